@@ -1,0 +1,70 @@
+// The engine's one entry point for a whole run: load a clip, train, evaluate, write results.
+// Used by `endorecon-worker reconstruct` and, in-process, by the worker runtime (one call per device).
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace endorecon {
+
+struct ReconstructOptions {
+  std::string clip_dir;        // EndoNeRF layout or a folder with transforms.json
+  std::string out_dir;         // results folder; created if missing
+  std::string config_file;     // optional JSON overriding the preset (same keys as config.json)
+  std::string preset = "cpu";  // "cpu" or "paper"
+  int iterations = -1;         // -1: the preset's
+  double time_budget_s = 0;    // 0: none; otherwise training stops at this many seconds
+  int holdout = -1;            // -1: the preset's; 0: none; K: every K-th frame held out
+  int threads = 0;             // 0: all cores
+  std::uint64_t seed = 0;
+  bool force_static = false;   // treat the clip as static (no deformation network)
+  std::string resume_from;     // optional checkpoint file to resume training from
+};
+
+struct Progress {
+  int iteration = 0;
+  int total_iterations = 0;
+  double seconds = 0;
+  double eta_s = 0;
+  double loss = 0;
+  double train_psnr = 0;
+  double heldout_psnr = -1;  // -1 until measured
+  double depth_rmse = -1;    // -1 when the clip has no depth ground truth or not yet measured
+  double samples_per_second = 0;
+};
+
+// A small image streamed while a job runs: 8-bit, row-major, `channels` 1 or 3.
+struct Preview {
+  std::string kind;  // "rgb", "depth" or "uncertainty"
+  int frame = 0;
+  int width = 0, height = 0, channels = 0;
+  std::vector<std::uint8_t> pixels;
+};
+
+struct ReconstructHooks {
+  std::function<void(const Progress&)> on_progress;             // every progress interval
+  std::function<void(const Preview&)> on_preview;               // every preview interval
+  std::function<void(const std::string& path)> on_checkpoint;   // after each checkpoint is written
+  std::function<bool()> should_stop;                            // polled every iteration; true = cancel
+  double progress_interval_s = 2.0;
+  double preview_interval_s = 30.0;
+  double checkpoint_interval_s = 120.0;
+};
+
+struct ReconstructSummary {
+  bool cancelled = false;
+  int iterations = 0;
+  double train_seconds = 0;
+  double heldout_psnr = -1;
+  double train_psnr = 0;
+  std::string metrics_path;  // out_dir/metrics.json
+};
+
+// Throws endorecon::Error: kInvalidArgument for a bad clip or option (message names the file),
+// kInternal when training diverges (message names the stage and iteration; the last good
+// checkpoint is kept), kCancelled never (a stop request returns with cancelled = true).
+ReconstructSummary Reconstruct(const ReconstructOptions& options, const ReconstructHooks& hooks);
+
+}  // namespace endorecon
