@@ -1,0 +1,95 @@
+#include "worker/engine/train/adam.h"
+
+#include <tbb/parallel_for.h>
+
+#include <cmath>
+#include <istream>
+#include <ostream>
+
+#include "common/error.h"
+
+namespace endorecon::train {
+
+Adam::Adam(std::vector<ParamGroup> groups, AdamConfig config)
+    : groups_(std::move(groups)), config_(std::move(config)) {
+  for (const auto& g : groups_) {
+    m_.emplace_back(g.size, 0.0f);
+    v_.emplace_back(g.size, 0.0f);
+  }
+}
+
+AdamStepReport Adam::Step(int iteration, int total_iterations) {
+  AdamStepReport report;
+  double sum_sq = 0;
+  for (const auto& g : groups_) {
+    double group_sq = 0;
+    for (std::size_t i = 0; i < g.size; ++i) group_sq += double(g.grad[i]) * g.grad[i];
+    if (!std::isfinite(group_sq) && report.finite) {
+      report.finite = false;
+      report.bad_group = g.name;
+    }
+    sum_sq += group_sq;
+  }
+  report.grad_norm = std::sqrt(sum_sq);
+  if (!report.finite) return report;
+
+  float scale = 1.0f;
+  if (config_.clip_norm > 0 && report.grad_norm > config_.clip_norm) {
+    scale = static_cast<float>(config_.clip_norm / report.grad_norm);
+  }
+  ++steps_;
+  const double progress = total_iterations > 0 ? double(iteration) / total_iterations : 0.0;
+  const float decay = static_cast<float>(std::pow(double(config_.final_lr_factor), std::min(progress, 1.0)));
+  const float b1 = config_.beta1, b2 = config_.beta2;
+  const float c1 = 1.0f - static_cast<float>(std::pow(double(b1), double(steps_)));
+  const float c2 = 1.0f - static_cast<float>(std::pow(double(b2), double(steps_)));
+  for (std::size_t k = 0; k < groups_.size(); ++k) {
+    const auto& g = groups_[k];
+    auto it = config_.lr.find(g.name);
+    const float lr = (it == config_.lr.end() ? config_.default_lr : it->second) * decay;
+    const float step = lr * std::sqrt(c2) / c1;
+    float* m = m_[k].data();
+    float* v = v_[k].data();
+    const float eps = config_.eps * std::sqrt(c2);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, g.size, 1 << 14), [&](const auto& r) {
+      for (std::size_t i = r.begin(); i != r.end(); ++i) {
+        const float grad = g.grad[i] * scale;
+        m[i] = b1 * m[i] + (1 - b1) * grad;
+        v[i] = b2 * v[i] + (1 - b2) * grad * grad;
+        g.value[i] -= step * m[i] / (std::sqrt(v[i]) + eps);
+      }
+    });
+  }
+  return report;
+}
+
+void Adam::Save(std::ostream& out) const {
+  const std::uint64_t count = groups_.size();
+  out.write(reinterpret_cast<const char*>(&steps_), sizeof(steps_));
+  out.write(reinterpret_cast<const char*>(&count), sizeof(count));
+  for (std::size_t k = 0; k < groups_.size(); ++k) {
+    const std::uint64_t size = groups_[k].size;
+    out.write(reinterpret_cast<const char*>(&size), sizeof(size));
+    out.write(reinterpret_cast<const char*>(m_[k].data()), std::streamsize(size * sizeof(float)));
+    out.write(reinterpret_cast<const char*>(v_[k].data()), std::streamsize(size * sizeof(float)));
+  }
+}
+
+void Adam::Load(std::istream& in) {
+  std::uint64_t count = 0;
+  in.read(reinterpret_cast<char*>(&steps_), sizeof(steps_));
+  in.read(reinterpret_cast<char*>(&count), sizeof(count));
+  if (!in || count != groups_.size()) Fail(ErrorCode::kDataLoss, "optimiser state: group count mismatch");
+  for (std::size_t k = 0; k < groups_.size(); ++k) {
+    std::uint64_t size = 0;
+    in.read(reinterpret_cast<char*>(&size), sizeof(size));
+    if (!in || size != groups_[k].size) {
+      Fail(ErrorCode::kDataLoss, "optimiser state: size mismatch in group " + groups_[k].name);
+    }
+    in.read(reinterpret_cast<char*>(m_[k].data()), std::streamsize(size * sizeof(float)));
+    in.read(reinterpret_cast<char*>(v_[k].data()), std::streamsize(size * sizeof(float)));
+    if (!in) Fail(ErrorCode::kDataLoss, "optimiser state: truncated in group " + groups_[k].name);
+  }
+}
+
+}  // namespace endorecon::train

@@ -1,0 +1,31 @@
+// endorecon-worker: the engine's command line (synth, reconstruct, render) and the service worker
+// (serve), which leases jobs from endorecon-server and runs one engine per device.
+#include <spdlog/spdlog.h>
+
+#include <CLI/CLI.hpp>
+#include <map>
+#include <string>
+
+#include "common/error.h"
+#include "worker/runtime/commands.h"
+
+int main(int argc, char** argv) {
+  CLI::App app{"endorecon-worker: reconstruct endoscopic clips, or serve jobs from endorecon-server"};
+  app.require_subcommand(1);
+  std::map<std::string, endorecon::worker::Command> commands;
+  commands["synth"] = endorecon::worker::AddSynthCommand(app);
+  commands["reconstruct"] = endorecon::worker::AddReconstructCommand(app);
+  commands["render"] = endorecon::worker::AddRenderCommand(app);
+  commands["serve"] = endorecon::worker::AddServeCommand(app);
+  CLI11_PARSE(app, argc, argv);
+  try {
+    for (auto* sub : app.get_subcommands()) return commands.at(sub->get_name())();
+  } catch (const endorecon::Error& e) {
+    spdlog::error("{}: {}", endorecon::ErrorCodeName(e.code()), e.what());
+    return e.code() == endorecon::ErrorCode::kInvalidArgument ? 2 : 1;
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,36 @@
+// endorecon-worker synth: writes a synthetic clip with known ground truth (EndoNeRF layout + gt/).
+#include <spdlog/spdlog.h>
+
+#include <CLI/CLI.hpp>
+#include <memory>
+
+#include "worker/engine/scene/synthetic_clip.h"
+#include "worker/runtime/commands.h"
+
+namespace endorecon::worker {
+
+Command AddSynthCommand(CLI::App& app) {
+  auto* cmd = app.add_subcommand("synth", "write a synthetic clip with ground truth (EndoNeRF layout)");
+  auto out = std::make_shared<std::string>();
+  auto options = std::make_shared<scene::SynthOptions>();
+  auto flags = std::make_shared<std::pair<bool, bool>>(false, false);  // --no-tool, --no-depth
+  cmd->add_option("out", *out, "output folder")->required();
+  cmd->add_option("--frames", options->frames, "number of frames")->capture_default_str()->check(CLI::Range(1, 100000));
+  cmd->add_option("--width", options->width, "frame width")->capture_default_str()->check(CLI::Range(8, 8192));
+  cmd->add_option("--height", options->height, "frame height")->capture_default_str()->check(CLI::Range(8, 8192));
+  cmd->add_option("--seed", options->seed, "random seed")->capture_default_str();
+  cmd->add_flag("--static", options->static_scene, "nothing moves");
+  cmd->add_flag("--no-tool", flags->first, "no tool, no masks/ folder");
+  cmd->add_flag("--no-depth", flags->second, "no depth/ folder");
+  cmd->add_flag("--stiff", options->stiff, "thin depth range, near-opaque surface, near-black tissue, saturated speculars");
+  cmd->add_flag("--stereo", options->stereo, "also write the right eye (images_right/, stereo.json)");
+  return [out, options, flags] {
+    options->tool = !flags->first;
+    options->depth = !flags->second;
+    scene::WriteSyntheticClip(*options, *out);
+    spdlog::info("wrote synthetic clip: {} ({} frames, {}x{})", *out, options->frames, options->width, options->height);
+    return 0;
+  };
+}
+
+}  // namespace endorecon::worker
