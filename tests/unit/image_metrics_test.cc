@@ -1,0 +1,49 @@
+#include "worker/engine/eval/image_metrics.h"
+
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "worker/engine/eval/psnr.h"
+
+namespace endorecon::eval {
+namespace {
+
+constexpr int kW = 24, kH = 16;
+
+TEST(ImageMetrics, TissueNumbersIgnoreTheTool) {
+  std::vector<std::uint8_t> reference(kW * kH * 3);
+  for (std::size_t i = 0; i < reference.size(); ++i) reference[i] = static_cast<std::uint8_t>(i * 13);
+  std::vector<float> rendered(reference.size());
+  for (std::size_t i = 0; i < reference.size(); ++i) rendered[i] = reference[i] / 255.0f;
+  std::vector<std::uint8_t> mask(kW * kH, 0);
+  for (int p = 0; p < 40; ++p) {
+    mask[p] = 1;
+    rendered[3 * p] = 1.0f - rendered[3 * p];
+  }
+  const ImageMetrics m = MeasureImage(rendered, reference, mask, kW, kH);
+  EXPECT_EQ(m.psnr_tissue, kPsnrCapDb);
+  EXPECT_LT(m.psnr, 40.0);
+  EXPECT_NEAR(m.ssim_tissue, 1.0, 1e-6);
+  EXPECT_LT(m.ssim, m.ssim_tissue);
+  EXPECT_EQ(m.tissue_pixels, kW * kH - 40);
+
+  const ImageMetrics unmasked = MeasureImage(rendered, reference, {}, kW, kH);
+  EXPECT_EQ(unmasked.psnr_tissue, unmasked.psnr);
+  EXPECT_EQ(unmasked.tissue_pixels, kW * kH);
+}
+
+TEST(ImageMetrics, FramesSerialiseWithSummaryAndNulls) {
+  const std::vector<ImageMetrics> frames = {{30, 0.9, 32, 0.92, 100}, {34, 0.8, std::nan(""), std::nan(""), 0}};
+  const nlohmann::json j = nlohmann::json::parse(ToJson(frames).dump());
+  EXPECT_DOUBLE_EQ(j["psnr"]["mean"].get<double>(), 32.0);
+  EXPECT_DOUBLE_EQ(j["psnr_tissue"]["mean"].get<double>(), 32.0);
+  EXPECT_EQ(j["psnr_tissue"]["count"].get<int>(), 1);
+  EXPECT_TRUE(j["per_frame"][1]["ssim_tissue"].is_null());
+}
+
+}  // namespace
+}  // namespace endorecon::eval

@@ -1,0 +1,34 @@
+#include "worker/engine/eval/summary.h"
+
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+namespace endorecon::eval {
+namespace {
+
+TEST(Summary, UndefinedValuesAreLeftOut) {
+  const std::vector<double> values = {1, 2, 3, std::nan(""), std::numeric_limits<double>::infinity()};
+  const Summary s = Summarise(values);
+  EXPECT_EQ(s.count, 3);
+  EXPECT_DOUBLE_EQ(s.mean, 2.0);
+  EXPECT_NEAR(s.std, std::sqrt(2.0 / 3.0), 1e-12);
+  EXPECT_EQ(s.min, 1.0);
+  EXPECT_EQ(s.max, 3.0);
+}
+
+TEST(Summary, NothingDefinedSerialisesAsNull) {
+  const std::vector<double> values = {std::nan("")};
+  const Summary s = Summarise(values);
+  EXPECT_EQ(s.count, 0);
+  EXPECT_TRUE(std::isnan(s.mean));
+  const nlohmann::json j = nlohmann::json::parse(ToJson(s).dump());
+  EXPECT_TRUE(j["mean"].is_null());
+  EXPECT_EQ(j["count"].get<int>(), 0);
+}
+
+}  // namespace
+}  // namespace endorecon::eval
