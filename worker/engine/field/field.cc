@@ -1,0 +1,451 @@
+#include "worker/engine/field/field.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <array>
+#include <cstring>
+#include <istream>
+#include <optional>
+#include <ostream>
+#include <sstream>
+
+#include "common/error.h"
+#include "worker/engine/field/temporal_blend.h"
+
+namespace endorecon::field {
+namespace {
+
+constexpr int kTile = 512;     // samples per tile: a tile's activations stay in L2
+constexpr int kMaxChunks = 8;  // tiles are grouped into at most this many chunks (tasks)
+constexpr int kMaxLayers = 8;  // hidden layers per head
+constexpr char kMagic[16] = "ENDORECON-FIELD";
+constexpr std::uint32_t kFormatVersion = 1;
+
+enum Group { kGrid, kBlend, kDeform, kDensity, kColor, kGroups };
+constexpr std::array<const char*, kGroups> kGroupNames = {"grid", "blend", "deform", "density", "color"};
+
+template <typename S>
+void GrowTo(std::vector<S>& v, std::size_t size) {
+  if (v.size() < size) v.resize(size);
+}
+
+// Splits n rows into tiles of kTile and the tiles into at most kMaxChunks chunks; runs
+// fn(chunk, row0, rows) for every tile, chunks in parallel and each chunk's tiles in order.
+// The split depends only on n. Returns the number of chunks.
+template <typename Fn>
+int RunTiles(int n, Fn&& fn) {
+  const int tiles = (n + kTile - 1) / kTile;
+  const int chunks = std::min(kMaxChunks, tiles);
+  if (chunks == 0) return 0;
+  const int per_chunk = (tiles + chunks - 1) / chunks;
+  tbb::parallel_for(tbb::blocked_range<int>(0, chunks, 1), [&](const tbb::blocked_range<int>& r) {
+    for (int c = r.begin(); c != r.end(); ++c) {
+      for (int t = c * per_chunk; t < std::min(tiles, (c + 1) * per_chunk); ++t) {
+        fn(c, t * kTile, std::min(kTile, n - t * kTile));
+      }
+    }
+  });
+  return chunks;
+}
+
+template <typename S>
+void CheckBatch(const SampleBatchT<S>& batch, const char* what) {
+  if (batch.n < 0) FailInvalid(std::string(what) + ": batch size must be >= 0, got " + std::to_string(batch.n));
+  if (batch.n > 0 && (!batch.pos || !batch.time || !batch.dir)) {
+    FailInvalid(std::string(what) + ": the batch needs pos, time and dir arrays");
+  }
+}
+
+template <typename S>
+const S* Offset(const S* p, std::size_t k) {
+  return p ? p + k : nullptr;
+}
+
+}  // namespace
+
+FieldConfig FieldConfig::Paper() {
+  FieldConfig c;
+  c.grids.base_resolutions = {8, 16, 32};
+  c.grids.scales = {1.4, 1.7, 1.9};
+  c.grids.levels = 16;
+  c.grids.features = 8;
+  c.grids.log2_table = 19;
+  c.deformation.resolution = 32;
+  c.deformation.time_knots = 16;
+  c.heads.density_hidden = {64};
+  c.heads.color_hidden = {64, 64};
+  return c;
+}
+
+FieldConfig FieldConfig::Cpu() {
+  FieldConfig c;
+  c.grids.base_resolutions = {8, 16, 32};
+  c.grids.scales = {1.6, 1.5, 1.4};
+  c.grids.levels = 10;
+  c.grids.features = 2;
+  c.grids.log2_table = 15;
+  c.deformation.resolution = 16;
+  c.deformation.time_knots = 8;
+  c.heads.density_hidden = {32};
+  c.heads.color_hidden = {32};
+  return c;
+}
+
+template <typename S>
+struct FieldT<S>::Impl {
+  // Batch-major activations of a run of rows; a View points at one row of it.
+  struct Acts {
+    std::vector<S> x0, gfeat, blend_hidden, beta, feat, dens_raw, col_in, col_raw;
+    std::array<std::vector<S>, kMaxLayers> dens_hidden, col_hidden;
+  };
+  struct View {
+    S *x0, *gfeat, *blend_hidden, *beta, *feat, *dens_raw, *col_in, *col_raw;
+    S* dens_hidden[kMaxLayers];
+    S* col_hidden[kMaxLayers];
+  };
+  struct Chunk {
+    Acts tile;                                 // Infer's activations, one tile
+    std::vector<S> scratch;                    // Backward's per-tile temporaries
+    std::array<std::vector<S>, kGroups> grad;  // this chunk's share of the small groups' gradients
+  };
+
+  GridEnsemble<S> grids;
+  TemporalBlend<S> blend;
+  std::optional<Deformation<S>> deform;
+  DensityHead<S> density;
+  ColorHead<S> color;
+
+  std::array<std::vector<S>, kGroups> value, grad;
+  Acts acts;         // kept activations of the last Forward
+  int capacity = 0;  // rows `acts` holds
+  std::array<Chunk, kMaxChunks> chunks;
+  std::vector<S> dfeat_by_level;  // [level][n][F]: dL/df, read by the table scatter
+  std::vector<S> beta_by_grid;    // [grid][n]
+  std::vector<S> dx0;             // n x 3: dL/dx0, read by the deformation scatter
+  int last_n = -1;
+  bool last_dropout = false;
+
+  explicit Impl(const FieldConfig& config)
+      : grids(config.grids),
+        blend(grids.grids(), grids.feature_dim(), config.blend_hidden),
+        density(grids.feature_dim(), config.heads),
+        color(config.heads) {
+    if (config.heads.density_hidden.size() > kMaxLayers || config.heads.color_hidden.size() > kMaxLayers) {
+      FailInvalid("field heads may have at most " + std::to_string(kMaxLayers) + " hidden layers each");
+    }
+    if (config.deformation.enabled) deform.emplace(config.deformation);
+    const std::array<std::size_t, kGroups> sizes = {grids.param_count(), blend.param_count(),
+                                                    deform ? deform->param_count() : 0, density.param_count(),
+                                                    color.param_count()};
+    for (int g = 0; g < kGroups; ++g) {
+      value[g].assign(sizes[g], S(0));
+      grad[g].assign(sizes[g], S(0));
+    }
+  }
+
+  void SizeActs(Acts& a, int rows) const {
+    const std::size_t n = static_cast<std::size_t>(rows);
+    GrowTo(a.x0, n * 3);
+    GrowTo(a.gfeat, n * grids.output_dim());
+    GrowTo(a.blend_hidden, n * blend.hidden_dim());
+    GrowTo(a.beta, n * grids.grids());
+    GrowTo(a.feat, n * grids.feature_dim());
+    GrowTo(a.dens_raw, n * density.raw_dim());
+    GrowTo(a.col_in, n * color.in_dim());
+    GrowTo(a.col_raw, n * 4);
+    for (int k = 0; k < density.mlp().hidden_layers(); ++k) GrowTo(a.dens_hidden[k], n * density.mlp().hidden_dim(k));
+    for (int k = 0; k < color.mlp().hidden_layers(); ++k) GrowTo(a.col_hidden[k], n * color.mlp().hidden_dim(k));
+  }
+
+  View ViewAt(Acts& a, int row0) const {
+    const std::size_t r = static_cast<std::size_t>(row0);
+    View v{};
+    v.x0 = a.x0.data() + r * 3;
+    v.gfeat = a.gfeat.data() + r * grids.output_dim();
+    v.blend_hidden = a.blend_hidden.data() + r * blend.hidden_dim();
+    v.beta = a.beta.data() + r * grids.grids();
+    v.feat = a.feat.data() + r * grids.feature_dim();
+    v.dens_raw = a.dens_raw.data() + r * density.raw_dim();
+    v.col_in = a.col_in.data() + r * color.in_dim();
+    v.col_raw = a.col_raw.data() + r * 4;
+    for (int k = 0; k < density.mlp().hidden_layers(); ++k) {
+      v.dens_hidden[k] = a.dens_hidden[k].data() + r * density.mlp().hidden_dim(k);
+    }
+    for (int k = 0; k < color.mlp().hidden_layers(); ++k) {
+      v.col_hidden[k] = a.col_hidden[k].data() + r * color.mlp().hidden_dim(k);
+    }
+    return v;
+  }
+
+  std::size_t ScratchSize() const {
+    const std::size_t heads = std::max({density.scratch_size(kTile), color.scratch_size(kTile), blend.scratch_size(kTile)});
+    return heads + static_cast<std::size_t>(kTile) * (density.mlp().out_dim() + grids.feature_dim() + grids.output_dim());
+  }
+
+  // The whole field on rows [row0, row0 + rows), activations into v.
+  void ForwardTile(const SampleBatchT<S>& batch, const FieldOutputT<S>& out, const View& v, int row0, int rows,
+                   const DropoutPass& drop) const {
+    const std::size_t r = static_cast<std::size_t>(row0);
+    const S* pos = batch.pos + 3 * r;
+    const S* t = batch.time + r;
+    const S* x0 = pos;
+    if (deform) {
+      deform->Forward(value[kDeform].data(), pos, t, rows, v.x0);
+      x0 = v.x0;
+    }
+    grids.Forward(value[kGrid].data(), x0, rows, v.gfeat);
+    blend.Weights(value[kBlend].data(), t, rows, v.blend_hidden, v.beta);
+    blend.Blend(v.beta, v.gfeat, rows, v.feat);
+    density.Forward(value[kDensity].data(), v.feat, rows, v.dens_hidden, v.dens_raw, out.sigma + r,
+                    out.sigma_logvar + r, drop);
+    color.Forward(value[kColor].data(), v.dens_raw + 2, density.raw_dim(), batch.dir + 3 * r, rows, v.col_in,
+                  v.col_hidden, v.col_raw, out.rgb + 3 * r, out.rgb_logvar + r, drop);
+  }
+
+  // Heads, blend and (with deformation) dL/dx0 of one tile; leaves dL/df level-major and beta grid-major
+  // for the table scatter that follows.
+  void BackwardTile(const SampleBatchT<S>& batch, const FieldOutputGradT<S>& g, Chunk& chunk, int row0, int rows) {
+    const int n = last_n;
+    const std::size_t r = static_cast<std::size_t>(row0);
+    const View v = ViewAt(acts, row0);
+    const int d = grids.feature_dim(), f = grids.grid(0).features();
+    S* dgeo = chunk.scratch.data();
+    S* df = dgeo + static_cast<std::size_t>(kTile) * density.mlp().out_dim();
+    S* dfeats = df + static_cast<std::size_t>(kTile) * d;
+    S* temp = dfeats + static_cast<std::size_t>(kTile) * grids.output_dim();
+    color.Backward(value[kColor].data(), v.col_in, rows, v.col_hidden, v.col_raw, Offset(g.rgb, 3 * r),
+                   Offset(g.rgb_logvar, r), dgeo, chunk.grad[kColor].data(), temp, last_dropout);
+    density.Backward(value[kDensity].data(), v.feat, rows, v.dens_hidden, v.dens_raw, Offset(g.sigma, r),
+                     Offset(g.sigma_logvar, r), dgeo, df, chunk.grad[kDensity].data(), temp, last_dropout);
+    blend.Backward(value[kBlend].data(), batch.time + r, rows, v.blend_hidden, v.beta, v.gfeat, df,
+                   deform ? dfeats : nullptr, chunk.grad[kBlend].data(), temp);
+    for (int i = 0; i < rows; ++i) {
+      for (int l = 0; l < d / f; ++l) {
+        S* dst = dfeat_by_level.data() + (static_cast<std::size_t>(l) * n + r + i) * f;
+        std::copy_n(df + static_cast<std::size_t>(i) * d + l * f, f, dst);
+      }
+      for (int k = 0; k < grids.grids(); ++k) beta_by_grid[static_cast<std::size_t>(k) * n + r + i] = v.beta[i * grids.grids() + k];
+    }
+    if (deform) {
+      std::fill_n(dx0.data() + 3 * r, 3 * static_cast<std::size_t>(rows), S(0));
+      grids.BackwardPosition(value[kGrid].data(), v.x0, rows, dfeats, dx0.data() + 3 * r);
+    }
+  }
+
+  // Table gradients, one (grid, level) or deformation time slice per task: disjoint parts of the
+  // gradient, so no task waits for another and the sums do not depend on the thread count.
+  void ScatterTables(const SampleBatchT<S>& batch) {
+    const int n = last_n, f = grids.grid(0).features();
+    std::vector<std::pair<int, int>> tasks;  // (grid, level), or (-1, knot)
+    for (int k = 0; k < grids.grids(); ++k) {
+      for (int l = 0; l < grids.grid(k).levels(); ++l) tasks.emplace_back(k, l);
+    }
+    if (deform) {
+      for (int knot = 1; knot <= deform->config().time_knots; ++knot) tasks.emplace_back(-1, knot);
+    }
+    const S* x0 = deform ? acts.x0.data() : batch.pos;
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, tasks.size(), 1), [&](const auto& range) {
+      for (std::size_t i = range.begin(); i != range.end(); ++i) {
+        const auto [k, l] = tasks[i];
+        if (k < 0) {
+          deform->BackwardKnot(l, batch.pos, batch.time, n, dx0.data(), grad[kDeform].data());
+        } else {
+          grids.BackwardLevel(k, l, x0, n, dfeat_by_level.data() + static_cast<std::size_t>(l) * n * f, f,
+                              beta_by_grid.data() + static_cast<std::size_t>(k) * n, grad[kGrid].data());
+        }
+      }
+    });
+  }
+
+  // grad[group] += the first `used` chunks' shares, summed in chunk order.
+  void ReduceChunks(int used) {
+    for (int g : {kBlend, kDensity, kColor}) {
+      S* dst = grad[g].data();
+      for (int c = 0; c < used; ++c) {
+        const S* src = chunks[c].grad[g].data();
+        for (std::size_t i = 0; i < grad[g].size(); ++i) dst[i] += src[i];
+      }
+    }
+  }
+};
+
+template <typename S>
+FieldT<S>::FieldT(const FieldConfig& config, std::uint64_t seed) : config_(config), impl_(std::make_unique<Impl>(config)) {
+  Impl& m = *impl_;
+  m.grids.Init(m.value[kGrid].data(), seed);
+  m.blend.Init(m.value[kBlend].data(), seed + 1);
+  if (m.deform) m.deform->Init(m.value[kDeform].data());
+  m.density.Init(m.value[kDensity].data(), seed + 2);
+  m.color.Init(m.value[kColor].data(), seed + 3);
+}
+
+template <typename S>
+FieldT<S>::~FieldT() = default;
+
+template <typename S>
+void FieldT<S>::Forward(const SampleBatchT<S>& batch, FieldOutputT<S>& out, bool dropout, std::uint64_t dropout_seed) {
+  CheckBatch(batch, "Field::Forward");
+  Impl& m = *impl_;
+  if (batch.n > m.capacity) {
+    m.SizeActs(m.acts, batch.n);
+    m.capacity = batch.n;
+  }
+  m.last_n = batch.n;
+  m.last_dropout = dropout;
+  RunTiles(batch.n, [&](int, int row0, int rows) {
+    m.ForwardTile(batch, out, m.ViewAt(m.acts, row0), row0, rows,
+                  DropoutPass{dropout, dropout_seed, static_cast<std::uint32_t>(row0)});
+  });
+}
+
+template <typename S>
+void FieldT<S>::Infer(const SampleBatchT<S>& batch, FieldOutputT<S>& out, bool dropout, std::uint64_t dropout_seed) {
+  CheckBatch(batch, "Field::Infer");
+  Impl& m = *impl_;
+  RunTiles(batch.n, [&](int c, int row0, int rows) {
+    auto& tile = m.chunks[c].tile;
+    m.SizeActs(tile, kTile);
+    m.ForwardTile(batch, out, m.ViewAt(tile, 0), row0, rows,
+                  DropoutPass{dropout, dropout_seed, static_cast<std::uint32_t>(row0)});
+  });
+}
+
+template <typename S>
+void FieldT<S>::Backward(const SampleBatchT<S>& batch, const FieldOutputGradT<S>& grad) {
+  Impl& m = *impl_;
+  if (batch.n != m.last_n) {
+    Fail(ErrorCode::kFailedPrecondition, "Field::Backward: batch of " + std::to_string(batch.n) +
+                                             " samples, but the last Forward had " + std::to_string(m.last_n));
+  }
+  const std::size_t n = static_cast<std::size_t>(batch.n);
+  GrowTo(m.dfeat_by_level, n * m.grids.feature_dim());
+  GrowTo(m.beta_by_grid, n * m.grids.grids());
+  if (m.deform) GrowTo(m.dx0, n * 3);
+  const int tiles = (batch.n + kTile - 1) / kTile;
+  for (int c = 0; c < std::min(kMaxChunks, tiles); ++c) {
+    auto& chunk = m.chunks[c];
+    GrowTo(chunk.scratch, m.ScratchSize());
+    for (int g : {kBlend, kDensity, kColor}) chunk.grad[g].assign(m.grad[g].size(), S(0));
+  }
+  const int chunks = RunTiles(batch.n, [&](int c, int row0, int rows) { m.BackwardTile(batch, grad, m.chunks[c], row0, rows); });
+  m.ScatterTables(batch);
+  m.ReduceChunks(chunks);
+}
+
+template <typename S>
+void FieldT<S>::ZeroGrad() {
+  for (auto& g : impl_->grad) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, g.size(), 1 << 16), [&](const auto& r) {
+      std::fill(g.begin() + r.begin(), g.begin() + r.end(), S(0));
+    });
+  }
+}
+
+template <typename S>
+std::vector<ParamBlock<S>> FieldT<S>::Blocks() {
+  std::vector<ParamBlock<S>> blocks;
+  for (int g = 0; g < kGroups; ++g) {
+    if (impl_->value[g].empty()) continue;
+    blocks.push_back({kGroupNames[g], impl_->value[g].data(), impl_->grad[g].data(), impl_->value[g].size()});
+  }
+  return blocks;
+}
+
+template <typename S>
+std::vector<train::ParamGroup> FieldT<S>::Params()
+  requires std::same_as<S, float>
+{
+  std::vector<train::ParamGroup> groups;
+  for (const auto& b : Blocks()) groups.push_back({b.name, b.value, b.grad, b.size});
+  return groups;
+}
+
+template <typename S>
+void FieldT<S>::Save(std::ostream& out) const {
+  out.write(kMagic, sizeof(kMagic));
+  const std::uint32_t header[3] = {kFormatVersion, static_cast<std::uint32_t>(sizeof(S)), kGroups};
+  out.write(reinterpret_cast<const char*>(header), sizeof(header));
+  for (int g = 0; g < kGroups; ++g) {
+    const std::uint64_t size = impl_->value[g].size();
+    out.write(reinterpret_cast<const char*>(&size), sizeof(size));
+    out.write(reinterpret_cast<const char*>(impl_->value[g].data()), static_cast<std::streamsize>(size * sizeof(S)));
+  }
+}
+
+template <typename S>
+void FieldT<S>::Load(std::istream& in) {
+  char magic[sizeof(kMagic)] = {};
+  std::uint32_t header[3] = {};
+  in.read(magic, sizeof(magic));
+  in.read(reinterpret_cast<char*>(header), sizeof(header));
+  if (!in || std::memcmp(magic, kMagic, sizeof(kMagic)) != 0) Fail(ErrorCode::kDataLoss, "field checkpoint: not a field state (bad header)");
+  if (header[0] != kFormatVersion || header[1] != sizeof(S) || header[2] != kGroups) {
+    Fail(ErrorCode::kDataLoss, "field checkpoint: format " + std::to_string(header[0]) + ", " +
+                                   std::to_string(header[1]) + "-byte scalars, " + std::to_string(header[2]) +
+                                   " groups; expected " + std::to_string(kFormatVersion) + ", " +
+                                   std::to_string(sizeof(S)) + ", " + std::to_string(kGroups));
+  }
+  for (int g = 0; g < kGroups; ++g) {
+    std::uint64_t size = 0;
+    in.read(reinterpret_cast<char*>(&size), sizeof(size));
+    if (!in) Fail(ErrorCode::kDataLoss, std::string("field checkpoint: truncated before group '") + kGroupNames[g] + "'");
+    if (size != impl_->value[g].size()) {
+      Fail(ErrorCode::kDataLoss, std::string("field checkpoint: group '") + kGroupNames[g] + "' holds " +
+                                     std::to_string(size) + " values but this field has " +
+                                     std::to_string(impl_->value[g].size()) + " (another configuration?)");
+    }
+    in.read(reinterpret_cast<char*>(impl_->value[g].data()), static_cast<std::streamsize>(size * sizeof(S)));
+    if (!in) Fail(ErrorCode::kDataLoss, std::string("field checkpoint: truncated inside group '") + kGroupNames[g] + "'");
+  }
+}
+
+template <typename S>
+std::string FieldT<S>::Describe() const {
+  const Impl& m = *impl_;
+  std::ostringstream s;
+  s << "hash grids: " << m.grids.grids() << " x (" << config_.grids.features << " features/level, 2^"
+    << config_.grids.log2_table << " slots), blended feature width " << m.grids.feature_dim() << "\n";
+  for (int k = 0; k < m.grids.grids(); ++k) {
+    const auto& grid = m.grids.grid(k);
+    s << "  grid " << k << ": base " << grid.config().base_resolution << ", scale " << grid.config().scale << ", "
+      << grid.levels() << " levels (resolution " << grid.level(0).res << ".." << grid.level(grid.levels() - 1).res;
+    int dense = 0;
+    for (int l = 0; l < grid.levels(); ++l) dense += static_cast<int>(grid.level(l).dense);
+    s << ", " << dense << " dense)";
+    if (grid.dropped_levels() > 0) {
+      s << "; left out " << grid.dropped_levels() << " finer levels (above resolution cap " << config_.grids.max_resolution << ")";
+    }
+    s << "\n";
+  }
+  s << "temporal blend: 1 -> " << m.blend.hidden_dim() << " -> " << m.blend.grids() << " softmax\n";
+  if (m.deform) {
+    s << "deformation: 4D grid " << config_.deformation.resolution << "^3 cells x " << config_.deformation.time_knots
+      << " time knots\n";
+  } else {
+    s << "deformation: left out (static scene)\n";
+  }
+  auto widths = [](const Mlp<S>& mlp) {
+    std::string w = std::to_string(mlp.in_dim());
+    for (int k = 0; k < mlp.hidden_layers(); ++k) w += " -> " + std::to_string(mlp.hidden_dim(k));
+    return w + " -> " + std::to_string(mlp.out_dim());
+  };
+  s << "density head: " << widths(m.density.mlp()) << ", colour head: " << widths(m.color.mlp())
+    << ", dropout " << config_.heads.dropout << "\n";
+  s << "parameters:";
+  for (int g = 0; g < kGroups; ++g) {
+    if (!m.value[g].empty()) s << " " << kGroupNames[g] << " " << m.value[g].size();
+  }
+  return s.str();
+}
+
+template <typename S>
+std::size_t FieldT<S>::head_macs_per_sample() const {
+  return impl_->density.mlp().macs_per_sample() + impl_->color.mlp().macs_per_sample();
+}
+
+template class FieldT<float>;
+template class FieldT<double>;
+
+}  // namespace endorecon::field

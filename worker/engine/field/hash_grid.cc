@@ -1,0 +1,175 @@
+#include "worker/engine/field/hash_grid.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <type_traits>
+
+#include "common/error.h"
+#include "worker/engine/render/rng.h"
+
+namespace endorecon::field {
+namespace {
+
+constexpr int kTile = 256;  // samples per level walk: their positions stay in L1 across levels
+
+template <int F, typename S>
+void ForwardLevel(const GridLevel& level, const S* table, const S* pos, int n, S* feat, int feat_stride) {
+  for (int i = 0; i < n; ++i) {
+    std::uint32_t slot[8];
+    S w[8], frac[3];
+    CellCorners(level, pos + 3 * i, slot, w, frac);
+    S acc[F] = {};
+    for (int k = 0; k < 8; ++k) {
+      const S* v = table + std::size_t{slot[k]} * F;
+      for (int f = 0; f < F; ++f) acc[f] += w[k] * v[f];
+    }
+    S* out = feat + static_cast<std::size_t>(i) * feat_stride;
+    for (int f = 0; f < F; ++f) out[f] = acc[f];
+  }
+}
+
+template <int F, typename S>
+void ScatterLevel(const GridLevel& level, const S* pos, int n, const S* dfeat, int dfeat_stride, const S* scale,
+                  S* grads) {
+  for (int i = 0; i < n; ++i) {
+    std::uint32_t slot[8];
+    S w[8], frac[3];
+    CellCorners(level, pos + 3 * i, slot, w, frac);
+    const S* d = dfeat + static_cast<std::size_t>(i) * dfeat_stride;
+    const S s = scale ? scale[i] : S(1);
+    S g[F];
+    for (int f = 0; f < F; ++f) g[f] = s * d[f];
+    for (int k = 0; k < 8; ++k) {
+      S* v = grads + std::size_t{slot[k]} * F;
+      for (int f = 0; f < F; ++f) v[f] += w[k] * g[f];
+    }
+  }
+}
+
+template <int F, typename S>
+void PositionLevel(const GridLevel& level, const S* table, const S* pos, int n, const S* dfeat, int dfeat_stride,
+                   S* dpos) {
+  const S res = static_cast<S>(level.res);
+  for (int i = 0; i < n; ++i) {
+    std::uint32_t slot[8];
+    S w[8], frac[3];
+    CellCorners(level, pos + 3 * i, slot, w, frac);
+    const S* d = dfeat + static_cast<std::size_t>(i) * dfeat_stride;
+    S grad[3] = {};
+    for (int k = 0; k < 8; ++k) {
+      const S* v = table + std::size_t{slot[k]} * F;
+      S dot = S(0);
+      for (int f = 0; f < F; ++f) dot += v[f] * d[f];
+      for (int a = 0; a < 3; ++a) grad[a] += CornerWeightDerivative(k, a, frac) * dot;
+    }
+    for (int a = 0; a < 3; ++a) {
+      if (InsideUnit(pos[3 * i + a])) dpos[3 * i + a] += res * grad[a];
+    }
+  }
+}
+
+// Calls fn(std::integral_constant<int, F>) for the grid's runtime feature count.
+template <typename Fn>
+void DispatchFeatures(int features, Fn&& fn) {
+  switch (features) {
+    case 1: fn(std::integral_constant<int, 1>{}); break;
+    case 2: fn(std::integral_constant<int, 2>{}); break;
+    case 4: fn(std::integral_constant<int, 4>{}); break;
+    default: fn(std::integral_constant<int, 8>{}); break;
+  }
+}
+
+}  // namespace
+
+int LevelResolution(const HashGridConfig& config, int level) {
+  const double r = std::floor(config.base_resolution * std::pow(config.scale, level) + 1e-9);
+  return static_cast<int>(std::min(r, 1e9));
+}
+
+int LevelsUpToResolution(const HashGridConfig& config, double finest_useful) {
+  int keep = 1;
+  while (keep < config.levels && LevelResolution(config, keep) <= finest_useful) ++keep;
+  return keep;
+}
+
+template <typename S>
+HashGrid<S>::HashGrid(const HashGridConfig& config) : config_(config) {
+  const int f = config.features;
+  if (f != 1 && f != 2 && f != 4 && f != 8) FailInvalid("hash grid features per level must be 1, 2, 4 or 8, got " + std::to_string(f));
+  if (config.log2_table < 4 || config.log2_table > 26) {
+    FailInvalid("hash grid log2 table size must be in [4, 26], got " + std::to_string(config.log2_table));
+  }
+  if (config.levels < 1) FailInvalid("hash grid needs at least 1 level, got " + std::to_string(config.levels));
+  if (config.base_resolution < 1) FailInvalid("hash grid base resolution must be >= 1, got " + std::to_string(config.base_resolution));
+  if (!(config.scale >= 1)) FailInvalid("hash grid per-level scale must be >= 1, got " + std::to_string(config.scale));
+  const int keep = config.max_resolution > 0 ? LevelsUpToResolution(config, config.max_resolution) : config.levels;
+  const std::uint64_t table = std::uint64_t{1} << config.log2_table;
+  std::uint64_t offset = 0;
+  for (int l = 0; l < keep; ++l) {
+    GridLevel level;
+    level.res = static_cast<std::uint32_t>(LevelResolution(config, l));
+    const std::uint64_t side = std::uint64_t{level.res} + 1;
+    const std::uint64_t vertices = side * side * side;
+    level.dense = vertices <= table ? 1 : 0;
+    // Each level starts on a 64-byte boundary for any F and scalar type.
+    const std::uint64_t entries = level.dense ? (vertices + 7) / 8 * 8 : table;
+    level.entries = static_cast<std::uint32_t>(level.dense ? vertices : table);
+    level.offset = offset;
+    offset += entries;
+    levels_.push_back(level);
+  }
+  param_count_ = offset * f;
+}
+
+template <typename S>
+void HashGrid<S>::Init(S* params, std::uint64_t seed) const {
+  const render::CounterRng<S> rng(seed, 0x4a5347u);
+  for (std::size_t i = 0; i < param_count_; ++i) {
+    params[i] = S(1e-4) * (S(2) * rng(static_cast<std::uint32_t>(i)) - S(1));
+  }
+}
+
+template <typename S>
+void HashGrid<S>::Forward(const S* params, const S* pos, int n, S* feat, int feat_stride) const {
+  DispatchFeatures(features(), [&](auto fc) {
+    constexpr int F = decltype(fc)::value;
+    for (int begin = 0; begin < n; begin += kTile) {
+      const int count = std::min(kTile, n - begin);
+      for (int l = 0; l < levels(); ++l) {
+        ForwardLevel<F>(levels_[l], params + levels_[l].offset * F, pos + 3 * begin, count,
+                        feat + static_cast<std::size_t>(begin) * feat_stride + l * F, feat_stride);
+      }
+    }
+  });
+}
+
+template <typename S>
+void HashGrid<S>::BackwardLevel(int l, const S* pos, int n, const S* dfeat, int dfeat_stride, const S* scale,
+                                S* grads) const {
+  DispatchFeatures(features(), [&](auto fc) {
+    constexpr int F = decltype(fc)::value;
+    ScatterLevel<F>(levels_[l], pos, n, dfeat, dfeat_stride, scale, grads + levels_[l].offset * F);
+  });
+}
+
+template <typename S>
+void HashGrid<S>::BackwardPosition(const S* params, const S* pos, int n, const S* dfeat, int dfeat_stride,
+                                   S* dpos) const {
+  DispatchFeatures(features(), [&](auto fc) {
+    constexpr int F = decltype(fc)::value;
+    for (int begin = 0; begin < n; begin += kTile) {
+      const int count = std::min(kTile, n - begin);
+      for (int l = 0; l < levels(); ++l) {
+        PositionLevel<F>(levels_[l], params + levels_[l].offset * F, pos + 3 * begin, count,
+                         dfeat + static_cast<std::size_t>(begin) * dfeat_stride + l * F, dfeat_stride,
+                         dpos + 3 * begin);
+      }
+    }
+  });
+}
+
+template class HashGrid<float>;
+template class HashGrid<double>;
+
+}  // namespace endorecon::field
