@@ -1,0 +1,109 @@
+#include "common/file_download.h"
+
+#include <fstream>
+#include <optional>
+#include <string>
+
+#include "common/error.h"
+#include "common/grpc_status.h"
+#include "common/safe_path.h"
+#include "common/sha256.h"
+
+namespace endorecon {
+namespace fs = std::filesystem;
+namespace {
+
+fs::path PartPath(const fs::path& target) { return fs::path(target.string() + ".part"); }
+
+// One file being received: appends to its .part, then verifies and renames.
+class PartialFile {
+ public:
+  PartialFile(const fs::path& dir, const v1::FileEntry& entry, std::int64_t offset) : entry_(entry) {
+    CheckRelativePath(entry.path());
+    target_ = dir / entry.path();
+    fs::create_directories(target_.parent_path());
+    const auto part = PartPath(target_);
+    const std::int64_t have = fs::exists(part) ? static_cast<std::int64_t>(fs::file_size(part)) : 0;
+    if (offset > have) FailInvalid("download of '" + entry.path() + "' starts past its partial file");
+    if (fs::exists(part)) fs::resize_file(part, static_cast<std::uintmax_t>(offset));
+    out_.open(part, std::ios::binary | std::ios::app);
+    if (!out_) Fail(ErrorCode::kUnavailable, "cannot write " + part.string());
+    written_ = offset;
+  }
+
+  void Append(std::int64_t offset, const std::string& data) {
+    if (offset != written_) {
+      FailInvalid("chunk of '" + entry_.path() + "' at offset " + std::to_string(offset) + ", expected " +
+                  std::to_string(written_));
+    }
+    out_.write(data.data(), static_cast<std::streamsize>(data.size()));
+    written_ += static_cast<std::int64_t>(data.size());
+  }
+
+  bool Done() const { return written_ >= entry_.size(); }
+
+  void Finish() {
+    out_.close();
+    const auto part = PartPath(target_);
+    const auto digest = Sha256File(part);
+    if (digest != entry_.sha256()) {
+      fs::remove(part);
+      Fail(ErrorCode::kDataLoss, "'" + entry_.path() + "' arrived with sha256 " + digest + ", expected " +
+                                     entry_.sha256() + "; removed, download it again");
+    }
+    fs::rename(part, target_);
+  }
+
+ private:
+  v1::FileEntry entry_;
+  fs::path target_;
+  std::ofstream out_;
+  std::int64_t written_ = 0;
+};
+
+}  // namespace
+
+std::vector<v1::FileRange> PendingDownloads(const fs::path& dir, const v1::Manifest& manifest) {
+  std::vector<v1::FileRange> pending;
+  for (const auto& entry : manifest.files()) {
+    CheckRelativePath(entry.path());
+    const auto target = dir / entry.path();
+    if (fs::is_regular_file(target) && static_cast<std::int64_t>(fs::file_size(target)) == entry.size() &&
+        Sha256File(target) == entry.sha256()) {
+      continue;
+    }
+    const auto part = PartPath(target);
+    std::int64_t offset = fs::is_regular_file(part) ? static_cast<std::int64_t>(fs::file_size(part)) : 0;
+    if (offset > entry.size()) offset = 0;
+    v1::FileRange range;
+    range.set_path(entry.path());
+    range.set_sha256(entry.sha256());
+    range.set_offset(offset);
+    pending.push_back(range);
+  }
+  return pending;
+}
+
+std::int64_t ReceiveFiles(grpc::ClientReaderInterface<v1::FileChunk>& reader, const fs::path& dir) {
+  std::int64_t received = 0;
+  std::optional<PartialFile> current;
+  v1::FileChunk chunk;
+  while (reader.Read(&chunk)) {
+    if (chunk.has_file()) {
+      if (current) FailInvalid("a new file began before '" + chunk.file().path() + "'s predecessor was complete");
+      current.emplace(dir, chunk.file(), chunk.offset());
+    }
+    if (!current) FailInvalid("a chunk arrived before its file's header");
+    current->Append(chunk.offset(), chunk.data());
+    received += static_cast<std::int64_t>(chunk.data().size());
+    if (current->Done()) {
+      current->Finish();
+      current.reset();
+    }
+  }
+  ThrowIfFailed(reader.Finish(), "download");
+  if (current) Fail(ErrorCode::kUnavailable, "the download stream ended inside a file; run again to resume");
+  return received;
+}
+
+}  // namespace endorecon

@@ -1,0 +1,25 @@
+// The receiving side of a download (the CLI's results, the worker's clips and checkpoints): each
+// file lands in <dir>/<path>.part, is verified against its SHA-256 and only then renamed into
+// place, so an interrupted download resumes from the .part's size and never leaves a wrong file.
+#pragma once
+
+#include <grpcpp/support/sync_stream.h>
+
+#include <cstdint>
+#include <filesystem>
+#include <vector>
+
+#include "endorecon/v1/files.pb.h"
+
+namespace endorecon {
+
+// The files of `manifest` still missing from `dir` (absent, or present with another size or
+// digest), each with the offset its .part file reached. Sets path, sha256 and offset.
+std::vector<v1::FileRange> PendingDownloads(const std::filesystem::path& dir, const v1::Manifest& manifest);
+
+// Writes a FileChunk stream into `dir`; returns the bytes written. Throws Error(kDataLoss) when a
+// file's digest does not match (its .part is removed), kInvalidArgument for an unsafe path or an
+// out-of-order chunk. Checks the stream's status itself.
+std::int64_t ReceiveFiles(grpc::ClientReaderInterface<v1::FileChunk>& reader, const std::filesystem::path& dir);
+
+}  // namespace endorecon

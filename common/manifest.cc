@@ -1,0 +1,53 @@
+#include "common/manifest.h"
+
+#include <algorithm>
+#include <set>
+#include <string>
+
+#include "common/error.h"
+#include "common/safe_path.h"
+#include "common/sha256.h"
+
+namespace endorecon {
+namespace fs = std::filesystem;
+
+v1::Manifest ManifestOfDirectory(const fs::path& dir) {
+  if (!fs::is_directory(dir)) Fail(ErrorCode::kNotFound, "not a directory: " + dir.string());
+  std::vector<fs::path> files;
+  for (const auto& entry : fs::recursive_directory_iterator(dir)) {
+    if (entry.is_regular_file()) files.push_back(entry.path());
+  }
+  if (files.empty()) FailInvalid("no files under " + dir.string());
+  std::sort(files.begin(), files.end());
+  v1::Manifest manifest;
+  for (const auto& file : files) {
+    auto* entry = manifest.add_files();
+    entry->set_path(fs::relative(file, dir).generic_string());
+    entry->set_size(static_cast<std::int64_t>(fs::file_size(file)));
+    entry->set_sha256(Sha256File(file));
+  }
+  return manifest;
+}
+
+void ValidateManifest(const v1::Manifest& manifest) {
+  if (manifest.files_size() == 0) FailInvalid("the manifest lists no files");
+  std::set<std::string> seen;
+  for (const auto& file : manifest.files()) {
+    CheckRelativePath(file.path());
+    if (!seen.insert(file.path()).second) FailInvalid("file '" + file.path() + "' is listed twice");
+    if (file.size() < 0) FailInvalid("file '" + file.path() + "' has negative size " + std::to_string(file.size()));
+    const auto& digest = file.sha256();
+    const bool hex = digest.size() == 64 && std::all_of(digest.begin(), digest.end(), [](char c) {
+                       return (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f');
+                     });
+    if (!hex) FailInvalid("file '" + file.path() + "' has sha256 '" + digest + "', not 64 lowercase hex digits");
+  }
+}
+
+std::int64_t TotalBytes(const v1::Manifest& manifest) {
+  std::int64_t total = 0;
+  for (const auto& file : manifest.files()) total += file.size();
+  return total;
+}
+
+}  // namespace endorecon

@@ -1,0 +1,154 @@
+#include "server/blob_store.h"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <array>
+#include <cerrno>
+#include <cstring>
+
+#include "common/error.h"
+
+namespace endorecon::server {
+namespace fs = std::filesystem;
+namespace {
+
+[[noreturn]] void FailErrno(const std::string& what, const fs::path& path) {
+  Fail(ErrorCode::kUnavailable, what + " " + path.string() + ": " + std::strerror(errno));
+}
+
+void FsyncDirectory(const fs::path& dir) {
+  const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY);
+  if (fd < 0) FailErrno("cannot open directory", dir);
+  ::fsync(fd);
+  ::close(fd);
+}
+
+}  // namespace
+
+BlobStore::BlobStore(fs::path root) : root_(std::move(root)) {
+  fs::create_directories(root_ / "blobs");
+  fs::create_directories(root_ / "partial");
+}
+
+bool BlobStore::Has(const std::string& sha256) const {
+  return sha256.size() == 64 && fs::is_regular_file(root_ / "blobs" / sha256.substr(0, 2) / sha256);
+}
+
+fs::path BlobStore::PathOf(const std::string& sha256) const {
+  if (!Has(sha256)) Fail(ErrorCode::kNotFound, "no blob with sha256 " + sha256);
+  return root_ / "blobs" / sha256.substr(0, 2) / sha256;
+}
+
+fs::path BlobStore::PartialPath(const std::string& sha256) const { return root_ / "partial" / (sha256 + ".part"); }
+
+std::int64_t BlobStore::Committed(const v1::FileEntry& entry) const {
+  if (Has(entry.sha256())) return entry.size();
+  std::error_code error;
+  const auto size = fs::file_size(PartialPath(entry.sha256()), error);
+  if (error) return 0;
+  return std::min(static_cast<std::int64_t>(size), entry.size());
+}
+
+std::unique_ptr<BlobStore::Writer> BlobStore::OpenWriter(const v1::FileEntry& entry) {
+  {
+    std::lock_guard lock(mutex_);
+    if (!writing_.insert(entry.sha256()).second) {
+      Fail(ErrorCode::kFailedPrecondition,
+           "'" + entry.path() + "' (sha256 " + entry.sha256() + ") is being uploaded by another stream right now");
+    }
+  }
+  try {
+    return std::unique_ptr<Writer>(new Writer(*this, entry));
+  } catch (...) {
+    Release(entry.sha256());
+    throw;
+  }
+}
+
+void BlobStore::Release(const std::string& sha256) {
+  std::lock_guard lock(mutex_);
+  writing_.erase(sha256);
+}
+
+std::string BlobStore::Put(std::string_view bytes) {
+  v1::FileEntry entry;
+  entry.set_path("blob");
+  entry.set_size(static_cast<std::int64_t>(bytes.size()));
+  entry.set_sha256(Sha256Hex(bytes));
+  if (Has(entry.sha256())) return entry.sha256();
+  auto writer = OpenWriter(entry);
+  writer->Append(writer->committed(), bytes.substr(static_cast<std::size_t>(writer->committed())));
+  writer->Promote();
+  return entry.sha256();
+}
+
+BlobStore::Writer::Writer(BlobStore& store, const v1::FileEntry& entry)
+    : store_(store), entry_(entry), partial_(store.PartialPath(entry.sha256())) {
+  fd_ = ::open(partial_.c_str(), O_RDWR | O_CREAT, 0644);
+  if (fd_ < 0) FailErrno("cannot open", partial_);
+  const off_t size = ::lseek(fd_, 0, SEEK_END);
+  if (size > entry_.size() && ::ftruncate(fd_, 0) != 0) FailErrno("cannot truncate", partial_);
+  committed_ = size > entry_.size() ? 0 : static_cast<std::int64_t>(size);
+  // The digest covers the whole file, so the bytes committed by earlier streams are read once.
+  std::array<char, 1 << 16> buffer{};
+  std::int64_t done = 0;
+  while (done < committed_) {
+    const ssize_t n = ::pread(fd_, buffer.data(), buffer.size(), done);
+    if (n <= 0) FailErrno("cannot read", partial_);
+    digest_.Update(buffer.data(), static_cast<std::size_t>(n));
+    done += n;
+  }
+  ::lseek(fd_, committed_, SEEK_SET);
+}
+
+BlobStore::Writer::~Writer() {
+  if (fd_ >= 0) {
+    ::fdatasync(fd_);
+    ::close(fd_);
+  }
+  store_.Release(entry_.sha256());
+}
+
+void BlobStore::Writer::Append(std::int64_t offset, std::string_view data) {
+  if (offset != committed_) {
+    Fail(ErrorCode::kFailedPrecondition, "chunk of '" + entry_.path() + "' starts at offset " +
+                                             std::to_string(offset) + " but " + std::to_string(committed_) +
+                                             " bytes are committed; continue from there");
+  }
+  if (committed_ + static_cast<std::int64_t>(data.size()) > entry_.size()) {
+    FailInvalid("chunk of '" + entry_.path() + "' runs to byte " +
+                std::to_string(committed_ + static_cast<std::int64_t>(data.size())) + " past its declared size " +
+                std::to_string(entry_.size()));
+  }
+  std::size_t written = 0;
+  while (written < data.size()) {
+    const ssize_t n = ::write(fd_, data.data() + written, data.size() - written);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      FailErrno("cannot write", partial_);
+    }
+    written += static_cast<std::size_t>(n);
+  }
+  digest_.Update(data);
+  committed_ += static_cast<std::int64_t>(data.size());
+}
+
+void BlobStore::Writer::Promote() {
+  if (!full()) Fail(ErrorCode::kInternal, "promoting an incomplete partial of '" + entry_.path() + "'");
+  if (::fdatasync(fd_) != 0) FailErrno("cannot sync", partial_);
+  ::close(fd_);
+  fd_ = -1;
+  const std::string actual = digest_.HexDigest();
+  if (actual != entry_.sha256()) {
+    fs::remove(partial_);
+    Fail(ErrorCode::kDataLoss, "'" + entry_.path() + "' has sha256 " + actual + " but the manifest says " +
+                                   entry_.sha256() + "; its bytes were discarded");
+  }
+  const fs::path dir = store_.root_ / "blobs" / entry_.sha256().substr(0, 2);
+  fs::create_directories(dir);
+  fs::rename(partial_, dir / entry_.sha256());
+  FsyncDirectory(dir);
+}
+
+}  // namespace endorecon::server

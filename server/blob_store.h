@@ -1,0 +1,73 @@
+// Content-addressed file storage: <root>/blobs/<first two hex>/<sha256>. A blob appears only
+// complete and verified. Its bytes first accumulate in <root>/partial/<sha256>.part, which survives
+// restarts (so an upload resumes from what it committed), and is fsynced, checked against the
+// digest and renamed into place; a mismatch removes the partial, so nothing half-written is visible.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <mutex>
+#include <set>
+#include <string>
+#include <string_view>
+
+#include "common/sha256.h"
+#include "endorecon/v1/files.pb.h"
+
+namespace endorecon::server {
+
+class BlobStore {
+ public:
+  // Creates the folders under `root` if missing.
+  explicit BlobStore(std::filesystem::path root);
+
+  bool Has(const std::string& sha256) const;
+  // The blob's file. Throws Error(kNotFound) naming the digest when it is absent.
+  std::filesystem::path PathOf(const std::string& sha256) const;
+  // Bytes held for `entry`: its size when the blob exists, otherwise the partial's length.
+  std::int64_t Committed(const v1::FileEntry& entry) const;
+
+  // Appends to the partial of one entry, then promotes it. One writer per digest at a time.
+  class Writer {
+   public:
+    ~Writer();  // fsyncs what was appended and releases the digest
+    Writer(const Writer&) = delete;
+    Writer& operator=(const Writer&) = delete;
+    std::int64_t committed() const { return committed_; }
+    bool full() const { return committed_ == entry_.size(); }
+    // Throws kFailedPrecondition when `offset` is not the committed size, kInvalidArgument when the
+    // data would run past the entry's size.
+    void Append(std::int64_t offset, std::string_view data);
+    // Requires full(). fsyncs, verifies the digest and renames the partial to the blob. On a
+    // mismatch removes the partial and throws kDataLoss naming the path and both digests.
+    void Promote();
+
+   private:
+    friend class BlobStore;
+    Writer(BlobStore& store, const v1::FileEntry& entry);
+    BlobStore& store_;
+    v1::FileEntry entry_;
+    std::filesystem::path partial_;
+    int fd_ = -1;
+    std::int64_t committed_ = 0;
+    Sha256 digest_;
+  };
+  // Throws kFailedPrecondition when another stream is writing the same content right now.
+  std::unique_ptr<Writer> OpenWriter(const v1::FileEntry& entry);
+
+  // Stores `bytes` as a blob at once; returns its digest.
+  std::string Put(std::string_view bytes);
+
+  const std::filesystem::path& root() const { return root_; }
+
+ private:
+  std::filesystem::path PartialPath(const std::string& sha256) const;
+  void Release(const std::string& sha256);
+
+  std::filesystem::path root_;
+  mutable std::mutex mutex_;
+  std::set<std::string> writing_;
+};
+
+}  // namespace endorecon::server

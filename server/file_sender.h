@@ -1,0 +1,22 @@
+// The sending side of downloads (JobService.Fetch, WorkerService.GetBlobs): blob content as
+// FileChunks, each file from a requested offset, its entry (size, sha256) on its first chunk.
+#pragma once
+
+#include <grpcpp/server_context.h>
+#include <grpcpp/support/sync_stream.h>
+
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+#include "endorecon/v1/files.pb.h"
+#include "server/blob_store.h"
+
+namespace endorecon::server {
+
+// Sends each (entry, offset). Throws kInvalidArgument for an offset past a file's size, kNotFound
+// for a missing blob, kUnavailable when the receiver went away. Returns the bytes sent.
+std::int64_t SendFiles(const BlobStore& blobs, const std::vector<std::pair<v1::FileEntry, std::int64_t>>& files,
+                       grpc::ServerWriterInterface<v1::FileChunk>& writer);
+
+}  // namespace endorecon::server

@@ -1,0 +1,270 @@
+#include "server/job_coordinator.h"
+
+#include <nlohmann/json.hpp>
+#include <spdlog/spdlog.h>
+
+#include "common/error.h"
+#include "common/manifest.h"
+
+namespace endorecon::server {
+namespace {
+
+bool Terminal(v1::JobState state) { return state == v1::SUCCEEDED || state == v1::FAILED || state == v1::CANCELLED; }
+
+void ValidateOptions(const v1::ReconstructionOptions& options) {
+  if (!options.preset().empty() && options.preset() != "cpu" && options.preset() != "paper") {
+    FailInvalid("options.preset is '" + options.preset() + "'; expected 'cpu' or 'paper'");
+  }
+  if (options.has_iterations() && options.iterations() <= 0) {
+    FailInvalid("options.iterations is " + std::to_string(options.iterations()) + "; expected > 0");
+  }
+  if (options.has_holdout() && options.holdout() < 0) {
+    FailInvalid("options.holdout is " + std::to_string(options.holdout()) + "; expected >= 0");
+  }
+  if (options.time_budget_s() < 0) FailInvalid("options.time_budget_s is negative");
+  if (!options.config_json().empty()) {
+    const auto config = nlohmann::json::parse(options.config_json(), nullptr, false);
+    if (config.is_discarded() || !config.is_object()) FailInvalid("options.config_json is not a JSON object");
+  }
+}
+
+// Throws kFailedPrecondition naming the first file of `manifest` the blob store lacks.
+void RequireBlobs(const BlobStore& blobs, const v1::Manifest& manifest, const std::string& what) {
+  int missing = 0;
+  std::string first;
+  for (const auto& file : manifest.files()) {
+    if (!blobs.Has(file.sha256())) {
+      if (missing++ == 0) first = file.path();
+    }
+  }
+  if (missing > 0) {
+    endorecon::Fail(ErrorCode::kFailedPrecondition, std::to_string(missing) + " file(s) of the " + what +
+                                             " are not uploaded yet, first '" + first + "'; upload them first");
+  }
+}
+
+}  // namespace
+
+std::int64_t NowUnixMs() {
+  return std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+JobCoordinator::JobCoordinator(CoordinatorParts parts, int max_attempts) : parts_(parts), max_attempts_(max_attempts) {}
+
+void JobCoordinator::Recover() {
+  std::lock_guard lock(mutex_);
+  const auto now = Clock::now();
+  int queued = 0, running = 0;
+  for (const auto& stored : parts_.store.Unfinished()) {
+    if (stored.job.state() == v1::QUEUED) {
+      parts_.scheduler.Push(stored.job.id(), stored.job.priority(), stored.seq);
+      ++queued;
+    } else {
+      parts_.leases.Restore(stored.job.lease_id(), stored.job.id(), stored.job.worker_id(), now);
+      parts_.workers.AddJob(stored.job.worker_id(), stored.job.id());
+      ++running;
+    }
+    parts_.hub.PublishJob(stored.job);
+  }
+  spdlog::info("recovered {} queued and {} running job(s)", queued, running);
+}
+
+StoredJob JobCoordinator::Load(const std::string& id) {
+  auto stored = parts_.store.Get(id);
+  if (!stored) endorecon::Fail(ErrorCode::kNotFound, "no job '" + id + "'");
+  return *stored;
+}
+
+StoredJob JobCoordinator::LoadLeased(const std::string& lease_id) {
+  const auto lease = parts_.leases.Find(lease_id);
+  if (!lease) {
+    endorecon::Fail(ErrorCode::kFailedPrecondition,
+         "lease '" + lease_id + "' is not held: it expired, or its job was cancelled or handed to another worker");
+  }
+  parts_.workers.Touch(lease->worker_id);
+  return Load(lease->job_id);
+}
+
+void JobCoordinator::Save(const v1::Job& job) {
+  parts_.store.Update(job);
+  parts_.hub.PublishJob(job);
+}
+
+void JobCoordinator::Finish(v1::Job& job, v1::JobState state, const std::string& error) {
+  if (!job.lease_id().empty()) parts_.leases.Release(job.lease_id());
+  if (!job.worker_id().empty()) parts_.workers.RemoveJob(job.worker_id(), job.id());
+  job.set_state(state);
+  job.set_error(error);
+  job.set_finished_unix_ms(NowUnixMs());
+  job.clear_lease_id();
+  Save(job);
+  const double run_seconds =
+      job.started_unix_ms() > 0 ? static_cast<double>(job.finished_unix_ms() - job.started_unix_ms()) / 1000.0 : -1.0;
+  parts_.metrics.JobFinished(state, run_seconds);
+  spdlog::info("job {} {}{}{}", job.id(), v1::JobState_Name(state), error.empty() ? "" : ": ", error);
+}
+
+void JobCoordinator::Requeue(StoredJob& stored, bool count_attempt, const std::string& reason) {
+  auto& job = stored.job;
+  if (count_attempt) job.set_attempts(job.attempts() + 1);
+  if (job.attempts() >= job.max_attempts()) {
+    Finish(job, v1::FAILED,
+           "gave up after " + std::to_string(job.attempts()) + " attempt(s) (max_attempts); last: " + reason);
+    return;
+  }
+  parts_.leases.Release(job.lease_id());
+  parts_.workers.RemoveJob(job.worker_id(), job.id());
+  job.set_state(v1::QUEUED);
+  job.set_error(reason);
+  job.clear_lease_id();
+  job.clear_worker_id();
+  Save(job);
+  parts_.scheduler.Push(job.id(), job.priority(), stored.seq);
+  spdlog::info("job {} requeued (attempts {}/{}): {}", job.id(), job.attempts(), job.max_attempts(), reason);
+}
+
+v1::Job JobCoordinator::Submit(const v1::SubmitRequest& request) {
+  ValidateManifest(request.clip());
+  ValidateOptions(request.options());
+  RequireBlobs(parts_.blobs, request.clip(), "clip");
+  v1::Job job;
+  job.set_id(RandomId(6));
+  job.set_name(request.name());
+  job.set_state(v1::QUEUED);
+  job.set_priority(request.priority());
+  *job.mutable_options() = request.options();
+  *job.mutable_clip() = request.clip();
+  job.set_created_unix_ms(NowUnixMs());
+  job.set_max_attempts(max_attempts_);
+  std::lock_guard lock(mutex_);
+  const auto seq = parts_.store.Insert(job);
+  parts_.hub.PublishJob(job);
+  parts_.scheduler.Push(job.id(), job.priority(), seq);
+  parts_.metrics.JobSubmitted();
+  spdlog::info("job {} submitted: {} file(s), {} bytes, priority {}", job.id(), job.clip().files_size(),
+               TotalBytes(job.clip()), job.priority());
+  return job;
+}
+
+v1::Job JobCoordinator::Get(const std::string& id) { return Load(id).job; }
+
+JobStore::Page JobCoordinator::List(const std::vector<v1::JobState>& states, int limit, std::int64_t before_seq) {
+  return parts_.store.List(states, limit, before_seq);
+}
+
+v1::Job JobCoordinator::Cancel(const std::string& id) {
+  std::lock_guard lock(mutex_);
+  auto stored = Load(id);
+  auto& job = stored.job;
+  if (Terminal(job.state())) {
+    endorecon::Fail(ErrorCode::kFailedPrecondition, "job " + id + " is already " + v1::JobState_Name(job.state()));
+  }
+  if (job.state() == v1::QUEUED) {
+    parts_.scheduler.Remove(id);
+    Finish(job, v1::CANCELLED, "cancelled by request while queued");
+  } else {
+    job.set_cancel_requested(true);
+    Save(job);
+  }
+  return job;
+}
+
+std::optional<JobCoordinator::Granted> JobCoordinator::Lease(const std::string& worker_id, Clock::time_point deadline) {
+  parts_.workers.Touch(worker_id);
+  while (true) {
+    const auto next = parts_.scheduler.PopWait(deadline);
+    if (!next) return std::nullopt;
+    std::lock_guard lock(mutex_);
+    auto stored = parts_.store.Get(*next);
+    if (!stored || stored->job.state() != v1::QUEUED) continue;
+    auto& job = stored->job;
+    const auto lease = parts_.leases.Grant(job.id(), worker_id, Clock::now());
+    job.set_state(v1::RUNNING);
+    job.set_lease_id(lease.id);
+    job.set_worker_id(worker_id);
+    job.set_started_unix_ms(NowUnixMs());
+    Save(job);
+    parts_.workers.AddJob(worker_id, job.id());
+    spdlog::info("job {} leased to {} (attempt {})", job.id(), worker_id, job.attempts() + 1);
+    return Granted{job, lease.id, job.attempts() + 1};
+  }
+}
+
+v1::ProgressReply::Action JobCoordinator::Report(const v1::ProgressUpdate& update) {
+  std::lock_guard lock(mutex_);
+  const auto lease = parts_.leases.Renew(update.lease_id(), Clock::now());
+  if (!lease) return v1::ProgressReply::STOP_LEASE_LOST;
+  parts_.workers.Touch(lease->worker_id);
+  auto stored = Load(lease->job_id);
+  auto& job = stored.job;
+  if (job.cancel_requested()) {
+    Finish(job, v1::CANCELLED, "cancelled by request while running on " + job.worker_id());
+    return v1::ProgressReply::STOP_CANCELLED;
+  }
+  bool changed = false;
+  if (update.has_checkpoint() && parts_.blobs.Has(update.checkpoint().sha256())) {
+    *job.mutable_checkpoint() = update.checkpoint();
+    changed = true;
+  }
+  if (update.has_progress()) {
+    *job.mutable_progress() = update.progress();
+    parts_.store.Update(job);
+    parts_.hub.PublishProgress(job.id(), update.progress());
+  } else if (changed) {
+    parts_.store.Update(job);
+  }
+  if (update.has_preview()) parts_.hub.PublishPreview(job.id(), update.preview());
+  return v1::ProgressReply::CONTINUE;
+}
+
+v1::Job JobCoordinator::Complete(const v1::CompleteRequest& request) {
+  ValidateManifest(request.result());
+  std::lock_guard lock(mutex_);
+  auto stored = LoadLeased(request.lease_id());
+  RequireBlobs(parts_.blobs, request.result(), "result");
+  auto& job = stored.job;
+  *job.mutable_result() = request.result();
+  job.set_summary_json(request.summary_json());
+  Finish(job, v1::SUCCEEDED, "");
+  return job;
+}
+
+v1::Job JobCoordinator::Fail(const v1::FailRequest& request) {
+  std::lock_guard lock(mutex_);
+  auto stored = LoadLeased(request.lease_id());
+  auto& job = stored.job;
+  const std::string reason = request.reason().empty() ? "the worker gave no reason" : request.reason();
+  if (job.cancel_requested()) {
+    Finish(job, v1::CANCELLED, "cancelled by request while running on " + job.worker_id());
+  } else if (request.retry()) {
+    Requeue(stored, !request.release(), "worker " + job.worker_id() + ": " + reason);
+  } else {
+    Finish(job, v1::FAILED, "worker " + job.worker_id() + ": " + reason);
+  }
+  return job;
+}
+
+void JobCoordinator::CheckLease(const std::string& lease_id) {
+  std::lock_guard lock(mutex_);
+  LoadLeased(lease_id);
+}
+
+void JobCoordinator::ExpireLeases(Clock::time_point now) {
+  const auto expired = parts_.leases.TakeExpired(now);
+  if (expired.empty()) return;
+  std::lock_guard lock(mutex_);
+  for (const auto& lease : expired) {
+    auto stored = parts_.store.Get(lease.job_id);
+    if (!stored || stored->job.state() != v1::RUNNING || stored->job.lease_id() != lease.id) continue;
+    parts_.metrics.LeaseExpired();
+    const std::string reason = "worker " + lease.worker_id + " stopped reporting; its lease expired";
+    if (stored->job.cancel_requested()) {
+      Finish(stored->job, v1::CANCELLED, "cancelled by request; " + reason);
+    } else {
+      Requeue(*stored, true, reason);
+    }
+  }
+}
+
+}  // namespace endorecon::server

@@ -1,0 +1,37 @@
+// JobService (proto/endorecon/v1/job_service.proto): the user-facing API, a thin adapter from
+// gRPC onto the JobCoordinator, the UploadReceiver and the blob store.
+#pragma once
+
+#include <chrono>
+
+#include "endorecon/v1/job_service.grpc.pb.h"
+#include "server/job_coordinator.h"
+#include "server/upload_receiver.h"
+
+namespace endorecon::server {
+
+class JobServiceImpl final : public v1::JobService::Service {
+ public:
+  JobServiceImpl(JobCoordinator& coordinator, UploadReceiver& uploads, BlobStore& blobs, WatchHub& hub,
+                 WorkerRegistry& workers, Metrics& metrics);
+
+  grpc::Status QueryUpload(grpc::ServerContext*, const v1::Manifest*, v1::UploadStatus*) override;
+  grpc::Status Upload(grpc::ServerContext*, grpc::ServerReader<v1::UploadRequest>*, v1::UploadStatus*) override;
+  grpc::Status Submit(grpc::ServerContext*, const v1::SubmitRequest*, v1::Job*) override;
+  grpc::Status Get(grpc::ServerContext*, const v1::GetJobRequest*, v1::Job*) override;
+  grpc::Status List(grpc::ServerContext*, const v1::ListJobsRequest*, v1::ListJobsResponse*) override;
+  grpc::Status Cancel(grpc::ServerContext*, const v1::CancelJobRequest*, v1::Job*) override;
+  grpc::Status Watch(grpc::ServerContext*, const v1::WatchJobRequest*, grpc::ServerWriter<v1::JobEvent>*) override;
+  grpc::Status Fetch(grpc::ServerContext*, const v1::FetchRequest*, grpc::ServerWriter<v1::FileChunk>*) override;
+  grpc::Status ListWorkers(grpc::ServerContext*, const v1::ListWorkersRequest*, v1::ListWorkersResponse*) override;
+
+ private:
+  JobCoordinator& coordinator_;
+  UploadReceiver& uploads_;
+  BlobStore& blobs_;
+  WatchHub& hub_;
+  WorkerRegistry& workers_;
+  Metrics& metrics_;
+};
+
+}  // namespace endorecon::server

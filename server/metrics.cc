@@ -1,0 +1,67 @@
+#include "server/metrics.h"
+
+namespace endorecon::server {
+namespace {
+
+using prometheus::BuildCounter;
+using prometheus::BuildGauge;
+using prometheus::BuildHistogram;
+
+prometheus::Counter& Counter(prometheus::Registry& registry, const std::string& name, const std::string& help) {
+  return BuildCounter().Name(name).Help(help).Register(registry).Add({});
+}
+
+prometheus::Gauge& Gauge(prometheus::Registry& registry, const std::string& name, const std::string& help) {
+  return BuildGauge().Name(name).Help(help).Register(registry).Add({});
+}
+
+}  // namespace
+
+Metrics::Metrics(const std::string& bind_address)
+    : registry_(std::make_shared<prometheus::Registry>()),
+      jobs_(BuildGauge().Name("endorecon_jobs").Help("Jobs in each state").Register(*registry_)),
+      queue_depth_(Gauge(*registry_, "endorecon_queue_depth", "Queued jobs waiting for a worker")),
+      submitted_(Counter(*registry_, "endorecon_jobs_submitted_total", "Jobs submitted")),
+      completed_(Counter(*registry_, "endorecon_jobs_completed_total", "Jobs that succeeded")),
+      failed_(Counter(*registry_, "endorecon_jobs_failed_total", "Jobs that failed")),
+      cancelled_(Counter(*registry_, "endorecon_jobs_cancelled_total", "Jobs cancelled")),
+      duration_(BuildHistogram()
+                    .Name("endorecon_job_duration_seconds")
+                    .Help("Run time of successful jobs, from lease to completion")
+                    .Register(*registry_)
+                    .Add({}, prometheus::Histogram::BucketBoundaries{10, 30, 60, 120, 300, 600, 1800, 3600, 7200,
+                                                                     14400, 43200, 86400})),
+      upload_bytes_(Counter(*registry_, "endorecon_upload_bytes_total", "Bytes committed by uploads")),
+      download_bytes_(Counter(*registry_, "endorecon_download_bytes_total", "Bytes sent by downloads")),
+      workers_connected_(Gauge(*registry_, "endorecon_workers_connected", "Workers heard from recently")),
+      lease_expiries_(Counter(*registry_, "endorecon_lease_expiries_total", "Leases that expired")) {
+  for (const auto state : {v1::QUEUED, v1::RUNNING, v1::SUCCEEDED, v1::FAILED, v1::CANCELLED}) {
+    jobs_.Add({{"state", v1::JobState_Name(state)}}).Set(0);
+  }
+  if (!bind_address.empty()) {
+    exposer_ = std::make_unique<prometheus::Exposer>(bind_address);
+    exposer_->RegisterCollectable(registry_);
+  }
+}
+
+int Metrics::port() const { return exposer_ ? exposer_->GetListeningPorts().at(0) : 0; }
+
+void Metrics::JobFinished(v1::JobState state, double run_seconds) {
+  if (state == v1::SUCCEEDED) {
+    completed_.Increment();
+    if (run_seconds >= 0) duration_.Observe(run_seconds);
+  } else if (state == v1::FAILED) {
+    failed_.Increment();
+  } else if (state == v1::CANCELLED) {
+    cancelled_.Increment();
+  }
+}
+
+void Metrics::SetJobsByState(const std::map<v1::JobState, std::int64_t>& counts) {
+  for (const auto state : {v1::QUEUED, v1::RUNNING, v1::SUCCEEDED, v1::FAILED, v1::CANCELLED}) {
+    const auto found = counts.find(state);
+    jobs_.Add({{"state", v1::JobState_Name(state)}}).Set(found == counts.end() ? 0.0 : static_cast<double>(found->second));
+  }
+}
+
+}  // namespace endorecon::server

@@ -1,0 +1,63 @@
+// The server's Prometheus metrics (prometheus-cpp), served at http://<bind>/metrics.
+//   endorecon_jobs{state}                    gauge: jobs in each state
+//   endorecon_queue_depth                    gauge: queued jobs waiting for a worker
+//   endorecon_jobs_submitted_total           counter
+//   endorecon_jobs_completed_total           counter: SUCCEEDED
+//   endorecon_jobs_failed_total              counter
+//   endorecon_jobs_cancelled_total           counter
+//   endorecon_job_duration_seconds           histogram: lease to SUCCEEDED of the successful attempt
+//   endorecon_upload_bytes_total             counter: bytes committed by uploads (clients and workers)
+//   endorecon_download_bytes_total           counter: bytes sent by downloads (results, clips, checkpoints)
+//   endorecon_workers_connected              gauge: workers heard from within the liveness window
+//   endorecon_lease_expiries_total           counter: leases that expired (worker vanished)
+#pragma once
+
+#include <prometheus/counter.h>
+#include <prometheus/exposer.h>
+#include <prometheus/gauge.h>
+#include <prometheus/histogram.h>
+#include <prometheus/registry.h>
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+
+#include "endorecon/v1/job.pb.h"
+
+namespace endorecon::server {
+
+class Metrics {
+ public:
+  // Serves the metrics on `bind_address` ("127.0.0.1:9464"; port 0 picks one); empty: not served.
+  explicit Metrics(const std::string& bind_address);
+  // The port actually bound (0 when not served).
+  int port() const;
+
+  void JobSubmitted() { submitted_.Increment(); }
+  // Counts a job reaching SUCCEEDED, FAILED or CANCELLED; `run_seconds` >= 0 is observed for SUCCEEDED.
+  void JobFinished(v1::JobState state, double run_seconds);
+  void LeaseExpired() { lease_expiries_.Increment(); }
+  void UploadBytes(std::int64_t bytes) { upload_bytes_.Increment(static_cast<double>(bytes)); }
+  void DownloadBytes(std::int64_t bytes) { download_bytes_.Increment(static_cast<double>(bytes)); }
+  void SetJobsByState(const std::map<v1::JobState, std::int64_t>& counts);
+  void SetQueueDepth(std::size_t depth) { queue_depth_.Set(static_cast<double>(depth)); }
+  void SetWorkersConnected(int workers) { workers_connected_.Set(workers); }
+
+ private:
+  std::shared_ptr<prometheus::Registry> registry_;
+  std::unique_ptr<prometheus::Exposer> exposer_;
+  prometheus::Family<prometheus::Gauge>& jobs_;
+  prometheus::Gauge& queue_depth_;
+  prometheus::Counter& submitted_;
+  prometheus::Counter& completed_;
+  prometheus::Counter& failed_;
+  prometheus::Counter& cancelled_;
+  prometheus::Histogram& duration_;
+  prometheus::Counter& upload_bytes_;
+  prometheus::Counter& download_bytes_;
+  prometheus::Gauge& workers_connected_;
+  prometheus::Counter& lease_expiries_;
+};
+
+}  // namespace endorecon::server

@@ -1,0 +1,38 @@
+// The queue of runnable jobs, in memory (rebuilt from the JobStore at start): highest priority
+// first, then oldest (lowest sequence number). Workers long-poll it. Thread-safe.
+#pragma once
+
+#include <chrono>
+#include <condition_variable>
+#include <cstdint>
+#include <map>
+#include <mutex>
+#include <optional>
+#include <set>
+#include <string>
+#include <tuple>
+
+namespace endorecon::server {
+
+class Scheduler {
+ public:
+  // Queues `job_id` (again, if it was queued before: the old entry is replaced).
+  void Push(const std::string& job_id, int priority, std::int64_t seq);
+  // Removes a queued job; false if it was not queued.
+  bool Remove(const std::string& job_id);
+  // The next job, waiting until `deadline` for one; nullopt on timeout or after Shutdown().
+  std::optional<std::string> PopWait(std::chrono::steady_clock::time_point deadline);
+  std::size_t Depth() const;
+  // Wakes every waiter for good.
+  void Shutdown();
+
+ private:
+  using Key = std::tuple<int, std::int64_t, std::string>;  // (-priority, seq, id)
+  mutable std::mutex mutex_;
+  std::condition_variable ready_;
+  std::set<Key> queue_;
+  std::map<std::string, Key> keys_;
+  bool shutdown_ = false;
+};
+
+}  // namespace endorecon::server

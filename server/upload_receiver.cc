@@ -1,0 +1,87 @@
+#include "server/upload_receiver.h"
+
+#include <filesystem>
+#include <map>
+#include <memory>
+
+#include "common/error.h"
+#include "common/manifest.h"
+#include "common/transport_security.h"
+
+namespace endorecon::server {
+
+UploadReceiver::UploadReceiver(BlobStore& blobs, std::int64_t max_upload_bytes,
+                               std::function<void(std::int64_t)> on_bytes)
+    : blobs_(blobs), max_upload_bytes_(max_upload_bytes), on_bytes_(std::move(on_bytes)) {}
+
+v1::UploadStatus UploadReceiver::Query(const v1::Manifest& manifest) const {
+  ValidateManifest(manifest);
+  const std::int64_t total = TotalBytes(manifest);
+  if (total > max_upload_bytes_) {
+    Fail(ErrorCode::kResourceExhausted, "upload of " + std::to_string(total) + " bytes exceeds the server's limit of " +
+                                            std::to_string(max_upload_bytes_) + " bytes (--max-upload-bytes)");
+  }
+  v1::UploadStatus status;
+  std::int64_t committed = 0;
+  for (const auto& entry : manifest.files()) {
+    auto* file = status.add_files();
+    file->set_path(entry.path());
+    file->set_size(entry.size());
+    file->set_committed(blobs_.Committed(entry));
+    committed += file->committed();
+  }
+  const auto free_bytes = static_cast<std::int64_t>(std::filesystem::space(blobs_.root()).available);
+  if (total - committed > free_bytes) {
+    Fail(ErrorCode::kResourceExhausted, "upload needs " + std::to_string(total - committed) + " more bytes but only " +
+                                            std::to_string(free_bytes) + " are free on the server's disk");
+  }
+  status.set_committed_bytes(committed);
+  status.set_total_bytes(total);
+  bool complete = true;
+  for (const auto& entry : manifest.files()) complete = complete && blobs_.Has(entry.sha256());
+  status.set_complete(complete);
+  return status;
+}
+
+v1::UploadStatus UploadReceiver::Receive(grpc::ServerReaderInterface<v1::UploadRequest>& reader) {
+  v1::UploadRequest request;
+  if (!reader.Read(&request)) FailInvalid("empty upload stream: the first message must be the manifest");
+  if (!request.has_manifest()) {
+    FailInvalid("the first message of an upload must be its manifest, got a chunk of '" + request.chunk().path() + "'");
+  }
+  const v1::Manifest manifest = request.manifest();
+  Query(manifest);
+  std::map<std::string, const v1::FileEntry*> entries;
+  for (const auto& entry : manifest.files()) entries[entry.path()] = &entry;
+
+  std::unique_ptr<BlobStore::Writer> writer;
+  std::string writer_path;
+  while (reader.Read(&request)) {
+    if (request.has_manifest()) FailInvalid("a second manifest in one upload stream; open a new stream instead");
+    const auto& chunk = request.chunk();
+    const auto found = entries.find(chunk.path());
+    if (found == entries.end()) FailInvalid("chunk of '" + chunk.path() + "', which is not in the manifest");
+    if (chunk.data().size() > static_cast<std::size_t>(kChunkBytes)) {
+      FailInvalid("chunk of '" + chunk.path() + "' carries " + std::to_string(chunk.data().size()) +
+                  " bytes; at most " + std::to_string(kChunkBytes) + " per chunk");
+    }
+    const v1::FileEntry& entry = *found->second;
+    if (blobs_.Has(entry.sha256())) continue;  // another upload completed the same content meanwhile
+    if (writer_path != entry.path()) {
+      writer.reset();
+      writer = blobs_.OpenWriter(entry);
+      writer_path = entry.path();
+    }
+    writer->Append(chunk.offset(), chunk.data());
+    if (on_bytes_) on_bytes_(static_cast<std::int64_t>(chunk.data().size()));
+    if (writer->full()) {
+      const auto promoting = std::move(writer);
+      writer_path.clear();
+      promoting->Promote();
+    }
+  }
+  writer.reset();
+  return Query(manifest);
+}
+
+}  // namespace endorecon::server

@@ -1,0 +1,35 @@
+// The receiving side of uploads (JobService.Upload from clients, WorkerService.PutBlobs from
+// workers): a manifest first, then chunks continuing each file from its committed size.
+// Rejections: no manifest first or a second manifest, an unsafe or unknown path, a chunk over
+// 4 MiB or past its file's size (INVALID_ARGUMENT); an upload over the size limit or the free disk
+// (RESOURCE_EXHAUSTED, before any byte is written); a wrong digest (DATA_LOSS; the bytes are
+// discarded). A stream that ends early keeps its committed bytes for the next one.
+#pragma once
+
+#include <grpcpp/support/sync_stream.h>
+
+#include <cstdint>
+#include <functional>
+
+#include "endorecon/v1/files.pb.h"
+#include "server/blob_store.h"
+
+namespace endorecon::server {
+
+class UploadReceiver {
+ public:
+  // `on_bytes` is told every committed chunk's size (for the metrics).
+  UploadReceiver(BlobStore& blobs, std::int64_t max_upload_bytes, std::function<void(std::int64_t)> on_bytes);
+
+  // Validates `manifest` (and the size limit) and says how much of each file is committed.
+  v1::UploadStatus Query(const v1::Manifest& manifest) const;
+  // Consumes one upload stream. Throws Error as described above.
+  v1::UploadStatus Receive(grpc::ServerReaderInterface<v1::UploadRequest>& reader);
+
+ private:
+  BlobStore& blobs_;
+  std::int64_t max_upload_bytes_;
+  std::function<void(std::int64_t)> on_bytes_;
+};
+
+}  // namespace endorecon::server

@@ -1,0 +1,71 @@
+#include "server/watch_hub.h"
+
+namespace endorecon::server {
+namespace {
+
+bool Terminal(v1::JobState state) { return state == v1::SUCCEEDED || state == v1::FAILED || state == v1::CANCELLED; }
+
+}  // namespace
+
+std::shared_ptr<WatchHub::Entry> WatchHub::EntryOf(const std::string& job_id) {
+  std::lock_guard lock(mutex_);
+  auto& entry = entries_[job_id];
+  if (!entry) entry = std::make_shared<Entry>();
+  return entry;
+}
+
+template <typename Update>
+void WatchHub::Publish(const std::string& job_id, Update&& update) {
+  const auto entry = EntryOf(job_id);
+  {
+    std::lock_guard lock(entry->mutex);
+    update(*entry, ++entry->version);
+  }
+  entry->changed.notify_all();
+}
+
+void WatchHub::PublishJob(const v1::Job& job) {
+  Publish(job.id(), [&](Entry& entry, std::uint64_t version) {
+    entry.job = Versioned<v1::Job>{version, job};
+    entry.job->value.clear_clip();
+    entry.job->value.clear_result();
+    if (Terminal(job.state())) entry.previews.clear();
+  });
+}
+
+void WatchHub::PublishProgress(const std::string& job_id, const v1::Progress& progress) {
+  Publish(job_id, [&](Entry& entry, std::uint64_t version) { entry.progress = Versioned<v1::Progress>{version, progress}; });
+}
+
+void WatchHub::PublishPreview(const std::string& job_id, const v1::Preview& preview) {
+  Publish(job_id, [&](Entry& entry, std::uint64_t version) {
+    entry.previews[preview.kind()] = Versioned<v1::Preview>{version, preview};
+  });
+}
+
+WatchHub::Changes WatchHub::Wait(const std::string& job_id, std::uint64_t seen,
+                                 std::chrono::steady_clock::time_point deadline) {
+  const auto entry = EntryOf(job_id);
+  Changes changes;
+  std::unique_lock lock(entry->mutex);
+  entry->changed.wait_until(lock, deadline, [&] {
+    std::lock_guard hub_lock(mutex_);
+    return shutdown_ || entry->version > seen;
+  });
+  changes.version = entry->version;
+  if (entry->version <= seen) return changes;
+  if (entry->job && entry->job->version > seen) changes.job = entry->job->value;
+  if (entry->progress && entry->progress->version > seen) changes.progress = entry->progress->value;
+  for (const auto& [kind, preview] : entry->previews) {
+    if (preview.version > seen) changes.previews.push_back(preview.value);
+  }
+  return changes;
+}
+
+void WatchHub::Shutdown() {
+  std::lock_guard lock(mutex_);
+  shutdown_ = true;
+  for (auto& [id, entry] : entries_) entry->changed.notify_all();
+}
+
+}  // namespace endorecon::server

@@ -1,0 +1,61 @@
+// What watchers of a job see: the latest job snapshot, progress and preview of each kind, each
+// with the version at which it was published. A watcher asks for what changed since the version
+// it saw last, so a slow watcher skips stale progress instead of queueing it (memory stays bounded
+// however many watchers there are). In memory. Thread-safe.
+#pragma once
+
+#include <chrono>
+#include <condition_variable>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "endorecon/v1/job.pb.h"
+
+namespace endorecon::server {
+
+class WatchHub {
+ public:
+  struct Changes {
+    std::uint64_t version = 0;  // pass back as `seen` to the next Wait
+    std::optional<v1::Job> job;
+    std::optional<v1::Progress> progress;
+    std::vector<v1::Preview> previews;
+  };
+
+  void PublishJob(const v1::Job& job);  // a terminal job's previews are dropped
+  void PublishProgress(const std::string& job_id, const v1::Progress& progress);
+  void PublishPreview(const std::string& job_id, const v1::Preview& preview);
+  // Returns what was published for `job_id` after version `seen`, waiting until `deadline` for
+  // something (an empty Changes on timeout or after Shutdown()).
+  Changes Wait(const std::string& job_id, std::uint64_t seen, std::chrono::steady_clock::time_point deadline);
+  void Shutdown();
+
+ private:
+  template <typename T>
+  struct Versioned {
+    std::uint64_t version = 0;
+    T value;
+  };
+  struct Entry {
+    std::mutex mutex;
+    std::condition_variable changed;
+    std::uint64_t version = 0;
+    std::optional<Versioned<v1::Job>> job;
+    std::optional<Versioned<v1::Progress>> progress;
+    std::map<std::string, Versioned<v1::Preview>> previews;  // by kind
+  };
+  std::shared_ptr<Entry> EntryOf(const std::string& job_id);
+  template <typename Update>
+  void Publish(const std::string& job_id, Update&& update);
+
+  std::mutex mutex_;
+  std::map<std::string, std::shared_ptr<Entry>> entries_;
+  bool shutdown_ = false;
+};
+
+}  // namespace endorecon::server

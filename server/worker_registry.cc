@@ -1,0 +1,66 @@
+#include "server/worker_registry.h"
+
+namespace endorecon::server {
+namespace {
+
+std::int64_t UnixMs() {
+  return std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+}  // namespace
+
+WorkerRegistry::Entry& WorkerRegistry::At(const std::string& worker_id) {
+  auto& entry = workers_[worker_id];
+  entry.info.set_id(worker_id);
+  entry.info.set_last_seen_unix_ms(UnixMs());
+  entry.last_seen = std::chrono::steady_clock::now();
+  return entry;
+}
+
+void WorkerRegistry::Register(const std::string& worker_id, const std::string& hostname,
+                              const std::vector<std::string>& devices) {
+  std::lock_guard lock(mutex_);
+  auto& entry = At(worker_id);
+  entry.info.set_hostname(hostname);
+  entry.info.clear_devices();
+  for (const auto& device : devices) entry.info.add_devices(device);
+}
+
+void WorkerRegistry::Touch(const std::string& worker_id) {
+  std::lock_guard lock(mutex_);
+  At(worker_id);
+}
+
+void WorkerRegistry::AddJob(const std::string& worker_id, const std::string& job_id) {
+  std::lock_guard lock(mutex_);
+  At(worker_id).jobs.insert(job_id);
+}
+
+void WorkerRegistry::RemoveJob(const std::string& worker_id, const std::string& job_id) {
+  std::lock_guard lock(mutex_);
+  if (const auto found = workers_.find(worker_id); found != workers_.end()) found->second.jobs.erase(job_id);
+}
+
+std::vector<v1::WorkerInfo> WorkerRegistry::List() const {
+  std::lock_guard lock(mutex_);
+  const auto now = std::chrono::steady_clock::now();
+  std::vector<v1::WorkerInfo> list;
+  for (const auto& [id, entry] : workers_) {
+    v1::WorkerInfo info = entry.info;
+    info.set_alive(now - entry.last_seen <= alive_window_);
+    for (const auto& job : entry.jobs) info.add_job_ids(job);
+    list.push_back(info);
+  }
+  return list;
+}
+
+int WorkerRegistry::CountAlive() const {
+  std::lock_guard lock(mutex_);
+  const auto now = std::chrono::steady_clock::now();
+  int alive = 0;
+  for (const auto& [id, entry] : workers_) alive += now - entry.last_seen <= alive_window_ ? 1 : 0;
+  return alive;
+}
+
+}  // namespace endorecon::server

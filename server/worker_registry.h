@@ -1,0 +1,41 @@
+// The workers the server has heard from: any worker call (Register, Lease, Report) counts as a
+// sign of life, so workers need not re-register after a server restart. In memory. Thread-safe.
+#pragma once
+
+#include <chrono>
+#include <map>
+#include <mutex>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "endorecon/v1/job_service.pb.h"
+
+namespace endorecon::server {
+
+class WorkerRegistry {
+ public:
+  // A worker counts as alive (connected) for `alive_window` after its last call.
+  explicit WorkerRegistry(std::chrono::milliseconds alive_window) : alive_window_(alive_window) {}
+
+  void Register(const std::string& worker_id, const std::string& hostname, const std::vector<std::string>& devices);
+  void Touch(const std::string& worker_id);
+  void AddJob(const std::string& worker_id, const std::string& job_id);
+  void RemoveJob(const std::string& worker_id, const std::string& job_id);
+  std::vector<v1::WorkerInfo> List() const;
+  int CountAlive() const;
+
+ private:
+  struct Entry {
+    v1::WorkerInfo info;
+    std::set<std::string> jobs;
+    std::chrono::steady_clock::time_point last_seen;
+  };
+  Entry& At(const std::string& worker_id);
+
+  std::chrono::milliseconds alive_window_;
+  mutable std::mutex mutex_;
+  std::map<std::string, Entry> workers_;
+};
+
+}  // namespace endorecon::server

@@ -1,0 +1,115 @@
+#include "server/worker_service.h"
+
+#include <filesystem>
+
+#include "common/error.h"
+#include "common/grpc_status.h"
+#include "server/file_sender.h"
+
+namespace endorecon::server {
+
+WorkerServiceImpl::WorkerServiceImpl(JobCoordinator& coordinator, UploadReceiver& uploads, BlobStore& blobs,
+                                     WorkerRegistry& workers, Metrics& metrics, WorkerTiming timing)
+    : coordinator_(coordinator), uploads_(uploads), blobs_(blobs), workers_(workers), metrics_(metrics), timing_(timing) {}
+
+grpc::Status WorkerServiceImpl::Register(grpc::ServerContext*, const v1::RegisterRequest* request,
+                                         v1::RegisterResponse* response) {
+  return GuardStatus([&] {
+    if (request->worker_id().empty()) FailInvalid("worker_id is empty");
+    workers_.Register(request->worker_id(), request->hostname(),
+                      std::vector<std::string>(request->devices().begin(), request->devices().end()));
+    response->set_lease_ttl_ms(timing_.lease_ttl.count());
+    response->set_heartbeat_interval_ms(timing_.heartbeat_interval.count());
+    return grpc::Status::OK;
+  });
+}
+
+grpc::Status WorkerServiceImpl::Lease(grpc::ServerContext* context, const v1::LeaseRequest* request,
+                                      v1::LeaseResponse* response) {
+  return GuardStatus([&] {
+    if (request->worker_id().empty()) FailInvalid("worker_id is empty");
+    const auto wait = std::min(std::chrono::milliseconds(std::max<std::int64_t>(request->wait_ms(), 0)),
+                               timing_.max_lease_wait);
+    // Answer a little before the caller's deadline, so an empty poll is not an error.
+    const auto caller_left = std::chrono::duration_cast<std::chrono::milliseconds>(
+        context->deadline() - std::chrono::system_clock::now() - std::chrono::milliseconds(500));
+    const auto deadline = Clock::now() + std::max(std::chrono::milliseconds(0), std::min(wait, caller_left));
+    auto granted = coordinator_.Lease(request->worker_id(), deadline);
+    if (!granted) return grpc::Status::OK;
+    if (context->IsCancelled()) {
+      v1::FailRequest release;
+      release.set_lease_id(granted->lease_id);
+      release.set_retry(true);
+      release.set_release(true);
+      release.set_reason("the lease call was cancelled before the worker got the job");
+      coordinator_.Fail(release);
+      return grpc::Status(grpc::StatusCode::CANCELLED, "lease call cancelled");
+    }
+    *response->mutable_job() = std::move(granted->job);
+    response->set_lease_id(granted->lease_id);
+    response->set_attempt(granted->attempt);
+    return grpc::Status::OK;
+  });
+}
+
+grpc::Status WorkerServiceImpl::Report(grpc::ServerContext*,
+                                       grpc::ServerReaderWriter<v1::ProgressReply, v1::ProgressUpdate>* stream) {
+  return GuardStatus([&] {
+    v1::ProgressUpdate update;
+    while (stream->Read(&update)) {
+      v1::ProgressReply reply;
+      reply.set_action(coordinator_.Report(update));
+      if (!stream->Write(reply) || reply.action() != v1::ProgressReply::CONTINUE) break;
+    }
+    return grpc::Status::OK;
+  });
+}
+
+grpc::Status WorkerServiceImpl::Complete(grpc::ServerContext*, const v1::CompleteRequest* request, v1::Job* job) {
+  return GuardStatus([&] {
+    *job = coordinator_.Complete(*request);
+    return grpc::Status::OK;
+  });
+}
+
+grpc::Status WorkerServiceImpl::Fail(grpc::ServerContext*, const v1::FailRequest* request, v1::Job* job) {
+  return GuardStatus([&] {
+    *job = coordinator_.Fail(*request);
+    return grpc::Status::OK;
+  });
+}
+
+grpc::Status WorkerServiceImpl::QueryBlobs(grpc::ServerContext*, const v1::Manifest* manifest,
+                                           v1::UploadStatus* status) {
+  return GuardStatus([&] {
+    *status = uploads_.Query(*manifest);
+    return grpc::Status::OK;
+  });
+}
+
+grpc::Status WorkerServiceImpl::PutBlobs(grpc::ServerContext*, grpc::ServerReader<v1::UploadRequest>* reader,
+                                         v1::UploadStatus* status) {
+  return GuardStatus([&] {
+    *status = uploads_.Receive(*reader);
+    return grpc::Status::OK;
+  });
+}
+
+grpc::Status WorkerServiceImpl::GetBlobs(grpc::ServerContext*, const v1::GetBlobsRequest* request,
+                                         grpc::ServerWriter<v1::FileChunk>* writer) {
+  return GuardStatus([&] {
+    coordinator_.CheckLease(request->lease_id());
+    std::vector<std::pair<v1::FileEntry, std::int64_t>> files;
+    for (const auto& range : request->files()) {
+      v1::FileEntry entry;
+      entry.set_path(range.path());
+      entry.set_sha256(range.sha256());
+      entry.set_size(static_cast<std::int64_t>(std::filesystem::file_size(blobs_.PathOf(range.sha256()))));
+      files.emplace_back(entry, range.offset());
+    }
+    metrics_.DownloadBytes(SendFiles(blobs_, files, *writer));
+    return grpc::Status::OK;
+  });
+}
+
+}  // namespace endorecon::server
