@@ -1,11 +1,11 @@
 #include "worker/engine/eval/curve_plot.h"
 
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <regex>
 #include <string>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 #include "common/error.h"
 #include "tests/unit/temp_dir.h"

@@ -1,11 +1,11 @@
 #include "worker/engine/eval/depth_error.h"
 
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <cstdint>
-#include <vector>
-
-#include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+#include <vector>
 
 #include "common/error.h"
 

@@ -1,15 +1,15 @@
 #include "worker/engine/eval/exports.h"
 
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <limits>
-#include <string>
-#include <vector>
-
-#include <gtest/gtest.h>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <string>
+#include <vector>
 
 #include "common/error.h"
 #include "tests/unit/temp_dir.h"
@@ -29,7 +29,7 @@ TEST(Exports, FrameFileNamesAreSixDigits) {
 TEST(Exports, Png8ClampsAndRoundsInRgbOrder) {
   TempDir dir("exports");
   const std::vector<float> rgb = {1.0f, 0.5f, 0.0f, -0.2f, 1.7f, std::nanf(""), 0.2f, 0.4f, 0.6f,
-                                  0.0f, 0.0f, 1.0f, 0.1f, 0.1f, 0.1f, 0.9f, 0.9f, 0.9f};
+                                  0.0f, 0.0f, 1.0f, 0.1f,  0.1f, 0.1f,          0.9f, 0.9f, 0.9f};
   WritePng8(dir / "a.png", rgb, 3, 2);
   const cv::Mat back = cv::imread((dir / "a.png").string(), cv::IMREAD_UNCHANGED);
   ASSERT_EQ(back.type(), CV_8UC3);
@@ -92,7 +92,8 @@ TEST(Exports, PlyIsBinaryLittleEndianWithColours) {
   EXPECT_EQ(header.rfind("ply\nformat binary_little_endian 1.0\n", 0), 0u);
   EXPECT_NE(header.find("element vertex 2\n"), std::string::npos);
   EXPECT_NE(header.find("property float x\nproperty float y\nproperty float z\n"), std::string::npos);
-  EXPECT_NE(header.find("property uchar red\nproperty uchar green\nproperty uchar blue\n"), std::string::npos);
+  EXPECT_NE(header.find("property uchar red\nproperty uchar green\nproperty uchar blue\n"),
+            std::string::npos);
   ASSERT_EQ(bytes.size(), body + 2 * 15);
   float xyz[3];
   std::memcpy(xyz, bytes.data() + body + 15, sizeof xyz);
@@ -112,10 +113,10 @@ TEST(Exports, HeatmapUsesOneFixedScale) {
   const cv::Mat back = cv::imread((dir / "h.png").string(), cv::IMREAD_UNCHANGED);
   ASSERT_EQ(back.type(), CV_8UC3);
   const cv::Vec3b low = back.at<cv::Vec3b>(0, 0), high = back.at<cv::Vec3b>(0, 2);
-  EXPECT_LT(low[0] + low[1] + low[2], 30);     // inferno starts near black
-  EXPECT_GT(high[1] + high[2], 400);           // and ends pale yellow
-  EXPECT_EQ(back.at<cv::Vec3b>(1, 0), high);   // clamped above vmax
-  EXPECT_EQ(back.at<cv::Vec3b>(1, 2), low);    // clamped below vmin
+  EXPECT_LT(low[0] + low[1] + low[2], 30);    // inferno starts near black
+  EXPECT_GT(high[1] + high[2], 400);          // and ends pale yellow
+  EXPECT_EQ(back.at<cv::Vec3b>(1, 0), high);  // clamped above vmax
+  EXPECT_EQ(back.at<cv::Vec3b>(1, 2), low);   // clamped below vmin
   EXPECT_EQ(back.at<cv::Vec3b>(1, 1), cv::Vec3b(128, 128, 128));
   EXPECT_THROW(WriteHeatmapPng(dir / "x.png", values, 3, 2, 1.0, 1.0), Error);
 }

@@ -1,11 +1,11 @@
 #include "worker/engine/eval/image_metrics.h"
 
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <cstdint>
-#include <vector>
-
-#include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+#include <vector>
 
 #include "worker/engine/eval/psnr.h"
 
@@ -37,7 +37,8 @@ TEST(ImageMetrics, TissueNumbersIgnoreTheTool) {
 }
 
 TEST(ImageMetrics, FramesSerialiseWithSummaryAndNulls) {
-  const std::vector<ImageMetrics> frames = {{30, 0.9, 32, 0.92, 100}, {34, 0.8, std::nan(""), std::nan(""), 0}};
+  const std::vector<ImageMetrics> frames = {{30, 0.9, 32, 0.92, 100},
+                                            {34, 0.8, std::nan(""), std::nan(""), 0}};
   const nlohmann::json j = nlohmann::json::parse(ToJson(frames).dump());
   EXPECT_DOUBLE_EQ(j["psnr"]["mean"].get<double>(), 32.0);
   EXPECT_DOUBLE_EQ(j["psnr_tissue"]["mean"].get<double>(), 32.0);

@@ -1,10 +1,10 @@
 #include "worker/engine/eval/pixel_error.h"
 
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <cstdint>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 #include "common/error.h"
 

@@ -1,11 +1,11 @@
 #include "worker/engine/eval/ssim.h"
 
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <cstdint>
 #include <random>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 #include "common/error.h"
 

@@ -1,11 +1,11 @@
 #include "worker/engine/eval/summary.h"
 
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <limits>
-#include <vector>
-
-#include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+#include <vector>
 
 namespace endorecon::eval {
 namespace {

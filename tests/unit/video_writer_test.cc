@@ -1,11 +1,11 @@
 #include "worker/engine/eval/video_writer.h"
 
-#include <filesystem>
-#include <vector>
-
 #include <gtest/gtest.h>
+
+#include <filesystem>
 #include <opencv2/core.hpp>
 #include <opencv2/videoio.hpp>
+#include <vector>
 
 #include "common/error.h"
 #include "tests/unit/temp_dir.h"

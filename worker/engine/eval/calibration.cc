@@ -3,10 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <nlohmann/json.hpp>
 #include <numeric>
 #include <string>
-
-#include <nlohmann/json.hpp>
 
 #include "common/error.h"
 
@@ -155,7 +154,8 @@ CalibrationSummary SummariseCalibration(std::span<const Calibration> frames) {
 namespace {
 
 nlohmann::json CurvesJson(const SparsificationCurves& curves) {
-  return {{"fractions", curves.fractions}, {"by_uncertainty", curves.by_uncertainty}, {"oracle", curves.oracle}};
+  return {
+      {"fractions", curves.fractions}, {"by_uncertainty", curves.by_uncertainty}, {"oracle", curves.oracle}};
 }
 
 }  // namespace

@@ -4,10 +4,9 @@
 #pragma once
 
 #include <cstdint>
+#include <nlohmann/json_fwd.hpp>
 #include <span>
 #include <vector>
-
-#include <nlohmann/json_fwd.hpp>
 
 #include "worker/engine/eval/summary.h"
 
@@ -44,8 +43,8 @@ Calibration MeasureCalibration(std::span<const float> uncertainty, std::span<con
                                std::span<const std::uint8_t> tool_mask, int steps = kSparsificationSteps);
 
 struct CalibrationSummary {
-  Summary pearson, spearman, ause;    // mean ± std over frames
-  SparsificationCurves mean_curves;   // per-fraction mean over the frames that have curves
+  Summary pearson, spearman, ause;   // mean ± std over frames
+  SparsificationCurves mean_curves;  // per-fraction mean over the frames that have curves
 };
 
 // Summary over frames; all frames must use the same number of steps (InvalidArgument otherwise).

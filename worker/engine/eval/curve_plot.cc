@@ -21,11 +21,20 @@ std::string Escape(const std::string& text) {
   std::string out;
   for (char c : text) {
     switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      default:
+        out += c;
     }
   }
   return out;
@@ -43,7 +52,9 @@ std::string TickLabel(double value) {
   return text;
 }
 
-bool Plotted(const CurveSeries& s, std::size_t i) { return s.seconds[i] > 0 && std::isfinite(s.seconds[i]) && std::isfinite(s.psnr[i]); }
+bool Plotted(const CurveSeries& s, std::size_t i) {
+  return s.seconds[i] > 0 && std::isfinite(s.seconds[i]) && std::isfinite(s.psnr[i]);
+}
 
 struct Range {
   double lo = std::numeric_limits<double>::infinity(), hi = -std::numeric_limits<double>::infinity();
@@ -72,7 +83,9 @@ Range NiceRange(Range data, double& step) {
 
 LogAxis::LogAxis(double lo, double hi, double p0, double p1)
     : log_lo_(std::log10(lo)), scale_((p1 - p0) / (std::log10(hi) - std::log10(lo))), p0_(p0) {
-  if (!(lo > 0 && hi > lo)) FailInvalid("log axis: range [" + std::to_string(lo) + ", " + std::to_string(hi) + "] is not 0 < lo < hi");
+  if (!(lo > 0 && hi > lo))
+    FailInvalid("log axis: range [" + std::to_string(lo) + ", " + std::to_string(hi) +
+                "] is not 0 < lo < hi");
 }
 
 double LogAxis::operator()(double value) const { return p0_ + (std::log10(value) - log_lo_) * scale_; }
@@ -85,8 +98,8 @@ std::string CurveSvg(std::span<const CurveSeries> series, const CurvePlotOptions
   Range xs, ys;
   for (const CurveSeries& s : series) {
     if (s.seconds.size() != s.psnr.size()) {
-      FailInvalid("curve plot: series '" + s.label + "' has " + std::to_string(s.seconds.size()) + " times and " +
-                  std::to_string(s.psnr.size()) + " PSNR values");
+      FailInvalid("curve plot: series '" + s.label + "' has " + std::to_string(s.seconds.size()) +
+                  " times and " + std::to_string(s.psnr.size()) + " PSNR values");
     }
     for (std::size_t i = 0; i < s.seconds.size(); ++i) {
       if (!Plotted(s, i)) continue;
@@ -104,26 +117,26 @@ std::string CurveSvg(std::span<const CurveSeries> series, const CurvePlotOptions
 
   std::ostringstream svg;
   svg << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
-      << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << options.width << "\" height=\"" << options.height
-      << "\" viewBox=\"0 0 " << options.width << " " << options.height
+      << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << options.width << "\" height=\""
+      << options.height << "\" viewBox=\"0 0 " << options.width << " " << options.height
       << "\" font-family=\"sans-serif\" font-size=\"12\">\n"
       << "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n"
-      << "<text x=\"" << Num(w / 2) << "\" y=\"22\" text-anchor=\"middle\" font-size=\"15\">" << Escape(options.title)
-      << "</text>\n";
+      << "<text x=\"" << Num(w / 2) << "\" y=\"22\" text-anchor=\"middle\" font-size=\"15\">"
+      << Escape(options.title) << "</text>\n";
 
   svg << "<g class=\"x-axis\" stroke=\"#000\">\n";
   for (double decade = xr.lo; decade <= xr.hi * 1.0001; decade *= 10) {
     const double x = x_axis(decade);
     svg << "<line x1=\"" << Num(x) << "\" y1=\"" << Num(y1) << "\" x2=\"" << Num(x) << "\" y2=\"" << Num(y0)
         << "\" stroke=\"#ddd\"/>\n"
-        << "<line x1=\"" << Num(x) << "\" y1=\"" << Num(y0) << "\" x2=\"" << Num(x) << "\" y2=\"" << Num(y0 + 6)
-        << "\"/>\n"
+        << "<line x1=\"" << Num(x) << "\" y1=\"" << Num(y0) << "\" x2=\"" << Num(x) << "\" y2=\""
+        << Num(y0 + 6) << "\"/>\n"
         << "<text x=\"" << Num(x) << "\" y=\"" << Num(y0 + 20) << "\" text-anchor=\"middle\" stroke=\"none\">"
         << TickLabel(decade) << "</text>\n";
     for (int m = 2; m <= 9 && decade * m < xr.hi; ++m) {
       const double xm = x_axis(decade * m);
-      svg << "<line x1=\"" << Num(xm) << "\" y1=\"" << Num(y0) << "\" x2=\"" << Num(xm) << "\" y2=\"" << Num(y0 + 3)
-          << "\"/>\n";
+      svg << "<line x1=\"" << Num(xm) << "\" y1=\"" << Num(y0) << "\" x2=\"" << Num(xm) << "\" y2=\""
+          << Num(y0 + 3) << "\"/>\n";
     }
   }
   svg << "</g>\n<g class=\"y-axis\" stroke=\"#000\">\n";
@@ -131,8 +144,8 @@ std::string CurveSvg(std::span<const CurveSeries> series, const CurvePlotOptions
     const double y = y_axis(v);
     svg << "<line x1=\"" << Num(x0) << "\" y1=\"" << Num(y) << "\" x2=\"" << Num(x1) << "\" y2=\"" << Num(y)
         << "\" stroke=\"#ddd\"/>\n"
-        << "<line x1=\"" << Num(x0 - 6) << "\" y1=\"" << Num(y) << "\" x2=\"" << Num(x0) << "\" y2=\"" << Num(y)
-        << "\"/>\n"
+        << "<line x1=\"" << Num(x0 - 6) << "\" y1=\"" << Num(y) << "\" x2=\"" << Num(x0) << "\" y2=\""
+        << Num(y) << "\"/>\n"
         << "<text x=\"" << Num(x0 - 9) << "\" y=\"" << Num(y + 4) << "\" text-anchor=\"end\" stroke=\"none\">"
         << TickLabel(std::round(v / y_step) * y_step) << "</text>\n";
   }
@@ -163,12 +176,14 @@ std::string CurveSvg(std::span<const CurveSeries> series, const CurvePlotOptions
   }
   if (!series.empty()) {  // bottom right, where PSNR-against-time curves rarely are
     const double top = y0 - 8 - 18.0 * series.size();
-    svg << "<g class=\"legend\">\n<rect x=\"" << Num(x1 - 198) << "\" y=\"" << Num(top) << "\" width=\"192\" height=\""
-        << Num(18.0 * series.size() + 4) << "\" fill=\"white\" fill-opacity=\"0.85\" stroke=\"#999\"/>\n";
+    svg << "<g class=\"legend\">\n<rect x=\"" << Num(x1 - 198) << "\" y=\"" << Num(top)
+        << "\" width=\"192\" height=\"" << Num(18.0 * series.size() + 4)
+        << "\" fill=\"white\" fill-opacity=\"0.85\" stroke=\"#999\"/>\n";
     for (std::size_t k = 0; k < series.size(); ++k) {
       const double ly = top + 11 + 18.0 * k;
-      svg << "<line x1=\"" << Num(x1 - 190) << "\" y1=\"" << Num(ly) << "\" x2=\"" << Num(x1 - 160) << "\" y2=\""
-          << Num(ly) << "\" stroke=\"" << colour_of(k) << "\" stroke-width=\"2\"" << dash_of(k) << "/>\n"
+      svg << "<line x1=\"" << Num(x1 - 190) << "\" y1=\"" << Num(ly) << "\" x2=\"" << Num(x1 - 160)
+          << "\" y2=\"" << Num(ly) << "\" stroke=\"" << colour_of(k) << "\" stroke-width=\"2\"" << dash_of(k)
+          << "/>\n"
           << "<text x=\"" << Num(x1 - 154) << "\" y=\"" << Num(ly + 4) << "\">" << Escape(series[k].label)
           << "</text>\n";
     }

@@ -2,10 +2,9 @@
 
 #include <cmath>
 #include <limits>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "worker/engine/eval/image_size.h"
 #include "worker/engine/eval/summary.h"

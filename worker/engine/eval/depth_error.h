@@ -2,9 +2,8 @@
 #pragma once
 
 #include <cstdint>
-#include <span>
-
 #include <nlohmann/json_fwd.hpp>
+#include <span>
 
 namespace endorecon::eval {
 

@@ -5,7 +5,6 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
-
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -51,7 +50,8 @@ void WritePng8(const std::filesystem::path& path, std::span<const float> rgb, in
 }
 
 double DepthPngScale(double far) {
-  if (!std::isfinite(far) || far <= 0) FailInvalid("depth PNG scale: far " + std::to_string(far) + " is not > 0");
+  if (!std::isfinite(far) || far <= 0)
+    FailInvalid("depth PNG scale: far " + std::to_string(far) + " is not > 0");
   return 65535.0 / far;
 }
 
@@ -62,15 +62,17 @@ void WriteDepthPng16(const std::filesystem::path& path, std::span<const float> d
   auto* out = image.ptr<std::uint16_t>(0);
   for (std::size_t p = 0; p < depth.size(); ++p) {
     const double value = static_cast<double>(depth[p]) * scale;
-    out[p] = std::isfinite(value) && value > 0 ? static_cast<std::uint16_t>(std::lround(std::min(value, 65535.0)))
-                                               : 0;
+    out[p] = std::isfinite(value) && value > 0
+                 ? static_cast<std::uint16_t>(std::lround(std::min(value, 65535.0)))
+                 : 0;
   }
   WriteImage(path, image);
 }
 
 void WriteDepthNpy(const std::filesystem::path& path, std::span<const float> depth, int width, int height) {
   CheckImageSize(depth.size(), width, height, 1, "depth .npy " + path.string());
-  scene::WriteNpyFloat32(path, depth.data(), {static_cast<std::size_t>(height), static_cast<std::size_t>(width)});
+  scene::WriteNpyFloat32(path, depth.data(),
+                         {static_cast<std::size_t>(height), static_cast<std::size_t>(width)});
 }
 
 void WritePly(const std::filesystem::path& path, const PointCloud& cloud) {
@@ -96,8 +98,8 @@ void WriteHeatmapPng(const std::filesystem::path& path, std::span<const float> v
                      double vmin, double vmax) {
   CheckImageSize(values.size(), width, height, 1, "heat map " + path.string());
   if (!(vmax > vmin)) {
-    FailInvalid("heat map " + path.string() + ": range [" + std::to_string(vmin) + ", " + std::to_string(vmax) +
-                "] is empty");
+    FailInvalid("heat map " + path.string() + ": range [" + std::to_string(vmin) + ", " +
+                std::to_string(vmax) + "] is empty");
   }
   cv::Mat level(height, width, CV_8UC1);
   auto* out = level.ptr<std::uint8_t>(0);
@@ -114,13 +116,16 @@ void WriteHeatmapPng(const std::filesystem::path& path, std::span<const float> v
 }
 
 double HeatmapUpperBound(std::span<const std::vector<float>> frames, double quantile) {
-  if (!(quantile > 0 && quantile <= 1)) FailInvalid("heat map quantile " + std::to_string(quantile) + " not in (0, 1]");
+  if (!(quantile > 0 && quantile <= 1))
+    FailInvalid("heat map quantile " + std::to_string(quantile) + " not in (0, 1]");
   std::vector<float> all;
   for (const auto& frame : frames) {
-    std::copy_if(frame.begin(), frame.end(), std::back_inserter(all), [](float v) { return std::isfinite(v); });
+    std::copy_if(frame.begin(), frame.end(), std::back_inserter(all),
+                 [](float v) { return std::isfinite(v); });
   }
   if (all.empty()) return 1.0;
-  const std::size_t k = std::min(all.size() - 1, static_cast<std::size_t>(std::ceil(quantile * all.size())) - 1);
+  const std::size_t k =
+      std::min(all.size() - 1, static_cast<std::size_t>(std::ceil(quantile * all.size())) - 1);
   std::nth_element(all.begin(), all.begin() + static_cast<std::ptrdiff_t>(k), all.end());
   return all[k] > 0 ? all[k] : 1.0;
 }

@@ -1,9 +1,8 @@
 #include "worker/engine/eval/image_metrics.h"
 
 #include <algorithm>
-#include <vector>
-
 #include <nlohmann/json.hpp>
+#include <vector>
 
 #include "worker/engine/eval/image_size.h"
 #include "worker/engine/eval/psnr.h"

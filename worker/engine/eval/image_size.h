@@ -17,9 +17,9 @@ inline void CheckImageSize(std::size_t size, int width, int height, int channels
   }
   const std::size_t expected = static_cast<std::size_t>(width) * height * channels;
   if (size != expected) {
-    FailInvalid(what + ": has " + std::to_string(size) + " values, expected " +
-                std::to_string(expected) + " (" + std::to_string(width) + "x" + std::to_string(height) + "x" +
-                std::to_string(channels) + ")");
+    FailInvalid(what + ": has " + std::to_string(size) + " values, expected " + std::to_string(expected) +
+                " (" + std::to_string(width) + "x" + std::to_string(height) + "x" + std::to_string(channels) +
+                ")");
   }
 }
 

@@ -15,8 +15,8 @@ std::vector<float> PixelRmse(std::span<const float> rendered, std::span<const st
   for (std::size_t p = 0; p < error.size(); ++p) {
     double squares = 0;
     for (int c = 0; c < 3; ++c) {
-      const double diff = std::clamp(static_cast<double>(rendered[3 * p + c]), 0.0, 1.0) -
-                          reference[3 * p + c] / 255.0;
+      const double diff =
+          std::clamp(static_cast<double>(rendered[3 * p + c]), 0.0, 1.0) - reference[3 * p + c] / 255.0;
       squares += diff * diff;
     }
     error[p] = static_cast<float>(std::sqrt(squares / 3.0));

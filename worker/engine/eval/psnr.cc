@@ -19,8 +19,8 @@ double Psnr(std::span<const float> rendered, std::span<const std::uint8_t> refer
   for (std::size_t p = 0; p < pixels; ++p) {
     if (!tool_mask.empty() && tool_mask[p] != 0) continue;
     for (int c = 0; c < 3; ++c) {
-      const double diff = std::clamp(static_cast<double>(rendered[3 * p + c]), 0.0, 1.0) -
-                          reference[3 * p + c] / 255.0;
+      const double diff =
+          std::clamp(static_cast<double>(rendered[3 * p + c]), 0.0, 1.0) - reference[3 * p + c] / 255.0;
       squared_error += diff * diff;
     }
     ++kept;

@@ -2,10 +2,9 @@
 
 #include <algorithm>
 #include <limits>
-#include <string>
-
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
+#include <string>
 
 #include "worker/engine/eval/image_size.h"
 

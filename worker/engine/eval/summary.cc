@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-
 #include <nlohmann/json.hpp>
 
 namespace endorecon::eval {
@@ -34,7 +33,10 @@ Summary Summarise(std::span<const double> values) {
 }
 
 nlohmann::json ToJson(const Summary& summary) {
-  return {{"mean", summary.mean}, {"std", summary.std}, {"min", summary.min}, {"max", summary.max},
+  return {{"mean", summary.mean},
+          {"std", summary.std},
+          {"min", summary.min},
+          {"max", summary.max},
           {"count", summary.count}};
 }
 

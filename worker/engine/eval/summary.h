@@ -1,9 +1,8 @@
 // Aggregates of one metric over the frames of a clip, as metrics.json reports them.
 #pragma once
 
-#include <span>
-
 #include <nlohmann/json_fwd.hpp>
+#include <span>
 
 namespace endorecon::eval {
 

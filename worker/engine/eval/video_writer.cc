@@ -1,7 +1,6 @@
 #include "worker/engine/eval/video_writer.h"
 
 #include <cmath>
-
 #include <opencv2/core.hpp>
 #include <opencv2/videoio.hpp>
 
@@ -58,13 +57,15 @@ VideoWriter::VideoWriter(const std::filesystem::path& path, int width, int heigh
       // This encoder is not available in the installed OpenCV/FFmpeg build; try the next one.
     }
   }
-  Fail(ErrorCode::kUnavailable, "video " + path.string() + ": no encoder could open it (tried avc1, mp4v, MJPG)");
+  Fail(ErrorCode::kUnavailable,
+       "video " + path.string() + ": no encoder could open it (tried avc1, mp4v, MJPG)");
 }
 
 VideoWriter::~VideoWriter() { Close(); }
 
 void VideoWriter::Write(std::span<const float> rgb) {
-  if (state_->closed) Fail(ErrorCode::kFailedPrecondition, "video " + state_->path.string() + ": write after close");
+  if (state_->closed)
+    Fail(ErrorCode::kFailedPrecondition, "video " + state_->path.string() + ": write after close");
   CheckImageSize(rgb.size(), state_->width, state_->height, 3,
                  "video " + state_->path.string() + " frame " + std::to_string(state_->frames));
   auto* out = state_->bgr.ptr<std::uint8_t>(0);
