@@ -30,5 +30,18 @@ TEST(Summary, NothingDefinedSerialisesAsNull) {
   EXPECT_EQ(j["count"].get<int>(), 0);
 }
 
+TEST(Summary, FramesAreSummarisedByKey) {
+  nlohmann::json per_frame = nlohmann::json::array();
+  per_frame.push_back({{"a", 1.0}, {"b", 4.0}});
+  per_frame.push_back({{"a", 3.0}, {"b", nullptr}});
+  per_frame.push_back({{"a", std::nan("")}});
+  const nlohmann::json j = SummariseFrames(per_frame, {"a", "b"});
+  EXPECT_DOUBLE_EQ(j["a"]["mean"].get<double>(), 2.0);
+  EXPECT_EQ(j["a"]["count"].get<int>(), 2);
+  EXPECT_DOUBLE_EQ(j["b"]["mean"].get<double>(), 4.0);
+  EXPECT_EQ(j["b"]["count"].get<int>(), 1);
+  EXPECT_EQ(j["per_frame"].dump(), per_frame.dump());
+}
+
 }  // namespace
 }  // namespace endorecon::eval

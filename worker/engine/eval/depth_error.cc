@@ -4,7 +4,6 @@
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <string>
-#include <vector>
 
 #include "worker/engine/eval/image_size.h"
 #include "worker/engine/eval/summary.h"
@@ -47,18 +46,9 @@ nlohmann::json ToJson(const DepthError& error) {
 }
 
 nlohmann::json ToJson(std::span<const DepthError> frames) {
-  std::vector<double> rmse, mae, relative;
   nlohmann::json per_frame = nlohmann::json::array();
-  for (const DepthError& f : frames) {
-    rmse.push_back(f.rmse);
-    mae.push_back(f.mae);
-    relative.push_back(f.rmse_relative);
-    per_frame.push_back(ToJson(f));
-  }
-  return {{"rmse", ToJson(Summarise(rmse))},
-          {"mae", ToJson(Summarise(mae))},
-          {"rmse_relative", ToJson(Summarise(relative))},
-          {"per_frame", std::move(per_frame)}};
+  for (const DepthError& f : frames) per_frame.push_back(ToJson(f));
+  return SummariseFrames(std::move(per_frame), {"rmse", "mae", "rmse_relative"});
 }
 
 }  // namespace endorecon::eval

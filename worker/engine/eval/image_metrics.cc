@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <nlohmann/json.hpp>
-#include <vector>
 
 #include "worker/engine/eval/image_size.h"
 #include "worker/engine/eval/psnr.h"
@@ -38,20 +37,9 @@ nlohmann::json ToJson(const ImageMetrics& metrics) {
 }
 
 nlohmann::json ToJson(std::span<const ImageMetrics> frames) {
-  std::vector<double> psnr, ssim, psnr_tissue, ssim_tissue;
   nlohmann::json per_frame = nlohmann::json::array();
-  for (const ImageMetrics& f : frames) {
-    psnr.push_back(f.psnr);
-    ssim.push_back(f.ssim);
-    psnr_tissue.push_back(f.psnr_tissue);
-    ssim_tissue.push_back(f.ssim_tissue);
-    per_frame.push_back(ToJson(f));
-  }
-  return {{"psnr", ToJson(Summarise(psnr))},
-          {"ssim", ToJson(Summarise(ssim))},
-          {"psnr_tissue", ToJson(Summarise(psnr_tissue))},
-          {"ssim_tissue", ToJson(Summarise(ssim_tissue))},
-          {"per_frame", std::move(per_frame)}};
+  for (const ImageMetrics& f : frames) per_frame.push_back(ToJson(f));
+  return SummariseFrames(std::move(per_frame), {"psnr", "ssim", "psnr_tissue", "ssim_tissue"});
 }
 
 }  // namespace endorecon::eval

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <nlohmann/json.hpp>
+#include <vector>
 
 namespace endorecon::eval {
 
@@ -38,6 +39,21 @@ nlohmann::json ToJson(const Summary& summary) {
           {"min", summary.min},
           {"max", summary.max},
           {"count", summary.count}};
+}
+
+nlohmann::json SummariseFrames(nlohmann::json per_frame, std::initializer_list<const char*> keys) {
+  nlohmann::json out = nlohmann::json::object();
+  for (const char* key : keys) {
+    std::vector<double> values;
+    for (const nlohmann::json& frame : per_frame) {
+      const auto it = frame.find(key);
+      values.push_back(it != frame.end() && it->is_number() ? it->get<double>()
+                                                            : std::numeric_limits<double>::quiet_NaN());
+    }
+    out[key] = ToJson(Summarise(values));
+  }
+  out["per_frame"] = std::move(per_frame);
+  return out;
 }
 
 }  // namespace endorecon::eval

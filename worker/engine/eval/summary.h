@@ -1,6 +1,7 @@
 // Aggregates of one metric over the frames of a clip, as metrics.json reports them.
 #pragma once
 
+#include <initializer_list>
 #include <nlohmann/json_fwd.hpp>
 #include <span>
 
@@ -18,5 +19,10 @@ Summary Summarise(std::span<const double> values);
 
 // {"mean", "std", "min", "max", "count"}; undefined numbers serialise as null.
 nlohmann::json ToJson(const Summary& summary);
+
+// Per-frame metrics objects and their summaries side by side: {"<key>": ToJson(Summary of
+// per_frame[i][key]) for each key, "per_frame": per_frame}. A key that is missing, null or not a
+// number on a frame counts as undefined there.
+nlohmann::json SummariseFrames(nlohmann::json per_frame, std::initializer_list<const char*> keys);
 
 }  // namespace endorecon::eval
