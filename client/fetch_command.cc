@@ -1,0 +1,68 @@
+// endorecon fetch JOB -o DIR: download a finished job's results, verified by SHA-256; files
+// already there are skipped and an interrupted download resumes.
+#include <CLI/CLI.hpp>
+#include <iostream>
+
+#include "client/commands.h"
+#include "client/exit_codes.h"
+#include "client/job_format.h"
+#include "common/error.h"
+#include "common/file_download.h"
+#include "common/grpc_status.h"
+#include "common/manifest.h"
+#include "common/transport_security.h"
+
+namespace endorecon::client {
+namespace {
+
+struct FetchFlags {
+  std::string id;
+  std::string out;
+  double min_bytes_per_second = 1 << 20;
+};
+
+int Fetch(const Globals& globals, const FetchFlags& flags) {
+  const auto stub = globals.Connect();
+  v1::GetJobRequest get;
+  get.set_id(flags.id);
+  v1::Job job;
+  auto context = CallContext(globals.timeout());
+  ThrowIfFailed(stub->Get(context.get(), get, &job), "fetch " + flags.id);
+  if (job.state() != v1::SUCCEEDED) {
+    Fail(ErrorCode::kFailedPrecondition,
+         "job " + job.id() + " is " + v1::JobState_Name(job.state()) + "; results exist once it has SUCCEEDED");
+  }
+  const auto pending = PendingDownloads(flags.out, job.result());
+  std::int64_t received = 0;
+  if (!pending.empty()) {
+    v1::FetchRequest request;
+    request.set_id(job.id());
+    std::int64_t to_receive = 0;
+    for (const auto& range : pending) *request.add_files() = range;
+    for (const auto& file : job.result().files()) to_receive += file.size();
+    auto stream_context = CallContext(
+        globals.timeout() +
+        std::chrono::milliseconds(static_cast<std::int64_t>(1000.0 * static_cast<double>(to_receive) / flags.min_bytes_per_second)));
+    auto reader = stub->Fetch(stream_context.get(), request);
+    received = ReceiveFiles(*reader, flags.out);
+  }
+  if (globals.json) {
+    std::cout << ToJson(job.result()) << std::endl;
+  } else {
+    std::cout << "fetched " << pending.size() << " of " << job.result().files_size() << " file(s) ("
+              << HumanBytes(received) << ") into " << flags.out << "; every file verified" << std::endl;
+  }
+  return kExitOk;
+}
+
+}  // namespace
+
+Command AddFetchCommand(CLI::App& app) {
+  auto flags = std::make_shared<FetchFlags>();
+  auto* sub = app.add_subcommand("fetch", "download a finished job's results (verified, resumable)");
+  sub->add_option("JOB", flags->id, "job id")->required();
+  sub->add_option("-o,--output", flags->out, "folder to write the results into")->required();
+  return [flags](const Globals& globals) { return Fetch(globals, *flags); };
+}
+
+}  // namespace endorecon::client

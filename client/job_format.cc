@@ -1,0 +1,81 @@
+#include "client/job_format.h"
+
+#include <fmt/chrono.h>
+#include <fmt/format.h>
+#include <google/protobuf/util/json_util.h>
+
+#include <chrono>
+#include <cmath>
+
+namespace endorecon::client {
+
+std::string ToJson(const google::protobuf::Message& message) {
+  std::string json;
+  google::protobuf::util::JsonPrintOptions options;
+  options.preserve_proto_field_names = true;
+  (void)google::protobuf::util::MessageToJsonString(message, &json, options);
+  return json;
+}
+
+std::string HumanBytes(std::int64_t bytes) {
+  const char* units[] = {"B", "kB", "MB", "GB", "TB"};
+  double value = static_cast<double>(bytes);
+  int unit = 0;
+  while (value >= 1000 && unit < 4) {
+    value /= 1000;
+    ++unit;
+  }
+  return unit == 0 ? fmt::format("{} B", bytes) : fmt::format("{:.1f} {}", value, units[unit]);
+}
+
+std::string HumanDuration(double seconds) {
+  const auto s = static_cast<std::int64_t>(std::llround(std::max(0.0, seconds)));
+  if (s < 60) return fmt::format("{}s", s);
+  if (s < 3600) return fmt::format("{}m{:02}s", s / 60, s % 60);
+  return fmt::format("{}h{:02}m", s / 3600, (s % 3600) / 60);
+}
+
+std::string HumanTime(std::int64_t unix_ms) {
+  if (unix_ms <= 0) return "-";
+  const std::time_t t = static_cast<std::time_t>(unix_ms / 1000);
+  return fmt::format("{:%Y-%m-%d %H:%M:%S}", fmt::localtime(t));
+}
+
+std::string ProgressLine(const v1::Progress& p) {
+  const double fraction =
+      p.total_iterations() > 0 ? std::clamp(static_cast<double>(p.iteration()) / p.total_iterations(), 0.0, 1.0) : 0.0;
+  constexpr int kWidth = 24;
+  const int filled = static_cast<int>(fraction * kWidth);
+  std::string line = fmt::format("[{}{}]", std::string(static_cast<std::size_t>(filled), '#'),
+                                 std::string(static_cast<std::size_t>(kWidth - filled), '.'));
+  line += fmt::format(" {:3.0f}%  it {}/{}  loss {:.4g}  PSNR {:.2f} dB", 100 * fraction, p.iteration(),
+                      p.total_iterations(), p.loss(), p.train_psnr());
+  if (p.heldout_psnr() >= 0) line += fmt::format(" (held-out {:.2f})", p.heldout_psnr());
+  line += fmt::format("  {:.3g} samples/s  ETA {}", p.samples_per_second(), HumanDuration(p.eta_s()));
+  return line;
+}
+
+std::string DescribeJob(const v1::Job& job) {
+  std::string text = job.name().empty() ? fmt::format("job {}\n", job.id())
+                                        : fmt::format("job {} ({})\n", job.id(), job.name());
+  text += fmt::format("  state     {}{}\n", v1::JobState_Name(job.state()),
+                      job.cancel_requested() && job.state() == v1::RUNNING ? " (cancel requested)" : "");
+  text += fmt::format("  priority  {}\n", job.priority());
+  text += fmt::format("  created   {}\n", HumanTime(job.created_unix_ms()));
+  if (job.started_unix_ms() > 0) text += fmt::format("  started   {}\n", HumanTime(job.started_unix_ms()));
+  if (job.finished_unix_ms() > 0) text += fmt::format("  finished  {}\n", HumanTime(job.finished_unix_ms()));
+  text += fmt::format("  attempts  {} lost of {} allowed\n", job.attempts(), job.max_attempts());
+  if (!job.worker_id().empty()) text += fmt::format("  worker    {}\n", job.worker_id());
+  if (job.clip().files_size() > 0) text += fmt::format("  clip      {} file(s)\n", job.clip().files_size());
+  if (job.has_progress()) text += "  progress  " + ProgressLine(job.progress()) + "\n";
+  if (!job.error().empty()) text += fmt::format("  reason    {}\n", job.error());
+  if (job.result().files_size() > 0) {
+    std::int64_t bytes = 0;
+    for (const auto& file : job.result().files()) bytes += file.size();
+    text += fmt::format("  results   {} file(s), {} (endorecon fetch {} -o DIR)\n", job.result().files_size(),
+                        HumanBytes(bytes), job.id());
+  }
+  return text;
+}
+
+}  // namespace endorecon::client

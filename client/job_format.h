@@ -1,0 +1,25 @@
+// How jobs, progress and workers look on a terminal, and as JSON (protobuf's JSON mapping, with
+// the .proto field names) for scripts.
+#pragma once
+
+#include <google/protobuf/message.h>
+
+#include <cstdint>
+#include <string>
+
+#include "endorecon/v1/job_service.pb.h"
+
+namespace endorecon::client {
+
+std::string ToJson(const google::protobuf::Message& message);
+// A multi-line description of one job.
+std::string DescribeJob(const v1::Job& job);
+// One line: bar, iteration, loss, PSNR, samples/s, ETA.
+std::string ProgressLine(const v1::Progress& progress);
+// "1.2 MB", "3.4 GB".
+std::string HumanBytes(std::int64_t bytes);
+// "42s", "3m07s", "2h05m".
+std::string HumanDuration(double seconds);
+std::string HumanTime(std::int64_t unix_ms);
+
+}  // namespace endorecon::client

@@ -1,0 +1,114 @@
+#include "client/job_watcher.h"
+
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <thread>
+
+#include "client/job_format.h"
+#include "common/grpc_status.h"
+#include "common/transport_security.h"
+
+namespace endorecon::client {
+namespace {
+
+bool Terminal(v1::JobState state) { return state == v1::SUCCEEDED || state == v1::FAILED || state == v1::CANCELLED; }
+
+void SavePreview(const std::string& dir, const v1::Preview& preview) {
+  std::filesystem::create_directories(dir);
+  const auto path = std::filesystem::path(dir) / (preview.kind() + "-it" + std::to_string(preview.iteration()) + ".png");
+  std::ofstream(path, std::ios::binary) << preview.png();
+}
+
+// Prints events as they come: on a terminal the progress line rewrites itself.
+class EventPrinter {
+ public:
+  explicit EventPrinter(bool json) : json_(json), tty_(isatty(STDOUT_FILENO) != 0) {}
+
+  void Job(const v1::Job& job) {
+    if (json_) return Json(job);
+    if (job.state() == last_state_) return;
+    EndLine();
+    last_state_ = job.state();
+    std::cout << "job " << job.id() << " " << v1::JobState_Name(job.state());
+    if (job.state() == v1::RUNNING) std::cout << " on " << job.worker_id();
+    if (!job.error().empty()) std::cout << ": " << job.error();
+    std::cout << std::endl;
+  }
+  void Progress(const v1::Progress& progress) {
+    if (json_) return Json(progress);
+    if (tty_) {
+      std::cout << "\r" << ProgressLine(progress) << "\033[K" << std::flush;
+      open_line_ = true;
+    } else {
+      std::cout << ProgressLine(progress) << std::endl;
+    }
+  }
+  void Preview(const v1::Preview& preview, const std::string& saved_to) {
+    if (json_) return;
+    EndLine();
+    std::cout << "preview " << preview.kind() << " at iteration " << preview.iteration() << " saved in " << saved_to
+              << std::endl;
+  }
+  void EndLine() {
+    if (open_line_) std::cout << std::endl;
+    open_line_ = false;
+  }
+
+ private:
+  void Json(const google::protobuf::Message& message) {
+    v1::JobEvent event;
+    if (const auto* job = dynamic_cast<const v1::Job*>(&message)) *event.mutable_job() = *job;
+    if (const auto* progress = dynamic_cast<const v1::Progress*>(&message)) *event.mutable_progress() = *progress;
+    std::cout << ToJson(event) << std::endl;
+  }
+  bool json_;
+  bool tty_;
+  bool open_line_ = false;
+  v1::JobState last_state_ = v1::JOB_STATE_UNSPECIFIED;
+};
+
+}  // namespace
+
+v1::Job WatchJob(const Globals& globals, const std::string& id, const WatchOptions& options) {
+  const auto stub = globals.Connect();
+  EventPrinter printer(globals.json);
+  v1::WatchJobRequest request;
+  request.set_id(id);
+  request.set_previews(!options.previews_dir.empty());
+  auto unreachable_since = std::chrono::steady_clock::now();
+  v1::Job job;
+  while (true) {
+    auto context = CallContext(std::chrono::milliseconds(static_cast<long>(options.stream_s * 1000)));
+    auto reader = stub->Watch(context.get(), request);
+    v1::JobEvent event;
+    while (reader->Read(&event)) {
+      unreachable_since = std::chrono::steady_clock::now();
+      if (event.has_progress()) printer.Progress(event.progress());
+      if (event.has_preview()) {
+        SavePreview(options.previews_dir, event.preview());
+        printer.Preview(event.preview(), options.previews_dir);
+      }
+      if (event.has_job()) {
+        job = event.job();
+        printer.Job(job);
+      }
+    }
+    const auto status = reader->Finish();
+    if (status.ok() && Terminal(job.state())) break;
+    const bool retry = status.ok() || status.error_code() == grpc::StatusCode::DEADLINE_EXCEEDED ||
+                       status.error_code() == grpc::StatusCode::UNAVAILABLE;
+    if (!retry || std::chrono::steady_clock::now() - unreachable_since > globals.timeout()) {
+      printer.EndLine();
+      ThrowIfFailed(status, "watch " + id);
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  }
+  printer.EndLine();
+  return job;
+}
+
+}  // namespace endorecon::client

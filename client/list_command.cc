@@ -1,0 +1,63 @@
+// endorecon list: jobs, newest first, one line each.
+#include <fmt/format.h>
+
+#include <CLI/CLI.hpp>
+#include <iostream>
+
+#include "client/commands.h"
+#include "client/exit_codes.h"
+#include "client/job_format.h"
+#include "common/error.h"
+#include "common/grpc_status.h"
+#include "common/transport_security.h"
+
+namespace endorecon::client {
+namespace {
+
+struct ListFlags {
+  std::vector<std::string> states;
+  int limit = 50;
+};
+
+int List(const Globals& globals, const ListFlags& flags) {
+  v1::ListJobsRequest request;
+  for (const auto& name : flags.states) {
+    v1::JobState state;
+    if (!v1::JobState_Parse(name, &state)) FailInvalid("--state " + name + ": expected QUEUED, RUNNING, SUCCEEDED, FAILED or CANCELLED");
+    request.add_states(state);
+  }
+  const auto stub = globals.Connect();
+  v1::ListJobsResponse all;
+  do {
+    request.set_page_size(std::min(flags.limit - all.jobs_size(), 1000));
+    v1::ListJobsResponse page;
+    auto context = CallContext(globals.timeout());
+    ThrowIfFailed(stub->List(context.get(), request, &page), "list");
+    for (const auto& job : page.jobs()) *all.add_jobs() = job;
+    request.set_page_token(page.next_page_token());
+  } while (!request.page_token().empty() && all.jobs_size() < flags.limit);
+  if (globals.json) {
+    std::cout << ToJson(all) << std::endl;
+    return kExitOk;
+  }
+  std::cout << fmt::format("{:<14} {:<10} {:>4} {:<19} {:>12} {}\n", "JOB", "STATE", "PRIO", "CREATED", "ITERATION", "NAME");
+  for (const auto& job : all.jobs()) {
+    const std::string iteration =
+        job.has_progress() ? fmt::format("{}/{}", job.progress().iteration(), job.progress().total_iterations()) : "-";
+    std::cout << fmt::format("{:<14} {:<10} {:>4} {:<19} {:>12} {}\n", job.id(), v1::JobState_Name(job.state()),
+                             job.priority(), HumanTime(job.created_unix_ms()), iteration, job.name());
+  }
+  return kExitOk;
+}
+
+}  // namespace
+
+Command AddListCommand(CLI::App& app) {
+  auto flags = std::make_shared<ListFlags>();
+  auto* sub = app.add_subcommand("list", "list jobs, newest first");
+  sub->add_option("--state", flags->states, "only jobs in these states (repeatable)");
+  sub->add_option("--limit", flags->limit, "at most this many jobs")->capture_default_str()->check(CLI::PositiveNumber);
+  return [flags](const Globals& globals) { return List(globals, *flags); };
+}
+
+}  // namespace endorecon::client

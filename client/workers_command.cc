@@ -1,0 +1,35 @@
+// endorecon workers: the workers the server has heard from.
+#include <fmt/format.h>
+
+#include <CLI/CLI.hpp>
+#include <iostream>
+
+#include "client/commands.h"
+#include "client/exit_codes.h"
+#include "client/job_format.h"
+#include "common/grpc_status.h"
+#include "common/transport_security.h"
+
+namespace endorecon::client {
+
+Command AddWorkersCommand(CLI::App& app) {
+  app.add_subcommand("workers", "list the workers: alive or not, devices, jobs");
+  return [](const Globals& globals) {
+    v1::ListWorkersResponse response;
+    auto context = CallContext(globals.timeout());
+    ThrowIfFailed(globals.Connect()->ListWorkers(context.get(), {}, &response), "workers");
+    if (globals.json) {
+      std::cout << ToJson(response) << std::endl;
+      return kExitOk;
+    }
+    std::cout << fmt::format("{:<28} {:<6} {:<16} {:<19} {}\n", "WORKER", "ALIVE", "DEVICES", "LAST SEEN", "JOBS");
+    for (const auto& worker : response.workers()) {
+      std::cout << fmt::format("{:<28} {:<6} {:<16} {:<19} {}\n", worker.id(), worker.alive() ? "yes" : "no",
+                               fmt::format("{}", fmt::join(worker.devices(), ",")),
+                               HumanTime(worker.last_seen_unix_ms()), fmt::format("{}", fmt::join(worker.job_ids(), ",")));
+    }
+    return kExitOk;
+  };
+}
+
+}  // namespace endorecon::client
