@@ -1,0 +1,249 @@
+#include "worker/engine/field/field.h"
+
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <cmath>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "common/error.h"
+#include "tests/unit/gradient_check.h"
+
+namespace endorecon::field {
+namespace {
+
+using testing::Dot;
+using testing::ExpectGradientMatches;
+using testing::RandomValues;
+using testing::SomeIndices;
+
+FieldConfig SmallConfig() {
+  FieldConfig c;
+  c.grids.base_resolutions = {2, 3};
+  c.grids.scales = {2.0, 1.5};
+  c.grids.levels = 3;
+  c.grids.features = 2;
+  c.grids.log2_table = 6;
+  c.blend_hidden = 4;
+  c.deformation.resolution = 3;
+  c.deformation.time_knots = 3;
+  c.heads.density_hidden = {8};
+  c.heads.color_hidden = {8, 6};
+  c.heads.geo_features = 4;
+  c.heads.dropout = 0.2;
+  return c;
+}
+
+// A batch and its outputs, in the scalar type of the field.
+template <typename S>
+struct Samples {
+  explicit Samples(int n, std::uint64_t seed) : n(n) {
+    const auto p = RandomValues(3 * n, 0.05, 0.95, seed);
+    const auto t = RandomValues(n, 0, 1, seed + 1);
+    auto d = RandomValues(3 * n, -1, 1, seed + 2);
+    for (int i = 0; i < n; ++i) {
+      const double len = std::sqrt(d[3 * i] * d[3 * i] + d[3 * i + 1] * d[3 * i + 1] + d[3 * i + 2] * d[3 * i + 2]);
+      for (int a = 0; a < 3; ++a) d[3 * i + a] /= len;
+    }
+    pos.assign(p.begin(), p.end());
+    time.assign(t.begin(), t.end());
+    dir.assign(d.begin(), d.end());
+    sigma.resize(n);
+    sigma_logvar.resize(n);
+    rgb.resize(3 * n);
+    rgb_logvar.resize(n);
+  }
+  SampleBatchT<S> batch() const { return {n, pos.data(), time.data(), dir.data()}; }
+  FieldOutputT<S> out() { return {sigma.data(), sigma_logvar.data(), rgb.data(), rgb_logvar.data()}; }
+
+  int n;
+  std::vector<S> pos, time, dir, sigma, sigma_logvar, rgb, rgb_logvar;
+};
+
+// Gives every parameter a random value, so that no path (the zero-initialised deformation and blend
+// output layer included) is trivially zero.
+template <typename S>
+void Randomise(FieldT<S>& field, std::uint64_t seed) {
+  for (auto& block : field.Blocks()) {
+    const double scale = block.name == "deform" ? 0.03 : block.name == "grid" ? 0.5 : 0.6;
+    const auto v = RandomValues(block.size, -scale, scale, seed++);
+    std::copy(v.begin(), v.end(), block.value);
+  }
+}
+
+TEST(FieldTest, GradientsOfEveryGroupMatchFiniteDifferencesWithDropout) {
+  FieldT<double> field(SmallConfig(), 1);
+  Randomise(field, 100);
+  Samples<double> s(1100, 7);  // three tiles, so three chunks are reduced
+  const auto ws = RandomValues(s.n, -1, 1, 11), wsl = RandomValues(s.n, -1, 1, 12);
+  const auto wc = RandomValues(3 * s.n, -1, 1, 13), wcl = RandomValues(s.n, -1, 1, 14);
+  const std::uint64_t seed = 4242;
+  auto loss = [&] {
+    auto out = s.out();
+    field.Forward(s.batch(), out, true, seed);
+    return Dot(ws, s.sigma) + Dot(wsl, s.sigma_logvar) + Dot(wc, s.rgb) + Dot(wcl, s.rgb_logvar);
+  };
+  loss();
+  field.ZeroGrad();
+  field.Backward(s.batch(), {ws.data(), wsl.data(), wc.data(), wcl.data()});
+  const auto blocks = field.Blocks();
+  ASSERT_EQ(blocks.size(), 5u);
+  std::uint64_t pick = 1;
+  for (const auto& b : blocks) {
+    const std::vector<double> grad(b.grad, b.grad + b.size);
+    const std::size_t count = b.name == "grid" ? 120 : 40;
+    const auto indices = SomeIndices(b.size, count, pick++);
+    const int nonzero = ExpectGradientMatches(b.value, grad.data(), indices, loss, b.name, {1e-6, 1e-5, 1e-8});
+    // Some gradients are truly zero (grid slots no sample touches, ReLU units dead for all times).
+    EXPECT_GE(nonzero, static_cast<int>(indices.size()) / 4) << b.name;
+  }
+}
+
+TEST(FieldTest, StaticSceneBuildsNoDeformation) {
+  FieldConfig c = SmallConfig();
+  c.deformation.enabled = false;
+  FieldT<double> field(c, 1);
+  for (const auto& b : field.Blocks()) EXPECT_NE(b.name, "deform");
+  EXPECT_NE(field.Describe().find("deformation: left out"), std::string::npos) << field.Describe();
+  // Without deformation, time only moves the blend: a sample's density is its canonical one.
+  Randomise(field, 5);
+  Samples<double> s(50, 3);
+  auto out = s.out();
+  field.Forward(s.batch(), out, false, 0);
+  for (double sigma : s.sigma) EXPECT_GT(sigma, 0.0);
+  const auto w = RandomValues(s.n, -1, 1, 4);
+  field.ZeroGrad();
+  field.Backward(s.batch(), {w.data(), nullptr, nullptr, nullptr});
+  double norm = 0;
+  for (const auto& b : field.Blocks()) {
+    for (std::size_t i = 0; i < b.size; ++i) norm += b.grad[i] * b.grad[i];
+  }
+  EXPECT_GT(norm, 0.0);
+}
+
+TEST(FieldTest, DescribeReportsLevelsLeftOut) {
+  FieldConfig c = SmallConfig();
+  c.grids.max_resolution = 5;  // grid 0 keeps 2 and 4; grid 1 keeps 3 and 4
+  const FieldT<float> field(c, 1);
+  const std::string d = field.Describe();
+  EXPECT_NE(d.find("left out 1 finer levels (above resolution cap 5)"), std::string::npos) << d;
+}
+
+TEST(FieldTest, ResultsDoNotDependOnThreadCount) {
+  FieldT<float> field(SmallConfig(), 3);
+  Randomise(field, 200);
+  Samples<float> s(6000, 9);
+  const auto w = RandomValues(3 * s.n, -1, 1, 10);
+  const std::vector<float> wc(w.begin(), w.end());
+  auto run = [&](int threads) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+    auto out = s.out();
+    field.Forward(s.batch(), out, true, 17);
+    field.ZeroGrad();
+    field.Backward(s.batch(), {wc.data(), wc.data() + s.n, wc.data(), wc.data() + 2 * s.n});
+    std::vector<float> all(s.rgb);
+    for (const auto& b : field.Blocks()) all.insert(all.end(), b.grad, b.grad + b.size);
+    return all;
+  };
+  const auto one = run(1);
+  EXPECT_EQ(run(2), one);
+  EXPECT_EQ(run(1), one);
+}
+
+TEST(FieldTest, InferMatchesForward) {
+  FieldT<float> field(SmallConfig(), 3);
+  Randomise(field, 300);
+  Samples<float> a(1500, 1), b(1500, 1);
+  auto oa = a.out(), ob = b.out();
+  field.Forward(a.batch(), oa, true, 5);
+  field.Infer(b.batch(), ob, true, 5);
+  EXPECT_EQ(a.sigma, b.sigma);
+  EXPECT_EQ(a.rgb, b.rgb);
+  EXPECT_EQ(a.rgb_logvar, b.rgb_logvar);
+  EXPECT_EQ(a.sigma_logvar, b.sigma_logvar);
+  field.Infer(b.batch(), ob, false, 5);
+  EXPECT_NE(a.rgb, b.rgb);  // dropout off changes the output
+}
+
+TEST(FieldTest, OutputsStayInRangeForWildInputs) {
+  FieldT<float> field(SmallConfig(), 3);
+  Randomise(field, 400);
+  Samples<float> s(4, 1);
+  s.pos = {-1e30f, 2.0f, NAN, INFINITY, -INFINITY, 0.5f, 0.5f, 0.5f, 0.5f, 1.0f, 0.0f, 1.0f};
+  s.time = {NAN, -3.0f, 7.0f, 1.0f};
+  auto out = s.out();
+  field.Forward(s.batch(), out, false, 0);
+  for (int i = 0; i < s.n; ++i) {
+    EXPECT_TRUE(std::isfinite(s.sigma[i]) && s.sigma[i] >= 0) << i;
+    EXPECT_TRUE(std::isfinite(s.sigma_logvar[i]) && std::isfinite(s.rgb_logvar[i])) << i;
+    for (int c = 0; c < 3; ++c) EXPECT_TRUE(s.rgb[3 * i + c] > 0 && s.rgb[3 * i + c] < 1) << i;
+  }
+}
+
+TEST(FieldTest, SaveLoadRoundTripIsExact) {
+  FieldT<float> a(SmallConfig(), 1), b(SmallConfig(), 2);
+  Randomise(a, 500);
+  std::stringstream stream;
+  a.Save(stream);
+  b.Load(stream);
+  Samples<float> sa(700, 5), sb(700, 5);
+  auto oa = sa.out(), ob = sb.out();
+  a.Forward(sa.batch(), oa, true, 8);
+  b.Forward(sb.batch(), ob, true, 8);
+  EXPECT_EQ(sa.rgb, sb.rgb);
+  EXPECT_EQ(sa.sigma, sb.sigma);
+}
+
+TEST(FieldTest, LoadRejectsAnotherShapeOrATruncatedStream) {
+  FieldT<float> a(SmallConfig(), 1);
+  std::stringstream stream;
+  a.Save(stream);
+  const std::string bytes = stream.str();
+  FieldConfig other = SmallConfig();
+  other.heads.color_hidden = {8};
+  FieldT<float> b(other, 1);
+  std::stringstream in1(bytes);
+  try {
+    b.Load(in1);
+    FAIL() << "loaded a state of another shape";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kDataLoss);
+    EXPECT_NE(std::string(e.what()).find("'color'"), std::string::npos) << e.what();
+  }
+  std::stringstream in2(bytes.substr(0, bytes.size() - 10));
+  EXPECT_THROW(a.Load(in2), Error);
+  std::stringstream in3("not a field");
+  EXPECT_THROW(a.Load(in3), Error);
+}
+
+TEST(FieldTest, BackwardNeedsAMatchingForward) {
+  FieldT<float> field(SmallConfig(), 1);
+  Samples<float> s(10, 1);
+  EXPECT_THROW(field.Backward(s.batch(), {}), Error);
+  auto out = s.out();
+  field.Forward(s.batch(), out, false, 0);
+  Samples<float> t(11, 1);
+  EXPECT_THROW(field.Backward(t.batch(), {}), Error);
+  EXPECT_THROW(field.Forward({-1, nullptr, nullptr, nullptr}, out, false, 0), Error);
+}
+
+TEST(FieldTest, PresetsHaveTheGroupsTheTrainerExpects) {
+  const FieldConfig cpu = FieldConfig::Cpu();
+  FieldT<float> field(cpu, 1);
+  std::vector<std::string> names;
+  for (const auto& g : field.Params()) {
+    names.push_back(g.name);
+    EXPECT_GT(g.size, 0u);
+  }
+  EXPECT_EQ(names, (std::vector<std::string>{"grid", "blend", "deform", "density", "color"}));
+  const FieldConfig paper = FieldConfig::Paper();
+  EXPECT_EQ(paper.grids.levels, 16);
+  EXPECT_EQ(paper.grids.features, 8);
+  EXPECT_EQ(paper.grids.base_resolutions, (std::vector<int>{8, 16, 32}));
+  EXPECT_EQ(paper.grids.scales, (std::vector<double>{1.4, 1.7, 1.9}));
+}
+
+}  // namespace
+}  // namespace endorecon::field

@@ -1,0 +1,80 @@
+#include "worker/engine/field/temporal_blend.h"
+
+#include <gtest/gtest.h>
+
+#include <vector>
+
+#include "tests/unit/gradient_check.h"
+
+namespace endorecon::field {
+namespace {
+
+using testing::Dot;
+using testing::ExpectGradientMatches;
+using testing::RandomValues;
+using testing::SomeIndices;
+
+constexpr int kGrids = 3, kDim = 4, kHidden = 5;
+
+struct BlendRun {
+  std::vector<double> hidden, beta, f;
+};
+
+BlendRun Forward(const TemporalBlend<double>& blend, const std::vector<double>& params, const std::vector<double>& t,
+            const std::vector<double>& feats) {
+  const int n = static_cast<int>(t.size());
+  BlendRun run;
+  run.hidden.resize(static_cast<std::size_t>(n) * kHidden);
+  run.beta.resize(static_cast<std::size_t>(n) * kGrids);
+  run.f.resize(static_cast<std::size_t>(n) * kDim);
+  blend.Weights(params.data(), t.data(), n, run.hidden.data(), run.beta.data());
+  blend.Blend(run.beta.data(), feats.data(), n, run.f.data());
+  return run;
+}
+
+TEST(TemporalBlendTest, StartsAsAnEvenBlend) {
+  const TemporalBlend<double> blend(kGrids, kDim, kHidden);
+  std::vector<double> params(blend.param_count());
+  blend.Init(params.data(), 1);
+  const std::vector<double> t = {0.0, 0.3, 1.0};
+  const std::vector<double> feats = RandomValues(3 * kGrids * kDim, -1, 1, 2);
+  const BlendRun run = Forward(blend, params, t, feats);
+  for (double b : run.beta) EXPECT_DOUBLE_EQ(b, 1.0 / kGrids);
+  EXPECT_NEAR(run.f[0], (feats[0] + feats[kDim] + feats[2 * kDim]) / 3, 1e-15);
+}
+
+TEST(TemporalBlendTest, WeightsSumToOneAndVaryInTime) {
+  const TemporalBlend<double> blend(kGrids, kDim, kHidden);
+  const std::vector<double> params = RandomValues(blend.param_count(), -2, 2, 3);
+  const std::vector<double> t = RandomValues(50, 0, 1, 4);
+  const BlendRun run = Forward(blend, params, t, std::vector<double>(50 * kGrids * kDim, 0.0));
+  for (int s = 0; s < 50; ++s) {
+    double sum = 0;
+    for (int i = 0; i < kGrids; ++i) {
+      EXPECT_GT(run.beta[s * kGrids + i], 0.0);
+      sum += run.beta[s * kGrids + i];
+    }
+    EXPECT_NEAR(sum, 1.0, 1e-14);
+  }
+  EXPECT_NE(run.beta[0], run.beta[kGrids]);
+}
+
+TEST(TemporalBlendTest, GradientsMatchFiniteDifferences) {
+  const TemporalBlend<double> blend(kGrids, kDim, kHidden);
+  const int n = 13;
+  std::vector<double> params = RandomValues(blend.param_count(), -1, 1, 5);
+  const std::vector<double> t = RandomValues(n, 0, 1, 6);
+  std::vector<double> feats = RandomValues(static_cast<std::size_t>(n) * kGrids * kDim, -1, 1, 7);
+  const std::vector<double> w = RandomValues(static_cast<std::size_t>(n) * kDim, -1, 1, 8);
+  const BlendRun run = Forward(blend, params, t, feats);
+  std::vector<double> grads(params.size(), 0.0), dfeats(feats.size(), 0.0), scratch(blend.scratch_size(n));
+  blend.Backward(params.data(), t.data(), n, run.hidden.data(), run.beta.data(), feats.data(), w.data(), dfeats.data(),
+                 grads.data(), scratch.data());
+  auto loss = [&] { return Dot(w, Forward(blend, params, t, feats).f); };
+  EXPECT_GT(ExpectGradientMatches(params.data(), grads.data(), SomeIndices(params.size(), params.size(), 1), loss, "params"), 10);
+  EXPECT_EQ(ExpectGradientMatches(feats.data(), dfeats.data(), SomeIndices(feats.size(), feats.size(), 2), loss, "feats"),
+            static_cast<int>(feats.size()));
+}
+
+}  // namespace
+}  // namespace endorecon::field
