@@ -1,0 +1,77 @@
+#include "worker/engine/eval/clip_evaluator.h"
+
+#include <nlohmann/json.hpp>
+
+#include "worker/engine/eval/depth_error.h"
+#include "worker/engine/eval/exports.h"
+#include "worker/engine/eval/image_metrics.h"
+#include "worker/engine/eval/point_cloud.h"
+#include "worker/engine/eval/video_writer.h"
+
+namespace endorecon::eval {
+
+const std::vector<std::uint8_t>& EvaluationMask(const scene::Clip& clip, int frame) {
+  static const std::vector<std::uint8_t> kNone;
+  if (!clip.eval_mask.empty()) return clip.eval_mask[frame];
+  if (!clip.tool_mask.empty()) return clip.tool_mask[frame];
+  return kNone;
+}
+
+namespace {
+
+nlohmann::json SplitMetrics(const scene::Clip& clip, const std::vector<int>& frames,
+                            const std::vector<ImageMetrics>& images, const std::vector<DepthError>& depths) {
+  std::vector<ImageMetrics> image_subset;
+  std::vector<DepthError> depth_subset;
+  for (int f : frames) {
+    image_subset.push_back(images[f]);
+    if (!depths.empty()) depth_subset.push_back(depths[f]);
+  }
+  nlohmann::json json;
+  json["frames"] = frames;
+  json["image"] = ToJson(std::span<const ImageMetrics>(image_subset));
+  if (!clip.gt_depth.empty()) json["depth"] = ToJson(std::span<const DepthError>(depth_subset));
+  return json;
+}
+
+}  // namespace
+
+nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& renderer, const ClipEvaluation& what,
+                            const std::filesystem::path& out_dir) {
+  const int count = clip.frame_count();
+  const int w = clip.width, h = clip.height;
+  const double depth_scale = DepthPngScale(clip.far);
+  if (what.write_files) {
+    for (const char* sub : {"rgb", "depth", "pointcloud"}) std::filesystem::create_directories(out_dir / sub);
+  }
+  std::vector<ImageMetrics> images(count);
+  std::vector<DepthError> depths(clip.gt_depth.empty() ? 0 : count);
+  std::vector<std::vector<float>> video;
+  for (int f = 0; f < count; ++f) {
+    const render::RenderedFrame frame = renderer.Render(clip.cameras[f], clip.times[f]);
+    const auto& mask = EvaluationMask(clip, f);
+    images[f] = MeasureImage(frame.rgb, clip.rgb[f], mask, w, h);
+    if (!depths.empty()) depths[f] = MeasureDepth(frame.depth, clip.gt_depth[f], mask, w, h, clip.near, clip.far);
+    if (what.write_files) {
+      WritePng8(out_dir / "rgb" / FrameFileName(f, ".png"), frame.rgb, w, h);
+      WriteDepthNpy(out_dir / "depth" / FrameFileName(f, ".npy"), frame.depth, w, h);
+      WriteDepthPng16(out_dir / "depth" / FrameFileName(f, ".png"), frame.depth, w, h, depth_scale);
+      WritePly(out_dir / "pointcloud" / FrameFileName(f, ".ply"),
+               BackProject(clip.cameras[f], frame.depth, frame.rgb, clip.has_masks() ? clip.tool_mask[f] : mask));
+      video.push_back(frame.rgb);
+    }
+    if (what.on_frame) what.on_frame(f + 1, count);
+  }
+  nlohmann::json json;
+  json["train"] = SplitMetrics(clip, what.train_frames, images, depths);
+  if (!what.heldout_frames.empty()) json["heldout"] = SplitMetrics(clip, what.heldout_frames, images, depths);
+  json["depth_png_scale"] = depth_scale;
+  json["evaluation_mask"] = !clip.eval_mask.empty() ? "gt_masks" : (clip.has_masks() ? "masks" : "none");
+  if (what.write_files) {
+    const VideoInfo info = WriteVideo(out_dir / "video.mp4", video, w, h, 15.0);
+    json["video"] = {{"path", info.path.filename().string()}, {"codec", info.codec}, {"frames", info.frames}};
+  }
+  return json;
+}
+
+}  // namespace endorecon::eval

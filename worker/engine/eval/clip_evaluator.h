@@ -1,0 +1,31 @@
+// Renders every frame of a clip from a trained field, measures it against the clip, and writes
+// the per-frame results (rgb/, depth/, pointcloud/, video.mp4). Returns the metrics as JSON.
+#pragma once
+
+#include <filesystem>
+#include <functional>
+#include <nlohmann/json_fwd.hpp>
+#include <vector>
+
+#include "worker/engine/render/frame_renderer.h"
+#include "worker/engine/scene/clip.h"
+
+namespace endorecon::eval {
+
+struct ClipEvaluation {
+  std::vector<int> train_frames, heldout_frames;
+  bool write_files = true;
+  std::function<void(int done, int total)> on_frame;  // progress while rendering
+};
+
+// Metrics: "train" and "heldout" splits each with per-frame and summarised image metrics (tissue
+// pixels: eval masks (gt_masks/) when the clip has them, else tool masks) and depth error against
+// the clip's ground-truth depth when present; "depth_png_scale".
+nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& renderer, const ClipEvaluation& what,
+                            const std::filesystem::path& out_dir);
+
+// Tool mask a frame is evaluated with: gt_masks/ when present (EndoNeRF's evaluation), else masks/,
+// else none (empty).
+const std::vector<std::uint8_t>& EvaluationMask(const scene::Clip& clip, int frame);
+
+}  // namespace endorecon::eval

@@ -1,0 +1,259 @@
+#include "worker/engine/reconstruct.h"
+
+#include <spdlog/spdlog.h>
+#include <tbb/global_control.h>
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <numeric>
+
+#include "common/error.h"
+#include "worker/engine/eval/clip_evaluator.h"
+#include "worker/engine/eval/curve_plot.h"
+#include "worker/engine/eval/image_metrics.h"
+#include "worker/engine/render/frame_renderer.h"
+#include "worker/engine/scene/clip_loader.h"
+#include "worker/engine/train/checkpoint.h"
+#include "worker/engine/train/scene_fit.h"
+#include "worker/engine/train/trainer.h"
+
+namespace endorecon {
+namespace {
+
+using nlohmann::literals::operator""_json_pointer;
+
+using Clock = std::chrono::steady_clock;
+namespace fs = std::filesystem;
+
+train::TrainConfig ResolveConfig(const ReconstructOptions& options) {
+  train::TrainConfig config = train::TrainConfig::Preset(options.preset);
+  if (!options.config_file.empty()) {
+    std::ifstream in(options.config_file);
+    if (!in) Fail(ErrorCode::kNotFound, "cannot read config file " + options.config_file);
+    nlohmann::json json;
+    try {
+      json = nlohmann::json::parse(in);
+    } catch (const nlohmann::json::exception& e) {
+      FailInvalid(options.config_file + ": not valid JSON: " + e.what());
+    }
+    train::ApplyJson(json, config);
+  }
+  if (options.iterations > 0) config.iterations = options.iterations;
+  if (options.holdout >= 0) config.holdout = options.holdout;
+  return config;
+}
+
+struct Split {
+  std::vector<int> train, heldout;
+};
+
+// Every K-th frame (K-1, 2K-1, ...) is held out; frame 0, which fixes the canonical space, never is.
+Split MakeSplit(int frames, int holdout) {
+  Split split;
+  for (int f = 0; f < frames; ++f) {
+    (holdout > 1 && (f + 1) % holdout == 0 ? split.heldout : split.train).push_back(f);
+  }
+  return split;
+}
+
+// Held-out PSNR on a fixed subset of pixels of a few held-out frames: cheap enough to measure
+// every few seconds for the error-against-time curve.
+class CurveProbe {
+ public:
+  CurveProbe(const scene::Clip& clip, const std::vector<int>& heldout, int max_frames) : clip_(clip) {
+    const int step = std::max<int>(1, int(heldout.size()) / std::max(1, max_frames));
+    for (std::size_t i = 0; i < heldout.size() && int(frames_.size()) < max_frames; i += step) {
+      frames_.push_back(heldout[i]);
+    }
+  }
+  bool empty() const { return frames_.empty(); }
+
+  double HeldoutPsnr(render::FrameRenderer& renderer) const {
+    double psnr_sum = 0;
+    for (int f : frames_) {
+      const auto frame = renderer.Render(clip_.cameras[f], clip_.times[f]);
+      const auto m = eval::MeasureImage(frame.rgb, clip_.rgb[f], eval::EvaluationMask(clip_, f), clip_.width,
+                                        clip_.height);
+      psnr_sum += m.psnr_tissue;
+    }
+    return psnr_sum / double(frames_.size());
+  }
+
+ private:
+  const scene::Clip& clip_;
+  std::vector<int> frames_;
+};
+
+Preview MakePreview(const render::RenderedFrame& frame, int index) {
+  Preview preview;
+  preview.kind = "rgb";
+  preview.frame = index;
+  preview.width = frame.width;
+  preview.height = frame.height;
+  preview.channels = 3;
+  preview.pixels.resize(frame.rgb.size());
+  for (std::size_t i = 0; i < frame.rgb.size(); ++i) {
+    preview.pixels[i] = std::uint8_t(std::lround(std::clamp(frame.rgb[i], 0.0f, 1.0f) * 255.0f));
+  }
+  return preview;
+}
+
+render::FrameRenderSettings RenderSettings(const train::TrainConfig& config, double near, double far) {
+  render::FrameRenderSettings settings;
+  settings.near = near;
+  settings.far = far;
+  settings.coarse_samples = config.eval_coarse_samples;
+  settings.fine_samples = config.eval_fine_samples;
+  settings.floor = config.eval_floor;
+  return settings;
+}
+
+}  // namespace
+
+ReconstructSummary Reconstruct(const ReconstructOptions& options, const ReconstructHooks& hooks) {
+  const int threads = options.threads > 0 ? options.threads : int(std::thread::hardware_concurrency());
+  tbb::global_control threads_control(tbb::global_control::max_allowed_parallelism, std::max(1, threads));
+
+  scene::LoadOptions load;
+  load.force_static = options.force_static;
+  const scene::Clip clip = scene::LoadClip(options.clip_dir, load);
+  train::TrainConfig config =
+      options.resume_from.empty() ? ResolveConfig(options) : train::ReadCheckpointConfig(options.resume_from);
+  const Split split = MakeSplit(clip.frame_count(), config.holdout);
+  const train::SceneFit fit = train::FitToScene(clip, config);
+  const fs::path out_dir = options.out_dir;
+  fs::create_directories(out_dir);
+  {
+    std::ofstream(out_dir / "config.json") << nlohmann::json{{"train", train::ToJson(config)},
+                                                             {"clip", options.clip_dir},
+                                                             {"seed", options.seed},
+                                                             {"time_budget_s", options.time_budget_s},
+                                                             {"threads", threads}}
+                                                  .dump(2);
+  }
+
+  train::Trainer trainer(clip, config, split.train, options.seed);
+  train::CheckpointExtras extras;
+  if (!options.resume_from.empty()) {
+    extras = train::ReadCheckpointState(options.resume_from, trainer);
+    spdlog::info("resumed from {} at iteration {}", options.resume_from, trainer.iteration());
+  }
+  spdlog::info("clip {}: {} frames {}x{}, {} train / {} held out; {}", clip.source, clip.frame_count(), clip.width,
+               clip.height, split.train.size(), split.heldout.size(), trainer.field().Describe());
+
+  render::FrameRenderer renderer(trainer.field(), trainer.box(), RenderSettings(config, clip.near, clip.far));
+  const CurveProbe probe(clip, split.heldout, config.curve_frames);
+  const fs::path checkpoint_path = out_dir / "model" / "checkpoint.bin";
+
+  ReconstructSummary summary;
+  double train_seconds = extras.train_seconds;
+  double next_curve = extras.curve.empty() ? 0.0 : train_seconds + config.curve_interval_s;
+  auto last_progress = Clock::now(), last_preview = Clock::now(), last_checkpoint = Clock::now();
+  double window_samples = 0, window_seconds = 0, samples_per_second = 0;
+  Progress progress;
+  progress.total_iterations = config.iterations;
+  const auto add_curve_point = [&](const train::StepStats& stats) {
+    nlohmann::json point = {{"seconds", train_seconds},
+                            {"iteration", trainer.iteration()},
+                            {"loss", stats.loss},
+                            {"train_psnr", stats.psnr}};
+    if (!probe.empty()) {
+      progress.heldout_psnr = probe.HeldoutPsnr(renderer);
+      point["heldout_psnr"] = progress.heldout_psnr;
+    }
+    extras.curve.push_back(point);
+  };
+
+  train::StepStats stats;
+  while (trainer.iteration() < config.iterations) {
+    if (options.time_budget_s > 0 && train_seconds >= options.time_budget_s) break;
+    if (hooks.should_stop && hooks.should_stop()) {
+      summary.cancelled = true;
+      break;
+    }
+    const auto start = Clock::now();
+    stats = trainer.Step();
+    const double dt = std::chrono::duration<double>(Clock::now() - start).count();
+    train_seconds += dt;
+    window_samples += double(stats.samples);
+    window_seconds += dt;
+    if (train_seconds >= next_curve || trainer.iteration() == config.iterations) {
+      add_curve_point(stats);
+      next_curve = train_seconds + config.curve_interval_s;
+    }
+    const auto now = Clock::now();
+    if (std::chrono::duration<double>(now - last_progress).count() >= hooks.progress_interval_s) {
+      samples_per_second = window_samples / std::max(window_seconds, 1e-9);
+      window_samples = window_seconds = 0;
+      progress.iteration = trainer.iteration();
+      progress.seconds = train_seconds;
+      progress.loss = stats.loss;
+      progress.train_psnr = stats.psnr;
+      progress.samples_per_second = samples_per_second;
+      const double per_iteration = train_seconds / std::max(1, trainer.iteration());
+      double eta = (config.iterations - trainer.iteration()) * per_iteration;
+      if (options.time_budget_s > 0) eta = std::min(eta, options.time_budget_s - train_seconds);
+      progress.eta_s = std::max(0.0, eta);
+      if (hooks.on_progress) hooks.on_progress(progress);
+      last_progress = now;
+    }
+    if (hooks.on_preview && std::chrono::duration<double>(now - last_preview).count() >= hooks.preview_interval_s) {
+      const int f = split.heldout.empty() ? 0 : split.heldout.front();
+      hooks.on_preview(MakePreview(renderer.Render(fit.preview_camera(clip.cameras[f]), clip.times[f]), f));
+      last_preview = Clock::now();
+    }
+    if (std::chrono::duration<double>(now - last_checkpoint).count() >= hooks.checkpoint_interval_s) {
+      extras.train_seconds = train_seconds;
+      train::WriteCheckpoint(checkpoint_path, trainer, extras);
+      if (hooks.on_checkpoint) hooks.on_checkpoint(checkpoint_path.string());
+      last_checkpoint = Clock::now();
+    }
+  }
+  if (extras.curve.empty() || extras.curve.back().at("iteration").get<int>() != trainer.iteration()) {
+    add_curve_point(stats);
+  }
+  extras.train_seconds = train_seconds;
+  train::WriteCheckpoint(checkpoint_path, trainer, extras);
+  if (hooks.on_checkpoint) hooks.on_checkpoint(checkpoint_path.string());
+  train::WriteModel(out_dir / "model" / "model.bin", config, trainer.box(), clip.near, clip.far, trainer.field());
+
+  summary.iterations = trainer.iteration();
+  summary.train_seconds = train_seconds;
+  summary.train_psnr = stats.psnr;
+  nlohmann::json metrics;
+  if (!summary.cancelled) {
+    eval::ClipEvaluation what;
+    what.train_frames = split.train;
+    what.heldout_frames = split.heldout;
+    metrics = eval::EvaluateClip(clip, renderer, what, out_dir);
+    const auto pointer = "/heldout/image/psnr_tissue/mean"_json_pointer;
+    if (metrics.contains(pointer) && metrics.at(pointer).is_number()) summary.heldout_psnr = metrics.at(pointer);
+  }
+  metrics["iterations"] = trainer.iteration();
+  metrics["train_seconds"] = train_seconds;
+  metrics["samples_per_second"] = samples_per_second;
+  metrics["cancelled"] = summary.cancelled;
+  metrics["curve"] = extras.curve;
+  metrics["left_out"] = fit.left_out;
+  metrics["field"] = trainer.field().Describe();
+  std::vector<eval::CurveSeries> series(2);
+  series[0].label = "held-out PSNR (tissue)";
+  series[1].label = "training PSNR (batch)";
+  series[1].dashed = true;
+  for (const auto& point : extras.curve) {
+    const double seconds = point["seconds"].get<double>();
+    series[0].seconds.push_back(seconds);
+    series[0].psnr.push_back(point.contains("heldout_psnr") ? point["heldout_psnr"].get<double>() : NAN);
+    series[1].seconds.push_back(seconds);
+    series[1].psnr.push_back(point["train_psnr"].get<double>());
+  }
+  eval::WriteCurveSvg(out_dir / "curve.svg", series);
+  summary.metrics_path = (out_dir / "metrics.json").string();
+  std::ofstream(summary.metrics_path) << metrics.dump(2);
+  return summary;
+}
+
+}  // namespace endorecon

@@ -1,0 +1,24 @@
+// The axis-aligned box the field lives in: every camera frustum between the clip's near and far,
+// padded. Field coordinates are positions mapped into [0,1]^3 by this box; distances along rays
+// are measured in units of the box's longest side so densities do not depend on the clip's units.
+#pragma once
+
+#include <Eigen/Core>
+#include <vector>
+
+#include "worker/engine/scene/camera.h"
+
+namespace endorecon::scene {
+
+struct SceneBox {
+  Eigen::Vector3d min = Eigen::Vector3d::Zero();
+  Eigen::Vector3d max = Eigen::Vector3d::Ones();
+
+  double scale() const { return (max - min).maxCoeff(); }
+  Eigen::Vector3d Normalise(const Eigen::Vector3d& x) const { return (x - min).cwiseQuotient(max - min); }
+};
+
+// The box around all cameras' frusta between near and far, padded by `padding` of its size per side.
+SceneBox FrustumBox(const std::vector<Camera>& cameras, double near, double far, double padding = 0.05);
+
+}  // namespace endorecon::scene

@@ -1,0 +1,40 @@
+// Files that hold a training run: a checkpoint (everything to resume exactly: config, trainer
+// state with the optimiser, elapsed time and the curve so far) and the trained model (config,
+// scene box and field only, for rendering). Both are written to a temporary file, flushed and
+// renamed, so a crash never leaves a half-written file under the real name.
+#pragma once
+
+#include <filesystem>
+#include <memory>
+#include <nlohmann/json.hpp>
+
+#include "worker/engine/field/field.h"
+#include "worker/engine/scene/scene_box.h"
+#include "worker/engine/train/train_config.h"
+#include "worker/engine/train/trainer.h"
+
+namespace endorecon::train {
+
+struct CheckpointExtras {
+  double train_seconds = 0;
+  nlohmann::json curve = nlohmann::json::array();
+};
+
+void WriteCheckpoint(const std::filesystem::path& path, const Trainer& trainer, const CheckpointExtras& extras);
+// The config stored in a checkpoint, to build the Trainer that ReadCheckpointState then fills.
+TrainConfig ReadCheckpointConfig(const std::filesystem::path& path);
+// Throws Error(kDataLoss) for a corrupt or truncated file, kInvalidArgument for a file that is no checkpoint.
+CheckpointExtras ReadCheckpointState(const std::filesystem::path& path, Trainer& trainer);
+
+struct Model {
+  TrainConfig config;
+  scene::SceneBox box;
+  double near = 0, far = 1;
+  std::unique_ptr<field::Field> field;
+};
+
+void WriteModel(const std::filesystem::path& path, const TrainConfig& config, const scene::SceneBox& box,
+                double near, double far, const field::Field& field);
+Model ReadModel(const std::filesystem::path& path);
+
+}  // namespace endorecon::train

@@ -1,0 +1,75 @@
+#include "worker/engine/train/scene_fit.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "worker/engine/field/hash_grid.h"
+#include "worker/engine/scene/scene_box.h"
+
+namespace endorecon::train {
+namespace {
+
+// Median of the known prior depths (a sparse subsample), or the middle of [near, far] without depth.
+double TypicalDepth(const scene::Clip& clip) {
+  std::vector<float> values;
+  for (const auto& frame : clip.depth) {
+    for (std::size_t i = 0; i < frame.size(); i += 97) {
+      if (frame[i] > 0) values.push_back(frame[i]);
+    }
+  }
+  if (values.empty()) return 0.5 * (clip.near + clip.far);
+  std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
+  return values[values.size() / 2];
+}
+
+}  // namespace
+
+scene::Camera SceneFit::preview_camera(const scene::Camera& camera) const {
+  const double k = std::min(1.0, double(preview_width) / camera.width);
+  scene::Camera small = camera;
+  small.width = std::max(1, int(std::lround(camera.width * k)));
+  small.height = std::max(1, int(std::lround(camera.height * k)));
+  small.fx *= k;
+  small.fy *= k;
+  small.cx *= k;
+  small.cy *= k;
+  return small;
+}
+
+SceneFit FitToScene(const scene::Clip& clip, TrainConfig& config) {
+  SceneFit fit;
+  const auto leave_out = [&](const std::string& what, const std::string& why) {
+    fit.left_out.push_back({{"what", what}, {"why", why}});
+  };
+  if (!clip.has_masks()) leave_out("tool-mask handling", "the clip has no masks/");
+  if (!clip.has_depth()) {
+    leave_out("depth loss and depth-guided sampling", "the clip has no depth/");
+    config.depth_weight = 0;
+  }
+  if (clip.is_static) {
+    leave_out("deformation network", "the clip is static");
+    config.field.deformation.enabled = false;
+  }
+  // Finest useful grid resolution: two cells per pixel footprint at the typical depth, over the box.
+  const scene::SceneBox box = scene::FrustumBox(clip.cameras, clip.near, clip.far);
+  double focal = 0;
+  for (const auto& camera : clip.cameras) focal = std::max({focal, camera.fx, camera.fy});
+  const double footprint = TypicalDepth(clip) / std::max(focal, 1e-9);
+  const int useful = int(std::ceil(2.0 * box.scale() / std::max(footprint, 1e-12)));
+  if (config.field.grids.max_resolution <= 0 || useful < config.field.grids.max_resolution) {
+    config.field.grids.max_resolution = useful;
+  }
+  int dropped = 0;
+  for (std::size_t i = 0; i < config.field.grids.base_resolutions.size(); ++i) {
+    dropped += config.field.grids.levels - field::LevelsUpToResolution(config.field.grids.Grid(int(i)),
+                                                                      config.field.grids.max_resolution);
+  }
+  if (dropped > 0) {
+    leave_out(std::to_string(dropped) + " hash-grid levels above " +
+                  std::to_string(config.field.grids.max_resolution) + " cells per axis",
+              "finer than half a pixel's footprint at the typical depth");
+  }
+  return fit;
+}
+
+}  // namespace endorecon::train

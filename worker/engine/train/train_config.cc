@@ -1,0 +1,141 @@
+#include "worker/engine/train/train_config.h"
+
+#include <nlohmann/json.hpp>
+
+#include "common/error.h"
+
+namespace endorecon::train {
+
+TrainConfig TrainConfig::Preset(const std::string& name) {
+  TrainConfig c;
+  c.preset = name;
+  c.adam.lr = {{"grid", 1e-2f}, {"blend", 1e-3f}, {"deform", 1e-3f}, {"density", 1e-3f}, {"color", 1e-3f}};
+  if (name == "cpu") {
+    c.field = field::FieldConfig::Cpu();
+    return c;
+  }
+  if (name == "paper") {
+    // The paper's grids and EndoNeRF's schedule: 50k iterations, 2048 rays, 64 + 32 samples.
+    c.field = field::FieldConfig::Paper();
+    c.iterations = 50000;
+    c.rays_per_batch = 2048;
+    c.depth_samples = 64;
+    c.stratified_samples = 32;
+    c.eval_coarse_samples = 64;
+    c.eval_fine_samples = 64;
+    c.curve_interval_s = 60;
+    return c;
+  }
+  FailInvalid("unknown preset '" + name + "' (expected cpu or paper)");
+}
+
+namespace {
+
+// One table drives both directions so a key cannot be written and not read, or the reverse.
+template <typename Visit>
+void VisitKeys(TrainConfig& c, Visit&& visit) {
+  visit("preset", c.preset);
+  visit("iterations", c.iterations);
+  visit("rays_per_batch", c.rays_per_batch);
+  visit("depth_samples", c.depth_samples);
+  visit("stratified_samples", c.stratified_samples);
+  visit("depth_xi", c.depth_xi);
+  visit("holdout", c.holdout);
+  visit("nll_weight", c.nll_weight);
+  visit("rgb_l2_weight", c.rgb_l2_weight);
+  visit("depth_weight", c.depth_weight);
+  visit("variance_reg", c.variance_reg);
+  visit("depth_loss", c.depth_loss);
+  visit("huber_delta", c.huber_delta);
+  visit("variance_eps", c.variance_eps);
+  visit("adam.lr", c.adam.lr);
+  visit("adam.default_lr", c.adam.default_lr);
+  visit("adam.beta1", c.adam.beta1);
+  visit("adam.beta2", c.adam.beta2);
+  visit("adam.eps", c.adam.eps);
+  visit("adam.final_lr_factor", c.adam.final_lr_factor);
+  visit("adam.clip_norm", c.adam.clip_norm);
+  visit("eval_coarse_samples", c.eval_coarse_samples);
+  visit("eval_fine_samples", c.eval_fine_samples);
+  visit("eval_floor", c.eval_floor);
+  visit("curve_interval_s", c.curve_interval_s);
+  visit("curve_frames", c.curve_frames);
+  visit("field.grids.base_resolutions", c.field.grids.base_resolutions);
+  visit("field.grids.scales", c.field.grids.scales);
+  visit("field.grids.levels", c.field.grids.levels);
+  visit("field.grids.features", c.field.grids.features);
+  visit("field.grids.log2_table", c.field.grids.log2_table);
+  visit("field.grids.max_resolution", c.field.grids.max_resolution);
+  visit("field.blend_hidden", c.field.blend_hidden);
+  visit("field.deformation.enabled", c.field.deformation.enabled);
+  visit("field.deformation.resolution", c.field.deformation.resolution);
+  visit("field.deformation.time_knots", c.field.deformation.time_knots);
+  visit("field.heads.density_hidden", c.field.heads.density_hidden);
+  visit("field.heads.color_hidden", c.field.heads.color_hidden);
+  visit("field.heads.geo_features", c.field.heads.geo_features);
+  visit("field.heads.dropout", c.field.heads.dropout);
+}
+
+nlohmann::json::json_pointer Pointer(const std::string& dotted) {
+  std::string path = "/" + dotted;
+  for (auto& ch : path) {
+    if (ch == '.') ch = '/';
+  }
+  return nlohmann::json::json_pointer(path);
+}
+
+void Validate(const TrainConfig& c) {
+  const auto require = [](bool ok, const std::string& what) {
+    if (!ok) FailInvalid("config: " + what);
+  };
+  require(c.iterations >= 0, "iterations must be >= 0");
+  require(c.rays_per_batch >= 1, "rays_per_batch must be >= 1");
+  require(c.depth_samples >= 0 && c.stratified_samples >= 1, "need stratified_samples >= 1 and depth_samples >= 0");
+  require(c.depth_xi > 0, "depth_xi must be > 0");
+  require(c.holdout >= 0, "holdout must be >= 0");
+  require(c.depth_loss == "huber" || c.depth_loss == "l1", "depth_loss must be huber or l1, got " + c.depth_loss);
+  require(c.variance_eps > 0, "variance_eps must be > 0");
+  require(c.eval_coarse_samples >= 1 && c.eval_fine_samples >= 1, "eval samples must be >= 1");
+  require(c.curve_interval_s > 0, "curve_interval_s must be > 0");
+}
+
+}  // namespace
+
+nlohmann::json ToJson(const TrainConfig& config) {
+  nlohmann::json json;
+  TrainConfig copy = config;
+  VisitKeys(copy, [&](const char* key, auto& value) { json[Pointer(key)] = value; });
+  return json;
+}
+
+void ApplyJson(const nlohmann::json& json, TrainConfig& config) {
+  if (!json.is_object()) FailInvalid("config: expected a JSON object");
+  const nlohmann::json flat = json.flatten();
+  std::size_t used = 0;
+  VisitKeys(config, [&](const char* key, auto& value) {
+    const auto pointer = Pointer(key);
+    if (!json.contains(pointer)) return;
+    try {
+      json.at(pointer).get_to(value);
+    } catch (const nlohmann::json::exception& e) {
+      FailInvalid(std::string("config: bad value for ") + key + ": " + e.what());
+    }
+    const auto& node = json.at(pointer);
+    used += node.is_structured() && !node.empty() ? node.flatten().size() : 1;
+  });
+  if (used != flat.size()) {
+    // Name the first key nobody read.
+    for (const auto& [path, value] : flat.items()) {
+      bool known = false;
+      TrainConfig probe;
+      VisitKeys(probe, [&](const char* key, auto&) {
+        const std::string prefix = Pointer(key).to_string();
+        if (path == prefix || path.rfind(prefix + "/", 0) == 0) known = true;
+      });
+      if (!known) FailInvalid("config: unknown key " + path);
+    }
+  }
+  Validate(config);
+}
+
+}  // namespace endorecon::train

@@ -1,0 +1,53 @@
+// Everything a training run needs, as one value that is written to config.json beside every
+// result and can be read back to reproduce it. Two presets: "paper" (the paper's settings) and
+// "cpu" (sized for a 2-core machine: a small clip in minutes).
+#pragma once
+
+#include <nlohmann/json_fwd.hpp>
+#include <string>
+
+#include "worker/engine/field/field.h"
+#include "worker/engine/train/adam.h"
+
+namespace endorecon::train {
+
+struct TrainConfig {
+  std::string preset = "cpu";
+  int iterations = 4000;
+  int rays_per_batch = 1024;
+  // Training samples per ray: Gaussian around the depth prior plus stratified over [near, far].
+  // Without depth every sample is stratified.
+  int depth_samples = 16;
+  int stratified_samples = 8;
+  double depth_xi = 0.02;  // width of the Gaussian, as a fraction of far - near
+  int holdout = 8;         // every K-th frame held out of training; 0 = none
+
+  // Loss (paper §3 "Training Objective" + EndoNeRF's rendered-colour L2, see losses.h).
+  float nll_weight = 1.0f;
+  float rgb_l2_weight = 1.0f;
+  float depth_weight = 1.0f;  // lambda_d
+  float variance_reg = 0.03f;  // eta
+  std::string depth_loss = "l1";  // "l1" or "huber", on depth in units of far - near
+  float huber_delta = 0.05f;    // in units of far - near
+  float variance_eps = 1e-3f;
+
+  AdamConfig adam;
+
+  // Rendering at evaluation: coarse stratified pass, then importance samples from its weights.
+  int eval_coarse_samples = 48;
+  int eval_fine_samples = 48;
+  float eval_floor = 0.02f;  // share of fine samples spread uniformly along the ray
+
+  double curve_interval_s = 10.0;  // a point of the error-against-time curve every this many seconds
+  int curve_frames = 4;            // held-out frames rendered for each curve point (evenly spread)
+
+  field::FieldConfig field;
+
+  static TrainConfig Preset(const std::string& name);  // throws Error(kInvalidArgument) for unknown names
+};
+
+nlohmann::json ToJson(const TrainConfig& config);
+// Overrides the keys present in `json` (same names as ToJson); unknown keys are an error naming them.
+void ApplyJson(const nlohmann::json& json, TrainConfig& config);
+
+}  // namespace endorecon::train

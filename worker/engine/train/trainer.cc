@@ -1,0 +1,194 @@
+#include "worker/engine/train/trainer.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
+#include <tbb/parallel_for.h>
+
+#include <cmath>
+#include <istream>
+#include <ostream>
+#include <string>
+
+#include "common/error.h"
+#include "worker/engine/render/depth_guided_sampler.h"
+#include "worker/engine/render/ray_points.h"
+#include "worker/engine/render/rng.h"
+#include "worker/engine/render/stratified_sampler.h"
+#include "worker/engine/render/volume_renderer.h"
+#include "worker/engine/train/losses.h"
+
+namespace endorecon::train {
+
+// Batch-major arrays for one step, allocated once: rays x samples, nothing allocated per step.
+struct Trainer::Batch {
+  int rays = 0, samples = 0;
+  std::vector<float> target, prior, s, delta, pos, dir, time;
+  std::vector<float> sigma, sigma_logvar, rgb, rgb_logvar, weights;
+  std::vector<float> d_weights, d_sigma, d_rgb, d_rgb_logvar;
+
+  Batch(int r, int n) : rays(r), samples(n) {
+    const std::size_t m = std::size_t(r) * n;
+    target.resize(3 * std::size_t(r));
+    prior.resize(r);
+    for (auto* v : {&s, &delta, &time, &sigma, &sigma_logvar, &rgb_logvar, &weights, &d_weights, &d_sigma,
+                    &d_rgb_logvar}) {
+      v->resize(m);
+    }
+    for (auto* v : {&pos, &dir, &rgb, &d_rgb}) v->resize(3 * m);
+  }
+};
+
+Trainer::Trainer(const scene::Clip& clip, const TrainConfig& config, std::vector<int> train_frames,
+                 std::uint64_t seed)
+    : clip_(clip),
+      config_(config),
+      seed_(seed),
+      box_(scene::FrustumBox(clip.cameras, clip.near, clip.far)),
+      sampler_(clip, std::move(train_frames)) {
+  field_ = std::make_unique<field::Field>(config_.field, seed);
+  adam_ = std::make_unique<Adam>(field_->Params(), config_.adam);
+  // Without depth the same number of samples is spread stratified over [near, far].
+  batch_ = std::make_unique<Batch>(config_.rays_per_batch, config_.depth_samples + config_.stratified_samples);
+}
+
+Trainer::~Trainer() = default;
+
+void Trainer::SampleRays() {
+  Batch& b = *batch_;
+  const float near = float(clip_.near), far = float(clip_.far);
+  const std::uint64_t step_seed = render::HashCombine(seed_, std::uint64_t(iteration_));
+  render::DepthGuidedConfig<float> guided;
+  guided.xi = float(config_.depth_xi * (clip_.far - clip_.near));
+  guided.gaussian_samples = config_.depth_samples;
+  guided.stratified_samples = config_.stratified_samples;
+  tbb::parallel_for(tbb::blocked_range<int>(0, b.rays, 64), [&](const tbb::blocked_range<int>& range) {
+    for (int r = range.begin(); r != range.end(); ++r) {
+      const RayPick pick = sampler_.Pick(step_seed, std::uint64_t(2 * r));
+      const scene::Camera& camera = clip_.cameras[pick.frame];
+      const int x = pick.pixel % clip_.width, y = pick.pixel / clip_.width;
+      Eigen::Vector3d origin, direction;
+      camera.Ray(x, y, origin, direction);
+      const std::uint8_t* px = &clip_.rgb[pick.frame][3 * std::size_t(pick.pixel)];
+      for (int c = 0; c < 3; ++c) b.target[3 * r + c] = px[c] / 255.0f;
+      b.prior[r] = clip_.has_depth() ? clip_.depth[pick.frame][pick.pixel] : 0.0f;
+
+      const render::CounterRng<float> uniform(step_seed, std::uint64_t(2 * r + 1));
+      float* s = &b.s[std::size_t(r) * b.samples];
+      float* delta = &b.delta[std::size_t(r) * b.samples];
+      if (clip_.has_depth()) {
+        render::DepthGuidedSamples(near, far, b.prior[r], guided, uniform, s, delta);
+      } else {
+        render::StratifiedSamples(near, far, b.samples, uniform, s, delta);
+      }
+      const std::size_t o = std::size_t(r) * b.samples;
+      render::RayPoints(box_, origin, direction, clip_.times[pick.frame], s, b.samples, delta, &b.pos[3 * o],
+                        &b.dir[3 * o], &b.time[o]);
+    }
+  });
+}
+
+double Trainer::LossAndGradients(StepStats& stats) {
+  Batch& b = *batch_;
+  const float inv_rays = 1.0f / float(b.rays);
+  const float depth_range = float(clip_.far - clip_.near);
+  const bool use_depth = clip_.has_depth() && config_.depth_weight > 0;
+  struct Sums {
+    double loss = 0, mse = 0;
+  };
+  const Sums sums = tbb::parallel_reduce(
+      tbb::blocked_range<int>(0, b.rays, 64), Sums{},
+      [&](const tbb::blocked_range<int>& range, Sums acc) {
+        for (int r = range.begin(); r != range.end(); ++r) {
+          const std::size_t o = std::size_t(r) * b.samples;
+          float* w = &b.weights[o];
+          const auto ray = render::CompositeRay(&b.sigma[o], &b.rgb[3 * o], &b.s[o], &b.delta[o], b.samples, w);
+          render::RayCompositeGrad<float> grad;
+          double loss = RenderedColorL2(ray.rgb, &b.target[3 * r], config_.rgb_l2_weight * inv_rays, grad.rgb);
+          acc.mse += RenderedColorL2(ray.rgb, &b.target[3 * r], 1.0f / 3.0f, static_cast<float*>(nullptr));
+          // Depth is compared in units of the depth range so lambda_d does not depend on the clip's units.
+          if (use_depth) {
+            float d_depth = 0;
+            const float scale = config_.depth_weight * inv_rays / depth_range;
+            if (config_.depth_loss == "l1") {
+              loss += depth_range * DepthL1(ray.depth / depth_range, b.prior[r] / depth_range, scale, &d_depth);
+            } else {
+              loss += depth_range * DepthHuber(ray.depth / depth_range, b.prior[r] / depth_range,
+                                               config_.huber_delta, scale, &d_depth);
+            }
+            grad.depth = d_depth;
+          }
+          float* d_w = &b.d_weights[o];
+          std::fill(d_w, d_w + b.samples, 0.0f);
+          float* d_lv = &b.d_rgb_logvar[o];
+          std::fill(d_lv, d_lv + b.samples, 0.0f);
+          float* d_rgb = &b.d_rgb[3 * o];
+          std::fill(d_rgb, d_rgb + 3 * b.samples, 0.0f);
+          // The NLL's weights w_j are held constant (no gradient into the densities): through w_j the
+          // NLL rewards opacity at any sample whose colour fits with a confident variance, which pulls
+          // surfaces in front of the true one. Geometry is learned from the rendered colour and depth.
+          if (config_.nll_weight > 0) {
+            loss += RgbNll(w, &b.rgb[3 * o], &b.rgb_logvar[o], b.samples, &b.target[3 * r], config_.variance_eps,
+                           config_.nll_weight * inv_rays, static_cast<float*>(nullptr), d_rgb, d_lv);
+          }
+          if (config_.variance_reg > 0) {
+            loss += VarianceRegularizer(&b.rgb_logvar[o], b.samples, config_.variance_eps,
+                                        config_.variance_reg * inv_rays, d_lv);
+          }
+          float* d_sigma = &b.d_sigma[o];
+          std::fill(d_sigma, d_sigma + b.samples, 0.0f);
+          render::CompositeRayBackward(&b.sigma[o], &b.rgb[3 * o], &b.s[o], &b.delta[o], w, ray, grad, d_w,
+                                       d_sigma, d_rgb);
+          acc.loss += loss;
+        }
+        return acc;
+      },
+      [](Sums a, const Sums& c) {
+        a.loss += c.loss;
+        a.mse += c.mse;
+        return a;
+      });
+  stats.rgb_mse = sums.mse * inv_rays;
+  stats.psnr = -10.0 * std::log10(std::max(stats.rgb_mse, 1e-12));
+  return sums.loss;
+}
+
+StepStats Trainer::Step() {
+  StepStats stats;
+  SampleRays();
+  Batch& b = *batch_;
+  const int n = b.rays * b.samples;
+  const field::SampleBatch in{n, b.pos.data(), b.time.data(), b.dir.data()};
+  field::FieldOutput out{b.sigma.data(), b.sigma_logvar.data(), b.rgb.data(), b.rgb_logvar.data()};
+  field_->Forward(in, out, /*dropout=*/true, render::HashCombine(seed_ ^ 0x5eed, std::uint64_t(iteration_)));
+  stats.loss = LossAndGradients(stats);
+  stats.samples = n;
+  if (!std::isfinite(stats.loss)) {
+    Fail(ErrorCode::kInternal, "training diverged: the loss is not finite at iteration " +
+                                   std::to_string(iteration_) + " (stage: loss)");
+  }
+  field_->ZeroGrad();
+  const field::FieldOutputGrad grad{b.d_sigma.data(), nullptr, b.d_rgb.data(), b.d_rgb_logvar.data()};
+  field_->Backward(in, grad);
+  const AdamStepReport report = adam_->Step(iteration_, config_.iterations);
+  if (!report.finite) {
+    Fail(ErrorCode::kInternal, "training diverged: a gradient is not finite at iteration " +
+                                   std::to_string(iteration_) + " (stage: backward, group " + report.bad_group + ")");
+  }
+  ++iteration_;
+  return stats;
+}
+
+void Trainer::Save(std::ostream& out) const {
+  out.write(reinterpret_cast<const char*>(&iteration_), sizeof(iteration_));
+  field_->Save(out);
+  adam_->Save(out);
+}
+
+void Trainer::Load(std::istream& in) {
+  in.read(reinterpret_cast<char*>(&iteration_), sizeof(iteration_));
+  if (!in) Fail(ErrorCode::kDataLoss, "checkpoint: truncated before the iteration count");
+  field_->Load(in);
+  adam_->Load(in);
+}
+
+}  // namespace endorecon::train

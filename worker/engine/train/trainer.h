@@ -1,0 +1,62 @@
+// One training run's state and its step: pick rays, sample along them, evaluate the field,
+// composite, compute the loss, backpropagate by hand, step Adam.
+#pragma once
+
+#include <cstdint>
+#include <iosfwd>
+#include <memory>
+#include <vector>
+
+#include "worker/engine/field/field.h"
+#include "worker/engine/scene/clip.h"
+#include "worker/engine/scene/scene_box.h"
+#include "worker/engine/train/adam.h"
+#include "worker/engine/train/ray_sampler.h"
+#include "worker/engine/train/train_config.h"
+
+namespace endorecon::train {
+
+struct StepStats {
+  double loss = 0;
+  double rgb_mse = 0;  // of the rendered colour on the batch's (tissue) pixels, colours in [0, 1]
+  double psnr = 0;
+  long long samples = 0;
+};
+
+class Trainer {
+ public:
+  // Keeps references to clip (which must outlive the trainer). train_frames: the frames rays come from.
+  Trainer(const scene::Clip& clip, const TrainConfig& config, std::vector<int> train_frames, std::uint64_t seed);
+  ~Trainer();
+
+  // One iteration. Throws Error(kInternal) naming the stage and iteration when the loss or a
+  // gradient is not finite; the parameters are then still those of the last good step.
+  StepStats Step();
+
+  int iteration() const { return iteration_; }
+  field::Field& field() { return *field_; }
+  const scene::SceneBox& box() const { return box_; }
+  const TrainConfig& config() const { return config_; }
+
+  // Exact state for resume: field, optimiser, iteration (the rays of a step depend only on the
+  // seed and the iteration, so a resumed run repeats the same loss curve).
+  void Save(std::ostream& out) const;
+  void Load(std::istream& in);
+
+ private:
+  struct Batch;
+  void SampleRays();
+  double LossAndGradients(StepStats& stats);
+
+  const scene::Clip& clip_;
+  TrainConfig config_;
+  std::uint64_t seed_;
+  scene::SceneBox box_;
+  RaySampler sampler_;
+  std::unique_ptr<field::Field> field_;
+  std::unique_ptr<Adam> adam_;
+  std::unique_ptr<Batch> batch_;
+  int iteration_ = 0;
+};
+
+}  // namespace endorecon::train
