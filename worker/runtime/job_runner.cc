@@ -1,0 +1,176 @@
+#include "worker/runtime/job_runner.h"
+
+#include <spdlog/spdlog.h>
+
+#include <fstream>
+#include <thread>
+#include <nlohmann/json.hpp>
+
+#include "common/error.h"
+#include "common/manifest.h"
+#include "common/sha256.h"
+#include "worker/engine/reconstruct.h"
+#include "worker/runtime/preview_png.h"
+#include "worker/runtime/progress_reporter.h"
+
+namespace endorecon::worker {
+namespace fs = std::filesystem;
+namespace {
+
+v1::Progress ToProto(const Progress& p) {
+  v1::Progress out;
+  out.set_iteration(p.iteration);
+  out.set_total_iterations(p.total_iterations);
+  out.set_seconds(p.seconds);
+  out.set_eta_s(p.eta_s);
+  out.set_loss(p.loss);
+  out.set_train_psnr(p.train_psnr);
+  out.set_heldout_psnr(p.heldout_psnr);
+  out.set_depth_rmse(p.depth_rmse);
+  out.set_samples_per_second(p.samples_per_second);
+  return out;
+}
+
+ReconstructOptions OptionsFor(const v1::Job& job, const fs::path& job_dir, const Device& device) {
+  const auto& o = job.options();
+  ReconstructOptions options;
+  options.clip_dir = (job_dir / "clip").string();
+  options.out_dir = (job_dir / "out").string();
+  if (!o.config_json().empty()) {
+    options.config_file = (job_dir / "config.json").string();
+    std::ofstream(options.config_file) << o.config_json();
+  }
+  if (!o.preset().empty()) options.preset = o.preset();
+  if (o.has_iterations()) options.iterations = o.iterations();
+  options.time_budget_s = o.time_budget_s();
+  if (o.has_holdout()) options.holdout = o.holdout();
+  options.seed = o.seed();
+  options.force_static = o.force_static();
+  options.threads = device.threads;
+  if (job.has_checkpoint() && !job.checkpoint().sha256().empty()) {
+    options.resume_from = (job_dir / "checkpoint" / job.checkpoint().path()).string();
+  }
+  return options;
+}
+
+// Uploads a checkpoint file the engine just wrote, as a blob named by its file name.
+v1::FileEntry UploadCheckpoint(WorkerClient& client, const fs::path& path) {
+  v1::Manifest manifest;
+  auto* entry = manifest.add_files();
+  entry->set_path(path.filename().string());
+  entry->set_size(static_cast<std::int64_t>(fs::file_size(path)));
+  entry->set_sha256(Sha256File(path));
+  client.PutFiles(path.parent_path(), manifest);
+  return *entry;
+}
+
+std::string SummaryJson(const ReconstructSummary& summary) {
+  return nlohmann::json{{"iterations", summary.iterations},
+                        {"train_seconds", summary.train_seconds},
+                        {"train_psnr", summary.train_psnr},
+                        {"heldout_psnr", summary.heldout_psnr},
+                        {"metrics", fs::path(summary.metrics_path).filename().string()}}
+      .dump();
+}
+
+// Retries `call` while the server is unreachable (a restart), for about `patience`.
+template <typename Call>
+auto WhileUnavailable(Call&& call, std::chrono::seconds patience = std::chrono::seconds(30)) {
+  const auto give_up = std::chrono::steady_clock::now() + patience;
+  while (true) {
+    try {
+      return call();
+    } catch (const Error& e) {
+      if (e.code() != ErrorCode::kUnavailable || std::chrono::steady_clock::now() > give_up) throw;
+      spdlog::warn("{}; retrying", e.what());
+      std::this_thread::sleep_for(std::chrono::seconds(1));
+    }
+  }
+}
+
+void Tell(WorkerClient& client, const std::string& lease_id, const std::string& reason, bool retry, bool release) {
+  v1::FailRequest request;
+  request.set_lease_id(lease_id);
+  request.set_reason(reason);
+  request.set_retry(retry);
+  request.set_release(release);
+  const auto job = WhileUnavailable([&] { return client.Fail(request); });
+  spdlog::info("job {} handed back: {} -> {}", job.id(), reason, v1::JobState_Name(job.state()));
+}
+
+}  // namespace
+
+void RunLeasedJob(WorkerClient& client, const v1::LeaseResponse& lease, const Device& device,
+                  const RunnerSettings& settings, WorkerMetrics& metrics, const std::atomic<bool>& shutting_down) {
+  const auto& job = lease.job();
+  const fs::path job_dir = settings.work_dir / job.id();
+  spdlog::info("[{}] job {} (attempt {}){}", device.name, job.id(), lease.attempt(),
+               job.has_checkpoint() ? " resuming from checkpoint " + job.checkpoint().sha256().substr(0, 12) : "");
+  auto& gauges = metrics.For(device.name);
+  gauges.busy.Set(1);
+  ProgressReporter reporter(client, lease.lease_id(), settings.heartbeat);
+  int last_iteration = 0;
+  try {
+    client.GetFiles(lease.lease_id(), job_dir / "clip", job.clip());
+    if (job.has_checkpoint() && !job.checkpoint().sha256().empty()) {
+      v1::Manifest checkpoint;
+      *checkpoint.add_files() = job.checkpoint();
+      client.GetFiles(lease.lease_id(), job_dir / "checkpoint", checkpoint);
+    }
+    fs::remove_all(job_dir / "out");
+    const auto options = OptionsFor(job, job_dir, device);
+
+    ReconstructHooks hooks;
+    hooks.progress_interval_s = std::min(2.0, std::chrono::duration<double>(settings.heartbeat).count());
+    hooks.preview_interval_s = settings.preview_interval_s;
+    hooks.checkpoint_interval_s = settings.checkpoint_interval_s;
+    hooks.on_progress = [&](const Progress& p) {
+      reporter.SetProgress(ToProto(p));
+      gauges.samples_per_second.Set(p.samples_per_second);
+      gauges.psnr.Set(p.train_psnr);
+      if (p.iteration > last_iteration) gauges.iterations.Increment(p.iteration - last_iteration);
+      last_iteration = p.iteration;
+      metrics.UpdateMemory();
+    };
+    hooks.on_preview = [&](const Preview& preview) { reporter.AddPreview(EncodePreview(preview, last_iteration)); };
+    hooks.on_checkpoint = [&](const std::string& path) {
+      reporter.SetCheckpoint(WhileUnavailable([&] { return UploadCheckpoint(client, path); }));
+    };
+    hooks.should_stop = [&] { return shutting_down.load() || reporter.stop_requested().has_value(); };
+
+    const auto summary = Reconstruct(options, hooks);
+    reporter.Stop();
+    gauges.busy.Set(0);
+    if (const auto stop = reporter.stop_requested()) {
+      spdlog::info("[{}] job {} stopped: {}", device.name, job.id(), v1::ProgressReply::Action_Name(*stop));
+    } else if (summary.cancelled) {
+      Tell(client, lease.lease_id(), "worker " + client.worker_id() + " is shutting down", true, true);
+    } else {
+      v1::CompleteRequest complete;
+      complete.set_lease_id(lease.lease_id());
+      *complete.mutable_result() = ManifestOfDirectory(options.out_dir);
+      WhileUnavailable([&] { client.PutFiles(options.out_dir, complete.result()); });
+      complete.set_summary_json(SummaryJson(summary));
+      WhileUnavailable([&] { return client.Complete(complete); });
+      spdlog::info("[{}] job {} done: {} iterations, {} result file(s)", device.name, job.id(), summary.iterations,
+                   complete.result().files_size());
+    }
+  } catch (const Error& e) {
+    reporter.Stop();
+    gauges.busy.Set(0);
+    spdlog::error("[{}] job {}: {}: {}", device.name, job.id(), ErrorCodeName(e.code()), e.what());
+    if (!reporter.stop_requested()) {
+      const bool bad_input = e.code() == ErrorCode::kInvalidArgument;
+      Tell(client, lease.lease_id(), std::string(ErrorCodeName(e.code())) + ": " + e.what(), !bad_input, false);
+    }
+  } catch (const std::exception& e) {
+    reporter.Stop();
+    gauges.busy.Set(0);
+    spdlog::error("[{}] job {}: {}", device.name, job.id(), e.what());
+    if (!reporter.stop_requested()) Tell(client, lease.lease_id(), e.what(), true, false);
+  }
+  std::error_code ignored;
+  fs::remove_all(job_dir, ignored);
+}
+
+}  // namespace endorecon::worker

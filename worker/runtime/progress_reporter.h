@@ -1,0 +1,57 @@
+// Keeps a leased job's Report stream going on its own thread: every heartbeat interval it sends
+// the latest progress, any new previews and the latest checkpoint, which also renews the lease,
+// and reads the server's answer. When the server says stop (the job was cancelled, or the lease
+// is lost) stop_requested() turns true and the engine's should_stop hook sees it. A broken stream
+// (server restart) is reopened; the lease outlives it as long as the server comes back within
+// the lease TTL.
+#pragma once
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "endorecon/v1/worker_service.pb.h"
+#include "worker/runtime/worker_client.h"
+
+namespace endorecon::worker {
+
+class ProgressReporter {
+ public:
+  ProgressReporter(WorkerClient& client, std::string lease_id, std::chrono::milliseconds interval);
+  ~ProgressReporter();  // Stop()s
+
+  void SetProgress(const v1::Progress& progress);
+  void AddPreview(v1::Preview preview);
+  void SetCheckpoint(const v1::FileEntry& checkpoint);
+  // Sends what is pending once more, then closes the stream and joins the thread.
+  void Stop();
+
+  // The server's reason to stop, once it gave one.
+  std::optional<v1::ProgressReply::Action> stop_requested() const;
+
+ private:
+  void Loop();
+  // Sends one update on the open stream (opening it if needed); false if the stream broke.
+  bool SendPending();
+
+  WorkerClient& client_;
+  std::string lease_id_;
+  std::chrono::milliseconds interval_;
+  mutable std::mutex mutex_;
+  std::condition_variable wake_;
+  std::optional<v1::Progress> progress_;
+  std::vector<v1::Preview> previews_;
+  std::optional<v1::FileEntry> checkpoint_;
+  std::optional<v1::ProgressReply::Action> stop_;
+  bool stopping_ = false;
+  std::unique_ptr<grpc::ClientContext> context_;
+  std::unique_ptr<grpc::ClientReaderWriter<v1::ProgressUpdate, v1::ProgressReply>> stream_;
+  std::thread thread_;
+};
+
+}  // namespace endorecon::worker

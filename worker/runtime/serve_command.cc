@@ -1,0 +1,156 @@
+// endorecon-worker serve: registers with endorecon-server, then runs one lease loop per device.
+// SIGTERM/SIGINT: running jobs stop at their next iteration, their last checkpoint is reported and
+// they are handed back to the queue (not counted as a lost attempt); then the process exits.
+#include <signal.h>
+#include <spdlog/spdlog.h>
+#include <unistd.h>
+
+#include <CLI/CLI.hpp>
+#include <atomic>
+#include <memory>
+#include <sstream>
+#include <thread>
+
+#include "common/error.h"
+#include "worker/runtime/commands.h"
+#include "worker/runtime/job_runner.h"
+#include "worker/runtime/worker_client.h"
+#include "worker/runtime/worker_metrics.h"
+
+namespace endorecon::worker {
+namespace {
+
+struct ServeFlags {
+  std::string server = "127.0.0.1:50051";
+  std::string devices = "cpu";
+  std::string metrics_host = "127.0.0.1";
+  int metrics_port = 9465;
+  std::string work_dir;
+  std::string id;
+  int threads = 0;
+  double timeout_s = 30;
+  double lease_wait_s = 10;
+  double preview_interval_s = 30;
+  double checkpoint_interval_s = 120;
+};
+
+// "cpu" -> one CPU slot; "cpu:N" -> N CPU slots; "0,1,..." -> GPU indices (CUDA_VISIBLE_DEVICES
+// style), which run as CPU slots until the CUDA engine exists.
+std::vector<Device> ParseDevices(const std::string& spec, int threads) {
+  std::vector<Device> devices;
+  if (spec == "cpu" || spec.rfind("cpu:", 0) == 0) {
+    const int slots = spec == "cpu" ? 1 : std::stoi(spec.substr(4));
+    if (slots < 1) FailInvalid("--devices " + spec + ": expected at least one slot");
+    for (int i = 0; i < slots; ++i) devices.push_back({"cpu" + std::to_string(i), "cpu", 0});
+  } else {
+    std::stringstream list(spec);
+    std::string index;
+    while (std::getline(list, index, ',')) {
+      if (index.empty() || index.find_first_not_of("0123456789") != std::string::npos) {
+        FailInvalid("--devices " + spec + ": expected cpu, cpu:N or GPU indices like 0,1");
+      }
+      devices.push_back({"gpu" + index, "cpu", 0});
+    }
+    spdlog::warn("no CUDA engine in this build: GPU slots {} run on the CPU", spec);
+  }
+  const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  for (auto& device : devices) device.threads = threads > 0 ? threads : std::max(1, cores / int(devices.size()));
+  return devices;
+}
+
+std::string Hostname() {
+  char name[256] = {};
+  gethostname(name, sizeof(name) - 1);
+  return name;
+}
+
+void LeaseLoop(WorkerClient& client, const Device& device, const RunnerSettings& settings, WorkerMetrics& metrics,
+               const std::atomic<bool>& shutting_down, std::chrono::milliseconds wait) {
+  auto backoff = std::chrono::milliseconds(500);
+  while (!shutting_down) {
+    try {
+      const auto lease = client.Lease(device.name, wait);
+      backoff = std::chrono::milliseconds(500);
+      if (lease) RunLeasedJob(client, *lease, device, settings, metrics, shutting_down);
+    } catch (const Error& e) {
+      spdlog::warn("[{}] {}: {}; retrying in {} ms", device.name, ErrorCodeName(e.code()), e.what(), backoff.count());
+      std::this_thread::sleep_for(backoff);
+      backoff = std::min(backoff * 2, std::chrono::milliseconds(5000));
+    }
+  }
+}
+
+int Serve(const ServeFlags& flags) {
+  sigset_t stop_signals;
+  sigemptyset(&stop_signals);
+  sigaddset(&stop_signals, SIGINT);
+  sigaddset(&stop_signals, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
+
+  const auto devices = ParseDevices(flags.devices, flags.threads);
+  const std::string worker_id = flags.id.empty() ? Hostname() + "-" + std::to_string(getpid()) : flags.id;
+  WorkerMetrics metrics(
+      flags.metrics_port >= 0 ? flags.metrics_host + ":" + std::to_string(flags.metrics_port) : "", devices);
+  WorkerClient client(flags.server, worker_id, std::chrono::milliseconds(static_cast<long>(flags.timeout_s * 1000)));
+  std::vector<std::string> names;
+  for (const auto& device : devices) names.push_back(device.name);
+
+  RunnerSettings settings;
+  settings.work_dir = flags.work_dir.empty() ? std::filesystem::temp_directory_path() / ("endorecon-" + worker_id)
+                                             : std::filesystem::path(flags.work_dir);
+  settings.preview_interval_s = flags.preview_interval_s;
+  settings.checkpoint_interval_s = flags.checkpoint_interval_s;
+  std::atomic<bool> shutting_down{false};
+  std::thread signal_waiter([&] {
+    int signal = 0;
+    sigwait(&stop_signals, &signal);
+    spdlog::info("signal {}: handing running jobs back and stopping", signal);
+    shutting_down = true;
+    client.CancelLeases();
+  });
+  while (!shutting_down) {
+    try {
+      const auto registered = client.Register(Hostname(), names);
+      settings.heartbeat = std::chrono::milliseconds(registered.heartbeat_interval_ms());
+      break;
+    } catch (const Error& e) {
+      spdlog::warn("cannot register with {}: {}; retrying", flags.server, e.what());
+      std::this_thread::sleep_for(std::chrono::seconds(1));
+    }
+  }
+  spdlog::info("worker {} serving {} with {} device(s) [{}], metrics on port {}", worker_id, flags.server,
+               devices.size(), fmt::join(names, ","), metrics.port());
+  std::vector<std::thread> loops;
+  const auto wait = std::chrono::milliseconds(static_cast<long>(flags.lease_wait_s * 1000));
+  for (const auto& device : devices) {
+    loops.emplace_back([&, device] { LeaseLoop(client, device, settings, metrics, shutting_down, wait); });
+  }
+  for (auto& loop : loops) loop.join();
+  if (!shutting_down) pthread_kill(signal_waiter.native_handle(), SIGTERM);
+  signal_waiter.join();
+  spdlog::info("worker {} stopped", worker_id);
+  return 0;
+}
+
+}  // namespace
+
+Command AddServeCommand(CLI::App& app) {
+  auto flags = std::make_shared<ServeFlags>();
+  auto* cmd = app.add_subcommand("serve", "lease jobs from endorecon-server and run them, one engine per device");
+  cmd->add_option("--server", flags->server, "server address host:port")->capture_default_str();
+  cmd->add_option("--devices", flags->devices, "cpu, cpu:N (N slots) or GPU indices 0,1,...")->capture_default_str();
+  cmd->add_option("--metrics-port", flags->metrics_port, "Prometheus /metrics port (0 picks one, -1 disables)")
+      ->capture_default_str();
+  cmd->add_option("--metrics-host", flags->metrics_host, "interface for /metrics")->capture_default_str();
+  cmd->add_option("--work-dir", flags->work_dir, "scratch folder for running jobs (default: in $TMPDIR)");
+  cmd->add_option("--id", flags->id, "worker id (default: hostname-pid)");
+  cmd->add_option("--threads", flags->threads, "engine threads per device (0: cores / devices)")->capture_default_str();
+  cmd->add_option("--timeout", flags->timeout_s, "deadline of each call in seconds")->capture_default_str();
+  cmd->add_option("--lease-wait", flags->lease_wait_s, "long-poll for a job this many seconds")->capture_default_str();
+  cmd->add_option("--preview-interval", flags->preview_interval_s, "seconds between previews")->capture_default_str();
+  cmd->add_option("--checkpoint-interval", flags->checkpoint_interval_s, "seconds between checkpoints")
+      ->capture_default_str();
+  return [flags] { return Serve(*flags); };
+}
+
+}  // namespace endorecon::worker

@@ -1,0 +1,47 @@
+// The worker's side of WorkerService: every call with a deadline, blob moves through the shared
+// resumable upload/download code, and long polls that can be cancelled at shutdown.
+#pragma once
+
+#include <chrono>
+#include <filesystem>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "endorecon/v1/worker_service.grpc.pb.h"
+
+namespace endorecon::worker {
+
+class WorkerClient {
+ public:
+  WorkerClient(const std::string& server, std::string worker_id, std::chrono::milliseconds timeout);
+
+  const std::string& worker_id() const { return worker_id_; }
+  v1::RegisterResponse Register(const std::string& hostname, const std::vector<std::string>& devices);
+  // Waits up to `wait` for a job; nullopt when none came (or CancelLeases() was called).
+  std::optional<v1::LeaseResponse> Lease(const std::string& device, std::chrono::milliseconds wait);
+  // Ends every Lease call in flight (at shutdown).
+  void CancelLeases();
+  v1::Job Complete(const v1::CompleteRequest& request);
+  v1::Job Fail(const v1::FailRequest& request);
+  // Uploads the files of `manifest` from `dir` (only what the server lacks).
+  void PutFiles(const std::filesystem::path& dir, const v1::Manifest& manifest);
+  // Downloads the files of `manifest` into `dir` (verified, resuming partial files).
+  void GetFiles(const std::string& lease_id, const std::filesystem::path& dir, const v1::Manifest& manifest);
+  // A Report stream; the caller owns `context` and must outlive the stream with it.
+  std::unique_ptr<grpc::ClientReaderWriter<v1::ProgressUpdate, v1::ProgressReply>> OpenReport(
+      grpc::ClientContext* context);
+
+ private:
+  std::unique_ptr<v1::WorkerService::Stub> stub_;
+  std::string worker_id_;
+  std::chrono::milliseconds timeout_;
+  std::mutex mutex_;
+  std::set<grpc::ClientContext*> leasing_;
+  bool cancelled_ = false;
+};
+
+}  // namespace endorecon::worker
