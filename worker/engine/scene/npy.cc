@@ -203,9 +203,12 @@ NpyArray ReadNpy(const std::filesystem::path& path) {
   return array;
 }
 
-void WriteNpyFloat32(const std::filesystem::path& path, const float* data,
-                     const std::vector<std::size_t>& shape) {
-  std::string header = "{'descr': '<f4', 'fortran_order': False, 'shape': " + ShapeText(shape) + ", }";
+namespace {
+
+void WriteNpy(const std::filesystem::path& path, const char* descr, const void* data, std::size_t item_size,
+              const std::vector<std::size_t>& shape) {
+  std::string header = std::string("{'descr': '") + descr + "', 'fortran_order': False, 'shape': " +
+                       ShapeText(shape) + ", }";
   const std::size_t preamble = kMagicSize + 4;
   const std::size_t padded = (preamble + header.size() + 1 + 63) / 64 * 64;
   header.append(padded - preamble - header.size() - 1, ' ');
@@ -220,9 +223,21 @@ void WriteNpyFloat32(const std::filesystem::path& path, const float* data,
                                       static_cast<char>(header.size() >> 8)};
   out.write(version_and_length, 4);
   out << header;
-  out.write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(count * sizeof(float)));
+  out.write(static_cast<const char*>(data), static_cast<std::streamsize>(count * item_size));
   out.close();
   if (!out) Fail(ErrorCode::kUnavailable, "cannot write " + path.string() + ": " + std::strerror(errno));
+}
+
+}  // namespace
+
+void WriteNpyFloat32(const std::filesystem::path& path, const float* data,
+                     const std::vector<std::size_t>& shape) {
+  WriteNpy(path, "<f4", data, sizeof(float), shape);
+}
+
+void WriteNpyFloat64(const std::filesystem::path& path, const double* data,
+                     const std::vector<std::size_t>& shape) {
+  WriteNpy(path, "<f8", data, sizeof(double), shape);
 }
 
 }  // namespace endorecon::scene

@@ -27,4 +27,8 @@ NpyArray ReadNpy(const std::filesystem::path& path);
 void WriteNpyFloat32(const std::filesystem::path& path, const float* data,
                      const std::vector<std::size_t>& shape);
 
+// The same for '<f8' (pose files).
+void WriteNpyFloat64(const std::filesystem::path& path, const double* data,
+                     const std::vector<std::size_t>& shape);
+
 }  // namespace endorecon::scene

@@ -1,0 +1,68 @@
+#include "worker/engine/scene/clip_loader.h"
+
+#include <gtest/gtest.h>
+
+#include "tests/unit/clip_fixture.h"
+#include "tests/unit/temp_dir.h"
+
+namespace endorecon::scene {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::ErrorFrom;
+using testing::Pattern;
+using testing::TempDir;
+using testing::WriteImage;
+
+void WriteEndoNerfClip(const fs::path& dir, int frames) {
+  for (int i = 0; i < frames; ++i) {
+    WriteImage(dir / "images" / (std::to_string(i) + ".png"), Pattern(8, 6, CV_8UC3, [](int x, int) { return x; }));
+  }
+  testing::WritePoses(dir / "poses_bounds.npy", std::vector<testing::PoseRow>(frames));
+}
+
+TEST(ClipLoaderTest, MissingFolderIsNotFound) {
+  TempDir dir("clip");
+  const std::string message = ErrorFrom([&] { LoadClip(dir / "absent"); }, ErrorCode::kNotFound);
+  EXPECT_NE(message.find("absent: clip folder does not exist"), std::string::npos) << message;
+}
+
+TEST(ClipLoaderTest, FolderWithoutLayoutSaysWhatWasLookedFor) {
+  TempDir dir("clip");
+  const std::string message = ErrorFrom([&] { LoadClip(dir.path()); });
+  EXPECT_NE(message.find("neither transforms.json"), std::string::npos) << message;
+  EXPECT_NE(message.find("nor poses_bounds.npy"), std::string::npos) << message;
+}
+
+TEST(ClipLoaderTest, PrefersTransformsJson) {
+  TempDir dir("clip");
+  WriteEndoNerfClip(dir.path(), 2);
+  testing::WriteBytes(dir / "transforms.json", R"({"fl_x": 5, "near": 1, "far": 2, "frames": [
+    {"file_path": "images/0.png", "transform_matrix": [[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]}]})");
+  EXPECT_EQ(LoadClip(dir.path()).frame_count(), 1);
+  fs::remove(dir / "transforms.json");
+  EXPECT_EQ(LoadClip(dir.path()).frame_count(), 2);
+}
+
+TEST(ClipLoaderTest, LoadsGroundTruthFolder) {
+  TempDir dir("clip");
+  WriteEndoNerfClip(dir.path(), 2);
+  const std::vector<float> depth(48, 7.5f);
+  fs::create_directories(dir / "gt/depth");
+  for (int i = 0; i < 2; ++i) {
+    WriteImage(dir / "gt/images" / (std::to_string(i) + ".png"), Pattern(8, 6, CV_8UC3, [i](int, int) { return 40 + i; }));
+    WriteNpyFloat32(dir / "gt/depth" / (std::to_string(i) + ".npy"), depth.data(), {6, 8});
+  }
+  const Clip clip = LoadClip(dir.path());
+  ASSERT_EQ(clip.gt_rgb.size(), 2u);
+  EXPECT_EQ(clip.gt_rgb[1][2], 41);
+  ASSERT_EQ(clip.gt_depth.size(), 2u);
+  EXPECT_EQ(clip.gt_depth[0][47], 7.5f);
+
+  fs::remove(dir / "gt/depth/1.npy");
+  const std::string message = ErrorFrom([&] { LoadClip(dir.path()); });
+  EXPECT_NE(message.find("gt/depth: holds 1 files but the clip has 2 frames"), std::string::npos) << message;
+}
+
+}  // namespace
+}  // namespace endorecon::scene

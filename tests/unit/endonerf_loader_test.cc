@@ -1,0 +1,286 @@
+#include "worker/engine/scene/endonerf_loader.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "tests/unit/clip_fixture.h"
+#include "tests/unit/temp_dir.h"
+#include "worker/engine/scene/clip_loader.h"
+
+namespace endorecon::scene {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::ErrorFrom;
+using testing::Pattern;
+using testing::PoseRow;
+using testing::TempDir;
+using testing::WriteImage;
+using testing::WritePoses;
+
+constexpr int kW = 8, kH = 6, kFrames = 3;
+
+std::string Name(int i) { return "frame-00" + std::to_string(i) + ".png"; }
+
+// A valid 3-frame clip of 8x6 frames: colour, 8-bit depth 10 + x, masks with the tool at x >= 6.
+class EndoNerfLoaderTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    for (int i = 0; i < kFrames; ++i) {
+      WriteImage(dir_ / "images" / Name(i), Pattern(kW, kH, CV_8UC3, [i](int x, int y) { return 10 * x + y + i; }));
+      WriteImage(dir_ / "depth" / Name(i), Pattern(kW, kH, CV_8UC1, [](int x, int) { return 10 + x; }));
+      WriteImage(dir_ / "masks" / Name(i), Pattern(kW, kH, CV_8UC1, [](int x, int) { return x >= 6 ? 255 : 0; }));
+    }
+    rows_.assign(kFrames, PoseRow{});
+    for (int i = 0; i < kFrames; ++i) {
+      rows_[i].near = 2 + i;
+      rows_[i].far = 30 - i;
+    }
+    WritePoses(dir_ / "poses_bounds.npy", rows_);
+  }
+  Clip Load(const LoadOptions& options = {}) { return LoadEndoNerfClip(dir_.path(), options); }
+  std::string LoadError(ErrorCode code = ErrorCode::kInvalidArgument) {
+    return ErrorFrom([&] { Load(); }, code);
+  }
+  void ExpectError(const std::string& file, const std::string& what) {
+    const std::string message = LoadError();
+    EXPECT_NE(message.find(file), std::string::npos) << message;
+    EXPECT_NE(message.find(what), std::string::npos) << message;
+  }
+
+  TempDir dir_{"endonerf"};
+  std::vector<PoseRow> rows_;
+};
+
+TEST_F(EndoNerfLoaderTest, LoadsFramesCamerasAndBounds) {
+  const Clip clip = Load();
+  ASSERT_EQ(clip.frame_count(), kFrames);
+  EXPECT_EQ(clip.width, kW);
+  EXPECT_EQ(clip.height, kH);
+  EXPECT_EQ(clip.near, 2);
+  EXPECT_EQ(clip.far, 30);
+  EXPECT_EQ(clip.times, (std::vector<float>{0.f, 0.5f, 1.f}));
+  EXPECT_FALSE(clip.is_static);
+  // LLFF [down, right, back] identity becomes OpenGL c2w = [right, up, back] = [e_y, -e_x, e_z].
+  Eigen::Matrix<double, 3, 4> expected;
+  expected << 0, -1, 0, 0, 1, 0, 0, 0, 0, 0, 1, 0;
+  EXPECT_TRUE(clip.cameras[1].c2w.isApprox(expected)) << clip.cameras[1].c2w;
+  EXPECT_EQ(clip.cameras[0].fx, 10);
+  EXPECT_EQ(clip.cameras[0].fy, 10);
+  EXPECT_EQ(clip.cameras[0].cx, 4);
+  EXPECT_EQ(clip.cameras[0].cy, 3);
+  // Pixel (x=2, y=1) of frame 2: B = 10x + y + i = 23, G = 11, R = 7, stored as RGB.
+  const std::size_t at = (1 * kW + 2) * 3;
+  EXPECT_EQ(clip.rgb[2][at + 0], 7);
+  EXPECT_EQ(clip.rgb[2][at + 1], 11);
+  EXPECT_EQ(clip.rgb[2][at + 2], 23);
+  ASSERT_TRUE(clip.has_depth());
+  EXPECT_EQ(clip.depth[0][1 * kW + 5], 15.f);
+  ASSERT_TRUE(clip.has_masks());
+  EXPECT_EQ(clip.tool_mask[0][7], 1);
+  EXPECT_EQ(clip.tool_mask[0][5], 0);
+  EXPECT_TRUE(clip.eval_mask.empty());
+  EXPECT_FALSE(clip.has_stereo());
+  EXPECT_TRUE(clip.gt_rgb.empty());
+}
+
+TEST_F(EndoNerfLoaderTest, DepthAndMasksAreOptional) {
+  fs::remove_all(dir_ / "depth");
+  fs::remove_all(dir_ / "masks");
+  const Clip clip = Load();
+  EXPECT_FALSE(clip.has_depth());
+  EXPECT_FALSE(clip.has_masks());
+}
+
+TEST_F(EndoNerfLoaderTest, ReadsSixteenBitAndNpyDepth) {
+  WriteImage(dir_ / "depth" / Name(0), Pattern(kW, kH, CV_16UC1, [](int x, int) { return 1000 + x; }));
+  fs::remove(dir_ / "depth" / Name(1));
+  const std::vector<float> values(kW * kH, 12.5f);
+  WriteNpyFloat32(dir_ / "depth" / "frame-001.npy", values.data(), {kH, kW});
+  const Clip clip = Load();
+  EXPECT_EQ(clip.depth[0][3], 1003.f);
+  EXPECT_EQ(clip.depth[1][3], 12.5f);
+}
+
+TEST_F(EndoNerfLoaderTest, ReadsEvalMasksStereoAndForcedStatic) {
+  for (int i = 0; i < kFrames; ++i) {
+    WriteImage(dir_ / "gt_masks" / Name(i), Pattern(kW, kH, CV_8UC1, [](int x, int) { return x == 0 ? 255 : 0; }));
+    WriteImage(dir_ / "images_right" / Name(i), Pattern(kW, kH, CV_8UC3, [](int x, int) { return x; }));
+  }
+  testing::WriteBytes(dir_ / "stereo.json", R"({"baseline": 4.0})");
+  LoadOptions options;
+  options.force_static = true;
+  const Clip clip = Load(options);
+  EXPECT_TRUE(clip.is_static);
+  ASSERT_EQ(clip.eval_mask.size(), 3u);
+  EXPECT_EQ(clip.eval_mask[0][0], 1);
+  EXPECT_EQ(clip.eval_mask[0][1], 0);
+  ASSERT_TRUE(clip.has_stereo());
+  ASSERT_EQ(clip.right_cameras.size(), 3u);
+  // The right eye sits 4 units along the left camera's x axis (world +y here).
+  EXPECT_TRUE((clip.right_cameras[0].c2w.col(3) - clip.cameras[0].c2w.col(3)).isApprox(Eigen::Vector3d(0, 4, 0)));
+  EXPECT_TRUE(clip.right_cameras[0].c2w.leftCols<3>().isApprox(clip.cameras[0].c2w.leftCols<3>()));
+
+  fs::remove(dir_ / "stereo.json");
+  const Clip fallback = Load();
+  EXPECT_NEAR((fallback.right_cameras[0].c2w.col(3) - fallback.cameras[0].c2w.col(3)).norm(),
+              kDefaultStereoBaseline, 1e-12);
+
+  testing::WriteBytes(dir_ / "stereo.json", R"({"baseline": -1})");
+  ExpectError("stereo.json", "finite b > 0");
+}
+
+TEST_F(EndoNerfLoaderTest, SingleFrameHasTimeZeroAndIsStatic) {
+  rows_.resize(1);
+  WritePoses(dir_ / "poses_bounds.npy", rows_);
+  for (const char* folder : {"images", "depth", "masks"}) {
+    for (int i = 1; i < kFrames; ++i) fs::remove(dir_ / folder / Name(i));
+  }
+  const Clip clip = Load();
+  EXPECT_EQ(clip.times, std::vector<float>{0.f});
+  EXPECT_TRUE(clip.is_static);
+}
+
+TEST(EndoNerfPoseFixtureTest, LoadsRealPoseFileWithDownscaledImages) {
+  TempDir dir("endonerf-real");
+  fs::copy_file(fs::path(ENDORECON_SHARED_DIR) / "data/endonerf_poses/pulling_soft_tissues/poses_bounds.npy",
+                dir / "poses_bounds.npy");
+  // 640x512 frames stored at 1/8 scale: 80x64.
+  const cv::Mat image = Pattern(80, 64, CV_8UC3, [](int x, int y) { return x + y; });
+  for (int i = 0; i < 63; ++i) {
+    char name[16];
+    std::snprintf(name, sizeof(name), "%03d.png", i);
+    WriteImage(dir / "images" / name, image);
+  }
+  const Clip clip = LoadClip(dir.path());
+  ASSERT_EQ(clip.frame_count(), 63);
+  EXPECT_EQ(clip.width, 80);
+  EXPECT_EQ(clip.height, 64);
+  EXPECT_NEAR(clip.cameras[0].fx, 569.46820041 / 8, 1e-9);
+  EXPECT_EQ(clip.cameras[0].cx, 40);
+  EXPECT_EQ(clip.near, 0);  // EndoNeRF's files have near 0
+  EXPECT_EQ(clip.far, 120);
+  EXPECT_FLOAT_EQ(clip.times[62], 1.f);
+  EXPECT_FLOAT_EQ(clip.times[21], 21.f / 62);
+}
+
+TEST_F(EndoNerfLoaderTest, RejectsMissingImagesFolder) {
+  fs::remove_all(dir_ / "images");
+  ExpectError("images", "folder does not exist");
+}
+
+TEST_F(EndoNerfLoaderTest, RejectsMissingPoseFile) {
+  fs::remove(dir_ / "poses_bounds.npy");
+  ExpectError("poses_bounds.npy", "does not exist");
+}
+
+TEST_F(EndoNerfLoaderTest, RejectsUnequalCounts) {
+  fs::remove(dir_ / "masks" / Name(1));
+  ExpectError("masks", "holds 2 files but poses_bounds.npy has 3 rows");
+}
+
+TEST_F(EndoNerfLoaderTest, RejectsUnequalSizes) {
+  WriteImage(dir_ / "depth" / Name(2), Pattern(kW, kH + 1, CV_8UC1, [](int, int) { return 5; }));
+  ExpectError("depth/" + Name(2), "size 8x7 differs from the clip's 8x6");
+}
+
+TEST_F(EndoNerfLoaderTest, RejectsImagesNotMatchingThePoseSize) {
+  for (PoseRow& row : rows_) row.h = 5;  // 8x5 is not a uniform scaling of 8x6
+  WritePoses(dir_ / "poses_bounds.npy", rows_);
+  ExpectError(Name(0), "does not match poses_bounds.npy's 8x5");
+}
+
+TEST_F(EndoNerfLoaderTest, RejectsTruncatedImage) {
+  const fs::path path = dir_ / "images" / Name(1);
+  const std::string bytes = testing::ReadBytes(path);
+  testing::WriteBytes(path, bytes.substr(0, bytes.size() / 2));
+  ExpectError(Name(1), "cannot decode the image");
+}
+
+TEST_F(EndoNerfLoaderTest, RejectsNonImageFile) {
+  testing::WriteBytes(dir_ / "images" / Name(0), "not a png at all");
+  ExpectError(Name(0), "cannot decode the image");
+}
+
+TEST_F(EndoNerfLoaderTest, RejectsNonFinitePose) {
+  rows_[1].t[2] = NAN;
+  WritePoses(dir_ / "poses_bounds.npy", rows_);
+  ExpectError("poses_bounds.npy row 1", "non-finite");
+}
+
+TEST_F(EndoNerfLoaderTest, RejectsNonOrthonormalRotation) {
+  rows_[2].r[0] = 1.1;
+  WritePoses(dir_ / "poses_bounds.npy", rows_);
+  ExpectError("poses_bounds.npy row 2", "not orthonormal (max |RᵀR − I| = 0.21)");
+}
+
+TEST_F(EndoNerfLoaderTest, RejectsReflection) {
+  rows_[0].r[8] = -1;
+  WritePoses(dir_ / "poses_bounds.npy", rows_);
+  ExpectError("poses_bounds.npy row 0", "determinant -1");
+}
+
+TEST_F(EndoNerfLoaderTest, RejectsNonPositiveFocalLength) {
+  rows_[1].f = 0;
+  WritePoses(dir_ / "poses_bounds.npy", rows_);
+  ExpectError("poses_bounds.npy row 1", "focal length must be finite and positive (fx = 0");
+}
+
+TEST_F(EndoNerfLoaderTest, RejectsBadImageSizeInPoses) {
+  rows_[0].w = 7.5;
+  WritePoses(dir_ / "poses_bounds.npy", rows_);
+  ExpectError("poses_bounds.npy row 0", "H and W must be positive integers (H = 6, W = 7.5)");
+}
+
+TEST_F(EndoNerfLoaderTest, RejectsZeroFrames) {
+  WritePoses(dir_ / "poses_bounds.npy", {});
+  ExpectError("poses_bounds.npy", "zero frames");
+}
+
+TEST_F(EndoNerfLoaderTest, RejectsWrongPoseShape) {
+  const std::vector<double> data(3 * 15, 1.0);
+  WriteNpyFloat64(dir_ / "poses_bounds.npy", data.data(), {3, 15});
+  ExpectError("poses_bounds.npy", "expected an array of shape (N, 17), found (3, 15)");
+}
+
+TEST_F(EndoNerfLoaderTest, RejectsNearNotBelowFar) {
+  rows_[1].near = 40;
+  WritePoses(dir_ / "poses_bounds.npy", rows_);
+  ExpectError("poses_bounds.npy row 1", "0 <= near < far (near = 40, far = 29)");
+}
+
+TEST_F(EndoNerfLoaderTest, RejectsFramesOverTheSizeLimit) {
+  LoadOptions options;
+  options.max_pixels_per_frame = 47;
+  const std::string message = ErrorFrom([&] { Load(options); }, ErrorCode::kResourceExhausted);
+  EXPECT_NE(message.find("frames of 8x6 (48 pixels) exceed the limit of 47 pixels"), std::string::npos) << message;
+}
+
+TEST_F(EndoNerfLoaderTest, RejectsMaskWithOtherValues) {
+  WriteImage(dir_ / "masks" / Name(1), Pattern(kW, kH, CV_8UC1, [](int x, int) { return x < 2 ? 0 : x < 4 ? 17 : 255; }));
+  ExpectError("masks/" + Name(1), "found values {0, 17, 255}");
+}
+
+TEST_F(EndoNerfLoaderTest, RejectsMaskWithThreeChannels) {
+  WriteImage(dir_ / "masks" / Name(0), Pattern(kW, kH, CV_8UC3, [](int, int) { return 0; }));
+  ExpectError("masks/" + Name(0), "must have one channel, found 3");
+}
+
+TEST_F(EndoNerfLoaderTest, RejectsDepthWithNaN) {
+  fs::remove(dir_ / "depth" / Name(2));
+  std::vector<float> values(kW * kH, 3.f);
+  values[kW + 4] = NAN;
+  WriteNpyFloat32(dir_ / "depth" / "frame-002.npy", values.data(), {kH, kW});
+  ExpectError("frame-002.npy", "depth must be finite and non-negative, found nan at pixel (4, 1)");
+}
+
+TEST_F(EndoNerfLoaderTest, RejectsDepthArrayOfWrongShape) {
+  fs::remove(dir_ / "depth" / Name(2));
+  const std::vector<float> values(kW * kH, 3.f);
+  WriteNpyFloat32(dir_ / "depth" / "frame-002.npy", values.data(), {kW, kH});
+  ExpectError("frame-002.npy", "shape (8, 6) does not match the clip's 8x6 (expected (6, 8))");
+}
+
+}  // namespace
+}  // namespace endorecon::scene

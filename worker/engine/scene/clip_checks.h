@@ -1,0 +1,28 @@
+// Checks shared by the clip loaders. Each throws an endorecon::Error whose message starts with
+// `where` (a file, or a file and a frame) and says what was found.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstddef>
+#include <string>
+
+#include "worker/engine/scene/camera.h"
+
+namespace endorecon::scene {
+
+// A camera-to-world [R | t]: every entry finite, R orthonormal (max |RᵀR − I| ≤ 1e-3) with det +1.
+void CheckPose(const Eigen::Matrix<double, 3, 4>& c2w, const std::string& where);
+
+// Intrinsics: finite fx, fy > 0, finite cx, cy, width and height > 0; and the pose (CheckPose).
+void CheckCamera(const Camera& camera, const std::string& where);
+
+// Depth bounds: finite, 0 ≤ near < far.
+void CheckNearFar(double near, double far, const std::string& where);
+
+// width x height must not exceed max_pixels; otherwise Error(kResourceExhausted).
+void CheckFrameLimit(int width, int height, std::size_t max_pixels, const std::string& where);
+
+// "WxH", for messages.
+std::string SizeText(int width, int height);
+
+}  // namespace endorecon::scene

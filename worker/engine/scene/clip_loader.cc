@@ -1,0 +1,63 @@
+#include "worker/engine/scene/clip_loader.h"
+
+#include "common/error.h"
+#include "worker/engine/scene/endonerf_loader.h"
+#include "worker/engine/scene/frame_reader.h"
+#include "worker/engine/scene/transforms_loader.h"
+
+namespace endorecon::scene {
+namespace {
+
+namespace fs = std::filesystem;
+
+void CheckCount(const fs::path& folder, std::size_t found, std::size_t frames) {
+  if (found != frames) {
+    FailInvalid(folder.string() + ": holds " + std::to_string(found) + " files but the clip has " +
+                std::to_string(frames) + " frames");
+  }
+}
+
+void LoadGroundTruth(const fs::path& dir, const LoadOptions& options, Clip& clip) {
+  const auto count = static_cast<std::size_t>(clip.frame_count());
+  const std::vector<fs::path> images = ListFiles(dir / "images", ImageExtensions());
+  CheckCount(dir / "images", images.size(), count);
+  std::vector<fs::path> depths;
+  if (fs::exists(dir / "depth")) {
+    depths = ListFiles(dir / "depth", {".npy"});
+    CheckCount(dir / "depth", depths.size(), count);
+  }
+  std::vector<FrameFiles> frames(count);
+  for (std::size_t i = 0; i < count; ++i) {
+    frames[i].image = images[i];
+    if (!depths.empty()) frames[i].depth = depths[i];
+  }
+  Clip truth;
+  truth.source = dir.string();
+  truth.width = clip.width;
+  truth.height = clip.height;
+  FrameReadOptions read_options;
+  read_options.max_pixels_per_frame = options.max_pixels_per_frame;
+  ReadFrames(frames, read_options, truth);
+  clip.gt_rgb = std::move(truth.rgb);
+  clip.gt_depth = std::move(truth.depth);
+}
+
+}  // namespace
+
+Clip LoadClip(const fs::path& dir, const LoadOptions& options) {
+  if (!fs::exists(dir)) Fail(ErrorCode::kNotFound, dir.string() + ": clip folder does not exist");
+  if (!fs::is_directory(dir)) FailInvalid(dir.string() + ": not a folder");
+  Clip clip;
+  if (fs::exists(dir / "transforms.json")) {
+    clip = LoadTransformsClip(dir, options);
+  } else if (fs::exists(dir / "poses_bounds.npy")) {
+    clip = LoadEndoNerfClip(dir, options);
+  } else {
+    FailInvalid(dir.string() + ": not a clip: found neither transforms.json (transforms.json layout) nor "
+                               "poses_bounds.npy (EndoNeRF layout)");
+  }
+  if (fs::is_directory(dir / "gt")) LoadGroundTruth(dir / "gt", options, clip);
+  return clip;
+}
+
+}  // namespace endorecon::scene

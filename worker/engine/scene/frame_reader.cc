@@ -1,0 +1,217 @@
+#include "worker/engine/scene/frame_reader.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <cmath>
+#include <exception>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "common/error.h"
+#include "worker/engine/scene/clip_checks.h"
+#include "worker/engine/scene/npy.h"
+
+namespace endorecon::scene {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string Lower(std::string text) {
+  std::transform(text.begin(), text.end(), text.begin(), [](unsigned char c) { return std::tolower(c); });
+  return text;
+}
+
+cv::Mat Decode(const fs::path& path) {
+  if (!fs::is_regular_file(path)) FailInvalid(path.string() + ": file does not exist");
+  cv::Mat image = cv::imread(path.string(), cv::IMREAD_UNCHANGED);
+  if (image.empty()) FailInvalid(path.string() + ": cannot decode the image (unreadable, truncated or not an image)");
+  return image;
+}
+
+void CheckSize(const fs::path& path, const cv::Mat& image, int width, int height) {
+  if (image.cols != width || image.rows != height) {
+    FailInvalid(path.string() + ": size " + SizeText(image.cols, image.rows) + " differs from the clip's " +
+                SizeText(width, height));
+  }
+}
+
+void CheckSingleChannel(const fs::path& path, const cv::Mat& image, const char* what) {
+  if (image.channels() != 1) {
+    FailInvalid(path.string() + ": a " + what + " must have one channel, found " +
+                std::to_string(image.channels()));
+  }
+}
+
+// "{0, 17, 255}" (at most 8 values, then "...").
+std::string ValuesText(const std::array<std::size_t, 256>& histogram) {
+  std::string text = "{";
+  int listed = 0, distinct = 0;
+  for (int value = 0; value < 256; ++value) {
+    if (histogram[value] == 0) continue;
+    ++distinct;
+    if (listed < 8) {
+      text += (listed++ > 0 ? ", " : "") + std::to_string(value);
+    }
+  }
+  if (distinct > listed) text += ", ... (" + std::to_string(distinct) + " distinct)";
+  return text + "}";
+}
+
+std::vector<std::uint8_t> ReadMask(const fs::path& path, const FrameReadOptions& options, int width, int height) {
+  const cv::Mat image = Decode(path);
+  CheckSingleChannel(path, image, "mask");
+  if (image.depth() != CV_8U) FailInvalid(path.string() + ": a mask must be 8-bit with values 0 and 255");
+  CheckSize(path, image, width, height);
+  std::array<std::size_t, 256> histogram{};
+  std::vector<std::uint8_t> mask(static_cast<std::size_t>(width) * height);
+  for (int y = 0; y < height; ++y) {
+    const std::uint8_t* row = image.ptr<std::uint8_t>(y);
+    for (int x = 0; x < width; ++x) {
+      ++histogram[row[x]];
+      mask[static_cast<std::size_t>(y) * width + x] = row[x] == options.tool_value ? 1 : 0;
+    }
+  }
+  if (histogram[0] + histogram[255] != mask.size()) {
+    FailInvalid(path.string() + ": a mask must hold only 0 and 255, found values " + ValuesText(histogram));
+  }
+  return mask;
+}
+
+std::vector<float> ReadDepth(const fs::path& path, const FrameReadOptions& options, int width, int height) {
+  std::vector<double> raw;
+  if (Lower(path.extension().string()) == ".npy") {
+    const NpyArray array = ReadNpy(path);
+    const bool matches = array.shape.size() == 2 || (array.shape.size() == 3 && array.shape[2] == 1);
+    if (!matches || array.shape[0] != static_cast<std::size_t>(height) ||
+        array.shape[1] != static_cast<std::size_t>(width)) {
+      std::string shape;
+      for (std::size_t dim : array.shape) shape += (shape.empty() ? "" : ", ") + std::to_string(dim);
+      FailInvalid(path.string() + ": depth array of shape (" + shape + ") does not match the clip's " +
+                  SizeText(width, height) + " (expected (" + std::to_string(height) + ", " +
+                  std::to_string(width) + "))");
+    }
+    raw = array.data;
+  } else {
+    const cv::Mat image = Decode(path);
+    CheckSingleChannel(path, image, "depth map");
+    CheckSize(path, image, width, height);
+    cv::Mat values;
+    image.convertTo(values, CV_64F);
+    raw.assign(values.begin<double>(), values.end<double>());
+  }
+  std::vector<float> depth(raw.size());
+  for (std::size_t i = 0; i < raw.size(); ++i) {
+    if (!std::isfinite(raw[i]) || raw[i] < 0) {
+      const std::size_t x = i % width, y = i / width;
+      FailInvalid(path.string() + ": depth must be finite and non-negative, found " + std::to_string(raw[i]) +
+                  " at pixel (" + std::to_string(x) + ", " + std::to_string(y) + ")");
+    }
+    depth[i] = static_cast<float>(raw[i] * options.depth_scale);
+  }
+  return depth;
+}
+
+std::vector<std::uint8_t> ReadRgb(const fs::path& path, int width, int height) {
+  RgbImage image = ReadRgbImage(path);
+  if (image.width != width || image.height != height) {
+    FailInvalid(path.string() + ": size " + SizeText(image.width, image.height) + " differs from the clip's " +
+                SizeText(width, height));
+  }
+  return std::move(image.rgb);
+}
+
+void CheckAllOrNone(const std::vector<FrameFiles>& frames, fs::path FrameFiles::*part, const char* what) {
+  const bool first = !(frames.front().*part).empty();
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    if ((frames[i].*part).empty() == first) {
+      FailInvalid("frame " + std::to_string(i) + " (" + frames[i].image.string() + ") " +
+                  (first ? "has no " : "has a ") + what + " while frame 0 " + (first ? "has one" : "has none"));
+    }
+  }
+}
+
+}  // namespace
+
+const std::vector<std::string>& ImageExtensions() {
+  static const std::vector<std::string> extensions = {".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff"};
+  return extensions;
+}
+
+std::vector<fs::path> ListFiles(const fs::path& dir, const std::vector<std::string>& extensions) {
+  if (!fs::is_directory(dir)) FailInvalid(dir.string() + ": folder does not exist");
+  std::vector<fs::path> files;
+  for (const fs::directory_entry& entry : fs::directory_iterator(dir)) {
+    const std::string extension = Lower(entry.path().extension().string());
+    if (entry.is_regular_file() && !entry.path().filename().string().starts_with(".") &&
+        std::find(extensions.begin(), extensions.end(), extension) != extensions.end()) {
+      files.push_back(entry.path());
+    }
+  }
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
+RgbImage ReadRgbImage(const fs::path& path) {
+  cv::Mat image = Decode(path);
+  if (image.depth() == CV_16U) image.convertTo(image, CV_8U, 1.0 / 257.0);
+  if (image.depth() != CV_8U) FailInvalid(path.string() + ": colour images must be 8- or 16-bit");
+  switch (image.channels()) {
+    case 1: cv::cvtColor(image, image, cv::COLOR_GRAY2RGB); break;
+    case 3: cv::cvtColor(image, image, cv::COLOR_BGR2RGB); break;
+    case 4: cv::cvtColor(image, image, cv::COLOR_BGRA2RGB); break;
+    default:
+      FailInvalid(path.string() + ": colour images must have 1, 3 or 4 channels, found " +
+                  std::to_string(image.channels()));
+  }
+  RgbImage result{image.cols, image.rows, {}};
+  result.rgb.assign(image.data, image.data + image.total() * 3);  // cvtColor's output is continuous
+  return result;
+}
+
+void ReadFrames(const std::vector<FrameFiles>& frames, const FrameReadOptions& options, Clip& clip) {
+  if (frames.empty()) FailInvalid(clip.source + ": the clip has no frames");
+  CheckAllOrNone(frames, &FrameFiles::depth, "depth file");
+  CheckAllOrNone(frames, &FrameFiles::tool_mask, "tool mask");
+  CheckAllOrNone(frames, &FrameFiles::eval_mask, "evaluation mask");
+  CheckAllOrNone(frames, &FrameFiles::right_image, "right image");
+
+  RgbImage first;
+  if (clip.width == 0 && clip.height == 0) {
+    first = ReadRgbImage(frames[0].image);
+    clip.width = first.width;
+    clip.height = first.height;
+  }
+  CheckFrameLimit(clip.width, clip.height, options.max_pixels_per_frame, clip.source);
+
+  const std::size_t n = frames.size();
+  const FrameFiles& f0 = frames.front();
+  clip.rgb.assign(n, {});
+  clip.depth.assign(f0.depth.empty() ? 0 : n, {});
+  clip.tool_mask.assign(f0.tool_mask.empty() ? 0 : n, {});
+  clip.eval_mask.assign(f0.eval_mask.empty() ? 0 : n, {});
+  clip.right_rgb.assign(f0.right_image.empty() ? 0 : n, {});
+
+  std::vector<std::exception_ptr> errors(n);
+  const int w = clip.width, h = clip.height;
+  tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
+    try {
+      const FrameFiles& f = frames[i];
+      clip.rgb[i] = (i == 0 && !first.rgb.empty()) ? std::move(first.rgb) : ReadRgb(f.image, w, h);
+      if (!f.depth.empty()) clip.depth[i] = ReadDepth(f.depth, options, w, h);
+      if (!f.tool_mask.empty()) clip.tool_mask[i] = ReadMask(f.tool_mask, options, w, h);
+      if (!f.eval_mask.empty()) clip.eval_mask[i] = ReadMask(f.eval_mask, options, w, h);
+      if (!f.right_image.empty()) clip.right_rgb[i] = ReadRgb(f.right_image, w, h);
+    } catch (...) {
+      errors[i] = std::current_exception();
+    }
+  });
+  for (const std::exception_ptr& error : errors) {
+    if (error) std::rethrow_exception(error);
+  }
+}
+
+}  // namespace endorecon::scene

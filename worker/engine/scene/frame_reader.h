@@ -1,0 +1,54 @@
+// Reading the per-frame files of a clip (colour, depth, masks, right eye) into a Clip, with the
+// checks every layout shares: readable files, one frame size, masks of 0/255, finite depth.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "worker/engine/scene/clip.h"
+
+namespace endorecon::scene {
+
+// The files of one frame; an empty path means the clip has no such file (for every frame).
+struct FrameFiles {
+  std::filesystem::path image;
+  std::filesystem::path depth, tool_mask, eval_mask, right_image;
+};
+
+struct FrameReadOptions {
+  double depth_scale = 1.0;        // clip units per raw depth value (integer or float files)
+  std::uint8_t tool_value = 255;   // the mask value that marks the tool (the other allowed value: 255 - this)
+  std::size_t max_pixels_per_frame = std::size_t{4096} * 4096;
+};
+
+// An image file as 8-bit RGB, row-major, top row first.
+struct RgbImage {
+  int width = 0, height = 0;
+  std::vector<std::uint8_t> rgb;  // width * height * 3
+};
+
+// The image file extensions the loaders read (lower case): .png .jpg .jpeg .bmp .tif .tiff.
+const std::vector<std::string>& ImageExtensions();
+
+// Sorted regular files in `dir` whose extension (any case) is one of `extensions`; hidden files
+// are skipped. Throws FailInvalid when `dir` is not a folder.
+std::vector<std::filesystem::path> ListFiles(const std::filesystem::path& dir,
+                                             const std::vector<std::string>& extensions);
+
+// Decodes an 8- or 16-bit grey, RGB or RGBA image. Throws FailInvalid naming the file when it is
+// missing, unreadable or truncated, or of an unsupported kind.
+RgbImage ReadRgbImage(const std::filesystem::path& path);
+
+// Depth maps: single-channel 8-, 16-bit or float images, or .npy arrays of shape (H, W). Raw values
+// times FrameReadOptions::depth_scale are clip units; 0 means unknown.
+
+// Reads every frame into clip.rgb / depth / tool_mask / eval_mask / right_rgb (a part whose path is
+// empty in the first frame stays empty and must be empty in all). Every file must have the size
+// clip.width x clip.height; when that is 0x0 the first image sets it. Throws the error of the
+// lowest failing frame; Error(kResourceExhausted) for frames over options.max_pixels_per_frame.
+void ReadFrames(const std::vector<FrameFiles>& frames, const FrameReadOptions& options, Clip& clip);
+
+}  // namespace endorecon::scene

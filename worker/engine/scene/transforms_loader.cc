@@ -1,0 +1,239 @@
+#include "worker/engine/scene/transforms_loader.h"
+
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <cmath>
+#include <optional>
+
+#include "common/error.h"
+#include "worker/engine/scene/clip_checks.h"
+#include "worker/engine/scene/frame_reader.h"
+#include "worker/engine/scene/json_file.h"
+
+namespace endorecon::scene {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+// Near/far derived from depth maps or camera distances (see the header).
+constexpr double kDepthNearFactor = 0.8, kDepthFarFactor = 1.2;
+constexpr double kDistanceNearFactor = 0.05, kDistanceFarFactor = 2.5;
+
+std::optional<double> OptionalNumber(const json& object, const char* key, const std::string& where) {
+  if (!object.contains(key)) return std::nullopt;
+  const json& value = object[key];
+  if (!value.is_number() || !std::isfinite(value.get<double>())) {
+    FailInvalid(where + ": \"" + key + "\" must be a finite number, found " + value.dump());
+  }
+  return value.get<double>();
+}
+
+// A per-frame value overrides the top-level one.
+std::optional<double> Field(const json& frame, const json& top, const char* key, const std::string& where,
+                            const std::string& top_where) {
+  if (auto value = OptionalNumber(frame, key, where)) return value;
+  return OptionalNumber(top, key, top_where);
+}
+
+fs::path ResolveFile(const fs::path& dir, const json& frame, const char* key, const std::string& where) {
+  const json& value = frame[key];
+  if (!value.is_string()) FailInvalid(where + ": \"" + key + "\" must be a string, found " + value.dump());
+  const fs::path path = dir / value.get<std::string>();
+  if (fs::is_regular_file(path)) return path;
+  for (const char* extension : {".png", ".jpg", ".jpeg", ".npy"}) {
+    fs::path candidate = path;
+    candidate += extension;
+    if (fs::is_regular_file(candidate)) return candidate;
+  }
+  FailInvalid(where + ": " + key + " " + path.string() + " does not exist (also tried adding .png, .jpg, .jpeg, .npy)");
+}
+
+Eigen::Matrix<double, 3, 4> ReadTransform(const json& frame, const std::string& where) {
+  if (!frame.contains("transform_matrix")) FailInvalid(where + ": no \"transform_matrix\"");
+  const json& m = frame["transform_matrix"];
+  const auto bad = [&] { FailInvalid(where + ": \"transform_matrix\" must be 4x4 numbers, found " + m.dump()); };
+  if (!m.is_array() || m.size() != 4) bad();
+  Eigen::Matrix4d matrix;
+  for (int r = 0; r < 4; ++r) {
+    if (!m[r].is_array() || m[r].size() != 4) bad();
+    for (int c = 0; c < 4; ++c) {
+      if (!m[r][c].is_number()) bad();
+      matrix(r, c) = m[r][c].get<double>();
+    }
+  }
+  if ((matrix.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).cwiseAbs().maxCoeff() > 1e-6) {
+    FailInvalid(where + ": the last row of \"transform_matrix\" must be [0, 0, 0, 1], found " + m[3].dump());
+  }
+  return matrix.topRows<3>();
+}
+
+void WarnAboutDistortion(const json& top, const std::string& file) {
+  std::string found;
+  auto scan = [&found](const json& object) {
+    for (const char* key : {"k1", "k2", "k3", "k4", "p1", "p2"}) {
+      if (object.contains(key) && object[key].is_number() && object[key].get<double>() != 0 &&
+          found.find(key) == std::string::npos) {
+        found += (found.empty() ? "" : ", ") + std::string(key);
+      }
+    }
+  };
+  scan(top);
+  for (const json& frame : top["frames"]) scan(frame);
+  if (!found.empty()) spdlog::warn("{}: lens distortion ({}) is ignored; undistort the images for best results", file, found);
+}
+
+Camera MakeCamera(const json& frame, const json& top, const Clip& clip, const std::string& where,
+                  const std::string& file) {
+  Camera camera;
+  camera.width = clip.width;
+  camera.height = clip.height;
+  const std::optional<double> fl_x = Field(frame, top, "fl_x", where, file);
+  const std::optional<double> angle_x = Field(frame, top, "camera_angle_x", where, file);
+  const std::optional<double> fl_y = Field(frame, top, "fl_y", where, file);
+  const std::optional<double> angle_y = Field(frame, top, "camera_angle_y", where, file);
+  if (fl_x) {
+    camera.fx = *fl_x;
+  } else if (angle_x) {
+    camera.fx = 0.5 * clip.width / std::tan(0.5 * *angle_x);
+  } else {
+    FailInvalid(where + ": no focal length (give \"fl_x\" or \"camera_angle_x\")");
+  }
+  camera.fy = fl_y ? *fl_y : angle_y ? 0.5 * clip.height / std::tan(0.5 * *angle_y) : camera.fx;
+  camera.cx = Field(frame, top, "cx", where, file).value_or(clip.width / 2.0);
+  camera.cy = Field(frame, top, "cy", where, file).value_or(clip.height / 2.0);
+  camera.c2w = ReadTransform(frame, where);
+  CheckCamera(camera, where);
+  return camera;
+}
+
+// The size named by "w"/"h" (top level or per frame), which every frame must agree on; 0x0 if none.
+void DeclaredSize(const json& top, const std::string& file, Clip& clip) {
+  const json& frames = top["frames"];
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    const std::string where = file + " frame " + std::to_string(i);
+    const std::optional<double> w = Field(frames[i], top, "w", where, file);
+    const std::optional<double> h = Field(frames[i], top, "h", where, file);
+    if (!w || !h) continue;
+    if (*w < 1 || *h < 1 || *w != std::floor(*w) || *h != std::floor(*h) || *w > 1e6 || *h > 1e6) {
+      FailInvalid(where + ": \"w\" and \"h\" must be positive integers, found " + std::to_string(*w) + " and " +
+                  std::to_string(*h));
+    }
+    if (clip.width == 0) {
+      clip.width = static_cast<int>(*w);
+      clip.height = static_cast<int>(*h);
+    } else if (clip.width != static_cast<int>(*w) || clip.height != static_cast<int>(*h)) {
+      FailInvalid(where + ": size " + SizeText(static_cast<int>(*w), static_cast<int>(*h)) +
+                  " differs from the clip's " + SizeText(clip.width, clip.height) + " (all frames must share one size)");
+    }
+  }
+}
+
+void SetTimes(const json& frames, const std::string& file, Clip& clip) {
+  const std::size_t n = frames.size();
+  std::vector<std::optional<double>> times(n);
+  for (std::size_t i = 0; i < n; ++i) times[i] = OptionalNumber(frames[i], "time", file + " frame " + std::to_string(i));
+  clip.times.assign(n, 0.f);
+  const std::size_t timed = static_cast<std::size_t>(std::count_if(times.begin(), times.end(), [](auto& t) { return t.has_value(); }));
+  if (timed == 0) {
+    clip.is_static = true;
+    return;
+  }
+  if (timed != n) {
+    const std::size_t missing = static_cast<std::size_t>(std::find(times.begin(), times.end(), std::nullopt) - times.begin());
+    FailInvalid(file + " frame " + std::to_string(missing) + ": no \"time\" while " + std::to_string(timed) +
+                " of " + std::to_string(n) + " frames have one (give all frames a time, or none)");
+  }
+  double lo = INFINITY, hi = -INFINITY;
+  for (const auto& t : times) {
+    lo = std::min(lo, *t);
+    hi = std::max(hi, *t);
+  }
+  const bool rescale = lo < 0 || hi > 1;
+  if (rescale) spdlog::info("{}: times span [{}, {}]; rescaling them to [0, 1]", file, lo, hi);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double t = !rescale ? *times[i] : hi > lo ? (*times[i] - lo) / (hi - lo) : 0.0;
+    clip.times[i] = static_cast<float>(t);
+  }
+  clip.is_static = hi == lo;
+}
+
+void SetNearFar(const json& top, const std::string& file, Clip& clip) {
+  const std::optional<double> near = OptionalNumber(top, "near", file);
+  const std::optional<double> far = OptionalNumber(top, "far", file);
+  double derived_near = 0, derived_far = 0;
+  if (!near || !far) {
+    float lo = INFINITY, hi = 0;
+    for (const std::vector<float>& depth : clip.depth) {
+      for (float z : depth) {
+        if (z > 0) lo = std::min(lo, z);
+        hi = std::max(hi, z);
+      }
+    }
+    if (hi > 0) {
+      derived_near = kDepthNearFactor * lo;
+      derived_far = kDepthFarFactor * hi;
+    } else {
+      std::vector<double> distances;
+      for (const Camera& camera : clip.cameras) distances.push_back(camera.c2w.col(3).norm());
+      std::nth_element(distances.begin(), distances.begin() + distances.size() / 2, distances.end());
+      const double median = distances[distances.size() / 2];
+      if (!(median > 1e-9)) {
+        FailInvalid(file + ": cannot derive near and far (no depth maps, and the cameras sit at the origin); "
+                           "add top-level \"near\" and \"far\"");
+      }
+      derived_near = kDistanceNearFactor * median;
+      derived_far = kDistanceFarFactor * median;
+    }
+    spdlog::info("{}: derived depth bounds near = {:.6g}, far = {:.6g}", file, near.value_or(derived_near),
+                 far.value_or(derived_far));
+  }
+  clip.near = near.value_or(derived_near);
+  clip.far = far.value_or(derived_far);
+  CheckNearFar(clip.near, clip.far, file);
+}
+
+}  // namespace
+
+Clip LoadTransformsClip(const fs::path& dir, const LoadOptions& options) {
+  const fs::path path = dir / "transforms.json";
+  const std::string file = path.string();
+  const json top = ReadJsonFile(path);
+  if (!top.is_object() || !top.contains("frames") || !top["frames"].is_array()) {
+    FailInvalid(file + ": expected an object with a \"frames\" array");
+  }
+  const json& frames = top["frames"];
+  if (frames.empty()) FailInvalid(file + ": zero frames (\"frames\" is empty)");
+  WarnAboutDistortion(top, file);
+
+  std::vector<FrameFiles> files(frames.size());
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    const std::string where = file + " frame " + std::to_string(i);
+    const json& frame = frames[i];
+    if (!frame.is_object() || !frame.contains("file_path")) FailInvalid(where + ": no \"file_path\"");
+    files[i].image = ResolveFile(dir, frame, "file_path", where);
+    if (frame.contains("depth_file_path")) files[i].depth = ResolveFile(dir, frame, "depth_file_path", where);
+    if (frame.contains("mask_path")) files[i].tool_mask = ResolveFile(dir, frame, "mask_path", where);
+  }
+
+  Clip clip;
+  clip.source = dir.string();
+  DeclaredSize(top, file, clip);
+  FrameReadOptions read_options;
+  read_options.tool_value = 0;
+  read_options.max_pixels_per_frame = options.max_pixels_per_frame;
+  read_options.depth_scale = OptionalNumber(top, "depth_unit_scale_factor", file).value_or(1.0);
+  if (read_options.depth_scale <= 0) FailInvalid(file + ": \"depth_unit_scale_factor\" must be positive");
+  ReadFrames(files, read_options, clip);
+
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    clip.cameras.push_back(MakeCamera(frames[i], top, clip, file + " frame " + std::to_string(i), file));
+  }
+  SetTimes(frames, file, clip);
+  SetNearFar(top, file, clip);
+  clip.is_static = clip.is_static || options.force_static;
+  return clip;
+}
+
+}  // namespace endorecon::scene
