@@ -1,0 +1,255 @@
+#include "worker/engine/scene/synthetic_clip.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "tests/unit/clip_fixture.h"
+#include "tests/unit/temp_dir.h"
+#include "worker/engine/scene/clip_loader.h"
+#include "worker/engine/scene/synthetic_scene.h"
+
+namespace endorecon::scene {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::TempDir;
+
+SynthOptions Small() {
+  SynthOptions options;
+  options.frames = 12;
+  options.width = 64;
+  options.height = 48;
+  options.seed = 7;
+  return options;
+}
+
+std::vector<fs::path> AllFiles(const fs::path& dir) {
+  std::vector<fs::path> files;
+  for (const auto& entry : fs::recursive_directory_iterator(dir)) {
+    if (entry.is_regular_file()) files.push_back(fs::relative(entry.path(), dir));
+  }
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
+TEST(SyntheticClipTest, IsDeterministicForASeed) {
+  TempDir a("synth"), b("synth"), c("synth");
+  SynthOptions options = Small();
+  options.stereo = true;
+  WriteSyntheticClip(options, a.path());
+  WriteSyntheticClip(options, b.path());
+  const std::vector<fs::path> files = AllFiles(a.path());
+  ASSERT_EQ(files, AllFiles(b.path()));
+  EXPECT_EQ(files.size(), 2 + 1 + 6u * 12);  // poses, stereo.json, synth.json; six files per frame
+  for (const fs::path& file : files) {
+    EXPECT_EQ(testing::ReadBytes(a / file.string()), testing::ReadBytes(b / file.string())) << file;
+  }
+  options.seed = 8;
+  WriteSyntheticClip(options, c.path());
+  EXPECT_NE(testing::ReadBytes(a / "images/000003.png"), testing::ReadBytes(c / "images/000003.png"));
+}
+
+TEST(SyntheticClipTest, LoadsAsAValidEndoNerfClip) {
+  TempDir dir("synth");
+  WriteSyntheticClip(Small(), dir.path());
+  const Clip clip = LoadClip(dir.path());
+  ASSERT_EQ(clip.frame_count(), 12);
+  EXPECT_EQ(clip.width, 64);
+  EXPECT_EQ(clip.height, 48);
+  EXPECT_EQ(clip.near, 40);
+  EXPECT_EQ(clip.far, 130);
+  EXPECT_FALSE(clip.is_static);
+  EXPECT_FLOAT_EQ(clip.times[3], 3.f / 11);
+  for (const Camera& camera : clip.cameras) {
+    EXPECT_TRUE(camera.c2w.isApprox(Eigen::Matrix<double, 3, 4>::Identity())) << camera.c2w;
+    EXPECT_NEAR(camera.fx, 64 * 569.46820041 / 640, 1e-9);
+    EXPECT_EQ(camera.cx, 32);
+    EXPECT_EQ(camera.cy, 24);
+  }
+  EXPECT_TRUE(clip.has_depth());
+  EXPECT_TRUE(clip.has_masks());
+  EXPECT_FALSE(clip.has_stereo());
+  EXPECT_EQ(clip.gt_rgb.size(), 12u);
+  EXPECT_EQ(clip.gt_depth.size(), 12u);
+  // The tissue deforms: ground-truth depth changes between the first and the middle frame.
+  double change = 0;
+  for (std::size_t i = 0; i < clip.gt_depth[0].size(); ++i) {
+    change = std::max(change, std::abs(double{clip.gt_depth[0][i]} - clip.gt_depth[6][i]));
+  }
+  EXPECT_GT(change, 0.5);
+}
+
+TEST(SyntheticClipTest, ToolMaskCoversTheToolAndNothingElse) {
+  TempDir dir("synth");
+  WriteSyntheticClip(Small(), dir.path());
+  const Clip clip = LoadClip(dir.path());
+  for (int f = 0; f < clip.frame_count(); ++f) {
+    std::size_t tool = 0, tool_differs = 0;
+    for (std::size_t p = 0; p < clip.tool_mask[f].size(); ++p) {
+      const bool differs = !std::equal(&clip.rgb[f][3 * p], &clip.rgb[f][3 * p + 3], &clip.gt_rgb[f][3 * p]);
+      if (clip.tool_mask[f][p] == 0) {
+        ASSERT_FALSE(differs) << "frame " << f << " pixel " << p << " differs from the tool-free image";
+        continue;
+      }
+      ++tool;
+      tool_differs += differs;
+      // The tool is in front of the tissue (holes aside).
+      if (clip.depth[f][p] > 0) {
+        EXPECT_LT(clip.depth[f][p], clip.gt_depth[f][p] - 2) << "frame " << f;
+      }
+    }
+    EXPECT_GT(tool, clip.tool_mask[f].size() / 50) << "frame " << f;
+    EXPECT_LT(tool, clip.tool_mask[f].size() / 3) << "frame " << f;
+    EXPECT_GT(tool_differs, tool * 95 / 100) << "frame " << f;
+  }
+}
+
+TEST(SyntheticClipTest, DepthIsNoisyTruthWithinBounds) {
+  TempDir dir("synth");
+  WriteSyntheticClip(Small(), dir.path());
+  const Clip clip = LoadClip(dir.path());
+  std::size_t holes = 0, compared = 0, exact = 0;
+  double sum = 0;
+  for (int f = 0; f < clip.frame_count(); ++f) {
+    for (std::size_t p = 0; p < clip.depth[f].size(); ++p) {
+      const double truth = clip.gt_depth[f][p];
+      ASSERT_GT(truth, clip.near);
+      ASSERT_LT(truth, clip.far);
+      if (clip.depth[f][p] == 0) {
+        ++holes;
+        continue;
+      }
+      if (clip.tool_mask[f][p]) continue;
+      // Noise is clamped at 3 sigma, sigma = 0.25 + 0.5 (z / 90)^2; then rounded.
+      const double sigma = 0.25 + 0.5 * (truth / 90) * (truth / 90);
+      const double error = clip.depth[f][p] - truth;
+      ASSERT_LE(std::abs(error), 3 * sigma + 0.5) << "frame " << f << " pixel " << p;
+      sum += error;
+      exact += std::abs(error) <= 0.5;
+      ++compared;
+    }
+  }
+  const std::size_t pixels = clip.depth.size() * clip.depth[0].size();
+  EXPECT_GT(holes, 0u);
+  EXPECT_LT(holes, pixels / 5);
+  EXPECT_NEAR(sum / compared, 0, 0.1);          // zero-mean noise
+  EXPECT_LT(exact, compared * 9 / 10);          // ... that is really there
+}
+
+TEST(SyntheticClipTest, RaysMeetTheTissueExactly) {
+  const SynthOptions options = Small();
+  const SyntheticScene scene(options);
+  const Camera camera = scene.LeftCamera();
+  for (double t : {0.0, 0.37, 1.0}) {
+    const SyntheticScene::State state = scene.At(t);
+    for (int v = 0; v < options.height; v += 5) {
+      for (int u = 0; u < options.width; u += 5) {
+        Eigen::Vector3d origin, direction;
+        camera.Ray(u, v, origin, direction);
+        const SceneHit hit = scene.Trace(state, origin, direction);
+        double dx, dy;
+        const double s = hit.tissue_depth;
+        EXPECT_NEAR(scene.TissueDepth(state, s * direction.x(), s * direction.y(), &dx, &dy), s, 1e-9);
+        // One crossing only: the residual s - D grows along the ray (the slope bound).
+        EXPECT_LT(dx * direction.x() + dy * direction.y(), 1);
+      }
+    }
+  }
+}
+
+TEST(SyntheticClipTest, NoToolAndNoDepthLeaveTheirFoldersOut) {
+  TempDir dir("synth");
+  SynthOptions options = Small();
+  options.tool = false;
+  options.depth = false;
+  WriteSyntheticClip(options, dir.path());
+  EXPECT_FALSE(fs::exists(dir / "masks"));
+  EXPECT_FALSE(fs::exists(dir / "depth"));
+  const Clip clip = LoadClip(dir.path());
+  EXPECT_FALSE(clip.has_masks());
+  EXPECT_FALSE(clip.has_depth());
+  EXPECT_EQ(clip.rgb, clip.gt_rgb);
+  EXPECT_EQ(clip.gt_depth.size(), 12u);
+}
+
+TEST(SyntheticClipTest, StaticSceneDoesNotMove) {
+  TempDir dir("synth");
+  SynthOptions options = Small();
+  options.static_scene = true;
+  WriteSyntheticClip(options, dir.path());
+  const Clip clip = LoadClip(dir.path());
+  EXPECT_FLOAT_EQ(clip.times.back(), 1.f);
+  for (int f = 1; f < clip.frame_count(); ++f) {
+    EXPECT_EQ(clip.rgb[f], clip.rgb[0]) << f;
+    EXPECT_EQ(clip.gt_depth[f], clip.gt_depth[0]) << f;
+    EXPECT_EQ(clip.tool_mask[f], clip.tool_mask[0]) << f;
+  }
+}
+
+TEST(SyntheticClipTest, StiffSceneIsThinDarkAndSaturated) {
+  TempDir dir("synth");
+  SynthOptions options = Small();
+  options.stiff = true;
+  WriteSyntheticClip(options, dir.path());
+  const Clip clip = LoadClip(dir.path());
+  EXPECT_LT(clip.far - clip.near, 8);
+  std::size_t dark = 0, saturated = 0, pixels = 0;
+  for (int f = 0; f < clip.frame_count(); ++f) {
+    for (float z : clip.gt_depth[f]) {
+      ASSERT_GT(z, clip.near);
+      ASSERT_LT(z, clip.far);
+    }
+    for (std::size_t p = 0; p < clip.gt_rgb[f].size(); p += 3, ++pixels) {
+      const std::uint8_t* rgb = &clip.gt_rgb[f][p];
+      dark += std::max({rgb[0], rgb[1], rgb[2]}) < 40;
+      saturated += std::min({rgb[0], rgb[1], rgb[2]}) == 255;
+    }
+  }
+  EXPECT_GT(dark, pixels / 3);
+  EXPECT_GT(saturated, pixels / 100);
+}
+
+TEST(SyntheticClipTest, StereoRightEyeIsShiftedByTheBaseline) {
+  TempDir dir("synth");
+  SynthOptions options = Small();
+  options.stereo = true;
+  WriteSyntheticClip(options, dir.path());
+  const Clip clip = LoadClip(dir.path());
+  ASSERT_TRUE(clip.has_stereo());
+  EXPECT_TRUE(clip.right_cameras[0].c2w.col(3).isApprox(Eigen::Vector3d(5, 0, 0)));
+  EXPECT_NE(clip.right_rgb[0], clip.rgb[0]);
+  // A far-away point seen by the right eye appears shifted left: the views overlap but differ.
+  std::size_t equal = 0;
+  for (std::size_t i = 0; i < clip.rgb[0].size(); ++i) equal += clip.right_rgb[0][i] == clip.rgb[0][i];
+  EXPECT_LT(equal, clip.rgb[0].size() / 2);
+}
+
+TEST(SyntheticClipTest, ReplacesAnEarlierSyntheticClipOnly) {
+  TempDir dir("synth");
+  SynthOptions options = Small();
+  WriteSyntheticClip(options, dir.path());
+  options.frames = 5;
+  options.tool = false;
+  WriteSyntheticClip(options, dir.path());
+  EXPECT_FALSE(fs::exists(dir / "masks"));
+  EXPECT_EQ(LoadClip(dir.path()).frame_count(), 5);
+
+  TempDir foreign("synth");
+  testing::WriteBytes(foreign / "notes.txt", "keep me");
+  const std::string message = testing::ErrorFrom([&] { WriteSyntheticClip(options, foreign.path()); });
+  EXPECT_NE(message.find("exists and is not empty"), std::string::npos) << message;
+  EXPECT_TRUE(fs::exists(foreign / "notes.txt"));
+}
+
+TEST(SyntheticClipTest, RejectsBadOptions) {
+  TempDir dir("synth");
+  SynthOptions options = Small();
+  options.frames = 0;
+  const std::string message = testing::ErrorFrom([&] { WriteSyntheticClip(options, dir / "out"); });
+  EXPECT_NE(message.find("must be positive (got 0 frames of 64x48)"), std::string::npos) << message;
+}
+
+}  // namespace
+}  // namespace endorecon::scene

@@ -1,0 +1,156 @@
+#include "worker/engine/scene/synthetic_clip.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "common/error.h"
+#include "worker/engine/scene/npy.h"
+#include "worker/engine/scene/portable_random.h"
+
+namespace endorecon::scene {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr double kSpecularHole = 0.35;  // stereo matching fails on highlights brighter than this
+
+nlohmann::json OptionsJson(const SynthOptions& o) {
+  return {{"frames", o.frames}, {"width", o.width},        {"height", o.height},
+          {"seed", o.seed},     {"static", o.static_scene}, {"tool", o.tool},
+          {"depth", o.depth},   {"stiff", o.stiff},         {"stereo", o.stereo}};
+}
+
+void PrepareFolder(const fs::path& out, const SynthOptions& options) {
+  if (fs::exists(out) && !fs::is_empty(out)) {
+    if (!fs::exists(out / "synth.json")) {
+      FailInvalid(out.string() + ": exists and is not empty (and holds no synthetic clip to replace)");
+    }
+    for (const char* entry : {"images", "depth", "masks", "images_right", "gt", "poses_bounds.npy", "stereo.json"}) {
+      fs::remove_all(out / entry);
+    }
+  }
+  for (const char* dir : {"images", "gt/images", "gt/depth"}) fs::create_directories(out / dir);
+  if (options.depth) fs::create_directories(out / "depth");
+  if (options.tool) fs::create_directories(out / "masks");
+  if (options.stereo) fs::create_directories(out / "images_right");
+}
+
+void WriteText(const fs::path& path, const std::string& text) {
+  std::ofstream file(path, std::ios::trunc);
+  file << text;
+  file.close();
+  if (!file) Fail(ErrorCode::kUnavailable, "cannot write " + path.string());
+}
+
+void WritePng(const fs::path& path, const cv::Mat& image) {
+  if (!cv::imwrite(path.string(), image)) Fail(ErrorCode::kUnavailable, "cannot write " + path.string());
+}
+
+std::uint8_t ToByte(float value) { return static_cast<std::uint8_t>(std::clamp(value, 0.f, 1.f) * 255.f + 0.5f); }
+
+void PutRgb(cv::Mat& bgr, int u, int v, const std::array<float, 3>& rgb) {
+  bgr.at<cv::Vec3b>(v, u) = {ToByte(rgb[2]), ToByte(rgb[1]), ToByte(rgb[0])};
+}
+
+// Observed z-depth plus truncated, depth-dependent noise, rounded to the 8-bit grid (1..255).
+std::uint8_t NoisyDepth(double depth, PortableRandom& random) {
+  const double sigma = 0.25 + 0.5 * (depth / 90) * (depth / 90);
+  const double noisy = depth + sigma * std::clamp(random.Normal(), -3.0, 3.0);
+  return static_cast<std::uint8_t>(std::clamp(std::lround(noisy), 1L, 255L));
+}
+
+void PunchHoles(cv::Mat& depth, PortableRandom& random) {
+  const int holes = 2 + static_cast<int>(random.Uniform(0, 3));
+  for (int h = 0; h < holes; ++h) {
+    const double cx = random.Uniform(0, depth.cols), cy = random.Uniform(0, depth.rows);
+    const double radius = random.Uniform(0.02, 0.06) * depth.cols;
+    for (int v = 0; v < depth.rows; ++v) {
+      for (int u = 0; u < depth.cols; ++u) {
+        if ((u + 0.5 - cx) * (u + 0.5 - cx) + (v + 0.5 - cy) * (v + 0.5 - cy) < radius * radius) {
+          depth.at<std::uint8_t>(v, u) = 0;
+        }
+      }
+    }
+  }
+}
+
+void WriteFrame(const SyntheticScene& scene, const SynthOptions& options, int index, const fs::path& out) {
+  const double time = options.frames == 1 ? 0.0 : static_cast<double>(index) / (options.frames - 1);
+  const SyntheticScene::State state = scene.At(time);
+  const Camera camera = scene.LeftCamera();
+  const int w = options.width, h = options.height;
+  cv::Mat rgb(h, w, CV_8UC3), gt_rgb(h, w, CV_8UC3), right(h, w, CV_8UC3), depth(h, w, CV_8UC1),
+      mask(h, w, CV_8UC1);
+  std::vector<float> gt_depth(static_cast<std::size_t>(w) * h);
+  PortableRandom random(StreamSeed(options.seed, static_cast<std::uint64_t>(index)));
+  const Eigen::Vector3d right_origin(scene.baseline(), 0, 0);
+
+  for (int v = 0; v < h; ++v) {
+    double guess = 0, right_guess = 0;
+    for (int u = 0; u < w; ++u) {
+      Eigen::Vector3d origin, direction;
+      camera.Ray(u, v, origin, direction);
+      const SceneHit hit = scene.Trace(state, origin, direction, guess);
+      guess = hit.tissue_depth;
+      PutRgb(rgb, u, v, hit.rgb);
+      PutRgb(gt_rgb, u, v, hit.tissue_rgb);
+      gt_depth[static_cast<std::size_t>(v) * w + u] = static_cast<float>(hit.tissue_depth);
+      mask.at<std::uint8_t>(v, u) = hit.tool ? 255 : 0;
+      const std::uint8_t noisy = NoisyDepth(hit.depth, random);
+      depth.at<std::uint8_t>(v, u) = hit.specular > kSpecularHole ? 0 : noisy;
+      if (options.stereo) {
+        const SceneHit right_hit = scene.Trace(state, right_origin, direction, right_guess);
+        right_guess = right_hit.tissue_depth;
+        PutRgb(right, u, v, right_hit.rgb);
+      }
+    }
+  }
+  PunchHoles(depth, random);
+
+  char name[32];
+  std::snprintf(name, sizeof(name), "%06d", index);
+  const std::string png = std::string(name) + ".png";
+  WritePng(out / "images" / png, rgb);
+  WritePng(out / "gt/images" / png, gt_rgb);
+  WriteNpyFloat32(out / "gt/depth" / (std::string(name) + ".npy"), gt_depth.data(),
+                  {static_cast<std::size_t>(h), static_cast<std::size_t>(w)});
+  if (options.depth) WritePng(out / "depth" / png, depth);
+  if (options.tool) WritePng(out / "masks" / png, mask);
+  if (options.stereo) WritePng(out / "images_right" / png, right);
+}
+
+// EndoNeRF rows: LLFF [down, right, back] columns chosen so the loaded OpenGL pose is the identity.
+void WritePoses(const SyntheticScene& scene, const SynthOptions& options, const fs::path& path) {
+  const Camera camera = scene.LeftCamera();
+  const double row[17] = {0, 1, 0, 0, static_cast<double>(options.height),
+                          -1, 0, 0, 0, static_cast<double>(options.width),
+                          0, 0, 1, 0, camera.fx,
+                          scene.near(), scene.far()};
+  std::vector<double> rows;
+  for (int i = 0; i < options.frames; ++i) rows.insert(rows.end(), row, row + 17);
+  WriteNpyFloat64(path, rows.data(), {static_cast<std::size_t>(options.frames), 17});
+}
+
+}  // namespace
+
+void WriteSyntheticClip(const SynthOptions& options, const fs::path& out) {
+  if (options.frames < 1 || options.width < 1 || options.height < 1) {
+    FailInvalid("synthetic clip: frames, width and height must be positive (got " + std::to_string(options.frames) +
+                " frames of " + std::to_string(options.width) + "x" + std::to_string(options.height) + ")");
+  }
+  PrepareFolder(out, options);
+  WriteText(out / "synth.json", OptionsJson(options).dump(2) + "\n");
+  const SyntheticScene scene(options);
+  WritePoses(scene, options, out / "poses_bounds.npy");
+  if (options.stereo) WriteText(out / "stereo.json", nlohmann::json{{"baseline", scene.baseline()}}.dump() + "\n");
+  tbb::parallel_for(0, options.frames, [&](int index) { WriteFrame(scene, options, index, out); });
+}
+
+}  // namespace endorecon::scene

@@ -1,0 +1,92 @@
+// The analytic scene behind synthetic clips: a textured tissue height field that deforms smoothly
+// over time (breathing bumps, one pulled sideways), seen by a fixed endoscope (OpenGL camera at the
+// origin looking down -z, light at the camera), and a grey capsule-shaped tool that sweeps across
+// it. Rays are intersected exactly, so colour and z-depth are known truth. Units: tissue at z-depth
+// ~60-105, tool ~42-58, near 40, far 130, so 8-bit depth PNGs hold them at one unit per level (a
+// unit is about a millimetre). `stiff` squashes every depth towards 85 by a factor 0.08 (near 81.4,
+// far 88.6, tissue ~84-86), darkens the tissue to near black and saturates the speculars.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "worker/engine/scene/camera.h"
+
+namespace endorecon::scene {
+
+struct SynthOptions {
+  int frames = 48, width = 160, height = 128;
+  std::uint64_t seed = 1;
+  bool static_scene = false;  // nothing moves: tissue and tool as at time 0 (times still span [0, 1])
+  bool tool = true;           // draw the tool and write masks/
+  bool depth = true;          // write depth/
+  bool stiff = false;         // thin depth range, near-opaque near-black tissue, saturated speculars
+  bool stereo = false;        // also render the right eye (images_right/, stereo.json)
+};
+
+// What a ray sees. Colours are linear in [0, 1] before clamping (speculars may exceed 1).
+struct SceneHit {
+  double tissue_depth = 0;  // z-depth of the tissue (always hit)
+  double depth = 0;         // z-depth of the first surface (tool or tissue)
+  bool tool = false;        // the tool is in front of the tissue
+  std::array<float, 3> tissue_rgb{};
+  std::array<float, 3> rgb{};  // tool colour where `tool`, otherwise tissue_rgb
+  float specular = 0;          // specular part of the first surface's shading
+};
+
+class SyntheticScene {
+ public:
+  static constexpr int kBumps = 5;
+
+  // The scene's time-dependent state (see At).
+  struct State {
+    struct Bump {
+      double x, y, sigma, amplitude;
+    };
+    std::array<Bump, kBumps> bumps;
+    Eigen::Vector2d pull = Eigen::Vector2d::Zero();  // texture displacement of the pulled bump
+    Eigen::Vector3d tool_base, tool_tip;             // capsule axis, undeformed (nominal) depths
+  };
+
+  // Draws the scene's parameters from options.seed; the image size fixes the field of view's aspect.
+  explicit SyntheticScene(const SynthOptions& options);
+
+  Camera LeftCamera() const;  // identity pose, f = 0.8898 W, cx = W/2, cy = H/2
+  double near() const;
+  double far() const;
+  double baseline() const { return 5.0; }  // the right eye sits at (+baseline, 0, 0)
+
+  // The state at time t in [0, 1] (as at 0 for a static scene).
+  State At(double t) const;
+
+  // Traces a ray from `origin` with direction `direction` (unit z-depth: direction.z() == -1).
+  // `depth_guess` (e.g. the neighbouring pixel's tissue depth) only speeds up the solve.
+  SceneHit Trace(const State& state, const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
+                 double depth_guess = 0) const;
+
+  // The tissue's z-depth under lateral position (x, y) (the surface is z = -depth), and its
+  // gradient in *dx, *dy. Trace's tissue_depth s solves s = TissueDepth(origin.xy + s direction.xy).
+  double TissueDepth(const State& state, double x, double y, double* dx, double* dy) const;
+
+ private:
+  std::array<float, 3> Albedo(const State& state, double x, double y, double* bump_dx, double* bump_dy) const;
+  void BuildAtlas(std::uint32_t salt, double aspect);
+  double SeenDepth(double nominal) const;  // the squash: nominal z-depth -> rendered z-depth
+
+  SynthOptions options_;
+  double squash_;             // depth squash factor about kSquashCentre (1, or 0.08 when stiff)
+  double tilt_x_, tilt_y_;
+  std::array<State::Bump, kBumps> bumps_;
+  std::array<double, kBumps> breath_amount_, breath_cycles_, breath_phase_;
+  Eigen::Vector2d pull_;  // the pulled bump's (index 0) displacement at full pull
+  Eigen::Vector3d tool_base_, tool_start_, tool_end_;
+  // The tissue texture sampled on a grid in material coordinates: {r, g, b, bump dx, bump dy}.
+  using Texel = std::array<float, 5>;
+  std::vector<Texel> atlas_;
+  int atlas_width_ = 0, atlas_height_ = 0;
+  double atlas_x0_ = 0, atlas_y0_ = 0, texel_ = 1;
+};
+
+}  // namespace endorecon::scene
