@@ -3,6 +3,7 @@
 #include <fstream>
 #include <map>
 #include <string>
+#include <thread>
 
 #include "common/error.h"
 #include "common/grpc_status.h"
@@ -37,22 +38,12 @@ bool SendFile(const std::filesystem::path& file, const v1::FileEntry& entry, std
   return true;
 }
 
-}  // namespace
-
-UploadResult UploadFiles(const std::filesystem::path& dir, const v1::Manifest& manifest, const UploadCalls& calls,
-                         const UploadOptions& options) {
-  UploadResult result;
-  auto query_context = CallContext(options.call_timeout);
-  ThrowIfFailed(calls.query(query_context.get(), manifest, &result.status), "upload query");
-  if (result.status.complete()) {
-    result.bytes_skipped = result.status.total_bytes();
-    return result;
-  }
+// Opens one Upload stream and sends the missing bytes of every file, each from its committed size.
+void SendRound(const std::filesystem::path& dir, const v1::Manifest& manifest, const UploadCalls& calls,
+               const UploadOptions& options, UploadResult& result) {
   std::map<std::string, std::int64_t> committed;
   for (const auto& file : result.status.files()) committed[file.path()] = file.committed();
-  result.bytes_skipped = result.status.committed_bytes();
   const std::int64_t to_send = result.status.total_bytes() - result.status.committed_bytes();
-
   const auto stream_timeout =
       options.call_timeout + std::chrono::milliseconds(static_cast<std::int64_t>(
                                  1000.0 * static_cast<double>(to_send) / options.min_bytes_per_second));
@@ -71,6 +62,24 @@ UploadResult UploadFiles(const std::filesystem::path& dir, const v1::Manifest& m
   if (open) writer->WritesDone();
   ThrowIfFailed(writer->Finish(), "upload");
   result.status = final_status;
+}
+
+}  // namespace
+
+UploadResult UploadFiles(const std::filesystem::path& dir, const v1::Manifest& manifest, const UploadCalls& calls,
+                         const UploadOptions& options) {
+  UploadResult result;
+  // A round sends what the server lacks; another round is needed only when a concurrent upload of
+  // the same content held a file (the server skips it) and did not finish it.
+  for (int round = 0; round < options.max_rounds; ++round) {
+    if (round > 0) std::this_thread::sleep_for(std::chrono::milliseconds(200 * round));
+    auto query_context = CallContext(options.call_timeout);
+    ThrowIfFailed(calls.query(query_context.get(), manifest, &result.status), "upload query");
+    if (round == 0) result.bytes_skipped = result.status.committed_bytes();
+    if (result.status.complete()) return result;
+    SendRound(dir, manifest, calls, options, result);
+    if (result.status.complete()) return result;
+  }
   return result;
 }
 

@@ -28,6 +28,7 @@ struct UploadOptions {
   std::chrono::milliseconds call_timeout{30000};  // for the query, and added to the stream's deadline
   double min_bytes_per_second = 1 << 20;          // the stream's deadline allows this slowest rate
   std::function<void(std::int64_t sent, std::int64_t to_send)> on_progress;
+  int max_rounds = 5;  // query-and-send rounds while another upload holds a file of the same content
 };
 
 struct UploadResult {
@@ -36,7 +37,8 @@ struct UploadResult {
   std::int64_t bytes_skipped = 0;  // bytes the server already held (earlier uploads, same content)
 };
 
-// Uploads the files of `manifest`, read from `dir`. Throws Error with the server's status (or
+// Uploads the files of `manifest`, read from `dir`; the result's status says whether it is
+// complete (it is not only if concurrent uploads of the same content kept it busy). Throws Error with the server's status (or
 // kNotFound/kDataLoss when a local file is missing or changed since the manifest was made).
 UploadResult UploadFiles(const std::filesystem::path& dir, const v1::Manifest& manifest, const UploadCalls& calls,
                          const UploadOptions& options);

@@ -51,12 +51,18 @@ std::int64_t BlobStore::Committed(const v1::FileEntry& entry) const {
 }
 
 std::unique_ptr<BlobStore::Writer> BlobStore::OpenWriter(const v1::FileEntry& entry) {
+  auto writer = TryOpenWriter(entry);
+  if (!writer) {
+    Fail(ErrorCode::kFailedPrecondition,
+         "'" + entry.path() + "' (sha256 " + entry.sha256() + ") is being uploaded by another stream right now");
+  }
+  return writer;
+}
+
+std::unique_ptr<BlobStore::Writer> BlobStore::TryOpenWriter(const v1::FileEntry& entry) {
   {
     std::lock_guard lock(mutex_);
-    if (!writing_.insert(entry.sha256()).second) {
-      Fail(ErrorCode::kFailedPrecondition,
-           "'" + entry.path() + "' (sha256 " + entry.sha256() + ") is being uploaded by another stream right now");
-    }
+    if (!writing_.insert(entry.sha256()).second) return nullptr;
   }
   try {
     return std::unique_ptr<Writer>(new Writer(*this, entry));

@@ -55,6 +55,8 @@ class BlobStore {
   };
   // Throws kFailedPrecondition when another stream is writing the same content right now.
   std::unique_ptr<Writer> OpenWriter(const v1::FileEntry& entry);
+  // The same, but returns null instead of throwing when the content is being written elsewhere.
+  std::unique_ptr<Writer> TryOpenWriter(const v1::FileEntry& entry);
 
   // Stores `bytes` as a blob at once; returns its digest.
   std::string Put(std::string_view bytes);

@@ -3,6 +3,7 @@
 #include <filesystem>
 #include <map>
 #include <memory>
+#include <set>
 
 #include "common/error.h"
 #include "common/manifest.h"
@@ -56,6 +57,7 @@ v1::UploadStatus UploadReceiver::Receive(grpc::ServerReaderInterface<v1::UploadR
 
   std::unique_ptr<BlobStore::Writer> writer;
   std::string writer_path;
+  std::set<std::string> busy;
   while (reader.Read(&request)) {
     if (request.has_manifest()) FailInvalid("a second manifest in one upload stream; open a new stream instead");
     const auto& chunk = request.chunk();
@@ -66,10 +68,15 @@ v1::UploadStatus UploadReceiver::Receive(grpc::ServerReaderInterface<v1::UploadR
                   " bytes; at most " + std::to_string(kChunkBytes) + " per chunk");
     }
     const v1::FileEntry& entry = *found->second;
-    if (blobs_.Has(entry.sha256())) continue;  // another upload completed the same content meanwhile
+    if (blobs_.Has(entry.sha256()) || busy.count(entry.path())) continue;
     if (writer_path != entry.path()) {
       writer.reset();
-      writer = blobs_.OpenWriter(entry);
+      writer_path.clear();
+      writer = blobs_.TryOpenWriter(entry);
+      if (!writer) {  // another stream is uploading the same content: the client asks again later
+        busy.insert(entry.path());
+        continue;
+      }
       writer_path = entry.path();
     }
     writer->Append(chunk.offset(), chunk.data());

@@ -3,7 +3,9 @@
 // Rejections: no manifest first or a second manifest, an unsafe or unknown path, a chunk over
 // 4 MiB or past its file's size (INVALID_ARGUMENT); an upload over the size limit or the free disk
 // (RESOURCE_EXHAUSTED, before any byte is written); a wrong digest (DATA_LOSS; the bytes are
-// discarded). A stream that ends early keeps its committed bytes for the next one.
+// discarded). A stream that ends early keeps its committed bytes for the next one. Chunks of a
+// file that another stream is writing at the same moment are skipped; the returned status then
+// says the upload is incomplete and the client asks again.
 #pragma once
 
 #include <grpcpp/support/sync_stream.h>

@@ -1,0 +1,94 @@
+#include "server/blob_store.h"
+
+#include <gtest/gtest.h>
+
+#include "common/error.h"
+#include "common/sha256.h"
+#include "tests/unit/temp_dir.h"
+
+namespace endorecon::server {
+namespace {
+
+v1::FileEntry EntryOf(const std::string& path, const std::string& bytes) {
+  v1::FileEntry entry;
+  entry.set_path(path);
+  entry.set_size(static_cast<std::int64_t>(bytes.size()));
+  entry.set_sha256(Sha256Hex(bytes));
+  return entry;
+}
+
+ErrorCode CodeOf(const std::function<void()>& call) {
+  try {
+    call();
+  } catch (const Error& e) {
+    return e.code();
+  }
+  ADD_FAILURE() << "expected an error";
+  return ErrorCode::kInternal;
+}
+
+TEST(BlobStoreTest, PutStoresContentUnderItsDigest) {
+  testing::TempDir dir("blobs");
+  BlobStore store(dir.path());
+  const std::string sha = store.Put("hello");
+  EXPECT_EQ(sha, Sha256Hex("hello"));
+  EXPECT_TRUE(store.Has(sha));
+  EXPECT_EQ(testing::ReadBytes(store.PathOf(sha)), "hello");
+  EXPECT_EQ(CodeOf([&] { store.PathOf(Sha256Hex("other")); }), ErrorCode::kNotFound);
+}
+
+TEST(BlobStoreTest, PartialBytesSurviveAndResume) {
+  testing::TempDir dir("blobs");
+  const std::string bytes = "0123456789abcdefghij";
+  const auto entry = EntryOf("clip/a.png", bytes);
+  {
+    BlobStore store(dir.path());
+    auto writer = store.OpenWriter(entry);
+    writer->Append(0, std::string_view(bytes).substr(0, 8));
+  }
+  BlobStore reopened(dir.path());
+  EXPECT_EQ(reopened.Committed(entry), 8);
+  EXPECT_FALSE(reopened.Has(entry.sha256()));
+  auto writer = reopened.OpenWriter(entry);
+  EXPECT_EQ(writer->committed(), 8);
+  EXPECT_EQ(CodeOf([&] { writer->Append(4, "x"); }), ErrorCode::kFailedPrecondition);
+  writer->Append(8, std::string_view(bytes).substr(8));
+  ASSERT_TRUE(writer->full());
+  writer->Promote();
+  EXPECT_TRUE(reopened.Has(entry.sha256()));
+  EXPECT_EQ(testing::ReadBytes(reopened.PathOf(entry.sha256())), bytes);
+  EXPECT_EQ(reopened.Committed(entry), entry.size());
+}
+
+TEST(BlobStoreTest, WrongDigestDiscardsTheBytes) {
+  testing::TempDir dir("blobs");
+  BlobStore store(dir.path());
+  auto entry = EntryOf("x.bin", "expected content");
+  auto writer = store.OpenWriter(entry);
+  writer->Append(0, "different bytes!");
+  EXPECT_EQ(CodeOf([&] { writer->Promote(); }), ErrorCode::kDataLoss);
+  EXPECT_FALSE(store.Has(entry.sha256()));
+  EXPECT_EQ(store.Committed(entry), 0);
+  EXPECT_TRUE(std::filesystem::is_empty(dir / "partial"));
+}
+
+TEST(BlobStoreTest, DataPastTheDeclaredSizeIsRejected) {
+  testing::TempDir dir("blobs");
+  BlobStore store(dir.path());
+  auto writer = store.OpenWriter(EntryOf("x.bin", "abc"));
+  EXPECT_EQ(CodeOf([&] { writer->Append(0, "abcd"); }), ErrorCode::kInvalidArgument);
+}
+
+TEST(BlobStoreTest, OneWriterPerContentAtATime) {
+  testing::TempDir dir("blobs");
+  BlobStore store(dir.path());
+  const auto entry = EntryOf("x.bin", "abc");
+  auto writer = store.OpenWriter(entry);
+  EXPECT_EQ(store.TryOpenWriter(entry), nullptr);
+  EXPECT_EQ(CodeOf([&] { store.OpenWriter(entry); }), ErrorCode::kFailedPrecondition);
+  writer.reset();
+  EXPECT_NE(store.TryOpenWriter(entry), nullptr);
+}
+
+}  // namespace
+}  // namespace endorecon::server
