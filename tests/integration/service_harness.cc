@@ -1,0 +1,219 @@
+#include "tests/integration/service_harness.h"
+
+#include <arpa/inet.h>
+#include <fcntl.h>
+#include <netinet/in.h>
+#include <signal.h>
+#include <sys/socket.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <stdexcept>
+#include <thread>
+
+#include "common/grpc_status.h"
+#include "common/transport_security.h"
+
+namespace endorecon::testing {
+namespace fs = std::filesystem;
+
+Process::Process(const std::vector<std::string>& argv, const fs::path& log) : log_(log) {
+  pid_ = fork();
+  if (pid_ < 0) throw std::runtime_error("fork failed");
+  if (pid_ == 0) {
+    const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
+    dup2(fd, STDOUT_FILENO);
+    dup2(fd, STDERR_FILENO);
+    std::vector<char*> args;
+    for (const auto& arg : argv) args.push_back(const_cast<char*>(arg.c_str()));
+    args.push_back(nullptr);
+    execv(args[0], args.data());
+    _exit(127);
+  }
+}
+
+Process::~Process() {
+  if (!reaped_) {
+    kill(pid_, SIGKILL);
+    Wait();
+  }
+}
+
+void Process::Signal(int signal) {
+  if (!reaped_) kill(pid_, signal);
+}
+
+int Process::Wait() {
+  if (!reaped_) {
+    waitpid(pid_, &status_, 0);
+    reaped_ = true;
+  }
+  return WIFEXITED(status_) ? WEXITSTATUS(status_) : 128 + WTERMSIG(status_);
+}
+
+std::string Process::Log() const { return ReadBytes(log_); }
+
+std::string BuiltBinary(const std::string& relative) { return std::string(ENDORECON_BINARY_DIR) + "/" + relative; }
+
+int FreePort() {
+  const int fd = socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  address.sin_port = 0;
+  bind(fd, reinterpret_cast<sockaddr*>(&address), sizeof(address));
+  socklen_t length = sizeof(address);
+  getsockname(fd, reinterpret_cast<sockaddr*>(&address), &length);
+  close(fd);
+  return ntohs(address.sin_port);
+}
+
+bool WaitUntil(const std::function<bool()>& condition, std::chrono::seconds limit) {
+  const auto give_up = std::chrono::steady_clock::now() + limit;
+  while (std::chrono::steady_clock::now() < give_up) {
+    if (condition()) return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  return condition();
+}
+
+CliResult RunCli(const std::string& address, const std::vector<std::string>& args) {
+  TempDir scratch("cli");
+  std::vector<std::string> argv{BuiltBinary("client/endorecon"), "--server", address};
+  argv.insert(argv.end(), args.begin(), args.end());
+  CliResult result;
+  const pid_t pid = fork();
+  if (pid == 0) {
+    const int out = ::open((scratch / "out").c_str(), O_WRONLY | O_CREAT, 0644);
+    const int err = ::open((scratch / "err").c_str(), O_WRONLY | O_CREAT, 0644);
+    dup2(out, STDOUT_FILENO);
+    dup2(err, STDERR_FILENO);
+    std::vector<char*> raw;
+    for (const auto& arg : argv) raw.push_back(const_cast<char*>(arg.c_str()));
+    raw.push_back(nullptr);
+    execv(raw[0], raw.data());
+    _exit(127);
+  }
+  int status = 0;
+  waitpid(pid, &status, 0);
+  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  result.out = ReadBytes(scratch / "out");
+  result.err = ReadBytes(scratch / "err");
+  return result;
+}
+
+void MakeClip(const fs::path& dir, int seed) {
+  const std::string command = BuiltBinary("worker/runtime/endorecon-worker") + " synth " + dir.string() +
+                              " --frames 8 --width 32 --height 24 --seed " + std::to_string(seed) + " > /dev/null 2>&1";
+  if (std::system(command.c_str()) != 0) throw std::runtime_error("synth failed: " + command);
+}
+
+std::string Capture(const std::string& command) {
+  std::string output;
+  FILE* pipe = popen(command.c_str(), "r");
+  if (!pipe) return output;
+  char buffer[4096];
+  while (const std::size_t n = fread(buffer, 1, sizeof(buffer), pipe)) output.append(buffer, n);
+  pclose(pipe);
+  return output;
+}
+
+Cluster::Cluster(std::vector<std::string> server_flags) : server_flags_(std::move(server_flags)) {
+  port_ = FreePort();
+  metrics_port_ = FreePort();
+  address_ = "127.0.0.1:" + std::to_string(port_);
+  stub_ = v1::JobService::NewStub(OpenChannel(address_));
+  StartServer();
+}
+
+void Cluster::StartServer() {
+  std::vector<std::string> argv{BuiltBinary("server/endorecon-server"), "--listen", address_, "--data-dir",
+                                data_dir().string(), "--metrics-port", std::to_string(metrics_port_),
+                                "--lease-ttl-ms", "3000", "--heartbeat-ms", "300"};
+  argv.insert(argv.end(), server_flags_.begin(), server_flags_.end());
+  server_ = std::make_unique<Process>(argv, dir_ / ("server-" + std::to_string(server_starts_++) + ".log"));
+  const bool up = WaitUntil(
+      [&] {
+        grpc::ClientContext context;
+        context.set_deadline(std::chrono::system_clock::now() + std::chrono::milliseconds(500));
+        v1::ListWorkersResponse response;
+        return stub_->ListWorkers(&context, {}, &response).ok();
+      },
+      std::chrono::seconds(20));
+  if (!up) throw std::runtime_error("server did not come up:\n" + ServerLog());
+}
+
+void Cluster::KillServer(int signal) {
+  server_->Signal(signal);
+  server_->Wait();
+}
+
+Process& Cluster::StartWorker(const std::string& id, std::vector<std::string> flags) {
+  const int metrics_port = FreePort();
+  std::vector<std::string> argv{BuiltBinary("worker/runtime/endorecon-worker"), "serve", "--server", address_,
+                                "--id", id, "--metrics-port", std::to_string(metrics_port), "--work-dir",
+                                (dir_ / ("work-" + id)).string(), "--lease-wait", "2", "--threads", "1"};
+  argv.insert(argv.end(), flags.begin(), flags.end());
+  workers_.emplace_back(id, std::make_unique<Process>(argv, dir_ / ("worker-" + id + ".log")));
+  worker_metrics_ports_.emplace_back(id, metrics_port);
+  return *workers_.back().second;
+}
+
+void Cluster::StopWorker(const std::string& id, int signal) {
+  for (auto& [name, process] : workers_) {
+    if (name == id) {
+      process->Signal(signal);
+      process->Wait();
+    }
+  }
+}
+
+int Cluster::worker_metrics_port(const std::string& id) const {
+  for (const auto& [name, port] : worker_metrics_ports_) {
+    if (name == id) return port;
+  }
+  return 0;
+}
+
+v1::Job Cluster::Job(const std::string& id) {
+  grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(10));
+  v1::GetJobRequest request;
+  request.set_id(id);
+  v1::Job job;
+  ThrowIfFailed(stub_->Get(&context, request, &job), "get " + id);
+  return job;
+}
+
+std::string Cluster::Submit(const fs::path& clip, const std::vector<std::string>& flags) {
+  std::vector<std::string> args{"--json", "submit", clip.string()};
+  args.insert(args.end(), flags.begin(), flags.end());
+  const auto result = RunCli(address_, args);
+  if (result.exit_code != 0) throw std::runtime_error("submit failed: " + result.err);
+  const auto key = result.out.find("\"id\":\"");
+  return result.out.substr(key + 6, 12);
+}
+
+v1::Job Cluster::WaitForState(const std::string& id, v1::JobState state, std::chrono::seconds limit) {
+  v1::Job job;
+  WaitUntil(
+      [&] {
+        try {
+          job = Job(id);
+        } catch (const std::exception&) {
+          return false;
+        }
+        return job.state() == state;
+      },
+      limit);
+  return job;
+}
+
+std::string Cluster::ServerLog() const {
+  std::string log;
+  for (int i = 0; i < server_starts_; ++i) log += ReadBytes(dir_ / ("server-" + std::to_string(i) + ".log"));
+  return log;
+}
+
+}  // namespace endorecon::testing

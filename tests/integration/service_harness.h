@@ -1,0 +1,97 @@
+// Real processes over loopback for the service's integration tests: endorecon-server,
+// endorecon-worker serve and the endorecon CLI, started from the build tree in a temp folder.
+#pragma once
+
+#include <sys/types.h>
+
+#include <chrono>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "endorecon/v1/job_service.grpc.pb.h"
+#include "tests/unit/temp_dir.h"
+
+namespace endorecon::testing {
+
+// A child process whose stdout and stderr go to `log`. The destructor kills it (SIGKILL) if alive.
+class Process {
+ public:
+  Process(const std::vector<std::string>& argv, const std::filesystem::path& log);
+  ~Process();
+  Process(const Process&) = delete;
+  Process& operator=(const Process&) = delete;
+  void Signal(int signal);
+  // Waits for the exit; returns the exit code (128 + signal if killed).
+  int Wait();
+  std::string Log() const;
+  pid_t pid() const { return pid_; }
+
+ private:
+  pid_t pid_ = -1;
+  bool reaped_ = false;
+  int status_ = 0;
+  std::filesystem::path log_;
+};
+
+struct CliResult {
+  int exit_code = -1;
+  std::string out;  // stdout
+  std::string err;  // stderr
+};
+
+// The path of a built binary: "server/endorecon-server", "client/endorecon", ...
+std::string BuiltBinary(const std::string& relative);
+// A TCP port free on 127.0.0.1 right now.
+int FreePort();
+// Polls `condition` every 100 ms until it holds or `limit` passes; returns whether it held.
+bool WaitUntil(const std::function<bool()>& condition, std::chrono::seconds limit = std::chrono::seconds(60));
+// Runs `endorecon --server ADDRESS args...` to completion.
+CliResult RunCli(const std::string& address, const std::vector<std::string>& args);
+// Writes a tiny synthetic clip (endorecon-worker synth, 8 frames of 32x24) into `dir`.
+void MakeClip(const std::filesystem::path& dir, int seed = 1);
+// Runs a command line through the shell; returns its stdout (for curl).
+std::string Capture(const std::string& command);
+
+// A server (and workers) on loopback in a temp folder.
+class Cluster {
+ public:
+  // Extra server flags are appended to the defaults (short leases and heartbeats).
+  explicit Cluster(std::vector<std::string> server_flags = {});
+
+  void StartServer();
+  void KillServer(int signal);
+  Process& StartWorker(const std::string& id, std::vector<std::string> flags = {});
+  void StopWorker(const std::string& id, int signal);
+
+  const std::string& address() const { return address_; }
+  int metrics_port() const { return metrics_port_; }
+  int worker_metrics_port(const std::string& id) const;
+  std::filesystem::path path(const std::string& name) const { return dir_ / name; }
+  std::filesystem::path data_dir() const { return dir_ / "data"; }
+  v1::JobService::Stub& stub() { return *stub_; }
+
+  // The job, read through the API (throws on an RPC failure).
+  v1::Job Job(const std::string& id);
+  // Submits `clip` with the CLI; returns the job id.
+  std::string Submit(const std::filesystem::path& clip, const std::vector<std::string>& flags);
+  // Waits until the job reaches `state`; returns the job.
+  v1::Job WaitForState(const std::string& id, v1::JobState state, std::chrono::seconds limit = std::chrono::seconds(90));
+  std::string ServerLog() const;
+
+ private:
+  TempDir dir_{"service"};
+  std::vector<std::string> server_flags_;
+  int port_ = 0;
+  int metrics_port_ = 0;
+  std::string address_;
+  std::unique_ptr<Process> server_;
+  int server_starts_ = 0;
+  std::vector<std::pair<std::string, std::unique_ptr<Process>>> workers_;
+  std::vector<std::pair<std::string, int>> worker_metrics_ports_;
+  std::unique_ptr<v1::JobService::Stub> stub_;
+};
+
+}  // namespace endorecon::testing

@@ -1,0 +1,61 @@
+// A clip goes in through the CLI, a worker reconstructs it, the results come back verified.
+#include <gtest/gtest.h>
+
+#include "common/sha256.h"
+#include "tests/integration/service_harness.h"
+
+namespace endorecon::testing {
+namespace {
+
+TEST(SubmitToCompletionTest, ClipInResultsOut) {
+  Cluster cluster;
+  cluster.StartWorker("w1");
+  MakeClip(cluster.path("clip"));
+  const auto submitted = RunCli(cluster.address(), {"submit", cluster.path("clip").string(), "--iterations", "30",
+                                                    "--wait", "--previews", cluster.path("previews").string()});
+  ASSERT_EQ(submitted.exit_code, 0) << submitted.err << submitted.out << cluster.ServerLog();
+  EXPECT_NE(submitted.out.find("SUCCEEDED"), std::string::npos) << submitted.out;
+
+  const auto listed = RunCli(cluster.address(), {"--json", "list"});
+  ASSERT_EQ(listed.exit_code, 0);
+  const auto id = listed.out.substr(listed.out.find("\"id\":\"") + 6, 12);
+  const auto job = cluster.Job(id);
+  EXPECT_EQ(job.state(), v1::SUCCEEDED);
+  EXPECT_EQ(job.worker_id(), "w1");
+  EXPECT_EQ(job.options().iterations(), 30);
+  ASSERT_GT(job.result().files_size(), 0);
+
+  const auto fetched = RunCli(cluster.address(), {"fetch", id, "-o", cluster.path("results").string()});
+  ASSERT_EQ(fetched.exit_code, 0) << fetched.err;
+  bool has_metrics = false;
+  for (const auto& file : job.result().files()) {
+    const auto local = cluster.path("results") / file.path();
+    ASSERT_TRUE(std::filesystem::exists(local)) << file.path();
+    EXPECT_EQ(Sha256File(local), file.sha256()) << file.path();
+    has_metrics = has_metrics || file.path() == "metrics.json";
+  }
+  EXPECT_TRUE(has_metrics);
+
+  // A second fetch finds everything in place and sends nothing.
+  const auto again = RunCli(cluster.address(), {"fetch", id, "-o", cluster.path("results").string()});
+  EXPECT_EQ(again.exit_code, 0);
+  EXPECT_NE(again.out.find("fetched 0 of"), std::string::npos) << again.out;
+
+  // The same clip again: nothing is uploaded twice.
+  const auto resubmitted = RunCli(cluster.address(), {"submit", cluster.path("clip").string(), "--iterations", "30"});
+  EXPECT_EQ(resubmitted.exit_code, 0);
+  EXPECT_NE(resubmitted.err.find(": 0 B sent"), std::string::npos) << resubmitted.err;
+
+  const auto status = RunCli(cluster.address(), {"status", id});
+  EXPECT_EQ(status.exit_code, 0);
+  EXPECT_NE(status.out.find("SUCCEEDED"), std::string::npos);
+  EXPECT_EQ(RunCli(cluster.address(), {"status", "doesnotexist"}).exit_code, 3);
+}
+
+TEST(SubmitToCompletionTest, UnreachableServerExitsWithFour) {
+  const auto result = RunCli("127.0.0.1:" + std::to_string(FreePort()), {"--timeout", "1", "list"});
+  EXPECT_EQ(result.exit_code, 4) << result.err;
+}
+
+}  // namespace
+}  // namespace endorecon::testing
