@@ -24,10 +24,14 @@ inline cv::Mat Pattern(int w, int h, int type, const std::function<double(int, i
       const double v = fill(x, y);
       switch (image.channels()) {
         case 1:
-          if (image.depth() == CV_8U) image.at<std::uint8_t>(y, x) = static_cast<std::uint8_t>(v);
-          else image.at<std::uint16_t>(y, x) = static_cast<std::uint16_t>(v);
+          if (image.depth() == CV_8U)
+            image.at<std::uint8_t>(y, x) = static_cast<std::uint8_t>(v);
+          else
+            image.at<std::uint16_t>(y, x) = static_cast<std::uint16_t>(v);
           break;
-        default: image.at<cv::Vec3b>(y, x) = cv::Vec3b(static_cast<std::uint8_t>(v), static_cast<std::uint8_t>(v / 2), 7);
+        default:
+          image.at<cv::Vec3b>(y, x) =
+              cv::Vec3b(static_cast<std::uint8_t>(v), static_cast<std::uint8_t>(v / 2), 7);
       }
     }
   }
@@ -49,8 +53,8 @@ struct PoseRow {
 inline void WritePoses(const std::filesystem::path& path, const std::vector<PoseRow>& rows) {
   std::vector<double> data;
   for (const PoseRow& p : rows) {
-    const double row[17] = {p.r[0], p.r[1], p.r[2], p.t[0], p.h, p.r[3], p.r[4], p.r[5], p.t[1], p.w,
-                            p.r[6], p.r[7], p.r[8], p.t[2], p.f, p.near, p.far};
+    const double row[17] = {p.r[0], p.r[1], p.r[2], p.t[0], p.h,    p.r[3], p.r[4], p.r[5], p.t[1],
+                            p.w,    p.r[6], p.r[7], p.r[8], p.t[2], p.f,    p.near, p.far};
     data.insert(data.end(), row, row + 17);
   }
   scene::WriteNpyFloat64(path, data.data(), {rows.size(), 17});

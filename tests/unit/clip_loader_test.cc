@@ -16,7 +16,8 @@ using testing::WriteImage;
 
 void WriteEndoNerfClip(const fs::path& dir, int frames) {
   for (int i = 0; i < frames; ++i) {
-    WriteImage(dir / "images" / (std::to_string(i) + ".png"), Pattern(8, 6, CV_8UC3, [](int x, int) { return x; }));
+    WriteImage(dir / "images" / (std::to_string(i) + ".png"),
+               Pattern(8, 6, CV_8UC3, [](int x, int) { return x; }));
   }
   testing::WritePoses(dir / "poses_bounds.npy", std::vector<testing::PoseRow>(frames));
 }
@@ -50,7 +51,8 @@ TEST(ClipLoaderTest, LoadsGroundTruthFolder) {
   const std::vector<float> depth(48, 7.5f);
   fs::create_directories(dir / "gt/depth");
   for (int i = 0; i < 2; ++i) {
-    WriteImage(dir / "gt/images" / (std::to_string(i) + ".png"), Pattern(8, 6, CV_8UC3, [i](int, int) { return 40 + i; }));
+    WriteImage(dir / "gt/images" / (std::to_string(i) + ".png"),
+               Pattern(8, 6, CV_8UC3, [i](int, int) { return 40 + i; }));
     WriteNpyFloat32(dir / "gt/depth" / (std::to_string(i) + ".npy"), depth.data(), {6, 8});
   }
   const Clip clip = LoadClip(dir.path());

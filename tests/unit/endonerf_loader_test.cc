@@ -28,9 +28,11 @@ class EndoNerfLoaderTest : public ::testing::Test {
  protected:
   void SetUp() override {
     for (int i = 0; i < kFrames; ++i) {
-      WriteImage(dir_ / "images" / Name(i), Pattern(kW, kH, CV_8UC3, [i](int x, int y) { return 10 * x + y + i; }));
+      WriteImage(dir_ / "images" / Name(i),
+                 Pattern(kW, kH, CV_8UC3, [i](int x, int y) { return 10 * x + y + i; }));
       WriteImage(dir_ / "depth" / Name(i), Pattern(kW, kH, CV_8UC1, [](int x, int) { return 10 + x; }));
-      WriteImage(dir_ / "masks" / Name(i), Pattern(kW, kH, CV_8UC1, [](int x, int) { return x >= 6 ? 255 : 0; }));
+      WriteImage(dir_ / "masks" / Name(i),
+                 Pattern(kW, kH, CV_8UC1, [](int x, int) { return x >= 6 ? 255 : 0; }));
     }
     rows_.assign(kFrames, PoseRow{});
     for (int i = 0; i < kFrames; ++i) {
@@ -105,7 +107,8 @@ TEST_F(EndoNerfLoaderTest, ReadsSixteenBitAndNpyDepth) {
 
 TEST_F(EndoNerfLoaderTest, ReadsEvalMasksStereoAndForcedStatic) {
   for (int i = 0; i < kFrames; ++i) {
-    WriteImage(dir_ / "gt_masks" / Name(i), Pattern(kW, kH, CV_8UC1, [](int x, int) { return x == 0 ? 255 : 0; }));
+    WriteImage(dir_ / "gt_masks" / Name(i),
+               Pattern(kW, kH, CV_8UC1, [](int x, int) { return x == 0 ? 255 : 0; }));
     WriteImage(dir_ / "images_right" / Name(i), Pattern(kW, kH, CV_8UC3, [](int x, int) { return x; }));
   }
   testing::WriteBytes(dir_ / "stereo.json", R"({"baseline": 4.0})");
@@ -119,7 +122,8 @@ TEST_F(EndoNerfLoaderTest, ReadsEvalMasksStereoAndForcedStatic) {
   ASSERT_TRUE(clip.has_stereo());
   ASSERT_EQ(clip.right_cameras.size(), 3u);
   // The right eye sits 4 units along the left camera's x axis (world +y here).
-  EXPECT_TRUE((clip.right_cameras[0].c2w.col(3) - clip.cameras[0].c2w.col(3)).isApprox(Eigen::Vector3d(0, 4, 0)));
+  EXPECT_TRUE(
+      (clip.right_cameras[0].c2w.col(3) - clip.cameras[0].c2w.col(3)).isApprox(Eigen::Vector3d(0, 4, 0)));
   EXPECT_TRUE(clip.right_cameras[0].c2w.leftCols<3>().isApprox(clip.cameras[0].c2w.leftCols<3>()));
 
   fs::remove(dir_ / "stereo.json");
@@ -254,11 +258,14 @@ TEST_F(EndoNerfLoaderTest, RejectsFramesOverTheSizeLimit) {
   LoadOptions options;
   options.max_pixels_per_frame = 47;
   const std::string message = ErrorFrom([&] { Load(options); }, ErrorCode::kResourceExhausted);
-  EXPECT_NE(message.find("frames of 8x6 (48 pixels) exceed the limit of 47 pixels"), std::string::npos) << message;
+  EXPECT_NE(message.find("frames of 8x6 (48 pixels) exceed the limit of 47 pixels"), std::string::npos)
+      << message;
 }
 
 TEST_F(EndoNerfLoaderTest, RejectsMaskWithOtherValues) {
-  WriteImage(dir_ / "masks" / Name(1), Pattern(kW, kH, CV_8UC1, [](int x, int) { return x < 2 ? 0 : x < 4 ? 17 : 255; }));
+  WriteImage(dir_ / "masks" / Name(1), Pattern(kW, kH, CV_8UC1, [](int x, int) {
+               return x < 2 ? 0 : x < 4 ? 17 : 255;
+             }));
   ExpectError("masks/" + Name(1), "found values {0, 17, 255}");
 }
 

@@ -20,7 +20,8 @@ std::string NpyBytes(int major, const std::string& header, const std::string& da
   bytes += static_cast<char>(major);
   bytes += '\0';
   const std::size_t length_bytes = major == 1 ? 2 : 4;
-  for (std::size_t i = 0; i < length_bytes; ++i) bytes += static_cast<char>((header.size() >> (8 * i)) & 0xff);
+  for (std::size_t i = 0; i < length_bytes; ++i)
+    bytes += static_cast<char>((header.size() >> (8 * i)) & 0xff);
   return bytes + header + data;
 }
 
@@ -78,8 +79,9 @@ TEST(NpyTest, ReadsVersions2And3AndUint8) {
                                       Raw<double>({1.25, -3.5})));
   const NpyArray v2 = ReadNpy(dir / "v2.npy");
   EXPECT_EQ(v2.data, (std::vector<double>{1.25, -3.5}));
-  WriteBytes(dir / "v3.npy", NpyBytes(3, "{\"descr\": \"|u1\", \"fortran_order\": False, \"shape\": (1, 3)}\n",
-                                      std::string("\x00\x11\xff", 3)));
+  WriteBytes(dir / "v3.npy",
+             NpyBytes(3, "{\"descr\": \"|u1\", \"fortran_order\": False, \"shape\": (1, 3)}\n",
+                      std::string("\x00\x11\xff", 3)));
   const NpyArray v3 = ReadNpy(dir / "v3.npy");
   EXPECT_EQ(v3.shape, (std::vector<std::size_t>{1, 3}));
   EXPECT_EQ(v3.data, (std::vector<double>{0, 17, 255}));
@@ -130,15 +132,15 @@ struct PoseFixture {
 class NpyFixtureTest : public ::testing::TestWithParam<PoseFixture> {};
 
 TEST_P(NpyFixtureTest, ReadsEndoNerfPoseFile) {
-  const std::filesystem::path path =
-      std::filesystem::path(ENDORECON_SHARED_DIR) / "data/endonerf_poses" / GetParam().scene / "poses_bounds.npy";
+  const std::filesystem::path path = std::filesystem::path(ENDORECON_SHARED_DIR) / "data/endonerf_poses" /
+                                     GetParam().scene / "poses_bounds.npy";
   const NpyArray array = ReadNpy(path);
   EXPECT_EQ(array.dtype, "<f8");
   ASSERT_EQ(array.shape, (std::vector<std::size_t>{GetParam().rows, 17}));
   for (std::size_t row = 0; row < GetParam().rows; ++row) {
     const double* r = &array.data[row * 17];
-    EXPECT_EQ(r[4], 512.0);  // H
-    EXPECT_EQ(r[9], 640.0);  // W
+    EXPECT_EQ(r[4], 512.0);             // H
+    EXPECT_EQ(r[9], 640.0);             // W
     EXPECT_NEAR(r[14], 569.468, 1e-3);  // f
     EXPECT_EQ(r[0], 1.0);
     EXPECT_EQ(r[6], 1.0);

@@ -134,8 +134,8 @@ TEST(SyntheticClipTest, DepthIsNoisyTruthWithinBounds) {
   const std::size_t pixels = clip.depth.size() * clip.depth[0].size();
   EXPECT_GT(holes, 0u);
   EXPECT_LT(holes, pixels / 5);
-  EXPECT_NEAR(sum / compared, 0, 0.1);          // zero-mean noise
-  EXPECT_LT(exact, compared * 9 / 10);          // ... that is really there
+  EXPECT_NEAR(sum / compared, 0, 0.1);  // zero-mean noise
+  EXPECT_LT(exact, compared * 9 / 10);  // ... that is really there
 }
 
 TEST(SyntheticClipTest, RaysMeetTheTissueExactly) {

@@ -75,8 +75,14 @@ TEST_F(TransformsLoaderTest, LoadsStaticMultiView) {
 
 TEST_F(TransformsLoaderTest, LoadsMovingEndoscopeWithTimeDepthAndMasks) {
   transforms_.erase("camera_angle_x");
-  transforms_.update({{"fl_x", 9.0}, {"fl_y", 9.5}, {"cx", 4.25}, {"cy", 2.75}, {"w", kW}, {"h", kH},
-                      {"k1", 0.01}, {"depth_unit_scale_factor", 0.01}});
+  transforms_.update({{"fl_x", 9.0},
+                      {"fl_y", 9.5},
+                      {"cx", 4.25},
+                      {"cy", 2.75},
+                      {"w", kW},
+                      {"h", kH},
+                      {"k1", 0.01},
+                      {"depth_unit_scale_factor", 0.01}});
   for (int i = 0; i < 3; ++i) {
     WriteImage(dir_ / "depth" / (std::to_string(i) + ".png"),
                Pattern(kW, kH, CV_16UC1, [](int x, int) { return 5000 + 100 * x; }));

@@ -29,7 +29,8 @@ void CheckPose(const Eigen::Matrix<double, 3, 4>& c2w, const std::string& where)
     FailInvalid(where + ": the pose's rotation is not orthonormal (max |RᵀR − I| = " + Number(error) + ")");
   }
   const double det = r.determinant();
-  if (det < 0) FailInvalid(where + ": the pose's rotation has determinant " + Number(det) + " (a reflection)");
+  if (det < 0)
+    FailInvalid(where + ": the pose's rotation has determinant " + Number(det) + " (a reflection)");
 }
 
 void CheckCamera(const Camera& camera, const std::string& where) {
@@ -38,8 +39,8 @@ void CheckCamera(const Camera& camera, const std::string& where) {
                 ", fy = " + Number(camera.fy) + ")");
   }
   if (!std::isfinite(camera.cx) || !std::isfinite(camera.cy)) {
-    FailInvalid(where + ": principal point is not finite (cx = " + Number(camera.cx) + ", cy = " +
-                Number(camera.cy) + ")");
+    FailInvalid(where + ": principal point is not finite (cx = " + Number(camera.cx) +
+                ", cy = " + Number(camera.cy) + ")");
   }
   if (camera.width <= 0 || camera.height <= 0) {
     FailInvalid(where + ": image size must be positive (" + SizeText(camera.width, camera.height) + ")");

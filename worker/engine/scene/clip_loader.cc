@@ -53,8 +53,9 @@ Clip LoadClip(const fs::path& dir, const LoadOptions& options) {
   } else if (fs::exists(dir / "poses_bounds.npy")) {
     clip = LoadEndoNerfClip(dir, options);
   } else {
-    FailInvalid(dir.string() + ": not a clip: found neither transforms.json (transforms.json layout) nor "
-                               "poses_bounds.npy (EndoNeRF layout)");
+    FailInvalid(dir.string() +
+                ": not a clip: found neither transforms.json (transforms.json layout) nor "
+                "poses_bounds.npy (EndoNeRF layout)");
   }
   if (fs::is_directory(dir / "gt")) LoadGroundTruth(dir / "gt", options, clip);
   return clip;

@@ -48,7 +48,8 @@ PoseRows ReadPoseRows(const fs::path& path) {
     const std::string where = path.string() + " row " + std::to_string(i);
     const double h = row[4], w = row[9], f = row[14], near = row[15], far = row[16];
     if (!(h >= 1 && w >= 1 && h == std::floor(h) && w == std::floor(w) && h <= 1e6 && w <= 1e6)) {
-      FailInvalid(where + ": H and W must be positive integers (H = " + Number(h) + ", W = " + Number(w) + ")");
+      FailInvalid(where + ": H and W must be positive integers (H = " + Number(h) + ", W = " + Number(w) +
+                  ")");
     }
     Camera camera;
     camera.width = static_cast<int>(w);
@@ -83,8 +84,9 @@ std::vector<fs::path> ListFolder(const fs::path& dir, const std::vector<std::str
   if (!required && !fs::exists(dir)) return {};
   std::vector<fs::path> files = ListFiles(dir, extensions);
   if (files.size() != count) {
-    FailInvalid(dir.string() + ": holds " + std::to_string(files.size()) + " files but poses_bounds.npy has " +
-                std::to_string(count) + " rows (the counts of images, depth maps, masks and poses must be equal)");
+    FailInvalid(dir.string() + ": holds " + std::to_string(files.size()) +
+                " files but poses_bounds.npy has " + std::to_string(count) +
+                " rows (the counts of images, depth maps, masks and poses must be equal)");
   }
   return files;
 }
@@ -110,11 +112,13 @@ void MatchImageSize(const fs::path& first_image, int width, int height, std::vec
   if (width == c0.width && height == c0.height) return;
   const double scale = static_cast<double>(width) / c0.width;
   if (std::abs(c0.height * scale - height) > 0.5 + 1e-9) {
-    FailInvalid(first_image.string() + ": size " + SizeText(width, height) + " does not match poses_bounds.npy's " +
-                SizeText(c0.width, c0.height) + " (nor a uniform scaling of it)");
+    FailInvalid(first_image.string() + ": size " + SizeText(width, height) +
+                " does not match poses_bounds.npy's " + SizeText(c0.width, c0.height) +
+                " (nor a uniform scaling of it)");
   }
   spdlog::info("{}: images are {} while poses_bounds.npy says {}; scaling the focal length by {}",
-               first_image.parent_path().string(), SizeText(width, height), SizeText(c0.width, c0.height), scale);
+               first_image.parent_path().string(), SizeText(width, height), SizeText(c0.width, c0.height),
+               scale);
   for (Camera& camera : cameras) {
     camera.fx *= scale;
     camera.fy *= scale;
@@ -160,7 +164,8 @@ Clip LoadEndoNerfClip(const fs::path& dir, const LoadOptions& options) {
   clip.far = poses.far;
   CheckNearFar(clip.near, clip.far, (dir / "poses_bounds.npy").string() + " (over all rows)");
   clip.times.resize(n);
-  for (std::size_t i = 0; i < n; ++i) clip.times[i] = n == 1 ? 0.f : static_cast<float>(i) / static_cast<float>(n - 1);
+  for (std::size_t i = 0; i < n; ++i)
+    clip.times[i] = n == 1 ? 0.f : static_cast<float>(i) / static_cast<float>(n - 1);
 
   if (clip.has_stereo()) {
     const double baseline = ReadBaseline(dir);

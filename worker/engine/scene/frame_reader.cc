@@ -28,7 +28,8 @@ std::string Lower(std::string text) {
 cv::Mat Decode(const fs::path& path) {
   if (!fs::is_regular_file(path)) FailInvalid(path.string() + ": file does not exist");
   cv::Mat image = cv::imread(path.string(), cv::IMREAD_UNCHANGED);
-  if (image.empty()) FailInvalid(path.string() + ": cannot decode the image (unreadable, truncated or not an image)");
+  if (image.empty())
+    FailInvalid(path.string() + ": cannot decode the image (unreadable, truncated or not an image)");
   return image;
 }
 
@@ -61,7 +62,8 @@ std::string ValuesText(const std::array<std::size_t, 256>& histogram) {
   return text + "}";
 }
 
-std::vector<std::uint8_t> ReadMask(const fs::path& path, const FrameReadOptions& options, int width, int height) {
+std::vector<std::uint8_t> ReadMask(const fs::path& path, const FrameReadOptions& options, int width,
+                                   int height) {
   const cv::Mat image = Decode(path);
   CheckSingleChannel(path, image, "mask");
   if (image.depth() != CV_8U) FailInvalid(path.string() + ": a mask must be 8-bit with values 0 and 255");
@@ -118,8 +120,8 @@ std::vector<float> ReadDepth(const fs::path& path, const FrameReadOptions& optio
 std::vector<std::uint8_t> ReadRgb(const fs::path& path, int width, int height) {
   RgbImage image = ReadRgbImage(path);
   if (image.width != width || image.height != height) {
-    FailInvalid(path.string() + ": size " + SizeText(image.width, image.height) + " differs from the clip's " +
-                SizeText(width, height));
+    FailInvalid(path.string() + ": size " + SizeText(image.width, image.height) +
+                " differs from the clip's " + SizeText(width, height));
   }
   return std::move(image.rgb);
 }
@@ -129,7 +131,8 @@ void CheckAllOrNone(const std::vector<FrameFiles>& frames, fs::path FrameFiles::
   for (std::size_t i = 0; i < frames.size(); ++i) {
     if ((frames[i].*part).empty() == first) {
       FailInvalid("frame " + std::to_string(i) + " (" + frames[i].image.string() + ") " +
-                  (first ? "has no " : "has a ") + what + " while frame 0 " + (first ? "has one" : "has none"));
+                  (first ? "has no " : "has a ") + what + " while frame 0 " +
+                  (first ? "has one" : "has none"));
     }
   }
 }
@@ -160,9 +163,15 @@ RgbImage ReadRgbImage(const fs::path& path) {
   if (image.depth() == CV_16U) image.convertTo(image, CV_8U, 1.0 / 257.0);
   if (image.depth() != CV_8U) FailInvalid(path.string() + ": colour images must be 8- or 16-bit");
   switch (image.channels()) {
-    case 1: cv::cvtColor(image, image, cv::COLOR_GRAY2RGB); break;
-    case 3: cv::cvtColor(image, image, cv::COLOR_BGR2RGB); break;
-    case 4: cv::cvtColor(image, image, cv::COLOR_BGRA2RGB); break;
+    case 1:
+      cv::cvtColor(image, image, cv::COLOR_GRAY2RGB);
+      break;
+    case 3:
+      cv::cvtColor(image, image, cv::COLOR_BGR2RGB);
+      break;
+    case 4:
+      cv::cvtColor(image, image, cv::COLOR_BGRA2RGB);
+      break;
     default:
       FailInvalid(path.string() + ": colour images must have 1, 3 or 4 channels, found " +
                   std::to_string(image.channels()));

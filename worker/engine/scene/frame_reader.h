@@ -19,8 +19,8 @@ struct FrameFiles {
 };
 
 struct FrameReadOptions {
-  double depth_scale = 1.0;        // clip units per raw depth value (integer or float files)
-  std::uint8_t tool_value = 255;   // the mask value that marks the tool (the other allowed value: 255 - this)
+  double depth_scale = 1.0;       // clip units per raw depth value (integer or float files)
+  std::uint8_t tool_value = 255;  // the mask value that marks the tool (the other allowed value: 255 - this)
   std::size_t max_pixels_per_frame = std::size_t{4096} * 4096;
 };
 

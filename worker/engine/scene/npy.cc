@@ -130,8 +130,7 @@ std::size_t ItemSize(const std::string& descr, const std::filesystem::path& path
   if (descr == "<f8") return 8;
   if (descr == "<f4") return 4;
   if (descr == "|u1" || descr == "<u1") return 1;
-  const std::string order =
-      !descr.empty() && descr[0] == '>' ? " (big-endian data is not supported)" : "";
+  const std::string order = !descr.empty() && descr[0] == '>' ? " (big-endian data is not supported)" : "";
   FailInvalid(path.string() + ": dtype '" + descr + "' is not supported" + order +
               "; expected '<f4', '<f8' or '|u1'");
 }
@@ -207,8 +206,8 @@ namespace {
 
 void WriteNpy(const std::filesystem::path& path, const char* descr, const void* data, std::size_t item_size,
               const std::vector<std::size_t>& shape) {
-  std::string header = std::string("{'descr': '") + descr + "', 'fortran_order': False, 'shape': " +
-                       ShapeText(shape) + ", }";
+  std::string header =
+      std::string("{'descr': '") + descr + "', 'fortran_order': False, 'shape': " + ShapeText(shape) + ", }";
   const std::size_t preamble = kMagicSize + 4;
   const std::size_t padded = (preamble + header.size() + 1 + 63) / 64 * 64;
   header.append(padded - preamble - header.size() - 1, ' ');

@@ -22,7 +22,7 @@ namespace fs = std::filesystem;
 constexpr double kSpecularHole = 0.35;  // stereo matching fails on highlights brighter than this
 
 nlohmann::json OptionsJson(const SynthOptions& o) {
-  return {{"frames", o.frames}, {"width", o.width},        {"height", o.height},
+  return {{"frames", o.frames}, {"width", o.width},         {"height", o.height},
           {"seed", o.seed},     {"static", o.static_scene}, {"tool", o.tool},
           {"depth", o.depth},   {"stiff", o.stiff},         {"stereo", o.stereo}};
 }
@@ -32,7 +32,8 @@ void PrepareFolder(const fs::path& out, const SynthOptions& options) {
     if (!fs::exists(out / "synth.json")) {
       FailInvalid(out.string() + ": exists and is not empty (and holds no synthetic clip to replace)");
     }
-    for (const char* entry : {"images", "depth", "masks", "images_right", "gt", "poses_bounds.npy", "stereo.json"}) {
+    for (const char* entry :
+         {"images", "depth", "masks", "images_right", "gt", "poses_bounds.npy", "stereo.json"}) {
       fs::remove_all(out / entry);
     }
   }
@@ -53,7 +54,9 @@ void WritePng(const fs::path& path, const cv::Mat& image) {
   if (!cv::imwrite(path.string(), image)) Fail(ErrorCode::kUnavailable, "cannot write " + path.string());
 }
 
-std::uint8_t ToByte(float value) { return static_cast<std::uint8_t>(std::clamp(value, 0.f, 1.f) * 255.f + 0.5f); }
+std::uint8_t ToByte(float value) {
+  return static_cast<std::uint8_t>(std::clamp(value, 0.f, 1.f) * 255.f + 0.5f);
+}
 
 void PutRgb(cv::Mat& bgr, int u, int v, const std::array<float, 3>& rgb) {
   bgr.at<cv::Vec3b>(v, u) = {ToByte(rgb[2]), ToByte(rgb[1]), ToByte(rgb[0])};
@@ -129,10 +132,23 @@ void WriteFrame(const SyntheticScene& scene, const SynthOptions& options, int in
 // EndoNeRF rows: LLFF [down, right, back] columns chosen so the loaded OpenGL pose is the identity.
 void WritePoses(const SyntheticScene& scene, const SynthOptions& options, const fs::path& path) {
   const Camera camera = scene.LeftCamera();
-  const double row[17] = {0, 1, 0, 0, static_cast<double>(options.height),
-                          -1, 0, 0, 0, static_cast<double>(options.width),
-                          0, 0, 1, 0, camera.fx,
-                          scene.near(), scene.far()};
+  const double row[17] = {0,
+                          1,
+                          0,
+                          0,
+                          static_cast<double>(options.height),
+                          -1,
+                          0,
+                          0,
+                          0,
+                          static_cast<double>(options.width),
+                          0,
+                          0,
+                          1,
+                          0,
+                          camera.fx,
+                          scene.near(),
+                          scene.far()};
   std::vector<double> rows;
   for (int i = 0; i < options.frames; ++i) rows.insert(rows.end(), row, row + 17);
   WriteNpyFloat64(path, rows.data(), {static_cast<std::size_t>(options.frames), 17});
@@ -142,14 +158,16 @@ void WritePoses(const SyntheticScene& scene, const SynthOptions& options, const 
 
 void WriteSyntheticClip(const SynthOptions& options, const fs::path& out) {
   if (options.frames < 1 || options.width < 1 || options.height < 1) {
-    FailInvalid("synthetic clip: frames, width and height must be positive (got " + std::to_string(options.frames) +
-                " frames of " + std::to_string(options.width) + "x" + std::to_string(options.height) + ")");
+    FailInvalid("synthetic clip: frames, width and height must be positive (got " +
+                std::to_string(options.frames) + " frames of " + std::to_string(options.width) + "x" +
+                std::to_string(options.height) + ")");
   }
   PrepareFolder(out, options);
   WriteText(out / "synth.json", OptionsJson(options).dump(2) + "\n");
   const SyntheticScene scene(options);
   WritePoses(scene, options, out / "poses_bounds.npy");
-  if (options.stereo) WriteText(out / "stereo.json", nlohmann::json{{"baseline", scene.baseline()}}.dump() + "\n");
+  if (options.stereo)
+    WriteText(out / "stereo.json", nlohmann::json{{"baseline", scene.baseline()}}.dump() + "\n");
   tbb::parallel_for(0, options.frames, [&](int index) { WriteFrame(scene, options, index, out); });
 }
 

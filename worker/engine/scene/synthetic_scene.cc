@@ -1,11 +1,11 @@
 #include "worker/engine/scene/synthetic_scene.h"
 
+#include <tbb/parallel_for.h>
+
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <numbers>
-
-#include <tbb/parallel_for.h>
 
 #include "worker/engine/scene/portable_random.h"
 
@@ -13,7 +13,7 @@ namespace endorecon::scene {
 namespace {
 
 constexpr double kFocalPerWidth = 569.46820041 / 640.0;  // the EndoNeRF sample scenes' field of view
-constexpr double kBaseDepth = 92;                       // tissue plane's z-depth before bumps and tilt
+constexpr double kBaseDepth = 92;                        // tissue plane's z-depth before bumps and tilt
 constexpr double kNear = 40, kFar = 130;
 constexpr double kSquashCentre = 85, kStiffSquash = 0.08;
 constexpr double kNearestTissue = 70, kDeepestTissue = 115;  // bounds the texture's resolution and extent
@@ -34,8 +34,8 @@ std::array<float, 3> Mix(const std::array<float, 3>& a, const std::array<float, 
 
 // Lattice hash to [0, 1): integer mixing, identical on every platform.
 double Hash01(std::int64_t ix, std::int64_t iy, std::uint32_t salt) {
-  std::uint32_t h = static_cast<std::uint32_t>(ix) * 0x8da6b343u ^ static_cast<std::uint32_t>(iy) * 0xd8163841u ^
-                    salt * 0xcb1ab31fu;
+  std::uint32_t h = static_cast<std::uint32_t>(ix) * 0x8da6b343u ^
+                    static_cast<std::uint32_t>(iy) * 0xd8163841u ^ salt * 0xcb1ab31fu;
   h ^= h >> 16;
   h *= 0x7feb352du;
   h ^= h >> 15;
@@ -51,8 +51,14 @@ struct NoiseValue {
 // Gradient noise (Perlin's, quintic fade) with its analytic gradient, in about [-0.7, 0.7].
 NoiseValue GradientNoise(double x, double y, std::uint32_t salt) {
   static constexpr double kDiagonal = 0.70710678118654752;
-  static constexpr double kGradients[8][2] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}, {kDiagonal, kDiagonal},
-                                              {-kDiagonal, kDiagonal}, {kDiagonal, -kDiagonal}, {-kDiagonal, -kDiagonal}};
+  static constexpr double kGradients[8][2] = {{1, 0},
+                                              {-1, 0},
+                                              {0, 1},
+                                              {0, -1},
+                                              {kDiagonal, kDiagonal},
+                                              {-kDiagonal, kDiagonal},
+                                              {kDiagonal, -kDiagonal},
+                                              {-kDiagonal, -kDiagonal}};
   const double fx = std::floor(x), fy = std::floor(y);
   const auto ix = static_cast<std::int64_t>(fx), iy = static_cast<std::int64_t>(fy);
   const double tx = x - fx, ty = y - fy;
@@ -148,7 +154,8 @@ std::array<float, 3> Shade(const std::array<float, 3>& albedo, const Eigen::Vect
   const double falloff = kBaseDepth * kBaseDepth / point.squaredNorm();
   *specular = static_cast<float>(spec * falloff);
   std::array<float, 3> rgb;
-  for (int c = 0; c < 3; ++c) rgb[c] = static_cast<float>((albedo[c] * (0.12 + 0.88 * diffuse) + spec) * falloff);
+  for (int c = 0; c < 3; ++c)
+    rgb[c] = static_cast<float>((albedo[c] * (0.12 + 0.88 * diffuse) + spec) * falloff);
   return rgb;
 }
 
@@ -164,7 +171,8 @@ SyntheticScene::SyntheticScene(const SynthOptions& options)
   tilt_y_ = random.Uniform(-0.12, 0.12);
   // A bump's steepest slope is 0.61 amplitude/sigma, at most 0.69 with breathing and pulling; even
   // two of them aligned with the tilt stay below 1.35, so along any ray of the field of view
-  // (|direction.xy| < 0.73 for 5:4 frames) the depth changes slower than s and the ray meets the surface once.
+  // (|direction.xy| < 0.73 for 5:4 frames) the depth changes slower than s and the ray meets the surface
+  // once.
   for (int i = 0; i < kBumps; ++i) {
     State::Bump& bump = bumps_[i];
     bump.sigma = random.Uniform(12, 26);
@@ -180,7 +188,8 @@ SyntheticScene::SyntheticScene(const SynthOptions& options)
   const double side = random.Uniform() < 0.5 ? 1 : -1;
   // Lateral positions follow the depth at which the tool is seen, so it enters from the image's edge
   // in stiff (squashed) scenes too.
-  const double base_w = half_width_at(SeenDepth(kToolBaseDepth)), tip_w = half_width_at(SeenDepth(kToolTipDepth));
+  const double base_w = half_width_at(SeenDepth(kToolBaseDepth)),
+               tip_w = half_width_at(SeenDepth(kToolTipDepth));
   tool_base_ = {side * 1.45 * base_w, random.Uniform(-0.6, -0.2) * base_w * aspect, -kToolBaseDepth};
   tool_start_ = {side * 0.45 * tip_w, random.Uniform(-0.3, 0.3) * tip_w * aspect, -kToolTipDepth};
   tool_end_ = {-side * 0.55 * tip_w, random.Uniform(-0.3, 0.3) * tip_w * aspect, -kToolTipDepth - 1};
@@ -216,7 +225,9 @@ Camera SyntheticScene::LeftCamera() const {
   return camera;
 }
 
-double SyntheticScene::SeenDepth(double nominal) const { return kSquashCentre + squash_ * (nominal - kSquashCentre); }
+double SyntheticScene::SeenDepth(double nominal) const {
+  return kSquashCentre + squash_ * (nominal - kSquashCentre);
+}
 double SyntheticScene::near() const { return SeenDepth(kNear); }
 double SyntheticScene::far() const { return SeenDepth(kFar); }
 
@@ -284,7 +295,8 @@ SceneHit SyntheticScene::Trace(const State& state, const Eigen::Vector3d& origin
                                const Eigen::Vector3d& direction, double depth_guess) const {
   // Tissue: solve s = D(origin.xy + s direction.xy) by Newton's method; the slope bound makes the
   // residual strictly increasing in s, so the root is unique. Bisection on [near, far] backs it up.
-  double s = depth_guess > near() && depth_guess < far() ? depth_guess : kSquashCentre, gx = 0, gy = 0, depth = 0;
+  double s = depth_guess > near() && depth_guess < far() ? depth_guess : kSquashCentre, gx = 0, gy = 0,
+         depth = 0;
   bool converged = false;
   for (int iteration = 0; iteration < 30 && !converged; ++iteration) {
     depth = TissueDepth(state, origin.x() + s * direction.x(), origin.y() + s * direction.y(), &gx, &gy);
@@ -315,7 +327,8 @@ SceneHit SyntheticScene::Trace(const State& state, const Eigen::Vector3d& origin
   const double centre_z = -kSquashCentre;
   const Eigen::Vector3d nominal_origin(origin.x(), origin.y(), centre_z + (origin.z() - centre_z) / squash_);
   const Eigen::Vector3d nominal_direction(direction.x(), direction.y(), direction.z() / squash_);
-  const double s_tool = IntersectCapsule(nominal_origin, nominal_direction, state.tool_base, state.tool_tip, kToolRadius);
+  const double s_tool =
+      IntersectCapsule(nominal_origin, nominal_direction, state.tool_base, state.tool_tip, kToolRadius);
   if (s_tool <= 0 || s_tool >= s) return hit;
   const Eigen::Vector3d nominal_point = nominal_origin + s_tool * nominal_direction;
   const Eigen::Vector3d axis = state.tool_tip - state.tool_base;
@@ -325,8 +338,8 @@ SceneHit SyntheticScene::Trace(const State& state, const Eigen::Vector3d& origin
   const float grey = along > 0.93 ? 0.08f : 0.22f;  // dark jaws at the tip
   hit.tool = true;
   hit.depth = s_tool;
-  hit.rgb = Shade({grey, grey, grey * 1.04f}, normal_tool.normalized(), origin + s_tool * direction, origin, 0.5,
-                  ToolLobe, &hit.specular);
+  hit.rgb = Shade({grey, grey, grey * 1.04f}, normal_tool.normalized(), origin + s_tool * direction, origin,
+                  0.5, ToolLobe, &hit.specular);
   return hit;
 }
 

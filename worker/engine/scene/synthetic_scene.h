@@ -76,7 +76,7 @@ class SyntheticScene {
   double SeenDepth(double nominal) const;  // the squash: nominal z-depth -> rendered z-depth
 
   SynthOptions options_;
-  double squash_;             // depth squash factor about kSquashCentre (1, or 0.08 when stiff)
+  double squash_;  // depth squash factor about kSquashCentre (1, or 0.08 when stiff)
   double tilt_x_, tilt_y_;
   std::array<State::Bump, kBumps> bumps_;
   std::array<double, kBumps> breath_amount_, breath_cycles_, breath_phase_;

@@ -7,6 +7,7 @@
 #include <optional>
 
 #include "common/error.h"
+#include "worker/engine/scene/camera_json.h"
 #include "worker/engine/scene/clip_checks.h"
 #include "worker/engine/scene/frame_reader.h"
 #include "worker/engine/scene/json_file.h"
@@ -21,22 +22,6 @@ using nlohmann::json;
 constexpr double kDepthNearFactor = 0.8, kDepthFarFactor = 1.2;
 constexpr double kDistanceNearFactor = 0.05, kDistanceFarFactor = 2.5;
 
-std::optional<double> OptionalNumber(const json& object, const char* key, const std::string& where) {
-  if (!object.contains(key)) return std::nullopt;
-  const json& value = object[key];
-  if (!value.is_number() || !std::isfinite(value.get<double>())) {
-    FailInvalid(where + ": \"" + key + "\" must be a finite number, found " + value.dump());
-  }
-  return value.get<double>();
-}
-
-// A per-frame value overrides the top-level one.
-std::optional<double> Field(const json& frame, const json& top, const char* key, const std::string& where,
-                            const std::string& top_where) {
-  if (auto value = OptionalNumber(frame, key, where)) return value;
-  return OptionalNumber(top, key, top_where);
-}
-
 fs::path ResolveFile(const fs::path& dir, const json& frame, const char* key, const std::string& where) {
   const json& value = frame[key];
   if (!value.is_string()) FailInvalid(where + ": \"" + key + "\" must be a string, found " + value.dump());
@@ -47,26 +32,8 @@ fs::path ResolveFile(const fs::path& dir, const json& frame, const char* key, co
     candidate += extension;
     if (fs::is_regular_file(candidate)) return candidate;
   }
-  FailInvalid(where + ": " + key + " " + path.string() + " does not exist (also tried adding .png, .jpg, .jpeg, .npy)");
-}
-
-Eigen::Matrix<double, 3, 4> ReadTransform(const json& frame, const std::string& where) {
-  if (!frame.contains("transform_matrix")) FailInvalid(where + ": no \"transform_matrix\"");
-  const json& m = frame["transform_matrix"];
-  const auto bad = [&] { FailInvalid(where + ": \"transform_matrix\" must be 4x4 numbers, found " + m.dump()); };
-  if (!m.is_array() || m.size() != 4) bad();
-  Eigen::Matrix4d matrix;
-  for (int r = 0; r < 4; ++r) {
-    if (!m[r].is_array() || m[r].size() != 4) bad();
-    for (int c = 0; c < 4; ++c) {
-      if (!m[r][c].is_number()) bad();
-      matrix(r, c) = m[r][c].get<double>();
-    }
-  }
-  if ((matrix.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).cwiseAbs().maxCoeff() > 1e-6) {
-    FailInvalid(where + ": the last row of \"transform_matrix\" must be [0, 0, 0, 1], found " + m[3].dump());
-  }
-  return matrix.topRows<3>();
+  FailInvalid(where + ": " + key + " " + path.string() +
+              " does not exist (also tried adding .png, .jpg, .jpeg, .npy)");
 }
 
 void WarnAboutDistortion(const json& top, const std::string& file) {
@@ -81,31 +48,9 @@ void WarnAboutDistortion(const json& top, const std::string& file) {
   };
   scan(top);
   for (const json& frame : top["frames"]) scan(frame);
-  if (!found.empty()) spdlog::warn("{}: lens distortion ({}) is ignored; undistort the images for best results", file, found);
-}
-
-Camera MakeCamera(const json& frame, const json& top, const Clip& clip, const std::string& where,
-                  const std::string& file) {
-  Camera camera;
-  camera.width = clip.width;
-  camera.height = clip.height;
-  const std::optional<double> fl_x = Field(frame, top, "fl_x", where, file);
-  const std::optional<double> angle_x = Field(frame, top, "camera_angle_x", where, file);
-  const std::optional<double> fl_y = Field(frame, top, "fl_y", where, file);
-  const std::optional<double> angle_y = Field(frame, top, "camera_angle_y", where, file);
-  if (fl_x) {
-    camera.fx = *fl_x;
-  } else if (angle_x) {
-    camera.fx = 0.5 * clip.width / std::tan(0.5 * *angle_x);
-  } else {
-    FailInvalid(where + ": no focal length (give \"fl_x\" or \"camera_angle_x\")");
+  if (!found.empty()) {
+    spdlog::warn("{}: lens distortion ({}) is ignored; undistort the images for best results", file, found);
   }
-  camera.fy = fl_y ? *fl_y : angle_y ? 0.5 * clip.height / std::tan(0.5 * *angle_y) : camera.fx;
-  camera.cx = Field(frame, top, "cx", where, file).value_or(clip.width / 2.0);
-  camera.cy = Field(frame, top, "cy", where, file).value_or(clip.height / 2.0);
-  camera.c2w = ReadTransform(frame, where);
-  CheckCamera(camera, where);
-  return camera;
 }
 
 // The size named by "w"/"h" (top level or per frame), which every frame must agree on; 0x0 if none.
@@ -113,19 +58,20 @@ void DeclaredSize(const json& top, const std::string& file, Clip& clip) {
   const json& frames = top["frames"];
   for (std::size_t i = 0; i < frames.size(); ++i) {
     const std::string where = file + " frame " + std::to_string(i);
-    const std::optional<double> w = Field(frames[i], top, "w", where, file);
-    const std::optional<double> h = Field(frames[i], top, "h", where, file);
+    const std::optional<double> w = FrameOrTopNumber(frames[i], top, "w", where, file);
+    const std::optional<double> h = FrameOrTopNumber(frames[i], top, "h", where, file);
     if (!w || !h) continue;
     if (*w < 1 || *h < 1 || *w != std::floor(*w) || *h != std::floor(*h) || *w > 1e6 || *h > 1e6) {
-      FailInvalid(where + ": \"w\" and \"h\" must be positive integers, found " + std::to_string(*w) + " and " +
-                  std::to_string(*h));
+      FailInvalid(where + ": \"w\" and \"h\" must be positive integers, found " + std::to_string(*w) +
+                  " and " + std::to_string(*h));
     }
     if (clip.width == 0) {
       clip.width = static_cast<int>(*w);
       clip.height = static_cast<int>(*h);
     } else if (clip.width != static_cast<int>(*w) || clip.height != static_cast<int>(*h)) {
       FailInvalid(where + ": size " + SizeText(static_cast<int>(*w), static_cast<int>(*h)) +
-                  " differs from the clip's " + SizeText(clip.width, clip.height) + " (all frames must share one size)");
+                  " differs from the clip's " + SizeText(clip.width, clip.height) +
+                  " (all frames must share one size)");
     }
   }
 }
@@ -133,15 +79,18 @@ void DeclaredSize(const json& top, const std::string& file, Clip& clip) {
 void SetTimes(const json& frames, const std::string& file, Clip& clip) {
   const std::size_t n = frames.size();
   std::vector<std::optional<double>> times(n);
-  for (std::size_t i = 0; i < n; ++i) times[i] = OptionalNumber(frames[i], "time", file + " frame " + std::to_string(i));
+  for (std::size_t i = 0; i < n; ++i)
+    times[i] = OptionalNumber(frames[i], "time", file + " frame " + std::to_string(i));
   clip.times.assign(n, 0.f);
-  const std::size_t timed = static_cast<std::size_t>(std::count_if(times.begin(), times.end(), [](auto& t) { return t.has_value(); }));
+  const std::size_t timed = static_cast<std::size_t>(
+      std::count_if(times.begin(), times.end(), [](auto& t) { return t.has_value(); }));
   if (timed == 0) {
     clip.is_static = true;
     return;
   }
   if (timed != n) {
-    const std::size_t missing = static_cast<std::size_t>(std::find(times.begin(), times.end(), std::nullopt) - times.begin());
+    const std::size_t missing =
+        static_cast<std::size_t>(std::find(times.begin(), times.end(), std::nullopt) - times.begin());
     FailInvalid(file + " frame " + std::to_string(missing) + ": no \"time\" while " + std::to_string(timed) +
                 " of " + std::to_string(n) + " frames have one (give all frames a time, or none)");
   }
@@ -180,8 +129,9 @@ void SetNearFar(const json& top, const std::string& file, Clip& clip) {
       std::nth_element(distances.begin(), distances.begin() + distances.size() / 2, distances.end());
       const double median = distances[distances.size() / 2];
       if (!(median > 1e-9)) {
-        FailInvalid(file + ": cannot derive near and far (no depth maps, and the cameras sit at the origin); "
-                           "add top-level \"near\" and \"far\"");
+        FailInvalid(file +
+                    ": cannot derive near and far (no depth maps, and the cameras sit at the origin); "
+                    "add top-level \"near\" and \"far\"");
       }
       derived_near = kDistanceNearFactor * median;
       derived_far = kDistanceFarFactor * median;
@@ -228,7 +178,8 @@ Clip LoadTransformsClip(const fs::path& dir, const LoadOptions& options) {
   ReadFrames(files, read_options, clip);
 
   for (std::size_t i = 0; i < frames.size(); ++i) {
-    clip.cameras.push_back(MakeCamera(frames[i], top, clip, file + " frame " + std::to_string(i), file));
+    clip.cameras.push_back(
+        CameraFromJson(frames[i], top, clip.width, clip.height, file + " frame " + std::to_string(i), file));
   }
   SetTimes(frames, file, clip);
   SetNearFar(top, file, clip);
