@@ -28,15 +28,16 @@ std::string Lower(std::string text) {
 cv::Mat Decode(const fs::path& path) {
   if (!fs::is_regular_file(path)) FailInvalid(path.string() + ": file does not exist");
   cv::Mat image = cv::imread(path.string(), cv::IMREAD_UNCHANGED);
-  if (image.empty())
+  if (image.empty()) {
     FailInvalid(path.string() + ": cannot decode the image (unreadable, truncated or not an image)");
+  }
   return image;
 }
 
-void CheckSize(const fs::path& path, const cv::Mat& image, int width, int height) {
-  if (image.cols != width || image.rows != height) {
-    FailInvalid(path.string() + ": size " + SizeText(image.cols, image.rows) + " differs from the clip's " +
-                SizeText(width, height));
+void CheckSize(const fs::path& path, int found_width, int found_height, int width, int height) {
+  if (found_width != width || found_height != height) {
+    FailInvalid(path.string() + ": size " + SizeText(found_width, found_height) +
+                " differs from the clip's " + SizeText(width, height));
   }
 }
 
@@ -67,7 +68,7 @@ std::vector<std::uint8_t> ReadMask(const fs::path& path, const FrameReadOptions&
   const cv::Mat image = Decode(path);
   CheckSingleChannel(path, image, "mask");
   if (image.depth() != CV_8U) FailInvalid(path.string() + ": a mask must be 8-bit with values 0 and 255");
-  CheckSize(path, image, width, height);
+  CheckSize(path, image.cols, image.rows, width, height);
   std::array<std::size_t, 256> histogram{};
   std::vector<std::uint8_t> mask(static_cast<std::size_t>(width) * height);
   for (int y = 0; y < height; ++y) {
@@ -100,7 +101,7 @@ std::vector<float> ReadDepth(const fs::path& path, const FrameReadOptions& optio
   } else {
     const cv::Mat image = Decode(path);
     CheckSingleChannel(path, image, "depth map");
-    CheckSize(path, image, width, height);
+    CheckSize(path, image.cols, image.rows, width, height);
     cv::Mat values;
     image.convertTo(values, CV_64F);
     raw.assign(values.begin<double>(), values.end<double>());
@@ -119,10 +120,7 @@ std::vector<float> ReadDepth(const fs::path& path, const FrameReadOptions& optio
 
 std::vector<std::uint8_t> ReadRgb(const fs::path& path, int width, int height) {
   RgbImage image = ReadRgbImage(path);
-  if (image.width != width || image.height != height) {
-    FailInvalid(path.string() + ": size " + SizeText(image.width, image.height) +
-                " differs from the clip's " + SizeText(width, height));
-  }
+  CheckSize(path, image.width, image.height, width, height);
   return std::move(image.rgb);
 }
 

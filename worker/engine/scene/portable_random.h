@@ -1,6 +1,6 @@
-// Random numbers that are the same on every platform for a seed: std::mt19937_64's output is
-// specified by the standard, but std's distributions are not (they differ between standard
-// libraries), so uniform and normal draws are written here.
+// Random numbers that are the same with every standard library for a seed: std::mt19937_64's
+// output is specified by the standard, but std's distributions are not (they differ between
+// libstdc++ and libc++, and between versions), so uniform and normal draws are written here.
 #pragma once
 
 #include <cmath>
