@@ -88,7 +88,7 @@ void Deformation<S>::BackwardPosition(const S* params, const S* pos, const S* t,
     CellCorners(level, pos + 3 * i, slot, w, frac);
     const int knot = TimeInterval(t[i], config_.time_knots, &ft);
     const S* g = dx0 + 3 * i;
-    S grad[3] = {};
+    S dot[8] = {};  // (dx . g) at each corner, both time slices blended
     for (int side = 0; side < 2; ++side) {
       const int slice = knot + side;
       if (slice == 0) continue;
@@ -96,10 +96,11 @@ void Deformation<S>::BackwardPosition(const S* params, const S* pos, const S* t,
       const S* table = params + (slice - 1) * slice_size_;
       for (int k = 0; k < 8; ++k) {
         const S* v = table + std::size_t{slot[k]} * 3;
-        const S dot = wt * (v[0] * g[0] + v[1] * g[1] + v[2] * g[2]);
-        for (int a = 0; a < 3; ++a) grad[a] += CornerWeightDerivative(k, a, frac) * dot;
+        dot[k] += wt * (v[0] * g[0] + v[1] * g[1] + v[2] * g[2]);
       }
     }
+    S grad[3];
+    TrilinearGradient(dot, frac, grad);
     for (int a = 0; a < 3; ++a) {
       dpos[3 * i + a] += g[a] + (InsideUnit(pos[3 * i + a]) ? res * grad[a] : S(0));
     }

@@ -1,6 +1,7 @@
 #include "worker/engine/field/field.h"
 
 #include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -17,8 +18,10 @@
 namespace endorecon::field {
 namespace {
 
-constexpr int kTile = 512;     // samples per tile: a tile's activations stay in L2
-constexpr int kMaxChunks = 8;  // tiles are grouped into at most this many chunks (tasks)
+constexpr int kTile = 512;     // samples per tile of the heads: a tile's activations stay in L1/L2
+constexpr int kChunk = 2048;   // samples per chunk (task): the grids walk their levels over a chunk, so a
+                               // level's table is pulled into L2 once and reused by ~16k lookups
+constexpr int kPositionGroups = 4;  // fixed split of the grid levels for dL/dx0 (see ScatterTables)
 constexpr int kMaxLayers = 8;  // hidden layers per head
 constexpr char kMagic[16] = "ENDORECON-FIELD";
 constexpr std::uint32_t kFormatVersion = 1;
@@ -31,23 +34,21 @@ void GrowTo(std::vector<S>& v, std::size_t size) {
   if (v.size() < size) v.resize(size);
 }
 
-// Splits n rows into tiles of kTile and the tiles into at most kMaxChunks chunks; runs
-// fn(chunk, row0, rows) for every tile, chunks in parallel and each chunk's tiles in order.
-// The split depends only on n. Returns the number of chunks.
+// Runs fn(chunk, row0, rows) for the chunks of kChunk rows of a batch of n, in parallel.
+// The split depends only on n, never on the thread count. Returns the number of chunks.
 template <typename Fn>
-int RunTiles(int n, Fn&& fn) {
-  const int tiles = (n + kTile - 1) / kTile;
-  const int chunks = std::min(kMaxChunks, tiles);
-  if (chunks == 0) return 0;
-  const int per_chunk = (tiles + chunks - 1) / chunks;
+int RunChunks(int n, Fn&& fn) {
+  const int chunks = (n + kChunk - 1) / kChunk;
   tbb::parallel_for(tbb::blocked_range<int>(0, chunks, 1), [&](const tbb::blocked_range<int>& r) {
-    for (int c = r.begin(); c != r.end(); ++c) {
-      for (int t = c * per_chunk; t < std::min(tiles, (c + 1) * per_chunk); ++t) {
-        fn(c, t * kTile, std::min(kTile, n - t * kTile));
-      }
-    }
+    for (int c = r.begin(); c != r.end(); ++c) fn(c, c * kChunk, std::min(kChunk, n - c * kChunk));
   });
   return chunks;
+}
+
+// Calls fn(offset, rows) for the tiles of kTile rows of a chunk of `rows` rows.
+template <typename Fn>
+void ForTiles(int rows, Fn&& fn) {
+  for (int t = 0; t < rows; t += kTile) fn(t, std::min(kTile, rows - t));
 }
 
 template <typename S>
@@ -105,12 +106,10 @@ struct FieldT<S>::Impl {
     S* dens_hidden[kMaxLayers];
     S* col_hidden[kMaxLayers];
   };
-  struct Chunk {
-    Acts tile;                                 // Infer's activations, one tile
-    std::vector<S> scratch;                    // Backward's per-tile temporaries
-    std::array<std::vector<S>, kGroups> grad;  // this chunk's share of the small groups' gradients
+  struct Scratch {  // one per thread, reused across calls
+    Acts chunk;            // Infer's activations (one chunk)
+    std::vector<S> temp;   // Backward's temporaries (one tile)
   };
-
   GridEnsemble<S> grids;
   TemporalBlend<S> blend;
   std::optional<Deformation<S>> deform;
@@ -120,9 +119,11 @@ struct FieldT<S>::Impl {
   std::array<std::vector<S>, kGroups> value, grad;
   Acts acts;         // kept activations of the last Forward
   int capacity = 0;  // rows `acts` holds
-  std::array<Chunk, kMaxChunks> chunks;
+  tbb::enumerable_thread_specific<Scratch> scratch;
+  std::vector<std::array<std::vector<S>, kGroups>> chunk_grad;  // each chunk's share of the small groups' gradients
   std::vector<S> dfeat_by_level;  // [level][n][F]: dL/df, read by the table scatter
   std::vector<S> beta_by_grid;    // [grid][n]
+  std::vector<S> group_dpos;      // [kPositionGroups][n][3]: parts of dL/dx0
   std::vector<S> dx0;             // n x 3: dL/dx0, read by the deformation scatter
   int last_n = -1;
   bool last_dropout = false;
@@ -179,83 +180,107 @@ struct FieldT<S>::Impl {
     return v;
   }
 
-  std::size_t ScratchSize() const {
+  // Backward's temporaries for one tile: dL/dgeo, dL/df and the heads' scratch.
+  std::size_t TempSize() const {
     const std::size_t heads = std::max({density.scratch_size(kTile), color.scratch_size(kTile), blend.scratch_size(kTile)});
-    return heads + static_cast<std::size_t>(kTile) * (density.mlp().out_dim() + grids.feature_dim() + grids.output_dim());
+    return static_cast<std::size_t>(kTile) * (density.raw_dim() + grids.feature_dim()) + heads;
   }
 
-  // The whole field on rows [row0, row0 + rows), activations into v.
-  void ForwardTile(const SampleBatchT<S>& batch, const FieldOutputT<S>& out, const View& v, int row0, int rows,
-                   const DropoutPass& drop) const {
+  // The whole field on batch rows [row0, row0 + rows) (one chunk), activations into rows
+  // [a_row0, a_row0 + rows) of `a`. The grids walk their levels over the whole chunk; the rest runs
+  // tile by tile.
+  void ForwardChunk(const SampleBatchT<S>& batch, const FieldOutputT<S>& out, Acts& a, int a_row0, int row0,
+                    int rows, bool dropout, std::uint64_t seed) const {
     const std::size_t r = static_cast<std::size_t>(row0);
-    const S* pos = batch.pos + 3 * r;
-    const S* t = batch.time + r;
-    const S* x0 = pos;
+    const View v = ViewAt(a, a_row0);
+    const S* x0 = batch.pos + 3 * r;
     if (deform) {
-      deform->Forward(value[kDeform].data(), pos, t, rows, v.x0);
+      deform->Forward(value[kDeform].data(), x0, batch.time + r, rows, v.x0);
       x0 = v.x0;
     }
     grids.Forward(value[kGrid].data(), x0, rows, v.gfeat);
-    blend.Weights(value[kBlend].data(), t, rows, v.blend_hidden, v.beta);
-    blend.Blend(v.beta, v.gfeat, rows, v.feat);
-    density.Forward(value[kDensity].data(), v.feat, rows, v.dens_hidden, v.dens_raw, out.sigma + r,
-                    out.sigma_logvar + r, drop);
-    color.Forward(value[kColor].data(), v.dens_raw + 2, density.raw_dim(), batch.dir + 3 * r, rows, v.col_in,
-                  v.col_hidden, v.col_raw, out.rgb + 3 * r, out.rgb_logvar + r, drop);
+    ForTiles(rows, [&](int t0, int n) {
+      const View w = ViewAt(a, a_row0 + t0);
+      const std::size_t q = r + static_cast<std::size_t>(t0);
+      const DropoutPass drop{dropout, seed, static_cast<std::uint32_t>(q)};
+      blend.Weights(value[kBlend].data(), batch.time + q, n, w.blend_hidden, w.beta);
+      blend.Blend(w.beta, w.gfeat, n, w.feat);
+      density.Forward(value[kDensity].data(), w.feat, n, w.dens_hidden, w.dens_raw, out.sigma + q,
+                      out.sigma_logvar + q, drop);
+      color.Forward(value[kColor].data(), w.dens_raw + 2, density.raw_dim(), batch.dir + 3 * q, n, w.col_in,
+                    w.col_hidden, w.col_raw, out.rgb + 3 * q, out.rgb_logvar + q, drop);
+    });
   }
 
-  // Heads, blend and (with deformation) dL/dx0 of one tile; leaves dL/df level-major and beta grid-major
-  // for the table scatter that follows.
-  void BackwardTile(const SampleBatchT<S>& batch, const FieldOutputGradT<S>& g, Chunk& chunk, int row0, int rows) {
+  // Heads and blend of one chunk, tile by tile. Leaves dL/df level-major and beta grid-major for the
+  // table scatter that follows.
+  void BackwardChunk(const SampleBatchT<S>& batch, const FieldOutputGradT<S>& g, int c, int row0, int rows) {
     const int n = last_n;
-    const std::size_t r = static_cast<std::size_t>(row0);
-    const View v = ViewAt(acts, row0);
-    const int d = grids.feature_dim(), f = grids.grid(0).features();
-    S* dgeo = chunk.scratch.data();
-    S* df = dgeo + static_cast<std::size_t>(kTile) * density.mlp().out_dim();
-    S* dfeats = df + static_cast<std::size_t>(kTile) * d;
-    S* temp = dfeats + static_cast<std::size_t>(kTile) * grids.output_dim();
-    color.Backward(value[kColor].data(), v.col_in, rows, v.col_hidden, v.col_raw, Offset(g.rgb, 3 * r),
-                   Offset(g.rgb_logvar, r), dgeo, chunk.grad[kColor].data(), temp, last_dropout);
-    density.Backward(value[kDensity].data(), v.feat, rows, v.dens_hidden, v.dens_raw, Offset(g.sigma, r),
-                     Offset(g.sigma_logvar, r), dgeo, df, chunk.grad[kDensity].data(), temp, last_dropout);
-    blend.Backward(value[kBlend].data(), batch.time + r, rows, v.blend_hidden, v.beta, v.gfeat, df,
-                   deform ? dfeats : nullptr, chunk.grad[kBlend].data(), temp);
-    for (int i = 0; i < rows; ++i) {
-      for (int l = 0; l < d / f; ++l) {
-        S* dst = dfeat_by_level.data() + (static_cast<std::size_t>(l) * n + r + i) * f;
-        std::copy_n(df + static_cast<std::size_t>(i) * d + l * f, f, dst);
+    const int d = grids.feature_dim(), f = grids.grid(0).features(), gn = grids.grids();
+    auto& grads = chunk_grad[c];
+    std::vector<S>& temp = scratch.local().temp;
+    GrowTo(temp, TempSize());
+    S* dgeo = temp.data();
+    S* df = dgeo + static_cast<std::size_t>(kTile) * density.raw_dim();
+    S* heads = df + static_cast<std::size_t>(kTile) * d;
+    ForTiles(rows, [&](int t0, int rt) {
+      const std::size_t q = static_cast<std::size_t>(row0 + t0);
+      const View v = ViewAt(acts, row0 + t0);
+      color.Backward(value[kColor].data(), v.col_in, rt, v.col_hidden, v.col_raw, Offset(g.rgb, 3 * q),
+                     Offset(g.rgb_logvar, q), dgeo, grads[kColor].data(), heads, last_dropout);
+      density.Backward(value[kDensity].data(), v.feat, rt, v.dens_hidden, v.dens_raw, Offset(g.sigma, q),
+                       Offset(g.sigma_logvar, q), dgeo, df, grads[kDensity].data(), heads, last_dropout);
+      blend.Backward(value[kBlend].data(), batch.time + q, rt, v.blend_hidden, v.beta, v.gfeat, df, nullptr,
+                     grads[kBlend].data(), heads);
+      for (int i = 0; i < rt; ++i) {
+        for (int l = 0; l < d / f; ++l) {
+          std::copy_n(df + static_cast<std::size_t>(i) * d + l * f, f,
+                      dfeat_by_level.data() + (static_cast<std::size_t>(l) * n + q + i) * f);
+        }
+        for (int k = 0; k < gn; ++k) beta_by_grid[static_cast<std::size_t>(k) * n + q + i] = v.beta[i * gn + k];
       }
-      for (int k = 0; k < grids.grids(); ++k) beta_by_grid[static_cast<std::size_t>(k) * n + r + i] = v.beta[i * grids.grids() + k];
-    }
-    if (deform) {
-      std::fill_n(dx0.data() + 3 * r, 3 * static_cast<std::size_t>(rows), S(0));
-      grids.BackwardPosition(value[kGrid].data(), v.x0, rows, dfeats, dx0.data() + 3 * r);
-    }
+    });
   }
 
-  // Table gradients, one (grid, level) or deformation time slice per task: disjoint parts of the
-  // gradient, so no task waits for another and the sums do not depend on the thread count.
+  // Table gradients, one (grid, level) per task, then (with deformation) the deformation's gradient,
+  // one time slice per task. Tasks write disjoint parts of the gradients. With deformation the level
+  // tasks also produce dL/dx0: they are dealt round-robin into kPositionGroups fixed groups, each run in
+  // order and adding into its own n x 3 buffer, and the buffers are summed in order: the result does
+  // not depend on the thread count.
   void ScatterTables(const SampleBatchT<S>& batch) {
-    const int n = last_n, f = grids.grid(0).features();
-    std::vector<std::pair<int, int>> tasks;  // (grid, level), or (-1, knot)
+    const std::size_t n = static_cast<std::size_t>(last_n);
+    const int f = grids.grid(0).features();
+    std::vector<std::pair<int, int>> tasks;  // (grid, level)
     for (int k = 0; k < grids.grids(); ++k) {
       for (int l = 0; l < grids.grid(k).levels(); ++l) tasks.emplace_back(k, l);
     }
-    if (deform) {
-      for (int knot = 1; knot <= deform->config().time_knots; ++knot) tasks.emplace_back(-1, knot);
-    }
     const S* x0 = deform ? acts.x0.data() : batch.pos;
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, tasks.size(), 1), [&](const auto& range) {
-      for (std::size_t i = range.begin(); i != range.end(); ++i) {
-        const auto [k, l] = tasks[i];
-        if (k < 0) {
-          deform->BackwardKnot(l, batch.pos, batch.time, n, dx0.data(), grad[kDeform].data());
-        } else {
-          grids.BackwardLevel(k, l, x0, n, dfeat_by_level.data() + static_cast<std::size_t>(l) * n * f, f,
-                              beta_by_grid.data() + static_cast<std::size_t>(k) * n, grad[kGrid].data());
-        }
+    auto run = [&](std::size_t i, S* dpos) {
+      const auto [k, l] = tasks[i];
+      grids.BackwardLevel(k, l, x0, last_n, dfeat_by_level.data() + l * n * f, f, beta_by_grid.data() + k * n,
+                          grad[kGrid].data(), dpos ? value[kGrid].data() : nullptr, dpos);
+    };
+    if (!deform) {
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, tasks.size(), 1), [&](const auto& range) {
+        for (std::size_t i = range.begin(); i != range.end(); ++i) run(i, nullptr);
+      });
+      return;
+    }
+    GrowTo(group_dpos, kPositionGroups * n * 3);
+    tbb::parallel_for(0, kPositionGroups, [&](int group) {
+      S* dpos = group_dpos.data() + group * n * 3;
+      std::fill_n(dpos, n * 3, S(0));
+      for (std::size_t i = group; i < tasks.size(); i += kPositionGroups) run(i, dpos);
+    });
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n * 3, 4096), [&](const auto& range) {
+      for (std::size_t j = range.begin(); j != range.end(); ++j) {
+        S sum = S(0);
+        for (int group = 0; group < kPositionGroups; ++group) sum += group_dpos[group * n * 3 + j];
+        dx0[j] = sum;
       }
+    });
+    tbb::parallel_for(1, deform->config().time_knots + 1, [&](int knot) {
+      deform->BackwardKnot(knot, batch.pos, batch.time, last_n, dx0.data(), grad[kDeform].data());
     });
   }
 
@@ -264,7 +289,7 @@ struct FieldT<S>::Impl {
     for (int g : {kBlend, kDensity, kColor}) {
       S* dst = grad[g].data();
       for (int c = 0; c < used; ++c) {
-        const S* src = chunks[c].grad[g].data();
+        const S* src = chunk_grad[c][g].data();
         for (std::size_t i = 0; i < grad[g].size(); ++i) dst[i] += src[i];
       }
     }
@@ -294,9 +319,8 @@ void FieldT<S>::Forward(const SampleBatchT<S>& batch, FieldOutputT<S>& out, bool
   }
   m.last_n = batch.n;
   m.last_dropout = dropout;
-  RunTiles(batch.n, [&](int, int row0, int rows) {
-    m.ForwardTile(batch, out, m.ViewAt(m.acts, row0), row0, rows,
-                  DropoutPass{dropout, dropout_seed, static_cast<std::uint32_t>(row0)});
+  RunChunks(batch.n, [&](int, int row0, int rows) {
+    m.ForwardChunk(batch, out, m.acts, row0, row0, rows, dropout, dropout_seed);
   });
 }
 
@@ -304,11 +328,10 @@ template <typename S>
 void FieldT<S>::Infer(const SampleBatchT<S>& batch, FieldOutputT<S>& out, bool dropout, std::uint64_t dropout_seed) {
   CheckBatch(batch, "Field::Infer");
   Impl& m = *impl_;
-  RunTiles(batch.n, [&](int c, int row0, int rows) {
-    auto& tile = m.chunks[c].tile;
-    m.SizeActs(tile, kTile);
-    m.ForwardTile(batch, out, m.ViewAt(tile, 0), row0, rows,
-                  DropoutPass{dropout, dropout_seed, static_cast<std::uint32_t>(row0)});
+  RunChunks(batch.n, [&](int, int row0, int rows) {
+    auto& acts = m.scratch.local().chunk;
+    m.SizeActs(acts, kChunk);
+    m.ForwardChunk(batch, out, acts, 0, row0, rows, dropout, dropout_seed);
   });
 }
 
@@ -323,13 +346,12 @@ void FieldT<S>::Backward(const SampleBatchT<S>& batch, const FieldOutputGradT<S>
   GrowTo(m.dfeat_by_level, n * m.grids.feature_dim());
   GrowTo(m.beta_by_grid, n * m.grids.grids());
   if (m.deform) GrowTo(m.dx0, n * 3);
-  const int tiles = (batch.n + kTile - 1) / kTile;
-  for (int c = 0; c < std::min(kMaxChunks, tiles); ++c) {
-    auto& chunk = m.chunks[c];
-    GrowTo(chunk.scratch, m.ScratchSize());
-    for (int g : {kBlend, kDensity, kColor}) chunk.grad[g].assign(m.grad[g].size(), S(0));
+  const int chunks = (batch.n + kChunk - 1) / kChunk;
+  if (static_cast<int>(m.chunk_grad.size()) < chunks) m.chunk_grad.resize(chunks);
+  for (int c = 0; c < chunks; ++c) {
+    for (int g : {kBlend, kDensity, kColor}) m.chunk_grad[c][g].assign(m.grad[g].size(), S(0));
   }
-  const int chunks = RunTiles(batch.n, [&](int c, int row0, int rows) { m.BackwardTile(batch, grad, m.chunks[c], row0, rows); });
+  RunChunks(batch.n, [&](int c, int row0, int rows) { m.BackwardChunk(batch, grad, c, row0, rows); });
   m.ScatterTables(batch);
   m.ReduceChunks(chunks);
 }

@@ -51,8 +51,9 @@ void GridEnsemble<S>::Forward(const S* params, const S* pos, int n, S* feats) co
 
 template <typename S>
 void GridEnsemble<S>::BackwardLevel(int g, int l, const S* pos, int n, const S* dfeat, int dfeat_stride,
-                                    const S* scale, S* grads) const {
-  grids_[g].BackwardLevel(l, pos, n, dfeat, dfeat_stride, scale, grads + offsets_[g]);
+                                    const S* scale, S* grads, const S* params, S* dpos_add) const {
+  grids_[g].BackwardLevel(l, pos, n, dfeat, dfeat_stride, scale, grads + offsets_[g],
+                          params ? params + offsets_[g] : nullptr, dpos_add);
 }
 
 template <typename S>

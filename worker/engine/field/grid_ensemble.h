@@ -41,10 +41,11 @@ class GridEnsemble {
   // feats: n rows of G * D values (row i at feats + i * G * D): grid 0's D values, then grid 1's, ...
   void Forward(const S* params, const S* pos, int n, S* feats) const;
 
-  // Table gradient of level l of grid g (see HashGrid::BackwardLevel); distinct (g, l) touch
-  // disjoint parts of grads, so they may run in parallel.
+  // Table gradient of level l of grid g, and optionally that level's part of dL/dpos (added to
+  // dpos_add; see HashGrid::BackwardLevel). Distinct (g, l) touch disjoint parts of grads, so they may
+  // run in parallel.
   void BackwardLevel(int g, int l, const S* pos, int n, const S* dfeat, int dfeat_stride, const S* scale,
-                     S* grads) const;
+                     S* grads, const S* params = nullptr, S* dpos_add = nullptr) const;
 
   // dpos += dL/dpos given dL/dfeats (n x G * D, the layout of Forward).
   void BackwardPosition(const S* params, const S* pos, int n, const S* dfeats, S* dpos) const;

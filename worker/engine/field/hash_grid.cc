@@ -11,14 +11,14 @@
 namespace endorecon::field {
 namespace {
 
-constexpr int kTile = 256;  // samples per level walk: their positions stay in L1 across levels
+constexpr int kTile = 4096;  // samples per level walk: enough lookups to reuse a level's table from L2
 
-template <int F, typename S>
+template <int F, bool kDense, typename S>
 void ForwardLevel(const GridLevel& level, const S* table, const S* pos, int n, S* feat, int feat_stride) {
   for (int i = 0; i < n; ++i) {
     std::uint32_t slot[8];
     S w[8], frac[3];
-    CellCorners(level, pos + 3 * i, slot, w, frac);
+    CellCornersOf<kDense>(level, pos + 3 * i, slot, w, frac);
     S acc[F] = {};
     for (int k = 0; k < 8; ++k) {
       const S* v = table + std::size_t{slot[k]} * F;
@@ -29,54 +29,78 @@ void ForwardLevel(const GridLevel& level, const S* table, const S* pos, int n, S
   }
 }
 
-template <int F, typename S>
+// Table scatter of one level; with kPosition also the level's position gradient (the corner values
+// it needs sit in the cache lines the scatter touches anyway).
+template <int F, bool kDense, bool kPosition, typename S>
 void ScatterLevel(const GridLevel& level, const S* pos, int n, const S* dfeat, int dfeat_stride, const S* scale,
-                  S* grads) {
+                  S* grads, const S* table, S* dpos) {
+  const S res = static_cast<S>(level.res);
   for (int i = 0; i < n; ++i) {
     std::uint32_t slot[8];
     S w[8], frac[3];
-    CellCorners(level, pos + 3 * i, slot, w, frac);
+    CellCornersOf<kDense>(level, pos + 3 * i, slot, w, frac);
     const S* d = dfeat + static_cast<std::size_t>(i) * dfeat_stride;
     const S s = scale ? scale[i] : S(1);
     S g[F];
     for (int f = 0; f < F; ++f) g[f] = s * d[f];
+    S dot[8];
     for (int k = 0; k < 8; ++k) {
-      S* v = grads + std::size_t{slot[k]} * F;
-      for (int f = 0; f < F; ++f) v[f] += w[k] * g[f];
+      S* gv = grads + std::size_t{slot[k]} * F;
+      if constexpr (kPosition) {
+        const S* v = table + std::size_t{slot[k]} * F;
+        dot[k] = S(0);
+        for (int f = 0; f < F; ++f) dot[k] += v[f] * g[f];
+      }
+      for (int f = 0; f < F; ++f) gv[f] += w[k] * g[f];
+    }
+    if constexpr (kPosition) {
+      S grad[3];
+      TrilinearGradient(dot, frac, grad);
+      for (int a = 0; a < 3; ++a) {
+        if (InsideUnit(pos[3 * i + a])) dpos[3 * i + a] += res * grad[a];
+      }
     }
   }
 }
 
-template <int F, typename S>
+template <int F, bool kDense, typename S>
 void PositionLevel(const GridLevel& level, const S* table, const S* pos, int n, const S* dfeat, int dfeat_stride,
                    S* dpos) {
   const S res = static_cast<S>(level.res);
   for (int i = 0; i < n; ++i) {
     std::uint32_t slot[8];
     S w[8], frac[3];
-    CellCorners(level, pos + 3 * i, slot, w, frac);
+    CellCornersOf<kDense>(level, pos + 3 * i, slot, w, frac);
     const S* d = dfeat + static_cast<std::size_t>(i) * dfeat_stride;
-    S grad[3] = {};
+    S dot[8];
     for (int k = 0; k < 8; ++k) {
       const S* v = table + std::size_t{slot[k]} * F;
-      S dot = S(0);
-      for (int f = 0; f < F; ++f) dot += v[f] * d[f];
-      for (int a = 0; a < 3; ++a) grad[a] += CornerWeightDerivative(k, a, frac) * dot;
+      dot[k] = S(0);
+      for (int f = 0; f < F; ++f) dot[k] += v[f] * d[f];
     }
+    S grad[3];
+    TrilinearGradient(dot, frac, grad);
     for (int a = 0; a < 3; ++a) {
       if (InsideUnit(pos[3 * i + a])) dpos[3 * i + a] += res * grad[a];
     }
   }
 }
 
-// Calls fn(std::integral_constant<int, F>) for the grid's runtime feature count.
+// Calls fn(std::integral_constant<int, F>, std::bool_constant<dense>) for a level of the grid.
 template <typename Fn>
-void DispatchFeatures(int features, Fn&& fn) {
+void Dispatch(int features, const GridLevel& level, Fn&& fn) {
+  auto with_f = [&](auto f) {
+    if (level.dense) {
+      fn(f, std::true_type{});
+    } else {
+      fn(f, std::false_type{});
+    }
+  };
   switch (features) {
-    case 1: fn(std::integral_constant<int, 1>{}); break;
-    case 2: fn(std::integral_constant<int, 2>{}); break;
-    case 4: fn(std::integral_constant<int, 4>{}); break;
-    default: fn(std::integral_constant<int, 8>{}); break;
+    case 1: with_f(std::integral_constant<int, 1>{}); break;
+    case 2: with_f(std::integral_constant<int, 2>{}); break;
+    case 4: with_f(std::integral_constant<int, 4>{}); break;
+    default: with_f(std::integral_constant<int, 8>{}); break;
   }
 }
 
@@ -132,41 +156,51 @@ void HashGrid<S>::Init(S* params, std::uint64_t seed) const {
 
 template <typename S>
 void HashGrid<S>::Forward(const S* params, const S* pos, int n, S* feat, int feat_stride) const {
-  DispatchFeatures(features(), [&](auto fc) {
-    constexpr int F = decltype(fc)::value;
-    for (int begin = 0; begin < n; begin += kTile) {
-      const int count = std::min(kTile, n - begin);
-      for (int l = 0; l < levels(); ++l) {
-        ForwardLevel<F>(levels_[l], params + levels_[l].offset * F, pos + 3 * begin, count,
-                        feat + static_cast<std::size_t>(begin) * feat_stride + l * F, feat_stride);
-      }
+  const int f = features();
+  for (int begin = 0; begin < n; begin += kTile) {
+    const int count = std::min(kTile, n - begin);
+    for (int l = 0; l < levels(); ++l) {
+      Dispatch(f, levels_[l], [&](auto fc, auto dense) {
+        ForwardLevel<decltype(fc)::value, decltype(dense)::value>(
+            levels_[l], params + levels_[l].offset * f, pos + 3 * begin, count,
+            feat + static_cast<std::size_t>(begin) * feat_stride + l * f, feat_stride);
+      });
     }
-  });
+  }
 }
 
 template <typename S>
 void HashGrid<S>::BackwardLevel(int l, const S* pos, int n, const S* dfeat, int dfeat_stride, const S* scale,
-                                S* grads) const {
-  DispatchFeatures(features(), [&](auto fc) {
+                                S* grads, const S* params, S* dpos_add) const {
+  const int f = features();
+  const std::size_t offset = levels_[l].offset * f;
+  Dispatch(f, levels_[l], [&](auto fc, auto dense) {
     constexpr int F = decltype(fc)::value;
-    ScatterLevel<F>(levels_[l], pos, n, dfeat, dfeat_stride, scale, grads + levels_[l].offset * F);
+    constexpr bool kDense = decltype(dense)::value;
+    if (dpos_add) {
+      ScatterLevel<F, kDense, true>(levels_[l], pos, n, dfeat, dfeat_stride, scale, grads + offset, params + offset,
+                                    dpos_add);
+    } else {
+      ScatterLevel<F, kDense, false>(levels_[l], pos, n, dfeat, dfeat_stride, scale, grads + offset,
+                                     static_cast<const S*>(nullptr), static_cast<S*>(nullptr));
+    }
   });
 }
 
 template <typename S>
 void HashGrid<S>::BackwardPosition(const S* params, const S* pos, int n, const S* dfeat, int dfeat_stride,
                                    S* dpos) const {
-  DispatchFeatures(features(), [&](auto fc) {
-    constexpr int F = decltype(fc)::value;
-    for (int begin = 0; begin < n; begin += kTile) {
-      const int count = std::min(kTile, n - begin);
-      for (int l = 0; l < levels(); ++l) {
-        PositionLevel<F>(levels_[l], params + levels_[l].offset * F, pos + 3 * begin, count,
-                         dfeat + static_cast<std::size_t>(begin) * dfeat_stride + l * F, dfeat_stride,
-                         dpos + 3 * begin);
-      }
+  const int f = features();
+  for (int begin = 0; begin < n; begin += kTile) {
+    const int count = std::min(kTile, n - begin);
+    for (int l = 0; l < levels(); ++l) {
+      Dispatch(f, levels_[l], [&](auto fc, auto dense) {
+        PositionLevel<decltype(fc)::value, decltype(dense)::value>(
+            levels_[l], params + levels_[l].offset * f, pos + 3 * begin, count,
+            dfeat + static_cast<std::size_t>(begin) * dfeat_stride + l * f, dfeat_stride, dpos + 3 * begin);
+      });
     }
-  });
+  }
 }
 
 template class HashGrid<float>;

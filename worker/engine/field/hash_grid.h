@@ -56,8 +56,10 @@ class HashGrid {
   // Gradient of one level's table: grads[level slots] += scale_i * trilinear weights * dfeat_i, where
   // dfeat_i (F values) is at dfeat + i * dfeat_stride and scale_i = scale[i] (1 when scale is null).
   // Touches only level l's part of grads, so different levels may run on different threads.
-  void BackwardLevel(int l, const S* pos, int n, const S* dfeat, int dfeat_stride, const S* scale,
-                     S* grads) const;
+  // When dpos_add is not null (params must be given then), also adds this level's part of dL/dpos
+  // (n x 3) to it in the same pass: the corner values it needs are in the lines the scatter touches.
+  void BackwardLevel(int l, const S* pos, int n, const S* dfeat, int dfeat_stride, const S* scale, S* grads,
+                     const S* params = nullptr, S* dpos_add = nullptr) const;
 
   // dpos += dL/dpos given dL/dfeat (rows at dfeat + i * dfeat_stride, output_dim() values each).
   // Zero along an axis where the position was clamped (outside the open interval (0, 1)).

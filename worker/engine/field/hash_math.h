@@ -8,6 +8,16 @@
 
 #include "common/hd.h"
 
+// The lookups below sit in the innermost per-sample loops: inlining them lets the compiler keep the 8
+// slots and weights in registers (GCC otherwise keeps the larger ones out of line).
+#if defined(__CUDACC__)
+#define ENDORECON_FIELD_INLINE __forceinline__
+#elif defined(__GNUC__)
+#define ENDORECON_FIELD_INLINE __attribute__((always_inline))
+#else
+#define ENDORECON_FIELD_INLINE
+#endif
+
 namespace endorecon::field {
 
 // One level of a grid as the per-sample code sees it. A level has `res` cells per axis and so
@@ -29,7 +39,7 @@ ENDORECON_HD std::uint32_t SpatialHash(std::uint32_t x, std::uint32_t y, std::ui
 // A coordinate in [0, 1]: values outside are clamped, NaN and -Inf map to 0 and +Inf to 1, so a bad
 // input always reads a valid cell. The derivative of this map is 1 strictly inside (0, 1), else 0.
 template <typename S>
-ENDORECON_HD S ClampUnit(S x) {
+ENDORECON_HD ENDORECON_FIELD_INLINE S ClampUnit(S x) {
   if (!(x > S(0))) return S(0);
   return x < S(1) ? x : S(1);
 }
@@ -42,7 +52,7 @@ ENDORECON_HD bool InsideUnit(S x) {
 // The cell containing `u` (in [0, 1], already clamped) at `res` cells per axis, and the fractional
 // position inside it (in [0, 1]). u = 1 falls in the last cell with fraction 1.
 template <typename S>
-ENDORECON_HD std::uint32_t CellOf(S u, std::uint32_t res, S* frac) {
+ENDORECON_HD ENDORECON_FIELD_INLINE std::uint32_t CellOf(S u, std::uint32_t res, S* frac) {
   const S p = u * static_cast<S>(res);
   std::uint32_t c = static_cast<std::uint32_t>(p);
   if (c >= res) c = res - 1;
@@ -61,31 +71,47 @@ ENDORECON_HD std::uint32_t VertexSlot(const GridLevel& level, std::uint32_t x, s
 
 // The 8 corners of the cell around `pos` (3 values, clamped to [0, 1] here): their slots (relative to
 // the level's offset) and trilinear weights, corner k having offsets (k & 1, k >> 1 & 1, k >> 2 & 1).
-// `frac` receives the fractional position (for derivatives).
-template <typename S>
-ENDORECON_HD void CellCorners(const GridLevel& level, const S* pos, std::uint32_t* slot, S* weight, S* frac) {
+// `frac` receives the fractional position (for derivatives). kDense must equal level.dense: the
+// branch is a template argument so the per-sample loops of one level carry none.
+template <bool kDense, typename S>
+ENDORECON_HD ENDORECON_FIELD_INLINE void CellCornersOf(const GridLevel& level, const S* pos, std::uint32_t* slot, S* weight, S* frac) {
   std::uint32_t c[3];
   for (int a = 0; a < 3; ++a) c[a] = CellOf(ClampUnit(pos[a]), level.res, &frac[a]);
-  for (int k = 0; k < 8; ++k) {
-    const std::uint32_t dx = k & 1, dy = (k >> 1) & 1, dz = (k >> 2) & 1;
-    slot[k] = VertexSlot(level, c[0] + dx, c[1] + dy, c[2] + dz);
-    weight[k] = (dx ? frac[0] : S(1) - frac[0]) * (dy ? frac[1] : S(1) - frac[1]) * (dz ? frac[2] : S(1) - frac[2]);
+  if constexpr (kDense) {
+    const std::uint32_t side = level.res + 1, plane = side * side;
+    const std::uint32_t base = c[0] + side * c[1] + plane * c[2];
+    for (int k = 0; k < 8; ++k) slot[k] = base + (k & 1) + ((k >> 1) & 1) * side + ((k >> 2) & 1) * plane;
+  } else {
+    const std::uint32_t mask = level.entries - 1;
+    const std::uint32_t hy[2] = {c[1] * 2654435761u, (c[1] + 1) * 2654435761u};
+    const std::uint32_t hz[2] = {c[2] * 805459861u, (c[2] + 1) * 805459861u};
+    for (int k = 0; k < 8; ++k) slot[k] = ((c[0] + (k & 1)) ^ hy[(k >> 1) & 1] ^ hz[(k >> 2) & 1]) & mask;
+  }
+  const S wx[2] = {S(1) - frac[0], frac[0]}, wy[2] = {S(1) - frac[1], frac[1]}, wz[2] = {S(1) - frac[2], frac[2]};
+  for (int k = 0; k < 8; ++k) weight[k] = wx[k & 1] * wy[(k >> 1) & 1] * wz[(k >> 2) & 1];
+}
+
+template <typename S>
+ENDORECON_HD ENDORECON_FIELD_INLINE void CellCorners(const GridLevel& level, const S* pos, std::uint32_t* slot, S* weight, S* frac) {
+  if (level.dense) {
+    CellCornersOf<true>(level, pos, slot, weight, frac);
+  } else {
+    CellCornersOf<false>(level, pos, slot, weight, frac);
   }
 }
 
-// d weight[k] / d frac[axis] for the trilinear weights of CellCorners.
+// Gradient of sum_k weight[k] * value[k] with respect to the fractional position, given value[k]
+// for the 8 corners of CellCorners (multiply by the resolution for d/dpos).
 template <typename S>
-ENDORECON_HD S CornerWeightDerivative(int k, int axis, const S* frac) {
-  S d = S(1);
-  for (int a = 0; a < 3; ++a) {
-    const bool high = (k >> a) & 1;
-    if (a == axis) {
-      d *= high ? S(1) : S(-1);
-    } else {
-      d *= high ? frac[a] : S(1) - frac[a];
-    }
+ENDORECON_HD ENDORECON_FIELD_INLINE void TrilinearGradient(const S* value, const S* frac, S* grad) {
+  const S wx[2] = {S(1) - frac[0], frac[0]}, wy[2] = {S(1) - frac[1], frac[1]}, wz[2] = {S(1) - frac[2], frac[2]};
+  grad[0] = grad[1] = grad[2] = S(0);
+  for (int k = 0; k < 8; k += 2) grad[0] += wy[(k >> 1) & 1] * wz[k >> 2] * (value[k + 1] - value[k]);
+  for (int j = 0; j < 4; ++j) {
+    const int k = (j & 1) | ((j >> 1) << 2);  // corners with y = 0: 0, 1, 4, 5
+    grad[1] += wx[k & 1] * wz[k >> 2] * (value[k + 2] - value[k]);
   }
-  return d;
+  for (int k = 0; k < 4; ++k) grad[2] += wx[k & 1] * wy[k >> 1] * (value[k + 4] - value[k]);
 }
 
 // Density activation: exp(min(x, 15)). The cap keeps a runaway raw value from overflowing float

@@ -1,0 +1,209 @@
+// Throughput of the neural field on the CPU, float32, batches of 32768 samples (512 rays x 64 samples,
+// rays crossing the unit box, one time per ray):
+//   forward+backward   Field::Forward (dropout on) + Field::Backward, the field's part of a training step
+//   forward            Field::Forward alone (keeps activations)
+//   infer              Field::Infer (rendering: nothing kept)
+//   zero grad          Field::ZeroGrad (a training step does it once)
+//   heads only         both heads' MLPs, forward + backward over the same batch in 512-sample tiles,
+//                      as GFLOP/s (2 flops per multiply-add, backward counted as 2x forward) against
+//                      the machine's fp32 peak (2 cores x 2.6 GHz x 2 FMA pipes x 16 lanes x 2 = ~190 GFLOP/s here)
+// for the CPU and paper presets. Usage: field_bench [--threads N] [--seconds S] [--preset cpu|paper|both]
+#include <tbb/global_control.h>
+#include <tbb/info.h>
+#include <tbb/parallel_for.h>
+
+#include <chrono>
+#include <ctime>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <functional>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "worker/engine/field/field.h"
+
+namespace {
+
+using namespace endorecon;
+using Clock = std::chrono::steady_clock;
+
+constexpr int kRays = 512;
+constexpr int kSamplesPerRay = 64;
+constexpr int kBatch = kRays * kSamplesPerRay;
+constexpr int kTile = 512;
+constexpr double kPeakGflops = 190.0;
+
+struct Batch {
+  std::vector<float> pos, time, dir, sigma, sigma_lv, rgb, rgb_lv, d_sigma, d_sigma_lv, d_rgb, d_rgb_lv;
+};
+
+// Rays from points below the box towards random points above it, sampled evenly inside it: neighbouring
+// samples are close in space, as in training.
+Batch MakeBatch() {
+  Batch b;
+  std::mt19937 gen(7);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  for (int r = 0; r < kRays; ++r) {
+    const float o[3] = {u(gen), u(gen), 0.0f}, e[3] = {u(gen), u(gen), 1.0f};
+    float d[3] = {e[0] - o[0], e[1] - o[1], 1.0f};
+    const float len = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    const float t = u(gen);
+    for (int s = 0; s < kSamplesPerRay; ++s) {
+      const float z = (s + u(gen)) / kSamplesPerRay;
+      for (int a = 0; a < 3; ++a) {
+        b.pos.push_back(o[a] + z * (e[a] - o[a]));
+        b.dir.push_back(d[a] / len);
+      }
+      b.time.push_back(t);
+    }
+  }
+  b.sigma.resize(kBatch);
+  b.sigma_lv.resize(kBatch);
+  b.rgb.resize(3 * kBatch);
+  b.rgb_lv.resize(kBatch);
+  for (int i = 0; i < kBatch; ++i) {
+    b.d_sigma.push_back(u(gen) - 0.5f);
+    b.d_sigma_lv.push_back(u(gen) - 0.5f);
+    b.d_rgb_lv.push_back(u(gen) - 0.5f);
+    for (int c = 0; c < 3; ++c) b.d_rgb.push_back(u(gen) - 0.5f);
+  }
+  return b;
+}
+
+// Seconds per call of fn (wall clock, and CPU time of the whole process: other processes sharing the
+// cores inflate the first but hardly the second), over at least `seconds` of calls after one warm-up.
+struct Timing {
+  double wall = 0, cpu = 0;
+};
+
+double CpuSeconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
+
+Timing TimePerCall(double seconds, const std::function<void()>& fn) {
+  fn();
+  int calls = 0;
+  const auto start = Clock::now();
+  const double cpu_start = CpuSeconds();
+  double elapsed = 0;
+  do {
+    fn();
+    ++calls;
+    elapsed = std::chrono::duration<double>(Clock::now() - start).count();
+  } while (elapsed < seconds);
+  return {elapsed / calls, (CpuSeconds() - cpu_start) / calls};
+}
+
+// Both heads, forward and backward, over the batch in tiles (TBB), on their own.
+double HeadsGflops(const field::FieldConfig& config, int feature_dim, double seconds) {
+  const field::DensityHead<float> density(feature_dim, config.heads);
+  const field::ColorHead<float> color(config.heads);
+  std::vector<float> pd(density.param_count()), pc(color.param_count());
+  density.Init(pd.data(), 1);
+  color.Init(pc.data(), 2);
+  const int tiles = kBatch / kTile;
+  struct Tile {
+    std::vector<float> feat, dh[8], ch[8], draw, craw, sigma, slv, in, rgb, clv, gd, gc, scratch, dgeo, dfeat;
+  };
+  std::vector<Tile> work(tiles);
+  std::mt19937 gen(3);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  std::vector<float> dir(3 * kTile, 0.57735f), d(3 * kTile);
+  for (float& x : d) x = u(gen);
+  for (auto& t : work) {
+    t.feat.resize(kTile * feature_dim);
+    for (float& x : t.feat) x = u(gen);
+    for (int k = 0; k < density.mlp().hidden_layers(); ++k) t.dh[k].resize(kTile * density.mlp().hidden_dim(k));
+    for (int k = 0; k < color.mlp().hidden_layers(); ++k) t.ch[k].resize(kTile * color.mlp().hidden_dim(k));
+    t.draw.resize(kTile * density.raw_dim());
+    t.craw.resize(kTile * 4);
+    t.sigma.resize(kTile);
+    t.slv.resize(kTile);
+    t.in.resize(kTile * color.in_dim());
+    t.rgb.resize(3 * kTile);
+    t.clv.resize(kTile);
+    t.gd.resize(pd.size());
+    t.gc.resize(pc.size());
+    t.scratch.resize(std::max(density.scratch_size(kTile), color.scratch_size(kTile)));
+    t.dgeo.resize(kTile * config.heads.geo_features);
+    t.dfeat.resize(kTile * feature_dim);
+  }
+  auto run = [&] {
+    tbb::parallel_for(0, tiles, [&](int i) {
+      Tile& t = work[i];
+      float* dh[8];
+      float* ch[8];
+      for (int k = 0; k < 8; ++k) {
+        dh[k] = t.dh[k].data();
+        ch[k] = t.ch[k].data();
+      }
+      const field::DropoutPass drop{true, 5, static_cast<std::uint32_t>(i * kTile)};
+      density.Forward(pd.data(), t.feat.data(), kTile, dh, t.draw.data(), t.sigma.data(), t.slv.data(), drop);
+      color.Forward(pc.data(), t.draw.data() + 2, density.raw_dim(), dir.data(), kTile, t.in.data(), ch, t.craw.data(),
+                    t.rgb.data(), t.clv.data(), drop);
+      color.Backward(pc.data(), t.in.data(), kTile, ch, t.craw.data(), d.data(), d.data(), t.dgeo.data(), t.gc.data(),
+                     t.scratch.data(), true);
+      density.Backward(pd.data(), t.feat.data(), kTile, dh, t.draw.data(), d.data(), d.data(), t.dgeo.data(),
+                       t.dfeat.data(), t.gd.data(), t.scratch.data(), true);
+    });
+  };
+  const double per_call = TimePerCall(seconds, run).wall;
+  const double macs = static_cast<double>(density.mlp().macs_per_sample() + color.mlp().macs_per_sample());
+  return 3.0 * 2.0 * macs * kBatch / per_call / 1e9;
+}
+
+void Bench(const char* name, const field::FieldConfig& config, double seconds) {
+  field::Field field(config, 1);
+  Batch b = MakeBatch();
+  const field::SampleBatch in{kBatch, b.pos.data(), b.time.data(), b.dir.data()};
+  field::FieldOutput out{b.sigma.data(), b.sigma_lv.data(), b.rgb.data(), b.rgb_lv.data()};
+  const field::FieldOutputGrad grad{b.d_sigma.data(), b.d_sigma_lv.data(), b.d_rgb.data(), b.d_rgb_lv.data()};
+  std::uint64_t seed = 0;
+  std::printf("== %s preset ==\n%s\n", name, field.Describe().c_str());
+  const Timing fb = TimePerCall(seconds, [&] {
+    field.Forward(in, out, true, ++seed);
+    field.Backward(in, grad);
+  });
+  const Timing fwd = TimePerCall(seconds, [&] { field.Forward(in, out, true, ++seed); });
+  const Timing inf = TimePerCall(seconds, [&] { field.Infer(in, out, false, 0); });
+  const Timing zero = TimePerCall(seconds, [&] { field.ZeroGrad(); });
+  const int feature_dim = field::GridEnsemble<float>(config.grids).feature_dim();
+  const double gflops = HeadsGflops(config, feature_dim, seconds);
+  auto row = [](const char* what, const Timing& t) {
+    std::printf("  %-17s %8.2f M samples/s  (%7.2f ms per batch; %6.2f M samples per CPU-second)\n", what,
+                kBatch / t.wall / 1e6, t.wall * 1e3, kBatch / t.cpu / 1e6);
+  };
+  row("forward+backward", fb);
+  row("forward", fwd);
+  row("infer", inf);
+  std::printf("  %-17s %8.3f ms\n", "zero grad", zero.wall * 1e3);
+  std::printf("  heads only        %8.1f GFLOP/s  (%.0f%% of ~%.0f GFLOP/s fp32 peak; %zu MACs/sample forward)\n\n",
+              gflops, 100 * gflops / kPeakGflops, kPeakGflops, field.head_macs_per_sample());
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  int threads = tbb::info::default_concurrency();
+  double seconds = 2.0;
+  std::string preset = "both";
+  for (int i = 1; i + 1 < argc; i += 2) {
+    if (!std::strcmp(argv[i], "--threads")) threads = std::atoi(argv[i + 1]);
+    else if (!std::strcmp(argv[i], "--seconds")) seconds = std::atof(argv[i + 1]);
+    else if (!std::strcmp(argv[i], "--preset")) preset = argv[i + 1];
+    else {
+      std::fprintf(stderr, "usage: field_bench [--threads N] [--seconds S] [--preset cpu|paper|both]\n");
+      return 2;
+    }
+  }
+  tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+  std::printf("field_bench: %d threads, batch %d samples (%d rays x %d)\n\n", threads, kBatch, kRays, kSamplesPerRay);
+  if (preset == "cpu" || preset == "both") Bench("cpu", endorecon::field::FieldConfig::Cpu(), seconds);
+  if (preset == "paper" || preset == "both") Bench("paper", endorecon::field::FieldConfig::Paper(), seconds);
+  return 0;
+}
