@@ -1,5 +1,7 @@
 #include "worker/engine/field/hash_grid.h"
 
+#include "worker/engine/field/hash_grid_simd.h"
+
 #include <algorithm>
 #include <cmath>
 #include <string>
@@ -161,9 +163,19 @@ void HashGrid<S>::Forward(const S* params, const S* pos, int n, S* feat, int fea
     const int count = std::min(kTile, n - begin);
     for (int l = 0; l < levels(); ++l) {
       Dispatch(f, levels_[l], [&](auto fc, auto dense) {
-        ForwardLevel<decltype(fc)::value, decltype(dense)::value>(
-            levels_[l], params + levels_[l].offset * f, pos + 3 * begin, count,
-            feat + static_cast<std::size_t>(begin) * feat_stride + l * f, feat_stride);
+        constexpr int F = decltype(fc)::value;
+        constexpr bool kDense = decltype(dense)::value;
+        const S* table = params + levels_[l].offset * F;
+        S* out = feat + static_cast<std::size_t>(begin) * feat_stride + l * F;
+        int done = 0;
+#ifdef ENDORECON_FIELD_AVX512
+        if constexpr (F == 2 && std::is_same_v<S, float>) {
+          done = count - count % simd::kBlock;
+          simd::ForwardLevelF2<kDense>(levels_[l], table, pos + 3 * begin, done, out, feat_stride);
+        }
+#endif
+        ForwardLevel<F, kDense>(levels_[l], table, pos + 3 * (begin + done), count - done,
+                                out + static_cast<std::size_t>(done) * feat_stride, feat_stride);
       });
     }
   }
@@ -177,12 +189,31 @@ void HashGrid<S>::BackwardLevel(int l, const S* pos, int n, const S* dfeat, int 
   Dispatch(f, levels_[l], [&](auto fc, auto dense) {
     constexpr int F = decltype(fc)::value;
     constexpr bool kDense = decltype(dense)::value;
+    const GridLevel& level = levels_[l];
+    auto run = [&](auto position, int begin, int count) {
+      constexpr bool kPosition = decltype(position)::value;
+      const S* d = dfeat + static_cast<std::size_t>(begin) * dfeat_stride;
+      const S* s = scale ? scale + begin : nullptr;
+      S* dp = kPosition ? dpos_add + 3 * static_cast<std::size_t>(begin) : nullptr;
+      const S* table = kPosition ? params + offset : nullptr;
+#ifdef ENDORECON_FIELD_AVX512
+      if constexpr (F == 2 && std::is_same_v<S, float>) {
+        const int simd_count = count - count % simd::kBlock;
+        simd::ScatterLevelF2<kDense, kPosition>(level, pos + 3 * begin, simd_count, d, dfeat_stride, s,
+                                                grads + offset, table, dp);
+        begin += simd_count;
+        count -= simd_count;
+        d += static_cast<std::size_t>(simd_count) * dfeat_stride;
+        s = s ? s + simd_count : nullptr;
+        dp = dp ? dp + 3 * static_cast<std::size_t>(simd_count) : nullptr;
+      }
+#endif
+      ScatterLevel<F, kDense, kPosition>(level, pos + 3 * begin, count, d, dfeat_stride, s, grads + offset, table, dp);
+    };
     if (dpos_add) {
-      ScatterLevel<F, kDense, true>(levels_[l], pos, n, dfeat, dfeat_stride, scale, grads + offset, params + offset,
-                                    dpos_add);
+      run(std::true_type{}, 0, n);
     } else {
-      ScatterLevel<F, kDense, false>(levels_[l], pos, n, dfeat, dfeat_stride, scale, grads + offset,
-                                     static_cast<const S*>(nullptr), static_cast<S*>(nullptr));
+      run(std::false_type{}, 0, n);
     }
   });
 }
