@@ -59,10 +59,13 @@ std::unique_ptr<BlobStore::Writer> BlobStore::OpenWriter(const v1::FileEntry& en
   return writer;
 }
 
-std::unique_ptr<BlobStore::Writer> BlobStore::TryOpenWriter(const v1::FileEntry& entry) {
+std::unique_ptr<BlobStore::Writer> BlobStore::TryOpenWriter(const v1::FileEntry& entry,
+                                                             std::chrono::milliseconds wait) {
   {
-    std::lock_guard lock(mutex_);
-    if (!writing_.insert(entry.sha256()).second) return nullptr;
+    std::unique_lock lock(mutex_);
+    const bool free = released_.wait_for(lock, wait, [&] { return writing_.count(entry.sha256()) == 0; });
+    if (!free) return nullptr;
+    writing_.insert(entry.sha256());
   }
   try {
     return std::unique_ptr<Writer>(new Writer(*this, entry));
@@ -73,8 +76,11 @@ std::unique_ptr<BlobStore::Writer> BlobStore::TryOpenWriter(const v1::FileEntry&
 }
 
 void BlobStore::Release(const std::string& sha256) {
-  std::lock_guard lock(mutex_);
-  writing_.erase(sha256);
+  {
+    std::lock_guard lock(mutex_);
+    writing_.erase(sha256);
+  }
+  released_.notify_all();
 }
 
 std::string BlobStore::Put(std::string_view bytes) {
@@ -117,11 +123,15 @@ BlobStore::Writer::~Writer() {
 }
 
 void BlobStore::Writer::Append(std::int64_t offset, std::string_view data) {
-  if (offset != committed_) {
+  if (offset > committed_ || offset < 0) {
     Fail(ErrorCode::kFailedPrecondition, "chunk of '" + entry_.path() + "' starts at offset " +
                                              std::to_string(offset) + " but " + std::to_string(committed_) +
                                              " bytes are committed; continue from there");
   }
+  // Bytes sent again (a client resuming from an older answer) are skipped; the digest at the end
+  // still vouches for the whole file.
+  const auto overlap = static_cast<std::size_t>(std::min<std::int64_t>(committed_ - offset, data.size()));
+  data.remove_prefix(overlap);
   if (committed_ + static_cast<std::int64_t>(data.size()) > entry_.size()) {
     FailInvalid("chunk of '" + entry_.path() + "' runs to byte " +
                 std::to_string(committed_ + static_cast<std::int64_t>(data.size())) + " past its declared size " +

@@ -4,6 +4,8 @@
 // digest and renamed into place; a mismatch removes the partial, so nothing half-written is visible.
 #pragma once
 
+#include <chrono>
+#include <condition_variable>
 #include <cstdint>
 #include <filesystem>
 #include <memory>
@@ -36,8 +38,8 @@ class BlobStore {
     Writer& operator=(const Writer&) = delete;
     std::int64_t committed() const { return committed_; }
     bool full() const { return committed_ == entry_.size(); }
-    // Throws kFailedPrecondition when `offset` is not the committed size, kInvalidArgument when the
-    // data would run past the entry's size.
+    // Throws kFailedPrecondition when `offset` is past the committed size (a gap), kInvalidArgument
+    // when the data would run past the entry's size. Bytes before the committed size are skipped.
     void Append(std::int64_t offset, std::string_view data);
     // Requires full(). fsyncs, verifies the digest and renames the partial to the blob. On a
     // mismatch removes the partial and throws kDataLoss naming the path and both digests.
@@ -55,8 +57,10 @@ class BlobStore {
   };
   // Throws kFailedPrecondition when another stream is writing the same content right now.
   std::unique_ptr<Writer> OpenWriter(const v1::FileEntry& entry);
-  // The same, but returns null instead of throwing when the content is being written elsewhere.
-  std::unique_ptr<Writer> TryOpenWriter(const v1::FileEntry& entry);
+  // The same, but waits up to `wait` for another writer of the content to finish, then returns
+  // null instead of throwing.
+  std::unique_ptr<Writer> TryOpenWriter(const v1::FileEntry& entry,
+                                        std::chrono::milliseconds wait = std::chrono::milliseconds(0));
 
   // Stores `bytes` as a blob at once; returns its digest.
   std::string Put(std::string_view bytes);
@@ -69,6 +73,7 @@ class BlobStore {
 
   std::filesystem::path root_;
   mutable std::mutex mutex_;
+  std::condition_variable released_;
   std::set<std::string> writing_;
 };
 

@@ -72,8 +72,14 @@ v1::UploadStatus UploadReceiver::Receive(grpc::ServerReaderInterface<v1::UploadR
     if (writer_path != entry.path()) {
       writer.reset();
       writer_path.clear();
-      writer = blobs_.TryOpenWriter(entry);
-      if (!writer) {  // another stream is uploading the same content: the client asks again later
+      // A stream that was just cut may still hold the file for a moment; a concurrent upload of the
+      // same content holds it longer, and then the client asks again later.
+      writer = blobs_.TryOpenWriter(entry, std::chrono::seconds(2));
+      if (writer && blobs_.Has(entry.sha256())) {
+        writer.reset();
+        continue;
+      }
+      if (!writer) {
         busy.insert(entry.path());
         continue;
       }

@@ -69,6 +69,17 @@ int FreePort() {
   return ntohs(address.sin_port);
 }
 
+bool PortOpen(int port) {
+  const int fd = socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  address.sin_port = htons(static_cast<std::uint16_t>(port));
+  const bool open = connect(fd, reinterpret_cast<sockaddr*>(&address), sizeof(address)) == 0;
+  close(fd);
+  return open;
+}
+
 bool WaitUntil(const std::function<bool()>& condition, std::chrono::seconds limit) {
   const auto give_up = std::chrono::steady_clock::now() + limit;
   while (std::chrono::steady_clock::now() < give_up) {
@@ -123,7 +134,6 @@ Cluster::Cluster(std::vector<std::string> server_flags) : server_flags_(std::mov
   port_ = FreePort();
   metrics_port_ = FreePort();
   address_ = "127.0.0.1:" + std::to_string(port_);
-  stub_ = v1::JobService::NewStub(OpenChannel(address_));
   StartServer();
 }
 
@@ -133,6 +143,9 @@ void Cluster::StartServer() {
                                 "--lease-ttl-ms", "3000", "--heartbeat-ms", "300"};
   argv.insert(argv.end(), server_flags_.begin(), server_flags_.end());
   server_ = std::make_unique<Process>(argv, dir_ / ("server-" + std::to_string(server_starts_++) + ".log"));
+  // A channel that tried before the port was open backs off for seconds: wait for the port first.
+  WaitUntil([&] { return PortOpen(port_); }, std::chrono::seconds(20));
+  stub_ = v1::JobService::NewStub(OpenChannel(address_));
   const bool up = WaitUntil(
       [&] {
         grpc::ClientContext context;

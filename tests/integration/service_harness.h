@@ -46,6 +46,8 @@ struct CliResult {
 std::string BuiltBinary(const std::string& relative);
 // A TCP port free on 127.0.0.1 right now.
 int FreePort();
+// True when something accepts TCP connections on 127.0.0.1:`port`.
+bool PortOpen(int port);
 // Polls `condition` every 100 ms until it holds or `limit` passes; returns whether it held.
 bool WaitUntil(const std::function<bool()>& condition, std::chrono::seconds limit = std::chrono::seconds(60));
 // Runs `endorecon --server ADDRESS args...` to completion.

@@ -51,8 +51,10 @@ TEST(BlobStoreTest, PartialBytesSurviveAndResume) {
   EXPECT_FALSE(reopened.Has(entry.sha256()));
   auto writer = reopened.OpenWriter(entry);
   EXPECT_EQ(writer->committed(), 8);
-  EXPECT_EQ(CodeOf([&] { writer->Append(4, "x"); }), ErrorCode::kFailedPrecondition);
-  writer->Append(8, std::string_view(bytes).substr(8));
+  EXPECT_EQ(CodeOf([&] { writer->Append(12, "x"); }), ErrorCode::kFailedPrecondition);
+  writer->Append(4, std::string_view(bytes).substr(4, 8));  // re-sends bytes 4..8, adds 8..12
+  EXPECT_EQ(writer->committed(), 12);
+  writer->Append(12, std::string_view(bytes).substr(12));
   ASSERT_TRUE(writer->full());
   writer->Promote();
   EXPECT_TRUE(reopened.Has(entry.sha256()));

@@ -1,0 +1,178 @@
+// Every malformed upload is rejected with the status gRPC intends, and nothing half-written
+// becomes visible: no blob appears unless all its bytes arrived and its SHA-256 matched.
+#include <gtest/gtest.h>
+
+#include "common/sha256.h"
+#include "tests/integration/service_harness.h"
+
+namespace endorecon::testing {
+namespace {
+namespace fs = std::filesystem;
+
+v1::FileEntry Entry(const std::string& path, const std::string& bytes) {
+  v1::FileEntry entry;
+  entry.set_path(path);
+  entry.set_size(static_cast<std::int64_t>(bytes.size()));
+  entry.set_sha256(Sha256Hex(bytes));
+  return entry;
+}
+
+v1::UploadRequest ManifestOf(const std::vector<v1::FileEntry>& entries) {
+  v1::UploadRequest request;
+  for (const auto& entry : entries) *request.mutable_manifest()->add_files() = entry;
+  return request;
+}
+
+v1::UploadRequest Chunk(const std::string& path, std::int64_t offset, const std::string& data) {
+  v1::UploadRequest request;
+  request.mutable_chunk()->set_path(path);
+  request.mutable_chunk()->set_offset(offset);
+  request.mutable_chunk()->set_data(data);
+  return request;
+}
+
+struct Outcome {
+  grpc::Status status;
+  v1::UploadStatus upload;
+};
+
+// Sends `requests` on one Upload stream; `cancel` ends it abruptly instead of cleanly.
+Outcome Send(Cluster& cluster, const std::vector<v1::UploadRequest>& requests, bool cancel = false) {
+  grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(20));
+  Outcome outcome;
+  auto writer = cluster.stub().Upload(&context, &outcome.upload);
+  for (const auto& request : requests) {
+    if (!writer->Write(request)) break;
+  }
+  if (cancel) {
+    // Let the server take the chunks in before the stream is cut.
+    const auto& manifest = requests.front().manifest();
+    WaitUntil([&] {
+      grpc::ClientContext query;
+      v1::UploadStatus status;
+      cluster.stub().QueryUpload(&query, manifest, &status);
+      return status.committed_bytes() > 0;
+    }, std::chrono::seconds(10));
+    context.TryCancel();
+  } else {
+    writer->WritesDone();
+  }
+  outcome.status = writer->Finish();
+  return outcome;
+}
+
+int CountFiles(const fs::path& dir) {
+  if (!fs::exists(dir)) return 0;
+  int count = 0;
+  for (const auto& entry : fs::recursive_directory_iterator(dir)) count += entry.is_regular_file() ? 1 : 0;
+  return count;
+}
+
+class BadUploadTest : public ::testing::Test {
+ protected:
+  Cluster cluster_{{"--max-upload-bytes", "1000000"}};
+  int Blobs() { return CountFiles(cluster_.data_dir() / "blobs"); }
+  int Partials() { return CountFiles(cluster_.data_dir() / "partial"); }
+};
+
+TEST_F(BadUploadTest, WrongChecksumIsDataLossAndLeavesNothing) {
+  auto entry = Entry("images/000000.png", "the bytes the client promised");
+  const auto outcome = Send(cluster_, {ManifestOf({entry}), Chunk(entry.path(), 0, "the bytes that really arrive!")});
+  EXPECT_EQ(outcome.status.error_code(), grpc::StatusCode::DATA_LOSS) << outcome.status.error_message();
+  EXPECT_NE(outcome.status.error_message().find("images/000000.png"), std::string::npos);
+  EXPECT_EQ(Blobs(), 0);
+  EXPECT_EQ(Partials(), 0);
+}
+
+TEST_F(BadUploadTest, TruncatedStreamKeepsCommittedBytesAndPromotesNothing) {
+  const std::string bytes(300000, 'x');
+  const auto entry = Entry("clip.bin", bytes);
+  const auto cut = Send(cluster_, {ManifestOf({entry}), Chunk(entry.path(), 0, bytes.substr(0, 100000))}, true);
+  EXPECT_FALSE(cut.status.ok());
+  EXPECT_EQ(Blobs(), 0);
+  grpc::ClientContext query;
+  v1::Manifest manifest;
+  *manifest.add_files() = entry;
+  v1::UploadStatus status;
+  ASSERT_TRUE(cluster_.stub().QueryUpload(&query, manifest, &status).ok());
+  EXPECT_EQ(status.files(0).committed(), 100000);
+  EXPECT_FALSE(status.complete());
+  // The client continues from the committed size and the blob appears.
+  const auto rest = Send(cluster_, {ManifestOf({entry}), Chunk(entry.path(), 100000, bytes.substr(100000))});
+  ASSERT_TRUE(rest.status.ok()) << rest.status.error_message();
+  EXPECT_TRUE(rest.upload.complete());
+  EXPECT_EQ(Blobs(), 1);
+  EXPECT_EQ(Partials(), 0);
+}
+
+TEST_F(BadUploadTest, ChunkNotContinuingTheCommittedBytesIsRejected) {
+  const auto entry = Entry("a.bin", "0123456789");
+  const auto outcome = Send(cluster_, {ManifestOf({entry}), Chunk("a.bin", 4, "456789")});
+  EXPECT_EQ(outcome.status.error_code(), grpc::StatusCode::FAILED_PRECONDITION) << outcome.status.error_message();
+  EXPECT_EQ(Blobs(), 0);
+}
+
+TEST_F(BadUploadTest, EscapingOrAbsolutePathsAreInvalidAndNamed) {
+  for (const std::string path : {"../x", "images/../../etc/passwd", "/etc/passwd"}) {
+    const auto entry = Entry(path, "data");
+    const auto outcome = Send(cluster_, {ManifestOf({entry}), Chunk(path, 0, "data")});
+    EXPECT_EQ(outcome.status.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << path;
+    EXPECT_NE(outcome.status.error_message().find("'" + path + "'"), std::string::npos) << outcome.status.error_message();
+  }
+  EXPECT_EQ(Blobs(), 0);
+  EXPECT_EQ(Partials(), 0);
+}
+
+TEST_F(BadUploadTest, OverTheSizeLimitIsResourceExhaustedBeforeAnyByte) {
+  v1::FileEntry huge;
+  huge.set_path("huge.bin");
+  huge.set_size(std::int64_t{50} << 30);  // 50 GiB
+  huge.set_sha256(Sha256Hex("not really"));
+  const auto outcome = Send(cluster_, {ManifestOf({huge}), Chunk("huge.bin", 0, std::string(1000, 'x'))});
+  EXPECT_EQ(outcome.status.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << outcome.status.error_message();
+  EXPECT_NE(outcome.status.error_message().find("--max-upload-bytes"), std::string::npos);
+  EXPECT_EQ(Partials(), 0);
+  grpc::ClientContext query;
+  v1::Manifest manifest;
+  *manifest.add_files() = huge;
+  v1::UploadStatus status;
+  EXPECT_EQ(cluster_.stub().QueryUpload(&query, manifest, &status).error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
+}
+
+TEST_F(BadUploadTest, MissingOrSecondManifestIsInvalid) {
+  const auto entry = Entry("a.bin", "abc");
+  const auto no_manifest = Send(cluster_, {Chunk("a.bin", 0, "abc")});
+  EXPECT_EQ(no_manifest.status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(no_manifest.status.error_message().find("manifest"), std::string::npos);
+  const auto empty = Send(cluster_, {});
+  EXPECT_EQ(empty.status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  const auto second = Send(cluster_, {ManifestOf({entry}), ManifestOf({entry}), Chunk("a.bin", 0, "abc")});
+  EXPECT_EQ(second.status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(second.status.error_message().find("second manifest"), std::string::npos);
+  const auto unknown = Send(cluster_, {ManifestOf({entry}), Chunk("b.bin", 0, "abc")});
+  EXPECT_EQ(unknown.status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(Blobs(), 0);
+}
+
+TEST_F(BadUploadTest, SubmittingAnIncompleteUploadIsAFailedPrecondition) {
+  grpc::ClientContext context;
+  v1::SubmitRequest request;
+  *request.mutable_clip()->add_files() = Entry("images/000000.png", "never uploaded");
+  v1::Job job;
+  const auto status = cluster_.stub().Submit(&context, request, &job);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::FAILED_PRECONDITION);
+  EXPECT_NE(status.error_message().find("images/000000.png"), std::string::npos);
+}
+
+TEST_F(BadUploadTest, CliReportsTheSizeLimitWithExitCodeEight) {
+  std::filesystem::create_directories(cluster_.path("big"));
+  WriteBytes(cluster_.path("big") / "frames.bin", std::string(2000000, 'x'));
+  const auto result = RunCli(cluster_.address(), {"submit", cluster_.path("big").string()});
+  EXPECT_EQ(result.exit_code, 8) << result.err;
+  EXPECT_NE(result.err.find("RESOURCE_EXHAUSTED"), std::string::npos) << result.err;
+  EXPECT_EQ(Partials(), 0);
+}
+
+}  // namespace
+}  // namespace endorecon::testing

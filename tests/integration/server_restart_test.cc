@@ -1,0 +1,97 @@
+// The server is killed (-9) mid-upload and mid-job. After a restart nothing accepted is lost:
+// committed upload bytes, queued and running jobs, finished results; the upload resumes and the
+// running job completes.
+#include <signal.h>
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "common/sha256.h"
+#include "tests/integration/service_harness.h"
+
+namespace endorecon::testing {
+namespace {
+
+TEST(ServerRestartTest, KillDuringUploadThenTheUploadResumes) {
+  Cluster cluster;
+  const auto clip = cluster.path("bigclip");
+  std::filesystem::create_directories(clip);
+  std::string bytes(24 << 20, '\0');
+  std::mt19937_64 random(7);
+  for (auto& byte : bytes) byte = static_cast<char>(random());
+  WriteBytes(clip / "video.bin", bytes);
+  v1::FileEntry entry;
+  entry.set_path("video.bin");
+  entry.set_size(static_cast<std::int64_t>(bytes.size()));
+  entry.set_sha256(Sha256Hex(bytes));
+
+  // Stream the first 12 MiB and keep the stream open while the server dies.
+  grpc::ClientContext context;
+  v1::UploadStatus ignored;
+  auto writer = cluster.stub().Upload(&context, &ignored);
+  v1::UploadRequest manifest;
+  *manifest.mutable_manifest()->add_files() = entry;
+  ASSERT_TRUE(writer->Write(manifest));
+  const int chunk = 3 << 20;
+  for (int offset = 0; offset < (12 << 20); offset += chunk) {
+    v1::UploadRequest request;
+    request.mutable_chunk()->set_path("video.bin");
+    request.mutable_chunk()->set_offset(offset);
+    request.mutable_chunk()->set_data(bytes.substr(static_cast<std::size_t>(offset), chunk));
+    ASSERT_TRUE(writer->Write(request));
+  }
+  v1::Manifest query_manifest;
+  *query_manifest.add_files() = entry;
+  std::int64_t committed_before = 0;
+  WaitUntil([&] {
+    grpc::ClientContext query;
+    v1::UploadStatus status;
+    cluster.stub().QueryUpload(&query, query_manifest, &status);
+    committed_before = status.committed_bytes();
+    return committed_before == (12 << 20);
+  });
+  ASSERT_EQ(committed_before, 12 << 20);
+  cluster.KillServer(SIGKILL);
+  EXPECT_FALSE(writer->Finish().ok());
+
+  cluster.StartServer();
+  grpc::ClientContext query;
+  v1::UploadStatus after;
+  ASSERT_TRUE(cluster.stub().QueryUpload(&query, query_manifest, &after).ok());
+  EXPECT_EQ(after.committed_bytes(), committed_before);
+  EXPECT_FALSE(after.complete());
+
+  const auto resumed = RunCli(cluster.address(), {"submit", clip.string(), "--iterations", "30"});
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.err;
+  EXPECT_NE(resumed.err.find("12.6 MB sent, 12.6 MB already on the server"), std::string::npos) << resumed.err;
+  const auto blob = cluster.data_dir() / "blobs" / entry.sha256().substr(0, 2) / entry.sha256();
+  ASSERT_TRUE(std::filesystem::exists(blob));
+  EXPECT_EQ(Sha256File(blob), entry.sha256());
+}
+
+TEST(ServerRestartTest, KillDuringAJobLosesNothing) {
+  Cluster cluster;
+  MakeClip(cluster.path("clip"));
+  auto& worker = cluster.StartWorker("w1", {"--checkpoint-interval", "0.5"});
+  const auto finished = cluster.Submit(cluster.path("clip"), {"--iterations", "30"});
+  ASSERT_EQ(cluster.WaitForState(finished, v1::SUCCEEDED).state(), v1::SUCCEEDED) << cluster.ServerLog();
+  const auto running = cluster.Submit(cluster.path("clip"), {"--iterations", "150"});
+  const auto queued = cluster.Submit(cluster.path("clip"), {"--iterations", "30", "--priority", "-1"});
+  ASSERT_TRUE(WaitUntil([&] { return cluster.Job(running).progress().iteration() > 0; })) << cluster.ServerLog();
+
+  cluster.KillServer(SIGKILL);
+  cluster.StartServer();
+  EXPECT_EQ(cluster.Job(finished).state(), v1::SUCCEEDED);
+  EXPECT_EQ(cluster.Job(queued).state(), v1::QUEUED);
+  // The worker kept training and reports to the restarted server under the same lease.
+  const auto done = cluster.WaitForState(running, v1::SUCCEEDED, std::chrono::seconds(120));
+  ASSERT_EQ(done.state(), v1::SUCCEEDED) << cluster.ServerLog() << worker.Log();
+  EXPECT_EQ(cluster.WaitForState(queued, v1::SUCCEEDED, std::chrono::seconds(120)).state(), v1::SUCCEEDED);
+  const auto fetched = RunCli(cluster.address(), {"fetch", finished, "-o", cluster.path("out").string()});
+  EXPECT_EQ(fetched.exit_code, 0) << fetched.err;
+  EXPECT_TRUE(std::filesystem::exists(cluster.path("out") / "metrics.json"));
+}
+
+}  // namespace
+}  // namespace endorecon::testing
