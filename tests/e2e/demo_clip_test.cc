@@ -1,0 +1,45 @@
+// The CPU preset on the demo clip (48 frames, 160 x 128), end to end through the engine's entry
+// point: every result file is written and the numbers are sane. Quality targets live in bench/.
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "tests/unit/temp_dir.h"
+#include "worker/engine/reconstruct.h"
+#include "worker/engine/scene/synthetic_clip.h"
+
+namespace endorecon {
+namespace {
+
+TEST(DemoClipTest, CpuPresetReconstructsTheDemoClip) {
+  testing::TempDir dir("e2e");
+  scene::WriteSyntheticClip(scene::SynthOptions{}, dir / "clip");
+  ReconstructOptions options;
+  options.clip_dir = (dir / "clip").string();
+  options.out_dir = (dir / "out").string();
+  options.time_budget_s = 20;
+  int progress_calls = 0;
+  ReconstructHooks hooks;
+  hooks.progress_interval_s = 1;
+  hooks.on_progress = [&](const Progress&) { ++progress_calls; };
+  const ReconstructSummary summary = Reconstruct(options, hooks);
+
+  EXPECT_FALSE(summary.cancelled);
+  EXPECT_GT(progress_calls, 3);
+  EXPECT_GT(summary.heldout_psnr, 20.0) << "held-out tissue PSNR after 20 s of training";
+  for (const char* file : {"metrics.json", "config.json", "curve.svg", "video.mp4", "model/model.bin",
+                           "model/checkpoint.bin", "rgb/000000.png", "depth/000047.npy", "depth/000047.png",
+                           "pointcloud/000010.ply"}) {
+    EXPECT_TRUE(std::filesystem::exists(dir / "out" / file)) << file;
+  }
+  std::ifstream in(dir / "out" / "metrics.json");
+  const auto metrics = nlohmann::json::parse(in);
+  EXPECT_EQ(metrics["heldout"]["frames"].size(), 6u);
+  EXPECT_LT(metrics["heldout"]["depth"]["rmse_relative"]["mean"].get<double>(), 0.08);
+  ASSERT_GE(metrics["curve"].size(), 2u);
+  EXPECT_TRUE(metrics["curve"].back().contains("heldout_psnr"));
+}
+
+}  // namespace
+}  // namespace endorecon
