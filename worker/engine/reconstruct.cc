@@ -13,6 +13,7 @@
 #include "common/error.h"
 #include "worker/engine/eval/clip_evaluator.h"
 #include "worker/engine/eval/curve_plot.h"
+#include "worker/engine/eval/depth_error.h"
 #include "worker/engine/eval/image_metrics.h"
 #include "worker/engine/render/frame_renderer.h"
 #include "worker/engine/scene/clip_loader.h"
@@ -71,15 +72,27 @@ class CurveProbe {
   }
   bool empty() const { return frames_.empty(); }
 
-  double HeldoutPsnr(render::FrameRenderer& renderer) const {
-    double psnr_sum = 0;
+  struct Point {
+    double psnr = 0;
+    double depth_rmse = -1;  // relative to far - near; -1 without ground-truth depth
+  };
+
+  Point Measure(render::FrameRenderer& renderer) const {
+    Point point;
+    double depth_sum = 0;
     for (int f : frames_) {
       const auto frame = renderer.Render(clip_.cameras[f], clip_.times[f]);
-      const auto m = eval::MeasureImage(frame.rgb, clip_.rgb[f], eval::EvaluationMask(clip_, f), clip_.width,
-                                        clip_.height);
-      psnr_sum += m.psnr_tissue;
+      const auto& mask = eval::EvaluationMask(clip_, f);
+      point.psnr += eval::MeasureImage(frame.rgb, clip_.rgb[f], mask, clip_.width, clip_.height).psnr_tissue;
+      if (!clip_.gt_depth.empty()) {
+        depth_sum += eval::MeasureDepth(frame.depth, clip_.gt_depth[f], mask, clip_.width, clip_.height, clip_.near,
+                                        clip_.far)
+                         .rmse_relative;
+      }
     }
-    return psnr_sum / double(frames_.size());
+    point.psnr /= double(frames_.size());
+    if (!clip_.gt_depth.empty()) point.depth_rmse = depth_sum / double(frames_.size());
+    return point;
   }
 
  private:
@@ -161,8 +174,11 @@ ReconstructSummary Reconstruct(const ReconstructOptions& options, const Reconstr
                             {"loss", stats.loss},
                             {"train_psnr", stats.psnr}};
     if (!probe.empty()) {
-      progress.heldout_psnr = probe.HeldoutPsnr(renderer);
-      point["heldout_psnr"] = progress.heldout_psnr;
+      const CurveProbe::Point measured = probe.Measure(renderer);
+      progress.heldout_psnr = measured.psnr;
+      progress.depth_rmse = measured.depth_rmse;
+      point["heldout_psnr"] = measured.psnr;
+      if (measured.depth_rmse >= 0) point["heldout_depth_rmse_relative"] = measured.depth_rmse;
     }
     extras.curve.push_back(point);
   };

@@ -31,7 +31,7 @@ struct Progress {
   double loss = 0;
   double train_psnr = 0;
   double heldout_psnr = -1;  // -1 until measured
-  double depth_rmse = -1;    // -1 when the clip has no depth ground truth or not yet measured
+  double depth_rmse = -1;    // held-out depth RMSE / (far - near); -1 without ground-truth depth or not yet measured
   double samples_per_second = 0;
 };
 
