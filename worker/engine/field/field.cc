@@ -86,7 +86,7 @@ FieldConfig FieldConfig::Cpu() {
   c.grids.scales = {1.6, 1.5, 1.4};
   c.grids.levels = 10;
   c.grids.features = 2;
-  c.grids.log2_table = 15;
+  c.grids.log2_table = 14;
   c.deformation.resolution = 16;
   c.deformation.time_knots = 8;
   c.heads.density_hidden = {32};
@@ -96,19 +96,24 @@ FieldConfig FieldConfig::Cpu() {
 
 template <typename S>
 struct FieldT<S>::Impl {
-  // Batch-major activations of a run of rows; a View points at one row of it.
+  // Batch-major activations kept from Forward for Backward (a View points at one row of them). What is
+  // cheap to recompute (the blend weights and blended features, the colour head's input) is not kept
+  // but rebuilt per tile in Tile, so the batch-sized footprint stays small and the tables stay cached.
   struct Acts {
-    std::vector<S> x0, gfeat, blend_hidden, beta, feat, dens_raw, col_in, col_raw;
+    std::vector<S> x0, gfeat, dens_raw, col_raw;
     std::array<std::vector<S>, kMaxLayers> dens_hidden, col_hidden;
   };
   struct View {
-    S *x0, *gfeat, *blend_hidden, *beta, *feat, *dens_raw, *col_in, *col_raw;
+    S *x0, *gfeat, *dens_raw, *col_raw;
     S* dens_hidden[kMaxLayers];
     S* col_hidden[kMaxLayers];
   };
+  struct Tile {  // per-tile temporaries
+    std::vector<S> blend_hidden, beta, feat, col_in, temp;
+  };
   struct Scratch {  // one per thread, reused across calls
-    Acts chunk;            // Infer's activations (one chunk)
-    std::vector<S> temp;   // Backward's temporaries (one tile)
+    Acts chunk;  // Infer's activations (one chunk)
+    Tile tile;
   };
   GridEnsemble<S> grids;
   TemporalBlend<S> blend;
@@ -150,11 +155,7 @@ struct FieldT<S>::Impl {
     const std::size_t n = static_cast<std::size_t>(rows);
     GrowTo(a.x0, n * 3);
     GrowTo(a.gfeat, n * grids.output_dim());
-    GrowTo(a.blend_hidden, n * blend.hidden_dim());
-    GrowTo(a.beta, n * grids.grids());
-    GrowTo(a.feat, n * grids.feature_dim());
     GrowTo(a.dens_raw, n * density.raw_dim());
-    GrowTo(a.col_in, n * color.in_dim());
     GrowTo(a.col_raw, n * 4);
     for (int k = 0; k < density.mlp().hidden_layers(); ++k) GrowTo(a.dens_hidden[k], n * density.mlp().hidden_dim(k));
     for (int k = 0; k < color.mlp().hidden_layers(); ++k) GrowTo(a.col_hidden[k], n * color.mlp().hidden_dim(k));
@@ -165,11 +166,7 @@ struct FieldT<S>::Impl {
     View v{};
     v.x0 = a.x0.data() + r * 3;
     v.gfeat = a.gfeat.data() + r * grids.output_dim();
-    v.blend_hidden = a.blend_hidden.data() + r * blend.hidden_dim();
-    v.beta = a.beta.data() + r * grids.grids();
-    v.feat = a.feat.data() + r * grids.feature_dim();
     v.dens_raw = a.dens_raw.data() + r * density.raw_dim();
-    v.col_in = a.col_in.data() + r * color.in_dim();
     v.col_raw = a.col_raw.data() + r * 4;
     for (int k = 0; k < density.mlp().hidden_layers(); ++k) {
       v.dens_hidden[k] = a.dens_hidden[k].data() + r * density.mlp().hidden_dim(k);
@@ -180,17 +177,30 @@ struct FieldT<S>::Impl {
     return v;
   }
 
-  // Backward's temporaries for one tile: dL/dgeo, dL/df and the heads' scratch.
-  std::size_t TempSize() const {
+  Tile& LocalTile() {
+    Tile& t = scratch.local().tile;
+    const std::size_t n = kTile;
+    GrowTo(t.blend_hidden, n * blend.hidden_dim());
+    GrowTo(t.beta, n * grids.grids());
+    GrowTo(t.feat, n * grids.feature_dim());
+    GrowTo(t.col_in, n * color.in_dim());
+    // Backward: dL/dgeo, dL/df and the heads' scratch.
     const std::size_t heads = std::max({density.scratch_size(kTile), color.scratch_size(kTile), blend.scratch_size(kTile)});
-    return static_cast<std::size_t>(kTile) * (density.raw_dim() + grids.feature_dim()) + heads;
+    GrowTo(t.temp, n * (density.raw_dim() + grids.feature_dim()) + heads);
+    return t;
+  }
+
+  // Blend weights and blended features of `n` rows (time t, grid features of view w) into tile t.
+  void BlendTile(const S* time, int n, const View& w, Tile& t) const {
+    blend.Weights(value[kBlend].data(), time, n, t.blend_hidden.data(), t.beta.data());
+    blend.Blend(t.beta.data(), w.gfeat, n, t.feat.data());
   }
 
   // The whole field on batch rows [row0, row0 + rows) (one chunk), activations into rows
   // [a_row0, a_row0 + rows) of `a`. The grids walk their levels over the whole chunk; the rest runs
   // tile by tile.
   void ForwardChunk(const SampleBatchT<S>& batch, const FieldOutputT<S>& out, Acts& a, int a_row0, int row0,
-                    int rows, bool dropout, std::uint64_t seed) const {
+                    int rows, bool dropout, std::uint64_t seed) {
     const std::size_t r = static_cast<std::size_t>(row0);
     const View v = ViewAt(a, a_row0);
     const S* x0 = batch.pos + 3 * r;
@@ -199,45 +209,46 @@ struct FieldT<S>::Impl {
       x0 = v.x0;
     }
     grids.Forward(value[kGrid].data(), x0, rows, v.gfeat);
+    Tile& t = LocalTile();
     ForTiles(rows, [&](int t0, int n) {
       const View w = ViewAt(a, a_row0 + t0);
       const std::size_t q = r + static_cast<std::size_t>(t0);
       const DropoutPass drop{dropout, seed, static_cast<std::uint32_t>(q)};
-      blend.Weights(value[kBlend].data(), batch.time + q, n, w.blend_hidden, w.beta);
-      blend.Blend(w.beta, w.gfeat, n, w.feat);
-      density.Forward(value[kDensity].data(), w.feat, n, w.dens_hidden, w.dens_raw, out.sigma + q,
+      BlendTile(batch.time + q, n, w, t);
+      density.Forward(value[kDensity].data(), t.feat.data(), n, w.dens_hidden, w.dens_raw, out.sigma + q,
                       out.sigma_logvar + q, drop);
-      color.Forward(value[kColor].data(), w.dens_raw + 2, density.raw_dim(), batch.dir + 3 * q, n, w.col_in,
+      color.Forward(value[kColor].data(), w.dens_raw + 2, density.raw_dim(), batch.dir + 3 * q, n, t.col_in.data(),
                     w.col_hidden, w.col_raw, out.rgb + 3 * q, out.rgb_logvar + q, drop);
     });
   }
 
-  // Heads and blend of one chunk, tile by tile. Leaves dL/df level-major and beta grid-major for the
-  // table scatter that follows.
+  // Heads and blend of one chunk, tile by tile (rebuilding what Forward did not keep). Leaves dL/df
+  // level-major and beta grid-major for the table scatter that follows.
   void BackwardChunk(const SampleBatchT<S>& batch, const FieldOutputGradT<S>& g, int c, int row0, int rows) {
     const int n = last_n;
     const int d = grids.feature_dim(), f = grids.grid(0).features(), gn = grids.grids();
     auto& grads = chunk_grad[c];
-    std::vector<S>& temp = scratch.local().temp;
-    GrowTo(temp, TempSize());
-    S* dgeo = temp.data();
+    Tile& t = LocalTile();
+    S* dgeo = t.temp.data();
     S* df = dgeo + static_cast<std::size_t>(kTile) * density.raw_dim();
     S* heads = df + static_cast<std::size_t>(kTile) * d;
     ForTiles(rows, [&](int t0, int rt) {
       const std::size_t q = static_cast<std::size_t>(row0 + t0);
       const View v = ViewAt(acts, row0 + t0);
-      color.Backward(value[kColor].data(), v.col_in, rt, v.col_hidden, v.col_raw, Offset(g.rgb, 3 * q),
+      BlendTile(batch.time + q, rt, v, t);
+      color.Input(v.dens_raw + 2, density.raw_dim(), batch.dir + 3 * q, rt, t.col_in.data());
+      color.Backward(value[kColor].data(), t.col_in.data(), rt, v.col_hidden, v.col_raw, Offset(g.rgb, 3 * q),
                      Offset(g.rgb_logvar, q), dgeo, grads[kColor].data(), heads, last_dropout);
-      density.Backward(value[kDensity].data(), v.feat, rt, v.dens_hidden, v.dens_raw, Offset(g.sigma, q),
+      density.Backward(value[kDensity].data(), t.feat.data(), rt, v.dens_hidden, v.dens_raw, Offset(g.sigma, q),
                        Offset(g.sigma_logvar, q), dgeo, df, grads[kDensity].data(), heads, last_dropout);
-      blend.Backward(value[kBlend].data(), batch.time + q, rt, v.blend_hidden, v.beta, v.gfeat, df, nullptr,
-                     grads[kBlend].data(), heads);
+      blend.Backward(value[kBlend].data(), batch.time + q, rt, t.blend_hidden.data(), t.beta.data(), v.gfeat, df,
+                     nullptr, grads[kBlend].data(), heads);
       for (int i = 0; i < rt; ++i) {
         for (int l = 0; l < d / f; ++l) {
           std::copy_n(df + static_cast<std::size_t>(i) * d + l * f, f,
                       dfeat_by_level.data() + (static_cast<std::size_t>(l) * n + q + i) * f);
         }
-        for (int k = 0; k < gn; ++k) beta_by_grid[static_cast<std::size_t>(k) * n + q + i] = v.beta[i * gn + k];
+        for (int k = 0; k < gn; ++k) beta_by_grid[static_cast<std::size_t>(k) * n + q + i] = t.beta[i * gn + k];
       }
     });
   }

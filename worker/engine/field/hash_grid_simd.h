@@ -144,12 +144,13 @@ void ScatterLevelF2(const GridLevel& level, const float* pos, int n, const float
     alignas(64) float pairs[2][2 * 8];
     _mm512_store_ps(pairs[0], d[0]);
     _mm512_store_ps(pairs[1], d[1]);
+    // Read-modify-write of each corner's pair as one 64-bit load, FMA and store.
     for (int j = 0; j < kBlock; ++j) {
-      const float* gj = pairs[j >> 3] + 2 * (j & 7);
+      const __m128 gj = _mm_castpd_ps(_mm_load_sd(reinterpret_cast<const double*>(pairs[j >> 3] + 2 * (j & 7))));
       for (int k = 0; k < 8; ++k) {
-        float* v = grads + 2 * std::size_t{slots[k][j]};
-        v[0] += weights[k][j] * gj[0];
-        v[1] += weights[k][j] * gj[1];
+        double* v = reinterpret_cast<double*>(grads + 2 * std::size_t{slots[k][j]});
+        const __m128 sum = _mm_fmadd_ps(_mm_set1_ps(weights[k][j]), gj, _mm_castpd_ps(_mm_load_sd(v)));
+        _mm_store_sd(v, _mm_castps_pd(sum));
       }
     }
     if constexpr (kPosition) {

@@ -57,14 +57,19 @@ ColorHead<S>::ColorHead(const HeadsConfig& config)
     : geo_(config.geo_features), mlp_(config.geo_features + kShDims, config.color_hidden, 4, config.dropout, kColorStream) {}
 
 template <typename S>
-void ColorHead<S>::Forward(const S* params, const S* geo, int geo_stride, const S* dir, int n, S* in,
-                           S* const* hidden, S* raw, S* rgb, S* logvar, const DropoutPass& drop) const {
+void ColorHead<S>::Input(const S* geo, int geo_stride, const S* dir, int n, S* in) const {
   const int w = in_dim();
   for (int i = 0; i < n; ++i) {
     S* row = in + static_cast<std::size_t>(i) * w;
     std::copy_n(geo + static_cast<std::size_t>(i) * geo_stride, geo_, row);
     ShEncode(dir + 3 * i, row + geo_);
   }
+}
+
+template <typename S>
+void ColorHead<S>::Forward(const S* params, const S* geo, int geo_stride, const S* dir, int n, S* in,
+                           S* const* hidden, S* raw, S* rgb, S* logvar, const DropoutPass& drop) const {
+  Input(geo, geo_stride, dir, n, in);
   mlp_.Forward(params, in, n, hidden, raw, drop);
   for (int i = 0; i < n; ++i) {
     const S* r = raw + 4 * static_cast<std::size_t>(i);

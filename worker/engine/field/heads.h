@@ -55,6 +55,9 @@ class ColorHead {
   std::size_t param_count() const { return mlp_.param_count(); }
   void Init(S* params, std::uint64_t seed) const { mlp_.Init(params, seed); }
 
+  // The network input [geo, SH(dir)] of n samples into in (n x in_dim()); geo rows at geo + i * geo_stride.
+  void Input(const S* geo, int geo_stride, const S* dir, int n, S* in) const;
+
   // geo: rows at geo + i * geo_stride; dir: n x 3 unit directions. in (n x in_dim()) receives the
   // network input [geo, SH(dir)] and raw (n x 4) its output, both kept for Backward;
   // rgb: n x 3, logvar: n values.
