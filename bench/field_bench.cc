@@ -6,18 +6,19 @@
 //   zero grad          Field::ZeroGrad (a training step does it once)
 //   heads only         both heads' MLPs, forward + backward over the same batch in 512-sample tiles,
 //                      as GFLOP/s (2 flops per multiply-add, backward counted as 2x forward) against
-//                      the machine's fp32 peak (2 cores x 2.6 GHz x 2 FMA pipes x 16 lanes x 2 = ~190 GFLOP/s here)
+//                      the machine's fp32 peak (2 cores x 2.6 GHz x 2 FMA pipes x 16 lanes x 2 = ~190 GFLOP/s
+//                      here)
 // for the CPU and paper presets. Usage: field_bench [--threads N] [--seconds S] [--preset cpu|paper|both]
 #include <tbb/global_control.h>
 #include <tbb/info.h>
 #include <tbb/parallel_for.h>
 
 #include <chrono>
-#include <ctime>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <ctime>
 #include <functional>
 #include <random>
 #include <string>
@@ -118,7 +119,8 @@ double HeadsGflops(const field::FieldConfig& config, int feature_dim, double sec
   for (auto& t : work) {
     t.feat.resize(kTile * feature_dim);
     for (float& x : t.feat) x = u(gen);
-    for (int k = 0; k < density.mlp().hidden_layers(); ++k) t.dh[k].resize(kTile * density.mlp().hidden_dim(k));
+    for (int k = 0; k < density.mlp().hidden_layers(); ++k)
+      t.dh[k].resize(kTile * density.mlp().hidden_dim(k));
     for (int k = 0; k < color.mlp().hidden_layers(); ++k) t.ch[k].resize(kTile * color.mlp().hidden_dim(k));
     t.draw.resize(kTile * density.raw_dim());
     t.craw.resize(kTile * 4);
@@ -144,10 +146,10 @@ double HeadsGflops(const field::FieldConfig& config, int feature_dim, double sec
       }
       const field::DropoutPass drop{true, 5, static_cast<std::uint32_t>(i * kTile)};
       density.Forward(pd.data(), t.feat.data(), kTile, dh, t.draw.data(), t.sigma.data(), t.slv.data(), drop);
-      color.Forward(pc.data(), t.draw.data() + 2, density.raw_dim(), dir.data(), kTile, t.in.data(), ch, t.craw.data(),
-                    t.rgb.data(), t.clv.data(), drop);
-      color.Backward(pc.data(), t.in.data(), kTile, ch, t.craw.data(), d.data(), d.data(), t.dgeo.data(), t.gc.data(),
-                     t.scratch.data(), true);
+      color.Forward(pc.data(), t.draw.data() + 2, density.raw_dim(), dir.data(), kTile, t.in.data(), ch,
+                    t.craw.data(), t.rgb.data(), t.clv.data(), drop);
+      color.Backward(pc.data(), t.in.data(), kTile, ch, t.craw.data(), d.data(), d.data(), t.dgeo.data(),
+                     t.gc.data(), t.scratch.data(), true);
       density.Backward(pd.data(), t.feat.data(), kTile, dh, t.draw.data(), d.data(), d.data(), t.dgeo.data(),
                        t.dfeat.data(), t.gd.data(), t.scratch.data(), true);
     });
@@ -182,8 +184,9 @@ void Bench(const char* name, const field::FieldConfig& config, double seconds) {
   row("forward", fwd);
   row("infer", inf);
   std::printf("  %-17s %8.3f ms\n", "zero grad", zero.wall * 1e3);
-  std::printf("  heads only        %8.1f GFLOP/s  (%.0f%% of ~%.0f GFLOP/s fp32 peak; %zu MACs/sample forward)\n\n",
-              gflops, 100 * gflops / kPeakGflops, kPeakGflops, field.head_macs_per_sample());
+  std::printf(
+      "  heads only        %8.1f GFLOP/s  (%.0f%% of ~%.0f GFLOP/s fp32 peak; %zu MACs/sample forward)\n\n",
+      gflops, 100 * gflops / kPeakGflops, kPeakGflops, field.head_macs_per_sample());
 }
 
 }  // namespace
@@ -193,16 +196,20 @@ int main(int argc, char** argv) {
   double seconds = 2.0;
   std::string preset = "both";
   for (int i = 1; i + 1 < argc; i += 2) {
-    if (!std::strcmp(argv[i], "--threads")) threads = std::atoi(argv[i + 1]);
-    else if (!std::strcmp(argv[i], "--seconds")) seconds = std::atof(argv[i + 1]);
-    else if (!std::strcmp(argv[i], "--preset")) preset = argv[i + 1];
+    if (!std::strcmp(argv[i], "--threads"))
+      threads = std::atoi(argv[i + 1]);
+    else if (!std::strcmp(argv[i], "--seconds"))
+      seconds = std::atof(argv[i + 1]);
+    else if (!std::strcmp(argv[i], "--preset"))
+      preset = argv[i + 1];
     else {
       std::fprintf(stderr, "usage: field_bench [--threads N] [--seconds S] [--preset cpu|paper|both]\n");
       return 2;
     }
   }
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
-  std::printf("field_bench: %d threads, batch %d samples (%d rays x %d)\n\n", threads, kBatch, kRays, kSamplesPerRay);
+  std::printf("field_bench: %d threads, batch %d samples (%d rays x %d)\n\n", threads, kBatch, kRays,
+              kSamplesPerRay);
   if (preset == "cpu" || preset == "both") Bench("cpu", endorecon::field::FieldConfig::Cpu(), seconds);
   if (preset == "paper" || preset == "both") Bench("paper", endorecon::field::FieldConfig::Paper(), seconds);
   return 0;

@@ -83,8 +83,12 @@ TEST(DeformationTest, GradientsMatchFiniteDifferences) {
   }
   deform.BackwardPosition(params.data(), pos.data(), t.data(), n, w.data(), dpos.data());
   auto loss = [&] { return Dot(w, Canonical(deform, params, pos, t)); };
-  EXPECT_GT(ExpectGradientMatches(params.data(), grads.data(), SomeIndices(params.size(), params.size(), 1), loss, "params"), 200);
-  EXPECT_EQ(ExpectGradientMatches(pos.data(), dpos.data(), SomeIndices(pos.size(), pos.size(), 2), loss, "pos"), 3 * n);
+  EXPECT_GT(ExpectGradientMatches(params.data(), grads.data(), SomeIndices(params.size(), params.size(), 1),
+                                  loss, "params"),
+            200);
+  EXPECT_EQ(
+      ExpectGradientMatches(pos.data(), dpos.data(), SomeIndices(pos.size(), pos.size(), 2), loss, "pos"),
+      3 * n);
 }
 
 }  // namespace

@@ -44,7 +44,8 @@ struct Samples {
     const auto t = RandomValues(n, 0, 1, seed + 1);
     auto d = RandomValues(3 * n, -1, 1, seed + 2);
     for (int i = 0; i < n; ++i) {
-      const double len = std::sqrt(d[3 * i] * d[3 * i] + d[3 * i + 1] * d[3 * i + 1] + d[3 * i + 2] * d[3 * i + 2]);
+      const double len =
+          std::sqrt(d[3 * i] * d[3 * i] + d[3 * i + 1] * d[3 * i + 1] + d[3 * i + 2] * d[3 * i + 2]);
       for (int a = 0; a < 3; ++a) d[3 * i + a] /= len;
     }
     pos.assign(p.begin(), p.end());
@@ -95,7 +96,8 @@ TEST(FieldTest, GradientsOfEveryGroupMatchFiniteDifferencesWithDropout) {
     const std::vector<double> grad(b.grad, b.grad + b.size);
     const std::size_t count = b.name == "grid" ? 120 : 40;
     const auto indices = SomeIndices(b.size, count, pick++);
-    const int nonzero = ExpectGradientMatches(b.value, grad.data(), indices, loss, b.name, {1e-6, 1e-5, 1e-8});
+    const int nonzero =
+        ExpectGradientMatches(b.value, grad.data(), indices, loss, b.name, {1e-6, 1e-5, 1e-8});
     // Some gradients are truly zero (grid slots no sample touches, ReLU units dead for all times).
     EXPECT_GE(nonzero, static_cast<int>(indices.size()) / 4) << b.name;
   }

@@ -3,8 +3,8 @@
 
 #include <gtest/gtest.h>
 
-#include <cmath>
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <random>
@@ -17,7 +17,7 @@ namespace endorecon::testing {
 
 struct GradientTolerance {
   double h = 1e-6;
-  double rel = 1e-6;   // of the larger of the two magnitudes
+  double rel = 1e-6;  // of the larger of the two magnitudes
   double abs = 1e-9;
 };
 
@@ -25,8 +25,8 @@ struct GradientTolerance {
 // and restored). Returns how many of the checked gradients are non-zero, so callers can assert the
 // check was not vacuous.
 template <typename Loss>
-int ExpectGradientMatches(double* x, const double* analytic, const std::vector<std::size_t>& indices, const Loss& loss,
-                          const std::string& what, const GradientTolerance& tol = {}) {
+int ExpectGradientMatches(double* x, const double* analytic, const std::vector<std::size_t>& indices,
+                          const Loss& loss, const std::string& what, const GradientTolerance& tol = {}) {
   int nonzero = 0;
   for (std::size_t i : indices) {
     const double numeric = CentralDifference(x[i], tol.h, loss);

@@ -65,12 +65,17 @@ TEST(GridEnsembleTest, GradientsMatchFiniteDifferences) {
   std::vector<double> grads(params.size(), 0.0), dpos(pos.size(), 0.0);
   for (int g = 0; g < e.grids(); ++g) {
     for (int l = 0; l < e.grid(g).levels(); ++l) {
-      e.BackwardLevel(g, l, pos.data(), n, w.data() + g * e.feature_dim() + 2 * l, width, nullptr, grads.data());
+      e.BackwardLevel(g, l, pos.data(), n, w.data() + g * e.feature_dim() + 2 * l, width, nullptr,
+                      grads.data());
     }
   }
   e.BackwardPosition(params.data(), pos.data(), n, w.data(), dpos.data());
-  EXPECT_GT(ExpectGradientMatches(params.data(), grads.data(), SomeIndices(params.size(), 300, 1), loss, "params"), 50);
-  EXPECT_EQ(ExpectGradientMatches(pos.data(), dpos.data(), SomeIndices(pos.size(), pos.size(), 2), loss, "pos"), 3 * n);
+  EXPECT_GT(
+      ExpectGradientMatches(params.data(), grads.data(), SomeIndices(params.size(), 300, 1), loss, "params"),
+      50);
+  EXPECT_EQ(
+      ExpectGradientMatches(pos.data(), dpos.data(), SomeIndices(pos.size(), pos.size(), 2), loss, "pos"),
+      3 * n);
 }
 
 }  // namespace

@@ -78,9 +78,9 @@ TEST(HashGridTest, ResolutionCapDropsFinerLevels) {
   c.levels = 8;
   c.base_resolution = 16;
   c.scale = 2.0;
-  EXPECT_EQ(LevelsUpToResolution(c, 100), 3);    // 16, 32, 64
-  EXPECT_EQ(LevelsUpToResolution(c, 1), 1);      // never fewer than one
-  EXPECT_EQ(LevelsUpToResolution(c, 1e9), 8);    // never more than configured
+  EXPECT_EQ(LevelsUpToResolution(c, 100), 3);  // 16, 32, 64
+  EXPECT_EQ(LevelsUpToResolution(c, 1), 1);    // never fewer than one
+  EXPECT_EQ(LevelsUpToResolution(c, 1e9), 8);  // never more than configured
   c.max_resolution = 100;
   const HashGrid<float> grid(c);
   EXPECT_EQ(grid.levels(), 3);
@@ -158,19 +158,21 @@ TEST(HashGridTest, TableGradientMatchesFiniteDifferences) {
   const std::vector<double> scale = RandomValues(n, 0.5, 2, 14);
   std::vector<double> grads(grid.param_count(), 0.0);
   for (int l = 0; l < grid.levels(); ++l) {
-    grid.BackwardLevel(l, pos.data(), n, w.data() + l * grid.features(), grid.output_dim(), scale.data(), grads.data());
+    grid.BackwardLevel(l, pos.data(), n, w.data() + l * grid.features(), grid.output_dim(), scale.data(),
+                       grads.data());
   }
   // The scale multiplies each sample's gradient: the loss is sum_i scale_i * w_i . feat_i.
   auto loss = [&] {
     const auto f = Features(grid, params, pos);
     double s = 0;
     for (int i = 0; i < n; ++i) {
-      for (int j = 0; j < grid.output_dim(); ++j) s += scale[i] * w[i * grid.output_dim() + j] * f[i * grid.output_dim() + j];
+      for (int j = 0; j < grid.output_dim(); ++j)
+        s += scale[i] * w[i * grid.output_dim() + j] * f[i * grid.output_dim() + j];
     }
     return s;
   };
-  const int nonzero = ExpectGradientMatches(params.data(), grads.data(), SomeIndices(params.size(), params.size(), 1),
-                                            loss, "table");
+  const int nonzero = ExpectGradientMatches(params.data(), grads.data(),
+                                            SomeIndices(params.size(), params.size(), 1), loss, "table");
   EXPECT_GT(nonzero, 100);
 }
 
@@ -183,7 +185,8 @@ TEST(HashGridTest, PositionGradientMatchesFiniteDifferences) {
   std::vector<double> dpos(3 * n, 0.0);
   grid.BackwardPosition(params.data(), pos.data(), n, w.data(), grid.output_dim(), dpos.data());
   auto loss = [&] { return Dot(w, Features(grid, params, pos)); };
-  const int nonzero = ExpectGradientMatches(pos.data(), dpos.data(), SomeIndices(pos.size(), pos.size(), 2), loss, "pos");
+  const int nonzero =
+      ExpectGradientMatches(pos.data(), dpos.data(), SomeIndices(pos.size(), pos.size(), 2), loss, "pos");
   EXPECT_EQ(nonzero, 3 * n);
 }
 
@@ -211,8 +214,8 @@ TEST(HashGridTest, FusedPositionGradientMatchesFiniteDifferences) {
   const std::vector<double> scale = RandomValues(n, 0.5, 2, 44);
   std::vector<double> grads(grid.param_count(), 0.0), dpos(3 * n, 0.0);
   for (int l = 0; l < grid.levels(); ++l) {
-    grid.BackwardLevel(l, pos.data(), n, w.data() + l * grid.features(), grid.output_dim(), scale.data(), grads.data(),
-                       params.data(), dpos.data());
+    grid.BackwardLevel(l, pos.data(), n, w.data() + l * grid.features(), grid.output_dim(), scale.data(),
+                       grads.data(), params.data(), dpos.data());
   }
   auto loss = [&] {
     const auto f = Features(grid, params, pos);
@@ -220,7 +223,9 @@ TEST(HashGridTest, FusedPositionGradientMatchesFiniteDifferences) {
     for (std::size_t j = 0; j < f.size(); ++j) s += scale[j / grid.output_dim()] * w[j] * f[j];
     return s;
   };
-  EXPECT_EQ(ExpectGradientMatches(pos.data(), dpos.data(), SomeIndices(pos.size(), pos.size(), 3), loss, "pos"), 3 * n);
+  EXPECT_EQ(
+      ExpectGradientMatches(pos.data(), dpos.data(), SomeIndices(pos.size(), pos.size(), 3), loss, "pos"),
+      3 * n);
 }
 
 // The float, 2-feature path has vector kernels (16 samples at a time, the rest one by one); it must
@@ -254,8 +259,10 @@ TEST(HashGridTest, TwoFeatureFloatPathAgreesWithDouble) {
     gd.BackwardLevel(l, xr.data(), n, wd.data() + 2 * l, width, sd.data(), gdd.data(), pd.data(), dpd.data());
     gf.BackwardLevel(l, xf.data(), n, wf.data() + 2 * l, width, sf.data(), gff.data(), pf.data(), dpf.data());
   }
-  for (std::size_t i = 0; i < gdd.size(); ++i) ASSERT_NEAR(gff[i], gdd[i], 1e-4 * std::fmax(1.0, std::fabs(gdd[i]))) << i;
-  for (std::size_t i = 0; i < dpd.size(); ++i) ASSERT_NEAR(dpf[i], dpd[i], 1e-3 * std::fmax(1.0, std::fabs(dpd[i]))) << i;
+  for (std::size_t i = 0; i < gdd.size(); ++i)
+    ASSERT_NEAR(gff[i], gdd[i], 1e-4 * std::fmax(1.0, std::fabs(gdd[i]))) << i;
+  for (std::size_t i = 0; i < dpd.size(); ++i)
+    ASSERT_NEAR(dpf[i], dpd[i], 1e-3 * std::fmax(1.0, std::fabs(dpd[i]))) << i;
   EXPECT_EQ(dpf[5], 0.0f);   // NaN coordinate: clamped, no gradient
   EXPECT_EQ(dpf[40], 0.0f);  // +Inf
 }

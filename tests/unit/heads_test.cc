@@ -28,7 +28,8 @@ HeadsConfig SmallConfig() {
 std::vector<double> UnitDirections(int n, std::uint64_t seed) {
   std::vector<double> d = RandomValues(3 * static_cast<std::size_t>(n), -1, 1, seed);
   for (int i = 0; i < n; ++i) {
-    const double len = std::sqrt(d[3 * i] * d[3 * i] + d[3 * i + 1] * d[3 * i + 1] + d[3 * i + 2] * d[3 * i + 2]);
+    const double len =
+        std::sqrt(d[3 * i] * d[3 * i] + d[3 * i + 1] * d[3 * i + 1] + d[3 * i + 2] * d[3 * i + 2]);
     for (int a = 0; a < 3; ++a) d[3 * i + a] /= len;
   }
   return d;
@@ -38,8 +39,8 @@ struct DensityRun {
   std::vector<double> hidden, raw, sigma, logvar;
 };
 
-DensityRun RunDensity(const DensityHead<double>& head, const std::vector<double>& params, const std::vector<double>& feat,
-                      int n, const DropoutPass& drop) {
+DensityRun RunDensity(const DensityHead<double>& head, const std::vector<double>& params,
+                      const std::vector<double>& feat, int n, const DropoutPass& drop) {
   DensityRun r;
   r.hidden.resize(static_cast<std::size_t>(n) * head.mlp().hidden_dim(0));
   r.raw.resize(static_cast<std::size_t>(n) * head.raw_dim());
@@ -80,18 +81,23 @@ TEST(HeadsTest, DensityGradientsMatchFiniteDifferences) {
   const auto r = RunDensity(head, params, feat, n, drop);
   const double* hidden = r.hidden.data();
   std::vector<double> grads(params.size(), 0.0), dfeat(feat.size(), 0.0), scratch(head.scratch_size(n));
-  head.Backward(params.data(), feat.data(), n, &hidden, r.raw.data(), ws.data(), wl.data(), wg.data(), dfeat.data(),
-                grads.data(), scratch.data(), true);
-  EXPECT_GT(ExpectGradientMatches(params.data(), grads.data(), SomeIndices(params.size(), params.size(), 1), loss, "params"), 30);
-  EXPECT_GT(ExpectGradientMatches(feat.data(), dfeat.data(), SomeIndices(feat.size(), feat.size(), 2), loss, "feat"), 20);
+  head.Backward(params.data(), feat.data(), n, &hidden, r.raw.data(), ws.data(), wl.data(), wg.data(),
+                dfeat.data(), grads.data(), scratch.data(), true);
+  EXPECT_GT(ExpectGradientMatches(params.data(), grads.data(), SomeIndices(params.size(), params.size(), 1),
+                                  loss, "params"),
+            30);
+  EXPECT_GT(ExpectGradientMatches(feat.data(), dfeat.data(), SomeIndices(feat.size(), feat.size(), 2), loss,
+                                  "feat"),
+            20);
 }
 
 struct ColorRun {
   std::vector<double> in, h0, h1, raw, rgb, logvar;
 };
 
-ColorRun RunColor(const ColorHead<double>& head, const std::vector<double>& params, const std::vector<double>& geo,
-                  const std::vector<double>& dir, int n, const DropoutPass& drop) {
+ColorRun RunColor(const ColorHead<double>& head, const std::vector<double>& params,
+                  const std::vector<double>& geo, const std::vector<double>& dir, int n,
+                  const DropoutPass& drop) {
   ColorRun r;
   r.in.resize(static_cast<std::size_t>(n) * head.in_dim());
   r.h0.resize(static_cast<std::size_t>(n) * 5);
@@ -134,10 +140,14 @@ TEST(HeadsTest, ColorGradientsMatchFiniteDifferences) {
   const auto r = RunColor(head, params, geo, dir, n, drop);
   const double* hidden[2] = {r.h0.data(), r.h1.data()};
   std::vector<double> grads(params.size(), 0.0), dgeo(geo.size(), 0.0), scratch(head.scratch_size(n));
-  head.Backward(params.data(), r.in.data(), n, hidden, r.raw.data(), wc.data(), wl.data(), dgeo.data(), grads.data(),
-                scratch.data(), true);
-  EXPECT_GT(ExpectGradientMatches(params.data(), grads.data(), SomeIndices(params.size(), params.size(), 1), loss, "params"), 40);
-  EXPECT_GT(ExpectGradientMatches(geo.data(), dgeo.data(), SomeIndices(geo.size(), geo.size(), 2), loss, "geo"), 10);
+  head.Backward(params.data(), r.in.data(), n, hidden, r.raw.data(), wc.data(), wl.data(), dgeo.data(),
+                grads.data(), scratch.data(), true);
+  EXPECT_GT(ExpectGradientMatches(params.data(), grads.data(), SomeIndices(params.size(), params.size(), 1),
+                                  loss, "params"),
+            40);
+  EXPECT_GT(
+      ExpectGradientMatches(geo.data(), dgeo.data(), SomeIndices(geo.size(), geo.size(), 2), loss, "geo"),
+      10);
 }
 
 }  // namespace

@@ -20,8 +20,8 @@ struct MlpRun {
   std::vector<double> out;
 };
 
-MlpRun Forward(const Mlp<double>& mlp, const std::vector<double>& params, const std::vector<double>& in, int rows,
-            const DropoutPass& drop) {
+MlpRun Forward(const Mlp<double>& mlp, const std::vector<double>& params, const std::vector<double>& in,
+               int rows, const DropoutPass& drop) {
   MlpRun run;
   std::vector<double*> ptrs;
   for (int k = 0; k < mlp.hidden_layers(); ++k) {
@@ -48,10 +48,14 @@ void CheckGradients(bool dropout_on) {
   for (const auto& h : run.hidden) hidden.push_back(h.data());
   std::vector<double> grads(mlp.param_count(), 0.0), din(in.size(), 0.0);
   std::vector<double> scratch(2 * static_cast<std::size_t>(rows) * mlp.max_width());
-  mlp.Backward(params.data(), in.data(), rows, hidden.data(), w.data(), din.data(), grads.data(), scratch.data(), dropout_on);
+  mlp.Backward(params.data(), in.data(), rows, hidden.data(), w.data(), din.data(), grads.data(),
+               scratch.data(), dropout_on);
   auto loss = [&] { return Dot(w, Forward(mlp, params, in, rows, drop).out); };
-  EXPECT_GT(ExpectGradientMatches(params.data(), grads.data(), SomeIndices(params.size(), params.size(), 1), loss, "params"), 50);
-  EXPECT_GT(ExpectGradientMatches(in.data(), din.data(), SomeIndices(in.size(), in.size(), 2), loss, "input"), 40);
+  EXPECT_GT(ExpectGradientMatches(params.data(), grads.data(), SomeIndices(params.size(), params.size(), 1),
+                                  loss, "params"),
+            50);
+  EXPECT_GT(ExpectGradientMatches(in.data(), din.data(), SomeIndices(in.size(), in.size(), 2), loss, "input"),
+            40);
 }
 
 TEST(MlpTest, GradientsMatchFiniteDifferences) { CheckGradients(false); }

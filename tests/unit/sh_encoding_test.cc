@@ -28,7 +28,8 @@ TEST(ShEncodingTest, BasisIsOrthonormal) {
   }
   const double cell = (2.0 / nu) * (2 * M_PI / nphi);
   for (int i = 0; i < kShDims; ++i) {
-    for (int j = 0; j < kShDims; ++j) EXPECT_NEAR(gram[i * kShDims + j] * cell, i == j ? 1.0 : 0.0, 1e-4) << i << "," << j;
+    for (int j = 0; j < kShDims; ++j)
+      EXPECT_NEAR(gram[i * kShDims + j] * cell, i == j ? 1.0 : 0.0, 1e-4) << i << "," << j;
   }
 }
 

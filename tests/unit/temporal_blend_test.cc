@@ -20,8 +20,8 @@ struct BlendRun {
   std::vector<double> hidden, beta, f;
 };
 
-BlendRun Forward(const TemporalBlend<double>& blend, const std::vector<double>& params, const std::vector<double>& t,
-            const std::vector<double>& feats) {
+BlendRun Forward(const TemporalBlend<double>& blend, const std::vector<double>& params,
+                 const std::vector<double>& t, const std::vector<double>& feats) {
   const int n = static_cast<int>(t.size());
   BlendRun run;
   run.hidden.resize(static_cast<std::size_t>(n) * kHidden);
@@ -68,11 +68,14 @@ TEST(TemporalBlendTest, GradientsMatchFiniteDifferences) {
   const std::vector<double> w = RandomValues(static_cast<std::size_t>(n) * kDim, -1, 1, 8);
   const BlendRun run = Forward(blend, params, t, feats);
   std::vector<double> grads(params.size(), 0.0), dfeats(feats.size(), 0.0), scratch(blend.scratch_size(n));
-  blend.Backward(params.data(), t.data(), n, run.hidden.data(), run.beta.data(), feats.data(), w.data(), dfeats.data(),
-                 grads.data(), scratch.data());
+  blend.Backward(params.data(), t.data(), n, run.hidden.data(), run.beta.data(), feats.data(), w.data(),
+                 dfeats.data(), grads.data(), scratch.data());
   auto loss = [&] { return Dot(w, Forward(blend, params, t, feats).f); };
-  EXPECT_GT(ExpectGradientMatches(params.data(), grads.data(), SomeIndices(params.size(), params.size(), 1), loss, "params"), 10);
-  EXPECT_EQ(ExpectGradientMatches(feats.data(), dfeats.data(), SomeIndices(feats.size(), feats.size(), 2), loss, "feats"),
+  EXPECT_GT(ExpectGradientMatches(params.data(), grads.data(), SomeIndices(params.size(), params.size(), 1),
+                                  loss, "params"),
+            10);
+  EXPECT_EQ(ExpectGradientMatches(feats.data(), dfeats.data(), SomeIndices(feats.size(), feats.size(), 2),
+                                  loss, "feats"),
             static_cast<int>(feats.size()));
 }
 

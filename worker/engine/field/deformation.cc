@@ -20,8 +20,8 @@ int TimeInterval(S t, int knots, S* frac) {
 template <typename S>
 Deformation<S>::Deformation(const DeformationConfig& config) : config_(config) {
   if (config.resolution < 1 || config.time_knots < 1) {
-    FailInvalid("deformation grid needs resolution and time_knots >= 1, got " + std::to_string(config.resolution) +
-                " and " + std::to_string(config.time_knots));
+    FailInvalid("deformation grid needs resolution and time_knots >= 1, got " +
+                std::to_string(config.resolution) + " and " + std::to_string(config.time_knots));
   }
   const std::size_t side = static_cast<std::size_t>(config.resolution) + 1;
   slice_size_ = side * side * side * 3;

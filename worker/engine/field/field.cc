@@ -18,11 +18,11 @@
 namespace endorecon::field {
 namespace {
 
-constexpr int kTile = 512;     // samples per tile of the heads: a tile's activations stay in L1/L2
-constexpr int kChunk = 2048;   // samples per chunk (task): the grids walk their levels over a chunk, so a
-                               // level's table is pulled into L2 once and reused by ~16k lookups
+constexpr int kTile = 512;    // samples per tile of the heads: a tile's activations stay in L1/L2
+constexpr int kChunk = 2048;  // samples per chunk (task): the grids walk their levels over a chunk, so a
+                              // level's table is pulled into L2 once and reused by ~16k lookups
 constexpr int kPositionGroups = 4;  // fixed split of the grid levels for dL/dx0 (see ScatterTables)
-constexpr int kMaxLayers = 8;  // hidden layers per head
+constexpr int kMaxLayers = 8;       // hidden layers per head
 constexpr char kMagic[16] = "ENDORECON-FIELD";
 constexpr std::uint32_t kFormatVersion = 1;
 
@@ -53,7 +53,8 @@ void ForTiles(int rows, Fn&& fn) {
 
 template <typename S>
 void CheckBatch(const SampleBatchT<S>& batch, const char* what) {
-  if (batch.n < 0) FailInvalid(std::string(what) + ": batch size must be >= 0, got " + std::to_string(batch.n));
+  if (batch.n < 0)
+    FailInvalid(std::string(what) + ": batch size must be >= 0, got " + std::to_string(batch.n));
   if (batch.n > 0 && (!batch.pos || !batch.time || !batch.dir)) {
     FailInvalid(std::string(what) + ": the batch needs pos, time and dir arrays");
   }
@@ -112,7 +113,7 @@ struct FieldT<S>::Impl {
     std::vector<S> blend_hidden, beta, feat, col_in, temp;
   };
   struct Scratch {  // one per thread, reused across calls
-    Acts chunk;  // Infer's activations (one chunk)
+    Acts chunk;     // Infer's activations (one chunk)
     Tile tile;
   };
   GridEnsemble<S> grids;
@@ -125,7 +126,8 @@ struct FieldT<S>::Impl {
   Acts acts;         // kept activations of the last Forward
   int capacity = 0;  // rows `acts` holds
   tbb::enumerable_thread_specific<Scratch> scratch;
-  std::vector<std::array<std::vector<S>, kGroups>> chunk_grad;  // each chunk's share of the small groups' gradients
+  std::vector<std::array<std::vector<S>, kGroups>>
+      chunk_grad;                 // each chunk's share of the small groups' gradients
   std::vector<S> dfeat_by_level;  // [level][n][F]: dL/df, read by the table scatter
   std::vector<S> beta_by_grid;    // [grid][n]
   std::vector<S> group_dpos;      // [kPositionGroups][n][3]: parts of dL/dx0
@@ -157,8 +159,10 @@ struct FieldT<S>::Impl {
     GrowTo(a.gfeat, n * grids.output_dim());
     GrowTo(a.dens_raw, n * density.raw_dim());
     GrowTo(a.col_raw, n * 4);
-    for (int k = 0; k < density.mlp().hidden_layers(); ++k) GrowTo(a.dens_hidden[k], n * density.mlp().hidden_dim(k));
-    for (int k = 0; k < color.mlp().hidden_layers(); ++k) GrowTo(a.col_hidden[k], n * color.mlp().hidden_dim(k));
+    for (int k = 0; k < density.mlp().hidden_layers(); ++k)
+      GrowTo(a.dens_hidden[k], n * density.mlp().hidden_dim(k));
+    for (int k = 0; k < color.mlp().hidden_layers(); ++k)
+      GrowTo(a.col_hidden[k], n * color.mlp().hidden_dim(k));
   }
 
   View ViewAt(Acts& a, int row0) const {
@@ -185,7 +189,8 @@ struct FieldT<S>::Impl {
     GrowTo(t.feat, n * grids.feature_dim());
     GrowTo(t.col_in, n * color.in_dim());
     // Backward: dL/dgeo, dL/df and the heads' scratch.
-    const std::size_t heads = std::max({density.scratch_size(kTile), color.scratch_size(kTile), blend.scratch_size(kTile)});
+    const std::size_t heads =
+        std::max({density.scratch_size(kTile), color.scratch_size(kTile), blend.scratch_size(kTile)});
     GrowTo(t.temp, n * (density.raw_dim() + grids.feature_dim()) + heads);
     return t;
   }
@@ -217,8 +222,8 @@ struct FieldT<S>::Impl {
       BlendTile(batch.time + q, n, w, t);
       density.Forward(value[kDensity].data(), t.feat.data(), n, w.dens_hidden, w.dens_raw, out.sigma + q,
                       out.sigma_logvar + q, drop);
-      color.Forward(value[kColor].data(), w.dens_raw + 2, density.raw_dim(), batch.dir + 3 * q, n, t.col_in.data(),
-                    w.col_hidden, w.col_raw, out.rgb + 3 * q, out.rgb_logvar + q, drop);
+      color.Forward(value[kColor].data(), w.dens_raw + 2, density.raw_dim(), batch.dir + 3 * q, n,
+                    t.col_in.data(), w.col_hidden, w.col_raw, out.rgb + 3 * q, out.rgb_logvar + q, drop);
     });
   }
 
@@ -239,16 +244,18 @@ struct FieldT<S>::Impl {
       color.Input(v.dens_raw + 2, density.raw_dim(), batch.dir + 3 * q, rt, t.col_in.data());
       color.Backward(value[kColor].data(), t.col_in.data(), rt, v.col_hidden, v.col_raw, Offset(g.rgb, 3 * q),
                      Offset(g.rgb_logvar, q), dgeo, grads[kColor].data(), heads, last_dropout);
-      density.Backward(value[kDensity].data(), t.feat.data(), rt, v.dens_hidden, v.dens_raw, Offset(g.sigma, q),
-                       Offset(g.sigma_logvar, q), dgeo, df, grads[kDensity].data(), heads, last_dropout);
-      blend.Backward(value[kBlend].data(), batch.time + q, rt, t.blend_hidden.data(), t.beta.data(), v.gfeat, df,
-                     nullptr, grads[kBlend].data(), heads);
+      density.Backward(value[kDensity].data(), t.feat.data(), rt, v.dens_hidden, v.dens_raw,
+                       Offset(g.sigma, q), Offset(g.sigma_logvar, q), dgeo, df, grads[kDensity].data(), heads,
+                       last_dropout);
+      blend.Backward(value[kBlend].data(), batch.time + q, rt, t.blend_hidden.data(), t.beta.data(), v.gfeat,
+                     df, nullptr, grads[kBlend].data(), heads);
       for (int i = 0; i < rt; ++i) {
         for (int l = 0; l < d / f; ++l) {
           std::copy_n(df + static_cast<std::size_t>(i) * d + l * f, f,
                       dfeat_by_level.data() + (static_cast<std::size_t>(l) * n + q + i) * f);
         }
-        for (int k = 0; k < gn; ++k) beta_by_grid[static_cast<std::size_t>(k) * n + q + i] = t.beta[i * gn + k];
+        for (int k = 0; k < gn; ++k)
+          beta_by_grid[static_cast<std::size_t>(k) * n + q + i] = t.beta[i * gn + k];
       }
     });
   }
@@ -308,7 +315,8 @@ struct FieldT<S>::Impl {
 };
 
 template <typename S>
-FieldT<S>::FieldT(const FieldConfig& config, std::uint64_t seed) : config_(config), impl_(std::make_unique<Impl>(config)) {
+FieldT<S>::FieldT(const FieldConfig& config, std::uint64_t seed)
+    : config_(config), impl_(std::make_unique<Impl>(config)) {
   Impl& m = *impl_;
   m.grids.Init(m.value[kGrid].data(), seed);
   m.blend.Init(m.value[kBlend].data(), seed + 1);
@@ -321,7 +329,8 @@ template <typename S>
 FieldT<S>::~FieldT() = default;
 
 template <typename S>
-void FieldT<S>::Forward(const SampleBatchT<S>& batch, FieldOutputT<S>& out, bool dropout, std::uint64_t dropout_seed) {
+void FieldT<S>::Forward(const SampleBatchT<S>& batch, FieldOutputT<S>& out, bool dropout,
+                        std::uint64_t dropout_seed) {
   CheckBatch(batch, "Field::Forward");
   Impl& m = *impl_;
   if (batch.n > m.capacity) {
@@ -336,7 +345,8 @@ void FieldT<S>::Forward(const SampleBatchT<S>& batch, FieldOutputT<S>& out, bool
 }
 
 template <typename S>
-void FieldT<S>::Infer(const SampleBatchT<S>& batch, FieldOutputT<S>& out, bool dropout, std::uint64_t dropout_seed) {
+void FieldT<S>::Infer(const SampleBatchT<S>& batch, FieldOutputT<S>& out, bool dropout,
+                      std::uint64_t dropout_seed) {
   CheckBatch(batch, "Field::Infer");
   Impl& m = *impl_;
   RunChunks(batch.n, [&](int, int row0, int rows) {
@@ -351,7 +361,8 @@ void FieldT<S>::Backward(const SampleBatchT<S>& batch, const FieldOutputGradT<S>
   Impl& m = *impl_;
   if (batch.n != m.last_n) {
     Fail(ErrorCode::kFailedPrecondition, "Field::Backward: batch of " + std::to_string(batch.n) +
-                                             " samples, but the last Forward had " + std::to_string(m.last_n));
+                                             " samples, but the last Forward had " +
+                                             std::to_string(m.last_n));
   }
   const std::size_t n = static_cast<std::size_t>(batch.n);
   GrowTo(m.dfeat_by_level, n * m.grids.feature_dim());
@@ -370,9 +381,8 @@ void FieldT<S>::Backward(const SampleBatchT<S>& batch, const FieldOutputGradT<S>
 template <typename S>
 void FieldT<S>::ZeroGrad() {
   for (auto& g : impl_->grad) {
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, g.size(), 1 << 16), [&](const auto& r) {
-      std::fill(g.begin() + r.begin(), g.begin() + r.end(), S(0));
-    });
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, g.size(), 1 << 16),
+                      [&](const auto& r) { std::fill(g.begin() + r.begin(), g.begin() + r.end(), S(0)); });
   }
 }
 
@@ -387,9 +397,7 @@ std::vector<ParamBlock<S>> FieldT<S>::Blocks() {
 }
 
 template <typename S>
-std::vector<train::ParamGroup> FieldT<S>::Params()
-  requires std::same_as<S, float>
-{
+std::vector<train::ParamGroup> FieldT<S>::Params() requires std::same_as<S, float> {
   std::vector<train::ParamGroup> groups;
   for (const auto& b : Blocks()) groups.push_back({b.name, b.value, b.grad, b.size});
   return groups;
@@ -403,7 +411,8 @@ void FieldT<S>::Save(std::ostream& out) const {
   for (int g = 0; g < kGroups; ++g) {
     const std::uint64_t size = impl_->value[g].size();
     out.write(reinterpret_cast<const char*>(&size), sizeof(size));
-    out.write(reinterpret_cast<const char*>(impl_->value[g].data()), static_cast<std::streamsize>(size * sizeof(S)));
+    out.write(reinterpret_cast<const char*>(impl_->value[g].data()),
+              static_cast<std::streamsize>(size * sizeof(S)));
   }
 }
 
@@ -413,7 +422,8 @@ void FieldT<S>::Load(std::istream& in) {
   std::uint32_t header[3] = {};
   in.read(magic, sizeof(magic));
   in.read(reinterpret_cast<char*>(header), sizeof(header));
-  if (!in || std::memcmp(magic, kMagic, sizeof(kMagic)) != 0) Fail(ErrorCode::kDataLoss, "field checkpoint: not a field state (bad header)");
+  if (!in || std::memcmp(magic, kMagic, sizeof(kMagic)) != 0)
+    Fail(ErrorCode::kDataLoss, "field checkpoint: not a field state (bad header)");
   if (header[0] != kFormatVersion || header[1] != sizeof(S) || header[2] != kGroups) {
     Fail(ErrorCode::kDataLoss, "field checkpoint: format " + std::to_string(header[0]) + ", " +
                                    std::to_string(header[1]) + "-byte scalars, " + std::to_string(header[2]) +
@@ -423,14 +433,18 @@ void FieldT<S>::Load(std::istream& in) {
   for (int g = 0; g < kGroups; ++g) {
     std::uint64_t size = 0;
     in.read(reinterpret_cast<char*>(&size), sizeof(size));
-    if (!in) Fail(ErrorCode::kDataLoss, std::string("field checkpoint: truncated before group '") + kGroupNames[g] + "'");
+    if (!in)
+      Fail(ErrorCode::kDataLoss,
+           std::string("field checkpoint: truncated before group '") + kGroupNames[g] + "'");
     if (size != impl_->value[g].size()) {
       Fail(ErrorCode::kDataLoss, std::string("field checkpoint: group '") + kGroupNames[g] + "' holds " +
                                      std::to_string(size) + " values but this field has " +
                                      std::to_string(impl_->value[g].size()) + " (another configuration?)");
     }
     in.read(reinterpret_cast<char*>(impl_->value[g].data()), static_cast<std::streamsize>(size * sizeof(S)));
-    if (!in) Fail(ErrorCode::kDataLoss, std::string("field checkpoint: truncated inside group '") + kGroupNames[g] + "'");
+    if (!in)
+      Fail(ErrorCode::kDataLoss,
+           std::string("field checkpoint: truncated inside group '") + kGroupNames[g] + "'");
   }
 }
 
@@ -442,20 +456,22 @@ std::string FieldT<S>::Describe() const {
     << config_.grids.log2_table << " slots), blended feature width " << m.grids.feature_dim() << "\n";
   for (int k = 0; k < m.grids.grids(); ++k) {
     const auto& grid = m.grids.grid(k);
-    s << "  grid " << k << ": base " << grid.config().base_resolution << ", scale " << grid.config().scale << ", "
-      << grid.levels() << " levels (resolution " << grid.level(0).res << ".." << grid.level(grid.levels() - 1).res;
+    s << "  grid " << k << ": base " << grid.config().base_resolution << ", scale " << grid.config().scale
+      << ", " << grid.levels() << " levels (resolution " << grid.level(0).res << ".."
+      << grid.level(grid.levels() - 1).res;
     int dense = 0;
     for (int l = 0; l < grid.levels(); ++l) dense += static_cast<int>(grid.level(l).dense);
     s << ", " << dense << " dense)";
     if (grid.dropped_levels() > 0) {
-      s << "; left out " << grid.dropped_levels() << " finer levels (above resolution cap " << config_.grids.max_resolution << ")";
+      s << "; left out " << grid.dropped_levels() << " finer levels (above resolution cap "
+        << config_.grids.max_resolution << ")";
     }
     s << "\n";
   }
   s << "temporal blend: 1 -> " << m.blend.hidden_dim() << " -> " << m.blend.grids() << " softmax\n";
   if (m.deform) {
-    s << "deformation: 4D grid " << config_.deformation.resolution << "^3 cells x " << config_.deformation.time_knots
-      << " time knots\n";
+    s << "deformation: 4D grid " << config_.deformation.resolution << "^3 cells x "
+      << config_.deformation.time_knots << " time knots\n";
   } else {
     s << "deformation: left out (static scene)\n";
   }

@@ -96,8 +96,7 @@ class FieldT {
 
   // Groups "grid", "blend", "deform" (absent for a static scene), "density", "color".
   std::vector<ParamBlock<S>> Blocks();
-  std::vector<train::ParamGroup> Params()
-    requires std::same_as<S, float>;
+  std::vector<train::ParamGroup> Params() requires std::same_as<S, float>;
 
   // Exact binary copy of every parameter. Load throws Error(kDataLoss) for a truncated stream or one
   // written by a field of another shape (the message says which group differs).

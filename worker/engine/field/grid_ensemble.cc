@@ -22,7 +22,8 @@ template <typename S>
 GridEnsemble<S>::GridEnsemble(const GridEnsembleConfig& config) {
   if (config.base_resolutions.empty() || config.base_resolutions.size() != config.scales.size()) {
     FailInvalid("grid ensemble needs as many base resolutions as scales (and at least one), got " +
-                std::to_string(config.base_resolutions.size()) + " and " + std::to_string(config.scales.size()));
+                std::to_string(config.base_resolutions.size()) + " and " +
+                std::to_string(config.scales.size()));
   }
   for (std::size_t i = 0; i < config.scales.size(); ++i) {
     grids_.emplace_back(config.Grid(static_cast<int>(i)));
@@ -34,7 +35,8 @@ GridEnsemble<S>::GridEnsemble(const GridEnsembleConfig& config) {
 
 template <typename S>
 void GridEnsemble<S>::Init(S* params, std::uint64_t seed) const {
-  for (int i = 0; i < grids(); ++i) grids_[i].Init(params + offsets_[i], seed + static_cast<std::uint64_t>(i));
+  for (int i = 0; i < grids(); ++i)
+    grids_[i].Init(params + offsets_[i], seed + static_cast<std::uint64_t>(i));
 }
 
 template <typename S>
@@ -45,7 +47,9 @@ void GridEnsemble<S>::Forward(const S* params, const S* pos, int n, S* feats) co
     grids_[i].Forward(params + offsets_[i], pos, n, base, stride);
     const int used = grids_[i].output_dim();
     if (used == feature_dim_) continue;
-    for (int s = 0; s < n; ++s) std::fill(base + static_cast<std::size_t>(s) * stride + used, base + static_cast<std::size_t>(s) * stride + feature_dim_, S(0));
+    for (int s = 0; s < n; ++s)
+      std::fill(base + static_cast<std::size_t>(s) * stride + used,
+                base + static_cast<std::size_t>(s) * stride + feature_dim_, S(0));
   }
 }
 

@@ -32,8 +32,8 @@ class GridEnsemble {
   int grids() const { return static_cast<int>(grids_.size()); }
   const HashGrid<S>& grid(int i) const { return grids_[i]; }
   std::size_t grid_offset(int i) const { return offsets_[i]; }  // grid i's table within params
-  int feature_dim() const { return feature_dim_; }               // D
-  int output_dim() const { return grids() * feature_dim_; }      // G * D
+  int feature_dim() const { return feature_dim_; }              // D
+  int output_dim() const { return grids() * feature_dim_; }     // G * D
   std::size_t param_count() const { return param_count_; }
 
   void Init(S* params, std::uint64_t seed) const;

@@ -1,13 +1,12 @@
 #include "worker/engine/field/hash_grid.h"
 
-#include "worker/engine/field/hash_grid_simd.h"
-
 #include <algorithm>
 #include <cmath>
 #include <string>
 #include <type_traits>
 
 #include "common/error.h"
+#include "worker/engine/field/hash_grid_simd.h"
 #include "worker/engine/render/rng.h"
 
 namespace endorecon::field {
@@ -34,8 +33,8 @@ void ForwardLevel(const GridLevel& level, const S* table, const S* pos, int n, S
 // Table scatter of one level; with kPosition also the level's position gradient (the corner values
 // it needs sit in the cache lines the scatter touches anyway).
 template <int F, bool kDense, bool kPosition, typename S>
-void ScatterLevel(const GridLevel& level, const S* pos, int n, const S* dfeat, int dfeat_stride, const S* scale,
-                  S* grads, const S* table, S* dpos) {
+void ScatterLevel(const GridLevel& level, const S* pos, int n, const S* dfeat, int dfeat_stride,
+                  const S* scale, S* grads, const S* table, S* dpos) {
   const S res = static_cast<S>(level.res);
   for (int i = 0; i < n; ++i) {
     std::uint32_t slot[8];
@@ -66,8 +65,8 @@ void ScatterLevel(const GridLevel& level, const S* pos, int n, const S* dfeat, i
 }
 
 template <int F, bool kDense, typename S>
-void PositionLevel(const GridLevel& level, const S* table, const S* pos, int n, const S* dfeat, int dfeat_stride,
-                   S* dpos) {
+void PositionLevel(const GridLevel& level, const S* table, const S* pos, int n, const S* dfeat,
+                   int dfeat_stride, S* dpos) {
   const S res = static_cast<S>(level.res);
   for (int i = 0; i < n; ++i) {
     std::uint32_t slot[8];
@@ -99,10 +98,18 @@ void Dispatch(int features, const GridLevel& level, Fn&& fn) {
     }
   };
   switch (features) {
-    case 1: with_f(std::integral_constant<int, 1>{}); break;
-    case 2: with_f(std::integral_constant<int, 2>{}); break;
-    case 4: with_f(std::integral_constant<int, 4>{}); break;
-    default: with_f(std::integral_constant<int, 8>{}); break;
+    case 1:
+      with_f(std::integral_constant<int, 1>{});
+      break;
+    case 2:
+      with_f(std::integral_constant<int, 2>{});
+      break;
+    case 4:
+      with_f(std::integral_constant<int, 4>{});
+      break;
+    default:
+      with_f(std::integral_constant<int, 8>{});
+      break;
   }
 }
 
@@ -122,14 +129,19 @@ int LevelsUpToResolution(const HashGridConfig& config, double finest_useful) {
 template <typename S>
 HashGrid<S>::HashGrid(const HashGridConfig& config) : config_(config) {
   const int f = config.features;
-  if (f != 1 && f != 2 && f != 4 && f != 8) FailInvalid("hash grid features per level must be 1, 2, 4 or 8, got " + std::to_string(f));
+  if (f != 1 && f != 2 && f != 4 && f != 8)
+    FailInvalid("hash grid features per level must be 1, 2, 4 or 8, got " + std::to_string(f));
   if (config.log2_table < 4 || config.log2_table > 26) {
     FailInvalid("hash grid log2 table size must be in [4, 26], got " + std::to_string(config.log2_table));
   }
-  if (config.levels < 1) FailInvalid("hash grid needs at least 1 level, got " + std::to_string(config.levels));
-  if (config.base_resolution < 1) FailInvalid("hash grid base resolution must be >= 1, got " + std::to_string(config.base_resolution));
-  if (!(config.scale >= 1)) FailInvalid("hash grid per-level scale must be >= 1, got " + std::to_string(config.scale));
-  const int keep = config.max_resolution > 0 ? LevelsUpToResolution(config, config.max_resolution) : config.levels;
+  if (config.levels < 1)
+    FailInvalid("hash grid needs at least 1 level, got " + std::to_string(config.levels));
+  if (config.base_resolution < 1)
+    FailInvalid("hash grid base resolution must be >= 1, got " + std::to_string(config.base_resolution));
+  if (!(config.scale >= 1))
+    FailInvalid("hash grid per-level scale must be >= 1, got " + std::to_string(config.scale));
+  const int keep =
+      config.max_resolution > 0 ? LevelsUpToResolution(config, config.max_resolution) : config.levels;
   const std::uint64_t table = std::uint64_t{1} << config.log2_table;
   std::uint64_t offset = 0;
   for (int l = 0; l < keep; ++l) {
@@ -208,7 +220,8 @@ void HashGrid<S>::BackwardLevel(int l, const S* pos, int n, const S* dfeat, int 
         dp = dp ? dp + 3 * static_cast<std::size_t>(simd_count) : nullptr;
       }
 #endif
-      ScatterLevel<F, kDense, kPosition>(level, pos + 3 * begin, count, d, dfeat_stride, s, grads + offset, table, dp);
+      ScatterLevel<F, kDense, kPosition>(level, pos + 3 * begin, count, d, dfeat_stride, s, grads + offset,
+                                         table, dp);
     };
     if (dpos_add) {
       run(std::true_type{}, 0, n);

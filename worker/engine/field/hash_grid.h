@@ -63,7 +63,8 @@ class HashGrid {
 
   // dpos += dL/dpos given dL/dfeat (rows at dfeat + i * dfeat_stride, output_dim() values each).
   // Zero along an axis where the position was clamped (outside the open interval (0, 1)).
-  void BackwardPosition(const S* params, const S* pos, int n, const S* dfeat, int dfeat_stride, S* dpos) const;
+  void BackwardPosition(const S* params, const S* pos, int n, const S* dfeat, int dfeat_stride,
+                        S* dpos) const;
 
  private:
   HashGridConfig config_;

@@ -40,7 +40,8 @@ inline void LoadPositions(const float* pos, __m512* xyz) {
                              _mm512_setr_epi32(0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 3, 6, 9, 12, 15)};
   const __mmask16 c_lanes[3] = {0xF800, 0xF800, 0xFC00};  // lanes filled from c (z: lane 10 is c[0])
   for (int axis = 0; axis < 3; ++axis) {
-    xyz[axis] = _mm512_mask_permutexvar_ps(_mm512_permutex2var_ps(a, ab[axis], b), c_lanes[axis], from_c[axis], c);
+    xyz[axis] =
+        _mm512_mask_permutexvar_ps(_mm512_permutex2var_ps(a, ab[axis], b), c_lanes[axis], from_c[axis], c);
   }
 }
 
@@ -53,7 +54,8 @@ inline void CornersOf(const GridLevel& level, const float* pos, Corners& out) {
   const __m512i last = _mm512_set1_epi32(static_cast<int>(level.res - 1));
   __m512i cell[3];
   for (int a = 0; a < 3; ++a) {
-    out.inside[a] = _mm512_cmp_ps_mask(xyz[a], zero, _CMP_GT_OQ) & _mm512_cmp_ps_mask(xyz[a], one, _CMP_LT_OQ);
+    out.inside[a] =
+        _mm512_cmp_ps_mask(xyz[a], zero, _CMP_GT_OQ) & _mm512_cmp_ps_mask(xyz[a], one, _CMP_LT_OQ);
     // max returns its second operand for NaN: NaN and -Inf clamp to 0, as ClampUnit.
     const __m512 u = _mm512_min_ps(_mm512_max_ps(xyz[a], zero), one);
     const __m512 p = _mm512_mul_ps(u, res);
@@ -62,9 +64,9 @@ inline void CornersOf(const GridLevel& level, const float* pos, Corners& out) {
   }
   if constexpr (kDense) {
     const int side = static_cast<int>(level.res + 1), plane = side * side;
-    const __m512i base = _mm512_add_epi32(
-        cell[0], _mm512_add_epi32(_mm512_mullo_epi32(cell[1], _mm512_set1_epi32(side)),
-                                  _mm512_mullo_epi32(cell[2], _mm512_set1_epi32(plane))));
+    const __m512i base =
+        _mm512_add_epi32(cell[0], _mm512_add_epi32(_mm512_mullo_epi32(cell[1], _mm512_set1_epi32(side)),
+                                                   _mm512_mullo_epi32(cell[2], _mm512_set1_epi32(plane))));
     for (int k = 0; k < 8; ++k) {
       const int offset = (k & 1) + ((k >> 1) & 1) * side + ((k >> 2) & 1) * plane;
       out.slot[k] = _mm512_add_epi32(base, _mm512_set1_epi32(offset));
@@ -77,13 +79,15 @@ inline void CornersOf(const GridLevel& level, const float* pos, Corners& out) {
     const __m512i hy[2] = {y0, _mm512_add_epi32(y0, p1)};
     const __m512i hz[2] = {z0, _mm512_add_epi32(z0, p2)};
     for (int k = 0; k < 8; ++k) {
-      out.slot[k] = _mm512_and_si512(_mm512_xor_si512(_mm512_xor_si512(hx[k & 1], hy[(k >> 1) & 1]), hz[k >> 2]), mask);
+      out.slot[k] =
+          _mm512_and_si512(_mm512_xor_si512(_mm512_xor_si512(hx[k & 1], hy[(k >> 1) & 1]), hz[k >> 2]), mask);
     }
   }
   const __m512 wx[2] = {_mm512_sub_ps(one, out.frac[0]), out.frac[0]};
   const __m512 wy[2] = {_mm512_sub_ps(one, out.frac[1]), out.frac[1]};
   const __m512 wz[2] = {_mm512_sub_ps(one, out.frac[2]), out.frac[2]};
-  for (int k = 0; k < 8; ++k) out.weight[k] = _mm512_mul_ps(_mm512_mul_ps(wx[k & 1], wy[(k >> 1) & 1]), wz[k >> 2]);
+  for (int k = 0; k < 8; ++k)
+    out.weight[k] = _mm512_mul_ps(_mm512_mul_ps(wx[k & 1], wy[(k >> 1) & 1]), wz[k >> 2]);
 }
 
 // Lanes 0..7 (half 0) or 8..15 (half 1) of v, each repeated twice: the layout of 8 gathered pairs.
@@ -106,13 +110,15 @@ inline __m256i RowOffsets(int stride, int half) {
 
 // Forward of n samples (a multiple of 16): feat rows at feat + i * feat_stride receive 2 values.
 template <bool kDense>
-void ForwardLevelF2(const GridLevel& level, const float* table, const float* pos, int n, float* feat, int feat_stride) {
+void ForwardLevelF2(const GridLevel& level, const float* table, const float* pos, int n, float* feat,
+                    int feat_stride) {
   for (int i = 0; i < n; i += kBlock) {
     Corners c;
     CornersOf<kDense>(level, pos + 3 * i, c);
     for (int half = 0; half < 2; ++half) {
       __m512 acc = _mm512_setzero_ps();
-      for (int k = 0; k < 8; ++k) acc = _mm512_fmadd_ps(DuplicateHalf(c.weight[k], half), GatherPairs(table, c.slot[k], half), acc);
+      for (int k = 0; k < 8; ++k)
+        acc = _mm512_fmadd_ps(DuplicateHalf(c.weight[k], half), GatherPairs(table, c.slot[k], half), acc);
       _mm512_i32scatter_pd(feat + static_cast<std::size_t>(i) * feat_stride, RowOffsets(feat_stride, half),
                            _mm512_castps_pd(acc), 4);
     }
@@ -133,8 +139,9 @@ void ScatterLevelF2(const GridLevel& level, const float* pos, int n, const float
     const __m512 s = scale ? _mm512_loadu_ps(scale + i) : _mm512_set1_ps(1.0f);
     __m512 d[2];  // scale_i * dfeat_i as pairs, 8 samples per half
     for (int half = 0; half < 2; ++half) {
-      const __m512 raw = _mm512_castpd_ps(_mm512_i32gather_pd(RowOffsets(dfeat_stride, half),
-                                                               reinterpret_cast<const double*>(dfeat + static_cast<std::size_t>(i) * dfeat_stride), 4));
+      const __m512 raw = _mm512_castpd_ps(_mm512_i32gather_pd(
+          RowOffsets(dfeat_stride, half),
+          reinterpret_cast<const double*>(dfeat + static_cast<std::size_t>(i) * dfeat_stride), 4));
       d[half] = _mm512_mul_ps(raw, DuplicateHalf(s, half));
     }
     for (int k = 0; k < 8; ++k) {
@@ -146,7 +153,8 @@ void ScatterLevelF2(const GridLevel& level, const float* pos, int n, const float
     _mm512_store_ps(pairs[1], d[1]);
     // Read-modify-write of each corner's pair as one 64-bit load, FMA and store.
     for (int j = 0; j < kBlock; ++j) {
-      const __m128 gj = _mm_castpd_ps(_mm_load_sd(reinterpret_cast<const double*>(pairs[j >> 3] + 2 * (j & 7))));
+      const __m128 gj =
+          _mm_castpd_ps(_mm_load_sd(reinterpret_cast<const double*>(pairs[j >> 3] + 2 * (j & 7))));
       for (int k = 0; k < 8; ++k) {
         double* v = reinterpret_cast<double*>(grads + 2 * std::size_t{slots[k][j]});
         const __m128 sum = _mm_fmadd_ps(_mm_set1_ps(weights[k][j]), gj, _mm_castpd_ps(_mm_load_sd(v)));
@@ -171,14 +179,17 @@ void ScatterLevelF2(const GridLevel& level, const float* pos, int n, const float
       const __m512 wz[2] = {_mm512_sub_ps(one, c.frac[2]), c.frac[2]};
       __m512 grad[3] = {_mm512_setzero_ps(), _mm512_setzero_ps(), _mm512_setzero_ps()};
       for (int k = 0; k < 8; k += 2) {
-        grad[0] = _mm512_fmadd_ps(_mm512_mul_ps(wy[(k >> 1) & 1], wz[k >> 2]), _mm512_sub_ps(dot[k + 1], dot[k]), grad[0]);
+        grad[0] = _mm512_fmadd_ps(_mm512_mul_ps(wy[(k >> 1) & 1], wz[k >> 2]),
+                                  _mm512_sub_ps(dot[k + 1], dot[k]), grad[0]);
       }
       for (int j = 0; j < 4; ++j) {
         const int k = (j & 1) | ((j >> 1) << 2);
-        grad[1] = _mm512_fmadd_ps(_mm512_mul_ps(wx[k & 1], wz[k >> 2]), _mm512_sub_ps(dot[k + 2], dot[k]), grad[1]);
+        grad[1] =
+            _mm512_fmadd_ps(_mm512_mul_ps(wx[k & 1], wz[k >> 2]), _mm512_sub_ps(dot[k + 2], dot[k]), grad[1]);
       }
       for (int k = 0; k < 4; ++k) {
-        grad[2] = _mm512_fmadd_ps(_mm512_mul_ps(wx[k & 1], wy[k >> 1]), _mm512_sub_ps(dot[k + 4], dot[k]), grad[2]);
+        grad[2] =
+            _mm512_fmadd_ps(_mm512_mul_ps(wx[k & 1], wy[k >> 1]), _mm512_sub_ps(dot[k + 4], dot[k]), grad[2]);
       }
       for (int a = 0; a < 3; ++a) {
         _mm512_store_ps(g[a], _mm512_maskz_mul_ps(c.inside[a], grad[a], _mm512_set1_ps(res)));

@@ -26,8 +26,8 @@ namespace endorecon::field {
 struct GridLevel {
   std::uint32_t res = 1;
   std::uint32_t dense = 1;
-  std::uint32_t entries = 8;   // table slots of this level
-  std::uint64_t offset = 0;    // first slot of this level in the grid's table (in slots, not scalars)
+  std::uint32_t entries = 8;  // table slots of this level
+  std::uint64_t offset = 0;   // first slot of this level in the grid's table (in slots, not scalars)
 };
 
 // instant-ngp's spatial hash: XOR of coordinates times large primes (the first prime is 1 so that
@@ -61,7 +61,8 @@ ENDORECON_HD ENDORECON_FIELD_INLINE std::uint32_t CellOf(S u, std::uint32_t res,
 }
 
 // Slot of vertex (x, y, z) of a level.
-ENDORECON_HD std::uint32_t VertexSlot(const GridLevel& level, std::uint32_t x, std::uint32_t y, std::uint32_t z) {
+ENDORECON_HD std::uint32_t VertexSlot(const GridLevel& level, std::uint32_t x, std::uint32_t y,
+                                      std::uint32_t z) {
   if (level.dense) {
     const std::uint32_t side = level.res + 1;
     return x + side * (y + side * z);
@@ -74,7 +75,8 @@ ENDORECON_HD std::uint32_t VertexSlot(const GridLevel& level, std::uint32_t x, s
 // `frac` receives the fractional position (for derivatives). kDense must equal level.dense: the
 // branch is a template argument so the per-sample loops of one level carry none.
 template <bool kDense, typename S>
-ENDORECON_HD ENDORECON_FIELD_INLINE void CellCornersOf(const GridLevel& level, const S* pos, std::uint32_t* slot, S* weight, S* frac) {
+ENDORECON_HD ENDORECON_FIELD_INLINE void CellCornersOf(const GridLevel& level, const S* pos,
+                                                       std::uint32_t* slot, S* weight, S* frac) {
   std::uint32_t c[3];
   for (int a = 0; a < 3; ++a) c[a] = CellOf(ClampUnit(pos[a]), level.res, &frac[a]);
   if constexpr (kDense) {
@@ -87,12 +89,14 @@ ENDORECON_HD ENDORECON_FIELD_INLINE void CellCornersOf(const GridLevel& level, c
     const std::uint32_t hz[2] = {c[2] * 805459861u, (c[2] + 1) * 805459861u};
     for (int k = 0; k < 8; ++k) slot[k] = ((c[0] + (k & 1)) ^ hy[(k >> 1) & 1] ^ hz[(k >> 2) & 1]) & mask;
   }
-  const S wx[2] = {S(1) - frac[0], frac[0]}, wy[2] = {S(1) - frac[1], frac[1]}, wz[2] = {S(1) - frac[2], frac[2]};
+  const S wx[2] = {S(1) - frac[0], frac[0]}, wy[2] = {S(1) - frac[1], frac[1]},
+          wz[2] = {S(1) - frac[2], frac[2]};
   for (int k = 0; k < 8; ++k) weight[k] = wx[k & 1] * wy[(k >> 1) & 1] * wz[(k >> 2) & 1];
 }
 
 template <typename S>
-ENDORECON_HD ENDORECON_FIELD_INLINE void CellCorners(const GridLevel& level, const S* pos, std::uint32_t* slot, S* weight, S* frac) {
+ENDORECON_HD ENDORECON_FIELD_INLINE void CellCorners(const GridLevel& level, const S* pos,
+                                                     std::uint32_t* slot, S* weight, S* frac) {
   if (level.dense) {
     CellCornersOf<true>(level, pos, slot, weight, frac);
   } else {
@@ -104,7 +108,8 @@ ENDORECON_HD ENDORECON_FIELD_INLINE void CellCorners(const GridLevel& level, con
 // for the 8 corners of CellCorners (multiply by the resolution for d/dpos).
 template <typename S>
 ENDORECON_HD ENDORECON_FIELD_INLINE void TrilinearGradient(const S* value, const S* frac, S* grad) {
-  const S wx[2] = {S(1) - frac[0], frac[0]}, wy[2] = {S(1) - frac[1], frac[1]}, wz[2] = {S(1) - frac[2], frac[2]};
+  const S wx[2] = {S(1) - frac[0], frac[0]}, wy[2] = {S(1) - frac[1], frac[1]},
+          wz[2] = {S(1) - frac[2], frac[2]};
   grad[0] = grad[1] = grad[2] = S(0);
   for (int k = 0; k < 8; k += 2) grad[0] += wy[(k >> 1) & 1] * wz[k >> 2] * (value[k + 1] - value[k]);
   for (int j = 0; j < 4; ++j) {

@@ -15,11 +15,12 @@ constexpr std::uint32_t kColorStream = 0xc2u;
 
 template <typename S>
 DensityHead<S>::DensityHead(int in_dim, const HeadsConfig& config)
-    : geo_(config.geo_features), mlp_(in_dim, config.density_hidden, 2 + config.geo_features, config.dropout, kDensityStream) {}
+    : geo_(config.geo_features),
+      mlp_(in_dim, config.density_hidden, 2 + config.geo_features, config.dropout, kDensityStream) {}
 
 template <typename S>
-void DensityHead<S>::Forward(const S* params, const S* feat, int n, S* const* hidden, S* raw, S* sigma, S* logvar,
-                             const DropoutPass& drop) const {
+void DensityHead<S>::Forward(const S* params, const S* feat, int n, S* const* hidden, S* raw, S* sigma,
+                             S* logvar, const DropoutPass& drop) const {
   mlp_.Forward(params, feat, n, hidden, raw, drop);
   const int w = raw_dim();
   for (int i = 0; i < n; ++i) {
@@ -35,8 +36,8 @@ std::size_t DensityHead<S>::scratch_size(int n) const {
 
 template <typename S>
 void DensityHead<S>::Backward(const S* params, const S* feat, int n, const S* const* hidden, const S* raw,
-                              const S* dsigma, const S* dlogvar, const S* dgeo, S* dfeat, S* grads, S* scratch,
-                              bool dropout_on) const {
+                              const S* dsigma, const S* dlogvar, const S* dgeo, S* dfeat, S* grads,
+                              S* scratch, bool dropout_on) const {
   const int w = raw_dim();
   S* draw = scratch;
   for (int i = 0; i < n; ++i) {
@@ -49,12 +50,14 @@ void DensityHead<S>::Backward(const S* params, const S* feat, int n, const S* co
       std::fill_n(d + 2, geo_, S(0));
     }
   }
-  mlp_.Backward(params, feat, n, hidden, draw, dfeat, grads, scratch + static_cast<std::size_t>(n) * w, dropout_on);
+  mlp_.Backward(params, feat, n, hidden, draw, dfeat, grads, scratch + static_cast<std::size_t>(n) * w,
+                dropout_on);
 }
 
 template <typename S>
 ColorHead<S>::ColorHead(const HeadsConfig& config)
-    : geo_(config.geo_features), mlp_(config.geo_features + kShDims, config.color_hidden, 4, config.dropout, kColorStream) {}
+    : geo_(config.geo_features),
+      mlp_(config.geo_features + kShDims, config.color_hidden, 4, config.dropout, kColorStream) {}
 
 template <typename S>
 void ColorHead<S>::Input(const S* geo, int geo_stride, const S* dir, int n, S* in) const {
@@ -85,7 +88,8 @@ std::size_t ColorHead<S>::scratch_size(int n) const {
 
 template <typename S>
 void ColorHead<S>::Backward(const S* params, const S* in, int n, const S* const* hidden, const S* raw,
-                            const S* drgb, const S* dlogvar, S* dgeo, S* grads, S* scratch, bool dropout_on) const {
+                            const S* drgb, const S* dlogvar, S* dgeo, S* grads, S* scratch,
+                            bool dropout_on) const {
   S* draw = scratch;
   S* din = scratch + 4 * static_cast<std::size_t>(n);
   for (int i = 0; i < n; ++i) {
@@ -98,10 +102,11 @@ void ColorHead<S>::Backward(const S* params, const S* in, int n, const S* const*
     d[3] = dlogvar ? dlogvar[i] : S(0);
   }
   const int w = in_dim();
-  mlp_.Backward(params, in, n, hidden, draw, dgeo ? din : nullptr, grads, din + static_cast<std::size_t>(n) * w,
-                dropout_on);
+  mlp_.Backward(params, in, n, hidden, draw, dgeo ? din : nullptr, grads,
+                din + static_cast<std::size_t>(n) * w, dropout_on);
   if (!dgeo) return;
-  for (int i = 0; i < n; ++i) std::copy_n(din + static_cast<std::size_t>(i) * w, geo_, dgeo + static_cast<std::size_t>(i) * geo_);
+  for (int i = 0; i < n; ++i)
+    std::copy_n(din + static_cast<std::size_t>(i) * w, geo_, dgeo + static_cast<std::size_t>(i) * geo_);
 }
 
 template class DensityHead<float>;

@@ -61,8 +61,8 @@ class ColorHead {
   // geo: rows at geo + i * geo_stride; dir: n x 3 unit directions. in (n x in_dim()) receives the
   // network input [geo, SH(dir)] and raw (n x 4) its output, both kept for Backward;
   // rgb: n x 3, logvar: n values.
-  void Forward(const S* params, const S* geo, int geo_stride, const S* dir, int n, S* in, S* const* hidden, S* raw,
-               S* rgb, S* logvar, const DropoutPass& drop) const;
+  void Forward(const S* params, const S* geo, int geo_stride, const S* dir, int n, S* in, S* const* hidden,
+               S* raw, S* rgb, S* logvar, const DropoutPass& drop) const;
 
   // drgb (n x 3) and dlogvar (n) may be null (= zero). Writes dgeo (n x geo) when not null.
   // scratch: scratch_size(n) values.

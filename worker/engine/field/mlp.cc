@@ -55,7 +55,8 @@ int Mlp<S>::max_width() const {
 template <typename S>
 std::size_t Mlp<S>::macs_per_sample() const {
   std::size_t macs = 0;
-  for (std::size_t k = 0; k + 1 < dims_.size(); ++k) macs += static_cast<std::size_t>(dims_[k]) * dims_[k + 1];
+  for (std::size_t k = 0; k + 1 < dims_.size(); ++k)
+    macs += static_cast<std::size_t>(dims_[k]) * dims_[k + 1];
   return macs;
 }
 
@@ -92,7 +93,8 @@ void Mlp<S>::Forward(const S* params, const S* in, int rows, S* const* hidden, S
       const DropoutKey key = MakeDropoutKey(drop.seed, (stream_ << 4) | static_cast<std::uint32_t>(k));
       for (int r = 0; r < rows; ++r) {
         S* row = y + static_cast<std::size_t>(r) * n_out;
-        const std::uint32_t base = (drop.first_row + static_cast<std::uint32_t>(r)) * static_cast<std::uint32_t>(n_out);
+        const std::uint32_t base =
+            (drop.first_row + static_cast<std::uint32_t>(r)) * static_cast<std::uint32_t>(n_out);
         for (int j = 0; j < n_out; ++j) {
           const bool keep = DropoutKeep(key, base + static_cast<std::uint32_t>(j), threshold);
           row[j] = (keep && row[j] > S(0)) ? row[j] * keep_scale : S(0);

@@ -42,16 +42,17 @@ class Mlp {
 
   // Forward of `rows` samples. in: rows x in_dim. hidden[k]: rows x hidden_dim(k), receives hidden layer
   // k after ReLU and dropout (kept for Backward). out: rows x out_dim.
-  void Forward(const S* params, const S* in, int rows, S* const* hidden, S* out, const DropoutPass& drop) const;
+  void Forward(const S* params, const S* in, int rows, S* const* hidden, S* out,
+               const DropoutPass& drop) const;
 
   // Backward of the same rows given dout = dL/dout (rows x out_dim). Adds dL/dparams to grads; writes
   // dL/din (rows x in_dim) when din is not null. scratch: 2 * rows * max_width() values.
   // `dropout_on` must match the forward pass (the mask itself is read back from the zeros in hidden).
-  void Backward(const S* params, const S* in, int rows, const S* const* hidden, const S* dout, S* din, S* grads,
-                S* scratch, bool dropout_on) const;
+  void Backward(const S* params, const S* in, int rows, const S* const* hidden, const S* dout, S* din,
+                S* grads, S* scratch, bool dropout_on) const;
 
  private:
-  std::vector<int> dims_;                 // in, hidden..., out
+  std::vector<int> dims_;  // in, hidden..., out
   std::vector<std::size_t> w_offset_, b_offset_;
   std::size_t param_count_ = 0;
   double rate_ = 0;

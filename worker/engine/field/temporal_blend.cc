@@ -71,7 +71,8 @@ void TemporalBlend<S>::Backward(const S* params, const S* t, int n, const S* hid
       }
     }
   }
-  mlp_.Backward(params, t, n, &hidden, dlogits, nullptr, grads, scratch + static_cast<std::size_t>(n) * grids_, false);
+  mlp_.Backward(params, t, n, &hidden, dlogits, nullptr, grads,
+                scratch + static_cast<std::size_t>(n) * grids_, false);
 }
 
 template class TemporalBlend<float>;

@@ -33,8 +33,8 @@ class TemporalBlend {
 
   // Given df = dL/df (n x D): adds dL/dparams to grads; writes dL/dfeats = beta_i df (n x G * D) when
   // dfeats is not null. scratch: scratch_size(n) values.
-  void Backward(const S* params, const S* t, int n, const S* hidden, const S* beta, const S* feats, const S* df,
-                S* dfeats, S* grads, S* scratch) const;
+  void Backward(const S* params, const S* t, int n, const S* hidden, const S* beta, const S* feats,
+                const S* df, S* dfeats, S* grads, S* scratch) const;
   std::size_t scratch_size(int n) const;
 
  private:
