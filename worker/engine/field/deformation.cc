@@ -15,6 +15,14 @@ int TimeInterval(S t, int knots, S* frac) {
   return static_cast<int>(CellOf(ClampUnit(t), static_cast<std::uint32_t>(knots), frac));
 }
 
+// The spatial grid of every time slice: dense, (resolution + 1)^3 vertices.
+GridLevel SpatialLevel(const DeformationConfig& config) {
+  GridLevel level;
+  level.res = static_cast<std::uint32_t>(config.resolution);
+  level.dense = 1;
+  return level;
+}
+
 }  // namespace
 
 template <typename S>
@@ -34,12 +42,11 @@ void Deformation<S>::Init(S* params) const {
 
 template <typename S>
 void Deformation<S>::Forward(const S* params, const S* pos, const S* t, int n, S* x0) const {
-  GridLevel level;
-  level.res = static_cast<std::uint32_t>(config_.resolution);
+  const GridLevel level = SpatialLevel(config_);
   for (int i = 0; i < n; ++i) {
     std::uint32_t slot[8];
     S w[8], frac[3], ft;
-    CellCorners(level, pos + 3 * i, slot, w, frac);
+    CellCornersOf<true>(level, pos + 3 * i, slot, w, frac);
     const int knot = TimeInterval(t[i], config_.time_knots, &ft);
     S dx[3] = {};
     for (int side = 0; side < 2; ++side) {
@@ -58,8 +65,7 @@ void Deformation<S>::Forward(const S* params, const S* pos, const S* t, int n, S
 
 template <typename S>
 void Deformation<S>::BackwardKnot(int knot, const S* pos, const S* t, int n, const S* dx0, S* grads) const {
-  GridLevel level;
-  level.res = static_cast<std::uint32_t>(config_.resolution);
+  const GridLevel level = SpatialLevel(config_);
   S* table = grads + (knot - 1) * slice_size_;
   for (int i = 0; i < n; ++i) {
     S ft;
@@ -68,7 +74,7 @@ void Deformation<S>::BackwardKnot(int knot, const S* pos, const S* t, int n, con
     const S wt = interval == knot ? S(1) - ft : ft;
     std::uint32_t slot[8];
     S w[8], frac[3];
-    CellCorners(level, pos + 3 * i, slot, w, frac);
+    CellCornersOf<true>(level, pos + 3 * i, slot, w, frac);
     for (int k = 0; k < 8; ++k) {
       S* v = table + std::size_t{slot[k]} * 3;
       for (int a = 0; a < 3; ++a) v[a] += wt * w[k] * dx0[3 * i + a];
@@ -79,13 +85,12 @@ void Deformation<S>::BackwardKnot(int knot, const S* pos, const S* t, int n, con
 template <typename S>
 void Deformation<S>::BackwardPosition(const S* params, const S* pos, const S* t, int n, const S* dx0,
                                       S* dpos) const {
-  GridLevel level;
-  level.res = static_cast<std::uint32_t>(config_.resolution);
+  const GridLevel level = SpatialLevel(config_);
   const S res = static_cast<S>(config_.resolution);
   for (int i = 0; i < n; ++i) {
     std::uint32_t slot[8];
     S w[8], frac[3], ft;
-    CellCorners(level, pos + 3 * i, slot, w, frac);
+    CellCornersOf<true>(level, pos + 3 * i, slot, w, frac);
     const int knot = TimeInterval(t[i], config_.time_knots, &ft);
     const S* g = dx0 + 3 * i;
     S dot[8] = {};  // (dx . g) at each corner, both time slices blended
