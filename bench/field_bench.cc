@@ -4,11 +4,12 @@
 //   forward            Field::Forward alone (keeps activations)
 //   infer              Field::Infer (rendering: nothing kept)
 //   zero grad          Field::ZeroGrad (a training step does it once)
-//   heads only         both heads' MLPs, forward + backward over the same batch in 512-sample tiles,
-//                      as GFLOP/s (2 flops per multiply-add, backward counted as 2x forward) against
-//                      the machine's fp32 peak (2 cores x 2.6 GHz x 2 FMA pipes x 16 lanes x 2 = ~190 GFLOP/s
-//                      here)
-// for the CPU and paper presets. Usage: field_bench [--threads N] [--seconds S] [--preset cpu|paper|both]
+//   heads only         both heads' MLPs, forward + backward over the same batch in 512-sample tiles, as
+//                      GFLOP/s (2 flops per multiply-add, backward counted as 2x forward) against the
+//                      ~190 GFLOP/s fp32 FMA peak of this machine kind (2 cores)
+// for the CPU preset (with and without deformation) and the paper preset. Each line gives wall-clock
+// throughput and samples per CPU-second: on a machine shared with other work the second is the steadier.
+// Usage: field_bench [--threads N] [--seconds S] [--preset cpu|paper|both]
 #include <tbb/global_control.h>
 #include <tbb/info.h>
 #include <tbb/parallel_for.h>
@@ -210,7 +211,12 @@ int main(int argc, char** argv) {
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
   std::printf("field_bench: %d threads, batch %d samples (%d rays x %d)\n\n", threads, kBatch, kRays,
               kSamplesPerRay);
-  if (preset == "cpu" || preset == "both") Bench("cpu", endorecon::field::FieldConfig::Cpu(), seconds);
+  if (preset == "cpu" || preset == "both") {
+    Bench("cpu", endorecon::field::FieldConfig::Cpu(), seconds);
+    endorecon::field::FieldConfig still = endorecon::field::FieldConfig::Cpu();
+    still.deformation.enabled = false;
+    Bench("cpu, static scene", still, seconds);
+  }
   if (preset == "paper" || preset == "both") Bench("paper", endorecon::field::FieldConfig::Paper(), seconds);
   return 0;
 }
