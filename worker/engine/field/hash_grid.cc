@@ -87,6 +87,18 @@ void PositionLevel(const GridLevel& level, const S* table, const S* pos, int n, 
   }
 }
 
+// Asks for a level's table to be brought into L2 with sequential prefetches before `lookups` random
+// reads of it: streaming the lines in is much faster than taking each one as a random miss. Skipped
+// when the table is larger than L2 could hold or the reads are too few to touch most of its lines.
+template <typename S>
+void PrefetchTable(const S* table, std::size_t count, std::size_t lookups) {
+  constexpr std::size_t kLine = 64, kMaxBytes = std::size_t{1} << 20;
+  const std::size_t bytes = count * sizeof(S);
+  if (bytes > kMaxBytes || lookups * kLine < bytes) return;
+  const char* p = reinterpret_cast<const char*>(table);
+  for (std::size_t b = 0; b < bytes; b += kLine) __builtin_prefetch(p + b, 0, 2);
+}
+
 // Calls fn(std::integral_constant<int, F>, std::bool_constant<dense>) for a level of the grid.
 template <typename Fn>
 void Dispatch(int features, const GridLevel& level, Fn&& fn) {
@@ -178,6 +190,7 @@ void HashGrid<S>::Forward(const S* params, const S* pos, int n, S* feat, int fea
         constexpr int F = decltype(fc)::value;
         constexpr bool kDense = decltype(dense)::value;
         const S* table = params + levels_[l].offset * F;
+        PrefetchTable(table, level_param_count(l), 8 * static_cast<std::size_t>(count));
         S* out = feat + static_cast<std::size_t>(begin) * feat_stride + l * F;
         int done = 0;
 #ifdef ENDORECON_FIELD_AVX512
@@ -202,6 +215,8 @@ void HashGrid<S>::BackwardLevel(int l, const S* pos, int n, const S* dfeat, int 
     constexpr int F = decltype(fc)::value;
     constexpr bool kDense = decltype(dense)::value;
     const GridLevel& level = levels_[l];
+    PrefetchTable(grads + offset, level_param_count(l), 8 * static_cast<std::size_t>(n));
+    if (dpos_add) PrefetchTable(params + offset, level_param_count(l), 8 * static_cast<std::size_t>(n));
     auto run = [&](auto position, int begin, int count) {
       constexpr bool kPosition = decltype(position)::value;
       const S* d = dfeat + static_cast<std::size_t>(begin) * dfeat_stride;
