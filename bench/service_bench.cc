@@ -32,7 +32,9 @@ namespace fs = std::filesystem;
 using namespace endorecon;
 using Clock = std::chrono::steady_clock;
 
-double Seconds(Clock::time_point since) { return std::chrono::duration<double>(Clock::now() - since).count(); }
+double Seconds(Clock::time_point since) {
+  return std::chrono::duration<double>(Clock::now() - since).count();
+}
 
 pid_t StartServer(const fs::path& data, int port, const fs::path& log) {
   const pid_t pid = fork();
@@ -42,8 +44,8 @@ pid_t StartServer(const fs::path& data, int port, const fs::path& log) {
     dup2(fd, STDERR_FILENO);
     const std::string binary = std::string(ENDORECON_BINARY_DIR) + "/server/endorecon-server";
     const std::string listen = "127.0.0.1:" + std::to_string(port);
-    execl(binary.c_str(), binary.c_str(), "--listen", listen.c_str(), "--data-dir", data.c_str(), "--metrics-port",
-          "-1", static_cast<char*>(nullptr));
+    execl(binary.c_str(), binary.c_str(), "--listen", listen.c_str(), "--data-dir", data.c_str(),
+          "--metrics-port", "-1", static_cast<char*>(nullptr));
     _exit(127);
   }
   return pid;
@@ -86,7 +88,9 @@ double PlainCopySeconds(const fs::path& from, const fs::path& to) {
 
 UploadCalls CallsOf(v1::JobService::Stub& stub) {
   UploadCalls calls;
-  calls.query = [&](grpc::ClientContext* c, const v1::Manifest& m, v1::UploadStatus* s) { return stub.QueryUpload(c, m, s); };
+  calls.query = [&](grpc::ClientContext* c, const v1::Manifest& m, v1::UploadStatus* s) {
+    return stub.QueryUpload(c, m, s);
+  };
   calls.open = [&](grpc::ClientContext* c, v1::UploadStatus* s) { return stub.Upload(c, s); };
   return calls;
 }
@@ -123,8 +127,10 @@ int main(int argc, char** argv) {
   UploadFiles(scratch / "clip", manifest, CallsOf(*jobs_stub), options);
   const double upload_s = Seconds(upload_start);
   const double mib = upload_mib;
-  std::printf("upload  %d MiB: plain copy %.2f s (%.0f MiB/s), upload over loopback %.2f s (%.0f MiB/s), ratio %.2f\n",
-              upload_mib, copy_s, mib / copy_s, upload_s, mib / upload_s, copy_s / upload_s);
+  std::printf(
+      "upload  %d MiB: plain copy %.2f s (%.0f MiB/s), upload over loopback %.2f s (%.0f MiB/s), ratio "
+      "%.2f\n",
+      upload_mib, copy_s, mib / copy_s, upload_s, mib / upload_s, copy_s / upload_s);
 
   // 2. Submit-to-start latency: an idle "worker" long-polls Lease, the client submits.
   v1::SubmitRequest submit;
@@ -193,8 +199,8 @@ int main(int argc, char** argv) {
   }
   std::this_thread::sleep_for(std::chrono::seconds(2));
   const long rss_loaded = RssKiB(server);
-  std::printf("memory  server RSS: %.1f MB idle, %.1f MB with %d queued jobs and %d watchers\n", rss_idle / 1024.0,
-              rss_loaded / 1024.0, jobs, watchers);
+  std::printf("memory  server RSS: %.1f MB idle, %.1f MB with %d queued jobs and %d watchers\n",
+              rss_idle / 1024.0, rss_loaded / 1024.0, jobs, watchers);
   for (auto& context : contexts) context->TryCancel();
   for (auto& stream : streams) stream->Finish();
   kill(server, SIGTERM);

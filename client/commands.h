@@ -17,10 +17,12 @@ namespace endorecon::client {
 
 // Flags shared by every subcommand.
 struct Globals {
-  std::string server;  // --server, else $ENDORECON_SERVER, else 127.0.0.1:50051
-  bool json = false;   // --json: machine-readable output on stdout
+  std::string server;     // --server, else $ENDORECON_SERVER, else 127.0.0.1:50051
+  bool json = false;      // --json: machine-readable output on stdout
   double timeout_s = 30;  // --timeout: deadline of each unary call
-  std::chrono::milliseconds timeout() const { return std::chrono::milliseconds(static_cast<long>(timeout_s * 1000)); }
+  std::chrono::milliseconds timeout() const {
+    return std::chrono::milliseconds(static_cast<long>(timeout_s * 1000));
+  }
   std::unique_ptr<v1::JobService::Stub> Connect() const;
 };
 

@@ -4,14 +4,22 @@ namespace endorecon::client {
 
 int ExitCodeFor(ErrorCode code) {
   switch (code) {
-    case ErrorCode::kInvalidArgument: return kExitInvalid;
-    case ErrorCode::kNotFound: return kExitNotFound;
-    case ErrorCode::kFailedPrecondition: return kExitPrecondition;
-    case ErrorCode::kResourceExhausted: return kExitResourceExhausted;
-    case ErrorCode::kUnavailable: return kExitUnavailable;
-    case ErrorCode::kDataLoss: return kExitDataLoss;
-    case ErrorCode::kCancelled: return kExitJobCancelled;
-    case ErrorCode::kInternal: return kExitInternal;
+    case ErrorCode::kInvalidArgument:
+      return kExitInvalid;
+    case ErrorCode::kNotFound:
+      return kExitNotFound;
+    case ErrorCode::kFailedPrecondition:
+      return kExitPrecondition;
+    case ErrorCode::kResourceExhausted:
+      return kExitResourceExhausted;
+    case ErrorCode::kUnavailable:
+      return kExitUnavailable;
+    case ErrorCode::kDataLoss:
+      return kExitDataLoss;
+    case ErrorCode::kCancelled:
+      return kExitJobCancelled;
+    case ErrorCode::kInternal:
+      return kExitInternal;
   }
   return kExitInternal;
 }

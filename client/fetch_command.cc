@@ -29,8 +29,8 @@ int Fetch(const Globals& globals, const FetchFlags& flags) {
   auto context = CallContext(globals.timeout());
   ThrowIfFailed(stub->Get(context.get(), get, &job), "fetch " + flags.id);
   if (job.state() != v1::SUCCEEDED) {
-    Fail(ErrorCode::kFailedPrecondition,
-         "job " + job.id() + " is " + v1::JobState_Name(job.state()) + "; results exist once it has SUCCEEDED");
+    Fail(ErrorCode::kFailedPrecondition, "job " + job.id() + " is " + v1::JobState_Name(job.state()) +
+                                             "; results exist once it has SUCCEEDED");
   }
   const auto pending = PendingDownloads(flags.out, job.result());
   std::int64_t received = 0;
@@ -41,8 +41,8 @@ int Fetch(const Globals& globals, const FetchFlags& flags) {
     for (const auto& range : pending) *request.add_files() = range;
     for (const auto& file : job.result().files()) to_receive += file.size();
     auto stream_context = CallContext(
-        globals.timeout() +
-        std::chrono::milliseconds(static_cast<std::int64_t>(1000.0 * static_cast<double>(to_receive) / flags.min_bytes_per_second)));
+        globals.timeout() + std::chrono::milliseconds(static_cast<std::int64_t>(
+                                1000.0 * static_cast<double>(to_receive) / flags.min_bytes_per_second)));
     auto reader = stub->Fetch(stream_context.get(), request);
     received = ReceiveFiles(*reader, flags.out);
   }

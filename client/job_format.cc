@@ -43,7 +43,9 @@ std::string HumanTime(std::int64_t unix_ms) {
 
 std::string ProgressLine(const v1::Progress& p) {
   const double fraction =
-      p.total_iterations() > 0 ? std::clamp(static_cast<double>(p.iteration()) / p.total_iterations(), 0.0, 1.0) : 0.0;
+      p.total_iterations() > 0
+          ? std::clamp(static_cast<double>(p.iteration()) / p.total_iterations(), 0.0, 1.0)
+          : 0.0;
   constexpr int kWidth = 24;
   const int filled = static_cast<int>(fraction * kWidth);
   std::string line = fmt::format("[{}{}]", std::string(static_cast<std::size_t>(filled), '#'),

@@ -15,11 +15,14 @@
 namespace endorecon::client {
 namespace {
 
-bool Terminal(v1::JobState state) { return state == v1::SUCCEEDED || state == v1::FAILED || state == v1::CANCELLED; }
+bool Terminal(v1::JobState state) {
+  return state == v1::SUCCEEDED || state == v1::FAILED || state == v1::CANCELLED;
+}
 
 void SavePreview(const std::string& dir, const v1::Preview& preview) {
   std::filesystem::create_directories(dir);
-  const auto path = std::filesystem::path(dir) / (preview.kind() + "-it" + std::to_string(preview.iteration()) + ".png");
+  const auto path =
+      std::filesystem::path(dir) / (preview.kind() + "-it" + std::to_string(preview.iteration()) + ".png");
   std::ofstream(path, std::ios::binary) << preview.png();
 }
 
@@ -50,8 +53,8 @@ class EventPrinter {
   void Preview(const v1::Preview& preview, const std::string& saved_to) {
     if (json_) return;
     EndLine();
-    std::cout << "preview " << preview.kind() << " at iteration " << preview.iteration() << " saved in " << saved_to
-              << std::endl;
+    std::cout << "preview " << preview.kind() << " at iteration " << preview.iteration() << " saved in "
+              << saved_to << std::endl;
   }
   void EndLine() {
     if (open_line_) std::cout << std::endl;
@@ -62,7 +65,8 @@ class EventPrinter {
   void Json(const google::protobuf::Message& message) {
     v1::JobEvent event;
     if (const auto* job = dynamic_cast<const v1::Job*>(&message)) *event.mutable_job() = *job;
-    if (const auto* progress = dynamic_cast<const v1::Progress*>(&message)) *event.mutable_progress() = *progress;
+    if (const auto* progress = dynamic_cast<const v1::Progress*>(&message))
+      *event.mutable_progress() = *progress;
     std::cout << ToJson(event) << std::endl;
   }
   bool json_;

@@ -23,7 +23,8 @@ int List(const Globals& globals, const ListFlags& flags) {
   v1::ListJobsRequest request;
   for (const auto& name : flags.states) {
     v1::JobState state;
-    if (!v1::JobState_Parse(name, &state)) FailInvalid("--state " + name + ": expected QUEUED, RUNNING, SUCCEEDED, FAILED or CANCELLED");
+    if (!v1::JobState_Parse(name, &state))
+      FailInvalid("--state " + name + ": expected QUEUED, RUNNING, SUCCEEDED, FAILED or CANCELLED");
     request.add_states(state);
   }
   const auto stub = globals.Connect();
@@ -40,12 +41,15 @@ int List(const Globals& globals, const ListFlags& flags) {
     std::cout << ToJson(all) << std::endl;
     return kExitOk;
   }
-  std::cout << fmt::format("{:<14} {:<10} {:>4} {:<19} {:>12} {}\n", "JOB", "STATE", "PRIO", "CREATED", "ITERATION", "NAME");
+  std::cout << fmt::format("{:<14} {:<10} {:>4} {:<19} {:>12} {}\n", "JOB", "STATE", "PRIO", "CREATED",
+                           "ITERATION", "NAME");
   for (const auto& job : all.jobs()) {
-    const std::string iteration =
-        job.has_progress() ? fmt::format("{}/{}", job.progress().iteration(), job.progress().total_iterations()) : "-";
-    std::cout << fmt::format("{:<14} {:<10} {:>4} {:<19} {:>12} {}\n", job.id(), v1::JobState_Name(job.state()),
-                             job.priority(), HumanTime(job.created_unix_ms()), iteration, job.name());
+    const std::string iteration = job.has_progress() ? fmt::format("{}/{}", job.progress().iteration(),
+                                                                   job.progress().total_iterations())
+                                                     : "-";
+    std::cout << fmt::format("{:<14} {:<10} {:>4} {:<19} {:>12} {}\n", job.id(),
+                             v1::JobState_Name(job.state()), job.priority(), HumanTime(job.created_unix_ms()),
+                             iteration, job.name());
   }
   return kExitOk;
 }
@@ -56,7 +60,9 @@ Command AddListCommand(CLI::App& app) {
   auto flags = std::make_shared<ListFlags>();
   auto* sub = app.add_subcommand("list", "list jobs, newest first");
   sub->add_option("--state", flags->states, "only jobs in these states (repeatable)");
-  sub->add_option("--limit", flags->limit, "at most this many jobs")->capture_default_str()->check(CLI::PositiveNumber);
+  sub->add_option("--limit", flags->limit, "at most this many jobs")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
   return [flags](const Globals& globals) { return List(globals, *flags); };
 }
 

@@ -13,19 +13,23 @@
 
 namespace endorecon::client {
 
-std::unique_ptr<v1::JobService::Stub> Globals::Connect() const { return v1::JobService::NewStub(OpenChannel(server)); }
+std::unique_ptr<v1::JobService::Stub> Globals::Connect() const {
+  return v1::JobService::NewStub(OpenChannel(server));
+}
 
 }  // namespace endorecon::client
 
 int main(int argc, char** argv) {
   using namespace endorecon::client;
-  CLI::App app{"endorecon: submit endoscopic clips to endorecon-server, watch the reconstruction, fetch results"};
+  CLI::App app{
+      "endorecon: submit endoscopic clips to endorecon-server, watch the reconstruction, fetch results"};
   app.footer(kExitCodeHelp);
   app.require_subcommand(1);
   Globals globals;
   const char* env_server = std::getenv("ENDORECON_SERVER");
   globals.server = env_server && *env_server ? env_server : "127.0.0.1:50051";
-  app.add_option("--server", globals.server, "server address host:port (default: $ENDORECON_SERVER or 127.0.0.1:50051)");
+  app.add_option("--server", globals.server,
+                 "server address host:port (default: $ENDORECON_SERVER or 127.0.0.1:50051)");
   app.add_flag("--json", globals.json, "machine-readable JSON on stdout (JSON Lines for streams)");
   app.add_option("--timeout", globals.timeout_s, "deadline of each call in seconds")->capture_default_str();
   std::map<std::string, Command> commands;

@@ -61,22 +61,26 @@ int Submit(const Globals& globals, const SubmitFlags& flags) {
   calls.query = [&](grpc::ClientContext* context, const v1::Manifest& m, v1::UploadStatus* status) {
     return stub->QueryUpload(context, m, status);
   };
-  calls.open = [&](grpc::ClientContext* context, v1::UploadStatus* status) { return stub->Upload(context, status); };
+  calls.open = [&](grpc::ClientContext* context, v1::UploadStatus* status) {
+    return stub->Upload(context, status);
+  };
   UploadOptions upload_options;
   upload_options.call_timeout = globals.timeout();
   const auto upload = UploadFiles(flags.clip, manifest, calls, upload_options);
   if (!globals.json) {
-    std::cerr << "uploaded " << manifest.files_size() << " file(s): " << HumanBytes(upload.bytes_sent) << " sent, "
-              << HumanBytes(upload.bytes_skipped) << " already on the server\n";
+    std::cerr << "uploaded " << manifest.files_size() << " file(s): " << HumanBytes(upload.bytes_sent)
+              << " sent, " << HumanBytes(upload.bytes_skipped) << " already on the server\n";
   }
-  if (!upload.status.complete()) Fail(ErrorCode::kUnavailable, "the upload is incomplete; run submit again to resume");
+  if (!upload.status.complete())
+    Fail(ErrorCode::kUnavailable, "the upload is incomplete; run submit again to resume");
 
   v1::SubmitRequest request;
   *request.mutable_clip() = manifest;
   *request.mutable_options() = options;
   request.set_priority(flags.priority);
-  request.set_name(flags.name.empty() ? std::filesystem::path(flags.clip).lexically_normal().filename().string()
-                                      : flags.name);
+  request.set_name(flags.name.empty()
+                       ? std::filesystem::path(flags.clip).lexically_normal().filename().string()
+                       : flags.name);
   v1::Job job;
   auto context = CallContext(globals.timeout());
   ThrowIfFailed(stub->Submit(context.get(), request, &job), "submit");
@@ -96,7 +100,8 @@ Command AddSubmitCommand(CLI::App& app) {
   auto flags = std::make_shared<SubmitFlags>();
   auto* sub = app.add_subcommand("submit", "upload a clip folder and queue its reconstruction");
   sub->add_option("CLIP", flags->clip, "clip folder (EndoNeRF layout or transforms.json)")->required();
-  sub->add_option("--config", flags->config, "JSON file overriding the preset (as endorecon-worker reconstruct)");
+  sub->add_option("--config", flags->config,
+                  "JSON file overriding the preset (as endorecon-worker reconstruct)");
   sub->add_option("--preset", flags->preset, "cpu or paper (default: the worker's, cpu)");
   sub->add_option("--iterations", flags->iterations, "training iterations (default: the preset's)");
   sub->add_option("--time-budget", flags->time_budget_s, "stop training after this many seconds (0: none)");

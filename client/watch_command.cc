@@ -12,8 +12,10 @@ Command AddWatchCommand(CLI::App& app) {
   auto options = std::make_shared<WatchOptions>();
   auto* sub = app.add_subcommand("watch", "follow a job: progress bar with PSNR and ETA, until it finishes");
   sub->add_option("JOB", *id, "job id")->required();
-  sub->add_option("--previews", options->previews_dir, "save the rendered and uncertainty previews in this folder");
-  return [id, options](const Globals& globals) { return ExitCodeFor(WatchJob(globals, *id, *options).state()); };
+  sub->add_option("--previews", options->previews_dir,
+                  "save the rendered and uncertainty previews in this folder");
+  return
+      [id, options](const Globals& globals) { return ExitCodeFor(WatchJob(globals, *id, *options).state()); };
 }
 
 }  // namespace endorecon::client

@@ -22,11 +22,13 @@ Command AddWorkersCommand(CLI::App& app) {
       std::cout << ToJson(response) << std::endl;
       return kExitOk;
     }
-    std::cout << fmt::format("{:<28} {:<6} {:<16} {:<19} {}\n", "WORKER", "ALIVE", "DEVICES", "LAST SEEN", "JOBS");
+    std::cout << fmt::format("{:<28} {:<6} {:<16} {:<19} {}\n", "WORKER", "ALIVE", "DEVICES", "LAST SEEN",
+                             "JOBS");
     for (const auto& worker : response.workers()) {
       std::cout << fmt::format("{:<28} {:<6} {:<16} {:<19} {}\n", worker.id(), worker.alive() ? "yes" : "no",
                                fmt::format("{}", fmt::join(worker.devices(), ",")),
-                               HumanTime(worker.last_seen_unix_ms()), fmt::format("{}", fmt::join(worker.job_ids(), ",")));
+                               HumanTime(worker.last_seen_unix_ms()),
+                               fmt::format("{}", fmt::join(worker.job_ids(), ",")));
     }
     return kExitOk;
   };

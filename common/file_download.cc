@@ -90,7 +90,8 @@ std::int64_t ReceiveFiles(grpc::ClientReaderInterface<v1::FileChunk>& reader, co
   v1::FileChunk chunk;
   while (reader.Read(&chunk)) {
     if (chunk.has_file()) {
-      if (current) FailInvalid("a new file began before '" + chunk.file().path() + "'s predecessor was complete");
+      if (current)
+        FailInvalid("a new file began before '" + chunk.file().path() + "'s predecessor was complete");
       current.emplace(dir, chunk.file(), chunk.offset());
     }
     if (!current) FailInvalid("a chunk arrived before its file's header");

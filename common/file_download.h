@@ -20,6 +20,7 @@ std::vector<v1::FileRange> PendingDownloads(const std::filesystem::path& dir, co
 // Writes a FileChunk stream into `dir`; returns the bytes written. Throws Error(kDataLoss) when a
 // file's digest does not match (its .part is removed), kInvalidArgument for an unsafe path or an
 // out-of-order chunk. Checks the stream's status itself.
-std::int64_t ReceiveFiles(grpc::ClientReaderInterface<v1::FileChunk>& reader, const std::filesystem::path& dir);
+std::int64_t ReceiveFiles(grpc::ClientReaderInterface<v1::FileChunk>& reader,
+                          const std::filesystem::path& dir);
 
 }  // namespace endorecon

@@ -25,7 +25,8 @@ bool SendFile(const std::filesystem::path& file, const v1::FileEntry& entry, std
   chunk->set_path(entry.path());
   std::string buffer(kChunkBytes, '\0');
   while (offset < entry.size()) {
-    const auto want = static_cast<std::streamsize>(std::min<std::int64_t>(kChunkBytes, entry.size() - offset));
+    const auto want =
+        static_cast<std::streamsize>(std::min<std::int64_t>(kChunkBytes, entry.size() - offset));
     in.read(buffer.data(), want);
     if (in.gcount() != want) Fail(ErrorCode::kDataLoss, file.string() + " is shorter than its manifest size");
     chunk->set_offset(offset);
@@ -66,8 +67,8 @@ void SendRound(const std::filesystem::path& dir, const v1::Manifest& manifest, c
 
 }  // namespace
 
-UploadResult UploadFiles(const std::filesystem::path& dir, const v1::Manifest& manifest, const UploadCalls& calls,
-                         const UploadOptions& options) {
+UploadResult UploadFiles(const std::filesystem::path& dir, const v1::Manifest& manifest,
+                         const UploadCalls& calls, const UploadOptions& options) {
   UploadResult result;
   // A round sends what the server lacks; another round is needed only when a concurrent upload of
   // the same content held a file (the server skips it) and did not finish it.

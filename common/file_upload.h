@@ -20,7 +20,7 @@ namespace endorecon {
 struct UploadCalls {
   std::function<grpc::Status(grpc::ClientContext*, const v1::Manifest&, v1::UploadStatus*)> query;
   std::function<std::unique_ptr<grpc::ClientWriterInterface<v1::UploadRequest>>(grpc::ClientContext*,
-                                                                               v1::UploadStatus*)>
+                                                                                v1::UploadStatus*)>
       open;
 };
 
@@ -32,15 +32,16 @@ struct UploadOptions {
 };
 
 struct UploadResult {
-  v1::UploadStatus status;       // the server's final word: complete when every file is a blob
-  std::int64_t bytes_sent = 0;   // bytes this call streamed
+  v1::UploadStatus status;         // the server's final word: complete when every file is a blob
+  std::int64_t bytes_sent = 0;     // bytes this call streamed
   std::int64_t bytes_skipped = 0;  // bytes the server already held (earlier uploads, same content)
 };
 
 // Uploads the files of `manifest`, read from `dir`; the result's status says whether it is
-// complete (it is not only if concurrent uploads of the same content kept it busy). Throws Error with the server's status (or
-// kNotFound/kDataLoss when a local file is missing or changed since the manifest was made).
-UploadResult UploadFiles(const std::filesystem::path& dir, const v1::Manifest& manifest, const UploadCalls& calls,
-                         const UploadOptions& options);
+// complete (it is not only if concurrent uploads of the same content kept it busy). Throws Error with the
+// server's status (or kNotFound/kDataLoss when a local file is missing or changed since the manifest was
+// made).
+UploadResult UploadFiles(const std::filesystem::path& dir, const v1::Manifest& manifest,
+                         const UploadCalls& calls, const UploadOptions& options);
 
 }  // namespace endorecon

@@ -35,12 +35,14 @@ void ValidateManifest(const v1::Manifest& manifest) {
   for (const auto& file : manifest.files()) {
     CheckRelativePath(file.path());
     if (!seen.insert(file.path()).second) FailInvalid("file '" + file.path() + "' is listed twice");
-    if (file.size() < 0) FailInvalid("file '" + file.path() + "' has negative size " + std::to_string(file.size()));
+    if (file.size() < 0)
+      FailInvalid("file '" + file.path() + "' has negative size " + std::to_string(file.size()));
     const auto& digest = file.sha256();
     const bool hex = digest.size() == 64 && std::all_of(digest.begin(), digest.end(), [](char c) {
                        return (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f');
                      });
-    if (!hex) FailInvalid("file '" + file.path() + "' has sha256 '" + digest + "', not 64 lowercase hex digits");
+    if (!hex)
+      FailInvalid("file '" + file.path() + "' has sha256 '" + digest + "', not 64 lowercase hex digits");
   }
 }
 

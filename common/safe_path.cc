@@ -28,7 +28,8 @@ void CheckRelativePath(std::string_view path) {
   while (start <= path.size()) {
     const std::size_t end = std::min(path.find('/', start), path.size());
     const std::string_view segment = path.substr(start, end - start);
-    if (segment.empty() || segment == "." || segment == "..") Reject(path, "has an empty, '.' or '..' segment");
+    if (segment.empty() || segment == "." || segment == "..")
+      Reject(path, "has an empty, '.' or '..' segment");
     start = end + 1;
   }
 }

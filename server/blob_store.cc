@@ -40,7 +40,9 @@ fs::path BlobStore::PathOf(const std::string& sha256) const {
   return root_ / "blobs" / sha256.substr(0, 2) / sha256;
 }
 
-fs::path BlobStore::PartialPath(const std::string& sha256) const { return root_ / "partial" / (sha256 + ".part"); }
+fs::path BlobStore::PartialPath(const std::string& sha256) const {
+  return root_ / "partial" / (sha256 + ".part");
+}
 
 std::int64_t BlobStore::Committed(const v1::FileEntry& entry) const {
   if (Has(entry.sha256())) return entry.size();
@@ -53,14 +55,14 @@ std::int64_t BlobStore::Committed(const v1::FileEntry& entry) const {
 std::unique_ptr<BlobStore::Writer> BlobStore::OpenWriter(const v1::FileEntry& entry) {
   auto writer = TryOpenWriter(entry);
   if (!writer) {
-    Fail(ErrorCode::kFailedPrecondition,
-         "'" + entry.path() + "' (sha256 " + entry.sha256() + ") is being uploaded by another stream right now");
+    Fail(ErrorCode::kFailedPrecondition, "'" + entry.path() + "' (sha256 " + entry.sha256() +
+                                             ") is being uploaded by another stream right now");
   }
   return writer;
 }
 
 std::unique_ptr<BlobStore::Writer> BlobStore::TryOpenWriter(const v1::FileEntry& entry,
-                                                             std::chrono::milliseconds wait) {
+                                                            std::chrono::milliseconds wait) {
   {
     std::unique_lock lock(mutex_);
     const bool free = released_.wait_for(lock, wait, [&] { return writing_.count(entry.sha256()) == 0; });
@@ -134,8 +136,8 @@ void BlobStore::Writer::Append(std::int64_t offset, std::string_view data) {
   data.remove_prefix(overlap);
   if (committed_ + static_cast<std::int64_t>(data.size()) > entry_.size()) {
     FailInvalid("chunk of '" + entry_.path() + "' runs to byte " +
-                std::to_string(committed_ + static_cast<std::int64_t>(data.size())) + " past its declared size " +
-                std::to_string(entry_.size()));
+                std::to_string(committed_ + static_cast<std::int64_t>(data.size())) +
+                " past its declared size " + std::to_string(entry_.size()));
   }
   std::size_t written = 0;
   while (written < data.size()) {

@@ -8,7 +8,8 @@
 
 namespace endorecon::server {
 
-std::int64_t SendFiles(const BlobStore& blobs, const std::vector<std::pair<v1::FileEntry, std::int64_t>>& files,
+std::int64_t SendFiles(const BlobStore& blobs,
+                       const std::vector<std::pair<v1::FileEntry, std::int64_t>>& files,
                        grpc::ServerWriterInterface<v1::FileChunk>& writer) {
   std::int64_t sent = 0;
   std::string buffer(kChunkBytes, '\0');
@@ -22,14 +23,17 @@ std::int64_t SendFiles(const BlobStore& blobs, const std::vector<std::pair<v1::F
     std::int64_t offset = start;
     bool first = true;
     while (first || offset < entry.size()) {
-      const auto want = static_cast<std::streamsize>(std::min<std::int64_t>(kChunkBytes, entry.size() - offset));
+      const auto want =
+          static_cast<std::streamsize>(std::min<std::int64_t>(kChunkBytes, entry.size() - offset));
       in.read(buffer.data(), want);
-      if (in.gcount() != want) Fail(ErrorCode::kDataLoss, "blob of '" + entry.path() + "' is shorter than its entry");
+      if (in.gcount() != want)
+        Fail(ErrorCode::kDataLoss, "blob of '" + entry.path() + "' is shorter than its entry");
       v1::FileChunk chunk;
       if (first) *chunk.mutable_file() = entry;
       chunk.set_offset(offset);
       chunk.set_data(buffer.data(), static_cast<std::size_t>(want));
-      if (!writer.Write(chunk)) Fail(ErrorCode::kUnavailable, "the receiver went away during '" + entry.path() + "'");
+      if (!writer.Write(chunk))
+        Fail(ErrorCode::kUnavailable, "the receiver went away during '" + entry.path() + "'");
       offset += want;
       sent += want;
       first = false;

@@ -16,7 +16,8 @@ namespace endorecon::server {
 
 // Sends each (entry, offset). Throws kInvalidArgument for an offset past a file's size, kNotFound
 // for a missing blob, kUnavailable when the receiver went away. Returns the bytes sent.
-std::int64_t SendFiles(const BlobStore& blobs, const std::vector<std::pair<v1::FileEntry, std::int64_t>>& files,
+std::int64_t SendFiles(const BlobStore& blobs,
+                       const std::vector<std::pair<v1::FileEntry, std::int64_t>>& files,
                        grpc::ServerWriterInterface<v1::FileChunk>& writer);
 
 }  // namespace endorecon::server

@@ -1,7 +1,8 @@
 #include "server/job_coordinator.h"
 
-#include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
+
+#include <nlohmann/json.hpp>
 
 #include "common/error.h"
 #include "common/manifest.h"
@@ -9,7 +10,9 @@
 namespace endorecon::server {
 namespace {
 
-bool Terminal(v1::JobState state) { return state == v1::SUCCEEDED || state == v1::FAILED || state == v1::CANCELLED; }
+bool Terminal(v1::JobState state) {
+  return state == v1::SUCCEEDED || state == v1::FAILED || state == v1::CANCELLED;
+}
 
 void ValidateOptions(const v1::ReconstructionOptions& options) {
   if (!options.preset().empty() && options.preset() != "cpu" && options.preset() != "paper") {
@@ -39,18 +42,21 @@ void RequireBlobs(const BlobStore& blobs, const v1::Manifest& manifest, const st
   }
   if (missing > 0) {
     endorecon::Fail(ErrorCode::kFailedPrecondition, std::to_string(missing) + " file(s) of the " + what +
-                                             " are not uploaded yet, first '" + first + "'; upload them first");
+                                                        " are not uploaded yet, first '" + first +
+                                                        "'; upload them first");
   }
 }
 
 }  // namespace
 
 std::int64_t NowUnixMs() {
-  return std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::system_clock::now().time_since_epoch())
+  return std::chrono::duration_cast<std::chrono::milliseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
       .count();
 }
 
-JobCoordinator::JobCoordinator(CoordinatorParts parts, int max_attempts) : parts_(parts), max_attempts_(max_attempts) {}
+JobCoordinator::JobCoordinator(CoordinatorParts parts, int max_attempts)
+    : parts_(parts), max_attempts_(max_attempts) {}
 
 void JobCoordinator::Recover() {
   std::lock_guard lock(mutex_);
@@ -80,7 +86,8 @@ StoredJob JobCoordinator::LoadLeased(const std::string& lease_id) {
   const auto lease = parts_.leases.Find(lease_id);
   if (!lease) {
     endorecon::Fail(ErrorCode::kFailedPrecondition,
-         "lease '" + lease_id + "' is not held: it expired, or its job was cancelled or handed to another worker");
+                    "lease '" + lease_id +
+                        "' is not held: it expired, or its job was cancelled or handed to another worker");
   }
   parts_.workers.Touch(lease->worker_id);
   return Load(lease->job_id);
@@ -100,7 +107,8 @@ void JobCoordinator::Finish(v1::Job& job, v1::JobState state, const std::string&
   job.clear_lease_id();
   Save(job);
   const double run_seconds =
-      job.started_unix_ms() > 0 ? static_cast<double>(job.finished_unix_ms() - job.started_unix_ms()) / 1000.0 : -1.0;
+      job.started_unix_ms() > 0 ? static_cast<double>(job.finished_unix_ms() - job.started_unix_ms()) / 1000.0
+                                : -1.0;
   parts_.metrics.JobFinished(state, run_seconds);
   spdlog::info("job {} {}{}{}", job.id(), v1::JobState_Name(state), error.empty() ? "" : ": ", error);
 }
@@ -149,7 +157,8 @@ v1::Job JobCoordinator::Submit(const v1::SubmitRequest& request) {
 
 v1::Job JobCoordinator::Get(const std::string& id) { return Load(id).job; }
 
-JobStore::Page JobCoordinator::List(const std::vector<v1::JobState>& states, int limit, std::int64_t before_seq) {
+JobStore::Page JobCoordinator::List(const std::vector<v1::JobState>& states, int limit,
+                                    std::int64_t before_seq) {
   return parts_.store.List(states, limit, before_seq);
 }
 
@@ -158,7 +167,8 @@ v1::Job JobCoordinator::Cancel(const std::string& id) {
   auto stored = Load(id);
   auto& job = stored.job;
   if (Terminal(job.state())) {
-    endorecon::Fail(ErrorCode::kFailedPrecondition, "job " + id + " is already " + v1::JobState_Name(job.state()));
+    endorecon::Fail(ErrorCode::kFailedPrecondition,
+                    "job " + id + " is already " + v1::JobState_Name(job.state()));
   }
   if (job.state() == v1::QUEUED) {
     parts_.scheduler.Remove(id);
@@ -170,7 +180,8 @@ v1::Job JobCoordinator::Cancel(const std::string& id) {
   return job;
 }
 
-std::optional<JobCoordinator::Granted> JobCoordinator::Lease(const std::string& worker_id, Clock::time_point deadline) {
+std::optional<JobCoordinator::Granted> JobCoordinator::Lease(const std::string& worker_id,
+                                                             Clock::time_point deadline) {
   parts_.workers.Touch(worker_id);
   while (true) {
     const auto next = parts_.scheduler.PopWait(deadline);

@@ -9,13 +9,20 @@
 namespace endorecon::server {
 namespace {
 
-bool Terminal(v1::JobState state) { return state == v1::SUCCEEDED || state == v1::FAILED || state == v1::CANCELLED; }
+bool Terminal(v1::JobState state) {
+  return state == v1::SUCCEEDED || state == v1::FAILED || state == v1::CANCELLED;
+}
 
 }  // namespace
 
-JobServiceImpl::JobServiceImpl(JobCoordinator& coordinator, UploadReceiver& uploads, BlobStore& blobs, WatchHub& hub,
-                               WorkerRegistry& workers, Metrics& metrics)
-    : coordinator_(coordinator), uploads_(uploads), blobs_(blobs), hub_(hub), workers_(workers), metrics_(metrics) {}
+JobServiceImpl::JobServiceImpl(JobCoordinator& coordinator, UploadReceiver& uploads, BlobStore& blobs,
+                               WatchHub& hub, WorkerRegistry& workers, Metrics& metrics)
+    : coordinator_(coordinator),
+      uploads_(uploads),
+      blobs_(blobs),
+      hub_(hub),
+      workers_(workers),
+      metrics_(metrics) {}
 
 grpc::Status JobServiceImpl::QueryUpload(grpc::ServerContext*, const v1::Manifest* manifest,
                                          v1::UploadStatus* status) {
@@ -88,7 +95,8 @@ grpc::Status JobServiceImpl::Watch(grpc::ServerContext* context, const v1::Watch
     if (!writer->Write(first) || Terminal(first.job().state())) return grpc::Status::OK;
     std::uint64_t seen = 0;
     while (!context->IsCancelled()) {
-      auto changes = hub_.Wait(request->id(), seen, std::chrono::steady_clock::now() + std::chrono::seconds(1));
+      auto changes =
+          hub_.Wait(request->id(), seen, std::chrono::steady_clock::now() + std::chrono::seconds(1));
       seen = changes.version;
       std::vector<v1::JobEvent> events;
       if (changes.progress) *events.emplace_back().mutable_progress() = *changes.progress;
@@ -110,8 +118,8 @@ grpc::Status JobServiceImpl::Fetch(grpc::ServerContext*, const v1::FetchRequest*
   return GuardStatus([&] {
     const auto job = coordinator_.Get(request->id());
     if (job.state() != v1::SUCCEEDED) {
-      Fail(ErrorCode::kFailedPrecondition,
-           "job " + job.id() + " is " + v1::JobState_Name(job.state()) + "; results exist once it has SUCCEEDED");
+      Fail(ErrorCode::kFailedPrecondition, "job " + job.id() + " is " + v1::JobState_Name(job.state()) +
+                                               "; results exist once it has SUCCEEDED");
     }
     std::map<std::string, v1::FileEntry> by_path;
     for (const auto& entry : job.result().files()) by_path[entry.path()] = entry;
@@ -121,7 +129,8 @@ grpc::Status JobServiceImpl::Fetch(grpc::ServerContext*, const v1::FetchRequest*
     }
     for (const auto& range : request->files()) {
       const auto found = by_path.find(range.path());
-      if (found == by_path.end()) Fail(ErrorCode::kNotFound, "job " + job.id() + " has no result '" + range.path() + "'");
+      if (found == by_path.end())
+        Fail(ErrorCode::kNotFound, "job " + job.id() + " has no result '" + range.path() + "'");
       files.emplace_back(found->second, range.offset());
     }
     metrics_.DownloadBytes(SendFiles(blobs_, files, *writer));

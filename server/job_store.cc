@@ -37,7 +37,8 @@ class Statement {
 
  private:
   void Check(int rc, const char* what) {
-    if (rc != SQLITE_OK) Fail(ErrorCode::kUnavailable, std::string("job store: ") + what + ": " + sqlite3_errmsg(db_));
+    if (rc != SQLITE_OK)
+      Fail(ErrorCode::kUnavailable, std::string("job store: ") + what + ": " + sqlite3_errmsg(db_));
   }
   sqlite3* db_;
   sqlite3_stmt* stmt_ = nullptr;
@@ -54,7 +55,8 @@ void Exec(sqlite3* db, const char* sql) {
 
 v1::Job Parse(const std::string& bytes, std::int64_t seq) {
   v1::Job job;
-  if (!job.ParseFromString(bytes)) Fail(ErrorCode::kDataLoss, "job store: row " + std::to_string(seq) + " is corrupt");
+  if (!job.ParseFromString(bytes))
+    Fail(ErrorCode::kDataLoss, "job store: row " + std::to_string(seq) + " is corrupt");
   return job;
 }
 

@@ -55,14 +55,17 @@ int Run(const ServerFlags& flags) {
   LeaseTable leases(std::chrono::milliseconds(flags.lease_ttl_ms));
   WorkerRegistry workers(std::chrono::milliseconds(flags.lease_ttl_ms));
   WatchHub hub;
-  Metrics metrics(flags.metrics_port >= 0 ? HostOf(flags.listen) + ":" + std::to_string(flags.metrics_port) : "");
+  Metrics metrics(flags.metrics_port >= 0 ? HostOf(flags.listen) + ":" + std::to_string(flags.metrics_port)
+                                          : "");
   JobCoordinator coordinator({store, blobs, scheduler, leases, workers, hub, metrics}, flags.max_attempts);
   coordinator.Recover();
-  UploadReceiver uploads(blobs, flags.max_upload_bytes, [&](std::int64_t bytes) { metrics.UploadBytes(bytes); });
+  UploadReceiver uploads(blobs, flags.max_upload_bytes,
+                         [&](std::int64_t bytes) { metrics.UploadBytes(bytes); });
   JobServiceImpl job_service(coordinator, uploads, blobs, hub, workers, metrics);
-  WorkerServiceImpl worker_service(coordinator, uploads, blobs, workers, metrics,
-                                   {std::chrono::milliseconds(flags.lease_ttl_ms),
-                                    std::chrono::milliseconds(flags.heartbeat_ms), std::chrono::milliseconds(20000)});
+  WorkerServiceImpl worker_service(
+      coordinator, uploads, blobs, workers, metrics,
+      {std::chrono::milliseconds(flags.lease_ttl_ms), std::chrono::milliseconds(flags.heartbeat_ms),
+       std::chrono::milliseconds(20000)});
 
   grpc::EnableDefaultHealthCheckService(true);
   grpc::ServerBuilder builder;
@@ -77,14 +80,15 @@ int Run(const ServerFlags& flags) {
   auto* health = server->GetHealthCheckService();
 
   const std::string address = HostOf(flags.listen) + ":" + std::to_string(port);
-  spdlog::info("endorecon-server listening on {} (data in {}, metrics on port {})", address, data_dir.string(),
-               metrics.port());
+  spdlog::info("endorecon-server listening on {} (data in {}, metrics on port {})", address,
+               data_dir.string(), metrics.port());
   if (IsLoopbackAddress(flags.listen)) {
     spdlog::info("listening on loopback only; pass --listen 0.0.0.0:{} to serve other machines", port);
   } else {
-    spdlog::warn("listening beyond loopback on {} without TLS or tokens (not implemented yet): anyone who can reach "
-                 "this port can submit jobs and read results; keep it on a trusted network",
-                 flags.listen);
+    spdlog::warn(
+        "listening beyond loopback on {} without TLS or tokens (not implemented yet): anyone who can reach "
+        "this port can submit jobs and read results; keep it on a trusted network",
+        flags.listen);
   }
 
   std::atomic<bool> stopping{false};
@@ -125,19 +129,23 @@ int main(int argc, char** argv) {
   CLI::App app{"endorecon-server: queues reconstruction jobs durably and hands them to pulling workers"};
   app.add_option("--listen", flags.listen, "gRPC address host:port (loopback by default; port 0 picks one)")
       ->capture_default_str();
-  app.add_option("--data-dir", flags.data_dir, "where jobs (SQLite) and blobs are kept")->capture_default_str();
+  app.add_option("--data-dir", flags.data_dir, "where jobs (SQLite) and blobs are kept")
+      ->capture_default_str();
   app.add_option("--metrics-port", flags.metrics_port,
                  "Prometheus /metrics port on the --listen host (0 picks one, -1 disables)")
       ->capture_default_str();
   app.add_option("--max-upload-bytes", flags.max_upload_bytes, "largest upload accepted (sum of its files)")
       ->capture_default_str();
-  app.add_option("--max-attempts", flags.max_attempts, "attempts before a job whose workers keep vanishing fails")
+  app.add_option("--max-attempts", flags.max_attempts,
+                 "attempts before a job whose workers keep vanishing fails")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
-  app.add_option("--lease-ttl-ms", flags.lease_ttl_ms, "a running job whose worker is silent this long is requeued")
+  app.add_option("--lease-ttl-ms", flags.lease_ttl_ms,
+                 "a running job whose worker is silent this long is requeued")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
-  app.add_option("--heartbeat-ms", flags.heartbeat_ms, "how often workers report (told to them at registration)")
+  app.add_option("--heartbeat-ms", flags.heartbeat_ms,
+                 "how often workers report (told to them at registration)")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
   CLI11_PARSE(app, argc, argv);

@@ -7,7 +7,8 @@ using prometheus::BuildCounter;
 using prometheus::BuildGauge;
 using prometheus::BuildHistogram;
 
-prometheus::Counter& Counter(prometheus::Registry& registry, const std::string& name, const std::string& help) {
+prometheus::Counter& Counter(prometheus::Registry& registry, const std::string& name,
+                             const std::string& help) {
   return BuildCounter().Name(name).Help(help).Register(registry).Add({});
 }
 
@@ -29,8 +30,8 @@ Metrics::Metrics(const std::string& bind_address)
                     .Name("endorecon_job_duration_seconds")
                     .Help("Run time of successful jobs, from lease to completion")
                     .Register(*registry_)
-                    .Add({}, prometheus::Histogram::BucketBoundaries{10, 30, 60, 120, 300, 600, 1800, 3600, 7200,
-                                                                     14400, 43200, 86400})),
+                    .Add({}, prometheus::Histogram::BucketBoundaries{10, 30, 60, 120, 300, 600, 1800, 3600,
+                                                                     7200, 14400, 43200, 86400})),
       upload_bytes_(Counter(*registry_, "endorecon_upload_bytes_total", "Bytes committed by uploads")),
       download_bytes_(Counter(*registry_, "endorecon_download_bytes_total", "Bytes sent by downloads")),
       workers_connected_(Gauge(*registry_, "endorecon_workers_connected", "Workers heard from recently")),
@@ -60,7 +61,8 @@ void Metrics::JobFinished(v1::JobState state, double run_seconds) {
 void Metrics::SetJobsByState(const std::map<v1::JobState, std::int64_t>& counts) {
   for (const auto state : {v1::QUEUED, v1::RUNNING, v1::SUCCEEDED, v1::FAILED, v1::CANCELLED}) {
     const auto found = counts.find(state);
-    jobs_.Add({{"state", v1::JobState_Name(state)}}).Set(found == counts.end() ? 0.0 : static_cast<double>(found->second));
+    jobs_.Add({{"state", v1::JobState_Name(state)}})
+        .Set(found == counts.end() ? 0.0 : static_cast<double>(found->second));
   }
 }
 

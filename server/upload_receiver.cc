@@ -19,8 +19,9 @@ v1::UploadStatus UploadReceiver::Query(const v1::Manifest& manifest) const {
   ValidateManifest(manifest);
   const std::int64_t total = TotalBytes(manifest);
   if (total > max_upload_bytes_) {
-    Fail(ErrorCode::kResourceExhausted, "upload of " + std::to_string(total) + " bytes exceeds the server's limit of " +
-                                            std::to_string(max_upload_bytes_) + " bytes (--max-upload-bytes)");
+    Fail(ErrorCode::kResourceExhausted,
+         "upload of " + std::to_string(total) + " bytes exceeds the server's limit of " +
+             std::to_string(max_upload_bytes_) + " bytes (--max-upload-bytes)");
   }
   v1::UploadStatus status;
   std::int64_t committed = 0;
@@ -33,8 +34,9 @@ v1::UploadStatus UploadReceiver::Query(const v1::Manifest& manifest) const {
   }
   const auto free_bytes = static_cast<std::int64_t>(std::filesystem::space(blobs_.root()).available);
   if (total - committed > free_bytes) {
-    Fail(ErrorCode::kResourceExhausted, "upload needs " + std::to_string(total - committed) + " more bytes but only " +
-                                            std::to_string(free_bytes) + " are free on the server's disk");
+    Fail(ErrorCode::kResourceExhausted, "upload needs " + std::to_string(total - committed) +
+                                            " more bytes but only " + std::to_string(free_bytes) +
+                                            " are free on the server's disk");
   }
   status.set_committed_bytes(committed);
   status.set_total_bytes(total);
@@ -48,7 +50,8 @@ v1::UploadStatus UploadReceiver::Receive(grpc::ServerReaderInterface<v1::UploadR
   v1::UploadRequest request;
   if (!reader.Read(&request)) FailInvalid("empty upload stream: the first message must be the manifest");
   if (!request.has_manifest()) {
-    FailInvalid("the first message of an upload must be its manifest, got a chunk of '" + request.chunk().path() + "'");
+    FailInvalid("the first message of an upload must be its manifest, got a chunk of '" +
+                request.chunk().path() + "'");
   }
   const v1::Manifest manifest = request.manifest();
   Query(manifest);
@@ -59,7 +62,8 @@ v1::UploadStatus UploadReceiver::Receive(grpc::ServerReaderInterface<v1::UploadR
   std::string writer_path;
   std::set<std::string> busy;
   while (reader.Read(&request)) {
-    if (request.has_manifest()) FailInvalid("a second manifest in one upload stream; open a new stream instead");
+    if (request.has_manifest())
+      FailInvalid("a second manifest in one upload stream; open a new stream instead");
     const auto& chunk = request.chunk();
     const auto found = entries.find(chunk.path());
     if (found == entries.end()) FailInvalid("chunk of '" + chunk.path() + "', which is not in the manifest");

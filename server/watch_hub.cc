@@ -3,7 +3,9 @@
 namespace endorecon::server {
 namespace {
 
-bool Terminal(v1::JobState state) { return state == v1::SUCCEEDED || state == v1::FAILED || state == v1::CANCELLED; }
+bool Terminal(v1::JobState state) {
+  return state == v1::SUCCEEDED || state == v1::FAILED || state == v1::CANCELLED;
+}
 
 }  // namespace
 
@@ -34,7 +36,9 @@ void WatchHub::PublishJob(const v1::Job& job) {
 }
 
 void WatchHub::PublishProgress(const std::string& job_id, const v1::Progress& progress) {
-  Publish(job_id, [&](Entry& entry, std::uint64_t version) { entry.progress = Versioned<v1::Progress>{version, progress}; });
+  Publish(job_id, [&](Entry& entry, std::uint64_t version) {
+    entry.progress = Versioned<v1::Progress>{version, progress};
+  });
 }
 
 void WatchHub::PublishPreview(const std::string& job_id, const v1::Preview& preview) {

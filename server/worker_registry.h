@@ -18,7 +18,8 @@ class WorkerRegistry {
   // A worker counts as alive (connected) for `alive_window` after its last call.
   explicit WorkerRegistry(std::chrono::milliseconds alive_window) : alive_window_(alive_window) {}
 
-  void Register(const std::string& worker_id, const std::string& hostname, const std::vector<std::string>& devices);
+  void Register(const std::string& worker_id, const std::string& hostname,
+                const std::vector<std::string>& devices);
   void Touch(const std::string& worker_id);
   void AddJob(const std::string& worker_id, const std::string& job_id);
   void RemoveJob(const std::string& worker_id, const std::string& job_id);

@@ -10,7 +10,12 @@ namespace endorecon::server {
 
 WorkerServiceImpl::WorkerServiceImpl(JobCoordinator& coordinator, UploadReceiver& uploads, BlobStore& blobs,
                                      WorkerRegistry& workers, Metrics& metrics, WorkerTiming timing)
-    : coordinator_(coordinator), uploads_(uploads), blobs_(blobs), workers_(workers), metrics_(metrics), timing_(timing) {}
+    : coordinator_(coordinator),
+      uploads_(uploads),
+      blobs_(blobs),
+      workers_(workers),
+      metrics_(metrics),
+      timing_(timing) {}
 
 grpc::Status WorkerServiceImpl::Register(grpc::ServerContext*, const v1::RegisterRequest* request,
                                          v1::RegisterResponse* response) {
@@ -52,8 +57,8 @@ grpc::Status WorkerServiceImpl::Lease(grpc::ServerContext* context, const v1::Le
   });
 }
 
-grpc::Status WorkerServiceImpl::Report(grpc::ServerContext*,
-                                       grpc::ServerReaderWriter<v1::ProgressReply, v1::ProgressUpdate>* stream) {
+grpc::Status WorkerServiceImpl::Report(
+    grpc::ServerContext*, grpc::ServerReaderWriter<v1::ProgressReply, v1::ProgressUpdate>* stream) {
   return GuardStatus([&] {
     v1::ProgressUpdate update;
     while (stream->Read(&update)) {
@@ -65,7 +70,8 @@ grpc::Status WorkerServiceImpl::Report(grpc::ServerContext*,
   });
 }
 
-grpc::Status WorkerServiceImpl::Complete(grpc::ServerContext*, const v1::CompleteRequest* request, v1::Job* job) {
+grpc::Status WorkerServiceImpl::Complete(grpc::ServerContext*, const v1::CompleteRequest* request,
+                                         v1::Job* job) {
   return GuardStatus([&] {
     *job = coordinator_.Complete(*request);
     return grpc::Status::OK;

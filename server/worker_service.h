@@ -18,8 +18,8 @@ struct WorkerTiming {
 
 class WorkerServiceImpl final : public v1::WorkerService::Service {
  public:
-  WorkerServiceImpl(JobCoordinator& coordinator, UploadReceiver& uploads, BlobStore& blobs, WorkerRegistry& workers,
-                    Metrics& metrics, WorkerTiming timing);
+  WorkerServiceImpl(JobCoordinator& coordinator, UploadReceiver& uploads, BlobStore& blobs,
+                    WorkerRegistry& workers, Metrics& metrics, WorkerTiming timing);
 
   grpc::Status Register(grpc::ServerContext*, const v1::RegisterRequest*, v1::RegisterResponse*) override;
   grpc::Status Lease(grpc::ServerContext*, const v1::LeaseRequest*, v1::LeaseResponse*) override;
@@ -28,8 +28,10 @@ class WorkerServiceImpl final : public v1::WorkerService::Service {
   grpc::Status Complete(grpc::ServerContext*, const v1::CompleteRequest*, v1::Job*) override;
   grpc::Status Fail(grpc::ServerContext*, const v1::FailRequest*, v1::Job*) override;
   grpc::Status QueryBlobs(grpc::ServerContext*, const v1::Manifest*, v1::UploadStatus*) override;
-  grpc::Status PutBlobs(grpc::ServerContext*, grpc::ServerReader<v1::UploadRequest>*, v1::UploadStatus*) override;
-  grpc::Status GetBlobs(grpc::ServerContext*, const v1::GetBlobsRequest*, grpc::ServerWriter<v1::FileChunk>*) override;
+  grpc::Status PutBlobs(grpc::ServerContext*, grpc::ServerReader<v1::UploadRequest>*,
+                        v1::UploadStatus*) override;
+  grpc::Status GetBlobs(grpc::ServerContext*, const v1::GetBlobsRequest*,
+                        grpc::ServerWriter<v1::FileChunk>*) override;
 
  private:
   JobCoordinator& coordinator_;

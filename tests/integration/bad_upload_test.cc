@@ -48,12 +48,14 @@ Outcome Send(Cluster& cluster, const std::vector<v1::UploadRequest>& requests, b
   if (cancel) {
     // Let the server take the chunks in before the stream is cut.
     const auto& manifest = requests.front().manifest();
-    WaitUntil([&] {
-      grpc::ClientContext query;
-      v1::UploadStatus status;
-      cluster.stub().QueryUpload(&query, manifest, &status);
-      return status.committed_bytes() > 0;
-    }, std::chrono::seconds(10));
+    WaitUntil(
+        [&] {
+          grpc::ClientContext query;
+          v1::UploadStatus status;
+          cluster.stub().QueryUpload(&query, manifest, &status);
+          return status.committed_bytes() > 0;
+        },
+        std::chrono::seconds(10));
     context.TryCancel();
   } else {
     writer->WritesDone();
@@ -78,7 +80,8 @@ class BadUploadTest : public ::testing::Test {
 
 TEST_F(BadUploadTest, WrongChecksumIsDataLossAndLeavesNothing) {
   auto entry = Entry("images/000000.png", "the bytes the client promised");
-  const auto outcome = Send(cluster_, {ManifestOf({entry}), Chunk(entry.path(), 0, "the bytes that really arrive!")});
+  const auto outcome =
+      Send(cluster_, {ManifestOf({entry}), Chunk(entry.path(), 0, "the bytes that really arrive!")});
   EXPECT_EQ(outcome.status.error_code(), grpc::StatusCode::DATA_LOSS) << outcome.status.error_message();
   EXPECT_NE(outcome.status.error_message().find("images/000000.png"), std::string::npos);
   EXPECT_EQ(Blobs(), 0);
@@ -88,7 +91,8 @@ TEST_F(BadUploadTest, WrongChecksumIsDataLossAndLeavesNothing) {
 TEST_F(BadUploadTest, TruncatedStreamKeepsCommittedBytesAndPromotesNothing) {
   const std::string bytes(300000, 'x');
   const auto entry = Entry("clip.bin", bytes);
-  const auto cut = Send(cluster_, {ManifestOf({entry}), Chunk(entry.path(), 0, bytes.substr(0, 100000))}, true);
+  const auto cut =
+      Send(cluster_, {ManifestOf({entry}), Chunk(entry.path(), 0, bytes.substr(0, 100000))}, true);
   EXPECT_FALSE(cut.status.ok());
   EXPECT_EQ(Blobs(), 0);
   grpc::ClientContext query;
@@ -109,7 +113,8 @@ TEST_F(BadUploadTest, TruncatedStreamKeepsCommittedBytesAndPromotesNothing) {
 TEST_F(BadUploadTest, ChunkNotContinuingTheCommittedBytesIsRejected) {
   const auto entry = Entry("a.bin", "0123456789");
   const auto outcome = Send(cluster_, {ManifestOf({entry}), Chunk("a.bin", 4, "456789")});
-  EXPECT_EQ(outcome.status.error_code(), grpc::StatusCode::FAILED_PRECONDITION) << outcome.status.error_message();
+  EXPECT_EQ(outcome.status.error_code(), grpc::StatusCode::FAILED_PRECONDITION)
+      << outcome.status.error_message();
   EXPECT_EQ(Blobs(), 0);
 }
 
@@ -118,7 +123,8 @@ TEST_F(BadUploadTest, EscapingOrAbsolutePathsAreInvalidAndNamed) {
     const auto entry = Entry(path, "data");
     const auto outcome = Send(cluster_, {ManifestOf({entry}), Chunk(path, 0, "data")});
     EXPECT_EQ(outcome.status.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << path;
-    EXPECT_NE(outcome.status.error_message().find("'" + path + "'"), std::string::npos) << outcome.status.error_message();
+    EXPECT_NE(outcome.status.error_message().find("'" + path + "'"), std::string::npos)
+        << outcome.status.error_message();
   }
   EXPECT_EQ(Blobs(), 0);
   EXPECT_EQ(Partials(), 0);
@@ -130,14 +136,16 @@ TEST_F(BadUploadTest, OverTheSizeLimitIsResourceExhaustedBeforeAnyByte) {
   huge.set_size(std::int64_t{50} << 30);  // 50 GiB
   huge.set_sha256(Sha256Hex("not really"));
   const auto outcome = Send(cluster_, {ManifestOf({huge}), Chunk("huge.bin", 0, std::string(1000, 'x'))});
-  EXPECT_EQ(outcome.status.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << outcome.status.error_message();
+  EXPECT_EQ(outcome.status.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED)
+      << outcome.status.error_message();
   EXPECT_NE(outcome.status.error_message().find("--max-upload-bytes"), std::string::npos);
   EXPECT_EQ(Partials(), 0);
   grpc::ClientContext query;
   v1::Manifest manifest;
   *manifest.add_files() = huge;
   v1::UploadStatus status;
-  EXPECT_EQ(cluster_.stub().QueryUpload(&query, manifest, &status).error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
+  EXPECT_EQ(cluster_.stub().QueryUpload(&query, manifest, &status).error_code(),
+            grpc::StatusCode::RESOURCE_EXHAUSTED);
 }
 
 TEST_F(BadUploadTest, MissingOrSecondManifestIsInvalid) {

@@ -22,15 +22,17 @@ TEST(ManyClientsTest, ConcurrentUploadsSubmissionsAndWatchers) {
   std::vector<CliResult> results(kClients);
   for (int i = 0; i < kClients; ++i) {
     clients.emplace_back([&, i] {
-      results[i] = RunCli(cluster.address(), {"submit", cluster.path("clip" + std::to_string(i % 2)).string(),
-                                              "--iterations", "10", "--wait", "--name", "client" + std::to_string(i)});
+      results[i] =
+          RunCli(cluster.address(), {"submit", cluster.path("clip" + std::to_string(i % 2)).string(),
+                                     "--iterations", "10", "--wait", "--name", "client" + std::to_string(i)});
     });
   }
   std::atomic<int> listings_ok{0};
   std::vector<std::thread> listers;
   for (int i = 0; i < 4; ++i) {
     listers.emplace_back([&] {
-      for (int k = 0; k < 5; ++k) listings_ok += RunCli(cluster.address(), {"--json", "list"}).exit_code == 0 ? 1 : 0;
+      for (int k = 0; k < 5; ++k)
+        listings_ok += RunCli(cluster.address(), {"--json", "list"}).exit_code == 0 ? 1 : 0;
     });
   }
   for (auto& client : clients) client.join();
@@ -41,7 +43,8 @@ TEST(ManyClientsTest, ConcurrentUploadsSubmissionsAndWatchers) {
   }
   EXPECT_EQ(listings_ok, 20);
   const auto listed = RunCli(cluster.address(), {"list", "--state", "SUCCEEDED"});
-  for (int i = 0; i < kClients; ++i) EXPECT_NE(listed.out.find("client" + std::to_string(i)), std::string::npos);
+  for (int i = 0; i < kClients; ++i)
+    EXPECT_NE(listed.out.find("client" + std::to_string(i)), std::string::npos);
   const auto workers = RunCli(cluster.address(), {"workers"});
   EXPECT_NE(workers.out.find("w1"), std::string::npos);
   EXPECT_NE(workers.out.find("w2"), std::string::npos);

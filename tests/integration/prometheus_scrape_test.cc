@@ -20,17 +20,19 @@ double Query(int prometheus_port, const std::string& expression) {
 }
 
 TEST(PrometheusScrapeTest, ServerAndWorkerMetricsReachPrometheus) {
-  if (!std::filesystem::exists("/usr/bin/prometheus")) GTEST_SKIP() << "prometheus is not installed (scripts/install-deps)";
+  if (!std::filesystem::exists("/usr/bin/prometheus"))
+    GTEST_SKIP() << "prometheus is not installed (scripts/install-deps)";
   Cluster cluster;
   cluster.StartWorker("w1");
   const int prometheus_port = FreePort();
   const auto config = cluster.path("prometheus.yml");
-  std::ofstream(config) << "global:\n  scrape_interval: 1s\n"
-                        << "scrape_configs:\n"
-                        << "  - job_name: endorecon-server\n    static_configs:\n      - targets: ['127.0.0.1:"
-                        << cluster.metrics_port() << "']\n"
-                        << "  - job_name: endorecon-worker\n    static_configs:\n      - targets: ['127.0.0.1:"
-                        << cluster.worker_metrics_port("w1") << "']\n";
+  std::ofstream(config)
+      << "global:\n  scrape_interval: 1s\n"
+      << "scrape_configs:\n"
+      << "  - job_name: endorecon-server\n    static_configs:\n      - targets: ['127.0.0.1:"
+      << cluster.metrics_port() << "']\n"
+      << "  - job_name: endorecon-worker\n    static_configs:\n      - targets: ['127.0.0.1:"
+      << cluster.worker_metrics_port("w1") << "']\n";
   Process prometheus({"/usr/bin/prometheus", "--config.file=" + config.string(),
                       "--storage.tsdb.path=" + cluster.path("tsdb").string(),
                       "--web.listen-address=127.0.0.1:" + std::to_string(prometheus_port)},
@@ -38,7 +40,8 @@ TEST(PrometheusScrapeTest, ServerAndWorkerMetricsReachPrometheus) {
   ASSERT_TRUE(WaitUntil([&] { return Query(prometheus_port, "up") >= 0; })) << prometheus.Log();
 
   MakeClip(cluster.path("clip"));
-  const auto result = RunCli(cluster.address(), {"submit", cluster.path("clip").string(), "--iterations", "30", "--wait"});
+  const auto result =
+      RunCli(cluster.address(), {"submit", cluster.path("clip").string(), "--iterations", "30", "--wait"});
   ASSERT_EQ(result.exit_code, 0) << result.err;
 
   EXPECT_TRUE(WaitUntil([&] { return Query(prometheus_port, "endorecon_jobs_completed_total") == 1; }));

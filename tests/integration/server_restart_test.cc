@@ -1,9 +1,8 @@
 // The server is killed (-9) mid-upload and mid-job. After a restart nothing accepted is lost:
 // committed upload bytes, queued and running jobs, finished results; the upload resumes and the
 // running job completes.
-#include <signal.h>
-
 #include <gtest/gtest.h>
+#include <signal.h>
 
 #include <random>
 
@@ -64,7 +63,8 @@ TEST(ServerRestartTest, KillDuringUploadThenTheUploadResumes) {
 
   const auto resumed = RunCli(cluster.address(), {"submit", clip.string(), "--iterations", "30"});
   ASSERT_EQ(resumed.exit_code, 0) << resumed.err;
-  EXPECT_NE(resumed.err.find("12.6 MB sent, 12.6 MB already on the server"), std::string::npos) << resumed.err;
+  EXPECT_NE(resumed.err.find("12.6 MB sent, 12.6 MB already on the server"), std::string::npos)
+      << resumed.err;
   const auto blob = cluster.data_dir() / "blobs" / entry.sha256().substr(0, 2) / entry.sha256();
   ASSERT_TRUE(std::filesystem::exists(blob));
   EXPECT_EQ(Sha256File(blob), entry.sha256());
@@ -78,7 +78,8 @@ TEST(ServerRestartTest, KillDuringAJobLosesNothing) {
   ASSERT_EQ(cluster.WaitForState(finished, v1::SUCCEEDED).state(), v1::SUCCEEDED) << cluster.ServerLog();
   const auto running = cluster.Submit(cluster.path("clip"), {"--iterations", "150"});
   const auto queued = cluster.Submit(cluster.path("clip"), {"--iterations", "30", "--priority", "-1"});
-  ASSERT_TRUE(WaitUntil([&] { return cluster.Job(running).progress().iteration() > 0; })) << cluster.ServerLog();
+  ASSERT_TRUE(WaitUntil([&] { return cluster.Job(running).progress().iteration() > 0; }))
+      << cluster.ServerLog();
 
   cluster.KillServer(SIGKILL);
   cluster.StartServer();

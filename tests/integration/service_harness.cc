@@ -18,13 +18,15 @@
 namespace endorecon::testing {
 namespace fs = std::filesystem;
 
-Process::Process(const std::vector<std::string>& argv, const fs::path& log) : log_(log) {
+Process::Process(const std::vector<std::string>& argv, const fs::path& log, const fs::path& err_log)
+    : log_(log) {
   pid_ = fork();
   if (pid_ < 0) throw std::runtime_error("fork failed");
   if (pid_ == 0) {
     const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
+    const int err = err_log.empty() ? fd : ::open(err_log.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
     dup2(fd, STDOUT_FILENO);
-    dup2(fd, STDERR_FILENO);
+    dup2(err, STDERR_FILENO);
     std::vector<char*> args;
     for (const auto& arg : argv) args.push_back(const_cast<char*>(arg.c_str()));
     args.push_back(nullptr);
@@ -54,7 +56,9 @@ int Process::Wait() {
 
 std::string Process::Log() const { return ReadBytes(log_); }
 
-std::string BuiltBinary(const std::string& relative) { return std::string(ENDORECON_BINARY_DIR) + "/" + relative; }
+std::string BuiltBinary(const std::string& relative) {
+  return std::string(ENDORECON_BINARY_DIR) + "/" + relative;
+}
 
 int FreePort() {
   const int fd = socket(AF_INET, SOCK_STREAM, 0);
@@ -94,21 +98,7 @@ CliResult RunCli(const std::string& address, const std::vector<std::string>& arg
   std::vector<std::string> argv{BuiltBinary("client/endorecon"), "--server", address};
   argv.insert(argv.end(), args.begin(), args.end());
   CliResult result;
-  const pid_t pid = fork();
-  if (pid == 0) {
-    const int out = ::open((scratch / "out").c_str(), O_WRONLY | O_CREAT, 0644);
-    const int err = ::open((scratch / "err").c_str(), O_WRONLY | O_CREAT, 0644);
-    dup2(out, STDOUT_FILENO);
-    dup2(err, STDERR_FILENO);
-    std::vector<char*> raw;
-    for (const auto& arg : argv) raw.push_back(const_cast<char*>(arg.c_str()));
-    raw.push_back(nullptr);
-    execv(raw[0], raw.data());
-    _exit(127);
-  }
-  int status = 0;
-  waitpid(pid, &status, 0);
-  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  result.exit_code = Process(argv, scratch / "out", scratch / "err").Wait();
   result.out = ReadBytes(scratch / "out");
   result.err = ReadBytes(scratch / "err");
   return result;
@@ -116,7 +106,8 @@ CliResult RunCli(const std::string& address, const std::vector<std::string>& arg
 
 void MakeClip(const fs::path& dir, int seed) {
   const std::string command = BuiltBinary("worker/runtime/endorecon-worker") + " synth " + dir.string() +
-                              " --frames 8 --width 32 --height 24 --seed " + std::to_string(seed) + " > /dev/null 2>&1";
+                              " --frames 8 --width 32 --height 24 --seed " + std::to_string(seed) +
+                              " > /dev/null 2>&1";
   if (std::system(command.c_str()) != 0) throw std::runtime_error("synth failed: " + command);
 }
 
@@ -138,9 +129,17 @@ Cluster::Cluster(std::vector<std::string> server_flags) : server_flags_(std::mov
 }
 
 void Cluster::StartServer() {
-  std::vector<std::string> argv{BuiltBinary("server/endorecon-server"), "--listen", address_, "--data-dir",
-                                data_dir().string(), "--metrics-port", std::to_string(metrics_port_),
-                                "--lease-ttl-ms", "3000", "--heartbeat-ms", "300"};
+  std::vector<std::string> argv{BuiltBinary("server/endorecon-server"),
+                                "--listen",
+                                address_,
+                                "--data-dir",
+                                data_dir().string(),
+                                "--metrics-port",
+                                std::to_string(metrics_port_),
+                                "--lease-ttl-ms",
+                                "3000",
+                                "--heartbeat-ms",
+                                "300"};
   argv.insert(argv.end(), server_flags_.begin(), server_flags_.end());
   server_ = std::make_unique<Process>(argv, dir_ / ("server-" + std::to_string(server_starts_++) + ".log"));
   // A channel that tried before the port was open backs off for seconds: wait for the port first.
@@ -164,9 +163,20 @@ void Cluster::KillServer(int signal) {
 
 Process& Cluster::StartWorker(const std::string& id, std::vector<std::string> flags) {
   const int metrics_port = FreePort();
-  std::vector<std::string> argv{BuiltBinary("worker/runtime/endorecon-worker"), "serve", "--server", address_,
-                                "--id", id, "--metrics-port", std::to_string(metrics_port), "--work-dir",
-                                (dir_ / ("work-" + id)).string(), "--lease-wait", "2", "--threads", "1"};
+  std::vector<std::string> argv{BuiltBinary("worker/runtime/endorecon-worker"),
+                                "serve",
+                                "--server",
+                                address_,
+                                "--id",
+                                id,
+                                "--metrics-port",
+                                std::to_string(metrics_port),
+                                "--work-dir",
+                                (dir_ / ("work-" + id)).string(),
+                                "--lease-wait",
+                                "2",
+                                "--threads",
+                                "1"};
   argv.insert(argv.end(), flags.begin(), flags.end());
   workers_.emplace_back(id, std::make_unique<Process>(argv, dir_ / ("worker-" + id + ".log")));
   worker_metrics_ports_.emplace_back(id, metrics_port);

@@ -16,10 +16,12 @@
 
 namespace endorecon::testing {
 
-// A child process whose stdout and stderr go to `log`. The destructor kills it (SIGKILL) if alive.
+// A child process whose stdout and stderr go to `log` (stderr to `err_log` when given). The
+// destructor kills it (SIGKILL) if alive.
 class Process {
  public:
-  Process(const std::vector<std::string>& argv, const std::filesystem::path& log);
+  Process(const std::vector<std::string>& argv, const std::filesystem::path& log,
+          const std::filesystem::path& err_log = {});
   ~Process();
   Process(const Process&) = delete;
   Process& operator=(const Process&) = delete;
@@ -80,7 +82,8 @@ class Cluster {
   // Submits `clip` with the CLI; returns the job id.
   std::string Submit(const std::filesystem::path& clip, const std::vector<std::string>& flags);
   // Waits until the job reaches `state`; returns the job.
-  v1::Job WaitForState(const std::string& id, v1::JobState state, std::chrono::seconds limit = std::chrono::seconds(90));
+  v1::Job WaitForState(const std::string& id, v1::JobState state,
+                       std::chrono::seconds limit = std::chrono::seconds(90));
   std::string ServerLog() const;
 
  private:

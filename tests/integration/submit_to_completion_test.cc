@@ -11,8 +11,9 @@ TEST(SubmitToCompletionTest, ClipInResultsOut) {
   Cluster cluster;
   cluster.StartWorker("w1");
   MakeClip(cluster.path("clip"));
-  const auto submitted = RunCli(cluster.address(), {"submit", cluster.path("clip").string(), "--iterations", "30",
-                                                    "--wait", "--previews", cluster.path("previews").string()});
+  const auto submitted =
+      RunCli(cluster.address(), {"submit", cluster.path("clip").string(), "--iterations", "30", "--wait",
+                                 "--previews", cluster.path("previews").string()});
   ASSERT_EQ(submitted.exit_code, 0) << submitted.err << submitted.out << cluster.ServerLog();
   EXPECT_NE(submitted.out.find("SUCCEEDED"), std::string::npos) << submitted.out;
 
@@ -42,7 +43,8 @@ TEST(SubmitToCompletionTest, ClipInResultsOut) {
   EXPECT_NE(again.out.find("fetched 0 of"), std::string::npos) << again.out;
 
   // The same clip again: nothing is uploaded twice.
-  const auto resubmitted = RunCli(cluster.address(), {"submit", cluster.path("clip").string(), "--iterations", "30"});
+  const auto resubmitted =
+      RunCli(cluster.address(), {"submit", cluster.path("clip").string(), "--iterations", "30"});
   EXPECT_EQ(resubmitted.exit_code, 0);
   EXPECT_NE(resubmitted.err.find(": 0 B sent"), std::string::npos) << resubmitted.err;
 

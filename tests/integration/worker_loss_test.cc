@@ -1,8 +1,7 @@
 // Workers go away mid-job: killed (the lease expires, the attempt counts, another worker resumes
 // from the last checkpoint) or stopped with SIGTERM (the job is handed back cleanly, no attempt lost).
-#include <signal.h>
-
 #include <gtest/gtest.h>
+#include <signal.h>
 
 #include "tests/integration/service_harness.h"
 
@@ -14,7 +13,8 @@ v1::Job WaitForCheckpoint(Cluster& cluster, const std::string& id) {
   v1::Job job;
   WaitUntil([&] {
     job = cluster.Job(id);
-    return job.state() == v1::RUNNING && !job.checkpoint().sha256().empty() && job.progress().iteration() >= 10;
+    return job.state() == v1::RUNNING && !job.checkpoint().sha256().empty() &&
+           job.progress().iteration() >= 10;
   });
   return job;
 }

@@ -61,7 +61,8 @@ TEST(JobStoreTest, UnfinishedListsQueuedAndRunningOldestFirst) {
 TEST(JobStoreTest, ListPagesNewestFirstWithStateFilter) {
   testing::TempDir dir("jobstore");
   JobStore store(dir / "jobs.sqlite");
-  for (int i = 0; i < 7; ++i) store.Insert(MakeJob(std::string("j").append(std::to_string(i)), i % 2 ? v1::FAILED : v1::QUEUED));
+  for (int i = 0; i < 7; ++i)
+    store.Insert(MakeJob(std::string("j").append(std::to_string(i)), i % 2 ? v1::FAILED : v1::QUEUED));
   const auto first = store.List({}, 3, 0);
   ASSERT_EQ(first.jobs.size(), 3u);
   EXPECT_EQ(first.jobs[0].id(), "j6");

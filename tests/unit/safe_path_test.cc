@@ -14,7 +14,8 @@ TEST(SafePathTest, AcceptsRelativePaths) {
 }
 
 TEST(SafePathTest, RejectsEscapesAndNamesThePath) {
-  for (const std::string bad : {"../x", "a/../../x", "/etc/passwd", "a//b", "./a", "a/", "", "a\\b", "..", "a/.."}) {
+  for (const std::string bad :
+       {"../x", "a/../../x", "/etc/passwd", "a//b", "./a", "a/", "", "a\\b", "..", "a/.."}) {
     try {
       CheckRelativePath(bad);
       ADD_FAILURE() << "accepted '" << bad << "'";

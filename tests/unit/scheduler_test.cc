@@ -7,7 +7,9 @@
 namespace endorecon::server {
 namespace {
 
-std::optional<std::string> PopNow(Scheduler& scheduler) { return scheduler.PopWait(std::chrono::steady_clock::now()); }
+std::optional<std::string> PopNow(Scheduler& scheduler) {
+  return scheduler.PopWait(std::chrono::steady_clock::now());
+}
 
 TEST(SchedulerTest, HigherPriorityFirstThenOldest) {
   Scheduler scheduler;
@@ -38,7 +40,8 @@ TEST(SchedulerTest, RequeuedJobKeepsItsAgeAndIsNotDuplicated) {
 TEST(SchedulerTest, WaitingPopReceivesALaterPush) {
   Scheduler scheduler;
   std::optional<std::string> got;
-  std::thread waiter([&] { got = scheduler.PopWait(std::chrono::steady_clock::now() + std::chrono::seconds(30)); });
+  std::thread waiter(
+      [&] { got = scheduler.PopWait(std::chrono::steady_clock::now() + std::chrono::seconds(30)); });
   scheduler.Push("late", 0, 1);
   waiter.join();
   EXPECT_EQ(got, "late");
@@ -47,7 +50,8 @@ TEST(SchedulerTest, WaitingPopReceivesALaterPush) {
 TEST(SchedulerTest, ShutdownReleasesWaiters) {
   Scheduler scheduler;
   std::optional<std::string> got = "unset";
-  std::thread waiter([&] { got = scheduler.PopWait(std::chrono::steady_clock::now() + std::chrono::hours(1)); });
+  std::thread waiter(
+      [&] { got = scheduler.PopWait(std::chrono::steady_clock::now() + std::chrono::hours(1)); });
   scheduler.Shutdown();
   waiter.join();
   EXPECT_EQ(got, std::nullopt);

@@ -41,7 +41,8 @@ TEST(WatchHubTest, TerminalJobDropsPreviewsAndWakesWaiters) {
   hub.PublishPreview("j", preview);
   EXPECT_EQ(hub.Wait("j", 0, Soon()).previews.size(), 1u);
   WatchHub::Changes changes;
-  std::thread waiter([&] { changes = hub.Wait("j", 1, std::chrono::steady_clock::now() + std::chrono::seconds(30)); });
+  std::thread waiter(
+      [&] { changes = hub.Wait("j", 1, std::chrono::steady_clock::now() + std::chrono::seconds(30)); });
   v1::Job job;
   job.set_id("j");
   job.set_state(v1::SUCCEEDED);

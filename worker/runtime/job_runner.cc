@@ -3,8 +3,8 @@
 #include <spdlog/spdlog.h>
 
 #include <fstream>
-#include <thread>
 #include <nlohmann/json.hpp>
+#include <thread>
 
 #include "common/error.h"
 #include "common/manifest.h"
@@ -88,7 +88,8 @@ auto WhileUnavailable(Call&& call, std::chrono::seconds patience = std::chrono::
   }
 }
 
-void Tell(WorkerClient& client, const std::string& lease_id, const std::string& reason, bool retry, bool release) {
+void Tell(WorkerClient& client, const std::string& lease_id, const std::string& reason, bool retry,
+          bool release) {
   v1::FailRequest request;
   request.set_lease_id(lease_id);
   request.set_reason(reason);
@@ -101,11 +102,13 @@ void Tell(WorkerClient& client, const std::string& lease_id, const std::string& 
 }  // namespace
 
 void RunLeasedJob(WorkerClient& client, const v1::LeaseResponse& lease, const Device& device,
-                  const RunnerSettings& settings, WorkerMetrics& metrics, const std::atomic<bool>& shutting_down) {
+                  const RunnerSettings& settings, WorkerMetrics& metrics,
+                  const std::atomic<bool>& shutting_down) {
   const auto& job = lease.job();
   const fs::path job_dir = settings.work_dir / job.id();
-  spdlog::info("[{}] job {} (attempt {}){}", device.name, job.id(), lease.attempt(),
-               job.has_checkpoint() ? " resuming from checkpoint " + job.checkpoint().sha256().substr(0, 12) : "");
+  spdlog::info(
+      "[{}] job {} (attempt {}){}", device.name, job.id(), lease.attempt(),
+      job.has_checkpoint() ? " resuming from checkpoint " + job.checkpoint().sha256().substr(0, 12) : "");
   auto& gauges = metrics.For(device.name);
   gauges.busy.Set(1);
   ProgressReporter reporter(client, lease.lease_id(), settings.heartbeat);
@@ -132,7 +135,9 @@ void RunLeasedJob(WorkerClient& client, const v1::LeaseResponse& lease, const De
       last_iteration = p.iteration;
       metrics.UpdateMemory();
     };
-    hooks.on_preview = [&](const Preview& preview) { reporter.AddPreview(EncodePreview(preview, last_iteration)); };
+    hooks.on_preview = [&](const Preview& preview) {
+      reporter.AddPreview(EncodePreview(preview, last_iteration));
+    };
     hooks.on_checkpoint = [&](const std::string& path) {
       reporter.SetCheckpoint(WhileUnavailable([&] { return UploadCheckpoint(client, path); }));
     };
@@ -152,8 +157,8 @@ void RunLeasedJob(WorkerClient& client, const v1::LeaseResponse& lease, const De
       WhileUnavailable([&] { client.PutFiles(options.out_dir, complete.result()); });
       complete.set_summary_json(SummaryJson(summary));
       WhileUnavailable([&] { return client.Complete(complete); });
-      spdlog::info("[{}] job {} done: {} iterations, {} result file(s)", device.name, job.id(), summary.iterations,
-                   complete.result().files_size());
+      spdlog::info("[{}] job {} done: {} iterations, {} result file(s)", device.name, job.id(),
+                   summary.iterations, complete.result().files_size());
     }
   } catch (const Error& e) {
     reporter.Stop();
@@ -161,7 +166,8 @@ void RunLeasedJob(WorkerClient& client, const v1::LeaseResponse& lease, const De
     spdlog::error("[{}] job {}: {}: {}", device.name, job.id(), ErrorCodeName(e.code()), e.what());
     if (!reporter.stop_requested()) {
       const bool bad_input = e.code() == ErrorCode::kInvalidArgument;
-      Tell(client, lease.lease_id(), std::string(ErrorCodeName(e.code())) + ": " + e.what(), !bad_input, false);
+      Tell(client, lease.lease_id(), std::string(ErrorCodeName(e.code())) + ": " + e.what(), !bad_input,
+           false);
     }
   } catch (const std::exception& e) {
     reporter.Stop();

@@ -27,6 +27,7 @@ struct RunnerSettings {
 // Never throws for the job's own failures (they are reported to the server); throws Error only
 // when the server cannot be told.
 void RunLeasedJob(WorkerClient& client, const v1::LeaseResponse& lease, const Device& device,
-                  const RunnerSettings& settings, WorkerMetrics& metrics, const std::atomic<bool>& shutting_down);
+                  const RunnerSettings& settings, WorkerMetrics& metrics,
+                  const std::atomic<bool>& shutting_down);
 
 }  // namespace endorecon::worker

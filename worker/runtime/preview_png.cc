@@ -13,8 +13,8 @@ v1::Preview EncodePreview(const Preview& preview, int iteration) {
     FailInvalid("preview '" + preview.kind + "' has " + std::to_string(preview.channels) + " channels");
   }
   if (preview.pixels.size() != static_cast<std::size_t>(preview.width * preview.height * preview.channels)) {
-    FailInvalid("preview '" + preview.kind + "' has " + std::to_string(preview.pixels.size()) + " bytes for " +
-                std::to_string(preview.width) + "x" + std::to_string(preview.height));
+    FailInvalid("preview '" + preview.kind + "' has " + std::to_string(preview.pixels.size()) +
+                " bytes for " + std::to_string(preview.width) + "x" + std::to_string(preview.height));
   }
   cv::Mat image(preview.height, preview.width, preview.channels == 3 ? CV_8UC3 : CV_8UC1,
                 const_cast<std::uint8_t*>(preview.pixels.data()));

@@ -6,7 +6,8 @@
 
 namespace endorecon::worker {
 
-ProgressReporter::ProgressReporter(WorkerClient& client, std::string lease_id, std::chrono::milliseconds interval)
+ProgressReporter::ProgressReporter(WorkerClient& client, std::string lease_id,
+                                   std::chrono::milliseconds interval)
     : client_(client), lease_id_(std::move(lease_id)), interval_(interval), thread_([this] { Loop(); }) {}
 
 ProgressReporter::~ProgressReporter() { Stop(); }

@@ -54,7 +54,8 @@ std::vector<Device> ParseDevices(const std::string& spec, int threads) {
     spdlog::warn("no CUDA engine in this build: GPU slots {} run on the CPU", spec);
   }
   const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  for (auto& device : devices) device.threads = threads > 0 ? threads : std::max(1, cores / int(devices.size()));
+  for (auto& device : devices)
+    device.threads = threads > 0 ? threads : std::max(1, cores / int(devices.size()));
   return devices;
 }
 
@@ -64,8 +65,9 @@ std::string Hostname() {
   return name;
 }
 
-void LeaseLoop(WorkerClient& client, const Device& device, const RunnerSettings& settings, WorkerMetrics& metrics,
-               const std::atomic<bool>& shutting_down, std::chrono::milliseconds wait) {
+void LeaseLoop(WorkerClient& client, const Device& device, const RunnerSettings& settings,
+               WorkerMetrics& metrics, const std::atomic<bool>& shutting_down,
+               std::chrono::milliseconds wait) {
   auto backoff = std::chrono::milliseconds(500);
   while (!shutting_down) {
     try {
@@ -73,7 +75,8 @@ void LeaseLoop(WorkerClient& client, const Device& device, const RunnerSettings&
       backoff = std::chrono::milliseconds(500);
       if (lease) RunLeasedJob(client, *lease, device, settings, metrics, shutting_down);
     } catch (const Error& e) {
-      spdlog::warn("[{}] {}: {}; retrying in {} ms", device.name, ErrorCodeName(e.code()), e.what(), backoff.count());
+      spdlog::warn("[{}] {}: {}; retrying in {} ms", device.name, ErrorCodeName(e.code()), e.what(),
+                   backoff.count());
       std::this_thread::sleep_for(backoff);
       backoff = std::min(backoff * 2, std::chrono::milliseconds(5000));
     }
@@ -91,13 +94,15 @@ int Serve(const ServeFlags& flags) {
   const std::string worker_id = flags.id.empty() ? Hostname() + "-" + std::to_string(getpid()) : flags.id;
   WorkerMetrics metrics(
       flags.metrics_port >= 0 ? flags.metrics_host + ":" + std::to_string(flags.metrics_port) : "", devices);
-  WorkerClient client(flags.server, worker_id, std::chrono::milliseconds(static_cast<long>(flags.timeout_s * 1000)));
+  WorkerClient client(flags.server, worker_id,
+                      std::chrono::milliseconds(static_cast<long>(flags.timeout_s * 1000)));
   std::vector<std::string> names;
   for (const auto& device : devices) names.push_back(device.name);
 
   RunnerSettings settings;
-  settings.work_dir = flags.work_dir.empty() ? std::filesystem::temp_directory_path() / ("endorecon-" + worker_id)
-                                             : std::filesystem::path(flags.work_dir);
+  settings.work_dir = flags.work_dir.empty()
+                          ? std::filesystem::temp_directory_path() / ("endorecon-" + worker_id)
+                          : std::filesystem::path(flags.work_dir);
   settings.preview_interval_s = flags.preview_interval_s;
   settings.checkpoint_interval_s = flags.checkpoint_interval_s;
   std::atomic<bool> shutting_down{false};
@@ -136,18 +141,24 @@ int Serve(const ServeFlags& flags) {
 
 Command AddServeCommand(CLI::App& app) {
   auto flags = std::make_shared<ServeFlags>();
-  auto* cmd = app.add_subcommand("serve", "lease jobs from endorecon-server and run them, one engine per device");
+  auto* cmd =
+      app.add_subcommand("serve", "lease jobs from endorecon-server and run them, one engine per device");
   cmd->add_option("--server", flags->server, "server address host:port")->capture_default_str();
-  cmd->add_option("--devices", flags->devices, "cpu, cpu:N (N slots) or GPU indices 0,1,...")->capture_default_str();
-  cmd->add_option("--metrics-port", flags->metrics_port, "Prometheus /metrics port (0 picks one, -1 disables)")
+  cmd->add_option("--devices", flags->devices, "cpu, cpu:N (N slots) or GPU indices 0,1,...")
+      ->capture_default_str();
+  cmd->add_option("--metrics-port", flags->metrics_port,
+                  "Prometheus /metrics port (0 picks one, -1 disables)")
       ->capture_default_str();
   cmd->add_option("--metrics-host", flags->metrics_host, "interface for /metrics")->capture_default_str();
   cmd->add_option("--work-dir", flags->work_dir, "scratch folder for running jobs (default: in $TMPDIR)");
   cmd->add_option("--id", flags->id, "worker id (default: hostname-pid)");
-  cmd->add_option("--threads", flags->threads, "engine threads per device (0: cores / devices)")->capture_default_str();
+  cmd->add_option("--threads", flags->threads, "engine threads per device (0: cores / devices)")
+      ->capture_default_str();
   cmd->add_option("--timeout", flags->timeout_s, "deadline of each call in seconds")->capture_default_str();
-  cmd->add_option("--lease-wait", flags->lease_wait_s, "long-poll for a job this many seconds")->capture_default_str();
-  cmd->add_option("--preview-interval", flags->preview_interval_s, "seconds between previews")->capture_default_str();
+  cmd->add_option("--lease-wait", flags->lease_wait_s, "long-poll for a job this many seconds")
+      ->capture_default_str();
+  cmd->add_option("--preview-interval", flags->preview_interval_s, "seconds between previews")
+      ->capture_default_str();
   cmd->add_option("--checkpoint-interval", flags->checkpoint_interval_s, "seconds between checkpoints")
       ->capture_default_str();
   return [flags] { return Serve(*flags); };

@@ -7,10 +7,14 @@
 
 namespace endorecon::worker {
 
-WorkerClient::WorkerClient(const std::string& server, std::string worker_id, std::chrono::milliseconds timeout)
-    : stub_(v1::WorkerService::NewStub(OpenChannel(server))), worker_id_(std::move(worker_id)), timeout_(timeout) {}
+WorkerClient::WorkerClient(const std::string& server, std::string worker_id,
+                           std::chrono::milliseconds timeout)
+    : stub_(v1::WorkerService::NewStub(OpenChannel(server))),
+      worker_id_(std::move(worker_id)),
+      timeout_(timeout) {}
 
-v1::RegisterResponse WorkerClient::Register(const std::string& hostname, const std::vector<std::string>& devices) {
+v1::RegisterResponse WorkerClient::Register(const std::string& hostname,
+                                            const std::vector<std::string>& devices) {
   v1::RegisterRequest request;
   request.set_worker_id(worker_id_);
   request.set_hostname(hostname);
@@ -22,7 +26,8 @@ v1::RegisterResponse WorkerClient::Register(const std::string& hostname, const s
   return response;
 }
 
-std::optional<v1::LeaseResponse> WorkerClient::Lease(const std::string& device, std::chrono::milliseconds wait) {
+std::optional<v1::LeaseResponse> WorkerClient::Lease(const std::string& device,
+                                                     std::chrono::milliseconds wait) {
   v1::LeaseRequest request;
   request.set_worker_id(worker_id_);
   request.set_device(device);
@@ -70,7 +75,9 @@ void WorkerClient::PutFiles(const std::filesystem::path& dir, const v1::Manifest
   calls.query = [&](grpc::ClientContext* context, const v1::Manifest& m, v1::UploadStatus* status) {
     return stub_->QueryBlobs(context, m, status);
   };
-  calls.open = [&](grpc::ClientContext* context, v1::UploadStatus* status) { return stub_->PutBlobs(context, status); };
+  calls.open = [&](grpc::ClientContext* context, v1::UploadStatus* status) {
+    return stub_->PutBlobs(context, status);
+  };
   UploadOptions options;
   options.call_timeout = timeout_;
   UploadFiles(dir, manifest, calls, options);

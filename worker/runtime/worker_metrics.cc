@@ -22,15 +22,22 @@ WorkerMetrics::WorkerMetrics(const std::string& bind_address, const std::vector<
                       .Name("endorecon_worker_samples_per_second")
                       .Help("Training samples per second")
                       .Register(*registry_);
-  auto& iterations =
-      BuildCounter().Name("endorecon_worker_iterations_total").Help("Training iterations done").Register(*registry_);
-  auto& psnr = BuildGauge().Name("endorecon_worker_psnr_db").Help("Training PSNR of the running job").Register(*registry_);
-  auto& busy = BuildGauge().Name("endorecon_worker_busy").Help("1 while the device runs a job").Register(*registry_);
-  auto& info = BuildGauge().Name("endorecon_worker_device_info").Help("The worker's devices").Register(*registry_);
+  auto& iterations = BuildCounter()
+                         .Name("endorecon_worker_iterations_total")
+                         .Help("Training iterations done")
+                         .Register(*registry_);
+  auto& psnr = BuildGauge()
+                   .Name("endorecon_worker_psnr_db")
+                   .Help("Training PSNR of the running job")
+                   .Register(*registry_);
+  auto& busy =
+      BuildGauge().Name("endorecon_worker_busy").Help("1 while the device runs a job").Register(*registry_);
+  auto& info =
+      BuildGauge().Name("endorecon_worker_device_info").Help("The worker's devices").Register(*registry_);
   for (const auto& device : devices) {
     const prometheus::Labels labels{{"device", device.name}};
-    devices_.emplace_back(device.name, DeviceGauges{samples.Add(labels), iterations.Add(labels), psnr.Add(labels),
-                                                    busy.Add(labels)});
+    devices_.emplace_back(device.name, DeviceGauges{samples.Add(labels), iterations.Add(labels),
+                                                    psnr.Add(labels), busy.Add(labels)});
     info.Add({{"device", device.name}, {"kind", device.kind}}).Set(1);
   }
   UpdateMemory();
