@@ -249,13 +249,16 @@ struct FieldT<S>::Impl {
                        last_dropout);
       blend.Backward(value[kBlend].data(), batch.time + q, rt, t.blend_hidden.data(), t.beta.data(), v.gfeat,
                      df, nullptr, grads[kBlend].data(), heads);
-      for (int i = 0; i < rt; ++i) {
-        for (int l = 0; l < d / f; ++l) {
-          std::copy_n(df + static_cast<std::size_t>(i) * d + l * f, f,
-                      dfeat_by_level.data() + (static_cast<std::size_t>(l) * n + q + i) * f);
+      // Level-major dL/df and grid-major beta, level (grid) by level, so the writes stream.
+      for (int l = 0; l < d / f; ++l) {
+        S* dst = dfeat_by_level.data() + (static_cast<std::size_t>(l) * n + q) * f;
+        for (int i = 0; i < rt; ++i) {
+          for (int j = 0; j < f; ++j) dst[i * f + j] = df[static_cast<std::size_t>(i) * d + l * f + j];
         }
-        for (int k = 0; k < gn; ++k)
-          beta_by_grid[static_cast<std::size_t>(k) * n + q + i] = t.beta[i * gn + k];
+      }
+      for (int k = 0; k < gn; ++k) {
+        S* dst = beta_by_grid.data() + static_cast<std::size_t>(k) * n + q;
+        for (int i = 0; i < rt; ++i) dst[i] = t.beta[i * gn + k];
       }
     });
   }
