@@ -142,8 +142,11 @@ TEST(HashGridTest, OutsideAndNonFiniteInputsReadTheClampedCell) {
   // No gradient flows into a clamped coordinate.
   const std::vector<double> pos = {-5.0, 0.3, nan};
   const std::vector<double> dfeat(grid.output_dim(), 1.0);
-  std::vector<double> dpos(3, 0.0);
-  grid.BackwardPosition(params.data(), pos.data(), 1, dfeat.data(), grid.output_dim(), dpos.data());
+  std::vector<double> grads(grid.param_count(), 0.0), dpos(3, 0.0);
+  for (int l = 0; l < grid.levels(); ++l) {
+    grid.BackwardLevel(l, pos.data(), 1, dfeat.data() + 2 * l, grid.output_dim(), nullptr, grads.data(),
+                       params.data(), dpos.data());
+  }
   EXPECT_EQ(dpos[0], 0.0);
   EXPECT_NE(dpos[1], 0.0);
   EXPECT_EQ(dpos[2], 0.0);
@@ -176,20 +179,6 @@ TEST(HashGridTest, TableGradientMatchesFiniteDifferences) {
   EXPECT_GT(nonzero, 100);
 }
 
-TEST(HashGridTest, PositionGradientMatchesFiniteDifferences) {
-  const HashGrid<double> grid(SmallConfig());
-  const int n = 16;
-  const std::vector<double> params = RandomValues(grid.param_count(), -1, 1, 21);
-  std::vector<double> pos = RandomValues(3 * n, 0.02, 0.98, 22);
-  const std::vector<double> w = RandomValues(static_cast<std::size_t>(n) * grid.output_dim(), -1, 1, 23);
-  std::vector<double> dpos(3 * n, 0.0);
-  grid.BackwardPosition(params.data(), pos.data(), n, w.data(), grid.output_dim(), dpos.data());
-  auto loss = [&] { return Dot(w, Features(grid, params, pos)); };
-  const int nonzero =
-      ExpectGradientMatches(pos.data(), dpos.data(), SomeIndices(pos.size(), pos.size(), 2), loss, "pos");
-  EXPECT_EQ(nonzero, 3 * n);
-}
-
 TEST(HashGridTest, FloatAgreesWithDouble) {
   HashGridConfig c = SmallConfig();
   c.features = 4;
@@ -205,7 +194,8 @@ TEST(HashGridTest, FloatAgreesWithDouble) {
   for (std::size_t i = 0; i < fd.size(); ++i) EXPECT_NEAR(ff[i], fd[i], 1e-5) << i;
 }
 
-TEST(HashGridTest, FusedPositionGradientMatchesFiniteDifferences) {
+// The position gradient comes out of the table scatter's pass (BackwardLevel with params and dpos).
+TEST(HashGridTest, PositionGradientMatchesFiniteDifferences) {
   const HashGrid<double> grid(SmallConfig());
   const int n = 16;
   const std::vector<double> params = RandomValues(grid.param_count(), -1, 1, 41);

@@ -31,7 +31,7 @@ struct FieldConfig {
 
   // The paper's sizes: grids {8, 16, 32} x scales {1.4, 1.7, 1.9}, 16 levels x 8 features, 2^19 tables.
   static FieldConfig Paper();
-  // Sized for ~1 M training samples/s on 2 cores (see field.cc for the numbers behind it).
+  // Sized for >= 1 M training samples/s on 2 cores (see field.cc for the numbers behind it).
   static FieldConfig Cpu();
 };
 

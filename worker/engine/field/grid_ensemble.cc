@@ -60,13 +60,6 @@ void GridEnsemble<S>::BackwardLevel(int g, int l, const S* pos, int n, const S* 
                           params ? params + offsets_[g] : nullptr, dpos_add);
 }
 
-template <typename S>
-void GridEnsemble<S>::BackwardPosition(const S* params, const S* pos, int n, const S* dfeats, S* dpos) const {
-  for (int i = 0; i < grids(); ++i) {
-    grids_[i].BackwardPosition(params + offsets_[i], pos, n, dfeats + i * feature_dim_, output_dim(), dpos);
-  }
-}
-
 template class GridEnsemble<float>;
 template class GridEnsemble<double>;
 

@@ -47,9 +47,6 @@ class GridEnsemble {
   void BackwardLevel(int g, int l, const S* pos, int n, const S* dfeat, int dfeat_stride, const S* scale,
                      S* grads, const S* params = nullptr, S* dpos_add = nullptr) const;
 
-  // dpos += dL/dpos given dL/dfeats (n x G * D, the layout of Forward).
-  void BackwardPosition(const S* params, const S* pos, int n, const S* dfeats, S* dpos) const;
-
  private:
   std::vector<HashGrid<S>> grids_;
   std::vector<std::size_t> offsets_;

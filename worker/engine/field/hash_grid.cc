@@ -64,29 +64,6 @@ void ScatterLevel(const GridLevel& level, const S* pos, int n, const S* dfeat, i
   }
 }
 
-template <int F, bool kDense, typename S>
-void PositionLevel(const GridLevel& level, const S* table, const S* pos, int n, const S* dfeat,
-                   int dfeat_stride, S* dpos) {
-  const S res = static_cast<S>(level.res);
-  for (int i = 0; i < n; ++i) {
-    std::uint32_t slot[8];
-    S w[8], frac[3];
-    CellCornersOf<kDense>(level, pos + 3 * i, slot, w, frac);
-    const S* d = dfeat + static_cast<std::size_t>(i) * dfeat_stride;
-    S dot[8];
-    for (int k = 0; k < 8; ++k) {
-      const S* v = table + std::size_t{slot[k]} * F;
-      dot[k] = S(0);
-      for (int f = 0; f < F; ++f) dot[k] += v[f] * d[f];
-    }
-    S grad[3];
-    TrilinearGradient(dot, frac, grad);
-    for (int a = 0; a < 3; ++a) {
-      if (InsideUnit(pos[3 * i + a])) dpos[3 * i + a] += res * grad[a];
-    }
-  }
-}
-
 // Asks for a level's table to be brought into L2 with sequential prefetches before `lookups` random
 // reads of it: streaming the lines in is much faster than taking each one as a random miss. Skipped
 // when the table is larger than L2 could hold or the reads are too few to touch most of its lines.
@@ -244,22 +221,6 @@ void HashGrid<S>::BackwardLevel(int l, const S* pos, int n, const S* dfeat, int 
       run(std::false_type{}, 0, n);
     }
   });
-}
-
-template <typename S>
-void HashGrid<S>::BackwardPosition(const S* params, const S* pos, int n, const S* dfeat, int dfeat_stride,
-                                   S* dpos) const {
-  const int f = features();
-  for (int begin = 0; begin < n; begin += kTile) {
-    const int count = std::min(kTile, n - begin);
-    for (int l = 0; l < levels(); ++l) {
-      Dispatch(f, levels_[l], [&](auto fc, auto dense) {
-        PositionLevel<decltype(fc)::value, decltype(dense)::value>(
-            levels_[l], params + levels_[l].offset * f, pos + 3 * begin, count,
-            dfeat + static_cast<std::size_t>(begin) * dfeat_stride + l * f, dfeat_stride, dpos + 3 * begin);
-      });
-    }
-  }
 }
 
 template class HashGrid<float>;

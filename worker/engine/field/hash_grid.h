@@ -61,11 +61,6 @@ class HashGrid {
   void BackwardLevel(int l, const S* pos, int n, const S* dfeat, int dfeat_stride, const S* scale, S* grads,
                      const S* params = nullptr, S* dpos_add = nullptr) const;
 
-  // dpos += dL/dpos given dL/dfeat (rows at dfeat + i * dfeat_stride, output_dim() values each).
-  // Zero along an axis where the position was clamped (outside the open interval (0, 1)).
-  void BackwardPosition(const S* params, const S* pos, int n, const S* dfeat, int dfeat_stride,
-                        S* dpos) const;
-
  private:
   HashGridConfig config_;
   std::vector<GridLevel> levels_;
