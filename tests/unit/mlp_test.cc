@@ -47,7 +47,7 @@ void CheckGradients(bool dropout_on) {
   std::vector<const double*> hidden;
   for (const auto& h : run.hidden) hidden.push_back(h.data());
   std::vector<double> grads(mlp.param_count(), 0.0), din(in.size(), 0.0);
-  std::vector<double> scratch(2 * static_cast<std::size_t>(rows) * mlp.max_width());
+  std::vector<double> scratch(mlp.scratch_size(rows));
   mlp.Backward(params.data(), in.data(), rows, hidden.data(), w.data(), din.data(), grads.data(),
                scratch.data(), dropout_on);
   auto loss = [&] { return Dot(w, Forward(mlp, params, in, rows, drop).out); };
@@ -108,6 +108,38 @@ TEST(MlpTest, DropoutMaskDoesNotDependOnTiling) {
   const std::vector<double> tail(in.begin() + 4 * 12, in.end());
   const MlpRun part = Forward(mlp, params, tail, rows - 12, {true, 77, 12});
   for (int i = 0; i < 2 * (rows - 12); ++i) EXPECT_EQ(part.out[i], whole.out[2 * 12 + i]) << i;
+}
+
+// The float network (what the field trains) agrees with the double one the gradient checks use.
+TEST(MlpTest, FloatAgreesWithDouble) {
+  const Mlp<double> md(20, {32, 33}, 17, 0.2, 4);
+  const Mlp<float> mf(20, {32, 33}, 17, 0.2, 4);
+  const int rows = 77;
+  std::vector<double> pd(md.param_count());
+  md.Init(pd.data(), 3);
+  for (auto& p : pd) p += 0.01;
+  const std::vector<float> pf(pd.begin(), pd.end());
+  const auto ind = RandomValues(static_cast<std::size_t>(rows) * 20, -1, 1, 5);
+  const auto gd = RandomValues(static_cast<std::size_t>(rows) * 17, -1, 1, 6);
+  const std::vector<float> inf(ind.begin(), ind.end()), gf(gd.begin(), gd.end());
+  const std::vector<double> inr(inf.begin(), inf.end()), gr(gf.begin(), gf.end());
+  const DropoutPass drop{true, 8, 0};
+  const MlpRun rd = Forward(md, pd, inr, rows, drop);
+  std::vector<float> h0(rows * 32), h1(rows * 33), outf(rows * 17);
+  float* hidden[2] = {h0.data(), h1.data()};
+  mf.Forward(pf.data(), inf.data(), rows, hidden, outf.data(), drop);
+  for (std::size_t i = 0; i < outf.size(); ++i) ASSERT_NEAR(outf[i], rd.out[i], 1e-4) << i;
+
+  std::vector<double> grad_d(pd.size(), 0.0), din_d(inr.size()), scratch_d(md.scratch_size(rows));
+  const double* hd[2] = {rd.hidden[0].data(), rd.hidden[1].data()};
+  md.Backward(pd.data(), inr.data(), rows, hd, gr.data(), din_d.data(), grad_d.data(), scratch_d.data(),
+              true);
+  std::vector<float> grad_f(pf.size(), 0.0f), din_f(inf.size()), scratch_f(mf.scratch_size(rows));
+  const float* hf[2] = {h0.data(), h1.data()};
+  mf.Backward(pf.data(), inf.data(), rows, hf, gf.data(), din_f.data(), grad_f.data(), scratch_f.data(),
+              true);
+  for (std::size_t i = 0; i < grad_f.size(); ++i) ASSERT_NEAR(grad_f[i], grad_d[i], 1e-3) << i;
+  for (std::size_t i = 0; i < din_f.size(); ++i) ASSERT_NEAR(din_f[i], din_d[i], 1e-4) << i;
 }
 
 TEST(MlpTest, RejectsBadShapes) {

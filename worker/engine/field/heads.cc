@@ -31,7 +31,7 @@ void DensityHead<S>::Forward(const S* params, const S* feat, int n, S* const* hi
 
 template <typename S>
 std::size_t DensityHead<S>::scratch_size(int n) const {
-  return static_cast<std::size_t>(n) * (raw_dim() + 2 * mlp_.max_width());
+  return static_cast<std::size_t>(n) * raw_dim() + mlp_.scratch_size(n);
 }
 
 template <typename S>
@@ -83,7 +83,7 @@ void ColorHead<S>::Forward(const S* params, const S* geo, int geo_stride, const 
 
 template <typename S>
 std::size_t ColorHead<S>::scratch_size(int n) const {
-  return static_cast<std::size_t>(n) * (4 + in_dim() + 2 * mlp_.max_width());
+  return static_cast<std::size_t>(n) * (4 + in_dim()) + mlp_.scratch_size(n);
 }
 
 template <typename S>

@@ -53,6 +53,11 @@ int Mlp<S>::max_width() const {
 }
 
 template <typename S>
+std::size_t Mlp<S>::scratch_size(int rows) const {
+  return 2 * static_cast<std::size_t>(rows) * max_width();
+}
+
+template <typename S>
 std::size_t Mlp<S>::macs_per_sample() const {
   std::size_t macs = 0;
   for (std::size_t k = 0; k + 1 < dims_.size(); ++k)

@@ -30,7 +30,9 @@ class Mlp {
   int out_dim() const { return dims_.back(); }
   int hidden_layers() const { return static_cast<int>(dims_.size()) - 2; }
   int hidden_dim(int k) const { return dims_[k + 1]; }
-  int max_width() const;  // widest layer, inputs and outputs included (sizes Backward's scratch)
+  int max_width() const;  // widest layer, inputs and outputs included
+  // Values of scratch Backward needs for `rows` rows.
+  std::size_t scratch_size(int rows) const;
   double dropout_rate() const { return rate_; }
   std::size_t param_count() const { return param_count_; }
   // Multiply-adds per sample in Forward (Backward does twice as many).
@@ -46,7 +48,7 @@ class Mlp {
                const DropoutPass& drop) const;
 
   // Backward of the same rows given dout = dL/dout (rows x out_dim). Adds dL/dparams to grads; writes
-  // dL/din (rows x in_dim) when din is not null. scratch: 2 * rows * max_width() values.
+  // dL/din (rows x in_dim) when din is not null. scratch: scratch_size(rows) values.
   // `dropout_on` must match the forward pass (the mask itself is read back from the zeros in hidden).
   void Backward(const S* params, const S* in, int rows, const S* const* hidden, const S* dout, S* din,
                 S* grads, S* scratch, bool dropout_on) const;

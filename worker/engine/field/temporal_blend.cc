@@ -42,7 +42,7 @@ void TemporalBlend<S>::Blend(const S* beta, const S* feats, int n, S* f) const {
 
 template <typename S>
 std::size_t TemporalBlend<S>::scratch_size(int n) const {
-  return static_cast<std::size_t>(n) * grids_ + 2 * static_cast<std::size_t>(n) * mlp_.max_width();
+  return static_cast<std::size_t>(n) * grids_ + mlp_.scratch_size(n);
 }
 
 template <typename S>
