@@ -48,7 +48,7 @@ template <typename S>
 struct FieldOutputT {
   S* sigma = nullptr;         // n, >= 0
   S* sigma_logvar = nullptr;  // n
-  S* rgb = nullptr;           // n x 3, in (0, 1)
+  S* rgb = nullptr;           // n x 3, in (0, 1) (float rounds a saturated sigmoid to 0 or 1)
   S* rgb_logvar = nullptr;    // n
 };
 
