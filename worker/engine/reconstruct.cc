@@ -191,7 +191,9 @@ ReconstructSummary Reconstruct(const ReconstructOptions& options, const Reconstr
       break;
     }
     const auto start = Clock::now();
-    stats = trainer.Step();
+    double schedule = double(trainer.iteration()) / std::max(1, config.iterations);
+    if (options.time_budget_s > 0) schedule = std::max(schedule, train_seconds / options.time_budget_s);
+    stats = trainer.Step(schedule);
     const double dt = std::chrono::duration<double>(Clock::now() - start).count();
     train_seconds += dt;
     window_samples += double(stats.samples);

@@ -2,6 +2,7 @@
 
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <cmath>
 #include <istream>
 #include <ostream>
@@ -18,7 +19,7 @@ Adam::Adam(std::vector<ParamGroup> groups, AdamConfig config)
   }
 }
 
-AdamStepReport Adam::Step(int iteration, int total_iterations) {
+AdamStepReport Adam::Step(double progress) {
   AdamStepReport report;
   double sum_sq = 0;
   for (const auto& g : groups_) {
@@ -38,8 +39,7 @@ AdamStepReport Adam::Step(int iteration, int total_iterations) {
     scale = static_cast<float>(config_.clip_norm / report.grad_norm);
   }
   ++steps_;
-  const double progress = total_iterations > 0 ? double(iteration) / total_iterations : 0.0;
-  const float decay = static_cast<float>(std::pow(double(config_.final_lr_factor), std::min(progress, 1.0)));
+  const float decay = static_cast<float>(std::pow(double(config_.final_lr_factor), std::clamp(progress, 0.0, 1.0)));
   const float b1 = config_.beta1, b2 = config_.beta2;
   const float c1 = 1.0f - static_cast<float>(std::pow(double(b1), double(steps_)));
   const float c2 = 1.0f - static_cast<float>(std::pow(double(b2), double(steps_)));

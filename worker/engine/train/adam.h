@@ -28,9 +28,10 @@ class Adam {
  public:
   Adam(std::vector<ParamGroup> groups, AdamConfig config);
 
-  // One update from the gradients currently in the groups. Does nothing (and says so) when a
-  // gradient is not finite, so a bad step never reaches the parameters.
-  AdamStepReport Step(int iteration, int total_iterations);
+  // One update from the gradients currently in the groups, at `progress` in [0, 1] of the run (the
+  // learning rate decays with it). Does nothing (and says so) when a gradient is not finite, so a bad
+  // step never reaches the parameters.
+  AdamStepReport Step(double progress);
 
   void Save(std::ostream& out) const;
   void Load(std::istream& in);  // throws Error(kDataLoss) on a mismatched or truncated state

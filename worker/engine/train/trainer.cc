@@ -152,7 +152,7 @@ double Trainer::LossAndGradients(StepStats& stats) {
   return sums.loss;
 }
 
-StepStats Trainer::Step() {
+StepStats Trainer::Step(double progress) {
   StepStats stats;
   SampleRays();
   Batch& b = *batch_;
@@ -169,7 +169,8 @@ StepStats Trainer::Step() {
   field_->ZeroGrad();
   const field::FieldOutputGrad grad{b.d_sigma.data(), nullptr, b.d_rgb.data(), b.d_rgb_logvar.data()};
   field_->Backward(in, grad);
-  const AdamStepReport report = adam_->Step(iteration_, config_.iterations);
+  if (progress < 0) progress = config_.iterations > 0 ? double(iteration_) / config_.iterations : 0.0;
+  const AdamStepReport report = adam_->Step(progress);
   if (!report.finite) {
     Fail(ErrorCode::kInternal, "training diverged: a gradient is not finite at iteration " +
                                    std::to_string(iteration_) + " (stage: backward, group " + report.bad_group + ")");

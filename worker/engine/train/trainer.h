@@ -29,9 +29,10 @@ class Trainer {
   Trainer(const scene::Clip& clip, const TrainConfig& config, std::vector<int> train_frames, std::uint64_t seed);
   ~Trainer();
 
-  // One iteration. Throws Error(kInternal) naming the stage and iteration when the loss or a
+  // One iteration at `progress` in [0, 1] of the run (drives the learning-rate decay; negative:
+  // iteration / config.iterations, so a time-budgeted run can decay by elapsed time instead). Throws Error(kInternal) naming the stage and iteration when the loss or a
   // gradient is not finite; the parameters are then still those of the last good step.
-  StepStats Step();
+  StepStats Step(double progress = -1);
 
   int iteration() const { return iteration_; }
   field::Field& field() { return *field_; }
