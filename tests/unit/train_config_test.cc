@@ -19,6 +19,12 @@ TEST(TrainConfigTest, JsonRoundTripKeepsEveryKey) {
   EXPECT_EQ(ToJson(back), ToJson(config));
 }
 
+TEST(TrainConfigTest, EmptyObjectChangesNothing) {
+  TrainConfig config = TrainConfig::Preset("cpu");
+  ApplyJson(nlohmann::json::object(), config);
+  EXPECT_EQ(ToJson(config), ToJson(TrainConfig::Preset("cpu")));
+}
+
 TEST(TrainConfigTest, UnknownKeyIsNamed) {
   TrainConfig config;
   try {

@@ -110,6 +110,7 @@ nlohmann::json ToJson(const TrainConfig& config) {
 
 void ApplyJson(const nlohmann::json& json, TrainConfig& config) {
   if (!json.is_object()) FailInvalid("config: expected a JSON object");
+  if (json.empty()) return Validate(config);
   const nlohmann::json flat = json.flatten();
   std::size_t used = 0;
   VisitKeys(config, [&](const char* key, auto& value) {
