@@ -9,10 +9,9 @@
 #include "common/hd.h"
 
 // The lookups below sit in the innermost per-sample loops: inlining them lets the compiler keep the 8
-// slots and weights in registers (GCC otherwise keeps the larger ones out of line).
-#if defined(__CUDACC__)
-#define ENDORECON_FIELD_INLINE __forceinline__
-#elif defined(__GNUC__)
+// slots and weights in registers (GCC otherwise keeps the larger ones out of line). The attribute
+// alone, also under nvcc: ENDORECON_HD already says inline, and __forceinline__ would say it again.
+#if defined(__GNUC__) || defined(__CUDACC__)
 #define ENDORECON_FIELD_INLINE __attribute__((always_inline))
 #else
 #define ENDORECON_FIELD_INLINE

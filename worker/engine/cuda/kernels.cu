@@ -1,0 +1,268 @@
+#include <cuda_runtime.h>
+
+#include <cstddef>
+#include <string>
+#include <type_traits>
+
+#include "common/error.h"
+#include "worker/engine/cuda/device.h"
+#include "worker/engine/cuda/kernels.h"
+#include "worker/engine/render/rng.h"
+#include "worker/engine/render/stratified_sampler.h"
+#include "worker/engine/train/losses.h"
+
+namespace endorecon::cuda {
+namespace {
+
+constexpr int kThreads = 128;
+
+int Blocks(int n) { return (n + kThreads - 1) / kThreads; }
+
+void CheckLaunch(const char* kernel) { CheckStatus(cudaGetLastError(), kernel); }
+
+__device__ int ThreadIndex() { return static_cast<int>(blockIdx.x * blockDim.x + threadIdx.x); }
+
+// --- hash grid ---
+
+template <int F, bool kDense>
+__global__ void HashLevelForwardKernel(field::GridLevel level, const float* table, const float* pos, int n,
+                                       float* feat, int feat_stride) {
+  const int i = ThreadIndex();
+  if (i >= n) return;
+  std::uint32_t slot[8];
+  float w[8], frac[3];
+  field::CellCornersOf<kDense>(level, pos + 3 * static_cast<std::size_t>(i), slot, w, frac);
+  float acc[F] = {};
+  for (int k = 0; k < 8; ++k) {
+    const float* v = table + std::size_t{slot[k]} * F;
+    for (int f = 0; f < F; ++f) acc[f] += w[k] * v[f];
+  }
+  float* out = feat + static_cast<std::size_t>(i) * feat_stride;
+  for (int f = 0; f < F; ++f) out[f] = acc[f];
+}
+
+template <int F, bool kDense, bool kPosition>
+__global__ void HashLevelBackwardKernel(field::GridLevel level, const float* pos, int n, const float* dfeat,
+                                        int dfeat_stride, const float* scale, float* grads,
+                                        const float* table, float* dpos) {
+  const int i = ThreadIndex();
+  if (i >= n) return;
+  const float* p = pos + 3 * static_cast<std::size_t>(i);
+  std::uint32_t slot[8];
+  float w[8], frac[3];
+  field::CellCornersOf<kDense>(level, p, slot, w, frac);
+  const float* d = dfeat + static_cast<std::size_t>(i) * dfeat_stride;
+  const float s = scale ? scale[i] : 1.0f;
+  float g[F];
+  for (int f = 0; f < F; ++f) g[f] = s * d[f];
+  float dot[8];
+  for (int k = 0; k < 8; ++k) {
+    float* gv = grads + std::size_t{slot[k]} * F;
+    for (int f = 0; f < F; ++f) atomicAdd(gv + f, w[k] * g[f]);
+    if constexpr (kPosition) {
+      const float* v = table + std::size_t{slot[k]} * F;
+      dot[k] = 0.0f;
+      for (int f = 0; f < F; ++f) dot[k] += v[f] * g[f];
+    }
+  }
+  if constexpr (kPosition) {
+    float grad[3];
+    field::TrilinearGradient(dot, frac, grad);
+    const float res = static_cast<float>(level.res);
+    for (int a = 0; a < 3; ++a) {
+      if (field::InsideUnit(p[a])) dpos[3 * static_cast<std::size_t>(i) + a] += res * grad[a];
+    }
+  }
+}
+
+// Calls fn(std::integral_constant<int, F>{}) for features F in {1, 2, 4, 8}.
+template <typename Fn>
+void WithFeatures(int features, Fn&& fn) {
+  switch (features) {
+    case 1:
+      return fn(std::integral_constant<int, 1>{});
+    case 2:
+      return fn(std::integral_constant<int, 2>{});
+    case 4:
+      return fn(std::integral_constant<int, 4>{});
+    case 8:
+      return fn(std::integral_constant<int, 8>{});
+    default:
+      FailInvalid("hash grid features per level must be 1, 2, 4 or 8, got " + std::to_string(features));
+  }
+}
+
+// --- samplers ---
+
+__device__ render::CounterRng<float> RayRng(const RayStreams& streams, int r) {
+  return render::CounterRng<float>(streams.seed,
+                                   streams.stream_base + streams.stream_step * std::uint64_t(r));
+}
+
+__global__ void StratifiedKernel(float near, float far, int n_rays, int samples, RayStreams streams, float* s,
+                                 float* delta) {
+  const int r = ThreadIndex();
+  if (r >= n_rays) return;
+  const std::size_t o = static_cast<std::size_t>(r) * samples;
+  render::StratifiedSamples(near, far, samples, RayRng(streams, r), s + o, delta + o);
+}
+
+__global__ void DepthGuidedKernel(float near, float far, const float* prior_depth, int n_rays,
+                                  render::DepthGuidedConfig<float> config, RayStreams streams, float* s,
+                                  float* delta) {
+  const int r = ThreadIndex();
+  if (r >= n_rays) return;
+  const std::size_t o = static_cast<std::size_t>(r) * (config.gaussian_samples + config.stratified_samples);
+  render::DepthGuidedSamples(near, far, prior_depth[r], config, RayRng(streams, r), s + o, delta + o);
+}
+
+// --- volume rendering ---
+
+__global__ void CompositeKernel(const float* sigma, const float* rgb, const float* s, const float* delta,
+                                int n_rays, int samples, float min_transmittance, float* weights,
+                                render::RayComposite<float>* out) {
+  const int r = ThreadIndex();
+  if (r >= n_rays) return;
+  const std::size_t o = static_cast<std::size_t>(r) * samples;
+  out[r] =
+      render::CompositeRay(sigma + o, rgb + 3 * o, s + o, delta + o, samples, weights + o, min_transmittance);
+}
+
+__global__ void CompositeBackwardKernel(const float* sigma, const float* rgb, const float* s,
+                                        const float* delta, const float* weights, int n_rays, int samples,
+                                        const render::RayComposite<float>* forward,
+                                        const render::RayCompositeGrad<float>* grad, const float* d_weights,
+                                        float* d_sigma, float* d_rgb) {
+  const int r = ThreadIndex();
+  if (r >= n_rays) return;
+  const std::size_t o = static_cast<std::size_t>(r) * samples;
+  render::CompositeRayBackward(sigma + o, rgb + 3 * o, s + o, delta + o, weights + o, forward[r], grad[r],
+                               d_weights ? d_weights + o : nullptr, d_sigma + o, d_rgb + 3 * o);
+}
+
+// --- losses ---
+
+__global__ void RayLossKernel(const render::RayComposite<float>* rays, const float* weights,
+                              const float* mean_rgb, const float* log_var, const float* target_rgb,
+                              const float* prior_depth, int n_rays, int samples, RayLossTerms terms,
+                              float* loss, render::RayCompositeGrad<float>* grad, float* d_mean_rgb,
+                              float* d_log_var) {
+  const int r = ThreadIndex();
+  if (r >= n_rays) return;
+  const std::size_t o = static_cast<std::size_t>(r) * samples;
+  const render::RayComposite<float>& ray = rays[r];
+  const float* target = target_rgb + 3 * static_cast<std::size_t>(r);
+  render::RayCompositeGrad<float> g;
+  float total = 0.0f;
+  if (terms.rgb_l2_scale != 0.0f) total += train::RenderedColorL2(ray.rgb, target, terms.rgb_l2_scale, g.rgb);
+  if (terms.depth_scale != 0.0f) {
+    // In units of the depth range, as the trainer: the loss is scaled back, the gradient is per unit depth.
+    const float range = terms.depth_range, scale = terms.depth_scale / range;
+    const float depth = ray.depth / range, prior = prior_depth[r] / range;
+    total += range * (terms.huber_delta > 0.0f
+                          ? train::DepthHuber(depth, prior, terms.huber_delta, scale, &g.depth)
+                          : train::DepthL1(depth, prior, scale, &g.depth));
+  }
+  if (terms.nll_scale != 0.0f) {
+    total += train::RgbNll(weights + o, mean_rgb + 3 * o, log_var + o, samples, target, terms.variance_eps,
+                           terms.nll_scale, static_cast<float*>(nullptr),
+                           d_mean_rgb ? d_mean_rgb + 3 * o : nullptr, d_log_var ? d_log_var + o : nullptr);
+  }
+  if (terms.variance_reg_scale != 0.0f) {
+    total += train::VarianceRegularizer(log_var + o, samples, terms.variance_eps, terms.variance_reg_scale,
+                                        d_log_var ? d_log_var + o : nullptr);
+  }
+  loss[r] = total;
+  grad[r] = g;
+}
+
+}  // namespace
+
+void HashLevelForward(const field::GridLevel& level, int features, const float* table, const float* pos,
+                      int n, float* feat, int feat_stride) {
+  WithFeatures(features, [&](auto fc) {
+    constexpr int F = decltype(fc)::value;
+    if (n <= 0) return;
+    if (level.dense) {
+      HashLevelForwardKernel<F, true><<<Blocks(n), kThreads>>>(level, table, pos, n, feat, feat_stride);
+    } else {
+      HashLevelForwardKernel<F, false><<<Blocks(n), kThreads>>>(level, table, pos, n, feat, feat_stride);
+    }
+    CheckLaunch("hash level forward kernel");
+  });
+}
+
+void HashLevelBackward(const field::GridLevel& level, int features, const float* pos, int n,
+                       const float* dfeat, int dfeat_stride, const float* scale, float* grads,
+                       const float* table, float* dpos_add) {
+  if (dpos_add != nullptr && table == nullptr)
+    FailInvalid("hash level backward: a position gradient needs the level's table");
+  WithFeatures(features, [&](auto fc) {
+    constexpr int F = decltype(fc)::value;
+    if (n <= 0) return;
+    const dim3 blocks(Blocks(n)), threads(kThreads);
+    if (level.dense && dpos_add) {
+      HashLevelBackwardKernel<F, true, true>
+          <<<blocks, threads>>>(level, pos, n, dfeat, dfeat_stride, scale, grads, table, dpos_add);
+    } else if (level.dense) {
+      HashLevelBackwardKernel<F, true, false>
+          <<<blocks, threads>>>(level, pos, n, dfeat, dfeat_stride, scale, grads, table, dpos_add);
+    } else if (dpos_add) {
+      HashLevelBackwardKernel<F, false, true>
+          <<<blocks, threads>>>(level, pos, n, dfeat, dfeat_stride, scale, grads, table, dpos_add);
+    } else {
+      HashLevelBackwardKernel<F, false, false>
+          <<<blocks, threads>>>(level, pos, n, dfeat, dfeat_stride, scale, grads, table, dpos_add);
+    }
+    CheckLaunch("hash level backward kernel");
+  });
+}
+
+void StratifiedSampleRays(float near, float far, int n_rays, int samples, const RayStreams& streams, float* s,
+                          float* delta) {
+  if (n_rays <= 0) return;
+  StratifiedKernel<<<Blocks(n_rays), kThreads>>>(near, far, n_rays, samples, streams, s, delta);
+  CheckLaunch("stratified sampler kernel");
+}
+
+void DepthGuidedSampleRays(float near, float far, const float* prior_depth, int n_rays,
+                           const render::DepthGuidedConfig<float>& config, const RayStreams& streams,
+                           float* s, float* delta) {
+  if (n_rays <= 0) return;
+  DepthGuidedKernel<<<Blocks(n_rays), kThreads>>>(near, far, prior_depth, n_rays, config, streams, s, delta);
+  CheckLaunch("depth-guided sampler kernel");
+}
+
+void CompositeRays(const float* sigma, const float* rgb, const float* s, const float* delta, int n_rays,
+                   int samples, float min_transmittance, float* weights, render::RayComposite<float>* out) {
+  if (n_rays <= 0) return;
+  CompositeKernel<<<Blocks(n_rays), kThreads>>>(sigma, rgb, s, delta, n_rays, samples, min_transmittance,
+                                                weights, out);
+  CheckLaunch("composite kernel");
+}
+
+void CompositeRaysBackward(const float* sigma, const float* rgb, const float* s, const float* delta,
+                           const float* weights, int n_rays, int samples,
+                           const render::RayComposite<float>* forward,
+                           const render::RayCompositeGrad<float>* grad, const float* d_weights,
+                           float* d_sigma, float* d_rgb) {
+  if (n_rays <= 0) return;
+  CompositeBackwardKernel<<<Blocks(n_rays), kThreads>>>(sigma, rgb, s, delta, weights, n_rays, samples,
+                                                        forward, grad, d_weights, d_sigma, d_rgb);
+  CheckLaunch("composite backward kernel");
+}
+
+void RayLosses(const render::RayComposite<float>* rays, const float* weights, const float* mean_rgb,
+               const float* log_var, const float* target_rgb, const float* prior_depth, int n_rays,
+               int samples, const RayLossTerms& terms, float* loss, render::RayCompositeGrad<float>* grad,
+               float* d_mean_rgb, float* d_log_var) {
+  if (terms.depth_scale != 0.0f && prior_depth == nullptr)
+    FailInvalid("ray losses: a depth term (depth_scale " + std::to_string(terms.depth_scale) +
+                ") needs prior depths");
+  if (n_rays <= 0) return;
+  RayLossKernel<<<Blocks(n_rays), kThreads>>>(rays, weights, mean_rgb, log_var, target_rgb, prior_depth,
+                                              n_rays, samples, terms, loss, grad, d_mean_rgb, d_log_var);
+  CheckLaunch("ray loss kernel");
+}
+
+}  // namespace endorecon::cuda

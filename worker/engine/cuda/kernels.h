@@ -1,0 +1,96 @@
+// The engine's per-sample and per-ray math on NVIDIA GPUs: thin kernels around the same ENDORECON_HD
+// functions the CPU loops call (field/hash_math.h, render/*_sampler.h, render/volume_renderer.h,
+// train/losses.h), so the CPU tests vouch for the GPU path too. A plain C++ header (no CUDA types);
+// defined in kernels.cu, present only in builds with ENDORECON_WITH_CUDA.
+//
+// Every pointer is DEVICE memory (cuda::DeviceArray or cuda::DeviceAlloc), float, laid out exactly as
+// the CPU code lays it out. Launches go to the current device's default stream and return at once;
+// a launch error throws endorecon::Error (device.h), an error inside a kernel surfaces at the next
+// Synchronize or copy. Ray batches have a fixed number of samples per ray, as the trainer's: sample j
+// of ray r is element r * samples + j (colours 3 floats each).
+#pragma once
+
+#include <cstdint>
+
+#include "worker/engine/field/hash_math.h"
+#include "worker/engine/render/depth_guided_sampler.h"
+#include "worker/engine/render/volume_renderer.h"
+
+namespace endorecon::cuda {
+
+// --- hash grid, one level over a batch (field::HashGrid's layout) ---
+
+// feat[i * feat_stride + f] = trilinear blend of the level's table at pos[3i..3i+2], f < features.
+// `table` is the level's own table (the grid's params + level.offset * features); features is 1, 2,
+// 4 or 8 (else Error(kInvalidArgument)).
+void HashLevelForward(const field::GridLevel& level, int features, const float* table, const float* pos,
+                      int n, float* feat, int feat_stride);
+
+// grads[level slots] += scale[i] * trilinear weights * dfeat[i * dfeat_stride + f] (scale null: 1),
+// scattered with atomicAdd; `grads` is the level's part of the gradient array. When dpos_add is not
+// null (table must be given then), also adds the level's part of dL/dpos (n x 3) to it.
+// Float atomics make the sum order (and so the last bits) vary from run to run.
+void HashLevelBackward(const field::GridLevel& level, int features, const float* pos, int n,
+                       const float* dfeat, int dfeat_stride, const float* scale, float* grads,
+                       const float* table, float* dpos_add);
+
+// --- samplers (one thread per ray) ---
+
+// Draws of ray r come from render::CounterRng<float>(seed, stream_base + stream_step * r), as the
+// trainer's (seed = the step's seed, base 1, step 2).
+struct RayStreams {
+  std::uint64_t seed = 0;
+  std::uint64_t stream_base = 0;
+  std::uint64_t stream_step = 1;
+};
+
+// render::StratifiedSamples over [near, far] for each of n_rays rays: s and delta are n_rays x samples.
+void StratifiedSampleRays(float near, float far, int n_rays, int samples, const RayStreams& streams, float* s,
+                          float* delta);
+
+// render::DepthGuidedSamples around prior_depth[r] for each ray; samples per ray = the config's
+// gaussian_samples + stratified_samples.
+void DepthGuidedSampleRays(float near, float far, const float* prior_depth, int n_rays,
+                           const render::DepthGuidedConfig<float>& config, const RayStreams& streams,
+                           float* s, float* delta);
+
+// --- volume rendering (one thread per ray) ---
+
+// render::CompositeRay for each ray: weights (n_rays x samples) and out[r].
+void CompositeRays(const float* sigma, const float* rgb, const float* s, const float* delta, int n_rays,
+                   int samples, float min_transmittance, float* weights, render::RayComposite<float>* out);
+
+// render::CompositeRayBackward for each ray, given grad[r] and optionally d_weights (n_rays x samples,
+// null for none); ADDS to d_sigma and d_rgb.
+void CompositeRaysBackward(const float* sigma, const float* rgb, const float* s, const float* delta,
+                           const float* weights, int n_rays, int samples,
+                           const render::RayComposite<float>* forward,
+                           const render::RayCompositeGrad<float>* grad, const float* d_weights,
+                           float* d_sigma, float* d_rgb);
+
+// --- losses (one thread per ray, train/losses.h) ---
+
+// Which terms of train/losses.h to add and their scales (0 skips a term), as the trainer combines
+// them: rendered-colour L2, depth (L1, or Huber with huber_delta > 0) on depth / depth_range, the
+// per-sample RGB NLL and the variance regulariser.
+struct RayLossTerms {
+  float rgb_l2_scale = 0;
+  float depth_scale = 0;
+  float depth_range = 1;
+  float huber_delta = 0;  // 0: L1
+  float nll_scale = 0;
+  float variance_reg_scale = 0;
+  float variance_eps = 1e-3f;
+};
+
+// Per ray r: loss[r] = the sum of the terms, grad[r] = their gradients with respect to the rendered
+// colour and depth (overwritten), and ADDED to d_mean_rgb (n_rays x samples x 3) and d_log_var
+// (n_rays x samples) the per-sample gradients of the NLL and the regulariser. The NLL's weights are
+// held constant (no d_weights), as the trainer's. target_rgb is n_rays x 3; prior_depth may be null
+// when depth_scale is 0.
+void RayLosses(const render::RayComposite<float>* rays, const float* weights, const float* mean_rgb,
+               const float* log_var, const float* target_rgb, const float* prior_depth, int n_rays,
+               int samples, const RayLossTerms& terms, float* loss, render::RayCompositeGrad<float>* grad,
+               float* d_mean_rgb, float* d_log_var);
+
+}  // namespace endorecon::cuda
