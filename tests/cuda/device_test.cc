@@ -23,7 +23,6 @@ TEST(CudaDeviceTest, ListsTheDevicesOrSaysWhyThereAreNone) {
     EXPECT_GE(d.compute_major, 3);
     EXPECT_GT(d.multiprocessors, 0);
     EXPECT_GT(d.total_memory_bytes, 0u);
-    EXPECT_LE(d.free_memory_bytes, d.total_memory_bytes);
   }
 }
 
@@ -51,6 +50,11 @@ TEST(CudaDeviceTest, AllocationWithoutADeviceIsAnErrorNotACrash) {
 
 TEST(CudaDeviceTest, ArraysRoundTripAndCheckSizes) {
   if (DeviceCount() == 0) GTEST_SKIP() << "no CUDA device: " << ListDevices().problem;
+  SetDevice(0);
+  const std::size_t total = ListDevices().devices[0].total_memory_bytes;
+  const std::size_t free_before = FreeMemoryBytes();
+  EXPECT_GT(free_before, 0u);
+  EXPECT_LE(free_before, total);
   const std::vector<float> host = {1.5f, -2.0f, 3.25f};
   DeviceArray<float> a(host);
   EXPECT_EQ(a.Download(), host);

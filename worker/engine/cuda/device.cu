@@ -63,14 +63,6 @@ DeviceList ListDevices() {
     info.compute_minor = prop.minor;
     info.multiprocessors = prop.multiProcessorCount;
     info.total_memory_bytes = prop.totalGlobalMem;
-    int previous = 0;
-    std::size_t free_bytes = 0, total_bytes = 0;
-    if (cudaGetDevice(&previous) == cudaSuccess && cudaSetDevice(i) == cudaSuccess &&
-        cudaMemGetInfo(&free_bytes, &total_bytes) == cudaSuccess) {
-      info.free_memory_bytes = free_bytes;
-    }
-    cudaSetDevice(previous);
-    cudaGetLastError();
     list.devices.push_back(info);
   }
   return list;
@@ -92,6 +84,12 @@ void SetDevice(int index) {
                 " device(s) visible)");
   }
   CheckStatus(cudaSetDevice(index), ("cudaSetDevice(" + std::to_string(index) + ")").c_str());
+}
+
+std::size_t FreeMemoryBytes() {
+  std::size_t free_bytes = 0, total_bytes = 0;
+  CheckStatus(cudaMemGetInfo(&free_bytes, &total_bytes), "cudaMemGetInfo");
+  return free_bytes;
 }
 
 void Synchronize() { CheckStatus(cudaDeviceSynchronize(), "cudaDeviceSynchronize (a kernel failed)"); }

@@ -23,11 +23,11 @@ struct DeviceInfo {
   int compute_major = 0, compute_minor = 0;
   int multiprocessors = 0;
   std::size_t total_memory_bytes = 0;
-  std::size_t free_memory_bytes = 0;  // at the time of the query
 };
 
 // What ListDevices found: the devices, or none and why (no driver, no device, driver too old).
-// Never throws: a machine without a GPU is a normal answer, not an error.
+// Never throws: a machine without a GPU is a normal answer, not an error. Reads properties only,
+// so it creates no context (and takes no memory) on devices other workers may be using.
 struct DeviceList {
   std::vector<DeviceInfo> devices;
   std::string problem;  // empty when the query itself worked (even with zero devices)
@@ -41,6 +41,9 @@ int DeviceCount();
 // Makes `index` the current device of the calling thread. Throws Error(kInvalidArgument) for an
 // index outside [0, DeviceCount()).
 void SetDevice(int index);
+
+// Free memory of the current device, in bytes (creates its context if there is none yet).
+std::size_t FreeMemoryBytes();
 
 // Waits for all work on the current device; throws if a kernel failed.
 void Synchronize();
