@@ -32,13 +32,7 @@ __global__ void HashLevelForwardKernel(field::GridLevel level, const float* tabl
   std::uint32_t slot[8];
   float w[8], frac[3];
   field::CellCornersOf<kDense>(level, pos + 3 * static_cast<std::size_t>(i), slot, w, frac);
-  float acc[F] = {};
-  for (int k = 0; k < 8; ++k) {
-    const float* v = table + std::size_t{slot[k]} * F;
-    for (int f = 0; f < F; ++f) acc[f] += w[k] * v[f];
-  }
-  float* out = feat + static_cast<std::size_t>(i) * feat_stride;
-  for (int f = 0; f < F; ++f) out[f] = acc[f];
+  field::BlendCorners<F>(table, slot, w, feat + static_cast<std::size_t>(i) * feat_stride);
 }
 
 template <int F, bool kDense, bool kPosition>

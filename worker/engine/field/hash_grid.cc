@@ -20,13 +20,7 @@ void ForwardLevel(const GridLevel& level, const S* table, const S* pos, int n, S
     std::uint32_t slot[8];
     S w[8], frac[3];
     CellCornersOf<kDense>(level, pos + 3 * i, slot, w, frac);
-    S acc[F] = {};
-    for (int k = 0; k < 8; ++k) {
-      const S* v = table + std::size_t{slot[k]} * F;
-      for (int f = 0; f < F; ++f) acc[f] += w[k] * v[f];
-    }
-    S* out = feat + static_cast<std::size_t>(i) * feat_stride;
-    for (int f = 0; f < F; ++f) out[f] = acc[f];
+    BlendCorners<F>(table, slot, w, feat + static_cast<std::size_t>(i) * feat_stride);
   }
 }
 

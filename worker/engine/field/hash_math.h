@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 
 #include "common/hd.h"
@@ -101,6 +102,19 @@ ENDORECON_HD ENDORECON_FIELD_INLINE void CellCorners(const GridLevel& level, con
   } else {
     CellCornersOf<false>(level, pos, slot, weight, frac);
   }
+}
+
+// out[f] = sum_k weight[k] * table[slot[k] * F + f] for f < F: a cell's 8 corner features blended
+// with the weights of CellCorners (accumulated in registers, stored once).
+template <int F, typename S>
+ENDORECON_HD ENDORECON_FIELD_INLINE void BlendCorners(const S* table, const std::uint32_t* slot,
+                                                      const S* weight, S* out) {
+  S acc[F] = {};
+  for (int k = 0; k < 8; ++k) {
+    const S* v = table + static_cast<std::size_t>(slot[k]) * F;
+    for (int f = 0; f < F; ++f) acc[f] += weight[k] * v[f];
+  }
+  for (int f = 0; f < F; ++f) out[f] = acc[f];
 }
 
 // Gradient of sum_k weight[k] * value[k] with respect to the fractional position, given value[k]
