@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <istream>
+#include <limits>
 #include <ostream>
 
 #include "common/error.h"
@@ -22,9 +23,14 @@ Adam::Adam(std::vector<ParamGroup> groups, AdamConfig config)
 AdamStepReport Adam::Step(double progress) {
   AdamStepReport report;
   double sum_sq = 0;
-  for (const auto& g : groups_) {
+  std::vector<double> group_max(groups_.size(), 0.0);
+  for (std::size_t k = 0; k < groups_.size(); ++k) {
+    const auto& g = groups_[k];
     double group_sq = 0;
-    for (std::size_t i = 0; i < g.size; ++i) group_sq += double(g.grad[i]) * g.grad[i];
+    for (std::size_t i = 0; i < g.size; ++i) {
+      group_sq += double(g.grad[i]) * g.grad[i];
+      group_max[k] = std::max(group_max[k], double(std::fabs(g.grad[i])));
+    }
     if (!std::isfinite(group_sq) && report.finite) {
       report.finite = false;
       report.bad_group = g.name;
@@ -37,6 +43,16 @@ AdamStepReport Adam::Step(double progress) {
   float scale = 1.0f;
   if (config_.clip_norm > 0 && report.grad_norm > config_.clip_norm) {
     scale = static_cast<float>(config_.clip_norm / report.grad_norm);
+  }
+  // The second moment is kept in float: a (scaled) gradient above sqrt(FLT_MAX) would make it Inf and
+  // freeze that parameter for good (m / sqrt(Inf) = 0) without any NaN. Refuse the step instead.
+  const double largest = std::sqrt(double(std::numeric_limits<float>::max()));
+  for (std::size_t k = 0; k < groups_.size(); ++k) {
+    if (group_max[k] * scale > largest) {
+      report.finite = false;
+      report.bad_group = groups_[k].name;
+      return report;
+    }
   }
   ++steps_;
   const float decay = static_cast<float>(std::pow(double(config_.final_lr_factor), std::clamp(progress, 0.0, 1.0)));

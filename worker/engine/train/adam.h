@@ -20,8 +20,10 @@ struct AdamConfig {
 
 struct AdamStepReport {
   double grad_norm = 0;  // before clipping
-  bool finite = true;    // false: some gradient was NaN/Inf and nothing was updated
-  std::string bad_group; // the first group holding a non-finite gradient
+  // false: some gradient was NaN/Inf, or (after clipping) so large that its square overflows float;
+  // nothing was updated
+  bool finite = true;
+  std::string bad_group;  // the first group holding such a gradient
 };
 
 class Adam {

@@ -172,8 +172,9 @@ StepStats Trainer::Step(double progress) {
   if (progress < 0) progress = config_.iterations > 0 ? double(iteration_) / config_.iterations : 0.0;
   const AdamStepReport report = adam_->Step(progress);
   if (!report.finite) {
-    Fail(ErrorCode::kInternal, "training diverged: a gradient is not finite at iteration " +
-                                   std::to_string(iteration_) + " (stage: backward, group " + report.bad_group + ")");
+    Fail(ErrorCode::kInternal,
+         "training diverged: a gradient is not finite (or its square overflows float) at iteration " +
+             std::to_string(iteration_) + " (stage: backward, group " + report.bad_group + ")");
   }
   ++iteration_;
   return stats;

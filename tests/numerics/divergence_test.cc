@@ -1,0 +1,122 @@
+// Guards in training (issue 6 §3): a run whose learning rate is large enough to diverge stops with
+// Error(kInternal) naming the stage and the iteration, never with silent NaN, and the checkpoint
+// written before the failing step is still there and loads; and gradient clipping keeps a
+// gradient too large for float's Adam second moment from stopping the run.
+#include <gtest/gtest.h>
+
+#include <cfloat>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <regex>
+#include <string>
+#include <vector>
+
+#include "common/error.h"
+#include "tests/unit/temp_dir.h"
+#include "worker/engine/reconstruct.h"
+#include "worker/engine/scene/clip_loader.h"
+#include "worker/engine/scene/synthetic_clip.h"
+#include "worker/engine/train/adam.h"
+#include "worker/engine/train/checkpoint.h"
+#include "worker/engine/train/trainer.h"
+
+namespace endorecon {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Every group at a learning rate of 1e9, no decay: the first update throws the parameters to ~1e9
+// and a later forward pass overflows.
+nlohmann::json DivergingConfig() {
+  nlohmann::json lr;
+  for (const char* group : {"grid", "density", "color", "blend", "deform"}) lr[group] = 1e9;
+  return {{"rays_per_batch", 128}, {"adam", {{"lr", lr}, {"final_lr_factor", 1.0}}}};
+}
+
+TEST(Divergence, ReconstructThrowsNamingStageAndIterationAndKeepsTheLastGoodCheckpoint) {
+  testing::TempDir dir("divergence");
+  scene::SynthOptions synth;
+  synth.frames = 6;
+  synth.width = 40;
+  synth.height = 32;
+  scene::WriteSyntheticClip(synth, dir / "clip");
+  std::ofstream(dir / "diverge.json") << DivergingConfig().dump();
+
+  ReconstructOptions options;
+  options.clip_dir = (dir / "clip").string();
+  options.out_dir = (dir / "out").string();
+  options.config_file = (dir / "diverge.json").string();
+  options.iterations = 200;
+  ReconstructHooks hooks;
+  hooks.checkpoint_interval_s = 0;  // a checkpoint after every step that passed its checks
+  int checkpoints = 0;
+  hooks.on_checkpoint = [&](const std::string&) { ++checkpoints; };
+  std::string message;
+  try {
+    Reconstruct(options, hooks);
+    FAIL() << "a learning rate of 1e9 trained 200 iterations without a non-finite loss or gradient";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kInternal) << e.what();
+    message = e.what();
+  }
+  std::smatch match;
+  ASSERT_TRUE(
+      std::regex_search(message, match, std::regex("at iteration ([0-9]+) \\(stage: (loss|backward)")))
+      << message;
+  const int failed_at = std::stoi(match[1]);
+  ASSERT_GT(failed_at, 0) << "the run must diverge after at least one good step for this test: " << message;
+  EXPECT_EQ(checkpoints, failed_at);
+
+  // Nothing is written on the throw: the checkpoint is that of the last good step, and it loads.
+  const fs::path checkpoint = dir / "out" / "model" / "checkpoint.bin";
+  ASSERT_TRUE(fs::exists(checkpoint));
+  EXPECT_FALSE(fs::exists(dir / "out" / "metrics.json"));
+  const scene::Clip clip = scene::LoadClip(dir / "clip");
+  const train::TrainConfig config = train::ReadCheckpointConfig(checkpoint);
+  EXPECT_FLOAT_EQ(config.adam.lr.at("grid"), 1e9f);
+  std::vector<int> frames(clip.frame_count());
+  for (int f = 0; f < clip.frame_count(); ++f) frames[f] = f;
+  train::Trainer trainer(clip, config, frames, options.seed);
+  train::ReadCheckpointState(checkpoint, trainer);
+  EXPECT_EQ(trainer.iteration(), failed_at);
+  for (const auto& block : trainer.field().Blocks()) {
+    for (std::size_t i = 0; i < block.size; ++i) {
+      ASSERT_TRUE(std::isfinite(block.value[i]))
+          << "checkpointed parameter " << block.name << "[" << i << "]";
+    }
+  }
+}
+
+// Adam keeps its second moment in float: a gradient above sqrt(FLT_MAX) ~ 1.8e19 would make it Inf
+// and freeze that parameter for good (m / sqrt(Inf) = 0) with no NaN anywhere. Adam reports such a
+// step as not finite (the trainer then stops naming the group); with clip_norm the gradient is
+// scaled down first and the step goes through.
+TEST(Divergence, ClippingPreventsTheSecondMomentOverflow) {
+  for (float clip : {0.0f, 1.0f}) {
+    std::vector<float> value = {0.5f, -0.25f}, grad = {3e19f, 1.0f};
+    train::AdamConfig config;
+    config.default_lr = 0.01f;
+    config.clip_norm = clip;
+    train::Adam adam({train::ParamGroup{"grid", value.data(), grad.data(), value.size()}}, config);
+    const train::AdamStepReport report = adam.Step(0.0);
+    EXPECT_NEAR(report.grad_norm, 3e19, 1e13);
+    if (clip == 0.0f) {
+      EXPECT_FALSE(report.finite) << "a gradient whose square overflows float went through unclipped";
+      EXPECT_EQ(report.bad_group, "grid");
+      EXPECT_EQ(value[0], 0.5f) << "a refused step must leave the parameters alone";
+    } else {
+      ASSERT_TRUE(report.finite);
+      // Adam's first step moves a parameter whose gradient dominates eps by lr against its sign.
+      EXPECT_NEAR(value[0], 0.49f, 1e-6f);
+      // And the next, ordinary step still moves it: nothing froze.
+      grad = {1.0f, 1.0f};
+      ASSERT_TRUE(adam.Step(0.0).finite);
+      EXPECT_LT(value[0], 0.49f - 1e-4f);
+    }
+  }
+}
+
+}  // namespace
+}  // namespace endorecon
