@@ -50,9 +50,10 @@ std::string ProgressLine(const v1::Progress& p) {
   const int filled = static_cast<int>(fraction * kWidth);
   std::string line = fmt::format("[{}{}]", std::string(static_cast<std::size_t>(filled), '#'),
                                  std::string(static_cast<std::size_t>(kWidth - filled), '.'));
-  line += fmt::format(" {:3.0f}%  it {}/{}  loss {:.4g}  PSNR {:.2f} dB", 100 * fraction, p.iteration(),
-                      p.total_iterations(), p.loss(), p.train_psnr());
+  line += fmt::format(" {:3.0f}%  it {}/{}  {:.0f} s  loss {:.4g}  PSNR {:.2f} dB", 100 * fraction,
+                      p.iteration(), p.total_iterations(), p.seconds(), p.loss(), p.train_psnr());
   if (p.heldout_psnr() >= 0) line += fmt::format(" (held-out {:.2f})", p.heldout_psnr());
+  if (p.depth_rmse() >= 0) line += fmt::format("  depth RMSE {:.2f}% of range", 100 * p.depth_rmse());
   line += fmt::format("  {:.3g} samples/s  ETA {}", p.samples_per_second(), HumanDuration(p.eta_s()));
   return line;
 }

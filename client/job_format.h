@@ -14,7 +14,8 @@ namespace endorecon::client {
 std::string ToJson(const google::protobuf::Message& message);
 // A multi-line description of one job.
 std::string DescribeJob(const v1::Job& job);
-// One line: bar, iteration, loss, PSNR, samples/s, ETA.
+// One line: bar, iteration, training seconds, loss, PSNR (training, held-out), held-out depth error,
+// samples/s, ETA.
 std::string ProgressLine(const v1::Progress& progress);
 // "1.2 MB", "3.4 GB".
 std::string HumanBytes(std::int64_t bytes);
