@@ -9,7 +9,9 @@ namespace endorecon::train {
 TrainConfig TrainConfig::Preset(const std::string& name) {
   TrainConfig c;
   c.preset = name;
-  c.adam.lr = {{"grid", 1e-2f}, {"blend", 1e-3f}, {"deform", 1e-3f}, {"density", 1e-3f}, {"color", 1e-3f}};
+  // Measured on the demo clip (3000 iterations, held-out tissue PSNR): these rates 34.5 dB against
+  // 32.3 dB with grid 1e-2 and heads 1e-3 (docs/benchmarks.md).
+  c.adam.lr = {{"grid", 3e-2f}, {"blend", 1e-3f}, {"deform", 1e-3f}, {"density", 3e-3f}, {"color", 3e-3f}};
   if (name == "cpu") {
     c.field = field::FieldConfig::Cpu();
     return c;

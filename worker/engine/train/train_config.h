@@ -23,7 +23,9 @@ struct TrainConfig {
   int holdout = 8;         // every K-th frame held out of training; 0 = none
 
   // Loss (paper §3 "Training Objective" + EndoNeRF's rendered-colour L2, see losses.h).
-  float nll_weight = 1.0f;
+  // The paper's uncertainty-loss weight (lambda_unc = 0.02-0.03). At 1 the NLL's 1/sigma^2 (down to
+  // 1/variance_eps) outweighs the photometric term: 29.8 dB against 34.5 dB held out (docs/benchmarks.md).
+  float nll_weight = 0.03f;
   float rgb_l2_weight = 1.0f;
   float depth_weight = 1.0f;  // lambda_d
   float variance_reg = 0.03f;  // eta
