@@ -114,6 +114,25 @@ Preview MakePreview(const render::RenderedFrame& frame, int index) {
   return preview;
 }
 
+// The total uncertainty as 8-bit grey, scaled by the preview's own largest value (a preview shows
+// where the uncertainty is, not how large it is; the results' heat maps carry the clip-wide scale).
+Preview MakeUncertaintyPreview(const render::RenderedFrame& frame, int index) {
+  Preview preview;
+  preview.kind = "uncertainty";
+  preview.frame = index;
+  preview.width = frame.width;
+  preview.height = frame.height;
+  preview.channels = 1;
+  float top = 0;
+  for (float v : frame.uncertainty) top = std::isfinite(v) ? std::max(top, v) : top;
+  preview.pixels.resize(frame.uncertainty.size());
+  for (std::size_t i = 0; i < frame.uncertainty.size(); ++i) {
+    const float v = std::isfinite(frame.uncertainty[i]) && top > 0 ? frame.uncertainty[i] / top : 0.0f;
+    preview.pixels[i] = std::uint8_t(std::lround(std::clamp(v, 0.0f, 1.0f) * 255.0f));
+  }
+  return preview;
+}
+
 render::FrameRenderSettings RenderSettings(const train::TrainConfig& config, double near, double far) {
   render::FrameRenderSettings settings;
   settings.near = near;
@@ -123,6 +142,20 @@ render::FrameRenderSettings RenderSettings(const train::TrainConfig& config, dou
   settings.floor = config.eval_floor;
   return settings;
 }
+
+}  // namespace
+
+render::FrameRenderSettings UncertaintyRenderSettings(const train::TrainConfig& config, double near, double far,
+                                                      std::uint64_t seed) {
+  render::FrameRenderSettings settings = RenderSettings(config, near, far);
+  settings.mc_passes = config.mc_passes;
+  settings.color_weight = config.uncertainty_lambda;
+  settings.variance_eps = config.variance_eps;
+  settings.mc_seed = seed;
+  return settings;
+}
+
+namespace {
 
 }  // namespace
 
@@ -158,6 +191,8 @@ ReconstructSummary Reconstruct(const ReconstructOptions& options, const Reconstr
                clip.height, split.train.size(), split.heldout.size(), trainer.field().Describe());
 
   render::FrameRenderer renderer(trainer.field(), trainer.box(), RenderSettings(config, clip.near, clip.far));
+  render::FrameRenderer uncertainty_renderer(trainer.field(), trainer.box(),
+                                             UncertaintyRenderSettings(config, clip.near, clip.far, options.seed));
   const CurveProbe probe(clip, split.heldout, config.curve_frames);
   const fs::path checkpoint_path = out_dir / "model" / "checkpoint.bin";
 
@@ -220,7 +255,9 @@ ReconstructSummary Reconstruct(const ReconstructOptions& options, const Reconstr
     }
     if (hooks.on_preview && std::chrono::duration<double>(now - last_preview).count() >= hooks.preview_interval_s) {
       const int f = split.heldout.empty() ? 0 : split.heldout.front();
-      hooks.on_preview(MakePreview(renderer.Render(fit.preview_camera(clip.cameras[f]), clip.times[f]), f));
+      const auto frame = uncertainty_renderer.Render(fit.preview_camera(clip.cameras[f]), clip.times[f]);
+      hooks.on_preview(MakePreview(frame, f));
+      if (!frame.uncertainty.empty()) hooks.on_preview(MakeUncertaintyPreview(frame, f));
       last_preview = Clock::now();
     }
     if (std::chrono::duration<double>(now - last_checkpoint).count() >= hooks.checkpoint_interval_s) {
@@ -246,7 +283,7 @@ ReconstructSummary Reconstruct(const ReconstructOptions& options, const Reconstr
     eval::ClipEvaluation what;
     what.train_frames = split.train;
     what.heldout_frames = split.heldout;
-    metrics = eval::EvaluateClip(clip, renderer, what, out_dir);
+    metrics = eval::EvaluateClip(clip, uncertainty_renderer, what, out_dir);
     const auto pointer = "/heldout/image/psnr_tissue/mean"_json_pointer;
     if (metrics.contains(pointer) && metrics.at(pointer).is_number()) summary.heldout_psnr = metrics.at(pointer);
   }

@@ -7,6 +7,9 @@
 #include <string>
 #include <vector>
 
+#include "worker/engine/render/frame_renderer.h"
+#include "worker/engine/train/train_config.h"
+
 namespace endorecon {
 
 struct ReconstructOptions {
@@ -61,6 +64,11 @@ struct ReconstructSummary {
   double train_psnr = 0;
   std::string metrics_path;  // out_dir/metrics.json
 };
+
+// The evaluation renderer's settings with uncertainty on (K = config.mc_passes, lambda, eps), as
+// Reconstruct uses them for results; `render` uses the same for novel views.
+render::FrameRenderSettings UncertaintyRenderSettings(const train::TrainConfig& config, double near, double far,
+                                                      std::uint64_t seed);
 
 // Throws endorecon::Error: kInvalidArgument for a bad clip or option (message names the file),
 // kInternal when training diverges (message names the stage and iteration; the last good

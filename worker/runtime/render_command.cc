@@ -1,11 +1,15 @@
-// endorecon-worker render: renders colour and depth from a results folder's trained model for any
+// endorecon-worker render: renders colour, depth and uncertainty from a results folder's trained model for any
 // cameras at any times (a transforms.json-style list), e.g. the other eye of a stereo endoscope.
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
+#include <fstream>
 #include <memory>
+#include <nlohmann/json.hpp>
 
+#include "worker/engine/eval/clip_evaluator.h"
 #include "worker/engine/eval/exports.h"
+#include "worker/engine/reconstruct.h"
 #include "worker/engine/render/frame_renderer.h"
 #include "worker/engine/scene/camera_list.h"
 #include "worker/engine/train/checkpoint.h"
@@ -25,26 +29,38 @@ Command AddRenderCommand(CLI::App& app) {
   return [args] {
     const train::Model model = train::ReadModel(std::filesystem::path(args->result) / "model" / "model.bin");
     const auto cameras = scene::ReadCameraList(args->cameras);
-    render::FrameRenderSettings settings;
-    settings.near = model.near;
-    settings.far = model.far;
-    settings.coarse_samples = model.config.eval_coarse_samples;
-    settings.fine_samples = model.config.eval_fine_samples;
-    settings.floor = model.config.eval_floor;
+    const auto settings = UncertaintyRenderSettings(model.config, model.near, model.far, 0);
     render::FrameRenderer renderer(*model.field, model.box, settings);
     const std::filesystem::path out(args->out);
-    std::filesystem::create_directories(out / "rgb");
-    std::filesystem::create_directories(out / "depth");
+    for (const char* sub : {"rgb", "depth", "uncertainty"}) std::filesystem::create_directories(out / sub);
     const double scale = eval::DepthPngScale(model.far);
+    // The heat maps share one scale over all views, so they are written once every view is rendered.
+    std::vector<std::vector<float>> totals;
     for (std::size_t i = 0; i < cameras.size(); ++i) {
       const auto& view = cameras[i];
-      const auto frame = renderer.Render(view.camera, view.time);
-      eval::WritePng8(out / "rgb" / eval::FrameFileName(int(i), ".png"), frame.rgb, frame.width, frame.height);
-      eval::WriteDepthNpy(out / "depth" / eval::FrameFileName(int(i), ".npy"), frame.depth, frame.width, frame.height);
-      eval::WriteDepthPng16(out / "depth" / eval::FrameFileName(int(i), ".png"), frame.depth, frame.width,
-                            frame.height, scale);
+      auto frame = renderer.Render(view.camera, view.time);
+      const int w = frame.width, h = frame.height;
+      eval::WritePng8(out / "rgb" / eval::FrameFileName(int(i), ".png"), frame.rgb, w, h);
+      eval::WriteDepthNpy(out / "depth" / eval::FrameFileName(int(i), ".npy"), frame.depth, w, h);
+      eval::WriteDepthPng16(out / "depth" / eval::FrameFileName(int(i), ".png"), frame.depth, w, h, scale);
+      if (frame.uncertainty.empty()) continue;
+      const auto path = [&](const char* suffix) { return out / "uncertainty" / eval::FrameFileName(int(i), suffix); };
+      eval::WriteDepthNpy(path(".npy"), frame.uncertainty, w, h);
+      eval::WriteDepthNpy(path("_aleatoric.npy"), frame.aleatoric, w, h);
+      eval::WriteDepthNpy(path("_epistemic.npy"), frame.epistemic, w, h);
+      totals.push_back(std::move(frame.uncertainty));
     }
-    spdlog::info("rendered {} views into {} (depth PNG scale {})", cameras.size(), args->out, scale);
+    const double heat = eval::HeatmapUpperBound(totals);
+    for (std::size_t i = 0; i < totals.size(); ++i) {
+      eval::WriteHeatmapPng(out / "uncertainty" / eval::FrameFileName(int(i), ".png"), totals[i],
+                            cameras[i].camera.width, cameras[i].camera.height, 0.0, heat);
+    }
+    nlohmann::json info = eval::UncertaintySettings(settings);
+    info["heatmap_scale"] = {{"uncertainty", {0.0, heat}}};
+    info["depth_png_scale"] = scale;
+    std::ofstream(out / "render.json") << info.dump(2);
+    spdlog::info("rendered {} views into {} (depth PNG scale {}, uncertainty heat-map scale [0, {}])", cameras.size(),
+                 args->out, scale, heat);
     return 0;
   };
 }

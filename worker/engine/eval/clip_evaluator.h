@@ -1,5 +1,6 @@
 // Renders every frame of a clip from a trained field, measures it against the clip, and writes
-// the per-frame results (rgb/, depth/, pointcloud/, video.mp4). Returns the metrics as JSON.
+// the per-frame results (rgb/, depth/, pointcloud/, video.mp4, and with a renderer that estimates
+// uncertainty: uncertainty/ and error/). Returns the metrics as JSON.
 #pragma once
 
 #include <filesystem>
@@ -20,9 +21,17 @@ struct ClipEvaluation {
 
 // Metrics: "train" and "heldout" splits each with per-frame and summarised image metrics (tissue
 // pixels: eval masks (gt_masks/) when the clip has them, else tool masks) and depth error against
-// the clip's ground-truth depth when present; "depth_png_scale".
+// the clip's ground-truth depth when present; "depth_png_scale". With uncertainty (renderer settings
+// mc_passes > 0): each split gets "calibration" (MeasureCalibration of the total uncertainty against
+// PixelRmse on tissue pixels, summarised over frames, with the mean sparsification curves), and
+// "uncertainty_maps" records the heat-map scales (one per clip: HeatmapUpperBound of every frame's
+// total uncertainty, and of every frame's error) and the estimator's settings.
 nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& renderer, const ClipEvaluation& what,
                             const std::filesystem::path& out_dir);
+
+// What the uncertainty maps of a renderer mean, for metrics.json: K, lambda, eps, the score's
+// formula and the error measure calibration uses.
+nlohmann::json UncertaintySettings(const render::FrameRenderSettings& settings);
 
 // Tool mask a frame is evaluated with: gt_masks/ when present (EndoNeRF's evaluation), else masks/,
 // else none (empty).

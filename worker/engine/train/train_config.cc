@@ -60,6 +60,14 @@ void VisitKeys(TrainConfig& c, Visit&& visit) {
   visit("eval_coarse_samples", c.eval_coarse_samples);
   visit("eval_fine_samples", c.eval_fine_samples);
   visit("eval_floor", c.eval_floor);
+  visit("mc_passes", c.mc_passes);
+  visit("uncertainty_lambda", c.uncertainty_lambda);
+  visit("adaptive_sampling", c.adaptive_sampling);
+  visit("adaptive_warmup", c.adaptive_warmup);
+  visit("adaptive_ray_fraction", c.adaptive_ray_fraction);
+  visit("adaptive_refresh", c.adaptive_refresh);
+  visit("adaptive_map_stride", c.adaptive_map_stride);
+  visit("adaptive_floor", c.adaptive_floor);
   visit("curve_interval_s", c.curve_interval_s);
   visit("curve_frames", c.curve_frames);
   visit("field.grids.base_resolutions", c.field.grids.base_resolutions);
@@ -99,6 +107,12 @@ void Validate(const TrainConfig& c) {
   require(c.variance_eps > 0, "variance_eps must be > 0");
   require(c.eval_coarse_samples >= 1 && c.eval_fine_samples >= 1, "eval samples must be >= 1");
   require(c.curve_interval_s > 0, "curve_interval_s must be > 0");
+  require(c.mc_passes >= 0, "mc_passes must be >= 0");
+  require(c.uncertainty_lambda >= 0, "uncertainty_lambda must be >= 0");
+  require(c.adaptive_warmup >= 0 && c.adaptive_warmup <= 1, "adaptive_warmup must be in [0, 1]");
+  require(c.adaptive_ray_fraction >= 0 && c.adaptive_ray_fraction <= 1, "adaptive_ray_fraction must be in [0, 1]");
+  require(c.adaptive_refresh >= 1 && c.adaptive_map_stride >= 1, "adaptive_refresh and adaptive_map_stride must be >= 1");
+  require(c.adaptive_floor > 0 && c.adaptive_floor <= 1, "adaptive_floor must be in (0, 1]");
 }
 
 }  // namespace

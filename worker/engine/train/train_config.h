@@ -40,6 +40,23 @@ struct TrainConfig {
   int eval_fine_samples = 48;
   float eval_floor = 0.02f;  // share of fine samples spread uniformly along the ray
 
+  // Uncertainty (paper §3). At evaluation: K dropout passes; lambda weighs the colour variance
+  // against the density variance in the ray score (docs/formats.md, "Uncertainty").
+  int mc_passes = 8;
+  float uncertainty_lambda = 1.0f;
+  // Uncertainty-guided adaptive sampling in training (docs/architecture.md). After the warm-up (a
+  // fraction of the run: of the iterations, or of the time budget when there is one), a fraction of
+  // each batch's rays is drawn in proportion to a per-pixel uncertainty map of the training frames
+  // (one dropout-on pass over every adaptive_map_stride-th pixel in x and y, refreshed every
+  // adaptive_refresh iterations); those rays' samples are reallocated by their sample scores from one
+  // dropout-on pass at the ordinary samples, with a uniform floor.
+  bool adaptive_sampling = true;
+  double adaptive_warmup = 0.1;
+  float adaptive_ray_fraction = 0.3f;
+  int adaptive_refresh = 500;
+  int adaptive_map_stride = 4;
+  float adaptive_floor = 0.2f;
+
   double curve_interval_s = 10.0;  // a point of the error-against-time curve every this many seconds
   int curve_frames = 4;            // held-out frames rendered for each curve point (evenly spread)
 

@@ -4,20 +4,30 @@
 #include <tbb/parallel_reduce.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <cmath>
 #include <istream>
 #include <ostream>
 #include <string>
 
 #include "common/error.h"
+#include "worker/engine/field/variance.h"
+#include "worker/engine/render/adaptive_sampler.h"
 #include "worker/engine/render/depth_guided_sampler.h"
 #include "worker/engine/render/ray_points.h"
 #include "worker/engine/render/rng.h"
+#include "worker/engine/render/sample_score.h"
 #include "worker/engine/render/stratified_sampler.h"
 #include "worker/engine/render/volume_renderer.h"
 #include "worker/engine/train/losses.h"
 
 namespace endorecon::train {
+namespace {
+
+// eps of the per-ray min-max normalisation of the variances (sample_score.h).
+constexpr float kScoreEps = 1e-6f;
+
+}  // namespace
 
 // Batch-major arrays for one step, allocated once: rays x samples, nothing allocated per step.
 struct Trainer::Batch {
@@ -25,11 +35,13 @@ struct Trainer::Batch {
   std::vector<float> target, prior, s, delta, pos, dir, time;
   std::vector<float> sigma, sigma_logvar, rgb, rgb_logvar, weights;
   std::vector<float> d_weights, d_sigma, d_rgb, d_rgb_logvar;
+  std::vector<RayPick> picks;
 
   Batch(int r, int n) : rays(r), samples(n) {
     const std::size_t m = std::size_t(r) * n;
     target.resize(3 * std::size_t(r));
     prior.resize(r);
+    picks.resize(r);
     for (auto* v : {&s, &delta, &time, &sigma, &sigma_logvar, &rgb_logvar, &weights, &d_weights, &d_sigma,
                     &d_rgb_logvar}) {
       v->resize(m);
@@ -44,7 +56,8 @@ Trainer::Trainer(const scene::Clip& clip, const TrainConfig& config, std::vector
       config_(config),
       seed_(seed),
       box_(scene::FrustumBox(clip.cameras, clip.near, clip.far)),
-      sampler_(clip, std::move(train_frames)) {
+      sampler_(clip, std::move(train_frames)),
+      map_(sampler_, clip.width, clip.height, config.adaptive_map_stride) {
   field_ = std::make_unique<field::Field>(config_.field, seed);
   adam_ = std::make_unique<Adam>(field_->Params(), config_.adam);
   // Without depth the same number of samples is spread stratified over [near, far].
@@ -53,38 +66,113 @@ Trainer::Trainer(const scene::Clip& clip, const TrainConfig& config, std::vector
 
 Trainer::~Trainer() = default;
 
-void Trainer::SampleRays() {
+void Trainer::PlaceRay(int r, const RayPick& pick, std::uint64_t step_seed) {
   Batch& b = *batch_;
   const float near = float(clip_.near), far = float(clip_.far);
-  const std::uint64_t step_seed = render::HashCombine(seed_, std::uint64_t(iteration_));
   render::DepthGuidedConfig<float> guided;
   guided.xi = float(config_.depth_xi * (clip_.far - clip_.near));
   guided.gaussian_samples = config_.depth_samples;
   guided.stratified_samples = config_.stratified_samples;
+  b.picks[r] = pick;
+  const scene::Camera& camera = clip_.cameras[pick.frame];
+  const int x = pick.pixel % clip_.width, y = pick.pixel / clip_.width;
+  Eigen::Vector3d origin, direction;
+  camera.Ray(x, y, origin, direction);
+  const std::uint8_t* px = &clip_.rgb[pick.frame][3 * std::size_t(pick.pixel)];
+  for (int c = 0; c < 3; ++c) b.target[3 * r + c] = px[c] / 255.0f;
+  b.prior[r] = clip_.has_depth() ? clip_.depth[pick.frame][pick.pixel] : 0.0f;
+
+  const render::CounterRng<float> uniform(step_seed, std::uint64_t(2 * r + 1));
+  float* s = &b.s[std::size_t(r) * b.samples];
+  float* delta = &b.delta[std::size_t(r) * b.samples];
+  if (clip_.has_depth()) {
+    render::DepthGuidedSamples(near, far, b.prior[r], guided, uniform, s, delta);
+  } else {
+    render::StratifiedSamples(near, far, b.samples, uniform, s, delta);
+  }
+  const std::size_t o = std::size_t(r) * b.samples;
+  render::RayPoints(box_, origin, direction, clip_.times[pick.frame], s, b.samples, delta, &b.pos[3 * o],
+                    &b.dir[3 * o], &b.time[o]);
+}
+
+void Trainer::SampleRays(int guided) {
+  Batch& b = *batch_;
+  const std::uint64_t step_seed = render::HashCombine(seed_, std::uint64_t(iteration_));
   tbb::parallel_for(tbb::blocked_range<int>(0, b.rays, 64), [&](const tbb::blocked_range<int>& range) {
     for (int r = range.begin(); r != range.end(); ++r) {
-      const RayPick pick = sampler_.Pick(step_seed, std::uint64_t(2 * r));
-      const scene::Camera& camera = clip_.cameras[pick.frame];
-      const int x = pick.pixel % clip_.width, y = pick.pixel / clip_.width;
-      Eigen::Vector3d origin, direction;
-      camera.Ray(x, y, origin, direction);
-      const std::uint8_t* px = &clip_.rgb[pick.frame][3 * std::size_t(pick.pixel)];
-      for (int c = 0; c < 3; ++c) b.target[3 * r + c] = px[c] / 255.0f;
-      b.prior[r] = clip_.has_depth() ? clip_.depth[pick.frame][pick.pixel] : 0.0f;
+      const std::uint64_t stream = std::uint64_t(2 * r);
+      const auto from_map = r < guided ? map_.Pick(step_seed ^ 0x6a1dedull, stream) : std::nullopt;
+      PlaceRay(r, from_map ? *from_map : sampler_.Pick(step_seed, stream), step_seed);
+    }
+  });
+  if (guided > 0) ReallocateSamples(guided, step_seed);
+}
 
-      const render::CounterRng<float> uniform(step_seed, std::uint64_t(2 * r + 1));
-      float* s = &b.s[std::size_t(r) * b.samples];
-      float* delta = &b.delta[std::size_t(r) * b.samples];
-      if (clip_.has_depth()) {
-        render::DepthGuidedSamples(near, far, b.prior[r], guided, uniform, s, delta);
-      } else {
-        render::StratifiedSamples(near, far, b.samples, uniform, s, delta);
+void Trainer::ReallocateSamples(int rays, std::uint64_t step_seed) {
+  Batch& b = *batch_;
+  const int n = b.samples;
+  const field::SampleBatch in{rays * n, b.pos.data(), b.time.data(), b.dir.data()};
+  field::FieldOutput out{b.sigma.data(), b.sigma_logvar.data(), b.rgb.data(), b.rgb_logvar.data()};
+  field_->Infer(in, out, /*dropout=*/true, render::HashCombine(step_seed, 0xc0a25eull));
+  const float near = float(clip_.near), far = float(clip_.far), eps = config_.variance_eps;
+  tbb::parallel_for(tbb::blocked_range<int>(0, rays, 64), [&](const tbb::blocked_range<int>& range) {
+    for (int r = range.begin(); r != range.end(); ++r) {
+      const std::size_t o = std::size_t(r) * n;
+      // The gradient arrays are free until the loss: they hold the variances, scores and coarse samples.
+      float* var_density = &b.d_sigma[o];
+      float* var_color = &b.d_rgb_logvar[o];
+      float* score = &b.d_weights[o];
+      float* coarse = &b.d_rgb[3 * o];
+      for (int j = 0; j < n; ++j) {
+        var_density[j] = field::VarianceFromLogVar(b.sigma_logvar[o + j], eps);
+        var_color[j] = field::VarianceFromLogVar(b.rgb_logvar[o + j], eps);
       }
-      const std::size_t o = std::size_t(r) * b.samples;
-      render::RayPoints(box_, origin, direction, clip_.times[pick.frame], s, b.samples, delta, &b.pos[3 * o],
+      render::SampleScores(var_density, var_color, n, config_.uncertainty_lambda, kScoreEps, score);
+      std::copy(&b.s[o], &b.s[o] + n, coarse);
+      const render::CounterRng<float> uniform(step_seed, std::uint64_t(2 * r + 1));
+      render::AdaptiveSamples(coarse, score, n, near, far, config_.adaptive_floor, n, uniform, &b.s[o], &b.delta[o],
+                              unsigned(4 * n));
+      const RayPick& pick = b.picks[r];
+      Eigen::Vector3d origin, direction;
+      clip_.cameras[pick.frame].Ray(pick.pixel % clip_.width, pick.pixel / clip_.width, origin, direction);
+      render::RayPoints(box_, origin, direction, clip_.times[pick.frame], &b.s[o], n, &b.delta[o], &b.pos[3 * o],
                         &b.dir[3 * o], &b.time[o]);
     }
   });
+}
+
+void Trainer::RefreshMap() {
+  Batch& b = *batch_;
+  const int n = b.samples;
+  const std::uint64_t map_seed = render::HashCombine(seed_ ^ 0x3a9ull, std::uint64_t(iteration_));
+  const float eps = config_.variance_eps;
+  std::vector<float> scores(map_.cells(), 0.0f);
+  std::vector<int> cells;
+  for (int i = 0; i < map_.cells(); ++i) {
+    if (map_.probe(i).pixel >= 0) cells.push_back(i);
+  }
+  for (std::size_t start = 0; start < cells.size(); start += std::size_t(b.rays)) {
+    const int rays = int(std::min<std::size_t>(std::size_t(b.rays), cells.size() - start));
+    tbb::parallel_for(tbb::blocked_range<int>(0, rays, 64), [&](const tbb::blocked_range<int>& range) {
+      for (int r = range.begin(); r != range.end(); ++r) PlaceRay(r, map_.probe(cells[start + r]), map_seed);
+    });
+    const field::SampleBatch in{rays * n, b.pos.data(), b.time.data(), b.dir.data()};
+    field::FieldOutput out{b.sigma.data(), b.sigma_logvar.data(), b.rgb.data(), b.rgb_logvar.data()};
+    field_->Infer(in, out, /*dropout=*/true, render::HashCombine(map_seed, start));
+    tbb::parallel_for(tbb::blocked_range<int>(0, rays, 64), [&](const tbb::blocked_range<int>& range) {
+      for (int r = range.begin(); r != range.end(); ++r) {
+        const std::size_t o = std::size_t(r) * n;
+        render::CompositeRay(&b.sigma[o], &b.rgb[3 * o], &b.s[o], &b.delta[o], n, &b.weights[o]);
+        for (int j = 0; j < n; ++j) {
+          b.sigma_logvar[o + j] = field::VarianceFromLogVar(b.sigma_logvar[o + j], eps);
+          b.rgb_logvar[o + j] = field::VarianceFromLogVar(b.rgb_logvar[o + j], eps);
+        }
+        scores[cells[start + r]] = render::RayScore(&b.weights[o], &b.sigma_logvar[o], &b.rgb_logvar[o], n,
+                                                    config_.uncertainty_lambda);
+      }
+    });
+  }
+  map_.Set(std::move(scores), iteration_);
 }
 
 double Trainer::LossAndGradients(StepStats& stats) {
@@ -154,7 +242,12 @@ double Trainer::LossAndGradients(StepStats& stats) {
 
 StepStats Trainer::Step(double progress) {
   StepStats stats;
-  SampleRays();
+  if (progress < 0) progress = config_.iterations > 0 ? double(iteration_) / config_.iterations : 0.0;
+  if (config_.adaptive_sampling && config_.adaptive_ray_fraction > 0 && progress >= config_.adaptive_warmup) {
+    if (map_.iteration() < 0 || iteration_ - map_.iteration() >= config_.adaptive_refresh) RefreshMap();
+    if (map_.ready()) stats.guided_rays = int(std::lround(config_.adaptive_ray_fraction * config_.rays_per_batch));
+  }
+  SampleRays(stats.guided_rays);
   Batch& b = *batch_;
   const int n = b.rays * b.samples;
   const field::SampleBatch in{n, b.pos.data(), b.time.data(), b.dir.data()};
@@ -169,7 +262,6 @@ StepStats Trainer::Step(double progress) {
   field_->ZeroGrad();
   const field::FieldOutputGrad grad{b.d_sigma.data(), nullptr, b.d_rgb.data(), b.d_rgb_logvar.data()};
   field_->Backward(in, grad);
-  if (progress < 0) progress = config_.iterations > 0 ? double(iteration_) / config_.iterations : 0.0;
   const AdamStepReport report = adam_->Step(progress);
   if (!report.finite) {
     Fail(ErrorCode::kInternal,
@@ -184,6 +276,7 @@ void Trainer::Save(std::ostream& out) const {
   out.write(reinterpret_cast<const char*>(&iteration_), sizeof(iteration_));
   field_->Save(out);
   adam_->Save(out);
+  map_.Save(out);
 }
 
 void Trainer::Load(std::istream& in) {
@@ -191,6 +284,7 @@ void Trainer::Load(std::istream& in) {
   if (!in) Fail(ErrorCode::kDataLoss, "checkpoint: truncated before the iteration count");
   field_->Load(in);
   adam_->Load(in);
+  map_.Load(in);
 }
 
 }  // namespace endorecon::train

@@ -13,6 +13,7 @@
 #include "worker/engine/train/adam.h"
 #include "worker/engine/train/ray_sampler.h"
 #include "worker/engine/train/train_config.h"
+#include "worker/engine/train/uncertainty_map.h"
 
 namespace endorecon::train {
 
@@ -21,6 +22,7 @@ struct StepStats {
   double rgb_mse = 0;  // of the rendered colour on the batch's (tissue) pixels, colours in [0, 1]
   double psnr = 0;
   long long samples = 0;
+  int guided_rays = 0;  // rays drawn from the uncertainty map (0 before the adaptive warm-up ends)
 };
 
 class Trainer {
@@ -39,14 +41,23 @@ class Trainer {
   const scene::SceneBox& box() const { return box_; }
   const TrainConfig& config() const { return config_; }
 
-  // Exact state for resume: field, optimiser, iteration (the rays of a step depend only on the
-  // seed and the iteration, so a resumed run repeats the same loss curve).
+  const UncertaintyMap& uncertainty_map() const { return map_; }
+
+  // Exact state for resume: field, optimiser, iteration and the uncertainty map (the rays of a step
+  // depend only on the seed, the iteration and the map, so a resumed run repeats the same loss curve).
   void Save(std::ostream& out) const;
   void Load(std::istream& in);
 
  private:
   struct Batch;
-  void SampleRays();
+  void SampleRays(int guided);
+  // Fills ray r of the batch for (frame, pixel) with the ordinary (depth-guided) samples.
+  void PlaceRay(int r, const RayPick& pick, std::uint64_t step_seed);
+  // Re-places the samples of rays [0, rays) in proportion to their sample scores from one
+  // dropout-on pass at the ordinary samples (adaptive_sampler.h), with the floor adaptive_floor.
+  void ReallocateSamples(int rays, std::uint64_t step_seed);
+  // One dropout-on pass at every cell's probe pixel; the ray scores of the aleatoric variances.
+  void RefreshMap();
   double LossAndGradients(StepStats& stats);
 
   const scene::Clip& clip_;
@@ -57,6 +68,7 @@ class Trainer {
   std::unique_ptr<field::Field> field_;
   std::unique_ptr<Adam> adam_;
   std::unique_ptr<Batch> batch_;
+  UncertaintyMap map_;
   int iteration_ = 0;
 };
 

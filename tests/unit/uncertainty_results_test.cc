@@ -1,0 +1,61 @@
+// The uncertainty part of a results folder: per-frame .npy and heat maps with one scale per clip,
+// error maps, and calibration for both splits in the metrics.
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include "tests/unit/temp_dir.h"
+#include "worker/engine/eval/clip_evaluator.h"
+#include "worker/engine/eval/exports.h"
+#include "worker/engine/reconstruct.h"
+#include "worker/engine/scene/clip_loader.h"
+#include "worker/engine/scene/synthetic_clip.h"
+#include "worker/engine/train/scene_fit.h"
+#include "worker/engine/train/trainer.h"
+
+namespace endorecon::eval {
+namespace {
+
+TEST(UncertaintyResults, FilesAndOneHeatmapScalePerClip) {
+  testing::TempDir dir("uncertainty_results");
+  scene::SynthOptions synth;
+  synth.frames = 4;
+  synth.width = 32;
+  synth.height = 24;
+  scene::WriteSyntheticClip(synth, dir.path() / "clip");
+  const scene::Clip clip = scene::LoadClip(dir.path() / "clip");
+  train::TrainConfig config = train::TrainConfig::Preset("cpu");
+  config.rays_per_batch = 128;
+  config.mc_passes = 3;
+  config.eval_coarse_samples = config.eval_fine_samples = 16;
+  train::FitToScene(clip, config);
+  train::Trainer trainer(clip, config, {0, 1, 2}, 1);
+  for (int i = 0; i < 20; ++i) trainer.Step();
+  render::FrameRenderer renderer(trainer.field(), trainer.box(),
+                                 UncertaintyRenderSettings(config, clip.near, clip.far, 5));
+  ClipEvaluation what;
+  what.train_frames = {0, 1, 2};
+  what.heldout_frames = {3};
+  const nlohmann::json metrics = EvaluateClip(clip, renderer, what, dir.path() / "out");
+
+  std::vector<std::vector<float>> totals;
+  for (int f = 0; f < 4; ++f) {
+    for (const char* name : {".npy", "_aleatoric.npy", "_epistemic.npy", ".png"}) {
+      EXPECT_TRUE(std::filesystem::exists(dir.path() / "out" / "uncertainty" / FrameFileName(f, name))) << f << name;
+    }
+    EXPECT_TRUE(std::filesystem::exists(dir.path() / "out" / "error" / FrameFileName(f, ".png"))) << f;
+    totals.push_back(renderer.Render(clip.cameras[f], clip.times[f]).uncertainty);  // deterministic
+  }
+  const auto& maps = metrics.at("uncertainty_maps");
+  EXPECT_EQ(maps.at("mc_passes"), 3);
+  EXPECT_DOUBLE_EQ(maps.at("heatmap_scale").at("uncertainty").at(1).get<double>(), HeatmapUpperBound(totals));
+  for (const char* split : {"train", "heldout"}) {
+    const auto& calibration = metrics.at(split).at("calibration");
+    EXPECT_TRUE(calibration.contains("spearman")) << split;
+    EXPECT_TRUE(calibration.at("curves").contains("oracle")) << split;
+    EXPECT_EQ(calibration.at("per_frame").size(), std::string(split) == "train" ? 3u : 1u);
+  }
+}
+
+}  // namespace
+}  // namespace endorecon::eval
