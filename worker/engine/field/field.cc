@@ -4,6 +4,8 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
+#include <Eigen/Core>
+
 #include <algorithm>
 #include <array>
 #include <cstring>
@@ -26,11 +28,16 @@ constexpr int kMaxLayers = 8;       // hidden layers per head
 constexpr char kMagic[16] = "ENDORECON-FIELD";
 constexpr std::uint32_t kFormatVersion = 1;
 
+// Every buffer starts on a cache line, so the vector kernels (Eigen's GEMMs) take the same path
+// whatever addresses the allocator hands out: a fixed seed on one thread gives bit-equal results.
+template <typename S>
+using AlignedVector = std::vector<S, Eigen::aligned_allocator<S>>;
+
 enum Group { kGrid, kBlend, kDeform, kDensity, kColor, kGroups };
 constexpr std::array<const char*, kGroups> kGroupNames = {"grid", "blend", "deform", "density", "color"};
 
 template <typename S>
-void GrowTo(std::vector<S>& v, std::size_t size) {
+void GrowTo(AlignedVector<S>& v, std::size_t size) {
   if (v.size() < size) v.resize(size);
 }
 
@@ -106,8 +113,8 @@ struct FieldT<S>::Impl {
   // cheap to recompute (the blend weights and blended features, the colour head's input) is not kept
   // but rebuilt per tile in Tile, so the batch-sized footprint stays small and the tables stay cached.
   struct Acts {
-    std::vector<S> x0, gfeat, dens_raw, col_raw;
-    std::array<std::vector<S>, kMaxLayers> dens_hidden, col_hidden;
+    AlignedVector<S> x0, gfeat, dens_raw, col_raw;
+    std::array<AlignedVector<S>, kMaxLayers> dens_hidden, col_hidden;
   };
   struct View {
     S *x0, *gfeat, *dens_raw, *col_raw;
@@ -115,7 +122,7 @@ struct FieldT<S>::Impl {
     S* col_hidden[kMaxLayers];
   };
   struct Tile {  // per-tile temporaries
-    std::vector<S> blend_hidden, beta, feat, col_in, temp;
+    AlignedVector<S> blend_hidden, beta, feat, col_in, temp;
   };
   struct Scratch {  // one per thread, reused across calls
     Acts chunk;     // Infer's activations (one chunk)
@@ -127,16 +134,16 @@ struct FieldT<S>::Impl {
   DensityHead<S> density;
   ColorHead<S> color;
 
-  std::array<std::vector<S>, kGroups> value, grad;
+  std::array<AlignedVector<S>, kGroups> value, grad;
   Acts acts;         // kept activations of the last Forward
   int capacity = 0;  // rows `acts` holds
   tbb::enumerable_thread_specific<Scratch> scratch;
-  std::vector<std::array<std::vector<S>, kGroups>>
+  std::vector<std::array<AlignedVector<S>, kGroups>>
       chunk_grad;                 // each chunk's share of the small groups' gradients
-  std::vector<S> dfeat_by_level;  // [level][n][F]: dL/df, read by the table scatter
-  std::vector<S> beta_by_grid;    // [grid][n]
-  std::vector<S> group_dpos;      // [kPositionGroups][n][3]: parts of dL/dx0
-  std::vector<S> dx0;             // n x 3: dL/dx0, read by the deformation scatter
+  AlignedVector<S> dfeat_by_level;  // [level][n][F]: dL/df, read by the table scatter
+  AlignedVector<S> beta_by_grid;    // [grid][n]
+  AlignedVector<S> group_dpos;      // [kPositionGroups][n][3]: parts of dL/dx0
+  AlignedVector<S> dx0;             // n x 3: dL/dx0, read by the deformation scatter
   int last_n = -1;
   bool last_dropout = false;
 
