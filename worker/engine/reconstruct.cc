@@ -15,6 +15,7 @@
 #include "worker/engine/eval/curve_plot.h"
 #include "worker/engine/eval/depth_error.h"
 #include "worker/engine/eval/image_metrics.h"
+#include "worker/engine/eval/summary.h"
 #include "worker/engine/render/frame_renderer.h"
 #include "worker/engine/scene/clip_loader.h"
 #include "worker/engine/train/checkpoint.h"
@@ -77,21 +78,22 @@ class CurveProbe {
     double depth_rmse = -1;  // relative to far - near; -1 without ground-truth depth
   };
 
+  // Means over the probe frames where the value is defined (an all-tool frame has no tissue PSNR).
   Point Measure(render::FrameRenderer& renderer) const {
-    Point point;
-    double depth_sum = 0;
+    std::vector<double> psnr, depth;
     for (int f : frames_) {
       const auto frame = renderer.Render(clip_.cameras[f], clip_.times[f]);
       const auto& mask = eval::EvaluationMask(clip_, f);
-      point.psnr += eval::MeasureImage(frame.rgb, clip_.rgb[f], mask, clip_.width, clip_.height).psnr_tissue;
+      psnr.push_back(eval::MeasureImage(frame.rgb, clip_.rgb[f], mask, clip_.width, clip_.height).psnr_tissue);
       if (!clip_.gt_depth.empty()) {
-        depth_sum += eval::MeasureDepth(frame.depth, clip_.gt_depth[f], mask, clip_.width, clip_.height, clip_.near,
-                                        clip_.far)
-                         .rmse_relative;
+        depth.push_back(eval::MeasureDepth(frame.depth, clip_.gt_depth[f], mask, clip_.width, clip_.height,
+                                           clip_.near, clip_.far)
+                            .rmse_relative);
       }
     }
-    point.psnr /= double(frames_.size());
-    if (!clip_.gt_depth.empty()) point.depth_rmse = depth_sum / double(frames_.size());
+    Point point;
+    point.psnr = eval::Summarise(psnr).mean;
+    if (!depth.empty()) point.depth_rmse = eval::Summarise(depth).mean;
     return point;
   }
 
@@ -145,8 +147,8 @@ render::FrameRenderSettings RenderSettings(const train::TrainConfig& config, dou
 
 }  // namespace
 
-render::FrameRenderSettings UncertaintyRenderSettings(const train::TrainConfig& config, double near, double far,
-                                                      std::uint64_t seed) {
+render::FrameRenderSettings UncertaintyRenderSettings(const train::TrainConfig& config, double near,
+                                                      double far, std::uint64_t seed) {
   render::FrameRenderSettings settings = RenderSettings(config, near, far);
   settings.mc_passes = config.mc_passes;
   settings.color_weight = config.uncertainty_lambda;
@@ -155,9 +157,7 @@ render::FrameRenderSettings UncertaintyRenderSettings(const train::TrainConfig& 
   return settings;
 }
 
-namespace {
-
-}  // namespace
+namespace {}  // namespace
 
 ReconstructSummary Reconstruct(const ReconstructOptions& options, const ReconstructHooks& hooks) {
   const int threads = options.threads > 0 ? options.threads : int(std::thread::hardware_concurrency());
@@ -173,12 +173,12 @@ ReconstructSummary Reconstruct(const ReconstructOptions& options, const Reconstr
   const fs::path out_dir = options.out_dir;
   fs::create_directories(out_dir);
   {
-    std::ofstream(out_dir / "config.json") << nlohmann::json{{"train", train::ToJson(config)},
-                                                             {"clip", options.clip_dir},
-                                                             {"seed", options.seed},
-                                                             {"time_budget_s", options.time_budget_s},
-                                                             {"threads", threads}}
-                                                  .dump(2);
+    std::ofstream(out_dir / "config.json") << nlohmann::json{
+        {"train", train::ToJson(config)},
+        {"clip", options.clip_dir},
+        {"seed", options.seed},
+        {"time_budget_s", options.time_budget_s},
+        {"threads", threads}}.dump(2);
   }
 
   train::Trainer trainer(clip, config, split.train, options.seed);
@@ -187,12 +187,12 @@ ReconstructSummary Reconstruct(const ReconstructOptions& options, const Reconstr
     extras = train::ReadCheckpointState(options.resume_from, trainer);
     spdlog::info("resumed from {} at iteration {}", options.resume_from, trainer.iteration());
   }
-  spdlog::info("clip {}: {} frames {}x{}, {} train / {} held out; {}", clip.source, clip.frame_count(), clip.width,
-               clip.height, split.train.size(), split.heldout.size(), trainer.field().Describe());
+  spdlog::info("clip {}: {} frames {}x{}, {} train / {} held out; {}", clip.source, clip.frame_count(),
+               clip.width, clip.height, split.train.size(), split.heldout.size(), trainer.field().Describe());
 
   render::FrameRenderer renderer(trainer.field(), trainer.box(), RenderSettings(config, clip.near, clip.far));
-  render::FrameRenderer uncertainty_renderer(trainer.field(), trainer.box(),
-                                             UncertaintyRenderSettings(config, clip.near, clip.far, options.seed));
+  render::FrameRenderer uncertainty_renderer(
+      trainer.field(), trainer.box(), UncertaintyRenderSettings(config, clip.near, clip.far, options.seed));
   const CurveProbe probe(clip, split.heldout, config.curve_frames);
   const fs::path checkpoint_path = out_dir / "model" / "checkpoint.bin";
 
@@ -253,7 +253,8 @@ ReconstructSummary Reconstruct(const ReconstructOptions& options, const Reconstr
       if (hooks.on_progress) hooks.on_progress(progress);
       last_progress = now;
     }
-    if (hooks.on_preview && std::chrono::duration<double>(now - last_preview).count() >= hooks.preview_interval_s) {
+    if (hooks.on_preview &&
+        std::chrono::duration<double>(now - last_preview).count() >= hooks.preview_interval_s) {
       const int f = split.heldout.empty() ? 0 : split.heldout.front();
       const auto frame = uncertainty_renderer.Render(fit.preview_camera(clip.cameras[f]), clip.times[f]);
       hooks.on_preview(MakePreview(frame, f));
@@ -273,7 +274,8 @@ ReconstructSummary Reconstruct(const ReconstructOptions& options, const Reconstr
   extras.train_seconds = train_seconds;
   train::WriteCheckpoint(checkpoint_path, trainer, extras);
   if (hooks.on_checkpoint) hooks.on_checkpoint(checkpoint_path.string());
-  train::WriteModel(out_dir / "model" / "model.bin", config, trainer.box(), clip.near, clip.far, trainer.field());
+  train::WriteModel(out_dir / "model" / "model.bin", config, trainer.box(), clip.near, clip.far,
+                    trainer.field());
 
   summary.iterations = trainer.iteration();
   summary.train_seconds = train_seconds;
@@ -285,7 +287,8 @@ ReconstructSummary Reconstruct(const ReconstructOptions& options, const Reconstr
     what.heldout_frames = split.heldout;
     metrics = eval::EvaluateClip(clip, uncertainty_renderer, what, out_dir);
     const auto pointer = "/heldout/image/psnr_tissue/mean"_json_pointer;
-    if (metrics.contains(pointer) && metrics.at(pointer).is_number()) summary.heldout_psnr = metrics.at(pointer);
+    if (metrics.contains(pointer) && metrics.at(pointer).is_number())
+      summary.heldout_psnr = metrics.at(pointer);
   }
   metrics["iterations"] = trainer.iteration();
   metrics["train_seconds"] = train_seconds;
