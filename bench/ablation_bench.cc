@@ -38,9 +38,12 @@ int main(int argc, char** argv) {
   std::string out = "/tmp/endorecon-ablation-bench";
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string flag = argv[i];
-    if (flag == "--budget") budget = std::stod(argv[i + 1]);
-    else if (flag == "--threads") threads = std::stoi(argv[i + 1]);
-    else if (flag == "--out") out = argv[i + 1];
+    if (flag == "--budget")
+      budget = std::stod(argv[i + 1]);
+    else if (flag == "--threads")
+      threads = std::stoi(argv[i + 1]);
+    else if (flag == "--out")
+      out = argv[i + 1];
     else {
       std::fprintf(stderr, "usage: ablation_bench [--budget SECONDS] [--threads N] [--out DIR]\n");
       return 2;
@@ -55,8 +58,9 @@ int main(int argc, char** argv) {
       {"(c) + uncertainty (NLL)", {{"nll_weight", 1.0}, {"adaptive_sampling", false}}},
       {"(d) + adaptive sampling", {{"nll_weight", 1.0}, {"adaptive_sampling", true}}},
   };
-  std::printf("| row | held-out PSNR (tissue) | held-out SSIM (tissue) | held-out depth RMSE / range | Pearson | "
-              "Spearman | AUSE | held-out Spearman | held-out AUSE | iterations | train s | wall s |\n");
+  std::printf(
+      "| row | held-out PSNR (tissue) | held-out SSIM (tissue) | held-out depth RMSE / range | Pearson | "
+      "Spearman | AUSE | held-out Spearman | held-out AUSE | iterations | train s | wall s |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (std::size_t i = 0; i < rows.size(); ++i) {
     const fs::path dir = root / ("row" + std::to_string(i));
@@ -76,13 +80,14 @@ int main(int argc, char** argv) {
     nlohmann::json m;
     std::ifstream(summary.metrics_path) >> m;
     // Calibration over all frames: the frame-count-weighted mean of the two splits' means.
-    const double nt = At(m, "/train/calibration/spearman/count"), nh = At(m, "/heldout/calibration/spearman/count");
+    const double nt = At(m, "/train/calibration/spearman/count"),
+                 nh = At(m, "/heldout/calibration/spearman/count");
     const auto both = [&](const char* train, const char* heldout) {
       return (At(m, train) * nt + At(m, heldout) * nh) / (nt + nh);
     };
-    std::printf("| %s | %.2f | %.4f | %.4f | %.3f | %.3f | %.3f | %.3f | %.3f | %d | %.0f | %.0f |\n", rows[i].name,
-                At(m, "/heldout/image/psnr_tissue/mean"), At(m, "/heldout/image/ssim_tissue/mean"),
-                At(m, "/heldout/depth/rmse_relative/mean"),
+    std::printf("| %s | %.2f | %.4f | %.4f | %.3f | %.3f | %.3f | %.3f | %.3f | %d | %.0f | %.0f |\n",
+                rows[i].name, At(m, "/heldout/image/psnr_tissue/mean"),
+                At(m, "/heldout/image/ssim_tissue/mean"), At(m, "/heldout/depth/rmse_relative/mean"),
                 both("/train/calibration/pearson/mean", "/heldout/calibration/pearson/mean"),
                 both("/train/calibration/spearman/mean", "/heldout/calibration/spearman/mean"),
                 both("/train/calibration/ause/mean", "/heldout/calibration/ause/mean"),

@@ -146,7 +146,8 @@ TEST_F(AdaptiveTrainingTest, FixedSeedRepeatsAndCheckpointResumes) {
   EXPECT_EQ(restored.uncertainty_map().iteration(), 7);
   EXPECT_EQ(restored.uncertainty_map().scores(), saved_scores);
   for (int i = 0; i < 10; ++i) resumed.push_back(restored.Step().loss);
-  for (int i = 0; i < 10; ++i) EXPECT_NEAR(resumed[i], expected[i], 1e-5 * std::abs(expected[i])) << "step " << i;
+  for (int i = 0; i < 10; ++i)
+    EXPECT_NEAR(resumed[i], expected[i], 1e-5 * std::abs(expected[i])) << "step " << i;
 }
 
 }  // namespace

@@ -41,7 +41,8 @@ TEST(UncertaintyResults, FilesAndOneHeatmapScalePerClip) {
   std::vector<std::vector<float>> totals;
   for (int f = 0; f < 4; ++f) {
     for (const char* name : {".npy", "_aleatoric.npy", "_epistemic.npy", ".png"}) {
-      EXPECT_TRUE(std::filesystem::exists(dir.path() / "out" / "uncertainty" / FrameFileName(f, name))) << f << name;
+      EXPECT_TRUE(std::filesystem::exists(dir.path() / "out" / "uncertainty" / FrameFileName(f, name)))
+          << f << name;
     }
     EXPECT_TRUE(std::filesystem::exists(dir.path() / "out" / "error" / FrameFileName(f, ".png"))) << f;
     totals.push_back(renderer.Render(clip.cameras[f], clip.times[f]).uncertainty);  // deterministic

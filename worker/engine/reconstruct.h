@@ -22,8 +22,8 @@ struct ReconstructOptions {
   int holdout = -1;            // -1: the preset's; 0: none; K: every K-th frame held out
   int threads = 0;             // 0: all cores
   std::uint64_t seed = 0;
-  bool force_static = false;   // treat the clip as static (no deformation network)
-  std::string resume_from;     // optional checkpoint file to resume training from
+  bool force_static = false;  // treat the clip as static (no deformation network)
+  std::string resume_from;    // optional checkpoint file to resume training from
 };
 
 struct Progress {
@@ -34,7 +34,8 @@ struct Progress {
   double loss = 0;
   double train_psnr = 0;
   double heldout_psnr = -1;  // -1 until measured
-  double depth_rmse = -1;    // held-out depth RMSE / (far - near); -1 without ground-truth depth or not yet measured
+  double depth_rmse =
+      -1;  // held-out depth RMSE / (far - near); -1 without ground-truth depth or not yet measured
   double samples_per_second = 0;
 };
 
@@ -47,10 +48,10 @@ struct Preview {
 };
 
 struct ReconstructHooks {
-  std::function<void(const Progress&)> on_progress;             // every progress interval
-  std::function<void(const Preview&)> on_preview;               // every preview interval
-  std::function<void(const std::string& path)> on_checkpoint;   // after each checkpoint is written
-  std::function<bool()> should_stop;                            // polled every iteration; true = cancel
+  std::function<void(const Progress&)> on_progress;            // every progress interval
+  std::function<void(const Preview&)> on_preview;              // every preview interval
+  std::function<void(const std::string& path)> on_checkpoint;  // after each checkpoint is written
+  std::function<bool()> should_stop;                           // polled every iteration; true = cancel
   double progress_interval_s = 2.0;
   double preview_interval_s = 30.0;
   double checkpoint_interval_s = 120.0;
@@ -67,8 +68,8 @@ struct ReconstructSummary {
 
 // The evaluation renderer's settings with uncertainty on (K = config.mc_passes, lambda, eps), as
 // Reconstruct uses them for results; `render` uses the same for novel views.
-render::FrameRenderSettings UncertaintyRenderSettings(const train::TrainConfig& config, double near, double far,
-                                                      std::uint64_t seed);
+render::FrameRenderSettings UncertaintyRenderSettings(const train::TrainConfig& config, double near,
+                                                      double far, std::uint64_t seed);
 
 // Throws endorecon::Error: kInvalidArgument for a bad clip or option (message names the file),
 // kInternal when training diverges (message names the stage and iteration; the last good

@@ -1,5 +1,5 @@
-// endorecon-worker render: renders colour, depth and uncertainty from a results folder's trained model for any
-// cameras at any times (a transforms.json-style list), e.g. the other eye of a stereo endoscope.
+// endorecon-worker render: renders colour, depth and uncertainty from a results folder's trained model for
+// any cameras at any times (a transforms.json-style list), e.g. the other eye of a stereo endoscope.
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
@@ -23,8 +23,10 @@ Command AddRenderCommand(CLI::App& app) {
     std::string result, cameras, out;
   };
   auto args = std::make_shared<Args>();
-  cmd->add_option("result", args->result, "results folder of `reconstruct` (holds model/model.bin)")->required();
-  cmd->add_option("--cameras", args->cameras, "transforms.json-style camera list with per-camera time")->required();
+  cmd->add_option("result", args->result, "results folder of `reconstruct` (holds model/model.bin)")
+      ->required();
+  cmd->add_option("--cameras", args->cameras, "transforms.json-style camera list with per-camera time")
+      ->required();
   cmd->add_option("-o,--out", args->out, "output folder (rgb/, depth/)")->required();
   return [args] {
     const train::Model model = train::ReadModel(std::filesystem::path(args->result) / "model" / "model.bin");
@@ -44,7 +46,9 @@ Command AddRenderCommand(CLI::App& app) {
       eval::WriteDepthNpy(out / "depth" / eval::FrameFileName(int(i), ".npy"), frame.depth, w, h);
       eval::WriteDepthPng16(out / "depth" / eval::FrameFileName(int(i), ".png"), frame.depth, w, h, scale);
       if (frame.uncertainty.empty()) continue;
-      const auto path = [&](const char* suffix) { return out / "uncertainty" / eval::FrameFileName(int(i), suffix); };
+      const auto path = [&](const char* suffix) {
+        return out / "uncertainty" / eval::FrameFileName(int(i), suffix);
+      };
       eval::WriteDepthNpy(path(".npy"), frame.uncertainty, w, h);
       eval::WriteDepthNpy(path("_aleatoric.npy"), frame.aleatoric, w, h);
       eval::WriteDepthNpy(path("_epistemic.npy"), frame.epistemic, w, h);
@@ -59,8 +63,8 @@ Command AddRenderCommand(CLI::App& app) {
     info["heatmap_scale"] = {{"uncertainty", {0.0, heat}}};
     info["depth_png_scale"] = scale;
     std::ofstream(out / "render.json") << info.dump(2);
-    spdlog::info("rendered {} views into {} (depth PNG scale {}, uncertainty heat-map scale [0, {}])", cameras.size(),
-                 args->out, scale, heat);
+    spdlog::info("rendered {} views into {} (depth PNG scale {}, uncertainty heat-map scale [0, {}])",
+                 cameras.size(), args->out, scale, heat);
     return 0;
   };
 }

@@ -45,8 +45,9 @@ nlohmann::json SplitMetrics(const scene::Clip& clip, const std::vector<int>& fra
 struct UncertaintyMaps {
   std::vector<std::vector<float>> total, error;
 
-  void Write(const std::filesystem::path& out_dir, const std::vector<render::RenderedFrame>& aleatoric_epistemic,
-             int w, int h, nlohmann::json& json) const {
+  void Write(const std::filesystem::path& out_dir,
+             const std::vector<render::RenderedFrame>& aleatoric_epistemic, int w, int h,
+             nlohmann::json& json) const {
     const double scale = HeatmapUpperBound(total);
     const double error_scale = HeatmapUpperBound(error);
     for (const char* sub : {"uncertainty", "error"}) std::filesystem::create_directories(out_dir / sub);
@@ -73,8 +74,8 @@ nlohmann::json UncertaintySettings(const render::FrameRenderSettings& settings) 
           {"score", "S_ray = sum_j w_j (var_sigma,j + lambda var_c,j) / sum_j w_j, raw variances"}};
 }
 
-nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& renderer, const ClipEvaluation& what,
-                            const std::filesystem::path& out_dir) {
+nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& renderer,
+                            const ClipEvaluation& what, const std::filesystem::path& out_dir) {
   const int count = clip.frame_count();
   const int w = clip.width, h = clip.height;
   const double depth_scale = DepthPngScale(clip.far);
@@ -104,13 +105,15 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
         components.push_back(std::move(parts));
       }
     }
-    if (!depths.empty()) depths[f] = MeasureDepth(frame.depth, clip.gt_depth[f], mask, w, h, clip.near, clip.far);
+    if (!depths.empty())
+      depths[f] = MeasureDepth(frame.depth, clip.gt_depth[f], mask, w, h, clip.near, clip.far);
     if (what.write_files) {
       WritePng8(out_dir / "rgb" / FrameFileName(f, ".png"), frame.rgb, w, h);
       WriteDepthNpy(out_dir / "depth" / FrameFileName(f, ".npy"), frame.depth, w, h);
       WriteDepthPng16(out_dir / "depth" / FrameFileName(f, ".png"), frame.depth, w, h, depth_scale);
-      WritePly(out_dir / "pointcloud" / FrameFileName(f, ".ply"),
-               BackProject(clip.cameras[f], frame.depth, frame.rgb, clip.has_masks() ? clip.tool_mask[f] : mask));
+      WritePly(
+          out_dir / "pointcloud" / FrameFileName(f, ".ply"),
+          BackProject(clip.cameras[f], frame.depth, frame.rgb, clip.has_masks() ? clip.tool_mask[f] : mask));
       video.push_back(frame.rgb);
     }
     if (what.on_frame) what.on_frame(f + 1, count);

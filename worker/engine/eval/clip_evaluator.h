@@ -26,8 +26,8 @@ struct ClipEvaluation {
 // PixelRmse on tissue pixels, summarised over frames, with the mean sparsification curves), and
 // "uncertainty_maps" records the heat-map scales (one per clip: HeatmapUpperBound of every frame's
 // total uncertainty, and of every frame's error) and the estimator's settings.
-nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& renderer, const ClipEvaluation& what,
-                            const std::filesystem::path& out_dir);
+nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& renderer,
+                            const ClipEvaluation& what, const std::filesystem::path& out_dir);
 
 // What the uncertainty maps of a renderer mean, for metrics.json: K, lambda, eps, the score's
 // formula and the error measure calibration uses.

@@ -16,10 +16,11 @@
 
 namespace endorecon::render {
 
-FrameRenderer::FrameRenderer(field::Field& field, const scene::SceneBox& box, const FrameRenderSettings& settings)
+FrameRenderer::FrameRenderer(field::Field& field, const scene::SceneBox& box,
+                             const FrameRenderSettings& settings)
     : field_(field), box_(box), settings_(settings) {
-  const std::size_t n = std::size_t(settings_.rays_per_chunk) *
-                        std::max(settings_.coarse_samples, settings_.fine_samples);
+  const std::size_t n =
+      std::size_t(settings_.rays_per_chunk) * std::max(settings_.coarse_samples, settings_.fine_samples);
   for (auto* v : {&s_, &delta_, &time_, &sigma_, &sigma_lv_, &color_lv_, &weights_, &fine_s_}) v->resize(n);
   for (auto* v : {&pos_, &dir_, &color_}) v->resize(3 * n);
   if (settings_.mc_passes > 0) {
@@ -58,7 +59,7 @@ void FrameRenderer::RenderPixels(const scene::Camera& camera, float time, const 
   const auto at = [](float* p, int offset) { return p ? p + offset : nullptr; };
   for (int start = 0; start < count; start += settings_.rays_per_chunk) {
     const int n = std::min(settings_.rays_per_chunk, count - start);
-    const PixelOutputs chunk{at(out.rgb, 3 * start),       at(out.depth, start),     at(out.opacity, start),
+    const PixelOutputs chunk{at(out.rgb, 3 * start),     at(out.depth, start),     at(out.opacity, start),
                              at(out.uncertainty, start), at(out.aleatoric, start), at(out.epistemic, start)};
     RenderChunk(camera, time, pixels + start, n, chunk);
   }
@@ -77,7 +78,8 @@ void FrameRenderer::EstimateUncertainty(int n, std::uint64_t chunk_seed) {
       for (int i = range.begin(); i != range.end(); ++i) {
         AddPass(density_moments_[i], k, sigma_[i], field::VarianceFromLogVar(sigma_lv_[i], eps));
         const float color_var = field::VarianceFromLogVar(color_lv_[i], eps);
-        for (int c = 0; c < 3; ++c) AddPass(color_moments_[3 * std::size_t(i) + c], k, color_[3 * i + c], color_var);
+        for (int c = 0; c < 3; ++c)
+          AddPass(color_moments_[3 * std::size_t(i) + c], k, color_[3 * i + c], color_var);
       }
     });
   }
@@ -114,12 +116,13 @@ void FrameRenderer::RenderChunk(const scene::Camera& camera, float time, const i
       const std::size_t o = std::size_t(r) * samples;
       if (fine) {
         const std::size_t c = std::size_t(r) * settings_.coarse_samples;
-        AdaptiveSamples(&fine_s_[c], &weights_[c], settings_.coarse_samples, near, far, settings_.floor, samples,
-                        centre, &s_[o], &delta_[o]);
+        AdaptiveSamples(&fine_s_[c], &weights_[c], settings_.coarse_samples, near, far, settings_.floor,
+                        samples, centre, &s_[o], &delta_[o]);
       } else {
         StratifiedSamples(near, far, samples, centre, &s_[o], &delta_[o]);
       }
-      RayPoints(box_, origin, direction, time, &s_[o], samples, &delta_[o], &pos_[3 * o], &dir_[3 * o], &time_[o]);
+      RayPoints(box_, origin, direction, time, &s_[o], samples, &delta_[o], &pos_[3 * o], &dir_[3 * o],
+                &time_[o]);
     });
     if (!evaluate) return;
     const field::SampleBatch in{count * samples, pos_.data(), time_.data(), dir_.data()};
@@ -148,7 +151,8 @@ void FrameRenderer::RenderChunk(const scene::Camera& camera, float time, const i
     if (!uncertain) return;
     for (int i = 0; i < 3; ++i) {
       if (scores[i]) {
-        scores[i][r] = RayScore(&weights_[o], &var_density_[i][o], &var_color_[i][o], m, settings_.color_weight);
+        scores[i][r] =
+            RayScore(&weights_[o], &var_density_[i][o], &var_color_[i][o], m, settings_.color_weight);
       }
     }
   });

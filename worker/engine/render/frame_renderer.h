@@ -24,12 +24,12 @@ struct FrameRenderSettings {
   double near = 0, far = 1;  // z-depth range sampled, clip units
   int coarse_samples = 48;
   int fine_samples = 48;
-  float floor = 0.02f;     // share of fine samples spread uniformly
+  float floor = 0.02f;  // share of fine samples spread uniformly
   int rays_per_chunk = 1024;
   int mc_passes = 0;           // K dropout passes for uncertainty; 0 = no uncertainty (one dropout-off pass)
   float color_weight = 1.0f;   // lambda of the ray score
   float variance_eps = 1e-3f;  // eps in var = softplus(l) + eps
-  std::uint64_t mc_seed = 0;   // dropout masks of pass k in a chunk: a pure function of (seed, k, first pixel)
+  std::uint64_t mc_seed = 0;  // dropout masks of pass k in a chunk: a pure function of (seed, k, first pixel)
 };
 
 struct RenderedFrame {
@@ -59,12 +59,14 @@ class FrameRenderer {
   RenderedFrame Render(const scene::Camera& camera, float time);
 
   // Renders an explicit list of pixels (row-major indices) of a camera; out arrays sized by the caller.
-  void RenderPixels(const scene::Camera& camera, float time, const int* pixels, int count, const PixelOutputs& out);
+  void RenderPixels(const scene::Camera& camera, float time, const int* pixels, int count,
+                    const PixelOutputs& out);
 
   const FrameRenderSettings& settings() const { return settings_; }
 
  private:
-  void RenderChunk(const scene::Camera& camera, float time, const int* pixels, int count, const PixelOutputs& out);
+  void RenderChunk(const scene::Camera& camera, float time, const int* pixels, int count,
+                   const PixelOutputs& out);
   // K dropout passes over the first n placed samples: leaves the means in sigma_ / color_ and the
   // per-sample total, aleatoric and epistemic variances in the var_* arrays.
   void EstimateUncertainty(int n, std::uint64_t chunk_seed);

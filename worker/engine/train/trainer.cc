@@ -1,8 +1,8 @@
 #include "worker/engine/train/trainer.h"
 
 #include <tbb/blocked_range.h>
-#include <tbb/parallel_reduce.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <cmath>
@@ -61,7 +61,8 @@ Trainer::Trainer(const scene::Clip& clip, const TrainConfig& config, std::vector
   field_ = std::make_unique<field::Field>(config_.field, seed);
   adam_ = std::make_unique<Adam>(field_->Params(), config_.adam);
   // Without depth the same number of samples is spread stratified over [near, far].
-  batch_ = std::make_unique<Batch>(config_.rays_per_batch, config_.depth_samples + config_.stratified_samples);
+  batch_ =
+      std::make_unique<Batch>(config_.rays_per_batch, config_.depth_samples + config_.stratified_samples);
 }
 
 Trainer::~Trainer() = default;
@@ -130,13 +131,13 @@ void Trainer::ReallocateSamples(int rays, std::uint64_t step_seed) {
       render::SampleScores(var_density, var_color, n, config_.uncertainty_lambda, kScoreEps, score);
       std::copy(&b.s[o], &b.s[o] + n, coarse);
       const render::CounterRng<float> uniform(step_seed, std::uint64_t(2 * r + 1));
-      render::AdaptiveSamples(coarse, score, n, near, far, config_.adaptive_floor, n, uniform, &b.s[o], &b.delta[o],
-                              unsigned(4 * n));
+      render::AdaptiveSamples(coarse, score, n, near, far, config_.adaptive_floor, n, uniform, &b.s[o],
+                              &b.delta[o], unsigned(4 * n));
       const RayPick& pick = b.picks[r];
       Eigen::Vector3d origin, direction;
       clip_.cameras[pick.frame].Ray(pick.pixel % clip_.width, pick.pixel / clip_.width, origin, direction);
-      render::RayPoints(box_, origin, direction, clip_.times[pick.frame], &b.s[o], n, &b.delta[o], &b.pos[3 * o],
-                        &b.dir[3 * o], &b.time[o]);
+      render::RayPoints(box_, origin, direction, clip_.times[pick.frame], &b.s[o], n, &b.delta[o],
+                        &b.pos[3 * o], &b.dir[3 * o], &b.time[o]);
     }
   });
 }
@@ -189,16 +190,19 @@ double Trainer::LossAndGradients(StepStats& stats) {
         for (int r = range.begin(); r != range.end(); ++r) {
           const std::size_t o = std::size_t(r) * b.samples;
           float* w = &b.weights[o];
-          const auto ray = render::CompositeRay(&b.sigma[o], &b.rgb[3 * o], &b.s[o], &b.delta[o], b.samples, w);
+          const auto ray =
+              render::CompositeRay(&b.sigma[o], &b.rgb[3 * o], &b.s[o], &b.delta[o], b.samples, w);
           render::RayCompositeGrad<float> grad;
-          double loss = RenderedColorL2(ray.rgb, &b.target[3 * r], config_.rgb_l2_weight * inv_rays, grad.rgb);
+          double loss =
+              RenderedColorL2(ray.rgb, &b.target[3 * r], config_.rgb_l2_weight * inv_rays, grad.rgb);
           acc.mse += RenderedColorL2(ray.rgb, &b.target[3 * r], 1.0f / 3.0f, static_cast<float*>(nullptr));
           // Depth is compared in units of the depth range so lambda_d does not depend on the clip's units.
           if (use_depth) {
             float d_depth = 0;
             const float scale = config_.depth_weight * inv_rays / depth_range;
             if (config_.depth_loss == "l1") {
-              loss += depth_range * DepthL1(ray.depth / depth_range, b.prior[r] / depth_range, scale, &d_depth);
+              loss +=
+                  depth_range * DepthL1(ray.depth / depth_range, b.prior[r] / depth_range, scale, &d_depth);
             } else {
               loss += depth_range * DepthHuber(ray.depth / depth_range, b.prior[r] / depth_range,
                                                config_.huber_delta, scale, &d_depth);
@@ -215,8 +219,9 @@ double Trainer::LossAndGradients(StepStats& stats) {
           // NLL rewards opacity at any sample whose colour fits with a confident variance, which pulls
           // surfaces in front of the true one. Geometry is learned from the rendered colour and depth.
           if (config_.nll_weight > 0) {
-            loss += RgbNll(w, &b.rgb[3 * o], &b.rgb_logvar[o], b.samples, &b.target[3 * r], config_.variance_eps,
-                           config_.nll_weight * inv_rays, static_cast<float*>(nullptr), d_rgb, d_lv);
+            loss +=
+                RgbNll(w, &b.rgb[3 * o], &b.rgb_logvar[o], b.samples, &b.target[3 * r], config_.variance_eps,
+                       config_.nll_weight * inv_rays, static_cast<float*>(nullptr), d_rgb, d_lv);
           }
           if (config_.variance_reg > 0) {
             loss += VarianceRegularizer(&b.rgb_logvar[o], b.samples, config_.variance_eps,
@@ -245,7 +250,8 @@ StepStats Trainer::Step(double progress) {
   if (progress < 0) progress = config_.iterations > 0 ? double(iteration_) / config_.iterations : 0.0;
   if (config_.adaptive_sampling && config_.adaptive_ray_fraction > 0 && progress >= config_.adaptive_warmup) {
     if (map_.iteration() < 0 || iteration_ - map_.iteration() >= config_.adaptive_refresh) RefreshMap();
-    if (map_.ready()) stats.guided_rays = int(std::lround(config_.adaptive_ray_fraction * config_.rays_per_batch));
+    if (map_.ready())
+      stats.guided_rays = int(std::lround(config_.adaptive_ray_fraction * config_.rays_per_batch));
   }
   SampleRays(stats.guided_rays);
   Batch& b = *batch_;

@@ -28,12 +28,14 @@ struct StepStats {
 class Trainer {
  public:
   // Keeps references to clip (which must outlive the trainer). train_frames: the frames rays come from.
-  Trainer(const scene::Clip& clip, const TrainConfig& config, std::vector<int> train_frames, std::uint64_t seed);
+  Trainer(const scene::Clip& clip, const TrainConfig& config, std::vector<int> train_frames,
+          std::uint64_t seed);
   ~Trainer();
 
   // One iteration at `progress` in [0, 1] of the run (drives the learning-rate decay; negative:
-  // iteration / config.iterations, so a time-budgeted run can decay by elapsed time instead). Throws Error(kInternal) naming the stage and iteration when the loss or a
-  // gradient is not finite; the parameters are then still those of the last good step.
+  // iteration / config.iterations, so a time-budgeted run can decay by elapsed time instead). Throws
+  // Error(kInternal) naming the stage and iteration when the loss or a gradient is not finite; the parameters
+  // are then still those of the last good step.
   StepStats Step(double progress = -1);
 
   int iteration() const { return iteration_; }

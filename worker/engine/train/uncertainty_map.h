@@ -26,7 +26,7 @@ class UncertaintyMap {
   // Replaces the scores (one per cell; negative or non-finite count as 0) and notes the iteration.
   // Throws InvalidArgument when the count differs from cells().
   void Set(std::vector<float> scores, int iteration);
-  bool ready() const { return total_ > 0; }  // some cell has a positive score
+  bool ready() const { return total_ > 0; }     // some cell has a positive score
   int iteration() const { return iteration_; }  // of the last Set, -1 before any
   const std::vector<float>& scores() const { return scores_; }
 
