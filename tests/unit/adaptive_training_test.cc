@@ -5,7 +5,7 @@
 
 #include <sstream>
 
-#include "tests/unit/temp_dir.h"
+#include "tests/unit/small_clip_fixture.h"
 #include "worker/engine/scene/clip_loader.h"
 #include "worker/engine/scene/synthetic_clip.h"
 #include "worker/engine/train/scene_fit.h"
@@ -15,41 +15,15 @@
 namespace endorecon::train {
 namespace {
 
-class AdaptiveTrainingTest : public ::testing::Test {
+class AdaptiveTrainingTest : public testing::SmallClipTest {
  protected:
-  static void SetUpTestSuite() {
-    dir_ = new testing::TempDir("adaptive");
-    scene::SynthOptions synth;
-    synth.frames = 8;
-    synth.width = 48;
-    synth.height = 40;
-    scene::WriteSyntheticClip(synth, dir_->path() / "clip");
-    clip_ = new scene::Clip(scene::LoadClip(dir_->path() / "clip"));
-  }
-  static void TearDownTestSuite() {
-    delete clip_;
-    delete dir_;
-  }
   static TrainConfig AdaptiveConfig() {
-    TrainConfig config = TrainConfig::Preset("cpu");
-    config.rays_per_batch = 256;
-    config.iterations = 400;
+    TrainConfig config = SmallConfig();
     config.adaptive_warmup = 0.0;  // guided rays from the first step
     config.adaptive_refresh = 7;
-    FitToScene(*clip_, config);
     return config;
   }
-  static std::vector<int> AllFrames() {
-    std::vector<int> frames(clip_->frame_count());
-    for (int i = 0; i < clip_->frame_count(); ++i) frames[i] = i;
-    return frames;
-  }
-  static testing::TempDir* dir_;
-  static scene::Clip* clip_;
 };
-
-testing::TempDir* AdaptiveTrainingTest::dir_ = nullptr;
-scene::Clip* AdaptiveTrainingTest::clip_ = nullptr;
 
 TEST_F(AdaptiveTrainingTest, MapNeverPicksToolPixelsAndFavoursUncertainCells) {
   ASSERT_TRUE(clip_->has_masks());

@@ -8,7 +8,7 @@
 #include <sstream>
 
 #include "common/error.h"
-#include "tests/unit/temp_dir.h"
+#include "tests/unit/small_clip_fixture.h"
 #include "worker/engine/scene/clip_loader.h"
 #include "worker/engine/scene/synthetic_clip.h"
 #include "worker/engine/train/scene_fit.h"
@@ -16,41 +16,7 @@
 namespace endorecon::train {
 namespace {
 
-class TrainerTest : public ::testing::Test {
- protected:
-  static void SetUpTestSuite() {
-    dir_ = new testing::TempDir("trainer");
-    scene::SynthOptions synth;
-    synth.frames = 8;
-    synth.width = 48;
-    synth.height = 40;
-    scene::WriteSyntheticClip(synth, dir_->path() / "clip");
-    clip_ = new scene::Clip(scene::LoadClip(dir_->path() / "clip"));
-  }
-  static void TearDownTestSuite() {
-    delete clip_;
-    delete dir_;
-  }
-
-  static TrainConfig SmallConfig() {
-    TrainConfig config = TrainConfig::Preset("cpu");
-    config.rays_per_batch = 256;
-    config.iterations = 400;
-    FitToScene(*clip_, config);
-    return config;
-  }
-  static std::vector<int> AllFrames() {
-    std::vector<int> frames(clip_->frame_count());
-    for (int i = 0; i < clip_->frame_count(); ++i) frames[i] = i;
-    return frames;
-  }
-
-  static testing::TempDir* dir_;
-  static scene::Clip* clip_;
-};
-
-testing::TempDir* TrainerTest::dir_ = nullptr;
-scene::Clip* TrainerTest::clip_ = nullptr;
+class TrainerTest : public testing::SmallClipTest {};
 
 TEST_F(TrainerTest, ErrorFallsBelowBound) {
   Trainer trainer(*clip_, SmallConfig(), AllFrames(), 7);

@@ -157,8 +157,6 @@ render::FrameRenderSettings UncertaintyRenderSettings(const train::TrainConfig& 
   return settings;
 }
 
-namespace {}  // namespace
-
 ReconstructSummary Reconstruct(const ReconstructOptions& options, const ReconstructHooks& hooks) {
   const int threads = options.threads > 0 ? options.threads : int(std::thread::hardware_concurrency());
   tbb::global_control threads_control(tbb::global_control::max_allowed_parallelism, std::max(1, threads));
