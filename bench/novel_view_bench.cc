@@ -40,11 +40,9 @@ int main(int argc, char** argv) {
 
   const auto clip = endorecon::scene::LoadClip(options.clip_dir);
   const auto model = endorecon::train::ReadModel(fs::path(options.out_dir) / "model" / "model.bin");
-  endorecon::render::FrameRenderSettings settings;
-  settings.near = model.near;
-  settings.far = model.far;
-  settings.coarse_samples = model.config.eval_coarse_samples;
-  settings.fine_samples = model.config.eval_fine_samples;
+  // The results' evaluation settings, without the dropout passes: colour only.
+  auto settings = endorecon::UncertaintyRenderSettings(model.config, model.near, model.far, 0);
+  settings.mc_passes = 0;
   endorecon::render::FrameRenderer renderer(*model.field, model.box, settings);
 
   // The right camera sits at +baseline along x: it sees up to f * baseline / near pixels past the
