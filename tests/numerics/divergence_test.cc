@@ -89,6 +89,49 @@ TEST(Divergence, ReconstructThrowsNamingStageAndIterationAndKeepsTheLastGoodChec
   }
 }
 
+// What the kept checkpoint is for: a run that diverges leaves the last periodic checkpoint alone,
+// and training resumes from it with another configuration (here the learning rates) over the
+// checkpoint's own.
+TEST(Divergence, TheLastGoodCheckpointResumesWithAnotherConfiguration) {
+  testing::TempDir dir("divergence-resume");
+  scene::SynthOptions synth;
+  synth.frames = 6;
+  synth.width = 40;
+  synth.height = 32;
+  scene::WriteSyntheticClip(synth, dir / "clip");
+  std::ofstream(dir / "small.json") << nlohmann::json{{"rays_per_batch", 128}}.dump();
+  std::ofstream(dir / "diverge.json") << DivergingConfig().dump();
+
+  ReconstructOptions options;
+  options.clip_dir = (dir / "clip").string();
+  options.out_dir = (dir / "healthy").string();
+  options.config_file = (dir / "small.json").string();
+  options.iterations = 5;
+  Reconstruct(options, {});
+  const fs::path good = dir / "healthy" / "model" / "checkpoint.bin";
+  ASSERT_TRUE(fs::exists(good));
+
+  // Resumed with a learning rate of 1e9 it diverges, and the checkpoint it resumed from is untouched.
+  options.resume_from = good.string();
+  options.out_dir = (dir / "healthy").string();
+  options.config_file = (dir / "diverge.json").string();
+  options.iterations = 200;
+  ReconstructHooks hooks;
+  hooks.checkpoint_interval_s = 1e9;
+  const auto before = fs::last_write_time(good);
+  EXPECT_THROW(Reconstruct(options, hooks), Error);
+  EXPECT_EQ(fs::last_write_time(good), before);
+  EXPECT_EQ(train::ReadCheckpointConfig(good).adam.lr.at("grid"), 3e-2f);
+
+  // Resumed with the preset's rates it trains on to the end, every parameter finite.
+  options.config_file = (dir / "small.json").string();
+  options.out_dir = (dir / "resumed").string();
+  options.iterations = 10;
+  const ReconstructSummary summary = Reconstruct(options, {});
+  EXPECT_EQ(summary.iterations, 10);
+  EXPECT_TRUE(std::isfinite(summary.train_psnr));
+}
+
 // Adam keeps its second moment in float: a gradient above sqrt(FLT_MAX) ~ 1.8e19 would make it Inf
 // and freeze that parameter for good (m / sqrt(Inf) = 0) with no NaN anywhere. Adam reports such a
 // step as not finite (the trainer then stops naming the group); with clip_norm the gradient is

@@ -30,8 +30,10 @@ using nlohmann::literals::operator""_json_pointer;
 using Clock = std::chrono::steady_clock;
 namespace fs = std::filesystem;
 
+// The preset (or, on resume, the checkpoint's configuration) with the config file and options over it.
 train::TrainConfig ResolveConfig(const ReconstructOptions& options) {
-  train::TrainConfig config = train::TrainConfig::Preset(options.preset);
+  train::TrainConfig config = options.resume_from.empty() ? train::TrainConfig::Preset(options.preset)
+                                                          : train::ReadCheckpointConfig(options.resume_from);
   if (!options.config_file.empty()) {
     std::ifstream in(options.config_file);
     if (!in) Fail(ErrorCode::kNotFound, "cannot read config file " + options.config_file);
@@ -164,8 +166,7 @@ ReconstructSummary Reconstruct(const ReconstructOptions& options, const Reconstr
   scene::LoadOptions load;
   load.force_static = options.force_static;
   const scene::Clip clip = scene::LoadClip(options.clip_dir, load);
-  train::TrainConfig config =
-      options.resume_from.empty() ? ResolveConfig(options) : train::ReadCheckpointConfig(options.resume_from);
+  train::TrainConfig config = ResolveConfig(options);
   const Split split = MakeSplit(clip.frame_count(), config.holdout);
   const train::SceneFit fit = train::FitToScene(clip, config);
   const fs::path out_dir = options.out_dir;

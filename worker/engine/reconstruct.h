@@ -23,7 +23,9 @@ struct ReconstructOptions {
   int threads = 0;             // 0: all cores
   std::uint64_t seed = 0;
   bool force_static = false;  // treat the clip as static (no deformation network)
-  std::string resume_from;    // optional checkpoint file to resume training from
+  // Optional checkpoint file to resume training from; its configuration replaces the preset, and
+  // config_file, iterations and holdout still apply over it (a field of another shape fails to load).
+  std::string resume_from;
 };
 
 struct Progress {
@@ -72,8 +74,9 @@ render::FrameRenderSettings UncertaintyRenderSettings(const train::TrainConfig& 
                                                       double far, std::uint64_t seed);
 
 // Throws endorecon::Error: kInvalidArgument for a bad clip or option (message names the file),
-// kInternal when training diverges (message names the stage and iteration; the last good
-// checkpoint is kept), kCancelled never (a stop request returns with cancelled = true).
+// kInternal when training diverges (message names the stage and iteration; nothing is written, so
+// out_dir/model/checkpoint.bin stays the last periodic one, to resume from with another config_file),
+// kCancelled never (a stop request returns with cancelled = true).
 ReconstructSummary Reconstruct(const ReconstructOptions& options, const ReconstructHooks& hooks);
 
 }  // namespace endorecon

@@ -1,0 +1,63 @@
+// What `endorecon watch` prints for a progress event: every number the engine streams, each shown
+// only once it has been measured.
+#include "client/job_format.h"
+
+#include <gtest/gtest.h>
+
+namespace endorecon::client {
+namespace {
+
+v1::Progress MidRun() {
+  v1::Progress p;
+  p.set_iteration(2500);
+  p.set_total_iterations(10000);
+  p.set_seconds(61.4);
+  p.set_loss(0.01234);
+  p.set_train_psnr(33.456);
+  p.set_samples_per_second(2.05e6);
+  p.set_eta_s(187);
+  p.set_heldout_psnr(-1);
+  p.set_depth_rmse(-1);
+  return p;
+}
+
+TEST(ProgressLine, ShowsIterationTimeLossPsnrThroughputAndEta) {
+  const std::string line = ProgressLine(MidRun());
+  EXPECT_EQ(line.rfind("[######..................]  25%", 0), 0u) << line;
+  for (const char* part : {"it 2500/10000", "61 s", "loss 0.01234", "PSNR 33.46 dB", "2.05e+06 samples/s",
+                           "ETA 3m07s"}) {
+    EXPECT_NE(line.find(part), std::string::npos) << "missing '" << part << "' in: " << line;
+  }
+  // Not measured yet (-1): not shown.
+  EXPECT_EQ(line.find("held-out"), std::string::npos) << line;
+  EXPECT_EQ(line.find("depth"), std::string::npos) << line;
+}
+
+TEST(ProgressLine, ShowsHeldOutPsnrAndDepthErrorOnceMeasured) {
+  v1::Progress p = MidRun();
+  p.set_heldout_psnr(31.237);
+  p.set_depth_rmse(0.0125);
+  const std::string line = ProgressLine(p);
+  EXPECT_NE(line.find("PSNR 33.46 dB (held-out 31.24)"), std::string::npos) << line;
+  EXPECT_NE(line.find("depth RMSE 1.25% of range"), std::string::npos) << line;
+}
+
+TEST(ProgressLine, ClampsTheBarAndHandlesAnUnknownTotal) {
+  v1::Progress p = MidRun();
+  p.set_iteration(12000);
+  EXPECT_EQ(ProgressLine(p).rfind("[########################] 100%", 0), 0u) << ProgressLine(p);
+  p.set_total_iterations(0);
+  EXPECT_EQ(ProgressLine(p).rfind("[........................]   0%", 0), 0u) << ProgressLine(p);
+}
+
+TEST(HumanUnits, DurationsAndBytes) {
+  EXPECT_EQ(HumanDuration(42.4), "42s");
+  EXPECT_EQ(HumanDuration(187), "3m07s");
+  EXPECT_EQ(HumanDuration(7500), "2h05m");
+  EXPECT_EQ(HumanDuration(-5), "0s");
+  EXPECT_EQ(HumanBytes(999), "999 B");
+  EXPECT_EQ(HumanBytes(1234567), "1.2 MB");
+}
+
+}  // namespace
+}  // namespace endorecon::client
