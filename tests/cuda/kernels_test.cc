@@ -15,7 +15,7 @@
 #include "worker/engine/render/rng.h"
 #include "worker/engine/render/stratified_sampler.h"
 #include "worker/engine/render/volume_renderer.h"
-#include "worker/engine/train/losses.h"
+#include "worker/engine/train/ray_loss.h"
 
 namespace endorecon::cuda {
 namespace {
@@ -259,7 +259,7 @@ TEST_F(CudaKernelsTest, RayLossesMatchTheCpuLosses) {
   prior[0] = 0.0f;  // unknown: no depth term
 
   for (float huber_delta : {0.0f, 0.05f}) {
-    RayLossTerms terms;
+    train::RayLossTerms terms;
     terms.rgb_l2_scale = 0.7f;
     terms.depth_scale = 0.2f;
     terms.depth_range = 2.0f;
@@ -272,17 +272,8 @@ TEST_F(CudaKernelsTest, RayLossesMatchTheCpuLosses) {
     for (int r = 0; r < rays; ++r) {
       const std::size_t o = std::size_t(r) * samples;
       CompositeGrad g;
-      const float* t = &target[3 * std::size_t(r)];
-      float total = train::RenderedColorL2(composite[r].rgb, t, terms.rgb_l2_scale, g.rgb);
-      const float range = terms.depth_range, scale = terms.depth_scale / range;
-      const float depth = composite[r].depth / range, p = prior[r] / range;
-      total += range * (huber_delta > 0 ? train::DepthHuber(depth, p, huber_delta, scale, &g.depth)
-                                        : train::DepthL1(depth, p, scale, &g.depth));
-      total += train::RgbNll(&weights[o], &b.rgb[3 * o], &log_var[o], samples, t, terms.variance_eps,
-                             terms.nll_scale, static_cast<float*>(nullptr), &d_mean[3 * o], &d_lv[o]);
-      total += train::VarianceRegularizer(&log_var[o], samples, terms.variance_eps, terms.variance_reg_scale,
-                                          &d_lv[o]);
-      loss[r] = total;
+      loss[r] = train::RayLoss(composite[r], &weights[o], &b.rgb[3 * o], &log_var[o], samples,
+                               &target[3 * std::size_t(r)], prior[r], terms, &g, &d_mean[3 * o], &d_lv[o]);
       grad_flat.insert(grad_flat.end(), {g.rgb[0], g.rgb[1], g.rgb[2], g.depth, g.opacity});
     }
 

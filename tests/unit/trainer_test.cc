@@ -43,21 +43,28 @@ TEST_F(TrainerTest, FixedSeedOnOneThreadRepeats) {
 
 TEST_F(TrainerTest, CheckpointResumesTheSameCurve) {
   tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
-  Trainer original(*clip_, SmallConfig(), AllFrames(), 3);
+  // Depth refinement at iterations 5, 10 and 15: the saved state holds refined priors, and the
+  // resumed run refines on the same schedule.
+  TrainConfig config = SmallConfig();
+  config.iterations = 100;
+  config.depth_refine_every = 0.05;
+  Trainer original(*clip_, config, AllFrames(), 3);
   for (int i = 0; i < 10; ++i) original.Step();
   std::stringstream state;
   original.Save(state);
   std::vector<double> expected, resumed;
   for (int i = 0; i < 10; ++i) expected.push_back(original.Step().loss);
 
-  Trainer restored(*clip_, SmallConfig(), AllFrames(), 3);
+  Trainer restored(*clip_, config, AllFrames(), 3);
   restored.Load(state);
   EXPECT_EQ(restored.iteration(), 10);
+  EXPECT_EQ(restored.depth_refiner().rounds(), 1);
   std::stringstream again;
   restored.Save(again);
   EXPECT_TRUE(again.str() == state.str()) << "state changed in a save/load round trip";
   for (int i = 0; i < 10; ++i) resumed.push_back(restored.Step().loss);
   EXPECT_EQ(expected, resumed);
+  EXPECT_EQ(restored.depth_refiner().rounds(), 3);
 }
 
 TEST_F(TrainerTest, DivergenceIsReportedNotSilent) {

@@ -9,7 +9,6 @@
 #include "worker/engine/cuda/kernels.h"
 #include "worker/engine/render/rng.h"
 #include "worker/engine/render/stratified_sampler.h"
-#include "worker/engine/train/losses.h"
 
 namespace endorecon::cuda {
 namespace {
@@ -138,36 +137,16 @@ __global__ void CompositeBackwardKernel(const float* sigma, const float* rgb, co
 
 __global__ void RayLossKernel(const render::RayComposite<float>* rays, const float* weights,
                               const float* mean_rgb, const float* log_var, const float* target_rgb,
-                              const float* prior_depth, int n_rays, int samples, RayLossTerms terms,
+                              const float* prior_depth, int n_rays, int samples, train::RayLossTerms terms,
                               float* loss, render::RayCompositeGrad<float>* grad, float* d_mean_rgb,
                               float* d_log_var) {
   const int r = ThreadIndex();
   if (r >= n_rays) return;
   const std::size_t o = static_cast<std::size_t>(r) * samples;
-  const render::RayComposite<float>& ray = rays[r];
-  const float* target = target_rgb + 3 * static_cast<std::size_t>(r);
-  render::RayCompositeGrad<float> g;
-  float total = 0.0f;
-  if (terms.rgb_l2_scale != 0.0f) total += train::RenderedColorL2(ray.rgb, target, terms.rgb_l2_scale, g.rgb);
-  if (terms.depth_scale != 0.0f) {
-    // In units of the depth range, as the trainer: the loss is scaled back, the gradient is per unit depth.
-    const float range = terms.depth_range, scale = terms.depth_scale / range;
-    const float depth = ray.depth / range, prior = prior_depth[r] / range;
-    total += range * (terms.huber_delta > 0.0f
-                          ? train::DepthHuber(depth, prior, terms.huber_delta, scale, &g.depth)
-                          : train::DepthL1(depth, prior, scale, &g.depth));
-  }
-  if (terms.nll_scale != 0.0f) {
-    total += train::RgbNll(weights + o, mean_rgb + 3 * o, log_var + o, samples, target, terms.variance_eps,
-                           terms.nll_scale, static_cast<float*>(nullptr),
-                           d_mean_rgb ? d_mean_rgb + 3 * o : nullptr, d_log_var ? d_log_var + o : nullptr);
-  }
-  if (terms.variance_reg_scale != 0.0f) {
-    total += train::VarianceRegularizer(log_var + o, samples, terms.variance_eps, terms.variance_reg_scale,
-                                        d_log_var ? d_log_var + o : nullptr);
-  }
-  loss[r] = total;
-  grad[r] = g;
+  loss[r] = train::RayLoss(rays[r], weights + o, mean_rgb + 3 * o, log_var + o, samples,
+                           target_rgb + 3 * static_cast<std::size_t>(r), prior_depth ? prior_depth[r] : 0.0f,
+                           terms, &grad[r], d_mean_rgb ? d_mean_rgb + 3 * o : nullptr,
+                           d_log_var ? d_log_var + o : nullptr);
 }
 
 }  // namespace
@@ -248,7 +227,7 @@ void CompositeRaysBackward(const float* sigma, const float* rgb, const float* s,
 
 void RayLosses(const render::RayComposite<float>* rays, const float* weights, const float* mean_rgb,
                const float* log_var, const float* target_rgb, const float* prior_depth, int n_rays,
-               int samples, const RayLossTerms& terms, float* loss, render::RayCompositeGrad<float>* grad,
+               int samples, const train::RayLossTerms& terms, float* loss, render::RayCompositeGrad<float>* grad,
                float* d_mean_rgb, float* d_log_var) {
   if (terms.depth_scale != 0.0f && prior_depth == nullptr)
     FailInvalid("ray losses: a depth term (depth_scale " + std::to_string(terms.depth_scale) +

@@ -15,6 +15,7 @@
 #include "worker/engine/field/hash_math.h"
 #include "worker/engine/render/depth_guided_sampler.h"
 #include "worker/engine/render/volume_renderer.h"
+#include "worker/engine/train/ray_loss.h"
 
 namespace endorecon::cuda {
 
@@ -68,29 +69,15 @@ void CompositeRaysBackward(const float* sigma, const float* rgb, const float* s,
                            const render::RayCompositeGrad<float>* grad, const float* d_weights,
                            float* d_sigma, float* d_rgb);
 
-// --- losses (one thread per ray, train/losses.h) ---
+// --- losses (one thread per ray, train/ray_loss.h) ---
 
-// Which terms of train/losses.h to add and their scales (0 skips a term), as the trainer combines
-// them: rendered-colour L2, depth (L1, or Huber with huber_delta > 0) on depth / depth_range, the
-// per-sample RGB NLL and the variance regulariser.
-struct RayLossTerms {
-  float rgb_l2_scale = 0;
-  float depth_scale = 0;
-  float depth_range = 1;
-  float huber_delta = 0;  // 0: L1
-  float nll_scale = 0;
-  float variance_reg_scale = 0;
-  float variance_eps = 1e-3f;
-};
-
-// Per ray r: loss[r] = the sum of the terms, grad[r] = their gradients with respect to the rendered
-// colour and depth (overwritten), and ADDED to d_mean_rgb (n_rays x samples x 3) and d_log_var
-// (n_rays x samples) the per-sample gradients of the NLL and the regulariser. The NLL's weights are
-// held constant (no d_weights), as the trainer's. target_rgb is n_rays x 3; prior_depth may be null
-// when depth_scale is 0.
+// Per ray r: loss[r] = RayLoss of the terms, grad[r] its gradient with respect to the rendered colour
+// and depth (overwritten), and ADDED to d_mean_rgb (n_rays x samples x 3) and d_log_var
+// (n_rays x samples) the per-sample gradients of the NLL and the regulariser. target_rgb is
+// n_rays x 3; prior_depth may be null when depth_scale is 0.
 void RayLosses(const render::RayComposite<float>* rays, const float* weights, const float* mean_rgb,
                const float* log_var, const float* target_rgb, const float* prior_depth, int n_rays,
-               int samples, const RayLossTerms& terms, float* loss, render::RayCompositeGrad<float>* grad,
+               int samples, const train::RayLossTerms& terms, float* loss, render::RayCompositeGrad<float>* grad,
                float* d_mean_rgb, float* d_log_var);
 
 }  // namespace endorecon::cuda

@@ -9,7 +9,8 @@
 namespace endorecon::train {
 namespace {
 
-constexpr char kCheckpointMagic[8] = {'E', 'N', 'D', 'O', 'C', 'K', 'P', '1'};
+// The last byte is the format version: 2 added the refined depth priors to the trainer state.
+constexpr char kCheckpointMagic[8] = {'E', 'N', 'D', 'O', 'C', 'K', 'P', '2'};
 constexpr char kModelMagic[8] = {'E', 'N', 'D', 'O', 'M', 'D', 'L', '1'};
 
 void WriteString(std::ostream& out, const std::string& s) {
@@ -47,8 +48,12 @@ std::ifstream OpenWithMagic(const std::filesystem::path& path, const char (&magi
   if (!in) Fail(ErrorCode::kNotFound, "cannot read " + path.string());
   char found[8] = {};
   in.read(found, 8);
-  if (!in || !std::equal(found, found + 8, magic)) {
+  if (!in || !std::equal(found, found + 7, magic)) {
     FailInvalid(path.string() + " is not an endorecon " + what + " file");
+  }
+  if (found[7] != magic[7]) {
+    FailInvalid(path.string() + ": an endorecon " + what + " of format " + std::string(1, found[7]) +
+                "; this build reads format " + std::string(1, magic[7]));
   }
   return in;
 }

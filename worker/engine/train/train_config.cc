@@ -68,6 +68,10 @@ void VisitKeys(TrainConfig& c, Visit&& visit) {
   visit("adaptive_refresh", c.adaptive_refresh);
   visit("adaptive_map_stride", c.adaptive_map_stride);
   visit("adaptive_floor", c.adaptive_floor);
+  visit("depth_refine_every", c.depth_refine_every);
+  visit("depth_refine_fraction", c.depth_refine_fraction);
+  visit("depth_refine_ema", c.depth_refine_ema);
+  visit("depth_refine_samples", c.depth_refine_samples);
   visit("curve_interval_s", c.curve_interval_s);
   visit("curve_frames", c.curve_frames);
   visit("field.grids.base_resolutions", c.field.grids.base_resolutions);
@@ -113,6 +117,10 @@ void Validate(const TrainConfig& c) {
   require(c.adaptive_ray_fraction >= 0 && c.adaptive_ray_fraction <= 1, "adaptive_ray_fraction must be in [0, 1]");
   require(c.adaptive_refresh >= 1 && c.adaptive_map_stride >= 1, "adaptive_refresh and adaptive_map_stride must be >= 1");
   require(c.adaptive_floor > 0 && c.adaptive_floor <= 1, "adaptive_floor must be in (0, 1]");
+  require(c.depth_refine_every >= 0 && c.depth_refine_every <= 1, "depth_refine_every must be in [0, 1]");
+  require(c.depth_refine_fraction > 0 && c.depth_refine_fraction <= 1, "depth_refine_fraction must be in (0, 1]");
+  require(c.depth_refine_ema > 0 && c.depth_refine_ema <= 1, "depth_refine_ema must be in (0, 1]");
+  require(c.depth_refine_samples >= 1, "depth_refine_samples must be >= 1");
 }
 
 }  // namespace

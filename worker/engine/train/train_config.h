@@ -59,6 +59,16 @@ struct TrainConfig {
   int adaptive_map_stride = 4;
   float adaptive_floor = 0.2f;
 
+  // EndoNeRF's depth-prior refinement (train/depth_refiner.h): a round every depth_refine_every of
+  // the run (of the iterations, or of the time budget), moving the depth_refine_fraction of each
+  // training frame's priors that disagree most with the rendered depth towards it by the moving
+  // average depth_refine_ema; rendered with depth_refine_samples coarse and as many fine samples.
+  // The paper: every 4000 of 50k iterations (0.08), alpha = 0.1; EndoNeRF: the worst 10%.
+  double depth_refine_every = 0.08;  // 0: off
+  float depth_refine_fraction = 0.1f;
+  float depth_refine_ema = 0.1f;
+  int depth_refine_samples = 24;
+
   double curve_interval_s = 10.0;  // a point of the error-against-time curve every this many seconds
   int curve_frames = 4;            // held-out frames rendered for each curve point (evenly spread)
 

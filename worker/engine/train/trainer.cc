@@ -2,6 +2,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <spdlog/spdlog.h>
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
@@ -14,12 +15,14 @@
 #include "worker/engine/field/variance.h"
 #include "worker/engine/render/adaptive_sampler.h"
 #include "worker/engine/render/depth_guided_sampler.h"
+#include "worker/engine/render/frame_renderer.h"
 #include "worker/engine/render/ray_points.h"
 #include "worker/engine/render/rng.h"
 #include "worker/engine/render/sample_score.h"
 #include "worker/engine/render/stratified_sampler.h"
 #include "worker/engine/render/volume_renderer.h"
 #include "worker/engine/train/losses.h"
+#include "worker/engine/train/ray_loss.h"
 
 namespace endorecon::train {
 namespace {
@@ -57,7 +60,8 @@ Trainer::Trainer(const scene::Clip& clip, const TrainConfig& config, std::vector
       seed_(seed),
       box_(scene::FrustumBox(clip.cameras, clip.near, clip.far)),
       sampler_(clip, std::move(train_frames)),
-      map_(sampler_, clip.width, clip.height, config.adaptive_map_stride) {
+      map_(sampler_, clip.width, clip.height, config.adaptive_map_stride),
+      refiner_(clip, sampler_.frames()) {
   field_ = std::make_unique<field::Field>(config_.field, seed);
   adam_ = std::make_unique<Adam>(field_->Params(), config_.adam);
   // Without depth the same number of samples is spread stratified over [near, far].
@@ -81,7 +85,7 @@ void Trainer::PlaceRay(int r, const RayPick& pick, std::uint64_t step_seed) {
   camera.Ray(x, y, origin, direction);
   const std::uint8_t* px = &clip_.rgb[pick.frame][3 * std::size_t(pick.pixel)];
   for (int c = 0; c < 3; ++c) b.target[3 * r + c] = px[c] / 255.0f;
-  b.prior[r] = clip_.has_depth() ? clip_.depth[pick.frame][pick.pixel] : 0.0f;
+  b.prior[r] = clip_.has_depth() ? refiner_.Prior(pick.frame, pick.pixel) : 0.0f;
 
   const render::CounterRng<float> uniform(step_seed, std::uint64_t(2 * r + 1));
   float* s = &b.s[std::size_t(r) * b.samples];
@@ -179,8 +183,14 @@ void Trainer::RefreshMap() {
 double Trainer::LossAndGradients(StepStats& stats) {
   Batch& b = *batch_;
   const float inv_rays = 1.0f / float(b.rays);
-  const float depth_range = float(clip_.far - clip_.near);
-  const bool use_depth = clip_.has_depth() && config_.depth_weight > 0;
+  RayLossTerms terms;
+  terms.rgb_l2_scale = config_.rgb_l2_weight * inv_rays;
+  if (clip_.has_depth()) terms.depth_scale = config_.depth_weight * inv_rays;
+  terms.depth_range = float(clip_.far - clip_.near);
+  terms.huber_delta = config_.depth_loss == "huber" ? config_.huber_delta : 0.0f;
+  terms.nll_scale = config_.nll_weight * inv_rays;
+  terms.variance_reg_scale = config_.variance_reg * inv_rays;
+  terms.variance_eps = config_.variance_eps;
   struct Sums {
     double loss = 0, mse = 0;
   };
@@ -192,46 +202,20 @@ double Trainer::LossAndGradients(StepStats& stats) {
           float* w = &b.weights[o];
           const auto ray =
               render::CompositeRay(&b.sigma[o], &b.rgb[3 * o], &b.s[o], &b.delta[o], b.samples, w);
-          render::RayCompositeGrad<float> grad;
-          double loss =
-              RenderedColorL2(ray.rgb, &b.target[3 * r], config_.rgb_l2_weight * inv_rays, grad.rgb);
-          acc.mse += RenderedColorL2(ray.rgb, &b.target[3 * r], 1.0f / 3.0f, static_cast<float*>(nullptr));
-          // Depth is compared in units of the depth range so lambda_d does not depend on the clip's units.
-          if (use_depth) {
-            float d_depth = 0;
-            const float scale = config_.depth_weight * inv_rays / depth_range;
-            if (config_.depth_loss == "l1") {
-              loss +=
-                  depth_range * DepthL1(ray.depth / depth_range, b.prior[r] / depth_range, scale, &d_depth);
-            } else {
-              loss += depth_range * DepthHuber(ray.depth / depth_range, b.prior[r] / depth_range,
-                                               config_.huber_delta, scale, &d_depth);
-            }
-            grad.depth = d_depth;
-          }
-          float* d_w = &b.d_weights[o];
-          std::fill(d_w, d_w + b.samples, 0.0f);
           float* d_lv = &b.d_rgb_logvar[o];
           std::fill(d_lv, d_lv + b.samples, 0.0f);
           float* d_rgb = &b.d_rgb[3 * o];
           std::fill(d_rgb, d_rgb + 3 * b.samples, 0.0f);
-          // The NLL's weights w_j are held constant (no gradient into the densities): through w_j the
-          // NLL rewards opacity at any sample whose colour fits with a confident variance, which pulls
-          // surfaces in front of the true one. Geometry is learned from the rendered colour and depth.
-          if (config_.nll_weight > 0) {
-            loss +=
-                RgbNll(w, &b.rgb[3 * o], &b.rgb_logvar[o], b.samples, &b.target[3 * r], config_.variance_eps,
-                       config_.nll_weight * inv_rays, static_cast<float*>(nullptr), d_rgb, d_lv);
-          }
-          if (config_.variance_reg > 0) {
-            loss += VarianceRegularizer(&b.rgb_logvar[o], b.samples, config_.variance_eps,
-                                        config_.variance_reg * inv_rays, d_lv);
-          }
+          render::RayCompositeGrad<float> grad;
+          acc.loss += RayLoss(ray, w, &b.rgb[3 * o], &b.rgb_logvar[o], b.samples, &b.target[3 * r], b.prior[r],
+                              terms, &grad, d_rgb, d_lv);
+          acc.mse += RenderedColorL2(ray.rgb, &b.target[3 * r], 1.0f / 3.0f, static_cast<float*>(nullptr));
+          float* d_w = &b.d_weights[o];
+          std::fill(d_w, d_w + b.samples, 0.0f);
           float* d_sigma = &b.d_sigma[o];
           std::fill(d_sigma, d_sigma + b.samples, 0.0f);
           render::CompositeRayBackward(&b.sigma[o], &b.rgb[3 * o], &b.s[o], &b.delta[o], w, ray, grad, d_w,
                                        d_sigma, d_rgb);
-          acc.loss += loss;
         }
         return acc;
       },
@@ -245,9 +229,27 @@ double Trainer::LossAndGradients(StepStats& stats) {
   return sums.loss;
 }
 
+DepthRefineStats Trainer::RefineDepth() {
+  render::FrameRenderSettings settings;
+  settings.near = clip_.near;
+  settings.far = clip_.far;
+  settings.coarse_samples = settings.fine_samples = config_.depth_refine_samples;
+  settings.floor = config_.eval_floor;
+  render::FrameRenderer renderer(*field_, box_, settings);
+  const DepthRefineStats stats = refiner_.Refine(renderer, config_.depth_refine_fraction, config_.depth_refine_ema);
+  spdlog::info("depth refinement round {} at iteration {}: {} of {} measured priors moved, by {:.3g} on average",
+               refiner_.rounds(), iteration_, stats.moved, stats.measured, stats.mean_shift);
+  return stats;
+}
+
 StepStats Trainer::Step(double progress) {
   StepStats stats;
   if (progress < 0) progress = config_.iterations > 0 ? double(iteration_) / config_.iterations : 0.0;
+  if (clip_.has_depth() && config_.depth_weight > 0 && config_.depth_refine_every > 0 &&
+      progress / config_.depth_refine_every >= refiner_.rounds() + 1) {
+    RefineDepth();
+    stats.depth_refined = true;
+  }
   if (config_.adaptive_sampling && config_.adaptive_ray_fraction > 0 && progress >= config_.adaptive_warmup) {
     if (map_.iteration() < 0 || iteration_ - map_.iteration() >= config_.adaptive_refresh) RefreshMap();
     if (map_.ready())
@@ -283,6 +285,7 @@ void Trainer::Save(std::ostream& out) const {
   field_->Save(out);
   adam_->Save(out);
   map_.Save(out);
+  refiner_.Save(out);
 }
 
 void Trainer::Load(std::istream& in) {
@@ -291,6 +294,7 @@ void Trainer::Load(std::istream& in) {
   field_->Load(in);
   adam_->Load(in);
   map_.Load(in);
+  refiner_.Load(in);
 }
 
 }  // namespace endorecon::train

@@ -11,6 +11,7 @@
 #include "worker/engine/scene/clip.h"
 #include "worker/engine/scene/scene_box.h"
 #include "worker/engine/train/adam.h"
+#include "worker/engine/train/depth_refiner.h"
 #include "worker/engine/train/ray_sampler.h"
 #include "worker/engine/train/train_config.h"
 #include "worker/engine/train/uncertainty_map.h"
@@ -23,6 +24,7 @@ struct StepStats {
   double psnr = 0;
   long long samples = 0;
   int guided_rays = 0;  // rays drawn from the uncertainty map (0 before the adaptive warm-up ends)
+  bool depth_refined = false;  // a depth-refinement round ran before this step
 };
 
 class Trainer {
@@ -44,9 +46,13 @@ class Trainer {
   const TrainConfig& config() const { return config_; }
 
   const UncertaintyMap& uncertainty_map() const { return map_; }
+  const DepthRefiner& depth_refiner() const { return refiner_; }
+  // One depth-refinement round now (Step runs them on the configured schedule).
+  DepthRefineStats RefineDepth();
 
-  // Exact state for resume: field, optimiser, iteration and the uncertainty map (the rays of a step
-  // depend only on the seed, the iteration and the map, so a resumed run repeats the same loss curve).
+  // Exact state for resume: field, optimiser, iteration, the uncertainty map and the refined depth
+  // priors (the rays of a step depend only on the seed, the iteration and the map, and their samples
+  // on the priors, so a resumed run repeats the same loss curve).
   void Save(std::ostream& out) const;
   void Load(std::istream& in);
 
@@ -71,6 +77,7 @@ class Trainer {
   std::unique_ptr<Adam> adam_;
   std::unique_ptr<Batch> batch_;
   UncertaintyMap map_;
+  DepthRefiner refiner_;
   int iteration_ = 0;
 };
 

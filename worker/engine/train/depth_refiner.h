@@ -1,0 +1,54 @@
+// EndoNeRF's refinement of the depth priors during training (design note, "Depth refinement"; the
+// paper: every K = 4000 iterations, with an exponential moving average, alpha = 0.1). Stereo depth
+// is noisy; a field trained on it fits the noise. Every so often each training frame is rendered at
+// its measured tissue pixels by the frame renderer (which never reads priors, so a wrong prior cannot
+// steer its own correction), and in each frame the `fraction` of pixels whose prior disagrees most
+// with the rendering move towards it: prior <- (1 - ema) prior + ema rendered (ema = 1 is EndoNeRF's
+// outright replacement). Pixels without a measurement (0: holes) and tool pixels are never touched,
+// so the depth loss still only supervises where the clip measured something.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <iosfwd>
+#include <vector>
+
+#include "worker/engine/render/frame_renderer.h"
+#include "worker/engine/scene/clip.h"
+
+namespace endorecon::train {
+
+struct DepthRefineStats {
+  std::size_t measured = 0;  // measured tissue pixels rendered
+  std::size_t moved = 0;     // priors changed
+  double mean_shift = 0;     // mean |change| of those, clip units
+};
+
+class DepthRefiner {
+ public:
+  // clip must outlive the refiner; frames: the training frames (only they are rendered and refined).
+  DepthRefiner(const scene::Clip& clip, std::vector<int> frames);
+
+  // The current prior of a pixel: the clip's until its frame is first refined. 0 = unknown.
+  float Prior(int frame, int pixel) const {
+    const auto& refined = refined_[std::size_t(frame)];
+    return refined.empty() ? clip_.depth[std::size_t(frame)][std::size_t(pixel)] : refined[std::size_t(pixel)];
+  }
+
+  // One round over every training frame; fraction in (0, 1], ema in (0, 1]. No-op without depth.
+  DepthRefineStats Refine(render::FrameRenderer& renderer, float fraction, float ema);
+  int rounds() const { return rounds_; }
+
+  // Exact state for resume (the refined frames and the round count). Load throws Error(kDataLoss)
+  // for a truncated stream or one of another clip size.
+  void Save(std::ostream& out) const;
+  void Load(std::istream& in);
+
+ private:
+  const scene::Clip& clip_;
+  std::vector<int> frames_;
+  std::vector<std::vector<float>> refined_;  // per frame of the clip; empty until that frame is refined
+  int rounds_ = 0;
+};
+
+}  // namespace endorecon::train
