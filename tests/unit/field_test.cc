@@ -103,6 +103,59 @@ TEST(FieldTest, GradientsOfEveryGroupMatchFiniteDifferencesWithDropout) {
   }
 }
 
+// The ablation's baseline: the frequency encoding in place of the grids and blend. The gradients of
+// the remaining groups (the deformation's through the encoding's derivative) against differences.
+TEST(FieldTest, FrequencyEncodingFieldGradientsMatchFiniteDifferences) {
+  FieldConfig c = SmallConfig();
+  c.encoding = "frequency";
+  c.frequencies = 4;
+  c.heads.density_hidden = {12, 10};
+  FieldT<double> field(c, 1);
+  Randomise(field, 150);
+  Samples<double> s(700, 8);
+  const auto ws = RandomValues(s.n, -1, 1, 21), wc = RandomValues(3 * s.n, -1, 1, 23);
+  const auto wcl = RandomValues(s.n, -1, 1, 24);
+  auto loss = [&] {
+    auto out = s.out();
+    field.Forward(s.batch(), out, true, 99);
+    return Dot(ws, s.sigma) + Dot(wc, s.rgb) + Dot(wcl, s.rgb_logvar);
+  };
+  loss();
+  field.ZeroGrad();
+  field.Backward(s.batch(), {ws.data(), nullptr, wc.data(), wcl.data()});
+  std::vector<std::string> names;
+  std::uint64_t pick = 7;
+  for (const auto& b : field.Blocks()) {
+    names.push_back(b.name);
+    const std::vector<double> grad(b.grad, b.grad + b.size);
+    const auto indices = SomeIndices(b.size, 40, pick++);
+    const int nonzero = ExpectGradientMatches(b.value, grad.data(), indices, loss, b.name, {1e-6, 1e-5, 1e-8});
+    EXPECT_GE(nonzero, static_cast<int>(indices.size()) / 4) << b.name;
+  }
+  EXPECT_EQ(names, (std::vector<std::string>{"deform", "density", "color"}));
+  EXPECT_NE(field.Describe().find("frequency encoding: 4 frequencies, 27 values"), std::string::npos)
+      << field.Describe();
+  // Encode/Decode split the same way.
+  Samples<double> a(300, 3), b(300, 3);
+  std::vector<double> encoding(std::size_t(b.n) * field.encoding_dim());
+  EXPECT_EQ(field.encoding_dim(), 27);
+  field.Encode(b.batch(), encoding.data());
+  auto oa = a.out(), ob = b.out();
+  field.Infer(a.batch(), oa, true, 3);
+  field.Decode(encoding.data(), b.batch(), ob, true, 3);
+  EXPECT_EQ(a.rgb, b.rgb);
+  EXPECT_EQ(a.sigma, b.sigma);
+}
+
+TEST(FieldTest, UnknownEncodingIsRejected) {
+  FieldConfig c = SmallConfig();
+  c.encoding = "fourier";
+  EXPECT_THROW(FieldT<float>(c, 1), Error);
+  c.encoding = "frequency";
+  c.frequencies = 0;
+  EXPECT_THROW(FieldT<float>(c, 1), Error);
+}
+
 TEST(FieldTest, StaticSceneBuildsNoDeformation) {
   FieldConfig c = SmallConfig();
   c.deformation.enabled = false;
@@ -167,6 +220,23 @@ TEST(FieldTest, InferMatchesForward) {
   EXPECT_EQ(a.sigma_logvar, b.sigma_logvar);
   field.Infer(b.batch(), ob, false, 5);
   EXPECT_NE(a.rgb, b.rgb);  // dropout off changes the output
+}
+
+TEST(FieldTest, DecodeOfEncodeMatchesInferForEveryDropoutPass) {
+  FieldT<float> field(SmallConfig(), 3);
+  Randomise(field, 310);
+  Samples<float> a(5000, 2), b(5000, 2);
+  std::vector<float> encoding(std::size_t(b.n) * field.encoding_dim());
+  field.Encode(b.batch(), encoding.data());
+  for (std::uint64_t seed : {5u, 6u}) {
+    auto oa = a.out(), ob = b.out();
+    field.Infer(a.batch(), oa, true, seed);
+    field.Decode(encoding.data(), b.batch(), ob, true, seed);
+    EXPECT_EQ(a.sigma, b.sigma) << seed;
+    EXPECT_EQ(a.rgb, b.rgb) << seed;
+    EXPECT_EQ(a.rgb_logvar, b.rgb_logvar) << seed;
+    EXPECT_EQ(a.sigma_logvar, b.sigma_logvar) << seed;
+  }
 }
 
 TEST(FieldTest, OutputsStayInRangeForWildInputs) {

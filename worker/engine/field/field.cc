@@ -15,6 +15,7 @@
 #include <sstream>
 
 #include "common/error.h"
+#include "worker/engine/field/frequency_encoding.h"
 #include "worker/engine/field/temporal_blend.h"
 
 namespace endorecon::field {
@@ -107,6 +108,18 @@ FieldConfig FieldConfig::Cpu() {
   return c;
 }
 
+// 0 for the hash encoding; the number of frequencies for the frequency encoding.
+int EncodingFrequencies(const FieldConfig& config) {
+  if (config.encoding == "hash") return 0;
+  if (config.encoding != "frequency") {
+    FailInvalid("field.encoding must be hash or frequency, got '" + config.encoding + "'");
+  }
+  if (config.frequencies < 1 || config.frequencies > 16) {
+    FailInvalid("field.frequencies must be in [1, 16], got " + std::to_string(config.frequencies));
+  }
+  return config.frequencies;
+}
+
 template <typename S>
 struct FieldT<S>::Impl {
   // Batch-major activations kept from Forward for Backward (a View points at one row of them). What is
@@ -130,6 +143,7 @@ struct FieldT<S>::Impl {
   };
   GridEnsemble<S> grids;
   TemporalBlend<S> blend;
+  int frequencies;  // > 0: the frequency encoding replaces the grids and the blend (no parameters)
   std::optional<Deformation<S>> deform;
   DensityHead<S> density;
   ColorHead<S> color;
@@ -150,13 +164,15 @@ struct FieldT<S>::Impl {
   explicit Impl(const FieldConfig& config)
       : grids(config.grids),
         blend(grids.grids(), grids.feature_dim(), config.blend_hidden),
-        density(grids.feature_dim(), config.heads),
+        frequencies(EncodingFrequencies(config)),
+        density(frequencies > 0 ? FrequencyEncodingDim(frequencies) : grids.feature_dim(), config.heads),
         color(config.heads) {
     if (config.heads.density_hidden.size() > kMaxLayers || config.heads.color_hidden.size() > kMaxLayers) {
       FailInvalid("field heads may have at most " + std::to_string(kMaxLayers) + " hidden layers each");
     }
     if (config.deformation.enabled) deform.emplace(config.deformation);
-    const std::array<std::size_t, kGroups> sizes = {grids.param_count(), blend.param_count(),
+    const bool hash = frequencies == 0;
+    const std::array<std::size_t, kGroups> sizes = {hash ? grids.param_count() : 0, hash ? blend.param_count() : 0,
                                                     deform ? deform->param_count() : 0, density.param_count(),
                                                     color.param_count()};
     for (int g = 0; g < kGroups; ++g) {
@@ -165,10 +181,15 @@ struct FieldT<S>::Impl {
     }
   }
 
+  // Per sample: what the encoder writes (all grids' features, or the frequency encoding), and what
+  // the density head reads (the blended features, or the same frequency encoding).
+  int encoder_dim() const { return frequencies > 0 ? FrequencyEncodingDim(frequencies) : grids.output_dim(); }
+  int feature_dim() const { return frequencies > 0 ? FrequencyEncodingDim(frequencies) : grids.feature_dim(); }
+
   void SizeActs(Acts& a, int rows) const {
     const std::size_t n = static_cast<std::size_t>(rows);
     GrowTo(a.x0, n * 3);
-    GrowTo(a.gfeat, n * grids.output_dim());
+    GrowTo(a.gfeat, n * encoder_dim());
     GrowTo(a.dens_raw, n * density.raw_dim());
     GrowTo(a.col_raw, n * 4);
     for (int k = 0; k < density.mlp().hidden_layers(); ++k)
@@ -181,7 +202,7 @@ struct FieldT<S>::Impl {
     const std::size_t r = static_cast<std::size_t>(row0);
     View v{};
     v.x0 = a.x0.data() + r * 3;
-    v.gfeat = a.gfeat.data() + r * grids.output_dim();
+    v.gfeat = a.gfeat.data() + r * encoder_dim();
     v.dens_raw = a.dens_raw.data() + r * density.raw_dim();
     v.col_raw = a.col_raw.data() + r * 4;
     for (int k = 0; k < density.mlp().hidden_layers(); ++k) {
@@ -198,44 +219,70 @@ struct FieldT<S>::Impl {
     const std::size_t n = kTile;
     GrowTo(t.blend_hidden, n * blend.hidden_dim());
     GrowTo(t.beta, n * grids.grids());
-    GrowTo(t.feat, n * grids.feature_dim());
+    GrowTo(t.feat, n * feature_dim());
     GrowTo(t.col_in, n * color.in_dim());
     // Backward: dL/dgeo, dL/df and the heads' scratch.
     const std::size_t heads =
         std::max({density.scratch_size(kTile), color.scratch_size(kTile), blend.scratch_size(kTile)});
-    GrowTo(t.temp, n * (density.raw_dim() + grids.feature_dim()) + heads);
+    GrowTo(t.temp, n * (density.raw_dim() + feature_dim()) + heads);
     return t;
   }
 
-  // Blend weights and blended features of `n` rows (time t, grid features of view w) into tile t.
-  void BlendTile(const S* time, int n, const View& w, Tile& t) const {
+  // Blend weights of `n` rows (time t) into tile t, and the blended grid features of view w into
+  // feat (t.feat unless given).
+  void BlendTile(const S* time, int n, const View& w, Tile& t, S* feat = nullptr) const {
     blend.Weights(value[kBlend].data(), time, n, t.blend_hidden.data(), t.beta.data());
-    blend.Blend(t.beta.data(), w.gfeat, n, t.feat.data());
+    blend.Blend(t.beta.data(), w.gfeat, n, feat ? feat : t.feat.data());
   }
 
-  // The whole field on batch rows [row0, row0 + rows) (one chunk), activations into rows
-  // [a_row0, a_row0 + rows) of `a`. The grids walk their levels over the whole chunk; the rest runs
-  // tile by tile.
-  void ForwardChunk(const SampleBatchT<S>& batch, const FieldOutputT<S>& out, Acts& a, int a_row0, int row0,
-                    int rows, bool dropout, std::uint64_t seed) {
+  // Deformation and grids of batch rows [row0, row0 + rows) (one chunk) into view v: the grids walk
+  // their levels over the whole chunk.
+  void GridsChunk(const SampleBatchT<S>& batch, const View& v, int row0, int rows) {
     const std::size_t r = static_cast<std::size_t>(row0);
-    const View v = ViewAt(a, a_row0);
     const S* x0 = batch.pos + 3 * r;
     if (deform) {
       deform->Forward(value[kDeform].data(), x0, batch.time + r, rows, v.x0);
       x0 = v.x0;
     }
-    grids.Forward(value[kGrid].data(), x0, rows, v.gfeat);
+    if (frequencies > 0) {
+      for (int i = 0; i < rows; ++i) FrequencyEncode(x0 + 3 * i, frequencies, v.gfeat + i * encoder_dim());
+    } else {
+      grids.Forward(value[kGrid].data(), x0, rows, v.gfeat);
+    }
+  }
+
+  // The density head's input for n rows of view w (time t): the blended grid features, written to
+  // dst (t.feat when null), or the frequency encoding where it already is (copied to dst if given).
+  const S* TileFeatures(const S* time, int n, const View& w, Tile& t, S* dst = nullptr) const {
+    if (frequencies > 0) {
+      if (dst != nullptr) std::copy(w.gfeat, w.gfeat + static_cast<std::size_t>(n) * encoder_dim(), dst);
+      return dst != nullptr ? dst : w.gfeat;
+    }
+    BlendTile(time, n, w, t, dst);
+    return dst != nullptr ? dst : t.feat.data();
+  }
+
+  // Both heads on n rows of blended features starting at batch row q (whose number keys the dropout
+  // masks, so the same row gets the same mask whichever call evaluates it); activations into view w.
+  void HeadsTile(const S* feat, const S* dir, std::size_t q, int n, const View& w, Tile& t,
+                 const FieldOutputT<S>& out, bool dropout, std::uint64_t seed) {
+    const DropoutPass drop{dropout, seed, static_cast<std::uint32_t>(q)};
+    density.Forward(value[kDensity].data(), feat, n, w.dens_hidden, w.dens_raw, out.sigma + q,
+                    out.sigma_logvar + q, drop);
+    color.Forward(value[kColor].data(), w.dens_raw + 2, density.raw_dim(), dir + 3 * q, n, t.col_in.data(),
+                  w.col_hidden, w.col_raw, out.rgb + 3 * q, out.rgb_logvar + q, drop);
+  }
+
+  // The whole field on batch rows [row0, row0 + rows) (one chunk), activations into rows
+  // [a_row0, a_row0 + rows) of `a`; after the grids, tile by tile.
+  void ForwardChunk(const SampleBatchT<S>& batch, const FieldOutputT<S>& out, Acts& a, int a_row0, int row0,
+                    int rows, bool dropout, std::uint64_t seed) {
+    GridsChunk(batch, ViewAt(a, a_row0), row0, rows);
     Tile& t = LocalTile();
     ForTiles(rows, [&](int t0, int n) {
       const View w = ViewAt(a, a_row0 + t0);
-      const std::size_t q = r + static_cast<std::size_t>(t0);
-      const DropoutPass drop{dropout, seed, static_cast<std::uint32_t>(q)};
-      BlendTile(batch.time + q, n, w, t);
-      density.Forward(value[kDensity].data(), t.feat.data(), n, w.dens_hidden, w.dens_raw, out.sigma + q,
-                      out.sigma_logvar + q, drop);
-      color.Forward(value[kColor].data(), w.dens_raw + 2, density.raw_dim(), batch.dir + 3 * q, n,
-                    t.col_in.data(), w.col_hidden, w.col_raw, out.rgb + 3 * q, out.rgb_logvar + q, drop);
+      const std::size_t q = static_cast<std::size_t>(row0 + t0);
+      HeadsTile(TileFeatures(batch.time + q, n, w, t), batch.dir, q, n, w, t, out, dropout, seed);
     });
   }
 
@@ -243,7 +290,7 @@ struct FieldT<S>::Impl {
   // level-major and beta grid-major for the table scatter that follows.
   void BackwardChunk(const SampleBatchT<S>& batch, const FieldOutputGradT<S>& g, int c, int row0, int rows) {
     const int n = last_n;
-    const int d = grids.feature_dim(), f = grids.grid(0).features(), gn = grids.grids();
+    const int d = feature_dim(), f = grids.grid(0).features(), gn = grids.grids();
     auto& grads = chunk_grad[c];
     Tile& t = LocalTile();
     S* dgeo = t.temp.data();
@@ -252,13 +299,22 @@ struct FieldT<S>::Impl {
     ForTiles(rows, [&](int t0, int rt) {
       const std::size_t q = static_cast<std::size_t>(row0 + t0);
       const View v = ViewAt(acts, row0 + t0);
-      BlendTile(batch.time + q, rt, v, t);
+      const S* feat = TileFeatures(batch.time + q, rt, v, t);
       color.Input(v.dens_raw + 2, density.raw_dim(), batch.dir + 3 * q, rt, t.col_in.data());
       color.Backward(value[kColor].data(), t.col_in.data(), rt, v.col_hidden, v.col_raw, Offset(g.rgb, 3 * q),
                      Offset(g.rgb_logvar, q), dgeo, grads[kColor].data(), heads, last_dropout);
-      density.Backward(value[kDensity].data(), t.feat.data(), rt, v.dens_hidden, v.dens_raw,
-                       Offset(g.sigma, q), Offset(g.sigma_logvar, q), dgeo, df, grads[kDensity].data(), heads,
-                       last_dropout);
+      density.Backward(value[kDensity].data(), feat, rt, v.dens_hidden, v.dens_raw, Offset(g.sigma, q),
+                       Offset(g.sigma_logvar, q), dgeo, df, grads[kDensity].data(), heads, last_dropout);
+      if (frequencies > 0) {
+        // No parameters: only dL/dx0, for the deformation.
+        if (deform) {
+          for (int i = 0; i < rt; ++i) {
+            FrequencyEncodeBackward(v.x0 + 3 * i, frequencies, df + static_cast<std::size_t>(i) * d,
+                                    dx0.data() + 3 * (q + i));
+          }
+        }
+        return;
+      }
       blend.Backward(value[kBlend].data(), batch.time + q, rt, t.blend_hidden.data(), t.beta.data(), v.gfeat,
                      df, nullptr, grads[kBlend].data(), heads);
       // Level-major dL/df and grid-major beta, level (grid) by level, so the writes stream.
@@ -282,6 +338,10 @@ struct FieldT<S>::Impl {
   // not depend on the thread count.
   void ScatterTables(const SampleBatchT<S>& batch) {
     const std::size_t n = static_cast<std::size_t>(last_n);
+    if (frequencies > 0) {  // dL/dx0 is already in dx0 (BackwardChunk)
+      if (deform) ScatterDeformation(batch);
+      return;
+    }
     const int f = grids.grid(0).features();
     std::vector<std::pair<int, int>> tasks;  // (grid, level)
     for (int k = 0; k < grids.grids(); ++k) {
@@ -312,6 +372,11 @@ struct FieldT<S>::Impl {
         dx0[j] = sum;
       }
     });
+    ScatterDeformation(batch);
+  }
+
+  // The deformation's gradient from dL/dx0, one time slice per task.
+  void ScatterDeformation(const SampleBatchT<S>& batch) {
     tbb::parallel_for(1, deform->config().time_knots + 1, [&](int knot) {
       deform->BackwardKnot(knot, batch.pos, batch.time, last_n, dx0.data(), grad[kDeform].data());
     });
@@ -333,8 +398,10 @@ template <typename S>
 FieldT<S>::FieldT(const FieldConfig& config, std::uint64_t seed)
     : config_(config), impl_(std::make_unique<Impl>(config)) {
   Impl& m = *impl_;
-  m.grids.Init(m.value[kGrid].data(), seed);
-  m.blend.Init(m.value[kBlend].data(), seed + 1);
+  if (m.frequencies == 0) {
+    m.grids.Init(m.value[kGrid].data(), seed);
+    m.blend.Init(m.value[kBlend].data(), seed + 1);
+  }
   if (m.deform) m.deform->Init(m.value[kDeform].data());
   m.density.Init(m.value[kDensity].data(), seed + 2);
   m.color.Init(m.value[kColor].data(), seed + 3);
@@ -372,6 +439,45 @@ void FieldT<S>::Infer(const SampleBatchT<S>& batch, FieldOutputT<S>& out, bool d
 }
 
 template <typename S>
+int FieldT<S>::encoding_dim() const {
+  return impl_->feature_dim();
+}
+
+template <typename S>
+void FieldT<S>::Encode(const SampleBatchT<S>& batch, S* encoding) {
+  CheckBatch(batch, "Field::Encode");
+  Impl& m = *impl_;
+  const std::size_t d = static_cast<std::size_t>(m.feature_dim());
+  RunChunks(batch.n, [&](int, int row0, int rows) {
+    auto& acts = m.scratch.local().chunk;
+    m.SizeActs(acts, kChunk);
+    m.GridsChunk(batch, m.ViewAt(acts, 0), row0, rows);
+    auto& t = m.LocalTile();
+    ForTiles(rows, [&](int t0, int n) {
+      const std::size_t q = static_cast<std::size_t>(row0 + t0);
+      m.TileFeatures(batch.time + q, n, m.ViewAt(acts, t0), t, encoding + q * d);
+    });
+  });
+}
+
+template <typename S>
+void FieldT<S>::Decode(const S* encoding, const SampleBatchT<S>& batch, FieldOutputT<S>& out, bool dropout,
+                       std::uint64_t dropout_seed) {
+  CheckBatch(batch, "Field::Decode");
+  Impl& m = *impl_;
+  const std::size_t d = static_cast<std::size_t>(m.feature_dim());
+  RunChunks(batch.n, [&](int, int row0, int rows) {
+    auto& acts = m.scratch.local().chunk;
+    m.SizeActs(acts, kChunk);
+    auto& t = m.LocalTile();
+    ForTiles(rows, [&](int t0, int n) {
+      const std::size_t q = static_cast<std::size_t>(row0 + t0);
+      m.HeadsTile(encoding + q * d, batch.dir, q, n, m.ViewAt(acts, t0), t, out, dropout, dropout_seed);
+    });
+  });
+}
+
+template <typename S>
 void FieldT<S>::Backward(const SampleBatchT<S>& batch, const FieldOutputGradT<S>& grad) {
   Impl& m = *impl_;
   if (batch.n != m.last_n) {
@@ -380,8 +486,10 @@ void FieldT<S>::Backward(const SampleBatchT<S>& batch, const FieldOutputGradT<S>
                                              std::to_string(m.last_n));
   }
   const std::size_t n = static_cast<std::size_t>(batch.n);
-  GrowTo(m.dfeat_by_level, n * m.grids.feature_dim());
-  GrowTo(m.beta_by_grid, n * m.grids.grids());
+  if (m.frequencies == 0) {
+    GrowTo(m.dfeat_by_level, n * m.grids.feature_dim());
+    GrowTo(m.beta_by_grid, n * m.grids.grids());
+  }
   if (m.deform) GrowTo(m.dx0, n * 3);
   const int chunks = (batch.n + kChunk - 1) / kChunk;
   if (static_cast<int>(m.chunk_grad.size()) < chunks) m.chunk_grad.resize(chunks);
@@ -467,23 +575,28 @@ template <typename S>
 std::string FieldT<S>::Describe() const {
   const Impl& m = *impl_;
   std::ostringstream s;
-  s << "hash grids: " << m.grids.grids() << " x (" << config_.grids.features << " features/level, 2^"
-    << config_.grids.log2_table << " slots), blended feature width " << m.grids.feature_dim() << "\n";
-  for (int k = 0; k < m.grids.grids(); ++k) {
-    const auto& grid = m.grids.grid(k);
-    s << "  grid " << k << ": base " << grid.config().base_resolution << ", scale " << grid.config().scale
-      << ", " << grid.levels() << " levels (resolution " << grid.level(0).res << ".."
-      << grid.level(grid.levels() - 1).res;
-    int dense = 0;
-    for (int l = 0; l < grid.levels(); ++l) dense += static_cast<int>(grid.level(l).dense);
-    s << ", " << dense << " dense)";
-    if (grid.dropped_levels() > 0) {
-      s << "; left out " << grid.dropped_levels() << " finer levels (above resolution cap "
-        << config_.grids.max_resolution << ")";
+  if (m.frequencies > 0) {
+    s << "frequency encoding: " << m.frequencies << " frequencies, " << m.feature_dim()
+      << " values (no hash grids, no temporal blend)\n";
+  } else {
+    s << "hash grids: " << m.grids.grids() << " x (" << config_.grids.features << " features/level, 2^"
+      << config_.grids.log2_table << " slots), blended feature width " << m.grids.feature_dim() << "\n";
+    for (int k = 0; k < m.grids.grids(); ++k) {
+      const auto& grid = m.grids.grid(k);
+      s << "  grid " << k << ": base " << grid.config().base_resolution << ", scale " << grid.config().scale
+        << ", " << grid.levels() << " levels (resolution " << grid.level(0).res << ".."
+        << grid.level(grid.levels() - 1).res;
+      int dense = 0;
+      for (int l = 0; l < grid.levels(); ++l) dense += static_cast<int>(grid.level(l).dense);
+      s << ", " << dense << " dense)";
+      if (grid.dropped_levels() > 0) {
+        s << "; left out " << grid.dropped_levels() << " finer levels (above resolution cap "
+          << config_.grids.max_resolution << ")";
+      }
+      s << "\n";
     }
-    s << "\n";
+    s << "temporal blend: 1 -> " << m.blend.hidden_dim() << " -> " << m.blend.grids() << " softmax\n";
   }
-  s << "temporal blend: 1 -> " << m.blend.hidden_dim() << " -> " << m.blend.grids() << " softmax\n";
   if (m.deform) {
     s << "deformation: 4D grid " << config_.deformation.resolution << "^3 cells x "
       << config_.deformation.time_knots << " time knots\n";

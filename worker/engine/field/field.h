@@ -1,6 +1,7 @@
 // The neural field of the method: (x, t, d) -> (mu_sigma, l_sigma, mu_c, l_c).
 //   x0 = x + dx(x, t)                          deformation to canonical space (skipped for static scenes)
-//   f  = sum_i beta_t^(i) H_i(x0)              hash-grid ensemble, blended in time
+//   f  = sum_i beta_t^(i) H_i(x0)              hash-grid ensemble, blended in time (or, for the
+//                                              ablation's baseline, f = PE(x0): frequency_encoding.h)
 //   (mu_sigma, l_sigma, geo) = MLP_dense(f)    density head
 //   (mu_c, l_c) = MLP_color([geo, SH(d)])      colour head
 // This file only composes the modules (each has its own forward and backward) and runs them in
@@ -24,6 +25,11 @@
 namespace endorecon::field {
 
 struct FieldConfig {
+  // The canonical-space encoder: "hash" (the method: the grid ensemble blended in time) or
+  // "frequency" (NeRF's positional encoding, EndoNeRF's encoder; the ablation's baseline: no grids,
+  // no temporal blend, the density head takes the encoding directly).
+  std::string encoding = "hash";
+  int frequencies = 10;  // L of the frequency encoding
   GridEnsembleConfig grids;
   int blend_hidden = 16;  // width of the temporal blend's hidden layer
   DeformationConfig deformation;
@@ -87,6 +93,15 @@ class FieldT {
 
   // As Forward, but keeps nothing (for rendering): no batch-sized buffers are touched.
   void Infer(const SampleBatchT<S>& batch, FieldOutputT<S>& out, bool dropout, std::uint64_t dropout_seed);
+
+  // Infer in two halves, for K dropout passes over the same samples (Monte Carlo uncertainty): the
+  // deterministic part (deformation, grids, temporal blend) once, then only the heads (where the
+  // dropout is) per pass. Encode writes n x encoding_dim() values; Decode reads them and the batch's
+  // directions. Decode(Encode(batch)) gives bit for bit what Infer(batch) gives with the same seed.
+  int encoding_dim() const;
+  void Encode(const SampleBatchT<S>& batch, S* encoding);
+  void Decode(const S* encoding, const SampleBatchT<S>& batch, FieldOutputT<S>& out, bool dropout,
+              std::uint64_t dropout_seed);
 
   // Adds dL/dparams to the gradients, for the batch of the last Forward (the same arrays).
   // Throws Error(kFailedPrecondition) when no Forward of that size preceded it.
