@@ -14,6 +14,7 @@
 #include "worker/engine/scene/clip_loader.h"
 #include "worker/engine/scene/synthetic_clip.h"
 #include "worker/engine/train/checkpoint.h"
+#include "worker/engine/train/trainer.h"
 
 int main(int argc, char** argv) {
   double budget = 120;
@@ -44,6 +45,8 @@ int main(int argc, char** argv) {
   auto settings = endorecon::UncertaintyRenderSettings(model.config, model.near, model.far, 0);
   settings.mc_passes = 0;
   endorecon::render::FrameRenderer renderer(*model.field, model.box, settings);
+  const auto occupancy = endorecon::train::BuildOccupancy(*model.field, model.config);
+  renderer.SetOccupancy(&occupancy);
 
   // The right camera sits at +baseline along x: it sees up to f * baseline / near pixels past the
   // left frame's right edge. Mask those columns as "not seen by the left eye" (1 = excluded).

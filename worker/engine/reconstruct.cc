@@ -1,5 +1,6 @@
 #include "worker/engine/reconstruct.h"
 
+#include <fmt/format.h>
 #include <spdlog/spdlog.h>
 #include <tbb/global_control.h>
 
@@ -190,6 +191,7 @@ ReconstructSummary Reconstruct(const ReconstructOptions& options, const Reconstr
                clip.width, clip.height, split.train.size(), split.heldout.size(), trainer.field().Describe());
 
   render::FrameRenderer renderer(trainer.field(), trainer.box(), RenderSettings(config, clip.near, clip.far));
+  renderer.SetOccupancy(&trainer.occupancy());
   render::FrameRenderer uncertainty_renderer(
       trainer.field(), trainer.box(), UncertaintyRenderSettings(config, clip.near, clip.far, options.seed));
   const CurveProbe probe(clip, split.heldout, config.curve_frames);
@@ -280,7 +282,19 @@ ReconstructSummary Reconstruct(const ReconstructOptions& options, const Reconstr
   summary.train_seconds = train_seconds;
   summary.train_psnr = stats.psnr;
   nlohmann::json metrics;
+  nlohmann::json left_out = fit.left_out;
   if (!summary.cancelled) {
+    // Results are rendered with empty space skipped by a grid of the final field.
+    trainer.RebuildOccupancy();
+    uncertainty_renderer.SetOccupancy(&trainer.occupancy());
+    if (!trainer.occupancy().empty()) {
+      left_out.push_back(
+          {{"what", fmt::format("sampling of {:.1f}% of the rays' range (occupancy grid {}^3, {:.1f}% of the "
+                                "scene box empty)",
+                                100.0 * (1.0 - trainer.occupancy_span_fraction()), config.occupancy_resolution,
+                                100.0 * (1.0 - trainer.occupancy().occupied_fraction()))},
+           {"why", fmt::format("empty: alpha below {} per cell at every probed time", config.occupancy_min_alpha)}});
+    }
     eval::ClipEvaluation what;
     what.train_frames = split.train;
     what.heldout_frames = split.heldout;
@@ -294,7 +308,7 @@ ReconstructSummary Reconstruct(const ReconstructOptions& options, const Reconstr
   metrics["samples_per_second"] = samples_per_second;
   metrics["cancelled"] = summary.cancelled;
   metrics["curve"] = extras.curve;
-  metrics["left_out"] = fit.left_out;
+  metrics["left_out"] = left_out;
   metrics["field"] = trainer.field().Describe();
   std::vector<eval::CurveSeries> series(2);
   series[0].label = "held-out PSNR (tissue)";

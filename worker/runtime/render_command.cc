@@ -13,6 +13,7 @@
 #include "worker/engine/render/frame_renderer.h"
 #include "worker/engine/scene/camera_list.h"
 #include "worker/engine/train/checkpoint.h"
+#include "worker/engine/train/trainer.h"
 #include "worker/runtime/commands.h"
 
 namespace endorecon::worker {
@@ -33,6 +34,8 @@ Command AddRenderCommand(CLI::App& app) {
     const auto cameras = scene::ReadCameraList(args->cameras);
     const auto settings = UncertaintyRenderSettings(model.config, model.near, model.far, 0);
     render::FrameRenderer renderer(*model.field, model.box, settings);
+    const render::OccupancyGrid occupancy = train::BuildOccupancy(*model.field, model.config);
+    renderer.SetOccupancy(&occupancy);
     const std::filesystem::path out(args->out);
     for (const char* sub : {"rgb", "depth", "uncertainty"}) std::filesystem::create_directories(out / sub);
     const double scale = eval::DepthPngScale(model.far);

@@ -23,7 +23,10 @@ FrameRenderer::FrameRenderer(field::Field& field, const scene::SceneBox& box,
       std::size_t(settings_.rays_per_chunk) * std::max(settings_.coarse_samples, settings_.fine_samples);
   for (auto* v : {&s_, &delta_, &time_, &sigma_, &sigma_lv_, &color_lv_, &weights_, &fine_s_}) v->resize(n);
   for (auto* v : {&pos_, &dir_, &color_}) v->resize(3 * n);
+  span_lo_.resize(settings_.rays_per_chunk);
+  span_hi_.resize(settings_.rays_per_chunk);
   if (settings_.mc_passes > 0) {
+    encoding_.resize(n * std::size_t(field_.encoding_dim()));
     density_moments_.resize(n);
     color_moments_.resize(3 * n);
     for (int i = 0; i < 3; ++i) {
@@ -72,8 +75,10 @@ void FrameRenderer::EstimateUncertainty(int n, std::uint64_t chunk_seed) {
   std::fill(color_moments_.begin(), color_moments_.begin() + 3 * std::size_t(n), McMoments<float>{});
   const field::SampleBatch in{n, pos_.data(), time_.data(), dir_.data()};
   field::FieldOutput out{sigma_.data(), sigma_lv_.data(), color_.data(), color_lv_.data()};
+  // Dropout is only in the heads: the deformation, grids and blend are evaluated once for all passes.
+  field_.Encode(in, encoding_.data());
   for (int k = 1; k <= passes; ++k) {
-    field_.Infer(in, out, /*dropout=*/true, HashCombine(chunk_seed, std::uint64_t(k)));
+    field_.Decode(encoding_.data(), in, out, /*dropout=*/true, HashCombine(chunk_seed, std::uint64_t(k)));
     tbb::parallel_for(tbb::blocked_range<int>(0, n, 4096), [&](const tbb::blocked_range<int>& range) {
       for (int i = range.begin(); i != range.end(); ++i) {
         AddPass(density_moments_[i], k, sigma_[i], field::VarianceFromLogVar(sigma_lv_[i], eps));
@@ -116,10 +121,14 @@ void FrameRenderer::RenderChunk(const scene::Camera& camera, float time, const i
       const std::size_t o = std::size_t(r) * samples;
       if (fine) {
         const std::size_t c = std::size_t(r) * settings_.coarse_samples;
-        AdaptiveSamples(&fine_s_[c], &weights_[c], settings_.coarse_samples, near, far, settings_.floor,
-                        samples, centre, &s_[o], &delta_[o]);
+        AdaptiveSamples(&fine_s_[c], &weights_[c], settings_.coarse_samples, span_lo_[r], span_hi_[r],
+                        settings_.floor, samples, centre, &s_[o], &delta_[o]);
       } else {
-        StratifiedSamples(near, far, samples, centre, &s_[o], &delta_[o]);
+        double lo = near, hi = far;
+        if (occupancy_ != nullptr) occupancy_->Span(box_, origin, direction, near, far, &lo, &hi);
+        span_lo_[r] = float(lo);
+        span_hi_[r] = float(hi);
+        StratifiedSamples(span_lo_[r], span_hi_[r], samples, centre, &s_[o], &delta_[o]);
       }
       RayPoints(box_, origin, direction, time, &s_[o], samples, &delta_[o], &pos_[3 * o], &dir_[3 * o],
                 &time_[o]);

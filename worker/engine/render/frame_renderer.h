@@ -1,5 +1,6 @@
-// Renders whole frames from a trained field for any camera at any time: a coarse stratified pass,
-// then importance samples placed by the coarse weights (with a uniform floor). Never reads depth
+// Renders whole frames from a trained field for any camera at any time: a coarse stratified pass
+// (over the ray's occupied span when an occupancy grid is set), then importance samples placed by
+// the coarse weights (with a uniform floor). Never reads depth
 // priors, so held-out frames and novel views are rendered as any other view.
 // With mc_passes = K > 0 it also estimates uncertainty (paper §3): the samples are placed by a
 // dropout-off coarse pass as always, then the fine samples are evaluated K times with dropout on;
@@ -15,6 +16,7 @@
 
 #include "worker/engine/field/field.h"
 #include "worker/engine/render/mc_dropout.h"
+#include "worker/engine/render/occupancy_grid.h"
 #include "worker/engine/scene/camera.h"
 #include "worker/engine/scene/scene_box.h"
 
@@ -56,6 +58,10 @@ class FrameRenderer {
  public:
   FrameRenderer(field::Field& field, const scene::SceneBox& box, const FrameRenderSettings& settings);
 
+  // Empty-space skipping: with a grid, each ray's coarse samples cover only its occupied span
+  // (occupancy_grid.h). The grid must outlive its use; null (the default) samples all of [near, far].
+  void SetOccupancy(const OccupancyGrid* grid) { occupancy_ = grid; }
+
   RenderedFrame Render(const scene::Camera& camera, float time);
 
   // Renders an explicit list of pixels (row-major indices) of a camera; out arrays sized by the caller.
@@ -74,8 +80,11 @@ class FrameRenderer {
   field::Field& field_;
   scene::SceneBox box_;
   FrameRenderSettings settings_;
+  const OccupancyGrid* occupancy_ = nullptr;
   // Scratch for one chunk, reused across chunks and frames.
   std::vector<float> s_, delta_, pos_, dir_, time_, sigma_, sigma_lv_, color_, color_lv_, weights_, fine_s_;
+  std::vector<float> span_lo_, span_hi_;  // per ray of the chunk: the occupied span sampled
+  std::vector<float> encoding_;  // the fine samples' field encoding, shared by the K passes
   std::vector<McMoments<float>> density_moments_, color_moments_;  // n and 3n, with mc_passes > 0
   std::vector<float> var_density_[3], var_color_[3];               // total, aleatoric, epistemic
 };

@@ -20,9 +20,15 @@ namespace endorecon::train {
 // isotropic Gaussian would have 3/2. Gradients: d_weights[j] (feed to CompositeRayBackward),
 // d_mean_rgb[3j..3j+2] and d_log_var[j]. Finite for any finite l (including +-80) and any error,
 // as long as eps is a normal number of S (the floor keeps var, and so 1/var, bounded).
+//
+// beta > 0 gives the beta-NLL of Seitzer et al. (ICLR 2022): each sample's term is weighted by
+// var_j^beta held constant (no gradient through the weight). The variance still goes to the squared
+// error (the NLL's minimiser is unchanged), but the mean's gradient is w (mu - C) var^(beta - 1)
+// instead of w (mu - C) / var: at beta = 1 that of a plain squared error, so a confident variance
+// no longer multiplies the pull of the mean colours by up to 1 / eps. beta = 0 is the paper's NLL.
 template <typename S>
 ENDORECON_HD S RgbNll(const S* weights, const S* mean_rgb, const S* log_var, int n, const S* target_rgb,
-                      S eps, S scale, S* d_weights, S* d_mean_rgb, S* d_log_var) {
+                      S eps, S scale, S* d_weights, S* d_mean_rgb, S* d_log_var, S beta = S(0)) {
   S loss = 0;
   for (int j = 0; j < n; ++j) {
     const S var = field::VarianceFromLogVar(log_var[j], eps);
@@ -31,9 +37,10 @@ ENDORECON_HD S RgbNll(const S* weights, const S* mean_rgb, const S* log_var, int
     const S r0 = mu[0] - target_rgb[0], r1 = mu[1] - target_rgb[1], r2 = mu[2] - target_rgb[2];
     const S error = r0 * r0 + r1 * r1 + r2 * r2;
     const S term = S(0.5) * (error * inv_var + std::log(var));
-    const S w = weights[j];
+    const S factor = beta == S(0) ? S(1) : std::pow(var, beta);
+    const S w = weights[j] * factor;
     loss += w * term;
-    if (d_weights != nullptr) d_weights[j] += scale * term;
+    if (d_weights != nullptr) d_weights[j] += scale * term * factor;
     if (d_mean_rgb != nullptr) {
       const S k = scale * w * inv_var;
       d_mean_rgb[3 * j] += k * r0;

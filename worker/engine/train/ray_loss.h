@@ -21,6 +21,7 @@ struct RayLossTerms {
   float depth_range = 1;  // far - near, clip units
   float huber_delta = 0;  // in units of the depth range; 0: L1
   float nll_scale = 0;
+  float nll_beta = 0;  // 0: the paper's NLL; > 0: beta-NLL (losses.h)
   float variance_reg_scale = 0;
   float variance_eps = 1e-3f;
 };
@@ -45,7 +46,7 @@ ENDORECON_HD S RayLoss(const render::RayComposite<S>& ray, const S* weights, con
   }
   if (terms.nll_scale != 0) {
     loss += RgbNll(weights, mean_rgb, log_var, n, target_rgb, S(terms.variance_eps), S(terms.nll_scale),
-                   static_cast<S*>(nullptr), d_mean_rgb, d_log_var);
+                   static_cast<S*>(nullptr), d_mean_rgb, d_log_var, S(terms.nll_beta));
   }
   if (terms.variance_reg_scale != 0) {
     loss += VarianceRegularizer(log_var, n, S(terms.variance_eps), S(terms.variance_reg_scale), d_log_var);

@@ -14,6 +14,8 @@ TrainConfig TrainConfig::Preset(const std::string& name) {
   c.adam.lr = {{"grid", 3e-2f}, {"blend", 1e-3f}, {"deform", 1e-3f}, {"density", 3e-3f}, {"color", 3e-3f}};
   if (name == "cpu") {
     c.field = field::FieldConfig::Cpu();
+    c.depth_refine_every = 0.4;
+    c.depth_refine_samples = 16;
     return c;
   }
   if (name == "paper") {
@@ -44,6 +46,7 @@ void VisitKeys(TrainConfig& c, Visit&& visit) {
   visit("depth_xi", c.depth_xi);
   visit("holdout", c.holdout);
   visit("nll_weight", c.nll_weight);
+  visit("nll_beta", c.nll_beta);
   visit("rgb_l2_weight", c.rgb_l2_weight);
   visit("depth_weight", c.depth_weight);
   visit("variance_reg", c.variance_reg);
@@ -72,8 +75,13 @@ void VisitKeys(TrainConfig& c, Visit&& visit) {
   visit("depth_refine_fraction", c.depth_refine_fraction);
   visit("depth_refine_ema", c.depth_refine_ema);
   visit("depth_refine_samples", c.depth_refine_samples);
+  visit("occupancy_resolution", c.occupancy_resolution);
+  visit("occupancy_every", c.occupancy_every);
+  visit("occupancy_min_alpha", c.occupancy_min_alpha);
   visit("curve_interval_s", c.curve_interval_s);
   visit("curve_frames", c.curve_frames);
+  visit("field.encoding", c.field.encoding);
+  visit("field.frequencies", c.field.frequencies);
   visit("field.grids.base_resolutions", c.field.grids.base_resolutions);
   visit("field.grids.scales", c.field.grids.scales);
   visit("field.grids.levels", c.field.grids.levels);
@@ -109,6 +117,7 @@ void Validate(const TrainConfig& c) {
   require(c.holdout >= 0, "holdout must be >= 0");
   require(c.depth_loss == "huber" || c.depth_loss == "l1", "depth_loss must be huber or l1, got " + c.depth_loss);
   require(c.variance_eps > 0, "variance_eps must be > 0");
+  require(c.nll_beta >= 0 && c.nll_beta <= 1, "nll_beta must be in [0, 1]");
   require(c.eval_coarse_samples >= 1 && c.eval_fine_samples >= 1, "eval samples must be >= 1");
   require(c.curve_interval_s > 0, "curve_interval_s must be > 0");
   require(c.mc_passes >= 0, "mc_passes must be >= 0");
@@ -121,6 +130,9 @@ void Validate(const TrainConfig& c) {
   require(c.depth_refine_fraction > 0 && c.depth_refine_fraction <= 1, "depth_refine_fraction must be in (0, 1]");
   require(c.depth_refine_ema > 0 && c.depth_refine_ema <= 1, "depth_refine_ema must be in (0, 1]");
   require(c.depth_refine_samples >= 1, "depth_refine_samples must be >= 1");
+  require(c.occupancy_resolution >= 0 && c.occupancy_resolution <= 512, "occupancy_resolution must be in [0, 512]");
+  require(c.occupancy_every > 0 && c.occupancy_every <= 1, "occupancy_every must be in (0, 1]");
+  require(c.occupancy_min_alpha > 0 && c.occupancy_min_alpha < 1, "occupancy_min_alpha must be in (0, 1)");
 }
 
 }  // namespace

@@ -26,6 +26,8 @@ struct TrainConfig {
   // The paper's uncertainty-loss weight (lambda_unc = 0.02-0.03). At 1 the NLL's 1/sigma^2 (down to
   // 1/variance_eps) outweighs the photometric term: 29.8 dB against 34.5 dB held out (docs/benchmarks.md).
   float nll_weight = 0.03f;
+  // 0: the paper's NLL; beta > 0: beta-NLL (train/losses.h), each sample's NLL weighted by its variance^beta.
+  float nll_beta = 0.0f;
   float rgb_l2_weight = 1.0f;
   float depth_weight = 1.0f;  // lambda_d
   float variance_reg = 0.03f;  // eta
@@ -63,11 +65,20 @@ struct TrainConfig {
   // the run (of the iterations, or of the time budget), moving the depth_refine_fraction of each
   // training frame's priors that disagree most with the rendered depth towards it by the moving
   // average depth_refine_ema; rendered with depth_refine_samples coarse and as many fine samples.
-  // The paper: every 4000 of 50k iterations (0.08), alpha = 0.1; EndoNeRF: the worst 10%.
+  // The paper: every 4000 of 50k iterations (0.08), alpha = 0.1; EndoNeRF: the worst 10%. The CPU
+  // preset refines twice (a round renders every training frame: ~5 s on the demo clip here).
   double depth_refine_every = 0.08;  // 0: off
   float depth_refine_fraction = 0.1f;
   float depth_refine_ema = 0.1f;
   int depth_refine_samples = 24;
+
+  // Empty-space skipping (render/occupancy_grid.h): a grid of occupancy_resolution^3 cells rebuilt
+  // from the field every occupancy_every of the run; stratified samples cover only each ray's occupied
+  // span. A cell counts as empty when a sample one cell long would be less than occupancy_min_alpha
+  // opaque at every probed time.
+  int occupancy_resolution = 48;  // 0: off
+  double occupancy_every = 0.2;
+  float occupancy_min_alpha = 0.01f;
 
   double curve_interval_s = 10.0;  // a point of the error-against-time curve every this many seconds
   int curve_frames = 4;            // held-out frames rendered for each curve point (evenly spread)

@@ -90,10 +90,12 @@ void Trainer::PlaceRay(int r, const RayPick& pick, std::uint64_t step_seed) {
   const render::CounterRng<float> uniform(step_seed, std::uint64_t(2 * r + 1));
   float* s = &b.s[std::size_t(r) * b.samples];
   float* delta = &b.delta[std::size_t(r) * b.samples];
+  double lo = near, hi = far;
+  occupancy_.Span(box_, origin, direction, near, far, &lo, &hi);
   if (clip_.has_depth()) {
-    render::DepthGuidedSamples(near, far, b.prior[r], guided, uniform, s, delta);
+    render::DepthGuidedSamples(float(lo), float(hi), b.prior[r], guided, uniform, s, delta);
   } else {
-    render::StratifiedSamples(near, far, b.samples, uniform, s, delta);
+    render::StratifiedSamples(float(lo), float(hi), b.samples, uniform, s, delta);
   }
   const std::size_t o = std::size_t(r) * b.samples;
   render::RayPoints(box_, origin, direction, clip_.times[pick.frame], s, b.samples, delta, &b.pos[3 * o],
@@ -134,12 +136,14 @@ void Trainer::ReallocateSamples(int rays, std::uint64_t step_seed) {
       }
       render::SampleScores(var_density, var_color, n, config_.uncertainty_lambda, kScoreEps, score);
       std::copy(&b.s[o], &b.s[o] + n, coarse);
-      const render::CounterRng<float> uniform(step_seed, std::uint64_t(2 * r + 1));
-      render::AdaptiveSamples(coarse, score, n, near, far, config_.adaptive_floor, n, uniform, &b.s[o],
-                              &b.delta[o], unsigned(4 * n));
       const RayPick& pick = b.picks[r];
       Eigen::Vector3d origin, direction;
       clip_.cameras[pick.frame].Ray(pick.pixel % clip_.width, pick.pixel / clip_.width, origin, direction);
+      double lo = near, hi = far;
+      occupancy_.Span(box_, origin, direction, near, far, &lo, &hi);
+      const render::CounterRng<float> uniform(step_seed, std::uint64_t(2 * r + 1));
+      render::AdaptiveSamples(coarse, score, n, float(lo), float(hi), config_.adaptive_floor, n, uniform,
+                              &b.s[o], &b.delta[o], unsigned(4 * n));
       render::RayPoints(box_, origin, direction, clip_.times[pick.frame], &b.s[o], n, &b.delta[o],
                         &b.pos[3 * o], &b.dir[3 * o], &b.time[o]);
     }
@@ -189,6 +193,7 @@ double Trainer::LossAndGradients(StepStats& stats) {
   terms.depth_range = float(clip_.far - clip_.near);
   terms.huber_delta = config_.depth_loss == "huber" ? config_.huber_delta : 0.0f;
   terms.nll_scale = config_.nll_weight * inv_rays;
+  terms.nll_beta = config_.nll_beta;
   terms.variance_reg_scale = config_.variance_reg * inv_rays;
   terms.variance_eps = config_.variance_eps;
   struct Sums {
@@ -236,15 +241,49 @@ DepthRefineStats Trainer::RefineDepth() {
   settings.coarse_samples = settings.fine_samples = config_.depth_refine_samples;
   settings.floor = config_.eval_floor;
   render::FrameRenderer renderer(*field_, box_, settings);
+  renderer.SetOccupancy(&occupancy_);
   const DepthRefineStats stats = refiner_.Refine(renderer, config_.depth_refine_fraction, config_.depth_refine_ema);
   spdlog::info("depth refinement round {} at iteration {}: {} of {} measured priors moved, by {:.3g} on average",
                refiner_.rounds(), iteration_, stats.moved, stats.measured, stats.mean_shift);
   return stats;
 }
 
+render::OccupancyGrid BuildOccupancy(field::Field& field, const TrainConfig& config) {
+  if (config.occupancy_resolution <= 0) return {};
+  return render::OccupancyGrid::Build(field, render::OccupancyProbeTimes(config.field.deformation.enabled),
+                                      config.occupancy_resolution, config.occupancy_min_alpha);
+}
+
+void Trainer::RebuildOccupancy() {
+  occupancy_ = BuildOccupancy(*field_, config_);
+  if (occupancy_.empty()) return;
+  spdlog::info("occupancy grid at iteration {}: {:.1f}% of the box occupied, {:.1f}% of the rays' range skipped",
+               iteration_, 100.0 * occupancy_.occupied_fraction(), 100.0 * (1.0 - occupancy_span_fraction()));
+}
+
+double Trainer::occupancy_span_fraction() const {
+  // Over a 16 x 16 lattice of pixels of the first training frame.
+  const scene::Camera& camera = clip_.cameras[sampler_.frames().front()];
+  double kept = 0;
+  for (int i = 0; i < 16; ++i) {
+    for (int j = 0; j < 16; ++j) {
+      Eigen::Vector3d origin, direction;
+      camera.Ray((2 * i + 1) * clip_.width / 32, (2 * j + 1) * clip_.height / 32, origin, direction);
+      double lo = clip_.near, hi = clip_.far;
+      occupancy_.Span(box_, origin, direction, clip_.near, clip_.far, &lo, &hi);
+      kept += (hi - lo) / (clip_.far - clip_.near);
+    }
+  }
+  return kept / 256.0;
+}
+
 StepStats Trainer::Step(double progress) {
   StepStats stats;
   if (progress < 0) progress = config_.iterations > 0 ? double(iteration_) / config_.iterations : 0.0;
+  if (config_.occupancy_resolution > 0 && progress / config_.occupancy_every >= occupancy_builds_ + 1) {
+    RebuildOccupancy();
+    ++occupancy_builds_;
+  }
   if (clip_.has_depth() && config_.depth_weight > 0 && config_.depth_refine_every > 0 &&
       progress / config_.depth_refine_every >= refiner_.rounds() + 1) {
     RefineDepth();
@@ -286,6 +325,8 @@ void Trainer::Save(std::ostream& out) const {
   adam_->Save(out);
   map_.Save(out);
   refiner_.Save(out);
+  out.write(reinterpret_cast<const char*>(&occupancy_builds_), sizeof(occupancy_builds_));
+  occupancy_.Save(out);
 }
 
 void Trainer::Load(std::istream& in) {
@@ -295,6 +336,9 @@ void Trainer::Load(std::istream& in) {
   adam_->Load(in);
   map_.Load(in);
   refiner_.Load(in);
+  in.read(reinterpret_cast<char*>(&occupancy_builds_), sizeof(occupancy_builds_));
+  if (!in) Fail(ErrorCode::kDataLoss, "checkpoint: truncated before the occupancy grid");
+  occupancy_.Load(in);
 }
 
 }  // namespace endorecon::train

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "worker/engine/field/field.h"
+#include "worker/engine/render/occupancy_grid.h"
 #include "worker/engine/scene/clip.h"
 #include "worker/engine/scene/scene_box.h"
 #include "worker/engine/train/adam.h"
@@ -26,6 +27,10 @@ struct StepStats {
   int guided_rays = 0;  // rays drawn from the uncertainty map (0 before the adaptive warm-up ends)
   bool depth_refined = false;  // a depth-refinement round ran before this step
 };
+
+// The occupancy grid of a field as the configuration asks (empty when occupancy_resolution is 0),
+// probed at one time for a static field (no deformation), at several for a dynamic one.
+render::OccupancyGrid BuildOccupancy(field::Field& field, const TrainConfig& config);
 
 class Trainer {
  public:
@@ -47,11 +52,18 @@ class Trainer {
 
   const UncertaintyMap& uncertainty_map() const { return map_; }
   const DepthRefiner& depth_refiner() const { return refiner_; }
+  // The occupancy grid the samplers use (empty until the first rebuild, or when switched off).
+  const render::OccupancyGrid& occupancy() const { return occupancy_; }
+  // Rebuilds it from the field now (Step does so on the configured schedule).
+  void RebuildOccupancy();
+  // The mean share of [near, far] the grid leaves to be sampled, over a lattice of pixels of the
+  // first training frame (1 with no grid).
+  double occupancy_span_fraction() const;
   // One depth-refinement round now (Step runs them on the configured schedule).
   DepthRefineStats RefineDepth();
 
-  // Exact state for resume: field, optimiser, iteration, the uncertainty map and the refined depth
-  // priors (the rays of a step depend only on the seed, the iteration and the map, and their samples
+  // Exact state for resume: field, optimiser, iteration, the uncertainty map, the refined depth
+  // priors and the occupancy grid (the rays of a step depend only on the seed, the iteration and the map, and their samples
   // on the priors, so a resumed run repeats the same loss curve).
   void Save(std::ostream& out) const;
   void Load(std::istream& in);
@@ -78,6 +90,8 @@ class Trainer {
   std::unique_ptr<Batch> batch_;
   UncertaintyMap map_;
   DepthRefiner refiner_;
+  render::OccupancyGrid occupancy_;
+  int occupancy_builds_ = 0;
   int iteration_ = 0;
 };
 
