@@ -22,17 +22,22 @@ Command AddRenderCommand(CLI::App& app) {
   auto* cmd = app.add_subcommand("render", "render any cameras at any times from a results folder");
   struct Args {
     std::string result, cameras, out;
+    int mc_passes = -1;
   };
   auto args = std::make_shared<Args>();
   cmd->add_option("result", args->result, "results folder of `reconstruct` (holds model/model.bin)")
       ->required();
   cmd->add_option("--cameras", args->cameras, "transforms.json-style camera list with per-camera time")
       ->required();
-  cmd->add_option("-o,--out", args->out, "output folder (rgb/, depth/)")->required();
+  cmd->add_option("-o,--out", args->out, "output folder (rgb/, depth/, uncertainty/)")->required();
+  cmd->add_option("--mc-passes", args->mc_passes,
+                  "dropout passes for the uncertainty maps (default: the model's, 0: no uncertainty)")
+      ->check(CLI::Range(0, 1024));
   return [args] {
     const train::Model model = train::ReadModel(std::filesystem::path(args->result) / "model" / "model.bin");
     const auto cameras = scene::ReadCameraList(args->cameras);
-    const auto settings = UncertaintyRenderSettings(model.config, model.near, model.far, 0);
+    auto settings = UncertaintyRenderSettings(model.config, model.near, model.far, 0);
+    if (args->mc_passes >= 0) settings.mc_passes = args->mc_passes;
     render::FrameRenderer renderer(*model.field, model.box, settings);
     const render::OccupancyGrid occupancy = train::BuildOccupancy(*model.field, model.config);
     renderer.SetOccupancy(&occupancy);

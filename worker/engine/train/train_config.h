@@ -26,7 +26,8 @@ struct TrainConfig {
   // The paper's uncertainty-loss weight (lambda_unc = 0.02-0.03). At 1 the NLL's 1/sigma^2 (down to
   // 1/variance_eps) outweighs the photometric term: 29.8 dB against 34.5 dB held out (docs/benchmarks.md).
   float nll_weight = 0.03f;
-  // 0: the paper's NLL; beta > 0: beta-NLL (train/losses.h), each sample's NLL weighted by its variance^beta.
+  // 0: the paper's NLL; beta > 0: the NLL's pull on the mean colours rescaled by variance^beta
+  // (train/losses.h, RgbNll), so the means learn as under a squared error at beta = 1.
   float nll_beta = 0.0f;
   float rgb_l2_weight = 1.0f;
   float depth_weight = 1.0f;  // lambda_d
