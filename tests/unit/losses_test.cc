@@ -64,34 +64,40 @@ TEST(RgbNll, GradientsMatchCentralDifferences) {
   }
 }
 
-// beta > 0: the value and the variance and weight gradients are the paper's NLL; the mean's gradient
-// is the NLL's times var^beta (at beta = 1 that of w |mu - C|^2 / 2).
-TEST(RgbNll, BetaRescalesOnlyTheMeansGradientByTheVariance) {
+// beta-NLL: the value is the NLL weighted by var^beta; the gradients are those of that loss with the
+// weight var^beta held constant, which the finite differences see when the weights are pre-multiplied.
+TEST(RgbNll, BetaWeighsEachTermByItsVarianceHeldConstant) {
   const int n = 10;
   const double scale = 0.5;
-  double* none = nullptr;
   for (double beta : {0.5, 1.0}) {
     Samples x = RandomSamples(n, 8);
-    const auto plain = [&] {
-      return RgbNll(x.weights.data(), x.mean_rgb.data(), x.log_var.data(), n, x.target, kEps, scale, none, none,
-                    none);
-    };
-    EXPECT_EQ(RgbNll(x.weights.data(), x.mean_rgb.data(), x.log_var.data(), n, x.target, kEps, scale, none, none,
-                     none, beta),
-              plain());
+    std::vector<double> frozen(n);
+    for (int j = 0; j < n; ++j) {
+      frozen[j] = x.weights[j] * std::pow(field::VarianceFromLogVar(x.log_var[j], kEps), beta);
+    }
+    double* none = nullptr;
+    const double beta_loss = RgbNll(x.weights.data(), x.mean_rgb.data(), x.log_var.data(), n, x.target, kEps,
+                                    scale, none, none, none, beta);
+    EXPECT_NEAR(beta_loss, RgbNll(frozen.data(), x.mean_rgb.data(), x.log_var.data(), n, x.target, kEps, scale,
+                                  none, none, none),
+                1e-12);
     std::vector<double> d_w(n, 0.0), d_mu(3 * n, 0.0), d_l(n, 0.0);
     RgbNll(x.weights.data(), x.mean_rgb.data(), x.log_var.data(), n, x.target, kEps, scale, d_w.data(),
            d_mu.data(), d_l.data(), beta);
+    auto with_frozen = [&] {
+      return RgbNll(frozen.data(), x.mean_rgb.data(), x.log_var.data(), n, x.target, kEps, scale, none, none,
+                    none);
+    };
     for (int j = 0; j < n; ++j) {
-      const double var_beta = std::pow(field::VarianceFromLogVar(x.log_var[j], kEps), beta);
-      EXPECT_TRUE(CloseRelative(d_w[j], CentralDifference(x.weights[j], 1e-6, plain), 1e-8)) << j;
-      EXPECT_TRUE(CloseRelative(d_l[j], CentralDifference(x.log_var[j], 1e-6, plain), 1e-8)) << j;
+      EXPECT_TRUE(CloseRelative(d_l[j], CentralDifference(x.log_var[j], 1e-6, with_frozen), 1e-7)) << j;
+      EXPECT_TRUE(CloseRelative(d_w[j] * x.weights[j], CentralDifference(frozen[j], 1e-6, with_frozen) * frozen[j], 1e-7)) << j;
       for (int c = 0; c < 3; ++c) {
-        EXPECT_TRUE(CloseRelative(d_mu[3 * j + c], var_beta * CentralDifference(x.mean_rgb[3 * j + c], 1e-6, plain),
-                                  1e-7));
+        EXPECT_TRUE(
+            CloseRelative(d_mu[3 * j + c], CentralDifference(x.mean_rgb[3 * j + c], 1e-6, with_frozen), 1e-7));
       }
     }
     if (beta == 1.0) {
+      // The mean's gradient is that of w |mu - C|^2 / 2: no 1 / var.
       for (int c = 0; c < 3; ++c) {
         EXPECT_NEAR(d_mu[c], scale * x.weights[0] * (x.mean_rgb[c] - x.target[c]), 1e-12);
       }

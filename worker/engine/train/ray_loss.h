@@ -21,7 +21,7 @@ struct RayLossTerms {
   float depth_range = 1;  // far - near, clip units
   float huber_delta = 0;  // in units of the depth range; 0: L1
   float nll_scale = 0;
-  float nll_beta = 0;  // 0: the paper's NLL; > 0: the means' gradient rescaled (losses.h, RgbNll)
+  float nll_beta = 0;  // 0: the paper's NLL; > 0: beta-NLL (losses.h)
   float variance_reg_scale = 0;
   float variance_eps = 1e-3f;
 };

@@ -26,8 +26,7 @@ struct TrainConfig {
   // The paper's uncertainty-loss weight (lambda_unc = 0.02-0.03). At 1 the NLL's 1/sigma^2 (down to
   // 1/variance_eps) outweighs the photometric term: 29.8 dB against 34.5 dB held out (docs/benchmarks.md).
   float nll_weight = 0.03f;
-  // 0: the paper's NLL; beta > 0: the NLL's pull on the mean colours rescaled by variance^beta
-  // (train/losses.h, RgbNll), so the means learn as under a squared error at beta = 1.
+  // 0: the paper's NLL; beta > 0: beta-NLL (train/losses.h), each sample's NLL weighted by its variance^beta.
   float nll_beta = 0.0f;
   float rgb_l2_weight = 1.0f;
   float depth_weight = 1.0f;  // lambda_d
@@ -46,9 +45,12 @@ struct TrainConfig {
   // Uncertainty (paper §3). At evaluation: K dropout passes; lambda weighs the colour variance
   // (colour², colours in [0, 1]) against the density variance (density², far larger) in the ray
   // score. Measured on the synthetic demo clip (20 s of training, K = 4), mean Spearman against the
-  // per-pixel error: lambda 1 -> -0.32 (the density term dominates), 1e4 -> 0.20, 1e6 -> 0.49.
+  // per-pixel error: lambda 1 -> -0.32 (the density term dominates), 1e4 -> 0.20, 1e6 -> 0.49. With
+  // longer training the densities (and their variance across dropout passes, in density^2) grow:
+  // at 2500 iterations lambda 1e6 gave 0.30 (the density's epistemic part, anti-correlated with the
+  // error, dominates) and 1e12 gave 0.57, so the colour variance carries the score.
   int mc_passes = 8;
-  float uncertainty_lambda = 1e6f;
+  float uncertainty_lambda = 1e12f;
   // Uncertainty-guided adaptive sampling in training (docs/architecture.md). After the warm-up (a
   // fraction of the run: of the iterations, or of the time budget when there is one), a fraction of
   // each batch's rays is drawn in proportion to a per-pixel uncertainty map of the training frames
