@@ -90,3 +90,27 @@ TEST(DepthGuidedSampler, PriorOutsideTheRangeClampsOntoItsEnd) {
 
 }  // namespace
 }  // namespace endorecon::render
+
+namespace endorecon::render {
+namespace {
+
+// The trainer's sample reallocation regenerates a ray's Gaussian samples with GaussianSamplesAround
+// and moves only the stratified ones: the regenerated ones must be exactly DepthGuidedSamples' own.
+TEST(DepthGuidedSampler, GaussianPartAloneIsTheSameDraws) {
+  DepthGuidedConfig<float> config;
+  config.xi = 0.7f;
+  config.gaussian_samples = 16;
+  config.stratified_samples = 8;
+  const int n = config.gaussian_samples + config.stratified_samples;
+  const CounterRng<float> uniform(11, 5);
+  std::vector<float> s(n), delta(n), parts(n);
+  DepthGuidedSamples(2.0f, 9.0f, 4.5f, config, uniform, s.data(), delta.data());
+  StratifiedSamples(2.0f, 9.0f, config.stratified_samples, uniform, parts.data(), delta.data());
+  GaussianSamplesAround(2.0f, 9.0f, 4.5f, config.xi, config.gaussian_samples, uniform,
+                        unsigned(config.stratified_samples), parts.data() + config.stratified_samples);
+  SortAscending(parts.data(), n);
+  EXPECT_EQ(parts, s);
+}
+
+}  // namespace
+}  // namespace endorecon::render

@@ -191,9 +191,12 @@ ReconstructSummary Reconstruct(const ReconstructOptions& options, const Reconstr
                clip.width, clip.height, split.train.size(), split.heldout.size(), trainer.field().Describe());
 
   render::FrameRenderer renderer(trainer.field(), trainer.box(), RenderSettings(config, clip.near, clip.far));
+  // Both renderers skip what the trainer's occupancy grid says is empty (rebuilt during training and,
+  // for the results, from the final field).
   renderer.SetOccupancy(&trainer.occupancy());
   render::FrameRenderer uncertainty_renderer(
       trainer.field(), trainer.box(), UncertaintyRenderSettings(config, clip.near, clip.far, options.seed));
+  uncertainty_renderer.SetOccupancy(&trainer.occupancy());
   const CurveProbe probe(clip, split.heldout, config.curve_frames);
   const fs::path checkpoint_path = out_dir / "model" / "checkpoint.bin";
 
@@ -284,9 +287,7 @@ ReconstructSummary Reconstruct(const ReconstructOptions& options, const Reconstr
   nlohmann::json metrics;
   nlohmann::json left_out = fit.left_out;
   if (!summary.cancelled) {
-    // Results are rendered with empty space skipped by a grid of the final field.
     trainer.RebuildOccupancy();
-    uncertainty_renderer.SetOccupancy(&trainer.occupancy());
     if (!trainer.occupancy().empty()) {
       left_out.push_back(
           {{"what", fmt::format("sampling of {:.1f}% of the rays' range (occupancy grid {}^3, {:.1f}% of the "

@@ -30,6 +30,20 @@ struct DepthGuidedConfig {
 // i takes uniform(stratified_samples + 2i) and uniform(stratified_samples + 2i + 1).
 // A prior that is unknown (<= 0, the depth maps' "no value") or not finite gives n stratified
 // samples instead, so one call serves every pixel of a clip with holes in its depth.
+// The Gaussian part alone: count draws around the prior, clamped onto [near, far], into s[0..count)
+// (unsorted, no intervals). Draw i takes uniform(first_draw + 2i) and uniform(first_draw + 2i + 1):
+// with first_draw = stratified_samples these are DepthGuidedSamples' own Gaussian samples.
+template <typename S, typename Uniform>
+ENDORECON_HD void GaussianSamplesAround(S near, S far, S prior_depth, S xi, int count, const Uniform& uniform,
+                                        unsigned first_draw, S* s) {
+  for (int i = 0; i < count; ++i) {
+    const S u1 = static_cast<S>(uniform(static_cast<unsigned>(first_draw + 2 * i)));
+    const S u2 = static_cast<S>(uniform(static_cast<unsigned>(first_draw + 2 * i + 1)));
+    const S x = prior_depth + xi * NormalFromUniforms(u1, u2);
+    s[i] = x < near ? near : (x > far ? far : x);
+  }
+}
+
 template <typename S, typename Uniform>
 ENDORECON_HD int DepthGuidedSamples(S near, S far, S prior_depth, const DepthGuidedConfig<S>& config,
                                     const Uniform& uniform, S* s, S* delta) {
@@ -40,12 +54,7 @@ ENDORECON_HD int DepthGuidedSamples(S near, S far, S prior_depth, const DepthGui
   }
   const int ns = config.stratified_samples;
   StratifiedSamples(near, far, ns, uniform, s, delta);
-  for (int i = 0; i < config.gaussian_samples; ++i) {
-    const S u1 = static_cast<S>(uniform(static_cast<unsigned>(ns + 2 * i)));
-    const S u2 = static_cast<S>(uniform(static_cast<unsigned>(ns + 2 * i + 1)));
-    const S x = prior_depth + config.xi * NormalFromUniforms(u1, u2);
-    s[ns + i] = x < near ? near : (x > far ? far : x);
-  }
+  GaussianSamplesAround(near, far, prior_depth, config.xi, config.gaussian_samples, uniform, unsigned(ns), s + ns);
   SortAscending(s, n);
   MidpointIntervals(s, n, near, far, delta);
   return n;

@@ -39,6 +39,9 @@ struct Trainer::Batch {
   std::vector<float> sigma, sigma_logvar, rgb, rgb_logvar, weights;
   std::vector<float> d_weights, d_sigma, d_rgb, d_rgb_logvar;
   std::vector<RayPick> picks;
+  // The scoring pass of guided rays (ReallocateSamples): stratified probe samples and their outputs.
+  std::vector<float> probe_s, probe_delta, probe_pos, probe_dir, probe_time, probe_sigma, probe_sigma_lv,
+      probe_rgb, probe_rgb_lv, probe_score, probe_span;
 
   Batch(int r, int n) : rays(r), samples(n) {
     const std::size_t m = std::size_t(r) * n;
@@ -46,10 +49,12 @@ struct Trainer::Batch {
     prior.resize(r);
     picks.resize(r);
     for (auto* v : {&s, &delta, &time, &sigma, &sigma_logvar, &rgb_logvar, &weights, &d_weights, &d_sigma,
-                    &d_rgb_logvar}) {
+                    &d_rgb_logvar, &probe_s, &probe_delta, &probe_time, &probe_sigma, &probe_sigma_lv,
+                    &probe_rgb_lv, &probe_score}) {
       v->resize(m);
     }
-    for (auto* v : {&pos, &dir, &rgb, &d_rgb}) v->resize(3 * m);
+    for (auto* v : {&pos, &dir, &rgb, &d_rgb, &probe_pos, &probe_dir, &probe_rgb}) v->resize(3 * m);
+    probe_span.resize(2 * std::size_t(r));
   }
 };
 
@@ -118,34 +123,65 @@ void Trainer::SampleRays(int guided) {
 void Trainer::ReallocateSamples(int rays, std::uint64_t step_seed) {
   Batch& b = *batch_;
   const int n = b.samples;
-  const field::SampleBatch in{rays * n, b.pos.data(), b.time.data(), b.dir.data()};
-  field::FieldOutput out{b.sigma.data(), b.sigma_logvar.data(), b.rgb.data(), b.rgb_logvar.data()};
-  field_->Infer(in, out, /*dropout=*/true, render::HashCombine(step_seed, 0xc0a25eull));
+  // Scored at stratified probes over the occupied span: the stratified part of the ray's samples (the
+  // same draws) when the clip has depth, all n otherwise. With depth that is a third of the cost of
+  // scoring every sample, and the probes cover the whole span, which is where points can be added.
+  const int m = clip_.has_depth() ? config_.stratified_samples : n;
   const float near = float(clip_.near), far = float(clip_.far), eps = config_.variance_eps;
+  const float xi = float(config_.depth_xi * (clip_.far - clip_.near));
+  std::vector<float>& span = b.probe_span;  // per ray: the occupied span [lo, hi]
+  const auto ray_of = [&](int r, Eigen::Vector3d& origin, Eigen::Vector3d& direction) {
+    const RayPick& pick = b.picks[r];
+    clip_.cameras[pick.frame].Ray(pick.pixel % clip_.width, pick.pixel / clip_.width, origin, direction);
+  };
   tbb::parallel_for(tbb::blocked_range<int>(0, rays, 64), [&](const tbb::blocked_range<int>& range) {
     for (int r = range.begin(); r != range.end(); ++r) {
-      const std::size_t o = std::size_t(r) * n;
-      // The gradient arrays are free until the loss: they hold the variances, scores and coarse samples.
-      float* var_density = &b.d_sigma[o];
-      float* var_color = &b.d_rgb_logvar[o];
-      float* score = &b.d_weights[o];
-      float* coarse = &b.d_rgb[3 * o];
-      for (int j = 0; j < n; ++j) {
-        var_density[j] = field::VarianceFromLogVar(b.sigma_logvar[o + j], eps);
-        var_color[j] = field::VarianceFromLogVar(b.rgb_logvar[o + j], eps);
-      }
-      render::SampleScores(var_density, var_color, n, config_.uncertainty_lambda, kScoreEps, score);
-      std::copy(&b.s[o], &b.s[o] + n, coarse);
-      const RayPick& pick = b.picks[r];
       Eigen::Vector3d origin, direction;
-      clip_.cameras[pick.frame].Ray(pick.pixel % clip_.width, pick.pixel / clip_.width, origin, direction);
+      ray_of(r, origin, direction);
       double lo = near, hi = far;
       occupancy_.Span(box_, origin, direction, near, far, &lo, &hi);
+      span[2 * r] = float(lo);
+      span[2 * r + 1] = float(hi);
+      const std::size_t o = std::size_t(r) * m;
       const render::CounterRng<float> uniform(step_seed, std::uint64_t(2 * r + 1));
-      render::AdaptiveSamples(coarse, score, n, float(lo), float(hi), config_.adaptive_floor, n, uniform,
-                              &b.s[o], &b.delta[o], unsigned(4 * n));
-      render::RayPoints(box_, origin, direction, clip_.times[pick.frame], &b.s[o], n, &b.delta[o],
-                        &b.pos[3 * o], &b.dir[3 * o], &b.time[o]);
+      render::StratifiedSamples(float(lo), float(hi), m, uniform, &b.probe_s[o], &b.probe_delta[o]);
+      render::RayPoints(box_, origin, direction, clip_.times[b.picks[r].frame], &b.probe_s[o], m,
+                        &b.probe_delta[o], &b.probe_pos[3 * o], &b.probe_dir[3 * o], &b.probe_time[o]);
+    }
+  });
+  const field::SampleBatch in{rays * m, b.probe_pos.data(), b.probe_time.data(), b.probe_dir.data()};
+  field::FieldOutput out{b.probe_sigma.data(), b.probe_sigma_lv.data(), b.probe_rgb.data(), b.probe_rgb_lv.data()};
+  field_->Infer(in, out, /*dropout=*/true, render::HashCombine(step_seed, 0xc0a25eull));
+  tbb::parallel_for(tbb::blocked_range<int>(0, rays, 64), [&](const tbb::blocked_range<int>& range) {
+    for (int r = range.begin(); r != range.end(); ++r) {
+      const std::size_t o = std::size_t(r) * m;
+      float* var_density = &b.probe_sigma[o];  // overwritten in place by the variances
+      float* var_color = &b.probe_rgb_lv[o];
+      for (int j = 0; j < m; ++j) {
+        var_density[j] = field::VarianceFromLogVar(b.probe_sigma_lv[o + j], eps);
+        var_color[j] = field::VarianceFromLogVar(b.probe_rgb_lv[o + j], eps);
+      }
+      render::SampleScores(var_density, var_color, m, config_.uncertainty_lambda, kScoreEps, &b.probe_score[o]);
+      // With a depth prior the Gaussian samples stay where PlaceRay put them (the same draws) and the
+      // stratified ones move to where the scores are: the paper's additional points for uncertain
+      // stretches, without taking any from the surface. Without a prior every sample moves.
+      const std::size_t q = std::size_t(r) * n;
+      const bool prior = clip_.has_depth() && HasDepthPrior(b.prior[r]);
+      const int moved = prior ? config_.stratified_samples : n;
+      const float lo = span[2 * r], hi = span[2 * r + 1];
+      const render::CounterRng<float> uniform(step_seed, std::uint64_t(2 * r + 1));
+      render::AdaptiveSamples(&b.probe_s[o], &b.probe_score[o], m, lo, hi, config_.adaptive_floor, moved,
+                              uniform, &b.s[q], &b.delta[q], unsigned(4 * n));
+      if (prior) {
+        render::GaussianSamplesAround(lo, hi, b.prior[r], xi, config_.depth_samples, uniform,
+                                      unsigned(config_.stratified_samples), &b.s[q + moved]);
+        render::SortAscending(&b.s[q], n);
+        render::MidpointIntervals(&b.s[q], n, lo, hi, &b.delta[q]);
+      }
+      Eigen::Vector3d origin, direction;
+      ray_of(r, origin, direction);
+      render::RayPoints(box_, origin, direction, clip_.times[b.picks[r].frame], &b.s[q], n, &b.delta[q],
+                        &b.pos[3 * q], &b.dir[3 * q], &b.time[q]);
     }
   });
 }

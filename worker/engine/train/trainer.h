@@ -73,8 +73,9 @@ class Trainer {
   void SampleRays(int guided);
   // Fills ray r of the batch for (frame, pixel) with the ordinary (depth-guided) samples.
   void PlaceRay(int r, const RayPick& pick, std::uint64_t step_seed);
-  // Re-places the samples of rays [0, rays) in proportion to their sample scores from one
-  // dropout-on pass at the ordinary samples (adaptive_sampler.h), with the floor adaptive_floor.
+  // Re-places the stratified samples of rays [0, rays) (all of a ray's samples when it has no depth
+  // prior) in proportion to the sample scores from one dropout-on pass at stratified probes of the
+  // ray (adaptive_sampler.h), with the floor adaptive_floor; the Gaussian samples around the prior stay.
   void ReallocateSamples(int rays, std::uint64_t step_seed);
   // One dropout-on pass at every cell's probe pixel; the ray scores of the aleatoric variances.
   void RefreshMap();
