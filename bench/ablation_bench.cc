@@ -50,7 +50,8 @@ int main(int argc, char** argv) {
     else if (flag == "--rows")
       row_letters = argv[i + 1];
     else {
-      std::fprintf(stderr, "usage: ablation_bench [--budget SECONDS] [--threads N] [--out DIR] [--rows abcd]\n");
+      std::fprintf(stderr,
+                   "usage: ablation_bench [--budget SECONDS] [--threads N] [--out DIR] [--rows abcd]\n");
       return 2;
     }
   }
@@ -62,7 +63,10 @@ int main(int argc, char** argv) {
       {"(a) positional encoding + MLP (EndoNeRF-like), L2",
        {{"nll_weight", 0.0},
         {"adaptive_sampling", false},
-        {"field", {{"encoding", "frequency"}, {"frequencies", 10}, {"heads", {{"density_hidden", {128, 128, 128, 128}}}}}}}},
+        {"field",
+         {{"encoding", "frequency"},
+          {"frequencies", 10},
+          {"heads", {{"density_hidden", {128, 128, 128, 128}}}}}}}},
       {"(b) hash ensemble + blending, L2", {{"nll_weight", 0.0}, {"adaptive_sampling", false}}},
       {"(c) + uncertainty (NLL)", {{"adaptive_sampling", false}}},
       {"(d) + adaptive sampling", nlohmann::json::object()},

@@ -65,8 +65,9 @@ int main(int argc, char** argv) {
     const auto same = renderer.Render(clip.cameras[f], clip.times[f]);
     left_sum += endorecon::eval::Psnr(same.rgb, clip.rgb[f], unseen, clip.width, clip.height);
   }
-  std::printf("trained %d iterations in %.0f s on the left eye (%d frames, %dx%d); %d right-edge columns excluded\n",
-              summary.iterations, summary.train_seconds, clip.frame_count(), clip.width, clip.height, hidden);
+  std::printf(
+      "trained %d iterations in %.0f s on the left eye (%d frames, %dx%d); %d right-edge columns excluded\n",
+      summary.iterations, summary.train_seconds, clip.frame_count(), clip.width, clip.height, hidden);
   std::printf("right eye (novel view) PSNR: %.2f dB; left eye (training views) PSNR: %.2f dB\n",
               right_sum / clip.frame_count(), left_sum / clip.frame_count());
   return 0;

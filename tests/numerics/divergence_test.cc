@@ -35,14 +35,21 @@ nlohmann::json DivergingConfig() {
   return {{"rays_per_batch", 128}, {"adam", {{"lr", lr}, {"final_lr_factor", 1.0}}}};
 }
 
-TEST(Divergence, ReconstructThrowsNamingStageAndIterationAndKeepsTheLastGoodCheckpoint) {
-  testing::TempDir dir("divergence");
+// A 6-frame 40 x 32 synthetic clip in dir/clip, diverge.json (DivergingConfig) and small.json (the
+// preset with the same small batch).
+void WriteClipAndConfigs(const fs::path& dir) {
   scene::SynthOptions synth;
   synth.frames = 6;
   synth.width = 40;
   synth.height = 32;
   scene::WriteSyntheticClip(synth, dir / "clip");
   std::ofstream(dir / "diverge.json") << DivergingConfig().dump();
+  std::ofstream(dir / "small.json") << nlohmann::json{{"rays_per_batch", 128}}.dump();
+}
+
+TEST(Divergence, ReconstructThrowsNamingStageAndIterationAndKeepsTheLastGoodCheckpoint) {
+  testing::TempDir dir("divergence");
+  WriteClipAndConfigs(dir.path());
 
   ReconstructOptions options;
   options.clip_dir = (dir / "clip").string();
@@ -94,13 +101,7 @@ TEST(Divergence, ReconstructThrowsNamingStageAndIterationAndKeepsTheLastGoodChec
 // checkpoint's own.
 TEST(Divergence, TheLastGoodCheckpointResumesWithAnotherConfiguration) {
   testing::TempDir dir("divergence-resume");
-  scene::SynthOptions synth;
-  synth.frames = 6;
-  synth.width = 40;
-  synth.height = 32;
-  scene::WriteSyntheticClip(synth, dir / "clip");
-  std::ofstream(dir / "small.json") << nlohmann::json{{"rays_per_batch", 128}}.dump();
-  std::ofstream(dir / "diverge.json") << DivergingConfig().dump();
+  WriteClipAndConfigs(dir.path());
 
   ReconstructOptions options;
   options.clip_dir = (dir / "clip").string();

@@ -48,7 +48,8 @@ TEST_F(DepthRefinerTest, MovesTheCorruptedPriorsToTheRenderedDepth) {
     for (std::size_t p = 0; p < clip.depth[f].size(); ++p) {
       const float prior = trainer.depth_refiner().Prior(f, int(p));
       if (clip.depth[f][p] <= 0 || Tool(clip, f, p)) {
-        EXPECT_EQ(prior, clip.depth[f][p]) << "a hole or tool pixel was refined: frame " << f << " pixel " << p;
+        EXPECT_EQ(prior, clip.depth[f][p])
+            << "a hole or tool pixel was refined: frame " << f << " pixel " << p;
         continue;
       }
       const bool moved = prior != clip.depth[f][p];
@@ -65,7 +66,8 @@ TEST_F(DepthRefinerTest, MovesTheCorruptedPriorsToTheRenderedDepth) {
   }
   ASSERT_GT(bad, 100u);
   EXPECT_GT(double(bad_moved) / double(bad), 0.9) << "the corrupted priors are the worst ones";
-  EXPECT_LT(after, 0.25 * before) << "mean error of the corrupted priors: " << before / bad << " -> " << after / bad;
+  EXPECT_LT(after, 0.25 * before) << "mean error of the corrupted priors: " << before / bad << " -> "
+                                  << after / bad;
   EXPECT_LT(double(good_moved) / double(good), 0.1);
 }
 

@@ -129,7 +129,8 @@ TEST(FieldTest, FrequencyEncodingFieldGradientsMatchFiniteDifferences) {
     names.push_back(b.name);
     const std::vector<double> grad(b.grad, b.grad + b.size);
     const auto indices = SomeIndices(b.size, 40, pick++);
-    const int nonzero = ExpectGradientMatches(b.value, grad.data(), indices, loss, b.name, {1e-6, 1e-5, 1e-8});
+    const int nonzero =
+        ExpectGradientMatches(b.value, grad.data(), indices, loss, b.name, {1e-6, 1e-5, 1e-8});
     EXPECT_GE(nonzero, static_cast<int>(indices.size()) / 4) << b.name;
   }
   EXPECT_EQ(names, (std::vector<std::string>{"deform", "density", "color"}));

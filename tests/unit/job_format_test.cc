@@ -24,8 +24,8 @@ v1::Progress MidRun() {
 TEST(ProgressLine, ShowsIterationTimeLossPsnrThroughputAndEta) {
   const std::string line = ProgressLine(MidRun());
   EXPECT_EQ(line.rfind("[######..................]  25%", 0), 0u) << line;
-  for (const char* part : {"it 2500/10000", "61 s", "loss 0.01234", "PSNR 33.46 dB", "2.05e+06 samples/s",
-                           "ETA 3m07s"}) {
+  for (const char* part :
+       {"it 2500/10000", "61 s", "loss 0.01234", "PSNR 33.46 dB", "2.05e+06 samples/s", "ETA 3m07s"}) {
     EXPECT_NE(line.find(part), std::string::npos) << "missing '" << part << "' in: " << line;
   }
   // Not measured yet (-1): not shown.

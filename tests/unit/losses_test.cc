@@ -78,8 +78,9 @@ TEST(RgbNll, BetaWeighsEachTermByItsVarianceHeldConstant) {
     double* none = nullptr;
     const double beta_loss = RgbNll(x.weights.data(), x.mean_rgb.data(), x.log_var.data(), n, x.target, kEps,
                                     scale, none, none, none, beta);
-    EXPECT_NEAR(beta_loss, RgbNll(frozen.data(), x.mean_rgb.data(), x.log_var.data(), n, x.target, kEps, scale,
-                                  none, none, none),
+    EXPECT_NEAR(beta_loss,
+                RgbNll(frozen.data(), x.mean_rgb.data(), x.log_var.data(), n, x.target, kEps, scale, none,
+                       none, none),
                 1e-12);
     std::vector<double> d_w(n, 0.0), d_mu(3 * n, 0.0), d_l(n, 0.0);
     RgbNll(x.weights.data(), x.mean_rgb.data(), x.log_var.data(), n, x.target, kEps, scale, d_w.data(),
@@ -90,10 +91,12 @@ TEST(RgbNll, BetaWeighsEachTermByItsVarianceHeldConstant) {
     };
     for (int j = 0; j < n; ++j) {
       EXPECT_TRUE(CloseRelative(d_l[j], CentralDifference(x.log_var[j], 1e-6, with_frozen), 1e-7)) << j;
-      EXPECT_TRUE(CloseRelative(d_w[j] * x.weights[j], CentralDifference(frozen[j], 1e-6, with_frozen) * frozen[j], 1e-7)) << j;
+      EXPECT_TRUE(CloseRelative(d_w[j] * x.weights[j],
+                                CentralDifference(frozen[j], 1e-6, with_frozen) * frozen[j], 1e-7))
+          << j;
       for (int c = 0; c < 3; ++c) {
-        EXPECT_TRUE(
-            CloseRelative(d_mu[3 * j + c], CentralDifference(x.mean_rgb[3 * j + c], 1e-6, with_frozen), 1e-7));
+        EXPECT_TRUE(CloseRelative(d_mu[3 * j + c],
+                                  CentralDifference(x.mean_rgb[3 * j + c], 1e-6, with_frozen), 1e-7));
       }
     }
     if (beta == 1.0) {

@@ -85,7 +85,8 @@ TEST_F(OccupancyGridTest, TrainedFieldSkipsSpaceKeepsEveryTissuePointAndRendersT
       for (int x = 0; x < clip_->width; ++x) {
         Eigen::Vector3d origin, direction;
         clip_->cameras[f].Ray(x, y, origin, direction);
-        const Eigen::Vector3d p = box.Normalise(origin + double(clip_->gt_depth[f][y * clip_->width + x]) * direction);
+        const Eigen::Vector3d p =
+            box.Normalise(origin + double(clip_->gt_depth[f][y * clip_->width + x]) * direction);
         const float q[3] = {float(p.x()), float(p.y()), float(p.z())};
         ++tissue;
         missed += !grid.cells()[OccupancyCell(q, grid.resolution())];

@@ -26,7 +26,8 @@ struct Ray {
 Ray RandomRay(unsigned seed) {
   std::mt19937 gen(seed);
   std::uniform_real_distribution<double> w(0.0, 0.2), c(0.0, 1.0), l(-5.0, 2.0);
-  Ray ray{{}, std::vector<double>(kSamples), std::vector<double>(3 * kSamples), std::vector<double>(kSamples)};
+  Ray ray{
+      {}, std::vector<double>(kSamples), std::vector<double>(3 * kSamples), std::vector<double>(kSamples)};
   for (int j = 0; j < kSamples; ++j) {
     ray.weights[j] = w(gen);
     ray.log_var[j] = l(gen);
@@ -71,8 +72,8 @@ TEST(RayLoss, IsTheSumOfTheScaledTerms) {
                            : DepthL1(depth, prior, scale, none)) +
         RgbNll(ray.weights.data(), ray.mean_rgb.data(), ray.log_var.data(), kSamples, ray.target,
                double(t.variance_eps), double(t.nll_scale), none, none, none) +
-        VarianceRegularizer(ray.log_var.data(), kSamples, double(t.variance_eps), double(t.variance_reg_scale),
-                            none);
+        VarianceRegularizer(ray.log_var.data(), kSamples, double(t.variance_eps),
+                            double(t.variance_reg_scale), none);
     EXPECT_NEAR(Loss(ray, t), expected, 1e-12);
   }
 }
@@ -105,7 +106,8 @@ TEST(RayLoss, GradientsMatchCentralDifferences) {
     for (int j = 0; j < kSamples; ++j) {
       EXPECT_TRUE(CloseRelative(d_lv[j], CentralDifference(ray.log_var[j], 1e-6, loss), 1e-7)) << j;
       for (int c = 0; c < 3; ++c) {
-        EXPECT_TRUE(CloseRelative(d_mean[3 * j + c], CentralDifference(ray.mean_rgb[3 * j + c], 1e-6, loss), 1e-7))
+        EXPECT_TRUE(
+            CloseRelative(d_mean[3 * j + c], CentralDifference(ray.mean_rgb[3 * j + c], 1e-6, loss), 1e-7))
             << j << "," << c;
       }
     }

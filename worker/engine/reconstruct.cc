@@ -87,7 +87,8 @@ class CurveProbe {
     for (int f : frames_) {
       const auto frame = renderer.Render(clip_.cameras[f], clip_.times[f]);
       const auto& mask = eval::EvaluationMask(clip_, f);
-      psnr.push_back(eval::MeasureImage(frame.rgb, clip_.rgb[f], mask, clip_.width, clip_.height).psnr_tissue);
+      psnr.push_back(
+          eval::MeasureImage(frame.rgb, clip_.rgb[f], mask, clip_.width, clip_.height).psnr_tissue);
       if (!clip_.gt_depth.empty()) {
         depth.push_back(eval::MeasureDepth(frame.depth, clip_.gt_depth[f], mask, clip_.width, clip_.height,
                                            clip_.near, clip_.far)
@@ -290,11 +291,13 @@ ReconstructSummary Reconstruct(const ReconstructOptions& options, const Reconstr
     trainer.RebuildOccupancy();
     if (!trainer.occupancy().empty()) {
       left_out.push_back(
-          {{"what", fmt::format("sampling of {:.1f}% of the rays' range (occupancy grid {}^3, {:.1f}% of the "
-                                "scene box empty)",
-                                100.0 * (1.0 - trainer.occupancy_span_fraction()), config.occupancy_resolution,
-                                100.0 * (1.0 - trainer.occupancy().occupied_fraction()))},
-           {"why", fmt::format("empty: alpha below {} per cell at every probed time", config.occupancy_min_alpha)}});
+          {{"what",
+            fmt::format("sampling of {:.1f}% of the rays' range (occupancy grid {}^3, {:.1f}% of the "
+                        "scene box empty)",
+                        100.0 * (1.0 - trainer.occupancy_span_fraction()), config.occupancy_resolution,
+                        100.0 * (1.0 - trainer.occupancy().occupied_fraction()))},
+           {"why",
+            fmt::format("empty: alpha below {} per cell at every probed time", config.occupancy_min_alpha)}});
     }
     eval::ClipEvaluation what;
     what.train_frames = split.train;

@@ -227,8 +227,8 @@ void CompositeRaysBackward(const float* sigma, const float* rgb, const float* s,
 
 void RayLosses(const render::RayComposite<float>* rays, const float* weights, const float* mean_rgb,
                const float* log_var, const float* target_rgb, const float* prior_depth, int n_rays,
-               int samples, const train::RayLossTerms& terms, float* loss, render::RayCompositeGrad<float>* grad,
-               float* d_mean_rgb, float* d_log_var) {
+               int samples, const train::RayLossTerms& terms, float* loss,
+               render::RayCompositeGrad<float>* grad, float* d_mean_rgb, float* d_log_var) {
   if (terms.depth_scale != 0.0f && prior_depth == nullptr)
     FailInvalid("ray losses: a depth term (depth_scale " + std::to_string(terms.depth_scale) +
                 ") needs prior depths");

@@ -77,7 +77,7 @@ void CompositeRaysBackward(const float* sigma, const float* rgb, const float* s,
 // n_rays x 3; prior_depth may be null when depth_scale is 0.
 void RayLosses(const render::RayComposite<float>* rays, const float* weights, const float* mean_rgb,
                const float* log_var, const float* target_rgb, const float* prior_depth, int n_rays,
-               int samples, const train::RayLossTerms& terms, float* loss, render::RayCompositeGrad<float>* grad,
-               float* d_mean_rgb, float* d_log_var);
+               int samples, const train::RayLossTerms& terms, float* loss,
+               render::RayCompositeGrad<float>* grad, float* d_mean_rgb, float* d_log_var);
 
 }  // namespace endorecon::cuda

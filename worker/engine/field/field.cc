@@ -5,7 +5,6 @@
 #include <tbb/parallel_for.h>
 
 #include <Eigen/Core>
-
 #include <algorithm>
 #include <array>
 #include <cstring>
@@ -153,7 +152,7 @@ struct FieldT<S>::Impl {
   int capacity = 0;  // rows `acts` holds
   tbb::enumerable_thread_specific<Scratch> scratch;
   std::vector<std::array<AlignedVector<S>, kGroups>>
-      chunk_grad;                 // each chunk's share of the small groups' gradients
+      chunk_grad;                   // each chunk's share of the small groups' gradients
   AlignedVector<S> dfeat_by_level;  // [level][n][F]: dL/df, read by the table scatter
   AlignedVector<S> beta_by_grid;    // [grid][n]
   AlignedVector<S> group_dpos;      // [kPositionGroups][n][3]: parts of dL/dx0
@@ -172,9 +171,9 @@ struct FieldT<S>::Impl {
     }
     if (config.deformation.enabled) deform.emplace(config.deformation);
     const bool hash = frequencies == 0;
-    const std::array<std::size_t, kGroups> sizes = {hash ? grids.param_count() : 0, hash ? blend.param_count() : 0,
-                                                    deform ? deform->param_count() : 0, density.param_count(),
-                                                    color.param_count()};
+    const std::array<std::size_t, kGroups> sizes = {
+        hash ? grids.param_count() : 0, hash ? blend.param_count() : 0, deform ? deform->param_count() : 0,
+        density.param_count(), color.param_count()};
     for (int g = 0; g < kGroups; ++g) {
       value[g].assign(sizes[g], S(0));
       grad[g].assign(sizes[g], S(0));
@@ -184,7 +183,9 @@ struct FieldT<S>::Impl {
   // Per sample: what the encoder writes (all grids' features, or the frequency encoding), and what
   // the density head reads (the blended features, or the same frequency encoding).
   int encoder_dim() const { return frequencies > 0 ? FrequencyEncodingDim(frequencies) : grids.output_dim(); }
-  int feature_dim() const { return frequencies > 0 ? FrequencyEncodingDim(frequencies) : grids.feature_dim(); }
+  int feature_dim() const {
+    return frequencies > 0 ? FrequencyEncodingDim(frequencies) : grids.feature_dim();
+  }
 
   void SizeActs(Acts& a, int rows) const {
     const std::size_t n = static_cast<std::size_t>(rows);

@@ -54,7 +54,8 @@ ENDORECON_HD int DepthGuidedSamples(S near, S far, S prior_depth, const DepthGui
   }
   const int ns = config.stratified_samples;
   StratifiedSamples(near, far, ns, uniform, s, delta);
-  GaussianSamplesAround(near, far, prior_depth, config.xi, config.gaussian_samples, uniform, unsigned(ns), s + ns);
+  GaussianSamplesAround(near, far, prior_depth, config.xi, config.gaussian_samples, uniform, unsigned(ns),
+                        s + ns);
   SortAscending(s, n);
   MidpointIntervals(s, n, near, far, delta);
   return n;

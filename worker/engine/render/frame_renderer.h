@@ -84,7 +84,7 @@ class FrameRenderer {
   // Scratch for one chunk, reused across chunks and frames.
   std::vector<float> s_, delta_, pos_, dir_, time_, sigma_, sigma_lv_, color_, color_lv_, weights_, fine_s_;
   std::vector<float> span_lo_, span_hi_;  // per ray of the chunk: the occupied span sampled
-  std::vector<float> encoding_;  // the fine samples' field encoding, shared by the K passes
+  std::vector<float> encoding_;           // the fine samples' field encoding, shared by the K passes
   std::vector<McMoments<float>> density_moments_, color_moments_;  // n and 3n, with mc_passes > 0
   std::vector<float> var_density_[3], var_color_[3];               // total, aleatoric, epistemic
 };

@@ -90,7 +90,8 @@ double OccupancyGrid::occupied_fraction() const {
 }
 
 void OccupancyGrid::Span(const scene::SceneBox& box, const Eigen::Vector3d& origin,
-                         const Eigen::Vector3d& direction, double near, double far, double* lo, double* hi) const {
+                         const Eigen::Vector3d& direction, double near, double far, double* lo,
+                         double* hi) const {
   if (empty()) {
     *lo = near;
     *hi = far;

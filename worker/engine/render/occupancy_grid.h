@@ -42,12 +42,14 @@ ENDORECON_HD int OccupancyCell(const float* pos, int res) {
 ENDORECON_HD void OccupiedSpan(const std::uint8_t* occupied, int res, const double* start, const double* step,
                                double near, double far, double* lo, double* hi) {
   double fastest = 0;
-  for (int c = 0; c < 3; ++c) fastest = step[c] > fastest ? step[c] : (-step[c] > fastest ? -step[c] : fastest);
+  for (int c = 0; c < 3; ++c)
+    fastest = step[c] > fastest ? step[c] : (-step[c] > fastest ? -step[c] : fastest);
   const double ds = fastest > 0 ? 0.5 / (res * fastest) : (far - near);
   double first = -1, last = -1;
   for (double s = near; s <= far + 0.5 * ds; s += ds) {
     const double z = s < far ? s : far;
-    const float p[3] = {static_cast<float>(start[0] + z * step[0]), static_cast<float>(start[1] + z * step[1]),
+    const float p[3] = {static_cast<float>(start[0] + z * step[0]),
+                        static_cast<float>(start[1] + z * step[1]),
                         static_cast<float>(start[2] + z * step[2])};
     const int cell = OccupancyCell(p, res);
     if (cell < 0 || !occupied[cell]) continue;

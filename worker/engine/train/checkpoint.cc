@@ -66,7 +66,8 @@ TrainConfig ConfigFromString(const std::string& text) {
 
 }  // namespace
 
-void WriteCheckpoint(const std::filesystem::path& path, const Trainer& trainer, const CheckpointExtras& extras) {
+void WriteCheckpoint(const std::filesystem::path& path, const Trainer& trainer,
+                     const CheckpointExtras& extras) {
   WriteAtomically(path, [&](std::ofstream& out) {
     out.write(kCheckpointMagic, 8);
     WriteString(out, ToJson(trainer.config()).dump());

@@ -32,7 +32,8 @@ class DepthRefiner {
   // The current prior of a pixel: the clip's until its frame is first refined. 0 = unknown.
   float Prior(int frame, int pixel) const {
     const auto& refined = refined_[std::size_t(frame)];
-    return refined.empty() ? clip_.depth[std::size_t(frame)][std::size_t(pixel)] : refined[std::size_t(pixel)];
+    return refined.empty() ? clip_.depth[std::size_t(frame)][std::size_t(pixel)]
+                           : refined[std::size_t(pixel)];
   }
 
   // One round over every training frame; fraction in (0, 1], ema in (0, 1]. No-op without depth.

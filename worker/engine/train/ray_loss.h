@@ -41,8 +41,9 @@ ENDORECON_HD S RayLoss(const render::RayComposite<S>& ray, const S* weights, con
     // The loss is scaled back to clip units; the gradient is per unit of depth.
     const S range = S(terms.depth_range), scale = S(terms.depth_scale) / range;
     const S depth = ray.depth / range, prior = prior_depth / range;
-    loss += range * (terms.huber_delta > 0 ? DepthHuber(depth, prior, S(terms.huber_delta), scale, &grad->depth)
-                                           : DepthL1(depth, prior, scale, &grad->depth));
+    loss +=
+        range * (terms.huber_delta > 0 ? DepthHuber(depth, prior, S(terms.huber_delta), scale, &grad->depth)
+                                       : DepthL1(depth, prior, scale, &grad->depth));
   }
   if (terms.nll_scale != 0) {
     loss += RgbNll(weights, mean_rgb, log_var, n, target_rgb, S(terms.variance_eps), S(terms.nll_scale),

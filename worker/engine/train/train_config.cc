@@ -112,10 +112,12 @@ void Validate(const TrainConfig& c) {
   };
   require(c.iterations >= 0, "iterations must be >= 0");
   require(c.rays_per_batch >= 1, "rays_per_batch must be >= 1");
-  require(c.depth_samples >= 0 && c.stratified_samples >= 1, "need stratified_samples >= 1 and depth_samples >= 0");
+  require(c.depth_samples >= 0 && c.stratified_samples >= 1,
+          "need stratified_samples >= 1 and depth_samples >= 0");
   require(c.depth_xi > 0, "depth_xi must be > 0");
   require(c.holdout >= 0, "holdout must be >= 0");
-  require(c.depth_loss == "huber" || c.depth_loss == "l1", "depth_loss must be huber or l1, got " + c.depth_loss);
+  require(c.depth_loss == "huber" || c.depth_loss == "l1",
+          "depth_loss must be huber or l1, got " + c.depth_loss);
   require(c.variance_eps > 0, "variance_eps must be > 0");
   require(c.nll_beta >= 0 && c.nll_beta <= 1, "nll_beta must be in [0, 1]");
   require(c.eval_coarse_samples >= 1 && c.eval_fine_samples >= 1, "eval samples must be >= 1");
@@ -123,14 +125,18 @@ void Validate(const TrainConfig& c) {
   require(c.mc_passes >= 0, "mc_passes must be >= 0");
   require(c.uncertainty_lambda >= 0, "uncertainty_lambda must be >= 0");
   require(c.adaptive_warmup >= 0 && c.adaptive_warmup <= 1, "adaptive_warmup must be in [0, 1]");
-  require(c.adaptive_ray_fraction >= 0 && c.adaptive_ray_fraction <= 1, "adaptive_ray_fraction must be in [0, 1]");
-  require(c.adaptive_refresh >= 1 && c.adaptive_map_stride >= 1, "adaptive_refresh and adaptive_map_stride must be >= 1");
+  require(c.adaptive_ray_fraction >= 0 && c.adaptive_ray_fraction <= 1,
+          "adaptive_ray_fraction must be in [0, 1]");
+  require(c.adaptive_refresh >= 1 && c.adaptive_map_stride >= 1,
+          "adaptive_refresh and adaptive_map_stride must be >= 1");
   require(c.adaptive_floor > 0 && c.adaptive_floor <= 1, "adaptive_floor must be in (0, 1]");
   require(c.depth_refine_every >= 0 && c.depth_refine_every <= 1, "depth_refine_every must be in [0, 1]");
-  require(c.depth_refine_fraction > 0 && c.depth_refine_fraction <= 1, "depth_refine_fraction must be in (0, 1]");
+  require(c.depth_refine_fraction > 0 && c.depth_refine_fraction <= 1,
+          "depth_refine_fraction must be in (0, 1]");
   require(c.depth_refine_ema > 0 && c.depth_refine_ema <= 1, "depth_refine_ema must be in (0, 1]");
   require(c.depth_refine_samples >= 1, "depth_refine_samples must be >= 1");
-  require(c.occupancy_resolution >= 0 && c.occupancy_resolution <= 512, "occupancy_resolution must be in [0, 512]");
+  require(c.occupancy_resolution >= 0 && c.occupancy_resolution <= 512,
+          "occupancy_resolution must be in [0, 512]");
   require(c.occupancy_every > 0 && c.occupancy_every <= 1, "occupancy_every must be in (0, 1]");
   require(c.occupancy_min_alpha > 0 && c.occupancy_min_alpha < 1, "occupancy_min_alpha must be in (0, 1)");
 }

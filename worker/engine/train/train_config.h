@@ -29,10 +29,10 @@ struct TrainConfig {
   // 0: the paper's NLL; beta > 0: beta-NLL (train/losses.h), each sample's NLL weighted by its variance^beta.
   float nll_beta = 0.0f;
   float rgb_l2_weight = 1.0f;
-  float depth_weight = 1.0f;  // lambda_d
-  float variance_reg = 0.03f;  // eta
+  float depth_weight = 1.0f;      // lambda_d
+  float variance_reg = 0.03f;     // eta
   std::string depth_loss = "l1";  // "l1" or "huber", on depth in units of far - near
-  float huber_delta = 0.05f;    // in units of far - near
+  float huber_delta = 0.05f;      // in units of far - near
   float variance_eps = 1e-3f;
 
   AdamConfig adam;

@@ -1,8 +1,8 @@
 #include "worker/engine/train/trainer.h"
 
+#include <spdlog/spdlog.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
-#include <spdlog/spdlog.h>
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
@@ -150,7 +150,8 @@ void Trainer::ReallocateSamples(int rays, std::uint64_t step_seed) {
     }
   });
   const field::SampleBatch in{rays * m, b.probe_pos.data(), b.probe_time.data(), b.probe_dir.data()};
-  field::FieldOutput out{b.probe_sigma.data(), b.probe_sigma_lv.data(), b.probe_rgb.data(), b.probe_rgb_lv.data()};
+  field::FieldOutput out{b.probe_sigma.data(), b.probe_sigma_lv.data(), b.probe_rgb.data(),
+                         b.probe_rgb_lv.data()};
   field_->Infer(in, out, /*dropout=*/true, render::HashCombine(step_seed, 0xc0a25eull));
   tbb::parallel_for(tbb::blocked_range<int>(0, rays, 64), [&](const tbb::blocked_range<int>& range) {
     for (int r = range.begin(); r != range.end(); ++r) {
@@ -161,7 +162,8 @@ void Trainer::ReallocateSamples(int rays, std::uint64_t step_seed) {
         var_density[j] = field::VarianceFromLogVar(b.probe_sigma_lv[o + j], eps);
         var_color[j] = field::VarianceFromLogVar(b.probe_rgb_lv[o + j], eps);
       }
-      render::SampleScores(var_density, var_color, m, config_.uncertainty_lambda, kScoreEps, &b.probe_score[o]);
+      render::SampleScores(var_density, var_color, m, config_.uncertainty_lambda, kScoreEps,
+                           &b.probe_score[o]);
       // With a depth prior the Gaussian samples stay where PlaceRay put them (the same draws) and the
       // stratified ones move to where the scores are: the paper's additional points for uncertain
       // stretches, without taking any from the surface. Without a prior every sample moves.
@@ -248,8 +250,8 @@ double Trainer::LossAndGradients(StepStats& stats) {
           float* d_rgb = &b.d_rgb[3 * o];
           std::fill(d_rgb, d_rgb + 3 * b.samples, 0.0f);
           render::RayCompositeGrad<float> grad;
-          acc.loss += RayLoss(ray, w, &b.rgb[3 * o], &b.rgb_logvar[o], b.samples, &b.target[3 * r], b.prior[r],
-                              terms, &grad, d_rgb, d_lv);
+          acc.loss += RayLoss(ray, w, &b.rgb[3 * o], &b.rgb_logvar[o], b.samples, &b.target[3 * r],
+                              b.prior[r], terms, &grad, d_rgb, d_lv);
           acc.mse += RenderedColorL2(ray.rgb, &b.target[3 * r], 1.0f / 3.0f, static_cast<float*>(nullptr));
           float* d_w = &b.d_weights[o];
           std::fill(d_w, d_w + b.samples, 0.0f);
@@ -278,9 +280,11 @@ DepthRefineStats Trainer::RefineDepth() {
   settings.floor = config_.eval_floor;
   render::FrameRenderer renderer(*field_, box_, settings);
   renderer.SetOccupancy(&occupancy_);
-  const DepthRefineStats stats = refiner_.Refine(renderer, config_.depth_refine_fraction, config_.depth_refine_ema);
-  spdlog::info("depth refinement round {} at iteration {}: {} of {} measured priors moved, by {:.3g} on average",
-               refiner_.rounds(), iteration_, stats.moved, stats.measured, stats.mean_shift);
+  const DepthRefineStats stats =
+      refiner_.Refine(renderer, config_.depth_refine_fraction, config_.depth_refine_ema);
+  spdlog::info(
+      "depth refinement round {} at iteration {}: {} of {} measured priors moved, by {:.3g} on average",
+      refiner_.rounds(), iteration_, stats.moved, stats.measured, stats.mean_shift);
   return stats;
 }
 
@@ -293,8 +297,9 @@ render::OccupancyGrid BuildOccupancy(field::Field& field, const TrainConfig& con
 void Trainer::RebuildOccupancy() {
   occupancy_ = BuildOccupancy(*field_, config_);
   if (occupancy_.empty()) return;
-  spdlog::info("occupancy grid at iteration {}: {:.1f}% of the box occupied, {:.1f}% of the rays' range skipped",
-               iteration_, 100.0 * occupancy_.occupied_fraction(), 100.0 * (1.0 - occupancy_span_fraction()));
+  spdlog::info(
+      "occupancy grid at iteration {}: {:.1f}% of the box occupied, {:.1f}% of the rays' range skipped",
+      iteration_, 100.0 * occupancy_.occupied_fraction(), 100.0 * (1.0 - occupancy_span_fraction()));
 }
 
 double Trainer::occupancy_span_fraction() const {

@@ -24,7 +24,7 @@ struct StepStats {
   double rgb_mse = 0;  // of the rendered colour on the batch's (tissue) pixels, colours in [0, 1]
   double psnr = 0;
   long long samples = 0;
-  int guided_rays = 0;  // rays drawn from the uncertainty map (0 before the adaptive warm-up ends)
+  int guided_rays = 0;         // rays drawn from the uncertainty map (0 before the adaptive warm-up ends)
   bool depth_refined = false;  // a depth-refinement round ran before this step
 };
 
@@ -63,8 +63,8 @@ class Trainer {
   DepthRefineStats RefineDepth();
 
   // Exact state for resume: field, optimiser, iteration, the uncertainty map, the refined depth
-  // priors and the occupancy grid (the rays of a step depend only on the seed, the iteration and the map, and their samples
-  // on the priors, so a resumed run repeats the same loss curve).
+  // priors and the occupancy grid (the rays of a step depend only on the seed, the iteration and the map, and
+  // their samples on the priors, so a resumed run repeats the same loss curve).
   void Save(std::ostream& out) const;
   void Load(std::istream& in);
 
