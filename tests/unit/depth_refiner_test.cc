@@ -98,6 +98,30 @@ TEST_F(DepthRefinerTest, ExponentialMovingAverageMovesAFractionOfTheWay) {
   EXPECT_GT(checked, 0);
 }
 
+TEST_F(DepthRefinerTest, BoundedRoundsTakeTheFramesInTurn) {
+  TrainConfig config = SmallConfig();
+  config.depth_refine_every = 0;
+  config.depth_refine_pixels = 1;  // one frame a round
+  Trainer trainer(*clip_, config, AllFrames(), 4);
+  for (int i = 0; i < 20; ++i) trainer.Step();
+  const auto measured = [&](int f) {
+    std::size_t count = 0;
+    for (std::size_t p = 0; p < clip_->depth[f].size(); ++p)
+      count += clip_->depth[f][p] > 0 && !Tool(*clip_, f, p);
+    return count;
+  };
+  for (int round = 0; round < clip_->frame_count() + 2; ++round) {
+    const int frame = round % clip_->frame_count();
+    EXPECT_EQ(trainer.RefineDepth().measured, measured(frame)) << "round " << round;
+  }
+  // The round after a resume starts where the saved state says.
+  std::stringstream state;
+  trainer.Save(state);
+  Trainer restored(*clip_, config, AllFrames(), 4);
+  restored.Load(state);
+  EXPECT_EQ(restored.RefineDepth().measured, measured(2));
+}
+
 TEST_F(DepthRefinerTest, StateRoundTripsAndRejectsAnotherClipSize) {
   DepthRefiner refiner(*clip_, AllFrames());
   std::stringstream state;

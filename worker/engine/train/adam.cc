@@ -55,7 +55,8 @@ AdamStepReport Adam::Step(double progress) {
     }
   }
   ++steps_;
-  const float decay = static_cast<float>(std::pow(double(config_.final_lr_factor), std::clamp(progress, 0.0, 1.0)));
+  const float decay =
+      static_cast<float>(std::pow(double(config_.final_lr_factor), std::clamp(progress, 0.0, 1.0)));
   const float b1 = config_.beta1, b2 = config_.beta2;
   const float c1 = 1.0f - static_cast<float>(std::pow(double(b1), double(steps_)));
   const float c2 = 1.0f - static_cast<float>(std::pow(double(b2), double(steps_)));

@@ -20,7 +20,8 @@ struct CheckpointExtras {
   nlohmann::json curve = nlohmann::json::array();
 };
 
-void WriteCheckpoint(const std::filesystem::path& path, const Trainer& trainer, const CheckpointExtras& extras);
+void WriteCheckpoint(const std::filesystem::path& path, const Trainer& trainer,
+                     const CheckpointExtras& extras);
 // The config stored in a checkpoint, to build the Trainer that ReadCheckpointState then fills.
 TrainConfig ReadCheckpointConfig(const std::filesystem::path& path);
 // Throws Error(kDataLoss) for a corrupt or truncated file, kInvalidArgument for a file that is no checkpoint.

@@ -13,14 +13,18 @@ namespace endorecon::train {
 DepthRefiner::DepthRefiner(const scene::Clip& clip, std::vector<int> frames)
     : clip_(clip), frames_(std::move(frames)), refined_(std::size_t(clip.frame_count())) {}
 
-DepthRefineStats DepthRefiner::Refine(render::FrameRenderer& renderer, float fraction, float ema) {
+DepthRefineStats DepthRefiner::Refine(render::FrameRenderer& renderer, float fraction, float ema,
+                                      std::size_t max_pixels) {
   DepthRefineStats stats;
-  if (!clip_.has_depth()) return stats;
+  if (!clip_.has_depth() || frames_.empty()) return stats;
   const std::size_t pixels = std::size_t(clip_.width) * std::size_t(clip_.height);
   std::vector<int> measured;
   std::vector<float> rendered, disagreement;
   double shift = 0;
-  for (int f : frames_) {
+  for (std::size_t visited = 0; visited < frames_.size(); ++visited) {
+    if (max_pixels > 0 && visited > 0 && stats.measured >= max_pixels) break;
+    const int f = frames_[next_];
+    next_ = (next_ + 1) % frames_.size();
     auto& prior = refined_[std::size_t(f)];
     if (prior.empty()) prior = clip_.depth[std::size_t(f)];
     measured.clear();
@@ -61,8 +65,9 @@ DepthRefineStats DepthRefiner::Refine(render::FrameRenderer& renderer, float fra
 
 void DepthRefiner::Save(std::ostream& out) const {
   const std::int32_t rounds = rounds_;
-  const std::int64_t frames = std::int64_t(refined_.size());
+  const std::int64_t frames = std::int64_t(refined_.size()), next = std::int64_t(next_);
   out.write(reinterpret_cast<const char*>(&rounds), sizeof(rounds));
+  out.write(reinterpret_cast<const char*>(&next), sizeof(next));
   out.write(reinterpret_cast<const char*>(&frames), sizeof(frames));
   for (const auto& frame : refined_) {
     const std::int64_t size = std::int64_t(frame.size());
@@ -73,10 +78,15 @@ void DepthRefiner::Save(std::ostream& out) const {
 
 void DepthRefiner::Load(std::istream& in) {
   std::int32_t rounds = 0;
-  std::int64_t frames = 0;
+  std::int64_t frames = 0, next = 0;
   in.read(reinterpret_cast<char*>(&rounds), sizeof(rounds));
+  in.read(reinterpret_cast<char*>(&next), sizeof(next));
   in.read(reinterpret_cast<char*>(&frames), sizeof(frames));
   if (!in) Fail(ErrorCode::kDataLoss, "checkpoint: truncated before the refined depth priors");
+  if (next < 0 || (next > 0 && std::size_t(next) >= frames_.size())) {
+    Fail(ErrorCode::kDataLoss, "checkpoint: depth refinement resumes at frame " + std::to_string(next) +
+                                   " of " + std::to_string(frames_.size()));
+  }
   if (frames != std::int64_t(refined_.size())) {
     Fail(ErrorCode::kDataLoss, "checkpoint: refined depth priors for " + std::to_string(frames) +
                                    " frames, the clip has " + std::to_string(refined_.size()));
@@ -94,6 +104,7 @@ void DepthRefiner::Load(std::istream& in) {
     if (!in) Fail(ErrorCode::kDataLoss, "checkpoint: truncated inside the refined depth priors");
   }
   rounds_ = rounds;
+  next_ = std::size_t(next);
 }
 
 }  // namespace endorecon::train

@@ -36,12 +36,16 @@ class DepthRefiner {
                            : refined[std::size_t(pixel)];
   }
 
-  // One round over every training frame; fraction in (0, 1], ema in (0, 1]. No-op without depth.
-  DepthRefineStats Refine(render::FrameRenderer& renderer, float fraction, float ema);
+  // One round; fraction in (0, 1], ema in (0, 1]. No-op without depth. A round refines the training
+  // frames in turn, starting where the last round stopped, until max_pixels measured pixels were
+  // rendered (at least one frame; 0: every training frame once, as EndoNeRF), so a round's cost is
+  // bounded however long the clip is.
+  DepthRefineStats Refine(render::FrameRenderer& renderer, float fraction, float ema,
+                          std::size_t max_pixels = 0);
   int rounds() const { return rounds_; }
 
-  // Exact state for resume (the refined frames and the round count). Load throws Error(kDataLoss)
-  // for a truncated stream or one of another clip size.
+  // Exact state for resume (the refined frames, the round count and where the next round starts). Load throws
+  // Error(kDataLoss) for a truncated stream or one of another clip size.
   void Save(std::ostream& out) const;
   void Load(std::istream& in);
 
@@ -50,6 +54,7 @@ class DepthRefiner {
   std::vector<int> frames_;
   std::vector<std::vector<float>> refined_;  // per frame of the clip; empty until that frame is refined
   int rounds_ = 0;
+  std::size_t next_ = 0;  // index into frames_ of the frame the next round starts with
 };
 
 }  // namespace endorecon::train

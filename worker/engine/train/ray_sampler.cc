@@ -24,7 +24,8 @@ RaySampler::RaySampler(const scene::Clip& clip, std::vector<int> frames) : clip_
       return std::all_of(mask.begin(), mask.end(), [](std::uint8_t m) { return m != 0; });
     });
   }
-  if (frames.empty()) FailInvalid(clip.source + ": no training frame has a tissue pixel (every pixel is tool)");
+  if (frames.empty())
+    FailInvalid(clip.source + ": no training frame has a tissue pixel (every pixel is tool)");
   frames_ = std::move(frames);
 }
 

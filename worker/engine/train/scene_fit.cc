@@ -62,7 +62,7 @@ SceneFit FitToScene(const scene::Clip& clip, TrainConfig& config) {
   int dropped = 0;
   for (std::size_t i = 0; i < config.field.grids.base_resolutions.size(); ++i) {
     dropped += config.field.grids.levels - field::LevelsUpToResolution(config.field.grids.Grid(int(i)),
-                                                                      config.field.grids.max_resolution);
+                                                                       config.field.grids.max_resolution);
   }
   if (dropped > 0) {
     leave_out(std::to_string(dropped) + " hash-grid levels above " +

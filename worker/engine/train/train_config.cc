@@ -14,8 +14,9 @@ TrainConfig TrainConfig::Preset(const std::string& name) {
   c.adam.lr = {{"grid", 3e-2f}, {"blend", 1e-3f}, {"deform", 1e-3f}, {"density", 3e-3f}, {"color", 3e-3f}};
   if (name == "cpu") {
     c.field = field::FieldConfig::Cpu();
-    c.depth_refine_every = 0.4;
+    c.depth_refine_every = 0.25;
     c.depth_refine_samples = 16;
+    c.depth_refine_pixels = 100000;
     return c;
   }
   if (name == "paper") {
@@ -75,6 +76,7 @@ void VisitKeys(TrainConfig& c, Visit&& visit) {
   visit("depth_refine_fraction", c.depth_refine_fraction);
   visit("depth_refine_ema", c.depth_refine_ema);
   visit("depth_refine_samples", c.depth_refine_samples);
+  visit("depth_refine_pixels", c.depth_refine_pixels);
   visit("occupancy_resolution", c.occupancy_resolution);
   visit("occupancy_every", c.occupancy_every);
   visit("occupancy_min_alpha", c.occupancy_min_alpha);
@@ -135,6 +137,7 @@ void Validate(const TrainConfig& c) {
           "depth_refine_fraction must be in (0, 1]");
   require(c.depth_refine_ema > 0 && c.depth_refine_ema <= 1, "depth_refine_ema must be in (0, 1]");
   require(c.depth_refine_samples >= 1, "depth_refine_samples must be >= 1");
+  require(c.depth_refine_pixels >= 0, "depth_refine_pixels must be >= 0");
   require(c.occupancy_resolution >= 0 && c.occupancy_resolution <= 512,
           "occupancy_resolution must be in [0, 512]");
   require(c.occupancy_every > 0 && c.occupancy_every <= 1, "occupancy_every must be in (0, 1]");

@@ -68,12 +68,14 @@ struct TrainConfig {
   // the run (of the iterations, or of the time budget), moving the depth_refine_fraction of each
   // training frame's priors that disagree most with the rendered depth towards it by the moving
   // average depth_refine_ema; rendered with depth_refine_samples coarse and as many fine samples.
-  // The paper: every 4000 of 50k iterations (0.08), alpha = 0.1; EndoNeRF: the worst 10%. The CPU
-  // preset refines twice (a round renders every training frame: ~5 s on the demo clip here).
+  // The paper: every 4000 of 50k iterations (0.08), alpha = 0.1; EndoNeRF: the worst 10%, every frame
+  // in a round. The CPU preset runs 3 rounds of 100k pixels (~1 s each on the demo clip; a round of
+  // every frame took ~6 s).
   double depth_refine_every = 0.08;  // 0: off
   float depth_refine_fraction = 0.1f;
   float depth_refine_ema = 0.1f;
   int depth_refine_samples = 24;
+  int depth_refine_pixels = 0;  // measured pixels rendered per round (frames in turn); 0: every frame
 
   // Empty-space skipping (render/occupancy_grid.h): a grid of occupancy_resolution^3 cells rebuilt
   // from the field every occupancy_every of the run; stratified samples cover only each ray's occupied

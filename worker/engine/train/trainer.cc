@@ -281,7 +281,8 @@ DepthRefineStats Trainer::RefineDepth() {
   render::FrameRenderer renderer(*field_, box_, settings);
   renderer.SetOccupancy(&occupancy_);
   const DepthRefineStats stats =
-      refiner_.Refine(renderer, config_.depth_refine_fraction, config_.depth_refine_ema);
+      refiner_.Refine(renderer, config_.depth_refine_fraction, config_.depth_refine_ema,
+                      std::size_t(config_.depth_refine_pixels));
   spdlog::info(
       "depth refinement round {} at iteration {}: {} of {} measured priors moved, by {:.3g} on average",
       refiner_.rounds(), iteration_, stats.moved, stats.measured, stats.mean_shift);
