@@ -1,7 +1,7 @@
 // Error against run time on the synthetic demo clip (48 frames, 160 x 128, every 8th frame held
 // out): held-out tissue PSNR and depth error at fixed training times, beside the 2D baseline of
 // averaging the two neighbouring frames (t-1, t+1) of each held-out frame.
-//   error_time_bench [--budget SECONDS] [--preset cpu|paper] [--out DIR]
+//   error_time_bench [--budget SECONDS] [--preset cpu|paper] [--out DIR] [--override JSON]
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -35,18 +35,22 @@ double NeighbourBaselinePsnr(const endorecon::scene::Clip& clip, const std::vect
 
 int main(int argc, char** argv) {
   double budget = 300;
-  std::string preset = "cpu", out = "/tmp/endorecon-error-time-bench";
+  std::string preset = "cpu", out = "/tmp/endorecon-error-time-bench", overrides = "{}";
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string flag = argv[i];
     if (flag == "--budget") budget = std::stod(argv[i + 1]);
     if (flag == "--preset") preset = argv[i + 1];
     if (flag == "--out") out = argv[i + 1];
+    if (flag == "--override") overrides = argv[i + 1];
   }
   namespace fs = std::filesystem;
   fs::remove_all(out);
   endorecon::scene::WriteSyntheticClip(endorecon::scene::SynthOptions{}, fs::path(out) / "clip");
-  // Every held-out frame on the curve, a point every 15 s.
-  std::ofstream(fs::path(out) / "bench.json") << nlohmann::json{{"curve_interval_s", 15.0}, {"curve_frames", 6}};
+  // Every held-out frame on the curve, a point every 15 s; --override JSON adds config keys (a variant).
+  nlohmann::json config = nlohmann::json::parse(overrides);
+  config["curve_interval_s"] = 15.0;
+  config["curve_frames"] = 6;
+  std::ofstream(fs::path(out) / "bench.json") << config.dump();
 
   endorecon::ReconstructOptions options;
   options.clip_dir = (fs::path(out) / "clip").string();
@@ -62,7 +66,8 @@ int main(int argc, char** argv) {
   std::ifstream in(fs::path(options.out_dir) / "metrics.json");
   const auto metrics = nlohmann::json::parse(in);
   const auto heldout = metrics["heldout"]["frames"].get<std::vector<int>>();
-  std::printf("neighbour-average baseline, held-out tissue PSNR: %.2f dB\n", NeighbourBaselinePsnr(clip, heldout));
+  std::printf("neighbour-average baseline, held-out tissue PSNR: %.2f dB\n",
+              NeighbourBaselinePsnr(clip, heldout));
   std::printf("%10s %10s %14s %22s\n", "seconds", "iteration", "held-out PSNR", "depth RMSE / range");
   for (const auto& point : metrics["curve"]) {
     std::printf("%10.1f %10d %14.2f %22.4f\n", point["seconds"].get<double>(), point["iteration"].get<int>(),
