@@ -1,6 +1,7 @@
 #include "worker/engine/train/adam.h"
 
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <cmath>
@@ -26,11 +27,31 @@ AdamStepReport Adam::Step(double progress) {
   std::vector<double> group_max(groups_.size(), 0.0);
   for (std::size_t k = 0; k < groups_.size(); ++k) {
     const auto& g = groups_[k];
-    double group_sq = 0;
-    for (std::size_t i = 0; i < g.size; ++i) {
-      group_sq += double(g.grad[i]) * g.grad[i];
-      group_max[k] = std::max(group_max[k], double(std::fabs(g.grad[i])));
-    }
+    // Sum of squares and largest magnitude, over blocks in parallel (a serial pass over the ~10^6
+    // grid gradients left the second core idle for a few per cent of every step).
+    struct Norms {
+      double sq = 0, max = 0;
+    };
+    const Norms norms = tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, g.size, 1 << 14), Norms{},
+        [&](const tbb::blocked_range<std::size_t>& r, Norms acc) {
+          // Squares in double: a gradient the clipping can still rescue (above sqrt(FLT_MAX)) must not
+          // read as Inf here.
+          double sq = 0;
+          float max = 0;
+          for (std::size_t i = r.begin(); i != r.end(); ++i) {
+            sq += double(g.grad[i]) * g.grad[i];
+            max = std::max(max, std::fabs(g.grad[i]));
+          }
+          acc.sq += sq;
+          acc.max = std::max(acc.max, double(max));
+          return acc;
+        },
+        [](Norms a, const Norms& b) {
+          return Norms{a.sq + b.sq, std::max(a.max, b.max)};
+        });
+    const double group_sq = norms.sq;
+    group_max[k] = norms.max;
     if (!std::isfinite(group_sq) && report.finite) {
       report.finite = false;
       report.bad_group = g.name;
