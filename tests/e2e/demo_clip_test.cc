@@ -39,6 +39,15 @@ TEST(DemoClipTest, CpuPresetReconstructsTheDemoClip) {
   EXPECT_LT(metrics["heldout"]["depth"]["rmse_relative"]["mean"].get<double>(), 0.08);
   ASSERT_GE(metrics["curve"].size(), 2u);
   EXPECT_TRUE(metrics["curve"].back().contains("heldout_psnr"));
+
+  // samples_per_second is the run's average: every step's samples over the training time.
+  std::ifstream config_in(dir / "out" / "config.json");
+  const auto train = nlohmann::json::parse(config_in)["train"];
+  const double per_step = train["rays_per_batch"].get<double>() *
+                          (train["depth_samples"].get<double>() + train["stratified_samples"].get<double>());
+  const double average =
+      metrics["iterations"].get<double>() * per_step / metrics["train_seconds"].get<double>();
+  EXPECT_NEAR(metrics["samples_per_second"].get<double>(), average, 1e-6 * average);
 }
 
 }  // namespace

@@ -206,6 +206,7 @@ ReconstructSummary Reconstruct(const ReconstructOptions& options, const Reconstr
   double next_curve = extras.curve.empty() ? 0.0 : train_seconds + config.curve_interval_s;
   auto last_progress = Clock::now(), last_preview = Clock::now(), last_checkpoint = Clock::now();
   double window_samples = 0, window_seconds = 0, samples_per_second = 0;
+  double run_samples = 0, run_step_seconds = 0;  // this process's steps, for metrics.json
   Progress progress;
   progress.total_iterations = config.iterations;
   const auto add_curve_point = [&](const train::StepStats& stats) {
@@ -238,6 +239,8 @@ ReconstructSummary Reconstruct(const ReconstructOptions& options, const Reconstr
     train_seconds += dt;
     window_samples += double(stats.samples);
     window_seconds += dt;
+    run_samples += double(stats.samples);
+    run_step_seconds += dt;
     if (train_seconds >= next_curve || trainer.iteration() == config.iterations) {
       add_curve_point(stats);
       next_curve = train_seconds + config.curve_interval_s;
@@ -309,7 +312,9 @@ ReconstructSummary Reconstruct(const ReconstructOptions& options, const Reconstr
   }
   metrics["iterations"] = trainer.iteration();
   metrics["train_seconds"] = train_seconds;
-  metrics["samples_per_second"] = samples_per_second;
+  // The average over this run's steps (periodic rounds included); the progress line shows the last
+  // interval's rate instead.
+  metrics["samples_per_second"] = run_samples / std::max(run_step_seconds, 1e-9);
   metrics["cancelled"] = summary.cancelled;
   metrics["curve"] = extras.curve;
   metrics["left_out"] = left_out;
