@@ -5,6 +5,7 @@
 #include <cmath>
 #include <vector>
 
+#include "common/error.h"
 #include "tests/unit/gradient_check.h"
 #include "worker/engine/field/sh_encoding.h"
 
@@ -123,6 +124,16 @@ TEST(HeadsTest, ColorIsInTheUnitIntervalAndSeesTheDirection) {
     EXPECT_LT(c, 1.0);
   }
   EXPECT_NE(r.rgb[0], r.rgb[3]);  // same geometry, other direction
+}
+
+TEST(HeadsTest, TheColourHeadTakesItsOwnDropoutRateWhenOneIsGiven) {
+  HeadsConfig config = SmallConfig();
+  EXPECT_DOUBLE_EQ(ColorHead<double>(config).mlp().dropout_rate(), 0.25);
+  config.color_dropout = 0.5;
+  EXPECT_DOUBLE_EQ(ColorHead<double>(config).mlp().dropout_rate(), 0.5);
+  EXPECT_DOUBLE_EQ(DensityHead<double>(4, config).mlp().dropout_rate(), 0.25);
+  config.color_dropout = 1.0;
+  EXPECT_THROW(ColorHead<double>{config}, Error);
 }
 
 TEST(HeadsTest, ColorGradientsMatchFiniteDifferences) {

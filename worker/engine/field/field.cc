@@ -610,7 +610,10 @@ std::string FieldT<S>::Describe() const {
     return w + " -> " + std::to_string(mlp.out_dim());
   };
   s << "density head: " << widths(m.density.mlp()) << ", colour head: " << widths(m.color.mlp())
-    << ", dropout " << config_.heads.dropout << "\n";
+    << ", dropout " << config_.heads.dropout;
+  if (config_.heads.ColorDropout() != config_.heads.dropout)
+    s << " (colour " << config_.heads.ColorDropout() << ")";
+  s << "\n";
   s << "parameters:";
   for (int g = 0; g < kGroups; ++g) {
     if (!m.value[g].empty()) s << " " << kGroupNames[g] << " " << m.value[g].size();

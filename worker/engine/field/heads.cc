@@ -57,7 +57,7 @@ void DensityHead<S>::Backward(const S* params, const S* feat, int n, const S* co
 template <typename S>
 ColorHead<S>::ColorHead(const HeadsConfig& config)
     : geo_(config.geo_features),
-      mlp_(config.geo_features + kShDims, config.color_hidden, 4, config.dropout, kColorStream) {}
+      mlp_(config.geo_features + kShDims, config.color_hidden, 4, config.ColorDropout(), kColorStream) {}
 
 template <typename S>
 void ColorHead<S>::Input(const S* geo, int geo_stride, const S* dir, int n, S* in) const {

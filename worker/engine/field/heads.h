@@ -18,6 +18,10 @@ struct HeadsConfig {
   std::vector<int> color_hidden = {64, 64};
   int geo_features = 15;
   double dropout = 0.1;  // rate in both heads' hidden layers (when a pass turns dropout on)
+  // The colour head's own rate; negative: `dropout`. The colour variances carry the uncertainty
+  // score, and the density head's dropout is what costs geometry (docs/benchmarks.md).
+  double color_dropout = -1;
+  double ColorDropout() const { return color_dropout < 0 ? dropout : color_dropout; }
 };
 
 template <typename S>

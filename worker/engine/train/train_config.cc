@@ -98,6 +98,7 @@ void VisitKeys(TrainConfig& c, Visit&& visit) {
   visit("field.heads.color_hidden", c.field.heads.color_hidden);
   visit("field.heads.geo_features", c.field.heads.geo_features);
   visit("field.heads.dropout", c.field.heads.dropout);
+  visit("field.heads.color_dropout", c.field.heads.color_dropout);
 }
 
 nlohmann::json::json_pointer Pointer(const std::string& dotted) {
