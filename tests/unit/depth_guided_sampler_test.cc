@@ -88,12 +88,6 @@ TEST(DepthGuidedSampler, PriorOutsideTheRangeClampsOntoItsEnd) {
   }
 }
 
-}  // namespace
-}  // namespace endorecon::render
-
-namespace endorecon::render {
-namespace {
-
 // The trainer's sample reallocation regenerates a ray's Gaussian samples with GaussianSamplesAround
 // and moves only the stratified ones: the regenerated ones must be exactly DepthGuidedSamples' own.
 TEST(DepthGuidedSampler, GaussianPartAloneIsTheSameDraws) {

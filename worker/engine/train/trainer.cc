@@ -39,9 +39,10 @@ struct Trainer::Batch {
   std::vector<float> sigma, sigma_logvar, rgb, rgb_logvar, weights;
   std::vector<float> d_weights, d_sigma, d_rgb, d_rgb_logvar;
   std::vector<RayPick> picks;
-  // The scoring pass of guided rays (ReallocateSamples): stratified probe samples and their outputs.
-  std::vector<float> probe_s, probe_delta, probe_pos, probe_dir, probe_time, probe_sigma, probe_sigma_lv,
-      probe_rgb, probe_rgb_lv, probe_score, probe_span;
+  // The scoring pass of guided rays (ReallocateSamples): stratified probe depths, intervals and
+  // scores, and per ray the occupied span. The probes' points and field outputs use the batch's own
+  // arrays, free until the guided rays' samples are placed and the step's forward pass runs.
+  std::vector<float> probe_s, probe_delta, probe_score, probe_span;
 
   Batch(int r, int n) : rays(r), samples(n) {
     const std::size_t m = std::size_t(r) * n;
@@ -49,11 +50,10 @@ struct Trainer::Batch {
     prior.resize(r);
     picks.resize(r);
     for (auto* v : {&s, &delta, &time, &sigma, &sigma_logvar, &rgb_logvar, &weights, &d_weights, &d_sigma,
-                    &d_rgb_logvar, &probe_s, &probe_delta, &probe_time, &probe_sigma, &probe_sigma_lv,
-                    &probe_rgb_lv, &probe_score}) {
+                    &d_rgb_logvar, &probe_s, &probe_delta, &probe_score}) {
       v->resize(m);
     }
-    for (auto* v : {&pos, &dir, &rgb, &d_rgb, &probe_pos, &probe_dir, &probe_rgb}) v->resize(3 * m);
+    for (auto* v : {&pos, &dir, &rgb, &d_rgb}) v->resize(3 * m);
     probe_span.resize(2 * std::size_t(r));
   }
 };
@@ -145,22 +145,22 @@ void Trainer::ReallocateSamples(int rays, std::uint64_t step_seed) {
       const std::size_t o = std::size_t(r) * m;
       const render::CounterRng<float> uniform(step_seed, std::uint64_t(2 * r + 1));
       render::StratifiedSamples(float(lo), float(hi), m, uniform, &b.probe_s[o], &b.probe_delta[o]);
+      // Rows [0, rays * m) of pos/dir/time: guided rays' own, rewritten below once scored.
       render::RayPoints(box_, origin, direction, clip_.times[b.picks[r].frame], &b.probe_s[o], m,
-                        &b.probe_delta[o], &b.probe_pos[3 * o], &b.probe_dir[3 * o], &b.probe_time[o]);
+                        &b.probe_delta[o], &b.pos[3 * o], &b.dir[3 * o], &b.time[o]);
     }
   });
-  const field::SampleBatch in{rays * m, b.probe_pos.data(), b.probe_time.data(), b.probe_dir.data()};
-  field::FieldOutput out{b.probe_sigma.data(), b.probe_sigma_lv.data(), b.probe_rgb.data(),
-                         b.probe_rgb_lv.data()};
+  const field::SampleBatch in{rays * m, b.pos.data(), b.time.data(), b.dir.data()};
+  field::FieldOutput out{b.sigma.data(), b.sigma_logvar.data(), b.rgb.data(), b.rgb_logvar.data()};
   field_->Infer(in, out, /*dropout=*/true, render::HashCombine(step_seed, 0xc0a25eull));
   tbb::parallel_for(tbb::blocked_range<int>(0, rays, 64), [&](const tbb::blocked_range<int>& range) {
     for (int r = range.begin(); r != range.end(); ++r) {
       const std::size_t o = std::size_t(r) * m;
-      float* var_density = &b.probe_sigma[o];  // overwritten in place by the variances
-      float* var_color = &b.probe_rgb_lv[o];
+      float* var_density = &b.sigma[o];  // the probes' outputs, overwritten in place by the variances
+      float* var_color = &b.rgb_logvar[o];
       for (int j = 0; j < m; ++j) {
-        var_density[j] = field::VarianceFromLogVar(b.probe_sigma_lv[o + j], eps);
-        var_color[j] = field::VarianceFromLogVar(b.probe_rgb_lv[o + j], eps);
+        var_density[j] = field::VarianceFromLogVar(b.sigma_logvar[o + j], eps);
+        var_color[j] = field::VarianceFromLogVar(b.rgb_logvar[o + j], eps);
       }
       render::SampleScores(var_density, var_color, m, config_.uncertainty_lambda, kScoreEps,
                            &b.probe_score[o]);
