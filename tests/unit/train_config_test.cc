@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <nlohmann/json.hpp>
+#include <string>
 
 #include "common/error.h"
 
@@ -41,6 +42,20 @@ TEST(TrainConfigTest, BadValuesAreRejected) {
   EXPECT_THROW(ApplyJson(nlohmann::json{{"depth_loss", "l3"}}, config), Error);
   EXPECT_THROW(ApplyJson(nlohmann::json{{"rays_per_batch", 0}}, config), Error);
   EXPECT_THROW(TrainConfig::Preset("gpu-ultra"), Error);
+  // Each names its key.
+  for (const auto& bad : {nlohmann::json{{"depth_refine_pixels", -1}},
+                          nlohmann::json{{"field", {{"heads", {{"dropout", 1.0}}}}}},
+                          nlohmann::json{{"field", {{"heads", {{"color_dropout", 1.5}}}}}}}) {
+    TrainConfig fresh;
+    const std::string key = bad.flatten().begin().key();  // "/field/heads/dropout"
+    const std::string leaf = key.substr(key.rfind('/') + 1);
+    try {
+      ApplyJson(bad, fresh);
+      ADD_FAILURE() << bad.dump() << " was accepted";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(leaf), std::string::npos) << e.what();
+    }
+  }
 }
 
 }  // namespace

@@ -143,6 +143,9 @@ void Validate(const TrainConfig& c) {
           "occupancy_resolution must be in [0, 512]");
   require(c.occupancy_every > 0 && c.occupancy_every <= 1, "occupancy_every must be in (0, 1]");
   require(c.occupancy_min_alpha > 0 && c.occupancy_min_alpha < 1, "occupancy_min_alpha must be in (0, 1)");
+  require(c.field.heads.dropout >= 0 && c.field.heads.dropout < 1, "field.heads.dropout must be in [0, 1)");
+  require(c.field.heads.color_dropout < 1,
+          "field.heads.color_dropout must be below 1 (negative: field.heads.dropout)");
 }
 
 }  // namespace
