@@ -7,8 +7,9 @@
 //   (d) + uncertainty-guided adaptive sampling (the CPU preset as it is)
 // Every row keeps the 4D-grid deformation (EndoNeRF's is an MLP), so (a) against (b) isolates the
 // encoder. Reports held-out PSNR, SSIM, depth error, the calibration of the uncertainty (Pearson,
-// Spearman, AUSE; all frames and held-out) and wall time, as a markdown table.
-//   ablation_bench [--budget SECONDS] [--threads N] [--out DIR] [--rows abcd]
+// Spearman, AUSE; all frames and held-out) and wall time, as a markdown table. --override JSON is
+// config keys applied to every row under the row's own (e.g. another dropout rate for all four).
+//   ablation_bench [--budget SECONDS] [--threads N] [--out DIR] [--rows abcd] [--override JSON]
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -39,6 +40,7 @@ int main(int argc, char** argv) {
   int threads = 0;
   std::string out = "/tmp/endorecon-ablation-bench";
   std::string row_letters = "abcd";
+  nlohmann::json overrides = nlohmann::json::object();
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string flag = argv[i];
     if (flag == "--budget")
@@ -49,9 +51,12 @@ int main(int argc, char** argv) {
       out = argv[i + 1];
     else if (flag == "--rows")
       row_letters = argv[i + 1];
+    else if (flag == "--override")
+      overrides = nlohmann::json::parse(argv[i + 1]);
     else {
       std::fprintf(stderr,
-                   "usage: ablation_bench [--budget SECONDS] [--threads N] [--out DIR] [--rows abcd]\n");
+                   "usage: ablation_bench [--budget SECONDS] [--threads N] [--out DIR] [--rows abcd] "
+                   "[--override JSON]\n");
       return 2;
     }
   }
@@ -82,7 +87,9 @@ int main(int argc, char** argv) {
   for (std::size_t i = 0; i < rows.size(); ++i) {
     const fs::path dir = root / ("row" + std::to_string(i));
     fs::create_directories(dir);
-    std::ofstream(dir / "override.json") << rows[i].config.dump();
+    nlohmann::json config = overrides;
+    config.merge_patch(rows[i].config);
+    std::ofstream(dir / "override.json") << config.dump();
     endorecon::ReconstructOptions options;
     options.clip_dir = (root / "clip").string();
     options.out_dir = (dir / "result").string();
