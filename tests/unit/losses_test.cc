@@ -108,6 +108,37 @@ TEST(RgbNll, BetaWeighsEachTermByItsVarianceHeldConstant) {
   }
 }
 
+// The variance that minimises one sample's NLL for a colour error of `levels` 8-bit steps in one
+// channel (golden-section search over the log-variance; the NLL is unimodal in it).
+double NllMinimisingVariance(double levels, double eps) {
+  const double weight = 1, mu[3] = {0.5 + levels / 255.0, 0.5, 0.5}, target[3] = {0.5, 0.5, 0.5};
+  const auto loss = [&](double l) {
+    return RgbNll(&weight, mu, &l, 1, target, eps, 1.0, static_cast<double*>(nullptr),
+                  static_cast<double*>(nullptr), static_cast<double*>(nullptr));
+  };
+  const double ratio = (std::sqrt(5.0) - 1) / 2;
+  double lo = -40, hi = 5;
+  for (int i = 0; i < 200; ++i) {
+    const double a = hi - ratio * (hi - lo), b = lo + ratio * (hi - lo);
+    if (loss(a) < loss(b)) {
+      hi = b;
+    } else {
+      lo = a;
+    }
+  }
+  return field::VarianceFromLogVar((lo + hi) / 2, eps);
+}
+
+TEST(RgbNll, TheDefaultFloorLetsTheVarianceRankErrorsOfOneIntensityLevel) {
+  // Above the floor the minimiser is var = |mu - C|^2, so twice the error gives four times the
+  // variance; a floor above the errors (the old 1e-3, an error of 8/255) gives both the floor.
+  const double eps = field::kDefaultVarianceEps;
+  const double one = NllMinimisingVariance(1, eps), two = NllMinimisingVariance(2, eps);
+  EXPECT_NEAR(one, 1 / (255.0 * 255.0), 0.05 / (255.0 * 255.0));
+  EXPECT_NEAR(two / one, 4.0, 0.2);
+  EXPECT_LT(NllMinimisingVariance(2, 1e-3) / NllMinimisingVariance(1, 1e-3), 1.01);
+}
+
 TEST(RenderedColorL2, ValueAndGradient) {
   double rendered[3] = {0.2, 0.9, 0.4};
   const double target[3] = {0.5, 0.5, 0.5};

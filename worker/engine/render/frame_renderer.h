@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "worker/engine/field/field.h"
+#include "worker/engine/field/variance.h"
 #include "worker/engine/render/mc_dropout.h"
 #include "worker/engine/render/occupancy_grid.h"
 #include "worker/engine/scene/camera.h"
@@ -30,7 +31,7 @@ struct FrameRenderSettings {
   int rays_per_chunk = 1024;
   int mc_passes = 0;           // K dropout passes for uncertainty; 0 = no uncertainty (one dropout-off pass)
   float color_weight = 1.0f;   // lambda of the ray score
-  float variance_eps = 1e-3f;  // eps in var = softplus(l) + eps
+  float variance_eps = field::kDefaultVarianceEps;  // eps in var = softplus(l) + eps
   std::uint64_t mc_seed = 0;  // dropout masks of pass k in a chunk: a pure function of (seed, k, first pixel)
 };
 

@@ -23,7 +23,7 @@ struct RayLossTerms {
   float nll_scale = 0;
   float nll_beta = 0;  // 0: the paper's NLL; > 0: beta-NLL (losses.h)
   float variance_reg_scale = 0;
-  float variance_eps = 1e-3f;
+  float variance_eps = field::kDefaultVarianceEps;
 };
 
 // Returns the ray's loss. Overwrites *grad with its gradient with respect to the rendered colour

@@ -14,6 +14,7 @@ TrainConfig TrainConfig::Preset(const std::string& name) {
   c.adam.lr = {{"grid", 3e-2f}, {"blend", 1e-3f}, {"deform", 1e-3f}, {"density", 3e-3f}, {"color", 3e-3f}};
   if (name == "cpu") {
     c.field = field::FieldConfig::Cpu();
+    c.nll_weight = 0.0075f;  // train_config.h
     c.depth_refine_every = 0.25;
     c.depth_refine_samples = 16;
     c.depth_refine_pixels = 100000;
