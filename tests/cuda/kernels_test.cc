@@ -9,10 +9,10 @@
 #include <random>
 #include <vector>
 
+#include "worker/engine/base/counter_rng.h"
 #include "worker/engine/cuda/device.h"
 #include "worker/engine/field/hash_grid.h"
 #include "worker/engine/render/depth_guided_sampler.h"
-#include "worker/engine/render/rng.h"
 #include "worker/engine/render/stratified_sampler.h"
 #include "worker/engine/render/volume_renderer.h"
 #include "worker/engine/train/ray_loss.h"
@@ -48,7 +48,7 @@ class CudaKernelsTest : public ::testing::Test {
                std::vector<float>(n)};
     for (int r = 0; r < rays; ++r) {
       const std::size_t o = std::size_t(r) * samples;
-      render::StratifiedSamples(1.0f, 3.0f, samples, render::CounterRng<float>(7, r), &b.s[o], &b.delta[o]);
+      render::StratifiedSamples(1.0f, 3.0f, samples, base::CounterRng<float>(7, r), &b.s[o], &b.delta[o]);
     }
     return b;
   }
@@ -88,7 +88,7 @@ TEST_F(CudaKernelsTest, HashLevelForwardMatchesTheCpuGrid) {
     const std::vector<float> params = Uniform(grid.param_count(), -1.0f, 1.0f);
     const std::vector<float> pos = Uniform(3 * std::size_t(n), -0.1f, 1.1f);
     std::vector<float> cpu(std::size_t(n) * dim);
-    grid.Forward(params.data(), pos.data(), n, cpu.data(), dim);
+    grid.ForwardRows(params.data(), pos.data(), n, cpu.data(), dim);
 
     DeviceArray<float> d_params(params), d_pos(pos), d_feat(cpu.size());
     for (int l = 0; l < grid.levels(); ++l) {
@@ -108,20 +108,19 @@ TEST_F(CudaKernelsTest, HashLevelBackwardMatchesTheCpuGrid) {
       const std::vector<float> params = Uniform(grid.param_count(), -1.0f, 1.0f);
       const std::vector<float> pos = Uniform(3 * std::size_t(n), -0.1f, 1.1f);
       const std::vector<float> dfeat = Uniform(std::size_t(n) * dim, -1.0f, 1.0f);
-      const std::vector<float> scale = Uniform(n, 0.5f, 2.0f);
       std::vector<float> grads(grid.param_count(), 0.0f), dpos(3 * std::size_t(n), 0.0f);
 
-      DeviceArray<float> d_params(params), d_pos(pos), d_dfeat(dfeat), d_scale(scale), d_grads(grads.size()),
+      DeviceArray<float> d_params(params), d_pos(pos), d_dfeat(dfeat), d_grads(grads.size()),
           d_dpos(dpos.size());
       d_grads.Zero();
       d_dpos.Zero();
       for (int l = 0; l < grid.levels(); ++l) {
         const std::size_t offset = grid.level(l).offset * features;
-        grid.BackwardLevel(l, pos.data(), n, dfeat.data() + l * features, dim, scale.data(), grads.data(),
+        grid.BackwardLevel(l, pos.data(), n, dfeat.data() + l * features, dim, grads.data(),
                            position ? params.data() : nullptr, position ? dpos.data() : nullptr);
         HashLevelBackward(grid.level(l), features, d_pos.data(), n, d_dfeat.data() + l * features, dim,
-                          d_scale.data(), d_grads.data() + offset,
-                          position ? d_params.data() + offset : nullptr, position ? d_dpos.data() : nullptr);
+                          d_grads.data() + offset, position ? d_params.data() + offset : nullptr,
+                          position ? d_dpos.data() : nullptr);
       }
       Synchronize();
       // Sums of many atomics: rounding grows with the number of samples per slot.
@@ -148,7 +147,7 @@ TEST_F(CudaKernelsTest, SamplersMatchTheCpuSamplers) {
   std::vector<float> s(std::size_t(rays) * samples), delta(s.size()), s_guided(s.size()),
       delta_guided(s.size());
   for (int r = 0; r < rays; ++r) {
-    const render::CounterRng<float> rng(streams.seed, streams.stream_base + streams.stream_step * r);
+    const base::CounterRng<float> rng(streams.seed, streams.stream_base + streams.stream_step * r);
     const std::size_t o = std::size_t(r) * samples;
     render::StratifiedSamples(near, far, samples, rng, &s[o], &delta[o]);
     render::DepthGuidedSamples(near, far, prior[r], config, rng, &s_guided[o], &delta_guided[o]);

@@ -20,20 +20,20 @@ struct BlendRun {
   std::vector<double> hidden, beta, f;
 };
 
-BlendRun Forward(const TemporalBlend<double>& blend, const std::vector<double>& params,
+BlendRun Forward(TemporalBlend<double>& blend, const std::vector<double>& params,
                  const std::vector<double>& t, const std::vector<double>& feats) {
   const int n = static_cast<int>(t.size());
   BlendRun run;
   run.hidden.resize(static_cast<std::size_t>(n) * kHidden);
   run.beta.resize(static_cast<std::size_t>(n) * kGrids);
   run.f.resize(static_cast<std::size_t>(n) * kDim);
-  blend.Weights(params.data(), t.data(), n, run.hidden.data(), run.beta.data());
-  blend.Blend(run.beta.data(), feats.data(), n, run.f.data());
+  blend.Forward(params.data(), {n, t.data(), feats.data()},
+                {run.hidden.data(), run.beta.data(), run.f.data()}, {});
   return run;
 }
 
 TEST(TemporalBlendTest, StartsAsAnEvenBlend) {
-  const TemporalBlend<double> blend(kGrids, kDim, kHidden);
+  TemporalBlend<double> blend(kGrids, kDim, kHidden);
   std::vector<double> params(blend.param_count());
   blend.Init(params.data(), 1);
   const std::vector<double> t = {0.0, 0.3, 1.0};
@@ -44,7 +44,7 @@ TEST(TemporalBlendTest, StartsAsAnEvenBlend) {
 }
 
 TEST(TemporalBlendTest, WeightsSumToOneAndVaryInTime) {
-  const TemporalBlend<double> blend(kGrids, kDim, kHidden);
+  TemporalBlend<double> blend(kGrids, kDim, kHidden);
   const std::vector<double> params = RandomValues(blend.param_count(), -2, 2, 3);
   const std::vector<double> t = RandomValues(50, 0, 1, 4);
   const BlendRun run = Forward(blend, params, t, std::vector<double>(50 * kGrids * kDim, 0.0));
@@ -60,16 +60,17 @@ TEST(TemporalBlendTest, WeightsSumToOneAndVaryInTime) {
 }
 
 TEST(TemporalBlendTest, GradientsMatchFiniteDifferences) {
-  const TemporalBlend<double> blend(kGrids, kDim, kHidden);
+  TemporalBlend<double> blend(kGrids, kDim, kHidden);
   const int n = 13;
   std::vector<double> params = RandomValues(blend.param_count(), -1, 1, 5);
   const std::vector<double> t = RandomValues(n, 0, 1, 6);
   std::vector<double> feats = RandomValues(static_cast<std::size_t>(n) * kGrids * kDim, -1, 1, 7);
   const std::vector<double> w = RandomValues(static_cast<std::size_t>(n) * kDim, -1, 1, 8);
-  const BlendRun run = Forward(blend, params, t, feats);
-  std::vector<double> grads(params.size(), 0.0), dfeats(feats.size(), 0.0), scratch(blend.scratch_size(n));
-  blend.Backward(params.data(), t.data(), n, run.hidden.data(), run.beta.data(), feats.data(), w.data(),
-                 dfeats.data(), grads.data(), scratch.data());
+  BlendRun run = Forward(blend, params, t, feats);
+  std::vector<double> grads(params.size(), 0.0), dfeats(feats.size(), 0.0);
+  blend.Backward(params.data(), {n, t.data(), feats.data()},
+                 {run.hidden.data(), run.beta.data(), run.f.data()}, {w.data()}, grads.data(),
+                 {dfeats.data()}, {});
   auto loss = [&] { return Dot(w, Forward(blend, params, t, feats).f); };
   EXPECT_GT(ExpectGradientMatches(params.data(), grads.data(), SomeIndices(params.size(), params.size(), 1),
                                   loss, "params"),

@@ -8,11 +8,11 @@
 #include <CLI/CLI.hpp>
 #include <atomic>
 #include <memory>
-#include <sstream>
 #include <thread>
 
 #include "common/error.h"
 #include "worker/runtime/commands.h"
+#include "worker/runtime/device_list.h"
 #include "worker/runtime/job_runner.h"
 #include "worker/runtime/worker_client.h"
 #include "worker/runtime/worker_metrics.h"
@@ -33,31 +33,6 @@ struct ServeFlags {
   double preview_interval_s = 30;
   double checkpoint_interval_s = 120;
 };
-
-// "cpu" -> one CPU slot; "cpu:N" -> N CPU slots; "0,1,..." -> GPU indices (CUDA_VISIBLE_DEVICES
-// style), which run as CPU slots until the CUDA engine exists.
-std::vector<Device> ParseDevices(const std::string& spec, int threads) {
-  std::vector<Device> devices;
-  if (spec == "cpu" || spec.rfind("cpu:", 0) == 0) {
-    const int slots = spec == "cpu" ? 1 : std::stoi(spec.substr(4));
-    if (slots < 1) FailInvalid("--devices " + spec + ": expected at least one slot");
-    for (int i = 0; i < slots; ++i) devices.push_back({"cpu" + std::to_string(i), "cpu", 0});
-  } else {
-    std::stringstream list(spec);
-    std::string index;
-    while (std::getline(list, index, ',')) {
-      if (index.empty() || index.find_first_not_of("0123456789") != std::string::npos) {
-        FailInvalid("--devices " + spec + ": expected cpu, cpu:N or GPU indices like 0,1");
-      }
-      devices.push_back({"gpu" + index, "cpu", 0});
-    }
-    spdlog::warn("no CUDA engine in this build: GPU slots {} run on the CPU", spec);
-  }
-  const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  for (auto& device : devices)
-    device.threads = threads > 0 ? threads : std::max(1, cores / int(devices.size()));
-  return devices;
-}
 
 std::string Hostname() {
   char name[256] = {};
@@ -90,7 +65,8 @@ int Serve(const ServeFlags& flags) {
   sigaddset(&stop_signals, SIGTERM);
   pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
 
-  const auto devices = ParseDevices(flags.devices, flags.threads);
+  const auto devices =
+      ParseDevices(flags.devices, flags.threads, static_cast<int>(std::thread::hardware_concurrency()));
   const std::string worker_id = flags.id.empty() ? Hostname() + "-" + std::to_string(getpid()) : flags.id;
   WorkerMetrics metrics(
       flags.metrics_port >= 0 ? flags.metrics_host + ":" + std::to_string(flags.metrics_port) : "", devices);

@@ -2,10 +2,13 @@
 
 #include <algorithm>
 #include <string>
+#include <utility>
 
 #include "common/error.h"
 
 namespace endorecon::field {
+
+static_assert(TrainableModule<GridEnsemble<float>, float>);
 
 HashGridConfig GridEnsembleConfig::Grid(int i) const {
   HashGridConfig grid;
@@ -40,24 +43,70 @@ void GridEnsemble<S>::Init(S* params, std::uint64_t seed) const {
 }
 
 template <typename S>
-void GridEnsemble<S>::Forward(const S* params, const S* pos, int n, S* feats) const {
+void GridEnsemble<S>::Forward(const S* params, const Inputs& in, const Outputs& out, const DropoutPass&) {
   const int stride = output_dim();
-  for (int i = 0; i < grids(); ++i) {
-    S* base = feats + i * feature_dim_;
-    grids_[i].Forward(params + offsets_[i], pos, n, base, stride);
-    const int used = grids_[i].output_dim();
-    if (used == feature_dim_) continue;
-    for (int s = 0; s < n; ++s)
-      std::fill(base + static_cast<std::size_t>(s) * stride + used,
-                base + static_cast<std::size_t>(s) * stride + feature_dim_, S(0));
-  }
+  ParallelTasks(in.n, kTaskRows, [&](int, int row0, int rows) {
+    const std::size_t r = static_cast<std::size_t>(row0);
+    for (int g = 0; g < grids(); ++g) {
+      S* base = out.feats + r * stride + g * feature_dim_;
+      grids_[g].ForwardRows(params + offsets_[g], in.pos + 3 * r, rows, base, stride);
+      const int used = grids_[g].output_dim();
+      if (used == feature_dim_) continue;
+      for (int s = 0; s < rows; ++s) {
+        std::fill(base + static_cast<std::size_t>(s) * stride + used,
+                  base + static_cast<std::size_t>(s) * stride + feature_dim_, S(0));
+      }
+    }
+  });
 }
 
 template <typename S>
-void GridEnsemble<S>::BackwardLevel(int g, int l, const S* pos, int n, const S* dfeat, int dfeat_stride,
-                                    const S* scale, S* grads, const S* params, S* dpos_add) const {
-  grids_[g].BackwardLevel(l, pos, n, dfeat, dfeat_stride, scale, grads + offsets_[g],
-                          params ? params + offsets_[g] : nullptr, dpos_add);
+void GridEnsemble<S>::Backward(const S* params, const Inputs& in, const Outputs&, const OutputGrads& grad,
+                               S* dparams, const InputGrads& din, const DropoutPass&) {
+  constexpr int kPositionGroups = 4;
+  const std::size_t n = static_cast<std::size_t>(in.n);
+  const int f = grids_.front().features(), levels_per_grid = feature_dim_ / f, stride = output_dim();
+  std::vector<std::pair<int, int>> tasks;  // (grid, level)
+  for (int g = 0; g < grids(); ++g) {
+    for (int l = 0; l < grids_[g].levels(); ++l) tasks.emplace_back(g, l);
+  }
+  // dL/dfeats level-major, level by level, so the writes stream.
+  GrowTo(dfeat_by_level_, static_cast<std::size_t>(grids()) * levels_per_grid * n * f);
+  ParallelTasks(in.n, kTaskRows, [&](int, int row0, int rows) {
+    for (const auto& [g, l] : tasks) {
+      const std::size_t slot = static_cast<std::size_t>(g) * levels_per_grid + l;
+      S* dst = dfeat_by_level_.data() + (slot * n + row0) * f;
+      const S* src = grad.dfeats + static_cast<std::size_t>(row0) * stride + g * feature_dim_ + l * f;
+      for (int i = 0; i < rows; ++i) {
+        for (int j = 0; j < f; ++j) dst[i * f + j] = src[static_cast<std::size_t>(i) * stride + j];
+      }
+    }
+  });
+  auto run = [&](std::size_t t, S* dpos) {
+    const auto [g, l] = tasks[t];
+    const std::size_t slot = static_cast<std::size_t>(g) * levels_per_grid + l;
+    grids_[g].BackwardLevel(l, in.pos, in.n, dfeat_by_level_.data() + slot * n * f, f, dparams + offsets_[g],
+                            dpos ? params + offsets_[g] : nullptr, dpos);
+  };
+  if (!din.dpos) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, tasks.size(), 1), [&](const auto& range) {
+      for (std::size_t t = range.begin(); t != range.end(); ++t) run(t, nullptr);
+    });
+    return;
+  }
+  GrowTo(group_dpos_, kPositionGroups * n * 3);
+  tbb::parallel_for(0, kPositionGroups, [&](int group) {
+    S* dpos = group_dpos_.data() + group * n * 3;
+    std::fill_n(dpos, n * 3, S(0));
+    for (std::size_t t = group; t < tasks.size(); t += kPositionGroups) run(t, dpos);
+  });
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n * 3, 4096), [&](const auto& range) {
+    for (std::size_t j = range.begin(); j != range.end(); ++j) {
+      S sum = S(0);
+      for (int group = 0; group < kPositionGroups; ++group) sum += group_dpos_[group * n * 3 + j];
+      din.dpos[j] = sum;
+    }
+  });
 }
 
 template class GridEnsemble<float>;

@@ -1,14 +1,16 @@
 // The ensemble of hash grids the paper blends in time: G grids with their own base resolution and
 // per-level scale, sharing levels, features per level and table size. Each grid's output is padded to
 // the same width D = (most levels any grid keeps) x F, so the blend can sum them; a level a grid left
-// out (above the resolution cap) reads as 0.
+// out (above the resolution cap) reads as 0. A module of the field (module.h).
 #pragma once
 
 #include <cstddef>
 #include <cstdint>
 #include <vector>
 
+#include "worker/engine/field/batch_loop.h"
 #include "worker/engine/field/hash_grid.h"
+#include "worker/engine/field/module.h"
 
 namespace endorecon::field {
 
@@ -26,6 +28,20 @@ struct GridEnsembleConfig {
 template <typename S>
 class GridEnsemble {
  public:
+  struct Inputs {
+    int n = 0;
+    const S* pos = nullptr;  // n x 3 (clamped into [0, 1]^3 for the lookups; NaN read as 0)
+  };
+  struct Outputs {
+    S* feats = nullptr;  // n x (G * D): grid 0's D values, then grid 1's, ...
+  };
+  struct OutputGrads {
+    const S* dfeats = nullptr;  // n x (G * D)
+  };
+  struct InputGrads {
+    S* dpos = nullptr;  // n x 3
+  };
+
   // Throws Error(kInvalidArgument) when the two lists differ in length or are empty, or a grid is bad.
   explicit GridEnsemble(const GridEnsembleConfig& config);
 
@@ -38,20 +54,21 @@ class GridEnsemble {
 
   void Init(S* params, std::uint64_t seed) const;
 
-  // feats: n rows of G * D values (row i at feats + i * G * D): grid 0's D values, then grid 1's, ...
-  void Forward(const S* params, const S* pos, int n, S* feats) const;
-
-  // Table gradient of level l of grid g, and optionally that level's part of dL/dpos (added to
-  // dpos_add; see HashGrid::BackwardLevel). Distinct (g, l) touch disjoint parts of grads, so they may
-  // run in parallel.
-  void BackwardLevel(int g, int l, const S* pos, int n, const S* dfeat, int dfeat_stride, const S* scale,
-                     S* grads, const S* params = nullptr, S* dpos_add = nullptr) const;
+  // Parallel over tasks of samples; each task walks every grid's levels over its samples.
+  void Forward(const S* params, const Inputs& in, const Outputs& out, const DropoutPass& pass);
+  // Parallel over (grid, level): each task scatters into its own part of dparams. With din.dpos the
+  // level tasks are dealt round-robin into a fixed number of groups, each adding into its own n x 3
+  // buffer, summed in group order: the result does not depend on the thread count.
+  void Backward(const S* params, const Inputs& in, const Outputs& out, const OutputGrads& grad, S* dparams,
+                const InputGrads& din, const DropoutPass& pass);
 
  private:
   std::vector<HashGrid<S>> grids_;
   std::vector<std::size_t> offsets_;
   int feature_dim_ = 0;
   std::size_t param_count_ = 0;
+  AlignedVector<S> dfeat_by_level_;  // [(grid, level)][n][F]: dL/dfeats level-major, so the scatter streams
+  AlignedVector<S> group_dpos_;      // [group][n][3]
 };
 
 }  // namespace endorecon::field

@@ -1,5 +1,5 @@
 // AVX-512 kernels of one grid level for float tables with 2 features per level (the CPU preset): the
-// same math as CellCornersOf / ForwardLevel / ScatterLevel in hash_grid.cc, 16 samples at a time.
+// same math as GatherLevel / ScatterLevel (hash_math.h), 16 samples at a time.
 // The cell, slot and weight arithmetic runs across samples in vectors and the forward reads use
 // 64-bit gathers (one slot = 2 floats); the table scatter stays scalar (slots of a block may repeat).
 // Only hash_grid.cc includes this; other shapes, double and non-AVX-512 builds use the portable
@@ -73,7 +73,8 @@ inline void CornersOf(const GridLevel& level, const float* pos, Corners& out) {
     }
   } else {
     const __m512i mask = _mm512_set1_epi32(static_cast<int>(level.entries - 1));
-    const __m512i p1 = _mm512_set1_epi32(static_cast<int>(2654435761u)), p2 = _mm512_set1_epi32(805459861);
+    const __m512i p1 = _mm512_set1_epi32(static_cast<int>(kHashPrimeY)),
+                  p2 = _mm512_set1_epi32(static_cast<int>(kHashPrimeZ));
     const __m512i hx[2] = {cell[0], _mm512_add_epi32(cell[0], _mm512_set1_epi32(1))};
     const __m512i y0 = _mm512_mullo_epi32(cell[1], p1), z0 = _mm512_mullo_epi32(cell[2], p2);
     const __m512i hy[2] = {y0, _mm512_add_epi32(y0, p1)};
@@ -128,7 +129,7 @@ void ForwardLevelF2(const GridLevel& level, const float* table, const float* pos
 // Table scatter of n samples (a multiple of 16); with kPosition also adds the level's dL/dpos to dpos.
 template <bool kDense, bool kPosition>
 void ScatterLevelF2(const GridLevel& level, const float* pos, int n, const float* dfeat, int dfeat_stride,
-                    const float* scale, float* grads, const float* table, float* dpos) {
+                    float* grads, const float* table, float* dpos) {
   alignas(64) std::uint32_t slots[8][kBlock];
   alignas(64) float weights[8][kBlock];
   alignas(64) float g[3][kBlock];
@@ -136,13 +137,11 @@ void ScatterLevelF2(const GridLevel& level, const float* pos, int n, const float
   for (int i = 0; i < n; i += kBlock) {
     Corners c;
     CornersOf<kDense>(level, pos + 3 * i, c);
-    const __m512 s = scale ? _mm512_loadu_ps(scale + i) : _mm512_set1_ps(1.0f);
-    __m512 d[2];  // scale_i * dfeat_i as pairs, 8 samples per half
+    __m512 d[2];  // dfeat_i as pairs, 8 samples per half
     for (int half = 0; half < 2; ++half) {
-      const __m512 raw = _mm512_castpd_ps(_mm512_i32gather_pd(
+      d[half] = _mm512_castpd_ps(_mm512_i32gather_pd(
           RowOffsets(dfeat_stride, half),
           reinterpret_cast<const double*>(dfeat + static_cast<std::size_t>(i) * dfeat_stride), 4));
-      d[half] = _mm512_mul_ps(raw, DuplicateHalf(s, half));
     }
     for (int k = 0; k < 8; ++k) {
       _mm512_store_si512(slots[k], c.slot[k]);
@@ -162,7 +161,7 @@ void ScatterLevelF2(const GridLevel& level, const float* pos, int n, const float
       }
     }
     if constexpr (kPosition) {
-      // dot_k = (corner k's pair) . (scaled dfeat pair), for 16 samples in one vector.
+      // dot_k = (corner k's pair) . (dfeat pair), for 16 samples in one vector.
       const __m512i even = _mm512_setr_epi32(0, 2, 4, 6, 8, 10, 12, 14, 16, 18, 20, 22, 24, 26, 28, 30);
       __m512 dot[8];
       for (int k = 0; k < 8; ++k) {

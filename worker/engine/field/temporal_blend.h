@@ -3,18 +3,38 @@
 // a per-frame table of logits: it costs ~(hidden * (G + 1)) multiply-adds per sample, nothing beside
 // the heads, and it gives held-out times a value shaped by their neighbours rather than a table slot
 // that was never trained. Its output layer starts at zero, so training starts from an even blend.
+// A module of the field (module.h).
 #pragma once
 
 #include <cstddef>
 #include <cstdint>
 
+#include "worker/engine/field/batch_loop.h"
 #include "worker/engine/field/mlp.h"
+#include "worker/engine/field/module.h"
 
 namespace endorecon::field {
 
 template <typename S>
 class TemporalBlend {
  public:
+  struct Inputs {
+    int n = 0;
+    const S* time = nullptr;   // n
+    const S* feats = nullptr;  // n x (G * D), as GridEnsemble writes them
+  };
+  struct Outputs {
+    S* hidden = nullptr;  // n x hidden_dim()
+    S* beta = nullptr;    // n x G, rows sum to 1
+    S* f = nullptr;       // n x D
+  };
+  struct OutputGrads {
+    const S* df = nullptr;  // n x D
+  };
+  struct InputGrads {
+    S* dfeats = nullptr;  // n x (G * D): beta_i df
+  };
+
   TemporalBlend(int grids, int feature_dim, int hidden);
 
   int grids() const { return grids_; }
@@ -25,21 +45,14 @@ class TemporalBlend {
 
   void Init(S* params, std::uint64_t seed) const;
 
-  // beta (n x G, rows sum to 1) of times t (n values); hidden (n x hidden_dim()) is kept for Backward.
-  void Weights(const S* params, const S* t, int n, S* hidden, S* beta) const;
-
-  // f (n x D) = sum_i beta_i f^(i), feats being n x (G * D) as GridEnsemble::Forward writes them.
-  void Blend(const S* beta, const S* feats, int n, S* f) const;
-
-  // Given df = dL/df (n x D): adds dL/dparams to grads; writes dL/dfeats = beta_i df (n x G * D) when
-  // dfeats is not null. scratch: scratch_size(n) values.
-  void Backward(const S* params, const S* t, int n, const S* hidden, const S* beta, const S* feats,
-                const S* df, S* dfeats, S* grads, S* scratch) const;
-  std::size_t scratch_size(int n) const;
+  void Forward(const S* params, const Inputs& in, const Outputs& out, const DropoutPass& pass);
+  void Backward(const S* params, const Inputs& in, const Outputs& out, const OutputGrads& grad, S* dparams,
+                const InputGrads& din, const DropoutPass& pass);
 
  private:
   int grids_, feature_dim_;
   Mlp<S> mlp_;
+  AlignedVector<S> dlogits_;  // n x G
 };
 
 }  // namespace endorecon::field
