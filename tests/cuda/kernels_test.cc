@@ -108,19 +108,20 @@ TEST_F(CudaKernelsTest, HashLevelBackwardMatchesTheCpuGrid) {
       const std::vector<float> params = Uniform(grid.param_count(), -1.0f, 1.0f);
       const std::vector<float> pos = Uniform(3 * std::size_t(n), -0.1f, 1.1f);
       const std::vector<float> dfeat = Uniform(std::size_t(n) * dim, -1.0f, 1.0f);
+      const std::vector<float> scale = Uniform(n, 0.5f, 2.0f);
       std::vector<float> grads(grid.param_count(), 0.0f), dpos(3 * std::size_t(n), 0.0f);
 
-      DeviceArray<float> d_params(params), d_pos(pos), d_dfeat(dfeat), d_grads(grads.size()),
+      DeviceArray<float> d_params(params), d_pos(pos), d_dfeat(dfeat), d_scale(scale), d_grads(grads.size()),
           d_dpos(dpos.size());
       d_grads.Zero();
       d_dpos.Zero();
       for (int l = 0; l < grid.levels(); ++l) {
         const std::size_t offset = grid.level(l).offset * features;
-        grid.BackwardLevel(l, pos.data(), n, dfeat.data() + l * features, dim, grads.data(),
+        grid.BackwardLevel(l, pos.data(), n, dfeat.data() + l * features, dim, scale.data(), grads.data(),
                            position ? params.data() : nullptr, position ? dpos.data() : nullptr);
         HashLevelBackward(grid.level(l), features, d_pos.data(), n, d_dfeat.data() + l * features, dim,
-                          d_grads.data() + offset, position ? d_params.data() + offset : nullptr,
-                          position ? d_dpos.data() : nullptr);
+                          d_scale.data(), d_grads.data() + offset,
+                          position ? d_params.data() + offset : nullptr, position ? d_dpos.data() : nullptr);
       }
       Synchronize();
       // Sums of many atomics: rounding grows with the number of samples per slot.

@@ -144,8 +144,8 @@ TEST(HashGridTest, OutsideAndNonFiniteInputsReadTheClampedCell) {
   const std::vector<double> dfeat(grid.output_dim(), 1.0);
   std::vector<double> grads(grid.param_count(), 0.0), dpos(3, 0.0);
   for (int l = 0; l < grid.levels(); ++l) {
-    grid.BackwardLevel(l, pos.data(), 1, dfeat.data() + 2 * l, grid.output_dim(), grads.data(), params.data(),
-                       dpos.data());
+    grid.BackwardLevel(l, pos.data(), 1, dfeat.data() + 2 * l, grid.output_dim(), nullptr, grads.data(),
+                       params.data(), dpos.data());
   }
   EXPECT_EQ(dpos[0], 0.0);
   EXPECT_NE(dpos[1], 0.0);
@@ -158,11 +158,22 @@ TEST(HashGridTest, TableGradientMatchesFiniteDifferences) {
   std::vector<double> params = RandomValues(grid.param_count(), -1, 1, 11);
   const std::vector<double> pos = RandomValues(3 * n, 0, 1, 12);
   const std::vector<double> w = RandomValues(static_cast<std::size_t>(n) * grid.output_dim(), -1, 1, 13);
+  const std::vector<double> scale = RandomValues(n, 0.5, 2, 14);
   std::vector<double> grads(grid.param_count(), 0.0);
   for (int l = 0; l < grid.levels(); ++l) {
-    grid.BackwardLevel(l, pos.data(), n, w.data() + l * grid.features(), grid.output_dim(), grads.data());
+    grid.BackwardLevel(l, pos.data(), n, w.data() + l * grid.features(), grid.output_dim(), scale.data(),
+                       grads.data());
   }
-  auto loss = [&] { return Dot(w, Features(grid, params, pos)); };
+  // The scale multiplies each sample's gradient: the loss is sum_i scale_i * w_i . feat_i.
+  auto loss = [&] {
+    const auto f = Features(grid, params, pos);
+    double s = 0;
+    for (int i = 0; i < n; ++i) {
+      for (int j = 0; j < grid.output_dim(); ++j)
+        s += scale[i] * w[i * grid.output_dim() + j] * f[i * grid.output_dim() + j];
+    }
+    return s;
+  };
   const int nonzero = ExpectGradientMatches(params.data(), grads.data(),
                                             SomeIndices(params.size(), params.size(), 1), loss, "table");
   EXPECT_GT(nonzero, 100);
@@ -190,12 +201,18 @@ TEST(HashGridTest, PositionGradientMatchesFiniteDifferences) {
   const std::vector<double> params = RandomValues(grid.param_count(), -1, 1, 41);
   std::vector<double> pos = RandomValues(3 * n, 0.02, 0.98, 42);
   const std::vector<double> w = RandomValues(static_cast<std::size_t>(n) * grid.output_dim(), -1, 1, 43);
+  const std::vector<double> scale = RandomValues(n, 0.5, 2, 44);
   std::vector<double> grads(grid.param_count(), 0.0), dpos(3 * n, 0.0);
   for (int l = 0; l < grid.levels(); ++l) {
-    grid.BackwardLevel(l, pos.data(), n, w.data() + l * grid.features(), grid.output_dim(), grads.data(),
-                       params.data(), dpos.data());
+    grid.BackwardLevel(l, pos.data(), n, w.data() + l * grid.features(), grid.output_dim(), scale.data(),
+                       grads.data(), params.data(), dpos.data());
   }
-  auto loss = [&] { return Dot(w, Features(grid, params, pos)); };
+  auto loss = [&] {
+    const auto f = Features(grid, params, pos);
+    double s = 0;
+    for (std::size_t j = 0; j < f.size(); ++j) s += scale[j / grid.output_dim()] * w[j] * f[j];
+    return s;
+  };
   EXPECT_EQ(
       ExpectGradientMatches(pos.data(), dpos.data(), SomeIndices(pos.size(), pos.size(), 3), loss, "pos"),
       3 * n);
@@ -216,7 +233,9 @@ TEST(HashGridTest, TwoFeatureFloatPathAgreesWithDouble) {
   xd[40] = std::numeric_limits<double>::infinity();
   xd[41] = -std::numeric_limits<double>::infinity();
   const std::vector<double> wd = RandomValues(static_cast<std::size_t>(n) * width, -1, 1, 53);
-  const std::vector<float> pf(pd.begin(), pd.end()), xf(xd.begin(), xd.end()), wf(wd.begin(), wd.end());
+  const std::vector<double> sd = RandomValues(n, 0.5, 2, 54);
+  const std::vector<float> pf(pd.begin(), pd.end()), xf(xd.begin(), xd.end()), wf(wd.begin(), wd.end()),
+      sf(sd.begin(), sd.end());
   const std::vector<double> xr(xf.begin(), xf.end());  // the positions as float sees them
 
   std::vector<float> ff(static_cast<std::size_t>(n) * width);
@@ -227,8 +246,8 @@ TEST(HashGridTest, TwoFeatureFloatPathAgreesWithDouble) {
   std::vector<double> gdd(gd.param_count(), 0.0), dpd(3 * n, 0.0);
   std::vector<float> gff(gf.param_count(), 0.0f), dpf(3 * n, 0.0f);
   for (int l = 0; l < gd.levels(); ++l) {
-    gd.BackwardLevel(l, xr.data(), n, wd.data() + 2 * l, width, gdd.data(), pd.data(), dpd.data());
-    gf.BackwardLevel(l, xf.data(), n, wf.data() + 2 * l, width, gff.data(), pf.data(), dpf.data());
+    gd.BackwardLevel(l, xr.data(), n, wd.data() + 2 * l, width, sd.data(), gdd.data(), pd.data(), dpd.data());
+    gf.BackwardLevel(l, xf.data(), n, wf.data() + 2 * l, width, sf.data(), gff.data(), pf.data(), dpf.data());
   }
   for (std::size_t i = 0; i < gdd.size(); ++i)
     ASSERT_NEAR(gff[i], gdd[i], 1e-4 * std::fmax(1.0, std::fabs(gdd[i]))) << i;

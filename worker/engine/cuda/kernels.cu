@@ -46,11 +46,13 @@ __global__ void HashLevelForwardKernel(field::GridLevel level, const float* tabl
 
 template <int F, bool kDense, bool kPosition>
 __global__ void HashLevelBackwardKernel(field::GridLevel level, const float* pos, int n, const float* dfeat,
-                                        int dfeat_stride, float* grads, const float* table, float* dpos) {
+                                        int dfeat_stride, const float* scale, float* grads,
+                                        const float* table, float* dpos) {
   const int i = ThreadIndex();
   if (i >= n) return;
   const std::size_t r = static_cast<std::size_t>(i);
-  field::ScatterLevel<F, kDense, kPosition>(level, pos + 3 * r, dfeat + r * dfeat_stride, grads, table,
+  field::ScatterLevel<F, kDense, kPosition>(level, pos + 3 * r, dfeat + r * dfeat_stride,
+                                            scale ? scale[r] : 1.0f, grads, table,
                                             kPosition ? dpos + 3 * r : nullptr, AtomicAdd{});
 }
 
@@ -131,8 +133,8 @@ void HashLevelForward(const field::GridLevel& level, int features, const float* 
 }
 
 void HashLevelBackward(const field::GridLevel& level, int features, const float* pos, int n,
-                       const float* dfeat, int dfeat_stride, float* grads, const float* table,
-                       float* dpos_add) {
+                       const float* dfeat, int dfeat_stride, const float* scale, float* grads,
+                       const float* table, float* dpos_add) {
   if (dpos_add != nullptr && table == nullptr)
     FailInvalid("hash level backward: a position gradient needs the level's table");
   field::DispatchLevel(features, level, [&](auto fc, auto dense) {
@@ -141,10 +143,10 @@ void HashLevelBackward(const field::GridLevel& level, int features, const float*
     if (n <= 0) return;
     if (dpos_add) {
       HashLevelBackwardKernel<F, kDense, true>
-          <<<Blocks(n), kThreads>>>(level, pos, n, dfeat, dfeat_stride, grads, table, dpos_add);
+          <<<Blocks(n), kThreads>>>(level, pos, n, dfeat, dfeat_stride, scale, grads, table, dpos_add);
     } else {
       HashLevelBackwardKernel<F, kDense, false>
-          <<<Blocks(n), kThreads>>>(level, pos, n, dfeat, dfeat_stride, grads, table, dpos_add);
+          <<<Blocks(n), kThreads>>>(level, pos, n, dfeat, dfeat_stride, scale, grads, table, dpos_add);
     }
     CheckLaunch("hash level backward kernel");
   });

@@ -35,6 +35,7 @@ inline int TaskCount(int n, int task_rows) { return (n + task_rows - 1) / task_r
 template <typename Fn>
 void ParallelTasks(int n, int task_rows, Fn&& fn) {
   const int tasks = TaskCount(n, task_rows);
+  if (tasks == 1) return fn(0, 0, n);  // the field's segments and tiles: no task to hand out
   tbb::parallel_for(tbb::blocked_range<int>(0, tasks, 1), [&](const tbb::blocked_range<int>& r) {
     for (int t = r.begin(); t != r.end(); ++t) fn(t, t * task_rows, std::min(task_rows, n - t * task_rows));
   });

@@ -1,8 +1,8 @@
 #include "worker/engine/field/field.h"
 
 #include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <array>
@@ -34,21 +34,23 @@ bool UsesFrequencyEncoding(const FieldConfig& config) {
   return config.encoding == "frequency";
 }
 
-// Rows of one segment of Infer, Encode and Decode: a multiple of kTaskRows (so the modules' tiles and
-// vector blocks fall on the same rows as in Forward, which keeps the results bit-equal), large enough
-// to give every thread of the arena work.
-int SegmentRows() { return kTaskRows * std::max(4, 2 * tbb::this_task_arena::max_concurrency()); }
+constexpr int kMaxLayers = 8;  // hidden layers per head
 
 }  // namespace
 
 template <typename S>
 struct FieldT<S>::Impl {
-  // Batch-major activations of one pass over `rows` samples.
+  // Batch-major activations of a pass over `rows` samples: Forward keeps the whole batch's for
+  // Backward; Infer, Encode and Decode use one segment's per thread.
   struct Acts {
     AlignedVector<S> x0, gfeat, blend_hidden, beta, feat, dens_raw, col_in, col_raw;
-    std::vector<AlignedVector<S>> dens_hidden, col_hidden;
-    std::vector<S*> dens_hidden_ptr, col_hidden_ptr;
+    std::array<AlignedVector<S>, kMaxLayers> dens_hidden, col_hidden;
     int rows = 0;
+  };
+  // Acts from one row on.
+  struct View {
+    S *x0, *gfeat, *blend_hidden, *beta, *feat, *dens_raw, *col_in, *col_raw;
+    std::array<S*, kMaxLayers> dens_hidden, col_hidden;
   };
 
   std::optional<GridEnsemble<S>> grids;
@@ -59,9 +61,9 @@ struct FieldT<S>::Impl {
   ColorHead<S> color;
 
   std::array<AlignedVector<S>, kGroups> value, grad;
-  Acts acts;     // Forward's, kept for Backward
-  Acts segment;  // Infer's, Encode's and Decode's
-  AlignedVector<S> dgeo, dfeat, dfeats, dx0;
+  Acts acts;                                       // Forward's, kept for Backward
+  tbb::enumerable_thread_specific<Acts> segments;  // Infer's, Encode's and Decode's
+  AlignedVector<S> dgeo, dfeat, dbeta, dx0;
   int last_n = -1;
   DropoutPass last_pass;
 
@@ -70,11 +72,14 @@ struct FieldT<S>::Impl {
                                    : GridEnsemble<S>(config.grids).feature_dim(),
                 config.heads),
         color(config.heads) {
+    if (config.heads.density_hidden.size() > kMaxLayers || config.heads.color_hidden.size() > kMaxLayers) {
+      FailInvalid("field heads may have at most " + std::to_string(kMaxLayers) + " hidden layers each");
+    }
     if (frequency_encoding) {
       frequency.emplace(config.frequencies);
     } else {
       grids.emplace(config.grids);
-      blend.emplace(grids->grids(), grids->feature_dim(), config.blend_hidden);
+      blend.emplace(grids->grids(), config.blend_hidden);
     }
     if (config.deformation.enabled) deform.emplace(config.deformation);
     const std::array<std::size_t, kGroups> sizes = {
@@ -102,54 +107,83 @@ struct FieldT<S>::Impl {
     GrowTo(a.dens_raw, n * density.raw_dim());
     GrowTo(a.col_in, n * color.in_dim());
     GrowTo(a.col_raw, n * 4);
-    const auto hidden = [n](const Mlp<S>& mlp, std::vector<AlignedVector<S>>& layers, std::vector<S*>& ptr) {
-      layers.resize(mlp.hidden_layers());
-      ptr.resize(mlp.hidden_layers());
-      for (int k = 0; k < mlp.hidden_layers(); ++k) {
-        GrowTo(layers[k], n * mlp.hidden_dim(k));
-        ptr[k] = layers[k].data();
-      }
-    };
-    hidden(density.mlp(), a.dens_hidden, a.dens_hidden_ptr);
-    hidden(color.mlp(), a.col_hidden, a.col_hidden_ptr);
+    for (int k = 0; k < density.mlp().hidden_layers(); ++k)
+      GrowTo(a.dens_hidden[k], n * density.mlp().hidden_dim(k));
+    for (int k = 0; k < color.mlp().hidden_layers(); ++k)
+      GrowTo(a.col_hidden[k], n * color.mlp().hidden_dim(k));
   }
 
-  // Deformation, then the encoder: rows [q, q + rows) of the batch into feat (rows x feature_dim()).
-  void EncodeRows(const SampleBatchT<S>& batch, std::size_t q, int rows, Acts& a, S* feat) {
+  View ViewAt(Acts& a, std::size_t r) const {
+    const auto at = [r](AlignedVector<S>& v, std::size_t width) {
+      return v.empty() ? nullptr : v.data() + r * width;
+    };
+    View v{};
+    v.x0 = at(a.x0, 3);
+    v.gfeat = grids ? at(a.gfeat, grids->output_dim()) : nullptr;
+    v.blend_hidden = blend ? at(a.blend_hidden, blend->hidden_dim()) : nullptr;
+    v.beta = grids ? at(a.beta, grids->grids()) : nullptr;
+    v.feat = at(a.feat, feature_dim());
+    v.dens_raw = at(a.dens_raw, density.raw_dim());
+    v.col_in = at(a.col_in, color.in_dim());
+    v.col_raw = at(a.col_raw, 4);
+    for (int k = 0; k < density.mlp().hidden_layers(); ++k)
+      v.dens_hidden[k] = at(a.dens_hidden[k], density.mlp().hidden_dim(k));
+    for (int k = 0; k < color.mlp().hidden_layers(); ++k)
+      v.col_hidden[k] = at(a.col_hidden[k], color.mlp().hidden_dim(k));
+    return v;
+  }
+
+  // Deformation, blend weights and grids (or the frequency encoding): rows [q, q + rows) of the batch,
+  // activations in v, features into feat (rows x feature_dim()).
+  void EncodeRows(const SampleBatchT<S>& batch, std::size_t q, int rows, const View& v, S* feat) {
     const S* pos = batch.pos + 3 * q;
     const S* time = batch.time + q;
     const S* x0 = pos;
     if (deform) {
-      deform->Forward(value[kDeform].data(), {rows, pos, time}, {a.x0.data()}, {});
-      x0 = a.x0.data();
+      deform->Forward(value[kDeform].data(), {rows, pos, time}, {v.x0}, {});
+      x0 = v.x0;
     }
     if (frequency) {
       frequency->Forward(nullptr, {rows, x0}, {feat}, {});
       return;
     }
-    grids->Forward(value[kGrid].data(), {rows, x0}, {a.gfeat.data()}, {});
-    blend->Forward(value[kBlend].data(), {rows, time, a.gfeat.data()},
-                   {a.blend_hidden.data(), a.beta.data(), feat}, {});
+    blend->Forward(value[kBlend].data(), {rows, time}, {v.blend_hidden, v.beta}, {});
+    grids->Forward(value[kGrid].data(), {rows, x0, v.beta}, {v.gfeat, feat}, {});
   }
 
-  // The heads: rows [q, q + rows) of the batch from their features into out.
-  void DecodeRows(const S* feat, const SampleBatchT<S>& batch, std::size_t q, int rows, Acts& a,
+  // The heads: rows [q, q + rows) of the batch from their features into out, a tile at a time so a
+  // tile's activations stay in cache between the two heads.
+  void DecodeRows(const S* feat, const SampleBatchT<S>& batch, std::size_t q, int rows, const View& v,
                   const FieldOutputT<S>& out, DropoutPass pass) {
-    pass.first_row = static_cast<std::uint32_t>(q);
-    density.Forward(value[kDensity].data(), {rows, feat},
-                    {a.dens_hidden_ptr.data(), a.dens_raw.data(), out.sigma + q, out.sigma_logvar + q}, pass);
-    color.Forward(
-        value[kColor].data(), {rows, a.dens_raw.data() + 2, density.raw_dim(), batch.dir + 3 * q},
-        {a.col_in.data(), a.col_hidden_ptr.data(), a.col_raw.data(), out.rgb + 3 * q, out.rgb_logvar + q},
-        pass);
+    const std::size_t d = static_cast<std::size_t>(feature_dim()),
+                      raw = static_cast<std::size_t>(density.raw_dim());
+    ForTiles(rows, [&](int t0, int n) {
+      const std::size_t t = static_cast<std::size_t>(t0), r = q + t;
+      std::array<S*, kMaxLayers> dens_hidden{}, col_hidden{};
+      for (int k = 0; k < density.mlp().hidden_layers(); ++k)
+        dens_hidden[k] = v.dens_hidden[k] + t * density.mlp().hidden_dim(k);
+      for (int k = 0; k < color.mlp().hidden_layers(); ++k)
+        col_hidden[k] = v.col_hidden[k] + t * color.mlp().hidden_dim(k);
+      pass.first_row = static_cast<std::uint32_t>(r);
+      S* dens_raw = v.dens_raw + t * raw;
+      density.Forward(value[kDensity].data(), {n, feat + t * d},
+                      {dens_hidden.data(), dens_raw, out.sigma + r, out.sigma_logvar + r}, pass);
+      color.Forward(value[kColor].data(), {n, dens_raw + 2, density.raw_dim(), batch.dir + 3 * r},
+                    {v.col_in + t * color.in_dim(), col_hidden.data(), v.col_raw + 4 * t, out.rgb + 3 * r,
+                     out.rgb_logvar + r},
+                    pass);
+    });
   }
 
-  // fn(q, rows) for the segments of a batch of n, in order.
+  // fn(q, rows, view) over the segments of kTaskRows rows of a batch of n, in parallel, each with its
+  // thread's activations (the split depends on n only: results do not depend on the thread count).
   template <typename Fn>
   void ForSegments(int n, Fn&& fn) {
-    const int rows = SegmentRows();
-    Size(segment, std::min(n, rows));
-    for (int q = 0; q < n; q += rows) fn(static_cast<std::size_t>(q), std::min(rows, n - q));
+    ParallelTasks(n, kTaskRows, [&](int, int row0, int rows) {
+      Acts& a = segments.local();
+      Size(a, kTaskRows);
+      fn(static_cast<std::size_t>(row0), rows, ViewAt(a, 0));
+    });
   }
 };
 
@@ -175,8 +209,13 @@ void FieldT<S>::Forward(const SampleBatchT<S>& batch, FieldOutputT<S>& out, bool
   m.Size(m.acts, batch.n);
   m.last_n = batch.n;
   m.last_pass = {dropout, dropout_seed, 0};
-  m.EncodeRows(batch, 0, batch.n, m.acts, m.acts.feat.data());
-  m.DecodeRows(m.acts.feat.data(), batch, 0, batch.n, m.acts, out, m.last_pass);
+  // Segment by segment as Infer (the same rows meet the same tiles), into the batch-sized activations.
+  ParallelTasks(batch.n, kTaskRows, [&](int, int row0, int rows) {
+    const std::size_t q = static_cast<std::size_t>(row0);
+    const auto v = m.ViewAt(m.acts, q);
+    m.EncodeRows(batch, q, rows, v, v.feat);
+    m.DecodeRows(v.feat, batch, q, rows, v, out, m.last_pass);
+  });
 }
 
 template <typename S>
@@ -184,9 +223,9 @@ void FieldT<S>::Infer(const SampleBatchT<S>& batch, FieldOutputT<S>& out, bool d
                       std::uint64_t dropout_seed) {
   CheckBatch(batch, "Field::Infer");
   Impl& m = *impl_;
-  m.ForSegments(batch.n, [&](std::size_t q, int rows) {
-    m.EncodeRows(batch, q, rows, m.segment, m.segment.feat.data());
-    m.DecodeRows(m.segment.feat.data(), batch, q, rows, m.segment, out, {dropout, dropout_seed, 0});
+  m.ForSegments(batch.n, [&](std::size_t q, int rows, const auto& v) {
+    m.EncodeRows(batch, q, rows, v, v.feat);
+    m.DecodeRows(v.feat, batch, q, rows, v, out, {dropout, dropout_seed, 0});
   });
 }
 
@@ -200,8 +239,9 @@ void FieldT<S>::Encode(const SampleBatchT<S>& batch, S* encoding) {
   CheckBatch(batch, "Field::Encode");
   Impl& m = *impl_;
   const std::size_t d = static_cast<std::size_t>(m.feature_dim());
-  m.ForSegments(batch.n,
-                [&](std::size_t q, int rows) { m.EncodeRows(batch, q, rows, m.segment, encoding + q * d); });
+  m.ForSegments(batch.n, [&](std::size_t q, int rows, const auto& v) {
+    m.EncodeRows(batch, q, rows, v, encoding + q * d);
+  });
 }
 
 template <typename S>
@@ -210,8 +250,8 @@ void FieldT<S>::Decode(const S* encoding, const SampleBatchT<S>& batch, FieldOut
   CheckBatch(batch, "Field::Decode");
   Impl& m = *impl_;
   const std::size_t d = static_cast<std::size_t>(m.feature_dim());
-  m.ForSegments(batch.n, [&](std::size_t q, int rows) {
-    m.DecodeRows(encoding + q * d, batch, q, rows, m.segment, out, {dropout, dropout_seed, 0});
+  m.ForSegments(batch.n, [&](std::size_t q, int rows, const auto& v) {
+    m.DecodeRows(encoding + q * d, batch, q, rows, v, out, {dropout, dropout_seed, 0});
   });
 }
 
@@ -225,35 +265,30 @@ void FieldT<S>::Backward(const SampleBatchT<S>& batch, const FieldOutputGradT<S>
   }
   const int n = batch.n;
   const std::size_t rows = static_cast<std::size_t>(n);
-  auto& a = m.acts;
+  const auto a = m.ViewAt(m.acts, 0);
   const DropoutPass& pass = m.last_pass;
   GrowTo(m.dgeo, rows * std::size_t(config_.heads.geo_features));
   GrowTo(m.dfeat, rows * m.feature_dim());
-  m.color.Backward(m.value[kColor].data(), {n, a.dens_raw.data() + 2, m.density.raw_dim(), batch.dir},
-                   {a.col_in.data(), a.col_hidden_ptr.data(), a.col_raw.data(), nullptr, nullptr},
-                   {g.rgb, g.rgb_logvar}, m.grad[kColor].data(), {m.dgeo.data()}, pass);
-  m.density.Backward(m.value[kDensity].data(), {n, a.feat.data()},
-                     {a.dens_hidden_ptr.data(), a.dens_raw.data(), nullptr, nullptr},
-                     {g.sigma, g.sigma_logvar, m.dgeo.data()}, m.grad[kDensity].data(), {m.dfeat.data()},
-                     pass);
-  const S* x0 = batch.pos;
-  if (m.deform) {
-    GrowTo(m.dx0, rows * 3);
-    x0 = a.x0.data();
-  }
+  m.color.Backward(m.value[kColor].data(), {n, a.dens_raw + 2, m.density.raw_dim(), batch.dir},
+                   {a.col_in, a.col_hidden.data(), a.col_raw, nullptr, nullptr}, {g.rgb, g.rgb_logvar},
+                   m.grad[kColor].data(), {m.dgeo.data()}, pass);
+  m.density.Backward(
+      m.value[kDensity].data(), {n, a.feat}, {a.dens_hidden.data(), a.dens_raw, nullptr, nullptr},
+      {g.sigma, g.sigma_logvar, m.dgeo.data()}, m.grad[kDensity].data(), {m.dfeat.data()}, pass);
+  const S* x0 = m.deform ? a.x0 : batch.pos;
+  if (m.deform) GrowTo(m.dx0, rows * 3);
   S* dx0 = m.deform ? m.dx0.data() : nullptr;
   if (m.frequency) {
-    m.frequency->Backward(nullptr, {n, x0}, {a.feat.data()}, {m.dfeat.data()}, nullptr, {dx0}, {});
+    m.frequency->Backward(nullptr, {n, x0}, {a.feat}, {m.dfeat.data()}, nullptr, {dx0}, {});
   } else {
-    GrowTo(m.dfeats, rows * m.grids->output_dim());
-    m.blend->Backward(m.value[kBlend].data(), {n, batch.time, a.gfeat.data()},
-                      {a.blend_hidden.data(), a.beta.data(), a.feat.data()}, {m.dfeat.data()},
-                      m.grad[kBlend].data(), {m.dfeats.data()}, {});
-    m.grids->Backward(m.value[kGrid].data(), {n, x0}, {a.gfeat.data()}, {m.dfeats.data()},
-                      m.grad[kGrid].data(), {dx0}, {});
+    GrowTo(m.dbeta, rows * m.grids->grids());
+    m.grids->Backward(m.value[kGrid].data(), {n, x0, a.beta}, {a.gfeat, a.feat}, {m.dfeat.data()},
+                      m.grad[kGrid].data(), {dx0, m.dbeta.data()}, {});
+    m.blend->Backward(m.value[kBlend].data(), {n, batch.time}, {a.blend_hidden, a.beta}, {m.dbeta.data()},
+                      m.grad[kBlend].data(), {}, {});
   }
   if (m.deform) {
-    m.deform->Backward(m.value[kDeform].data(), {n, batch.pos, batch.time}, {a.x0.data()}, {dx0},
+    m.deform->Backward(m.value[kDeform].data(), {n, batch.pos, batch.time}, {a.x0}, {dx0},
                        m.grad[kDeform].data(), {}, {});
   }
 }

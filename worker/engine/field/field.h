@@ -1,7 +1,8 @@
 // The neural field of the method: (x, t, d) -> (mu_sigma, l_sigma, mu_c, l_c).
 //   x0 = x + dx(x, t)                          Deformation (left out for static scenes)
-//   f  = sum_i beta_t^(i) H_i(x0)              GridEnsemble, then TemporalBlend (or, for the ablation's
-//                                              baseline, f = PE(x0): FrequencyEncoder)
+//   f  = sum_i beta_t^(i) H_i(x0)              TemporalBlend (beta_t), then GridEnsemble (H_i and the
+//                                              sum) (or, for the ablation's baseline, f = PE(x0):
+//                                              FrequencyEncoder)
 //   (mu_sigma, l_sigma, geo) = MLP_dense(f)    DensityHead
 //   (mu_c, l_c) = MLP_color([geo, SH(d)])      ColorHead
 // A thin composition: each module (module.h) runs its own forward, backward and parallel loop over

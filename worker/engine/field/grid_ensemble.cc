@@ -44,49 +44,74 @@ void GridEnsemble<S>::Init(S* params, std::uint64_t seed) const {
 
 template <typename S>
 void GridEnsemble<S>::Forward(const S* params, const Inputs& in, const Outputs& out, const DropoutPass&) {
-  const int stride = output_dim();
+  const int stride = output_dim(), g_count = grids(), d = feature_dim_;
   ParallelTasks(in.n, kTaskRows, [&](int, int row0, int rows) {
     const std::size_t r = static_cast<std::size_t>(row0);
-    for (int g = 0; g < grids(); ++g) {
-      S* base = out.feats + r * stride + g * feature_dim_;
+    for (int g = 0; g < g_count; ++g) {
+      S* base = out.feats + r * stride + g * d;
       grids_[g].ForwardRows(params + offsets_[g], in.pos + 3 * r, rows, base, stride);
       const int used = grids_[g].output_dim();
-      if (used == feature_dim_) continue;
+      if (used == d) continue;
       for (int s = 0; s < rows; ++s) {
         std::fill(base + static_cast<std::size_t>(s) * stride + used,
-                  base + static_cast<std::size_t>(s) * stride + feature_dim_, S(0));
+                  base + static_cast<std::size_t>(s) * stride + d, S(0));
+      }
+    }
+    // The blend, while the task's features are still in cache.
+    for (std::size_t s = r; s < r + static_cast<std::size_t>(rows); ++s) {
+      const S* b = in.beta + s * g_count;
+      const S* feats = out.feats + s * stride;
+      S* f = out.f + s * d;
+      for (int j = 0; j < d; ++j) f[j] = b[0] * feats[j];
+      for (int g = 1; g < g_count; ++g) {
+        for (int j = 0; j < d; ++j) f[j] += b[g] * feats[g * d + j];
       }
     }
   });
 }
 
 template <typename S>
-void GridEnsemble<S>::Backward(const S* params, const Inputs& in, const Outputs&, const OutputGrads& grad,
+void GridEnsemble<S>::Backward(const S* params, const Inputs& in, const Outputs& out, const OutputGrads& grad,
                                S* dparams, const InputGrads& din, const DropoutPass&) {
   constexpr int kPositionGroups = 4;
   const std::size_t n = static_cast<std::size_t>(in.n);
-  const int f = grids_.front().features(), levels_per_grid = feature_dim_ / f, stride = output_dim();
-  std::vector<std::pair<int, int>> tasks;  // (grid, level)
-  for (int g = 0; g < grids(); ++g) {
-    for (int l = 0; l < grids_[g].levels(); ++l) tasks.emplace_back(g, l);
-  }
-  // dL/dfeats level-major, level by level, so the writes stream.
-  GrowTo(dfeat_by_level_, static_cast<std::size_t>(grids()) * levels_per_grid * n * f);
+  const int f = grids_.front().features(), levels = feature_dim_ / f, g_count = grids(), d = feature_dim_;
+  // dL/dbeta_g = df . H_g(x); dL/df level-major and beta grid-major, level by level, so the writes stream.
+  GrowTo(df_by_level_, static_cast<std::size_t>(levels) * n * f);
+  GrowTo(beta_by_grid_, static_cast<std::size_t>(g_count) * n);
   ParallelTasks(in.n, kTaskRows, [&](int, int row0, int rows) {
-    for (const auto& [g, l] : tasks) {
-      const std::size_t slot = static_cast<std::size_t>(g) * levels_per_grid + l;
-      S* dst = dfeat_by_level_.data() + (slot * n + row0) * f;
-      const S* src = grad.dfeats + static_cast<std::size_t>(row0) * stride + g * feature_dim_ + l * f;
-      for (int i = 0; i < rows; ++i) {
-        for (int j = 0; j < f; ++j) dst[i * f + j] = src[static_cast<std::size_t>(i) * stride + j];
+    const std::size_t r = static_cast<std::size_t>(row0);
+    if (din.dbeta) {
+      for (std::size_t s = r; s < r + static_cast<std::size_t>(rows); ++s) {
+        const S* df = grad.df + s * d;
+        const S* feats = out.feats + s * output_dim();
+        for (int g = 0; g < g_count; ++g) {
+          S dot = S(0);
+          for (int j = 0; j < d; ++j) dot += df[j] * feats[g * d + j];
+          din.dbeta[s * g_count + g] = dot;
+        }
       }
     }
+    for (int l = 0; l < levels; ++l) {
+      S* dst = df_by_level_.data() + (static_cast<std::size_t>(l) * n + r) * f;
+      const S* src = grad.df + r * d + l * f;
+      for (int i = 0; i < rows; ++i) {
+        for (int j = 0; j < f; ++j) dst[i * f + j] = src[static_cast<std::size_t>(i) * d + j];
+      }
+    }
+    for (int g = 0; g < g_count; ++g) {
+      S* dst = beta_by_grid_.data() + static_cast<std::size_t>(g) * n + r;
+      for (int i = 0; i < rows; ++i) dst[i] = in.beta[(r + i) * g_count + g];
+    }
   });
+  std::vector<std::pair<int, int>> tasks;  // (grid, level)
+  for (int g = 0; g < g_count; ++g) {
+    for (int l = 0; l < grids_[g].levels(); ++l) tasks.emplace_back(g, l);
+  }
   auto run = [&](std::size_t t, S* dpos) {
     const auto [g, l] = tasks[t];
-    const std::size_t slot = static_cast<std::size_t>(g) * levels_per_grid + l;
-    grids_[g].BackwardLevel(l, in.pos, in.n, dfeat_by_level_.data() + slot * n * f, f, dparams + offsets_[g],
-                            dpos ? params + offsets_[g] : nullptr, dpos);
+    grids_[g].BackwardLevel(l, in.pos, in.n, df_by_level_.data() + l * n * f, f, beta_by_grid_.data() + g * n,
+                            dparams + offsets_[g], dpos ? params + offsets_[g] : nullptr, dpos);
   };
   if (!din.dpos) {
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, tasks.size(), 1), [&](const auto& range) {

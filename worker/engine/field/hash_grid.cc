@@ -110,8 +110,8 @@ void HashGrid<S>::ForwardRows(const S* params, const S* pos, int n, S* feat, int
 }
 
 template <typename S>
-void HashGrid<S>::BackwardLevel(int l, const S* pos, int n, const S* dfeat, int dfeat_stride, S* grads,
-                                const S* params, S* dpos_add) const {
+void HashGrid<S>::BackwardLevel(int l, const S* pos, int n, const S* dfeat, int dfeat_stride, const S* scale,
+                                S* grads, const S* params, S* dpos_add) const {
   const GridLevel& level = levels_[l];
   DispatchLevel(features(), level, [&](auto fc, auto dense) {
     constexpr int F = decltype(fc)::value;
@@ -126,14 +126,15 @@ void HashGrid<S>::BackwardLevel(int l, const S* pos, int n, const S* dfeat, int 
 #ifdef ENDORECON_FIELD_AVX512
       if constexpr (F == 2 && std::is_same_v<S, float>) {
         done = n - n % simd::kBlock;
-        simd::ScatterLevelF2<kDense, kPosition>(level, pos, done, dfeat, dfeat_stride, grads + offset, table,
-                                                dpos_add);
+        simd::ScatterLevelF2<kDense, kPosition>(level, pos, done, dfeat, dfeat_stride, scale, grads + offset,
+                                                table, dpos_add);
       }
 #endif
       for (int i = done; i < n; ++i) {
         const std::size_t r = static_cast<std::size_t>(i);
-        ScatterLevel<F, kDense, kPosition>(level, pos + 3 * r, dfeat + r * dfeat_stride, grads + offset,
-                                           table, kPosition ? dpos_add + 3 * r : nullptr, PlainAdd{});
+        ScatterLevel<F, kDense, kPosition>(level, pos + 3 * r, dfeat + r * dfeat_stride,
+                                           scale ? scale[r] : S(1), grads + offset, table,
+                                           kPosition ? dpos_add + 3 * r : nullptr, PlainAdd{});
       }
     };
     if (dpos_add) {

@@ -55,11 +55,12 @@ class HashGrid {
   // time over tiles of samples so a level's table stays in cache.
   void ForwardRows(const S* params, const S* pos, int n, S* feat, int feat_stride) const;
 
-  // Gradient of level l's table: grads[level slots] += trilinear weights * dfeat_i, where dfeat_i (F
-  // values) is at dfeat + i * dfeat_stride. Touches only level l's part of grads, so different levels
-  // may run on different threads. When dpos_add is not null (params must be given then), also adds
-  // this level's part of dL/dpos (n x 3) to it in the same pass (hash_math.h ScatterLevel).
-  void BackwardLevel(int l, const S* pos, int n, const S* dfeat, int dfeat_stride, S* grads,
+  // Gradient of level l's table: grads[level slots] += scale_i * trilinear weights * dfeat_i, where
+  // dfeat_i (F values) is at dfeat + i * dfeat_stride and scale_i = scale[i] (1 when scale is null).
+  // Touches only level l's part of grads, so different levels may run on different threads. When
+  // dpos_add is not null (params must be given then), also adds this level's part of dL/dpos (n x 3)
+  // to it in the same pass (hash_math.h ScatterLevel).
+  void BackwardLevel(int l, const S* pos, int n, const S* dfeat, int dfeat_stride, const S* scale, S* grads,
                      const S* params = nullptr, S* dpos_add = nullptr) const;
 
  private:

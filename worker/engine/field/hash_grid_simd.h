@@ -129,7 +129,7 @@ void ForwardLevelF2(const GridLevel& level, const float* table, const float* pos
 // Table scatter of n samples (a multiple of 16); with kPosition also adds the level's dL/dpos to dpos.
 template <bool kDense, bool kPosition>
 void ScatterLevelF2(const GridLevel& level, const float* pos, int n, const float* dfeat, int dfeat_stride,
-                    float* grads, const float* table, float* dpos) {
+                    const float* scale, float* grads, const float* table, float* dpos) {
   alignas(64) std::uint32_t slots[8][kBlock];
   alignas(64) float weights[8][kBlock];
   alignas(64) float g[3][kBlock];
@@ -137,11 +137,13 @@ void ScatterLevelF2(const GridLevel& level, const float* pos, int n, const float
   for (int i = 0; i < n; i += kBlock) {
     Corners c;
     CornersOf<kDense>(level, pos + 3 * i, c);
-    __m512 d[2];  // dfeat_i as pairs, 8 samples per half
+    const __m512 s = scale ? _mm512_loadu_ps(scale + i) : _mm512_set1_ps(1.0f);
+    __m512 d[2];  // scale_i * dfeat_i as pairs, 8 samples per half
     for (int half = 0; half < 2; ++half) {
-      d[half] = _mm512_castpd_ps(_mm512_i32gather_pd(
+      const __m512 raw = _mm512_castpd_ps(_mm512_i32gather_pd(
           RowOffsets(dfeat_stride, half),
           reinterpret_cast<const double*>(dfeat + static_cast<std::size_t>(i) * dfeat_stride), 4));
+      d[half] = _mm512_mul_ps(raw, DuplicateHalf(s, half));
     }
     for (int k = 0; k < 8; ++k) {
       _mm512_store_si512(slots[k], c.slot[k]);
@@ -161,7 +163,7 @@ void ScatterLevelF2(const GridLevel& level, const float* pos, int n, const float
       }
     }
     if constexpr (kPosition) {
-      // dot_k = (corner k's pair) . (dfeat pair), for 16 samples in one vector.
+      // dot_k = (corner k's pair) . (scaled dfeat pair), for 16 samples in one vector.
       const __m512i even = _mm512_setr_epi32(0, 2, 4, 6, 8, 10, 12, 14, 16, 18, 20, 22, 24, 26, 28, 30);
       __m512 dot[8];
       for (int k = 0; k < 8; ++k) {

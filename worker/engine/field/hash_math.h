@@ -151,25 +151,28 @@ struct PlainAdd {
   }
 };
 
-// One sample's gradient at one level: grads[corner slot * F + f] += weight * dfeat[f] for the 8
-// corners of its cell, through add(pointer, value) (PlainAdd on the CPU, an atomic add in CUDA
+// One sample's gradient at one level: grads[corner slot * F + f] += weight * scale * dfeat[f] for the
+// 8 corners of its cell, through add(pointer, value) (PlainAdd on the CPU, an atomic add in CUDA
 // kernels). With kPosition also adds the level's part of dL/dpos to dpos[0..3): the corner values it
 // needs are in the cache lines the scatter touches anyway (table: the level's parameters).
 template <int F, bool kDense, bool kPosition, typename S, typename Add>
 ENDORECON_HD ENDORECON_FIELD_INLINE void ScatterLevel(const GridLevel& level, const S* pos, const S* dfeat,
-                                                      S* grads, const S* table, S* dpos, const Add& add) {
+                                                      S scale, S* grads, const S* table, S* dpos,
+                                                      const Add& add) {
   std::uint32_t slot[8];
   S w[8], frac[3];
   CellCornersOf<kDense>(level, pos, slot, w, frac);
+  S g[F];
+  for (int f = 0; f < F; ++f) g[f] = scale * dfeat[f];
   S dot[8];
   for (int k = 0; k < 8; ++k) {
     S* gv = grads + static_cast<std::size_t>(slot[k]) * F;
     if constexpr (kPosition) {
       const S* v = table + static_cast<std::size_t>(slot[k]) * F;
       dot[k] = S(0);
-      for (int f = 0; f < F; ++f) dot[k] += v[f] * dfeat[f];
+      for (int f = 0; f < F; ++f) dot[k] += v[f] * g[f];
     }
-    for (int f = 0; f < F; ++f) add(gv + f, w[k] * dfeat[f]);
+    for (int f = 0; f < F; ++f) add(gv + f, w[k] * g[f]);
   }
   if constexpr (kPosition) {
     S gradient[3];

@@ -14,8 +14,9 @@
 // Outputs of a Forward with the same inputs and pass, ADDS dL/dparams to dparams and WRITES the input
 // gradients din asks for (a null pointer: not wanted); a null gradient in OutputGrads means zero.
 // Each module runs its own parallel loop over the batch, split by the batch size only, with per-task
-// partial gradients added in task order, so results never depend on the thread count. Forward and
-// Backward use the module's scratch: one call at a time per module object.
+// partial gradients added in task order, so results never depend on the thread count. Forward keeps
+// nothing in the module, so calls on different rows may run at once (the field runs its segments in
+// parallel); Backward uses the module's own scratch: one Backward at a time per module object.
 #pragma once
 
 #include <concepts>

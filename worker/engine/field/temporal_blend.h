@@ -1,9 +1,9 @@
-// Temporal blending of the grid ensemble: f = sum_i beta_t^(i) f^(i), beta_t = softmax(MLP(t)).
-// The network is 1 -> hidden (ReLU) -> G logits, as the paper's "small network of t". We chose it over
-// a per-frame table of logits: it costs ~(hidden * (G + 1)) multiply-adds per sample, nothing beside
-// the heads, and it gives held-out times a value shaped by their neighbours rather than a table slot
-// that was never trained. Its output layer starts at zero, so training starts from an even blend.
-// A module of the field (module.h).
+// The temporal blend weights of the grid ensemble: beta_t = softmax(MLP(t)), which GridEnsemble applies
+// as f = sum_i beta_t^(i) f^(i). The network is 1 -> hidden (ReLU) -> G logits, as the paper's "small
+// network of t". We chose it over a per-frame table of logits: it costs ~(hidden * (G + 1))
+// multiply-adds per sample, nothing beside the heads, and it gives held-out times a value shaped by
+// their neighbours rather than a table slot that was never trained. Its output layer starts at zero,
+// so training starts from an even blend. A module of the field (module.h).
 #pragma once
 
 #include <cstddef>
@@ -20,25 +20,20 @@ class TemporalBlend {
  public:
   struct Inputs {
     int n = 0;
-    const S* time = nullptr;   // n
-    const S* feats = nullptr;  // n x (G * D), as GridEnsemble writes them
+    const S* time = nullptr;  // n
   };
   struct Outputs {
     S* hidden = nullptr;  // n x hidden_dim()
     S* beta = nullptr;    // n x G, rows sum to 1
-    S* f = nullptr;       // n x D
   };
   struct OutputGrads {
-    const S* df = nullptr;  // n x D
+    const S* dbeta = nullptr;  // n x G
   };
-  struct InputGrads {
-    S* dfeats = nullptr;  // n x (G * D): beta_i df
-  };
+  struct InputGrads {};  // times are data: no gradient
 
-  TemporalBlend(int grids, int feature_dim, int hidden);
+  TemporalBlend(int grids, int hidden);
 
   int grids() const { return grids_; }
-  int feature_dim() const { return feature_dim_; }
   int hidden_dim() const { return mlp_.hidden_dim(0); }
   std::size_t param_count() const { return mlp_.param_count(); }
   const Mlp<S>& mlp() const { return mlp_; }
@@ -50,7 +45,7 @@ class TemporalBlend {
                 const InputGrads& din, const DropoutPass& pass);
 
  private:
-  int grids_, feature_dim_;
+  int grids_;
   Mlp<S> mlp_;
   AlignedVector<S> dlogits_;  // n x G
 };
