@@ -3,6 +3,7 @@
 // installs (it runs it), the runtime stage installs the runtime packages, those packages (with
 // their dependencies) provide every shared library the built binaries load, and each image copies
 // the binaries the manifests and units start.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <map>
@@ -24,10 +25,14 @@ std::vector<Stage> StagesOf(const fs::path& recipe) {
   std::istringstream lines(ReadBytes(recipe));
   std::string line, instruction;
   while (std::getline(lines, line)) {
-    if (line.empty() || line[0] == '#') continue;
-    instruction += line;
-    if (!instruction.empty() && instruction.back() == '\\') {
+    const auto begin = line.find_first_not_of(' ');
+    if (begin == std::string::npos || line[begin] == '#') continue;
+    // A continued line and the next join with one space: "a \\" then "  && b" read "a && b".
+    instruction += instruction.empty() ? line : line.substr(begin);
+    if (instruction.back() == '\\') {
       instruction.pop_back();
+      while (!instruction.empty() && instruction.back() == ' ') instruction.pop_back();
+      instruction += ' ';
       continue;
     }
     if (instruction.rfind("FROM ", 0) == 0) stages.push_back({instruction.substr(5), ""});
@@ -72,7 +77,7 @@ TEST(ContainerRecipesTest, EachRecipeBuildsWithInstallDepsAndShipsTheRuntimePack
     int binaries = 0;
     for (auto it = std::sregex_iterator(runtime.text.begin(), runtime.text.end(), copied);
          it != std::sregex_iterator(); ++it, ++binaries) {
-      EXPECT_NE(build->text.find(" " + (*it)[1].str()), std::string::npos)
+      EXPECT_NE(build->text.find(fmt::format(" {}", (*it)[1].str())), std::string::npos)
           << file.path() << " copies " << (*it)[1] << " but does not build it";
     }
     EXPECT_GT(binaries, 0) << file.path();
@@ -87,7 +92,8 @@ TEST(ContainerRecipesTest, EachRecipeBuildsWithInstallDepsAndShipsTheRuntimePack
 // The runtime packages and everything they depend on (the dpkg database of this machine, which
 // install-deps set up from the same Debian 12 archive as the images) own every library ldd finds.
 TEST(ContainerRecipesTest, RuntimePackagesProvideEveryLibraryTheBinariesLoad) {
-  const auto runtime = Lines(Capture("'" + SourcePath("scripts/install-deps").string() + "' --list-runtime"));
+  const auto runtime =
+      Lines(Capture(fmt::format("'{}' --list-runtime", SourcePath("scripts/install-deps").string())));
   ASSERT_FALSE(runtime.empty());
   std::map<std::string, std::vector<std::string>> depends;
   for (const auto& line : Lines(Capture("dpkg-query -W -f='${Package} ${Depends}, ${Pre-Depends}\\n'"))) {
@@ -111,14 +117,24 @@ TEST(ContainerRecipesTest, RuntimePackagesProvideEveryLibraryTheBinariesLoad) {
   }
   for (const auto& package : runtime)
     EXPECT_TRUE(depends.count(package)) << package << " is not a Debian package here";
-  for (const auto& binary :
+  // Each library ldd resolves, and the file it links to: with /usr merged, dpkg knows one of the two.
+  std::map<std::string, std::vector<std::string>> libraries;  // binary -> libraries
+  std::string paths;
+  for (const auto* binary :
        {"server/endorecon-server", "worker/runtime/endorecon-worker", "client/endorecon"}) {
-    const auto libraries = Capture("ldd '" + BuiltBinary(binary) + "' | awk '/=> \\// {print $3}'");
-    ASSERT_FALSE(libraries.empty()) << binary;
-    for (const auto& library : Lines(libraries)) {
-      const auto resolved = fs::canonical(library).string();
-      auto owner = Capture("dpkg -S '" + library + "' 2>/dev/null || dpkg -S '" + resolved + "' 2>/dev/null");
-      owner = owner.substr(0, owner.find_first_of(":\n"));
+    libraries[binary] = Lines(Capture("ldd '" + BuiltBinary(binary) + "' | awk '/=> \\// {print $3}'"));
+    ASSERT_FALSE(libraries[binary].empty()) << binary;
+    for (const auto& library : libraries[binary])
+      paths += " '" + library + "' '" + fs::canonical(library).string() + "'";
+  }
+  std::map<std::string, std::string> owners;  // path -> package
+  for (const auto& line : Lines(Capture("dpkg -S" + paths + " 2>/dev/null"))) {
+    const auto colon = line.find(": ");
+    if (colon != std::string::npos) owners[line.substr(colon + 2)] = line.substr(0, line.find_first_of(":,"));
+  }
+  for (const auto& [binary, paths_of] : libraries) {
+    for (const auto& library : paths_of) {
+      const auto owner = owners.count(library) ? owners[library] : owners[fs::canonical(library).string()];
       ASSERT_FALSE(owner.empty()) << binary << " loads " << library << ", which no package owns";
       EXPECT_TRUE(closure.count(owner)) << binary << " loads " << library << " from " << owner
                                         << ", which scripts/install-deps --runtime does not bring";

@@ -65,7 +65,8 @@ TEST(K8sManifestsTest, DeploymentsAreConsistentWithImagesFlagsVolumesAndPorts) {
               pod["metadata"]["labels"]["app"].as<std::string>())
         << name;
     std::map<std::string, YAML::Node> volumes;
-    for (const auto& volume : pod["spec"]["volumes"]) volumes[volume["name"].as<std::string>()] = volume;
+    for (const auto& volume : pod["spec"]["volumes"])
+      volumes[volume["name"].as<std::string>()] = static_cast<const YAML::Node&>(volume);
     ASSERT_TRUE(pod["spec"]["containers"].size() > 0) << name;
     for (const auto& container : pod["spec"]["containers"]) {
       // The image is built by a recipe of the same name, which copies the binary the pod starts.
@@ -84,8 +85,9 @@ TEST(K8sManifestsTest, DeploymentsAreConsistentWithImagesFlagsVolumesAndPorts) {
       const auto accepted = AcceptedFlags(BinaryNamed(command[0]), subcommand ? command[1] : "");
       ASSERT_FALSE(accepted.empty()) << command[0] << " --help printed no flags";
       for (const auto& word : command) {
-        if (word.rfind("--", 0) == 0)
+        if (word.rfind("--", 0) == 0) {
           EXPECT_TRUE(accepted.count(word)) << name << ": " << command[0] << " has no " << word;
+        }
       }
 
       // Every mount has its volume, every secret is one the docs say how to create, every claim
@@ -103,9 +105,10 @@ TEST(K8sManifestsTest, DeploymentsAreConsistentWithImagesFlagsVolumesAndPorts) {
               volumes[volume]["secret"]["defaultMode"].as<std::string>();  // octal, as YAML 1.1 reads it
           EXPECT_EQ(std::stoi(mode, nullptr, 8) & 07, 0) << secret << " readable by others";
         }
-        if (volumes[volume]["persistentVolumeClaim"])
+        if (volumes[volume]["persistentVolumeClaim"]) {
           EXPECT_TRUE(claims.count(volumes[volume]["persistentVolumeClaim"]["claimName"].as<std::string>()))
               << name;
+        }
       }
       for (const auto& flag : {"--tls-cert", "--tls-key", "--tls-client-ca", "--ca", "--token-file",
                                "--data-dir", "--work-dir"}) {

@@ -42,7 +42,8 @@ TEST(SlurmBatchTest, SbatchStartsAWorkerThatFinishesAJob) {
            ",ENDORECON_CA=" + pki.ca_cert.string() + ",ENDORECON_TLS_CERT=" + pki.worker_cert.string() +
            ",ENDORECON_TLS_KEY=" + pki.worker_key.string() +
            ",ENDORECON_TOKEN_FILE=" + worker_token.string() +
-           ",ENDORECON_METRICS_HOST=127.0.0.1,ENDORECON_METRICS_PORT=" + std::to_string(FreePort()),
+           ",ENDORECON_METRICS_HOST=127.0.0.1,ENDORECON_METRICS_PORT=" + std::to_string(FreePort()) +
+           ",TMPDIR=" + cluster.path("").string(),
        script});
   ASSERT_EQ(submitted.exit_code, 0) << submitted.err;
   const std::string slurm_job = submitted.out.substr(0, submitted.out.find_first_of(";\n"));

@@ -5,6 +5,7 @@
 
 #include <cstdlib>
 #include <fstream>
+#include <thread>
 
 namespace endorecon::testing {
 namespace fs = std::filesystem;

@@ -15,7 +15,13 @@ void Run(const std::string& command) {
     throw std::runtime_error("openssl failed: " + command);
 }
 
-std::string Q(const fs::path& path) { return "'" + path.string() + "'"; }
+// Quoted for the shell. Appended piece by piece: GCC 12 flags "'" + string + "'" with a false -Wrestrict.
+std::string Q(const fs::path& path) {
+  std::string quoted = "'";
+  quoted += path.string();
+  quoted += '\'';
+  return quoted;
+}
 
 void SelfSignedCa(const fs::path& cert, const fs::path& key, const std::string& name) {
   Run("openssl req -x509 -newkey ec -pkeyopt ec_paramgen_curve:P-256 -nodes -keyout " + Q(key) + " -out " +

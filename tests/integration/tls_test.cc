@@ -9,6 +9,7 @@
 #include <mutex>
 #include <optional>
 
+#include "common/transport_security.h"
 #include "tests/integration/audit_reader.h"
 #include "tests/integration/service_harness.h"
 #include "tests/integration/test_pki.h"
@@ -62,7 +63,7 @@ std::unique_ptr<TestPki> TlsTest::pki_;
 // grpc.health.v1.Health/Check over plaintext, without generated stubs: the empty request, and the
 // raw response bytes (08 01 is status SERVING).
 std::string HealthCheckBytes(const std::string& address) {
-  grpc::GenericStub stub(grpc::CreateChannel(address, grpc::InsecureChannelCredentials()));
+  grpc::GenericStub stub(OpenChannel(address));
   grpc::ClientContext context;
   context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(5));
   grpc::Slice empty("", 0);
@@ -104,11 +105,11 @@ TEST_F(TlsTest, ClientsThatCannotTrustTheServerOrSpeakPlaintextGetNothing) {
 TEST_F(TlsTest, TheHealthPortAnswersInPlaintextBesideTheTlsPort) {
   TempDir dir("health");
   const int port = FreePort(), health = FreePort();
-  Process server({BuiltBinary("server/endorecon-server"), "--listen", "127.0.0.1:" + std::to_string(port),
-                  "--data-dir", (dir / "data").string(), "--metrics-port", "-1", "--tls-cert",
-                  pki_->server_cert.string(), "--tls-key", pki_->server_key.string(), "--health-listen",
-                  "127.0.0.1:" + std::to_string(health)},
-                 dir / "server.log");
+  Process server(
+      {BuiltBinary("server/endorecon-server"), "--listen", "127.0.0.1:" + std::to_string(port), "--data-dir",
+       (dir / "data").string(), "--metrics-port", "-1", "--tls-cert", pki_->server_cert.string(), "--tls-key",
+       pki_->server_key.string(), "--health-listen", "127.0.0.1:" + std::to_string(health)},
+      dir / "server.log");
   ASSERT_TRUE(WaitUntil([&] { return PortOpen(health); }, std::chrono::seconds(20))) << server.Log();
   EXPECT_TRUE(WaitUntil([&] { return HealthCheckBytes("127.0.0.1:" + std::to_string(health)) == "\x08\x01"; },
                         std::chrono::seconds(10)));
