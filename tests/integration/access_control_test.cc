@@ -169,6 +169,30 @@ TEST_F(AccessControlTest, OverQuotaSubmitsAreRefusedAndNothingIsLost) {
   EXPECT_EQ(AuditFind(Audit(), "Submit", "RESOURCE_EXHAUSTED", "alice").size(), 1u);
 }
 
+TEST(TenantQuotaTest, AnUploadOverTheByteQuotaIsRefusedBeforeAByteIsWritten) {
+  TempDir config("quotas");
+  WriteBytes(config / "quotas.json", R"({"research": {"max_bytes": 1000}})");
+  Cluster cluster({"--quotas", (config / "quotas.json").string()}, false);
+  const ClientCredentials carol{"",
+                                WriteTokenFile(cluster.path("carol.token"),
+                                               CreateToken(cluster.data_dir(), "client", "research", "carol"))
+                                    .string()};
+  cluster.UseCredentials(carol);
+  cluster.StartServer();
+  MakeClip(cluster.path("clip"));
+  auto args = carol.CliFlags();
+  args.insert(args.end(), {"submit", cluster.path("clip").string()});
+  const auto refused = RunCli(cluster.address(), args);
+  EXPECT_EQ(refused.exit_code, 8) << refused.err;
+  EXPECT_NE(refused.err.find("max_bytes of 1000 bytes"), std::string::npos) << refused.err;
+  EXPECT_TRUE(std::filesystem::is_empty(cluster.data_dir() / "blobs"));
+  EXPECT_TRUE(std::filesystem::is_empty(cluster.data_dir() / "partial"));
+  EXPECT_EQ(
+      AuditFind(AuditLines(cluster.data_dir() / "audit.jsonl"), "QueryUpload", "RESOURCE_EXHAUSTED", "carol")
+          .size(),
+      1u);
+}
+
 TEST_F(AccessControlTest, NoLogHoldsATokenOrAJobName) {
   SubmitAs(alice_, "patient-jane-doe-1957");
   Cli(bob_, {"list"});

@@ -200,7 +200,9 @@ void Cluster::StartServer() {
         grpc::ClientContext context;
         context.set_deadline(std::chrono::system_clock::now() + std::chrono::milliseconds(500));
         v1::ListWorkersResponse response;
-        return stub_->ListWorkers(&context, {}, &response).ok();
+        // Any answer means up: a client token may not list workers (PERMISSION_DENIED).
+        const auto code = stub_->ListWorkers(&context, {}, &response).error_code();
+        return code != grpc::StatusCode::UNAVAILABLE && code != grpc::StatusCode::DEADLINE_EXCEEDED;
       },
       std::chrono::seconds(20));
   if (!up) throw std::runtime_error("server did not come up:\n" + ServerLog());

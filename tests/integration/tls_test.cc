@@ -185,6 +185,17 @@ TEST_F(TlsTest, TheServerRefusesPlaintextBeyondLoopbackAndReadableKeys) {
   EXPECT_EQ(leaky.Wait(), 2);
   EXPECT_NE(leaky.Log().find("chmod o-rwx"), std::string::npos) << leaky.Log();
 
+  // --insecure serves beyond loopback in plaintext, and says so loudly.
+  const int insecure_port = FreePort();
+  Process insecure({server, "--listen", "0.0.0.0:" + std::to_string(insecure_port), "--data-dir",
+                    (dir / "d").string(), "--metrics-port", "-1", "--insecure"},
+                   dir / "insecure.log");
+  EXPECT_TRUE(WaitUntil([&] { return PortOpen(insecure_port); }, std::chrono::seconds(20))) << insecure.Log();
+  insecure.Signal(SIGTERM);
+  EXPECT_EQ(insecure.Wait(), 0);
+  EXPECT_NE(insecure.Log().find("critical"), std::string::npos) << insecure.Log();
+  EXPECT_NE(insecure.Log().find("WITHOUT TLS"), std::string::npos) << insecure.Log();
+
   // Workers and clients refuse readable secrets too.
   const auto readable_token = dir / "readable.token";
   WriteBytes(readable_token, "endorecon.0.0\n");

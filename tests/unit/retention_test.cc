@@ -1,5 +1,6 @@
 #include "server/retention.h"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include "tests/unit/temp_dir.h"
@@ -15,7 +16,7 @@ v1::Job JobWith(const std::string& id, v1::JobState state, std::int64_t finished
   job.set_finished_unix_ms(finished);
   for (std::size_t i = 0; i < clip.size(); ++i) {
     auto* file = job.mutable_clip()->add_files();
-    file->set_path("f" + std::to_string(i));
+    file->set_path(fmt::format("f{}", i));
     file->set_sha256(clip[i]);
     file->set_size(3);
   }
