@@ -17,15 +17,9 @@ TEST(SlurmBatchTest, SbatchStartsAWorkerThatFinishesAJob) {
 
   TempDir pki_dir("pki");
   const TestPki pki(pki_dir.path());
-  Cluster cluster({"--tls-cert", pki.server_cert.string(), "--tls-key", pki.server_key.string(),
-                   "--tls-client-ca", pki.ca_cert.string()},
-                  false);
-  const auto worker_token = WriteTokenFile(cluster.path("worker.token"),
-                                           CreateToken(cluster.data_dir(), "worker", "", "slurm-node"));
-  cluster.UseCredentials(
-      {pki.ca_cert.string(),
-       WriteTokenFile(cluster.path("admin.token"), CreateToken(cluster.data_dir(), "admin", "", "ops"))
-           .string()});
+  Cluster cluster(ServerTlsFlags(pki), false);
+  const auto worker_token = MakeCredentials(cluster, "", "worker", "", "slurm-node").token_file;
+  cluster.UseCredentials(MakeCredentials(cluster, pki.ca_cert.string(), "admin", "", "ops"));
   cluster.StartServer();
   MakeClip(cluster.path("clip"));
   const auto id = cluster.Submit(cluster.path("clip"), {"--iterations", "20"});
@@ -40,8 +34,7 @@ TEST(SlurmBatchTest, SbatchStartsAWorkerThatFinishesAJob) {
        "--export=ALL,ENDORECON_SERVER=" + cluster.address() +
            ",ENDORECON_WORKER=" + BuiltBinary("worker/runtime/endorecon-worker") +
            ",ENDORECON_CA=" + pki.ca_cert.string() + ",ENDORECON_TLS_CERT=" + pki.worker_cert.string() +
-           ",ENDORECON_TLS_KEY=" + pki.worker_key.string() +
-           ",ENDORECON_TOKEN_FILE=" + worker_token.string() +
+           ",ENDORECON_TLS_KEY=" + pki.worker_key.string() + ",ENDORECON_TOKEN_FILE=" + worker_token +
            ",ENDORECON_METRICS_HOST=127.0.0.1,ENDORECON_METRICS_PORT=" + std::to_string(FreePort()) +
            ",TMPDIR=" + cluster.path("").string(),
        script});

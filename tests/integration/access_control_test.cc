@@ -21,9 +21,10 @@ class AccessControlTest : public ::testing::Test {
   }
 
   ClientCredentials Credentials(const std::string& role, const std::string& tenant, const std::string& name) {
-    const auto token = CreateToken(cluster_.data_dir(), role, tenant, name);
-    tokens_.push_back(token);
-    return {"", WriteTokenFile(cluster_.path(name + ".token"), token).string()};
+    auto credentials = MakeCredentials(cluster_, "", role, tenant, name);
+    const auto file = ReadBytes(credentials.token_file);
+    tokens_.push_back(file.substr(0, file.find('\n')));
+    return credentials;
   }
 
   CliResult Cli(const ClientCredentials& who, std::vector<std::string> args) {
@@ -173,10 +174,7 @@ TEST(TenantQuotaTest, AnUploadOverTheByteQuotaIsRefusedBeforeAByteIsWritten) {
   TempDir config("quotas");
   WriteBytes(config / "quotas.json", R"({"research": {"max_bytes": 1000}})");
   Cluster cluster({"--quotas", (config / "quotas.json").string()}, false);
-  const ClientCredentials carol{"",
-                                WriteTokenFile(cluster.path("carol.token"),
-                                               CreateToken(cluster.data_dir(), "client", "research", "carol"))
-                                    .string()};
+  const auto carol = MakeCredentials(cluster, "", "client", "research", "carol");
   cluster.UseCredentials(carol);
   cluster.StartServer();
   MakeClip(cluster.path("clip"));

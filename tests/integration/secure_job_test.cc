@@ -14,22 +14,12 @@ namespace {
 TEST(SecureJobTest, TlsMtlsAndTokensEndToEnd) {
   TempDir pki_dir("pki");
   const TestPki pki(pki_dir.path());
-  Cluster cluster({"--tls-cert", pki.server_cert.string(), "--tls-key", pki.server_key.string(),
-                   "--tls-client-ca", pki.ca_cert.string()},
-                  false);
-  const ClientCredentials alice{
-      pki.ca_cert.string(), WriteTokenFile(cluster.path("alice.token"),
-                                           CreateToken(cluster.data_dir(), "client", "radiology", "alice"))
-                                .string()};
-  const auto worker_token = WriteTokenFile(cluster.path("worker.token"),
-                                           CreateToken(cluster.data_dir(), "worker", "", "gpu-node-7"));
-  cluster.UseCredentials(
-      {pki.ca_cert.string(),
-       WriteTokenFile(cluster.path("admin.token"), CreateToken(cluster.data_dir(), "admin", "", "ops"))
-           .string()});
+  Cluster cluster(ServerTlsFlags(pki), false);
+  const auto alice = MakeCredentials(cluster, pki.ca_cert.string(), "client", "radiology", "alice");
+  const auto worker = MakeCredentials(cluster, "", "worker", "", "gpu-node-7");
+  cluster.UseCredentials(MakeCredentials(cluster, pki.ca_cert.string(), "admin", "", "ops"));
   cluster.StartServer();
-  cluster.StartWorker("w1", {"--ca", pki.ca_cert.string(), "--tls-cert", pki.worker_cert.string(),
-                             "--tls-key", pki.worker_key.string(), "--token-file", worker_token.string()});
+  cluster.StartWorker("w1", WorkerTlsFlags(pki, worker.token_file));
   MakeClip(cluster.path("clip"));
 
   auto args = alice.CliFlags();

@@ -286,6 +286,12 @@ v1::Job Cluster::WaitForState(const std::string& id, v1::JobState state, std::ch
   return job;
 }
 
+ClientCredentials MakeCredentials(const Cluster& cluster, const std::string& ca_file, const std::string& role,
+                                  const std::string& tenant, const std::string& name) {
+  const auto token = CreateToken(cluster.data_dir(), role, tenant, name);
+  return {ca_file, WriteTokenFile(cluster.path(name + ".token"), token).string()};
+}
+
 std::string Cluster::ServerLog() const {
   std::string log;
   for (int i = 0; i < server_starts_; ++i) log += ReadBytes(dir_ / ("server-" + std::to_string(i) + ".log"));

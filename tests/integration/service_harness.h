@@ -116,4 +116,9 @@ class Cluster {
   ClientCredentials credentials_;
 };
 
+// A new token in `cluster`'s store (running or not), written to <cluster folder>/<name>.token,
+// with `ca_file` for TLS ("" for plaintext).
+ClientCredentials MakeCredentials(const Cluster& cluster, const std::string& ca_file, const std::string& role,
+                                  const std::string& tenant, const std::string& name);
+
 }  // namespace endorecon::testing

@@ -68,4 +68,14 @@ TestPki::TestPki(const fs::path& dir) {
          "subjectAltName=IP:127.0.0.1,DNS:localhost\nextendedKeyUsage=serverAuth,clientAuth", 2);
 }
 
+std::vector<std::string> ServerTlsFlags(const TestPki& pki) {
+  return {"--tls-cert",      pki.server_cert.string(), "--tls-key", pki.server_key.string(),
+          "--tls-client-ca", pki.ca_cert.string()};
+}
+
+std::vector<std::string> WorkerTlsFlags(const TestPki& pki, const std::string& token_file) {
+  return {"--ca",      pki.ca_cert.string(),    "--tls-cert",   pki.worker_cert.string(),
+          "--tls-key", pki.worker_key.string(), "--token-file", token_file};
+}
+
 }  // namespace endorecon::testing

@@ -5,6 +5,8 @@
 #pragma once
 
 #include <filesystem>
+#include <string>
+#include <vector>
 
 namespace endorecon::testing {
 
@@ -20,5 +22,11 @@ struct TestPki {
   std::filesystem::path rogue_ca_cert;              // a CA nobody trusts
   std::filesystem::path rogue_cert, rogue_key;      // server and client certificate signed by it
 };
+
+// Server flags for TLS with `pki`'s server certificate, client certificates required on the worker API.
+std::vector<std::string> ServerTlsFlags(const TestPki& pki);
+// Worker flags: verify the server against the CA, present the worker certificate, send the token in
+// `token_file`.
+std::vector<std::string> WorkerTlsFlags(const TestPki& pki, const std::string& token_file);
 
 }  // namespace endorecon::testing

@@ -31,16 +31,9 @@ class TlsTest : public ::testing::Test {
 
   // A server with TLS, client certificates required on the worker API, and tokens.
   void StartSecureServer() {
-    cluster_ = std::make_unique<Cluster>(
-        std::vector<std::string>{"--tls-cert", pki_->server_cert.string(), "--tls-key",
-                                 pki_->server_key.string(), "--tls-client-ca", pki_->ca_cert.string()},
-        false);
-    admin_ = {pki_->ca_cert.string(), WriteTokenFile(cluster_->path("admin.token"),
-                                                     CreateToken(cluster_->data_dir(), "admin", "", "ops"))
-                                          .string()};
-    worker_token_ = WriteTokenFile(cluster_->path("worker.token"),
-                                   CreateToken(cluster_->data_dir(), "worker", "", "node-1"))
-                        .string();
+    cluster_ = std::make_unique<Cluster>(ServerTlsFlags(*pki_), false);
+    admin_ = MakeCredentials(*cluster_, pki_->ca_cert.string(), "admin", "", "ops");
+    worker_token_ = MakeCredentials(*cluster_, "", "worker", "", "node-1").token_file;
     cluster_->UseCredentials(admin_);
     cluster_->StartServer();
   }
@@ -151,9 +144,7 @@ TEST_F(TlsTest, WorkersWithoutAClientCertificateOrWithAClientTokenLeaseNothing) 
   rogue.Wait();
   EXPECT_NE(rogue.Log().find("cannot register"), std::string::npos) << rogue.Log();
 
-  auto& client_token = cluster_->StartWorker(
-      "w-client-token", {"--ca", pki_->ca_cert.string(), "--tls-cert", pki_->worker_cert.string(),
-                         "--tls-key", pki_->worker_key.string(), "--token-file", admin_.token_file});
+  auto& client_token = cluster_->StartWorker("w-client-token", WorkerTlsFlags(*pki_, admin_.token_file));
   EXPECT_NE(client_token.Wait(), 0);
   EXPECT_NE(client_token.Log().find("PERMISSION_DENIED"), std::string::npos) << client_token.Log();
 
