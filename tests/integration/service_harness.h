@@ -54,6 +54,8 @@ bool PortOpen(int port);
 bool WaitUntil(const std::function<bool()>& condition, std::chrono::seconds limit = std::chrono::seconds(60));
 // Runs `endorecon --server ADDRESS args...` to completion.
 CliResult RunCli(const std::string& address, const std::vector<std::string>& args);
+// Runs `endorecon args...` to completion, with no --server added.
+CliResult RunCliAsTyped(const std::vector<std::string>& args);
 // Writes a tiny synthetic clip (endorecon-worker synth, 8 frames of 32x24) into `dir`.
 void MakeClip(const std::filesystem::path& dir, int seed = 1);
 // Runs a command line through the shell; returns its stdout (for curl).
