@@ -16,6 +16,7 @@
 #include "worker/engine/eval/curve_plot.h"
 #include "worker/engine/eval/depth_error.h"
 #include "worker/engine/eval/image_metrics.h"
+#include "worker/engine/eval/report.h"
 #include "worker/engine/eval/summary.h"
 #include "worker/engine/render/frame_renderer.h"
 #include "worker/engine/scene/clip_loader.h"
@@ -333,6 +334,7 @@ ReconstructSummary Reconstruct(const ReconstructOptions& options, const Reconstr
   eval::WriteCurveSvg(out_dir / "curve.svg", series);
   summary.metrics_path = (out_dir / "metrics.json").string();
   std::ofstream(summary.metrics_path) << metrics.dump(2);
+  eval::WriteReport(out_dir);
   return summary;
 }
 
