@@ -82,7 +82,8 @@ TEST_F(ReportTest, AReconstructionsPageHoldsEveryFrameItsMetricsAndItsRun) {
   EXPECT_EQ(surface["stride"], SurfaceStride(48, 40, 8, 600000));
   const auto& grid = surface["frames"][0]["grid"];
   const std::size_t points = grid[0].get<std::size_t>() * grid[1].get<std::size_t>();
-  EXPECT_EQ(surface["frames"][0]["xyz"].get<std::string>().size(), 4 * ((6 * points + 2) / 3));
+  EXPECT_EQ(surface["frames"][0]["depth"].get<std::string>().size(), 4 * ((2 * points + 2) / 3));
+  EXPECT_EQ(surface["frames"][0]["camera"]["width"], 48);
   EXPECT_EQ(surface["frames"][0]["uncertainty"].get<std::string>().size(), 4 * ((points + 2) / 3));
   EXPECT_EQ(surface["view"]["eye"].size(), 3u);
 }

@@ -35,8 +35,19 @@ TEST(SurfaceGridTest, StrideFitsThePointBudgetAndSixteenBitIndices) {
   EXPECT_GE(SurfaceStride(10, 10, 1000, 1), 10) << "a budget below one point a frame gives one point";
 }
 
-TEST(SurfaceGridTest, PointsAreTheBackProjectedDepthWithinQuantisation) {
-  const scene::Camera camera = Camera(6, 4);
+// What report.html does with a grid point (surface_viewer.js): its pixel's ray, with unit z-depth,
+// times the decoded depth.
+Eigen::Vector3d PagePoint(const SurfaceGrid& grid, const scene::Camera& camera, int i, int j) {
+  const std::size_t g = static_cast<std::size_t>(j) * grid.width + i;
+  const double z = grid.depth_origin + grid.depth[g] * grid.depth_step;
+  const int u = SurfacePixel(i, grid.stride, camera.width), v = SurfacePixel(j, grid.stride, camera.height);
+  const Eigen::Vector3d ray((u + 0.5 - camera.cx) / camera.fx, -(v + 0.5 - camera.cy) / camera.fy, -1.0);
+  return camera.c2w.col(3) + z * (camera.c2w.leftCols<3>() * ray);
+}
+
+TEST(SurfaceGridTest, ThePagesPointsAreTheBackProjectedDepthWithinQuantisation) {
+  scene::Camera camera = Camera(6, 4);
+  camera.c2w.leftCols<3>() << 0, 0, 1, 0, 1, 0, -1, 0, 0;  // a turned camera: rotation matters
   std::vector<float> depth(24), rgb_float(72, 0.0f);
   for (int p = 0; p < 24; ++p) depth[p] = 10.0f + 0.5f * float(p);
   std::vector<std::uint8_t> rgb(72, 0);
@@ -44,12 +55,16 @@ TEST(SurfaceGridTest, PointsAreTheBackProjectedDepthWithinQuantisation) {
   const SurfaceGrid grid = SampleSurface(camera, depth, rgb, {}, 1.0, {}, 1);
   ASSERT_EQ(grid.width, 6);
   ASSERT_EQ(grid.height, 4);
+  EXPECT_DOUBLE_EQ(grid.depth_origin, 10.0);
   const PointCloud cloud = BackProject(camera, depth, rgb_float, {});
   ASSERT_EQ(cloud.size(), 24u);
-  for (std::size_t g = 0; g < 24; ++g) {
-    for (int a = 0; a < 3; ++a) {
-      const double decoded = grid.origin[a] + grid.xyz[3 * g + a] * grid.step[a];
-      EXPECT_NEAR(decoded, cloud.xyz[3 * g + a], grid.step[a] / 2 + 1e-5) << "point " << g << " axis " << a;
+  // Half a quantisation step of depth along a ray of length at most |(ray)| ~ 1.6.
+  const double tolerance = grid.depth_step * 0.5 * 1.7 + 1e-5;
+  for (int j = 0; j < 4; ++j) {
+    for (int i = 0; i < 6; ++i) {
+      const Eigen::Vector3d point = PagePoint(grid, camera, i, j);
+      for (int a = 0; a < 3; ++a)
+        EXPECT_NEAR(point[a], cloud.xyz[3 * (j * 6 + i) + a], tolerance) << i << "," << j;
     }
   }
   EXPECT_EQ(grid.rgb[3 * 7], 200);
@@ -63,6 +78,7 @@ TEST(SurfaceGridTest, StrideSamplesPixelCentresOfItsBlocks) {
   std::vector<std::uint8_t> rgb(45);
   for (int p = 0; p < 15; ++p) rgb[3 * p] = std::uint8_t(p);
   const SurfaceGrid grid = SampleSurface(camera, depth, rgb, {}, 1.0, {}, 2);
+  EXPECT_EQ(grid.stride, 2);
   ASSERT_EQ(grid.width, 3);
   ASSERT_EQ(grid.height, 2);
   // Grid (i, j) -> pixel (min(2i + 1, 4), min(2j + 1, 2)).
@@ -75,8 +91,8 @@ TEST(SurfaceGridTest, ToolPixelsAndMissingDepthHaveNoPoint) {
   const std::vector<float> depth = {5.0f, 0.0f, std::numeric_limits<float>::quiet_NaN(), 5.0f};
   const std::vector<std::uint8_t> mask = {0, 0, 0, 1};
   const SurfaceGrid grid = SampleSurface(camera, depth, std::vector<std::uint8_t>(12, 0), {}, 1.0, mask, 1);
-  EXPECT_NE(grid.xyz[0], SurfaceGrid::kNoVertex);
-  for (int g = 1; g < 4; ++g) EXPECT_EQ(grid.xyz[3 * g], SurfaceGrid::kNoVertex) << g;
+  EXPECT_NE(grid.depth[0], SurfaceGrid::kNoDepth);
+  for (int g = 1; g < 4; ++g) EXPECT_EQ(grid.depth[g], SurfaceGrid::kNoDepth) << g;
 }
 
 TEST(SurfaceGridTest, UncertaintyIsScaledByTheBoundAndClamped) {

@@ -161,19 +161,31 @@ std::string ToolOverlayUri(const std::vector<std::uint8_t>& mask, int width, int
   return DataUri(bgra, ".png", cv::INTER_NEAREST);
 }
 
-json SurfaceJson(const SurfaceGrid& grid) {
+// A frame's surface grid and the camera the page back-projects it through (formats.md, "report.html").
+json SurfaceJson(const SurfaceGrid& grid, const scene::Camera& camera) {
   // Little-endian, as the page's Uint16Array reads it on the (little-endian) machines browsers run on.
-  std::string xyz(grid.xyz.size() * 2, '\0');
-  for (std::size_t i = 0; i < grid.xyz.size(); ++i) {
-    xyz[2 * i] = char(grid.xyz[i] & 0xff);
-    xyz[2 * i + 1] = char(grid.xyz[i] >> 8);
+  std::string depth(grid.depth.size() * 2, '\0');
+  for (std::size_t i = 0; i < grid.depth.size(); ++i) {
+    depth[2 * i] = char(grid.depth[i] & 0xff);
+    depth[2 * i + 1] = char(grid.depth[i] >> 8);
   }
+  json c2w = json::array();
+  for (int r = 0; r < 3; ++r)
+    c2w.push_back({camera.c2w(r, 0), camera.c2w(r, 1), camera.c2w(r, 2), camera.c2w(r, 3)});
   return {{"grid", {grid.width, grid.height}},
-          {"origin", grid.origin},
-          {"step", grid.step},
-          {"xyz", Base64(xyz)},
+          {"depth_origin", grid.depth_origin},
+          {"depth_step", grid.depth_step},
+          {"depth", Base64(depth)},
           {"rgb", BytesBase64(grid.rgb.data(), grid.rgb.size())},
-          {"uncertainty", BytesBase64(grid.uncertainty.data(), grid.uncertainty.size())}};
+          {"uncertainty", BytesBase64(grid.uncertainty.data(), grid.uncertainty.size())},
+          {"camera",
+           {{"c2w", c2w},
+            {"fx", camera.fx},
+            {"fy", camera.fy},
+            {"cx", camera.cx},
+            {"cy", camera.cy},
+            {"width", camera.width},
+            {"height", camera.height}}}};
 }
 
 // The heat-map scale [0, bound] a results file records, with the JSON pointers the page shows it by.
@@ -242,7 +254,8 @@ void AddFrames(const fs::path& results_dir, const Views& views, const json& reco
     if (error) frames["error"].push_back(JpegUri(ReadFrameImage(file("error", ".png"), camera)));
     const auto& mask = views.clip ? EvaluationMask(*views.clip, f) : kNoMask;
     if (tool) frames["tool"].push_back(ToolOverlayUri(mask, w, h));
-    surfaces.push_back(SurfaceJson(SampleSurface(camera, depth, colour.rgb, total, bound, mask, stride)));
+    surfaces.push_back(
+        SurfaceJson(SampleSurface(camera, depth, colour.rgb, total, bound, mask, stride), camera));
   }
   for (const char* layer : {"input", "uncertainty", "error", "tool"}) {
     if (frames[layer].empty()) frames[layer] = nullptr;

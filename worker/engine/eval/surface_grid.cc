@@ -11,7 +11,7 @@ namespace endorecon::eval {
 int SurfaceStride(int width, int height, int frames, std::size_t budget) {
   for (int s = 1;; ++s) {
     const std::size_t points = static_cast<std::size_t>((width + s - 1) / s) * ((height + s - 1) / s);
-    if (points <= SurfaceGrid::kNoVertex && points * static_cast<std::size_t>(std::max(1, frames)) <= budget)
+    if (points <= SurfaceGrid::kNoDepth && points * static_cast<std::size_t>(std::max(1, frames)) <= budget)
       return s;
     if (points == 1) return s;
   }
@@ -28,19 +28,17 @@ SurfaceGrid SampleSurface(const scene::Camera& camera, std::span<const float> de
   if (stride < 1) FailInvalid("surface: stride " + std::to_string(stride) + " is below 1");
   if (!(uncertainty_bound > 0)) FailInvalid("surface: the uncertainty bound must be > 0");
   SurfaceGrid grid;
+  grid.stride = stride;
   grid.width = (w + stride - 1) / stride;
   grid.height = (h + stride - 1) / stride;
   const std::size_t points = static_cast<std::size_t>(grid.width) * grid.height;
-  std::vector<Eigen::Vector3d> world(points);
-  std::vector<bool> present(points, false);
+  std::vector<double> z(points, std::numeric_limits<double>::quiet_NaN());
   grid.rgb.assign(points * 3, 0);
   grid.uncertainty.assign(points, 0);
-  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
-  Eigen::Vector3d hi = -lo;
-  Eigen::Vector3d origin, direction;
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
   for (int j = 0; j < grid.height; ++j) {
     for (int i = 0; i < grid.width; ++i) {
-      const int u = std::min(i * stride + stride / 2, w - 1), v = std::min(j * stride + stride / 2, h - 1);
+      const int u = SurfacePixel(i, stride, w), v = SurfacePixel(j, stride, h);
       const std::size_t p = static_cast<std::size_t>(v) * w + u,
                         g = static_cast<std::size_t>(j) * grid.width + i;
       for (int c = 0; c < 3; ++c) grid.rgb[3 * g + c] = rgb[3 * p + c];
@@ -49,28 +47,19 @@ SurfaceGrid SampleSurface(const scene::Camera& camera, std::span<const float> de
         grid.uncertainty[g] = static_cast<std::uint8_t>(std::lround(255.0 * level));
       }
       if ((!tool_mask.empty() && tool_mask[p] != 0) || !std::isfinite(depth[p]) || depth[p] <= 0) continue;
-      camera.Ray(u, v, origin, direction);
-      world[g] = origin + static_cast<double>(depth[p]) * direction;
-      present[g] = true;
-      lo = lo.cwiseMin(world[g]);
-      hi = hi.cwiseMax(world[g]);
+      z[g] = depth[p];
+      lo = std::min(lo, z[g]);
+      hi = std::max(hi, z[g]);
     }
   }
-  grid.xyz.assign(points * 3, 0);
-  const double levels = SurfaceGrid::kNoVertex - 1;
-  for (int a = 0; a < 3; ++a) {
-    grid.origin[a] = std::isfinite(lo[a]) ? lo[a] : 0.0;
-    grid.step[a] = std::isfinite(lo[a]) ? (hi[a] - lo[a]) / levels : 0.0;
-  }
+  const double levels = SurfaceGrid::kNoDepth - 1;
+  grid.depth_origin = std::isfinite(lo) ? lo : 0.0;
+  grid.depth_step = std::isfinite(lo) ? (hi - lo) / levels : 0.0;
+  grid.depth.assign(points, SurfaceGrid::kNoDepth);
   for (std::size_t g = 0; g < points; ++g) {
-    if (!present[g]) {
-      grid.xyz[3 * g] = SurfaceGrid::kNoVertex;
-      continue;
-    }
-    for (int a = 0; a < 3; ++a) {
-      const double q = grid.step[a] > 0 ? (world[g][a] - grid.origin[a]) / grid.step[a] : 0.0;
-      grid.xyz[3 * g + a] = static_cast<std::uint16_t>(std::lround(std::clamp(q, 0.0, levels)));
-    }
+    if (std::isnan(z[g])) continue;
+    const double q = grid.depth_step > 0 ? (z[g] - grid.depth_origin) / grid.depth_step : 0.0;
+    grid.depth[g] = static_cast<std::uint16_t>(std::lround(std::clamp(q, 0.0, levels)));
   }
   return grid;
 }

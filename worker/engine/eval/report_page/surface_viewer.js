@@ -70,20 +70,27 @@ class SurfaceViewer {
     if (this.meshes.has(index)) return this.meshes.get(index);
     const data = this.surface.frames[index];
     const [gw, gh] = data.grid;
-    const count = gw * gh;
-    const xyz = new Uint16Array(decodeBase64(data.xyz).buffer);
+    const count = gw * gh, stride = this.surface.stride, camera = data.camera, c2w = camera.c2w;
+    const depth = new Uint16Array(decodeBase64(data.depth).buffer);
     const rgb = decodeBase64(data.rgb);
     const uncertainty = decodeBase64(data.uncertainty);
     const position = new Float32Array(count * 3), valid = new Uint8Array(count);
-    let lo = [Infinity, Infinity, Infinity], hi = [-Infinity, -Infinity, -Infinity];
-    for (let i = 0; i < count; ++i) {
-      if (xyz[3 * i] === 65535) continue;
-      valid[i] = 1;
+    const lo = [Infinity, Infinity, Infinity], hi = [-Infinity, -Infinity, -Infinity];
+    // Back-projection as eval::BackProject: the ray through the centre of the grid point's pixel, with
+    // unit z-depth, from the camera's centre (OpenGL camera: x right, y up, looking down -z).
+    for (let j = 0; j < gh; ++j) for (let i = 0; i < gw; ++i) {
+      const g = j * gw + i;
+      if (depth[g] === 65535) continue;
+      valid[g] = 1;
+      const z = data.depth_origin + depth[g] * data.depth_step;
+      const u = Math.min(i * stride + (stride >> 1), camera.width - 1);
+      const v = Math.min(j * stride + (stride >> 1), camera.height - 1);
+      const ray = [(u + 0.5 - camera.cx) / camera.fx, -(v + 0.5 - camera.cy) / camera.fy, -1];
       for (let a = 0; a < 3; ++a) {
-        const v = data.origin[a] + xyz[3 * i + a] * data.step[a];
-        position[3 * i + a] = v;
-        lo[a] = Math.min(lo[a], v);
-        hi[a] = Math.max(hi[a], v);
+        const p = c2w[a][3] + z * (c2w[a][0] * ray[0] + c2w[a][1] * ray[1] + c2w[a][2] * ray[2]);
+        position[3 * g + a] = p;
+        lo[a] = Math.min(lo[a], p);
+        hi[a] = Math.max(hi[a], p);
       }
     }
     const distance = (i, j) => Math.hypot(position[3 * i] - position[3 * j], position[3 * i + 1] - position[3 * j + 1],
