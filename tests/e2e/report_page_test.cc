@@ -220,7 +220,7 @@ TEST(ReportPageTest, APageWorksInHeadlessChromium) {
   }
   EXPECT_TRUE(browser->problems().empty()) << fmt::format("{}", fmt::join(browser->problems(), "\n"));
 
-  // The picture in docs/ (docs/report.png) comes from here.
+  // A picture of the page to look at after a run (docs/report.png is the demo clip's, docs/benchmarks.md).
   browser->Evaluate(
       "(() => { const s = document.getElementById('surface-colour'); s.value = 'rgb';"
       " s.dispatchEvent(new Event('change')); window.scrollTo(0, 0); })()");
