@@ -44,8 +44,13 @@ int main(int argc, char** argv) {
   using namespace endorecon::client;
   CLI::App app{
       "endorecon: submit endoscopic clips to endorecon-server, watch the reconstruction, fetch results"};
-  app.footer(kExitCodeHelp);
+  app.footer(std::string(kExitCodeHelp) +
+             " Global options (endorecon --help) may also follow the subcommand.");
   app.require_subcommand(1);
+  // Global options are accepted after the subcommand too (`endorecon submit clip --json`, as git, docker
+  // and kubectl users type them): every subcommand, added below, inherits this and hands the options it
+  // does not know to the app, so any global option added later works there without more code.
+  app.fallthrough();
   Globals globals;
   const char* env_server = std::getenv("ENDORECON_SERVER");
   globals.server = env_server && *env_server ? env_server : "127.0.0.1:50051";

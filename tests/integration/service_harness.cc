@@ -104,8 +104,14 @@ bool WaitUntil(const std::function<bool()>& condition, std::chrono::seconds limi
 }
 
 CliResult RunCli(const std::string& address, const std::vector<std::string>& args) {
+  std::vector<std::string> with_server{"--server", address};
+  with_server.insert(with_server.end(), args.begin(), args.end());
+  return RunCliAsTyped(with_server);
+}
+
+CliResult RunCliAsTyped(const std::vector<std::string>& args) {
   TempDir scratch("cli");
-  std::vector<std::string> argv{BuiltBinary("client/endorecon"), "--server", address};
+  std::vector<std::string> argv{BuiltBinary("client/endorecon")};
   argv.insert(argv.end(), args.begin(), args.end());
   CliResult result;
   result.exit_code = Process(argv, scratch / "out", scratch / "err").Wait();

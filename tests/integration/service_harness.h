@@ -67,6 +67,8 @@ std::string CreateToken(const std::filesystem::path& data_dir, const std::string
                         const std::string& tenant, const std::string& name);
 // Writes `token` into `path` with mode 0600; returns the path.
 std::filesystem::path WriteTokenFile(const std::filesystem::path& path, const std::string& token);
+// Runs `endorecon args...` to completion, with no --server added.
+CliResult RunCliAsTyped(const std::vector<std::string>& args);
 // Writes a tiny synthetic clip (endorecon-worker synth, 8 frames of 32x24) into `dir`.
 void MakeClip(const std::filesystem::path& dir, int seed = 1);
 // Runs a command line through the shell; returns its stdout (for curl).

@@ -10,6 +10,7 @@
 
 #include "common/file_write.h"
 #include "worker/engine/eval/clip_evaluator.h"
+#include "worker/engine/eval/report.h"
 #include "worker/engine/eval/run_outputs.h"
 #include "worker/engine/field/field_description.h"
 #include "worker/engine/run_config.h"
@@ -102,6 +103,7 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
   metrics["field"] = field::DescribeField(trainer.field());
   eval::WriteCurve(out_dir / "curve.svg", extras.curve);
   eval::WriteMetrics(out_dir / "metrics.json", metrics);
+  eval::WriteReport(out_dir);
 
   ReconstructSummary summary;
   summary.cancelled = trained.cancelled;

@@ -9,6 +9,7 @@
 #include "common/file_write.h"
 #include "worker/engine/eval/clip_evaluator.h"
 #include "worker/engine/eval/exports.h"
+#include "worker/engine/eval/report.h"
 #include "worker/engine/render/frame_renderer.h"
 #include "worker/engine/scene/camera_list.h"
 #include "worker/engine/train/checkpoint.h"
@@ -71,6 +72,13 @@ Command AddRenderCommand(CLI::App& app) {
     info["heatmap_scale"] = {{"uncertainty", {0.0, heat}}};
     info["depth_png_scale"] = scale;
     WriteFile(out / "render.json", info.dump(2), "render description");
+    // The views' cameras and times travel with them (the report back-projects the depth through them).
+    const auto cameras_copy = out / "cameras.json";
+    if (!std::filesystem::exists(cameras_copy) || !std::filesystem::equivalent(args->cameras, cameras_copy)) {
+      std::filesystem::copy_file(args->cameras, cameras_copy,
+                                 std::filesystem::copy_options::overwrite_existing);
+    }
+    eval::WriteReport(out);
     spdlog::info("rendered {} views into {} (depth PNG scale {}, uncertainty heat-map scale [0, {}])",
                  cameras.size(), args->out, scale, heat);
     return 0;
