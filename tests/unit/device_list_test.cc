@@ -23,6 +23,30 @@ TEST(DeviceList, CpuSlotsShareTheCores) {
   EXPECT_EQ(ParseDevices("cpu:2", 5, 2)[1].threads, 5);  // --threads wins
 }
 
+TEST(DeviceList, GpuIndicesAreCudaEnginesOneEach) {
+  const auto gpus = ParseDevices("0,2", 0, 8);
+  ASSERT_EQ(gpus.size(), 2u);
+  EXPECT_EQ(gpus[1].name, "gpu2");
+  EXPECT_EQ(gpus[1].kind, "cuda");
+  EXPECT_EQ(gpus[1].index, 2);
+  EXPECT_EQ(gpus[1].EngineDevice(), "cuda:2");
+  EXPECT_EQ(gpus[0].threads, 4);
+  EXPECT_EQ(ParseDevices("cpu", 0, 2)[0].EngineDevice(), "cpu");
+}
+
+// A GPU that is not there is refused at start naming it, never run on the CPU instead (this machine
+// has no device 99, with or without a CUDA build).
+TEST(DeviceList, AGpuThatCannotRunIsRefusedNamingIt) {
+  EXPECT_NO_THROW(CheckDevices(ParseDevices("cpu:2", 0, 2)));
+  try {
+    CheckDevices(ParseDevices("99", 0, 2));
+    FAIL() << "accepted CUDA device 99";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument);
+    EXPECT_NE(std::string(e.what()).find("cuda:99"), std::string::npos) << e.what();
+  }
+}
+
 TEST(DeviceList, BadFormsAreRefusedNamingTheFlag) {
   for (const std::string bad : {"cpu:0", "cpu:", "cpu:x", "cpu:-1", "gpu", "0,,1", "1,a", "", "cpu:99999"}) {
     try {

@@ -59,15 +59,15 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
   const fs::path out_dir = options.out_dir;
   WriteFile(out_dir / "config.json", RunConfigJson(config, options, threads).dump(2), "run configuration");
 
-  train::Trainer trainer(clip, config, split.train, options.seed);
+  train::Trainer trainer(clip, config, split.train, options.seed, BackendFor(options.device));
   train::CheckpointExtras extras;
   if (!options.resume_from.empty()) {
     extras = train::ReadCheckpointState(options.resume_from, trainer);
     spdlog::info("resumed from {} at iteration {}", options.resume_from, trainer.iteration());
   }
-  spdlog::info("clip {}: {} frames {}x{}, {} train / {} held out, {} threads; {}", clip.source,
+  spdlog::info("clip {}: {} frames {}x{}, {} train / {} held out, {} threads, steps on {}; {}", clip.source,
                clip.frame_count(), clip.width, clip.height, split.train.size(), split.heldout.size(), threads,
-               field::DescribeField(trainer.field()));
+               trainer.device(), field::DescribeField(trainer.field()));
   // Both renderers skip what the trainer's occupancy grid says is empty.
   render::FrameRenderer renderer(trainer.field(), trainer.box(),
                                  train::EvalRenderSettings(config, clip.near, clip.far));
@@ -86,6 +86,7 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
                         options.time_budget_s,
                         out_dir / "model" / "checkpoint.bin"};
   const TrainingResult trained = Train(run, hooks, extras);
+  trainer.SyncField();
   train::WriteModel(out_dir / "model" / "model.bin", config, trainer.box(), clip.near, clip.far,
                     trainer.field());
 
@@ -97,6 +98,7 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
   metrics["train_seconds"] = extras.train_seconds;
   metrics["samples_per_second"] = trained.samples_per_second;
   metrics["threads"] = threads;
+  metrics["device"] = trainer.device();
   metrics["cancelled"] = trained.cancelled;
   metrics["curve"] = extras.curve;
   metrics["left_out"] = left_out;
@@ -111,6 +113,7 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
   summary.train_seconds = extras.train_seconds;
   summary.train_psnr = trained.last.psnr;
   summary.threads = threads;
+  summary.device = trainer.device();
   summary.metrics_path = (out_dir / "metrics.json").string();
   const auto heldout = "/heldout/image/psnr_tissue/mean"_json_pointer;
   if (metrics.contains(heldout) && metrics.at(heldout).is_number())

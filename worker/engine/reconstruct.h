@@ -24,6 +24,7 @@ struct ReconstructOptions {
   double time_budget_s = 0;    // 0: none; otherwise training stops at this many seconds
   int holdout = -1;            // -1: the preset's; 0: none; K: every K-th frame held out
   int threads = 0;             // 0: all cores; the run's own TBB arena, other runs in the process keep theirs
+  std::string device = "cpu";  // where the training steps run: "cpu" or "cuda:N" (run_config.h BackendFor)
   std::uint64_t seed = 0;
   bool force_static = false;  // treat the clip as static (no deformation network)
   // Optional checkpoint file to resume training from; its configuration replaces the preset, and
@@ -61,6 +62,7 @@ struct ReconstructSummary {
   double heldout_psnr = -1;
   double train_psnr = 0;
   int threads = 0;           // the run's arena's concurrency
+  std::string device;        // where the steps ran
   std::string metrics_path;  // out_dir/metrics.json
 };
 

@@ -61,6 +61,7 @@ class TrainingLoop {
                             {"loss", stats.loss},
                             {"train_psnr", stats.psnr}};
     if (!probe_.empty()) {
+      run_.trainer.SyncField();
       const eval::CurveProbe::Point measured = probe_.Measure(run_.renderer);
       progress_.heldout_psnr = measured.psnr;
       progress_.depth_rmse = measured.depth_rmse;
@@ -81,6 +82,7 @@ class TrainingLoop {
   }
 
   void SendPreviews() {
+    run_.trainer.SyncField();
     const int f = run_.split.heldout.empty() ? 0 : run_.split.heldout.front();
     const auto frame =
         run_.uncertainty_renderer.Render(run_.fit.preview_camera(run_.clip.cameras[f]), run_.clip.times[f]);

@@ -1,11 +1,10 @@
 #include "worker/runtime/device_list.h"
 
-#include <spdlog/spdlog.h>
-
 #include <algorithm>
 #include <sstream>
 
 #include "common/error.h"
+#include "worker/engine/run_config.h"
 
 namespace endorecon::worker {
 namespace {
@@ -31,14 +30,19 @@ std::vector<Device> ParseDevices(const std::string& spec, int threads, int cores
       if (!AllDigits(index) || index.size() > 4) {
         FailInvalid("--devices " + spec + ": expected cpu, cpu:N or GPU indices like 0,1");
       }
-      devices.push_back({"gpu" + index, "cpu", 0});
+      devices.push_back({"gpu" + index, "cuda", 0, std::stoi(index)});
     }
     if (devices.empty()) FailInvalid("--devices " + spec + ": expected cpu, cpu:N or GPU indices like 0,1");
-    spdlog::warn("no CUDA engine in this build: GPU slots {} run on the CPU", spec);
   }
   for (auto& device : devices)
     device.threads = threads > 0 ? threads : std::max(1, std::max(1, cores) / int(devices.size()));
   return devices;
+}
+
+void CheckDevices(const std::vector<Device>& devices) {
+  for (const auto& device : devices) {
+    if (device.kind == "cuda") BackendFor(device.EngineDevice());
+  }
 }
 
 }  // namespace endorecon::worker

@@ -9,14 +9,22 @@ namespace endorecon::worker {
 
 struct Device {
   std::string name;  // "cpu0", "gpu1", ...
-  std::string kind;  // "cpu", or "cuda" once the CUDA engine exists
-  int threads = 0;   // engine threads for a CPU slot
+  std::string kind;  // "cpu" or "cuda"
+  int threads = 0;   // host threads of the engine (a CPU slot's training; a GPU's periodic rounds)
+  int index = -1;    // the CUDA device index of a "cuda" device
+
+  // The engine's device name: "cpu" or "cuda:N" (ReconstructOptions::device).
+  std::string EngineDevice() const { return kind == "cuda" ? "cuda:" + std::to_string(index) : "cpu"; }
 };
 
-// "cpu" -> one CPU slot; "cpu:N" -> N CPU slots; "0,1,..." -> GPU indices (CUDA_VISIBLE_DEVICES
-// style), which run as CPU slots until the CUDA engine exists. threads > 0: each slot's thread count;
+// "cpu" -> one CPU slot; "cpu:N" -> N CPU slots; "0,1,..." -> CUDA device indices (as
+// CUDA_VISIBLE_DEVICES leaves them), one engine each. threads > 0: each device's host thread count;
 // 0: the machine's `cores` shared evenly (at least 1 each). Throws Error(kInvalidArgument) naming the
-// flag for any other form.
+// flag for any other form. Whether the GPUs exist is CheckDevices' business.
 std::vector<Device> ParseDevices(const std::string& spec, int threads, int cores);
+
+// Refuses, naming the device and the reason, a GPU this build or machine cannot run (a build without
+// CUDA, an index past the last device): never a silent fallback to the CPU.
+void CheckDevices(const std::vector<Device>& devices);
 
 }  // namespace endorecon::worker

@@ -25,6 +25,7 @@ ReconstructOptions OptionsFor(const v1::Job& job, const std::filesystem::path& j
   options.seed = o.seed();
   options.force_static = o.force_static();
   options.threads = device.threads;
+  options.device = device.EngineDevice();
   if (job.has_checkpoint() && !job.checkpoint().sha256().empty()) {
     options.resume_from = (job_dir / "checkpoint" / job.checkpoint().path()).string();
   }

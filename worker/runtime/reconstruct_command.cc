@@ -39,6 +39,7 @@ Command AddReconstructCommand(CLI::App& app) {
   cmd->add_option("-o,--out", options->out_dir, "results folder")->required();
   AddReconstructOptions(*cmd, *options, *config_file);
   cmd->add_option("--threads", options->threads, "worker threads (0: all cores)")->capture_default_str();
+  cmd->add_option("--device", options->device, "where the training steps run: cpu or cuda:N")->capture_default_str();
   cmd->add_option("--resume", options->resume_from, "checkpoint file to resume from");
   return [options, config_file] {
     if (!config_file->empty()) options->config = scene::ReadJsonFile(*config_file);

@@ -86,6 +86,7 @@ int Serve(const ServeFlags& flags) {
 
   const auto devices =
       ParseDevices(flags.devices, flags.threads, static_cast<int>(std::thread::hardware_concurrency()));
+  CheckDevices(devices);
   const std::string worker_id = flags.id.empty() ? Hostname() + "-" + std::to_string(getpid()) : flags.id;
   WorkerMetrics metrics(
       flags.metrics_port >= 0 ? flags.metrics_host + ":" + std::to_string(flags.metrics_port) : "", devices);
@@ -145,7 +146,7 @@ Command AddServeCommand(CLI::App& app) {
   auto* cmd =
       app.add_subcommand("serve", "lease jobs from endorecon-server and run them, one engine per device");
   cmd->add_option("--server", flags->server, "server address host:port")->capture_default_str();
-  cmd->add_option("--devices", flags->devices, "cpu, cpu:N (N slots) or GPU indices 0,1,...")
+  cmd->add_option("--devices", flags->devices, "cpu, cpu:N (N slots) or CUDA device indices 0,1,... (one engine each)")
       ->capture_default_str();
   cmd->add_option("--metrics-port", flags->metrics_port,
                   "Prometheus /metrics port (0 picks one, -1 disables)")

@@ -7,38 +7,19 @@
 #include "worker/engine/base/counter_rng.h"
 #include "worker/engine/cuda/device.h"
 #include "worker/engine/cuda/kernels.h"
+#include "worker/engine/cuda/launch.cuh"
 #include "worker/engine/field/level_dispatch.h"
 #include "worker/engine/render/stratified_sampler.h"
 
 namespace endorecon::cuda {
 namespace {
 
-constexpr int kThreads = 128;
-
-int Blocks(int n) { return (n + kThreads - 1) / kThreads; }
-
-void CheckLaunch(const char* kernel) { CheckStatus(cudaGetLastError(), kernel); }
-
-__device__ int ThreadIndex() { return static_cast<int>(blockIdx.x * blockDim.x + threadIdx.x); }
-
 // --- hash grid ---
-
-// The scatter's accumulation when many threads add into one table: atomic on the device. (The host
-// branch exists only so the functor is callable from field::ScatterLevel's __host__ __device__ body.)
-struct AtomicAdd {
-  __host__ __device__ void operator()(float* target, float value) const {
-#ifdef __CUDA_ARCH__
-    atomicAdd(target, value);
-#else
-    *target += value;
-#endif
-  }
-};
 
 template <int F, bool kDense>
 __global__ void HashLevelForwardKernel(field::GridLevel level, const float* table, const float* pos, int n,
                                        float* feat, int feat_stride) {
-  const int i = ThreadIndex();
+  const int i = static_cast<int>(ThreadIndex());
   if (i >= n) return;
   field::GatherLevel<F, kDense>(level, table, pos + 3 * static_cast<std::size_t>(i),
                                 feat + static_cast<std::size_t>(i) * feat_stride);
@@ -46,13 +27,13 @@ __global__ void HashLevelForwardKernel(field::GridLevel level, const float* tabl
 
 template <int F, bool kDense, bool kPosition>
 __global__ void HashLevelBackwardKernel(field::GridLevel level, const float* pos, int n, const float* dfeat,
-                                        int dfeat_stride, const float* scale, float* grads,
+                                        int dfeat_stride, const float* scale, int scale_stride, float* grads,
                                         const float* table, float* dpos) {
-  const int i = ThreadIndex();
+  const int i = static_cast<int>(ThreadIndex());
   if (i >= n) return;
   const std::size_t r = static_cast<std::size_t>(i);
   field::ScatterLevel<F, kDense, kPosition>(level, pos + 3 * r, dfeat + r * dfeat_stride,
-                                            scale ? scale[r] : 1.0f, grads, table,
+                                            scale ? scale[r * scale_stride] : 1.0f, grads, table,
                                             kPosition ? dpos + 3 * r : nullptr, AtomicAdd{});
 }
 
@@ -64,7 +45,7 @@ __device__ base::CounterRng<float> RayRng(const RayStreams& streams, int r) {
 
 __global__ void StratifiedKernel(float near, float far, int n_rays, int samples, RayStreams streams, float* s,
                                  float* delta) {
-  const int r = ThreadIndex();
+  const int r = static_cast<int>(ThreadIndex());
   if (r >= n_rays) return;
   const std::size_t o = static_cast<std::size_t>(r) * samples;
   render::StratifiedSamples(near, far, samples, RayRng(streams, r), s + o, delta + o);
@@ -73,7 +54,7 @@ __global__ void StratifiedKernel(float near, float far, int n_rays, int samples,
 __global__ void DepthGuidedKernel(float near, float far, const float* prior_depth, int n_rays,
                                   render::DepthGuidedConfig<float> config, RayStreams streams, float* s,
                                   float* delta) {
-  const int r = ThreadIndex();
+  const int r = static_cast<int>(ThreadIndex());
   if (r >= n_rays) return;
   const std::size_t o = static_cast<std::size_t>(r) * (config.gaussian_samples + config.stratified_samples);
   render::DepthGuidedSamples(near, far, prior_depth[r], config, RayRng(streams, r), s + o, delta + o);
@@ -84,7 +65,7 @@ __global__ void DepthGuidedKernel(float near, float far, const float* prior_dept
 __global__ void CompositeKernel(const float* sigma, const float* rgb, const float* s, const float* delta,
                                 int n_rays, int samples, float min_transmittance, float* weights,
                                 render::RayComposite<float>* out) {
-  const int r = ThreadIndex();
+  const int r = static_cast<int>(ThreadIndex());
   if (r >= n_rays) return;
   const std::size_t o = static_cast<std::size_t>(r) * samples;
   out[r] =
@@ -96,7 +77,7 @@ __global__ void CompositeBackwardKernel(const float* sigma, const float* rgb, co
                                         const render::RayComposite<float>* forward,
                                         const render::RayCompositeGrad<float>* grad, const float* d_weights,
                                         float* d_sigma, float* d_rgb) {
-  const int r = ThreadIndex();
+  const int r = static_cast<int>(ThreadIndex());
   if (r >= n_rays) return;
   const std::size_t o = static_cast<std::size_t>(r) * samples;
   render::CompositeRayBackward(sigma + o, rgb + 3 * o, s + o, delta + o, weights + o, forward[r], grad[r],
@@ -110,7 +91,7 @@ __global__ void RayLossKernel(const render::RayComposite<float>* rays, const flo
                               const float* prior_depth, int n_rays, int samples, train::RayLossTerms terms,
                               float* loss, render::RayCompositeGrad<float>* grad, float* d_mean_rgb,
                               float* d_log_var) {
-  const int r = ThreadIndex();
+  const int r = static_cast<int>(ThreadIndex());
   if (r >= n_rays) return;
   const std::size_t o = static_cast<std::size_t>(r) * samples;
   loss[r] = train::RayLoss(rays[r], weights + o, mean_rgb + 3 * o, log_var + o, samples,
@@ -134,7 +115,7 @@ void HashLevelForward(const field::GridLevel& level, int features, const float* 
 
 void HashLevelBackward(const field::GridLevel& level, int features, const float* pos, int n,
                        const float* dfeat, int dfeat_stride, const float* scale, float* grads,
-                       const float* table, float* dpos_add) {
+                       const float* table, float* dpos_add, int scale_stride) {
   if (dpos_add != nullptr && table == nullptr)
     FailInvalid("hash level backward: a position gradient needs the level's table");
   field::DispatchLevel(features, level, [&](auto fc, auto dense) {
@@ -142,11 +123,11 @@ void HashLevelBackward(const field::GridLevel& level, int features, const float*
     constexpr bool kDense = decltype(dense)::value;
     if (n <= 0) return;
     if (dpos_add) {
-      HashLevelBackwardKernel<F, kDense, true>
-          <<<Blocks(n), kThreads>>>(level, pos, n, dfeat, dfeat_stride, scale, grads, table, dpos_add);
+      HashLevelBackwardKernel<F, kDense, true><<<Blocks(n), kThreads>>>(
+          level, pos, n, dfeat, dfeat_stride, scale, scale_stride, grads, table, dpos_add);
     } else {
-      HashLevelBackwardKernel<F, kDense, false>
-          <<<Blocks(n), kThreads>>>(level, pos, n, dfeat, dfeat_stride, scale, grads, table, dpos_add);
+      HashLevelBackwardKernel<F, kDense, false><<<Blocks(n), kThreads>>>(
+          level, pos, n, dfeat, dfeat_stride, scale, scale_stride, grads, table, dpos_add);
     }
     CheckLaunch("hash level backward kernel");
   });

@@ -27,14 +27,14 @@ namespace endorecon::cuda {
 void HashLevelForward(const field::GridLevel& level, int features, const float* table, const float* pos,
                       int n, float* feat, int feat_stride);
 
-// grads[level slots] += scale[i] * trilinear weights * dfeat[i * dfeat_stride + f] (scale null: 1),
-// scattered with atomicAdd (field::ScatterLevel, the CPU's per-sample function); `grads` is the level's
-// part of the gradient array. When dpos_add is not null (table must be given then), also adds the level's
-// part of dL/dpos (n x 3) to it. Features as HashLevelForward. Float atomics make the sum order (and so the
-// last bits) vary from run to run.
+// grads[level slots] += scale[i * scale_stride] * trilinear weights * dfeat[i * dfeat_stride + f] (scale
+// null: 1), scattered with atomicAdd (field::ScatterLevel, the CPU's per-sample function); `grads` is the
+// level's part of the gradient array. When dpos_add is not null (table must be given then), also adds the
+// level's part of dL/dpos (n x 3) to it. Features as HashLevelForward. Float atomics make the sum order (and
+// so the last bits) vary from run to run.
 void HashLevelBackward(const field::GridLevel& level, int features, const float* pos, int n,
-                       const float* dfeat, int dfeat_stride, const float* scale, float* grads, const float* table,
-                       float* dpos_add);
+                       const float* dfeat, int dfeat_stride, const float* scale, float* grads,
+                       const float* table, float* dpos_add, int scale_stride = 1);
 
 // --- samplers (one thread per ray) ---
 

@@ -11,6 +11,7 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "worker/engine/field/deformation_math.h"
 #include "worker/engine/field/module.h"
 
 namespace endorecon::field {
@@ -45,6 +46,11 @@ class Deformation {
   const DeformationConfig& config() const { return config_; }
   std::size_t param_count() const { return slice_size_ * config_.time_knots; }
 
+  // The layout the per-sample math (deformation_math.h) reads.
+  DeformationLayout layout() const {
+    return {static_cast<std::uint32_t>(config_.resolution), config_.time_knots, slice_size_};
+  }
+
   // All zero whatever the seed: no motion until training finds some.
   void Init(S* params, std::uint64_t seed) const;
 
@@ -54,9 +60,6 @@ class Deformation {
                 const InputGrads& din, const DropoutPass& pass);
 
  private:
-  // Adds to dparams the part of the gradient that lies in time slice `knot` (1..time_knots).
-  void BackwardKnot(int knot, const Inputs& in, const S* dx0, S* dparams) const;
-
   DeformationConfig config_;
   std::size_t slice_size_ = 0;  // scalars per time slice: (resolution + 1)^3 * 3
 };

@@ -5,6 +5,7 @@
 #include <utility>
 
 #include "common/error.h"
+#include "worker/engine/field/blend_math.h"
 
 namespace endorecon::field {
 
@@ -59,13 +60,7 @@ void GridEnsemble<S>::Forward(const S* params, const Inputs& in, const Outputs& 
     }
     // The blend, while the task's features are still in cache.
     for (std::size_t s = r; s < r + static_cast<std::size_t>(rows); ++s) {
-      const S* b = in.beta + s * g_count;
-      const S* feats = out.feats + s * stride;
-      S* f = out.f + s * d;
-      for (int j = 0; j < d; ++j) f[j] = b[0] * feats[j];
-      for (int g = 1; g < g_count; ++g) {
-        for (int j = 0; j < d; ++j) f[j] += b[g] * feats[g * d + j];
-      }
+      BlendFeatures(in.beta + s * g_count, out.feats + s * stride, g_count, d, out.f + s * d);
     }
   });
 }
@@ -83,13 +78,8 @@ void GridEnsemble<S>::Backward(const S* params, const Inputs& in, const Outputs&
     const std::size_t r = static_cast<std::size_t>(row0);
     if (din.dbeta) {
       for (std::size_t s = r; s < r + static_cast<std::size_t>(rows); ++s) {
-        const S* df = grad.df + s * d;
-        const S* feats = out.feats + s * output_dim();
-        for (int g = 0; g < g_count; ++g) {
-          S dot = S(0);
-          for (int j = 0; j < d; ++j) dot += df[j] * feats[g * d + j];
-          din.dbeta[s * g_count + g] = dot;
-        }
+        BlendWeightGradient(grad.df + s * d, out.feats + s * output_dim(), g_count, d,
+                            din.dbeta + s * g_count);
       }
     }
     for (int l = 0; l < levels; ++l) {

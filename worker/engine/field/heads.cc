@@ -2,8 +2,7 @@
 
 #include <algorithm>
 
-#include "worker/engine/field/activations.h"
-#include "worker/engine/field/sh_encoding.h"
+#include "worker/engine/field/heads_math.h"
 
 namespace endorecon::field {
 namespace {
@@ -25,10 +24,7 @@ template <typename S>
 void DensityHead<S>::Forward(const S* params, const Inputs& in, const Outputs& out, const DropoutPass& pass) {
   mlp_.Forward(params, {in.n, in.feat}, {out.hidden, out.raw}, pass);
   const std::size_t w = static_cast<std::size_t>(raw_dim());
-  ParallelRows(in.n, [&](std::size_t i) {
-    out.sigma[i] = TruncExp(out.raw[i * w]);
-    out.logvar[i] = out.raw[i * w + 1];
-  });
+  ParallelRows(in.n, [&](std::size_t i) { DensityOutputs(out.raw + i * w, out.sigma + i, out.logvar + i); });
 }
 
 template <typename S>
@@ -37,14 +33,9 @@ void DensityHead<S>::Backward(const S* params, const Inputs& in, const Outputs& 
   const std::size_t w = static_cast<std::size_t>(raw_dim());
   GrowTo(draw_, static_cast<std::size_t>(in.n) * w);
   ParallelRows(in.n, [&](std::size_t i) {
-    S* d = draw_.data() + i * w;
-    d[0] = grad.dsigma ? grad.dsigma[i] * TruncExpGrad(out.raw[i * w]) : S(0);
-    d[1] = grad.dlogvar ? grad.dlogvar[i] : S(0);
-    if (grad.dgeo) {
-      std::copy_n(grad.dgeo + i * geo_, geo_, d + 2);
-    } else {
-      std::fill_n(d + 2, geo_, S(0));
-    }
+    DensityOutputsBackward(out.raw + i * w, grad.dsigma ? grad.dsigma + i : nullptr,
+                           grad.dlogvar ? grad.dlogvar + i : nullptr,
+                           grad.dgeo ? grad.dgeo + i * geo_ : nullptr, geo_, draw_.data() + i * w);
   });
   mlp_.Backward(params, {in.n, in.feat}, {out.hidden, out.raw}, {draw_.data()}, dparams, {din.dfeat}, pass);
 }
@@ -58,16 +49,10 @@ template <typename S>
 void ColorHead<S>::Forward(const S* params, const Inputs& in, const Outputs& out, const DropoutPass& pass) {
   const std::size_t w = static_cast<std::size_t>(in_dim());
   ParallelRows(in.n, [&](std::size_t i) {
-    S* row = out.in + i * w;
-    std::copy_n(in.geo + i * in.geo_stride, geo_, row);
-    ShEncode(in.dir + 3 * i, row + geo_);
+    ColorInput(in.geo + i * in.geo_stride, geo_, in.dir + 3 * i, out.in + i * w);
   });
   mlp_.Forward(params, {in.n, out.in}, {out.hidden, out.raw}, pass);
-  ParallelRows(in.n, [&](std::size_t i) {
-    const S* r = out.raw + 4 * i;
-    for (int c = 0; c < 3; ++c) out.rgb[3 * i + c] = Sigmoid(r[c]);
-    out.logvar[i] = r[3];
-  });
+  ParallelRows(in.n, [&](std::size_t i) { ColorOutputs(out.raw + 4 * i, out.rgb + 3 * i, out.logvar + i); });
 }
 
 template <typename S>
@@ -76,13 +61,8 @@ void ColorHead<S>::Backward(const S* params, const Inputs& in, const Outputs& ou
   const std::size_t n = static_cast<std::size_t>(in.n), w = static_cast<std::size_t>(in_dim());
   GrowTo(draw_, 4 * n);
   ParallelRows(in.n, [&](std::size_t i) {
-    const S* r = out.raw + 4 * i;
-    S* d = draw_.data() + 4 * i;
-    for (int c = 0; c < 3; ++c) {
-      const S s = Sigmoid(r[c]);
-      d[c] = grad.drgb ? grad.drgb[3 * i + c] * s * (S(1) - s) : S(0);
-    }
-    d[3] = grad.dlogvar ? grad.dlogvar[i] : S(0);
+    ColorOutputsBackward(out.raw + 4 * i, grad.drgb ? grad.drgb + 3 * i : nullptr,
+                         grad.dlogvar ? grad.dlogvar + i : nullptr, draw_.data() + 4 * i);
   });
   if (din.dgeo) GrowTo(din_, n * w);
   mlp_.Backward(params, {in.n, out.in}, {out.hidden, out.raw}, {draw_.data()}, dparams,

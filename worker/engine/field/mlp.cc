@@ -11,7 +11,7 @@
 
 #include "common/error.h"
 #include "worker/engine/base/counter_rng.h"
-#include "worker/engine/field/dropout.h"
+#include "worker/engine/field/mlp_math.h"
 
 namespace endorecon::field {
 namespace {
@@ -91,20 +91,15 @@ void Mlp<S>::ForwardTile(const S* params, const S* x, int rows, S* const* hidden
     Y.noalias() = ConstMap<S>(x, rows, n_in) * ConstMap<S>(params + w_offset_[k], n_in, n_out);
     Y.rowwise() += Eigen::Map<const RowVector<S>>(params + b_offset_[k], n_out);
     if (k == layers - 1) break;
-    if (dropout) {
-      const DropoutKey key = MakeDropoutKey(pass.seed, (stream_ << 4) | static_cast<std::uint32_t>(k));
-      for (int r = 0; r < rows; ++r) {
-        S* row = out + static_cast<std::size_t>(r) * n_out;
-        const std::uint32_t base =
-            (first_row + static_cast<std::uint32_t>(r)) * static_cast<std::uint32_t>(n_out);
-        for (int j = 0; j < n_out; ++j) {
-          const bool keep = DropoutKeep(key, base + static_cast<std::uint32_t>(j), threshold);
-          row[j] = (keep && row[j] > S(0)) ? row[j] * keep_scale : S(0);
-        }
-      }
-    } else {
-      const std::size_t count = static_cast<std::size_t>(rows) * n_out;
-      for (std::size_t i = 0; i < count; ++i) out[i] = out[i] > S(0) ? out[i] : S(0);
+    const HiddenDropout<S> drop =
+        dropout ? HiddenDropout<S>{true,
+                                   MakeDropoutKey(pass.seed, (stream_ << 4) | static_cast<std::uint32_t>(k)),
+                                   threshold, keep_scale}
+                : HiddenDropout<S>{};
+    for (int r = 0; r < rows; ++r) {
+      S* row = out + static_cast<std::size_t>(r) * n_out;
+      for (int j = 0; j < n_out; ++j)
+        row[j] = HiddenActivation(row[j], drop, first_row + std::uint32_t(r), n_out, j);
     }
     x = out;
   }
@@ -128,7 +123,7 @@ void Mlp<S>::BackwardTile(const S* params, const S* x_in, int rows, S* const* hi
     MutMap<S>(d, rows, n_in).noalias() = G * ConstMap<S>(params + w_offset_[k], n_in, n_out).transpose();
     if (k > 0) {
       const std::size_t count = static_cast<std::size_t>(rows) * n_in;
-      for (std::size_t i = 0; i < count; ++i) d[i] = x[i] > S(0) ? d[i] * keep_scale : S(0);
+      for (std::size_t i = 0; i < count; ++i) d[i] = HiddenActivationGrad(x[i], d[i], keep_scale);
     }
     g = d;
   }

@@ -34,6 +34,9 @@ struct DropoutPass {
   std::uint32_t first_row = 0;
 };
 
+// Checked where the modules are compiled (C++20); the CUDA sources, built as C++17 for CUDA 11.8,
+// see the modules without it.
+#if defined(__cpp_concepts)
 template <typename M, typename S>
 concept TrainableModule = requires(M& m, const M& cm, const S* params, S* grads, std::uint64_t seed,
                                    const typename M::Inputs& in, const typename M::Outputs& out,
@@ -45,5 +48,6 @@ concept TrainableModule = requires(M& m, const M& cm, const S* params, S* grads,
   m.Backward(params, in, out, grad, grads, din, pass);
   { in.n } -> std::convertible_to<int>;
 };
+#endif
 
 }  // namespace endorecon::field

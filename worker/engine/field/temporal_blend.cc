@@ -1,7 +1,6 @@
 #include "worker/engine/field/temporal_blend.h"
 
-#include <algorithm>
-#include <cmath>
+#include "worker/engine/field/blend_math.h"
 
 namespace endorecon::field {
 
@@ -21,13 +20,7 @@ void TemporalBlend<S>::Forward(const S* params, const Inputs& in, const Outputs&
   S* const hidden[] = {out.hidden};
   mlp_.Forward(params, {in.n, in.time}, {hidden, out.beta}, DropoutPass{});
   const int g = grids_;
-  ParallelRows(in.n, [&](std::size_t s) {
-    S* b = out.beta + s * g;
-    const S top = *std::max_element(b, b + g);
-    S sum = S(0);
-    for (int i = 0; i < g; ++i) sum += (b[i] = std::exp(b[i] - top));
-    for (int i = 0; i < g; ++i) b[i] /= sum;
-  });
+  ParallelRows(in.n, [&](std::size_t s) { SoftmaxInPlace(out.beta + s * g, g); });
 }
 
 template <typename S>
@@ -36,13 +29,7 @@ void TemporalBlend<S>::Backward(const S* params, const Inputs& in, const Outputs
   const int g = grids_;
   GrowTo(dlogits_, static_cast<std::size_t>(in.n) * g);
   ParallelRows(in.n, [&](std::size_t s) {
-    const S* b = out.beta + s * g;
-    const S* db = grad.dbeta + s * g;
-    S* dl = dlogits_.data() + s * g;
-    S mean = S(0);
-    for (int i = 0; i < g; ++i) mean += b[i] * db[i];
-    // Softmax backward: dlogit_i = beta_i (dbeta_i - sum_k beta_k dbeta_k).
-    for (int i = 0; i < g; ++i) dl[i] = b[i] * (db[i] - mean);
+    SoftmaxBackward(out.beta + s * g, grad.dbeta + s * g, g, dlogits_.data() + s * g);
   });
   S* const hidden[] = {out.hidden};
   mlp_.Backward(params, {in.n, in.time}, {hidden, out.beta}, {dlogits_.data()}, dparams, {}, DropoutPass{});

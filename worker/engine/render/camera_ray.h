@@ -1,26 +1,47 @@
 // The one way a pixel becomes samples for the field, shared by training, depth refinement and
-// rendering: the camera ray of the pixel, the part of [near, far] worth sampling (its occupied span
-// when an occupancy grid is given), a sampler that places depths and intervals there, and RayPoints,
-// which turns them into field inputs.
+// rendering, on the CPU and in CUDA kernels: the camera ray of the pixel, the part of [near, far]
+// worth sampling (its occupied span when an occupancy grid is given), a sampler that places depths
+// and intervals there, and RayPointsOf, which turns them into field inputs.
 #pragma once
 
-#include <Eigen/Core>
+#include <cstdint>
 
+#include "common/hd.h"
 #include "worker/engine/render/occupancy_grid.h"
 #include "worker/engine/render/ray_points.h"
 #include "worker/engine/scene/camera.h"
 #include "worker/engine/scene/scene_box.h"
+#include "worker/engine/scene/view_geometry.h"
 
 namespace endorecon::render {
 
-// A pixel's ray (origin, direction with unit z-depth, as scene::Camera::Ray) and its span [lo, hi].
+// A pixel's ray (origin, direction with unit z-depth) and its span [lo, hi].
 struct CameraRay {
-  Eigen::Vector3d origin, direction;
+  double origin[3] = {0, 0, 0}, direction[3] = {0, 0, 1};
   float lo = 0, hi = 1;
 };
 
-// The ray of `pixel` (row-major index) of `camera`; its span is [near, far], or the occupied span of
-// that range when `occupancy` is not null (an empty grid leaves the whole range).
+// The occupancy cells a ray consults: res^3 cells (occupancy_grid.h), none when cells is null.
+struct OccupancyView {
+  const std::uint8_t* cells = nullptr;
+  int res = 0;
+};
+
+// The ray of `pixel` (row-major index) of `view`; its span is [near, far], or the occupied span of
+// that range when the occupancy view has cells.
+ENDORECON_HD CameraRay CameraRayOfPixel(const scene::PinholeView& view, int pixel, const scene::BoxFrame& box,
+                                        const OccupancyView& occupancy, double near, double far) {
+  CameraRay ray;
+  scene::PixelRay(view, pixel, ray.origin, ray.direction);
+  double lo = near, hi = far;
+  if (occupancy.cells != nullptr)
+    RaySpan(occupancy.cells, occupancy.res, box, ray.origin, ray.direction, near, far, &lo, &hi);
+  ray.lo = static_cast<float>(lo);
+  ray.hi = static_cast<float>(hi);
+  return ray;
+}
+
+// The same for a scene::Camera and an OccupancyGrid (null or empty: no skipping).
 CameraRay CameraRayOf(const scene::Camera& camera, int pixel, const scene::SceneBox& box,
                       const OccupancyGrid* occupancy, double near, double far);
 
@@ -34,18 +55,18 @@ struct RaySlot {
 };
 
 // Ray r of arrays laid out ray-major with n samples per ray.
-inline RaySlot RaySlotOf(float* s, float* delta, float* pos, float* dir, float* time, int r, int n) {
+ENDORECON_HD RaySlot RaySlotOf(float* s, float* delta, float* pos, float* dir, float* time, int r, int n) {
   const std::size_t o = static_cast<std::size_t>(r) * n;
   return {s + o, delta + o, pos + 3 * o, dir + 3 * o, time + o};
 }
 
-// sample(lo, hi, s, delta) places the ray's n samples within its span; RayPoints then makes them
+// sample(lo, hi, s, delta) places the ray's n samples within its span; RayPointsOf then makes them
 // field inputs at `time` (intervals rescaled to box units).
 template <typename Sample>
-void PlaceSamples(const CameraRay& ray, const scene::SceneBox& box, float time, int n, Sample&& sample,
-                  const RaySlot& slot) {
+ENDORECON_HD void PlaceSamples(const CameraRay& ray, const scene::BoxFrame& box, float time, int n,
+                               const Sample& sample, const RaySlot& slot) {
   sample(ray.lo, ray.hi, slot.s, slot.delta);
-  RayPoints(box, ray.origin, ray.direction, time, slot.s, n, slot.delta, slot.pos, slot.dir, slot.time);
+  RayPointsOf(box, ray.origin, ray.direction, time, slot.s, n, slot.delta, slot.pos, slot.dir, slot.time);
 }
 
 }  // namespace endorecon::render

@@ -121,7 +121,7 @@ void FrameRenderer::RenderChunk(const scene::Camera& camera, float time, const i
       if (fine) {
         const std::size_t c = std::size_t(r) * settings_.coarse_samples;
         PlaceSamples(
-            rays_[r], box_, time, samples,
+            rays_[r], box_.Frame(), time, samples,
             [&](float lo, float hi, float* s, float* delta) {
               AdaptiveSamples(&fine_s_[c], &weights_[c], settings_.coarse_samples, lo, hi, settings_.floor,
                               samples, centre, s, delta);
@@ -130,7 +130,7 @@ void FrameRenderer::RenderChunk(const scene::Camera& camera, float time, const i
       } else {
         rays_[r] = CameraRayOf(camera, pixels[r], box_, occupancy_, near, far);
         PlaceSamples(
-            rays_[r], box_, time, samples,
+            rays_[r], box_.Frame(), time, samples,
             [&](float lo, float hi, float* s, float* delta) {
               StratifiedSamples(lo, hi, samples, centre, s, delta);
             },

@@ -97,10 +97,7 @@ void OccupancyGrid::Span(const scene::SceneBox& box, const Eigen::Vector3d& orig
     *hi = far;
     return;
   }
-  const Eigen::Vector3d inv_size = (box.max - box.min).cwiseInverse();
-  const Eigen::Vector3d start = (origin - box.min).cwiseProduct(inv_size);
-  const Eigen::Vector3d step = direction.cwiseProduct(inv_size);
-  OccupiedSpan(cells_.data(), res_, start.data(), step.data(), near, far, lo, hi);
+  RaySpan(cells_.data(), res_, box.Frame(), origin.data(), direction.data(), near, far, lo, hi);
 }
 
 void OccupancyGrid::Save(std::ostream& out) const {

@@ -20,6 +20,7 @@
 #include "common/hd.h"
 #include "worker/engine/field/field.h"
 #include "worker/engine/scene/scene_box.h"
+#include "worker/engine/scene/view_geometry.h"
 
 namespace endorecon::render {
 
@@ -63,6 +64,18 @@ ENDORECON_HD void OccupiedSpan(const std::uint8_t* occupied, int res, const doub
   }
   *lo = first - ds > near ? first - ds : near;
   *hi = last + ds < far ? last + ds : far;
+}
+
+// OccupiedSpan of the ray origin + s * direction (scene units, direction with unit z-depth) in the box.
+ENDORECON_HD void RaySpan(const std::uint8_t* occupied, int res, const scene::BoxFrame& box,
+                          const double* origin, const double* direction, double near, double far, double* lo,
+                          double* hi) {
+  double start[3], step[3];
+  for (int c = 0; c < 3; ++c) {
+    start[c] = (origin[c] - box.min[c]) * box.inv_size[c];
+    step[c] = direction[c] * box.inv_size[c];
+  }
+  OccupiedSpan(occupied, res, start, step, near, far, lo, hi);
 }
 
 // The times a grid is probed at: one for a static field, else 8 evenly spaced over [0, 1] (the CPU

@@ -5,6 +5,8 @@
 
 #include <Eigen/Core>
 
+#include "worker/engine/scene/view_geometry.h"
+
 namespace endorecon::scene {
 
 struct Camera {
@@ -15,9 +17,19 @@ struct Camera {
   // Ray through the centre of pixel (u, v) (u right, v down), origin and unnormalised direction
   // with unit z-depth per unit s.
   void Ray(double u, double v, Eigen::Vector3d& origin, Eigen::Vector3d& direction) const {
-    const Eigen::Vector3d d_cam((u + 0.5 - cx) / fx, -(v + 0.5 - cy) / fy, -1.0);
-    direction = c2w.leftCols<3>() * d_cam;
-    origin = c2w.col(3);
+    PixelRay(c2w.data(), fx, fy, cx, cy, u, v, origin.data(), direction.data());
+  }
+
+  PinholeView View() const {
+    PinholeView view;
+    for (int i = 0; i < 12; ++i) view.c2w[i] = c2w.data()[i];
+    view.fx = fx;
+    view.fy = fy;
+    view.cx = cx;
+    view.cy = cy;
+    view.width = width;
+    view.height = height;
+    return view;
   }
 };
 

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "worker/engine/scene/camera.h"
+#include "worker/engine/scene/view_geometry.h"
 
 namespace endorecon::scene {
 
@@ -16,6 +17,15 @@ struct SceneBox {
 
   double scale() const { return (max - min).maxCoeff(); }
   Eigen::Vector3d Normalise(const Eigen::Vector3d& x) const { return (x - min).cwiseQuotient(max - min); }
+  BoxFrame Frame() const {
+    BoxFrame frame;
+    for (int k = 0; k < 3; ++k) {
+      frame.min[k] = min[k];
+      frame.inv_size[k] = 1.0 / (max[k] - min[k]);
+    }
+    frame.scale = scale();
+    return frame;
+  }
 };
 
 // The box around all cameras' frusta between near and far, padded by `padding` of its size per side.

@@ -10,6 +10,7 @@
 #include <ostream>
 
 #include "common/error.h"
+#include "worker/engine/train/adam_math.h"
 
 namespace endorecon::train {
 
@@ -78,24 +79,19 @@ AdamStepReport Adam::Step(double progress) {
   ++steps_;
   const float decay =
       static_cast<float>(std::pow(double(config_.final_lr_factor), std::clamp(progress, 0.0, 1.0)));
-  const float b1 = config_.beta1, b2 = config_.beta2;
-  const float c1 = 1.0f - static_cast<float>(std::pow(double(b1), double(steps_)));
-  const float c2 = 1.0f - static_cast<float>(std::pow(double(b2), double(steps_)));
+  const float c1 = 1.0f - static_cast<float>(std::pow(double(config_.beta1), double(steps_)));
+  const float c2 = 1.0f - static_cast<float>(std::pow(double(config_.beta2), double(steps_)));
   for (std::size_t k = 0; k < groups_.size(); ++k) {
     const auto& g = groups_[k];
     auto it = config_.lr.find(g.name);
     const float lr = (it == config_.lr.end() ? config_.default_lr : it->second) * decay;
-    const float step = lr * std::sqrt(c2) / c1;
+    const AdamCoefficients coefficients{config_.beta1, config_.beta2, lr * std::sqrt(c2) / c1,
+                                        config_.eps * std::sqrt(c2), scale};
     float* m = m_[k].data();
     float* v = v_[k].data();
-    const float eps = config_.eps * std::sqrt(c2);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, g.size, 1 << 14), [&](const auto& r) {
-      for (std::size_t i = r.begin(); i != r.end(); ++i) {
-        const float grad = g.grad[i] * scale;
-        m[i] = b1 * m[i] + (1 - b1) * grad;
-        v[i] = b2 * v[i] + (1 - b2) * grad * grad;
-        g.value[i] -= step * m[i] / (std::sqrt(v[i]) + eps);
-      }
+      for (std::size_t i = r.begin(); i != r.end(); ++i)
+        AdamUpdate(g.value[i], g.grad[i], m[i], v[i], coefficients);
     });
   }
   return report;

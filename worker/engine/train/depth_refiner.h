@@ -36,6 +36,12 @@ class DepthRefiner {
                            : refined[std::size_t(pixel)];
   }
 
+  // The current priors of a whole frame (H x W), as Prior reads them; valid until the next round or Load.
+  const float* PriorFrame(int frame) const {
+    const auto& refined = refined_[std::size_t(frame)];
+    return refined.empty() ? clip_.depth[std::size_t(frame)].data() : refined.data();
+  }
+
   // One round; fraction in (0, 1], ema in (0, 1]. No-op without depth. A round refines the training
   // frames in turn, starting where the last round stopped, until max_pixels measured pixels were
   // rendered (at least one frame; 0: every training frame once, as EndoNeRF), so a round's cost is

@@ -3,7 +3,6 @@
 #include <algorithm>
 
 #include "common/error.h"
-#include "worker/engine/base/counter_rng.h"
 
 namespace endorecon::train {
 
@@ -27,24 +26,15 @@ RaySampler::RaySampler(const scene::Clip& clip, std::vector<int> frames) : clip_
   if (frames.empty())
     FailInvalid(clip.source + ": no training frame has a tissue pixel (every pixel is tool)");
   frames_ = std::move(frames);
+  for (const auto& mask : clip.tool_mask) mask_frames_.push_back(mask.data());
+  tables_ = {frames_.data(),
+             int(frames_.size()),
+             clip.width,
+             clip.height,
+             occlusion_weight_.empty() ? nullptr : occlusion_weight_.data(),
+             mask_frames_.empty() ? nullptr : mask_frames_.data()};
 }
 
-float RaySampler::Weight(int frame, int pixel) const {
-  if (occlusion_weight_.empty()) return 1.0f;
-  return clip_.tool_mask[frame][pixel] ? 0.0f : occlusion_weight_[pixel];
-}
-
-RayPick RaySampler::Pick(std::uint64_t seed, std::uint64_t stream) const {
-  const base::CounterRng<double> uniform(seed, stream);
-  const int pixels = clip_.width * clip_.height;
-  RayPick pick;
-  // Every frame kept has a tissue pixel, so acceptance is at least 1 / (2 * pixels) per draw; in
-  // practice tissue covers most of a frame and a few draws suffice.
-  for (unsigned draw = 0;; draw += 3) {
-    pick.frame = frames_[std::min<int>(int(uniform(draw) * frames_.size()), int(frames_.size()) - 1)];
-    pick.pixel = std::min(int(uniform(draw + 1) * pixels), pixels - 1);
-    if (uniform(draw + 2) * 2.0 < Weight(pick.frame, pick.pixel)) return pick;
-  }
-}
+float RaySampler::Weight(int frame, int pixel) const { return PixelWeight(tables_, frame, pixel); }
 
 }  // namespace endorecon::train

@@ -1,20 +1,24 @@
-// One training run's state and its step: pick rays, sample along them, evaluate the field,
-// composite, compute the loss, backpropagate by hand, step Adam.
+// One training run's state and its schedule: the field, the uncertainty map, the refined depth priors,
+// the occupancy grid and the seeds; each step's loops (pick rays, sample along them, evaluate the
+// field, composite, compute the loss, backpropagate by hand, step Adam) run on a StepBackend
+// (step_backend.h): the CPU's by default, a GPU's when the caller gives its factory.
 #pragma once
 
 #include <cstdint>
 #include <iosfwd>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "worker/engine/field/field.h"
 #include "worker/engine/render/occupancy_grid.h"
 #include "worker/engine/scene/clip.h"
 #include "worker/engine/scene/scene_box.h"
-#include "worker/engine/train/adam.h"
 #include "worker/engine/train/depth_refiner.h"
 #include "worker/engine/train/ray_sampler.h"
+#include "worker/engine/train/step_backend.h"
 #include "worker/engine/train/train_config.h"
+#include "worker/engine/train/training_ray.h"
 #include "worker/engine/train/uncertainty_map.h"
 
 namespace endorecon::train {
@@ -35,8 +39,9 @@ render::OccupancyGrid BuildOccupancy(field::Field& field, const TrainConfig& con
 class Trainer {
  public:
   // Keeps references to clip (which must outlive the trainer). train_frames: the frames rays come from.
+  // `backend` makes the step backend (MakeCpuStep by default).
   Trainer(const scene::Clip& clip, const TrainConfig& config, std::vector<int> train_frames,
-          std::uint64_t seed);
+          std::uint64_t seed, const StepBackendFactory& backend = MakeCpuStep);
   ~Trainer();
 
   // One iteration at `progress` in [0, 1] of the run (drives the learning-rate decay and the periodic
@@ -46,7 +51,11 @@ class Trainer {
   StepStats Step(double progress = -1);
 
   int iteration() const { return iteration_; }
+  // The host field. With a GPU backend its parameters are the last SyncField's: call it before reading.
   field::Field& field() { return *field_; }
+  void SyncField() { backend_->PullField(); }
+  // Where the steps run ("cpu", "cuda:0 (...)").
+  std::string device() const { return backend_->device(); }
   const scene::SceneBox& box() const { return box_; }
   const TrainConfig& config() const { return config_; }
 
@@ -69,17 +78,11 @@ class Trainer {
   void Load(std::istream& in);
 
  private:
-  struct Batch;
-  void SampleRays(int guided);
-  // Fills ray r of the batch for (frame, pixel) with the ordinary (depth-guided) samples.
-  void PlaceRay(int r, const RayPick& pick, std::uint64_t step_seed);
-  // Re-places the stratified samples of rays [0, rays) (all of a ray's samples when it has no depth
-  // prior) in proportion to the sample scores from one dropout-on pass at stratified probes of the
-  // ray (adaptive_sampler.h), with the floor adaptive_floor; the Gaussian samples around the prior stay.
-  void ReallocateSamples(int rays, std::uint64_t step_seed);
+  // Points the step tables at the current priors, occupancy grid and map (after a refinement, a
+  // rebuild, a refresh, Load) and tells the backend.
+  void UpdateTables();
   // One dropout-on pass at every cell's probe pixel; the ray scores of the aleatoric variances.
   void RefreshMap();
-  double LossAndGradients(StepStats& stats);
 
   const scene::Clip& clip_;
   TrainConfig config_;
@@ -87,12 +90,15 @@ class Trainer {
   scene::SceneBox box_;
   RaySampler sampler_;
   std::unique_ptr<field::Field> field_;
-  std::unique_ptr<Adam> adam_;
-  std::unique_ptr<Batch> batch_;
   UncertaintyMap map_;
   DepthRefiner refiner_;
   render::OccupancyGrid occupancy_;
   int occupancy_builds_ = 0;
+  std::vector<const std::uint8_t*> rgb_frames_;
+  std::vector<const float*> prior_frames_;
+  std::vector<scene::PinholeView> views_;
+  StepTables tables_;
+  std::unique_ptr<StepBackend> backend_;
   int iteration_ = 0;
 };
 

@@ -60,24 +60,14 @@ void UncertaintyMap::Set(std::vector<float> scores, int iteration) {
   total_ = sum;
 }
 
+MapTables UncertaintyMap::tables() const {
+  return {probe_.data(), cumulative_.data(), cells(), total_, stride_, cells_x_, cells_y_};
+}
+
 std::optional<RayPick> UncertaintyMap::Pick(std::uint64_t seed, std::uint64_t stream) const {
-  if (!(total_ > 0)) return std::nullopt;
-  const base::CounterRng<double> uniform(seed, stream);
-  const double target = uniform(0) * total_;
-  const auto it = std::upper_bound(cumulative_.begin(), cumulative_.end(), target);
-  const int cell = std::min<int>(int(it - cumulative_.begin()), cells() - 1);
-  const RayPick probe = probe_[cell];
-  const int in_frame = cell % (cells_x_ * cells_y_);
-  const int x0 = (in_frame % cells_x_) * stride_, y0 = (in_frame / cells_x_) * stride_;
-  const int w = std::min(width_, x0 + stride_) - x0, h = std::min(height_, y0 + stride_) - y0;
-  // Uniform over the cell's tissue pixels by rejection; the probe after a bounded number of draws.
-  for (unsigned draw = 1; draw < 1 + 2 * 32; draw += 2) {
-    const int x = x0 + std::min(int(uniform(draw) * w), w - 1);
-    const int y = y0 + std::min(int(uniform(draw + 1) * h), h - 1);
-    const int pixel = y * width_ + x;
-    if (sampler_.Weight(probe.frame, pixel) > 0) return RayPick{probe.frame, pixel};
-  }
-  return probe;
+  RayPick pick;
+  if (!PickFromMap(tables(), sampler_.tables(), seed, stream, &pick)) return std::nullopt;
+  return pick;
 }
 
 void UncertaintyMap::Save(std::ostream& out) const {

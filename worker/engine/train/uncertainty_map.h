@@ -33,6 +33,8 @@ class UncertaintyMap {
   // A pick in proportion to the cell scores, a pure function of (seed, stream); nullopt when no cell
   // has a positive score.
   std::optional<RayPick> Pick(std::uint64_t seed, std::uint64_t stream) const;
+  // The tables PickFromMap reads (they point into this map).
+  MapTables tables() const;
 
   void Save(std::ostream& out) const;
   void Load(std::istream& in);  // Error(kDataLoss) for a truncated stream or another cell count
