@@ -6,6 +6,7 @@
 
 #include "common/error.h"
 #include "common/manifest.h"
+#include "common/prepare_flags_proto.h"
 
 namespace endorecon::server {
 namespace {
@@ -135,7 +136,8 @@ void JobCoordinator::Requeue(StoredJob& stored, bool count_attempt, const std::s
 v1::Job JobCoordinator::Submit(const v1::SubmitRequest& request) {
   ValidateManifest(request.clip());
   ValidateOptions(request.options());
-  RequireBlobs(parts_.blobs, request.clip(), "clip");
+  if (request.has_prepare()) CheckPrepareOptions(request.prepare(), request.clip());
+  RequireBlobs(parts_.blobs, request.clip(), request.has_prepare() ? "recording" : "clip");
   v1::Job job;
   job.set_id(RandomId(6));
   job.set_name(request.name());
@@ -143,6 +145,7 @@ v1::Job JobCoordinator::Submit(const v1::SubmitRequest& request) {
   job.set_priority(request.priority());
   *job.mutable_options() = request.options();
   *job.mutable_clip() = request.clip();
+  if (request.has_prepare()) *job.mutable_prepare() = request.prepare();
   job.set_created_unix_ms(NowUnixMs());
   job.set_max_attempts(max_attempts_);
   std::lock_guard lock(mutex_);
