@@ -1,10 +1,12 @@
 // Preparation of raw stereo recordings (issue 16): frames per second of `prepare` at 640x512 and
 // 1280x1024 on the synthetic rig's recording (lens distortion, rotated eyes, a tool, masks), the
-// depth error against time of each depth option there, and optionally the reconstruction target:
+// depth error against time of each depth option there, `calibrate` and `--estimate-poses` against
+// the rig's truth (640x512), and optionally the reconstruction target:
 // held-out PSNR of a clip prepared from the synthetic stereo pair against the same clip with the
 // synthetic generator's own depth, each trained for the same time.
 //   prepare_bench [--out DIR] [--frames N] [--sizes 640x512,1280x1024] [--reconstruct SECONDS]
 //                 [--reconstruct-size WxH] [--reconstruct-frames N]
+#include <Eigen/Geometry>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -16,11 +18,11 @@
 #include "tests/unit/synthetic_recording_fixture.h"
 #include "worker/engine/reconstruct.h"
 #include "worker/engine/scene/clip_loader.h"
+#include "worker/prepare/checkerboard_calibration.h"
 
 namespace {
 
 namespace fs = std::filesystem;
-using endorecon::prepare::DepthFilter;
 using endorecon::prepare::DepthOptions;
 
 struct Row {
@@ -32,18 +34,83 @@ std::vector<Row> DepthRows() {
   std::vector<Row> rows;
   for (const bool eight : {false, true}) {
     for (const bool refine : {false, true}) {
-      for (const DepthFilter filter : {DepthFilter::kNone, DepthFilter::kWls}) {
-        DepthOptions d;
-        d.eight_paths = eight;
-        d.refine = refine;
-        d.filter = filter;
-        rows.push_back({std::string(eight ? "8-path" : "3-way") + (refine ? " + refine" : "") +
-                            (filter == DepthFilter::kWls ? " + WLS" : ""),
-                        d});
-      }
+      DepthOptions d;
+      d.eight_paths = eight;
+      d.refine = refine;
+      rows.push_back({std::string(eight ? "8-path" : "3-way") + (refine ? " + refine" : ""), d});
     }
   }
   return rows;
+}
+
+Eigen::Matrix4d Homogeneous(const Eigen::Matrix<double, 3, 4>& pose) {
+  Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
+  m.topRows<3>() = pose;
+  return m;
+}
+
+// --estimate-poses on the moving endoscope (static tissue, light at the tip) against its path.
+void MeasurePoses(const fs::path& root, int width, int height, int frames) {
+  endorecon::scene::SynthOptions synth = endorecon::testing::RecordingOptions(width, height, frames);
+  synth.moving = true;
+  synth.static_scene = true;
+  const fs::path dir = root / "poses";
+  endorecon::scene::WriteSyntheticClip(synth, dir / "synth");
+  endorecon::prepare::PrepareOptions options =
+      endorecon::testing::RecordingPrepareOptions(dir / "synth", dir / "clip");
+  options.estimate_poses = true;
+  options.depth.eight_paths = true;  // what --estimate-poses chooses by default
+  const auto summary = endorecon::prepare::PrepareClip(options);
+  const auto report = endorecon::testing::ReadJson(dir / "clip/prepare.json");
+  const auto clip = endorecon::scene::LoadClip(dir / "clip");
+  const endorecon::scene::SyntheticScene scene(synth);
+  const Eigen::Matrix4d first = Homogeneous(endorecon::testing::TruthCamera(scene, synth, report, 0).c2w);
+  double length = 0, translation = 0, degrees = 0;
+  Eigen::Vector3d previous = Eigen::Vector3d::Zero();
+  for (int f = 0; f < clip.frame_count(); ++f) {
+    const Eigen::Matrix4d truth =
+        first.inverse() * Homogeneous(endorecon::testing::TruthCamera(scene, synth, report, f).c2w);
+    const Eigen::Matrix4d estimate = Homogeneous(clip.cameras[f].c2w);
+    length += (truth.topRightCorner<3, 1>() - previous).norm();
+    previous = truth.topRightCorner<3, 1>();
+    translation =
+        std::max(translation, (estimate.topRightCorner<3, 1>() - truth.topRightCorner<3, 1>()).norm());
+    degrees = std::max(
+        degrees,
+        Eigen::AngleAxisd(estimate.topLeftCorner<3, 3>().transpose() * truth.topLeftCorner<3, 3>()).angle() *
+            180 / M_PI);
+  }
+  std::printf(
+      "poses at %dx%d, %d frames: worst translation %.3f (%.2f%% of the %.2f-unit path), worst rotation "
+      "%.3f deg, reprojection RMS %.3f px, %d dropped\n",
+      width, height, frames, translation, 100 * translation / length, length, degrees,
+      summary.pose_reprojection.rms, summary.dropped);
+}
+
+// `calibrate` on the rig's 24 checkerboard views, and the true rig's rows rectified with the estimate.
+void MeasureCalibration(const fs::path& root, int width, int height) {
+  const endorecon::scene::SynthOptions synth = endorecon::testing::RecordingOptions(width, height, 1, 24);
+  const fs::path dir = root / "calibration";
+  endorecon::scene::WriteSyntheticClip(synth, dir / "synth");
+  endorecon::prepare::CheckerboardOptions board;
+  board.inner_corners = {endorecon::scene::kCheckerboardColumns, endorecon::scene::kCheckerboardRows};
+  board.square = endorecon::scene::kCheckerboardSquare;
+  const auto result =
+      endorecon::prepare::CalibrateFromCheckerboard({endorecon::prepare::StereoLayout::kTwoSources,
+                                                     dir / "synth/recording/checkerboard/left",
+                                                     dir / "synth/recording/checkerboard/right",
+                                                     {}},
+                                                    board);
+  const auto truth = endorecon::testing::SyntheticCalibration(synth);
+  const auto [epipolar, projection] = endorecon::testing::EpipolarAndProjectionError(
+      truth, endorecon::prepare::StereoRectifier(result.calibration, {}));
+  const auto [exact, exact_projection] =
+      endorecon::testing::EpipolarAndProjectionError(truth, endorecon::prepare::StereoRectifier(truth, {}));
+  std::printf(
+      "calibration at %dx%d: %d views, RMS reprojection %.3f px, baseline %.4f (true %.4f), fx %.2f "
+      "(true %.2f); worst epipolar error over the view: %.3f px with the estimate, %.2g px with the truth\n",
+      width, height, result.views_used, result.rms_px, result.calibration.baseline(), truth.baseline(),
+      result.calibration.k1(0, 0), truth.k1(0, 0), epipolar, exact);
 }
 
 void MeasureSize(const fs::path& root, int width, int height, int frames) {
@@ -136,6 +203,8 @@ int main(int argc, char** argv) {
   }
   fs::remove_all(out);
   for (const auto& [width, height] : ParseSizes(sizes)) MeasureSize(out, width, height, frames);
+  MeasureCalibration(out, 640, 512);
+  MeasurePoses(out, 640, 512, 12);
   if (reconstruct > 0) {
     const auto size = endorecon::ParseFrameSize(reconstruct_size);
     MeasureReconstruction(out, size.width, size.height, reconstruct_frames, reconstruct);

@@ -110,10 +110,7 @@ void CheckPrepareFlags(const PrepareFlags& f) {
   if (f.mask_tool != "white" && f.mask_tool != "black") {
     FailInvalid("--mask-tool must be white (255 = tool) or black (0 = tool), found '" + f.mask_tool + "'");
   }
-  if (f.depth_filter != "none" && f.depth_filter != "wls") {
-    FailInvalid("--depth-filter must be none or wls, found '" + f.depth_filter + "'");
-  }
-  if (f.depth_paths != 3 && f.depth_paths != 8) {
+  if (f.depth_paths != 0 && f.depth_paths != 3 && f.depth_paths != 8) {
     FailInvalid("--depth-paths must be 3 or 8, found " + std::to_string(f.depth_paths));
   }
   if (!f.frames.empty()) ParseFrameRange(f.frames);

@@ -44,13 +44,10 @@ void AddPrepareFlags(CLI::App& cmd, PrepareFlags& f) {
   cmd.add_flag("--estimate-poses", f.estimate_poses,
                "estimate a moving endoscope's poses from the stereo frames")
       ->group(extras);
-  cmd.add_option("--depth-filter", f.depth_filter, "none, or wls (edge-aware weighted least squares)")
-      ->capture_default_str()
-      ->group(depth);
   cmd.add_flag("--depth-refine", f.depth_refine,
                "Lucas-Kanade sub-pixel refinement of every disparity (slower)")
       ->group(depth);
-  cmd.add_option("--depth-paths", f.depth_paths, "SGBM directions: 3 (fast) or 8 (slower)")
+  cmd.add_option("--depth-paths", f.depth_paths, "SGBM directions: 3 (fast) or 8 (3x slower; the default with --estimate-poses)")
       ->capture_default_str()
       ->group(depth);
 }

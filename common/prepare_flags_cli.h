@@ -11,7 +11,7 @@ class App;
 namespace endorecon {
 
 // Registers --left --right --side-by-side --top-bottom --calibration --rectified --focal --baseline
-// --masks --mask-tool --exclude --frames --size --poses --estimate-poses --depth-filter
+// --masks --mask-tool --exclude --frames --size --poses --estimate-poses
 // --depth-refine --depth-paths on `cmd`, writing into `flags` (which must outlive parsing).
 void AddPrepareFlags(CLI::App& cmd, PrepareFlags& flags);
 

@@ -21,7 +21,6 @@ v1::PrepareOptions PrepareFlagsToProto(const PrepareFlags& f) {
   o.set_size(f.size);
   o.set_poses(f.poses);
   o.set_estimate_poses(f.estimate_poses);
-  o.set_depth_filter(f.depth_filter);
   o.set_depth_refine(f.depth_refine);
   o.set_depth_paths(f.depth_paths);
   return o;
@@ -44,9 +43,8 @@ PrepareFlags PrepareFlagsFromProto(const v1::PrepareOptions& o) {
   f.size = o.size();
   f.poses = o.poses();
   f.estimate_poses = o.estimate_poses();
-  if (!o.depth_filter().empty()) f.depth_filter = o.depth_filter();
   f.depth_refine = o.depth_refine();
-  if (o.depth_paths() != 0) f.depth_paths = o.depth_paths();
+  f.depth_paths = o.depth_paths();
   return f;
 }
 

@@ -5,7 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
-#include <fstream>
+#include <nlohmann/json.hpp>
 
 #include "tests/unit/temp_dir.h"
 #include "worker/engine/reconstruct.h"
@@ -18,13 +18,14 @@ namespace {
 // The same short run for both clips: a fixed number of iterations (not seconds, so a busy machine
 // changes nothing), evaluation without the uncertainty passes (not measured here).
 double HeldOutPsnr(const std::filesystem::path& clip, const std::filesystem::path& out) {
-  std::ofstream(out.string() + ".json")
-      << R"({"rays_per_batch": 512, "mc_passes": 0, "curve_interval_s": 1000,
-                                              "eval_coarse_samples": 32, "eval_fine_samples": 32})";
   ReconstructOptions options;
   options.clip_dir = clip.string();
   options.out_dir = out.string();
-  options.config_file = out.string() + ".json";
+  options.config = {{"rays_per_batch", 512},
+                    {"mc_passes", 0},
+                    {"curve_interval_s", 1000},
+                    {"eval_coarse_samples", 32},
+                    {"eval_fine_samples", 32}};
   options.iterations = 400;
   options.holdout = 4;
   return Reconstruct(options, {}).heldout_psnr;

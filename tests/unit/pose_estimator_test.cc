@@ -29,6 +29,7 @@ TEST(PoseEstimatorTest, FollowsTheMovingSyntheticEndoscope) {
   scene::WriteSyntheticClip(synth, dir / "synth");
   prepare::PrepareOptions options = RecordingPrepareOptions(dir / "synth", dir / "clip");
   options.estimate_poses = true;
+  options.depth.eight_paths = true;  // what --estimate-poses chooses by default
   const prepare::PrepareSummary summary = prepare::PrepareClip(options);
   EXPECT_EQ(summary.layout, "transforms");
   EXPECT_EQ(summary.dropped, 0);

@@ -48,9 +48,8 @@ TEST_F(StereoDepthTest, MeetsTheDepthTargetsOnTheSyntheticRig) {
   EXPECT_GE(score.valid_share(), 0.85);
 }
 
-TEST_F(StereoDepthTest, UnfilteredRefinedEightPathDepthKeepsTheTargets) {
+TEST_F(StereoDepthTest, RefinedEightPathDepthKeepsTheTargets) {
   prepare::DepthOptions options;
-  options.filter = prepare::DepthFilter::kNone;
   options.refine = true;
   options.eight_paths = true;
   const DepthScore score = PrepareAndScore(options);

@@ -26,9 +26,8 @@ PrepareOptions OptionsFromFlags(const PrepareFlags& f, const std::filesystem::pa
   if (!f.size.empty()) o.size = ParseFrameSize(f.size);
   o.poses = path(f.poses);
   o.estimate_poses = f.estimate_poses;
-  o.depth.filter = f.depth_filter == "wls" ? DepthFilter::kWls : DepthFilter::kNone;
   o.depth.refine = f.depth_refine;
-  o.depth.eight_paths = f.depth_paths == 8;
+  o.depth.eight_paths = f.depth_paths == 8 || (f.depth_paths == 0 && f.estimate_poses);
   return o;
 }
 

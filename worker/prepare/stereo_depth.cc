@@ -5,7 +5,6 @@
 #include <cmath>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
-#include <opencv2/ximgproc/disparity_filter.hpp>
 #include <vector>
 
 #include "common/error.h"
@@ -42,8 +41,7 @@ cv::Mat ConsistentDisparity(const cv::Mat& left16, const cv::Mat& right16, Dispa
       if (d < range.min || d >= range.max()) continue;
       const int xr = static_cast<int>(std::lround(x - d));
       if (xr < 0 || xr >= width) continue;  // outside the right view: occluded by its frame
-      // The right matcher reports the right view's disparities negated.
-      const double dr = -static_cast<double>(r[xr]) / kSubpixel;
+      const double dr = static_cast<double>(r[xr]) / kSubpixel;
       if (dr < range.min || dr >= range.max() || std::abs(dr - d) > max_difference) continue;
       o[x] = static_cast<float>(d);
     }
@@ -129,7 +127,7 @@ void DropWhereRightMasked(const cv::Mat& mask, cv::Mat& disparity) {
 std::string DepthOptions::Describe() const {
   return std::string("SGBM ") + (eight_paths ? "8-path (MODE_HH)" : "3-way (MODE_SGBM_3WAY)") + ", block " +
          std::to_string(block_size) + ", left-right check " + std::to_string(max_lr_difference) + " px" +
-         (refine ? ", sub-pixel refinement" : "") + (filter == DepthFilter::kWls ? ", WLS filter" : "");
+         (refine ? ", sub-pixel refinement" : "");
 }
 
 StereoDepth::StereoDepth(const DepthOptions& options, DisparityRange range, double focal, double baseline)
@@ -146,34 +144,23 @@ StereoDepth::StereoDepth(const DepthOptions& options, DisparityRange range, doub
 StereoDepthResult StereoDepth::Compute(const cv::Mat& left, const cv::Mat& right,
                                        const cv::Mat& excluded_left, const cv::Mat& excluded_right) const {
   const cv::Ptr<cv::StereoSGBM> matcher = MakeMatcher(options_, range_, left.size());
-  const cv::Ptr<cv::StereoMatcher> right_matcher = cv::ximgproc::createRightMatcher(matcher);
   // SGBM leaves the first min + count columns of the left view (and the last of the right view)
   // unmatched; padding both sides lets every real pixel search its whole range.
   const int pad = range_.max();
-  const cv::Rect inner(pad, 0, left.cols, left.rows);
   cv::Mat left_padded, right_padded, left16, right16;
   cv::copyMakeBorder(left, left_padded, 0, 0, pad, pad, cv::BORDER_CONSTANT);
   cv::copyMakeBorder(right, right_padded, 0, 0, pad, pad, cv::BORDER_CONSTANT);
   matcher->compute(left_padded, right_padded, left16);
-  right_matcher->compute(right_padded, left_padded, right16);
+  // The right view's disparities: the same matcher on the mirrored pair (the right eye mirrored is
+  // a left eye). Written here rather than taken from ximgproc's createRightMatcher, which would
+  // bring all of libopencv-contrib for four lines.
+  cv::Mat left_mirrored, right_mirrored;
+  cv::flip(right_padded, left_mirrored, 1);
+  cv::flip(left_padded, right_mirrored, 1);
+  matcher->compute(left_mirrored, right_mirrored, right16);
+  cv::flip(right16, right16, 1);
   cv::Mat disparity = ConsistentDisparity(left16, right16, range_, options_.max_lr_difference, pad);
 
-  if (options_.filter == DepthFilter::kWls) {
-    const cv::Ptr<cv::ximgproc::DisparityWLSFilter> wls = cv::ximgproc::createDisparityWLSFilter(matcher);
-    wls->setLambda(8000);
-    wls->setSigmaColor(1.5);
-    cv::Mat filtered16;
-    wls->filter(left16, left_padded, filtered16, right16);
-    filtered16 = filtered16(inner);
-    // The filter smooths along edges of the image; it also fills holes, which stay unknown here.
-    for (int y = 0; y < disparity.rows; ++y) {
-      float* d = disparity.ptr<float>(y);
-      const short* f = filtered16.ptr<short>(y);
-      for (int x = 0; x < disparity.cols; ++x) {
-        if (!std::isnan(d[x])) d[x] = static_cast<float>(f[x]) / kSubpixel;
-      }
-    }
-  }
   if (options_.refine) RefineSubpixel(left, right, kRefineRadius, disparity);
 
   cv::Mat unknown_left = excluded_left.empty() ? cv::Mat::zeros(left.size(), CV_8U) : excluded_left.clone();

@@ -1,7 +1,7 @@
 // Depth from a rectified stereo pair: OpenCV's semi-global matching (StereoSGBM, sub-pixel by its
 // cost parabola) on both views, a left-right consistency check, optionally a Lucas-Kanade sub-pixel
-// refinement of each disparity and an edge-aware filter (ximgproc's weighted least squares, from
-// libopencv-contrib-dev); depth = focal * baseline / disparity.
+// refinement of each disparity; depth = focal * baseline / disparity. (An edge-aware filter,
+// ximgproc's weighted least squares, was measured and left out: docs/benchmarks.md.)
 // Pixels without a trustworthy match (inconsistent, occluded, outside the right view, on a
 // specular highlight in either eye, in an excluded region) get depth 0 = unknown.
 #pragma once
@@ -11,15 +11,12 @@
 
 namespace endorecon::prepare {
 
-enum class DepthFilter { kNone, kWls };
-
 struct DepthOptions {
-  int block_size = 5;            // SGBM's matching window (odd)
-  bool eight_paths = false;      // MODE_HH (8 paths, about twice the time) instead of MODE_SGBM_3WAY
-  double max_lr_difference = 1;  // pixels between the left disparity and the right one it points to
-  bool refine = false;           // Lucas-Kanade sub-pixel refinement of each disparity (9 x 9 window)
-  DepthFilter filter = DepthFilter::kWls;  // halves the RMSE at little cost (docs/benchmarks.md)
-  int specular_min_channel = 200;          // SpecularMask's threshold; 256 disables the specular check
+  int block_size = 5;              // SGBM's matching window (odd)
+  bool eight_paths = false;        // MODE_HH (8 paths, about twice the time) instead of MODE_SGBM_3WAY
+  double max_lr_difference = 1;    // pixels between the left disparity and the right one it points to
+  bool refine = false;             // Lucas-Kanade sub-pixel refinement of each disparity (9 x 9 window)
+  int specular_min_channel = 200;  // SpecularMask's threshold; 256 disables the specular check
 
   std::string Describe() const;
 };
