@@ -47,7 +47,8 @@ void AddPrepareFlags(CLI::App& cmd, PrepareFlags& f) {
   cmd.add_flag("--depth-refine", f.depth_refine,
                "Lucas-Kanade sub-pixel refinement of every disparity (slower)")
       ->group(depth);
-  cmd.add_option("--depth-paths", f.depth_paths, "SGBM directions: 3 (fast) or 8 (3x slower; the default with --estimate-poses)")
+  cmd.add_option("--depth-paths", f.depth_paths,
+                 "SGBM directions: 3 (fast) or 8 (3x slower; the default with --estimate-poses)")
       ->capture_default_str()
       ->group(depth);
 }
