@@ -42,6 +42,11 @@ std::string HumanTime(std::int64_t unix_ms) {
 }
 
 std::string ProgressLine(const v1::Progress& p) {
+  if (p.phase() == "prepare") {
+    return p.total_iterations() > 0
+               ? fmt::format("preparing the recording: frame {}/{}", p.iteration(), p.total_iterations())
+               : fmt::format("preparing the recording: frame {}", p.iteration());
+  }
   const double fraction =
       p.total_iterations() > 0
           ? std::clamp(static_cast<double>(p.iteration()) / p.total_iterations(), 0.0, 1.0)
@@ -71,7 +76,11 @@ std::string DescribeJob(const v1::Job& job) {
   if (job.finished_unix_ms() > 0) text += fmt::format("  finished  {}\n", HumanTime(job.finished_unix_ms()));
   text += fmt::format("  attempts  {} lost of {} allowed\n", job.attempts(), job.max_attempts());
   if (!job.worker_id().empty()) text += fmt::format("  worker    {}\n", job.worker_id());
-  if (job.clip().files_size() > 0) text += fmt::format("  clip      {} file(s)\n", job.clip().files_size());
+  if (job.clip().files_size() > 0) {
+    text +=
+        fmt::format("  {}  {} file(s){}\n", job.has_prepare() ? "recording" : "clip     ",
+                    job.clip().files_size(), job.has_prepare() ? " (prepared into the results' clip/)" : "");
+  }
   if (job.has_progress()) text += "  progress  " + ProgressLine(job.progress()) + "\n";
   if (!job.error().empty()) text += fmt::format("  reason    {}\n", job.error());
   if (job.expired_unix_ms() > 0) {

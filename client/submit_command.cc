@@ -1,18 +1,24 @@
 // endorecon submit CLIP [options]: upload the clip folder (only what the server lacks, resuming a
-// partial upload), queue a reconstruction, optionally wait for it.
+// partial upload), queue a reconstruction, optionally wait for it. With a raw stereo recording
+// instead of CLIP (--left L --right R --calibration C ..., prepare's flags), the recording's files
+// are uploaded and the worker prepares the clip before reconstructing it, in the same job.
 #include <CLI/CLI.hpp>
 #include <fstream>
 #include <iostream>
+#include <optional>
 #include <sstream>
 
 #include "client/commands.h"
 #include "client/exit_codes.h"
 #include "client/job_format.h"
 #include "client/job_watcher.h"
+#include "client/recording_upload.h"
 #include "common/error.h"
 #include "common/file_upload.h"
 #include "common/grpc_status.h"
 #include "common/manifest.h"
+#include "common/prepare_flags_cli.h"
+#include "common/prepare_flags_proto.h"
 #include "common/transport_security.h"
 
 namespace endorecon::client {
@@ -31,6 +37,7 @@ struct SubmitFlags {
   std::string name;
   bool wait = false;
   std::string previews;
+  PrepareFlags recording;  // a raw recording instead of CLIP
 };
 
 std::string ReadFile(const std::string& path) {
@@ -55,7 +62,15 @@ v1::ReconstructionOptions OptionsOf(const SubmitFlags& flags) {
 
 int Submit(const Globals& globals, const SubmitFlags& flags) {
   const auto options = OptionsOf(flags);
-  const auto manifest = ManifestOfDirectory(flags.clip);
+  if (flags.clip.empty() == flags.recording.empty()) {
+    FailInvalid(
+        "give a CLIP folder, or a raw recording (--left/--right, --side-by-side or --top-bottom), not both");
+  }
+  // A recording is staged under canonical names (recording_upload.h); its folder is uploaded.
+  std::optional<StagedRecording> staged;
+  if (!flags.recording.empty()) staged.emplace(flags.recording);
+  const std::filesystem::path folder = staged ? staged->dir() : std::filesystem::path(flags.clip);
+  const auto manifest = ManifestOfDirectory(folder);
   const auto stub = globals.Connect();
   UploadCalls calls;
   calls.query = [&](grpc::ClientContext* context, const v1::Manifest& m, v1::UploadStatus* status) {
@@ -66,7 +81,7 @@ int Submit(const Globals& globals, const SubmitFlags& flags) {
   };
   UploadOptions upload_options;
   upload_options.call_timeout = globals.timeout();
-  const auto upload = UploadFiles(flags.clip, manifest, calls, upload_options);
+  const auto upload = UploadFiles(folder, manifest, calls, upload_options);
   if (!globals.json) {
     std::cerr << "uploaded " << manifest.files_size() << " file(s): " << HumanBytes(upload.bytes_sent)
               << " sent, " << HumanBytes(upload.bytes_skipped) << " already on the server\n";
@@ -77,10 +92,11 @@ int Submit(const Globals& globals, const SubmitFlags& flags) {
   v1::SubmitRequest request;
   *request.mutable_clip() = manifest;
   *request.mutable_options() = options;
+  if (staged) *request.mutable_prepare() = PrepareFlagsToProto(staged->flags());
   request.set_priority(flags.priority);
-  request.set_name(flags.name.empty()
-                       ? std::filesystem::path(flags.clip).lexically_normal().filename().string()
-                       : flags.name);
+  request.set_name(!flags.name.empty() ? flags.name
+                   : staged            ? staged->name()
+                            : std::filesystem::path(flags.clip).lexically_normal().filename().string());
   v1::Job job;
   auto context = CallContext(globals.timeout());
   ThrowIfFailed(stub->Submit(context.get(), request, &job), "submit");
@@ -98,8 +114,12 @@ int Submit(const Globals& globals, const SubmitFlags& flags) {
 
 Command AddSubmitCommand(CLI::App& app) {
   auto flags = std::make_shared<SubmitFlags>();
-  auto* sub = app.add_subcommand("submit", "upload a clip folder and queue its reconstruction");
-  sub->add_option("CLIP", flags->clip, "clip folder (EndoNeRF layout or transforms.json)")->required();
+  auto* sub = app.add_subcommand("submit",
+                                 "upload a clip folder (or a raw stereo recording, prepared by the worker) "
+                                 "and queue its reconstruction");
+  sub->add_option("CLIP", flags->clip,
+                  "clip folder (EndoNeRF layout or transforms.json); or give a recording");
+  AddPrepareFlags(*sub, flags->recording);
   sub->add_option("--config", flags->config,
                   "JSON file overriding the preset (as endorecon-worker reconstruct)");
   sub->add_option("--preset", flags->preset, "cpu or paper (default: the worker's, cpu)");

@@ -6,6 +6,7 @@
 
 #include "common/error.h"
 #include "common/manifest.h"
+#include "common/prepare_flags_proto.h"
 
 namespace endorecon::server {
 namespace {
@@ -156,6 +157,7 @@ void JobCoordinator::CheckUploadQuota(const v1::Manifest& manifest, const Princi
 v1::Job JobCoordinator::Submit(const v1::SubmitRequest& request, const Principal& caller) {
   ValidateManifest(request.clip());
   ValidateOptions(request.options());
+  if (request.has_prepare()) CheckPrepareOptions(request.prepare(), request.clip());
   v1::Job job;
   job.set_id(RandomId(6));
   job.set_name(request.name());
@@ -163,6 +165,7 @@ v1::Job JobCoordinator::Submit(const v1::SubmitRequest& request, const Principal
   job.set_priority(request.priority());
   *job.mutable_options() = request.options();
   *job.mutable_clip() = request.clip();
+  if (request.has_prepare()) *job.mutable_prepare() = request.prepare();
   job.set_created_unix_ms(NowUnixMs());
   job.set_max_attempts(max_attempts_);
   job.set_tenant(caller.tenant);
@@ -170,7 +173,7 @@ v1::Job JobCoordinator::Submit(const v1::SubmitRequest& request, const Principal
   // Under the lock, so retention cannot delete a blob between this check and the insert, and two
   // submits cannot both take a tenant's last job slot.
   std::lock_guard lock(mutex_);
-  RequireBlobs(parts_.blobs, request.clip(), "clip");
+  RequireBlobs(parts_.blobs, request.clip(), request.has_prepare() ? "recording" : "clip");
   const auto quota = quotas_.For(caller.tenant);
   const auto usage = parts_.store.UsageOf(caller.tenant);
   if (quota.max_jobs > 0 && usage.active_jobs >= quota.max_jobs) {
