@@ -12,6 +12,7 @@
 #pragma once
 
 #include <chrono>
+#include <functional>
 #include <mutex>
 #include <optional>
 #include <string>
@@ -22,6 +23,7 @@
 #include "server/job_store.h"
 #include "server/lease_table.h"
 #include "server/metrics.h"
+#include "server/pacs_directory.h"
 #include "server/scheduler.h"
 #include "server/watch_hub.h"
 #include "server/worker_registry.h"
@@ -38,11 +40,24 @@ struct CoordinatorParts {
   Metrics& metrics;
 };
 
+// The DICOM side of jobs: which PACS exist, and who retrieves recordings and sends results
+// (server/dicom_gateway.h). Without it, jobs that name a PACS are refused.
+struct DicomHooks {
+  const PacsDirectory* pacs = nullptr;
+  std::string uid_root;
+  std::function<void(const std::string& job_id)> retrieve;  // the job waits for its recording
+  std::function<void(const std::string& job_id)> send;      // the job has PENDING sends
+};
+
 class JobCoordinator {
  public:
   JobCoordinator(CoordinatorParts parts, int max_attempts);
 
-  // Queues the QUEUED jobs of the store and re-grants the leases of its RUNNING ones.
+  void SetDicomHooks(DicomHooks hooks);
+
+  // Queues the QUEUED jobs of the store (those still waiting for a PACS retrieval go back to the
+  // retrieve hook), re-grants the leases of its RUNNING ones and hands SUCCEEDED jobs with PENDING
+  // or SENDING sends back to the send hook.
   void Recover();
 
   // Throws kInvalidArgument (bad manifest or option, naming it), kFailedPrecondition (a clip file
@@ -73,6 +88,18 @@ class JobCoordinator {
   // Takes back every lease expired at `now`: requeues the job or fails it after max attempts.
   void ExpireLeases(Clock::time_point now);
 
+  // Asks for the DICOM results of a SUCCEEDED job to go (again) to the PACS `destination`.
+  // Throws kNotFound (job or PACS), kFailedPrecondition (not SUCCEEDED, no dicom/ results).
+  v1::Job RequestSend(const std::string& id, const std::string& destination);
+  // Applies `change` to a job and saves it (watchers see it); for the retrieval and the sends,
+  // which change nothing else. Returns the job as saved. Throws kNotFound.
+  v1::Job Update(const std::string& id, const std::function<void(v1::Job&)>& change);
+  // The recording of a job submitted by Study UID is in the blob store: the job gets it as its clip
+  // and is queued for a worker (if still QUEUED).
+  void RetrievalDone(const std::string& id, const v1::Manifest& clip);
+  // The retrieval failed: the job FAILS with the reason.
+  void RetrievalFailed(const std::string& id, const std::string& reason);
+
  private:
   StoredJob Load(const std::string& id);
   StoredJob LoadLeased(const std::string& lease_id);
@@ -82,6 +109,7 @@ class JobCoordinator {
   void Requeue(StoredJob& stored, bool count_attempt, const std::string& reason);
 
   CoordinatorParts parts_;
+  DicomHooks dicom_;
   int max_attempts_;
   std::mutex mutex_;
 };

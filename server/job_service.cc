@@ -1,5 +1,6 @@
 #include "server/job_service.h"
 
+#include <algorithm>
 #include <map>
 
 #include "common/error.h"
@@ -11,6 +12,16 @@ namespace {
 
 bool Terminal(v1::JobState state) {
   return state == v1::SUCCEEDED || state == v1::FAILED || state == v1::CANCELLED;
+}
+
+// A watch ends when nothing more will happen to the job: it is finished and none of its DICOM
+// sends is still waiting for an attempt or in one.
+bool Settled(const v1::Job& job) {
+  if (!Terminal(job.state())) return false;
+  if (job.state() != v1::SUCCEEDED) return true;
+  return std::none_of(job.sends().begin(), job.sends().end(), [](const v1::DicomSend& send) {
+    return send.state() == v1::DicomSend::PENDING || send.state() == v1::DicomSend::SENDING;
+  });
 }
 
 }  // namespace
@@ -92,7 +103,7 @@ grpc::Status JobServiceImpl::Watch(grpc::ServerContext* context, const v1::Watch
     v1::JobEvent first;
     *first.mutable_job() = coordinator_.Get(request->id());
     first.mutable_job()->clear_clip();
-    if (!writer->Write(first) || Terminal(first.job().state())) return grpc::Status::OK;
+    if (!writer->Write(first) || Settled(first.job())) return grpc::Status::OK;
     std::uint64_t seen = 0;
     while (!context->IsCancelled()) {
       auto changes =
@@ -107,7 +118,7 @@ grpc::Status JobServiceImpl::Watch(grpc::ServerContext* context, const v1::Watch
       for (const auto& event : events) {
         if (!writer->Write(event)) return grpc::Status::OK;
       }
-      if (changes.job && Terminal(changes.job->state())) return grpc::Status::OK;
+      if (changes.job && Settled(*changes.job)) return grpc::Status::OK;
     }
     return grpc::Status(grpc::StatusCode::CANCELLED, "watch cancelled");
   });
@@ -142,6 +153,14 @@ grpc::Status JobServiceImpl::ListWorkers(grpc::ServerContext*, const v1::ListWor
                                          v1::ListWorkersResponse* response) {
   for (auto& worker : workers_.List()) *response->add_workers() = std::move(worker);
   return grpc::Status::OK;
+}
+
+grpc::Status JobServiceImpl::Send(grpc::ServerContext*, const v1::SendRequest* request, v1::Job* job) {
+  return GuardStatus([&] {
+    *job = coordinator_.RequestSend(request->id(), request->destination());
+    job->clear_clip();
+    return grpc::Status::OK;
+  });
 }
 
 }  // namespace endorecon::server

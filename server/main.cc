@@ -10,8 +10,13 @@
 #include <filesystem>
 #include <thread>
 
+#include "common/dicom/peer.h"
+#include "common/dicom/storage_scp.h"
+#include "common/dicom/uid.h"
 #include "common/error.h"
 #include "common/transport_security.h"
+#include "server/dicom_retriever.h"
+#include "server/dicom_sender.h"
 #include "server/job_service.h"
 #include "server/worker_service.h"
 
@@ -28,7 +33,28 @@ struct ServerFlags {
   int max_attempts = 3;
   std::int64_t lease_ttl_ms = 30000;
   std::int64_t heartbeat_ms = 2000;
+  DicomSettings dicom;
+  std::vector<std::string> pacs;
 };
+
+// The storage SCP, when --dicom-listen asks for one; C-MOVE progress goes to `retriever`.
+std::unique_ptr<dicom::StorageScp> StartStorageScp(const ServerFlags& flags, const std::filesystem::path& folder,
+                                                   DicomRetriever*& retriever) {
+  if (flags.dicom.listen.empty()) return nullptr;
+  const auto colon = flags.dicom.listen.rfind(':');
+  if (colon == std::string::npos) FailInvalid("--dicom-listen '" + flags.dicom.listen + "': expected HOST:PORT");
+  dicom::StorageScpSettings settings;
+  settings.ae_title = flags.dicom.ae_title;
+  settings.host = HostOf(flags.dicom.listen);
+  settings.port = std::stoi(flags.dicom.listen.substr(colon + 1));
+  settings.folder = folder;
+  auto scp = std::make_unique<dicom::StorageScp>(
+      settings, [&retriever](const std::string& study, const std::filesystem::path&, std::int64_t bytes) {
+        if (retriever != nullptr) retriever->Received(study, bytes);
+      });
+  spdlog::info("DICOM storage SCP listening as {}", dicom::PeerText({settings.ae_title, settings.host, settings.port}));
+  return scp;
+}
 
 std::string HostOf(const std::string& address) {
   if (!address.empty() && address.front() == '[') return address.substr(0, address.find(']') + 1);
@@ -58,6 +84,18 @@ int Run(const ServerFlags& flags) {
   Metrics metrics(flags.metrics_port >= 0 ? HostOf(flags.listen) + ":" + std::to_string(flags.metrics_port)
                                           : "");
   JobCoordinator coordinator({store, blobs, scheduler, leases, workers, hub, metrics}, flags.max_attempts);
+  const PacsDirectory pacs(flags.pacs);
+  DicomRetriever* retriever_for_scp = nullptr;
+  const auto scp = StartStorageScp(flags, data_dir / "dicom-incoming", retriever_for_scp);
+  DicomRetriever retriever(coordinator, blobs, pacs, flags.dicom, metrics, data_dir / "retrievals", scp.get());
+  retriever_for_scp = &retriever;
+  DicomSender sender(coordinator, blobs, pacs, flags.dicom, metrics);
+  coordinator.SetDicomHooks({&pacs, flags.dicom.uid_root, [&](const std::string& id) { retriever.Retrieve(id); },
+                             [&](const std::string& id) { sender.Send(id); }});
+  for (const auto& name : pacs.Names()) {
+    spdlog::info("PACS {} = {} (this server calls as {})", name, dicom::PeerText(pacs.Find(name)),
+                 flags.dicom.ae_title);
+  }
   coordinator.Recover();
   UploadReceiver uploads(blobs, flags.max_upload_bytes,
                          [&](std::int64_t bytes) { metrics.UploadBytes(bytes); });
@@ -148,8 +186,28 @@ int main(int argc, char** argv) {
                  "how often workers report (told to them at registration)")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
+  app.add_option("--ae-title", flags.dicom.ae_title, "this server's DICOM AE title (calling, and its storage SCP's)")
+      ->capture_default_str();
+  app.add_option("--pacs", flags.pacs, "a PACS, NAME=AET@HOST:PORT (repeatable): retrieve from it, send results to it");
+  app.add_option("--dicom-listen", flags.dicom.listen,
+                 "HOST:PORT of this server's storage SCP (where a PACS delivers C-MOVE retrievals); off by default");
+  app.add_option("--uid-root", flags.dicom.uid_root,
+                 "UID root of the DICOM results' new UIDs (default: 2.25 UUID-derived UIDs)");
+  app.add_option("--send-attempts", flags.dicom.send_attempts,
+                 "attempts to send a job's DICOM results to one PACS before the send FAILS")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  app.add_option("--send-backoff-ms", flags.dicom.send_backoff_ms,
+                 "wait before the second send attempt, doubled for each further one (at most 60 s)")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  app.add_option("--dicom-timeout", flags.dicom.timeout_s, "seconds for a PACS to connect, associate and answer")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
   CLI11_PARSE(app, argc, argv);
   try {
+    dicom::CheckAeTitle(flags.dicom.ae_title, "--ae-title");
+    if (!flags.dicom.uid_root.empty()) dicom::NewUid(flags.dicom.uid_root);  // refuses a malformed root now
     return Run(flags);
   } catch (const endorecon::Error& e) {
     spdlog::error("{}: {}", endorecon::ErrorCodeName(e.code()), e.what());

@@ -35,7 +35,17 @@ Metrics::Metrics(const std::string& bind_address)
       upload_bytes_(Counter(*registry_, "endorecon_upload_bytes_total", "Bytes committed by uploads")),
       download_bytes_(Counter(*registry_, "endorecon_download_bytes_total", "Bytes sent by downloads")),
       workers_connected_(Gauge(*registry_, "endorecon_workers_connected", "Workers heard from recently")),
-      lease_expiries_(Counter(*registry_, "endorecon_lease_expiries_total", "Leases that expired")) {
+      lease_expiries_(Counter(*registry_, "endorecon_lease_expiries_total", "Leases that expired")),
+      dicom_sent_(BuildCounter()
+                      .Name("endorecon_dicom_instances_sent_total")
+                      .Help("DICOM instances a PACS confirmed storing (C-STORE)")
+                      .Register(*registry_)),
+      dicom_send_failures_(BuildCounter()
+                               .Name("endorecon_dicom_send_failures_total")
+                               .Help("Attempts to send DICOM results to a PACS that failed")
+                               .Register(*registry_)),
+      retrieval_bytes_(Counter(*registry_, "endorecon_dicom_retrieval_bytes_total",
+                               "Bytes of recordings retrieved from a PACS")) {
   for (const auto state : {v1::QUEUED, v1::RUNNING, v1::SUCCEEDED, v1::FAILED, v1::CANCELLED}) {
     jobs_.Add({{"state", v1::JobState_Name(state)}}).Set(0);
   }

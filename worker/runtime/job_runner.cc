@@ -10,6 +10,7 @@
 #include "common/manifest.h"
 #include "common/sha256.h"
 #include "worker/engine/reconstruct.h"
+#include "worker/runtime/dicom_job.h"
 #include "worker/runtime/preview_png.h"
 #include "worker/runtime/progress_reporter.h"
 
@@ -121,7 +122,9 @@ void RunLeasedJob(WorkerClient& client, const v1::LeaseResponse& lease, const De
       client.GetFiles(lease.lease_id(), job_dir / "checkpoint", checkpoint);
     }
     fs::remove_all(job_dir / "out");
-    const auto options = OptionsFor(job, job_dir, device);
+    auto options = OptionsFor(job, job_dir, device);
+    const auto recording = PrepareRecording(options.clip_dir, job.recording(), job_dir / "clip-from-dicom");
+    if (recording) options.clip_dir = recording->clip_dir.string();
 
     ReconstructHooks hooks;
     hooks.progress_interval_s = std::min(2.0, std::chrono::duration<double>(settings.heartbeat).count());
@@ -151,6 +154,7 @@ void RunLeasedJob(WorkerClient& client, const v1::LeaseResponse& lease, const De
     } else if (summary.cancelled) {
       Tell(client, lease.lease_id(), "worker " + client.worker_id() + " is shutting down", true, true);
     } else {
+      WriteJobDicom(options.out_dir, recording, job.dicom());
       v1::CompleteRequest complete;
       complete.set_lease_id(lease.lease_id());
       *complete.mutable_result() = ManifestOfDirectory(options.out_dir);

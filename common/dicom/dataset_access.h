@@ -1,0 +1,31 @@
+// Reading and writing single attributes of a DCMTK dataset with errors that name the attribute
+// (by its dictionary name) and the file. Internal to common/dicom.
+#pragma once
+
+#include <dcmtk/dcmdata/dctk.h>
+
+#include <optional>
+#include <string>
+
+namespace endorecon::dicom {
+
+// The attribute's whole value (all components, backslash-separated), or nullopt when absent or empty.
+std::optional<std::string> FindString(DcmItem& item, const DcmTagKey& tag);
+// The attribute as an integer, nullopt when absent, empty or not a number.
+std::optional<long> FindInteger(DcmItem& item, const DcmTagKey& tag);
+// Component `index` of a numeric (DS, IS, US) attribute, nullopt when absent.
+std::optional<double> FindNumber(DcmItem& item, const DcmTagKey& tag, unsigned long index = 0);
+// Components of a multi-valued numeric attribute; empty when absent.
+std::vector<double> FindNumbers(DcmItem& item, const DcmTagKey& tag);
+
+// Inserts or replaces the attribute. Throws Error(kInternal) naming the attribute when DCMTK refuses
+// the value (a bug in the caller: a value of the wrong form).
+void Put(DcmItem& item, const DcmTagKey& tag, const std::string& value);
+void PutUint16(DcmItem& item, const DcmTagKey& tag, Uint16 value);
+
+// The dictionary name of a tag ("NumberOfFrames"), for messages.
+std::string TagName(const DcmTagKey& tag);
+// "Video Endoscopic Image Storage (1.2.840.10008.5.1.4.1.1.77.1.1.1)" for a known UID, else the UID.
+std::string UidName(const std::string& uid);
+
+}  // namespace endorecon::dicom

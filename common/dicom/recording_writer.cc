@@ -1,0 +1,158 @@
+#include "common/dicom/recording_writer.h"
+
+#include <dcmtk/dcmdata/dcpixseq.h>
+#include <dcmtk/dcmdata/dcpxitem.h>
+#include <dcmtk/dcmdata/dctk.h>
+#include <dcmtk/dcmjpeg/djencode.h>
+#include <dcmtk/dcmjpeg/djrploss.h>
+
+#include <fstream>
+#include <mutex>
+#include <sstream>
+
+#include "common/dicom/dataset_access.h"
+#include "common/dicom/uid.h"
+#include "common/error.h"
+
+namespace endorecon::dicom {
+namespace fs = std::filesystem;
+namespace {
+
+// Patient, study, series and the endoscopic image parts both writers share.
+void PutHeader(DcmDataset& data, const RecordingHeader& header, const std::string& sop_class,
+               const std::string& sop_uid) {
+  WriteStudyModules(header.study, data);
+  OFString date, time;
+  DcmDate::getCurrentDate(date);
+  DcmTime::getCurrentTime(time);
+  Put(data, DCM_SOPClassUID, sop_class);
+  Put(data, DCM_SOPInstanceUID, sop_uid);
+  Put(data, DCM_Modality, "ES");
+  Put(data, DCM_SeriesInstanceUID, header.series_uid.empty() ? NewUid(header.uid_root) : header.series_uid);
+  Put(data, DCM_SeriesNumber, std::to_string(header.series_number));
+  Put(data, DCM_SeriesDescription, header.series_description);
+  Put(data, DCM_InstanceNumber, "1");
+  Put(data, DCM_ContentDate, date.c_str());
+  Put(data, DCM_ContentTime, time.c_str());
+  Put(data, DCM_AcquisitionDateTime, std::string(date.c_str()) + time.c_str());
+  Put(data, DCM_Manufacturer, "endorecon");
+  Put(data, DCM_PatientOrientation, "");
+  Put(data, DCM_ImageType, "ORIGINAL\\PRIMARY");
+  Put(data, DCM_LossyImageCompression, "00");
+  Put(data, DCM_AnatomicRegionSequence, "");
+  Put(data, DCM_BurnedInAnnotation, "NO");
+  PutUint16(data, DCM_SamplesPerPixel, 3);
+  PutUint16(data, DCM_BitsAllocated, 8);
+  PutUint16(data, DCM_BitsStored, 8);
+  PutUint16(data, DCM_HighBit, 7);
+  PutUint16(data, DCM_PixelRepresentation, 0);
+  PutUint16(data, DCM_PlanarConfiguration, 0);
+}
+
+void Save(DcmFileFormat& file, const fs::path& out, E_TransferSyntax xfer) {
+  if (!out.parent_path().empty()) fs::create_directories(out.parent_path());
+  const OFCondition status = file.saveFile(out.c_str(), xfer);
+  if (status.bad()) Fail(ErrorCode::kUnavailable, "cannot write " + out.string() + ": " + status.text());
+}
+
+std::string Decimal(double value) {
+  std::ostringstream text;
+  text.precision(8);
+  text << value;
+  return text.str();
+}
+
+}  // namespace
+
+std::string WriteVideoEndoscopic(const fs::path& video, int frames, int width, int height, double fps,
+                                 const RecordingHeader& header, const fs::path& out) {
+  std::ifstream in(video, std::ios::binary);
+  if (!in) FailInvalid(video.string() + ": cannot read the video");
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (bytes.empty()) FailInvalid(video.string() + ": the video is empty");
+  if (frames <= 0 || width <= 0 || height <= 0 || !(fps > 0)) {
+    FailInvalid(video.string() + ": frames, size and frame rate must be positive");
+  }
+  if (bytes.size() % 2 != 0) bytes.push_back('\0');  // fragments have an even length
+  DcmFileFormat file;
+  DcmDataset& data = *file.getDataset();
+  const std::string uid = NewUid(header.uid_root);
+  PutHeader(data, header, UID_VideoEndoscopicImageStorage, uid);
+  Put(data, DCM_LossyImageCompression, "01");
+  Put(data, DCM_LossyImageCompressionMethod, "ISO_14496_10");
+  Put(data, DCM_PhotometricInterpretation, "YBR_PARTIAL_420");
+  PutUint16(data, DCM_Rows, static_cast<Uint16>(height));
+  PutUint16(data, DCM_Columns, static_cast<Uint16>(width));
+  Put(data, DCM_NumberOfFrames, std::to_string(frames));
+  Put(data, DCM_FrameIncrementPointer, "(0018,1063)");
+  Put(data, DCM_FrameTime, Decimal(1000.0 / fps));
+  Put(data, DCM_CineRate, std::to_string(static_cast<int>(std::lround(fps))));
+  Put(data, DCM_RecommendedDisplayFrameRate, std::to_string(static_cast<int>(std::lround(fps))));
+  Put(data, DCM_StartTrim, "1");
+  Put(data, DCM_StopTrim, std::to_string(frames));
+  auto* pixels = new DcmPixelData(DCM_PixelData);
+  auto* sequence = new DcmPixelSequence(DCM_PixelSequenceTag);
+  sequence->insert(new DcmPixelItem(DCM_PixelItemTag));  // the empty offset table
+  auto* fragment = new DcmPixelItem(DCM_PixelItemTag);
+  fragment->putUint8Array(reinterpret_cast<const Uint8*>(bytes.data()), static_cast<Uint32>(bytes.size()));
+  sequence->insert(fragment);
+  pixels->putOriginalRepresentation(EXS_MPEG4HighProfileLevel4_1, nullptr, sequence);
+  data.insert(pixels, true);
+  Save(file, out, EXS_MPEG4HighProfileLevel4_1);
+  return uid;
+}
+
+std::string WriteEndoscopicFrames(const std::vector<cv::Mat>& frames, const std::vector<double>& times_s, bool jpeg,
+                                  const RecordingHeader& header, const fs::path& out) {
+  if (frames.empty()) FailInvalid(out.string() + ": no frames to write");
+  if (times_s.size() != frames.size()) FailInvalid(out.string() + ": one time per frame is needed");
+  const int width = frames[0].cols, height = frames[0].rows;
+  DcmFileFormat file;
+  DcmDataset& data = *file.getDataset();
+  const std::string uid = NewUid(header.uid_root);
+  PutHeader(data, header, UID_VLEndoscopicImageStorage, uid);
+  Put(data, DCM_PhotometricInterpretation, "RGB");
+  PutUint16(data, DCM_Rows, static_cast<Uint16>(height));
+  PutUint16(data, DCM_Columns, static_cast<Uint16>(width));
+  Put(data, DCM_NumberOfFrames, std::to_string(frames.size()));
+  Put(data, DCM_FrameIncrementPointer, "(0018,1065)");
+  std::string vector = "0";
+  for (std::size_t f = 1; f < times_s.size(); ++f) {
+    vector += '\\';  // appended apart: GCC 12 warns falsely (-Wrestrict) on "\\" + string
+    vector += Decimal(1000.0 * (times_s[f] - times_s[f - 1]));
+  }
+  Put(data, DCM_FrameTimeVector, vector);
+  const std::size_t frame_bytes = static_cast<std::size_t>(width) * height * 3;
+  std::vector<Uint8> rgb(frame_bytes * frames.size());
+  for (std::size_t f = 0; f < frames.size(); ++f) {
+    if (frames[f].cols != width || frames[f].rows != height || frames[f].type() != CV_8UC3) {
+      FailInvalid(out.string() + ": frame " + std::to_string(f) + " differs from frame 0 in size or type");
+    }
+    for (int y = 0; y < height; ++y) {
+      const auto* row = frames[f].ptr<cv::Vec3b>(y);
+      for (int x = 0; x < width; ++x) {
+        Uint8* p = &rgb[f * frame_bytes + (static_cast<std::size_t>(y) * width + x) * 3];
+        p[0] = row[x][2];
+        p[1] = row[x][1];
+        p[2] = row[x][0];
+      }
+    }
+  }
+  data.putAndInsertUint8Array(DCM_PixelData, rgb.data(), static_cast<unsigned long>(rgb.size()));
+  if (!jpeg) {
+    Save(file, out, EXS_LittleEndianExplicit);
+    return uid;
+  }
+  static std::once_flag once;
+  std::call_once(once, [] { DJEncoderRegistration::registerCodecs(); });
+  DJ_RPLossy quality(90);
+  if (data.chooseRepresentation(EXS_JPEGProcess1, &quality).bad() || !data.canWriteXfer(EXS_JPEGProcess1)) {
+    Fail(ErrorCode::kInternal, out.string() + ": DCMTK could not JPEG-compress the frames");
+  }
+  Put(data, DCM_LossyImageCompression, "01");
+  Put(data, DCM_LossyImageCompressionMethod, "ISO_10918_1");
+  Save(file, out, EXS_JPEGProcess1);
+  return uid;
+}
+
+}  // namespace endorecon::dicom

@@ -1,0 +1,177 @@
+// A real PACS at both ends (Orthanc on loopback): an endoscopic H.264 recording made here is
+// stored in it, a job is submitted by its Study UID (the server retrieves it by C-GET), runs, and
+// its DICOM results go back into the same patient and study. Then: the PACS down during a send
+// (the send fails, the job stays SUCCEEDED, a resend after it is back succeeds), an association
+// refused by AE title, an unknown study, and a retrieval by C-MOVE to the server's storage SCP.
+#include <gtest/gtest.h>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/videoio.hpp>
+
+#include "common/dicom/recording_writer.h"
+#include "tests/integration/orthanc_harness.h"
+#include "tests/unit/dciodvfy.h"
+
+namespace endorecon::testing {
+namespace {
+namespace fs = std::filesystem;
+
+constexpr const char* kPatient = "PAT-15";
+
+// The synthetic clip's frames as an H.264 MP4 (OpenCV's FFmpeg), wrapped as Video Endoscopic.
+std::string MakeRecording(const fs::path& dir, const fs::path& out) {
+  MakeClip(dir / "clip");
+  std::vector<fs::path> images;
+  for (const auto& entry : fs::directory_iterator(dir / "clip" / "images")) images.push_back(entry.path());
+  std::sort(images.begin(), images.end());
+  const cv::Mat first = cv::imread(images[0].string());
+  cv::VideoWriter writer((dir / "video.mp4").string(), cv::VideoWriter::fourcc('a', 'v', 'c', '1'), 10.0,
+                         first.size());
+  EXPECT_TRUE(writer.isOpened());
+  for (const auto& image : images) writer.write(cv::imread(image.string()));
+  writer.release();
+  dicom::RecordingHeader header;
+  header.study = dicom::NewStudyContext(kPatient, "Test^Patient", "", "");
+  dicom::WriteVideoEndoscopic(dir / "video.mp4", static_cast<int>(images.size()), first.cols, first.rows, 10.0,
+                              header, out);
+  return header.study.study_instance_uid;
+}
+
+std::string JobIdIn(const std::string& out) {
+  const auto at = out.find("job ");
+  return at == std::string::npos ? "" : out.substr(at + 4, 12);
+}
+
+const v1::DicomSend* SendTo(const v1::Job& job, const std::string& destination) {
+  for (const auto& send : job.sends()) {
+    if (send.destination() == destination) return &send;
+  }
+  return nullptr;
+}
+
+class PacsRoundTripTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    scp_port_ = FreePort();
+    mover_port_ = FreePort();
+    orthanc_ = std::make_unique<Orthanc>(dir_ / "orthanc", std::vector<OrthancModality>{
+                                                               {"ENDORECON", scp_port_, true},
+                                                               {"MOVER", mover_port_, false}});
+    const std::string why = orthanc_->Start();
+    if (!why.empty()) GTEST_SKIP() << "Orthanc cannot start, PACS tests skipped: " << why;
+  }
+
+  TempDir dir_{"pacs"};
+  int scp_port_ = 0, mover_port_ = 0;
+  std::unique_ptr<Orthanc> orthanc_;
+};
+
+TEST_F(PacsRoundTripTest, RecordingFromThePacsResultsBackIntoItsStudy) {
+  const std::string study = MakeRecording(dir_.path(), dir_ / "recording.dcm");
+  const auto stored = orthanc_->Store(dir_ / "recording.dcm");
+  ASSERT_EQ(stored.value("Status", ""), "Success") << stored.dump();
+  const std::string orthanc_study = stored.value("ParentStudy", "");
+
+  Cluster cluster({"--ae-title", "ENDORECON", "--pacs", "orthanc=" + orthanc_->Address(), "--pacs",
+                   "wrongae=WRONGAE@127.0.0.1:" + std::to_string(orthanc_->dicom_port()), "--dicom-listen",
+                   "127.0.0.1:" + std::to_string(scp_port_), "--send-attempts", "2", "--send-backoff-ms", "200",
+                   "--dicom-timeout", "5"});
+  cluster.StartWorker("w1");
+  const auto submitted = RunCli(cluster.address(), {"submit", "--pacs", "orthanc", "--study", study, "--send-to",
+                                                    "orthanc", "--iterations", "30", "--wait"});
+  ASSERT_EQ(submitted.exit_code, 0) << submitted.out << submitted.err << cluster.ServerLog();
+  EXPECT_NE(submitted.out.find("retrieval from PACS orthanc by C-GET"), std::string::npos) << submitted.out;
+  EXPECT_NE(submitted.out.find("send to orthanc: sent 4 of 4"), std::string::npos) << submitted.out;
+  const std::string id = JobIdIn(submitted.out);
+  v1::Job job = cluster.Job(id);
+  EXPECT_EQ(job.state(), v1::SUCCEEDED);
+  EXPECT_EQ(job.retrieval().state(), v1::Retrieval::RETRIEVED);
+  EXPECT_EQ(job.retrieval().instances(), 1);
+  EXPECT_EQ(job.retrieval().bytes(), static_cast<std::int64_t>(fs::file_size(dir_ / "recording.dcm")));
+
+  // In the PACS: the recording's study now holds four more series, of the same patient.
+  const auto series = orthanc_->Post(
+      "/tools/find", nlohmann::json{{"Level", "Series"}, {"Query", {{"StudyInstanceUID", study}}}, {"Expand", true}}
+                         .dump());
+  ASSERT_TRUE(series.is_array()) << series.dump();
+  EXPECT_EQ(series.size(), 5u) << series.dump();
+  std::map<std::string, nlohmann::json> by_class;
+  for (const auto& one : series) {
+    EXPECT_EQ(one.value("ParentStudy", ""), orthanc_study);
+    const auto tags = orthanc_->Get("/instances/" + one["Instances"][0].get<std::string>() + "/simplified-tags");
+    EXPECT_EQ(tags.value("PatientID", ""), kPatient);
+    by_class[tags.value("SOPClassUID", "")] = tags;
+  }
+  const auto rendered = by_class["1.2.840.10008.5.1.4.1.1.7.4"];
+  EXPECT_EQ(rendered.value("NumberOfFrames", ""), "8") << rendered.dump();
+  EXPECT_NE(rendered.value("DerivationDescription", "").find("endorecon"), std::string::npos);
+  EXPECT_EQ(by_class["1.2.840.10008.5.1.4.1.1.7.3"].value("NumberOfFrames", ""), "8");
+  EXPECT_EQ(by_class.count("1.2.840.10008.5.1.4.1.1.104.3"), 1u);
+  EXPECT_EQ(by_class.count("1.2.840.10008.5.1.4.1.1.77.1.1.1"), 1u);
+  EXPECT_EQ(orthanc_->Get("/studies/" + orthanc_study).value("ParentPatient", ""),
+            orthanc_->Get("/patients").at(0).get<std::string>());
+
+  // What the worker wrote conforms, and the mesh is there in the open formats too.
+  ASSERT_EQ(RunCli(cluster.address(), {"fetch", id, "-o", (dir_ / "results").string()}).exit_code, 0);
+  for (const char* name : {"rendered.dcm", "depth.dcm", "uncertainty.dcm", "mesh.dcm"}) {
+    EXPECT_EQ(DciodvfyErrors(dir_ / "results" / "dicom" / name), "") << name;
+  }
+  EXPECT_TRUE(fs::exists(dir_ / "results" / "mesh.ply"));
+  EXPECT_TRUE(fs::exists(dir_ / "results" / "mesh.obj"));
+
+  const auto metrics = Capture("curl -s http://127.0.0.1:" + std::to_string(cluster.metrics_port()) + "/metrics");
+  EXPECT_NE(metrics.find("endorecon_dicom_instances_sent_total{destination=\"orthanc\"} 4"), std::string::npos)
+      << metrics;
+  EXPECT_EQ(metrics.find("endorecon_dicom_retrieval_bytes_total 0\n"), std::string::npos);
+
+  // An association the PACS refuses by AE title: the send fails with the PACS's reason.
+  const auto refused = RunCli(cluster.address(), {"send", id, "--to", "wrongae", "--wait"});
+  EXPECT_EQ(refused.exit_code, 5) << refused.out << refused.err;
+  job = cluster.Job(id);
+  ASSERT_NE(SendTo(job, "wrongae"), nullptr);
+  EXPECT_EQ(SendTo(job, "wrongae")->state(), v1::DicomSend::SEND_FAILED);
+  EXPECT_NE(SendTo(job, "wrongae")->error().find("rejected"), std::string::npos) << SendTo(job, "wrongae")->error();
+
+  // The PACS down: the send fails and the job keeps its results; back up, a resend goes through.
+  orthanc_->Stop();
+  const auto down = RunCli(cluster.address(), {"send", id, "--to", "orthanc", "--wait"});
+  EXPECT_EQ(down.exit_code, 5) << down.out << down.err;
+  job = cluster.Job(id);
+  EXPECT_EQ(job.state(), v1::SUCCEEDED);
+  EXPECT_EQ(SendTo(job, "orthanc")->state(), v1::DicomSend::SEND_FAILED);
+  EXPECT_EQ(SendTo(job, "orthanc")->attempts(), 2);
+  EXPECT_NE(metrics.size(), 0u);
+  ASSERT_EQ(orthanc_->Start(), "");
+  const auto resent = RunCli(cluster.address(), {"send", id, "--to", "orthanc", "--wait"});
+  EXPECT_EQ(resent.exit_code, 0) << resent.out << resent.err;
+  EXPECT_EQ(SendTo(cluster.Job(id), "orthanc")->state(), v1::DicomSend::SENT);
+  EXPECT_EQ(SendTo(cluster.Job(id), "orthanc")->sent(), 4);
+
+  // A study the PACS does not hold: the job fails with the reason, before any worker sees it.
+  const auto missing = RunCli(cluster.address(), {"submit", "--pacs", "orthanc", "--study", "1.2.3.4.5", "--wait"});
+  EXPECT_EQ(missing.exit_code, 5) << missing.out << missing.err;
+  EXPECT_NE(missing.out.find("holds no instance of the study"), std::string::npos) << missing.out;
+}
+
+TEST_F(PacsRoundTripTest, CMoveToTheServersStorageScpWhenCGetIsRefused) {
+  const std::string study = MakeRecording(dir_.path(), dir_ / "recording.dcm");
+  ASSERT_EQ(orthanc_->Store(dir_ / "recording.dcm").value("Status", ""), "Success");
+  // Orthanc lets the AE MOVER move but not get; without a worker the job waits in the queue.
+  Cluster cluster({"--ae-title", "MOVER", "--pacs", "orthanc=" + orthanc_->Address(), "--dicom-listen",
+                   "127.0.0.1:" + std::to_string(mover_port_), "--dicom-timeout", "5"});
+  const auto submitted = RunCli(cluster.address(), {"submit", "--pacs", "orthanc", "--study", study});
+  ASSERT_EQ(submitted.exit_code, 0) << submitted.err;
+  const std::string id = JobIdIn(submitted.out);
+  ASSERT_TRUE(WaitUntil([&] { return cluster.Job(id).retrieval().state() != v1::Retrieval::RETRIEVING; },
+                        std::chrono::seconds(60)));
+  const v1::Job job = cluster.Job(id);
+  EXPECT_EQ(job.retrieval().state(), v1::Retrieval::RETRIEVED) << job.retrieval().error() << cluster.ServerLog();
+  EXPECT_EQ(job.retrieval().method(), "C-MOVE");
+  EXPECT_EQ(job.retrieval().instances(), 1);
+  EXPECT_EQ(job.state(), v1::QUEUED);
+  ASSERT_EQ(job.clip().files_size(), 1);
+  EXPECT_EQ(job.clip().files(0).size(), static_cast<std::int64_t>(fs::file_size(dir_ / "recording.dcm")));
+}
+
+}  // namespace
+}  // namespace endorecon::testing
