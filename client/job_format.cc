@@ -66,14 +66,16 @@ std::string DicomLines(const v1::Job& job) {
                         : r.state() == v1::Retrieval::RETRIEVED ? "done"
                                                                 : "failed";
     text += fmt::format("  retrieval from PACS {}{}: {} instance(s), {}, {}{}\n", r.source().pacs(),
-                        r.method().empty() ? "" : " by " + r.method(), r.instances(), HumanBytes(r.bytes()), state,
-                        r.error().empty() ? "" : ": " + r.error());
+                        r.method().empty() ? "" : " by " + r.method(), r.instances(), HumanBytes(r.bytes()),
+                        state, r.error().empty() ? "" : ": " + r.error());
   }
   for (const auto& send : job.sends()) {
     std::string state;
     switch (send.state()) {
       case v1::DicomSend::PENDING:
-        state = send.attempts() == 0 ? "pending" : fmt::format("pending (attempt {} failed: {})", send.attempts(), send.error());
+        state = send.attempts() == 0
+                    ? "pending"
+                    : fmt::format("pending (attempt {} failed: {})", send.attempts(), send.error());
         break;
       case v1::DicomSend::SENDING:
         state = fmt::format("sending, {} of {} sent", send.sent(), send.total());
@@ -82,8 +84,8 @@ std::string DicomLines(const v1::Job& job) {
         state = fmt::format("sent {} of {}", send.sent(), send.total());
         break;
       default:
-        state = fmt::format("failed after {} attempt(s), {} of {} sent: {}", send.attempts(), send.sent(), send.total(),
-                            send.error());
+        state = fmt::format("failed after {} attempt(s), {} of {} sent: {}", send.attempts(), send.sent(),
+                            send.total(), send.error());
     }
     text += fmt::format("  send to {}: {}\n", send.destination(), state);
   }

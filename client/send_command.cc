@@ -15,12 +15,14 @@ namespace endorecon::client {
 Command AddSendCommand(CLI::App& app) {
   auto request = std::make_shared<v1::SendRequest>();
   auto wait = std::make_shared<bool>(false);
-  auto* sub = app.add_subcommand("send", "send a finished job's DICOM results to a PACS configured on the server");
+  auto* sub =
+      app.add_subcommand("send", "send a finished job's DICOM results to a PACS configured on the server");
   sub->add_option_function<std::string>(
          "JOB", [request](const std::string& v) { request->set_id(v); }, "job id")
       ->required();
   sub->add_option_function<std::string>(
-         "--to", [request](const std::string& v) { request->set_destination(v); }, "the PACS's name on the server")
+         "--to", [request](const std::string& v) { request->set_destination(v); },
+         "the PACS's name on the server")
       ->required();
   sub->add_flag("--wait", *wait, "follow the send until it is done or failed; exit code 5 when it failed");
   return [request, wait](const Globals& globals) {

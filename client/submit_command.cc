@@ -77,7 +77,9 @@ v1::Manifest Upload(const Globals& globals, v1::JobService::Stub& stub, const st
   calls.query = [&](grpc::ClientContext* context, const v1::Manifest& m, v1::UploadStatus* status) {
     return stub.QueryUpload(context, m, status);
   };
-  calls.open = [&](grpc::ClientContext* context, v1::UploadStatus* status) { return stub.Upload(context, status); };
+  calls.open = [&](grpc::ClientContext* context, v1::UploadStatus* status) {
+    return stub.Upload(context, status);
+  };
   UploadOptions upload_options;
   upload_options.call_timeout = globals.timeout();
   const auto upload = UploadFiles(root.empty() ? "." : root, manifest, calls, upload_options);
@@ -110,9 +112,9 @@ int Submit(const Globals& globals, const SubmitFlags& flags) {
   *request.mutable_dicom() = flags.dicom;
   for (const auto& name : flags.send_to) request.add_send_to(name);
   request.set_priority(flags.priority);
-  const std::string default_name = flags.clip.empty()
-                                       ? "pacs " + flags.pacs
-                                       : std::filesystem::path(flags.clip).lexically_normal().filename().string();
+  const std::string default_name =
+      flags.clip.empty() ? "pacs " + flags.pacs
+                         : std::filesystem::path(flags.clip).lexically_normal().filename().string();
   request.set_name(flags.name.empty() ? default_name : flags.name);
   v1::Job job;
   auto context = CallContext(globals.timeout());
@@ -132,13 +134,16 @@ int Submit(const Globals& globals, const SubmitFlags& flags) {
 Command AddSubmitCommand(CLI::App& app) {
   auto flags = std::make_shared<SubmitFlags>();
   auto* sub = app.add_subcommand("submit", "upload a clip folder and queue its reconstruction");
-  sub->add_option("CLIP", flags->clip,
-                  "clip folder (EndoNeRF layout or transforms.json), or a DICOM recording (a file, or a folder of "
-                  "DICOM files)");
-  sub->add_option("--pacs", flags->pacs, "instead of CLIP: retrieve the recording from this PACS (server's name)");
+  sub->add_option(
+      "CLIP", flags->clip,
+      "clip folder (EndoNeRF layout or transforms.json), or a DICOM recording (a file, or a folder of "
+      "DICOM files)");
+  sub->add_option("--pacs", flags->pacs,
+                  "instead of CLIP: retrieve the recording from this PACS (server's name)");
   sub->add_option("--study", flags->study_uid, "with --pacs: the recording's Study Instance UID");
   sub->add_option("--series", flags->series_uid, "with --pacs: only this series of the study");
-  sub->add_option("--send-to", flags->send_to, "send the DICOM results to this PACS when the job succeeds (repeatable)");
+  sub->add_option("--send-to", flags->send_to,
+                  "send the DICOM results to this PACS when the job succeeds (repeatable)");
   sub->add_option_function<std::string>(
          "--stereo", [flags](const std::string& v) { flags->recording.set_stereo(v); },
          "DICOM recording: side-by-side, top-bottom, or series (two series: left, right)")

@@ -81,7 +81,8 @@ void DicomRetriever::Progress(const std::string& job_id, int instances, std::int
   });
 }
 
-std::pair<fs::path, std::string> DicomRetriever::Fetch(const std::string& job_id, const v1::PacsSource& source) {
+std::pair<fs::path, std::string> DicomRetriever::Fetch(const std::string& job_id,
+                                                       const v1::PacsSource& source) {
   dicom::RetrieveRequest request;
   request.peer = pacs_.Find(source.pacs());
   request.calling_ae_title = settings_.ae_title;
@@ -92,7 +93,8 @@ std::pair<fs::path, std::string> DicomRetriever::Fetch(const std::string& job_id
   fs::remove_all(folder);
   coordinator_.Update(job_id, [](v1::Job& job) { job.mutable_retrieval()->set_method("C-GET"); });
   try {
-    dicom::GetStudy(request, folder, [&](int instances, std::int64_t bytes) { Progress(job_id, instances, bytes); });
+    dicom::GetStudy(request, folder,
+                    [&](int instances, std::int64_t bytes) { Progress(job_id, instances, bytes); });
     return {folder, "C-GET"};
   } catch (const Error& e) {
     if (scp_ == nullptr || e.code() == ErrorCode::kNotFound) throw;
@@ -122,7 +124,8 @@ std::pair<fs::path, std::string> DicomRetriever::Fetch(const std::string& job_id
   }
   fs::create_directories(folder);
   for (const auto& entry : fs::recursive_directory_iterator(study_folder)) {
-    const bool wanted = source.series_uid().empty() || entry.path().parent_path().filename() == source.series_uid();
+    const bool wanted =
+        source.series_uid().empty() || entry.path().parent_path().filename() == source.series_uid();
     if (entry.is_regular_file() && entry.path().extension() == ".dcm" && wanted) {
       fs::rename(entry.path(), folder / entry.path().filename());
     }

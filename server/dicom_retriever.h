@@ -40,7 +40,8 @@ class DicomRetriever {
   void Loop();
   void Run(const std::string& job_id);
   // Returns the folder holding the retrieved files and the method used.
-  std::pair<std::filesystem::path, std::string> Fetch(const std::string& job_id, const v1::PacsSource& source);
+  std::pair<std::filesystem::path, std::string> Fetch(const std::string& job_id,
+                                                      const v1::PacsSource& source);
   v1::Manifest StoreBlobs(const std::filesystem::path& folder);
   void Progress(const std::string& job_id, int instances, std::int64_t bytes);
 

@@ -108,7 +108,8 @@ void DicomSender::Attempt(const std::string& job_id, const std::string& destinat
   const v1::DicomSend* send = Find(job, destination);
   if (send == nullptr || send->state() != v1::DicomSend::SENDING) return;
   const int attempt = send->attempts();
-  spdlog::info("job {}: sending {} DICOM instance(s) to {} (attempt {})", job_id, files.size(), destination, attempt);
+  spdlog::info("job {}: sending {} DICOM instance(s) to {} (attempt {})", job_id, files.size(), destination,
+               attempt);
   std::string failure;
   try {
     if (send->total() == 0) Fail(ErrorCode::kFailedPrecondition, "the job has no DICOM results");
@@ -128,8 +129,8 @@ void DicomSender::Attempt(const std::string& job_id, const std::string& destinat
     failure = e.what();
   }
   const bool retry = !failure.empty() && attempt < settings_.send_attempts;
-  const std::int64_t backoff =
-      std::min<std::int64_t>(60000, static_cast<std::int64_t>(settings_.send_backoff_ms) << std::min(attempt - 1, 20));
+  const std::int64_t backoff = std::min<std::int64_t>(
+      60000, static_cast<std::int64_t>(settings_.send_backoff_ms) << std::min(attempt - 1, 20));
   const std::int64_t next = NowUnixMs() + backoff;
   coordinator_.Update(job_id, [&](v1::Job& stored) {
     v1::DicomSend* s = Find(stored, destination);

@@ -3,7 +3,6 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
-
 #include <nlohmann/json.hpp>
 
 #include "common/dicom/recording.h"
@@ -38,7 +37,8 @@ void ValidateOptions(const v1::ReconstructionOptions& options) {
 void ValidateRecording(const v1::RecordingOptions& recording) {
   dicom::ParseStereoLayout(recording.stereo());
   dicom::ParseFrameWindow(recording.frames());
-  if (!(recording.fps() >= 0)) FailInvalid("recording.fps is " + std::to_string(recording.fps()) + "; expected >= 0");
+  if (!(recording.fps() >= 0))
+    FailInvalid("recording.fps is " + std::to_string(recording.fps()) + "; expected >= 0");
 }
 
 bool Retrieving(const v1::Job& job) {
@@ -105,8 +105,8 @@ void JobCoordinator::Recover() {
     if (page.next_before_seq == 0) break;
     before = page.next_before_seq;
   }
-  spdlog::info("recovered {} queued and {} running job(s), {} retrieval(s) and {} DICOM send(s) to resume", queued,
-               running, retrieving.size(), sending.size());
+  spdlog::info("recovered {} queued and {} running job(s), {} retrieval(s) and {} DICOM send(s) to resume",
+               queued, running, retrieving.size(), sending.size());
   for (const auto& id : retrieving) {
     if (dicom_.retrieve) dicom_.retrieve(id);
   }
@@ -222,7 +222,8 @@ v1::Job JobCoordinator::Submit(const v1::SubmitRequest& request) {
     parts_.metrics.JobSubmitted();
   }
   if (from_pacs) {
-    spdlog::info("job {} submitted: its recording is retrieved from PACS {}", job.id(), request.pacs().pacs());
+    spdlog::info("job {} submitted: its recording is retrieved from PACS {}", job.id(),
+                 request.pacs().pacs());
     dicom_.retrieve(job.id());
   } else {
     spdlog::info("job {} submitted: {} file(s), {} bytes, priority {}", job.id(), job.clip().files_size(),
@@ -366,8 +367,9 @@ v1::Job JobCoordinator::RequestSend(const std::string& id, const std::string& de
       endorecon::Fail(ErrorCode::kFailedPrecondition, "job " + id + " is " + v1::JobState_Name(job.state()) +
                                                           "; results are sent once it has SUCCEEDED");
     }
-    const bool has_dicom = std::any_of(job.result().files().begin(), job.result().files().end(),
-                                       [](const v1::FileEntry& f) { return f.path().rfind("dicom/", 0) == 0; });
+    const bool has_dicom =
+        std::any_of(job.result().files().begin(), job.result().files().end(),
+                    [](const v1::FileEntry& f) { return f.path().rfind("dicom/", 0) == 0; });
     if (!has_dicom) {
       endorecon::Fail(ErrorCode::kFailedPrecondition,
                       "job " + id + " has no DICOM results (submit a DICOM recording, or pass --dicom)");
@@ -413,7 +415,8 @@ void JobCoordinator::RetrievalDone(const std::string& id, const v1::Manifest& cl
   job.mutable_retrieval()->set_state(v1::Retrieval::RETRIEVED);
   Save(job);
   parts_.scheduler.Push(job.id(), job.priority(), stored.seq);
-  spdlog::info("job {}: recording retrieved ({} file(s), {} bytes); queued", id, clip.files_size(), TotalBytes(clip));
+  spdlog::info("job {}: recording retrieved ({} file(s), {} bytes); queued", id, clip.files_size(),
+               TotalBytes(clip));
 }
 
 void JobCoordinator::RetrievalFailed(const std::string& id, const std::string& reason) {

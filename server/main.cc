@@ -37,12 +37,19 @@ struct ServerFlags {
   std::vector<std::string> pacs;
 };
 
+std::string HostOf(const std::string& address) {
+  if (!address.empty() && address.front() == '[') return address.substr(0, address.find(']') + 1);
+  return address.substr(0, address.rfind(':'));
+}
+
 // The storage SCP, when --dicom-listen asks for one; C-MOVE progress goes to `retriever`.
-std::unique_ptr<dicom::StorageScp> StartStorageScp(const ServerFlags& flags, const std::filesystem::path& folder,
+std::unique_ptr<dicom::StorageScp> StartStorageScp(const ServerFlags& flags,
+                                                   const std::filesystem::path& folder,
                                                    DicomRetriever*& retriever) {
   if (flags.dicom.listen.empty()) return nullptr;
   const auto colon = flags.dicom.listen.rfind(':');
-  if (colon == std::string::npos) FailInvalid("--dicom-listen '" + flags.dicom.listen + "': expected HOST:PORT");
+  if (colon == std::string::npos)
+    FailInvalid("--dicom-listen '" + flags.dicom.listen + "': expected HOST:PORT");
   dicom::StorageScpSettings settings;
   settings.ae_title = flags.dicom.ae_title;
   settings.host = HostOf(flags.dicom.listen);
@@ -52,13 +59,9 @@ std::unique_ptr<dicom::StorageScp> StartStorageScp(const ServerFlags& flags, con
       settings, [&retriever](const std::string& study, const std::filesystem::path&, std::int64_t bytes) {
         if (retriever != nullptr) retriever->Received(study, bytes);
       });
-  spdlog::info("DICOM storage SCP listening as {}", dicom::PeerText({settings.ae_title, settings.host, settings.port}));
+  spdlog::info("DICOM storage SCP listening as {}",
+               dicom::PeerText({settings.ae_title, settings.host, settings.port}));
   return scp;
-}
-
-std::string HostOf(const std::string& address) {
-  if (!address.empty() && address.front() == '[') return address.substr(0, address.find(']') + 1);
-  return address.substr(0, address.rfind(':'));
 }
 
 // Blocks SIGINT/SIGTERM in every thread; one thread waits for them and shuts the server down.
@@ -87,10 +90,12 @@ int Run(const ServerFlags& flags) {
   const PacsDirectory pacs(flags.pacs);
   DicomRetriever* retriever_for_scp = nullptr;
   const auto scp = StartStorageScp(flags, data_dir / "dicom-incoming", retriever_for_scp);
-  DicomRetriever retriever(coordinator, blobs, pacs, flags.dicom, metrics, data_dir / "retrievals", scp.get());
+  DicomRetriever retriever(coordinator, blobs, pacs, flags.dicom, metrics, data_dir / "retrievals",
+                           scp.get());
   retriever_for_scp = &retriever;
   DicomSender sender(coordinator, blobs, pacs, flags.dicom, metrics);
-  coordinator.SetDicomHooks({&pacs, flags.dicom.uid_root, [&](const std::string& id) { retriever.Retrieve(id); },
+  coordinator.SetDicomHooks({&pacs, flags.dicom.uid_root,
+                             [&](const std::string& id) { retriever.Retrieve(id); },
                              [&](const std::string& id) { sender.Send(id); }});
   for (const auto& name : pacs.Names()) {
     spdlog::info("PACS {} = {} (this server calls as {})", name, dicom::PeerText(pacs.Find(name)),
@@ -186,11 +191,14 @@ int main(int argc, char** argv) {
                  "how often workers report (told to them at registration)")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
-  app.add_option("--ae-title", flags.dicom.ae_title, "this server's DICOM AE title (calling, and its storage SCP's)")
+  app.add_option("--ae-title", flags.dicom.ae_title,
+                 "this server's DICOM AE title (calling, and its storage SCP's)")
       ->capture_default_str();
-  app.add_option("--pacs", flags.pacs, "a PACS, NAME=AET@HOST:PORT (repeatable): retrieve from it, send results to it");
-  app.add_option("--dicom-listen", flags.dicom.listen,
-                 "HOST:PORT of this server's storage SCP (where a PACS delivers C-MOVE retrievals); off by default");
+  app.add_option("--pacs", flags.pacs,
+                 "a PACS, NAME=AET@HOST:PORT (repeatable): retrieve from it, send results to it");
+  app.add_option(
+      "--dicom-listen", flags.dicom.listen,
+      "HOST:PORT of this server's storage SCP (where a PACS delivers C-MOVE retrievals); off by default");
   app.add_option("--uid-root", flags.dicom.uid_root,
                  "UID root of the DICOM results' new UIDs (default: 2.25 UUID-derived UIDs)");
   app.add_option("--send-attempts", flags.dicom.send_attempts,
@@ -201,7 +209,8 @@ int main(int argc, char** argv) {
                  "wait before the second send attempt, doubled for each further one (at most 60 s)")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
-  app.add_option("--dicom-timeout", flags.dicom.timeout_s, "seconds for a PACS to connect, associate and answer")
+  app.add_option("--dicom-timeout", flags.dicom.timeout_s,
+                 "seconds for a PACS to connect, associate and answer")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
   CLI11_PARSE(app, argc, argv);

@@ -46,7 +46,9 @@ class Metrics {
   void SetJobsByState(const std::map<v1::JobState, std::int64_t>& counts);
   void SetQueueDepth(std::size_t depth) { queue_depth_.Set(static_cast<double>(depth)); }
   void SetWorkersConnected(int workers) { workers_connected_.Set(workers); }
-  void DicomInstanceSent(const std::string& destination) { dicom_sent_.Add({{"destination", destination}}).Increment(); }
+  void DicomInstanceSent(const std::string& destination) {
+    dicom_sent_.Add({{"destination", destination}}).Increment();
+  }
   void DicomSendFailed(const std::string& destination) {
     dicom_send_failures_.Add({{"destination", destination}}).Increment();
   }

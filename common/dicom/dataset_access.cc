@@ -56,6 +56,16 @@ void PutUint16(DcmItem& item, const DcmTagKey& tag, Uint16 value) {
   if (status.bad()) Fail(ErrorCode::kInternal, "cannot set " + TagName(tag) + ": " + status.text());
 }
 
+void PutTag(DcmItem& item, const DcmTagKey& tag, const DcmTagKey& value) {
+  const OFCondition status = item.putAndInsertTagKey(tag, value);
+  if (status.bad()) Fail(ErrorCode::kInternal, "cannot set " + TagName(tag) + ": " + status.text());
+}
+
+void PutEmpty(DcmItem& item, const DcmTagKey& tag) {
+  const OFCondition status = item.insertEmptyElement(tag);
+  if (status.bad()) Fail(ErrorCode::kInternal, "cannot add " + TagName(tag) + ": " + status.text());
+}
+
 std::string TagName(const DcmTagKey& tag) {
   DcmTag named(tag);
   const char* name = named.getTagName();

@@ -22,6 +22,10 @@ std::vector<double> FindNumbers(DcmItem& item, const DcmTagKey& tag);
 // the value (a bug in the caller: a value of the wrong form).
 void Put(DcmItem& item, const DcmTagKey& tag, const std::string& value);
 void PutUint16(DcmItem& item, const DcmTagKey& tag, Uint16 value);
+// An attribute tag value (VR AT), e.g. Frame Increment Pointer -> Frame Time.
+void PutTag(DcmItem& item, const DcmTagKey& tag, const DcmTagKey& value);
+// An empty attribute (a type 2 sequence, say).
+void PutEmpty(DcmItem& item, const DcmTagKey& tag);
 
 // The dictionary name of a tag ("NumberOfFrames"), for messages.
 std::string TagName(const DcmTagKey& tag);

@@ -8,7 +8,8 @@ void CheckAeTitle(const std::string& ae_title, const std::string& what) {
   bool printable = !ae_title.empty() && ae_title.size() <= 16 && ae_title.front() != ' ';
   for (const char c : ae_title) printable = printable && c >= 0x20 && c < 0x7f && c != '\\';
   if (!printable) {
-    FailInvalid(what + " '" + ae_title + "' is not an AE title (1 to 16 printable ASCII characters, no backslash)");
+    FailInvalid(what + " '" + ae_title +
+                "' is not an AE title (1 to 16 printable ASCII characters, no backslash)");
   }
 }
 
@@ -34,7 +35,8 @@ Peer ParsePeer(const std::string& text) {
   } catch (const std::exception&) {
     peer.port = 0;
   }
-  if (peer.port < 1 || peer.port > 65535) FailInvalid("'" + text + "': port '" + port + "' is not in 1..65535");
+  if (peer.port < 1 || peer.port > 65535)
+    FailInvalid("'" + text + "': port '" + port + "' is not in 1..65535");
   return peer;
 }
 

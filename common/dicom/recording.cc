@@ -30,9 +30,10 @@ namespace {
 
 const std::set<std::string> kVideoClasses = {
     UID_VideoEndoscopicImageStorage, UID_VideoPhotographicImageStorage, UID_VideoMicroscopicImageStorage};
-const std::set<std::string> kImageClasses = {
-    UID_VLEndoscopicImageStorage, UID_VLPhotographicImageStorage, UID_SecondaryCaptureImageStorage,
-    UID_MultiframeTrueColorSecondaryCaptureImageStorage, UID_MultiframeGrayscaleByteSecondaryCaptureImageStorage};
+const std::set<std::string> kImageClasses = {UID_VLEndoscopicImageStorage, UID_VLPhotographicImageStorage,
+                                             UID_SecondaryCaptureImageStorage,
+                                             UID_MultiframeTrueColorSecondaryCaptureImageStorage,
+                                             UID_MultiframeGrayscaleByteSecondaryCaptureImageStorage};
 const std::set<std::string> kVideoSyntaxes = {UID_MPEG2MainProfileAtMainLevelTransferSyntax,
                                               UID_MPEG2MainProfileAtHighLevelTransferSyntax,
                                               UID_MPEG4HighProfileLevel4_1TransferSyntax,
@@ -42,10 +43,11 @@ const std::set<std::string> kVideoSyntaxes = {UID_MPEG2MainProfileAtMainLevelTra
                                               UID_MPEG4StereoHighProfileLevel4_2TransferSyntax,
                                               UID_HEVCMainProfileLevel5_1TransferSyntax,
                                               UID_HEVCMain10ProfileLevel5_1TransferSyntax};
-const std::set<E_TransferSyntax> kImageSyntaxes = {
-    EXS_LittleEndianImplicit, EXS_LittleEndianExplicit, EXS_BigEndianExplicit, EXS_DeflatedLittleEndianExplicit,
-    EXS_RLELossless,          EXS_JPEGProcess1,         EXS_JPEGProcess2_4,    EXS_JPEGProcess14,
-    EXS_JPEGProcess14SV1};
+const std::set<E_TransferSyntax> kImageSyntaxes = {EXS_LittleEndianImplicit, EXS_LittleEndianExplicit,
+                                                   EXS_BigEndianExplicit,    EXS_DeflatedLittleEndianExplicit,
+                                                   EXS_RLELossless,          EXS_JPEGProcess1,
+                                                   EXS_JPEGProcess2_4,       EXS_JPEGProcess14,
+                                                   EXS_JPEGProcess14SV1};
 
 void RegisterCodecs() {
   static std::once_flag once;
@@ -102,7 +104,8 @@ void ExtractStream(Instance& instance) {
   DcmPixelSequence* sequence = nullptr;
   const OFCondition status = pixels->getEncapsulatedRepresentation(instance.xfer, nullptr, sequence);
   if (status.bad() || sequence == nullptr) {
-    FailInvalid(Where(instance) + ": the pixel data is not an encapsulated video stream (" + status.text() + ")");
+    FailInvalid(Where(instance) + ": the pixel data is not an encapsulated video stream (" + status.text() +
+                ")");
   }
   const bool mpeg2 = instance.transfer_syntax == UID_MPEG2MainProfileAtMainLevelTransferSyntax ||
                      instance.transfer_syntax == UID_MPEG2MainProfileAtHighLevelTransferSyntax;
@@ -128,8 +131,8 @@ void ExtractStream(Instance& instance) {
 cv::VideoCapture OpenStream(const Instance& instance) {
   cv::VideoCapture capture(instance.stream->path().string(), cv::CAP_FFMPEG);
   if (!capture.isOpened()) {
-    FailInvalid(Where(instance) + ": FFmpeg cannot open the encapsulated " + UidName(instance.transfer_syntax) +
-                " stream");
+    FailInvalid(Where(instance) + ": FFmpeg cannot open the encapsulated " +
+                UidName(instance.transfer_syntax) + " stream");
   }
   return capture;
 }
@@ -161,7 +164,8 @@ void ReadTimes(Instance& instance) {
   } else if (const auto rate = FindNumber(data, DCM_CineRate); rate && *rate > 0) {
     interval = 1.0 / *rate;
     instance.times_from = "Cine Rate (0018,0040)";
-  } else if (const auto display = FindNumber(data, DCM_RecommendedDisplayFrameRate); display && *display > 0) {
+  } else if (const auto display = FindNumber(data, DCM_RecommendedDisplayFrameRate);
+             display && *display > 0) {
     interval = 1.0 / *display;
     instance.times_from = "Recommended Display Frame Rate (0008,2144)";
   } else if (instance.video) {
@@ -212,11 +216,12 @@ Instance LoadInstance(const fs::path& path) {
   instance.rows = static_cast<int>(FindInteger(data, DCM_Rows).value_or(0));
   instance.columns = static_cast<int>(FindInteger(data, DCM_Columns).value_or(0));
   if (instance.rows <= 0 || instance.columns <= 0) {
-    FailInvalid(path.string() + ": Rows and Columns must be positive (found " + std::to_string(instance.rows) +
-                " x " + std::to_string(instance.columns) + ")");
+    FailInvalid(path.string() + ": Rows and Columns must be positive (found " +
+                std::to_string(instance.rows) + " x " + std::to_string(instance.columns) + ")");
   }
   const long frames = FindInteger(data, DCM_NumberOfFrames).value_or(1);
-  if (frames <= 0) FailInvalid(path.string() + ": zero frames (Number of Frames is " + std::to_string(frames) + ")");
+  if (frames <= 0)
+    FailInvalid(path.string() + ": zero frames (Number of Frames is " + std::to_string(frames) + ")");
   instance.frames = static_cast<int>(frames);
   if (instance.video) ExtractStream(instance);
   ReadTimes(instance);
@@ -313,8 +318,9 @@ std::vector<cv::Mat> Decode(const std::vector<Instance>& series, const std::vect
     while (decoded < instance.frames && capture.read(image)) {
       if (image.rows != instance.rows || image.cols != instance.columns) {
         FailInvalid(Where(instance) + " frame " + std::to_string(decoded) + ": the stream's frames are " +
-                    std::to_string(image.cols) + "x" + std::to_string(image.rows) + " but Rows x Columns say " +
-                    std::to_string(instance.columns) + "x" + std::to_string(instance.rows));
+                    std::to_string(image.cols) + "x" + std::to_string(image.rows) +
+                    " but Rows x Columns say " + std::to_string(instance.columns) + "x" +
+                    std::to_string(instance.rows));
       }
       if (const auto found = wanted.find(decoded); found != wanted.end()) {
         for (const auto slot : found->second) frames[slot] = image.clone();
@@ -335,14 +341,16 @@ std::vector<cv::Mat> Split(std::vector<cv::Mat>& frames, StereoLayout layout, co
   for (auto& frame : frames) {
     if (layout == StereoLayout::kSideBySide) {
       if (frame.cols % 2 != 0) {
-        FailInvalid(where + ": a side-by-side frame must have an even width, found " + std::to_string(frame.cols));
+        FailInvalid(where + ": a side-by-side frame must have an even width, found " +
+                    std::to_string(frame.cols));
       }
       const int half = frame.cols / 2;
       right.push_back(frame(cv::Rect(half, 0, half, frame.rows)).clone());
       frame = frame(cv::Rect(0, 0, half, frame.rows)).clone();
     } else {
       if (frame.rows % 2 != 0) {
-        FailInvalid(where + ": a top-bottom frame must have an even height, found " + std::to_string(frame.rows));
+        FailInvalid(where + ": a top-bottom frame must have an even height, found " +
+                    std::to_string(frame.rows));
       }
       const int half = frame.rows / 2;
       right.push_back(frame(cv::Rect(0, half, frame.cols, half)).clone());
@@ -354,7 +362,8 @@ std::vector<cv::Mat> Split(std::vector<cv::Mat>& frames, StereoLayout layout, co
 
 bool HasDicomExtension(const fs::path& path) {
   std::string extension = path.extension().string();
-  std::transform(extension.begin(), extension.end(), extension.begin(), [](unsigned char c) { return std::tolower(c); });
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return std::tolower(c); });
   return extension == ".dcm";
 }
 
@@ -382,8 +391,9 @@ std::vector<std::vector<Instance>> LoadSeries(const fs::path& path) {
   }
   std::vector<std::vector<Instance>> series;
   for (auto& [uid, instances] : by_uid) {
-    std::stable_sort(instances.begin(), instances.end(),
-                     [](const Instance& a, const Instance& b) { return a.instance_number < b.instance_number; });
+    std::stable_sort(instances.begin(), instances.end(), [](const Instance& a, const Instance& b) {
+      return a.instance_number < b.instance_number;
+    });
     series.push_back(std::move(instances));
   }
   std::stable_sort(series.begin(), series.end(), [](const auto& a, const auto& b) {
@@ -396,9 +406,9 @@ std::string Describe(const std::vector<Instance>& series) {
   const Instance& first = series.front();
   int frames = 0;
   for (const auto& instance : series) frames += instance.frames;
-  return UidName(first.sop_class) + ", " + UidName(first.transfer_syntax) + ", " + std::to_string(series.size()) +
-         " instance(s), " + std::to_string(frames) + " frame(s) of " + std::to_string(first.columns) + "x" +
-         std::to_string(first.rows);
+  return UidName(first.sop_class) + ", " + UidName(first.transfer_syntax) + ", " +
+         std::to_string(series.size()) + " instance(s), " + std::to_string(frames) + " frame(s) of " +
+         std::to_string(first.columns) + "x" + std::to_string(first.rows);
 }
 
 }  // namespace
@@ -472,7 +482,8 @@ bool HoldsDicom(const fs::path& path) {
   if (fs::is_regular_file(path, error)) return IsDicomFile(path) || HasDicomExtension(path);
   if (!fs::is_directory(path, error)) return false;
   for (const auto& entry : fs::directory_iterator(path, error)) {
-    if (entry.is_regular_file() && (IsDicomFile(entry.path()) || HasDicomExtension(entry.path()))) return true;
+    if (entry.is_regular_file() && (IsDicomFile(entry.path()) || HasDicomExtension(entry.path())))
+      return true;
   }
   return false;
 }
@@ -509,8 +520,8 @@ Recording ReadRecording(const fs::path& path, const RecordingOptions& options) {
   recording.times_from = series[0].front().times_from;
   recording.study = ReadStudyContext(*series[0].front().dataset, series[0].front().path.string());
   for (std::size_t i = 1; i < series[0].size(); ++i) {
-    recording.study.source_instances.push_back({series[0][i].sop_class,
-                                                FindString(*series[0][i].dataset, DCM_SOPInstanceUID).value_or("")});
+    recording.study.source_instances.push_back(
+        {series[0][i].sop_class, FindString(*series[0][i].dataset, DCM_SOPInstanceUID).value_or("")});
   }
   recording.description = Describe(series[0]) + (two ? " (and a right series)" : "");
   return recording;

@@ -40,8 +40,8 @@ struct RecordingOptions {
 };
 
 struct Recording {
-  std::vector<cv::Mat> left;   // 8-bit BGR (OpenCV's order), one per kept frame
-  std::vector<cv::Mat> right;  // the right eye, same count, when stereo; else empty
+  std::vector<cv::Mat> left;    // 8-bit BGR (OpenCV's order), one per kept frame
+  std::vector<cv::Mat> right;   // the right eye, same count, when stereo; else empty
   std::vector<double> times_s;  // per kept frame, seconds from the recording's first frame
   std::string times_from;       // which attribute gave the times (for the clip's record)
   int recording_frames = 0;     // frames in the recording before the window

@@ -39,7 +39,7 @@ void PutHeader(DcmDataset& data, const RecordingHeader& header, const std::strin
   Put(data, DCM_PatientOrientation, "");
   Put(data, DCM_ImageType, "ORIGINAL\\PRIMARY");
   Put(data, DCM_LossyImageCompression, "00");
-  Put(data, DCM_AnatomicRegionSequence, "");
+  PutEmpty(data, DCM_AnatomicRegionSequence);
   Put(data, DCM_BurnedInAnnotation, "NO");
   PutUint16(data, DCM_SamplesPerPixel, 3);
   PutUint16(data, DCM_BitsAllocated, 8);
@@ -84,7 +84,7 @@ std::string WriteVideoEndoscopic(const fs::path& video, int frames, int width, i
   PutUint16(data, DCM_Rows, static_cast<Uint16>(height));
   PutUint16(data, DCM_Columns, static_cast<Uint16>(width));
   Put(data, DCM_NumberOfFrames, std::to_string(frames));
-  Put(data, DCM_FrameIncrementPointer, "(0018,1063)");
+  PutTag(data, DCM_FrameIncrementPointer, DCM_FrameTime);
   Put(data, DCM_FrameTime, Decimal(1000.0 / fps));
   Put(data, DCM_CineRate, std::to_string(static_cast<int>(std::lround(fps))));
   Put(data, DCM_RecommendedDisplayFrameRate, std::to_string(static_cast<int>(std::lround(fps))));
@@ -102,8 +102,8 @@ std::string WriteVideoEndoscopic(const fs::path& video, int frames, int width, i
   return uid;
 }
 
-std::string WriteEndoscopicFrames(const std::vector<cv::Mat>& frames, const std::vector<double>& times_s, bool jpeg,
-                                  const RecordingHeader& header, const fs::path& out) {
+std::string WriteEndoscopicFrames(const std::vector<cv::Mat>& frames, const std::vector<double>& times_s,
+                                  bool jpeg, const RecordingHeader& header, const fs::path& out) {
   if (frames.empty()) FailInvalid(out.string() + ": no frames to write");
   if (times_s.size() != frames.size()) FailInvalid(out.string() + ": one time per frame is needed");
   const int width = frames[0].cols, height = frames[0].rows;
@@ -115,7 +115,7 @@ std::string WriteEndoscopicFrames(const std::vector<cv::Mat>& frames, const std:
   PutUint16(data, DCM_Rows, static_cast<Uint16>(height));
   PutUint16(data, DCM_Columns, static_cast<Uint16>(width));
   Put(data, DCM_NumberOfFrames, std::to_string(frames.size()));
-  Put(data, DCM_FrameIncrementPointer, "(0018,1065)");
+  PutTag(data, DCM_FrameIncrementPointer, DCM_FrameTimeVector);
   std::string vector = "0";
   for (std::size_t f = 1; f < times_s.size(); ++f) {
     vector += '\\';  // appended apart: GCC 12 warns falsely (-Wrestrict) on "\\" + string

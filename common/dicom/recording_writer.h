@@ -14,10 +14,10 @@
 namespace endorecon::dicom {
 
 struct RecordingHeader {
-  StudyContext study;          // patient and study (study.study_instance_uid required)
-  std::string series_uid;      // empty: a new one
+  StudyContext study;      // patient and study (study.study_instance_uid required)
+  std::string series_uid;  // empty: a new one
   int series_number = 1;
-  std::string uid_root;        // for new UIDs
+  std::string uid_root;  // for new UIDs
   std::string series_description = "endoscopy";
 };
 
@@ -26,13 +26,13 @@ struct RecordingHeader {
 // AVC/H.264 High Profile / Level 4.1, one fragment. `frames`, `width`, `height` must describe the
 // stream; `fps` gives Frame Time. Returns the SOP Instance UID. Throws InvalidArgument for a
 // missing or empty video, Error(kUnavailable) when `out` cannot be written.
-std::string WriteVideoEndoscopic(const std::filesystem::path& video, int frames, int width, int height, double fps,
-                                 const RecordingHeader& header, const std::filesystem::path& out);
+std::string WriteVideoEndoscopic(const std::filesystem::path& video, int frames, int width, int height,
+                                 double fps, const RecordingHeader& header, const std::filesystem::path& out);
 
 // `frames` (8-bit BGR, one size) as one multi-frame VL Endoscopic Image instance with a Frame Time
 // Vector from `times_s` (seconds, one per frame, non-decreasing), uncompressed or JPEG baseline
 // (one frame per fragment). Returns the SOP Instance UID.
-std::string WriteEndoscopicFrames(const std::vector<cv::Mat>& frames, const std::vector<double>& times_s, bool jpeg,
-                                  const RecordingHeader& header, const std::filesystem::path& out);
+std::string WriteEndoscopicFrames(const std::vector<cv::Mat>& frames, const std::vector<double>& times_s,
+                                  bool jpeg, const RecordingHeader& header, const std::filesystem::path& out);
 
 }  // namespace endorecon::dicom

@@ -50,6 +50,7 @@ std::string PutCommon(DcmDataset& data, const SeriesHeader& header, const std::s
   Put(data, DCM_InstanceCreationDate, date.c_str());
   Put(data, DCM_InstanceCreationTime, time.c_str());
   Put(data, DCM_Modality, modality);
+  Put(data, DCM_Laterality, "");  // Type 2C: the body part may be paired; unknown here
   Put(data, DCM_SeriesInstanceUID, NewUid(header.uid_root));
   Put(data, DCM_SeriesNumber, std::to_string(header.series_number));
   Put(data, DCM_SeriesDescription, header.series_description);
@@ -84,14 +85,15 @@ void PutImage(DcmDataset& data, const SeriesHeader& header, int frames, int widt
   for (const auto& source : header.study.source_instances) {
     PutReference(*AppendItem(data, DCM_SourceImageSequence), source);
   }
+  if (frames == 1) return;  // Frame Increment Pointer and the times are for more than one frame
   if (header.frame_times_s.empty()) {
     Put(data, DCM_FrameTime, DecimalString(1000.0 / 15.0));
-    Put(data, DCM_FrameIncrementPointer, "(0018,1063)");
+    PutTag(data, DCM_FrameIncrementPointer, DCM_FrameTime);
     return;
   }
   if (static_cast<int>(header.frame_times_s.size()) != frames) {
-    FailInvalid("frame times: " + std::to_string(header.frame_times_s.size()) + " for " + std::to_string(frames) +
-                " frames");
+    FailInvalid("frame times: " + std::to_string(header.frame_times_s.size()) + " for " +
+                std::to_string(frames) + " frames");
   }
   std::string vector = "0";
   for (int f = 1; f < frames; ++f) {
@@ -99,7 +101,7 @@ void PutImage(DcmDataset& data, const SeriesHeader& header, int frames, int widt
     vector += DecimalString(1000.0 * std::max(0.0, header.frame_times_s[f] - header.frame_times_s[f - 1]));
   }
   Put(data, DCM_FrameTimeVector, vector);
-  Put(data, DCM_FrameIncrementPointer, "(0018,1065)");
+  PutTag(data, DCM_FrameIncrementPointer, DCM_FrameTimeVector);
 }
 
 void Save(DcmFileFormat& file, const std::filesystem::path& path) {
@@ -148,7 +150,8 @@ std::string WriteColorFrames(const std::filesystem::path& path, const SeriesHead
       }
     }
   }
-  if (data.putAndInsertUint8Array(DCM_PixelData, pixels.data(), static_cast<unsigned long>(pixels.size())).bad()) {
+  if (data.putAndInsertUint8Array(DCM_PixelData, pixels.data(), static_cast<unsigned long>(pixels.size()))
+          .bad()) {
     Fail(ErrorCode::kInternal, "cannot set Pixel Data of " + path.string());
   }
   Save(file, path);
@@ -164,8 +167,9 @@ std::string WriteScalarFrames(const std::filesystem::path& path, const SeriesHea
   double largest = 0;
   for (std::size_t f = 0; f < frames.size(); ++f) {
     if (frames[f].size() != pixels_per_frame) {
-      FailInvalid(path.string() + ": frame " + std::to_string(f) + " has " + std::to_string(frames[f].size()) +
-                  " values for " + std::to_string(width) + "x" + std::to_string(height));
+      FailInvalid(path.string() + ": frame " + std::to_string(f) + " has " +
+                  std::to_string(frames[f].size()) + " values for " + std::to_string(width) + "x" +
+                  std::to_string(height));
     }
     for (const float v : frames[f]) {
       if (std::isfinite(v)) largest = std::max(largest, static_cast<double>(v));
@@ -175,7 +179,8 @@ std::string WriteScalarFrames(const std::filesystem::path& path, const SeriesHea
   const double slope = std::stod(DecimalString(largest > 0 ? largest / 65535.0 * (1 + 1e-6) : 1.0));
   DcmFileFormat file;
   DcmDataset& data = *file.getDataset();
-  const std::string uid = PutCommon(data, header, UID_MultiframeGrayscaleWordSecondaryCaptureImageStorage, "ES");
+  const std::string uid =
+      PutCommon(data, header, UID_MultiframeGrayscaleWordSecondaryCaptureImageStorage, "ES");
   PutImage(data, header, static_cast<int>(frames.size()), width, height);
   PutUint16(data, DCM_SamplesPerPixel, 1);
   Put(data, DCM_PhotometricInterpretation, "MONOCHROME2");
@@ -197,15 +202,16 @@ std::string WriteScalarFrames(const std::filesystem::path& path, const SeriesHea
       stored[f * pixels_per_frame + i] = static_cast<Uint16>(std::min(q, 65535.0));
     }
   }
-  if (data.putAndInsertUint16Array(DCM_PixelData, stored.data(), static_cast<unsigned long>(stored.size())).bad()) {
+  if (data.putAndInsertUint16Array(DCM_PixelData, stored.data(), static_cast<unsigned long>(stored.size()))
+          .bad()) {
     Fail(ErrorCode::kInternal, "cannot set Pixel Data of " + path.string());
   }
   Save(file, path);
   return uid;
 }
 
-std::string WriteStlMesh(const std::filesystem::path& path, const SeriesHeader& header, const std::string& stl,
-                         const std::string& unit) {
+std::string WriteStlMesh(const std::filesystem::path& path, const SeriesHeader& header,
+                         const std::string& stl, const std::string& unit) {
   if (stl.size() < 84) FailInvalid(path.string() + ": the STL file is shorter than its 84-byte header");
   DcmFileFormat file;
   DcmDataset& data = *file.getDataset();
@@ -217,7 +223,7 @@ std::string WriteStlMesh(const std::filesystem::path& path, const SeriesHeader& 
   Put(data, DCM_AcquisitionDateTime, "");
   Put(data, DCM_BurnedInAnnotation, "NO");
   Put(data, DCM_DocumentTitle, header.series_description);
-  data.insertEmptyElement(DCM_ConceptNameCodeSequence);
+  PutEmpty(data, DCM_ConceptNameCodeSequence);
   Put(data, DCM_MIMETypeOfEncapsulatedDocument, "model/stl");
   for (const auto& source : header.study.source_instances) {
     PutReference(*AppendItem(data, DCM_SourceInstanceSequence), source);

@@ -47,7 +47,7 @@ std::string WriteScalarFrames(const std::filesystem::path& file, const SeriesHea
 
 // `stl`: the bytes of a binary STL file; `unit`: the length unit of its coordinates as a UCUM code
 // ("mm"). Returns the SOP Instance UID.
-std::string WriteStlMesh(const std::filesystem::path& file, const SeriesHeader& header, const std::string& stl,
-                         const std::string& unit);
+std::string WriteStlMesh(const std::filesystem::path& file, const SeriesHeader& header,
+                         const std::string& stl, const std::string& unit);
 
 }  // namespace endorecon::dicom

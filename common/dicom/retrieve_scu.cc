@@ -12,24 +12,36 @@ namespace endorecon::dicom {
 namespace fs = std::filesystem;
 namespace {
 
-// DcmSCU counting what C-GET stores (DcmSCU writes each instance into its storage folder).
+// DcmSCU counting what C-GET stores (DcmSCU writes each instance into its storage folder, under
+// the name it asks createStorageFilename for).
 class RetrievingScu : public DcmSCU {
  public:
   RetrieveProgress progress;
   int instances = 0;
   std::int64_t bytes = 0;
 
+ protected:
+  OFString createStorageFilename(DcmDataset* dataset) override {
+    last_file_ = DcmSCU::createStorageFilename(dataset);
+    return last_file_;
+  }
+
   OFCondition handleSTORERequest(const T_ASC_PresentationContextID id, DcmDataset* incoming, OFBool& go_on,
                                  Uint16& status) override {
-    const auto size = incoming ? static_cast<std::int64_t>(incoming->getLength(incoming->getOriginalXfer())) : 0;
+    last_file_.clear();
     const OFCondition result = DcmSCU::handleSTORERequest(id, incoming, go_on, status);
-    if (result.good()) {
+    std::error_code error;
+    const auto size = last_file_.empty() ? 0 : fs::file_size(last_file_.c_str(), error);
+    if (result.good() && !error) {
       ++instances;
-      bytes += size;
+      bytes += static_cast<std::int64_t>(size);
       if (progress) progress(instances, bytes);
     }
     return result;
   }
+
+ private:
+  OFString last_file_;
 };
 
 void Configure(DcmSCU& scu, const RetrieveRequest& request) {
@@ -64,18 +76,20 @@ std::string What(const RetrieveRequest& request) {
 }
 
 // Checks the final response; returns the completed sub-operations.
-int Finish(const OFList<RetrieveResponse*>& responses, const RetrieveRequest& request, const std::string& verb) {
+int Finish(const OFList<RetrieveResponse*>& responses, const RetrieveRequest& request,
+           const std::string& verb) {
   if (responses.empty()) Fail(ErrorCode::kUnavailable, verb + " of " + What(request) + ": no response");
   const RetrieveResponse* last = responses.back();
   char hex[8];
   std::snprintf(hex, sizeof(hex), "0x%04X", last->m_status);
   const std::string status = std::string(hex);
   if (last->m_status != STATUS_Success && (last->m_status & 0xf000) != 0xb000) {
-    Fail(ErrorCode::kUnavailable, verb + " of " + What(request) + " refused by " + PeerText(request.peer) +
-                                      " with status " + status);
+    Fail(ErrorCode::kUnavailable,
+         verb + " of " + What(request) + " refused by " + PeerText(request.peer) + " with status " + status);
   }
   if (last->m_numberOfFailedSubops > 0) {
-    Fail(ErrorCode::kDataLoss, verb + " of " + What(request) + ": " + std::to_string(last->m_numberOfFailedSubops) +
+    Fail(ErrorCode::kDataLoss, verb + " of " + What(request) + ": " +
+                                   std::to_string(last->m_numberOfFailedSubops) +
                                    " instance(s) failed (status " + status + ")");
   }
   return last->m_numberOfCompletedSubops;
@@ -109,7 +123,8 @@ int GetStudy(const RetrieveRequest& request, const fs::path& out_dir, const Retr
     }
   }
   Connect(scu, request);
-  const T_ASC_PresentationContextID id = scu.findPresentationContextID(UID_GETStudyRootQueryRetrieveInformationModel, "");
+  const T_ASC_PresentationContextID id =
+      scu.findPresentationContextID(UID_GETStudyRootQueryRetrieveInformationModel, "");
   if (id == 0) {
     scu.releaseAssociation();
     Fail(ErrorCode::kUnavailable, PeerText(request.peer) + " does not offer C-GET (Study Root); use C-MOVE");
@@ -165,7 +180,8 @@ int MoveStudy(const RetrieveRequest& request, const std::string& destination_ae)
     throw;
   }
   FreeAll(responses);
-  if (moved == 0) Fail(ErrorCode::kNotFound, PeerText(request.peer) + " holds no instance of " + What(request));
+  if (moved == 0)
+    Fail(ErrorCode::kNotFound, PeerText(request.peer) + " holds no instance of " + What(request));
   return moved;
 }
 

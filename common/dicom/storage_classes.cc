@@ -15,20 +15,19 @@ const std::vector<StorageClass>& RecordingStorageClasses() {
                                             UID_MPEG2MainProfileAtHighLevelTransferSyntax,
                                             UID_HEVCMainProfileLevel5_1TransferSyntax,
                                             UID_HEVCMain10ProfileLevel5_1TransferSyntax};
-    const std::vector<std::string> image = {UID_LittleEndianExplicitTransferSyntax,
-                                            UID_LittleEndianImplicitTransferSyntax,
-                                            UID_JPEGProcess1TransferSyntax,
-                                            UID_JPEGProcess2_4TransferSyntax,
-                                            UID_JPEGProcess14SV1TransferSyntax,
-                                            UID_RLELosslessTransferSyntax};
+    const std::vector<std::string> image = {
+        UID_LittleEndianExplicitTransferSyntax, UID_LittleEndianImplicitTransferSyntax,
+        UID_JPEGProcess1TransferSyntax,         UID_JPEGProcess2_4TransferSyntax,
+        UID_JPEGProcess14SV1TransferSyntax,     UID_RLELosslessTransferSyntax};
     std::vector<StorageClass> all;
     for (const char* sop : {UID_VideoEndoscopicImageStorage, UID_VideoPhotographicImageStorage,
                             UID_VideoMicroscopicImageStorage}) {
       all.push_back({sop, video});
     }
-    for (const char* sop : {UID_VLEndoscopicImageStorage, UID_VLPhotographicImageStorage,
-                            UID_SecondaryCaptureImageStorage, UID_MultiframeTrueColorSecondaryCaptureImageStorage,
-                            UID_MultiframeGrayscaleByteSecondaryCaptureImageStorage}) {
+    for (const char* sop :
+         {UID_VLEndoscopicImageStorage, UID_VLPhotographicImageStorage, UID_SecondaryCaptureImageStorage,
+          UID_MultiframeTrueColorSecondaryCaptureImageStorage,
+          UID_MultiframeGrayscaleByteSecondaryCaptureImageStorage}) {
       all.push_back({sop, image});
     }
     return all;

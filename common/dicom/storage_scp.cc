@@ -15,7 +15,8 @@ namespace fs = std::filesystem;
 namespace {
 
 bool IsLoopback(const std::string& host) {
-  return host == "localhost" || host == "::1" || host.rfind("127.", 0) == 0 || host.rfind("::ffff:127.", 0) == 0;
+  return host == "localhost" || host == "::1" || host.rfind("127.", 0) == 0 ||
+         host.rfind("::ffff:127.", 0) == 0;
 }
 
 }  // namespace
@@ -94,7 +95,8 @@ StorageScp::StorageScp(const StorageScpSettings& settings, OnStored on_stored)
   }
   thread_ = std::thread([this] {
     const OFCondition result = scp_->acceptAssociations();
-    if (result.bad() && result != NET_EC_StopAfterConnectionTimeout && result != NET_EC_StopAfterAssociation) {
+    if (result.bad() && result != NET_EC_StopAfterConnectionTimeout &&
+        result != NET_EC_StopAfterAssociation) {
       spdlog::error("storage SCP stopped: {}", result.text());
     }
   });

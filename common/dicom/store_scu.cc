@@ -124,9 +124,10 @@ std::string StatusText(Uint16 status) {
 }
 
 // Sends one file; returns "" on success, else why it failed.
-std::string StoreOne(T_ASC_Association* association, const fs::path& path, const FileInfo& info, int timeout_s) {
-  T_ASC_PresentationContextID id =
-      ASC_findAcceptedPresentationContextID(association, info.sop_class.c_str(), info.transfer_syntax.c_str());
+std::string StoreOne(T_ASC_Association* association, const fs::path& path, const FileInfo& info,
+                     int timeout_s) {
+  T_ASC_PresentationContextID id = ASC_findAcceptedPresentationContextID(association, info.sop_class.c_str(),
+                                                                         info.transfer_syntax.c_str());
   if (id == 0) return "the peer accepted no presentation context for " + UidName(info.sop_class);
   T_ASC_PresentationContext context;
   ASC_findAcceptedPresentationContext(association->params, id, &context);
@@ -142,7 +143,8 @@ std::string StoreOne(T_ASC_Association* association, const fs::path& path, const
   }
   T_DIMSE_C_StoreRQ request{};
   request.MessageID = association->nextMsgID++;
-  OFStandard::strlcpy(request.AffectedSOPClassUID, info.sop_class.c_str(), sizeof(request.AffectedSOPClassUID));
+  OFStandard::strlcpy(request.AffectedSOPClassUID, info.sop_class.c_str(),
+                      sizeof(request.AffectedSOPClassUID));
   OFStandard::strlcpy(request.AffectedSOPInstanceUID, info.sop_instance.c_str(),
                       sizeof(request.AffectedSOPInstanceUID));
   request.DataSetType = DIMSE_DATASET_PRESENT;

@@ -42,9 +42,9 @@ StudyContext NewStudyContext(const std::string& patient_id, const std::string& p
   if (!study_uid.empty()) CheckUid(study_uid, "--study-uid");
   study.study_instance_uid = study_uid.empty() ? NewUid(uid_root) : study_uid;
   study.specific_character_set = "ISO_IR 192";  // UTF-8: names typed on a command line
-  study.patient_id = patient_id.empty() ? "ENDORECON-" + study.study_instance_uid.substr(
-                                                             study.study_instance_uid.size() - 8)
-                                        : patient_id;
+  study.patient_id = patient_id.empty()
+                         ? "ENDORECON-" + study.study_instance_uid.substr(study.study_instance_uid.size() - 8)
+                         : patient_id;
   study.patient_name = patient_name;
   OFString date, time;
   DcmDate::getCurrentDate(date);

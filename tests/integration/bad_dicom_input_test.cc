@@ -13,7 +13,8 @@ TEST(BadDicomInputTest, RefusedAtSubmitOrAtPreparation) {
   WriteBytes(cluster.path("recording.dcm"), std::string(1000, 'x'));
   const auto bad = RunCli(cluster.address(), {"submit", cluster.path("recording.dcm").string(), "--wait"});
   EXPECT_EQ(bad.exit_code, 5) << bad.out << bad.err;
-  EXPECT_NE(bad.out.find("recording.dcm: not a DICOM file (no \"DICM\" at byte 128)"), std::string::npos) << bad.out;
+  EXPECT_NE(bad.out.find("recording.dcm: not a DICOM file (no \"DICM\" at byte 128)"), std::string::npos)
+      << bad.out;
 
   const auto unknown = RunCli(cluster.address(), {"submit", "--pacs", "nowhere", "--study", "1.2.3"});
   EXPECT_EQ(unknown.exit_code, 2) << unknown.err;
@@ -21,7 +22,8 @@ TEST(BadDicomInputTest, RefusedAtSubmitOrAtPreparation) {
 
   // The worker is still there for the next job.
   MakeClip(cluster.path("clip"));
-  const auto good = RunCli(cluster.address(), {"submit", cluster.path("clip").string(), "--iterations", "10", "--wait"});
+  const auto good =
+      RunCli(cluster.address(), {"submit", cluster.path("clip").string(), "--iterations", "10", "--wait"});
   EXPECT_EQ(good.exit_code, 0) << good.out << good.err;
 }
 

@@ -1,5 +1,6 @@
 #include "tests/integration/orthanc_harness.h"
 
+#include <csignal>
 #include <fstream>
 #include <thread>
 
@@ -11,9 +12,14 @@ Orthanc::Orthanc(const fs::path& folder, std::vector<OrthancModality> modalities
   dicom_port_ = FreePort();
   nlohmann::json known = nlohmann::json::object();
   for (const auto& modality : modalities) {
-    known[modality.ae_title] = {{"AET", modality.ae_title}, {"Host", "127.0.0.1"},   {"Port", modality.port},
-                                {"AllowEcho", true},        {"AllowFind", true},     {"AllowMove", true},
-                                {"AllowGet", modality.allow_get}, {"AllowStore", true}};
+    known[modality.ae_title] = {{"AET", modality.ae_title},
+                                {"Host", "127.0.0.1"},
+                                {"Port", modality.port},
+                                {"AllowEcho", true},
+                                {"AllowFind", true},
+                                {"AllowMove", true},
+                                {"AllowGet", modality.allow_get},
+                                {"AllowStore", true}};
   }
   const nlohmann::json config = {{"Name", "endorecon-test"},
                                  {"StorageDirectory", (folder / "db").string()},
@@ -40,7 +46,8 @@ Orthanc::Orthanc(const fs::path& folder, std::vector<OrthancModality> modalities
 std::string Orthanc::Start() {
   if (!fs::exists("/usr/sbin/Orthanc")) return "Orthanc is not installed (Debian package orthanc)";
   process_ = std::make_unique<Process>(
-      std::vector<std::string>{"/usr/sbin/Orthanc", (folder_ / "orthanc.json").string()}, folder_ / "orthanc.log");
+      std::vector<std::string>{"/usr/sbin/Orthanc", (folder_ / "orthanc.json").string()},
+      folder_ / "orthanc.log");
   const bool up = WaitUntil([&] { return Get("/system").is_object(); }, std::chrono::seconds(20));
   if (up) return "";
   std::ifstream log(folder_ / "orthanc.log");
@@ -72,8 +79,8 @@ nlohmann::json Orthanc::Post(const std::string& uri, const std::string& body) co
 }
 
 nlohmann::json Orthanc::Store(const fs::path& file) const {
-  const auto text = Capture("curl -s --max-time 30 -X POST --data-binary @" + file.string() + " http://127.0.0.1:" +
-                            std::to_string(http_port_) + "/instances");
+  const auto text = Capture("curl -s --max-time 30 -X POST --data-binary @" + file.string() +
+                            " http://127.0.0.1:" + std::to_string(http_port_) + "/instances");
   return nlohmann::json::parse(text, nullptr, false);
 }
 

@@ -1,13 +1,12 @@
 // DICOM recordings in: video (H.264 through FFmpeg), multi-frame images (uncompressed and JPEG),
 // stereo layouts, frame times and windows, and every bad input refused with what and where.
-#include "common/dicom/recording.h"
-
 #include <dcmtk/dcmdata/dctk.h>
 #include <gtest/gtest.h>
 
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 
+#include "common/dicom/recording.h"
 #include "common/dicom/recording_writer.h"
 #include "common/dicom/result_instances.h"
 #include "common/dicom/uid.h"
@@ -18,6 +17,7 @@ namespace endorecon::dicom {
 namespace {
 
 using testing::TempDir;
+using testing::WriteBytes;
 
 // Frames whose colours say their index: a gradient plus a block that moves one step per frame.
 std::vector<cv::Mat> Frames(int count, int width, int height) {
@@ -26,8 +26,8 @@ std::vector<cv::Mat> Frames(int count, int width, int height) {
     cv::Mat frame(height, width, CV_8UC3);
     for (int y = 0; y < height; ++y) {
       for (int x = 0; x < width; ++x) {
-        frame.at<cv::Vec3b>(y, x) = cv::Vec3b(static_cast<uchar>(4 * x), static_cast<uchar>(6 * y),
-                                              static_cast<uchar>(20 * f + 10));
+        frame.at<cv::Vec3b>(y, x) =
+            cv::Vec3b(static_cast<uchar>(4 * x), static_cast<uchar>(6 * y), static_cast<uchar>(20 * f + 10));
       }
     }
     cv::rectangle(frame, cv::Rect(2 * f % width, 4, 8, 8), cv::Scalar(255, 255, 255), cv::FILLED);
@@ -103,7 +103,8 @@ TEST(DicomRecordingTest, JpegFramesDecodeCloseToTheOriginal) {
   WriteEndoscopicFrames(frames, {0, 0.1, 0.2, 0.3}, true, Header(), dir / "jpeg.dcm");
   const Recording recording = ReadRecording(dir / "jpeg.dcm", {});
   ASSERT_EQ(recording.left.size(), 4u);
-  for (int f = 0; f < 4; ++f) EXPECT_LT(MeanAbsDifference(recording.left[f], frames[f]), 6.0) << "frame " << f;
+  for (int f = 0; f < 4; ++f)
+    EXPECT_LT(MeanAbsDifference(recording.left[f], frames[f]), 6.0) << "frame " << f;
   EXPECT_NE(recording.description.find("JPEG"), std::string::npos) << recording.description;
 }
 
@@ -120,7 +121,8 @@ TEST(DicomRecordingTest, H264VideoDecodesEveryFrameAtItsFrameTime) {
   const Recording recording = ReadRecording(dir / "video.dcm", {});
   ASSERT_EQ(recording.left.size(), 12u);
   EXPECT_NEAR(recording.times_s[11], 11 * 0.04, 1e-6);
-  for (int f = 0; f < 12; ++f) EXPECT_LT(MeanAbsDifference(recording.left[f], frames[f]), 12.0) << "frame " << f;
+  for (int f = 0; f < 12; ++f)
+    EXPECT_LT(MeanAbsDifference(recording.left[f], frames[f]), 12.0) << "frame " << f;
   EXPECT_NE(recording.description.find("VideoEndoscopic"), std::string::npos) << recording.description;
 
   // Number of Frames larger than the stream holds: a truncated stream, said so.
@@ -185,7 +187,8 @@ TEST(DicomRecordingTest, BadInputsAreNamed) {
   derived.study = NewStudyContext("P-1", "", "", "");
   WriteScalarFrames(dir / "depth.dcm", derived, {std::vector<float>(12, 1.f)}, 4, 3, {"US", "values"});
   const std::string sop = ErrorOf(dir / "depth.dcm");
-  EXPECT_NE(sop.find("depth.dcm: SOP class MultiframeGrayscaleWordSecondaryCaptureImageStorage"), std::string::npos)
+  EXPECT_NE(sop.find("depth.dcm: SOP class MultiframeGrayscaleWordSecondaryCaptureImageStorage"),
+            std::string::npos)
       << sop;
 
   WriteEndoscopicFrames(Frames(4, 32, 24), {0, 0.1, 0.2, 0.3}, false, Header(), dir / "full.dcm");
@@ -194,7 +197,8 @@ TEST(DicomRecordingTest, BadInputsAreNamed) {
   std::filesystem::resize_file(dir / "cut.dcm", size - 5000);
   const std::string cut = ErrorOf(dir / "cut.dcm");
   EXPECT_NE(cut.find("cut.dcm"), std::string::npos) << cut;
-  EXPECT_TRUE(cut.find("truncated") != std::string::npos || cut.find("not a readable") != std::string::npos) << cut;
+  EXPECT_TRUE(cut.find("truncated") != std::string::npos || cut.find("not a readable") != std::string::npos)
+      << cut;
 
   DcmFileFormat file;
   ASSERT_TRUE(file.loadFile((dir / "full.dcm").c_str()).good());

@@ -5,10 +5,10 @@
 #include <dcmtk/dcmdata/dctk.h>
 #include <gtest/gtest.h>
 
-
 #include "common/dicom/recording.h"
 #include "common/dicom/recording_writer.h"
 #include "common/dicom/uid.h"
+#include "common/error.h"
 #include "tests/unit/dciodvfy.h"
 #include "tests/unit/temp_dir.h"
 

@@ -44,10 +44,10 @@ TEST(SurfaceMeshTest, ToolUnknownAndFarPixelsAndDepthEdgesAreLeftOut) {
   std::vector<float> depth(w * h, 50.f);
   const std::vector<float> rgb(w * h * 3, 0.5f);
   std::vector<std::uint8_t> tool(w * h, 0);
-  tool[0] = 1;            // a tool pixel at the corner: one triangle of its square goes
-  depth[3] = 0;           // unknown depth at the other top corner
-  depth[11] = 100;        // the far plane (nothing rendered)
-  depth[5] = 70;          // a step of 40%: every triangle touching it is an edge
+  tool[0] = 1;      // a tool pixel at the corner: one triangle of its square goes
+  depth[3] = 0;     // unknown depth at the other top corner
+  depth[11] = 100;  // the far plane (nothing rendered)
+  depth[5] = 70;    // a step of 40%: every triangle touching it is an edge
   const SurfaceMesh mesh = TriangulateDepth(Camera(w, h), depth, rgb, tool, 100);
   EXPECT_EQ(mesh.vertex_count(), 9u);
   for (const auto index : mesh.triangles) {

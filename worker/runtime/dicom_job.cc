@@ -14,7 +14,8 @@ dicom::RecordingOptions RecordingOptionsOf(const v1::RecordingOptions& options) 
   return out;
 }
 
-std::optional<RecordingClip> PrepareRecording(const std::filesystem::path& input, const v1::RecordingOptions& options,
+std::optional<RecordingClip> PrepareRecording(const std::filesystem::path& input,
+                                              const v1::RecordingOptions& options,
                                               const std::filesystem::path& clip_dir) {
   return ClipFromRecording(input, RecordingOptionsOf(options), clip_dir);
 }

@@ -15,7 +15,8 @@ dicom::RecordingOptions RecordingOptionsOf(const v1::RecordingOptions& options);
 
 // When `input` is a DICOM recording, converts it into `clip_dir` and returns what the results need;
 // nullopt for any other clip.
-std::optional<RecordingClip> PrepareRecording(const std::filesystem::path& input, const v1::RecordingOptions& options,
+std::optional<RecordingClip> PrepareRecording(const std::filesystem::path& input,
+                                              const v1::RecordingOptions& options,
                                               const std::filesystem::path& clip_dir);
 
 // Writes out_dir/dicom/ when the input was a recording (into its study) or `dicom.enabled()` (into

@@ -16,11 +16,14 @@ namespace {
 
 void AddReconstructOptions(CLI::App& cmd, ReconstructOptions& options) {
   cmd.add_option("--config", options.config_file, "JSON file overriding the preset (keys as in config.json)");
-  cmd.add_option("--preset", options.preset, "cpu or paper")->capture_default_str()->check(CLI::IsMember({"cpu", "paper"}));
+  cmd.add_option("--preset", options.preset, "cpu or paper")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"cpu", "paper"}));
   cmd.add_option("--iterations", options.iterations, "training iterations (default: the preset's)");
   cmd.add_option("--time-budget", options.time_budget_s, "stop training after this many seconds (0: none)")
       ->check(CLI::NonNegativeNumber);
-  cmd.add_option("--holdout", options.holdout, "hold every K-th frame out of training (0: none; default: the preset's)");
+  cmd.add_option("--holdout", options.holdout,
+                 "hold every K-th frame out of training (0: none; default: the preset's)");
   cmd.add_option("--seed", options.seed, "random seed")->capture_default_str();
   cmd.add_flag("--static", options.force_static, "treat the clip as static (no deformation network)");
 }
@@ -34,13 +37,15 @@ void AddDicomOptions(CLI::App& cmd, v1::RecordingOptions& recording, v1::DicomOu
       "--frames", [&](const std::string& v) { recording.set_frames(v); },
       "DICOM recording: frames START:END:STEP (as a Python slice)");
   cmd.add_option_function<double>(
-         "--fps", [&](double v) { recording.set_fps(v); }, "DICOM recording: keep at most this many frames per second")
+         "--fps", [&](double v) { recording.set_fps(v); },
+         "DICOM recording: keep at most this many frames per second")
       ->check(CLI::NonNegativeNumber);
   cmd.add_flag_function(
       "--dicom", [&](std::int64_t) { dicom.set_enabled(true); },
       "write dicom/ for a clip that is not DICOM (always written for a DICOM recording)");
   cmd.add_option_function<std::string>(
-      "--patient-id", [&](const std::string& v) { dicom.set_patient_id(v); }, "with --dicom: the patient's ID");
+      "--patient-id", [&](const std::string& v) { dicom.set_patient_id(v); },
+      "with --dicom: the patient's ID");
   cmd.add_option_function<std::string>(
       "--patient-name", [&](const std::string& v) { dicom.set_patient_name(v); },
       "with --dicom: the patient's name (DICOM PN, e.g. Doe^Jane)");
@@ -74,7 +79,9 @@ Command AddReconstructCommand(CLI::App& app) {
     hooks.progress_interval_s = 1.0;
     hooks.on_progress = [](const Progress& p) {
       const double percent = p.total_iterations > 0 ? 100.0 * p.iteration / p.total_iterations : 0.0;
-      std::fprintf(stderr, "\r iter %6d/%d %5.1f%%  ETA %5.0fs  loss %.4f  PSNR %5.2f dB  held-out %5.2f dB  %.2f M samples/s ",
+      std::fprintf(stderr,
+                   "\r iter %6d/%d %5.1f%%  ETA %5.0fs  loss %.4f  PSNR %5.2f dB  held-out %5.2f dB  %.2f M "
+                   "samples/s ",
                    p.iteration, p.total_iterations, percent, p.eta_s, p.loss, p.train_psnr, p.heldout_psnr,
                    p.samples_per_second / 1e6);
     };
@@ -82,7 +89,8 @@ Command AddReconstructCommand(CLI::App& app) {
     std::fprintf(stderr, "\n");
     spdlog::info("{} {} iterations in {:.1f} s; training PSNR {:.2f} dB; held-out tissue PSNR {}",
                  summary.cancelled ? "stopped after" : "done:", summary.iterations, summary.train_seconds,
-                 summary.train_psnr, summary.heldout_psnr >= 0 ? fmt::format("{:.2f} dB", summary.heldout_psnr) : "n/a");
+                 summary.train_psnr,
+                 summary.heldout_psnr >= 0 ? fmt::format("{:.2f} dB", summary.heldout_psnr) : "n/a");
     if (!summary.cancelled) WriteJobDicom(options->out_dir, from_dicom, *dicom);
     spdlog::info("results: {}  (metrics: {})", options->out_dir, summary.metrics_path);
     return 0;

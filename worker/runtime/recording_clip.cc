@@ -23,7 +23,8 @@ void WriteFrames(const std::vector<cv::Mat>& frames, const fs::path& folder) {
   fs::create_directories(folder);
   for (std::size_t i = 0; i < frames.size(); ++i) {
     const fs::path path = folder / eval::FrameFileName(static_cast<int>(i), ".png");
-    if (!cv::imwrite(path.string(), frames[i])) Fail(ErrorCode::kUnavailable, "cannot write " + path.string());
+    if (!cv::imwrite(path.string(), frames[i]))
+      Fail(ErrorCode::kUnavailable, "cannot write " + path.string());
   }
 }
 
@@ -38,10 +39,14 @@ void WriteTransforms(const dicom::Recording& recording, const fs::path& clip_dir
                       {"transform_matrix", identity},
                       {"time", recording.times_s[i] / span}});
   }
-  const nlohmann::json transforms = {{"fl_x", kFocalPerWidth * w}, {"fl_y", kFocalPerWidth * w},
-                                     {"cx", w / 2.0},              {"cy", h / 2.0},
-                                     {"w", w},                     {"h", h},
-                                     {"near", kNear},              {"far", kFar},
+  const nlohmann::json transforms = {{"fl_x", kFocalPerWidth * w},
+                                     {"fl_y", kFocalPerWidth * w},
+                                     {"cx", w / 2.0},
+                                     {"cy", h / 2.0},
+                                     {"w", w},
+                                     {"h", h},
+                                     {"near", kNear},
+                                     {"far", kFar},
                                      {"frames", frames}};
   std::ofstream(clip_dir / "transforms.json") << transforms.dump(1);
 }
@@ -94,12 +99,14 @@ std::optional<RecordingClip> ClipFromRecording(const fs::path& input, const dico
   clip.study = recording.study;
   clip.times_s = recording.times_s;
   clip.summary = recording.description + "; " + std::to_string(recording.left.size()) + " of " +
-                 std::to_string(recording.recording_frames) + " frame(s) kept, times from " + recording.times_from +
+                 std::to_string(recording.recording_frames) + " frame(s) kept, times from " +
+                 recording.times_from +
                  (recording.right.empty() ? "" : ", stereo " + dicom::StereoLayoutName(options.stereo));
   const nlohmann::json record = {
       {"source", recording.description},
       {"stereo", dicom::StereoLayoutName(options.stereo)},
-      {"frames", {{"start", options.frames.start}, {"end", options.frames.end}, {"step", options.frames.step}}},
+      {"frames",
+       {{"start", options.frames.start}, {"end", options.frames.end}, {"step", options.frames.step}}},
       {"fps", options.fps},
       {"recording_frames", recording.recording_frames},
       {"times_from", recording.times_from},

@@ -27,8 +27,9 @@ Eigen::Vector3f Vertex(const SurfaceMesh& mesh, std::uint32_t index) {
 
 }  // namespace
 
-SurfaceMesh TriangulateDepth(const scene::Camera& camera, std::span<const float> depth, std::span<const float> rgb,
-                             std::span<const std::uint8_t> tool_mask, double far, double max_depth_jump) {
+SurfaceMesh TriangulateDepth(const scene::Camera& camera, std::span<const float> depth,
+                             std::span<const float> rgb, std::span<const std::uint8_t> tool_mask, double far,
+                             double max_depth_jump) {
   const int w = camera.width, h = camera.height;
   CheckImageSize(depth.size(), w, h, 1, "mesh: depth");
   CheckImageSize(rgb.size(), w, h, 3, "mesh: colour");
@@ -58,7 +59,8 @@ SurfaceMesh TriangulateDepth(const scene::Camera& camera, std::span<const float>
   };
   for (int v = 0; v + 1 < h; ++v) {
     for (int u = 0; u + 1 < w; ++u) {
-      const std::size_t p00 = static_cast<std::size_t>(v) * w + u, p01 = p00 + 1, p10 = p00 + w, p11 = p10 + 1;
+      const std::size_t p00 = static_cast<std::size_t>(v) * w + u, p01 = p00 + 1, p10 = p00 + w,
+                        p11 = p10 + 1;
       // Image rows run down while camera y runs up, so (p00, p10, p01) is counter-clockwise seen
       // from the camera.
       add(p00, p10, p01);
@@ -96,9 +98,9 @@ void WriteMeshObj(const std::filesystem::path& path, const SurfaceMesh& mesh) {
   out << "# endorecon tissue surface mesh, clip units; vertex colours in [0, 1]\n";
   char line[160];
   for (std::size_t i = 0; i < mesh.vertex_count(); ++i) {
-    std::snprintf(line, sizeof(line), "v %.6g %.6g %.6g %.4f %.4f %.4f\n", mesh.xyz[3 * i], mesh.xyz[3 * i + 1],
-                  mesh.xyz[3 * i + 2], mesh.rgb[3 * i] / 255.0, mesh.rgb[3 * i + 1] / 255.0,
-                  mesh.rgb[3 * i + 2] / 255.0);
+    std::snprintf(line, sizeof(line), "v %.6g %.6g %.6g %.4f %.4f %.4f\n", mesh.xyz[3 * i],
+                  mesh.xyz[3 * i + 1], mesh.xyz[3 * i + 2], mesh.rgb[3 * i] / 255.0,
+                  mesh.rgb[3 * i + 1] / 255.0, mesh.rgb[3 * i + 2] / 255.0);
     out << line;
   }
   for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
@@ -117,7 +119,8 @@ void WriteMeshStl(const std::filesystem::path& path, const SurfaceMesh& mesh) {
   const auto count = static_cast<std::uint32_t>(mesh.triangle_count());
   out.write(reinterpret_cast<const char*>(&count), sizeof(count));
   for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
-    const Eigen::Vector3f a = Vertex(mesh, mesh.triangles[3 * t]), b = Vertex(mesh, mesh.triangles[3 * t + 1]),
+    const Eigen::Vector3f a = Vertex(mesh, mesh.triangles[3 * t]),
+                          b = Vertex(mesh, mesh.triangles[3 * t + 1]),
                           c = Vertex(mesh, mesh.triangles[3 * t + 2]);
     const Eigen::Vector3f normal = (b - a).cross(c - a).normalized();
     float facet[12];

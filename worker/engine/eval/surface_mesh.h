@@ -12,9 +12,10 @@
 namespace endorecon::eval {
 
 struct SurfaceMesh {
-  std::vector<float> xyz;               // 3 per vertex, world coordinates, clip units
-  std::vector<std::uint8_t> rgb;        // 3 per vertex
-  std::vector<std::uint32_t> triangles;  // 3 vertex indices per triangle, counter-clockwise seen from the camera
+  std::vector<float> xyz;         // 3 per vertex, world coordinates, clip units
+  std::vector<std::uint8_t> rgb;  // 3 per vertex
+  std::vector<std::uint32_t>
+      triangles;  // 3 vertex indices per triangle, counter-clockwise seen from the camera
   std::size_t vertex_count() const { return xyz.size() / 3; }
   std::size_t triangle_count() const { return triangles.size() / 3; }
 };
@@ -25,8 +26,9 @@ struct SurfaceMesh {
 // edge (a triangle whose largest depth exceeds its smallest by more than `max_depth_jump`, a
 // fraction), so the tissue is not bridged to what lies behind a fold. Throws InvalidArgument when a
 // size disagrees with the camera's.
-SurfaceMesh TriangulateDepth(const scene::Camera& camera, std::span<const float> depth, std::span<const float> rgb,
-                             std::span<const std::uint8_t> tool_mask, double far, double max_depth_jump = 0.1);
+SurfaceMesh TriangulateDepth(const scene::Camera& camera, std::span<const float> depth,
+                             std::span<const float> rgb, std::span<const std::uint8_t> tool_mask, double far,
+                             double max_depth_jump = 0.1);
 
 // Binary little-endian PLY: vertices (float x, y, z, uchar red, green, blue), faces (uchar count,
 // int indices). Throws Error(kUnavailable) naming the file when it cannot be written.
