@@ -30,7 +30,7 @@ TEST(DemoClipTest, CpuPresetReconstructsTheDemoClip) {
   EXPECT_GT(summary.heldout_psnr, 20.0) << "held-out tissue PSNR after 20 s of training";
   for (const char* file : {"metrics.json", "config.json", "curve.svg", "video.mp4", "model/model.bin",
                            "model/checkpoint.bin", "rgb/000000.png", "depth/000047.npy", "depth/000047.png",
-                           "pointcloud/000010.ply"}) {
+                           "pointcloud/000010.ply", "mesh.ply", "mesh.obj", "mesh.stl"}) {
     EXPECT_TRUE(std::filesystem::exists(dir / "out" / file)) << file;
   }
   std::ifstream in(dir / "out" / "metrics.json");
