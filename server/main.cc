@@ -52,15 +52,16 @@ std::unique_ptr<dicom::StorageScp> StartStorageScp(const ServerFlags& flags,
     FailInvalid("--dicom-listen '" + flags.dicom.listen + "': expected HOST:PORT");
   dicom::StorageScpSettings settings;
   settings.ae_title = flags.dicom.ae_title;
-  settings.host = HostOf(flags.dicom.listen);
   settings.port = std::stoi(flags.dicom.listen.substr(colon + 1));
   settings.folder = folder;
+  settings.calling_ae_titles = calling_ae_titles;
   auto scp = std::make_unique<dicom::StorageScp>(
       settings, [&retriever](const std::string& study, const std::filesystem::path&, std::int64_t bytes) {
         if (retriever != nullptr) retriever->Received(study, bytes);
       });
-  spdlog::info("DICOM storage SCP listening as {}",
-               dicom::PeerText({settings.ae_title, settings.host, settings.port}));
+  spdlog::info(
+      "DICOM storage SCP {} listening on port {} (every interface; admits the configured PACS' AE titles)",
+      settings.ae_title, settings.port);
   return scp;
 }
 
@@ -89,7 +90,9 @@ int Run(const ServerFlags& flags) {
   JobCoordinator coordinator({store, blobs, scheduler, leases, workers, hub, metrics}, flags.max_attempts);
   const PacsDirectory pacs(flags.pacs);
   DicomRetriever* retriever_for_scp = nullptr;
-  const auto scp = StartStorageScp(flags, data_dir / "dicom-incoming", retriever_for_scp);
+  std::vector<std::string> pacs_ae_titles;
+  for (const auto& name : pacs.Names()) pacs_ae_titles.push_back(pacs.Find(name).ae_title);
+  const auto scp = StartStorageScp(flags, data_dir / "dicom-incoming", pacs_ae_titles, retriever_for_scp);
   DicomRetriever retriever(coordinator, blobs, pacs, flags.dicom, metrics, data_dir / "retrievals",
                            scp.get());
   retriever_for_scp = &retriever;

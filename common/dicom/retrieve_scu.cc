@@ -5,6 +5,7 @@
 #include <dcmtk/dcmnet/scu.h>
 
 #include "common/dicom/dataset_access.h"
+#include "common/dicom/dcmtk_logging.h"
 #include "common/dicom/storage_classes.h"
 #include "common/error.h"
 
@@ -103,6 +104,7 @@ void FreeAll(OFList<RetrieveResponse*>& responses) {
 }  // namespace
 
 int GetStudy(const RetrieveRequest& request, const fs::path& out_dir, const RetrieveProgress& progress) {
+  QuietDcmtkLogs();
   fs::create_directories(out_dir);
   RetrievingScu scu;
   Configure(scu, request);
@@ -151,6 +153,7 @@ int GetStudy(const RetrieveRequest& request, const fs::path& out_dir, const Retr
 }
 
 int MoveStudy(const RetrieveRequest& request, const std::string& destination_ae) {
+  QuietDcmtkLogs();
   DcmSCU scu;
   Configure(scu, request);
   OFList<OFString> plain;

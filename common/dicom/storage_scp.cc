@@ -4,7 +4,10 @@
 #include <dcmtk/dcmnet/dstorscp.h>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
+
 #include "common/dicom/dataset_access.h"
+#include "common/dicom/dcmtk_logging.h"
 #include "common/dicom/peer.h"
 #include "common/dicom/storage_classes.h"
 #include "common/dicom/uid.h"
@@ -30,8 +33,16 @@ class StorageScp::Scp : public DcmStorageSCP {
  protected:
   OFBool stopAfterConnectionTimeout() override { return stop.load(); }
   OFBool stopAfterCurrentAssociation() override { return stop.load(); }
-  OFBool checkCallingHostAccepted(const OFString& host) override {
-    return !IsLoopback(settings_.host) || IsLoopback(host.c_str());
+  // DCMTK 3.6.7 neither binds one interface nor tells the check which host calls, so the SCP
+  // admits callers by AE title: the PACS configured on the server.
+  OFBool checkCallingAETitleAccepted(const OFString& calling) override {
+    const auto& allowed = settings_.calling_ae_titles;
+    const bool accepted =
+        allowed.empty() || std::find(allowed.begin(), allowed.end(), calling.c_str()) != allowed.end();
+    if (!accepted)
+      spdlog::warn("storage SCP: refused an association from AE '{}' (not a configured PACS)",
+                   calling.c_str());
+    return accepted;
   }
 
   Uint16 checkAndProcessSTORERequest(const T_DIMSE_C_StoreRQ& request, DcmFileFormat& file) override {
@@ -68,6 +79,7 @@ class StorageScp::Scp : public DcmStorageSCP {
 
 StorageScp::StorageScp(const StorageScpSettings& settings, OnStored on_stored)
     : settings_(settings), scp_(std::make_unique<Scp>(settings, std::move(on_stored))) {
+  QuietDcmtkLogs();
   CheckAeTitle(settings.ae_title, "the storage SCP's AE title");
   fs::create_directories(settings.folder);
   scp_->setAETitle(settings.ae_title.c_str());
@@ -78,7 +90,7 @@ StorageScp::StorageScp(const StorageScpSettings& settings, OnStored on_stored)
   scp_->setDIMSETimeout(60);
   scp_->setACSETimeout(30);
   scp_->setHostLookupEnabled(OFFalse);
-  scp_->setEnableVerification();
+  // DcmStorageSCP already offers Verification; a second context for it would make the profile invalid.
   for (const auto& storage : RecordingStorageClasses()) {
     OFList<OFString> syntaxes;
     for (const auto& ts : storage.transfer_syntaxes) syntaxes.push_back(ts.c_str());

@@ -11,14 +11,15 @@
 #include <memory>
 #include <string>
 #include <thread>
+#include <vector>
 
 namespace endorecon::dicom {
 
 struct StorageScpSettings {
   std::string ae_title = "ENDORECON";
-  std::string host = "127.0.0.1";  // a loopback host: only loopback peers are accepted (see below)
   int port = 11112;
   std::filesystem::path folder;
+  std::vector<std::string> calling_ae_titles;  // who may store here (the configured PACS); empty: anyone
 };
 
 class StorageScp {
@@ -28,7 +29,7 @@ class StorageScp {
                                       std::int64_t bytes)>;
 
   // Opens the port and starts serving associations in a thread. DCMTK 3.6.7 binds the port on
-  // every interface; with a loopback `host` associations from other addresses are refused.
+  // every interface and cannot tell which host calls: associations are admitted by calling AE title.
   // Throws Error(kUnavailable) when the port cannot be opened.
   StorageScp(const StorageScpSettings& settings, OnStored on_stored);
   // Stops after the association in progress (within a second when idle) and joins the thread.

@@ -9,6 +9,7 @@
 #include <memory>
 
 #include "common/dicom/dataset_access.h"
+#include "common/dicom/dcmtk_logging.h"
 #include "common/error.h"
 
 namespace endorecon::dicom {
@@ -166,6 +167,7 @@ std::string StoreOne(T_ASC_Association* association, const fs::path& path, const
 
 StoreResult StoreFiles(const Peer& peer, const std::vector<fs::path>& files, const StoreSettings& settings,
                        const std::function<void(std::size_t)>& on_stored) {
+  QuietDcmtkLogs();
   std::vector<FileInfo> infos;
   for (const auto& file : files) infos.push_back(Inspect(file));
   StoreResult result;

@@ -17,8 +17,9 @@ TEST(BadDicomInputTest, RefusedAtSubmitOrAtPreparation) {
       << bad.out;
 
   const auto unknown = RunCli(cluster.address(), {"submit", "--pacs", "nowhere", "--study", "1.2.3"});
-  EXPECT_EQ(unknown.exit_code, 2) << unknown.err;
-  EXPECT_NE(unknown.err.find("no PACS configured"), std::string::npos) << unknown.err;
+  EXPECT_EQ(unknown.exit_code, 3) << unknown.err;
+  EXPECT_NE(unknown.err.find("no PACS named 'nowhere' is configured on the server"), std::string::npos)
+      << unknown.err;
 
   // The worker is still there for the next job.
   MakeClip(cluster.path("clip"));

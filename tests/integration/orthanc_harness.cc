@@ -66,8 +66,11 @@ void Orthanc::Stop() {
 std::string Orthanc::Address() const { return "ORTHANC@127.0.0.1:" + std::to_string(dicom_port_); }
 
 nlohmann::json Orthanc::Get(const std::string& uri) const {
-  const auto text = Capture("curl -s --max-time 10 http://127.0.0.1:" + std::to_string(http_port_) + uri);
-  return nlohmann::json::parse(text, nullptr, false);
+  return nlohmann::json::parse(GetText(uri), nullptr, false);
+}
+
+std::string Orthanc::GetText(const std::string& uri) const {
+  return Capture("curl -s --max-time 10 http://127.0.0.1:" + std::to_string(http_port_) + uri);
 }
 
 nlohmann::json Orthanc::Post(const std::string& uri, const std::string& body) const {

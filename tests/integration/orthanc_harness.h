@@ -33,6 +33,7 @@ class Orthanc {
   std::string Address() const;
   // REST calls; a failure (no JSON back) returns a null value.
   nlohmann::json Get(const std::string& uri) const;
+  std::string GetText(const std::string& uri) const;
   nlohmann::json Post(const std::string& uri, const std::string& body) const;
   // Stores a DICOM file through the REST API; returns Orthanc's answer.
   nlohmann::json Store(const std::filesystem::path& file) const;
