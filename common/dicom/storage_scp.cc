@@ -15,14 +15,6 @@
 
 namespace endorecon::dicom {
 namespace fs = std::filesystem;
-namespace {
-
-bool IsLoopback(const std::string& host) {
-  return host == "localhost" || host == "::1" || host.rfind("127.", 0) == 0 ||
-         host.rfind("::ffff:127.", 0) == 0;
-}
-
-}  // namespace
 
 class StorageScp::Scp : public DcmStorageSCP {
  public:
