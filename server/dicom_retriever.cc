@@ -92,14 +92,16 @@ std::pair<fs::path, std::string> DicomRetriever::Fetch(const std::string& job_id
   const fs::path folder = work_dir_ / job_id;
   fs::remove_all(folder);
   coordinator_.Update(job_id, [](v1::Job& job) { job.mutable_retrieval()->set_method("C-GET"); });
+  std::string get_error;
   try {
     dicom::GetStudy(request, folder,
                     [&](int instances, std::int64_t bytes) { Progress(job_id, instances, bytes); });
     return {folder, "C-GET"};
   } catch (const Error& e) {
     if (scp_ == nullptr || e.code() == ErrorCode::kNotFound) throw;
+    get_error = e.what();
     spdlog::warn("job {}: C-GET from {} failed ({}); trying C-MOVE to this server's storage SCP", job_id,
-                 source.pacs(), e.what());
+                 source.pacs(), get_error);
   }
   coordinator_.Update(job_id, [](v1::Job& job) { job.mutable_retrieval()->set_method("C-MOVE"); });
   const fs::path study_folder = scp_->settings().folder / source.study_uid();
@@ -113,6 +115,13 @@ std::pair<fs::path, std::string> DicomRetriever::Fetch(const std::string& job_id
   }
   try {
     dicom::MoveStudy(request, settings_.ae_title);
+  } catch (const Error& e) {
+    {
+      std::lock_guard lock(mutex_);
+      moving_job_.clear();
+    }
+    // Both ways failed: say both, the first is often the telling one.
+    Fail(e.code(), "C-GET: " + get_error + "; then C-MOVE: " + e.what());
   } catch (...) {
     std::lock_guard lock(mutex_);
     moving_job_.clear();

@@ -5,10 +5,7 @@
 // refused by AE title, an unknown study, and a retrieval by C-MOVE to the server's storage SCP.
 #include <gtest/gtest.h>
 
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/videoio.hpp>
-
-#include "common/dicom/recording_writer.h"
+#include "common/dicom/uid.h"
 #include "tests/integration/orthanc_harness.h"
 #include "tests/unit/dciodvfy.h"
 
@@ -18,23 +15,17 @@ namespace fs = std::filesystem;
 
 constexpr const char* kPatient = "PAT-15";
 
-// The synthetic clip's frames as an H.264 MP4 (OpenCV's FFmpeg), wrapped as Video Endoscopic.
+// The synthetic clip's frames as an H.264 Video Endoscopic recording (endorecon-worker to-dicom:
+// OpenCV's FFmpeg encodes, DCMTK wraps) of a new study; returns its Study Instance UID.
 std::string MakeRecording(const fs::path& dir, const fs::path& out) {
   MakeClip(dir / "clip");
-  std::vector<fs::path> images;
-  for (const auto& entry : fs::directory_iterator(dir / "clip" / "images")) images.push_back(entry.path());
-  std::sort(images.begin(), images.end());
-  const cv::Mat first = cv::imread(images[0].string());
-  cv::VideoWriter writer((dir / "video.mp4").string(), cv::VideoWriter::fourcc('a', 'v', 'c', '1'), 10.0,
-                         first.size());
-  EXPECT_TRUE(writer.isOpened());
-  for (const auto& image : images) writer.write(cv::imread(image.string()));
-  writer.release();
-  dicom::RecordingHeader header;
-  header.study = dicom::NewStudyContext(kPatient, "Test^Patient", "", "");
-  dicom::WriteVideoEndoscopic(dir / "video.mp4", static_cast<int>(images.size()), first.cols, first.rows,
-                              10.0, header, out);
-  return header.study.study_instance_uid;
+  const std::string study = dicom::NewUid("");
+  Process writer({BuiltBinary("worker/runtime/endorecon-worker"), "to-dicom",
+                  (dir / "clip" / "images").string(), "-o", out.string(), "--fps", "10", "--patient-id",
+                  kPatient, "--patient-name", "Test^Patient", "--study-uid", study},
+                 dir / "to-dicom.log");
+  EXPECT_EQ(writer.Wait(), 0) << writer.Log();
+  return study;
 }
 
 std::string JobIdIn(const std::string& out) {

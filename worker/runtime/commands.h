@@ -16,5 +16,6 @@ Command AddSynthCommand(CLI::App& app);
 Command AddReconstructCommand(CLI::App& app);
 Command AddRenderCommand(CLI::App& app);
 Command AddServeCommand(CLI::App& app);
+Command AddToDicomCommand(CLI::App& app);
 
 }  // namespace endorecon::worker

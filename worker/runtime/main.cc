@@ -17,6 +17,7 @@ int main(int argc, char** argv) {
   commands["reconstruct"] = endorecon::worker::AddReconstructCommand(app);
   commands["render"] = endorecon::worker::AddRenderCommand(app);
   commands["serve"] = endorecon::worker::AddServeCommand(app);
+  commands["to-dicom"] = endorecon::worker::AddToDicomCommand(app);
   CLI11_PARSE(app, argc, argv);
   try {
     for (auto* sub : app.get_subcommands()) return commands.at(sub->get_name())();
