@@ -1,5 +1,9 @@
 #include "common/dicom/dataset_access.h"
 
+#include <algorithm>
+#include <cstdio>
+#include <cstring>
+
 #include "common/error.h"
 
 namespace endorecon::dicom {
@@ -64,6 +68,24 @@ void PutTag(DcmItem& item, const DcmTagKey& tag, const DcmTagKey& value) {
 void PutEmpty(DcmItem& item, const DcmTagKey& tag) {
   const OFCondition status = item.insertEmptyElement(tag);
   if (status.bad()) Fail(ErrorCode::kInternal, "cannot add " + TagName(tag) + ": " + status.text());
+}
+
+std::string DecimalString(double value) {
+  char text[32];
+  for (const char* format : {"%.10g", "%.9e", "%.6e"}) {
+    std::snprintf(text, sizeof(text), format, value);
+    if (std::strlen(text) <= 16) break;
+  }
+  return text;
+}
+
+std::string FrameTimeVector(const std::vector<double>& times_s) {
+  std::string vector = "0";
+  for (std::size_t f = 1; f < times_s.size(); ++f) {
+    vector += '\\';  // appended apart: GCC 12 warns falsely (-Wrestrict) on "\\" + string
+    vector += DecimalString(1000.0 * std::max(0.0, times_s[f] - times_s[f - 1]));
+  }
+  return vector;
 }
 
 std::string TagName(const DcmTagKey& tag) {

@@ -6,6 +6,7 @@
 
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace endorecon::dicom {
 
@@ -26,6 +27,12 @@ void PutUint16(DcmItem& item, const DcmTagKey& tag, Uint16 value);
 void PutTag(DcmItem& item, const DcmTagKey& tag, const DcmTagKey& value);
 // An empty attribute (a type 2 sequence, say).
 void PutEmpty(DcmItem& item, const DcmTagKey& tag);
+
+// A Decimal String (DS) value of at most 16 characters.
+std::string DecimalString(double value);
+// A Frame Time Vector (0018,1065) value: "0", then the milliseconds between consecutive times
+// (seconds, negative steps written as 0), backslash-separated.
+std::string FrameTimeVector(const std::vector<double>& times_s);
 
 // The dictionary name of a tag ("NumberOfFrames"), for messages.
 std::string TagName(const DcmTagKey& tag);

@@ -8,9 +8,9 @@
 
 #include <fstream>
 #include <mutex>
-#include <sstream>
 
 #include "common/dicom/dataset_access.h"
+#include "common/dicom/rgb_pixels.h"
 #include "common/dicom/uid.h"
 #include "common/error.h"
 
@@ -55,13 +55,6 @@ void Save(DcmFileFormat& file, const fs::path& out, E_TransferSyntax xfer) {
   if (status.bad()) Fail(ErrorCode::kUnavailable, "cannot write " + out.string() + ": " + status.text());
 }
 
-std::string Decimal(double value) {
-  std::ostringstream text;
-  text.precision(8);
-  text << value;
-  return text.str();
-}
-
 }  // namespace
 
 std::string WriteVideoEndoscopic(const fs::path& video, int frames, int width, int height, double fps,
@@ -85,7 +78,7 @@ std::string WriteVideoEndoscopic(const fs::path& video, int frames, int width, i
   PutUint16(data, DCM_Columns, static_cast<Uint16>(width));
   Put(data, DCM_NumberOfFrames, std::to_string(frames));
   PutTag(data, DCM_FrameIncrementPointer, DCM_FrameTime);
-  Put(data, DCM_FrameTime, Decimal(1000.0 / fps));
+  Put(data, DCM_FrameTime, DecimalString(1000.0 / fps));
   Put(data, DCM_CineRate, std::to_string(static_cast<int>(std::lround(fps))));
   Put(data, DCM_RecommendedDisplayFrameRate, std::to_string(static_cast<int>(std::lround(fps))));
   Put(data, DCM_StartTrim, "1");
@@ -116,28 +109,8 @@ std::string WriteEndoscopicFrames(const std::vector<cv::Mat>& frames, const std:
   PutUint16(data, DCM_Columns, static_cast<Uint16>(width));
   Put(data, DCM_NumberOfFrames, std::to_string(frames.size()));
   PutTag(data, DCM_FrameIncrementPointer, DCM_FrameTimeVector);
-  std::string vector = "0";
-  for (std::size_t f = 1; f < times_s.size(); ++f) {
-    vector += '\\';  // appended apart: GCC 12 warns falsely (-Wrestrict) on "\\" + string
-    vector += Decimal(1000.0 * (times_s[f] - times_s[f - 1]));
-  }
-  Put(data, DCM_FrameTimeVector, vector);
-  const std::size_t frame_bytes = static_cast<std::size_t>(width) * height * 3;
-  std::vector<Uint8> rgb(frame_bytes * frames.size());
-  for (std::size_t f = 0; f < frames.size(); ++f) {
-    if (frames[f].cols != width || frames[f].rows != height || frames[f].type() != CV_8UC3) {
-      FailInvalid(out.string() + ": frame " + std::to_string(f) + " differs from frame 0 in size or type");
-    }
-    for (int y = 0; y < height; ++y) {
-      const auto* row = frames[f].ptr<cv::Vec3b>(y);
-      for (int x = 0; x < width; ++x) {
-        Uint8* p = &rgb[f * frame_bytes + (static_cast<std::size_t>(y) * width + x) * 3];
-        p[0] = row[x][2];
-        p[1] = row[x][1];
-        p[2] = row[x][0];
-      }
-    }
-  }
+  Put(data, DCM_FrameTimeVector, FrameTimeVector(times_s));
+  const std::vector<Uint8> rgb = InterleavedRgb(frames, out.string());
   data.putAndInsertUint8Array(DCM_PixelData, rgb.data(), static_cast<unsigned long>(rgb.size()));
   if (!jpeg) {
     Save(file, out, EXS_LittleEndianExplicit);

@@ -6,6 +6,7 @@
 #include <cstdio>
 
 #include "common/dicom/dataset_access.h"
+#include "common/dicom/rgb_pixels.h"
 #include "common/dicom/uid.h"
 #include "common/error.h"
 
@@ -14,14 +15,6 @@ namespace {
 
 constexpr const char* kManufacturer = "endorecon";
 constexpr const char* kSoftwareVersion = "0.1.0";
-
-std::string DecimalString(double value) {
-  char text[32];
-  std::snprintf(text, sizeof(text), "%.10g", value);
-  if (std::string(text).size() > 16) std::snprintf(text, sizeof(text), "%.9e", value);
-  if (std::string(text).size() > 16) std::snprintf(text, sizeof(text), "%.6e", value);
-  return text;
-}
 
 DcmItem* AppendItem(DcmItem& parent, const DcmTagKey& sequence) {
   DcmItem* item = nullptr;
@@ -95,12 +88,7 @@ void PutImage(DcmDataset& data, const SeriesHeader& header, int frames, int widt
     FailInvalid("frame times: " + std::to_string(header.frame_times_s.size()) + " for " +
                 std::to_string(frames) + " frames");
   }
-  std::string vector = "0";
-  for (int f = 1; f < frames; ++f) {
-    vector += '\\';  // appended apart: GCC 12 warns falsely (-Wrestrict) on "\\" + string
-    vector += DecimalString(1000.0 * std::max(0.0, header.frame_times_s[f] - header.frame_times_s[f - 1]));
-  }
-  Put(data, DCM_FrameTimeVector, vector);
+  Put(data, DCM_FrameTimeVector, FrameTimeVector(header.frame_times_s));
   PutTag(data, DCM_FrameIncrementPointer, DCM_FrameTimeVector);
 }
 
@@ -108,6 +96,22 @@ void Save(DcmFileFormat& file, const std::filesystem::path& path) {
   std::filesystem::create_directories(path.parent_path());
   const OFCondition status = file.saveFile(path.c_str(), EXS_LittleEndianExplicit);
   if (status.bad()) Fail(ErrorCode::kUnavailable, "cannot write " + path.string() + ": " + status.text());
+}
+
+// Sets Pixel Data (8- or 16-bit samples) and writes the file.
+template <typename Sample>
+void SaveWithPixels(DcmFileFormat& file, const std::filesystem::path& path,
+                    const std::vector<Sample>& pixels) {
+  DcmDataset& data = *file.getDataset();
+  const auto count = static_cast<unsigned long>(pixels.size());
+  OFCondition status;
+  if constexpr (sizeof(Sample) == 1) {
+    status = data.putAndInsertUint8Array(DCM_PixelData, pixels.data(), count);
+  } else {
+    status = data.putAndInsertUint16Array(DCM_PixelData, pixels.data(), count);
+  }
+  if (status.bad()) Fail(ErrorCode::kInternal, "cannot set Pixel Data of " + path.string());
+  Save(file, path);
 }
 
 void CheckSize(int width, int height, const std::filesystem::path& path) {
@@ -134,27 +138,7 @@ std::string WriteColorFrames(const std::filesystem::path& path, const SeriesHead
   PutUint16(data, DCM_BitsAllocated, 8);
   PutUint16(data, DCM_BitsStored, 8);
   PutUint16(data, DCM_HighBit, 7);
-  const std::size_t frame_bytes = static_cast<std::size_t>(width) * height * 3;
-  std::vector<Uint8> pixels(frame_bytes * frames.size());
-  for (std::size_t f = 0; f < frames.size(); ++f) {
-    if (frames[f].cols != width || frames[f].rows != height || frames[f].type() != CV_8UC3) {
-      FailInvalid(path.string() + ": frame " + std::to_string(f) + " differs from frame 0 in size or type");
-    }
-    for (int y = 0; y < height; ++y) {
-      const auto* row = frames[f].ptr<cv::Vec3b>(y);
-      Uint8* out = &pixels[f * frame_bytes + static_cast<std::size_t>(y) * width * 3];
-      for (int x = 0; x < width; ++x) {
-        out[3 * x + 0] = row[x][2];
-        out[3 * x + 1] = row[x][1];
-        out[3 * x + 2] = row[x][0];
-      }
-    }
-  }
-  if (data.putAndInsertUint8Array(DCM_PixelData, pixels.data(), static_cast<unsigned long>(pixels.size()))
-          .bad()) {
-    Fail(ErrorCode::kInternal, "cannot set Pixel Data of " + path.string());
-  }
-  Save(file, path);
+  SaveWithPixels(file, path, InterleavedRgb(frames, path.string()));
   return uid;
 }
 
@@ -202,11 +186,7 @@ std::string WriteScalarFrames(const std::filesystem::path& path, const SeriesHea
       stored[f * pixels_per_frame + i] = static_cast<Uint16>(std::min(q, 65535.0));
     }
   }
-  if (data.putAndInsertUint16Array(DCM_PixelData, stored.data(), static_cast<unsigned long>(stored.size()))
-          .bad()) {
-    Fail(ErrorCode::kInternal, "cannot set Pixel Data of " + path.string());
-  }
-  Save(file, path);
+  SaveWithPixels(file, path, stored);
   return uid;
 }
 

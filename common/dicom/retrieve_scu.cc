@@ -101,6 +101,42 @@ void FreeAll(OFList<RetrieveResponse*>& responses) {
   responses.clear();
 }
 
+// Connects, finds the presentation context of `model`, sends the request through `send` and
+// checks the final response; returns the completed sub-operations. The association is released
+// on every path.
+using SendRequest =
+    std::function<OFCondition(T_ASC_PresentationContextID, DcmDataset*, OFList<RetrieveResponse*>*)>;
+int Retrieve(DcmSCU& scu, const RetrieveRequest& request, const char* model, const std::string& verb,
+             const SendRequest& send) {
+  Connect(scu, request);
+  const T_ASC_PresentationContextID id = scu.findPresentationContextID(model, "");
+  if (id == 0) {
+    scu.releaseAssociation();
+    Fail(ErrorCode::kUnavailable, PeerText(request.peer) + " does not offer " + verb + " (Study Root)");
+  }
+  DcmDataset query = Query(request);
+  OFList<RetrieveResponse*> responses;
+  const OFCondition status = send(id, &query, &responses);
+  scu.releaseAssociation();
+  try {
+    if (status.bad())
+      Fail(ErrorCode::kUnavailable, verb + " of " + What(request) + " failed: " + status.text());
+    const int completed = Finish(responses, request, verb);
+    FreeAll(responses);
+    return completed;
+  } catch (...) {
+    FreeAll(responses);
+    throw;
+  }
+}
+
+OFList<OFString> Uncompressed() {
+  OFList<OFString> plain;
+  plain.push_back(UID_LittleEndianExplicitTransferSyntax);
+  plain.push_back(UID_LittleEndianImplicitTransferSyntax);
+  return plain;
+}
+
 }  // namespace
 
 int GetStudy(const RetrieveRequest& request, const fs::path& out_dir, const RetrieveProgress& progress) {
@@ -111,10 +147,7 @@ int GetStudy(const RetrieveRequest& request, const fs::path& out_dir, const Retr
   scu.progress = progress;
   scu.setStorageDir(out_dir.c_str());
   scu.setStorageMode(DCMSCU_STORAGE_DISK);
-  OFList<OFString> plain;
-  plain.push_back(UID_LittleEndianExplicitTransferSyntax);
-  plain.push_back(UID_LittleEndianImplicitTransferSyntax);
-  scu.addPresentationContext(UID_GETStudyRootQueryRetrieveInformationModel, plain);
+  scu.addPresentationContext(UID_GETStudyRootQueryRetrieveInformationModel, Uncompressed());
   // One context per transfer syntax: the PACS sends each instance as it holds it, and a video
   // cannot be transcoded.
   for (const auto& storage : RecordingStorageClasses()) {
@@ -124,28 +157,10 @@ int GetStudy(const RetrieveRequest& request, const fs::path& out_dir, const Retr
       scu.addPresentationContext(storage.sop_class.c_str(), one, ASC_SC_ROLE_SCP);
     }
   }
-  Connect(scu, request);
-  const T_ASC_PresentationContextID id =
-      scu.findPresentationContextID(UID_GETStudyRootQueryRetrieveInformationModel, "");
-  if (id == 0) {
-    scu.releaseAssociation();
-    Fail(ErrorCode::kUnavailable, PeerText(request.peer) + " does not offer C-GET (Study Root); use C-MOVE");
-  }
-  DcmDataset query = Query(request);
-  OFList<RetrieveResponse*> responses;
-  const OFCondition status = scu.sendCGETRequest(id, &query, &responses);
-  scu.releaseAssociation();
-  if (status.bad()) {
-    FreeAll(responses);
-    Fail(ErrorCode::kUnavailable, "C-GET of " + What(request) + " failed: " + status.text());
-  }
-  try {
-    Finish(responses, request, "C-GET");
-  } catch (...) {
-    FreeAll(responses);
-    throw;
-  }
-  FreeAll(responses);
+  Retrieve(scu, request, UID_GETStudyRootQueryRetrieveInformationModel, "C-GET",
+           [&](T_ASC_PresentationContextID id, DcmDataset* query, OFList<RetrieveResponse*>* responses) {
+             return scu.sendCGETRequest(id, query, responses);
+           });
   if (scu.instances == 0) {
     Fail(ErrorCode::kNotFound, PeerText(request.peer) + " holds no instance of " + What(request));
   }
@@ -156,33 +171,12 @@ int MoveStudy(const RetrieveRequest& request, const std::string& destination_ae)
   QuietDcmtkLogs();
   DcmSCU scu;
   Configure(scu, request);
-  OFList<OFString> plain;
-  plain.push_back(UID_LittleEndianExplicitTransferSyntax);
-  plain.push_back(UID_LittleEndianImplicitTransferSyntax);
-  scu.addPresentationContext(UID_MOVEStudyRootQueryRetrieveInformationModel, plain);
-  Connect(scu, request);
-  const T_ASC_PresentationContextID id =
-      scu.findPresentationContextID(UID_MOVEStudyRootQueryRetrieveInformationModel, "");
-  if (id == 0) {
-    scu.releaseAssociation();
-    Fail(ErrorCode::kUnavailable, PeerText(request.peer) + " does not offer C-MOVE (Study Root)");
-  }
-  DcmDataset query = Query(request);
-  OFList<RetrieveResponse*> responses;
-  const OFCondition status = scu.sendMOVERequest(id, destination_ae.c_str(), &query, &responses);
-  scu.releaseAssociation();
-  if (status.bad()) {
-    FreeAll(responses);
-    Fail(ErrorCode::kUnavailable, "C-MOVE of " + What(request) + " failed: " + status.text());
-  }
-  int moved = 0;
-  try {
-    moved = Finish(responses, request, "C-MOVE to " + destination_ae);
-  } catch (...) {
-    FreeAll(responses);
-    throw;
-  }
-  FreeAll(responses);
+  scu.addPresentationContext(UID_MOVEStudyRootQueryRetrieveInformationModel, Uncompressed());
+  const int moved =
+      Retrieve(scu, request, UID_MOVEStudyRootQueryRetrieveInformationModel, "C-MOVE to " + destination_ae,
+               [&](T_ASC_PresentationContextID id, DcmDataset* query, OFList<RetrieveResponse*>* responses) {
+                 return scu.sendMOVERequest(id, destination_ae.c_str(), query, responses);
+               });
   if (moved == 0)
     Fail(ErrorCode::kNotFound, PeerText(request.peer) + " holds no instance of " + What(request));
   return moved;
