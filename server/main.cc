@@ -43,7 +43,8 @@ std::string HostOf(const std::string& address) {
 }
 
 // The storage SCP, when --dicom-listen asks for one; C-MOVE progress goes to `retriever`.
-std::unique_ptr<dicom::StorageScp> StartStorageScp(const ServerFlags& flags, const std::filesystem::path& folder,
+std::unique_ptr<dicom::StorageScp> StartStorageScp(const ServerFlags& flags,
+                                                   const std::filesystem::path& folder,
                                                    const std::vector<std::string>& calling_ae_titles,
                                                    DicomRetriever*& retriever) {
   if (flags.dicom.listen.empty()) return nullptr;
