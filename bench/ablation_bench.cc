@@ -89,11 +89,10 @@ int main(int argc, char** argv) {
     fs::create_directories(dir);
     nlohmann::json config = overrides;
     config.merge_patch(rows[i].config);
-    std::ofstream(dir / "override.json") << config.dump();
     endorecon::ReconstructOptions options;
     options.clip_dir = (root / "clip").string();
     options.out_dir = (dir / "result").string();
-    options.config_file = (dir / "override.json").string();
+    options.config = config;
     options.holdout = 8;
     options.iterations = 1000000;  // the time budget ends every run
     options.time_budget_s = budget;

@@ -50,12 +50,11 @@ int main(int argc, char** argv) {
   nlohmann::json config = nlohmann::json::parse(overrides);
   config["curve_interval_s"] = 15.0;
   config["curve_frames"] = 6;
-  std::ofstream(fs::path(out) / "bench.json") << config.dump();
 
   endorecon::ReconstructOptions options;
   options.clip_dir = (fs::path(out) / "clip").string();
   options.out_dir = (fs::path(out) / "result").string();
-  options.config_file = (fs::path(out) / "bench.json").string();
+  options.config = config;
   options.preset = preset;
   options.holdout = 8;
   options.iterations = 1000000;

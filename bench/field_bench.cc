@@ -4,7 +4,7 @@
 //   forward            Field::Forward alone (keeps activations)
 //   infer              Field::Infer (rendering: nothing kept)
 //   zero grad          Field::ZeroGrad (a training step does it once)
-//   heads only         both heads' MLPs, forward + backward over the same batch in 512-sample tiles, as
+//   heads only         both heads' MLPs, forward + backward over the same batch (their own loops), as
 //                      GFLOP/s (2 flops per multiply-add, backward counted as 2x forward) against the
 //                      fp32 FMA peak measured at start-up on the same threads (12 independent chains
 //                      of 512-bit FMAs per thread; the design brief's ~190 GFLOP/s came from a kernel
@@ -28,6 +28,7 @@
 #include <vector>
 
 #include "worker/engine/field/field.h"
+#include "worker/engine/field/field_description.h"
 
 #if defined(__AVX512F__)
 #include <immintrin.h>
@@ -41,7 +42,6 @@ using Clock = std::chrono::steady_clock;
 constexpr int kRays = 512;
 constexpr int kSamplesPerRay = 64;
 constexpr int kBatch = kRays * kSamplesPerRay;
-constexpr int kTile = 512;
 
 struct Batch {
   std::vector<float> pos, time, dir, sigma, sigma_lv, rgb, rgb_lv, d_sigma, d_sigma_lv, d_rgb, d_rgb_lv;
@@ -147,59 +147,43 @@ double PeakGflops(int threads) {
 #endif
 }
 
-// Both heads, forward and backward, over the batch in tiles (TBB), on their own.
+// Both heads, forward and backward, over the batch (each runs its own parallel loop), on their own.
 double HeadsGflops(const field::FieldConfig& config, int feature_dim, double seconds) {
-  const field::DensityHead<float> density(feature_dim, config.heads);
-  const field::ColorHead<float> color(config.heads);
+  field::DensityHead<float> density(feature_dim, config.heads);
+  field::ColorHead<float> color(config.heads);
   std::vector<float> pd(density.param_count()), pc(color.param_count());
   density.Init(pd.data(), 1);
   color.Init(pc.data(), 2);
-  const int tiles = kBatch / kTile;
-  struct Tile {
-    std::vector<float> feat, dh[8], ch[8], draw, craw, sigma, slv, in, rgb, clv, gd, gc, scratch, dgeo, dfeat;
-  };
-  std::vector<Tile> work(tiles);
+  const std::size_t n = kBatch;
   std::mt19937 gen(3);
   std::uniform_real_distribution<float> u(-1.0f, 1.0f);
-  std::vector<float> dir(3 * kTile, 0.57735f), d(3 * kTile);
+  std::vector<float> feat(n * feature_dim), dir(3 * n, 0.57735f), d(3 * n);
+  for (float& x : feat) x = u(gen);
   for (float& x : d) x = u(gen);
-  for (auto& t : work) {
-    t.feat.resize(kTile * feature_dim);
-    for (float& x : t.feat) x = u(gen);
-    for (int k = 0; k < density.mlp().hidden_layers(); ++k)
-      t.dh[k].resize(kTile * density.mlp().hidden_dim(k));
-    for (int k = 0; k < color.mlp().hidden_layers(); ++k) t.ch[k].resize(kTile * color.mlp().hidden_dim(k));
-    t.draw.resize(kTile * density.raw_dim());
-    t.craw.resize(kTile * 4);
-    t.sigma.resize(kTile);
-    t.slv.resize(kTile);
-    t.in.resize(kTile * color.in_dim());
-    t.rgb.resize(3 * kTile);
-    t.clv.resize(kTile);
-    t.gd.resize(pd.size());
-    t.gc.resize(pc.size());
-    t.scratch.resize(std::max(density.scratch_size(kTile), color.scratch_size(kTile)));
-    t.dgeo.resize(kTile * config.heads.geo_features);
-    t.dfeat.resize(kTile * feature_dim);
+  std::vector<std::vector<float>> dh(density.mlp().hidden_layers()), ch(color.mlp().hidden_layers());
+  std::vector<float*> dhp, chp;
+  for (int k = 0; k < density.mlp().hidden_layers(); ++k) {
+    dh[k].resize(n * density.mlp().hidden_dim(k));
+    dhp.push_back(dh[k].data());
   }
+  for (int k = 0; k < color.mlp().hidden_layers(); ++k) {
+    ch[k].resize(n * color.mlp().hidden_dim(k));
+    chp.push_back(ch[k].data());
+  }
+  std::vector<float> draw(n * density.raw_dim()), craw(4 * n), sigma(n), slv(n), in(n * color.in_dim()),
+      rgb(3 * n), clv(n), gd(pd.size()), gc(pc.size()), dgeo(n * config.heads.geo_features),
+      dfeat(n * feature_dim);
+  const field::DropoutPass drop{true, 5, 0};
   auto run = [&] {
-    tbb::parallel_for(0, tiles, [&](int i) {
-      Tile& t = work[i];
-      float* dh[8];
-      float* ch[8];
-      for (int k = 0; k < 8; ++k) {
-        dh[k] = t.dh[k].data();
-        ch[k] = t.ch[k].data();
-      }
-      const field::DropoutPass drop{true, 5, static_cast<std::uint32_t>(i * kTile)};
-      density.Forward(pd.data(), t.feat.data(), kTile, dh, t.draw.data(), t.sigma.data(), t.slv.data(), drop);
-      color.Forward(pc.data(), t.draw.data() + 2, density.raw_dim(), dir.data(), kTile, t.in.data(), ch,
-                    t.craw.data(), t.rgb.data(), t.clv.data(), drop);
-      color.Backward(pc.data(), t.in.data(), kTile, ch, t.craw.data(), d.data(), d.data(), t.dgeo.data(),
-                     t.gc.data(), t.scratch.data(), true);
-      density.Backward(pd.data(), t.feat.data(), kTile, dh, t.draw.data(), d.data(), d.data(), t.dgeo.data(),
-                       t.dfeat.data(), t.gd.data(), t.scratch.data(), true);
-    });
+    density.Forward(pd.data(), {kBatch, feat.data()}, {dhp.data(), draw.data(), sigma.data(), slv.data()},
+                    drop);
+    color.Forward(pc.data(), {kBatch, draw.data() + 2, density.raw_dim(), dir.data()},
+                  {in.data(), chp.data(), craw.data(), rgb.data(), clv.data()}, drop);
+    color.Backward(pc.data(), {kBatch, draw.data() + 2, density.raw_dim(), dir.data()},
+                   {in.data(), chp.data(), craw.data(), rgb.data(), clv.data()}, {d.data(), d.data()},
+                   gc.data(), {dgeo.data()}, drop);
+    density.Backward(pd.data(), {kBatch, feat.data()}, {dhp.data(), draw.data(), sigma.data(), slv.data()},
+                     {d.data(), d.data(), dgeo.data()}, gd.data(), {dfeat.data()}, drop);
   };
   const double per_call = TimePerCall(seconds, run).wall;
   const double macs = static_cast<double>(density.mlp().macs_per_sample() + color.mlp().macs_per_sample());
@@ -213,7 +197,7 @@ void Bench(const char* name, const field::FieldConfig& config, double seconds, d
   field::FieldOutput out{b.sigma.data(), b.sigma_lv.data(), b.rgb.data(), b.rgb_lv.data()};
   const field::FieldOutputGrad grad{b.d_sigma.data(), b.d_sigma_lv.data(), b.d_rgb.data(), b.d_rgb_lv.data()};
   std::uint64_t seed = 0;
-  std::printf("== %s preset ==\n%s\n", name, field.Describe().c_str());
+  std::printf("== %s preset ==\n%s\n", name, field::DescribeField(field).c_str());
   const Timing fb = TimePerCall(seconds, [&] {
     field.Forward(in, out, true, ++seed);
     field.Backward(in, grad);

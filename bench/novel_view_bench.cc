@@ -14,6 +14,7 @@
 #include "worker/engine/scene/clip_loader.h"
 #include "worker/engine/scene/synthetic_clip.h"
 #include "worker/engine/train/checkpoint.h"
+#include "worker/engine/train/render_settings.h"
 #include "worker/engine/train/trainer.h"
 
 int main(int argc, char** argv) {
@@ -42,7 +43,7 @@ int main(int argc, char** argv) {
   const auto clip = endorecon::scene::LoadClip(options.clip_dir);
   const auto model = endorecon::train::ReadModel(fs::path(options.out_dir) / "model" / "model.bin");
   // The results' evaluation settings, without the dropout passes: colour only.
-  auto settings = endorecon::UncertaintyRenderSettings(model.config, model.near, model.far, 0);
+  auto settings = endorecon::train::UncertaintyRenderSettings(model.config, model.near, model.far, 0);
   settings.mc_passes = 0;
   endorecon::render::FrameRenderer renderer(*model.field, model.box, settings);
   const auto occupancy = endorecon::train::BuildOccupancy(*model.field, model.config);

@@ -14,7 +14,7 @@
 #include <random>
 #include <vector>
 
-#include "worker/engine/render/rng.h"
+#include "worker/engine/base/counter_rng.h"
 #include "worker/engine/render/stratified_sampler.h"
 #include "worker/engine/render/volume_renderer.h"
 #include "worker/engine/train/losses.h"
@@ -50,7 +50,7 @@ Batch MakeBatch() {
   std::mt19937 gen(1);
   std::uniform_real_distribution<float> u(0.0f, 1.0f);
   for (int r = 0; r < kRays; ++r) {
-    render::StratifiedSamples(2.0f, 6.0f, kSamples, render::CounterRng<float>(1, r), &b.s[r * kSamples],
+    render::StratifiedSamples(2.0f, 6.0f, kSamples, base::CounterRng<float>(1, r), &b.s[r * kSamples],
                               &b.delta[r * kSamples]);
     b.prior[r] = 2.0f + 4.0f * u(gen);
     for (int c = 0; c < 3; ++c) b.target[3 * r + c] = u(gen);
@@ -64,7 +64,7 @@ Batch MakeBatch() {
 }
 
 void Sample(Batch& b, int r) {
-  render::StratifiedSamples(2.0f, 6.0f, kSamples, render::CounterRng<float>(7, r), &b.s[r * kSamples],
+  render::StratifiedSamples(2.0f, 6.0f, kSamples, base::CounterRng<float>(7, r), &b.s[r * kSamples],
                             &b.delta[r * kSamples]);
 }
 

@@ -78,12 +78,11 @@ int main(int argc, char** argv) {
     nlohmann::json config = variant.config;
     config["curve_interval_s"] = interval;
     config["curve_frames"] = 3;
-    std::ofstream(dir / "bench.json") << config.dump(2);
 
     endorecon::ReconstructOptions options;
     options.clip_dir = (fs::path(out) / variant.clip).string();
     options.out_dir = (dir / "result").string();
-    options.config_file = (dir / "bench.json").string();
+    options.config = config;
     options.preset = variant.preset;
     options.holdout = 8;
     options.iterations = 1000000;

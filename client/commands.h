@@ -17,12 +17,16 @@ namespace endorecon::client {
 
 // Flags shared by every subcommand.
 struct Globals {
-  std::string server;     // --server, else $ENDORECON_SERVER, else 127.0.0.1:50051
-  bool json = false;      // --json: machine-readable output on stdout
-  double timeout_s = 30;  // --timeout: deadline of each unary call
+  std::string server;      // --server, else $ENDORECON_SERVER, else 127.0.0.1:50051
+  bool json = false;       // --json: machine-readable output on stdout
+  double timeout_s = 30;   // --timeout: deadline of each unary call
+  std::string ca_file;     // --ca, else $ENDORECON_CA: TLS, verifying the server against this CA
+  std::string token_file;  // --token-file: the bearer token; else $ENDORECON_TOKEN holds the token itself
   std::chrono::milliseconds timeout() const {
     return std::chrono::milliseconds(static_cast<long>(timeout_s * 1000));
   }
+  // A stub over a channel with the TLS and token settings above. Throws Error(kInvalidArgument)
+  // for an unreadable or world-readable token file.
   std::unique_ptr<v1::JobService::Stub> Connect() const;
 };
 

@@ -20,6 +20,10 @@ int ExitCodeFor(ErrorCode code) {
       return kExitJobCancelled;
     case ErrorCode::kInternal:
       return kExitInternal;
+    case ErrorCode::kUnauthenticated:
+      return kExitUnauthenticated;
+    case ErrorCode::kPermissionDenied:
+      return kExitPermissionDenied;
   }
   return kExitInternal;
 }

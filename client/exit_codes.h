@@ -17,13 +17,16 @@ enum ExitCode : int {
   kExitPrecondition = 7,       // not possible in the job's state (fetch before it succeeded, ...)
   kExitResourceExhausted = 8,  // a server limit was hit (upload size, disk)
   kExitDataLoss = 9,           // a checksum did not match
+  kExitUnauthenticated = 10,   // no token, or one the server does not accept (unknown, revoked, malformed)
+  kExitPermissionDenied = 11,  // the token's role may not do this
 };
 
 inline constexpr const char* kExitCodeHelp =
     "Exit codes: 0 ok, 1 internal error, 2 invalid usage or input, 3 not found, 4 server unavailable or "
     "timed out, 5 job failed, 6 job cancelled, 7 not possible in the job's state, 8 server limit exceeded, "
-    "9 checksum mismatch. The server address comes from --server, else $ENDORECON_SERVER, else "
-    "127.0.0.1:50051.";
+    "9 checksum mismatch, 10 not authenticated, 11 not permitted. The server address comes from --server, "
+    "else "
+    "$ENDORECON_SERVER, else 127.0.0.1:50051.";
 
 int ExitCodeFor(ErrorCode code);
 // 0 for SUCCEEDED, 5 for FAILED, 6 for CANCELLED, 0 otherwise (still running).

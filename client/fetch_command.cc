@@ -1,6 +1,7 @@
 // endorecon fetch JOB -o DIR: download a finished job's results, verified by SHA-256; files
 // already there are skipped and an interrupted download resumes.
 #include <CLI/CLI.hpp>
+#include <filesystem>
 #include <iostream>
 
 #include "client/commands.h"
@@ -28,6 +29,11 @@ int Fetch(const Globals& globals, const FetchFlags& flags) {
   v1::Job job;
   auto context = CallContext(globals.timeout());
   ThrowIfFailed(stub->Get(context.get(), get, &job), "fetch " + flags.id);
+  if (job.expired_unix_ms() > 0) {
+    Fail(ErrorCode::kFailedPrecondition, "job " + job.id() + " expired on " +
+                                             HumanTime(job.expired_unix_ms()) +
+                                             ": the server's retention policy deleted its clip and results");
+  }
   if (job.state() != v1::SUCCEEDED) {
     Fail(ErrorCode::kFailedPrecondition, "job " + job.id() + " is " + v1::JobState_Name(job.state()) +
                                              "; results exist once it has SUCCEEDED");
@@ -51,6 +57,11 @@ int Fetch(const Globals& globals, const FetchFlags& flags) {
   } else {
     std::cout << "fetched " << pending.size() << " of " << job.result().files_size() << " file(s) ("
               << HumanBytes(received) << ") into " << flags.out << "; every file verified" << std::endl;
+    for (const auto& file : job.result().files()) {
+      if (file.path() == "report.html") {
+        std::cout << "report: " << (std::filesystem::path(flags.out) / file.path()).string() << std::endl;
+      }
+    }
   }
   return kExitOk;
 }

@@ -98,6 +98,8 @@ std::string DescribeJob(const v1::Job& job) {
   text += fmt::format("  state     {}{}\n", v1::JobState_Name(job.state()),
                       job.cancel_requested() && job.state() == v1::RUNNING ? " (cancel requested)" : "");
   text += fmt::format("  priority  {}\n", job.priority());
+  if (!job.tenant().empty()) text += fmt::format("  tenant    {}\n", job.tenant());
+  if (!job.submitted_by().empty()) text += fmt::format("  by        {}\n", job.submitted_by());
   text += fmt::format("  created   {}\n", HumanTime(job.created_unix_ms()));
   if (job.started_unix_ms() > 0) text += fmt::format("  started   {}\n", HumanTime(job.started_unix_ms()));
   if (job.finished_unix_ms() > 0) text += fmt::format("  finished  {}\n", HumanTime(job.finished_unix_ms()));
@@ -107,11 +109,17 @@ std::string DescribeJob(const v1::Job& job) {
   if (job.has_progress()) text += "  progress  " + ProgressLine(job.progress()) + "\n";
   if (!job.error().empty()) text += fmt::format("  reason    {}\n", job.error());
   text += DicomLines(job);
+  if (job.expired_unix_ms() > 0) {
+    text += fmt::format("  expired   {} (the retention policy deleted its clip and results)\n",
+                        HumanTime(job.expired_unix_ms()));
+  }
   if (job.result().files_size() > 0) {
     std::int64_t bytes = 0;
     for (const auto& file : job.result().files()) bytes += file.size();
-    text += fmt::format("  results   {} file(s), {} (endorecon fetch {} -o DIR)\n", job.result().files_size(),
-                        HumanBytes(bytes), job.id());
+    if (job.expired_unix_ms() == 0) {
+      text += fmt::format("  results   {} file(s), {} (endorecon fetch {} -o DIR)\n",
+                          job.result().files_size(), HumanBytes(bytes), job.id());
+    }
   }
   return text;
 }

@@ -4,11 +4,11 @@
 
 #include <chrono>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
 #include <thread>
 
 #include "client/job_format.h"
+#include "common/file_write.h"
 #include "common/grpc_status.h"
 #include "common/transport_security.h"
 
@@ -20,10 +20,9 @@ bool Terminal(v1::JobState state) {
 }
 
 void SavePreview(const std::string& dir, const v1::Preview& preview) {
-  std::filesystem::create_directories(dir);
   const auto path =
       std::filesystem::path(dir) / (preview.kind() + "-it" + std::to_string(preview.iteration()) + ".png");
-  std::ofstream(path, std::ios::binary) << preview.png();
+  WriteFile(path, preview.png(), "preview");
 }
 
 // Prints events as they come: on a terminal the progress line rewrites itself.

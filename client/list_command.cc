@@ -2,6 +2,7 @@
 #include <fmt/format.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <iostream>
 
 #include "client/commands.h"
@@ -41,13 +42,20 @@ int List(const Globals& globals, const ListFlags& flags) {
     std::cout << ToJson(all) << std::endl;
     return kExitOk;
   }
-  std::cout << fmt::format("{:<14} {:<10} {:>4} {:<19} {:>12} {}\n", "JOB", "STATE", "PRIO", "CREATED",
-                           "ITERATION", "NAME");
+  // Jobs of tenants (a server with tokens) get the tenant column; an admin sees several.
+  const bool tenants = std::any_of(all.jobs().begin(), all.jobs().end(),
+                                   [](const v1::Job& job) { return !job.tenant().empty(); });
+  const auto tenant_of = [&](const v1::Job& job) {
+    return tenants ? fmt::format("{:<16} ", job.tenant().empty() ? "-" : job.tenant()) : std::string();
+  };
+  std::cout << fmt::format("{:<14} {}{:<10} {:>4} {:<19} {:>12} {}\n", "JOB",
+                           tenants ? "TENANT           " : "", "STATE", "PRIO", "CREATED", "ITERATION",
+                           "NAME");
   for (const auto& job : all.jobs()) {
     const std::string iteration = job.has_progress() ? fmt::format("{}/{}", job.progress().iteration(),
                                                                    job.progress().total_iterations())
                                                      : "-";
-    std::cout << fmt::format("{:<14} {:<10} {:>4} {:<19} {:>12} {}\n", job.id(),
+    std::cout << fmt::format("{:<14} {}{:<10} {:>4} {:<19} {:>12} {}\n", job.id(), tenant_of(job),
                              v1::JobState_Name(job.state()), job.priority(), HumanTime(job.created_unix_ms()),
                              iteration, job.name());
   }

@@ -14,8 +14,29 @@
 namespace endorecon::client {
 
 std::unique_ptr<v1::JobService::Stub> Globals::Connect() const {
-  return v1::JobService::NewStub(OpenChannel(server));
+  ChannelSecurity security;
+  security.ca_file = ca_file;
+  if (!token_file.empty()) {
+    security.token = ReadTokenFile(token_file, "--token-file");
+  } else if (const char* token = std::getenv("ENDORECON_TOKEN"); token && *token) {
+    security.token = token;
+  }
+  return v1::JobService::NewStub(OpenChannel(server, security));
 }
+
+namespace {
+
+// What the user can do about a refusal the server's answer alone does not explain.
+std::string HintFor(const endorecon::Error& error, const Globals& globals) {
+  if (error.code() == endorecon::ErrorCode::kUnavailable && globals.ca_file.empty())
+    return "\nendorecon: if the server uses TLS, pass --ca FILE or set ENDORECON_CA";
+  if (error.code() == endorecon::ErrorCode::kUnauthenticated && globals.token_file.empty() &&
+      !std::getenv("ENDORECON_TOKEN"))
+    return "\nendorecon: pass --token-file FILE or set ENDORECON_TOKEN";
+  return "";
+}
+
+}  // namespace
 
 }  // namespace endorecon::client
 
@@ -23,8 +44,13 @@ int main(int argc, char** argv) {
   using namespace endorecon::client;
   CLI::App app{
       "endorecon: submit endoscopic clips to endorecon-server, watch the reconstruction, fetch results"};
-  app.footer(kExitCodeHelp);
+  app.footer(std::string(kExitCodeHelp) +
+             " Global options (endorecon --help) may also follow the subcommand.");
   app.require_subcommand(1);
+  // Global options are accepted after the subcommand too (`endorecon submit clip --json`, as git, docker
+  // and kubectl users type them): every subcommand, added below, inherits this and hands the options it
+  // does not know to the app, so any global option added later works there without more code.
+  app.fallthrough();
   Globals globals;
   const char* env_server = std::getenv("ENDORECON_SERVER");
   globals.server = env_server && *env_server ? env_server : "127.0.0.1:50051";
@@ -32,6 +58,12 @@ int main(int argc, char** argv) {
                  "server address host:port (default: $ENDORECON_SERVER or 127.0.0.1:50051)");
   app.add_flag("--json", globals.json, "machine-readable JSON on stdout (JSON Lines for streams)");
   app.add_option("--timeout", globals.timeout_s, "deadline of each call in seconds")->capture_default_str();
+  const char* env_ca = std::getenv("ENDORECON_CA");
+  globals.ca_file = env_ca ? env_ca : "";
+  app.add_option("--ca", globals.ca_file,
+                 "TLS: verify the server against this CA certificate (default: $ENDORECON_CA)");
+  app.add_option("--token-file", globals.token_file,
+                 "file holding the bearer token (mode 0600; default: the token in $ENDORECON_TOKEN)");
   std::map<std::string, Command> commands;
   commands["submit"] = AddSubmitCommand(app);
   commands["status"] = AddStatusCommand(app);
@@ -49,7 +81,8 @@ int main(int argc, char** argv) {
   try {
     for (auto* sub : app.get_subcommands()) return commands.at(sub->get_name())(globals);
   } catch (const endorecon::Error& e) {
-    std::cerr << "endorecon: " << endorecon::ErrorCodeName(e.code()) << ": " << e.what() << "\n";
+    std::cerr << "endorecon: " << endorecon::ErrorCodeName(e.code()) << ": " << e.what()
+              << HintFor(e, globals) << "\n";
     return ExitCodeFor(e.code());
   } catch (const std::exception& e) {
     std::cerr << "endorecon: " << e.what() << "\n";

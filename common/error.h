@@ -16,6 +16,8 @@ enum class ErrorCode {
   kDataLoss,            // stored data is corrupt (checksum mismatch, truncated file)
   kInternal,            // a broken invariant: a bug, or numerics that went non-finite
   kCancelled,           // the work was cancelled on request
+  kUnauthenticated,     // the caller's identity is missing or not accepted (token, certificate)
+  kPermissionDenied,    // the caller is known but its role may not do this
 };
 
 const char* ErrorCodeName(ErrorCode code);
@@ -30,6 +32,8 @@ class Error : public std::runtime_error {
 };
 
 [[noreturn]] inline void Fail(ErrorCode code, const std::string& message) { throw Error(code, message); }
-[[noreturn]] inline void FailInvalid(const std::string& message) { throw Error(ErrorCode::kInvalidArgument, message); }
+[[noreturn]] inline void FailInvalid(const std::string& message) {
+  throw Error(ErrorCode::kInvalidArgument, message);
+}
 
 }  // namespace endorecon

@@ -22,6 +22,10 @@ grpc::StatusCode ToGrpcCode(ErrorCode code) {
       return grpc::StatusCode::INTERNAL;
     case ErrorCode::kCancelled:
       return grpc::StatusCode::CANCELLED;
+    case ErrorCode::kUnauthenticated:
+      return grpc::StatusCode::UNAUTHENTICATED;
+    case ErrorCode::kPermissionDenied:
+      return grpc::StatusCode::PERMISSION_DENIED;
   }
   return grpc::StatusCode::UNKNOWN;
 }
@@ -46,6 +50,10 @@ ErrorCode FromGrpcCode(grpc::StatusCode code) {
       return ErrorCode::kDataLoss;
     case grpc::StatusCode::CANCELLED:
       return ErrorCode::kCancelled;
+    case grpc::StatusCode::UNAUTHENTICATED:
+      return ErrorCode::kUnauthenticated;
+    case grpc::StatusCode::PERMISSION_DENIED:
+      return ErrorCode::kPermissionDenied;
     default:
       return ErrorCode::kInternal;
   }

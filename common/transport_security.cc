@@ -3,10 +3,64 @@
 #include <grpcpp/create_channel.h>
 #include <grpcpp/security/credentials.h>
 #include <grpcpp/support/channel_arguments.h>
+#include <grpcpp/support/client_interceptor.h>
+
+#include "common/error.h"
+#include "common/secret_file.h"
 
 namespace endorecon {
+namespace {
 
-std::shared_ptr<grpc::Channel> OpenChannel(const std::string& address) {
+void RequirePair(const std::string& cert_file, const std::string& key_file) {
+  if (cert_file.empty() != key_file.empty())
+    FailInvalid("--tls-cert and --tls-key go together: give both or neither");
+}
+
+// Adds the bearer token to every call's initial metadata. An interceptor rather than call
+// credentials, because gRPC sends call credentials only over TLS and a token store may guard a
+// plaintext loopback server too.
+class BearerTokenInterceptor final : public grpc::experimental::Interceptor {
+ public:
+  explicit BearerTokenInterceptor(const std::string& header) : header_(header) {}
+  void Intercept(grpc::experimental::InterceptorBatchMethods* methods) override {
+    if (methods->QueryInterceptionHookPoint(
+            grpc::experimental::InterceptionHookPoints::PRE_SEND_INITIAL_METADATA)) {
+      methods->GetSendInitialMetadata()->emplace("authorization", header_);
+    }
+    methods->Proceed();
+  }
+
+ private:
+  const std::string& header_;
+};
+
+class BearerTokenFactory final : public grpc::experimental::ClientInterceptorFactoryInterface {
+ public:
+  explicit BearerTokenFactory(const std::string& token) : header_("Bearer " + token) {}
+  grpc::experimental::Interceptor* CreateClientInterceptor(grpc::experimental::ClientRpcInfo*) override {
+    return new BearerTokenInterceptor(header_);
+  }
+
+ private:
+  std::string header_;
+};
+
+}  // namespace
+
+std::shared_ptr<grpc::Channel> OpenChannel(const std::string& address, const ChannelSecurity& security) {
+  RequirePair(security.cert_file, security.key_file);
+  if (!security.cert_file.empty() && security.ca_file.empty())
+    FailInvalid("--tls-cert needs --ca: a client certificate is presented only over TLS");
+  std::shared_ptr<grpc::ChannelCredentials> credentials = grpc::InsecureChannelCredentials();
+  if (!security.ca_file.empty()) {
+    grpc::SslCredentialsOptions tls;
+    tls.pem_root_certs = ReadPublicFile(security.ca_file, "--ca");
+    if (!security.cert_file.empty()) {
+      tls.pem_cert_chain = ReadPublicFile(security.cert_file, "--tls-cert");
+      tls.pem_private_key = ReadSecretFile(security.key_file, "--tls-key");
+    }
+    credentials = grpc::SslCredentials(tls);
+  }
   grpc::ChannelArguments args;
   args.SetMaxReceiveMessageSize(kMaxMessageBytes);
   args.SetMaxSendMessageSize(kMaxMessageBytes);
@@ -15,10 +69,38 @@ std::shared_ptr<grpc::Channel> OpenChannel(const std::string& address) {
   args.SetInt(GRPC_ARG_MAX_RECONNECT_BACKOFF_MS, 2000);
   args.SetInt(GRPC_ARG_INITIAL_RECONNECT_BACKOFF_MS, 200);
   args.SetInt(GRPC_ARG_MIN_RECONNECT_BACKOFF_MS, 200);
-  return grpc::CreateCustomChannel(address, grpc::InsecureChannelCredentials(), args);
+  if (security.token.empty()) return grpc::CreateCustomChannel(address, credentials, args);
+  std::vector<std::unique_ptr<grpc::experimental::ClientInterceptorFactoryInterface>> interceptors;
+  interceptors.push_back(std::make_unique<BearerTokenFactory>(security.token));
+  return grpc::experimental::CreateCustomChannelWithInterceptors(address, credentials, args,
+                                                                 std::move(interceptors));
 }
 
-std::shared_ptr<grpc::ServerCredentials> ServerCredentials() { return grpc::InsecureServerCredentials(); }
+std::shared_ptr<grpc::ServerCredentials> ServerCredentials(const ServerSecurity& security) {
+  RequirePair(security.cert_file, security.key_file);
+  if (!security.tls()) {
+    if (!security.client_ca_file.empty()) FailInvalid("--tls-client-ca needs --tls-cert and --tls-key");
+    return grpc::InsecureServerCredentials();
+  }
+  grpc::SslServerCredentialsOptions tls(security.client_ca_file.empty()
+                                            ? GRPC_SSL_DONT_REQUEST_CLIENT_CERTIFICATE
+                                            : GRPC_SSL_REQUEST_CLIENT_CERTIFICATE_AND_VERIFY);
+  tls.pem_key_cert_pairs.push_back(
+      {ReadSecretFile(security.key_file, "--tls-key"), ReadPublicFile(security.cert_file, "--tls-cert")});
+  if (!security.client_ca_file.empty())
+    tls.pem_root_certs = ReadPublicFile(security.client_ca_file, "--tls-client-ca");
+  return grpc::SslServerCredentials(tls);
+}
+
+std::string ReadTokenFile(const std::filesystem::path& path, const std::string& flag) {
+  const std::string text = ReadSecretFile(path, flag);
+  const auto begin = text.find_first_not_of(" \t\r\n");
+  const auto end = text.find_last_not_of(" \t\r\n");
+  const std::string token = begin == std::string::npos ? "" : text.substr(begin, end - begin + 1);
+  if (token.empty() || token.find_first_of(" \t\r\n") != std::string::npos)
+    FailInvalid(flag + " " + path.string() + ": expected one token (one word) in the file");
+  return token;
+}
 
 bool IsLoopbackAddress(const std::string& address) {
   std::string host = address;

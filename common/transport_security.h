@@ -1,10 +1,6 @@
-// The one place where transport security and caller identity are decided, for every binary.
-//
-// Today the service speaks plaintext and binds to loopback unless told otherwise. The next step
-// (TLS and per-call tokens) lands here without touching callers: OpenChannel() composes
-// grpc::SslCredentials with a token (grpc::AccessTokenCredentials or a MetadataCredentialsPlugin),
-// ServerCredentials() returns grpc::SslServerCredentials, and the server checks the token in one
-// grpc::experimental::ServerInterceptor (UNAUTHENTICATED / PERMISSION_DENIED).
+// The one place where transport security is decided, for every binary: TLS (and client
+// certificates) on channels and listening ports, and the bearer token every client call carries.
+// Which caller may do what is the server's CallGuard (server/call_guard.h).
 #pragma once
 
 #include <grpcpp/channel.h>
@@ -12,6 +8,7 @@
 #include <grpcpp/security/server_credentials.h>
 
 #include <chrono>
+#include <filesystem>
 #include <memory>
 #include <string>
 
@@ -22,16 +19,40 @@ inline constexpr int kMaxMessageBytes = 4 * 1024 * 1024 + 64 * 1024;
 // Upload and download chunks carry at most this many bytes (strictly below 4 MiB).
 inline constexpr int kChunkBytes = 4 * 1024 * 1024 - 4096;
 
-// A channel to `address` ("host:port") with the service's credentials and message limits.
-std::shared_ptr<grpc::Channel> OpenChannel(const std::string& address);
+// How a client or worker reaches the server. All empty: plaintext without a token (loopback).
+struct ChannelSecurity {
+  std::string ca_file;    // TLS: verify the server's certificate against this CA bundle (--ca)
+  std::string cert_file;  // mTLS: present this certificate chain (--tls-cert), with key_file
+  std::string key_file;   // its private key (--tls-key); refused when others may read it
+  std::string token;      // sent as "authorization: Bearer <token>" with every call
+};
 
-std::shared_ptr<grpc::ServerCredentials> ServerCredentials();
+// A channel to `address` ("host:port") with `security` and the service's message limits. Throws
+// Error(kInvalidArgument) for a certificate without its key (or the reverse) or a key file others
+// may read, kNotFound for a file that cannot be read.
+std::shared_ptr<grpc::Channel> OpenChannel(const std::string& address, const ChannelSecurity& security = {});
+
+// The server's side. All empty: plaintext.
+struct ServerSecurity {
+  std::string cert_file;       // --tls-cert: the server's certificate chain
+  std::string key_file;        // --tls-key: its private key
+  std::string client_ca_file;  // --tls-client-ca: ask callers for a certificate, verify it against this CA
+  bool tls() const { return !cert_file.empty(); }
+};
+
+// Credentials for a listening port. With a client CA, a caller may present a certificate (then it
+// must verify, or the handshake fails) but need not: the worker API demands one (CallGuard).
+// Throws as OpenChannel.
+std::shared_ptr<grpc::ServerCredentials> ServerCredentials(const ServerSecurity& security = {});
+
+// The token in `path` (surrounding whitespace removed), checked as a secret file. Throws as
+// ReadSecretFile, and kInvalidArgument when the file holds more than one word.
+std::string ReadTokenFile(const std::filesystem::path& path, const std::string& flag);
 
 // True when `address` ("host:port", "[v6]:port") names a loopback interface only.
 bool IsLoopbackAddress(const std::string& address);
 
-// A context whose call must finish within `timeout` (every client call has a deadline); the
-// place where per-call tokens will be attached.
+// A context whose call must finish within `timeout` (every client call has a deadline).
 std::unique_ptr<grpc::ClientContext> CallContext(std::chrono::milliseconds timeout);
 
 }  // namespace endorecon

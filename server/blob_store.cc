@@ -40,6 +40,13 @@ fs::path BlobStore::PathOf(const std::string& sha256) const {
   return root_ / "blobs" / sha256.substr(0, 2) / sha256;
 }
 
+void BlobStore::Remove(const std::string& sha256) {
+  if (!Has(sha256)) return;
+  std::error_code error;
+  fs::remove(root_ / "blobs" / sha256.substr(0, 2) / sha256, error);
+  if (error) Fail(ErrorCode::kUnavailable, "cannot delete blob " + sha256 + ": " + error.message());
+}
+
 fs::path BlobStore::PartialPath(const std::string& sha256) const {
   return root_ / "partial" / (sha256 + ".part");
 }

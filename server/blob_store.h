@@ -62,6 +62,10 @@ class BlobStore {
   std::unique_ptr<Writer> TryOpenWriter(const v1::FileEntry& entry,
                                         std::chrono::milliseconds wait = std::chrono::milliseconds(0));
 
+  // Deletes the blob (retention); a missing blob is not an error. Throws Error(kUnavailable) when
+  // the file exists but cannot be removed.
+  void Remove(const std::string& sha256);
+
   // Stores `bytes` as a blob at once; returns its digest.
   std::string Put(std::string_view bytes);
 

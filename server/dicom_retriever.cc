@@ -14,7 +14,7 @@ namespace fs = std::filesystem;
 
 DicomRetriever::DicomRetriever(JobCoordinator& coordinator, BlobStore& blobs, const PacsDirectory& pacs,
                                const DicomSettings& settings, Metrics& metrics, fs::path work_dir,
-                               const dicom::StorageScp* scp)
+                               const dicom::StorageScp* scp, PacsAudit audit)
     : coordinator_(coordinator),
       blobs_(blobs),
       pacs_(pacs),
@@ -22,6 +22,7 @@ DicomRetriever::DicomRetriever(JobCoordinator& coordinator, BlobStore& blobs, co
       metrics_(metrics),
       work_dir_(std::move(work_dir)),
       scp_(scp),
+      audit_(std::move(audit)),
       thread_([this] { Loop(); }) {}
 
 DicomRetriever::~DicomRetriever() {
@@ -143,23 +144,30 @@ std::pair<fs::path, std::string> DicomRetriever::Fetch(const std::string& job_id
   return {folder, "C-MOVE"};
 }
 
-// Each retrieved file becomes a blob (streamed from disk and verified as uploads are) and an entry
-// of the clip, named after the file.
-v1::Manifest DicomRetriever::StoreBlobs(const fs::path& folder) {
-  v1::Manifest manifest;
+// Each retrieved file is an entry of the clip, named after the file.
+std::vector<std::pair<fs::path, v1::FileEntry>> DicomRetriever::Describe(const fs::path& folder) {
   std::vector<fs::path> files;
   for (const auto& entry : fs::directory_iterator(folder)) {
     if (entry.is_regular_file()) files.push_back(entry.path());
   }
   std::sort(files.begin(), files.end());
+  std::vector<std::pair<fs::path, v1::FileEntry>> described;
   for (const auto& file : files) {
-    auto* entry = manifest.add_files();
-    entry->set_path(file.filename().string() + (file.extension() == ".dcm" ? "" : ".dcm"));
-    CheckRelativePath(entry->path());
-    entry->set_size(static_cast<std::int64_t>(fs::file_size(file)));
-    entry->set_sha256(Sha256File(file));
-    if (blobs_.Has(entry->sha256())) continue;
-    auto writer = blobs_.TryOpenWriter(*entry, std::chrono::seconds(60));
+    v1::FileEntry entry;
+    entry.set_path(file.filename().string() + (file.extension() == ".dcm" ? "" : ".dcm"));
+    CheckRelativePath(entry.path());
+    entry.set_size(static_cast<std::int64_t>(fs::file_size(file)));
+    entry.set_sha256(Sha256File(file));
+    described.emplace_back(file, std::move(entry));
+  }
+  return described;
+}
+
+// Each file becomes a blob, streamed from disk and verified as uploads are.
+void DicomRetriever::StoreBlobs(const std::vector<std::pair<fs::path, v1::FileEntry>>& files) {
+  for (const auto& [file, entry] : files) {
+    if (blobs_.Has(entry.sha256())) continue;
+    auto writer = blobs_.TryOpenWriter(entry, std::chrono::seconds(60));
     if (!writer) continue;  // the same content was being written by another stream, and is now a blob
     std::ifstream in(file, std::ios::binary);
     std::string chunk(1 << 20, '\0');
@@ -170,24 +178,30 @@ v1::Manifest DicomRetriever::StoreBlobs(const fs::path& folder) {
     }
     writer->Promote();
   }
-  return manifest;
 }
 
 void DicomRetriever::Run(const std::string& job_id) {
-  const v1::Job job = coordinator_.Get(job_id);
+  const v1::Job job = coordinator_.Get(job_id, ServerPrincipal());
   if (job.state() != v1::QUEUED) return;
   const auto& source = job.retrieval().source();
   spdlog::info("job {}: retrieving its recording from PACS {}", job_id, source.pacs());
   try {
     const auto [folder, method] = Fetch(job_id, source);
-    const v1::Manifest clip = StoreBlobs(folder);
+    const auto files = Describe(folder);
+    if (files.empty()) Fail(ErrorCode::kNotFound, "no instance arrived");
+    v1::Manifest clip;
+    for (const auto& [file, entry] : files) *clip.add_files() = entry;
+    // The job's tenant pays for the recording: refused before any byte enters the blob store.
+    coordinator_.CheckRetrievalQuota(job_id, clip);
+    StoreBlobs(files);
     fs::remove_all(folder);
-    if (clip.files_size() == 0) Fail(ErrorCode::kNotFound, "no instance arrived");
     coordinator_.RetrievalDone(job_id, clip);
+    audit_("PacsRetrieve", job_id, "OK", source.pacs());
     spdlog::info("job {}: recording retrieved from PACS {} by {}", job_id, source.pacs(), method);
   } catch (const Error& e) {
     std::error_code ignored;
     fs::remove_all(work_dir_ / job_id, ignored);
+    audit_("PacsRetrieve", job_id, ErrorCodeName(e.code()), source.pacs());
     coordinator_.RetrievalFailed(job_id, std::string(ErrorCodeName(e.code())) + ": " + e.what());
   }
 }

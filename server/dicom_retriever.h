@@ -2,7 +2,8 @@
 // thread of its own: C-GET into <data>/retrievals/<job>/, or, when the PACS refuses C-GET and the
 // server runs its storage SCP, C-MOVE to it. The files become blobs and the job's clip, and the job
 // is queued; the job's `retrieval` shows instances and bytes as they arrive. A failure FAILS the job
-// with the PACS's reason.
+// with the PACS's reason; so does a recording that would take the job's tenant over its byte quota
+// (checked before the files enter the blob store).
 #pragma once
 
 #include <condition_variable>
@@ -25,7 +26,7 @@ class DicomRetriever {
   // `scp` (may be null) is the server's storage SCP, whose folder C-MOVE fills.
   DicomRetriever(JobCoordinator& coordinator, BlobStore& blobs, const PacsDirectory& pacs,
                  const DicomSettings& settings, Metrics& metrics, std::filesystem::path work_dir,
-                 const dicom::StorageScp* scp);
+                 const dicom::StorageScp* scp, PacsAudit audit);
   // Stops after the retrieval in progress and joins the thread.
   ~DicomRetriever();
   DicomRetriever(const DicomRetriever&) = delete;
@@ -42,7 +43,8 @@ class DicomRetriever {
   // Returns the folder holding the retrieved files and the method used.
   std::pair<std::filesystem::path, std::string> Fetch(const std::string& job_id,
                                                       const v1::PacsSource& source);
-  v1::Manifest StoreBlobs(const std::filesystem::path& folder);
+  std::vector<std::pair<std::filesystem::path, v1::FileEntry>> Describe(const std::filesystem::path& folder);
+  void StoreBlobs(const std::vector<std::pair<std::filesystem::path, v1::FileEntry>>& files);
   void Progress(const std::string& job_id, int instances, std::int64_t bytes);
 
   JobCoordinator& coordinator_;
@@ -52,6 +54,7 @@ class DicomRetriever {
   Metrics& metrics_;
   std::filesystem::path work_dir_;
   const dicom::StorageScp* scp_;
+  PacsAudit audit_;
 
   std::mutex mutex_;
   std::condition_variable wake_;

@@ -7,6 +7,7 @@
 
 #include "common/dicom/store_scu.h"
 #include "common/error.h"
+#include "server/job_states.h"
 
 namespace endorecon::server {
 namespace {
@@ -18,19 +19,16 @@ v1::DicomSend* Find(v1::Job& job, const std::string& destination) {
   return nullptr;
 }
 
-bool Waiting(const v1::DicomSend& send) {
-  return send.state() == v1::DicomSend::PENDING || send.state() == v1::DicomSend::SENDING;
-}
-
 }  // namespace
 
 DicomSender::DicomSender(JobCoordinator& coordinator, BlobStore& blobs, const PacsDirectory& pacs,
-                         const DicomSettings& settings, Metrics& metrics)
+                         const DicomSettings& settings, Metrics& metrics, PacsAudit audit)
     : coordinator_(coordinator),
       blobs_(blobs),
       pacs_(pacs),
       settings_(settings),
       metrics_(metrics),
+      audit_(std::move(audit)),
       thread_([this] { Loop(); }) {}
 
 DicomSender::~DicomSender() {
@@ -54,10 +52,10 @@ void DicomSender::Schedule(const Key& key, std::int64_t at_unix_ms) {
 }
 
 void DicomSender::Send(const std::string& job_id) {
-  const v1::Job job = coordinator_.Get(job_id);
+  const v1::Job job = coordinator_.Get(job_id, ServerPrincipal());
   if (job.state() != v1::SUCCEEDED) return;
   for (const auto& send : job.sends()) {
-    if (Waiting(send)) Schedule({job_id, send.destination()}, send.next_attempt_unix_ms());
+    if (SendWaiting(send)) Schedule({job_id, send.destination()}, send.next_attempt_unix_ms());
   }
 }
 
@@ -91,7 +89,7 @@ void DicomSender::Attempt(const std::string& job_id, const std::string& destinat
   std::vector<std::filesystem::path> files;
   v1::Job job = coordinator_.Update(job_id, [&](v1::Job& stored) {
     v1::DicomSend* send = Find(stored, destination);
-    if (send == nullptr || !Waiting(*send)) return;
+    if (send == nullptr || !SendWaiting(*send)) return;
     const std::set<std::string> sent(send->sent_paths().begin(), send->sent_paths().end());
     int total = 0;
     for (const auto& file : stored.result().files()) {
@@ -144,6 +142,7 @@ void DicomSender::Attempt(const std::string& job_id, const std::string& destinat
       s->set_next_attempt_unix_ms(retry ? next : 0);
     }
   });
+  audit_("PacsSend", job_id, failure.empty() ? "OK" : "FAILED", destination);
   if (failure.empty()) {
     spdlog::info("job {}: DICOM results sent to {}", job_id, destination);
     return;

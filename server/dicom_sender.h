@@ -24,7 +24,7 @@ namespace endorecon::server {
 class DicomSender {
  public:
   DicomSender(JobCoordinator& coordinator, BlobStore& blobs, const PacsDirectory& pacs,
-              const DicomSettings& settings, Metrics& metrics);
+              const DicomSettings& settings, Metrics& metrics, PacsAudit audit);
   // Stops after the attempt in progress and joins the thread.
   ~DicomSender();
   DicomSender(const DicomSender&) = delete;
@@ -44,6 +44,7 @@ class DicomSender {
   const PacsDirectory& pacs_;
   DicomSettings settings_;
   Metrics& metrics_;
+  PacsAudit audit_;
 
   std::mutex mutex_;
   std::condition_variable wake_;

@@ -9,13 +9,10 @@
 #include "common/dicom/uid.h"
 #include "common/error.h"
 #include "common/manifest.h"
+#include "server/job_states.h"
 
 namespace endorecon::server {
 namespace {
-
-bool Terminal(v1::JobState state) {
-  return state == v1::SUCCEEDED || state == v1::FAILED || state == v1::CANCELLED;
-}
 
 void ValidateOptions(const v1::ReconstructionOptions& options) {
   if (!options.preset().empty() && options.preset() != "cpu" && options.preset() != "paper") {
@@ -45,13 +42,6 @@ bool Retrieving(const v1::Job& job) {
   return job.has_retrieval() && job.retrieval().state() == v1::Retrieval::RETRIEVING;
 }
 
-bool SendsWaiting(const v1::Job& job) {
-  for (const auto& send : job.sends()) {
-    if (send.state() == v1::DicomSend::PENDING || send.state() == v1::DicomSend::SENDING) return true;
-  }
-  return false;
-}
-
 // Throws kFailedPrecondition naming the first file of `manifest` the blob store lacks.
 void RequireBlobs(const BlobStore& blobs, const v1::Manifest& manifest, const std::string& what) {
   int missing = 0;
@@ -76,8 +66,8 @@ std::int64_t NowUnixMs() {
       .count();
 }
 
-JobCoordinator::JobCoordinator(CoordinatorParts parts, int max_attempts)
-    : parts_(parts), max_attempts_(max_attempts) {}
+JobCoordinator::JobCoordinator(CoordinatorParts parts, int max_attempts, TenantQuotas quotas)
+    : parts_(parts), max_attempts_(max_attempts), quotas_(std::move(quotas)) {}
 
 void JobCoordinator::Recover() {
   std::lock_guard lock(mutex_);
@@ -120,6 +110,13 @@ void JobCoordinator::SetDicomHooks(DicomHooks hooks) { dicom_ = std::move(hooks)
 StoredJob JobCoordinator::Load(const std::string& id) {
   auto stored = parts_.store.Get(id);
   if (!stored) endorecon::Fail(ErrorCode::kNotFound, "no job '" + id + "'");
+  return *stored;
+}
+
+StoredJob JobCoordinator::LoadVisible(const std::string& id, const Principal& caller) {
+  auto stored = parts_.store.Get(id);
+  if (!stored || (!caller.SeesAllTenants() && stored->job.tenant() != caller.tenant))
+    endorecon::Fail(ErrorCode::kNotFound, "no job '" + id + "'");
   return *stored;
 }
 
@@ -173,7 +170,28 @@ void JobCoordinator::Requeue(StoredJob& stored, bool count_attempt, const std::s
   spdlog::info("job {} requeued (attempts {}/{}): {}", job.id(), job.attempts(), job.max_attempts(), reason);
 }
 
-v1::Job JobCoordinator::Submit(const v1::SubmitRequest& request) {
+void JobCoordinator::CheckBytesQuota(const std::string& tenant, std::int64_t adding) {
+  const auto quota = quotas_.For(tenant);
+  if (quota.max_bytes == 0) return;
+  const auto usage = parts_.store.UsageOf(tenant);
+  if (usage.bytes + adding > quota.max_bytes) {
+    endorecon::Fail(ErrorCode::kResourceExhausted,
+                    "tenant '" + tenant + "' keeps " + std::to_string(usage.bytes) +
+                        " bytes in its jobs and this adds " + std::to_string(adding) +
+                        ": over its quota max_bytes of " + std::to_string(quota.max_bytes) +
+                        " bytes; cancel or wait for retention to free some");
+  }
+}
+
+void JobCoordinator::CheckUploadQuota(const v1::Manifest& manifest, const Principal& caller) {
+  CheckBytesQuota(caller.tenant, TotalBytes(manifest));
+}
+
+void JobCoordinator::CheckRetrievalQuota(const std::string& id, const v1::Manifest& recording) {
+  CheckBytesQuota(Load(id).job.tenant(), TotalBytes(recording));
+}
+
+v1::Job JobCoordinator::Submit(const v1::SubmitRequest& request, const Principal& caller) {
   const bool from_pacs = !request.pacs().pacs().empty();
   if (from_pacs) {
     if (dicom_.pacs == nullptr) FailInvalid("pacs: this server has no PACS configured (--pacs)");
@@ -191,7 +209,6 @@ v1::Job JobCoordinator::Submit(const v1::SubmitRequest& request) {
     if (dicom_.pacs == nullptr) FailInvalid("send_to: this server has no PACS configured (--pacs)");
     dicom_.pacs->Find(name);
   }
-  if (!from_pacs) RequireBlobs(parts_.blobs, request.clip(), "clip");
   v1::Job job;
   job.set_id(RandomId(6));
   job.set_name(request.name());
@@ -214,8 +231,22 @@ v1::Job JobCoordinator::Submit(const v1::SubmitRequest& request) {
   }
   job.set_created_unix_ms(NowUnixMs());
   job.set_max_attempts(max_attempts_);
+  job.set_tenant(caller.tenant);
+  if (!caller.anonymous) job.set_submitted_by(caller.name);
   {
+    // Under the lock, so retention cannot delete a blob between this check and the insert, and two
+    // submits cannot both take a tenant's last job slot.
     std::lock_guard lock(mutex_);
+    if (!from_pacs) RequireBlobs(parts_.blobs, request.clip(), "clip");
+    const auto quota = quotas_.For(caller.tenant);
+    const auto usage = parts_.store.UsageOf(caller.tenant);
+    if (quota.max_jobs > 0 && usage.active_jobs >= quota.max_jobs) {
+      endorecon::Fail(ErrorCode::kResourceExhausted,
+                      "tenant '" + caller.tenant + "' has " + std::to_string(usage.active_jobs) +
+                          " job(s) queued or running, its quota max_jobs is " +
+                          std::to_string(quota.max_jobs) + "; submit again when one has finished");
+    }
+    CheckUploadQuota(request.clip(), caller);
     const auto seq = parts_.store.Insert(job);
     parts_.hub.PublishJob(job);
     if (!from_pacs) parts_.scheduler.Push(job.id(), job.priority(), seq);
@@ -232,16 +263,20 @@ v1::Job JobCoordinator::Submit(const v1::SubmitRequest& request) {
   return job;
 }
 
-v1::Job JobCoordinator::Get(const std::string& id) { return Load(id).job; }
-
-JobStore::Page JobCoordinator::List(const std::vector<v1::JobState>& states, int limit,
-                                    std::int64_t before_seq) {
-  return parts_.store.List(states, limit, before_seq);
+v1::Job JobCoordinator::Get(const std::string& id, const Principal& caller) {
+  return LoadVisible(id, caller).job;
 }
 
-v1::Job JobCoordinator::Cancel(const std::string& id) {
+JobStore::Page JobCoordinator::List(const std::vector<v1::JobState>& states, int limit,
+                                    std::int64_t before_seq, const Principal& caller) {
+  return parts_.store.List(
+      states, limit, before_seq,
+      caller.SeesAllTenants() ? std::nullopt : std::optional<std::string>(caller.tenant));
+}
+
+v1::Job JobCoordinator::Cancel(const std::string& id, const Principal& caller) {
   std::lock_guard lock(mutex_);
-  auto stored = Load(id);
+  auto stored = LoadVisible(id, caller);
   auto& job = stored.job;
   if (Terminal(job.state())) {
     endorecon::Fail(ErrorCode::kFailedPrecondition,
@@ -274,15 +309,17 @@ std::optional<JobCoordinator::Granted> JobCoordinator::Lease(const std::string& 
     job.set_started_unix_ms(NowUnixMs());
     Save(job);
     parts_.workers.AddJob(worker_id, job.id());
+    parts_.metrics.LeaseGranted();
     spdlog::info("job {} leased to {} (attempt {})", job.id(), worker_id, job.attempts() + 1);
     return Granted{job, lease.id, job.attempts() + 1};
   }
 }
 
-v1::ProgressReply::Action JobCoordinator::Report(const v1::ProgressUpdate& update) {
+v1::ProgressReply::Action JobCoordinator::Report(const v1::ProgressUpdate& update, std::string* job_id) {
   std::lock_guard lock(mutex_);
   const auto lease = parts_.leases.Renew(update.lease_id(), Clock::now());
   if (!lease) return v1::ProgressReply::STOP_LEASE_LOST;
+  if (job_id) *job_id = lease->job_id;
   parts_.workers.Touch(lease->worker_id);
   auto stored = Load(lease->job_id);
   auto& job = stored.job;
@@ -334,9 +371,29 @@ v1::Job JobCoordinator::Fail(const v1::FailRequest& request) {
   return job;
 }
 
-void JobCoordinator::CheckLease(const std::string& lease_id) {
+v1::Job JobCoordinator::CheckLease(const std::string& lease_id) {
   std::lock_guard lock(mutex_);
-  LoadLeased(lease_id);
+  return LoadLeased(lease_id).job;
+}
+
+RetentionPlan JobCoordinator::ExpireFinishedBefore(std::int64_t cutoff_unix_ms) {
+  std::lock_guard lock(mutex_);
+  auto plan = PlanRetention(parts_.store, parts_.blobs, cutoff_unix_ms);
+  // Files first: a crash in between leaves jobs that the next run expires (their blobs already
+  // gone), never a job marked expired whose files are still kept.
+  for (const auto& digest : plan.blobs) parts_.blobs.Remove(digest);
+  const auto now = NowUnixMs();
+  for (auto& job : plan.jobs) {
+    job.set_expired_unix_ms(now);
+    Save(job);
+  }
+  parts_.metrics.JobsExpired(plan.jobs.size());
+  if (!plan.jobs.empty()) {
+    spdlog::info(
+        "retention: expired {} job(s), deleted {} blob(s) ({} bytes), kept {} shared with other jobs",
+        plan.jobs.size(), plan.blobs.size(), plan.bytes, plan.kept_shared);
+  }
+  return plan;
 }
 
 void JobCoordinator::ExpireLeases(Clock::time_point now) {
@@ -356,16 +413,22 @@ void JobCoordinator::ExpireLeases(Clock::time_point now) {
   }
 }
 
-v1::Job JobCoordinator::RequestSend(const std::string& id, const std::string& destination) {
-  if (dicom_.pacs == nullptr) FailInvalid("this server has no PACS configured (--pacs)");
-  dicom_.pacs->Find(destination);
+v1::Job JobCoordinator::RequestSend(const std::string& id, const std::string& destination,
+                                    const Principal& caller) {
   v1::Job job;
   {
     std::lock_guard lock(mutex_);
-    job = Load(id).job;
+    // The job first: whether a PACS exists must not tell apart another tenant's job from none.
+    job = LoadVisible(id, caller).job;
+    if (dicom_.pacs == nullptr) FailInvalid("this server has no PACS configured (--pacs)");
+    dicom_.pacs->Find(destination);
     if (job.state() != v1::SUCCEEDED) {
       endorecon::Fail(ErrorCode::kFailedPrecondition, "job " + id + " is " + v1::JobState_Name(job.state()) +
                                                           "; results are sent once it has SUCCEEDED");
+    }
+    if (job.expired_unix_ms() > 0) {
+      endorecon::Fail(ErrorCode::kFailedPrecondition,
+                      "job " + id + " expired: the retention policy deleted its results, DICOM included");
     }
     const bool has_dicom =
         std::any_of(job.result().files().begin(), job.result().files().end(),
@@ -381,7 +444,7 @@ v1::Job JobCoordinator::RequestSend(const std::string& id, const std::string& de
     if (send == nullptr) {
       send = job.add_sends();
       send->set_destination(destination);
-    } else if (send->state() == v1::DicomSend::PENDING || send->state() == v1::DicomSend::SENDING) {
+    } else if (SendWaiting(*send)) {
       return job;
     }
     if (send->state() == v1::DicomSend::SENT) {
@@ -411,6 +474,8 @@ void JobCoordinator::RetrievalDone(const std::string& id, const v1::Manifest& cl
   auto stored = Load(id);
   auto& job = stored.job;
   if (job.state() != v1::QUEUED) return;  // cancelled meanwhile
+  CheckBytesQuota(job.tenant(), TotalBytes(clip));
+  RequireBlobs(parts_.blobs, clip, "retrieved recording");  // retention may share and delete blobs
   *job.mutable_clip() = clip;
   job.mutable_retrieval()->set_state(v1::Retrieval::RETRIEVED);
   Save(job);

@@ -9,6 +9,9 @@
 //
 // An attempt counts when a worker vanishes (lease expiry) or fails retryably; a clean hand-back
 // (release) does not count. The job store is written before anything else is told.
+//
+// Jobs belong to the submitter's tenant. A caller limited to one tenant (Principal) sees only that
+// tenant's jobs: any other id is NOT_FOUND with the same message as an id that does not exist.
 #pragma once
 
 #include <chrono>
@@ -24,7 +27,10 @@
 #include "server/lease_table.h"
 #include "server/metrics.h"
 #include "server/pacs_directory.h"
+#include "server/principal.h"
+#include "server/retention.h"
 #include "server/scheduler.h"
+#include "server/tenant_quotas.h"
 #include "server/watch_hub.h"
 #include "server/worker_registry.h"
 
@@ -51,7 +57,7 @@ struct DicomHooks {
 
 class JobCoordinator {
  public:
-  JobCoordinator(CoordinatorParts parts, int max_attempts);
+  JobCoordinator(CoordinatorParts parts, int max_attempts, TenantQuotas quotas = {});
 
   void SetDicomHooks(DicomHooks hooks);
 
@@ -60,15 +66,25 @@ class JobCoordinator {
   // or SENDING sends back to the send hook.
   void Recover();
 
-  // Throws kInvalidArgument (bad manifest or option, naming it), kFailedPrecondition (a clip file
-  // not uploaded yet, naming it).
-  v1::Job Submit(const v1::SubmitRequest& request);
-  // Throws kNotFound.
-  v1::Job Get(const std::string& id);
-  // Jobs newest first (see JobStore::List).
-  JobStore::Page List(const std::vector<v1::JobState>& states, int limit, std::int64_t before_seq);
-  // Throws kNotFound, kFailedPrecondition when the job is already finished.
-  v1::Job Cancel(const std::string& id);
+  // Queues a job of the caller's tenant; a job naming a PACS study waits for its retrieval first
+  // (the retrieve hook), and the recording's bytes count against the tenant once retrieved. Throws
+  // kInvalidArgument (bad manifest, option, UID or PACS name, naming it), kFailedPrecondition (a
+  // clip file not uploaded yet, naming it), kResourceExhausted (the tenant's max_jobs or max_bytes
+  // quota, naming it and the numbers).
+  v1::Job Submit(const v1::SubmitRequest& request, const Principal& caller);
+  // Throws kResourceExhausted when storing `manifest` in full would take the caller's tenant over
+  // its max_bytes quota (checked before an upload writes anything).
+  void CheckUploadQuota(const v1::Manifest& manifest, const Principal& caller);
+  // The same for a recording retrieved for job `id`, before it goes into the blob store: the job's
+  // tenant pays for it.
+  void CheckRetrievalQuota(const std::string& id, const v1::Manifest& recording);
+  // Throws kNotFound (also for another tenant's job).
+  v1::Job Get(const std::string& id, const Principal& caller);
+  // Jobs newest first (see JobStore::List), the caller's tenant only unless it sees all tenants.
+  JobStore::Page List(const std::vector<v1::JobState>& states, int limit, std::int64_t before_seq,
+                      const Principal& caller);
+  // Throws kNotFound (also for another tenant's job), kFailedPrecondition when the job is already finished.
+  v1::Job Cancel(const std::string& id, const Principal& caller);
 
   struct Granted {
     v1::Job job;
@@ -77,32 +93,43 @@ class JobCoordinator {
   };
   // Leases the next job to `worker_id`, waiting until `deadline`; nullopt when there is none.
   std::optional<Granted> Lease(const std::string& worker_id, Clock::time_point deadline);
-  // Renews the lease and records progress, preview or checkpoint; says whether to go on.
-  v1::ProgressReply::Action Report(const v1::ProgressUpdate& update);
+  // Renews the lease and records progress, preview or checkpoint; says whether to go on. Sets
+  // `job_id` to the lease's job when the lease is held.
+  v1::ProgressReply::Action Report(const v1::ProgressUpdate& update, std::string* job_id = nullptr);
   // Throws kFailedPrecondition when the lease is not held or a result file is not uploaded.
   v1::Job Complete(const v1::CompleteRequest& request);
   // Throws kFailedPrecondition when the lease is not held.
   v1::Job Fail(const v1::FailRequest& request);
-  // Throws kFailedPrecondition unless `lease_id` is held (workers download only while leasing).
-  void CheckLease(const std::string& lease_id);
+  // The leased job. Throws kFailedPrecondition unless `lease_id` is held (workers download only
+  // while leasing, and only their job's files).
+  v1::Job CheckLease(const std::string& lease_id);
   // Takes back every lease expired at `now`: requeues the job or fails it after max attempts.
   void ExpireLeases(Clock::time_point now);
+  // Retention: deletes the files of jobs finished before `cutoff_unix_ms` that no other job shares
+  // and marks those jobs expired (PlanRetention). Returns what it did.
+  RetentionPlan ExpireFinishedBefore(std::int64_t cutoff_unix_ms);
 
-  // Asks for the DICOM results of a SUCCEEDED job to go (again) to the PACS `destination`.
-  // Throws kNotFound (job or PACS), kFailedPrecondition (not SUCCEEDED, no dicom/ results).
-  v1::Job RequestSend(const std::string& id, const std::string& destination);
+  // Asks for the DICOM results of a SUCCEEDED job of the caller's tenant to go (again) to the PACS
+  // `destination`. Throws kNotFound (job, also another tenant's, or PACS), kFailedPrecondition (not
+  // SUCCEEDED, no dicom/ results, results deleted by retention).
+  v1::Job RequestSend(const std::string& id, const std::string& destination, const Principal& caller);
   // Applies `change` to a job and saves it (watchers see it); for the retrieval and the sends,
   // which change nothing else. Returns the job as saved. Throws kNotFound.
   v1::Job Update(const std::string& id, const std::function<void(v1::Job&)>& change);
   // The recording of a job submitted by Study UID is in the blob store: the job gets it as its clip
-  // and is queued for a worker (if still QUEUED).
+  // and is queued for a worker (if still QUEUED). Throws kResourceExhausted when it would take the
+  // job's tenant over its max_bytes quota (the job is then not changed).
   void RetrievalDone(const std::string& id, const v1::Manifest& clip);
   // The retrieval failed: the job FAILS with the reason.
   void RetrievalFailed(const std::string& id, const std::string& reason);
 
  private:
   StoredJob Load(const std::string& id);
+  // Load, but another tenant's job is kNotFound exactly as a missing one.
+  StoredJob LoadVisible(const std::string& id, const Principal& caller);
   StoredJob LoadLeased(const std::string& lease_id);
+  // Throws kResourceExhausted when `tenant` keeping `adding` more bytes would pass its max_bytes.
+  void CheckBytesQuota(const std::string& tenant, std::int64_t adding);
   // Writes `job` to the store, then tells the watchers.
   void Save(const v1::Job& job);
   void Finish(v1::Job& job, v1::JobState state, const std::string& error);
@@ -111,6 +138,7 @@ class JobCoordinator {
   CoordinatorParts parts_;
   DicomHooks dicom_;
   int max_attempts_;
+  TenantQuotas quotas_;
   std::mutex mutex_;
 };
 

@@ -1,73 +1,70 @@
 #include "server/job_service.h"
 
-#include <algorithm>
+#include <fmt/chrono.h>
+
 #include <map>
 
 #include "common/error.h"
-#include "common/grpc_status.h"
 #include "server/file_sender.h"
+#include "server/job_states.h"
 
 namespace endorecon::server {
 namespace {
 
-bool Terminal(v1::JobState state) {
-  return state == v1::SUCCEEDED || state == v1::FAILED || state == v1::CANCELLED;
-}
-
 // A watch ends when nothing more will happen to the job: it is finished and none of its DICOM
 // sends is still waiting for an attempt or in one.
-bool Settled(const v1::Job& job) {
-  if (!Terminal(job.state())) return false;
-  if (job.state() != v1::SUCCEEDED) return true;
-  return std::none_of(job.sends().begin(), job.sends().end(), [](const v1::DicomSend& send) {
-    return send.state() == v1::DicomSend::PENDING || send.state() == v1::DicomSend::SENDING;
-  });
-}
+bool Settled(const v1::Job& job) { return Terminal(job.state()) && !SendsWaiting(job); }
 
 }  // namespace
 
-JobServiceImpl::JobServiceImpl(JobCoordinator& coordinator, UploadReceiver& uploads, BlobStore& blobs,
-                               WatchHub& hub, WorkerRegistry& workers, Metrics& metrics)
-    : coordinator_(coordinator),
+JobServiceImpl::JobServiceImpl(CallGuard& guard, JobCoordinator& coordinator, UploadReceiver& uploads,
+                               BlobStore& blobs, WatchHub& hub, WorkerRegistry& workers, Metrics& metrics)
+    : guard_(guard),
+      coordinator_(coordinator),
       uploads_(uploads),
       blobs_(blobs),
       hub_(hub),
       workers_(workers),
       metrics_(metrics) {}
 
-grpc::Status JobServiceImpl::QueryUpload(grpc::ServerContext*, const v1::Manifest* manifest,
+grpc::Status JobServiceImpl::QueryUpload(grpc::ServerContext* context, const v1::Manifest* manifest,
                                          v1::UploadStatus* status) {
-  return GuardStatus([&] {
+  return guard_.Run(context, {"QueryUpload", Access::kJobs, kReads, ""}, [&](Call& call) {
     *status = uploads_.Query(*manifest);
+    coordinator_.CheckUploadQuota(*manifest, call.caller);
     return grpc::Status::OK;
   });
 }
 
-grpc::Status JobServiceImpl::Upload(grpc::ServerContext*, grpc::ServerReader<v1::UploadRequest>* reader,
-                                    v1::UploadStatus* status) {
-  return GuardStatus([&] {
-    *status = uploads_.Receive(*reader);
+grpc::Status JobServiceImpl::Upload(grpc::ServerContext* context,
+                                    grpc::ServerReader<v1::UploadRequest>* reader, v1::UploadStatus* status) {
+  return guard_.Run(context, {"Upload", Access::kJobs, kWrites, ""}, [&](Call& call) {
+    *status = uploads_.Receive(
+        *reader, [&](const v1::Manifest& manifest) { coordinator_.CheckUploadQuota(manifest, call.caller); });
     return grpc::Status::OK;
   });
 }
 
-grpc::Status JobServiceImpl::Submit(grpc::ServerContext*, const v1::SubmitRequest* request, v1::Job* job) {
-  return GuardStatus([&] {
-    *job = coordinator_.Submit(*request);
+grpc::Status JobServiceImpl::Submit(grpc::ServerContext* context, const v1::SubmitRequest* request,
+                                    v1::Job* job) {
+  return guard_.Run(context, {"Submit", Access::kJobs, kWrites, ""}, [&](Call& call) {
+    *job = coordinator_.Submit(*request, call.caller);
+    call.job_id = job->id();
     return grpc::Status::OK;
   });
 }
 
-grpc::Status JobServiceImpl::Get(grpc::ServerContext*, const v1::GetJobRequest* request, v1::Job* job) {
-  return GuardStatus([&] {
-    *job = coordinator_.Get(request->id());
+grpc::Status JobServiceImpl::Get(grpc::ServerContext* context, const v1::GetJobRequest* request,
+                                 v1::Job* job) {
+  return guard_.Run(context, {"Get", Access::kJobs, kReads, request->id()}, [&](Call& call) {
+    *job = coordinator_.Get(request->id(), call.caller);
     return grpc::Status::OK;
   });
 }
 
-grpc::Status JobServiceImpl::List(grpc::ServerContext*, const v1::ListJobsRequest* request,
+grpc::Status JobServiceImpl::List(grpc::ServerContext* context, const v1::ListJobsRequest* request,
                                   v1::ListJobsResponse* response) {
-  return GuardStatus([&] {
+  return guard_.Run(context, {"List", Access::kJobs, kReads, ""}, [&](Call& call) {
     const int size = request->page_size() <= 0 ? 50 : std::min(request->page_size(), 1000);
     std::int64_t before = 0;
     if (!request->page_token().empty()) {
@@ -79,7 +76,7 @@ grpc::Status JobServiceImpl::List(grpc::ServerContext*, const v1::ListJobsReques
     }
     std::vector<v1::JobState> states;
     for (const int state : request->states()) states.push_back(static_cast<v1::JobState>(state));
-    const auto page = coordinator_.List(states, size, before);
+    const auto page = coordinator_.List(states, size, before, call.caller);
     for (auto job : page.jobs) {
       job.clear_clip();
       job.clear_result();
@@ -90,18 +87,19 @@ grpc::Status JobServiceImpl::List(grpc::ServerContext*, const v1::ListJobsReques
   });
 }
 
-grpc::Status JobServiceImpl::Cancel(grpc::ServerContext*, const v1::CancelJobRequest* request, v1::Job* job) {
-  return GuardStatus([&] {
-    *job = coordinator_.Cancel(request->id());
+grpc::Status JobServiceImpl::Cancel(grpc::ServerContext* context, const v1::CancelJobRequest* request,
+                                    v1::Job* job) {
+  return guard_.Run(context, {"Cancel", Access::kJobs, kWrites, request->id()}, [&](Call& call) {
+    *job = coordinator_.Cancel(request->id(), call.caller);
     return grpc::Status::OK;
   });
 }
 
 grpc::Status JobServiceImpl::Watch(grpc::ServerContext* context, const v1::WatchJobRequest* request,
                                    grpc::ServerWriter<v1::JobEvent>* writer) {
-  return GuardStatus([&] {
+  return guard_.Run(context, {"Watch", Access::kJobs, kReads, request->id()}, [&](Call& call) {
     v1::JobEvent first;
-    *first.mutable_job() = coordinator_.Get(request->id());
+    *first.mutable_job() = coordinator_.Get(request->id(), call.caller);
     first.mutable_job()->clear_clip();
     if (!writer->Write(first) || Settled(first.job())) return grpc::Status::OK;
     std::uint64_t seen = 0;
@@ -124,10 +122,16 @@ grpc::Status JobServiceImpl::Watch(grpc::ServerContext* context, const v1::Watch
   });
 }
 
-grpc::Status JobServiceImpl::Fetch(grpc::ServerContext*, const v1::FetchRequest* request,
+grpc::Status JobServiceImpl::Fetch(grpc::ServerContext* context, const v1::FetchRequest* request,
                                    grpc::ServerWriter<v1::FileChunk>* writer) {
-  return GuardStatus([&] {
-    const auto job = coordinator_.Get(request->id());
+  return guard_.Run(context, {"Fetch", Access::kJobs, kReads, request->id()}, [&](Call& call) {
+    const auto job = coordinator_.Get(request->id(), call.caller);
+    if (job.expired_unix_ms() > 0) {
+      Fail(ErrorCode::kFailedPrecondition,
+           fmt::format(
+               "job {} expired: the retention policy deleted its clip and results on {:%Y-%m-%d %H:%M} UTC",
+               job.id(), fmt::gmtime(static_cast<std::time_t>(job.expired_unix_ms() / 1000))));
+    }
     if (job.state() != v1::SUCCEEDED) {
       Fail(ErrorCode::kFailedPrecondition, "job " + job.id() + " is " + v1::JobState_Name(job.state()) +
                                                "; results exist once it has SUCCEEDED");
@@ -149,15 +153,18 @@ grpc::Status JobServiceImpl::Fetch(grpc::ServerContext*, const v1::FetchRequest*
   });
 }
 
-grpc::Status JobServiceImpl::ListWorkers(grpc::ServerContext*, const v1::ListWorkersRequest*,
+grpc::Status JobServiceImpl::ListWorkers(grpc::ServerContext* context, const v1::ListWorkersRequest*,
                                          v1::ListWorkersResponse* response) {
-  for (auto& worker : workers_.List()) *response->add_workers() = std::move(worker);
-  return grpc::Status::OK;
+  return guard_.Run(context, {"ListWorkers", Access::kAdmin, kReads, ""}, [&](Call&) {
+    for (auto& worker : workers_.List()) *response->add_workers() = std::move(worker);
+    return grpc::Status::OK;
+  });
 }
 
-grpc::Status JobServiceImpl::Send(grpc::ServerContext*, const v1::SendRequest* request, v1::Job* job) {
-  return GuardStatus([&] {
-    *job = coordinator_.RequestSend(request->id(), request->destination());
+grpc::Status JobServiceImpl::Send(grpc::ServerContext* context, const v1::SendRequest* request,
+                                  v1::Job* job) {
+  return guard_.Run(context, {"Send", Access::kJobs, kWrites, request->id()}, [&](Call& call) {
+    *job = coordinator_.RequestSend(request->id(), request->destination(), call.caller);
     job->clear_clip();
     return grpc::Status::OK;
   });

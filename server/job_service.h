@@ -1,10 +1,12 @@
 // JobService (proto/endorecon/v1/job_service.proto): the user-facing API, a thin adapter from
-// gRPC onto the JobCoordinator, the UploadReceiver and the blob store.
+// gRPC onto the JobCoordinator, the UploadReceiver and the blob store. Every handler goes through
+// the CallGuard (tokens, roles, tenants, audit).
 #pragma once
 
 #include <chrono>
 
 #include "endorecon/v1/job_service.grpc.pb.h"
+#include "server/call_guard.h"
 #include "server/job_coordinator.h"
 #include "server/upload_receiver.h"
 
@@ -12,8 +14,8 @@ namespace endorecon::server {
 
 class JobServiceImpl final : public v1::JobService::Service {
  public:
-  JobServiceImpl(JobCoordinator& coordinator, UploadReceiver& uploads, BlobStore& blobs, WatchHub& hub,
-                 WorkerRegistry& workers, Metrics& metrics);
+  JobServiceImpl(CallGuard& guard, JobCoordinator& coordinator, UploadReceiver& uploads, BlobStore& blobs,
+                 WatchHub& hub, WorkerRegistry& workers, Metrics& metrics);
 
   grpc::Status QueryUpload(grpc::ServerContext*, const v1::Manifest*, v1::UploadStatus*) override;
   grpc::Status Upload(grpc::ServerContext*, grpc::ServerReader<v1::UploadRequest>*,
@@ -31,6 +33,7 @@ class JobServiceImpl final : public v1::JobService::Service {
   grpc::Status Send(grpc::ServerContext*, const v1::SendRequest*, v1::Job*) override;
 
  private:
+  CallGuard& guard_;
   JobCoordinator& coordinator_;
   UploadReceiver& uploads_;
   BlobStore& blobs_;

@@ -1,57 +1,13 @@
 #include "server/job_store.h"
 
 #include "common/error.h"
+#include "common/manifest.h"
+#include "server/sqlite_statement.h"
 
 namespace endorecon::server {
 namespace {
 
-// A prepared statement that finalizes itself.
-class Statement {
- public:
-  Statement(sqlite3* db, const char* sql) : db_(db) {
-    if (sqlite3_prepare_v2(db, sql, -1, &stmt_, nullptr) != SQLITE_OK) Check(SQLITE_ERROR, sql);
-  }
-  ~Statement() { sqlite3_finalize(stmt_); }
-  Statement(const Statement&) = delete;
-  Statement& operator=(const Statement&) = delete;
-
-  void Bind(int index, std::int64_t value) { sqlite3_bind_int64(stmt_, index, value); }
-  void Bind(int index, const std::string& value) {
-    sqlite3_bind_blob(stmt_, index, value.data(), static_cast<int>(value.size()), SQLITE_TRANSIENT);
-  }
-  void BindText(int index, const std::string& value) {
-    sqlite3_bind_text(stmt_, index, value.data(), static_cast<int>(value.size()), SQLITE_TRANSIENT);
-  }
-  // True while there is a row; false when done.
-  bool Step() {
-    const int rc = sqlite3_step(stmt_);
-    if (rc == SQLITE_ROW) return true;
-    Check(rc == SQLITE_DONE ? SQLITE_OK : rc, "step");
-    return false;
-  }
-  std::int64_t Int(int column) { return sqlite3_column_int64(stmt_, column); }
-  std::string Blob(int column) {
-    const auto* data = static_cast<const char*>(sqlite3_column_blob(stmt_, column));
-    return std::string(data ? data : "", static_cast<std::size_t>(sqlite3_column_bytes(stmt_, column)));
-  }
-
- private:
-  void Check(int rc, const char* what) {
-    if (rc != SQLITE_OK)
-      Fail(ErrorCode::kUnavailable, std::string("job store: ") + what + ": " + sqlite3_errmsg(db_));
-  }
-  sqlite3* db_;
-  sqlite3_stmt* stmt_ = nullptr;
-};
-
-void Exec(sqlite3* db, const char* sql) {
-  char* message = nullptr;
-  if (sqlite3_exec(db, sql, nullptr, nullptr, &message) != SQLITE_OK) {
-    const std::string text = message ? message : "unknown error";
-    sqlite3_free(message);
-    Fail(ErrorCode::kUnavailable, std::string("job store: ") + text + " in: " + sql);
-  }
-}
+constexpr const char* kStore = "job store";
 
 v1::Job Parse(const std::string& bytes, std::int64_t seq) {
   v1::Job job;
@@ -60,61 +16,106 @@ v1::Job Parse(const std::string& bytes, std::int64_t seq) {
   return job;
 }
 
+bool HasColumn(sqlite3* db, const std::string& column) {
+  Statement info(db, "PRAGMA table_info(jobs)", kStore);
+  while (info.Step()) {
+    if (info.Text(1) == column) return true;
+  }
+  return false;
+}
+
+// Stores made before tenants and quotas get the two columns, filled from the jobs themselves.
+void AddAccessColumns(sqlite3* db) {
+  if (HasColumn(db, "tenant")) return;
+  Exec(db, "BEGIN IMMEDIATE", kStore);
+  try {
+    Exec(db, "ALTER TABLE jobs ADD COLUMN tenant TEXT NOT NULL DEFAULT ''", kStore);
+    Exec(db, "ALTER TABLE jobs ADD COLUMN bytes INTEGER NOT NULL DEFAULT 0", kStore);
+    std::vector<std::pair<std::int64_t, std::int64_t>> sizes;
+    {
+      Statement select(db, "SELECT seq, job FROM jobs", kStore);
+      while (select.Step())
+        sizes.emplace_back(select.Int(0), StoredBytes(Parse(select.Blob(1), select.Int(0))));
+    }
+    for (const auto& [seq, bytes] : sizes) {
+      Statement update(db, "UPDATE jobs SET bytes = ? WHERE seq = ?", kStore);
+      update.Bind(1, bytes);
+      update.Bind(2, seq);
+      update.Step();
+    }
+    Exec(db, "COMMIT", kStore);
+  } catch (...) {
+    sqlite3_exec(db, "ROLLBACK", nullptr, nullptr, nullptr);
+    throw;
+  }
+}
+
 }  // namespace
 
-JobStore::JobStore(const std::filesystem::path& db_file) {
-  if (sqlite3_open(db_file.c_str(), &db_) != SQLITE_OK) {
-    const std::string message = db_ ? sqlite3_errmsg(db_) : "out of memory";
+std::int64_t StoredBytes(const v1::Job& job) {
+  if (job.expired_unix_ms() > 0) return 0;
+  return TotalBytes(job.clip()) + TotalBytes(job.result()) + job.checkpoint().size();
+}
+
+JobStore::JobStore(const std::filesystem::path& db_file) : db_(OpenDatabase(db_file, kStore)) {
+  try {
+    Exec(db_,
+         "CREATE TABLE IF NOT EXISTS jobs ("
+         " seq INTEGER PRIMARY KEY AUTOINCREMENT,"
+         " id TEXT NOT NULL UNIQUE,"
+         " state INTEGER NOT NULL,"
+         " priority INTEGER NOT NULL,"
+         " job BLOB NOT NULL)",
+         kStore);
+    Exec(db_, "CREATE INDEX IF NOT EXISTS jobs_state ON jobs(state, seq)", kStore);
+    AddAccessColumns(db_);
+    Exec(db_, "CREATE INDEX IF NOT EXISTS jobs_tenant ON jobs(tenant, state)", kStore);
+  } catch (...) {
     sqlite3_close(db_);
-    Fail(ErrorCode::kUnavailable, "cannot open job store " + db_file.string() + ": " + message);
+    throw;
   }
-  sqlite3_busy_timeout(db_, 5000);
-  Exec(db_, "PRAGMA journal_mode=WAL");
-  Exec(db_, "PRAGMA synchronous=FULL");
-  Exec(db_,
-       "CREATE TABLE IF NOT EXISTS jobs ("
-       " seq INTEGER PRIMARY KEY AUTOINCREMENT,"
-       " id TEXT NOT NULL UNIQUE,"
-       " state INTEGER NOT NULL,"
-       " priority INTEGER NOT NULL,"
-       " job BLOB NOT NULL)");
-  Exec(db_, "CREATE INDEX IF NOT EXISTS jobs_state ON jobs(state, seq)");
 }
 
 JobStore::~JobStore() { sqlite3_close(db_); }
 
 std::int64_t JobStore::Insert(const v1::Job& job) {
   std::lock_guard lock(mutex_);
-  Statement insert(db_, "INSERT INTO jobs(id, state, priority, job) VALUES(?, ?, ?, ?)");
+  Statement insert(db_, "INSERT INTO jobs(id, state, priority, tenant, bytes, job) VALUES(?, ?, ?, ?, ?, ?)",
+                   kStore);
   insert.BindText(1, job.id());
   insert.Bind(2, job.state());
   insert.Bind(3, job.priority());
-  insert.Bind(4, job.SerializeAsString());
+  insert.BindText(4, job.tenant());
+  insert.Bind(5, StoredBytes(job));
+  insert.Bind(6, job.SerializeAsString());
   insert.Step();
   return sqlite3_last_insert_rowid(db_);
 }
 
 void JobStore::Update(const v1::Job& job) {
   std::lock_guard lock(mutex_);
-  Statement update(db_, "UPDATE jobs SET state = ?, priority = ?, job = ? WHERE id = ?");
+  Statement update(db_, "UPDATE jobs SET state = ?, priority = ?, bytes = ?, job = ? WHERE id = ?", kStore);
   update.Bind(1, job.state());
   update.Bind(2, job.priority());
-  update.Bind(3, job.SerializeAsString());
-  update.BindText(4, job.id());
+  update.Bind(3, StoredBytes(job));
+  update.Bind(4, job.SerializeAsString());
+  update.BindText(5, job.id());
   update.Step();
   if (sqlite3_changes(db_) == 0) Fail(ErrorCode::kNotFound, "no job " + job.id());
 }
 
 std::optional<StoredJob> JobStore::Get(const std::string& id) {
   std::lock_guard lock(mutex_);
-  Statement select(db_, "SELECT seq, job FROM jobs WHERE id = ?");
+  Statement select(db_, "SELECT seq, job FROM jobs WHERE id = ?", kStore);
   select.BindText(1, id);
   if (!select.Step()) return std::nullopt;
   return StoredJob{select.Int(0), Parse(select.Blob(1), select.Int(0))};
 }
 
-JobStore::Page JobStore::List(const std::vector<v1::JobState>& states, int limit, std::int64_t before_seq) {
+JobStore::Page JobStore::List(const std::vector<v1::JobState>& states, int limit, std::int64_t before_seq,
+                              const std::optional<std::string>& tenant) {
   std::string sql = "SELECT seq, job FROM jobs WHERE seq < ?";
+  if (tenant) sql += " AND tenant = ?";
   if (!states.empty()) {
     sql += " AND state IN (";
     for (std::size_t i = 0; i < states.size(); ++i) sql += i ? ",?" : "?";
@@ -122,9 +123,10 @@ JobStore::Page JobStore::List(const std::vector<v1::JobState>& states, int limit
   }
   sql += " ORDER BY seq DESC LIMIT ?";
   std::lock_guard lock(mutex_);
-  Statement select(db_, sql.c_str());
+  Statement select(db_, sql.c_str(), kStore);
   int index = 1;
   select.Bind(index++, before_seq > 0 ? before_seq : INT64_MAX);
+  if (tenant) select.BindText(index++, *tenant);
   for (const auto state : states) select.Bind(index++, state);
   select.Bind(index, limit + 1);
   Page page;
@@ -142,7 +144,7 @@ JobStore::Page JobStore::List(const std::vector<v1::JobState>& states, int limit
 
 std::vector<StoredJob> JobStore::Unfinished() {
   std::lock_guard lock(mutex_);
-  Statement select(db_, "SELECT seq, job FROM jobs WHERE state IN (?, ?) ORDER BY seq");
+  Statement select(db_, "SELECT seq, job FROM jobs WHERE state IN (?, ?) ORDER BY seq", kStore);
   select.Bind(1, v1::QUEUED);
   select.Bind(2, v1::RUNNING);
   std::vector<StoredJob> jobs;
@@ -152,10 +154,28 @@ std::vector<StoredJob> JobStore::Unfinished() {
 
 std::map<v1::JobState, std::int64_t> JobStore::CountByState() {
   std::lock_guard lock(mutex_);
-  Statement select(db_, "SELECT state, COUNT(*) FROM jobs GROUP BY state");
+  Statement select(db_, "SELECT state, COUNT(*) FROM jobs GROUP BY state", kStore);
   std::map<v1::JobState, std::int64_t> counts;
   while (select.Step()) counts[static_cast<v1::JobState>(select.Int(0))] = select.Int(1);
   return counts;
+}
+
+JobStore::Usage JobStore::UsageOf(const std::string& tenant) {
+  std::lock_guard lock(mutex_);
+  Statement select(
+      db_, "SELECT COALESCE(SUM(state IN (?, ?)), 0), COALESCE(SUM(bytes), 0) FROM jobs WHERE tenant = ?",
+      kStore);
+  select.Bind(1, v1::QUEUED);
+  select.Bind(2, v1::RUNNING);
+  select.BindText(3, tenant);
+  select.Step();
+  return {select.Int(0), select.Int(1)};
+}
+
+void JobStore::Scan(const std::function<void(const StoredJob&)>& visit) {
+  std::lock_guard lock(mutex_);
+  Statement select(db_, "SELECT seq, job FROM jobs ORDER BY seq", kStore);
+  while (select.Step()) visit({select.Int(0), Parse(select.Blob(1), select.Int(0))});
 }
 
 bool JobStore::Writable() {

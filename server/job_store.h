@@ -1,12 +1,14 @@
 // The durable record of every job: one SQLite database in WAL mode with synchronous=FULL, so a
 // job is on disk when Insert/Update return and survives a kill -9 of the server. Each row keeps
-// the whole v1::Job (serialized) plus the columns the queries need. Thread-safe.
+// the whole v1::Job (serialized) plus the columns the queries need (state, priority, tenant and the
+// bytes the job keeps stored, for quotas). Thread-safe.
 #pragma once
 
 #include <sqlite3.h>
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <mutex>
 #include <optional>
@@ -41,11 +43,22 @@ class JobStore {
     std::vector<v1::Job> jobs;
     std::int64_t next_before_seq = 0;  // 0: no more
   };
-  // Jobs newest first, restricted to `states` (empty: all), with seq < before_seq (0: from the newest).
-  Page List(const std::vector<v1::JobState>& states, int limit, std::int64_t before_seq);
+  // Jobs newest first, restricted to `states` (empty: all) and to `tenant` when given, with
+  // seq < before_seq (0: from the newest).
+  Page List(const std::vector<v1::JobState>& states, int limit, std::int64_t before_seq,
+            const std::optional<std::string>& tenant = std::nullopt);
   // Every QUEUED or RUNNING job, oldest first (what the scheduler and leases rebuild from).
   std::vector<StoredJob> Unfinished();
   std::map<v1::JobState, std::int64_t> CountByState();
+
+  // What one tenant holds: its QUEUED and RUNNING jobs, and the bytes its jobs keep (StoredBytes).
+  struct Usage {
+    std::int64_t active_jobs = 0;
+    std::int64_t bytes = 0;
+  };
+  Usage UsageOf(const std::string& tenant);
+  // Calls `visit` for every job, oldest first (retention's view of what references which blob).
+  void Scan(const std::function<void(const StoredJob&)>& visit);
   // True when a write transaction succeeds (readiness).
   bool Writable();
 
@@ -53,5 +66,9 @@ class JobStore {
   sqlite3* db_ = nullptr;
   std::mutex mutex_;
 };
+
+// The bytes `job` keeps in the blob store (clip, result, checkpoint; 0 once expired), counted per
+// job even where jobs share content: a tenant's quota is what its own jobs would need alone.
+std::int64_t StoredBytes(const v1::Job& job);
 
 }  // namespace endorecon::server

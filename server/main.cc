@@ -1,5 +1,6 @@
 // endorecon-server: the job API (clients), the worker API (workers pull jobs), a durable job store,
 // a content-addressed blob store, Prometheus metrics and grpc.health.v1. See docs/operations.md.
+// Subcommands: `token create|list|revoke` and `retention --dry-run` (server/commands.h).
 #include <grpcpp/grpcpp.h>
 #include <grpcpp/health_check_service_interface.h>
 #include <signal.h>
@@ -15,8 +16,11 @@
 #include "common/dicom/uid.h"
 #include "common/error.h"
 #include "common/transport_security.h"
+#include "server/call_guard.h"
+#include "server/commands.h"
 #include "server/dicom_retriever.h"
 #include "server/dicom_sender.h"
+#include "server/health_port.h"
 #include "server/job_service.h"
 #include "server/worker_service.h"
 
@@ -29,12 +33,23 @@ struct ServerFlags {
   std::string listen = "127.0.0.1:50051";
   std::string data_dir = "endorecon-data";
   int metrics_port = 9464;
+  std::string metrics_host = "127.0.0.1";
   std::int64_t max_upload_bytes = std::int64_t{20} << 30;
   int max_attempts = 3;
   std::int64_t lease_ttl_ms = 30000;
   std::int64_t heartbeat_ms = 2000;
+  // Hospital imaging (docs/operations.md, "Hospital imaging").
   DicomSettings dicom;
   std::vector<std::string> pacs;
+  // Security and operations (docs/operations.md, "Securing a deployment").
+  ServerSecurity tls;
+  bool insecure = false;
+  std::string health_listen;
+  std::string audit_log;
+  Quota tenant_quota;
+  std::string quotas_file;
+  double retention_days = 0;
+  double retention_check_s = 3600;
 };
 
 std::string HostOf(const std::string& address) {
@@ -76,8 +91,28 @@ sigset_t BlockStopSignals() {
   return signals;
 }
 
+// Refuses a listener that would carry patient data in the clear beyond this machine.
+void CheckExposure(const ServerFlags& flags) {
+  if (IsLoopbackAddress(flags.listen) || flags.tls.tls()) return;
+  if (!flags.insecure) {
+    FailInvalid(
+        "refusing to listen on " + flags.listen +
+        " without TLS: pass --tls-cert and --tls-key (docs/operations.md, \"Securing a deployment\"), "
+        "or --insecure on a network you trust entirely");
+  }
+  spdlog::critical(
+      "--insecure: serving {} WITHOUT TLS. Clips, results and tokens cross the network in the clear; anyone "
+      "on "
+      "the path can read them. Use TLS (--tls-cert, --tls-key) for anything but an isolated test network.",
+      flags.listen);
+}
+
 int Run(const ServerFlags& flags) {
   const sigset_t stop_signals = BlockStopSignals();
+  CheckExposure(flags);
+  dicom::CheckAeTitle(flags.dicom.ae_title, "--ae-title");
+  if (!flags.dicom.uid_root.empty()) dicom::NewUid(flags.dicom.uid_root);  // refuses a malformed root now
+  const auto credentials = ServerCredentials(flags.tls);
   const std::filesystem::path data_dir = flags.data_dir;
   std::filesystem::create_directories(data_dir);
   JobStore store(data_dir / "jobs.sqlite");
@@ -86,18 +121,25 @@ int Run(const ServerFlags& flags) {
   LeaseTable leases(std::chrono::milliseconds(flags.lease_ttl_ms));
   WorkerRegistry workers(std::chrono::milliseconds(flags.lease_ttl_ms));
   WatchHub hub;
-  Metrics metrics(flags.metrics_port >= 0 ? HostOf(flags.listen) + ":" + std::to_string(flags.metrics_port)
+  Metrics metrics(flags.metrics_port >= 0 ? flags.metrics_host + ":" + std::to_string(flags.metrics_port)
                                           : "");
-  JobCoordinator coordinator({store, blobs, scheduler, leases, workers, hub, metrics}, flags.max_attempts);
+  AuditLog audit(flags.audit_log.empty() ? data_dir / "audit.jsonl" : std::filesystem::path(flags.audit_log));
+  CallGuard guard(TokenStore::PathIn(data_dir), !flags.tls.client_ca_file.empty(), audit, metrics);
+  JobCoordinator coordinator({store, blobs, scheduler, leases, workers, hub, metrics}, flags.max_attempts,
+                             TenantQuotas(flags.tenant_quota, flags.quotas_file));
   const PacsDirectory pacs(flags.pacs);
   DicomRetriever* retriever_for_scp = nullptr;
   std::vector<std::string> pacs_ae_titles;
   for (const auto& name : pacs.Names()) pacs_ae_titles.push_back(pacs.Find(name).ae_title);
   const auto scp = StartStorageScp(flags, data_dir / "dicom-incoming", pacs_ae_titles, retriever_for_scp);
-  DicomRetriever retriever(coordinator, blobs, pacs, flags.dicom, metrics, data_dir / "retrievals",
-                           scp.get());
+  const PacsAudit pacs_audit = [&guard](const std::string& method, const std::string& job_id,
+                                        const std::string& outcome, const std::string& pacs_name) {
+    guard.RecordServerAction(method, job_id, outcome, pacs_name);
+  };
+  DicomRetriever retriever(coordinator, blobs, pacs, flags.dicom, metrics, data_dir / "retrievals", scp.get(),
+                           pacs_audit);
   retriever_for_scp = &retriever;
-  DicomSender sender(coordinator, blobs, pacs, flags.dicom, metrics);
+  DicomSender sender(coordinator, blobs, pacs, flags.dicom, metrics, pacs_audit);
   coordinator.SetDicomHooks({&pacs, flags.dicom.uid_root,
                              [&](const std::string& id) { retriever.Retrieve(id); },
                              [&](const std::string& id) { sender.Send(id); }});
@@ -108,47 +150,82 @@ int Run(const ServerFlags& flags) {
   coordinator.Recover();
   UploadReceiver uploads(blobs, flags.max_upload_bytes,
                          [&](std::int64_t bytes) { metrics.UploadBytes(bytes); });
-  JobServiceImpl job_service(coordinator, uploads, blobs, hub, workers, metrics);
+  JobServiceImpl job_service(guard, coordinator, uploads, blobs, hub, workers, metrics);
   WorkerServiceImpl worker_service(
-      coordinator, uploads, blobs, workers, metrics,
+      guard, coordinator, uploads, blobs, workers, metrics,
       {std::chrono::milliseconds(flags.lease_ttl_ms), std::chrono::milliseconds(flags.heartbeat_ms),
        std::chrono::milliseconds(20000)});
 
   grpc::EnableDefaultHealthCheckService(true);
   grpc::ServerBuilder builder;
   int port = 0;
-  builder.AddListeningPort(flags.listen, ServerCredentials(), &port);
+  builder.AddListeningPort(flags.listen, credentials, &port);
   builder.SetMaxReceiveMessageSize(kMaxMessageBytes);
   builder.SetMaxSendMessageSize(kMaxMessageBytes);
   builder.RegisterService(&job_service);
   builder.RegisterService(&worker_service);
   const auto server = builder.BuildAndStart();
   if (!server || port == 0) Fail(ErrorCode::kUnavailable, "cannot listen on " + flags.listen);
-  auto* health = server->GetHealthCheckService();
+  std::unique_ptr<HealthPort> health_port;
+  if (!flags.health_listen.empty()) {
+    health_port = std::make_unique<HealthPort>(flags.health_listen);
+    spdlog::info("grpc.health.v1 only, in plaintext, on {}:{}", HostOf(flags.health_listen),
+                 health_port->port());
+  }
 
   const std::string address = HostOf(flags.listen) + ":" + std::to_string(port);
-  spdlog::info("endorecon-server listening on {} (data in {}, metrics on port {})", address,
-               data_dir.string(), metrics.port());
-  if (IsLoopbackAddress(flags.listen)) {
-    spdlog::info("listening on loopback only; pass --listen 0.0.0.0:{} to serve other machines", port);
+  spdlog::info("endorecon-server listening on {} ({}; data in {}, metrics on {}:{})", address,
+               flags.tls.tls()
+                   ? (flags.tls.client_ca_file.empty() ? "TLS" : "TLS, workers need a client certificate")
+                   : "plaintext",
+               data_dir.string(), flags.metrics_host, metrics.port());
+  if (guard.Refresh()) {
+    spdlog::info("tokens required: {}", TokenStore::PathIn(data_dir).string());
+  } else if (IsLoopbackAddress(flags.listen)) {
+    spdlog::info(
+        "no token store: every local caller may use every API (create tokens with `endorecon-server "
+        "token create --data-dir {}`; they are required from then on)",
+        data_dir.string());
   } else {
     spdlog::warn(
-        "listening beyond loopback on {} without TLS or tokens (not implemented yet): anyone who can reach "
-        "this port can submit jobs and read results; keep it on a trusted network",
-        flags.listen);
+        "no token store in {}: any caller that reaches {} may use every API until the first "
+        "`endorecon-server token create --data-dir {}` (picked up within a second)",
+        data_dir.string(), address, data_dir.string());
+  }
+  if (flags.retention_days > 0) {
+    spdlog::info("retention: files of jobs finished more than {} day(s) ago are deleted (checked every {} s)",
+                 flags.retention_days, flags.retention_check_s);
   }
 
   std::atomic<bool> stopping{false};
   std::thread maintenance([&] {
-    int tick = 0;
-    while (!stopping) {
+    auto next_retention = std::chrono::steady_clock::now();
+    for (int tick = 0; !stopping; ++tick) {
       coordinator.ExpireLeases(Clock::now());
-      if (tick++ % 5 == 0) {
+      if (tick % 5 == 0) {
         const bool writable = store.Writable();
-        health->SetServingStatus(writable);
+        server->GetHealthCheckService()->SetServingStatus(writable);
+        if (health_port) health_port->SetServing(writable);
         metrics.SetJobsByState(store.CountByState());
         metrics.SetQueueDepth(scheduler.Depth());
         metrics.SetWorkersConnected(workers.CountAlive());
+        std::error_code error;
+        const auto space = std::filesystem::space(data_dir, error);
+        if (!error)
+          metrics.SetDataDisk(static_cast<std::int64_t>(space.available),
+                              static_cast<std::int64_t>(space.capacity));
+        guard.Refresh();
+      }
+      if (flags.retention_days > 0 && std::chrono::steady_clock::now() >= next_retention) {
+        next_retention +=
+            std::chrono::milliseconds(static_cast<std::int64_t>(flags.retention_check_s * 1000));
+        try {
+          const auto plan = coordinator.ExpireFinishedBefore(
+              NowUnixMs() - static_cast<std::int64_t>(flags.retention_days * 86'400'000.0));
+          for (const auto& job : plan.jobs) guard.RecordServerAction("Retention", job.id(), "EXPIRED");
+        } catch (const Error& e) {
+          spdlog::error("retention: {}: {}", ErrorCodeName(e.code()), e.what());
+        }
       }
       std::this_thread::sleep_for(std::chrono::milliseconds(200));
     }
@@ -169,32 +246,36 @@ int Run(const ServerFlags& flags) {
   return 0;
 }
 
-}  // namespace
+void AddSecurityFlags(CLI::App& app, ServerFlags& flags) {
+  app.add_option("--tls-cert", flags.tls.cert_file, "serve gRPC over TLS with this certificate chain (PEM)");
+  app.add_option("--tls-key", flags.tls.key_file,
+                 "the certificate's private key (PEM; refused if others may read it)");
+  app.add_option("--tls-client-ca", flags.tls.client_ca_file,
+                 "the worker API requires a client certificate signed by this CA (mTLS)");
+  app.add_flag("--insecure", flags.insecure, "allow a non-loopback --listen without TLS (logged loudly)");
+  app.add_option(
+      "--health-listen", flags.health_listen,
+      "also answer grpc.health.v1 (only) in plaintext on this address, for probes that cannot use TLS");
+  app.add_option("--audit-log", flags.audit_log, "JSON Lines audit log (default: DATA_DIR/audit.jsonl)");
+  app.add_option("--tenant-max-jobs", flags.tenant_quota.max_jobs,
+                 "queued + running jobs each tenant may have (0: no limit)")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--tenant-max-bytes", flags.tenant_quota.max_bytes,
+                 "bytes each tenant's jobs may keep stored (0: no limit)")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--quotas", flags.quotas_file, "JSON file of per-tenant quotas (overrides the two above)");
+  app.add_option("--retention-days", flags.retention_days,
+                 "delete clips and results of jobs finished longer ago than this (0: keep forever)")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--retention-check-s", flags.retention_check_s, "how often retention runs, in seconds")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+}
 
-int main(int argc, char** argv) {
-  ServerFlags flags;
-  CLI::App app{"endorecon-server: queues reconstruction jobs durably and hands them to pulling workers"};
-  app.add_option("--listen", flags.listen, "gRPC address host:port (loopback by default; port 0 picks one)")
-      ->capture_default_str();
-  app.add_option("--data-dir", flags.data_dir, "where jobs (SQLite) and blobs are kept")
-      ->capture_default_str();
-  app.add_option("--metrics-port", flags.metrics_port,
-                 "Prometheus /metrics port on the --listen host (0 picks one, -1 disables)")
-      ->capture_default_str();
-  app.add_option("--max-upload-bytes", flags.max_upload_bytes, "largest upload accepted (sum of its files)")
-      ->capture_default_str();
-  app.add_option("--max-attempts", flags.max_attempts,
-                 "attempts before a job whose workers keep vanishing fails")
-      ->capture_default_str()
-      ->check(CLI::PositiveNumber);
-  app.add_option("--lease-ttl-ms", flags.lease_ttl_ms,
-                 "a running job whose worker is silent this long is requeued")
-      ->capture_default_str()
-      ->check(CLI::PositiveNumber);
-  app.add_option("--heartbeat-ms", flags.heartbeat_ms,
-                 "how often workers report (told to them at registration)")
-      ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+void AddDicomFlags(CLI::App& app, ServerFlags& flags) {
   app.add_option("--ae-title", flags.dicom.ae_title,
                  "this server's DICOM AE title (calling, and its storage SCP's)")
       ->capture_default_str();
@@ -217,14 +298,49 @@ int main(int argc, char** argv) {
                  "seconds for a PACS to connect, associate and answer")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  ServerFlags flags;
+  CLI::App app{"endorecon-server: queues reconstruction jobs durably and hands them to pulling workers"};
+  app.add_option("--listen", flags.listen, "gRPC address host:port (loopback by default; port 0 picks one)")
+      ->capture_default_str();
+  app.add_option("--data-dir", flags.data_dir, "where jobs (SQLite) and blobs are kept")
+      ->capture_default_str();
+  app.add_option("--metrics-port", flags.metrics_port, "Prometheus /metrics port (0 picks one, -1 disables)")
+      ->capture_default_str();
+  app.add_option("--metrics-host", flags.metrics_host,
+                 "interface for /metrics (plaintext; loopback by default)")
+      ->capture_default_str();
+  app.add_option("--max-upload-bytes", flags.max_upload_bytes, "largest upload accepted (sum of its files)")
+      ->capture_default_str();
+  app.add_option("--max-attempts", flags.max_attempts,
+                 "attempts before a job whose workers keep vanishing fails")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  app.add_option("--lease-ttl-ms", flags.lease_ttl_ms,
+                 "a running job whose worker is silent this long is requeued")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  app.add_option("--heartbeat-ms", flags.heartbeat_ms,
+                 "how often workers report (told to them at registration)")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  AddSecurityFlags(app, flags);
+  AddDicomFlags(app, flags);
+  app.require_subcommand(0, 1);
+  const auto token_command = AddTokenCommand(app);
+  const auto retention_command = AddRetentionCommand(app);
   CLI11_PARSE(app, argc, argv);
   try {
-    dicom::CheckAeTitle(flags.dicom.ae_title, "--ae-title");
-    if (!flags.dicom.uid_root.empty()) dicom::NewUid(flags.dicom.uid_root);  // refuses a malformed root now
+    if (app.got_subcommand("token")) return token_command();
+    if (app.got_subcommand("retention")) return retention_command();
     return Run(flags);
   } catch (const endorecon::Error& e) {
     spdlog::error("{}: {}", endorecon::ErrorCodeName(e.code()), e.what());
-    return 1;
+    return e.code() == endorecon::ErrorCode::kInvalidArgument ? 2 : 1;
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());
     return 1;

@@ -45,7 +45,19 @@ Metrics::Metrics(const std::string& bind_address)
                                .Help("Attempts to send DICOM results to a PACS that failed")
                                .Register(*registry_)),
       retrieval_bytes_(Counter(*registry_, "endorecon_dicom_retrieval_bytes_total",
-                               "Bytes of recordings retrieved from a PACS")) {
+                               "Bytes of recordings retrieved from a PACS")),
+      leases_granted_(Counter(*registry_, "endorecon_leases_granted_total", "Jobs handed to a worker")),
+      refused_(BuildCounter()
+                   .Name("endorecon_calls_refused_total")
+                   .Help("Calls refused, by gRPC status")
+                   .Register(*registry_)),
+      expired_(
+          Counter(*registry_, "endorecon_jobs_expired_total", "Finished jobs whose files retention deleted")),
+      data_available_(
+          Gauge(*registry_, "endorecon_data_available_bytes", "Free bytes on the data folder's file system")),
+      data_capacity_(
+          Gauge(*registry_, "endorecon_data_capacity_bytes", "Size of the data folder's file system")) {
+  for (const auto* code : {"UNAUTHENTICATED", "PERMISSION_DENIED"}) refused_.Add({{"code", code}});
   for (const auto state : {v1::QUEUED, v1::RUNNING, v1::SUCCEEDED, v1::FAILED, v1::CANCELLED}) {
     jobs_.Add({{"state", v1::JobState_Name(state)}}).Set(0);
   }
@@ -66,6 +78,11 @@ void Metrics::JobFinished(v1::JobState state, double run_seconds) {
   } else if (state == v1::CANCELLED) {
     cancelled_.Increment();
   }
+}
+
+void Metrics::SetDataDisk(std::int64_t available, std::int64_t capacity) {
+  data_available_.Set(static_cast<double>(available));
+  data_capacity_.Set(static_cast<double>(capacity));
 }
 
 void Metrics::SetJobsByState(const std::map<v1::JobState, std::int64_t>& counts) {

@@ -13,6 +13,12 @@
 //   endorecon_dicom_instances_sent_total{destination}  counter: instances a PACS confirmed (C-STORE)
 //   endorecon_dicom_send_failures_total{destination}   counter: send attempts that failed
 //   endorecon_dicom_retrieval_bytes_total    counter: bytes of recordings retrieved from a PACS
+//   endorecon_leases_granted_total           counter: jobs handed to a worker (attempts started)
+//   endorecon_calls_refused_total{code}      counter: calls refused (UNAUTHENTICATED, PERMISSION_DENIED,
+//                                            NOT_FOUND, RESOURCE_EXHAUSTED, ...)
+//   endorecon_jobs_expired_total             counter: finished jobs whose files retention deleted
+//   endorecon_data_available_bytes           gauge: free bytes on the data folder's file system
+//   endorecon_data_capacity_bytes            gauge: size of that file system
 #pragma once
 
 #include <prometheus/counter.h>
@@ -41,6 +47,11 @@ class Metrics {
   // Counts a job reaching SUCCEEDED, FAILED or CANCELLED; `run_seconds` >= 0 is observed for SUCCEEDED.
   void JobFinished(v1::JobState state, double run_seconds);
   void LeaseExpired() { lease_expiries_.Increment(); }
+  void LeaseGranted() { leases_granted_.Increment(); }
+  // `code`: the gRPC status name.
+  void CallRefused(const std::string& code) { refused_.Add({{"code", code}}).Increment(); }
+  void JobsExpired(std::size_t jobs) { expired_.Increment(static_cast<double>(jobs)); }
+  void SetDataDisk(std::int64_t available, std::int64_t capacity);
   void UploadBytes(std::int64_t bytes) { upload_bytes_.Increment(static_cast<double>(bytes)); }
   void DownloadBytes(std::int64_t bytes) { download_bytes_.Increment(static_cast<double>(bytes)); }
   void SetJobsByState(const std::map<v1::JobState, std::int64_t>& counts);
@@ -71,6 +82,11 @@ class Metrics {
   prometheus::Family<prometheus::Counter>& dicom_sent_;
   prometheus::Family<prometheus::Counter>& dicom_send_failures_;
   prometheus::Counter& retrieval_bytes_;
+  prometheus::Counter& leases_granted_;
+  prometheus::Family<prometheus::Counter>& refused_;
+  prometheus::Counter& expired_;
+  prometheus::Gauge& data_available_;
+  prometheus::Gauge& data_capacity_;
 };
 
 }  // namespace endorecon::server

@@ -2,6 +2,7 @@
 // (--ae-title, --dicom-listen, --uid-root). Workers never talk to a PACS; the server does.
 #pragma once
 
+#include <functional>
 #include <map>
 #include <string>
 #include <vector>
@@ -18,6 +19,11 @@ struct DicomSettings {
   int send_backoff_ms = 2000;          // wait before the second attempt, doubled each time (max 60 s)
   int timeout_s = 30;                  // connect, association and each DIMSE response
 };
+
+// Audits what the server did with a PACS on its own: method ("PacsRetrieve", "PacsSend"), job,
+// outcome ("OK" or why not, as a status name) and the PACS's name.
+using PacsAudit = std::function<void(const std::string& method, const std::string& job_id,
+                                     const std::string& outcome, const std::string& pacs)>;
 
 class PacsDirectory {
  public:

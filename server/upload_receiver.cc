@@ -46,7 +46,8 @@ v1::UploadStatus UploadReceiver::Query(const v1::Manifest& manifest) const {
   return status;
 }
 
-v1::UploadStatus UploadReceiver::Receive(grpc::ServerReaderInterface<v1::UploadRequest>& reader) {
+v1::UploadStatus UploadReceiver::Receive(grpc::ServerReaderInterface<v1::UploadRequest>& reader,
+                                         const std::function<void(const v1::Manifest&)>& admit) {
   v1::UploadRequest request;
   if (!reader.Read(&request)) FailInvalid("empty upload stream: the first message must be the manifest");
   if (!request.has_manifest()) {
@@ -55,6 +56,7 @@ v1::UploadStatus UploadReceiver::Receive(grpc::ServerReaderInterface<v1::UploadR
   }
   const v1::Manifest manifest = request.manifest();
   Query(manifest);
+  if (admit) admit(manifest);
   std::map<std::string, const v1::FileEntry*> entries;
   for (const auto& entry : manifest.files()) entries[entry.path()] = &entry;
 

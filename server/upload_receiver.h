@@ -25,8 +25,10 @@ class UploadReceiver {
 
   // Validates `manifest` (and the size limit) and says how much of each file is committed.
   v1::UploadStatus Query(const v1::Manifest& manifest) const;
-  // Consumes one upload stream. Throws Error as described above.
-  v1::UploadStatus Receive(grpc::ServerReaderInterface<v1::UploadRequest>& reader);
+  // Consumes one upload stream. Throws Error as described above. `admit`, when given, sees the
+  // manifest before any byte is written and throws to refuse it (a tenant's quota).
+  v1::UploadStatus Receive(grpc::ServerReaderInterface<v1::UploadRequest>& reader,
+                           const std::function<void(const v1::Manifest&)>& admit = {});
 
  private:
   BlobStore& blobs_;

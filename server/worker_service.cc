@@ -1,25 +1,27 @@
 #include "server/worker_service.h"
 
 #include <filesystem>
+#include <set>
 
 #include "common/error.h"
-#include "common/grpc_status.h"
 #include "server/file_sender.h"
 
 namespace endorecon::server {
 
-WorkerServiceImpl::WorkerServiceImpl(JobCoordinator& coordinator, UploadReceiver& uploads, BlobStore& blobs,
-                                     WorkerRegistry& workers, Metrics& metrics, WorkerTiming timing)
-    : coordinator_(coordinator),
+WorkerServiceImpl::WorkerServiceImpl(CallGuard& guard, JobCoordinator& coordinator, UploadReceiver& uploads,
+                                     BlobStore& blobs, WorkerRegistry& workers, Metrics& metrics,
+                                     WorkerTiming timing)
+    : guard_(guard),
+      coordinator_(coordinator),
       uploads_(uploads),
       blobs_(blobs),
       workers_(workers),
       metrics_(metrics),
       timing_(timing) {}
 
-grpc::Status WorkerServiceImpl::Register(grpc::ServerContext*, const v1::RegisterRequest* request,
+grpc::Status WorkerServiceImpl::Register(grpc::ServerContext* context, const v1::RegisterRequest* request,
                                          v1::RegisterResponse* response) {
-  return GuardStatus([&] {
+  return guard_.Run(context, {"Register", Access::kWorker, kWrites, ""}, [&](Call&) {
     if (request->worker_id().empty()) FailInvalid("worker_id is empty");
     workers_.Register(request->worker_id(), request->hostname(),
                       std::vector<std::string>(request->devices().begin(), request->devices().end()));
@@ -31,7 +33,7 @@ grpc::Status WorkerServiceImpl::Register(grpc::ServerContext*, const v1::Registe
 
 grpc::Status WorkerServiceImpl::Lease(grpc::ServerContext* context, const v1::LeaseRequest* request,
                                       v1::LeaseResponse* response) {
-  return GuardStatus([&] {
+  return guard_.Run(context, {"Lease", Access::kWorker, kReads, ""}, [&](Call& call) {
     if (request->worker_id().empty()) FailInvalid("worker_id is empty");
     const auto wait = std::min(std::chrono::milliseconds(std::max<std::int64_t>(request->wait_ms(), 0)),
                                timing_.max_lease_wait);
@@ -41,6 +43,8 @@ grpc::Status WorkerServiceImpl::Lease(grpc::ServerContext* context, const v1::Le
     const auto deadline = Clock::now() + std::max(std::chrono::milliseconds(0), std::min(wait, caller_left));
     auto granted = coordinator_.Lease(request->worker_id(), deadline);
     if (!granted) return grpc::Status::OK;
+    call.wrote = true;
+    call.job_id = granted->job.id();
     if (context->IsCancelled()) {
       v1::FailRequest release;
       release.set_lease_id(granted->lease_id);
@@ -58,55 +62,66 @@ grpc::Status WorkerServiceImpl::Lease(grpc::ServerContext* context, const v1::Le
 }
 
 grpc::Status WorkerServiceImpl::Report(
-    grpc::ServerContext*, grpc::ServerReaderWriter<v1::ProgressReply, v1::ProgressUpdate>* stream) {
-  return GuardStatus([&] {
+    grpc::ServerContext* context, grpc::ServerReaderWriter<v1::ProgressReply, v1::ProgressUpdate>* stream) {
+  return guard_.Run(context, {"Report", Access::kWorker, kWrites, ""}, [&](Call& call) {
     v1::ProgressUpdate update;
     while (stream->Read(&update)) {
       v1::ProgressReply reply;
-      reply.set_action(coordinator_.Report(update));
+      reply.set_action(coordinator_.Report(update, &call.job_id));
       if (!stream->Write(reply) || reply.action() != v1::ProgressReply::CONTINUE) break;
     }
     return grpc::Status::OK;
   });
 }
 
-grpc::Status WorkerServiceImpl::Complete(grpc::ServerContext*, const v1::CompleteRequest* request,
+grpc::Status WorkerServiceImpl::Complete(grpc::ServerContext* context, const v1::CompleteRequest* request,
                                          v1::Job* job) {
-  return GuardStatus([&] {
+  return guard_.Run(context, {"Complete", Access::kWorker, kWrites, ""}, [&](Call& call) {
     *job = coordinator_.Complete(*request);
+    call.job_id = job->id();
     return grpc::Status::OK;
   });
 }
 
-grpc::Status WorkerServiceImpl::Fail(grpc::ServerContext*, const v1::FailRequest* request, v1::Job* job) {
-  return GuardStatus([&] {
+grpc::Status WorkerServiceImpl::Fail(grpc::ServerContext* context, const v1::FailRequest* request,
+                                     v1::Job* job) {
+  return guard_.Run(context, {"Fail", Access::kWorker, kWrites, ""}, [&](Call& call) {
     *job = coordinator_.Fail(*request);
+    call.job_id = job->id();
     return grpc::Status::OK;
   });
 }
 
-grpc::Status WorkerServiceImpl::QueryBlobs(grpc::ServerContext*, const v1::Manifest* manifest,
+grpc::Status WorkerServiceImpl::QueryBlobs(grpc::ServerContext* context, const v1::Manifest* manifest,
                                            v1::UploadStatus* status) {
-  return GuardStatus([&] {
+  return guard_.Run(context, {"QueryBlobs", Access::kWorker, kReads, ""}, [&](Call&) {
     *status = uploads_.Query(*manifest);
     return grpc::Status::OK;
   });
 }
 
-grpc::Status WorkerServiceImpl::PutBlobs(grpc::ServerContext*, grpc::ServerReader<v1::UploadRequest>* reader,
+grpc::Status WorkerServiceImpl::PutBlobs(grpc::ServerContext* context,
+                                         grpc::ServerReader<v1::UploadRequest>* reader,
                                          v1::UploadStatus* status) {
-  return GuardStatus([&] {
+  return guard_.Run(context, {"PutBlobs", Access::kWorker, kWrites, ""}, [&](Call&) {
     *status = uploads_.Receive(*reader);
     return grpc::Status::OK;
   });
 }
 
-grpc::Status WorkerServiceImpl::GetBlobs(grpc::ServerContext*, const v1::GetBlobsRequest* request,
+grpc::Status WorkerServiceImpl::GetBlobs(grpc::ServerContext* context, const v1::GetBlobsRequest* request,
                                          grpc::ServerWriter<v1::FileChunk>* writer) {
-  return GuardStatus([&] {
-    coordinator_.CheckLease(request->lease_id());
+  return guard_.Run(context, {"GetBlobs", Access::kWorker, kReads, ""}, [&](Call& call) {
+    const auto job = coordinator_.CheckLease(request->lease_id());
+    call.job_id = job.id();
+    // A lease opens its own job's clip and checkpoint, not every blob of every tenant.
+    std::set<std::string> allowed{job.checkpoint().sha256()};
+    for (const auto& file : job.clip().files()) allowed.insert(file.sha256());
     std::vector<std::pair<v1::FileEntry, std::int64_t>> files;
     for (const auto& range : request->files()) {
+      if (range.sha256().empty() || !allowed.count(range.sha256()))
+        endorecon::Fail(ErrorCode::kNotFound,
+                        "job " + job.id() + " has no file with sha256 '" + range.sha256() + "'");
       v1::FileEntry entry;
       entry.set_path(range.path());
       entry.set_sha256(range.sha256());

@@ -1,10 +1,12 @@
 // WorkerService (proto/endorecon/v1/worker_service.proto): the worker-facing API, a thin adapter
-// from gRPC onto the JobCoordinator, the UploadReceiver and the blob store.
+// from gRPC onto the JobCoordinator, the UploadReceiver and the blob store. Every handler goes
+// through the CallGuard (worker tokens, client certificates, audit).
 #pragma once
 
 #include <chrono>
 
 #include "endorecon/v1/worker_service.grpc.pb.h"
+#include "server/call_guard.h"
 #include "server/job_coordinator.h"
 #include "server/upload_receiver.h"
 
@@ -18,7 +20,7 @@ struct WorkerTiming {
 
 class WorkerServiceImpl final : public v1::WorkerService::Service {
  public:
-  WorkerServiceImpl(JobCoordinator& coordinator, UploadReceiver& uploads, BlobStore& blobs,
+  WorkerServiceImpl(CallGuard& guard, JobCoordinator& coordinator, UploadReceiver& uploads, BlobStore& blobs,
                     WorkerRegistry& workers, Metrics& metrics, WorkerTiming timing);
 
   grpc::Status Register(grpc::ServerContext*, const v1::RegisterRequest*, v1::RegisterResponse*) override;
@@ -34,6 +36,7 @@ class WorkerServiceImpl final : public v1::WorkerService::Service {
                         grpc::ServerWriter<v1::FileChunk>*) override;
 
  private:
+  CallGuard& guard_;
   JobCoordinator& coordinator_;
   UploadReceiver& uploads_;
   BlobStore& blobs_;

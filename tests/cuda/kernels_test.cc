@@ -9,10 +9,10 @@
 #include <random>
 #include <vector>
 
+#include "worker/engine/base/counter_rng.h"
 #include "worker/engine/cuda/device.h"
 #include "worker/engine/field/hash_grid.h"
 #include "worker/engine/render/depth_guided_sampler.h"
-#include "worker/engine/render/rng.h"
 #include "worker/engine/render/stratified_sampler.h"
 #include "worker/engine/render/volume_renderer.h"
 #include "worker/engine/train/ray_loss.h"
@@ -48,7 +48,7 @@ class CudaKernelsTest : public ::testing::Test {
                std::vector<float>(n)};
     for (int r = 0; r < rays; ++r) {
       const std::size_t o = std::size_t(r) * samples;
-      render::StratifiedSamples(1.0f, 3.0f, samples, render::CounterRng<float>(7, r), &b.s[o], &b.delta[o]);
+      render::StratifiedSamples(1.0f, 3.0f, samples, base::CounterRng<float>(7, r), &b.s[o], &b.delta[o]);
     }
     return b;
   }
@@ -88,7 +88,7 @@ TEST_F(CudaKernelsTest, HashLevelForwardMatchesTheCpuGrid) {
     const std::vector<float> params = Uniform(grid.param_count(), -1.0f, 1.0f);
     const std::vector<float> pos = Uniform(3 * std::size_t(n), -0.1f, 1.1f);
     std::vector<float> cpu(std::size_t(n) * dim);
-    grid.Forward(params.data(), pos.data(), n, cpu.data(), dim);
+    grid.ForwardRows(params.data(), pos.data(), n, cpu.data(), dim);
 
     DeviceArray<float> d_params(params), d_pos(pos), d_feat(cpu.size());
     for (int l = 0; l < grid.levels(); ++l) {
@@ -148,7 +148,7 @@ TEST_F(CudaKernelsTest, SamplersMatchTheCpuSamplers) {
   std::vector<float> s(std::size_t(rays) * samples), delta(s.size()), s_guided(s.size()),
       delta_guided(s.size());
   for (int r = 0; r < rays; ++r) {
-    const render::CounterRng<float> rng(streams.seed, streams.stream_base + streams.stream_step * r);
+    const base::CounterRng<float> rng(streams.seed, streams.stream_base + streams.stream_step * r);
     const std::size_t o = std::size_t(r) * samples;
     render::StratifiedSamples(near, far, samples, rng, &s[o], &delta[o]);
     render::DepthGuidedSamples(near, far, prior[r], config, rng, &s_guided[o], &delta_guided[o]);

@@ -30,9 +30,10 @@ TEST(DemoClipTest, CpuPresetReconstructsTheDemoClip) {
   EXPECT_GT(summary.heldout_psnr, 20.0) << "held-out tissue PSNR after 20 s of training";
   for (const char* file : {"metrics.json", "config.json", "curve.svg", "video.mp4", "model/model.bin",
                            "model/checkpoint.bin", "rgb/000000.png", "depth/000047.npy", "depth/000047.png",
-                           "pointcloud/000010.ply", "mesh.ply", "mesh.obj", "mesh.stl"}) {
+                           "pointcloud/000010.ply", "report.html", "mesh.ply", "mesh.obj", "mesh.stl"}) {
     EXPECT_TRUE(std::filesystem::exists(dir / "out" / file)) << file;
   }
+  EXPECT_LT(std::filesystem::file_size(dir / "out" / "report.html"), 30'000'000u) << "the demo clip's page";
   std::ifstream in(dir / "out" / "metrics.json");
   const auto metrics = nlohmann::json::parse(in);
   EXPECT_EQ(metrics["heldout"]["frames"].size(), 6u);

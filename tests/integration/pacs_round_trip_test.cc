@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include "common/dicom/uid.h"
+#include "tests/integration/audit_reader.h"
 #include "tests/integration/orthanc_harness.h"
 #include "tests/unit/dciodvfy.h"
 
@@ -182,6 +183,55 @@ TEST_F(PacsRoundTripTest, CMoveToTheServersStorageScpWhenCGetIsRefused) {
   EXPECT_EQ(job.state(), v1::QUEUED);
   ASSERT_EQ(job.clip().files_size(), 1);
   EXPECT_EQ(job.clip().files(0).size(), job.retrieval().bytes());
+}
+
+// With tokens: a recording retrieved for a job is the submitting tenant's, and its bytes count
+// against that tenant's byte quota; a tenant whose quota it would pass gets a FAILED job, and not
+// a byte of the recording enters the blob store.
+TEST_F(PacsRoundTripTest, ARetrievedRecordingCountsAgainstTheSubmittersByteQuota) {
+  const std::string study = MakeRecording(dir_.path(), dir_ / "recording.dcm");
+  ASSERT_EQ(Text(orthanc_->Store(dir_ / "recording.dcm"), "Status"), "Success");
+  const auto recording_bytes = fs::file_size(dir_ / "recording.dcm");
+  WriteBytes(dir_ / "quotas.json", nlohmann::json{{"radiology", {{"max_bytes", recording_bytes + 100}}},
+                                                  {"research", {{"max_bytes", 1000}}}}
+                                       .dump());
+  Cluster cluster({"--pacs", "orthanc=" + orthanc_->Address(), "--dicom-timeout", "5", "--quotas",
+                   (dir_ / "quotas.json").string()},
+                  false);
+  const auto alice = MakeCredentials(cluster, "", "client", "radiology", "alice");
+  const auto carol = MakeCredentials(cluster, "", "client", "research", "carol");
+  cluster.UseCredentials(alice);
+  cluster.StartServer();
+  const auto as = [&](const ClientCredentials& who, std::vector<std::string> args) {
+    auto argv = who.CliFlags();
+    argv.insert(argv.end(), args.begin(), args.end());
+    return RunCli(cluster.address(), argv);
+  };
+
+  const auto refused = as(carol, {"submit", "--pacs", "orthanc", "--study", study, "--wait"});
+  EXPECT_EQ(refused.exit_code, 5) << refused.out << refused.err;
+  EXPECT_NE(refused.out.find("max_bytes of 1000 bytes"), std::string::npos) << refused.out;
+  EXPECT_TRUE(fs::is_empty(cluster.data_dir() / "blobs"));
+
+  const auto kept = as(alice, {"submit", "--pacs", "orthanc", "--study", study});
+  ASSERT_EQ(kept.exit_code, 0) << kept.err;
+  const std::string id = JobIdIn(kept.out);
+  ASSERT_TRUE(WaitUntil([&] { return cluster.Job(id).retrieval().state() != v1::Retrieval::RETRIEVING; },
+                        std::chrono::seconds(60)));
+  const v1::Job job = cluster.Job(id);
+  EXPECT_EQ(job.retrieval().state(), v1::Retrieval::RETRIEVED) << job.retrieval().error();
+  EXPECT_EQ(job.tenant(), "radiology");
+  EXPECT_EQ(job.submitted_by(), "alice");
+  // The recording now fills radiology's quota: another clip does not fit.
+  MakeClip(cluster.path("clip"));
+  const auto over = as(alice, {"submit", cluster.path("clip").string()});
+  EXPECT_EQ(over.exit_code, 8) << over.err;
+  EXPECT_NE(over.err.find("keeps " + std::to_string(recording_bytes) + " bytes"), std::string::npos)
+      << over.err;
+
+  const auto audit = AuditLines(cluster.data_dir() / "audit.jsonl");
+  EXPECT_EQ(AuditFind(audit, "PacsRetrieve", "RESOURCE_EXHAUSTED", "server").size(), 1u);
+  EXPECT_EQ(AuditFind(audit, "PacsRetrieve", "OK", "server", id).size(), 1u);
 }
 
 }  // namespace

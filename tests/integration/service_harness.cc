@@ -17,6 +17,16 @@
 
 namespace endorecon::testing {
 namespace fs = std::filesystem;
+namespace {
+
+ChannelSecurity ChannelSecurityOf(const ClientCredentials& credentials) {
+  ChannelSecurity security;
+  security.ca_file = credentials.ca_file;
+  if (!credentials.token_file.empty()) security.token = ReadTokenFile(credentials.token_file, "token file");
+  return security;
+}
+
+}  // namespace
 
 Process::Process(const std::vector<std::string>& argv, const fs::path& log, const fs::path& err_log)
     : log_(log) {
@@ -94,14 +104,54 @@ bool WaitUntil(const std::function<bool()>& condition, std::chrono::seconds limi
 }
 
 CliResult RunCli(const std::string& address, const std::vector<std::string>& args) {
+  std::vector<std::string> with_server{"--server", address};
+  with_server.insert(with_server.end(), args.begin(), args.end());
+  return RunCliAsTyped(with_server);
+}
+
+CliResult RunCliAsTyped(const std::vector<std::string>& args) {
   TempDir scratch("cli");
-  std::vector<std::string> argv{BuiltBinary("client/endorecon"), "--server", address};
+  std::vector<std::string> argv{BuiltBinary("client/endorecon")};
   argv.insert(argv.end(), args.begin(), args.end());
   CliResult result;
   result.exit_code = Process(argv, scratch / "out", scratch / "err").Wait();
   result.out = ReadBytes(scratch / "out");
   result.err = ReadBytes(scratch / "err");
   return result;
+}
+
+std::vector<std::string> ClientCredentials::CliFlags() const {
+  std::vector<std::string> flags;
+  if (!ca_file.empty()) flags.insert(flags.end(), {"--ca", ca_file});
+  if (!token_file.empty()) flags.insert(flags.end(), {"--token-file", token_file});
+  return flags;
+}
+
+std::string CreateToken(const fs::path& data_dir, const std::string& role, const std::string& tenant,
+                        const std::string& name) {
+  TempDir scratch("token");
+  std::vector<std::string> argv{BuiltBinary("server/endorecon-server"),
+                                "token",
+                                "create",
+                                "--data-dir",
+                                data_dir.string(),
+                                "--role",
+                                role,
+                                "--name",
+                                name};
+  if (!tenant.empty()) argv.insert(argv.end(), {"--tenant", tenant});
+  if (Process(argv, scratch / "out").Wait() != 0)
+    throw std::runtime_error("token create failed: " + ReadBytes(scratch / "out"));
+  const std::string out = ReadBytes(scratch / "out");
+  const auto end = out.find_last_not_of(" \n");
+  const auto begin = out.find_last_of(" \n", end);
+  return out.substr(begin + 1, end - begin);
+}
+
+fs::path WriteTokenFile(const fs::path& path, const std::string& token) {
+  WriteBytes(path, token + "\n");
+  fs::permissions(path, fs::perms::owner_read | fs::perms::owner_write);
+  return path;
 }
 
 void MakeClip(const fs::path& dir, int seed) {
@@ -121,11 +171,17 @@ std::string Capture(const std::string& command) {
   return output;
 }
 
-Cluster::Cluster(std::vector<std::string> server_flags) : server_flags_(std::move(server_flags)) {
+Cluster::Cluster(std::vector<std::string> server_flags, bool start) : server_flags_(std::move(server_flags)) {
   port_ = FreePort();
   metrics_port_ = FreePort();
   address_ = "127.0.0.1:" + std::to_string(port_);
-  StartServer();
+  fs::create_directories(data_dir());
+  if (start) StartServer();
+}
+
+void Cluster::UseCredentials(const ClientCredentials& credentials) {
+  credentials_ = credentials;
+  if (server_) stub_ = v1::JobService::NewStub(OpenChannel(address_, ChannelSecurityOf(credentials_)));
 }
 
 void Cluster::StartServer() {
@@ -144,13 +200,15 @@ void Cluster::StartServer() {
   server_ = std::make_unique<Process>(argv, dir_ / ("server-" + std::to_string(server_starts_++) + ".log"));
   // A channel that tried before the port was open backs off for seconds: wait for the port first.
   WaitUntil([&] { return PortOpen(port_); }, std::chrono::seconds(20));
-  stub_ = v1::JobService::NewStub(OpenChannel(address_));
+  stub_ = v1::JobService::NewStub(OpenChannel(address_, ChannelSecurityOf(credentials_)));
   const bool up = WaitUntil(
       [&] {
         grpc::ClientContext context;
         context.set_deadline(std::chrono::system_clock::now() + std::chrono::milliseconds(500));
         v1::ListWorkersResponse response;
-        return stub_->ListWorkers(&context, {}, &response).ok();
+        // Any answer means up: a client token may not list workers (PERMISSION_DENIED).
+        const auto code = stub_->ListWorkers(&context, {}, &response).error_code();
+        return code != grpc::StatusCode::UNAVAILABLE && code != grpc::StatusCode::DEADLINE_EXCEEDED;
       },
       std::chrono::seconds(20));
   if (!up) throw std::runtime_error("server did not come up:\n" + ServerLog());
@@ -210,7 +268,8 @@ v1::Job Cluster::Job(const std::string& id) {
 }
 
 std::string Cluster::Submit(const fs::path& clip, const std::vector<std::string>& flags) {
-  std::vector<std::string> args{"--json", "submit", clip.string()};
+  std::vector<std::string> args = credentials_.CliFlags();
+  args.insert(args.end(), {"--json", "submit", clip.string()});
   args.insert(args.end(), flags.begin(), flags.end());
   const auto result = RunCli(address_, args);
   if (result.exit_code != 0) throw std::runtime_error("submit failed: " + result.err);
@@ -231,6 +290,12 @@ v1::Job Cluster::WaitForState(const std::string& id, v1::JobState state, std::ch
       },
       limit);
   return job;
+}
+
+ClientCredentials MakeCredentials(const Cluster& cluster, const std::string& ca_file, const std::string& role,
+                                  const std::string& tenant, const std::string& name) {
+  const auto token = CreateToken(cluster.data_dir(), role, tenant, name);
+  return {ca_file, WriteTokenFile(cluster.path(name + ".token"), token).string()};
 }
 
 std::string Cluster::ServerLog() const {

@@ -54,6 +54,21 @@ bool PortOpen(int port);
 bool WaitUntil(const std::function<bool()>& condition, std::chrono::seconds limit = std::chrono::seconds(60));
 // Runs `endorecon --server ADDRESS args...` to completion.
 CliResult RunCli(const std::string& address, const std::vector<std::string>& args);
+
+// How a test's client reaches a server with TLS and tokens (empty: plaintext, no token).
+struct ClientCredentials {
+  std::string ca_file;
+  std::string token_file;
+  // The CLI's global options for these ("--ca", FILE, "--token-file", FILE).
+  std::vector<std::string> CliFlags() const;
+};
+// Runs `endorecon-server token create --data-dir DIR ...`; returns the token (its output's last word).
+std::string CreateToken(const std::filesystem::path& data_dir, const std::string& role,
+                        const std::string& tenant, const std::string& name);
+// Writes `token` into `path` with mode 0600; returns the path.
+std::filesystem::path WriteTokenFile(const std::filesystem::path& path, const std::string& token);
+// Runs `endorecon args...` to completion, with no --server added.
+CliResult RunCliAsTyped(const std::vector<std::string>& args);
 // Writes a tiny synthetic clip (endorecon-worker synth, 8 frames of 32x24) into `dir`.
 void MakeClip(const std::filesystem::path& dir, int seed = 1);
 // Runs a command line through the shell; returns its stdout (for curl).
@@ -62,9 +77,12 @@ std::string Capture(const std::string& command);
 // A server (and workers) on loopback in a temp folder.
 class Cluster {
  public:
-  // Extra server flags are appended to the defaults (short leases and heartbeats).
-  explicit Cluster(std::vector<std::string> server_flags = {});
+  // Extra server flags are appended to the defaults (short leases and heartbeats). With `start`
+  // false the test prepares the data folder (tokens) and credentials, then calls StartServer().
+  explicit Cluster(std::vector<std::string> server_flags = {}, bool start = true);
 
+  // The credentials of the cluster's own calls (its stub, Submit) from now on.
+  void UseCredentials(const ClientCredentials& credentials);
   void StartServer();
   void KillServer(int signal);
   Process& StartWorker(const std::string& id, std::vector<std::string> flags = {});
@@ -97,6 +115,12 @@ class Cluster {
   std::vector<std::pair<std::string, std::unique_ptr<Process>>> workers_;
   std::vector<std::pair<std::string, int>> worker_metrics_ports_;
   std::unique_ptr<v1::JobService::Stub> stub_;
+  ClientCredentials credentials_;
 };
+
+// A new token in `cluster`'s store (running or not), written to <cluster folder>/<name>.token,
+// with `ca_file` for TLS ("" for plaintext).
+ClientCredentials MakeCredentials(const Cluster& cluster, const std::string& ca_file, const std::string& role,
+                                  const std::string& tenant, const std::string& name);
 
 }  // namespace endorecon::testing

@@ -28,6 +28,9 @@ TEST(SubmitToCompletionTest, ClipInResultsOut) {
 
   const auto fetched = RunCli(cluster.address(), {"fetch", id, "-o", cluster.path("results").string()});
   ASSERT_EQ(fetched.exit_code, 0) << fetched.err;
+  EXPECT_NE(fetched.out.find("report: " + (cluster.path("results") / "report.html").string()),
+            std::string::npos)
+      << fetched.out;
   bool has_metrics = false;
   for (const auto& file : job.result().files()) {
     const auto local = cluster.path("results") / file.path();

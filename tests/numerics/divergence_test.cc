@@ -7,7 +7,6 @@
 #include <cfloat>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <nlohmann/json.hpp>
 #include <regex>
 #include <string>
@@ -35,26 +34,26 @@ nlohmann::json DivergingConfig() {
   return {{"rays_per_batch", 128}, {"adam", {{"lr", lr}, {"final_lr_factor", 1.0}}}};
 }
 
-// A 6-frame 40 x 32 synthetic clip in dir/clip, diverge.json (DivergingConfig) and small.json (the
-// preset with the same small batch).
-void WriteClipAndConfigs(const fs::path& dir) {
+// The preset with DivergingConfig's small batch.
+nlohmann::json SmallConfig() { return {{"rays_per_batch", 128}}; }
+
+// A 6-frame 40 x 32 synthetic clip in dir/clip.
+void WriteClip(const fs::path& dir) {
   scene::SynthOptions synth;
   synth.frames = 6;
   synth.width = 40;
   synth.height = 32;
   scene::WriteSyntheticClip(synth, dir / "clip");
-  std::ofstream(dir / "diverge.json") << DivergingConfig().dump();
-  std::ofstream(dir / "small.json") << nlohmann::json{{"rays_per_batch", 128}}.dump();
 }
 
 TEST(Divergence, ReconstructThrowsNamingStageAndIterationAndKeepsTheLastGoodCheckpoint) {
   testing::TempDir dir("divergence");
-  WriteClipAndConfigs(dir.path());
+  WriteClip(dir.path());
 
   ReconstructOptions options;
   options.clip_dir = (dir / "clip").string();
   options.out_dir = (dir / "out").string();
-  options.config_file = (dir / "diverge.json").string();
+  options.config = DivergingConfig();
   options.iterations = 200;
   ReconstructHooks hooks;
   hooks.checkpoint_interval_s = 0;  // a checkpoint after every step that passed its checks
@@ -101,12 +100,12 @@ TEST(Divergence, ReconstructThrowsNamingStageAndIterationAndKeepsTheLastGoodChec
 // checkpoint's own.
 TEST(Divergence, TheLastGoodCheckpointResumesWithAnotherConfiguration) {
   testing::TempDir dir("divergence-resume");
-  WriteClipAndConfigs(dir.path());
+  WriteClip(dir.path());
 
   ReconstructOptions options;
   options.clip_dir = (dir / "clip").string();
   options.out_dir = (dir / "healthy").string();
-  options.config_file = (dir / "small.json").string();
+  options.config = SmallConfig();
   options.iterations = 5;
   Reconstruct(options, {});
   const fs::path good = dir / "healthy" / "model" / "checkpoint.bin";
@@ -115,7 +114,7 @@ TEST(Divergence, TheLastGoodCheckpointResumesWithAnotherConfiguration) {
   // Resumed with a learning rate of 1e9 it diverges, and the checkpoint it resumed from is untouched.
   options.resume_from = good.string();
   options.out_dir = (dir / "healthy").string();
-  options.config_file = (dir / "diverge.json").string();
+  options.config = DivergingConfig();
   options.iterations = 200;
   ReconstructHooks hooks;
   hooks.checkpoint_interval_s = 1e9;
@@ -125,7 +124,7 @@ TEST(Divergence, TheLastGoodCheckpointResumesWithAnotherConfiguration) {
   EXPECT_EQ(train::ReadCheckpointConfig(good).adam.lr.at("grid"), 3e-2f);
 
   // Resumed with the preset's rates it trains on to the end, every parameter finite.
-  options.config_file = (dir / "small.json").string();
+  options.config = SmallConfig();
   options.out_dir = (dir / "resumed").string();
   options.iterations = 10;
   const ReconstructSummary summary = Reconstruct(options, {});
@@ -143,7 +142,7 @@ TEST(Divergence, ClippingPreventsTheSecondMomentOverflow) {
     train::AdamConfig config;
     config.default_lr = 0.01f;
     config.clip_norm = clip;
-    train::Adam adam({train::ParamGroup{"grid", value.data(), grad.data(), value.size()}}, config);
+    train::Adam adam({field::ParamBlock<float>{"grid", value.data(), grad.data(), value.size()}}, config);
     const train::AdamStepReport report = adam.Step(0.0);
     EXPECT_NEAR(report.grad_norm, 3e19, 1e13);
     if (clip == 0.0f) {

@@ -62,12 +62,10 @@ cv::Mat Colour(int value) { return cv::Mat(kHeight, kWidth, CV_8UC3, cv::Scalar(
 
 // 40 iterations, every 4th frame held out, 128 rays a step. Returns metrics.json.
 nlohmann::json ReconstructSmall(const testing::TempDir& dir, const fs::path& clip) {
-  const fs::path config = dir / "small.json";
-  std::ofstream(config) << nlohmann::json{{"rays_per_batch", 128}, {"curve_interval_s", 0.05}}.dump();
   ReconstructOptions options;
   options.clip_dir = clip.string();
   options.out_dir = (dir / "out").string();
-  options.config_file = config.string();
+  options.config = {{"rays_per_batch", 128}, {"curve_interval_s", 0.05}};
   options.iterations = 40;
   options.holdout = 4;
   const ReconstructSummary summary = Reconstruct(options, {});

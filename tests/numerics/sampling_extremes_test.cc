@@ -7,9 +7,9 @@
 #include <cmath>
 #include <vector>
 
+#include "worker/engine/base/counter_rng.h"
 #include "worker/engine/render/adaptive_sampler.h"
 #include "worker/engine/render/depth_guided_sampler.h"
-#include "worker/engine/render/rng.h"
 #include "worker/engine/render/sample_score.h"
 #include "worker/engine/render/stratified_sampler.h"
 
@@ -32,7 +32,7 @@ void ExpectValidSamples(const std::vector<float>& s, const std::vector<float>& d
 
 TEST(SamplingExtremes, EmptyAndHugeDepthRanges) {
   const float ranges[][2] = {{3.0f, 3.0f}, {0.0f, 1e-9f}, {0.0f, 1e30f}, {1e30f, 3e30f}};
-  const CounterRng<float> rng(1, 2);
+  const base::CounterRng<float> rng(1, 2);
   for (const auto& r : ranges) {
     std::vector<float> s(32), delta(32), coarse(32), score(32, 1.0f);
     StratifiedSamples(r[0], r[1], 32, rng, s.data(), delta.data());
@@ -50,7 +50,7 @@ TEST(SamplingExtremes, EmptyAndHugeDepthRanges) {
 TEST(SamplingExtremes, ZeroWidthGaussianPutsEverySampleOnThePrior) {
   const DepthGuidedConfig<float> config{0.0f, 16, 0};
   std::vector<float> s(16), delta(16);
-  DepthGuidedSamples(1.0f, 5.0f, 2.5f, config, CounterRng<float>(4, 4), s.data(), delta.data());
+  DepthGuidedSamples(1.0f, 5.0f, 2.5f, config, base::CounterRng<float>(4, 4), s.data(), delta.data());
   ExpectValidSamples(s, delta, 1.0f, 5.0f, "xi = 0");
   for (float x : s) EXPECT_EQ(x, 2.5f);
 }

@@ -34,14 +34,11 @@ TEST(StiffScene, ShortReconstructionHasNoNanOrInf) {
   scene::WriteSyntheticClip(synth, dir / "clip");
   const scene::Clip clip = scene::LoadClip(dir / "clip");
   ASSERT_LT(clip.far - clip.near, 10.0) << "the stiff clip's depth range";
-  std::ofstream(dir / "short.json") << nlohmann::json{
-      {"rays_per_batch", 512},
-      {"curve_interval_s", 1.0}}.dump();
 
   ReconstructOptions options;
   options.clip_dir = (dir / "clip").string();
   options.out_dir = (dir / "out").string();
-  options.config_file = (dir / "short.json").string();
+  options.config = {{"rays_per_batch", 512}, {"curve_interval_s", 1.0}};
   options.iterations = 300;
   options.holdout = 4;
   const ReconstructSummary summary = Reconstruct(options, {});

@@ -5,7 +5,7 @@
 #include <cmath>
 #include <vector>
 
-#include "worker/engine/render/rng.h"
+#include "worker/engine/base/counter_rng.h"
 #include "worker/engine/render/stratified_sampler.h"
 
 namespace endorecon::render {
@@ -53,8 +53,8 @@ TEST(AdaptiveSampler, SamplesFollowTheScoreAboveAFloor) {
   score[5] = 1.7;
   const int n = 128;
   std::vector<double> s(n), delta(n);
-  AdaptiveSamples(coarse.data(), score.data(), 16, kNear, kFar, 0.25, n, CounterRng<double>(1, 1), s.data(),
-                  delta.data());
+  AdaptiveSamples(coarse.data(), score.data(), 16, kNear, kFar, 0.25, n, base::CounterRng<double>(1, 1),
+                  s.data(), delta.data());
   ExpectTilesTheRange(s, delta);
   std::vector<int> per_cell(16, 0);
   for (double x : s) per_cell[std::min(15, static_cast<int>((x - kNear) * 4))]++;
@@ -76,8 +76,8 @@ TEST(AdaptiveSampler, IntervalsFollowTheDensity) {
   const int n = 64;
   const double floor = 0.5;
   std::vector<double> s(n), delta(n);
-  AdaptiveSamples(coarse.data(), score.data(), 16, kNear, kFar, floor, n, CounterRng<double>(2, 5), s.data(),
-                  delta.data());
+  AdaptiveSamples(coarse.data(), score.data(), 16, kNear, kFar, floor, n, base::CounterRng<double>(2, 5),
+                  s.data(), delta.data());
   ExpectTilesTheRange(s, delta);
   auto density = [&](int k) { return floor / (kFar - kNear) + (1 - floor) * score[k] / (4.0 * 0.25); };
   int checked = 0;
@@ -101,8 +101,8 @@ TEST(AdaptiveSampler, BadScoresCountAsZero) {
   score[7] = -5;
   score[9] = HUGE_VAL;
   std::vector<double> s(32), delta(32);
-  AdaptiveSamples(coarse.data(), score.data(), 16, kNear, kFar, 0.1, 32, CounterRng<double>(7, 7), s.data(),
-                  delta.data());
+  AdaptiveSamples(coarse.data(), score.data(), 16, kNear, kFar, 0.1, 32, base::CounterRng<double>(7, 7),
+                  s.data(), delta.data());
   for (int j = 0; j < 32; ++j) {
     ASSERT_TRUE(std::isfinite(s[j]));
     EXPECT_NEAR(delta[j], 4.0 / 32, 1e-12);  // uniform: no valid score anywhere
@@ -112,10 +112,11 @@ TEST(AdaptiveSampler, BadScoresCountAsZero) {
 TEST(AdaptiveSampler, OneOrNoCoarseSample) {
   const double coarse = 3.0, score = 1.0;
   std::vector<double> s(8), delta(8);
-  AdaptiveSamples(&coarse, &score, 1, kNear, kFar, 0.3, 8, CounterRng<double>(1, 2), s.data(), delta.data());
+  AdaptiveSamples(&coarse, &score, 1, kNear, kFar, 0.3, 8, base::CounterRng<double>(1, 2), s.data(),
+                  delta.data());
   ExpectTilesTheRange(s, delta);
   AdaptiveSamples(static_cast<const double*>(nullptr), static_cast<const double*>(nullptr), 0, kNear, kFar,
-                  0.3, 8, CounterRng<double>(1, 2), s.data(), delta.data());
+                  0.3, 8, base::CounterRng<double>(1, 2), s.data(), delta.data());
   ExpectTilesTheRange(s, delta);
   for (double d : delta) EXPECT_NEAR(d, 0.5, 1e-12);
 }

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
 #include <regex>
 #include <string>
 #include <vector>
@@ -113,7 +114,8 @@ TEST(CurvePlot, WritesTheFile) {
   const std::vector<CurveSeries> series = {{"run", {1, 2}, {20, 21}, false, ""}};
   WriteCurveSvg(dir / "curve.svg", series);
   EXPECT_EQ(testing::ReadBytes(dir / "curve.svg"), CurveSvg(series));
-  EXPECT_THROW(WriteCurveSvg(dir / "missing" / "curve.svg", series), Error);
+  std::ofstream(dir / "a-file") << "x";  // a parent that is a file: nothing can be written there
+  EXPECT_THROW(WriteCurveSvg(dir / "a-file" / "curve.svg", series), Error);
 }
 
 }  // namespace

@@ -5,7 +5,7 @@
 #include <cmath>
 #include <vector>
 
-#include "worker/engine/render/rng.h"
+#include "worker/engine/base/counter_rng.h"
 
 namespace endorecon::render {
 namespace {
@@ -19,8 +19,8 @@ Drawn Draw(double near, double far, double prior, const DepthGuidedConfig<double
   Drawn d;
   d.s.resize(config.gaussian_samples + config.stratified_samples);
   d.delta.resize(d.s.size());
-  d.n =
-      DepthGuidedSamples(near, far, prior, config, CounterRng<double>(3, stream), d.s.data(), d.delta.data());
+  d.n = DepthGuidedSamples(near, far, prior, config, base::CounterRng<double>(3, stream), d.s.data(),
+                           d.delta.data());
   return d;
 }
 
@@ -96,7 +96,7 @@ TEST(DepthGuidedSampler, GaussianPartAloneIsTheSameDraws) {
   config.gaussian_samples = 16;
   config.stratified_samples = 8;
   const int n = config.gaussian_samples + config.stratified_samples;
-  const CounterRng<float> uniform(11, 5);
+  const base::CounterRng<float> uniform(11, 5);
   std::vector<float> s(n), delta(n), parts(n);
   DepthGuidedSamples(2.0f, 9.0f, 4.5f, config, uniform, s.data(), delta.data());
   StratifiedSamples(2.0f, 9.0f, config.stratified_samples, uniform, parts.data(), delta.data());

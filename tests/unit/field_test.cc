@@ -10,6 +10,8 @@
 
 #include "common/error.h"
 #include "tests/unit/gradient_check.h"
+#include "worker/engine/field/field_description.h"
+#include "worker/engine/field/field_state.h"
 
 namespace endorecon::field {
 namespace {
@@ -134,8 +136,8 @@ TEST(FieldTest, FrequencyEncodingFieldGradientsMatchFiniteDifferences) {
     EXPECT_GE(nonzero, static_cast<int>(indices.size()) / 4) << b.name;
   }
   EXPECT_EQ(names, (std::vector<std::string>{"deform", "density", "color"}));
-  EXPECT_NE(field.Describe().find("frequency encoding: 4 frequencies, 27 values"), std::string::npos)
-      << field.Describe();
+  EXPECT_NE(DescribeField(field).find("frequency encoding: 4 frequencies, 27 values"), std::string::npos)
+      << DescribeField(field);
   // Encode/Decode split the same way.
   Samples<double> a(300, 3), b(300, 3);
   std::vector<double> encoding(std::size_t(b.n) * field.encoding_dim());
@@ -162,7 +164,7 @@ TEST(FieldTest, StaticSceneBuildsNoDeformation) {
   c.deformation.enabled = false;
   FieldT<double> field(c, 1);
   for (const auto& b : field.Blocks()) EXPECT_NE(b.name, "deform");
-  EXPECT_NE(field.Describe().find("deformation: left out"), std::string::npos) << field.Describe();
+  EXPECT_NE(DescribeField(field).find("deformation: left out"), std::string::npos) << DescribeField(field);
   // Without deformation, time only moves the blend: a sample's density is its canonical one.
   Randomise(field, 5);
   Samples<double> s(50, 3);
@@ -183,7 +185,7 @@ TEST(FieldTest, DescribeReportsLevelsLeftOut) {
   FieldConfig c = SmallConfig();
   c.grids.max_resolution = 5;  // grid 0 keeps 2 and 4; grid 1 keeps 3 and 4
   const FieldT<float> field(c, 1);
-  const std::string d = field.Describe();
+  const std::string d = DescribeField(field);
   EXPECT_NE(d.find("left out 1 finer levels (above resolution cap 5)"), std::string::npos) << d;
 }
 
@@ -259,8 +261,8 @@ TEST(FieldTest, SaveLoadRoundTripIsExact) {
   FieldT<float> a(SmallConfig(), 1), b(SmallConfig(), 2);
   Randomise(a, 500);
   std::stringstream stream;
-  a.Save(stream);
-  b.Load(stream);
+  SaveFieldState(a, stream);
+  LoadFieldState(b, stream);
   Samples<float> sa(700, 5), sb(700, 5);
   auto oa = sa.out(), ob = sb.out();
   a.Forward(sa.batch(), oa, true, 8);
@@ -272,23 +274,23 @@ TEST(FieldTest, SaveLoadRoundTripIsExact) {
 TEST(FieldTest, LoadRejectsAnotherShapeOrATruncatedStream) {
   FieldT<float> a(SmallConfig(), 1);
   std::stringstream stream;
-  a.Save(stream);
+  SaveFieldState(a, stream);
   const std::string bytes = stream.str();
   FieldConfig other = SmallConfig();
   other.heads.color_hidden = {8};
   FieldT<float> b(other, 1);
   std::stringstream in1(bytes);
   try {
-    b.Load(in1);
+    LoadFieldState(b, in1);
     FAIL() << "loaded a state of another shape";
   } catch (const Error& e) {
     EXPECT_EQ(e.code(), ErrorCode::kDataLoss);
     EXPECT_NE(std::string(e.what()).find("'color'"), std::string::npos) << e.what();
   }
   std::stringstream in2(bytes.substr(0, bytes.size() - 10));
-  EXPECT_THROW(a.Load(in2), Error);
+  EXPECT_THROW(LoadFieldState(a, in2), Error);
   std::stringstream in3("not a field");
-  EXPECT_THROW(a.Load(in3), Error);
+  EXPECT_THROW(LoadFieldState(a, in3), Error);
 }
 
 TEST(FieldTest, BackwardNeedsAMatchingForward) {
@@ -306,7 +308,7 @@ TEST(FieldTest, PresetsHaveTheGroupsTheTrainerExpects) {
   const FieldConfig cpu = FieldConfig::Cpu();
   FieldT<float> field(cpu, 1);
   std::vector<std::string> names;
-  for (const auto& g : field.Params()) {
+  for (const auto& g : field.Blocks()) {
     names.push_back(g.name);
     EXPECT_GT(g.size, 0u);
   }

@@ -33,7 +33,7 @@ std::vector<double> Features(const HashGrid<double>& grid, const std::vector<dou
                              const std::vector<double>& pos) {
   const int n = static_cast<int>(pos.size() / 3);
   std::vector<double> feat(static_cast<std::size_t>(n) * grid.output_dim());
-  grid.Forward(params.data(), pos.data(), n, feat.data(), grid.output_dim());
+  grid.ForwardRows(params.data(), pos.data(), n, feat.data(), grid.output_dim());
   return feat;
 }
 
@@ -189,7 +189,7 @@ TEST(HashGridTest, FloatAgreesWithDouble) {
   const std::vector<double> xd = RandomValues(3 * n, 0, 1, 32);
   const std::vector<float> pf(pd.begin(), pd.end()), xf(xd.begin(), xd.end());
   std::vector<float> ff(static_cast<std::size_t>(n) * gf.output_dim());
-  gf.Forward(pf.data(), xf.data(), n, ff.data(), gf.output_dim());
+  gf.ForwardRows(pf.data(), xf.data(), n, ff.data(), gf.output_dim());
   const auto fd = Features(gd, pd, std::vector<double>(xf.begin(), xf.end()));
   for (std::size_t i = 0; i < fd.size(); ++i) EXPECT_NEAR(ff[i], fd[i], 1e-5) << i;
 }
@@ -239,7 +239,7 @@ TEST(HashGridTest, TwoFeatureFloatPathAgreesWithDouble) {
   const std::vector<double> xr(xf.begin(), xf.end());  // the positions as float sees them
 
   std::vector<float> ff(static_cast<std::size_t>(n) * width);
-  gf.Forward(pf.data(), xf.data(), n, ff.data(), width);
+  gf.ForwardRows(pf.data(), xf.data(), n, ff.data(), width);
   const auto fd = Features(gd, pd, xr);
   for (std::size_t i = 0; i < fd.size(); ++i) ASSERT_NEAR(ff[i], fd[i], 1e-5) << i;
 

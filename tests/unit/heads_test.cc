@@ -40,20 +40,21 @@ struct DensityRun {
   std::vector<double> hidden, raw, sigma, logvar;
 };
 
-DensityRun RunDensity(const DensityHead<double>& head, const std::vector<double>& params,
+DensityRun RunDensity(DensityHead<double>& head, const std::vector<double>& params,
                       const std::vector<double>& feat, int n, const DropoutPass& drop) {
   DensityRun r;
   r.hidden.resize(static_cast<std::size_t>(n) * head.mlp().hidden_dim(0));
   r.raw.resize(static_cast<std::size_t>(n) * head.raw_dim());
   r.sigma.resize(n);
   r.logvar.resize(n);
-  double* hidden = r.hidden.data();
-  head.Forward(params.data(), feat.data(), n, &hidden, r.raw.data(), r.sigma.data(), r.logvar.data(), drop);
+  double* const hidden[] = {r.hidden.data()};
+  head.Forward(params.data(), {n, feat.data()}, {hidden, r.raw.data(), r.sigma.data(), r.logvar.data()},
+               drop);
   return r;
 }
 
 TEST(HeadsTest, DensityOutputsFollowTheirActivations) {
-  const DensityHead<double> head(4, SmallConfig());
+  DensityHead<double> head(4, SmallConfig());
   EXPECT_EQ(head.raw_dim(), 5);
   std::vector<double> params = RandomValues(head.param_count(), -1, 1, 1);
   const auto r = RunDensity(head, params, RandomValues(40, -1, 1, 2), 10, {});
@@ -64,7 +65,7 @@ TEST(HeadsTest, DensityOutputsFollowTheirActivations) {
 }
 
 TEST(HeadsTest, DensityGradientsMatchFiniteDifferences) {
-  const DensityHead<double> head(4, SmallConfig());
+  DensityHead<double> head(4, SmallConfig());
   const int n = 9, geo = 3;
   std::vector<double> params = RandomValues(head.param_count(), -0.8, 0.8, 3);
   std::vector<double> feat = RandomValues(4 * n, -1, 1, 4);
@@ -79,11 +80,11 @@ TEST(HeadsTest, DensityGradientsMatchFiniteDifferences) {
     }
     return s;
   };
-  const auto r = RunDensity(head, params, feat, n, drop);
-  const double* hidden = r.hidden.data();
-  std::vector<double> grads(params.size(), 0.0), dfeat(feat.size(), 0.0), scratch(head.scratch_size(n));
-  head.Backward(params.data(), feat.data(), n, &hidden, r.raw.data(), ws.data(), wl.data(), wg.data(),
-                dfeat.data(), grads.data(), scratch.data(), true);
+  auto r = RunDensity(head, params, feat, n, drop);
+  double* const hidden[] = {r.hidden.data()};
+  std::vector<double> grads(params.size(), 0.0), dfeat(feat.size(), 0.0);
+  head.Backward(params.data(), {n, feat.data()}, {hidden, r.raw.data(), r.sigma.data(), r.logvar.data()},
+                {ws.data(), wl.data(), wg.data()}, grads.data(), {dfeat.data()}, drop);
   EXPECT_GT(ExpectGradientMatches(params.data(), grads.data(), SomeIndices(params.size(), params.size(), 1),
                                   loss, "params"),
             30);
@@ -96,9 +97,8 @@ struct ColorRun {
   std::vector<double> in, h0, h1, raw, rgb, logvar;
 };
 
-ColorRun RunColor(const ColorHead<double>& head, const std::vector<double>& params,
-                  const std::vector<double>& geo, const std::vector<double>& dir, int n,
-                  const DropoutPass& drop) {
+ColorRun RunColor(ColorHead<double>& head, const std::vector<double>& params, const std::vector<double>& geo,
+                  const std::vector<double>& dir, int n, const DropoutPass& drop) {
   ColorRun r;
   r.in.resize(static_cast<std::size_t>(n) * head.in_dim());
   r.h0.resize(static_cast<std::size_t>(n) * 5);
@@ -106,14 +106,14 @@ ColorRun RunColor(const ColorHead<double>& head, const std::vector<double>& para
   r.raw.resize(4 * static_cast<std::size_t>(n));
   r.rgb.resize(3 * static_cast<std::size_t>(n));
   r.logvar.resize(n);
-  double* hidden[2] = {r.h0.data(), r.h1.data()};
-  head.Forward(params.data(), geo.data(), 3, dir.data(), n, r.in.data(), hidden, r.raw.data(), r.rgb.data(),
-               r.logvar.data(), drop);
+  double* const hidden[2] = {r.h0.data(), r.h1.data()};
+  head.Forward(params.data(), {n, geo.data(), 3, dir.data()},
+               {r.in.data(), hidden, r.raw.data(), r.rgb.data(), r.logvar.data()}, drop);
   return r;
 }
 
 TEST(HeadsTest, ColorIsInTheUnitIntervalAndSeesTheDirection) {
-  const ColorHead<double> head(SmallConfig());
+  ColorHead<double> head(SmallConfig());
   EXPECT_EQ(head.in_dim(), 3 + kShDims);
   const std::vector<double> params = RandomValues(head.param_count(), -0.5, 0.5, 8);
   const int n = 20;
@@ -137,7 +137,7 @@ TEST(HeadsTest, TheColourHeadTakesItsOwnDropoutRateWhenOneIsGiven) {
 }
 
 TEST(HeadsTest, ColorGradientsMatchFiniteDifferences) {
-  const ColorHead<double> head(SmallConfig());
+  ColorHead<double> head(SmallConfig());
   const int n = 8;
   std::vector<double> params = RandomValues(head.param_count(), -0.8, 0.8, 10);
   std::vector<double> geo = RandomValues(3 * n, -1, 1, 11);
@@ -148,11 +148,12 @@ TEST(HeadsTest, ColorGradientsMatchFiniteDifferences) {
     const auto r = RunColor(head, params, geo, dir, n, drop);
     return Dot(wc, r.rgb) + Dot(wl, r.logvar);
   };
-  const auto r = RunColor(head, params, geo, dir, n, drop);
-  const double* hidden[2] = {r.h0.data(), r.h1.data()};
-  std::vector<double> grads(params.size(), 0.0), dgeo(geo.size(), 0.0), scratch(head.scratch_size(n));
-  head.Backward(params.data(), r.in.data(), n, hidden, r.raw.data(), wc.data(), wl.data(), dgeo.data(),
-                grads.data(), scratch.data(), true);
+  auto r = RunColor(head, params, geo, dir, n, drop);
+  double* const hidden[2] = {r.h0.data(), r.h1.data()};
+  std::vector<double> grads(params.size(), 0.0), dgeo(geo.size(), 0.0);
+  head.Backward(params.data(), {n, geo.data(), 3, dir.data()},
+                {r.in.data(), hidden, r.raw.data(), r.rgb.data(), r.logvar.data()}, {wc.data(), wl.data()},
+                grads.data(), {dgeo.data()}, drop);
   EXPECT_GT(ExpectGradientMatches(params.data(), grads.data(), SomeIndices(params.size(), params.size(), 1),
                                   loss, "params"),
             40);

@@ -91,5 +91,62 @@ TEST(JobStoreTest, UpdatingAnUnknownJobIsNotFound) {
   EXPECT_TRUE(store.Writable());
 }
 
+TEST(JobStoreTest, TenantsSeeTheirOwnJobsAndUsage) {
+  testing::TempDir dir("jobstore");
+  JobStore store(dir / "jobs.sqlite");
+  auto job = [](const std::string& id, v1::JobState state, const std::string& tenant,
+                std::int64_t clip_bytes) {
+    auto made = MakeJob(id, state);
+    made.set_tenant(tenant);
+    made.mutable_clip()->add_files()->set_size(clip_bytes);
+    return made;
+  };
+  store.Insert(job("a1", v1::QUEUED, "a", 100));
+  store.Insert(job("a2", v1::SUCCEEDED, "a", 50));
+  store.Insert(job("b1", v1::RUNNING, "b", 7));
+  auto a3 = job("a3", v1::RUNNING, "a", 10);
+  store.Insert(a3);
+  a3.mutable_checkpoint()->set_size(5);
+  store.Update(a3);
+  const auto usage = store.UsageOf("a");
+  EXPECT_EQ(usage.active_jobs, 2);
+  EXPECT_EQ(usage.bytes, 165);
+  a3.set_state(v1::SUCCEEDED);
+  a3.set_expired_unix_ms(1);
+  store.Update(a3);
+  EXPECT_EQ(store.UsageOf("a").bytes, 150);
+  EXPECT_EQ(store.UsageOf("a").active_jobs, 1);
+  EXPECT_EQ(store.UsageOf("nobody").bytes, 0);
+  EXPECT_EQ(store.List({}, 10, 0, std::string("b")).jobs.size(), 1u);
+  EXPECT_EQ(store.List({}, 10, 0, std::string("a")).jobs.size(), 3u);
+  EXPECT_EQ(store.List({}, 10, 0).jobs.size(), 4u);
+}
+
+TEST(JobStoreTest, StoresFromBeforeTenantsGainTheColumns) {
+  testing::TempDir dir("jobstore");
+  {
+    sqlite3* db = nullptr;
+    ASSERT_EQ(sqlite3_open((dir / "jobs.sqlite").c_str(), &db), SQLITE_OK);
+    auto old = MakeJob("old", v1::SUCCEEDED);
+    old.mutable_clip()->add_files()->set_size(42);
+    const std::string bytes = old.SerializeAsString();
+    sqlite3_exec(db,
+                 "CREATE TABLE jobs (seq INTEGER PRIMARY KEY AUTOINCREMENT, id TEXT NOT NULL UNIQUE, state "
+                 "INTEGER NOT "
+                 "NULL, priority INTEGER NOT NULL, job BLOB NOT NULL)",
+                 nullptr, nullptr, nullptr);
+    sqlite3_stmt* insert = nullptr;
+    sqlite3_prepare_v2(db, "INSERT INTO jobs(id, state, priority, job) VALUES('old', 3, 0, ?)", -1, &insert,
+                       nullptr);
+    sqlite3_bind_blob(insert, 1, bytes.data(), static_cast<int>(bytes.size()), SQLITE_TRANSIENT);
+    ASSERT_EQ(sqlite3_step(insert), SQLITE_DONE);
+    sqlite3_finalize(insert);
+    sqlite3_close(db);
+  }
+  JobStore store(dir / "jobs.sqlite");
+  EXPECT_EQ(store.UsageOf("").bytes, 42);
+  EXPECT_TRUE(store.Get("old").has_value());
+}
+
 }  // namespace
 }  // namespace endorecon::server

@@ -2,6 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 #include "common/error.h"
@@ -20,21 +23,43 @@ struct MlpRun {
   std::vector<double> out;
 };
 
-MlpRun Forward(const Mlp<double>& mlp, const std::vector<double>& params, const std::vector<double>& in,
-               int rows, const DropoutPass& drop) {
-  MlpRun run;
-  std::vector<double*> ptrs;
+template <typename S>
+struct MlpPass {
+  std::vector<std::vector<S>> hidden;
+  std::vector<S*> ptrs;
+  std::vector<S> out;
+};
+
+template <typename S>
+MlpPass<S> ForwardOf(Mlp<S>& mlp, const std::vector<S>& params, const std::vector<S>& in, int rows,
+                     const DropoutPass& drop) {
+  MlpPass<S> run;
   for (int k = 0; k < mlp.hidden_layers(); ++k) {
     run.hidden.emplace_back(static_cast<std::size_t>(rows) * mlp.hidden_dim(k));
   }
-  for (auto& h : run.hidden) ptrs.push_back(h.data());
+  for (auto& h : run.hidden) run.ptrs.push_back(h.data());
   run.out.resize(static_cast<std::size_t>(rows) * mlp.out_dim());
-  mlp.Forward(params.data(), in.data(), rows, ptrs.data(), run.out.data(), drop);
+  mlp.Forward(params.data(), {rows, in.data()}, {run.ptrs.data(), run.out.data()}, drop);
   return run;
 }
 
+MlpRun Forward(Mlp<double>& mlp, const std::vector<double>& params, const std::vector<double>& in, int rows,
+               const DropoutPass& drop) {
+  MlpPass<double> run = ForwardOf(mlp, params, in, rows, drop);
+  return {std::move(run.hidden), std::move(run.out)};
+}
+
+// dL/dparams (added to grads) and dL/din of a forward run.
+template <typename S>
+void BackwardOf(Mlp<S>& mlp, const std::vector<S>& params, const std::vector<S>& in, int rows,
+                MlpPass<S>& run, const std::vector<S>& dout, std::vector<S>& grads,
+                std::type_identity_t<std::vector<S>>* din, const DropoutPass& drop) {
+  mlp.Backward(params.data(), {rows, in.data()}, {run.ptrs.data(), run.out.data()}, {dout.data()},
+               grads.data(), {din ? din->data() : nullptr}, drop);
+}
+
 void CheckGradients(bool dropout_on) {
-  const Mlp<double> mlp(5, {7, 6}, 3, 0.3, 9);
+  Mlp<double> mlp(5, {7, 6}, 3, 0.3, 9);
   const int rows = 11;
   std::vector<double> params(mlp.param_count());
   mlp.Init(params.data(), 4);
@@ -43,13 +68,9 @@ void CheckGradients(bool dropout_on) {
   std::vector<double> in = RandomValues(static_cast<std::size_t>(rows) * 5, -1, 1, 5);
   const std::vector<double> w = RandomValues(static_cast<std::size_t>(rows) * 3, -1, 1, 6);
   const DropoutPass drop{dropout_on, 1234, 40};
-  const MlpRun run = Forward(mlp, params, in, rows, drop);
-  std::vector<const double*> hidden;
-  for (const auto& h : run.hidden) hidden.push_back(h.data());
+  MlpPass<double> run = ForwardOf(mlp, params, in, rows, drop);
   std::vector<double> grads(mlp.param_count(), 0.0), din(in.size(), 0.0);
-  std::vector<double> scratch(mlp.scratch_size(rows));
-  mlp.Backward(params.data(), in.data(), rows, hidden.data(), w.data(), din.data(), grads.data(),
-               scratch.data(), dropout_on);
+  BackwardOf(mlp, params, in, rows, run, w, grads, &din, drop);
   auto loss = [&] { return Dot(w, Forward(mlp, params, in, rows, drop).out); };
   EXPECT_GT(ExpectGradientMatches(params.data(), grads.data(), SomeIndices(params.size(), params.size(), 1),
                                   loss, "params"),
@@ -62,8 +83,33 @@ TEST(MlpTest, GradientsMatchFiniteDifferences) { CheckGradients(false); }
 
 TEST(MlpTest, GradientsMatchFiniteDifferencesWithDropout) { CheckGradients(true); }
 
+// A batch of several tasks (per-task partial gradients, added in task order) gives the sum of the
+// gradients of its parts, and adds to what the gradient array held.
+TEST(MlpTest, BatchGradientIsTheSumOverItsParts) {
+  Mlp<double> mlp(6, {9}, 4, 0.2, 5);
+  std::vector<double> params(mlp.param_count());
+  mlp.Init(params.data(), 2);
+  const int rows = 5000, split = 3001;
+  const auto in = RandomValues(static_cast<std::size_t>(rows) * 6, -1, 1, 3);
+  const auto w = RandomValues(static_cast<std::size_t>(rows) * 4, -1, 1, 4);
+  const DropoutPass drop{true, 11, 0};
+  MlpPass<double> whole = ForwardOf(mlp, params, in, rows, drop);
+  std::vector<double> grads(mlp.param_count(), 1.0);
+  BackwardOf(mlp, params, in, rows, whole, w, grads, nullptr, drop);
+  std::vector<double> parts(mlp.param_count(), 1.0);
+  for (const auto& [first, count] : {std::pair{0, split}, std::pair{split, rows - split}}) {
+    const std::vector<double> in_part(in.begin() + 6 * first, in.begin() + 6 * (first + count));
+    const std::vector<double> w_part(w.begin() + 4 * first, w.begin() + 4 * (first + count));
+    const DropoutPass part_drop{true, 11, static_cast<std::uint32_t>(first)};
+    MlpPass<double> run = ForwardOf(mlp, params, in_part, count, part_drop);
+    BackwardOf(mlp, params, in_part, count, run, w_part, parts, nullptr, part_drop);
+  }
+  for (std::size_t i = 0; i < grads.size(); ++i)
+    ASSERT_NEAR(grads[i], parts[i], 1e-9 * (1 + std::abs(parts[i]))) << i;
+}
+
 TEST(MlpTest, LayerIsTheMatrixProduct) {
-  const Mlp<double> mlp(3, {}, 2, 0.0, 1);
+  Mlp<double> mlp(3, {}, 2, 0.0, 1);
   const std::vector<double> params = {1, 2, 3, 4, 5, 6, 0.5, -0.5};  // W (3 x 2) row-major, then b
   const std::vector<double> in = {1, 0, -1, 2, 1, 0};
   const MlpRun run = Forward(mlp, params, in, 2, {});
@@ -76,7 +122,7 @@ TEST(MlpTest, LayerIsTheMatrixProduct) {
 
 TEST(MlpTest, DropoutDropsItsRateAndScalesSurvivors) {
   // A hidden layer whose pre-activations are all exactly 1.
-  const Mlp<double> mlp(1, {64}, 1, 0.25, 3);
+  Mlp<double> mlp(1, {64}, 1, 0.25, 3);
   std::vector<double> params(mlp.param_count(), 0.0);
   for (int j = 0; j < 64; ++j) params[j] = 1.0;
   const int rows = 500;
@@ -99,7 +145,7 @@ TEST(MlpTest, DropoutDropsItsRateAndScalesSurvivors) {
 }
 
 TEST(MlpTest, DropoutMaskDoesNotDependOnTiling) {
-  const Mlp<double> mlp(4, {16}, 2, 0.5, 3);
+  Mlp<double> mlp(4, {16}, 2, 0.5, 3);
   std::vector<double> params(mlp.param_count());
   mlp.Init(params.data(), 1);
   const int rows = 30;
@@ -112,8 +158,8 @@ TEST(MlpTest, DropoutMaskDoesNotDependOnTiling) {
 
 // The float network (what the field trains) agrees with the double one the gradient checks use.
 TEST(MlpTest, FloatAgreesWithDouble) {
-  const Mlp<double> md(20, {32, 33}, 17, 0.2, 4);
-  const Mlp<float> mf(20, {32, 33}, 17, 0.2, 4);
+  Mlp<double> md(20, {32, 33}, 17, 0.2, 4);
+  Mlp<float> mf(20, {32, 33}, 17, 0.2, 4);
   const int rows = 77;
   std::vector<double> pd(md.param_count());
   md.Init(pd.data(), 3);
@@ -124,20 +170,14 @@ TEST(MlpTest, FloatAgreesWithDouble) {
   const std::vector<float> inf(ind.begin(), ind.end()), gf(gd.begin(), gd.end());
   const std::vector<double> inr(inf.begin(), inf.end()), gr(gf.begin(), gf.end());
   const DropoutPass drop{true, 8, 0};
-  const MlpRun rd = Forward(md, pd, inr, rows, drop);
-  std::vector<float> h0(rows * 32), h1(rows * 33), outf(rows * 17);
-  float* hidden[2] = {h0.data(), h1.data()};
-  mf.Forward(pf.data(), inf.data(), rows, hidden, outf.data(), drop);
-  for (std::size_t i = 0; i < outf.size(); ++i) ASSERT_NEAR(outf[i], rd.out[i], 1e-4) << i;
+  MlpPass<double> rd = ForwardOf(md, pd, inr, rows, drop);
+  MlpPass<float> rf = ForwardOf(mf, pf, inf, rows, drop);
+  for (std::size_t i = 0; i < rf.out.size(); ++i) ASSERT_NEAR(rf.out[i], rd.out[i], 1e-4) << i;
 
-  std::vector<double> grad_d(pd.size(), 0.0), din_d(inr.size()), scratch_d(md.scratch_size(rows));
-  const double* hd[2] = {rd.hidden[0].data(), rd.hidden[1].data()};
-  md.Backward(pd.data(), inr.data(), rows, hd, gr.data(), din_d.data(), grad_d.data(), scratch_d.data(),
-              true);
-  std::vector<float> grad_f(pf.size(), 0.0f), din_f(inf.size()), scratch_f(mf.scratch_size(rows));
-  const float* hf[2] = {h0.data(), h1.data()};
-  mf.Backward(pf.data(), inf.data(), rows, hf, gf.data(), din_f.data(), grad_f.data(), scratch_f.data(),
-              true);
+  std::vector<double> grad_d(pd.size(), 0.0), din_d(inr.size());
+  BackwardOf(md, pd, inr, rows, rd, gr, grad_d, &din_d, drop);
+  std::vector<float> grad_f(pf.size(), 0.0f), din_f(inf.size());
+  BackwardOf(mf, pf, inf, rows, rf, gf, grad_f, &din_f, drop);
   for (std::size_t i = 0; i < grad_f.size(); ++i) ASSERT_NEAR(grad_f[i], grad_d[i], 1e-3) << i;
   for (std::size_t i = 0; i < din_f.size(); ++i) ASSERT_NEAR(din_f[i], din_d[i], 1e-4) << i;
 }

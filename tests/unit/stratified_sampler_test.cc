@@ -4,7 +4,7 @@
 
 #include <vector>
 
-#include "worker/engine/render/rng.h"
+#include "worker/engine/base/counter_rng.h"
 
 namespace endorecon::render {
 namespace {
@@ -24,7 +24,7 @@ TEST(StratifiedSampler, OneSamplePerBinAndIntervalsTileTheRange) {
   const int n = 64;
   const float near = 0.3f, far = 7.9f;
   std::vector<float> s(n), delta(n);
-  StratifiedSamples(near, far, n, CounterRng<float>(5, 11), s.data(), delta.data());
+  StratifiedSamples(near, far, n, base::CounterRng<float>(5, 11), s.data(), delta.data());
   float edge = near, total = 0;
   for (int j = 0; j < n; ++j) {
     EXPECT_GE(s[j], edge);

@@ -7,9 +7,9 @@
 #include "tests/unit/temp_dir.h"
 #include "worker/engine/eval/clip_evaluator.h"
 #include "worker/engine/eval/exports.h"
-#include "worker/engine/reconstruct.h"
 #include "worker/engine/scene/clip_loader.h"
 #include "worker/engine/scene/synthetic_clip.h"
+#include "worker/engine/train/render_settings.h"
 #include "worker/engine/train/scene_fit.h"
 #include "worker/engine/train/trainer.h"
 
@@ -32,7 +32,7 @@ TEST(UncertaintyResults, FilesAndOneHeatmapScalePerClip) {
   train::Trainer trainer(clip, config, {0, 1, 2}, 1);
   for (int i = 0; i < 20; ++i) trainer.Step();
   render::FrameRenderer renderer(trainer.field(), trainer.box(),
-                                 UncertaintyRenderSettings(config, clip.near, clip.far, 5));
+                                 train::UncertaintyRenderSettings(config, clip.near, clip.far, 5));
   ClipEvaluation what;
   what.train_frames = {0, 1, 2};
   what.heldout_frames = {3};

@@ -1,30 +1,33 @@
 // The engine's one entry point for a whole run: load a clip, train, evaluate, write results.
 // Used by `endorecon-worker reconstruct` and, in-process, by the worker runtime (one call per device).
+// The pipeline reads as reconstruct.cc; its stages: run_config.h (what the run is configured with and
+// trains on), training_loop.h (the training phase and its periodic work), eval/ (results).
 #pragma once
 
 #include <cstdint>
 #include <functional>
+#include <nlohmann/json.hpp>
 #include <string>
-#include <vector>
 
-#include "worker/engine/render/frame_renderer.h"
-#include "worker/engine/train/train_config.h"
+#include "worker/engine/eval/preview.h"
 
 namespace endorecon {
 
 struct ReconstructOptions {
-  std::string clip_dir;        // EndoNeRF layout or a folder with transforms.json
-  std::string out_dir;         // results folder; created if missing
-  std::string config_file;     // optional JSON overriding the preset (same keys as config.json)
+  std::string clip_dir;  // EndoNeRF layout or a folder with transforms.json
+  std::string out_dir;   // results folder; created if missing
+  // Keys of the training configuration (config.json's "train" object) overriding the preset, or on
+  // resume the checkpoint's configuration; unknown keys are an error naming them.
+  nlohmann::json config = nlohmann::json::object();
   std::string preset = "cpu";  // "cpu" or "paper"
   int iterations = -1;         // -1: the preset's
   double time_budget_s = 0;    // 0: none; otherwise training stops at this many seconds
   int holdout = -1;            // -1: the preset's; 0: none; K: every K-th frame held out
-  int threads = 0;             // 0: all cores
+  int threads = 0;             // 0: all cores; the run's own TBB arena, other runs in the process keep theirs
   std::uint64_t seed = 0;
   bool force_static = false;  // treat the clip as static (no deformation network)
   // Optional checkpoint file to resume training from; its configuration replaces the preset, and
-  // config_file, iterations and holdout still apply over it (a field of another shape fails to load).
+  // config, iterations and holdout still apply over it (a field of another shape fails to load).
   std::string resume_from;
 };
 
@@ -41,17 +44,9 @@ struct Progress {
   double samples_per_second = 0;
 };
 
-// A small image streamed while a job runs: 8-bit, row-major, `channels` 1 or 3.
-struct Preview {
-  std::string kind;  // "rgb", "depth" or "uncertainty"
-  int frame = 0;
-  int width = 0, height = 0, channels = 0;
-  std::vector<std::uint8_t> pixels;
-};
-
 struct ReconstructHooks {
   std::function<void(const Progress&)> on_progress;            // every progress interval
-  std::function<void(const Preview&)> on_preview;              // every preview interval
+  std::function<void(const eval::Preview&)> on_preview;        // every preview interval
   std::function<void(const std::string& path)> on_checkpoint;  // after each checkpoint is written
   std::function<bool()> should_stop;                           // polled every iteration; true = cancel
   double progress_interval_s = 2.0;
@@ -65,17 +60,14 @@ struct ReconstructSummary {
   double train_seconds = 0;
   double heldout_psnr = -1;
   double train_psnr = 0;
+  int threads = 0;           // the run's arena's concurrency
   std::string metrics_path;  // out_dir/metrics.json
 };
 
-// The evaluation renderer's settings with uncertainty on (K = config.mc_passes, lambda, eps), as
-// Reconstruct uses them for results; `render` uses the same for novel views.
-render::FrameRenderSettings UncertaintyRenderSettings(const train::TrainConfig& config, double near,
-                                                      double far, std::uint64_t seed);
-
 // Throws endorecon::Error: kInvalidArgument for a bad clip or option (message names the file),
 // kInternal when training diverges (message names the stage and iteration; nothing is written, so
-// out_dir/model/checkpoint.bin stays the last periodic one, to resume from with another config_file),
+// out_dir/model/checkpoint.bin stays the last periodic one, to resume from with another config),
+// kUnavailable / kResourceExhausted when a result cannot be written (message names the file),
 // kCancelled never (a stop request returns with cancelled = true).
 ReconstructSummary Reconstruct(const ReconstructOptions& options, const ReconstructHooks& hooks);
 

@@ -2,7 +2,6 @@
 
 #include <spdlog/spdlog.h>
 
-#include <fstream>
 #include <nlohmann/json.hpp>
 #include <thread>
 
@@ -11,6 +10,7 @@
 #include "common/sha256.h"
 #include "worker/engine/reconstruct.h"
 #include "worker/runtime/dicom_job.h"
+#include "worker/runtime/job_options.h"
 #include "worker/runtime/preview_png.h"
 #include "worker/runtime/progress_reporter.h"
 
@@ -30,28 +30,6 @@ v1::Progress ToProto(const Progress& p) {
   out.set_depth_rmse(p.depth_rmse);
   out.set_samples_per_second(p.samples_per_second);
   return out;
-}
-
-ReconstructOptions OptionsFor(const v1::Job& job, const fs::path& job_dir, const Device& device) {
-  const auto& o = job.options();
-  ReconstructOptions options;
-  options.clip_dir = (job_dir / "clip").string();
-  options.out_dir = (job_dir / "out").string();
-  if (!o.config_json().empty()) {
-    options.config_file = (job_dir / "config.json").string();
-    std::ofstream(options.config_file) << o.config_json();
-  }
-  if (!o.preset().empty()) options.preset = o.preset();
-  if (o.has_iterations()) options.iterations = o.iterations();
-  options.time_budget_s = o.time_budget_s();
-  if (o.has_holdout()) options.holdout = o.holdout();
-  options.seed = o.seed();
-  options.force_static = o.force_static();
-  options.threads = device.threads;
-  if (job.has_checkpoint() && !job.checkpoint().sha256().empty()) {
-    options.resume_from = (job_dir / "checkpoint" / job.checkpoint().path()).string();
-  }
-  return options;
 }
 
 // Uploads a checkpoint file the engine just wrote, as a blob named by its file name.
@@ -138,7 +116,7 @@ void RunLeasedJob(WorkerClient& client, const v1::LeaseResponse& lease, const De
       last_iteration = p.iteration;
       metrics.UpdateMemory();
     };
-    hooks.on_preview = [&](const Preview& preview) {
+    hooks.on_preview = [&](const eval::Preview& preview) {
       reporter.AddPreview(EncodePreview(preview, last_iteration));
     };
     hooks.on_checkpoint = [&](const std::string& path) {

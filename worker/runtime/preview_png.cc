@@ -8,7 +8,7 @@
 
 namespace endorecon::worker {
 
-v1::Preview EncodePreview(const Preview& preview, int iteration) {
+v1::Preview EncodePreview(const eval::Preview& preview, int iteration) {
   if (preview.channels != 1 && preview.channels != 3) {
     FailInvalid("preview '" + preview.kind + "' has " + std::to_string(preview.channels) + " channels");
   }

@@ -2,11 +2,11 @@
 #pragma once
 
 #include "endorecon/v1/job.pb.h"
-#include "worker/engine/reconstruct.h"
+#include "worker/engine/eval/preview.h"
 
 namespace endorecon::worker {
 
 // Encodes `preview` as PNG (RGB or grey); `iteration` is the training iteration it shows.
-v1::Preview EncodePreview(const Preview& preview, int iteration);
+v1::Preview EncodePreview(const eval::Preview& preview, int iteration);
 
 }  // namespace endorecon::worker

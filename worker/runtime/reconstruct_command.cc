@@ -7,6 +7,7 @@
 #include <memory>
 
 #include "worker/engine/reconstruct.h"
+#include "worker/engine/scene/json_file.h"
 #include "worker/runtime/commands.h"
 #include "worker/runtime/dicom_job.h"
 
@@ -14,8 +15,9 @@ namespace endorecon::worker {
 
 namespace {
 
-void AddReconstructOptions(CLI::App& cmd, ReconstructOptions& options) {
-  cmd.add_option("--config", options.config_file, "JSON file overriding the preset (keys as in config.json)");
+void AddReconstructOptions(CLI::App& cmd, ReconstructOptions& options, std::string& config_file) {
+  cmd.add_option("--config", config_file,
+                 "JSON file of training keys overriding the preset (as config.json's \"train\")");
   cmd.add_option("--preset", options.preset, "cpu or paper")
       ->capture_default_str()
       ->check(CLI::IsMember({"cpu", "paper"}));
@@ -62,17 +64,19 @@ void AddDicomOptions(CLI::App& cmd, v1::RecordingOptions& recording, v1::DicomOu
 Command AddReconstructCommand(CLI::App& app) {
   auto* cmd = app.add_subcommand("reconstruct", "reconstruct a clip here and write the results folder");
   auto options = std::make_shared<ReconstructOptions>();
+  auto config_file = std::make_shared<std::string>();
   auto recording = std::make_shared<v1::RecordingOptions>();
   auto dicom = std::make_shared<v1::DicomOutputOptions>();
   cmd->add_option("clip", options->clip_dir,
                   "clip folder (EndoNeRF layout or transforms.json), or a DICOM recording (file or folder)")
       ->required();
   cmd->add_option("-o,--out", options->out_dir, "results folder")->required();
-  AddReconstructOptions(*cmd, *options);
+  AddReconstructOptions(*cmd, *options, *config_file);
   cmd->add_option("--threads", options->threads, "worker threads (0: all cores)")->capture_default_str();
   cmd->add_option("--resume", options->resume_from, "checkpoint file to resume from");
   AddDicomOptions(*cmd, *recording, *dicom);
-  return [options, recording, dicom] {
+  return [options, config_file, recording, dicom] {
+    if (!config_file->empty()) options->config = scene::ReadJsonFile(*config_file);
     const auto from_dicom = PrepareRecording(options->clip_dir, *recording, options->out_dir + ".clip");
     if (from_dicom) options->clip_dir = from_dicom->clip_dir.string();
     ReconstructHooks hooks;

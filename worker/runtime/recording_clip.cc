@@ -3,11 +3,11 @@
 #include <spdlog/spdlog.h>
 
 #include <cmath>
-#include <fstream>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
 #include "common/error.h"
+#include "common/file_write.h"
 #include "worker/engine/eval/exports.h"
 #include "worker/engine/scene/npy.h"
 
@@ -48,7 +48,7 @@ void WriteTransforms(const dicom::Recording& recording, const fs::path& clip_dir
                                      {"near", kNear},
                                      {"far", kFar},
                                      {"frames", frames}};
-  std::ofstream(clip_dir / "transforms.json") << transforms.dump(1);
+  WriteFile(clip_dir / "transforms.json", transforms.dump(1), "clip cameras");
 }
 
 void WritePosesBounds(const dicom::Recording& recording, const fs::path& clip_dir) {
@@ -114,7 +114,7 @@ std::optional<RecordingClip> ClipFromRecording(const fs::path& input, const dico
       {"focal_per_width", kFocalPerWidth},
       {"near", kNear},
       {"far", kFar}};
-  std::ofstream(clip_dir / "recording.json") << record.dump(1);
+  WriteFile(clip_dir / "recording.json", record.dump(1), "recording description");
   spdlog::info("DICOM recording: {}", clip.summary);
   return clip;
 }

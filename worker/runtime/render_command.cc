@@ -3,16 +3,17 @@
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
-#include <fstream>
 #include <memory>
 #include <nlohmann/json.hpp>
 
+#include "common/file_write.h"
 #include "worker/engine/eval/clip_evaluator.h"
 #include "worker/engine/eval/exports.h"
-#include "worker/engine/reconstruct.h"
+#include "worker/engine/eval/report.h"
 #include "worker/engine/render/frame_renderer.h"
 #include "worker/engine/scene/camera_list.h"
 #include "worker/engine/train/checkpoint.h"
+#include "worker/engine/train/render_settings.h"
 #include "worker/engine/train/trainer.h"
 #include "worker/runtime/commands.h"
 
@@ -36,7 +37,7 @@ Command AddRenderCommand(CLI::App& app) {
   return [args] {
     const train::Model model = train::ReadModel(std::filesystem::path(args->result) / "model" / "model.bin");
     const auto cameras = scene::ReadCameraList(args->cameras);
-    auto settings = UncertaintyRenderSettings(model.config, model.near, model.far, 0);
+    auto settings = train::UncertaintyRenderSettings(model.config, model.near, model.far, 0);
     if (args->mc_passes >= 0) settings.mc_passes = args->mc_passes;
     render::FrameRenderer renderer(*model.field, model.box, settings);
     const render::OccupancyGrid occupancy = train::BuildOccupancy(*model.field, model.config);
@@ -70,7 +71,14 @@ Command AddRenderCommand(CLI::App& app) {
     nlohmann::json info = eval::UncertaintySettings(settings);
     info["heatmap_scale"] = {{"uncertainty", {0.0, heat}}};
     info["depth_png_scale"] = scale;
-    std::ofstream(out / "render.json") << info.dump(2);
+    WriteFile(out / "render.json", info.dump(2), "render description");
+    // The views' cameras and times travel with them (the report back-projects the depth through them).
+    const auto cameras_copy = out / "cameras.json";
+    if (!std::filesystem::exists(cameras_copy) || !std::filesystem::equivalent(args->cameras, cameras_copy)) {
+      std::filesystem::copy_file(args->cameras, cameras_copy,
+                                 std::filesystem::copy_options::overwrite_existing);
+    }
+    eval::WriteReport(out);
     spdlog::info("rendered {} views into {} (depth PNG scale {}, uncertainty heat-map scale [0, {}])",
                  cameras.size(), args->out, scale, heat);
     return 0;

@@ -8,11 +8,12 @@
 #include <CLI/CLI.hpp>
 #include <atomic>
 #include <memory>
-#include <sstream>
 #include <thread>
 
 #include "common/error.h"
+#include "common/transport_security.h"
 #include "worker/runtime/commands.h"
+#include "worker/runtime/device_list.h"
 #include "worker/runtime/job_runner.h"
 #include "worker/runtime/worker_client.h"
 #include "worker/runtime/worker_metrics.h"
@@ -32,31 +33,24 @@ struct ServeFlags {
   double lease_wait_s = 10;
   double preview_interval_s = 30;
   double checkpoint_interval_s = 120;
+  std::string ca_file;
+  std::string tls_cert;
+  std::string tls_key;
+  std::string token_file;
 };
 
-// "cpu" -> one CPU slot; "cpu:N" -> N CPU slots; "0,1,..." -> GPU indices (CUDA_VISIBLE_DEVICES
-// style), which run as CPU slots until the CUDA engine exists.
-std::vector<Device> ParseDevices(const std::string& spec, int threads) {
-  std::vector<Device> devices;
-  if (spec == "cpu" || spec.rfind("cpu:", 0) == 0) {
-    const int slots = spec == "cpu" ? 1 : std::stoi(spec.substr(4));
-    if (slots < 1) FailInvalid("--devices " + spec + ": expected at least one slot");
-    for (int i = 0; i < slots; ++i) devices.push_back({"cpu" + std::to_string(i), "cpu", 0});
-  } else {
-    std::stringstream list(spec);
-    std::string index;
-    while (std::getline(list, index, ',')) {
-      if (index.empty() || index.find_first_not_of("0123456789") != std::string::npos) {
-        FailInvalid("--devices " + spec + ": expected cpu, cpu:N or GPU indices like 0,1");
-      }
-      devices.push_back({"gpu" + index, "cpu", 0});
-    }
-    spdlog::warn("no CUDA engine in this build: GPU slots {} run on the CPU", spec);
-  }
-  const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  for (auto& device : devices)
-    device.threads = threads > 0 ? threads : std::max(1, cores / int(devices.size()));
-  return devices;
+ChannelSecurity SecurityOf(const ServeFlags& flags) {
+  ChannelSecurity security;
+  security.ca_file = flags.ca_file;
+  security.cert_file = flags.tls_cert;
+  security.key_file = flags.tls_key;
+  if (!flags.token_file.empty()) security.token = ReadTokenFile(flags.token_file, "--token-file");
+  return security;
+}
+
+// A refusal that retrying cannot change: the worker's credentials are wrong.
+bool Refused(const Error& error) {
+  return error.code() == ErrorCode::kUnauthenticated || error.code() == ErrorCode::kPermissionDenied;
 }
 
 std::string Hostname() {
@@ -90,11 +84,12 @@ int Serve(const ServeFlags& flags) {
   sigaddset(&stop_signals, SIGTERM);
   pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
 
-  const auto devices = ParseDevices(flags.devices, flags.threads);
+  const auto devices =
+      ParseDevices(flags.devices, flags.threads, static_cast<int>(std::thread::hardware_concurrency()));
   const std::string worker_id = flags.id.empty() ? Hostname() + "-" + std::to_string(getpid()) : flags.id;
   WorkerMetrics metrics(
       flags.metrics_port >= 0 ? flags.metrics_host + ":" + std::to_string(flags.metrics_port) : "", devices);
-  WorkerClient client(flags.server, worker_id,
+  WorkerClient client(flags.server, SecurityOf(flags), worker_id,
                       std::chrono::milliseconds(static_cast<long>(flags.timeout_s * 1000)));
   std::vector<std::string> names;
   for (const auto& device : devices) names.push_back(device.name);
@@ -119,6 +114,12 @@ int Serve(const ServeFlags& flags) {
       settings.heartbeat = std::chrono::milliseconds(registered.heartbeat_interval_ms());
       break;
     } catch (const Error& e) {
+      if (Refused(e)) {
+        shutting_down = true;
+        pthread_kill(signal_waiter.native_handle(), SIGTERM);
+        signal_waiter.join();
+        throw;
+      }
       spdlog::warn("cannot register with {}: {}; retrying", flags.server, e.what());
       std::this_thread::sleep_for(std::chrono::seconds(1));
     }
@@ -161,6 +162,10 @@ Command AddServeCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--checkpoint-interval", flags->checkpoint_interval_s, "seconds between checkpoints")
       ->capture_default_str();
+  cmd->add_option("--ca", flags->ca_file, "TLS: verify the server against this CA certificate");
+  cmd->add_option("--tls-cert", flags->tls_cert, "client certificate for a server that requires one (mTLS)");
+  cmd->add_option("--tls-key", flags->tls_key, "its private key (refused if others may read it)");
+  cmd->add_option("--token-file", flags->token_file, "file holding the worker's bearer token (mode 0600)");
   return [flags] { return Serve(*flags); };
 }
 

@@ -3,13 +3,12 @@
 #include "common/file_download.h"
 #include "common/file_upload.h"
 #include "common/grpc_status.h"
-#include "common/transport_security.h"
 
 namespace endorecon::worker {
 
-WorkerClient::WorkerClient(const std::string& server, std::string worker_id,
+WorkerClient::WorkerClient(const std::string& server, const ChannelSecurity& security, std::string worker_id,
                            std::chrono::milliseconds timeout)
-    : stub_(v1::WorkerService::NewStub(OpenChannel(server))),
+    : stub_(v1::WorkerService::NewStub(OpenChannel(server, security))),
       worker_id_(std::move(worker_id)),
       timeout_(timeout) {}
 

@@ -11,13 +11,16 @@
 #include <string>
 #include <vector>
 
+#include "common/transport_security.h"
 #include "endorecon/v1/worker_service.grpc.pb.h"
 
 namespace endorecon::worker {
 
 class WorkerClient {
  public:
-  WorkerClient(const std::string& server, std::string worker_id, std::chrono::milliseconds timeout);
+  // Throws as OpenChannel for bad TLS files.
+  WorkerClient(const std::string& server, const ChannelSecurity& security, std::string worker_id,
+               std::chrono::milliseconds timeout);
 
   const std::string& worker_id() const { return worker_id_; }
   v1::RegisterResponse Register(const std::string& hostname, const std::vector<std::string>& devices);

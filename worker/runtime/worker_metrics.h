@@ -16,13 +16,9 @@
 #include <string>
 #include <vector>
 
-namespace endorecon::worker {
+#include "worker/runtime/device_list.h"
 
-struct Device {
-  std::string name;  // "cpu0", "gpu1", ...
-  std::string kind;  // "cpu", or "cuda" once the CUDA engine exists
-  int threads = 0;   // engine threads for a CPU slot
-};
+namespace endorecon::worker {
 
 class WorkerMetrics {
  public:

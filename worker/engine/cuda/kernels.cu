@@ -2,12 +2,12 @@
 
 #include <cstddef>
 #include <string>
-#include <type_traits>
 
 #include "common/error.h"
+#include "worker/engine/base/counter_rng.h"
 #include "worker/engine/cuda/device.h"
 #include "worker/engine/cuda/kernels.h"
-#include "worker/engine/render/rng.h"
+#include "worker/engine/field/level_dispatch.h"
 #include "worker/engine/render/stratified_sampler.h"
 
 namespace endorecon::cuda {
@@ -23,15 +23,25 @@ __device__ int ThreadIndex() { return static_cast<int>(blockIdx.x * blockDim.x +
 
 // --- hash grid ---
 
+// The scatter's accumulation when many threads add into one table: atomic on the device. (The host
+// branch exists only so the functor is callable from field::ScatterLevel's __host__ __device__ body.)
+struct AtomicAdd {
+  __host__ __device__ void operator()(float* target, float value) const {
+#ifdef __CUDA_ARCH__
+    atomicAdd(target, value);
+#else
+    *target += value;
+#endif
+  }
+};
+
 template <int F, bool kDense>
 __global__ void HashLevelForwardKernel(field::GridLevel level, const float* table, const float* pos, int n,
                                        float* feat, int feat_stride) {
   const int i = ThreadIndex();
   if (i >= n) return;
-  std::uint32_t slot[8];
-  float w[8], frac[3];
-  field::CellCornersOf<kDense>(level, pos + 3 * static_cast<std::size_t>(i), slot, w, frac);
-  field::BlendCorners<F>(table, slot, w, feat + static_cast<std::size_t>(i) * feat_stride);
+  field::GatherLevel<F, kDense>(level, table, pos + 3 * static_cast<std::size_t>(i),
+                                feat + static_cast<std::size_t>(i) * feat_stride);
 }
 
 template <int F, bool kDense, bool kPosition>
@@ -40,56 +50,16 @@ __global__ void HashLevelBackwardKernel(field::GridLevel level, const float* pos
                                         const float* table, float* dpos) {
   const int i = ThreadIndex();
   if (i >= n) return;
-  const float* p = pos + 3 * static_cast<std::size_t>(i);
-  std::uint32_t slot[8];
-  float w[8], frac[3];
-  field::CellCornersOf<kDense>(level, p, slot, w, frac);
-  const float* d = dfeat + static_cast<std::size_t>(i) * dfeat_stride;
-  const float s = scale ? scale[i] : 1.0f;
-  float g[F];
-  for (int f = 0; f < F; ++f) g[f] = s * d[f];
-  float dot[8];
-  for (int k = 0; k < 8; ++k) {
-    float* gv = grads + std::size_t{slot[k]} * F;
-    for (int f = 0; f < F; ++f) atomicAdd(gv + f, w[k] * g[f]);
-    if constexpr (kPosition) {
-      const float* v = table + std::size_t{slot[k]} * F;
-      dot[k] = 0.0f;
-      for (int f = 0; f < F; ++f) dot[k] += v[f] * g[f];
-    }
-  }
-  if constexpr (kPosition) {
-    float grad[3];
-    field::TrilinearGradient(dot, frac, grad);
-    const float res = static_cast<float>(level.res);
-    for (int a = 0; a < 3; ++a) {
-      if (field::InsideUnit(p[a])) dpos[3 * static_cast<std::size_t>(i) + a] += res * grad[a];
-    }
-  }
-}
-
-// Calls fn(std::integral_constant<int, F>{}) for features F in {1, 2, 4, 8}.
-template <typename Fn>
-void WithFeatures(int features, Fn&& fn) {
-  switch (features) {
-    case 1:
-      return fn(std::integral_constant<int, 1>{});
-    case 2:
-      return fn(std::integral_constant<int, 2>{});
-    case 4:
-      return fn(std::integral_constant<int, 4>{});
-    case 8:
-      return fn(std::integral_constant<int, 8>{});
-    default:
-      FailInvalid("hash grid features per level must be 1, 2, 4 or 8, got " + std::to_string(features));
-  }
+  const std::size_t r = static_cast<std::size_t>(i);
+  field::ScatterLevel<F, kDense, kPosition>(level, pos + 3 * r, dfeat + r * dfeat_stride,
+                                            scale ? scale[r] : 1.0f, grads, table,
+                                            kPosition ? dpos + 3 * r : nullptr, AtomicAdd{});
 }
 
 // --- samplers ---
 
-__device__ render::CounterRng<float> RayRng(const RayStreams& streams, int r) {
-  return render::CounterRng<float>(streams.seed,
-                                   streams.stream_base + streams.stream_step * std::uint64_t(r));
+__device__ base::CounterRng<float> RayRng(const RayStreams& streams, int r) {
+  return base::CounterRng<float>(streams.seed, streams.stream_base + streams.stream_step * std::uint64_t(r));
 }
 
 __global__ void StratifiedKernel(float near, float far, int n_rays, int samples, RayStreams streams, float* s,
@@ -153,14 +123,11 @@ __global__ void RayLossKernel(const render::RayComposite<float>* rays, const flo
 
 void HashLevelForward(const field::GridLevel& level, int features, const float* table, const float* pos,
                       int n, float* feat, int feat_stride) {
-  WithFeatures(features, [&](auto fc) {
+  field::DispatchLevel(features, level, [&](auto fc, auto dense) {
     constexpr int F = decltype(fc)::value;
+    constexpr bool kDense = decltype(dense)::value;
     if (n <= 0) return;
-    if (level.dense) {
-      HashLevelForwardKernel<F, true><<<Blocks(n), kThreads>>>(level, table, pos, n, feat, feat_stride);
-    } else {
-      HashLevelForwardKernel<F, false><<<Blocks(n), kThreads>>>(level, table, pos, n, feat, feat_stride);
-    }
+    HashLevelForwardKernel<F, kDense><<<Blocks(n), kThreads>>>(level, table, pos, n, feat, feat_stride);
     CheckLaunch("hash level forward kernel");
   });
 }
@@ -170,22 +137,16 @@ void HashLevelBackward(const field::GridLevel& level, int features, const float*
                        const float* table, float* dpos_add) {
   if (dpos_add != nullptr && table == nullptr)
     FailInvalid("hash level backward: a position gradient needs the level's table");
-  WithFeatures(features, [&](auto fc) {
+  field::DispatchLevel(features, level, [&](auto fc, auto dense) {
     constexpr int F = decltype(fc)::value;
+    constexpr bool kDense = decltype(dense)::value;
     if (n <= 0) return;
-    const dim3 blocks(Blocks(n)), threads(kThreads);
-    if (level.dense && dpos_add) {
-      HashLevelBackwardKernel<F, true, true>
-          <<<blocks, threads>>>(level, pos, n, dfeat, dfeat_stride, scale, grads, table, dpos_add);
-    } else if (level.dense) {
-      HashLevelBackwardKernel<F, true, false>
-          <<<blocks, threads>>>(level, pos, n, dfeat, dfeat_stride, scale, grads, table, dpos_add);
-    } else if (dpos_add) {
-      HashLevelBackwardKernel<F, false, true>
-          <<<blocks, threads>>>(level, pos, n, dfeat, dfeat_stride, scale, grads, table, dpos_add);
+    if (dpos_add) {
+      HashLevelBackwardKernel<F, kDense, true>
+          <<<Blocks(n), kThreads>>>(level, pos, n, dfeat, dfeat_stride, scale, grads, table, dpos_add);
     } else {
-      HashLevelBackwardKernel<F, false, false>
-          <<<blocks, threads>>>(level, pos, n, dfeat, dfeat_stride, scale, grads, table, dpos_add);
+      HashLevelBackwardKernel<F, kDense, false>
+          <<<Blocks(n), kThreads>>>(level, pos, n, dfeat, dfeat_stride, scale, grads, table, dpos_add);
     }
     CheckLaunch("hash level backward kernel");
   });

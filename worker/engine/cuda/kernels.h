@@ -28,16 +28,17 @@ void HashLevelForward(const field::GridLevel& level, int features, const float* 
                       int n, float* feat, int feat_stride);
 
 // grads[level slots] += scale[i] * trilinear weights * dfeat[i * dfeat_stride + f] (scale null: 1),
-// scattered with atomicAdd; `grads` is the level's part of the gradient array. When dpos_add is not
-// null (table must be given then), also adds the level's part of dL/dpos (n x 3) to it.
-// Float atomics make the sum order (and so the last bits) vary from run to run.
+// scattered with atomicAdd (field::ScatterLevel, the CPU's per-sample function); `grads` is the level's
+// part of the gradient array. When dpos_add is not null (table must be given then), also adds the level's
+// part of dL/dpos (n x 3) to it. Features as HashLevelForward. Float atomics make the sum order (and so the
+// last bits) vary from run to run.
 void HashLevelBackward(const field::GridLevel& level, int features, const float* pos, int n,
-                       const float* dfeat, int dfeat_stride, const float* scale, float* grads,
-                       const float* table, float* dpos_add);
+                       const float* dfeat, int dfeat_stride, const float* scale, float* grads, const float* table,
+                       float* dpos_add);
 
 // --- samplers (one thread per ray) ---
 
-// Draws of ray r come from render::CounterRng<float>(seed, stream_base + stream_step * r), as the
+// Draws of ray r come from base::CounterRng<float>(seed, stream_base + stream_step * r), as the
 // trainer's (seed = the step's seed, base 1, step 2).
 struct RayStreams {
   std::uint64_t seed = 0;

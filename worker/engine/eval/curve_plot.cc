@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "common/error.h"
+#include "common/file_write.h"
 
 namespace endorecon::eval {
 namespace {
@@ -195,11 +196,7 @@ std::string CurveSvg(std::span<const CurveSeries> series, const CurvePlotOptions
 
 void WriteCurveSvg(const std::filesystem::path& path, std::span<const CurveSeries> series,
                    const CurvePlotOptions& options) {
-  const std::string text = CurveSvg(series, options);
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  out << text;
-  out.close();
-  if (!out) Fail(ErrorCode::kUnavailable, "cannot write curve plot " + path.string());
+  WriteFile(path, CurveSvg(series, options), "curve plot");
 }
 
 }  // namespace endorecon::eval

@@ -4,9 +4,13 @@
 #include <string>
 
 #include "common/error.h"
+#include "worker/engine/field/batch_loop.h"
 #include "worker/engine/field/hash_math.h"
 
 namespace endorecon::field {
+
+static_assert(TrainableModule<Deformation<float>, float>);
+
 namespace {
 
 // The time interval of t: slices `knot` and `knot + 1` with weights 1 - frac and frac.
@@ -36,18 +40,18 @@ Deformation<S>::Deformation(const DeformationConfig& config) : config_(config) {
 }
 
 template <typename S>
-void Deformation<S>::Init(S* params) const {
+void Deformation<S>::Init(S* params, std::uint64_t) const {
   std::fill_n(params, param_count(), S(0));
 }
 
 template <typename S>
-void Deformation<S>::Forward(const S* params, const S* pos, const S* t, int n, S* x0) const {
+void Deformation<S>::Forward(const S* params, const Inputs& in, const Outputs& out, const DropoutPass&) {
   const GridLevel level = SpatialLevel(config_);
-  for (int i = 0; i < n; ++i) {
+  ParallelRows(in.n, [&](std::size_t i) {
     std::uint32_t slot[8];
     S w[8], frac[3], ft;
-    CellCornersOf<true>(level, pos + 3 * i, slot, w, frac);
-    const int knot = TimeInterval(t[i], config_.time_knots, &ft);
+    CellCornersOf<true>(level, in.pos + 3 * i, slot, w, frac);
+    const int knot = TimeInterval(in.time[i], config_.time_knots, &ft);
     S dx[3] = {};
     for (int side = 0; side < 2; ++side) {
       const int slice = knot + side;  // slice 0 is the fixed zero at t = 0
@@ -59,22 +63,22 @@ void Deformation<S>::Forward(const S* params, const S* pos, const S* t, int n, S
         for (int a = 0; a < 3; ++a) dx[a] += wt * w[k] * v[a];
       }
     }
-    for (int a = 0; a < 3; ++a) x0[3 * i + a] = pos[3 * i + a] + dx[a];
-  }
+    for (int a = 0; a < 3; ++a) out.x0[3 * i + a] = in.pos[3 * i + a] + dx[a];
+  });
 }
 
 template <typename S>
-void Deformation<S>::BackwardKnot(int knot, const S* pos, const S* t, int n, const S* dx0, S* grads) const {
+void Deformation<S>::BackwardKnot(int knot, const Inputs& in, const S* dx0, S* dparams) const {
   const GridLevel level = SpatialLevel(config_);
-  S* table = grads + (knot - 1) * slice_size_;
-  for (int i = 0; i < n; ++i) {
+  S* table = dparams + (knot - 1) * slice_size_;
+  for (int i = 0; i < in.n; ++i) {
     S ft;
-    const int interval = TimeInterval(t[i], config_.time_knots, &ft);
+    const int interval = TimeInterval(in.time[i], config_.time_knots, &ft);
     if (interval != knot && interval + 1 != knot) continue;
     const S wt = interval == knot ? S(1) - ft : ft;
     std::uint32_t slot[8];
     S w[8], frac[3];
-    CellCornersOf<true>(level, pos + 3 * i, slot, w, frac);
+    CellCornersOf<true>(level, in.pos + 3 * i, slot, w, frac);
     for (int k = 0; k < 8; ++k) {
       S* v = table + std::size_t{slot[k]} * 3;
       for (int a = 0; a < 3; ++a) v[a] += wt * w[k] * dx0[3 * i + a];
@@ -83,16 +87,18 @@ void Deformation<S>::BackwardKnot(int knot, const S* pos, const S* t, int n, con
 }
 
 template <typename S>
-void Deformation<S>::BackwardPosition(const S* params, const S* pos, const S* t, int n, const S* dx0,
-                                      S* dpos) const {
+void Deformation<S>::Backward(const S* params, const Inputs& in, const Outputs&, const OutputGrads& grad,
+                              S* dparams, const InputGrads& din, const DropoutPass&) {
+  tbb::parallel_for(1, config_.time_knots + 1, [&](int knot) { BackwardKnot(knot, in, grad.dx0, dparams); });
+  if (!din.dpos) return;
   const GridLevel level = SpatialLevel(config_);
   const S res = static_cast<S>(config_.resolution);
-  for (int i = 0; i < n; ++i) {
+  ParallelRows(in.n, [&](std::size_t i) {
     std::uint32_t slot[8];
     S w[8], frac[3], ft;
-    CellCornersOf<true>(level, pos + 3 * i, slot, w, frac);
-    const int knot = TimeInterval(t[i], config_.time_knots, &ft);
-    const S* g = dx0 + 3 * i;
+    CellCornersOf<true>(level, in.pos + 3 * i, slot, w, frac);
+    const int knot = TimeInterval(in.time[i], config_.time_knots, &ft);
+    const S* g = grad.dx0 + 3 * i;
     S dot[8] = {};  // (dx . g) at each corner, both time slices blended
     for (int side = 0; side < 2; ++side) {
       const int slice = knot + side;
@@ -104,12 +110,12 @@ void Deformation<S>::BackwardPosition(const S* params, const S* pos, const S* t,
         dot[k] += wt * (v[0] * g[0] + v[1] * g[1] + v[2] * g[2]);
       }
     }
-    S grad[3];
-    TrilinearGradient(dot, frac, grad);
+    S gradient[3];
+    TrilinearGradient(dot, frac, gradient);
     for (int a = 0; a < 3; ++a) {
-      dpos[3 * i + a] += g[a] + (InsideUnit(pos[3 * i + a]) ? res * grad[a] : S(0));
+      din.dpos[3 * i + a] = g[a] + (InsideUnit(in.pos[3 * i + a]) ? res * gradient[a] : S(0));
     }
-  }
+  });
 }
 
 template class Deformation<float>;

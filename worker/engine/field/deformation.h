@@ -5,10 +5,13 @@
 // per sample, ~100x the whole CPU field budget; the grid costs 16 reads and 48 multiply-adds per
 // sample (the same again backward), is linear in its parameters (starts at exactly zero motion, and
 // its gradient is a scatter), and tissue motion is smooth enough for 16^3 spatial cells.
+// A module of the field (module.h).
 #pragma once
 
 #include <cstddef>
 #include <cstdint>
+
+#include "worker/engine/field/module.h"
 
 namespace endorecon::field {
 
@@ -21,27 +24,39 @@ struct DeformationConfig {
 template <typename S>
 class Deformation {
  public:
+  struct Inputs {
+    int n = 0;
+    const S* pos = nullptr;   // n x 3, clamped into [0, 1] for the lookup, NaN read as 0
+    const S* time = nullptr;  // n, likewise
+  };
+  struct Outputs {
+    S* x0 = nullptr;  // n x 3: pos + dx(pos, t), not clamped (the hash grids clamp and stop the gradient)
+  };
+  struct OutputGrads {
+    const S* dx0 = nullptr;  // n x 3
+  };
+  struct InputGrads {
+    S* dpos = nullptr;  // n x 3: dL/dpos = dx0 + (d dx / d pos)^T dx0
+  };
+
   // Throws Error(kInvalidArgument) for resolution or time_knots < 1.
   explicit Deformation(const DeformationConfig& config);
 
   const DeformationConfig& config() const { return config_; }
   std::size_t param_count() const { return slice_size_ * config_.time_knots; }
 
-  // All zero: no motion until training finds some.
-  void Init(S* params) const;
+  // All zero whatever the seed: no motion until training finds some.
+  void Init(S* params, std::uint64_t seed) const;
 
-  // x0 = x + dx(x, t) for n samples (pos n x 3, t n values, both clamped into [0, 1] for the lookup,
-  // NaN read as 0). x0 is not clamped: the hash grids clamp (and stop the gradient) themselves.
-  void Forward(const S* params, const S* pos, const S* t, int n, S* x0) const;
-
-  // Adds to grads the part of dL/dparams that lies in time slice `knot` (1..time_knots) given
-  // dx0 = dL/dx0 (n x 3). Slices are disjoint, so different knots may run on different threads.
-  void BackwardKnot(int knot, const S* pos, const S* t, int n, const S* dx0, S* grads) const;
-
-  // dpos += dL/dx = dx0 + (d dx / d x)^T dx0.
-  void BackwardPosition(const S* params, const S* pos, const S* t, int n, const S* dx0, S* dpos) const;
+  void Forward(const S* params, const Inputs& in, const Outputs& out, const DropoutPass& pass);
+  // The parameters' gradient is scattered one time slice per task (slices are disjoint).
+  void Backward(const S* params, const Inputs& in, const Outputs& out, const OutputGrads& grad, S* dparams,
+                const InputGrads& din, const DropoutPass& pass);
 
  private:
+  // Adds to dparams the part of the gradient that lies in time slice `knot` (1..time_knots).
+  void BackwardKnot(int knot, const Inputs& in, const S* dx0, S* dparams) const;
+
   DeformationConfig config_;
   std::size_t slice_size_ = 0;  // scalars per time slice: (resolution + 1)^3 * 3
 };

@@ -1,45 +1,31 @@
 // The neural field of the method: (x, t, d) -> (mu_sigma, l_sigma, mu_c, l_c).
-//   x0 = x + dx(x, t)                          deformation to canonical space (skipped for static scenes)
-//   f  = sum_i beta_t^(i) H_i(x0)              hash-grid ensemble, blended in time (or, for the
-//                                              ablation's baseline, f = PE(x0): frequency_encoding.h)
-//   (mu_sigma, l_sigma, geo) = MLP_dense(f)    density head
-//   (mu_c, l_c) = MLP_color([geo, SH(d)])      colour head
-// This file only composes the modules (each has its own forward and backward) and runs them in
-// parallel over tiles of samples with TBB. The work split depends only on the batch size, and
-// per-tile gradients are reduced in a fixed order, so results do not depend on the thread count.
+//   x0 = x + dx(x, t)                          Deformation (left out for static scenes)
+//   f  = sum_i beta_t^(i) H_i(x0)              TemporalBlend (beta_t), then GridEnsemble (H_i and the
+//                                              sum) (or, for the ablation's baseline, f = PE(x0):
+//                                              FrequencyEncoder)
+//   (mu_sigma, l_sigma, geo) = MLP_dense(f)    DensityHead
+//   (mu_c, l_c) = MLP_color([geo, SH(d)])      ColorHead
+// A thin composition: each module (module.h) runs its own forward, backward and parallel loop over
+// the batch; the field owns the parameter blocks and the activations that pass between them. Every
+// module's split depends only on the batch size and partial gradients are reduced in a fixed order,
+// so results do not depend on the thread count. Presets: field_config.h; saving and loading the
+// parameters: field_state.h; the human-readable summary: field_description.h.
 #pragma once
 
-#include <concepts>
 #include <cstddef>
 #include <cstdint>
-#include <iosfwd>
 #include <memory>
-#include <string>
 #include <vector>
 
 #include "worker/engine/field/deformation.h"
+#include "worker/engine/field/field_config.h"
+#include "worker/engine/field/frequency_encoder.h"
 #include "worker/engine/field/grid_ensemble.h"
 #include "worker/engine/field/heads.h"
-#include "worker/engine/train/param_group.h"
+#include "worker/engine/field/param_block.h"
+#include "worker/engine/field/temporal_blend.h"
 
 namespace endorecon::field {
-
-struct FieldConfig {
-  // The canonical-space encoder: "hash" (the method: the grid ensemble blended in time) or
-  // "frequency" (NeRF's positional encoding, EndoNeRF's encoder; the ablation's baseline: no grids,
-  // no temporal blend, the density head takes the encoding directly).
-  std::string encoding = "hash";
-  int frequencies = 10;  // L of the frequency encoding
-  GridEnsembleConfig grids;
-  int blend_hidden = 16;  // width of the temporal blend's hidden layer
-  DeformationConfig deformation;
-  HeadsConfig heads;
-
-  // The paper's sizes: grids {8, 16, 32} x scales {1.4, 1.7, 1.9}, 16 levels x 8 features, 2^19 tables.
-  static FieldConfig Paper();
-  // Sized for >= 1 M training samples/s on 2 cores (see field.cc for the numbers behind it).
-  static FieldConfig Cpu();
-};
 
 template <typename S>
 struct SampleBatchT {
@@ -67,15 +53,6 @@ struct FieldOutputGradT {
   const S* rgb_logvar = nullptr;
 };
 
-// One group of parameters as the field owns it (any scalar type; Params() gives the optimiser's view).
-template <typename S>
-struct ParamBlock {
-  std::string name;
-  S* value = nullptr;
-  S* grad = nullptr;
-  std::size_t size = 0;
-};
-
 template <typename S>
 class FieldT {
  public:
@@ -91,7 +68,8 @@ class FieldT {
   // for n < 0 or a missing array.
   void Forward(const SampleBatchT<S>& batch, FieldOutputT<S>& out, bool dropout, std::uint64_t dropout_seed);
 
-  // As Forward, but keeps nothing (for rendering): no batch-sized buffers are touched.
+  // As Forward, but keeps nothing (for rendering): the batch runs in segments through buffers of a
+  // fixed size, and gives bit for bit what Forward gives.
   void Infer(const SampleBatchT<S>& batch, FieldOutputT<S>& out, bool dropout, std::uint64_t dropout_seed);
 
   // Infer in two halves, for K dropout passes over the same samples (Monte Carlo uncertainty): the
@@ -109,24 +87,24 @@ class FieldT {
 
   void ZeroGrad();
 
-  // Groups "grid", "blend", "deform" (absent for a static scene), "density", "color".
+  // Blocks "grid", "blend" (both absent with the frequency encoding), "deform" (absent for a static
+  // scene), "density", "color", in that order.
   std::vector<ParamBlock<S>> Blocks();
-  std::vector<train::ParamGroup> Params() requires std::same_as<S, float>;
-
-  // Exact binary copy of every parameter. Load throws Error(kDataLoss) for a truncated stream or one
-  // written by a field of another shape (the message says which group differs).
-  void Save(std::ostream& out) const;
-  void Load(std::istream& in);
+  std::vector<ParamBlock<const S>> Blocks() const;
 
   const FieldConfig& config() const { return config_; }
-  // What was built and what was left out (levels above the resolution cap, deformation off), and the
-  // parameter count of each group.
-  std::string Describe() const;
+  // The modules, read only (descriptions, other backends). Null where the configuration leaves one out.
+  const GridEnsemble<S>* grids() const;
+  const TemporalBlend<S>* blend() const;
+  const FrequencyEncoder<S>* frequency() const;
+  const Deformation<S>* deformation() const;
+  const DensityHead<S>& density() const;
+  const ColorHead<S>& color() const;
   // Multiply-adds per sample of the two heads' forward passes (backward does twice as many).
   std::size_t head_macs_per_sample() const;
 
  private:
-  struct Impl;  // the modules, parameters and buffers (field.cc)
+  struct Impl;  // the modules, parameters and activations (field.cc)
   FieldConfig config_;
   std::unique_ptr<Impl> impl_;
 };

@@ -2,6 +2,8 @@
 // table of up to 2^log2_table slots of `features` values each, dense where the level's vertices fit,
 // hashed otherwise; a position's feature at a level is the trilinear blend of its cell's 8 corners.
 // The object holds the layout only; the table and its gradient are caller arrays (param_count()).
+// Its loops are serial over the rows they are given: the trainable module is GridEnsemble (one or more
+// grids), which owns the parallel loops, and the CUDA kernels run the same per-sample functions.
 #pragma once
 
 #include <cstddef>
@@ -51,13 +53,13 @@ class HashGrid {
   // Features of n positions (n x 3, clamped into [0, 1]^3, NaN read as 0): row i of feat (at
   // feat + i * feat_stride) receives output_dim() values, level-major. Walks the levels one at a
   // time over tiles of samples so a level's table stays in cache.
-  void Forward(const S* params, const S* pos, int n, S* feat, int feat_stride) const;
+  void ForwardRows(const S* params, const S* pos, int n, S* feat, int feat_stride) const;
 
-  // Gradient of one level's table: grads[level slots] += scale_i * trilinear weights * dfeat_i, where
+  // Gradient of level l's table: grads[level slots] += scale_i * trilinear weights * dfeat_i, where
   // dfeat_i (F values) is at dfeat + i * dfeat_stride and scale_i = scale[i] (1 when scale is null).
-  // Touches only level l's part of grads, so different levels may run on different threads.
-  // When dpos_add is not null (params must be given then), also adds this level's part of dL/dpos
-  // (n x 3) to it in the same pass: the corner values it needs are in the lines the scatter touches.
+  // Touches only level l's part of grads, so different levels may run on different threads. When
+  // dpos_add is not null (params must be given then), also adds this level's part of dL/dpos (n x 3)
+  // to it in the same pass (hash_math.h ScatterLevel).
   void BackwardLevel(int l, const S* pos, int n, const S* dfeat, int dfeat_stride, const S* scale, S* grads,
                      const S* params = nullptr, S* dpos_add = nullptr) const;
 

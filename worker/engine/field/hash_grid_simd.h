@@ -1,5 +1,5 @@
 // AVX-512 kernels of one grid level for float tables with 2 features per level (the CPU preset): the
-// same math as CellCornersOf / ForwardLevel / ScatterLevel in hash_grid.cc, 16 samples at a time.
+// same math as GatherLevel / ScatterLevel (hash_math.h), 16 samples at a time.
 // The cell, slot and weight arithmetic runs across samples in vectors and the forward reads use
 // 64-bit gathers (one slot = 2 floats); the table scatter stays scalar (slots of a block may repeat).
 // Only hash_grid.cc includes this; other shapes, double and non-AVX-512 builds use the portable
@@ -73,7 +73,8 @@ inline void CornersOf(const GridLevel& level, const float* pos, Corners& out) {
     }
   } else {
     const __m512i mask = _mm512_set1_epi32(static_cast<int>(level.entries - 1));
-    const __m512i p1 = _mm512_set1_epi32(static_cast<int>(2654435761u)), p2 = _mm512_set1_epi32(805459861);
+    const __m512i p1 = _mm512_set1_epi32(static_cast<int>(kHashPrimeY)),
+                  p2 = _mm512_set1_epi32(static_cast<int>(kHashPrimeZ));
     const __m512i hx[2] = {cell[0], _mm512_add_epi32(cell[0], _mm512_set1_epi32(1))};
     const __m512i y0 = _mm512_mullo_epi32(cell[1], p1), z0 = _mm512_mullo_epi32(cell[2], p2);
     const __m512i hy[2] = {y0, _mm512_add_epi32(y0, p1)};

@@ -1,5 +1,5 @@
-// Per-sample math of the field, shared by the CPU loops and (later) CUDA kernels: grid cell lookup
-// (instant-ngp's spatial hash or dense indexing), trilinear weights, and the scalar activations.
+// Per-sample math of the hash grids, shared by the CPU loops and the CUDA kernels: grid cell lookup
+// (instant-ngp's spatial hash or dense indexing), trilinear weights and their gradient.
 // Every function is a pure function of its arguments: no heap, no exceptions, no STL containers.
 #pragma once
 
@@ -8,6 +8,7 @@
 #include <cstdint>
 
 #include "common/hd.h"
+#include "worker/engine/field/hash_primes.h"
 
 // The lookups below sit in the innermost per-sample loops: inlining them lets the compiler keep the 8
 // slots and weights in registers (GCC otherwise keeps the larger ones out of line). The attribute
@@ -30,10 +31,9 @@ struct GridLevel {
   std::uint64_t offset = 0;   // first slot of this level in the grid's table (in slots, not scalars)
 };
 
-// instant-ngp's spatial hash: XOR of coordinates times large primes (the first prime is 1 so that
-// neighbouring x share cache lines), wrapped to the table size.
+// instant-ngp's spatial hash (hash_primes.h), before wrapping to the table size.
 ENDORECON_HD std::uint32_t SpatialHash(std::uint32_t x, std::uint32_t y, std::uint32_t z) {
-  return x ^ (y * 2654435761u) ^ (z * 805459861u);
+  return x ^ (y * kHashPrimeY) ^ (z * kHashPrimeZ);
 }
 
 // A coordinate in [0, 1]: values outside are clamped, NaN and -Inf map to 0 and +Inf to 1, so a bad
@@ -85,8 +85,8 @@ ENDORECON_HD ENDORECON_FIELD_INLINE void CellCornersOf(const GridLevel& level, c
     for (int k = 0; k < 8; ++k) slot[k] = base + (k & 1) + ((k >> 1) & 1) * side + ((k >> 2) & 1) * plane;
   } else {
     const std::uint32_t mask = level.entries - 1;
-    const std::uint32_t hy[2] = {c[1] * 2654435761u, (c[1] + 1) * 2654435761u};
-    const std::uint32_t hz[2] = {c[2] * 805459861u, (c[2] + 1) * 805459861u};
+    const std::uint32_t hy[2] = {c[1] * kHashPrimeY, (c[1] + 1) * kHashPrimeY};
+    const std::uint32_t hz[2] = {c[2] * kHashPrimeZ, (c[2] + 1) * kHashPrimeZ};
     for (int k = 0; k < 8; ++k) slot[k] = ((c[0] + (k & 1)) ^ hy[(k >> 1) & 1] ^ hz[(k >> 2) & 1]) & mask;
   }
   const S wx[2] = {S(1) - frac[0], frac[0]}, wy[2] = {S(1) - frac[1], frac[1]},
@@ -132,31 +132,56 @@ ENDORECON_HD ENDORECON_FIELD_INLINE void TrilinearGradient(const S* value, const
   for (int k = 0; k < 4; ++k) grad[2] += wx[k & 1] * wy[k >> 1] * (value[k + 4] - value[k]);
 }
 
-// Density activation: exp(min(x, 15)). The cap keeps a runaway raw value from overflowing float
-// (e^15 ~ 3.3e6 is far beyond any useful density). TruncExpGrad is exp(min(x, 15)) too, also above
-// the cap (as instant-ngp's trunc_exp): a density stuck above the cap still gets a gradient back down.
-template <typename S>
-ENDORECON_HD S TruncExp(S x) {
-  return std::exp(x < S(15) ? x : S(15));
+// One sample's features at one level: out[f] for f < F, the trilinear blend of its cell's corners in
+// the level's table. The forward loop of the CPU grid and of the CUDA level kernel.
+template <int F, bool kDense, typename S>
+ENDORECON_HD ENDORECON_FIELD_INLINE void GatherLevel(const GridLevel& level, const S* table, const S* pos,
+                                                     S* out) {
+  std::uint32_t slot[8];
+  S w[8], frac[3];
+  CellCornersOf<kDense>(level, pos, slot, w, frac);
+  BlendCorners<F>(table, slot, w, out);
 }
 
-template <typename S>
-ENDORECON_HD S TruncExpGrad(S x) {
-  return TruncExp(x);
-}
+// The accumulation of a scatter where one thread owns the table it adds to (the CPU's level tasks).
+struct PlainAdd {
+  template <typename S>
+  ENDORECON_HD void operator()(S* target, S value) const {
+    *target += value;
+  }
+};
 
-// Logistic sigmoid, never overflowing (exp of a non-positive argument only).
-template <typename S>
-ENDORECON_HD S Sigmoid(S x) {
-  if (x >= S(0)) return S(1) / (S(1) + std::exp(-x));
-  const S e = std::exp(x);
-  return e / (S(1) + e);
-}
-
-// log(1 + e^x) without overflow for large x or loss of precision for very negative x.
-template <typename S>
-ENDORECON_HD S Softplus(S x) {
-  return (x > S(0) ? x : S(0)) + std::log1p(std::exp(-std::fabs(x)));
+// One sample's gradient at one level: grads[corner slot * F + f] += weight * scale * dfeat[f] for the
+// 8 corners of its cell, through add(pointer, value) (PlainAdd on the CPU, an atomic add in CUDA
+// kernels). With kPosition also adds the level's part of dL/dpos to dpos[0..3): the corner values it
+// needs are in the cache lines the scatter touches anyway (table: the level's parameters).
+template <int F, bool kDense, bool kPosition, typename S, typename Add>
+ENDORECON_HD ENDORECON_FIELD_INLINE void ScatterLevel(const GridLevel& level, const S* pos, const S* dfeat,
+                                                      S scale, S* grads, const S* table, S* dpos,
+                                                      const Add& add) {
+  std::uint32_t slot[8];
+  S w[8], frac[3];
+  CellCornersOf<kDense>(level, pos, slot, w, frac);
+  S g[F];
+  for (int f = 0; f < F; ++f) g[f] = scale * dfeat[f];
+  S dot[8];
+  for (int k = 0; k < 8; ++k) {
+    S* gv = grads + static_cast<std::size_t>(slot[k]) * F;
+    if constexpr (kPosition) {
+      const S* v = table + static_cast<std::size_t>(slot[k]) * F;
+      dot[k] = S(0);
+      for (int f = 0; f < F; ++f) dot[k] += v[f] * g[f];
+    }
+    for (int f = 0; f < F; ++f) add(gv + f, w[k] * g[f]);
+  }
+  if constexpr (kPosition) {
+    S gradient[3];
+    TrilinearGradient(dot, frac, gradient);
+    const S res = static_cast<S>(level.res);
+    for (int a = 0; a < 3; ++a) {
+      if (InsideUnit(pos[a])) dpos[a] += res * gradient[a];
+    }
+  }
 }
 
 }  // namespace endorecon::field

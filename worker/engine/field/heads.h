@@ -3,13 +3,16 @@
 //           features = raw[2..] (no activation);
 //  colour:  MLP_color([geo, SH(d)]) -> raw (4): mu_c = sigmoid(raw0..2), l_c = raw3.
 // The log-variances are raw; their variances are VarianceFromLogVar (variance.h), applied by the loss.
+// Both are modules of the field (module.h).
 #pragma once
 
 #include <cstddef>
 #include <cstdint>
 #include <vector>
 
+#include "worker/engine/field/batch_loop.h"
 #include "worker/engine/field/mlp.h"
+#include "worker/engine/field/module.h"
 
 namespace endorecon::field {
 
@@ -27,31 +30,66 @@ struct HeadsConfig {
 template <typename S>
 class DensityHead {
  public:
+  struct Inputs {
+    int n = 0;
+    const S* feat = nullptr;  // n x in_dim
+  };
+  struct Outputs {
+    S* const* hidden = nullptr;  // the network's hidden layers (Mlp::Outputs)
+    S* raw = nullptr;            // n x raw_dim(): the network's output, geometry features in columns 2..
+    S* sigma = nullptr;          // n
+    S* logvar = nullptr;         // n
+  };
+  struct OutputGrads {
+    const S* dsigma = nullptr;   // n
+    const S* dlogvar = nullptr;  // n
+    const S* dgeo = nullptr;     // n x geo_features
+  };
+  struct InputGrads {
+    S* dfeat = nullptr;  // n x in_dim
+  };
+
   DensityHead(int in_dim, const HeadsConfig& config);
 
   const Mlp<S>& mlp() const { return mlp_; }
-  int raw_dim() const { return mlp_.out_dim(); }  // 2 + geo; geo features are raw columns 2..
+  int raw_dim() const { return mlp_.out_dim(); }
   std::size_t param_count() const { return mlp_.param_count(); }
   void Init(S* params, std::uint64_t seed) const { mlp_.Init(params, seed); }
 
-  // raw: n x raw_dim(), kept (it holds the geometry features); sigma, logvar: n values each.
-  void Forward(const S* params, const S* feat, int n, S* const* hidden, S* raw, S* sigma, S* logvar,
-               const DropoutPass& drop) const;
-
-  // dsigma, dlogvar (n values) and dgeo (n x geo) may each be null (= zero). Writes dfeat (n x in_dim)
-  // when not null. scratch: scratch_size(n) values.
-  void Backward(const S* params, const S* feat, int n, const S* const* hidden, const S* raw, const S* dsigma,
-                const S* dlogvar, const S* dgeo, S* dfeat, S* grads, S* scratch, bool dropout_on) const;
-  std::size_t scratch_size(int n) const;
+  void Forward(const S* params, const Inputs& in, const Outputs& out, const DropoutPass& pass);
+  void Backward(const S* params, const Inputs& in, const Outputs& out, const OutputGrads& grad, S* dparams,
+                const InputGrads& din, const DropoutPass& pass);
 
  private:
   int geo_;
   Mlp<S> mlp_;
+  AlignedVector<S> draw_;  // n x raw_dim: dL/draw
 };
 
 template <typename S>
 class ColorHead {
  public:
+  struct Inputs {
+    int n = 0;
+    const S* geo = nullptr;  // row i at geo + i * geo_stride (the density head's raw columns 2..)
+    int geo_stride = 0;
+    const S* dir = nullptr;  // n x 3 unit view directions
+  };
+  struct Outputs {
+    S* in = nullptr;             // n x in_dim(): the network input [geo, SH(dir)]
+    S* const* hidden = nullptr;  // the network's hidden layers (Mlp::Outputs)
+    S* raw = nullptr;            // n x 4
+    S* rgb = nullptr;            // n x 3
+    S* logvar = nullptr;         // n
+  };
+  struct OutputGrads {
+    const S* drgb = nullptr;     // n x 3
+    const S* dlogvar = nullptr;  // n
+  };
+  struct InputGrads {
+    S* dgeo = nullptr;  // n x geo_features
+  };
+
   explicit ColorHead(const HeadsConfig& config);
 
   const Mlp<S>& mlp() const { return mlp_; }
@@ -59,24 +97,14 @@ class ColorHead {
   std::size_t param_count() const { return mlp_.param_count(); }
   void Init(S* params, std::uint64_t seed) const { mlp_.Init(params, seed); }
 
-  // The network input [geo, SH(dir)] of n samples into in (n x in_dim()); geo rows at geo + i * geo_stride.
-  void Input(const S* geo, int geo_stride, const S* dir, int n, S* in) const;
-
-  // geo: rows at geo + i * geo_stride; dir: n x 3 unit directions. in (n x in_dim()) receives the
-  // network input [geo, SH(dir)] and raw (n x 4) its output, both kept for Backward;
-  // rgb: n x 3, logvar: n values.
-  void Forward(const S* params, const S* geo, int geo_stride, const S* dir, int n, S* in, S* const* hidden,
-               S* raw, S* rgb, S* logvar, const DropoutPass& drop) const;
-
-  // drgb (n x 3) and dlogvar (n) may be null (= zero). Writes dgeo (n x geo) when not null.
-  // scratch: scratch_size(n) values.
-  void Backward(const S* params, const S* in, int n, const S* const* hidden, const S* raw, const S* drgb,
-                const S* dlogvar, S* dgeo, S* grads, S* scratch, bool dropout_on) const;
-  std::size_t scratch_size(int n) const;
+  void Forward(const S* params, const Inputs& in, const Outputs& out, const DropoutPass& pass);
+  void Backward(const S* params, const Inputs& in, const Outputs& out, const OutputGrads& grad, S* dparams,
+                const InputGrads& din, const DropoutPass& pass);
 
  private:
   int geo_;
   Mlp<S> mlp_;
+  AlignedVector<S> draw_, din_;  // n x 4: dL/draw; n x in_dim: dL/din
 };
 
 }  // namespace endorecon::field

@@ -10,8 +10,8 @@
 #include <string>
 
 #include "common/error.h"
+#include "worker/engine/base/counter_rng.h"
 #include "worker/engine/field/dropout.h"
-#include "worker/engine/render/rng.h"
 
 namespace endorecon::field {
 namespace {
@@ -26,6 +26,8 @@ template <typename S>
 using RowVector = Eigen::Matrix<S, 1, Eigen::Dynamic>;
 
 }  // namespace
+
+static_assert(TrainableModule<Mlp<float>, float>);
 
 template <typename S>
 Mlp<S>::Mlp(int in_dim, std::vector<int> hidden, int out_dim, double dropout_rate, std::uint32_t stream)
@@ -53,11 +55,6 @@ int Mlp<S>::max_width() const {
 }
 
 template <typename S>
-std::size_t Mlp<S>::scratch_size(int rows) const {
-  return 2 * static_cast<std::size_t>(rows) * max_width();
-}
-
-template <typename S>
 std::size_t Mlp<S>::macs_per_sample() const {
   std::size_t macs = 0;
   for (std::size_t k = 0; k + 1 < dims_.size(); ++k)
@@ -71,7 +68,7 @@ void Mlp<S>::Init(S* params, std::uint64_t seed, S output_gain) const {
   for (int k = 0; k < layers; ++k) {
     const S bound = std::sqrt(S(6) / S(dims_[k])) * (k == layers - 1 ? output_gain : S(1));
     const std::size_t count = static_cast<std::size_t>(dims_[k]) * dims_[k + 1];
-    const render::CounterRng<S> rng(seed, (std::uint64_t{stream_} << 8) | static_cast<std::uint64_t>(k));
+    const base::CounterRng<S> rng(seed, (std::uint64_t{stream_} << 8) | static_cast<std::uint64_t>(k));
     for (std::size_t i = 0; i < count; ++i) {
       params[w_offset_[k] + i] = bound * (S(2) * rng(static_cast<std::uint32_t>(i)) - S(1));
     }
@@ -80,26 +77,26 @@ void Mlp<S>::Init(S* params, std::uint64_t seed, S output_gain) const {
 }
 
 template <typename S>
-void Mlp<S>::Forward(const S* params, const S* in, int rows, S* const* hidden, S* out,
-                     const DropoutPass& drop) const {
+void Mlp<S>::ForwardTile(const S* params, const S* x, int rows, S* const* hidden, std::size_t row0, S* y,
+                         const DropoutPass& pass) const {
   const int layers = static_cast<int>(dims_.size()) - 1;
-  const bool dropout = drop.on && rate_ > 0;
+  const bool dropout = pass.on && rate_ > 0;
   const S keep_scale = dropout ? S(1) / S(1 - rate_) : S(1);
   const auto threshold = static_cast<std::uint32_t>(std::min(rate_ * 4294967296.0, 4294967295.0));
-  const S* x = in;
+  const std::uint32_t first_row = pass.first_row + static_cast<std::uint32_t>(row0);
   for (int k = 0; k < layers; ++k) {
     const int n_in = dims_[k], n_out = dims_[k + 1];
-    S* y = k == layers - 1 ? out : hidden[k];
-    MutMap<S> Y(y, rows, n_out);
+    S* out = k == layers - 1 ? y + row0 * n_out : hidden[k] + row0 * n_out;
+    MutMap<S> Y(out, rows, n_out);
     Y.noalias() = ConstMap<S>(x, rows, n_in) * ConstMap<S>(params + w_offset_[k], n_in, n_out);
     Y.rowwise() += Eigen::Map<const RowVector<S>>(params + b_offset_[k], n_out);
     if (k == layers - 1) break;
     if (dropout) {
-      const DropoutKey key = MakeDropoutKey(drop.seed, (stream_ << 4) | static_cast<std::uint32_t>(k));
+      const DropoutKey key = MakeDropoutKey(pass.seed, (stream_ << 4) | static_cast<std::uint32_t>(k));
       for (int r = 0; r < rows; ++r) {
-        S* row = y + static_cast<std::size_t>(r) * n_out;
+        S* row = out + static_cast<std::size_t>(r) * n_out;
         const std::uint32_t base =
-            (drop.first_row + static_cast<std::uint32_t>(r)) * static_cast<std::uint32_t>(n_out);
+            (first_row + static_cast<std::uint32_t>(r)) * static_cast<std::uint32_t>(n_out);
         for (int j = 0; j < n_out; ++j) {
           const bool keep = DropoutKeep(key, base + static_cast<std::uint32_t>(j), threshold);
           row[j] = (keep && row[j] > S(0)) ? row[j] * keep_scale : S(0);
@@ -107,34 +104,58 @@ void Mlp<S>::Forward(const S* params, const S* in, int rows, S* const* hidden, S
       }
     } else {
       const std::size_t count = static_cast<std::size_t>(rows) * n_out;
-      for (std::size_t i = 0; i < count; ++i) y[i] = y[i] > S(0) ? y[i] : S(0);
+      for (std::size_t i = 0; i < count; ++i) out[i] = out[i] > S(0) ? out[i] : S(0);
     }
-    x = y;
+    x = out;
   }
 }
 
 template <typename S>
-void Mlp<S>::Backward(const S* params, const S* in, int rows, const S* const* hidden, const S* dout, S* din,
-                      S* grads, S* scratch, bool dropout_on) const {
+void Mlp<S>::BackwardTile(const S* params, const S* x_in, int rows, S* const* hidden, std::size_t row0,
+                          const S* dy, S* dx, S* dparams, bool dropout_on, S* scratch) const {
   const int layers = static_cast<int>(dims_.size()) - 1;
   const S keep_scale = (dropout_on && rate_ > 0) ? S(1) / S(1 - rate_) : S(1);
   const std::size_t stride = static_cast<std::size_t>(rows) * max_width();
-  const S* g = dout;
+  const S* g = dy;
   for (int k = layers - 1; k >= 0; --k) {
     const int n_in = dims_[k], n_out = dims_[k + 1];
-    const S* x = k == 0 ? in : hidden[k - 1];
+    const S* x = k == 0 ? x_in : hidden[k - 1] + row0 * n_in;
     ConstMap<S> G(g, rows, n_out);
-    MutMap<S>(grads + w_offset_[k], n_in, n_out).noalias() += ConstMap<S>(x, rows, n_in).transpose() * G;
-    Eigen::Map<RowVector<S>>(grads + b_offset_[k], n_out) += G.colwise().sum();
-    if (k == 0 && din == nullptr) break;
-    S* dx = k == 0 ? din : scratch + (k % 2) * stride;
-    MutMap<S>(dx, rows, n_in).noalias() = G * ConstMap<S>(params + w_offset_[k], n_in, n_out).transpose();
+    MutMap<S>(dparams + w_offset_[k], n_in, n_out).noalias() += ConstMap<S>(x, rows, n_in).transpose() * G;
+    Eigen::Map<RowVector<S>>(dparams + b_offset_[k], n_out) += G.colwise().sum();
+    if (k == 0 && dx == nullptr) break;
+    S* d = k == 0 ? dx : scratch + (k % 2) * stride;
+    MutMap<S>(d, rows, n_in).noalias() = G * ConstMap<S>(params + w_offset_[k], n_in, n_out).transpose();
     if (k > 0) {
       const std::size_t count = static_cast<std::size_t>(rows) * n_in;
-      for (std::size_t i = 0; i < count; ++i) dx[i] = x[i] > S(0) ? dx[i] * keep_scale : S(0);
+      for (std::size_t i = 0; i < count; ++i) d[i] = x[i] > S(0) ? d[i] * keep_scale : S(0);
     }
-    g = dx;
+    g = d;
   }
+}
+
+template <typename S>
+void Mlp<S>::Forward(const S* params, const Inputs& in, const Outputs& out, const DropoutPass& pass) {
+  ParallelTasks(in.n, kTileRows, [&](int, int row0, int rows) {
+    const std::size_t r = static_cast<std::size_t>(row0);
+    ForwardTile(params, in.x + r * in_dim(), rows, out.hidden, r, out.y, pass);
+  });
+}
+
+template <typename S>
+void Mlp<S>::Backward(const S* params, const Inputs& in, const Outputs& out, const OutputGrads& grad,
+                      S* dparams, const InputGrads& din, const DropoutPass& pass) {
+  partials_.Reset(TaskCount(in.n, kTaskRows), param_count_);
+  ParallelTasks(in.n, kTaskRows, [&](int task, int row0, int rows) {
+    auto& scratch = scratch_.local();
+    GrowTo(scratch, 2 * static_cast<std::size_t>(kTileRows) * max_width());
+    ForTiles(rows, [&](int offset, int tile_rows) {
+      const std::size_t r = static_cast<std::size_t>(row0 + offset);
+      BackwardTile(params, in.x + r * in_dim(), tile_rows, out.hidden, r, grad.dy + r * out_dim(),
+                   din.dx ? din.dx + r * in_dim() : nullptr, partials_.task(task), pass.on, scratch.data());
+    });
+  });
+  partials_.AddTo(dparams);
 }
 
 template class Mlp<float>;

@@ -4,7 +4,7 @@
 #pragma once
 
 #include "common/hd.h"
-#include "worker/engine/field/hash_math.h"
+#include "worker/engine/field/activations.h"
 
 namespace endorecon::field {
 

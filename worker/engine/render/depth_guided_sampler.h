@@ -10,8 +10,8 @@
 #include <cmath>
 
 #include "common/hd.h"
+#include "worker/engine/base/counter_rng.h"
 #include "worker/engine/render/ray_samples.h"
-#include "worker/engine/render/rng.h"
 #include "worker/engine/render/stratified_sampler.h"
 
 namespace endorecon::render {
@@ -39,7 +39,7 @@ ENDORECON_HD void GaussianSamplesAround(S near, S far, S prior_depth, S xi, int 
   for (int i = 0; i < count; ++i) {
     const S u1 = static_cast<S>(uniform(static_cast<unsigned>(first_draw + 2 * i)));
     const S u2 = static_cast<S>(uniform(static_cast<unsigned>(first_draw + 2 * i + 1)));
-    const S x = prior_depth + xi * NormalFromUniforms(u1, u2);
+    const S x = prior_depth + xi * base::NormalFromUniforms(u1, u2);
     s[i] = x < near ? near : (x > far ? far : x);
   }
 }

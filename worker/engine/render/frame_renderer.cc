@@ -6,10 +6,10 @@
 #include <algorithm>
 #include <numeric>
 
+#include "worker/engine/base/counter_rng.h"
 #include "worker/engine/field/variance.h"
 #include "worker/engine/render/adaptive_sampler.h"
-#include "worker/engine/render/ray_points.h"
-#include "worker/engine/render/rng.h"
+#include "worker/engine/render/camera_ray.h"
 #include "worker/engine/render/sample_score.h"
 #include "worker/engine/render/stratified_sampler.h"
 #include "worker/engine/render/volume_renderer.h"
@@ -23,8 +23,7 @@ FrameRenderer::FrameRenderer(field::Field& field, const scene::SceneBox& box,
       std::size_t(settings_.rays_per_chunk) * std::max(settings_.coarse_samples, settings_.fine_samples);
   for (auto* v : {&s_, &delta_, &time_, &sigma_, &sigma_lv_, &color_lv_, &weights_, &fine_s_}) v->resize(n);
   for (auto* v : {&pos_, &dir_, &color_}) v->resize(3 * n);
-  span_lo_.resize(settings_.rays_per_chunk);
-  span_hi_.resize(settings_.rays_per_chunk);
+  rays_.resize(settings_.rays_per_chunk);
   if (settings_.mc_passes > 0) {
     encoding_.resize(n * std::size_t(field_.encoding_dim()));
     density_moments_.resize(n);
@@ -78,7 +77,8 @@ void FrameRenderer::EstimateUncertainty(int n, std::uint64_t chunk_seed) {
   // Dropout is only in the heads: the deformation, grids and blend are evaluated once for all passes.
   field_.Encode(in, encoding_.data());
   for (int k = 1; k <= passes; ++k) {
-    field_.Decode(encoding_.data(), in, out, /*dropout=*/true, HashCombine(chunk_seed, std::uint64_t(k)));
+    field_.Decode(encoding_.data(), in, out, /*dropout=*/true,
+                  base::HashCombine(chunk_seed, std::uint64_t(k)));
     tbb::parallel_for(tbb::blocked_range<int>(0, n, 4096), [&](const tbb::blocked_range<int>& range) {
       for (int i = range.begin(); i != range.end(); ++i) {
         AddPass(density_moments_[i], k, sigma_[i], field::VarianceFromLogVar(sigma_lv_[i], eps));
@@ -116,22 +116,26 @@ void FrameRenderer::RenderChunk(const scene::Camera& camera, float time, const i
   const auto centre = [](unsigned) { return 0.5f; };
   const auto place = [&](int samples, bool fine, bool evaluate) {
     tbb::parallel_for(0, count, [&](int r) {
-      Eigen::Vector3d origin, direction;
-      camera.Ray(pixels[r] % camera.width, pixels[r] / camera.width, origin, direction);
-      const std::size_t o = std::size_t(r) * samples;
+      const RaySlot slot =
+          RaySlotOf(s_.data(), delta_.data(), pos_.data(), dir_.data(), time_.data(), r, samples);
       if (fine) {
         const std::size_t c = std::size_t(r) * settings_.coarse_samples;
-        AdaptiveSamples(&fine_s_[c], &weights_[c], settings_.coarse_samples, span_lo_[r], span_hi_[r],
-                        settings_.floor, samples, centre, &s_[o], &delta_[o]);
+        PlaceSamples(
+            rays_[r], box_, time, samples,
+            [&](float lo, float hi, float* s, float* delta) {
+              AdaptiveSamples(&fine_s_[c], &weights_[c], settings_.coarse_samples, lo, hi, settings_.floor,
+                              samples, centre, s, delta);
+            },
+            slot);
       } else {
-        double lo = near, hi = far;
-        if (occupancy_ != nullptr) occupancy_->Span(box_, origin, direction, near, far, &lo, &hi);
-        span_lo_[r] = float(lo);
-        span_hi_[r] = float(hi);
-        StratifiedSamples(span_lo_[r], span_hi_[r], samples, centre, &s_[o], &delta_[o]);
+        rays_[r] = CameraRayOf(camera, pixels[r], box_, occupancy_, near, far);
+        PlaceSamples(
+            rays_[r], box_, time, samples,
+            [&](float lo, float hi, float* s, float* delta) {
+              StratifiedSamples(lo, hi, samples, centre, s, delta);
+            },
+            slot);
       }
-      RayPoints(box_, origin, direction, time, &s_[o], samples, &delta_[o], &pos_[3 * o], &dir_[3 * o],
-                &time_[o]);
     });
     if (!evaluate) return;
     const field::SampleBatch in{count * samples, pos_.data(), time_.data(), dir_.data()};
@@ -149,7 +153,8 @@ void FrameRenderer::RenderChunk(const scene::Camera& camera, float time, const i
   const int m = settings_.fine_samples;
   const bool uncertain = settings_.mc_passes > 0;
   place(m, true, !uncertain);
-  if (uncertain) EstimateUncertainty(count * m, HashCombine(settings_.mc_seed, std::uint64_t(pixels[0])));
+  if (uncertain)
+    EstimateUncertainty(count * m, base::HashCombine(settings_.mc_seed, std::uint64_t(pixels[0])));
   float* scores[3] = {result.uncertainty, result.aleatoric, result.epistemic};
   tbb::parallel_for(0, count, [&](int r) {
     const std::size_t o = std::size_t(r) * m;

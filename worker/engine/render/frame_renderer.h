@@ -16,6 +16,7 @@
 
 #include "worker/engine/field/field.h"
 #include "worker/engine/field/variance.h"
+#include "worker/engine/render/camera_ray.h"
 #include "worker/engine/render/mc_dropout.h"
 #include "worker/engine/render/occupancy_grid.h"
 #include "worker/engine/scene/camera.h"
@@ -29,8 +30,8 @@ struct FrameRenderSettings {
   int fine_samples = 48;
   float floor = 0.02f;  // share of fine samples spread uniformly
   int rays_per_chunk = 1024;
-  int mc_passes = 0;           // K dropout passes for uncertainty; 0 = no uncertainty (one dropout-off pass)
-  float color_weight = 1.0f;   // lambda of the ray score
+  int mc_passes = 0;          // K dropout passes for uncertainty; 0 = no uncertainty (one dropout-off pass)
+  float color_weight = 1.0f;  // lambda of the ray score
   float variance_eps = field::kDefaultVarianceEps;  // eps in var = softplus(l) + eps
   std::uint64_t mc_seed = 0;  // dropout masks of pass k in a chunk: a pure function of (seed, k, first pixel)
 };
@@ -84,8 +85,8 @@ class FrameRenderer {
   const OccupancyGrid* occupancy_ = nullptr;
   // Scratch for one chunk, reused across chunks and frames.
   std::vector<float> s_, delta_, pos_, dir_, time_, sigma_, sigma_lv_, color_, color_lv_, weights_, fine_s_;
-  std::vector<float> span_lo_, span_hi_;  // per ray of the chunk: the occupied span sampled
-  std::vector<float> encoding_;           // the fine samples' field encoding, shared by the K passes
+  std::vector<CameraRay> rays_;  // per ray of the chunk: the ray and the span sampled
+  std::vector<float> encoding_;  // the fine samples' field encoding, shared by the K passes
   std::vector<McMoments<float>> density_moments_, color_moments_;  // n and 3n, with mc_passes > 0
   std::vector<float> var_density_[3], var_color_[3];               // total, aleatoric, epistemic
 };

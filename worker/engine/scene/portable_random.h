@@ -8,6 +8,8 @@
 #include <numbers>
 #include <random>
 
+#include "worker/engine/base/counter_rng.h"
+
 namespace endorecon::scene {
 
 class PortableRandom {
@@ -27,12 +29,7 @@ class PortableRandom {
   std::mt19937_64 engine_;
 };
 
-// A well-mixed seed for stream `stream` of `seed` (SplitMix64's finaliser), e.g. one stream per frame.
-inline std::uint64_t StreamSeed(std::uint64_t seed, std::uint64_t stream) {
-  std::uint64_t z = seed + 0x9e3779b97f4a7c15ULL * (stream + 1);
-  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-  return z ^ (z >> 31);
-}
+// One seed per stream of a seed (e.g. per frame): the engine's one splitmix64 (base/counter_rng.h).
+using base::StreamSeed;
 
 }  // namespace endorecon::scene

@@ -13,7 +13,7 @@
 
 namespace endorecon::train {
 
-Adam::Adam(std::vector<ParamGroup> groups, AdamConfig config)
+Adam::Adam(std::vector<field::ParamBlock<float>> groups, AdamConfig config)
     : groups_(std::move(groups)), config_(std::move(config)) {
   for (const auto& g : groups_) {
     m_.emplace_back(g.size, 0.0f);

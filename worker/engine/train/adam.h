@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "worker/engine/train/param_group.h"
+#include "worker/engine/field/param_block.h"
 
 namespace endorecon::train {
 
@@ -28,7 +28,7 @@ struct AdamStepReport {
 
 class Adam {
  public:
-  Adam(std::vector<ParamGroup> groups, AdamConfig config);
+  Adam(std::vector<field::ParamBlock<float>> groups, AdamConfig config);
 
   // One update from the gradients currently in the groups, at `progress` in [0, 1] of the run (the
   // learning rate decays with it). Does nothing (and says so) when a gradient is not finite, so a bad
@@ -39,7 +39,7 @@ class Adam {
   void Load(std::istream& in);  // throws Error(kDataLoss) on a mismatched or truncated state
 
  private:
-  std::vector<ParamGroup> groups_;
+  std::vector<field::ParamBlock<float>> groups_;
   AdamConfig config_;
   std::vector<std::vector<float>> m_, v_;
   long long steps_ = 0;

@@ -3,7 +3,7 @@
 #include <algorithm>
 
 #include "common/error.h"
-#include "worker/engine/render/rng.h"
+#include "worker/engine/base/counter_rng.h"
 
 namespace endorecon::train {
 
@@ -35,7 +35,7 @@ float RaySampler::Weight(int frame, int pixel) const {
 }
 
 RayPick RaySampler::Pick(std::uint64_t seed, std::uint64_t stream) const {
-  const render::CounterRng<double> uniform(seed, stream);
+  const base::CounterRng<double> uniform(seed, stream);
   const int pixels = clip_.width * clip_.height;
   RayPick pick;
   // Every frame kept has a tissue pixel, so acceptance is at least 1 / (2 * pixels) per draw; in

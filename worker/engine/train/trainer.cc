@@ -12,17 +12,20 @@
 #include <string>
 
 #include "common/error.h"
+#include "worker/engine/base/counter_rng.h"
+#include "worker/engine/field/field_state.h"
 #include "worker/engine/field/variance.h"
 #include "worker/engine/render/adaptive_sampler.h"
+#include "worker/engine/render/camera_ray.h"
 #include "worker/engine/render/depth_guided_sampler.h"
 #include "worker/engine/render/frame_renderer.h"
-#include "worker/engine/render/ray_points.h"
-#include "worker/engine/render/rng.h"
 #include "worker/engine/render/sample_score.h"
 #include "worker/engine/render/stratified_sampler.h"
 #include "worker/engine/render/volume_renderer.h"
 #include "worker/engine/train/losses.h"
 #include "worker/engine/train/ray_loss.h"
+#include "worker/engine/train/render_settings.h"
+#include "worker/engine/train/run_clock.h"
 
 namespace endorecon::train {
 namespace {
@@ -39,10 +42,11 @@ struct Trainer::Batch {
   std::vector<float> sigma, sigma_logvar, rgb, rgb_logvar, weights;
   std::vector<float> d_weights, d_sigma, d_rgb, d_rgb_logvar;
   std::vector<RayPick> picks;
+  std::vector<render::CameraRay> camera_rays;  // each ray and its span, as PlaceRay made it
   // The scoring pass of guided rays (ReallocateSamples): stratified probe depths, intervals and
-  // scores, and per ray the occupied span. The probes' points and field outputs use the batch's own
-  // arrays, free until the guided rays' samples are placed and the step's forward pass runs.
-  std::vector<float> probe_s, probe_delta, probe_score, probe_span;
+  // scores. The probes' points and field outputs use the batch's own arrays, free until the guided
+  // rays' samples are placed and the step's forward pass runs.
+  std::vector<float> probe_s, probe_delta, probe_score;
 
   Batch(int r, int n) : rays(r), samples(n) {
     const std::size_t m = std::size_t(r) * n;
@@ -54,7 +58,10 @@ struct Trainer::Batch {
       v->resize(m);
     }
     for (auto* v : {&pos, &dir, &rgb, &d_rgb}) v->resize(3 * m);
-    probe_span.resize(2 * std::size_t(r));
+    camera_rays.resize(r);
+  }
+  render::RaySlot slot(int r, int n) {
+    return render::RaySlotOf(s.data(), delta.data(), pos.data(), dir.data(), time.data(), r, n);
   }
 };
 
@@ -68,7 +75,7 @@ Trainer::Trainer(const scene::Clip& clip, const TrainConfig& config, std::vector
       map_(sampler_, clip.width, clip.height, config.adaptive_map_stride),
       refiner_(clip, sampler_.frames()) {
   field_ = std::make_unique<field::Field>(config_.field, seed);
-  adam_ = std::make_unique<Adam>(field_->Params(), config_.adam);
+  adam_ = std::make_unique<Adam>(field_->Blocks(), config_.adam);
   // Without depth the same number of samples is spread stratified over [near, far].
   batch_ =
       std::make_unique<Batch>(config_.rays_per_batch, config_.depth_samples + config_.stratified_samples);
@@ -78,38 +85,33 @@ Trainer::~Trainer() = default;
 
 void Trainer::PlaceRay(int r, const RayPick& pick, std::uint64_t step_seed) {
   Batch& b = *batch_;
-  const float near = float(clip_.near), far = float(clip_.far);
   render::DepthGuidedConfig<float> guided;
   guided.xi = float(config_.depth_xi * (clip_.far - clip_.near));
   guided.gaussian_samples = config_.depth_samples;
   guided.stratified_samples = config_.stratified_samples;
   b.picks[r] = pick;
-  const scene::Camera& camera = clip_.cameras[pick.frame];
-  const int x = pick.pixel % clip_.width, y = pick.pixel / clip_.width;
-  Eigen::Vector3d origin, direction;
-  camera.Ray(x, y, origin, direction);
   const std::uint8_t* px = &clip_.rgb[pick.frame][3 * std::size_t(pick.pixel)];
   for (int c = 0; c < 3; ++c) b.target[3 * r + c] = px[c] / 255.0f;
-  b.prior[r] = clip_.has_depth() ? refiner_.Prior(pick.frame, pick.pixel) : 0.0f;
-
-  const render::CounterRng<float> uniform(step_seed, std::uint64_t(2 * r + 1));
-  float* s = &b.s[std::size_t(r) * b.samples];
-  float* delta = &b.delta[std::size_t(r) * b.samples];
-  double lo = near, hi = far;
-  occupancy_.Span(box_, origin, direction, near, far, &lo, &hi);
-  if (clip_.has_depth()) {
-    render::DepthGuidedSamples(float(lo), float(hi), b.prior[r], guided, uniform, s, delta);
-  } else {
-    render::StratifiedSamples(float(lo), float(hi), b.samples, uniform, s, delta);
-  }
-  const std::size_t o = std::size_t(r) * b.samples;
-  render::RayPoints(box_, origin, direction, clip_.times[pick.frame], s, b.samples, delta, &b.pos[3 * o],
-                    &b.dir[3 * o], &b.time[o]);
+  const float prior = clip_.has_depth() ? refiner_.Prior(pick.frame, pick.pixel) : 0.0f;
+  b.prior[r] = prior;
+  const base::CounterRng<float> uniform(step_seed, std::uint64_t(2 * r + 1));
+  b.camera_rays[r] =
+      render::CameraRayOf(clip_.cameras[pick.frame], pick.pixel, box_, &occupancy_, clip_.near, clip_.far);
+  render::PlaceSamples(
+      b.camera_rays[r], box_, clip_.times[pick.frame], b.samples,
+      [&](float lo, float hi, float* s, float* delta) {
+        if (clip_.has_depth()) {
+          render::DepthGuidedSamples(lo, hi, prior, guided, uniform, s, delta);
+        } else {
+          render::StratifiedSamples(lo, hi, b.samples, uniform, s, delta);
+        }
+      },
+      b.slot(r, b.samples));
 }
 
 void Trainer::SampleRays(int guided) {
   Batch& b = *batch_;
-  const std::uint64_t step_seed = render::HashCombine(seed_, std::uint64_t(iteration_));
+  const std::uint64_t step_seed = base::HashCombine(seed_, std::uint64_t(iteration_));
   tbb::parallel_for(tbb::blocked_range<int>(0, b.rays, 64), [&](const tbb::blocked_range<int>& range) {
     for (int r = range.begin(); r != range.end(); ++r) {
       const std::uint64_t stream = std::uint64_t(2 * r);
@@ -127,32 +129,24 @@ void Trainer::ReallocateSamples(int rays, std::uint64_t step_seed) {
   // same draws) when the clip has depth, all n otherwise. With depth that is a third of the cost of
   // scoring every sample, and the probes cover the whole span, which is where points can be added.
   const int m = clip_.has_depth() ? config_.stratified_samples : n;
-  const float near = float(clip_.near), far = float(clip_.far), eps = config_.variance_eps;
+  const float eps = config_.variance_eps;
   const float xi = float(config_.depth_xi * (clip_.far - clip_.near));
-  std::vector<float>& span = b.probe_span;  // per ray: the occupied span [lo, hi]
-  const auto ray_of = [&](int r, Eigen::Vector3d& origin, Eigen::Vector3d& direction) {
-    const RayPick& pick = b.picks[r];
-    clip_.cameras[pick.frame].Ray(pick.pixel % clip_.width, pick.pixel / clip_.width, origin, direction);
-  };
   tbb::parallel_for(tbb::blocked_range<int>(0, rays, 64), [&](const tbb::blocked_range<int>& range) {
     for (int r = range.begin(); r != range.end(); ++r) {
-      Eigen::Vector3d origin, direction;
-      ray_of(r, origin, direction);
-      double lo = near, hi = far;
-      occupancy_.Span(box_, origin, direction, near, far, &lo, &hi);
-      span[2 * r] = float(lo);
-      span[2 * r + 1] = float(hi);
-      const std::size_t o = std::size_t(r) * m;
-      const render::CounterRng<float> uniform(step_seed, std::uint64_t(2 * r + 1));
-      render::StratifiedSamples(float(lo), float(hi), m, uniform, &b.probe_s[o], &b.probe_delta[o]);
+      const base::CounterRng<float> uniform(step_seed, std::uint64_t(2 * r + 1));
       // Rows [0, rays * m) of pos/dir/time: guided rays' own, rewritten below once scored.
-      render::RayPoints(box_, origin, direction, clip_.times[b.picks[r].frame], &b.probe_s[o], m,
-                        &b.probe_delta[o], &b.pos[3 * o], &b.dir[3 * o], &b.time[o]);
+      render::PlaceSamples(
+          b.camera_rays[r], box_, clip_.times[b.picks[r].frame], m,
+          [&](float lo, float hi, float* s, float* delta) {
+            render::StratifiedSamples(lo, hi, m, uniform, s, delta);
+          },
+          render::RaySlotOf(b.probe_s.data(), b.probe_delta.data(), b.pos.data(), b.dir.data(), b.time.data(),
+                            r, m));
     }
   });
   const field::SampleBatch in{rays * m, b.pos.data(), b.time.data(), b.dir.data()};
   field::FieldOutput out{b.sigma.data(), b.sigma_logvar.data(), b.rgb.data(), b.rgb_logvar.data()};
-  field_->Infer(in, out, /*dropout=*/true, render::HashCombine(step_seed, 0xc0a25eull));
+  field_->Infer(in, out, /*dropout=*/true, base::HashCombine(step_seed, 0xc0a25eull));
   tbb::parallel_for(tbb::blocked_range<int>(0, rays, 64), [&](const tbb::blocked_range<int>& range) {
     for (int r = range.begin(); r != range.end(); ++r) {
       const std::size_t o = std::size_t(r) * m;
@@ -167,23 +161,21 @@ void Trainer::ReallocateSamples(int rays, std::uint64_t step_seed) {
       // With a depth prior the Gaussian samples stay where PlaceRay put them (the same draws) and the
       // stratified ones move to where the scores are: the paper's additional points for uncertain
       // stretches, without taking any from the surface. Without a prior every sample moves.
-      const std::size_t q = std::size_t(r) * n;
       const bool prior = clip_.has_depth() && HasDepthPrior(b.prior[r]);
       const int moved = prior ? config_.stratified_samples : n;
-      const float lo = span[2 * r], hi = span[2 * r + 1];
-      const render::CounterRng<float> uniform(step_seed, std::uint64_t(2 * r + 1));
-      render::AdaptiveSamples(&b.probe_s[o], &b.probe_score[o], m, lo, hi, config_.adaptive_floor, moved,
-                              uniform, &b.s[q], &b.delta[q], unsigned(4 * n));
-      if (prior) {
-        render::GaussianSamplesAround(lo, hi, b.prior[r], xi, config_.depth_samples, uniform,
-                                      unsigned(config_.stratified_samples), &b.s[q + moved]);
-        render::SortAscending(&b.s[q], n);
-        render::MidpointIntervals(&b.s[q], n, lo, hi, &b.delta[q]);
-      }
-      Eigen::Vector3d origin, direction;
-      ray_of(r, origin, direction);
-      render::RayPoints(box_, origin, direction, clip_.times[b.picks[r].frame], &b.s[q], n, &b.delta[q],
-                        &b.pos[3 * q], &b.dir[3 * q], &b.time[q]);
+      const base::CounterRng<float> uniform(step_seed, std::uint64_t(2 * r + 1));
+      render::PlaceSamples(
+          b.camera_rays[r], box_, clip_.times[b.picks[r].frame], n,
+          [&](float lo, float hi, float* s, float* delta) {
+            render::AdaptiveSamples(&b.probe_s[o], &b.probe_score[o], m, lo, hi, config_.adaptive_floor,
+                                    moved, uniform, s, delta, unsigned(4 * n));
+            if (!prior) return;
+            render::GaussianSamplesAround(lo, hi, b.prior[r], xi, config_.depth_samples, uniform,
+                                          unsigned(config_.stratified_samples), s + moved);
+            render::SortAscending(s, n);
+            render::MidpointIntervals(s, n, lo, hi, delta);
+          },
+          b.slot(r, n));
     }
   });
 }
@@ -191,7 +183,7 @@ void Trainer::ReallocateSamples(int rays, std::uint64_t step_seed) {
 void Trainer::RefreshMap() {
   Batch& b = *batch_;
   const int n = b.samples;
-  const std::uint64_t map_seed = render::HashCombine(seed_ ^ 0x3a9ull, std::uint64_t(iteration_));
+  const std::uint64_t map_seed = base::HashCombine(seed_ ^ 0x3a9ull, std::uint64_t(iteration_));
   const float eps = config_.variance_eps;
   std::vector<float> scores(map_.cells(), 0.0f);
   std::vector<int> cells;
@@ -205,7 +197,7 @@ void Trainer::RefreshMap() {
     });
     const field::SampleBatch in{rays * n, b.pos.data(), b.time.data(), b.dir.data()};
     field::FieldOutput out{b.sigma.data(), b.sigma_logvar.data(), b.rgb.data(), b.rgb_logvar.data()};
-    field_->Infer(in, out, /*dropout=*/true, render::HashCombine(map_seed, start));
+    field_->Infer(in, out, /*dropout=*/true, base::HashCombine(map_seed, start));
     tbb::parallel_for(tbb::blocked_range<int>(0, rays, 64), [&](const tbb::blocked_range<int>& range) {
       for (int r = range.begin(); r != range.end(); ++r) {
         const std::size_t o = std::size_t(r) * n;
@@ -273,12 +265,7 @@ double Trainer::LossAndGradients(StepStats& stats) {
 }
 
 DepthRefineStats Trainer::RefineDepth() {
-  render::FrameRenderSettings settings;
-  settings.near = clip_.near;
-  settings.far = clip_.far;
-  settings.coarse_samples = settings.fine_samples = config_.depth_refine_samples;
-  settings.floor = config_.eval_floor;
-  render::FrameRenderer renderer(*field_, box_, settings);
+  render::FrameRenderer renderer(*field_, box_, DepthRefineRenderSettings(config_, clip_.near, clip_.far));
   renderer.SetOccupancy(&occupancy_);
   const DepthRefineStats stats =
       refiner_.Refine(renderer, config_.depth_refine_fraction, config_.depth_refine_ema,
@@ -321,7 +308,7 @@ double Trainer::occupancy_span_fraction() const {
 
 StepStats Trainer::Step(double progress) {
   StepStats stats;
-  if (progress < 0) progress = config_.iterations > 0 ? double(iteration_) / config_.iterations : 0.0;
+  if (progress < 0) progress = RunProgress(iteration_, config_.iterations, 0, 0);
   if (config_.occupancy_resolution > 0 && progress / config_.occupancy_every >= occupancy_builds_ + 1) {
     RebuildOccupancy();
     ++occupancy_builds_;
@@ -341,7 +328,7 @@ StepStats Trainer::Step(double progress) {
   const int n = b.rays * b.samples;
   const field::SampleBatch in{n, b.pos.data(), b.time.data(), b.dir.data()};
   field::FieldOutput out{b.sigma.data(), b.sigma_logvar.data(), b.rgb.data(), b.rgb_logvar.data()};
-  field_->Forward(in, out, /*dropout=*/true, render::HashCombine(seed_ ^ 0x5eed, std::uint64_t(iteration_)));
+  field_->Forward(in, out, /*dropout=*/true, base::HashCombine(seed_ ^ 0x5eed, std::uint64_t(iteration_)));
   stats.loss = LossAndGradients(stats);
   stats.samples = n;
   if (!std::isfinite(stats.loss)) {
@@ -363,7 +350,7 @@ StepStats Trainer::Step(double progress) {
 
 void Trainer::Save(std::ostream& out) const {
   out.write(reinterpret_cast<const char*>(&iteration_), sizeof(iteration_));
-  field_->Save(out);
+  field::SaveFieldState(*field_, out);
   adam_->Save(out);
   map_.Save(out);
   refiner_.Save(out);
@@ -374,7 +361,7 @@ void Trainer::Save(std::ostream& out) const {
 void Trainer::Load(std::istream& in) {
   in.read(reinterpret_cast<char*>(&iteration_), sizeof(iteration_));
   if (!in) Fail(ErrorCode::kDataLoss, "checkpoint: truncated before the iteration count");
-  field_->Load(in);
+  field::LoadFieldState(*field_, in);
   adam_->Load(in);
   map_.Load(in);
   refiner_.Load(in);

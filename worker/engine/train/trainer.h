@@ -39,8 +39,8 @@ class Trainer {
           std::uint64_t seed);
   ~Trainer();
 
-  // One iteration at `progress` in [0, 1] of the run (drives the learning-rate decay; negative:
-  // iteration / config.iterations, so a time-budgeted run can decay by elapsed time instead). Throws
+  // One iteration at `progress` in [0, 1] of the run (drives the learning-rate decay and the periodic
+  // rounds; a RunClock's Progress; negative: by iterations alone, RunProgress(iteration, iterations)). Throws
   // Error(kInternal) naming the stage and iteration when the loss or a gradient is not finite; the parameters
   // are then still those of the last good step.
   StepStats Step(double progress = -1);

@@ -7,7 +7,7 @@
 #include <string>
 
 #include "common/error.h"
-#include "worker/engine/render/rng.h"
+#include "worker/engine/base/counter_rng.h"
 
 namespace endorecon::train {
 
@@ -62,7 +62,7 @@ void UncertaintyMap::Set(std::vector<float> scores, int iteration) {
 
 std::optional<RayPick> UncertaintyMap::Pick(std::uint64_t seed, std::uint64_t stream) const {
   if (!(total_ > 0)) return std::nullopt;
-  const render::CounterRng<double> uniform(seed, stream);
+  const base::CounterRng<double> uniform(seed, stream);
   const double target = uniform(0) * total_;
   const auto it = std::upper_bound(cumulative_.begin(), cumulative_.end(), target);
   const int cell = std::min<int>(int(it - cumulative_.begin()), cells() - 1);

@@ -1,10 +1,10 @@
-#include "worker/engine/render/rng.h"
+#include "worker/engine/base/counter_rng.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 
-namespace endorecon::render {
+namespace endorecon::base {
 namespace {
 
 TEST(CounterRng, SameKeyGivesSameDrawsAndStreamsDiffer) {
@@ -62,5 +62,13 @@ TEST(CounterRng, BoxMullerGivesStandardNormal) {
   EXPECT_TRUE(std::isfinite(NormalFromUniforms(UniformFromBits<float>(~0ull), 0.5f)));
 }
 
+// StreamSeed(seed, k) is output k + 1 of the splitmix64 sequence started at `seed` (Vigna's reference
+// values for seed 0), the seeds every synthetic clip's frames were drawn with.
+TEST(StreamSeed, IsTheSplitmix64Sequence) {
+  EXPECT_EQ(StreamSeed(0, 0), 0xe220a8397b1dcdafull);
+  EXPECT_EQ(StreamSeed(0, 1), 0x6e789e6aa1b965f4ull);
+  EXPECT_EQ(StreamSeed(0, 2), 0x06c45d188009454full);
+}
+
 }  // namespace
-}  // namespace endorecon::render
+}  // namespace endorecon::base

@@ -1,0 +1,54 @@
+// How long report.html takes to open: each run starts a fresh headless Chromium (tests/e2e's driver),
+// opens the page and reads when, after the navigation started, its script had built everything but
+// the 3D view and everything (the page's own marks, dataset.shownMs and readyMs), and the renderer's
+// counters (the DevTools Performance domain). Prints one line per run and the medians.
+// Usage: report_page_bench RESULTS/report.html [--runs N]
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "tests/e2e/headless_chromium.h"
+
+int main(int argc, char** argv) {
+  if (argc < 2) {
+    std::fprintf(stderr, "usage: %s REPORT.html [--runs N]\n", argv[0]);
+    return 2;
+  }
+  const std::filesystem::path report = std::filesystem::absolute(argv[1]);
+  const int runs = argc >= 4 && std::strcmp(argv[2], "--runs") == 0 ? std::max(1, std::atoi(argv[3])) : 5;
+  std::printf("%s: %.2f MB\n", report.c_str(), double(std::filesystem::file_size(report)) / 1e6);
+  std::printf("%-4s %10s %10s %12s %12s %12s\n", "run", "shown (s)", "ready (s)", "tasks (s)", "script (s)",
+              "CPU (s)");
+  std::vector<double> shown, ready;
+  for (int run = 0; run < runs; ++run) {
+    endorecon::testing::HeadlessChromium browser(1280, 900);
+    browser.Call("Performance.enable");
+    browser.Navigate("file://" + report.string());
+    if (!browser.WaitFor("document.body.dataset.ready === 'true'", std::chrono::seconds(60))) {
+      std::fprintf(stderr, "the page was not ready within 60 s\n");
+      return 1;
+    }
+    const auto marks =
+        browser.Evaluate("[Number(document.body.dataset.shownMs), Number(document.body.dataset.readyMs)]");
+    shown.push_back(marks[0].get<double>() / 1000);
+    ready.push_back(marks[1].get<double>() / 1000);
+    double tasks = 0, script = 0, cpu = 0;
+    const auto metrics = browser.Call("Performance.getMetrics");
+    for (const auto& metric : metrics["metrics"]) {
+      const std::string name = metric["name"];
+      if (name == "TaskDuration") tasks = metric["value"];
+      if (name == "ScriptDuration") script = metric["value"];
+      if (name == "ProcessTime") cpu = metric["value"];
+    }
+    std::printf("%-4d %10.2f %10.2f %12.2f %12.2f %12.2f\n", run, shown.back(), ready.back(), tasks, script,
+                cpu);
+  }
+  for (auto* times : {&shown, &ready}) std::sort(times->begin(), times->end());
+  std::printf("median over %d runs: shown %.2f s, ready %.2f s\n", runs, shown[shown.size() / 2],
+              ready[ready.size() / 2]);
+  return 0;
+}

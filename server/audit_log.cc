@@ -1,0 +1,49 @@
+#include "server/audit_log.h"
+
+#include <fcntl.h>
+#include <fmt/chrono.h>
+#include <spdlog/spdlog.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <chrono>
+#include <cstring>
+#include <nlohmann/json.hpp>
+
+#include "common/error.h"
+
+namespace endorecon::server {
+namespace {
+
+std::string UtcNow() {
+  const auto now = std::chrono::system_clock::now();
+  const auto ms =
+      std::chrono::duration_cast<std::chrono::milliseconds>(now.time_since_epoch()).count() % 1000;
+  return fmt::format("{:%Y-%m-%dT%H:%M:%S}.{:03}Z", fmt::gmtime(std::chrono::system_clock::to_time_t(now)),
+                     ms);
+}
+
+}  // namespace
+
+AuditLog::AuditLog(const std::filesystem::path& file) : path_(file) {
+  fd_ = ::open(file.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0640);
+  if (fd_ < 0)
+    Fail(ErrorCode::kUnavailable, "cannot open audit log " + file.string() + ": " + std::strerror(errno));
+}
+
+AuditLog::~AuditLog() { ::close(fd_); }
+
+void AuditLog::Write(const AuditEntry& entry) {
+  nlohmann::ordered_json line{{"time", UtcNow()},         {"principal", entry.principal},
+                              {"role", entry.role},       {"tenant", entry.tenant},
+                              {"method", entry.method},   {"job", entry.job_id},
+                              {"outcome", entry.outcome}, {"peer", entry.peer}};
+  if (!entry.certificate.empty()) line["certificate"] = entry.certificate;
+  if (!entry.subject.empty()) line["subject"] = entry.subject;
+  // Invalid UTF-8 from a caller (a worker id, a peer name) is replaced rather than thrown.
+  const std::string text = line.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
+  if (::write(fd_, text.data(), text.size()) != static_cast<ssize_t>(text.size()))
+    spdlog::error("audit log {}: write failed: {}", path_.string(), std::strerror(errno));
+}
+
+}  // namespace endorecon::server

@@ -1,0 +1,158 @@
+#include "server/call_guard.h"
+
+#include <spdlog/spdlog.h>
+
+#include "common/error.h"
+
+namespace endorecon::server {
+namespace {
+
+std::string CertificateName(const grpc::ServerContext& context) {
+  const auto auth = context.auth_context();
+  if (!auth || !auth->IsPeerAuthenticated()) return "";
+  const auto names = auth->FindPropertyValues("x509_common_name");
+  return names.empty() ? "(no common name)" : std::string(names.front().data(), names.front().size());
+}
+
+std::string BearerToken(const grpc::ServerContext& context) {
+  const auto& metadata = context.client_metadata();
+  const auto found = metadata.find("authorization");
+  if (found == metadata.end()) {
+    Fail(ErrorCode::kUnauthenticated,
+         "no token: this server requires one (endorecon --token-file FILE or $ENDORECON_TOKEN; "
+         "endorecon-worker serve --token-file FILE)");
+  }
+  const std::string_view value(found->second.data(), found->second.size());
+  constexpr std::string_view kBearer = "Bearer ";
+  if (value.substr(0, kBearer.size()) != kBearer)
+    Fail(ErrorCode::kUnauthenticated, "malformed authorization header: expected 'Bearer <token>'");
+  return std::string(value.substr(kBearer.size()));
+}
+
+// Transient outcomes (the caller went away, a timeout) are neither refusals nor worth a line.
+bool Refused(const grpc::Status& status) {
+  switch (status.error_code()) {
+    case grpc::StatusCode::OK:
+    case grpc::StatusCode::CANCELLED:
+    case grpc::StatusCode::DEADLINE_EXCEEDED:
+    case grpc::StatusCode::UNAVAILABLE:
+      return false;
+    default:
+      return true;
+  }
+}
+
+// The status's name as the audit log and the metrics write it (gRPC's C++ API has none).
+const char* CodeName(grpc::StatusCode code) {
+  switch (code) {
+    case grpc::StatusCode::OK:
+      return "OK";
+    case grpc::StatusCode::CANCELLED:
+      return "CANCELLED";
+    case grpc::StatusCode::INVALID_ARGUMENT:
+      return "INVALID_ARGUMENT";
+    case grpc::StatusCode::DEADLINE_EXCEEDED:
+      return "DEADLINE_EXCEEDED";
+    case grpc::StatusCode::NOT_FOUND:
+      return "NOT_FOUND";
+    case grpc::StatusCode::ALREADY_EXISTS:
+      return "ALREADY_EXISTS";
+    case grpc::StatusCode::PERMISSION_DENIED:
+      return "PERMISSION_DENIED";
+    case grpc::StatusCode::RESOURCE_EXHAUSTED:
+      return "RESOURCE_EXHAUSTED";
+    case grpc::StatusCode::FAILED_PRECONDITION:
+      return "FAILED_PRECONDITION";
+    case grpc::StatusCode::ABORTED:
+      return "ABORTED";
+    case grpc::StatusCode::OUT_OF_RANGE:
+      return "OUT_OF_RANGE";
+    case grpc::StatusCode::UNIMPLEMENTED:
+      return "UNIMPLEMENTED";
+    case grpc::StatusCode::INTERNAL:
+      return "INTERNAL";
+    case grpc::StatusCode::UNAVAILABLE:
+      return "UNAVAILABLE";
+    case grpc::StatusCode::DATA_LOSS:
+      return "DATA_LOSS";
+    case grpc::StatusCode::UNAUTHENTICATED:
+      return "UNAUTHENTICATED";
+    default:
+      return "UNKNOWN";
+  }
+}
+
+}  // namespace
+
+CallGuard::CallGuard(std::filesystem::path token_store, bool require_worker_certificate, AuditLog& audit,
+                     Metrics& metrics)
+    : token_store_path_(std::move(token_store)),
+      require_worker_certificate_(require_worker_certificate),
+      audit_(audit),
+      metrics_(metrics) {
+  Refresh();
+}
+
+bool CallGuard::Refresh() { return Tokens() != nullptr; }
+
+TokenStore* CallGuard::Tokens() {
+  std::lock_guard lock(mutex_);
+  if (!tokens_ && std::filesystem::exists(token_store_path_)) {
+    tokens_ = std::make_unique<TokenStore>(token_store_path_);
+    spdlog::info("token store {} found: every call needs a token from now on", token_store_path_.string());
+  }
+  return tokens_.get();
+}
+
+void CallGuard::Admit(const grpc::ServerContext& context, const Rpc& rpc, Call& call) {
+  if (rpc.access == Access::kWorker && require_worker_certificate_ && CertificateName(context).empty()) {
+    Fail(ErrorCode::kUnauthenticated,
+         "the worker API requires a client certificate signed by the server's --tls-client-ca "
+         "(endorecon-worker serve --tls-cert FILE --tls-key FILE)");
+  }
+  TokenStore* tokens = Tokens();
+  if (!tokens) {
+    call.caller = AnonymousPrincipal();
+    return;
+  }
+  const auto record = tokens->Verify(BearerToken(context));
+  call.caller = Principal{record.name, record.role, record.tenant, false};
+  const Role role = record.role;
+  switch (rpc.access) {
+    case Access::kJobs:
+      if (role == Role::kWorker)
+        Fail(ErrorCode::kPermissionDenied,
+             std::string(rpc.method) + ": a worker token may use the worker API only");
+      break;
+    case Access::kAdmin:
+      if (role != Role::kAdmin)
+        Fail(ErrorCode::kPermissionDenied, std::string(rpc.method) + ": needs an admin token");
+      break;
+    case Access::kWorker:
+      if (role != Role::kWorker) {
+        Fail(ErrorCode::kPermissionDenied, std::string(rpc.method) +
+                                               ": the worker API needs a worker token, not a " +
+                                               RoleName(role) + " token");
+      }
+      break;
+  }
+}
+
+void CallGuard::Record(const grpc::ServerContext& context, const Rpc& rpc, const Call& call,
+                       const grpc::Status& status) {
+  const bool refused = Refused(status);
+  if (refused) metrics_.CallRefused(CodeName(status.error_code()));
+  if (!rpc.writes && !call.wrote && !refused) return;
+  const bool known = !call.caller.name.empty();
+  audit_.Write({known ? call.caller.name : "-",
+                known && !call.caller.anonymous ? RoleName(call.caller.role) : "-", call.caller.tenant,
+                rpc.method, call.job_id, CodeName(status.error_code()), context.peer(),
+                CertificateName(context), ""});
+}
+
+void CallGuard::RecordServerAction(const std::string& method, const std::string& job_id,
+                                   const std::string& outcome, const std::string& subject) {
+  audit_.Write({"server", "-", "", method, job_id, outcome, "", "", subject});
+}
+
+}  // namespace endorecon::server

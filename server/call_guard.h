@@ -1,0 +1,99 @@
+// The one gate every RPC handler goes through: who is calling (bearer token, client certificate),
+// whether that caller may use this API, the handler itself with its errors turned into statuses,
+// and the audit line. A new RPC gets all of it by wrapping its body:
+//
+//   return guard_.Run(context, {"Submit", Access::kJobs, kWrites}, [&](Call& call) {
+//     *job = coordinator_.Submit(*request, call.caller);
+//     call.job_id = job->id();
+//     return grpc::Status::OK;
+//   });
+//
+// Refusals: no token, a malformed, unknown or revoked one, or (worker API, when the server has a
+// client CA) no verified client certificate: UNAUTHENTICATED. A client token on the worker API, a
+// worker token on the job API, a non-admin on an admin call: PERMISSION_DENIED. Without a token
+// store every caller is the anonymous principal and may use every API (loopback use); the store is
+// picked up within a second of its first token being created, without a restart.
+#pragma once
+
+#include <grpcpp/server_context.h>
+
+#include <filesystem>
+#include <memory>
+#include <mutex>
+#include <string>
+
+#include "common/grpc_status.h"
+#include "server/audit_log.h"
+#include "server/metrics.h"
+#include "server/principal.h"
+#include "server/token_store.h"
+
+namespace endorecon::server {
+
+enum class Access {
+  kJobs,    // the job API: client and admin tokens
+  kAdmin,   // admin tokens only (the worker list)
+  kWorker,  // the worker API: worker tokens, and a client certificate when the server has a client CA
+};
+
+inline constexpr bool kWrites = true;
+inline constexpr bool kReads = false;
+
+// What a handler is, for the gate and the audit log.
+struct Rpc {
+  const char* method;
+  Access access;
+  bool writes;         // audited whatever its outcome; reads only when refused
+  std::string job_id;  // the job it concerns when the request names one
+};
+
+// The call as the handler sees it.
+struct Call {
+  Principal caller;
+  std::string job_id;  // set by a handler whose job is known only inside (Submit, Lease, Complete)
+  bool wrote = false;  // set by a read whose outcome changed something after all (a granted lease)
+};
+
+class CallGuard {
+ public:
+  // `token_store`: where the token store is or will be; `require_worker_certificate`: the server
+  // has a client CA.
+  CallGuard(std::filesystem::path token_store, bool require_worker_certificate, AuditLog& audit,
+            Metrics& metrics);
+
+  template <typename Body>
+  grpc::Status Run(grpc::ServerContext* context, const Rpc& rpc, Body&& body) {
+    Call call;
+    call.job_id = rpc.job_id;
+    const grpc::Status status = GuardStatus([&] {
+      Admit(*context, rpc, call);
+      return body(call);
+    });
+    Record(*context, rpc, call, status);
+    return status;
+  }
+
+  // Opens the token store once its file exists (at start, and from the server's maintenance
+  // thread). Returns whether tokens are required now.
+  bool Refresh();
+  // Audits something the server did on its own (retention, PACS retrievals and sends), as principal
+  // "server"; `subject` names what it acted with (a PACS's name), never patient data.
+  void RecordServerAction(const std::string& method, const std::string& job_id, const std::string& outcome,
+                          const std::string& subject = "");
+
+ private:
+  // Fills call.caller, then throws Error(kUnauthenticated / kPermissionDenied) unless it may call `rpc`.
+  void Admit(const grpc::ServerContext& context, const Rpc& rpc, Call& call);
+  TokenStore* Tokens();
+  void Record(const grpc::ServerContext& context, const Rpc& rpc, const Call& call,
+              const grpc::Status& status);
+
+  std::filesystem::path token_store_path_;
+  bool require_worker_certificate_;
+  AuditLog& audit_;
+  Metrics& metrics_;
+  std::mutex mutex_;
+  std::unique_ptr<TokenStore> tokens_;
+};
+
+}  // namespace endorecon::server

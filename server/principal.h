@@ -1,0 +1,36 @@
+// Who is calling: the token's label, its role and its tenant. On a server without a token store
+// every caller is the anonymous principal, which may do everything (loopback use, the demo).
+#pragma once
+
+#include <optional>
+#include <string>
+#include <string_view>
+
+namespace endorecon::server {
+
+enum class Role {
+  kClient,  // the job API for its own tenant's jobs
+  kWorker,  // the worker API only
+  kAdmin,   // the job API for every tenant, the worker list, cancelling anything
+};
+
+const char* RoleName(Role role);
+// "client", "worker" or "admin"; nullopt otherwise.
+std::optional<Role> ParseRole(std::string_view name);
+
+struct Principal {
+  std::string name;  // the token's label; "anonymous" without a token store
+  Role role = Role::kAdmin;
+  std::string tenant;  // "" for anonymous callers and for tokens without a tenant
+  bool anonymous = true;
+
+  // True when the caller's view of jobs is not limited to one tenant.
+  bool SeesAllTenants() const { return anonymous || role == Role::kAdmin; }
+};
+
+inline Principal AnonymousPrincipal() { return Principal{"anonymous", Role::kAdmin, "", true}; }
+// The server acting on its own behalf (PACS retrievals and sends, which follow the jobs of every
+// tenant); named "server" as in the audit log's entries for such actions.
+inline Principal ServerPrincipal() { return Principal{"server", Role::kAdmin, "", false}; }
+
+}  // namespace endorecon::server

@@ -1,0 +1,27 @@
+// Retention: the clips, results and checkpoints of jobs that finished (SUCCEEDED, FAILED,
+// CANCELLED) before a cutoff are deleted; each job's record stays, marked expired. A blob that any
+// other job still references (a queued or running job, or a finished one inside the retention
+// period) is never deleted: the same content may belong to several jobs. A SUCCEEDED job whose
+// DICOM results are still to be sent (a send PENDING or SENDING) is kept until its sends settle.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "server/blob_store.h"
+#include "server/job_store.h"
+
+namespace endorecon::server {
+
+struct RetentionPlan {
+  std::vector<v1::Job> jobs;       // finished before the cutoff and not expired yet
+  std::vector<std::string> blobs;  // digests referenced only by those jobs, present in the store
+  std::int64_t bytes = 0;          // the size of those blobs
+  std::int64_t kept_shared = 0;    // blobs of those jobs kept because other jobs reference them
+};
+
+// What retention would delete for `cutoff_unix_ms`. Reads only, so it also serves the dry run.
+RetentionPlan PlanRetention(JobStore& store, const BlobStore& blobs, std::int64_t cutoff_unix_ms);
+
+}  // namespace endorecon::server

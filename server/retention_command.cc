@@ -1,0 +1,66 @@
+// endorecon-server retention --data-dir DIR --retention-days D --dry-run: what a server with
+// --retention-days D would delete now. Reads only; deleting is the running server's job (it alone
+// knows which blobs an upload in flight is about to reference).
+#include <fmt/chrono.h>
+#include <fmt/format.h>
+
+#include <CLI/CLI.hpp>
+#include <iostream>
+#include <memory>
+
+#include "common/error.h"
+#include "server/blob_store.h"
+#include "server/commands.h"
+#include "server/job_coordinator.h"
+#include "server/retention.h"
+
+namespace endorecon::server {
+namespace {
+
+struct RetentionFlags {
+  std::string data_dir = "endorecon-data";
+  double days = 0;
+  bool dry_run = false;
+};
+
+int DryRun(const RetentionFlags& flags) {
+  if (!flags.dry_run) {
+    FailInvalid(
+        "retention deletes only inside a running server (--retention-days); this command shows what "
+        "it would delete: add --dry-run");
+  }
+  const std::filesystem::path dir = flags.data_dir;
+  if (!std::filesystem::exists(dir / "jobs.sqlite"))
+    Fail(ErrorCode::kNotFound, "no job store in " + dir.string());
+  JobStore store(dir / "jobs.sqlite");
+  BlobStore blobs(dir);
+  const auto cutoff = NowUnixMs() - static_cast<std::int64_t>(flags.days * 86'400'000.0);
+  const auto plan = PlanRetention(store, blobs, cutoff);
+  for (const auto& job : plan.jobs) {
+    std::cout << fmt::format("would expire job {} (tenant {}, {}, finished {:%Y-%m-%d %H:%M} UTC)\n",
+                             job.id(), job.tenant().empty() ? "-" : job.tenant(),
+                             v1::JobState_Name(job.state()),
+                             fmt::gmtime(static_cast<std::time_t>(job.finished_unix_ms() / 1000)));
+  }
+  std::cout << fmt::format(
+      "dry run: {} job(s) finished more than {} day(s) ago would expire; {} blob(s), {} bytes, would be "
+      "deleted; "
+      "{} blob(s) stay because other jobs share them\n",
+      plan.jobs.size(), flags.days, plan.blobs.size(), plan.bytes, plan.kept_shared);
+  return 0;
+}
+
+}  // namespace
+
+Command AddRetentionCommand(CLI::App& app) {
+  auto flags = std::make_shared<RetentionFlags>();
+  auto* command = app.add_subcommand("retention", "show what retention would delete (--dry-run)");
+  command->add_option("--data-dir", flags->data_dir, "the server's data folder")->capture_default_str();
+  command->add_option("--retention-days", flags->days, "files of jobs finished longer ago than this go")
+      ->required()
+      ->check(CLI::NonNegativeNumber);
+  command->add_flag("--dry-run", flags->dry_run, "list what would go; change nothing");
+  return [flags] { return DryRun(*flags); };
+}
+
+}  // namespace endorecon::server

@@ -1,0 +1,45 @@
+// The SQLite pieces the server's stores share (jobs.sqlite, tokens.sqlite): a prepared statement
+// that finalizes itself and turns every failure into Error(kUnavailable) naming the store.
+#pragma once
+
+#include <sqlite3.h>
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+
+namespace endorecon::server {
+
+class Statement {
+ public:
+  // Throws Error(kUnavailable) "<store>: ..." when `sql` does not prepare.
+  Statement(sqlite3* db, const char* sql, const char* store);
+  ~Statement();
+  Statement(const Statement&) = delete;
+  Statement& operator=(const Statement&) = delete;
+
+  void Bind(int index, std::int64_t value);
+  void Bind(int index, const std::string& value);  // as a blob
+  void BindText(int index, const std::string& value);
+  // True while there is a row; false when done. Throws Error(kUnavailable) on an error.
+  bool Step();
+  std::int64_t Int(int column);
+  std::string Blob(int column);
+  std::string Text(int column);
+
+ private:
+  void Check(int rc, const char* what);
+  sqlite3* db_;
+  const char* store_;
+  sqlite3_stmt* stmt_ = nullptr;
+};
+
+// Runs statements without results. Throws Error(kUnavailable) naming `store` and the SQL.
+void Exec(sqlite3* db, const char* sql, const char* store);
+
+// Opens (creating) a database in WAL mode with synchronous=FULL and a busy timeout, so several
+// processes (the server, `endorecon-server token ...`) may use it at once. Throws
+// Error(kUnavailable) naming the file.
+sqlite3* OpenDatabase(const std::filesystem::path& file, const char* store);
+
+}  // namespace endorecon::server

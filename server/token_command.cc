@@ -1,0 +1,109 @@
+// endorecon-server token create|list|revoke --data-dir DIR: the token store of a data folder.
+// Run it as the server's user, so the store's files stay readable by the server.
+#include <fmt/chrono.h>
+#include <fmt/format.h>
+#include <pwd.h>
+#include <unistd.h>
+
+#include <CLI/CLI.hpp>
+#include <iostream>
+#include <memory>
+
+#include "common/error.h"
+#include "server/audit_log.h"
+#include "server/commands.h"
+#include "server/token_store.h"
+
+namespace endorecon::server {
+namespace {
+
+struct TokenFlags {
+  std::string data_dir = "endorecon-data";
+  std::string audit_log;
+  std::string role;
+  std::string tenant;
+  std::string name;
+};
+
+std::string LocalUser() {
+  const passwd* user = getpwuid(geteuid());
+  return "local:" + std::string(user ? user->pw_name : std::to_string(geteuid()));
+}
+
+std::unique_ptr<TokenStore> OpenStore(const TokenFlags& flags) {
+  std::filesystem::create_directories(flags.data_dir);
+  return std::make_unique<TokenStore>(TokenStore::PathIn(flags.data_dir));
+}
+
+void Audit(const TokenFlags& flags, const std::string& method, const TokenRecord& record) {
+  AuditLog log(flags.audit_log.empty() ? std::filesystem::path(flags.data_dir) / "audit.jsonl"
+                                       : std::filesystem::path(flags.audit_log));
+  log.Write({LocalUser(), "-", record.tenant, method, "", "OK", "", "", record.name});
+}
+
+int Create(const TokenFlags& flags) {
+  const auto role = ParseRole(flags.role);
+  if (!role) FailInvalid("--role " + flags.role + ": expected client, worker or admin");
+  const auto token = OpenStore(flags)->Create(flags.name, *role, flags.tenant);
+  Audit(flags, "TokenCreate", {flags.name, *role, flags.tenant, 0, 0});
+  std::cout << fmt::format(
+      "created {} token '{}'{}; it is shown only now, keep it in a file only its user can "
+      "read (chmod 600):\n{}\n",
+      RoleName(*role), flags.name, flags.tenant.empty() ? "" : fmt::format(" for tenant '{}'", flags.tenant),
+      token);
+  return 0;
+}
+
+int List(const TokenFlags& flags) {
+  const auto records = OpenStore(flags)->List();
+  std::cout << fmt::format("{:<24} {:<7} {:<16} {:<20} {}\n", "NAME", "ROLE", "TENANT", "CREATED (UTC)",
+                           "STATE");
+  for (const auto& record : records) {
+    const auto when = [](std::int64_t ms) {
+      return fmt::format("{:%Y-%m-%d %H:%M:%S}", fmt::gmtime(static_cast<std::time_t>(ms / 1000)));
+    };
+    std::cout << fmt::format("{:<24} {:<7} {:<16} {:<20} {}\n", record.name, RoleName(record.role),
+                             record.tenant.empty() ? "-" : record.tenant, when(record.created_unix_ms),
+                             record.revoked_unix_ms ? "revoked " + when(record.revoked_unix_ms) : "active");
+  }
+  return 0;
+}
+
+int Revoke(const TokenFlags& flags) {
+  const auto record = OpenStore(flags)->Revoke(flags.name);
+  Audit(flags, "TokenRevoke", record);
+  std::cout << "revoked token '" << record.name << "'; calls with it are refused from now on\n";
+  return 0;
+}
+
+void AddCommonFlags(CLI::App& command, TokenFlags& flags) {
+  command.add_option("--data-dir", flags.data_dir, "the server's data folder")->capture_default_str();
+  command.add_option("--audit-log", flags.audit_log, "audit log (default: DATA_DIR/audit.jsonl)");
+}
+
+}  // namespace
+
+Command AddTokenCommand(CLI::App& app) {
+  auto flags = std::make_shared<TokenFlags>();
+  auto* token =
+      app.add_subcommand("token", "create, list or revoke bearer tokens (works while the server runs)");
+  token->require_subcommand(1);
+  auto* create = token->add_subcommand("create", "create a token and print it once (its last word)");
+  AddCommonFlags(*create, *flags);
+  create->add_option("--role", flags->role, "client (its tenant's jobs), worker (the worker API) or admin")
+      ->required();
+  create->add_option("--tenant", flags->tenant, "the tenant whose jobs a client token works on");
+  create->add_option("--name", flags->name, "a label for the token (audit log, list, revoke)")->required();
+  auto* list = token->add_subcommand("list", "list tokens: name, role, tenant, created, active or revoked");
+  AddCommonFlags(*list, *flags);
+  auto* revoke = token->add_subcommand("revoke", "revoke the active token with this label");
+  AddCommonFlags(*revoke, *flags);
+  revoke->add_option("NAME", flags->name, "the token's label")->required();
+  return [flags, create, list] {
+    if (create->parsed()) return Create(*flags);
+    if (list->parsed()) return List(*flags);
+    return Revoke(*flags);
+  };
+}
+
+}  // namespace endorecon::server

@@ -1,0 +1,167 @@
+#include "server/token_store.h"
+
+#include <openssl/crypto.h>
+
+#include "common/error.h"
+#include "common/sha256.h"
+#include "server/job_coordinator.h"
+#include "server/lease_table.h"
+#include "server/sqlite_statement.h"
+
+namespace endorecon::server {
+namespace {
+
+constexpr const char* kStore = "token store";
+constexpr std::string_view kPrefix = "endorecon.";
+constexpr int kIdBytes = 8;
+constexpr int kSecretBytes = 32;
+
+bool IsHex(std::string_view text, std::size_t length) {
+  return text.size() == length && text.find_first_not_of("0123456789abcdef") == std::string_view::npos;
+}
+
+std::string HashOf(const std::string& salt, std::string_view secret) {
+  Sha256 digest;
+  digest.Update(salt);
+  digest.Update(secret);
+  return digest.HexDigest();
+}
+
+void ValidateName(const std::string& name) {
+  if (name.empty() || name.size() > 64 ||
+      name.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789._@-") !=
+          std::string::npos) {
+    FailInvalid("token name '" + name + "': expected 1-64 characters of letters, digits, '.', '_', '@', '-'");
+  }
+}
+
+}  // namespace
+
+void ValidateTenant(const std::string& tenant) {
+  if (tenant.empty() || tenant.size() > 63 ||
+      tenant.find_first_not_of("abcdefghijklmnopqrstuvwxyz0123456789._-") != std::string::npos ||
+      tenant.find_first_of("._-") == 0) {
+    FailInvalid("tenant '" + tenant +
+                "': expected 1-63 characters of a-z, 0-9, '.', '_', '-', starting with a letter or digit");
+  }
+}
+
+std::filesystem::path TokenStore::PathIn(const std::filesystem::path& data_dir) {
+  return data_dir / "tokens.sqlite";
+}
+
+TokenStore::TokenStore(const std::filesystem::path& db_file) {
+  const bool created = !std::filesystem::exists(db_file);
+  db_ = OpenDatabase(db_file, kStore);
+  if (created) {
+    std::error_code ignored;
+    std::filesystem::permissions(
+        db_file, std::filesystem::perms::owner_read | std::filesystem::perms::owner_write, ignored);
+  }
+  try {
+    Exec(db_,
+         "CREATE TABLE IF NOT EXISTS tokens ("
+         " id TEXT PRIMARY KEY,"
+         " name TEXT NOT NULL,"
+         " role TEXT NOT NULL,"
+         " tenant TEXT NOT NULL,"
+         " salt TEXT NOT NULL,"
+         " hash TEXT NOT NULL,"
+         " created INTEGER NOT NULL,"
+         " revoked INTEGER NOT NULL DEFAULT 0)",
+         kStore);
+    Exec(db_, "CREATE UNIQUE INDEX IF NOT EXISTS tokens_active_name ON tokens(name) WHERE revoked = 0",
+         kStore);
+  } catch (...) {
+    sqlite3_close(db_);
+    throw;
+  }
+}
+
+TokenStore::~TokenStore() { sqlite3_close(db_); }
+
+std::string TokenStore::Create(const std::string& name, Role role, const std::string& tenant) {
+  ValidateName(name);
+  if (!tenant.empty() || role == Role::kClient) {
+    if (tenant.empty()) FailInvalid("a client token needs --tenant: its jobs belong to that tenant");
+    ValidateTenant(tenant);
+  }
+  const std::string id = RandomId(kIdBytes);
+  const std::string secret = RandomId(kSecretBytes);
+  const std::string salt = RandomId(16);
+  std::lock_guard lock(mutex_);
+  {
+    Statement active(db_, "SELECT COUNT(*) FROM tokens WHERE name = ? AND revoked = 0", kStore);
+    active.BindText(1, name);
+    active.Step();
+    if (active.Int(0) > 0)
+      FailInvalid("an active token is named '" + name + "'; revoke it first or pick another name");
+  }
+  Statement insert(
+      db_, "INSERT INTO tokens(id, name, role, tenant, salt, hash, created) VALUES(?, ?, ?, ?, ?, ?, ?)",
+      kStore);
+  insert.BindText(1, id);
+  insert.BindText(2, name);
+  insert.BindText(3, RoleName(role));
+  insert.BindText(4, tenant);
+  insert.BindText(5, salt);
+  insert.BindText(6, HashOf(salt, secret));
+  insert.Bind(7, NowUnixMs());
+  insert.Step();
+  return std::string(kPrefix) + id + "." + secret;
+}
+
+std::vector<TokenRecord> TokenStore::List() {
+  std::lock_guard lock(mutex_);
+  Statement select(db_, "SELECT name, role, tenant, created, revoked FROM tokens ORDER BY created, rowid",
+                   kStore);
+  std::vector<TokenRecord> records;
+  while (select.Step()) {
+    records.push_back({select.Text(0), ParseRole(select.Text(1)).value_or(Role::kClient), select.Text(2),
+                       select.Int(3), select.Int(4)});
+  }
+  return records;
+}
+
+TokenRecord TokenStore::Revoke(const std::string& name) {
+  std::lock_guard lock(mutex_);
+  TokenRecord record;
+  {
+    Statement select(db_, "SELECT role, tenant, created FROM tokens WHERE name = ? AND revoked = 0", kStore);
+    select.BindText(1, name);
+    if (!select.Step()) Fail(ErrorCode::kNotFound, "no active token named '" + name + "'");
+    record = {name, ParseRole(select.Text(0)).value_or(Role::kClient), select.Text(1), select.Int(2),
+              NowUnixMs()};
+  }
+  Statement update(db_, "UPDATE tokens SET revoked = ? WHERE name = ? AND revoked = 0", kStore);
+  update.Bind(1, record.revoked_unix_ms);
+  update.BindText(2, name);
+  update.Step();
+  return record;
+}
+
+TokenRecord TokenStore::Verify(std::string_view token) {
+  const auto dot = token.find('.', kPrefix.size());
+  if (token.substr(0, kPrefix.size()) != kPrefix || dot == std::string_view::npos ||
+      !IsHex(token.substr(kPrefix.size(), dot - kPrefix.size()), 2 * kIdBytes) ||
+      !IsHex(token.substr(dot + 1), 2 * kSecretBytes)) {
+    Fail(ErrorCode::kUnauthenticated,
+         "malformed token: expected endorecon.<id>.<secret> as printed by "
+         "`endorecon-server token create`");
+  }
+  const std::string id(token.substr(kPrefix.size(), dot - kPrefix.size()));
+  std::lock_guard lock(mutex_);
+  Statement select(db_, "SELECT name, role, tenant, salt, hash, created, revoked FROM tokens WHERE id = ?",
+                   kStore);
+  select.BindText(1, id);
+  if (!select.Step()) Fail(ErrorCode::kUnauthenticated, "unknown token");
+  const std::string expected = select.Text(4);
+  const std::string actual = HashOf(select.Text(3), token.substr(dot + 1));
+  if (actual.size() != expected.size() || CRYPTO_memcmp(actual.data(), expected.data(), actual.size()) != 0)
+    Fail(ErrorCode::kUnauthenticated, "unknown token");
+  if (select.Int(6) != 0) Fail(ErrorCode::kUnauthenticated, "the token '" + select.Text(0) + "' was revoked");
+  return {select.Text(0), ParseRole(select.Text(1)).value_or(Role::kClient), select.Text(2), select.Int(5),
+          0};
+}
+
+}  // namespace endorecon::server

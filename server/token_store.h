@@ -1,0 +1,63 @@
+// Bearer tokens: <data-dir>/tokens.sqlite (SQLite, WAL), written by `endorecon-server token ...`
+// and read by the running server on every call, so a created or revoked token counts at once.
+//
+// A token is "endorecon.<id>.<secret>": 8 random bytes of id (the row's key) and 32 of secret, in
+// hex. Only the id, a random salt and SHA-256(salt || secret) are stored; the token itself exists
+// once, in the output of Create. A fast hash is enough because the secret is 256 random bits, not a
+// password: there is nothing to guess that a slow hash would protect.
+#pragma once
+
+#include <sqlite3.h>
+
+#include <cstdint>
+#include <filesystem>
+#include <mutex>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "server/principal.h"
+
+namespace endorecon::server {
+
+struct TokenRecord {
+  std::string name;  // the label: unique among active tokens
+  Role role = Role::kClient;
+  std::string tenant;
+  std::int64_t created_unix_ms = 0;
+  std::int64_t revoked_unix_ms = 0;  // 0 while active
+};
+
+class TokenStore {
+ public:
+  // <data_dir>/tokens.sqlite.
+  static std::filesystem::path PathIn(const std::filesystem::path& data_dir);
+
+  // Opens or creates the store (created with mode 0600). Throws Error(kUnavailable) naming the file.
+  explicit TokenStore(const std::filesystem::path& db_file);
+  ~TokenStore();
+  TokenStore(const TokenStore&) = delete;
+  TokenStore& operator=(const TokenStore&) = delete;
+
+  // Creates a token and returns it (the only copy). Throws Error(kInvalidArgument) for a bad name or
+  // tenant (saying which characters are allowed), a client token without a tenant, or a name an
+  // active token already has.
+  std::string Create(const std::string& name, Role role, const std::string& tenant);
+  // Every token ever created (active and revoked), oldest first. Never a secret or a hash.
+  std::vector<TokenRecord> List();
+  // Revokes the active token named `name`; returns its record. Throws Error(kNotFound).
+  TokenRecord Revoke(const std::string& name);
+  // The active token's record. Throws Error(kUnauthenticated) saying whether the token is malformed,
+  // unknown or revoked (never echoing it).
+  TokenRecord Verify(std::string_view token);
+
+ private:
+  sqlite3* db_ = nullptr;
+  std::mutex mutex_;
+};
+
+// Throws Error(kInvalidArgument) unless `tenant` is 1-63 characters of a-z, 0-9, '.', '_', '-'
+// starting with a letter or digit (it appears in paths, logs and metrics).
+void ValidateTenant(const std::string& tenant);
+
+}  // namespace endorecon::server

@@ -1,0 +1,70 @@
+// The alert rules and the Grafana dashboard: promtool accepts the rules and their unit tests, and
+// every metric they use is one a live server or worker exports.
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include "tests/deploy/deploy_files.h"
+
+namespace endorecon::testing {
+namespace {
+
+TEST(PrometheusRulesTest, PromtoolAcceptsTheRulesAndTheirTests) {
+  if (!std::filesystem::exists("/usr/bin/promtool"))
+    GTEST_SKIP() << "promtool is not installed (scripts/install-deps installs prometheus)";
+  const auto dir = SourcePath("deploy/prometheus");
+  const auto check = Capture("cd '" + dir.string() + "' && promtool check rules alerts.yml 2>&1; echo rc=$?");
+  EXPECT_NE(check.find("SUCCESS: 7 rules found"), std::string::npos) << check;
+  EXPECT_NE(check.find("rc=0"), std::string::npos) << check;
+  const auto config =
+      Capture("cd '" + dir.string() + "' && promtool check config prometheus.yml 2>&1; echo rc=$?");
+  EXPECT_NE(config.find("rc=0"), std::string::npos) << config;
+  const auto tests =
+      Capture("cd '" + dir.string() + "' && promtool test rules alerts_test.yml 2>&1; echo rc=$?");
+  EXPECT_NE(tests.find("SUCCESS"), std::string::npos) << tests;
+  EXPECT_NE(tests.find("rc=0"), std::string::npos) << tests;
+  for (const std::string alert : {"EndoreconQueueStuck", "EndoreconNoLiveWorkers", "EndoreconJobsFailing",
+                                  "EndoreconDiskNearlyFull", "EndoreconLeaseExpiriesRising"}) {
+    EXPECT_NE(ReadBytes(dir / "alerts_test.yml").find("alertname: " + alert), std::string::npos)
+        << alert << " has no unit test";
+  }
+}
+
+TEST(PrometheusRulesTest, AlertsAndDashboardUseOnlyExportedMetrics) {
+  Cluster cluster;
+  cluster.StartWorker("w1");
+  const auto metrics_of = [](int port) {
+    return Capture("curl -s --max-time 5 http://127.0.0.1:" + std::to_string(port) + "/metrics");
+  };
+  std::string exported;
+  ASSERT_TRUE(WaitUntil([&] {
+    exported = metrics_of(cluster.metrics_port()) + metrics_of(cluster.worker_metrics_port("w1"));
+    return exported.find("endorecon_worker_busy") != std::string::npos;
+  }));
+  const auto available = MetricNames(exported);
+
+  const auto dashboard = nlohmann::json::parse(ReadBytes(SourcePath("deploy/grafana/endorecon.json")));
+  std::string expressions;
+  ASSERT_FALSE(dashboard.at("panels").empty());
+  for (const auto& panel : dashboard.at("panels")) {
+    ASSERT_FALSE(panel.at("targets").empty()) << panel.at("title");
+    for (const auto& target : panel.at("targets")) expressions += target.at("expr").get<std::string>() + "\n";
+  }
+  const auto used_by_dashboard = MetricNames(expressions);
+  const auto used_by_alerts = MetricNames(ReadBytes(SourcePath("deploy/prometheus/alerts.yml")));
+  for (const auto& names : {used_by_dashboard, used_by_alerts}) {
+    for (const auto& name : names) EXPECT_TRUE(available.count(name)) << name << " is not exported";
+  }
+  // The dashboard shows every server metric.
+  for (const auto& name : MetricNames(metrics_of(cluster.metrics_port()))) {
+    const bool histogram_part =
+        name.size() > 7 && (name.ends_with("_bucket") || name.ends_with("_count") || name.ends_with("_sum"));
+    if (!histogram_part) {
+      EXPECT_TRUE(used_by_dashboard.count(name) || used_by_dashboard.count(name + "_bucket"))
+          << name << " is not on the dashboard";
+    }
+  }
+}
+
+}  // namespace
+}  // namespace endorecon::testing

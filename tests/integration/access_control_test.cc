@@ -1,0 +1,288 @@
+// Tokens, roles and tenants against a real server with a token store: every refusal of the matrix
+// with its status, its CLI exit code and its audit line, and nothing accepted lost on the way.
+#include <gtest/gtest.h>
+
+#include "tests/integration/audit_reader.h"
+#include "tests/integration/service_harness.h"
+
+namespace endorecon::testing {
+namespace {
+
+class AccessControlTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    admin_ = Credentials("admin", "", "ops");
+    alice_ = Credentials("client", "radiology", "alice");
+    bob_ = Credentials("client", "oncology", "bob");
+    worker_ = Credentials("worker", "", "node-1");
+    cluster_.UseCredentials(admin_);
+    cluster_.StartServer();
+    MakeClip(cluster_.path("clip"));
+  }
+
+  ClientCredentials Credentials(const std::string& role, const std::string& tenant, const std::string& name) {
+    auto credentials = MakeCredentials(cluster_, "", role, tenant, name);
+    const auto file = ReadBytes(credentials.token_file);
+    tokens_.push_back(file.substr(0, file.find('\n')));
+    return credentials;
+  }
+
+  CliResult Cli(const ClientCredentials& who, std::vector<std::string> args) {
+    auto argv = who.CliFlags();
+    argv.insert(argv.end(), args.begin(), args.end());
+    return RunCli(cluster_.address(), argv);
+  }
+
+  std::string SubmitAs(const ClientCredentials& who, const std::string& name) {
+    const auto result = Cli(who, {"--json", "submit", cluster_.path("clip").string(), "--name", name});
+    EXPECT_EQ(result.exit_code, 0) << result.err;
+    return result.out.substr(result.out.find("\"id\":\"") + 6, 12);
+  }
+
+  std::vector<nlohmann::json> Audit() { return AuditLines(cluster_.data_dir() / "audit.jsonl"); }
+
+  // A PACS the server knows by name; nothing listens there, so a retrieval from it fails at once.
+  Cluster cluster_{{"--tenant-max-jobs", "2", "--pacs", "pacs1=PACS1@127.0.0.1:" + std::to_string(FreePort()),
+                    "--dicom-timeout", "5"},
+                   false};
+  ClientCredentials admin_, alice_, bob_, worker_;
+  std::vector<std::string> tokens_;
+};
+
+TEST_F(AccessControlTest, CallsWithoutAnAcceptedTokenAreUnauthenticated) {
+  const auto none = Cli({}, {"list"});
+  EXPECT_EQ(none.exit_code, 10) << none.err;
+  EXPECT_NE(none.err.find("UNAUTHENTICATED"), std::string::npos) << none.err;
+  EXPECT_NE(none.err.find("--token-file"), std::string::npos) << none.err;
+
+  const auto malformed_file = WriteTokenFile(cluster_.path("bad.token"), "not-a-token");
+  const auto malformed = Cli({"", malformed_file.string()}, {"list"});
+  EXPECT_EQ(malformed.exit_code, 10);
+  EXPECT_NE(malformed.err.find("malformed token"), std::string::npos) << malformed.err;
+
+  // Well-formed, but the secret of alice's token with one digit changed.
+  std::string forged = tokens_[1];
+  forged.back() = forged.back() == '0' ? '1' : '0';
+  const auto unknown = Cli({"", WriteTokenFile(cluster_.path("forged.token"), forged).string()}, {"list"});
+  EXPECT_EQ(unknown.exit_code, 10);
+  EXPECT_NE(unknown.err.find("unknown token"), std::string::npos) << unknown.err;
+
+  const auto audit = Audit();
+  EXPECT_EQ(AuditFind(audit, "List", "UNAUTHENTICATED", "-").size(), 3u);
+}
+
+TEST_F(AccessControlTest, RevokingATokenTakesEffectWithoutARestart) {
+  const auto id = SubmitAs(alice_, "before-revoke");
+  EXPECT_EQ(Cli(alice_, {"status", id}).exit_code, 0);
+
+  TempDir scratch("revoke");
+  Process revoke({BuiltBinary("server/endorecon-server"), "token", "revoke", "--data-dir",
+                  cluster_.data_dir().string(), "alice"},
+                 scratch / "out");
+  ASSERT_EQ(revoke.Wait(), 0) << ReadBytes(scratch / "out");
+  const auto refused = Cli(alice_, {"status", id});
+  EXPECT_EQ(refused.exit_code, 10);
+  EXPECT_NE(refused.err.find("revoked"), std::string::npos) << refused.err;
+
+  Process list(
+      {BuiltBinary("server/endorecon-server"), "token", "list", "--data-dir", cluster_.data_dir().string()},
+      scratch / "list");
+  ASSERT_EQ(list.Wait(), 0);
+  const auto listed = ReadBytes(scratch / "list");
+  EXPECT_NE(listed.find("alice"), std::string::npos) << listed;
+  EXPECT_NE(listed.find("revoked"), std::string::npos) << listed;
+
+  // Nothing accepted is lost: the job is still there, and its tenant's other tokens still work.
+  EXPECT_EQ(cluster_.Job(id).state(), v1::QUEUED);
+  const auto audit = Audit();
+  EXPECT_EQ(AuditFind(audit, "TokenRevoke", "OK").size(), 1u);
+  EXPECT_EQ(AuditFind(audit, "Get", "UNAUTHENTICATED", "-", id).size(), 1u);
+}
+
+TEST_F(AccessControlTest, RolesKeepToTheirApi) {
+  const auto worker_on_jobs = Cli(worker_, {"list"});
+  EXPECT_EQ(worker_on_jobs.exit_code, 11) << worker_on_jobs.err;
+  EXPECT_NE(worker_on_jobs.err.find("PERMISSION_DENIED"), std::string::npos);
+
+  const auto client_lists_workers = Cli(alice_, {"workers"});
+  EXPECT_EQ(client_lists_workers.exit_code, 11) << client_lists_workers.err;
+  EXPECT_EQ(Cli(admin_, {"workers"}).exit_code, 0);
+
+  // A worker holding a client token leases nothing: it is refused at registration and stops.
+  const auto id = SubmitAs(alice_, "queued");
+  auto& worker = cluster_.StartWorker("w-client-token", {"--token-file", alice_.token_file});
+  EXPECT_NE(worker.Wait(), 0);
+  EXPECT_NE(worker.Log().find("PERMISSION_DENIED"), std::string::npos) << worker.Log();
+  EXPECT_EQ(cluster_.Job(id).state(), v1::QUEUED);
+
+  const auto audit = Audit();
+  EXPECT_EQ(AuditFind(audit, "List", "PERMISSION_DENIED", "node-1").size(), 1u);
+  EXPECT_EQ(AuditFind(audit, "ListWorkers", "PERMISSION_DENIED", "alice").size(), 1u);
+  EXPECT_EQ(AuditFind(audit, "Register", "PERMISSION_DENIED", "alice").size(), 1u);
+}
+
+TEST_F(AccessControlTest, AnotherTenantsJobIsNotFoundLikeAMissingOne) {
+  const auto id = SubmitAs(alice_, "alice-job");
+  const auto missing = Cli(bob_, {"status", "000000000000"});
+  ASSERT_EQ(missing.exit_code, 3);
+  for (const std::string command : {"status", "watch", "cancel"}) {
+    const auto result = Cli(bob_, {command, id});
+    EXPECT_EQ(result.exit_code, 3) << command << ": " << result.err;
+    EXPECT_EQ(result.err.find("radiology"), std::string::npos) << result.err;
+    EXPECT_NE(result.err.find("no job '" + id + "'"), std::string::npos) << result.err;
+  }
+  const auto fetched = Cli(bob_, {"fetch", id, "-o", cluster_.path("stolen").string()});
+  EXPECT_EQ(fetched.exit_code, 3) << fetched.err;
+  EXPECT_FALSE(std::filesystem::exists(cluster_.path("stolen")));
+
+  // Lists: each client its own tenant; the admin every tenant, with the tenant shown.
+  SubmitAs(bob_, "bob-job");
+  const auto bobs = Cli(bob_, {"list"});
+  EXPECT_EQ(bobs.out.find(id), std::string::npos) << bobs.out;
+  EXPECT_NE(bobs.out.find("bob-job"), std::string::npos) << bobs.out;
+  const auto all = Cli(admin_, {"list"});
+  EXPECT_NE(all.out.find("TENANT"), std::string::npos) << all.out;
+  EXPECT_NE(all.out.find("radiology"), std::string::npos) << all.out;
+  EXPECT_NE(all.out.find("oncology"), std::string::npos) << all.out;
+
+  // Nothing of alice's was touched, and every refusal is in the audit log with the job's id.
+  const auto job = cluster_.Job(id);
+  EXPECT_EQ(job.state(), v1::QUEUED);
+  EXPECT_EQ(job.tenant(), "radiology");
+  EXPECT_EQ(job.submitted_by(), "alice");
+  const auto audit = Audit();
+  for (const std::string method : {"Watch", "Cancel"})
+    EXPECT_EQ(AuditFind(audit, method, "NOT_FOUND", "bob", id).size(), 1u) << method;
+  EXPECT_EQ(AuditFind(audit, "Get", "NOT_FOUND", "bob", id).size(), 2u);  // status, fetch
+  // The admin may cancel anything.
+  EXPECT_EQ(Cli(admin_, {"cancel", id}).exit_code, 0);
+  EXPECT_EQ(cluster_.Job(id).state(), v1::CANCELLED);
+}
+
+TEST_F(AccessControlTest, OverQuotaSubmitsAreRefusedAndNothingIsLost) {
+  const auto first = SubmitAs(alice_, "one");
+  const auto second = SubmitAs(alice_, "two");
+  const auto third = Cli(alice_, {"submit", cluster_.path("clip").string(), "--name", "three"});
+  EXPECT_EQ(third.exit_code, 8) << third.err;
+  EXPECT_NE(third.err.find("max_jobs"), std::string::npos) << third.err;
+  EXPECT_NE(third.err.find("radiology"), std::string::npos) << third.err;
+  // Another tenant has its own quota.
+  SubmitAs(bob_, "bobs");
+  EXPECT_EQ(cluster_.Job(first).state(), v1::QUEUED);
+  EXPECT_EQ(cluster_.Job(second).state(), v1::QUEUED);
+  EXPECT_EQ(AuditFind(Audit(), "Submit", "RESOURCE_EXHAUSTED", "alice").size(), 1u);
+}
+
+TEST(TenantQuotaTest, AnUploadOverTheByteQuotaIsRefusedBeforeAByteIsWritten) {
+  TempDir config("quotas");
+  WriteBytes(config / "quotas.json", R"({"research": {"max_bytes": 1000}})");
+  Cluster cluster({"--quotas", (config / "quotas.json").string()}, false);
+  const auto carol = MakeCredentials(cluster, "", "client", "research", "carol");
+  cluster.UseCredentials(carol);
+  cluster.StartServer();
+  MakeClip(cluster.path("clip"));
+  auto args = carol.CliFlags();
+  args.insert(args.end(), {"submit", cluster.path("clip").string()});
+  const auto refused = RunCli(cluster.address(), args);
+  EXPECT_EQ(refused.exit_code, 8) << refused.err;
+  EXPECT_NE(refused.err.find("max_bytes of 1000 bytes"), std::string::npos) << refused.err;
+  EXPECT_TRUE(std::filesystem::is_empty(cluster.data_dir() / "blobs"));
+  EXPECT_TRUE(std::filesystem::is_empty(cluster.data_dir() / "partial"));
+  EXPECT_EQ(
+      AuditFind(AuditLines(cluster.data_dir() / "audit.jsonl"), "QueryUpload", "RESOURCE_EXHAUSTED", "carol")
+          .size(),
+      1u);
+}
+
+TEST_F(AccessControlTest, NoLogHoldsATokenOrAJobName) {
+  SubmitAs(alice_, "patient-jane-doe-1957");
+  Cli(bob_, {"list"});
+  Cli({"", WriteTokenFile(cluster_.path("forged.token"), tokens_[2] + "0").string()}, {"list"});
+  const std::string audit = ReadBytes(cluster_.data_dir() / "audit.jsonl");
+  const std::string server_log = cluster_.ServerLog();
+  for (const auto& token : tokens_) {
+    const auto secret = token.substr(token.rfind('.') + 1);
+    EXPECT_EQ(audit.find(secret), std::string::npos);
+    EXPECT_EQ(server_log.find(secret), std::string::npos);
+    EXPECT_EQ(ReadBytes(cluster_.data_dir() / "tokens.sqlite").find(secret), std::string::npos);
+  }
+  EXPECT_EQ(audit.find("jane"), std::string::npos);
+  EXPECT_EQ(server_log.find("jane"), std::string::npos);
+  EXPECT_EQ(AuditFind(AuditLines(cluster_.data_dir() / "audit.jsonl"), "Submit", "OK", "alice").size(), 1u);
+}
+
+// Send goes through the same gate as every job call: a token of the job API, and the caller's own
+// tenant (an admin: any); another tenant's job is NOT_FOUND exactly like a missing one, whatever
+// PACS it names.
+TEST_F(AccessControlTest, SendKeepsToTheCallersTenantAndRole) {
+  const auto id = SubmitAs(alice_, "alice-job");
+  const auto none = Cli({}, {"send", id, "--to", "pacs1"});
+  EXPECT_EQ(none.exit_code, 10) << none.err;
+  EXPECT_NE(none.err.find("UNAUTHENTICATED"), std::string::npos) << none.err;
+  const auto worker = Cli(worker_, {"send", id, "--to", "pacs1"});
+  EXPECT_EQ(worker.exit_code, 11) << worker.err;
+  EXPECT_NE(worker.err.find("PERMISSION_DENIED"), std::string::npos) << worker.err;
+
+  const std::string missing_id = "000000000000";
+  const auto missing = Cli(bob_, {"send", missing_id, "--to", "pacs1"});
+  ASSERT_EQ(missing.exit_code, 3) << missing.err;
+  for (const std::string pacs : {"pacs1", "no-such-pacs"}) {
+    const auto other = Cli(bob_, {"send", id, "--to", pacs});
+    EXPECT_EQ(other.exit_code, 3) << other.err;
+    std::string as_missing = other.err;
+    for (auto at = as_missing.find(id); at != std::string::npos; at = as_missing.find(id))
+      as_missing.replace(at, id.size(), missing_id);
+    if (pacs == "pacs1") {
+      EXPECT_EQ(as_missing, missing.err);
+    }
+    EXPECT_NE(other.err.find("no job '" + id + "'"), std::string::npos) << other.err;
+    EXPECT_EQ(other.err.find("radiology"), std::string::npos) << other.err;
+  }
+
+  // The owner and the admin pass the gate and meet the job's state: a QUEUED job has nothing to send.
+  const auto own = Cli(alice_, {"send", id, "--to", "pacs1"});
+  EXPECT_EQ(own.exit_code, 7) << own.err;
+  EXPECT_NE(own.err.find("QUEUED"), std::string::npos) << own.err;
+  EXPECT_EQ(Cli(admin_, {"send", id, "--to", "pacs1"}).exit_code, 7);
+
+  const auto job = cluster_.Job(id);
+  EXPECT_EQ(job.state(), v1::QUEUED);
+  EXPECT_EQ(job.sends_size(), 0);
+  const auto audit = Audit();
+  EXPECT_EQ(AuditFind(audit, "Send", "UNAUTHENTICATED", "-", id).size(), 1u);
+  EXPECT_EQ(AuditFind(audit, "Send", "PERMISSION_DENIED", "node-1", id).size(), 1u);
+  EXPECT_EQ(AuditFind(audit, "Send", "NOT_FOUND", "bob", id).size(), 2u);
+  EXPECT_EQ(AuditFind(audit, "Send", "FAILED_PRECONDITION", "alice", id).size(), 1u);
+  EXPECT_EQ(AuditFind(audit, "Send", "FAILED_PRECONDITION", "ops", id).size(), 1u);
+}
+
+// A job submitted by Study UID belongs to the submitter's tenant like any other, and neither the
+// audit log nor the server's log holds the patient's or the study's identifiers.
+TEST_F(AccessControlTest, DicomJobsKeepToTheirTenantAndOutOfTheLogs) {
+  const std::string study = "1.2.826.0.1.3680043.10.999.4711";
+  const auto from_pacs = Cli(alice_, {"--json", "submit", "--pacs", "pacs1", "--study", study});
+  ASSERT_EQ(from_pacs.exit_code, 0) << from_pacs.err;
+  const std::string id = from_pacs.out.substr(from_pacs.out.find("\"id\":\"") + 6, 12);
+  const auto failed = cluster_.WaitForState(id, v1::FAILED, std::chrono::seconds(30));
+  EXPECT_EQ(failed.tenant(), "radiology");
+  EXPECT_EQ(failed.submitted_by(), "alice");
+  EXPECT_EQ(failed.retrieval().state(), v1::Retrieval::RETRIEVAL_FAILED);
+  EXPECT_EQ(Cli(bob_, {"status", id}).exit_code, 3);
+
+  const auto with_patient =
+      Cli(alice_, {"submit", cluster_.path("clip").string(), "--dicom", "--patient-id", "PAT-4711",
+                   "--patient-name", "Doe^Jane", "--study-uid", study + ".2", "--send-to", "pacs1"});
+  EXPECT_EQ(with_patient.exit_code, 0) << with_patient.err;
+
+  const auto audit = Audit();
+  const auto retrievals = AuditFind(audit, "PacsRetrieve", "UNAVAILABLE", "server", id);
+  ASSERT_EQ(retrievals.size(), 1u);
+  EXPECT_EQ(retrievals[0].value("subject", ""), "pacs1");
+  for (const std::string& log : {ReadBytes(cluster_.data_dir() / "audit.jsonl"), cluster_.ServerLog()}) {
+    for (const std::string& secret : {study, std::string("PAT-4711"), std::string("Doe")})
+      EXPECT_EQ(log.find(secret), std::string::npos) << secret;
+  }
+}
+
+}  // namespace
+}  // namespace endorecon::testing

@@ -1,0 +1,200 @@
+// TLS and client certificates with real processes and certificates made by openssl at test time:
+// what a client or worker that cannot prove itself (or cannot trust the server) gets, and what the
+// server refuses to start with.
+#include <grpcpp/generic/generic_stub.h>
+#include <gtest/gtest.h>
+
+#include <condition_variable>
+#include <memory>
+#include <mutex>
+#include <optional>
+
+#include "common/transport_security.h"
+#include "tests/integration/audit_reader.h"
+#include "tests/integration/service_harness.h"
+#include "tests/integration/test_pki.h"
+
+namespace endorecon::testing {
+namespace fs = std::filesystem;
+namespace {
+
+class TlsTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    pki_dir_ = std::make_unique<TempDir>("pki");
+    pki_ = std::make_unique<TestPki>(pki_dir_->path());
+  }
+  static void TearDownTestSuite() {
+    pki_.reset();
+    pki_dir_.reset();
+  }
+
+  // A server with TLS, client certificates required on the worker API, and tokens.
+  void StartSecureServer() {
+    cluster_ = std::make_unique<Cluster>(ServerTlsFlags(*pki_), false);
+    admin_ = MakeCredentials(*cluster_, pki_->ca_cert.string(), "admin", "", "ops");
+    worker_token_ = MakeCredentials(*cluster_, "", "worker", "", "node-1").token_file;
+    cluster_->UseCredentials(admin_);
+    cluster_->StartServer();
+  }
+
+  CliResult Cli(std::vector<std::string> flags, const std::vector<std::string>& args) {
+    flags.insert(flags.end(), args.begin(), args.end());
+    return RunCli(cluster_->address(), flags);
+  }
+
+  static std::unique_ptr<TempDir> pki_dir_;
+  static std::unique_ptr<TestPki> pki_;
+  std::unique_ptr<Cluster> cluster_;
+  ClientCredentials admin_;
+  std::string worker_token_;
+};
+
+std::unique_ptr<TempDir> TlsTest::pki_dir_;
+std::unique_ptr<TestPki> TlsTest::pki_;
+
+// grpc.health.v1.Health/Check over plaintext, without generated stubs: the empty request, and the
+// raw response bytes (08 01 is status SERVING).
+std::string HealthCheckBytes(const std::string& address) {
+  grpc::GenericStub stub(OpenChannel(address));
+  grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(5));
+  grpc::Slice empty("", 0);
+  grpc::ByteBuffer request(&empty, 1), response;
+  std::mutex mutex;
+  std::condition_variable done;
+  std::optional<grpc::Status> status;
+  stub.UnaryCall(&context, "/grpc.health.v1.Health/Check", grpc::StubOptions(), &request, &response,
+                 [&](grpc::Status result) {
+                   std::lock_guard lock(mutex);
+                   status = result;
+                   done.notify_all();
+                 });
+  std::unique_lock lock(mutex);
+  done.wait(lock, [&] { return status.has_value(); });
+  if (!status->ok()) return "error " + status->error_message();
+  std::vector<grpc::Slice> slices;
+  (void)response.Dump(&slices);
+  std::string bytes;
+  for (const auto& slice : slices) bytes.append(reinterpret_cast<const char*>(slice.begin()), slice.size());
+  return bytes;
+}
+
+TEST_F(TlsTest, ClientsThatCannotTrustTheServerOrSpeakPlaintextGetNothing) {
+  StartSecureServer();
+  const auto trusted = Cli(admin_.CliFlags(), {"list"});
+  ASSERT_EQ(trusted.exit_code, 0) << trusted.err;
+
+  const auto plaintext = Cli({"--token-file", admin_.token_file, "--timeout", "2"}, {"list"});
+  EXPECT_EQ(plaintext.exit_code, 4) << plaintext.err;
+  EXPECT_NE(plaintext.err.find("--ca"), std::string::npos) << plaintext.err;
+
+  const auto untrusted = Cli(
+      {"--ca", pki_->rogue_ca_cert.string(), "--token-file", admin_.token_file, "--timeout", "2"}, {"list"});
+  EXPECT_EQ(untrusted.exit_code, 4) << untrusted.err;
+  EXPECT_NE(untrusted.err.find("UNAVAILABLE"), std::string::npos) << untrusted.err;
+}
+
+TEST_F(TlsTest, TheHealthPortAnswersInPlaintextBesideTheTlsPort) {
+  TempDir dir("health");
+  const int port = FreePort(), health = FreePort();
+  Process server(
+      {BuiltBinary("server/endorecon-server"), "--listen", "127.0.0.1:" + std::to_string(port), "--data-dir",
+       (dir / "data").string(), "--metrics-port", "-1", "--tls-cert", pki_->server_cert.string(), "--tls-key",
+       pki_->server_key.string(), "--health-listen", "127.0.0.1:" + std::to_string(health)},
+      dir / "server.log");
+  ASSERT_TRUE(WaitUntil([&] { return PortOpen(health); }, std::chrono::seconds(20))) << server.Log();
+  EXPECT_TRUE(WaitUntil([&] { return HealthCheckBytes("127.0.0.1:" + std::to_string(health)) == "\x08\x01"; },
+                        std::chrono::seconds(10)));
+  // The API is not there: only the health service answers on that port.
+  const auto api = RunCli("127.0.0.1:" + std::to_string(health), {"--timeout", "2", "list"});
+  EXPECT_EQ(api.exit_code, 1) << api.err;  // UNIMPLEMENTED
+}
+
+TEST_F(TlsTest, AnExpiredServerCertificateIsRefusedByClients) {
+  TempDir dir("expired");
+  const int port = FreePort();
+  Process server({BuiltBinary("server/endorecon-server"), "--listen", "127.0.0.1:" + std::to_string(port),
+                  "--data-dir", (dir / "data").string(), "--metrics-port", "-1", "--tls-cert",
+                  pki_->expired_cert.string(), "--tls-key", pki_->expired_key.string()},
+                 dir / "server.log");
+  ASSERT_TRUE(WaitUntil([&] { return PortOpen(port); }, std::chrono::seconds(20))) << server.Log();
+  const auto result =
+      RunCli("127.0.0.1:" + std::to_string(port), {"--ca", pki_->ca_cert.string(), "--timeout", "2", "list"});
+  EXPECT_EQ(result.exit_code, 4) << result.err;
+  EXPECT_NE(result.err.find("UNAVAILABLE"), std::string::npos) << result.err;
+}
+
+TEST_F(TlsTest, WorkersWithoutAClientCertificateOrWithAClientTokenLeaseNothing) {
+  StartSecureServer();
+  MakeClip(cluster_->path("clip"));
+  const auto id = cluster_->Submit(cluster_->path("clip"), {"--iterations", "5"});
+
+  auto& no_certificate =
+      cluster_->StartWorker("w-no-cert", {"--ca", pki_->ca_cert.string(), "--token-file", worker_token_});
+  EXPECT_NE(no_certificate.Wait(), 0);
+  EXPECT_NE(no_certificate.Log().find("client certificate"), std::string::npos) << no_certificate.Log();
+
+  // A certificate from a CA the server does not trust fails the handshake: the worker never gets in.
+  auto& rogue = cluster_->StartWorker(
+      "w-rogue", {"--ca", pki_->ca_cert.string(), "--tls-cert", pki_->rogue_cert.string(), "--tls-key",
+                  pki_->rogue_key.string(), "--token-file", worker_token_, "--timeout", "2"});
+  std::this_thread::sleep_for(std::chrono::seconds(3));
+  rogue.Signal(SIGTERM);
+  rogue.Wait();
+  EXPECT_NE(rogue.Log().find("cannot register"), std::string::npos) << rogue.Log();
+
+  auto& client_token = cluster_->StartWorker("w-client-token", WorkerTlsFlags(*pki_, admin_.token_file));
+  EXPECT_NE(client_token.Wait(), 0);
+  EXPECT_NE(client_token.Log().find("PERMISSION_DENIED"), std::string::npos) << client_token.Log();
+
+  EXPECT_EQ(cluster_->Job(id).state(), v1::QUEUED);
+  const auto audit = AuditLines(cluster_->data_dir() / "audit.jsonl");
+  EXPECT_EQ(AuditFind(audit, "Register", "UNAUTHENTICATED").size(), 1u);
+  EXPECT_TRUE(AuditFind(audit, "Register", "OK").empty());
+  const auto denied = AuditFind(audit, "Register", "PERMISSION_DENIED", "ops");
+  ASSERT_EQ(denied.size(), 1u);
+  EXPECT_EQ(denied[0].value("certificate", ""), "worker-1");
+}
+
+TEST_F(TlsTest, TheServerRefusesPlaintextBeyondLoopbackAndReadableKeys) {
+  TempDir dir("refusals");
+  const std::string server = BuiltBinary("server/endorecon-server");
+  Process exposed({server, "--listen", "0.0.0.0:" + std::to_string(FreePort()), "--data-dir",
+                   (dir / "d").string(), "--metrics-port", "-1"},
+                  dir / "exposed.log");
+  EXPECT_EQ(exposed.Wait(), 2);
+  EXPECT_NE(exposed.Log().find("without TLS"), std::string::npos) << exposed.Log();
+
+  const auto readable_key = dir / "readable.key";
+  fs::copy_file(pki_->server_key, readable_key);
+  fs::permissions(readable_key, fs::perms::others_read, fs::perm_options::add);
+  Process leaky(
+      {server, "--listen", "127.0.0.1:" + std::to_string(FreePort()), "--data-dir", (dir / "d").string(),
+       "--metrics-port", "-1", "--tls-cert", pki_->server_cert.string(), "--tls-key", readable_key.string()},
+      dir / "leaky.log");
+  EXPECT_EQ(leaky.Wait(), 2);
+  EXPECT_NE(leaky.Log().find("chmod o-rwx"), std::string::npos) << leaky.Log();
+
+  // --insecure serves beyond loopback in plaintext, and says so loudly.
+  const int insecure_port = FreePort();
+  Process insecure({server, "--listen", "0.0.0.0:" + std::to_string(insecure_port), "--data-dir",
+                    (dir / "d").string(), "--metrics-port", "-1", "--insecure"},
+                   dir / "insecure.log");
+  EXPECT_TRUE(WaitUntil([&] { return PortOpen(insecure_port); }, std::chrono::seconds(20))) << insecure.Log();
+  insecure.Signal(SIGTERM);
+  EXPECT_EQ(insecure.Wait(), 0);
+  EXPECT_NE(insecure.Log().find("critical"), std::string::npos) << insecure.Log();
+  EXPECT_NE(insecure.Log().find("WITHOUT TLS"), std::string::npos) << insecure.Log();
+
+  // Workers and clients refuse readable secrets too.
+  const auto readable_token = dir / "readable.token";
+  WriteBytes(readable_token, "endorecon.0.0\n");
+  fs::permissions(readable_token, fs::perms::others_read, fs::perm_options::add);
+  const auto cli = RunCli("127.0.0.1:1", {"--token-file", readable_token.string(), "list"});
+  EXPECT_EQ(cli.exit_code, 2) << cli.err;
+  EXPECT_NE(cli.err.find("others may access it"), std::string::npos) << cli.err;
+}
+
+}  // namespace
+}  // namespace endorecon::testing

@@ -1,0 +1,46 @@
+#include "server/audit_log.h"
+
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <thread>
+
+#include "tests/unit/temp_dir.h"
+
+namespace endorecon::server {
+namespace {
+
+TEST(AuditLogTest, OneJsonLinePerEntryFromManyThreadsAndWriters) {
+  testing::TempDir dir("audit");
+  const auto path = dir / "audit.jsonl";
+  {
+    AuditLog first(path);
+    AuditLog second(path);  // another process appending (endorecon-server token ...)
+    std::vector<std::thread> threads;
+    for (int t = 0; t < 4; ++t) {
+      threads.emplace_back([&, t] {
+        for (int i = 0; i < 50; ++i) {
+          (t % 2 ? first : second)
+              .Write({"alice", "client", "radiology", "Submit", "job" + std::to_string(i), "OK",
+                      "ipv4:127.0.0.1:1", "", ""});
+        }
+      });
+    }
+    for (auto& thread : threads) thread.join();
+    first.Write({"-", "-", "", "List", "", "UNAUTHENTICATED", "ipv4:127.0.0.1:2", "worker-1", "bad\xff"});
+  }
+  std::istringstream text(testing::ReadBytes(path));
+  int lines = 0;
+  nlohmann::json last;
+  for (std::string line; std::getline(text, line); ++lines) last = nlohmann::json::parse(line);
+  EXPECT_EQ(lines, 201);
+  EXPECT_EQ(last["method"], "List");
+  EXPECT_EQ(last["outcome"], "UNAUTHENTICATED");
+  EXPECT_EQ(last["certificate"], "worker-1");
+  EXPECT_EQ(last["time"].get<std::string>().size(), 24u);  // 2026-11-30T12:00:00.000Z
+  EXPECT_EQ(last["time"].get<std::string>().back(), 'Z');
+}
+
+}  // namespace
+}  // namespace endorecon::server

@@ -1,0 +1,76 @@
+// Whole runs through Reconstruct: each run keeps the thread count it was given, also when two run at
+// once in one process (a worker serving two devices), and says so in metrics.json.
+#include "worker/engine/reconstruct.h"
+
+#include <gtest/gtest.h>
+#include <tbb/task_arena.h>
+
+#include <chrono>
+#include <fstream>
+#include <thread>
+
+#include "tests/unit/temp_dir.h"
+#include "worker/engine/scene/synthetic_clip.h"
+
+namespace endorecon {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+struct Observed {
+  ReconstructSummary summary;
+  int concurrency_in_hooks = 0;  // the arena the run's hooks were called in
+  Clock::time_point first, last;
+  nlohmann::json metrics;
+};
+
+Observed RunReconstruct(const fs::path& clip, const fs::path& out, int threads) {
+  ReconstructOptions options;
+  options.clip_dir = clip.string();
+  options.out_dir = out.string();
+  options.threads = threads;
+  options.iterations = 60;
+  options.holdout = 4;
+  options.config = {
+      {"rays_per_batch", 256}, {"mc_passes", 1}, {"eval_coarse_samples", 8}, {"eval_fine_samples", 8}};
+  Observed observed;
+  ReconstructHooks hooks;
+  hooks.progress_interval_s = 0;
+  hooks.on_progress = [&](const Progress&) {
+    observed.concurrency_in_hooks = tbb::this_task_arena::max_concurrency();
+    if (observed.first == Clock::time_point()) observed.first = Clock::now();
+    observed.last = Clock::now();
+  };
+  observed.summary = Reconstruct(options, hooks);
+  std::ifstream(out / "metrics.json") >> observed.metrics;
+  return observed;
+}
+
+TEST(Reconstruct, TwoRunsInOneProcessEachKeepTheirThreadCount) {
+  testing::TempDir dir("reconstruct-threads");
+  scene::SynthOptions synth;
+  synth.frames = 8;
+  synth.width = 40;
+  synth.height = 32;
+  scene::WriteSyntheticClip(synth, dir / "clip");
+  Observed one, two;
+  std::thread a([&] { one = RunReconstruct(dir / "clip", dir / "one", 1); });
+  std::thread b([&] { two = RunReconstruct(dir / "clip", dir / "two", 2); });
+  a.join();
+  b.join();
+  EXPECT_EQ(one.summary.threads, 1);
+  EXPECT_EQ(two.summary.threads, 2);
+  EXPECT_EQ(one.metrics.at("threads"), 1);
+  EXPECT_EQ(two.metrics.at("threads"), 2);
+  EXPECT_EQ(one.concurrency_in_hooks, 1);
+  EXPECT_EQ(two.concurrency_in_hooks, 2);
+  // They did run at the same time.
+  EXPECT_LT(one.first, two.last);
+  EXPECT_LT(two.first, one.last);
+  EXPECT_EQ(one.summary.iterations, 60);
+  EXPECT_EQ(two.summary.iterations, 60);
+}
+
+}  // namespace
+}  // namespace endorecon

@@ -1,0 +1,120 @@
+// report.html as written at the end of a reconstruction: what its data block holds, for a finished and
+// a cancelled run, and the errors for a folder that is not a results folder. (The page itself runs in
+// a browser in tests/e2e/report_page_test.cc.)
+#include "worker/engine/eval/report.h"
+
+#include <gtest/gtest.h>
+
+#include "common/error.h"
+#include "tests/unit/report_data.h"
+#include "tests/unit/temp_dir.h"
+#include "worker/engine/eval/surface_grid.h"
+#include "worker/engine/reconstruct.h"
+#include "worker/engine/scene/json_file.h"
+#include "worker/engine/scene/synthetic_clip.h"
+
+namespace endorecon::eval {
+namespace {
+
+namespace fs = std::filesystem;
+
+class ReportTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new testing::TempDir("report");
+    scene::SynthOptions synth;
+    synth.frames = 8;
+    synth.width = 48;
+    synth.height = 40;
+    scene::WriteSyntheticClip(synth, dir_->path() / "clip");
+    testing::WriteBytes(
+        dir_->path() / "config.json",
+        R"({"rays_per_batch": 256, "depth_refine_every": 0, "occupancy_resolution": 16, "mc_passes": 2})");
+  }
+  static void TearDownTestSuite() {
+    delete dir_;
+    dir_ = nullptr;
+  }
+  static ReconstructOptions Options(const std::string& out) {
+    ReconstructOptions options;
+    options.clip_dir = (dir_->path() / "clip").string();
+    options.out_dir = (dir_->path() / out).string();
+    options.config_file = (dir_->path() / "config.json").string();
+    options.iterations = 20;
+    options.holdout = 4;
+    options.threads = 2;
+    return options;
+  }
+  static inline testing::TempDir* dir_ = nullptr;
+};
+
+TEST_F(ReportTest, AReconstructionsPageHoldsEveryFrameItsMetricsAndItsRun) {
+  const ReconstructOptions options = Options("out");
+  Reconstruct(options, {});
+  const fs::path out = options.out_dir;
+  const auto data = testing::ReportData(out / "report.html");
+  ASSERT_TRUE(data.is_object()) << "no data block in report.html";
+  EXPECT_EQ(data["kind"], "reconstruction");
+  EXPECT_EQ(data["title"], "clip");
+  EXPECT_EQ(data["metrics"], scene::ReadJsonFile(out / "metrics.json"));
+  EXPECT_EQ(data["config"], scene::ReadJsonFile(out / "config.json"));
+  EXPECT_EQ(data["run"]["device"], "CPU, 2 threads");
+  EXPECT_EQ(data["run"]["version"].get<std::string>().rfind("0.1.0", 0), 0u) << data["run"]["version"];
+  EXPECT_GT(data["run"]["machine"]["logical_cores"].get<int>(), 0);
+
+  const auto& frames = data["frames"];
+  EXPECT_EQ(frames["count"], 8);
+  EXPECT_EQ(frames["times"].size(), 8u);
+  EXPECT_EQ(frames["source_width"], 48);
+  for (const char* layer : {"input", "rendered", "depth", "uncertainty", "error", "tool"}) {
+    ASSERT_EQ(frames[layer].size(), 8u) << layer;
+    EXPECT_EQ(frames[layer][3].get<std::string>().rfind("data:image/", 0), 0u) << layer;
+  }
+  EXPECT_EQ(data["scales"]["uncertainty"]["range"],
+            data["metrics"]["uncertainty_maps"]["heatmap_scale"]["uncertainty"]);
+  EXPECT_EQ(data["scales"]["error"]["range"], data["metrics"]["uncertainty_maps"]["heatmap_scale"]["error"]);
+  const auto depth_range = data["scales"]["depth"]["range"];
+  EXPECT_GT(depth_range[1].get<double>(), depth_range[0].get<double>());
+  EXPECT_GT(depth_range[0].get<double>(), 0.0);
+
+  const auto& surface = data["surface"];
+  ASSERT_EQ(surface["frames"].size(), 8u);
+  EXPECT_EQ(surface["stride"], SurfaceStride(48, 40, 8, 600000));
+  const auto& grid = surface["frames"][0]["grid"];
+  const std::size_t points = grid[0].get<std::size_t>() * grid[1].get<std::size_t>();
+  EXPECT_EQ(surface["frames"][0]["depth"].get<std::string>().size(), 4 * ((2 * points + 2) / 3));
+  EXPECT_EQ(surface["frames"][0]["camera"]["width"], 48);
+  EXPECT_EQ(surface["frames"][0]["uncertainty"].get<std::string>().size(), 4 * ((points + 2) / 3));
+  EXPECT_EQ(surface["view"]["eye"].size(), 3u);
+}
+
+TEST_F(ReportTest, ACancelledRunsPageHasNoFramesButTheRest) {
+  const ReconstructOptions options = Options("cancelled");
+  ReconstructHooks hooks;
+  hooks.should_stop = [] { return true; };
+  ASSERT_TRUE(Reconstruct(options, hooks).cancelled);
+  const auto data = testing::ReportData(fs::path(options.out_dir) / "report.html");
+  ASSERT_TRUE(data.is_object());
+  EXPECT_TRUE(data["metrics"]["cancelled"].get<bool>());
+  EXPECT_FALSE(data.contains("frames"));
+  EXPECT_FALSE(data.contains("surface"));
+}
+
+TEST_F(ReportTest, AFolderThatHoldsNoResultsIsRefusedByName) {
+  testing::TempDir empty("report-empty");
+  try {
+    WriteReport(empty.path());
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument);
+    EXPECT_NE(std::string(e.what()).find(empty.path().string()), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("metrics.json"), std::string::npos) << e.what();
+  }
+  testing::WriteBytes(empty / "metrics.json", "{}");
+  testing::WriteBytes(empty / "config.json", "{}");
+  EXPECT_THROW(WriteReport(empty.path()), Error) << "config.json names no clip";
+  EXPECT_FALSE(fs::exists(empty / "report.html"));
+}
+
+}  // namespace
+}  // namespace endorecon::eval

@@ -1,0 +1,55 @@
+#include "worker/engine/run_config.h"
+
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "common/error.h"
+
+namespace endorecon {
+namespace {
+
+TEST(RunConfig, TheOptionsGoOverThePreset) {
+  ReconstructOptions options;
+  options.preset = "paper";
+  options.config = {{"rays_per_batch", 64}, {"field", {{"grids", {{"levels", 4}}}}}};
+  options.iterations = 12;
+  options.holdout = 0;
+  const train::TrainConfig config = ResolveConfig(options);
+  EXPECT_EQ(config.preset, "paper");
+  EXPECT_EQ(config.rays_per_batch, 64);
+  EXPECT_EQ(config.field.grids.levels, 4);
+  EXPECT_EQ(config.field.grids.features, 8);  // the paper's, untouched
+  EXPECT_EQ(config.iterations, 12);
+  EXPECT_EQ(config.holdout, 0);
+}
+
+TEST(RunConfig, AConfigThatIsNoObjectOrHasAnUnknownKeyIsRefused) {
+  ReconstructOptions options;
+  options.config = nlohmann::json::array({1, 2});
+  try {
+    ResolveConfig(options);
+    FAIL() << "took an array";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument);
+    EXPECT_NE(std::string(e.what()).find("must be a JSON object"), std::string::npos) << e.what();
+  }
+  options.config = {{"rays_per_bacth", 64}};
+  try {
+    ResolveConfig(options);
+    FAIL() << "took an unknown key";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("rays_per_bacth"), std::string::npos) << e.what();
+  }
+}
+
+TEST(RunConfig, EveryKthFrameIsHeldOutButNeverTheFirst) {
+  const FrameSplit split = SplitFrames(10, 4);
+  EXPECT_EQ(split.heldout, (std::vector<int>{3, 7}));
+  EXPECT_EQ(split.train, (std::vector<int>{0, 1, 2, 4, 5, 6, 8, 9}));
+  EXPECT_TRUE(SplitFrames(5, 0).heldout.empty());
+  EXPECT_TRUE(SplitFrames(5, 1).heldout.empty());
+}
+
+}  // namespace
+}  // namespace endorecon

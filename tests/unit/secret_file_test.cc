@@ -1,0 +1,53 @@
+#include "common/secret_file.h"
+
+#include <gtest/gtest.h>
+
+#include "common/error.h"
+#include "common/transport_security.h"
+#include "tests/unit/temp_dir.h"
+
+namespace endorecon {
+namespace {
+namespace fs = std::filesystem;
+
+TEST(SecretFileTest, RefusesFilesOthersMayAccessAndAcceptsGroupRead) {
+  testing::TempDir dir("secret");
+  const auto key = dir / "server.key";
+  testing::WriteBytes(key, "-----BEGIN PRIVATE KEY-----\n");
+  fs::permissions(key, fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read);
+  EXPECT_EQ(ReadSecretFile(key, "--tls-key"), "-----BEGIN PRIVATE KEY-----\n");
+  fs::permissions(key, fs::perms::others_read, fs::perm_options::add);
+  try {
+    ReadSecretFile(key, "--tls-key");
+    ADD_FAILURE() << "a world-readable key was accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument);
+    const std::string message = e.what();
+    EXPECT_NE(message.find("--tls-key"), std::string::npos) << message;
+    EXPECT_NE(message.find("0644"), std::string::npos) << message;
+    EXPECT_NE(message.find("chmod o-rwx"), std::string::npos) << message;
+  }
+  EXPECT_THROW(ReadSecretFile(dir / "missing.key", "--tls-key"), Error);
+}
+
+TEST(SecretFileTest, TokenFilesHoldOneWord) {
+  testing::TempDir dir("secret");
+  const auto token = dir / "token";
+  testing::WriteBytes(token, "  endorecon.abc.def\n");
+  fs::permissions(token, fs::perms::owner_read | fs::perms::owner_write);
+  EXPECT_EQ(ReadTokenFile(token, "--token-file"), "endorecon.abc.def");
+  testing::WriteBytes(token, "two words\n");
+  EXPECT_THROW(ReadTokenFile(token, "--token-file"), Error);
+  testing::WriteBytes(token, "\n");
+  EXPECT_THROW(ReadTokenFile(token, "--token-file"), Error);
+}
+
+TEST(SecretFileTest, ChannelsAndPortsRefuseHalfAConfiguration) {
+  EXPECT_THROW(OpenChannel("127.0.0.1:1", {"", "cert.pem", "", ""}), Error);
+  EXPECT_THROW(OpenChannel("127.0.0.1:1", {"", "cert.pem", "key.pem", ""}), Error);
+  EXPECT_THROW(ServerCredentials({"", "", "ca.pem"}), Error);
+  EXPECT_THROW(ServerCredentials({"cert.pem", "", ""}), Error);
+}
+
+}  // namespace
+}  // namespace endorecon

@@ -1,0 +1,93 @@
+#include "server/token_store.h"
+
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+
+#include "common/error.h"
+#include "tests/unit/temp_dir.h"
+
+namespace endorecon::server {
+namespace {
+
+ErrorCode CodeOf(const std::function<void()>& call) {
+  try {
+    call();
+  } catch (const Error& e) {
+    return e.code();
+  }
+  ADD_FAILURE() << "no error";
+  return ErrorCode::kInternal;
+}
+
+TEST(TokenStoreTest, CreatedTokensVerifyAndOnlyTheirHashIsStored) {
+  testing::TempDir dir("tokens");
+  const auto path = TokenStore::PathIn(dir.path());
+  std::string token;
+  {
+    TokenStore store(path);
+    token = store.Create("alice", Role::kClient, "radiology");
+  }
+  struct stat info {};
+  ASSERT_EQ(stat(path.c_str(), &info), 0);
+  EXPECT_EQ(info.st_mode & 0777, 0600u);
+  // A second process (the running server) sees the token.
+  TokenStore reader(path);
+  const auto record = reader.Verify(token);
+  EXPECT_EQ(record.name, "alice");
+  EXPECT_EQ(record.role, Role::kClient);
+  EXPECT_EQ(record.tenant, "radiology");
+  const auto secret = token.substr(token.rfind('.') + 1);
+  EXPECT_EQ(secret.size(), 64u);
+  for (const auto& file : std::filesystem::directory_iterator(dir.path()))
+    EXPECT_EQ(testing::ReadBytes(file.path()).find(secret), std::string::npos) << file.path();
+}
+
+TEST(TokenStoreTest, RefusesMalformedUnknownForgedAndRevokedTokens) {
+  testing::TempDir dir("tokens");
+  TokenStore store(TokenStore::PathIn(dir.path()));
+  const auto token = store.Create("node-1", Role::kWorker, "");
+  EXPECT_EQ(CodeOf([&] { store.Verify("garbage"); }), ErrorCode::kUnauthenticated);
+  EXPECT_EQ(CodeOf([&] { store.Verify(token + "0"); }), ErrorCode::kUnauthenticated);
+  std::string forged = token;
+  forged.back() = forged.back() == 'a' ? 'b' : 'a';
+  EXPECT_EQ(CodeOf([&] { store.Verify(forged); }), ErrorCode::kUnauthenticated);
+  std::string other_id = token;
+  other_id[10] = other_id[10] == 'a' ? 'b' : 'a';
+  EXPECT_EQ(CodeOf([&] { store.Verify(other_id); }), ErrorCode::kUnauthenticated);
+
+  const auto revoked = store.Revoke("node-1");
+  EXPECT_GT(revoked.revoked_unix_ms, 0);
+  try {
+    store.Verify(token);
+    ADD_FAILURE() << "a revoked token verified";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kUnauthenticated);
+    EXPECT_NE(std::string(e.what()).find("revoked"), std::string::npos);
+    EXPECT_EQ(std::string(e.what()).find(token), std::string::npos);
+  }
+  EXPECT_EQ(CodeOf([&] { store.Revoke("node-1"); }), ErrorCode::kNotFound);
+  // The label is free again; the old token stays revoked.
+  const auto again = store.Create("node-1", Role::kWorker, "");
+  EXPECT_EQ(store.Verify(again).name, "node-1");
+  EXPECT_EQ(CodeOf([&] { store.Verify(token); }), ErrorCode::kUnauthenticated);
+  const auto listed = store.List();
+  ASSERT_EQ(listed.size(), 2u);
+  EXPECT_GT(listed[0].revoked_unix_ms, 0);
+  EXPECT_EQ(listed[1].revoked_unix_ms, 0);
+}
+
+TEST(TokenStoreTest, RefusesBadNamesTenantsAndDuplicates) {
+  testing::TempDir dir("tokens");
+  TokenStore store(TokenStore::PathIn(dir.path()));
+  store.Create("alice", Role::kClient, "radiology");
+  EXPECT_EQ(CodeOf([&] { store.Create("alice", Role::kClient, "radiology"); }), ErrorCode::kInvalidArgument);
+  EXPECT_EQ(CodeOf([&] { store.Create("bob", Role::kClient, ""); }), ErrorCode::kInvalidArgument);
+  EXPECT_EQ(CodeOf([&] { store.Create("bob", Role::kClient, "Radiology"); }), ErrorCode::kInvalidArgument);
+  EXPECT_EQ(CodeOf([&] { store.Create("bob", Role::kClient, "-x"); }), ErrorCode::kInvalidArgument);
+  EXPECT_EQ(CodeOf([&] { store.Create("bob smith", Role::kClient, "x"); }), ErrorCode::kInvalidArgument);
+  EXPECT_EQ(CodeOf([&] { store.Create("", Role::kAdmin, ""); }), ErrorCode::kInvalidArgument);
+  EXPECT_EQ(store.List().size(), 1u);
+}
+
+}  // namespace
+}  // namespace endorecon::server

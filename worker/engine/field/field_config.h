@@ -1,0 +1,30 @@
+// What a field is built from: the encoder, the grids, the blend, the deformation and the heads, with
+// the two presets (the paper's sizes and a CPU-sized one; field_config.cc says why each value).
+#pragma once
+
+#include <string>
+
+#include "worker/engine/field/deformation.h"
+#include "worker/engine/field/grid_ensemble.h"
+#include "worker/engine/field/heads.h"
+
+namespace endorecon::field {
+
+struct FieldConfig {
+  // The canonical-space encoder: "hash" (the method: the grid ensemble blended in time) or
+  // "frequency" (NeRF's positional encoding, EndoNeRF's encoder; the ablation's baseline: no grids,
+  // no temporal blend, the density head takes the encoding directly).
+  std::string encoding = "hash";
+  int frequencies = 10;  // L of the frequency encoding
+  GridEnsembleConfig grids;
+  int blend_hidden = 16;  // width of the temporal blend's hidden layer
+  DeformationConfig deformation;
+  HeadsConfig heads;
+
+  // The paper's sizes: grids {8, 16, 32} x scales {1.4, 1.7, 1.9}, 16 levels x 8 features, 2^19 tables.
+  static FieldConfig Paper();
+  // Sized for >= 1 M training samples/s on 2 cores.
+  static FieldConfig Cpu();
+};
+
+}  // namespace endorecon::field

@@ -1,0 +1,38 @@
+#include "worker/engine/run_config.h"
+
+#include "common/error.h"
+#include "worker/engine/train/checkpoint.h"
+
+namespace endorecon {
+
+train::TrainConfig ResolveConfig(const ReconstructOptions& options) {
+  train::TrainConfig config = options.resume_from.empty() ? train::TrainConfig::Preset(options.preset)
+                                                          : train::ReadCheckpointConfig(options.resume_from);
+  if (!options.config.is_object()) {
+    FailInvalid("the run's configuration must be a JSON object of training keys, got " +
+                options.config.dump());
+  }
+  train::ApplyJson(options.config, config);
+  if (options.iterations > 0) config.iterations = options.iterations;
+  if (options.holdout >= 0) config.holdout = options.holdout;
+  return config;
+}
+
+FrameSplit SplitFrames(int frames, int holdout) {
+  FrameSplit split;
+  for (int f = 0; f < frames; ++f) {
+    (holdout > 1 && (f + 1) % holdout == 0 ? split.heldout : split.train).push_back(f);
+  }
+  return split;
+}
+
+nlohmann::json RunConfigJson(const train::TrainConfig& config, const ReconstructOptions& options,
+                             int threads) {
+  return {{"train", train::ToJson(config)},
+          {"clip", options.clip_dir},
+          {"seed", options.seed},
+          {"time_budget_s", options.time_budget_s},
+          {"threads", threads}};
+}
+
+}  // namespace endorecon

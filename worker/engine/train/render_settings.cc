@@ -1,0 +1,31 @@
+#include "worker/engine/train/render_settings.h"
+
+namespace endorecon::train {
+
+render::FrameRenderSettings EvalRenderSettings(const TrainConfig& config, double near, double far) {
+  render::FrameRenderSettings settings;
+  settings.near = near;
+  settings.far = far;
+  settings.coarse_samples = config.eval_coarse_samples;
+  settings.fine_samples = config.eval_fine_samples;
+  settings.floor = config.eval_floor;
+  return settings;
+}
+
+render::FrameRenderSettings UncertaintyRenderSettings(const TrainConfig& config, double near, double far,
+                                                      std::uint64_t seed) {
+  render::FrameRenderSettings settings = EvalRenderSettings(config, near, far);
+  settings.mc_passes = config.mc_passes;
+  settings.color_weight = config.uncertainty_lambda;
+  settings.variance_eps = config.variance_eps;
+  settings.mc_seed = seed;
+  return settings;
+}
+
+render::FrameRenderSettings DepthRefineRenderSettings(const TrainConfig& config, double near, double far) {
+  render::FrameRenderSettings settings = EvalRenderSettings(config, near, far);
+  settings.coarse_samples = settings.fine_samples = config.depth_refine_samples;
+  return settings;
+}
+
+}  // namespace endorecon::train

@@ -1,0 +1,56 @@
+// The clock of a training run: how far along the run is (the schedule the learning-rate decay and
+// every periodic round follow), when it ends, how fast it goes and how long is left. A run ends at its
+// iteration cap or when its time budget is spent, whichever comes first; with a budget the schedule
+// runs on time.
+#pragma once
+
+namespace endorecon::train {
+
+// The share of a run done in [0, 1]: iteration / iterations, or seconds / budget_s when there is a
+// budget and time is further along.
+double RunProgress(int iteration, int iterations, double seconds, double budget_s);
+
+class RunClock {
+ public:
+  // `seconds`: training time already spent (a resumed run's); budget_s 0: no budget.
+  RunClock(int iterations, double budget_s, double seconds);
+
+  double Progress(int iteration) const { return RunProgress(iteration, iterations_, seconds_, budget_s_); }
+  // True when no further step should run: the cap is reached or the budget spent.
+  bool Finished(int iteration) const;
+  // Accounts one step of `seconds` that processed `samples`.
+  void AddStep(double seconds, long long samples);
+
+  double seconds() const { return seconds_; }  // training time so far, earlier processes included
+  // This process's samples per training second.
+  double SamplesPerSecond() const;
+  // Samples per second since the last call (the progress line's rate); starts a new window.
+  double TakeWindowRate();
+  // Seconds of training left at `iteration`: by the average step so far, within the budget.
+  double Eta(int iteration) const;
+
+ private:
+  int iterations_;
+  double budget_s_;
+  double seconds_;
+  double run_seconds_ = 0, run_samples_ = 0;
+  double window_seconds_ = 0, window_samples_ = 0;
+};
+
+// A periodic event on any clock: Due(now) is true once `interval` has passed since it last was (or
+// since `start`), and then waits another interval.
+class Every {
+ public:
+  Every(double interval, double start) : interval_(interval), next_(start + interval) {}
+  bool Due(double now) {
+    if (now < next_) return false;
+    next_ = now + interval_;
+    return true;
+  }
+
+ private:
+  double interval_;
+  double next_;
+};
+
+}  // namespace endorecon::train

@@ -1,0 +1,113 @@
+#include "worker/engine/training_loop.h"
+
+#include <chrono>
+
+#include "worker/engine/eval/curve_probe.h"
+#include "worker/engine/train/run_clock.h"
+
+namespace endorecon {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double Since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+
+class TrainingLoop {
+ public:
+  TrainingLoop(const TrainingRun& run, const ReconstructHooks& hooks, train::CheckpointExtras& extras)
+      : run_(run),
+        hooks_(hooks),
+        extras_(extras),
+        config_(run.trainer.config()),
+        clock_(config_.iterations, run.time_budget_s, extras.train_seconds),
+        probe_(run.clip, run.split.heldout, config_.curve_frames),
+        curve_(config_.curve_interval_s, extras.curve.empty() ? -config_.curve_interval_s : clock_.seconds()),
+        progress_line_(hooks.progress_interval_s, 0),
+        previews_(hooks.preview_interval_s, 0),
+        checkpoints_(hooks.checkpoint_interval_s, 0) {
+    progress_.total_iterations = config_.iterations;
+  }
+
+  TrainingResult Run() {
+    TrainingResult result;
+    const auto wall = Clock::now();
+    while (!clock_.Finished(run_.trainer.iteration())) {
+      if (hooks_.should_stop && hooks_.should_stop()) {
+        result.cancelled = true;
+        break;
+      }
+      const auto start = Clock::now();
+      result.last = run_.trainer.Step(clock_.Progress(run_.trainer.iteration()));
+      clock_.AddStep(Since(start), result.last.samples);
+      if (curve_.Due(clock_.seconds()) || run_.trainer.iteration() == config_.iterations)
+        AddCurvePoint(result.last);
+      if (progress_line_.Due(Since(wall))) ReportProgress(result.last);
+      if (hooks_.on_preview && previews_.Due(Since(wall))) SendPreviews();
+      if (checkpoints_.Due(Since(wall))) Checkpoint();
+    }
+    if (extras_.curve.empty() ||
+        extras_.curve.back().at("iteration").get<int>() != run_.trainer.iteration()) {
+      AddCurvePoint(result.last);
+    }
+    Checkpoint();
+    result.samples_per_second = clock_.SamplesPerSecond();
+    return result;
+  }
+
+ private:
+  void AddCurvePoint(const train::StepStats& stats) {
+    nlohmann::json point = {{"seconds", clock_.seconds()},
+                            {"iteration", run_.trainer.iteration()},
+                            {"loss", stats.loss},
+                            {"train_psnr", stats.psnr}};
+    if (!probe_.empty()) {
+      const eval::CurveProbe::Point measured = probe_.Measure(run_.renderer);
+      progress_.heldout_psnr = measured.psnr;
+      progress_.depth_rmse = measured.depth_rmse;
+      point["heldout_psnr"] = measured.psnr;
+      if (measured.depth_rmse >= 0) point["heldout_depth_rmse_relative"] = measured.depth_rmse;
+    }
+    extras_.curve.push_back(point);
+  }
+
+  void ReportProgress(const train::StepStats& stats) {
+    progress_.iteration = run_.trainer.iteration();
+    progress_.seconds = clock_.seconds();
+    progress_.loss = stats.loss;
+    progress_.train_psnr = stats.psnr;
+    progress_.samples_per_second = clock_.TakeWindowRate();
+    progress_.eta_s = clock_.Eta(run_.trainer.iteration());
+    if (hooks_.on_progress) hooks_.on_progress(progress_);
+  }
+
+  void SendPreviews() {
+    const int f = run_.split.heldout.empty() ? 0 : run_.split.heldout.front();
+    const auto frame =
+        run_.uncertainty_renderer.Render(run_.fit.preview_camera(run_.clip.cameras[f]), run_.clip.times[f]);
+    hooks_.on_preview(eval::RgbPreview(frame, f));
+    if (!frame.uncertainty.empty()) hooks_.on_preview(eval::UncertaintyPreview(frame, f));
+  }
+
+  void Checkpoint() {
+    extras_.train_seconds = clock_.seconds();
+    train::WriteCheckpoint(run_.checkpoint_path, run_.trainer, extras_);
+    if (hooks_.on_checkpoint) hooks_.on_checkpoint(run_.checkpoint_path.string());
+  }
+
+  const TrainingRun& run_;
+  const ReconstructHooks& hooks_;
+  train::CheckpointExtras& extras_;
+  const train::TrainConfig& config_;
+  train::RunClock clock_;
+  const eval::CurveProbe probe_;
+  train::Every curve_, progress_line_, previews_, checkpoints_;
+  Progress progress_;
+};
+
+}  // namespace
+
+TrainingResult Train(const TrainingRun& run, const ReconstructHooks& hooks, train::CheckpointExtras& extras) {
+  return TrainingLoop(run, hooks, extras).Run();
+}
+
+}  // namespace endorecon
