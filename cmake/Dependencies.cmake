@@ -15,3 +15,5 @@ find_package(PkgConfig REQUIRED)
 pkg_check_modules(GRPCPP REQUIRED IMPORTED_TARGET grpc++)
 find_program(GRPC_CPP_PLUGIN grpc_cpp_plugin REQUIRED)
 find_package(prometheus-cpp CONFIG REQUIRED)
+# DICOM: every byte of it through DCMTK (libdcmtk-dev); its targets are named dcmdata, dcmnet, ...
+find_package(DCMTK REQUIRED CONFIG)

@@ -18,5 +18,6 @@ Command AddRenderCommand(CLI::App& app);
 Command AddServeCommand(CLI::App& app);
 Command AddPrepareCommand(CLI::App& app);
 Command AddCalibrateCommand(CLI::App& app);
+Command AddToDicomCommand(CLI::App& app);
 
 }  // namespace endorecon::worker

@@ -19,6 +19,7 @@ int main(int argc, char** argv) {
   commands["serve"] = endorecon::worker::AddServeCommand(app);
   commands["prepare"] = endorecon::worker::AddPrepareCommand(app);
   commands["calibrate"] = endorecon::worker::AddCalibrateCommand(app);
+  commands["to-dicom"] = endorecon::worker::AddToDicomCommand(app);
   CLI11_PARSE(app, argc, argv);
   try {
     for (auto* sub : app.get_subcommands()) return commands.at(sub->get_name())();
