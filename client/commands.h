@@ -39,5 +39,6 @@ Command AddListCommand(CLI::App& app);
 Command AddCancelCommand(CLI::App& app);
 Command AddFetchCommand(CLI::App& app);
 Command AddWorkersCommand(CLI::App& app);
+Command AddSendCommand(CLI::App& app);
 
 }  // namespace endorecon::client

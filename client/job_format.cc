@@ -42,6 +42,11 @@ std::string HumanTime(std::int64_t unix_ms) {
 }
 
 std::string ProgressLine(const v1::Progress& p) {
+  if (p.phase() == "prepare") {
+    return p.total_iterations() > 0
+               ? fmt::format("preparing the recording: frame {}/{}", p.iteration(), p.total_iterations())
+               : fmt::format("preparing the recording: frame {}", p.iteration());
+  }
   const double fraction =
       p.total_iterations() > 0
           ? std::clamp(static_cast<double>(p.iteration()) / p.total_iterations(), 0.0, 1.0)
@@ -58,6 +63,40 @@ std::string ProgressLine(const v1::Progress& p) {
   return line;
 }
 
+std::string DicomLines(const v1::Job& job) {
+  std::string text;
+  if (job.has_retrieval()) {
+    const auto& r = job.retrieval();
+    const char* state = r.state() == v1::Retrieval::RETRIEVING  ? "in progress"
+                        : r.state() == v1::Retrieval::RETRIEVED ? "done"
+                                                                : "failed";
+    text += fmt::format("  retrieval from PACS {}{}: {} instance(s), {}, {}{}\n", r.source().pacs(),
+                        r.method().empty() ? "" : " by " + r.method(), r.instances(), HumanBytes(r.bytes()),
+                        state, r.error().empty() ? "" : ": " + r.error());
+  }
+  for (const auto& send : job.sends()) {
+    std::string state;
+    switch (send.state()) {
+      case v1::DicomSend::PENDING:
+        state = send.attempts() == 0
+                    ? "pending"
+                    : fmt::format("pending (attempt {} failed: {})", send.attempts(), send.error());
+        break;
+      case v1::DicomSend::SENDING:
+        state = fmt::format("sending, {} of {} sent", send.sent(), send.total());
+        break;
+      case v1::DicomSend::SENT:
+        state = fmt::format("sent {} of {}", send.sent(), send.total());
+        break;
+      default:
+        state = fmt::format("failed after {} attempt(s), {} of {} sent: {}", send.attempts(), send.sent(),
+                            send.total(), send.error());
+    }
+    text += fmt::format("  send to {}: {}\n", send.destination(), state);
+  }
+  return text;
+}
+
 std::string DescribeJob(const v1::Job& job) {
   std::string text = job.name().empty() ? fmt::format("job {}\n", job.id())
                                         : fmt::format("job {} ({})\n", job.id(), job.name());
@@ -71,9 +110,14 @@ std::string DescribeJob(const v1::Job& job) {
   if (job.finished_unix_ms() > 0) text += fmt::format("  finished  {}\n", HumanTime(job.finished_unix_ms()));
   text += fmt::format("  attempts  {} lost of {} allowed\n", job.attempts(), job.max_attempts());
   if (!job.worker_id().empty()) text += fmt::format("  worker    {}\n", job.worker_id());
-  if (job.clip().files_size() > 0) text += fmt::format("  clip      {} file(s)\n", job.clip().files_size());
+  if (job.clip().files_size() > 0) {
+    text +=
+        fmt::format("  {}  {} file(s){}\n", job.has_prepare() ? "recording" : "clip     ",
+                    job.clip().files_size(), job.has_prepare() ? " (prepared into the results' clip/)" : "");
+  }
   if (job.has_progress()) text += "  progress  " + ProgressLine(job.progress()) + "\n";
   if (!job.error().empty()) text += fmt::format("  reason    {}\n", job.error());
+  text += DicomLines(job);
   if (job.expired_unix_ms() > 0) {
     text += fmt::format("  expired   {} (the retention policy deleted its clip and results)\n",
                         HumanTime(job.expired_unix_ms()));

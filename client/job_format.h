@@ -14,6 +14,10 @@ namespace endorecon::client {
 std::string ToJson(const google::protobuf::Message& message);
 // A multi-line description of one job.
 std::string DescribeJob(const v1::Job& job);
+// The DICOM side of a job, one line each: the retrieval from a PACS ("retrieval from PACS1 by C-GET:
+// 3 instance(s), 1.2 MB, done") and each destination's send ("send to PACS1: sent 4 of 4"; "failed
+// after 5 attempt(s): <the peer's reason>"). Empty when the job has neither.
+std::string DicomLines(const v1::Job& job);
 // One line: bar, iteration, training seconds, loss, PSNR (training, held-out), held-out depth error,
 // samples/s, ETA.
 std::string ProgressLine(const v1::Progress& progress);

@@ -32,6 +32,12 @@ class EventPrinter {
 
   void Job(const v1::Job& job) {
     if (json_) return Json(job);
+    const std::string dicom = DicomLines(job);
+    if (dicom != last_dicom_) {
+      EndLine();
+      std::cout << dicom << std::flush;
+      last_dicom_ = dicom;
+    }
     if (job.state() == last_state_) return;
     EndLine();
     last_state_ = job.state();
@@ -72,6 +78,7 @@ class EventPrinter {
   bool tty_;
   bool open_line_ = false;
   v1::JobState last_state_ = v1::JOB_STATE_UNSPECIFIED;
+  std::string last_dicom_;
 };
 
 }  // namespace

@@ -72,6 +72,7 @@ int main(int argc, char** argv) {
   commands["cancel"] = AddCancelCommand(app);
   commands["fetch"] = AddFetchCommand(app);
   commands["workers"] = AddWorkersCommand(app);
+  commands["send"] = AddSendCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -1,18 +1,25 @@
 // endorecon submit CLIP [options]: upload the clip folder (only what the server lacks, resuming a
-// partial upload), queue a reconstruction, optionally wait for it.
+// partial upload), queue a reconstruction, optionally wait for it. With a raw stereo recording
+// instead of CLIP (--left L --right R --calibration C ..., prepare's flags), the recording's files
+// are uploaded and the worker prepares the clip before reconstructing it, in the same job.
 #include <CLI/CLI.hpp>
 #include <fstream>
 #include <iostream>
+#include <optional>
 #include <sstream>
 
 #include "client/commands.h"
 #include "client/exit_codes.h"
 #include "client/job_format.h"
 #include "client/job_watcher.h"
+#include "client/recording_upload.h"
 #include "common/error.h"
 #include "common/file_upload.h"
 #include "common/grpc_status.h"
 #include "common/manifest.h"
+#include "common/prepare_flags_cli.h"
+#include "common/prepare_flags_proto.h"
+#include "common/sha256.h"
 #include "common/transport_security.h"
 
 namespace endorecon::client {
@@ -20,6 +27,10 @@ namespace {
 
 struct SubmitFlags {
   std::string clip;
+  std::string pacs, study_uid, series_uid;
+  std::vector<std::string> send_to;
+  v1::RecordingOptions recording;
+  v1::DicomOutputOptions dicom;
   std::string config;
   std::string preset;
   int iterations = -1;
@@ -31,6 +42,7 @@ struct SubmitFlags {
   std::string name;
   bool wait = false;
   std::string previews;
+  PrepareFlags raw;  // a raw stereo recording instead of CLIP (its --frames also picks a DICOM window)
 };
 
 std::string ReadFile(const std::string& path) {
@@ -53,34 +65,75 @@ v1::ReconstructionOptions OptionsOf(const SubmitFlags& flags) {
   return options;
 }
 
-int Submit(const Globals& globals, const SubmitFlags& flags) {
-  const auto options = OptionsOf(flags);
-  const auto manifest = ManifestOfDirectory(flags.clip);
-  const auto stub = globals.Connect();
+// A folder is uploaded whole; a single file (a DICOM recording) as itself, named by its file name.
+v1::Manifest ManifestOfClip(const std::filesystem::path& clip) {
+  if (!std::filesystem::is_regular_file(clip)) return ManifestOfDirectory(clip);
+  v1::Manifest manifest;
+  auto* entry = manifest.add_files();
+  entry->set_path(clip.filename().string());
+  entry->set_size(static_cast<std::int64_t>(std::filesystem::file_size(clip)));
+  entry->set_sha256(Sha256File(clip));
+  return manifest;
+}
+
+// Uploads the clip (what the server lacks of it) and returns its manifest.
+v1::Manifest Upload(const Globals& globals, v1::JobService::Stub& stub, const std::filesystem::path& clip) {
+  const auto manifest = ManifestOfClip(clip);
+  const auto root = std::filesystem::is_regular_file(clip) ? clip.parent_path() : clip;
   UploadCalls calls;
   calls.query = [&](grpc::ClientContext* context, const v1::Manifest& m, v1::UploadStatus* status) {
-    return stub->QueryUpload(context, m, status);
+    return stub.QueryUpload(context, m, status);
   };
   calls.open = [&](grpc::ClientContext* context, v1::UploadStatus* status) {
-    return stub->Upload(context, status);
+    return stub.Upload(context, status);
   };
   UploadOptions upload_options;
   upload_options.call_timeout = globals.timeout();
-  const auto upload = UploadFiles(flags.clip, manifest, calls, upload_options);
+  const auto upload = UploadFiles(root.empty() ? "." : root, manifest, calls, upload_options);
   if (!globals.json) {
     std::cerr << "uploaded " << manifest.files_size() << " file(s): " << HumanBytes(upload.bytes_sent)
               << " sent, " << HumanBytes(upload.bytes_skipped) << " already on the server\n";
   }
   if (!upload.status.complete())
     Fail(ErrorCode::kUnavailable, "the upload is incomplete; run submit again to resume");
+  return manifest;
+}
 
+int Submit(const Globals& globals, const SubmitFlags& flags) {
+  const auto options = OptionsOf(flags);
+  if (!flags.clip.empty() + !flags.pacs.empty() + !flags.raw.empty() != 1) {
+    FailInvalid(
+        "submit takes a CLIP (folder or DICOM recording), a raw recording (--left/--right, --side-by-side "
+        "or --top-bottom) or --pacs NAME --study UID: exactly one of them");
+  }
+  if (!flags.pacs.empty() && flags.study_uid.empty()) FailInvalid("--pacs needs --study UID");
+  // A raw recording is staged under canonical names (recording_upload.h); its folder is uploaded.
+  std::optional<StagedRecording> staged;
+  if (!flags.raw.empty()) staged.emplace(flags.raw);
+  const auto stub = globals.Connect();
   v1::SubmitRequest request;
-  *request.mutable_clip() = manifest;
+  if (!flags.pacs.empty()) {
+    request.mutable_pacs()->set_pacs(flags.pacs);
+    request.mutable_pacs()->set_study_uid(flags.study_uid);
+    request.mutable_pacs()->set_series_uid(flags.series_uid);
+  } else {
+    *request.mutable_clip() = Upload(globals, *stub, staged ? staged->dir() : std::filesystem::path(flags.clip));
+  }
+  if (staged) {
+    *request.mutable_prepare() = PrepareFlagsToProto(staged->flags());
+  } else {
+    *request.mutable_recording() = flags.recording;
+    request.mutable_recording()->set_frames(flags.raw.frames);
+  }
   *request.mutable_options() = options;
+  *request.mutable_dicom() = flags.dicom;
+  for (const auto& name : flags.send_to) request.add_send_to(name);
   request.set_priority(flags.priority);
-  request.set_name(flags.name.empty()
-                       ? std::filesystem::path(flags.clip).lexically_normal().filename().string()
-                       : flags.name);
+  const std::string default_name =
+      staged               ? staged->name()
+      : flags.clip.empty() ? "pacs " + flags.pacs
+                           : std::filesystem::path(flags.clip).lexically_normal().filename().string();
+  request.set_name(flags.name.empty() ? default_name : flags.name);
   v1::Job job;
   auto context = CallContext(globals.timeout());
   ThrowIfFailed(stub->Submit(context.get(), request, &job), "submit");
@@ -98,8 +151,41 @@ int Submit(const Globals& globals, const SubmitFlags& flags) {
 
 Command AddSubmitCommand(CLI::App& app) {
   auto flags = std::make_shared<SubmitFlags>();
-  auto* sub = app.add_subcommand("submit", "upload a clip folder and queue its reconstruction");
-  sub->add_option("CLIP", flags->clip, "clip folder (EndoNeRF layout or transforms.json)")->required();
+  auto* sub = app.add_subcommand(
+      "submit",
+      "upload a clip folder, a DICOM recording or a raw stereo recording (prepared by the worker), or "
+      "name a recording in a PACS, and queue its reconstruction");
+  sub->add_option(
+      "CLIP", flags->clip,
+      "clip folder (EndoNeRF layout or transforms.json), or a DICOM recording (a file, or a folder of "
+      "DICOM files); or give a raw recording or --pacs");
+  AddPrepareFlags(*sub, flags->raw);
+  sub->add_option("--pacs", flags->pacs,
+                  "instead of CLIP: retrieve the recording from this PACS (server's name)");
+  sub->add_option("--study", flags->study_uid, "with --pacs: the recording's Study Instance UID");
+  sub->add_option("--series", flags->series_uid, "with --pacs: only this series of the study");
+  sub->add_option("--send-to", flags->send_to,
+                  "send the DICOM results to this PACS when the job succeeds (repeatable)");
+  sub->add_option_function<std::string>(
+         "--stereo", [flags](const std::string& v) { flags->recording.set_stereo(v); },
+         "DICOM recording: side-by-side, top-bottom, or series (two series: left, right)")
+      ->check(CLI::IsMember({"mono", "side-by-side", "top-bottom", "series"}));
+  sub->add_option_function<double>(
+         "--fps", [flags](double v) { flags->recording.set_fps(v); },
+         "DICOM recording: keep at most this many frames per second")
+      ->check(CLI::NonNegativeNumber);
+  sub->add_flag_function(
+      "--dicom", [flags](std::int64_t) { flags->dicom.set_enabled(true); },
+      "DICOM results for a clip that is not DICOM (a DICOM recording always gets them)");
+  sub->add_option_function<std::string>(
+      "--patient-id", [flags](const std::string& v) { flags->dicom.set_patient_id(v); },
+      "with --dicom: the patient's ID");
+  sub->add_option_function<std::string>(
+      "--patient-name", [flags](const std::string& v) { flags->dicom.set_patient_name(v); },
+      "with --dicom: the patient's name (DICOM PN, e.g. Doe^Jane)");
+  sub->add_option_function<std::string>(
+      "--study-uid", [flags](const std::string& v) { flags->dicom.set_study_uid(v); },
+      "with --dicom: the study the results join (default: a new study)");
   sub->add_option("--config", flags->config,
                   "JSON file overriding the preset (as endorecon-worker reconstruct)");
   sub->add_option("--preset", flags->preset, "cpu or paper (default: the worker's, cpu)");

@@ -1,8 +1,11 @@
 # Debian's per-module OpenCV packages (libopencv-core-dev, ...) ship no OpenCVConfig.cmake; that
 # comes only with libopencv-dev and its GUI stack. Find the modules we use directly instead.
+# OpenCV_LIBS: what every part links (calib3d for the synthetic stereo rig's lens model);
+# OpenCV_PREPARE_LIBS: what worker/prepare adds (corner features, optical flow).
 find_path(OpenCV_INCLUDE_DIRS opencv2/core.hpp PATH_SUFFIXES opencv4 REQUIRED)
 set(OpenCV_LIBS "")
-foreach(module core imgproc imgcodecs videoio)
+set(OpenCV_PREPARE_LIBS "")
+foreach(module core imgproc imgcodecs videoio calib3d features2d video)
   find_library(OpenCV_${module}_LIBRARY opencv_${module} REQUIRED)
   if(NOT TARGET OpenCV::${module})
     add_library(OpenCV::${module} SHARED IMPORTED)
@@ -11,5 +14,9 @@ foreach(module core imgproc imgcodecs videoio)
       INTERFACE_SYSTEM_INCLUDE_DIRECTORIES ${OpenCV_INCLUDE_DIRS}
       INTERFACE_INCLUDE_DIRECTORIES ${OpenCV_INCLUDE_DIRS})
   endif()
-  list(APPEND OpenCV_LIBS OpenCV::${module})
+  if(module MATCHES "^(features2d|video)$")
+    list(APPEND OpenCV_PREPARE_LIBS OpenCV::${module})
+  else()
+    list(APPEND OpenCV_LIBS OpenCV::${module})
+  endif()
 endforeach()

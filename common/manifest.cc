@@ -22,7 +22,8 @@ v1::Manifest ManifestOfDirectory(const fs::path& dir) {
   v1::Manifest manifest;
   for (const auto& file : files) {
     auto* entry = manifest.add_files();
-    entry->set_path(fs::relative(file, dir).generic_string());
+    // Lexically: a symbolic link under `dir` (a staged recording) keeps its own name.
+    entry->set_path(file.lexically_relative(dir).generic_string());
     entry->set_size(static_cast<std::int64_t>(fs::file_size(file)));
     entry->set_sha256(Sha256File(file));
   }

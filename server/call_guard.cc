@@ -151,8 +151,8 @@ void CallGuard::Record(const grpc::ServerContext& context, const Rpc& rpc, const
 }
 
 void CallGuard::RecordServerAction(const std::string& method, const std::string& job_id,
-                                   const std::string& outcome) {
-  audit_.Write({"server", "-", "", method, job_id, outcome, "", "", ""});
+                                   const std::string& outcome, const std::string& subject) {
+  audit_.Write({"server", "-", "", method, job_id, outcome, "", "", subject});
 }
 
 }  // namespace endorecon::server

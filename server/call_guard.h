@@ -76,8 +76,10 @@ class CallGuard {
   // Opens the token store once its file exists (at start, and from the server's maintenance
   // thread). Returns whether tokens are required now.
   bool Refresh();
-  // Audits something the server did on its own (retention), as principal "server".
-  void RecordServerAction(const std::string& method, const std::string& job_id, const std::string& outcome);
+  // Audits something the server did on its own (retention, PACS retrievals and sends), as principal
+  // "server"; `subject` names what it acted with (a PACS's name), never patient data.
+  void RecordServerAction(const std::string& method, const std::string& job_id, const std::string& outcome,
+                          const std::string& subject = "");
 
  private:
   // Fills call.caller, then throws Error(kUnauthenticated / kPermissionDenied) unless it may call `rpc`.

@@ -2,17 +2,18 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <nlohmann/json.hpp>
 
+#include "common/dicom/recording.h"
+#include "common/dicom/uid.h"
 #include "common/error.h"
 #include "common/manifest.h"
+#include "common/prepare_flags_proto.h"
+#include "server/job_states.h"
 
 namespace endorecon::server {
 namespace {
-
-bool Terminal(v1::JobState state) {
-  return state == v1::SUCCEEDED || state == v1::FAILED || state == v1::CANCELLED;
-}
 
 void ValidateOptions(const v1::ReconstructionOptions& options) {
   if (!options.preset().empty() && options.preset() != "cpu" && options.preset() != "paper") {
@@ -29,6 +30,17 @@ void ValidateOptions(const v1::ReconstructionOptions& options) {
     const auto config = nlohmann::json::parse(options.config_json(), nullptr, false);
     if (config.is_discarded() || !config.is_object()) FailInvalid("options.config_json is not a JSON object");
   }
+}
+
+void ValidateRecording(const v1::RecordingOptions& recording) {
+  dicom::ParseStereoLayout(recording.stereo());
+  dicom::ParseFrameWindow(recording.frames());
+  if (!(recording.fps() >= 0))
+    FailInvalid("recording.fps is " + std::to_string(recording.fps()) + "; expected >= 0");
+}
+
+bool Retrieving(const v1::Job& job) {
+  return job.has_retrieval() && job.retrieval().state() == v1::Retrieval::RETRIEVING;
 }
 
 // Throws kFailedPrecondition naming the first file of `manifest` the blob store lacks.
@@ -62,8 +74,11 @@ void JobCoordinator::Recover() {
   std::lock_guard lock(mutex_);
   const auto now = Clock::now();
   int queued = 0, running = 0;
+  std::vector<std::string> retrieving, sending;
   for (const auto& stored : parts_.store.Unfinished()) {
-    if (stored.job.state() == v1::QUEUED) {
+    if (stored.job.state() == v1::QUEUED && Retrieving(stored.job)) {
+      retrieving.push_back(stored.job.id());
+    } else if (stored.job.state() == v1::QUEUED) {
       parts_.scheduler.Push(stored.job.id(), stored.job.priority(), stored.seq);
       ++queued;
     } else {
@@ -73,8 +88,25 @@ void JobCoordinator::Recover() {
     }
     parts_.hub.PublishJob(stored.job);
   }
-  spdlog::info("recovered {} queued and {} running job(s)", queued, running);
+  for (std::int64_t before = 0;;) {
+    const auto page = parts_.store.List({v1::SUCCEEDED}, 500, before);
+    for (const auto& job : page.jobs) {
+      if (SendsWaiting(job)) sending.push_back(job.id());
+    }
+    if (page.next_before_seq == 0) break;
+    before = page.next_before_seq;
+  }
+  spdlog::info("recovered {} queued and {} running job(s), {} retrieval(s) and {} DICOM send(s) to resume",
+               queued, running, retrieving.size(), sending.size());
+  for (const auto& id : retrieving) {
+    if (dicom_.retrieve) dicom_.retrieve(id);
+  }
+  for (const auto& id : sending) {
+    if (dicom_.send) dicom_.send(id);
+  }
 }
+
+void JobCoordinator::SetDicomHooks(DicomHooks hooks) { dicom_ = std::move(hooks); }
 
 StoredJob JobCoordinator::Load(const std::string& id) {
   auto stored = parts_.store.Get(id);
@@ -139,23 +171,46 @@ void JobCoordinator::Requeue(StoredJob& stored, bool count_attempt, const std::s
   spdlog::info("job {} requeued (attempts {}/{}): {}", job.id(), job.attempts(), job.max_attempts(), reason);
 }
 
-void JobCoordinator::CheckUploadQuota(const v1::Manifest& manifest, const Principal& caller) {
-  const auto quota = quotas_.For(caller.tenant);
+void JobCoordinator::CheckBytesQuota(const std::string& tenant, std::int64_t adding) {
+  const auto quota = quotas_.For(tenant);
   if (quota.max_bytes == 0) return;
-  const auto usage = parts_.store.UsageOf(caller.tenant);
-  const auto adding = TotalBytes(manifest);
+  const auto usage = parts_.store.UsageOf(tenant);
   if (usage.bytes + adding > quota.max_bytes) {
     endorecon::Fail(ErrorCode::kResourceExhausted,
-                    "tenant '" + caller.tenant + "' keeps " + std::to_string(usage.bytes) +
-                        " bytes in its jobs and " + "this adds " + std::to_string(adding) +
+                    "tenant '" + tenant + "' keeps " + std::to_string(usage.bytes) +
+                        " bytes in its jobs and this adds " + std::to_string(adding) +
                         ": over its quota max_bytes of " + std::to_string(quota.max_bytes) +
                         " bytes; cancel or wait for retention to free some");
   }
 }
 
+void JobCoordinator::CheckUploadQuota(const v1::Manifest& manifest, const Principal& caller) {
+  CheckBytesQuota(caller.tenant, TotalBytes(manifest));
+}
+
+void JobCoordinator::CheckRetrievalQuota(const std::string& id, const v1::Manifest& recording) {
+  CheckBytesQuota(Load(id).job.tenant(), TotalBytes(recording));
+}
+
 v1::Job JobCoordinator::Submit(const v1::SubmitRequest& request, const Principal& caller) {
-  ValidateManifest(request.clip());
+  const bool from_pacs = !request.pacs().pacs().empty();
+  if (from_pacs) {
+    if (dicom_.pacs == nullptr) FailInvalid("pacs: this server has no PACS configured (--pacs)");
+    dicom_.pacs->Find(request.pacs().pacs());
+    dicom::CheckUid(request.pacs().study_uid(), "pacs.study_uid");
+    if (!request.pacs().series_uid().empty()) dicom::CheckUid(request.pacs().series_uid(), "pacs.series_uid");
+    if (request.clip().files_size() > 0) FailInvalid("a job names either a clip or a PACS study, not both");
+  } else {
+    ValidateManifest(request.clip());
+  }
   ValidateOptions(request.options());
+  if (request.has_prepare()) CheckPrepareOptions(request.prepare(), request.clip());
+  ValidateRecording(request.recording());
+  if (!request.dicom().study_uid().empty()) dicom::CheckUid(request.dicom().study_uid(), "dicom.study_uid");
+  for (const auto& name : request.send_to()) {
+    if (dicom_.pacs == nullptr) FailInvalid("send_to: this server has no PACS configured (--pacs)");
+    dicom_.pacs->Find(name);
+  }
   v1::Job job;
   job.set_id(RandomId(6));
   job.set_name(request.name());
@@ -163,29 +218,51 @@ v1::Job JobCoordinator::Submit(const v1::SubmitRequest& request, const Principal
   job.set_priority(request.priority());
   *job.mutable_options() = request.options();
   *job.mutable_clip() = request.clip();
+  if (request.has_prepare()) *job.mutable_prepare() = request.prepare();
+  *job.mutable_recording() = request.recording();
+  *job.mutable_dicom() = request.dicom();
+  job.mutable_dicom()->set_uid_root(dicom_.uid_root);
+  if (request.send_to_size() > 0) job.mutable_dicom()->set_enabled(true);
+  for (const auto& name : request.send_to()) {
+    auto* send = job.add_sends();
+    send->set_destination(name);
+    send->set_state(v1::DicomSend::PENDING);
+  }
+  if (from_pacs) {
+    *job.mutable_retrieval()->mutable_source() = request.pacs();
+    job.mutable_retrieval()->set_state(v1::Retrieval::RETRIEVING);
+  }
   job.set_created_unix_ms(NowUnixMs());
   job.set_max_attempts(max_attempts_);
   job.set_tenant(caller.tenant);
   if (!caller.anonymous) job.set_submitted_by(caller.name);
-  // Under the lock, so retention cannot delete a blob between this check and the insert, and two
-  // submits cannot both take a tenant's last job slot.
-  std::lock_guard lock(mutex_);
-  RequireBlobs(parts_.blobs, request.clip(), "clip");
-  const auto quota = quotas_.For(caller.tenant);
-  const auto usage = parts_.store.UsageOf(caller.tenant);
-  if (quota.max_jobs > 0 && usage.active_jobs >= quota.max_jobs) {
-    endorecon::Fail(ErrorCode::kResourceExhausted,
-                    "tenant '" + caller.tenant + "' has " + std::to_string(usage.active_jobs) +
-                        " job(s) queued or running, its quota max_jobs is " + std::to_string(quota.max_jobs) +
-                        "; submit again when one has finished");
+  {
+    // Under the lock, so retention cannot delete a blob between this check and the insert, and two
+    // submits cannot both take a tenant's last job slot.
+    std::lock_guard lock(mutex_);
+    if (!from_pacs) RequireBlobs(parts_.blobs, request.clip(), request.has_prepare() ? "recording" : "clip");
+    const auto quota = quotas_.For(caller.tenant);
+    const auto usage = parts_.store.UsageOf(caller.tenant);
+    if (quota.max_jobs > 0 && usage.active_jobs >= quota.max_jobs) {
+      endorecon::Fail(ErrorCode::kResourceExhausted,
+                      "tenant '" + caller.tenant + "' has " + std::to_string(usage.active_jobs) +
+                          " job(s) queued or running, its quota max_jobs is " +
+                          std::to_string(quota.max_jobs) + "; submit again when one has finished");
+    }
+    CheckUploadQuota(request.clip(), caller);
+    const auto seq = parts_.store.Insert(job);
+    parts_.hub.PublishJob(job);
+    if (!from_pacs) parts_.scheduler.Push(job.id(), job.priority(), seq);
+    parts_.metrics.JobSubmitted();
   }
-  CheckUploadQuota(request.clip(), caller);
-  const auto seq = parts_.store.Insert(job);
-  parts_.hub.PublishJob(job);
-  parts_.scheduler.Push(job.id(), job.priority(), seq);
-  parts_.metrics.JobSubmitted();
-  spdlog::info("job {} submitted: {} file(s), {} bytes, priority {}", job.id(), job.clip().files_size(),
-               TotalBytes(job.clip()), job.priority());
+  if (from_pacs) {
+    spdlog::info("job {} submitted: its recording is retrieved from PACS {}", job.id(),
+                 request.pacs().pacs());
+    dicom_.retrieve(job.id());
+  } else {
+    spdlog::info("job {} submitted: {} file(s), {} bytes, priority {}", job.id(), job.clip().files_size(),
+                 TotalBytes(job.clip()), job.priority());
+  }
   return job;
 }
 
@@ -278,6 +355,7 @@ v1::Job JobCoordinator::Complete(const v1::CompleteRequest& request) {
   *job.mutable_result() = request.result();
   job.set_summary_json(request.summary_json());
   Finish(job, v1::SUCCEEDED, "");
+  if (SendsWaiting(job) && dicom_.send) dicom_.send(job.id());
   return job;
 }
 
@@ -336,6 +414,86 @@ void JobCoordinator::ExpireLeases(Clock::time_point now) {
       Requeue(*stored, true, reason);
     }
   }
+}
+
+v1::Job JobCoordinator::RequestSend(const std::string& id, const std::string& destination,
+                                    const Principal& caller) {
+  v1::Job job;
+  {
+    std::lock_guard lock(mutex_);
+    // The job first: whether a PACS exists must not tell apart another tenant's job from none.
+    job = LoadVisible(id, caller).job;
+    if (dicom_.pacs == nullptr) FailInvalid("this server has no PACS configured (--pacs)");
+    dicom_.pacs->Find(destination);
+    if (job.state() != v1::SUCCEEDED) {
+      endorecon::Fail(ErrorCode::kFailedPrecondition, "job " + id + " is " + v1::JobState_Name(job.state()) +
+                                                          "; results are sent once it has SUCCEEDED");
+    }
+    if (job.expired_unix_ms() > 0) {
+      endorecon::Fail(ErrorCode::kFailedPrecondition,
+                      "job " + id + " expired: the retention policy deleted its results, DICOM included");
+    }
+    const bool has_dicom =
+        std::any_of(job.result().files().begin(), job.result().files().end(),
+                    [](const v1::FileEntry& f) { return f.path().rfind("dicom/", 0) == 0; });
+    if (!has_dicom) {
+      endorecon::Fail(ErrorCode::kFailedPrecondition,
+                      "job " + id + " has no DICOM results (submit a DICOM recording, or pass --dicom)");
+    }
+    v1::DicomSend* send = nullptr;
+    for (auto& existing : *job.mutable_sends()) {
+      if (existing.destination() == destination) send = &existing;
+    }
+    if (send == nullptr) {
+      send = job.add_sends();
+      send->set_destination(destination);
+    } else if (SendWaiting(*send)) {
+      return job;
+    }
+    if (send->state() == v1::DicomSend::SENT) {
+      send->clear_sent_paths();
+      send->set_sent(0);
+    }
+    send->set_state(v1::DicomSend::PENDING);
+    send->set_attempts(0);
+    send->set_next_attempt_unix_ms(0);
+    Save(job);
+  }
+  spdlog::info("job {}: DICOM results to be sent to {}", id, destination);
+  if (dicom_.send) dicom_.send(id);
+  return job;
+}
+
+v1::Job JobCoordinator::Update(const std::string& id, const std::function<void(v1::Job&)>& change) {
+  std::lock_guard lock(mutex_);
+  auto job = Load(id).job;
+  change(job);
+  Save(job);
+  return job;
+}
+
+void JobCoordinator::RetrievalDone(const std::string& id, const v1::Manifest& clip) {
+  std::lock_guard lock(mutex_);
+  auto stored = Load(id);
+  auto& job = stored.job;
+  if (job.state() != v1::QUEUED) return;  // cancelled meanwhile
+  CheckBytesQuota(job.tenant(), TotalBytes(clip));
+  RequireBlobs(parts_.blobs, clip, "retrieved recording");  // retention may share and delete blobs
+  *job.mutable_clip() = clip;
+  job.mutable_retrieval()->set_state(v1::Retrieval::RETRIEVED);
+  Save(job);
+  parts_.scheduler.Push(job.id(), job.priority(), stored.seq);
+  spdlog::info("job {}: recording retrieved ({} file(s), {} bytes); queued", id, clip.files_size(),
+               TotalBytes(clip));
+}
+
+void JobCoordinator::RetrievalFailed(const std::string& id, const std::string& reason) {
+  std::lock_guard lock(mutex_);
+  auto job = Load(id).job;
+  if (job.state() != v1::QUEUED) return;
+  job.mutable_retrieval()->set_state(v1::Retrieval::RETRIEVAL_FAILED);
+  job.mutable_retrieval()->set_error(reason);
+  Finish(job, v1::FAILED, "retrieval from PACS " + job.retrieval().source().pacs() + " failed: " + reason);
 }
 
 }  // namespace endorecon::server

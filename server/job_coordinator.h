@@ -15,6 +15,7 @@
 #pragma once
 
 #include <chrono>
+#include <functional>
 #include <mutex>
 #include <optional>
 #include <string>
@@ -25,6 +26,7 @@
 #include "server/job_store.h"
 #include "server/lease_table.h"
 #include "server/metrics.h"
+#include "server/pacs_directory.h"
 #include "server/principal.h"
 #include "server/retention.h"
 #include "server/scheduler.h"
@@ -44,20 +46,38 @@ struct CoordinatorParts {
   Metrics& metrics;
 };
 
+// The DICOM side of jobs: which PACS exist, and who retrieves recordings and sends results
+// (server/dicom_gateway.h). Without it, jobs that name a PACS are refused.
+struct DicomHooks {
+  const PacsDirectory* pacs = nullptr;
+  std::string uid_root;
+  std::function<void(const std::string& job_id)> retrieve;  // the job waits for its recording
+  std::function<void(const std::string& job_id)> send;      // the job has PENDING sends
+};
+
 class JobCoordinator {
  public:
   JobCoordinator(CoordinatorParts parts, int max_attempts, TenantQuotas quotas = {});
 
-  // Queues the QUEUED jobs of the store and re-grants the leases of its RUNNING ones.
+  void SetDicomHooks(DicomHooks hooks);
+
+  // Queues the QUEUED jobs of the store (those still waiting for a PACS retrieval go back to the
+  // retrieve hook), re-grants the leases of its RUNNING ones and hands SUCCEEDED jobs with PENDING
+  // or SENDING sends back to the send hook.
   void Recover();
 
-  // Queues a job of the caller's tenant. Throws kInvalidArgument (bad manifest or option, naming
-  // it), kFailedPrecondition (a clip file not uploaded yet, naming it), kResourceExhausted (the
-  // tenant's max_jobs or max_bytes quota, naming it and the numbers).
+  // Queues a job of the caller's tenant; a job naming a PACS study waits for its retrieval first
+  // (the retrieve hook), and the recording's bytes count against the tenant once retrieved. Throws
+  // kInvalidArgument (bad manifest, option, UID or PACS name, naming it), kFailedPrecondition (a
+  // clip file not uploaded yet, naming it), kResourceExhausted (the tenant's max_jobs or max_bytes
+  // quota, naming it and the numbers).
   v1::Job Submit(const v1::SubmitRequest& request, const Principal& caller);
   // Throws kResourceExhausted when storing `manifest` in full would take the caller's tenant over
   // its max_bytes quota (checked before an upload writes anything).
   void CheckUploadQuota(const v1::Manifest& manifest, const Principal& caller);
+  // The same for a recording retrieved for job `id`, before it goes into the blob store: the job's
+  // tenant pays for it.
+  void CheckRetrievalQuota(const std::string& id, const v1::Manifest& recording);
   // Throws kNotFound (also for another tenant's job).
   v1::Job Get(const std::string& id, const Principal& caller);
   // Jobs newest first (see JobStore::List), the caller's tenant only unless it sees all tenants.
@@ -89,17 +109,34 @@ class JobCoordinator {
   // and marks those jobs expired (PlanRetention). Returns what it did.
   RetentionPlan ExpireFinishedBefore(std::int64_t cutoff_unix_ms);
 
+  // Asks for the DICOM results of a SUCCEEDED job of the caller's tenant to go (again) to the PACS
+  // `destination`. Throws kNotFound (job, also another tenant's, or PACS), kFailedPrecondition (not
+  // SUCCEEDED, no dicom/ results, results deleted by retention).
+  v1::Job RequestSend(const std::string& id, const std::string& destination, const Principal& caller);
+  // Applies `change` to a job and saves it (watchers see it); for the retrieval and the sends,
+  // which change nothing else. Returns the job as saved. Throws kNotFound.
+  v1::Job Update(const std::string& id, const std::function<void(v1::Job&)>& change);
+  // The recording of a job submitted by Study UID is in the blob store: the job gets it as its clip
+  // and is queued for a worker (if still QUEUED). Throws kResourceExhausted when it would take the
+  // job's tenant over its max_bytes quota (the job is then not changed).
+  void RetrievalDone(const std::string& id, const v1::Manifest& clip);
+  // The retrieval failed: the job FAILS with the reason.
+  void RetrievalFailed(const std::string& id, const std::string& reason);
+
  private:
   StoredJob Load(const std::string& id);
   // Load, but another tenant's job is kNotFound exactly as a missing one.
   StoredJob LoadVisible(const std::string& id, const Principal& caller);
   StoredJob LoadLeased(const std::string& lease_id);
+  // Throws kResourceExhausted when `tenant` keeping `adding` more bytes would pass its max_bytes.
+  void CheckBytesQuota(const std::string& tenant, std::int64_t adding);
   // Writes `job` to the store, then tells the watchers.
   void Save(const v1::Job& job);
   void Finish(v1::Job& job, v1::JobState state, const std::string& error);
   void Requeue(StoredJob& stored, bool count_attempt, const std::string& reason);
 
   CoordinatorParts parts_;
+  DicomHooks dicom_;
   int max_attempts_;
   TenantQuotas quotas_;
   std::mutex mutex_;

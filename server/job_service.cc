@@ -6,13 +6,14 @@
 
 #include "common/error.h"
 #include "server/file_sender.h"
+#include "server/job_states.h"
 
 namespace endorecon::server {
 namespace {
 
-bool Terminal(v1::JobState state) {
-  return state == v1::SUCCEEDED || state == v1::FAILED || state == v1::CANCELLED;
-}
+// A watch ends when nothing more will happen to the job: it is finished and none of its DICOM
+// sends is still waiting for an attempt or in one.
+bool Settled(const v1::Job& job) { return Terminal(job.state()) && !SendsWaiting(job); }
 
 }  // namespace
 
@@ -100,7 +101,7 @@ grpc::Status JobServiceImpl::Watch(grpc::ServerContext* context, const v1::Watch
     v1::JobEvent first;
     *first.mutable_job() = coordinator_.Get(request->id(), call.caller);
     first.mutable_job()->clear_clip();
-    if (!writer->Write(first) || Terminal(first.job().state())) return grpc::Status::OK;
+    if (!writer->Write(first) || Settled(first.job())) return grpc::Status::OK;
     std::uint64_t seen = 0;
     while (!context->IsCancelled()) {
       auto changes =
@@ -115,7 +116,7 @@ grpc::Status JobServiceImpl::Watch(grpc::ServerContext* context, const v1::Watch
       for (const auto& event : events) {
         if (!writer->Write(event)) return grpc::Status::OK;
       }
-      if (changes.job && Terminal(changes.job->state())) return grpc::Status::OK;
+      if (changes.job && Settled(*changes.job)) return grpc::Status::OK;
     }
     return grpc::Status(grpc::StatusCode::CANCELLED, "watch cancelled");
   });
@@ -156,6 +157,15 @@ grpc::Status JobServiceImpl::ListWorkers(grpc::ServerContext* context, const v1:
                                          v1::ListWorkersResponse* response) {
   return guard_.Run(context, {"ListWorkers", Access::kAdmin, kReads, ""}, [&](Call&) {
     for (auto& worker : workers_.List()) *response->add_workers() = std::move(worker);
+    return grpc::Status::OK;
+  });
+}
+
+grpc::Status JobServiceImpl::Send(grpc::ServerContext* context, const v1::SendRequest* request,
+                                  v1::Job* job) {
+  return guard_.Run(context, {"Send", Access::kJobs, kWrites, request->id()}, [&](Call& call) {
+    *job = coordinator_.RequestSend(request->id(), request->destination(), call.caller);
+    job->clear_clip();
     return grpc::Status::OK;
   });
 }

@@ -30,6 +30,7 @@ class JobServiceImpl final : public v1::JobService::Service {
                      grpc::ServerWriter<v1::FileChunk>*) override;
   grpc::Status ListWorkers(grpc::ServerContext*, const v1::ListWorkersRequest*,
                            v1::ListWorkersResponse*) override;
+  grpc::Status Send(grpc::ServerContext*, const v1::SendRequest*, v1::Job*) override;
 
  private:
   CallGuard& guard_;

@@ -11,10 +11,15 @@
 #include <filesystem>
 #include <thread>
 
+#include "common/dicom/peer.h"
+#include "common/dicom/storage_scp.h"
+#include "common/dicom/uid.h"
 #include "common/error.h"
 #include "common/transport_security.h"
 #include "server/call_guard.h"
 #include "server/commands.h"
+#include "server/dicom_retriever.h"
+#include "server/dicom_sender.h"
 #include "server/health_port.h"
 #include "server/job_service.h"
 #include "server/worker_service.h"
@@ -33,6 +38,9 @@ struct ServerFlags {
   int max_attempts = 3;
   std::int64_t lease_ttl_ms = 30000;
   std::int64_t heartbeat_ms = 2000;
+  // Hospital imaging (docs/operations.md, "Hospital imaging").
+  DicomSettings dicom;
+  std::vector<std::string> pacs;
   // Security and operations (docs/operations.md, "Securing a deployment").
   ServerSecurity tls;
   bool insecure = false;
@@ -47,6 +55,30 @@ struct ServerFlags {
 std::string HostOf(const std::string& address) {
   if (!address.empty() && address.front() == '[') return address.substr(0, address.find(']') + 1);
   return address.substr(0, address.rfind(':'));
+}
+
+// The storage SCP, when --dicom-listen asks for one; C-MOVE progress goes to `retriever`.
+std::unique_ptr<dicom::StorageScp> StartStorageScp(const ServerFlags& flags,
+                                                   const std::filesystem::path& folder,
+                                                   const std::vector<std::string>& calling_ae_titles,
+                                                   DicomRetriever*& retriever) {
+  if (flags.dicom.listen.empty()) return nullptr;
+  const auto colon = flags.dicom.listen.rfind(':');
+  if (colon == std::string::npos)
+    FailInvalid("--dicom-listen '" + flags.dicom.listen + "': expected HOST:PORT");
+  dicom::StorageScpSettings settings;
+  settings.ae_title = flags.dicom.ae_title;
+  settings.port = std::stoi(flags.dicom.listen.substr(colon + 1));
+  settings.folder = folder;
+  settings.calling_ae_titles = calling_ae_titles;
+  auto scp = std::make_unique<dicom::StorageScp>(
+      settings, [&retriever](const std::string& study, const std::filesystem::path&, std::int64_t bytes) {
+        if (retriever != nullptr) retriever->Received(study, bytes);
+      });
+  spdlog::info(
+      "DICOM storage SCP {} listening on port {} (every interface; admits the configured PACS' AE titles)",
+      settings.ae_title, settings.port);
+  return scp;
 }
 
 // Blocks SIGINT/SIGTERM in every thread; one thread waits for them and shuts the server down.
@@ -78,6 +110,8 @@ void CheckExposure(const ServerFlags& flags) {
 int Run(const ServerFlags& flags) {
   const sigset_t stop_signals = BlockStopSignals();
   CheckExposure(flags);
+  dicom::CheckAeTitle(flags.dicom.ae_title, "--ae-title");
+  if (!flags.dicom.uid_root.empty()) dicom::NewUid(flags.dicom.uid_root);  // refuses a malformed root now
   const auto credentials = ServerCredentials(flags.tls);
   const std::filesystem::path data_dir = flags.data_dir;
   std::filesystem::create_directories(data_dir);
@@ -93,6 +127,26 @@ int Run(const ServerFlags& flags) {
   CallGuard guard(TokenStore::PathIn(data_dir), !flags.tls.client_ca_file.empty(), audit, metrics);
   JobCoordinator coordinator({store, blobs, scheduler, leases, workers, hub, metrics}, flags.max_attempts,
                              TenantQuotas(flags.tenant_quota, flags.quotas_file));
+  const PacsDirectory pacs(flags.pacs);
+  DicomRetriever* retriever_for_scp = nullptr;
+  std::vector<std::string> pacs_ae_titles;
+  for (const auto& name : pacs.Names()) pacs_ae_titles.push_back(pacs.Find(name).ae_title);
+  const auto scp = StartStorageScp(flags, data_dir / "dicom-incoming", pacs_ae_titles, retriever_for_scp);
+  const PacsAudit pacs_audit = [&guard](const std::string& method, const std::string& job_id,
+                                        const std::string& outcome, const std::string& pacs_name) {
+    guard.RecordServerAction(method, job_id, outcome, pacs_name);
+  };
+  DicomRetriever retriever(coordinator, blobs, pacs, flags.dicom, metrics, data_dir / "retrievals", scp.get(),
+                           pacs_audit);
+  retriever_for_scp = &retriever;
+  DicomSender sender(coordinator, blobs, pacs, flags.dicom, metrics, pacs_audit);
+  coordinator.SetDicomHooks({&pacs, flags.dicom.uid_root,
+                             [&](const std::string& id) { retriever.Retrieve(id); },
+                             [&](const std::string& id) { sender.Send(id); }});
+  for (const auto& name : pacs.Names()) {
+    spdlog::info("PACS {} = {} (this server calls as {})", name, dicom::PeerText(pacs.Find(name)),
+                 flags.dicom.ae_title);
+  }
   coordinator.Recover();
   UploadReceiver uploads(blobs, flags.max_upload_bytes,
                          [&](std::int64_t bytes) { metrics.UploadBytes(bytes); });
@@ -221,6 +275,31 @@ void AddSecurityFlags(CLI::App& app, ServerFlags& flags) {
       ->check(CLI::PositiveNumber);
 }
 
+void AddDicomFlags(CLI::App& app, ServerFlags& flags) {
+  app.add_option("--ae-title", flags.dicom.ae_title,
+                 "this server's DICOM AE title (calling, and its storage SCP's)")
+      ->capture_default_str();
+  app.add_option("--pacs", flags.pacs,
+                 "a PACS, NAME=AET@HOST:PORT (repeatable): retrieve from it, send results to it");
+  app.add_option(
+      "--dicom-listen", flags.dicom.listen,
+      "HOST:PORT of this server's storage SCP (where a PACS delivers C-MOVE retrievals); off by default");
+  app.add_option("--uid-root", flags.dicom.uid_root,
+                 "UID root of the DICOM results' new UIDs (default: 2.25 UUID-derived UIDs)");
+  app.add_option("--send-attempts", flags.dicom.send_attempts,
+                 "attempts to send a job's DICOM results to one PACS before the send FAILS")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  app.add_option("--send-backoff-ms", flags.dicom.send_backoff_ms,
+                 "wait before the second send attempt, doubled for each further one (at most 60 s)")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  app.add_option("--dicom-timeout", flags.dicom.timeout_s,
+                 "seconds for a PACS to connect, associate and answer")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -250,6 +329,7 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
   AddSecurityFlags(app, flags);
+  AddDicomFlags(app, flags);
   app.require_subcommand(0, 1);
   const auto token_command = AddTokenCommand(app);
   const auto retention_command = AddRetentionCommand(app);

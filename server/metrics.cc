@@ -36,6 +36,16 @@ Metrics::Metrics(const std::string& bind_address)
       download_bytes_(Counter(*registry_, "endorecon_download_bytes_total", "Bytes sent by downloads")),
       workers_connected_(Gauge(*registry_, "endorecon_workers_connected", "Workers heard from recently")),
       lease_expiries_(Counter(*registry_, "endorecon_lease_expiries_total", "Leases that expired")),
+      dicom_sent_(BuildCounter()
+                      .Name("endorecon_dicom_instances_sent_total")
+                      .Help("DICOM instances a PACS confirmed storing (C-STORE)")
+                      .Register(*registry_)),
+      dicom_send_failures_(BuildCounter()
+                               .Name("endorecon_dicom_send_failures_total")
+                               .Help("Attempts to send DICOM results to a PACS that failed")
+                               .Register(*registry_)),
+      retrieval_bytes_(Counter(*registry_, "endorecon_dicom_retrieval_bytes_total",
+                               "Bytes of recordings retrieved from a PACS")),
       leases_granted_(Counter(*registry_, "endorecon_leases_granted_total", "Jobs handed to a worker")),
       refused_(BuildCounter()
                    .Name("endorecon_calls_refused_total")

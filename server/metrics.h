@@ -10,6 +10,9 @@
 //   endorecon_download_bytes_total           counter: bytes sent by downloads (results, clips, checkpoints)
 //   endorecon_workers_connected              gauge: workers heard from within the liveness window
 //   endorecon_lease_expiries_total           counter: leases that expired (worker vanished)
+//   endorecon_dicom_instances_sent_total{destination}  counter: instances a PACS confirmed (C-STORE)
+//   endorecon_dicom_send_failures_total{destination}   counter: send attempts that failed
+//   endorecon_dicom_retrieval_bytes_total    counter: bytes of recordings retrieved from a PACS
 //   endorecon_leases_granted_total           counter: jobs handed to a worker (attempts started)
 //   endorecon_calls_refused_total{code}      counter: calls refused (UNAUTHENTICATED, PERMISSION_DENIED,
 //                                            NOT_FOUND, RESOURCE_EXHAUSTED, ...)
@@ -54,6 +57,13 @@ class Metrics {
   void SetJobsByState(const std::map<v1::JobState, std::int64_t>& counts);
   void SetQueueDepth(std::size_t depth) { queue_depth_.Set(static_cast<double>(depth)); }
   void SetWorkersConnected(int workers) { workers_connected_.Set(workers); }
+  void DicomInstanceSent(const std::string& destination) {
+    dicom_sent_.Add({{"destination", destination}}).Increment();
+  }
+  void DicomSendFailed(const std::string& destination) {
+    dicom_send_failures_.Add({{"destination", destination}}).Increment();
+  }
+  void RetrievalBytes(std::int64_t bytes) { retrieval_bytes_.Increment(static_cast<double>(bytes)); }
 
  private:
   std::shared_ptr<prometheus::Registry> registry_;
@@ -69,6 +79,9 @@ class Metrics {
   prometheus::Counter& download_bytes_;
   prometheus::Gauge& workers_connected_;
   prometheus::Counter& lease_expiries_;
+  prometheus::Family<prometheus::Counter>& dicom_sent_;
+  prometheus::Family<prometheus::Counter>& dicom_send_failures_;
+  prometheus::Counter& retrieval_bytes_;
   prometheus::Counter& leases_granted_;
   prometheus::Family<prometheus::Counter>& refused_;
   prometheus::Counter& expired_;

@@ -29,5 +29,8 @@ struct Principal {
 };
 
 inline Principal AnonymousPrincipal() { return Principal{"anonymous", Role::kAdmin, "", true}; }
+// The server acting on its own behalf (PACS retrievals and sends, which follow the jobs of every
+// tenant); named "server" as in the audit log's entries for such actions.
+inline Principal ServerPrincipal() { return Principal{"server", Role::kAdmin, "", false}; }
 
 }  // namespace endorecon::server

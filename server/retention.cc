@@ -3,12 +3,10 @@
 #include <filesystem>
 #include <set>
 
+#include "server/job_states.h"
+
 namespace endorecon::server {
 namespace {
-
-bool Terminal(v1::JobState state) {
-  return state == v1::SUCCEEDED || state == v1::FAILED || state == v1::CANCELLED;
-}
 
 void AddBlobs(const v1::Job& job, std::set<std::string>& digests) {
   for (const auto& file : job.clip().files()) digests.insert(file.sha256());
@@ -24,7 +22,7 @@ RetentionPlan PlanRetention(JobStore& store, const BlobStore& blobs, std::int64_
   store.Scan([&](const StoredJob& stored) {
     const auto& job = stored.job;
     if (job.expired_unix_ms() > 0) return;
-    if (Terminal(job.state()) && job.finished_unix_ms() < cutoff_unix_ms) {
+    if (Terminal(job.state()) && job.finished_unix_ms() < cutoff_unix_ms && !SendsWaiting(job)) {
       plan.jobs.push_back(job);
       AddBlobs(job, expiring);
     } else {

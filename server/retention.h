@@ -1,7 +1,8 @@
 // Retention: the clips, results and checkpoints of jobs that finished (SUCCEEDED, FAILED,
 // CANCELLED) before a cutoff are deleted; each job's record stays, marked expired. A blob that any
 // other job still references (a queued or running job, or a finished one inside the retention
-// period) is never deleted: the same content may belong to several jobs.
+// period) is never deleted: the same content may belong to several jobs. A SUCCEEDED job whose
+// DICOM results are still to be sent (a send PENDING or SENDING) is kept until its sends settle.
 #pragma once
 
 #include <cstdint>

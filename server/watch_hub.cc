@@ -1,13 +1,8 @@
 #include "server/watch_hub.h"
 
+#include "server/job_states.h"
+
 namespace endorecon::server {
-namespace {
-
-bool Terminal(v1::JobState state) {
-  return state == v1::SUCCEEDED || state == v1::FAILED || state == v1::CANCELLED;
-}
-
-}  // namespace
 
 std::shared_ptr<WatchHub::Entry> WatchHub::EntryOf(const std::string& job_id) {
   std::lock_guard lock(mutex_);

@@ -28,9 +28,9 @@ TEST(DemoClipTest, CpuPresetReconstructsTheDemoClip) {
   EXPECT_FALSE(summary.cancelled);
   EXPECT_GT(progress_calls, 3);
   EXPECT_GT(summary.heldout_psnr, 20.0) << "held-out tissue PSNR after 20 s of training";
-  for (const char* file :
-       {"metrics.json", "config.json", "curve.svg", "video.mp4", "model/model.bin", "model/checkpoint.bin",
-        "rgb/000000.png", "depth/000047.npy", "depth/000047.png", "pointcloud/000010.ply", "report.html"}) {
+  for (const char* file : {"metrics.json", "config.json", "curve.svg", "video.mp4", "model/model.bin",
+                           "model/checkpoint.bin", "rgb/000000.png", "depth/000047.npy", "depth/000047.png",
+                           "pointcloud/000010.ply", "report.html", "mesh.ply", "mesh.obj", "mesh.stl"}) {
     EXPECT_TRUE(std::filesystem::exists(dir / "out" / file)) << file;
   }
   EXPECT_LT(std::filesystem::file_size(dir / "out" / "report.html"), 30'000'000u) << "the demo clip's page";

@@ -81,11 +81,10 @@ fs::path ReconstructSmallClip(const testing::TempDir& dir, int frames, int itera
   synth.width = 80;
   synth.height = 64;
   scene::WriteSyntheticClip(synth, dir / "clip");
-  testing::WriteBytes(dir / "config.json", kQuickConfig);
   ReconstructOptions options;
   options.clip_dir = (dir / "clip").string();
   options.out_dir = (dir / "out").string();
-  options.config_file = (dir / "config.json").string();
+  options.config = nlohmann::json::parse(kQuickConfig);
   options.iterations = iterations;
   Reconstruct(options, {});
   return dir / "out";

@@ -41,7 +41,10 @@ class AccessControlTest : public ::testing::Test {
 
   std::vector<nlohmann::json> Audit() { return AuditLines(cluster_.data_dir() / "audit.jsonl"); }
 
-  Cluster cluster_{{"--tenant-max-jobs", "2"}, false};
+  // A PACS the server knows by name; nothing listens there, so a retrieval from it fails at once.
+  Cluster cluster_{{"--tenant-max-jobs", "2", "--pacs", "pacs1=PACS1@127.0.0.1:" + std::to_string(FreePort()),
+                    "--dicom-timeout", "5"},
+                   false};
   ClientCredentials admin_, alice_, bob_, worker_;
   std::vector<std::string> tokens_;
 };
@@ -206,6 +209,79 @@ TEST_F(AccessControlTest, NoLogHoldsATokenOrAJobName) {
   EXPECT_EQ(audit.find("jane"), std::string::npos);
   EXPECT_EQ(server_log.find("jane"), std::string::npos);
   EXPECT_EQ(AuditFind(AuditLines(cluster_.data_dir() / "audit.jsonl"), "Submit", "OK", "alice").size(), 1u);
+}
+
+// Send goes through the same gate as every job call: a token of the job API, and the caller's own
+// tenant (an admin: any); another tenant's job is NOT_FOUND exactly like a missing one, whatever
+// PACS it names.
+TEST_F(AccessControlTest, SendKeepsToTheCallersTenantAndRole) {
+  const auto id = SubmitAs(alice_, "alice-job");
+  const auto none = Cli({}, {"send", id, "--to", "pacs1"});
+  EXPECT_EQ(none.exit_code, 10) << none.err;
+  EXPECT_NE(none.err.find("UNAUTHENTICATED"), std::string::npos) << none.err;
+  const auto worker = Cli(worker_, {"send", id, "--to", "pacs1"});
+  EXPECT_EQ(worker.exit_code, 11) << worker.err;
+  EXPECT_NE(worker.err.find("PERMISSION_DENIED"), std::string::npos) << worker.err;
+
+  const std::string missing_id = "000000000000";
+  const auto missing = Cli(bob_, {"send", missing_id, "--to", "pacs1"});
+  ASSERT_EQ(missing.exit_code, 3) << missing.err;
+  for (const std::string pacs : {"pacs1", "no-such-pacs"}) {
+    const auto other = Cli(bob_, {"send", id, "--to", pacs});
+    EXPECT_EQ(other.exit_code, 3) << other.err;
+    std::string as_missing = other.err;
+    for (auto at = as_missing.find(id); at != std::string::npos; at = as_missing.find(id))
+      as_missing.replace(at, id.size(), missing_id);
+    if (pacs == "pacs1") {
+      EXPECT_EQ(as_missing, missing.err);
+    }
+    EXPECT_NE(other.err.find("no job '" + id + "'"), std::string::npos) << other.err;
+    EXPECT_EQ(other.err.find("radiology"), std::string::npos) << other.err;
+  }
+
+  // The owner and the admin pass the gate and meet the job's state: a QUEUED job has nothing to send.
+  const auto own = Cli(alice_, {"send", id, "--to", "pacs1"});
+  EXPECT_EQ(own.exit_code, 7) << own.err;
+  EXPECT_NE(own.err.find("QUEUED"), std::string::npos) << own.err;
+  EXPECT_EQ(Cli(admin_, {"send", id, "--to", "pacs1"}).exit_code, 7);
+
+  const auto job = cluster_.Job(id);
+  EXPECT_EQ(job.state(), v1::QUEUED);
+  EXPECT_EQ(job.sends_size(), 0);
+  const auto audit = Audit();
+  EXPECT_EQ(AuditFind(audit, "Send", "UNAUTHENTICATED", "-", id).size(), 1u);
+  EXPECT_EQ(AuditFind(audit, "Send", "PERMISSION_DENIED", "node-1", id).size(), 1u);
+  EXPECT_EQ(AuditFind(audit, "Send", "NOT_FOUND", "bob", id).size(), 2u);
+  EXPECT_EQ(AuditFind(audit, "Send", "FAILED_PRECONDITION", "alice", id).size(), 1u);
+  EXPECT_EQ(AuditFind(audit, "Send", "FAILED_PRECONDITION", "ops", id).size(), 1u);
+}
+
+// A job submitted by Study UID belongs to the submitter's tenant like any other, and neither the
+// audit log nor the server's log holds the patient's or the study's identifiers.
+TEST_F(AccessControlTest, DicomJobsKeepToTheirTenantAndOutOfTheLogs) {
+  const std::string study = "1.2.826.0.1.3680043.10.999.4711";
+  const auto from_pacs = Cli(alice_, {"--json", "submit", "--pacs", "pacs1", "--study", study});
+  ASSERT_EQ(from_pacs.exit_code, 0) << from_pacs.err;
+  const std::string id = from_pacs.out.substr(from_pacs.out.find("\"id\":\"") + 6, 12);
+  const auto failed = cluster_.WaitForState(id, v1::FAILED, std::chrono::seconds(30));
+  EXPECT_EQ(failed.tenant(), "radiology");
+  EXPECT_EQ(failed.submitted_by(), "alice");
+  EXPECT_EQ(failed.retrieval().state(), v1::Retrieval::RETRIEVAL_FAILED);
+  EXPECT_EQ(Cli(bob_, {"status", id}).exit_code, 3);
+
+  const auto with_patient =
+      Cli(alice_, {"submit", cluster_.path("clip").string(), "--dicom", "--patient-id", "PAT-4711",
+                   "--patient-name", "Doe^Jane", "--study-uid", study + ".2", "--send-to", "pacs1"});
+  EXPECT_EQ(with_patient.exit_code, 0) << with_patient.err;
+
+  const auto audit = Audit();
+  const auto retrievals = AuditFind(audit, "PacsRetrieve", "UNAVAILABLE", "server", id);
+  ASSERT_EQ(retrievals.size(), 1u);
+  EXPECT_EQ(retrievals[0].value("subject", ""), "pacs1");
+  for (const std::string& log : {ReadBytes(cluster_.data_dir() / "audit.jsonl"), cluster_.ServerLog()}) {
+    for (const std::string& secret : {study, std::string("PAT-4711"), std::string("Doe")})
+      EXPECT_EQ(log.find(secret), std::string::npos) << secret;
+  }
 }
 
 }  // namespace

@@ -27,9 +27,6 @@ class ReportTest : public ::testing::Test {
     synth.width = 48;
     synth.height = 40;
     scene::WriteSyntheticClip(synth, dir_->path() / "clip");
-    testing::WriteBytes(
-        dir_->path() / "config.json",
-        R"({"rays_per_batch": 256, "depth_refine_every": 0, "occupancy_resolution": 16, "mc_passes": 2})");
   }
   static void TearDownTestSuite() {
     delete dir_;
@@ -39,7 +36,8 @@ class ReportTest : public ::testing::Test {
     ReconstructOptions options;
     options.clip_dir = (dir_->path() / "clip").string();
     options.out_dir = (dir_->path() / out).string();
-    options.config_file = (dir_->path() / "config.json").string();
+    options.config = {
+        {"rays_per_batch", 256}, {"depth_refine_every", 0}, {"occupancy_resolution", 16}, {"mc_passes", 2}};
     options.iterations = 20;
     options.holdout = 4;
     options.threads = 2;

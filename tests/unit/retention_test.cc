@@ -48,5 +48,26 @@ TEST(RetentionTest, PlansOnlyBlobsNoLiveOrRecentJobShares) {
   EXPECT_EQ(PlanRetention(store, blobs, 1000).jobs.size(), 3u);
 }
 
+TEST(RetentionTest, KeepsAJobWhoseDicomResultsAreStillBeingSent) {
+  testing::TempDir dir("retention");
+  JobStore store(dir / "jobs.sqlite");
+  BlobStore blobs(dir.path());
+  const auto a = blobs.Put("aaa"), b = blobs.Put("bbb"), c = blobs.Put("ccc");
+  const auto with_send = [](v1::Job job, v1::DicomSend::State state) {
+    auto* send = job.add_sends();
+    send->set_destination("pacs1");
+    send->set_state(state);
+    return job;
+  };
+  store.Insert(with_send(JobWith("pending", v1::SUCCEEDED, 100, {a}), v1::DicomSend::PENDING));
+  store.Insert(with_send(JobWith("sending", v1::SUCCEEDED, 100, {b}), v1::DicomSend::SENDING));
+  store.Insert(with_send(JobWith("failed", v1::SUCCEEDED, 100, {c}), v1::DicomSend::SEND_FAILED));
+
+  const auto plan = PlanRetention(store, blobs, 500);
+  ASSERT_EQ(plan.jobs.size(), 1u);
+  EXPECT_EQ(plan.jobs[0].id(), "failed");  // a failed send waits for a person, not for retention
+  EXPECT_EQ(plan.blobs, std::vector<std::string>{c});
+}
+
 }  // namespace
 }  // namespace endorecon::server

@@ -4,6 +4,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <nlohmann/json.hpp>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "tests/unit/clip_fixture.h"
 #include "tests/unit/temp_dir.h"
@@ -224,6 +228,80 @@ TEST(SyntheticClipTest, StereoRightEyeIsShiftedByTheBaseline) {
   std::size_t equal = 0;
   for (std::size_t i = 0; i < clip.rgb[0].size(); ++i) equal += clip.right_rgb[0][i] == clip.rgb[0][i];
   EXPECT_LT(equal, clip.rgb[0].size() / 2);
+}
+
+TEST(SyntheticClipTest, MovingEndoscopeFollowsItsPath) {
+  TempDir dir("synth");
+  SynthOptions options = Small();
+  options.moving = true;
+  WriteSyntheticClip(options, dir.path());
+  const Clip clip = LoadClip(dir.path());
+  const SyntheticScene scene(options);
+  for (int f : {0, 5, 11}) {
+    EXPECT_TRUE(clip.cameras[f].c2w.isApprox(scene.LeftPose(FrameTime(options, f)), 1e-12)) << f;
+  }
+  EXPECT_GT((clip.cameras[11].c2w.col(3) - clip.cameras[0].c2w.col(3)).norm(), 10);
+  // Rays from the moved camera meet the tissue: the hit lies on the surface z = -D(x, y).
+  const SyntheticScene::State state = scene.At(FrameTime(options, 11));
+  for (int v = 0; v < options.height; v += 7) {
+    for (int u = 0; u < options.width; u += 7) {
+      Eigen::Vector3d origin, direction;
+      clip.cameras[11].Ray(u, v, origin, direction);
+      const SceneHit hit = scene.TraceAlong(state, origin, direction);
+      const Eigen::Vector3d point = origin + hit.tissue_depth * direction;
+      double dx, dy;
+      EXPECT_NEAR(-point.z(), scene.TissueDepth(state, point.x(), point.y(), &dx, &dy), 1e-6);
+    }
+  }
+}
+
+// The raw left eye is the ideal left camera seen through the calibration's lens model: a pixel of
+// the ideal frame, projected with K1 and D1, finds the same colour in the raw frame.
+TEST(SyntheticClipTest, RecordingMatchesItsCalibration) {
+  TempDir dir("synth");
+  SynthOptions options = Small();
+  options.width = 160;
+  options.height = 128;
+  options.frames = 2;
+  options.recording = true;
+  options.checkerboard_views = 2;
+  WriteSyntheticClip(options, dir.path());
+  for (const char* file :
+       {"recording/calibration.yaml", "recording/poses.json", "recording/left/000001.png",
+        "recording/right/000001.png", "recording/masks/000001.png", "recording/checkerboard/left/000001.png",
+        "recording/checkerboard/right/000001.png"}) {
+    EXPECT_TRUE(fs::exists(dir / file)) << file;
+  }
+  const cv::Mat ideal = cv::imread((dir / "gt/images/000000.png").string());
+  const cv::Mat raw = cv::imread((dir / "recording/left/000000.png").string());
+  cv::FileStorage calibration((dir / "recording/calibration.yaml").string(), cv::FileStorage::READ);
+  cv::Mat k, d;
+  calibration["K1"] >> k;
+  calibration["D1"] >> d;
+  EXPECT_EQ(static_cast<int>(calibration["image_width"]), 160);
+  const double f = SyntheticScene(options).LeftCamera().fx;
+  std::vector<cv::Point3d> rays;
+  std::vector<cv::Point2i> pixels;
+  for (int v = 20; v < 108; v += 4) {
+    for (int u = 20; u < 140; u += 4) {
+      rays.emplace_back((u - 79.5) / f, (v - 63.5) / f, 1);  // OpenCV pixel centres
+      pixels.emplace_back(u, v);
+    }
+  }
+  std::vector<cv::Point2d> projected;
+  cv::projectPoints(rays, cv::Vec3d(), cv::Vec3d(), k, d, projected);
+  double difference = 0;
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    cv::Mat sample;
+    cv::getRectSubPix(raw, cv::Size(1, 1), cv::Point2f(projected[i]), sample);
+    difference += cv::norm(cv::Vec3d(sample.at<cv::Vec3b>(0, 0)) - cv::Vec3d(ideal.at<cv::Vec3b>(pixels[i])),
+                           cv::NORM_L1) /
+                  3;
+  }
+  EXPECT_LT(difference / rays.size(), 8) << "mean difference per channel";
+  const nlohmann::json poses = nlohmann::json::parse(testing::ReadBytes(dir / "recording/poses.json"));
+  EXPECT_EQ(poses["poses"].size(), 2u);
+  EXPECT_EQ(poses["convention"], "opencv");
 }
 
 TEST(SyntheticClipTest, ReplacesAnEarlierSyntheticClipOnly) {

@@ -16,5 +16,8 @@ Command AddSynthCommand(CLI::App& app);
 Command AddReconstructCommand(CLI::App& app);
 Command AddRenderCommand(CLI::App& app);
 Command AddServeCommand(CLI::App& app);
+Command AddPrepareCommand(CLI::App& app);
+Command AddCalibrateCommand(CLI::App& app);
+Command AddToDicomCommand(CLI::App& app);
 
 }  // namespace endorecon::worker

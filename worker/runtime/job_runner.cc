@@ -9,6 +9,8 @@
 #include "common/manifest.h"
 #include "common/sha256.h"
 #include "worker/engine/reconstruct.h"
+#include "worker/runtime/dicom_job.h"
+#include "worker/runtime/job_preparation.h"
 #include "worker/runtime/job_options.h"
 #include "worker/runtime/preview_png.h"
 #include "worker/runtime/progress_reporter.h"
@@ -99,7 +101,18 @@ void RunLeasedJob(WorkerClient& client, const v1::LeaseResponse& lease, const De
       client.GetFiles(lease.lease_id(), job_dir / "checkpoint", checkpoint);
     }
     fs::remove_all(job_dir / "out");
-    const auto options = OptionsFor(job, job_dir, device);
+    auto options = OptionsFor(job, job_dir, device);
+    // Issue 16: a job submitted as a raw stereo recording is prepared into out/clip/ first; issue 15:
+    // a DICOM recording is converted into a clip (and its study is where the DICOM results go).
+    std::optional<RecordingClip> recording;
+    if (job.has_prepare()) {
+      options.clip_dir = PrepareJobRecording(job, job_dir / "clip", job_dir / "out", reporter, [&] {
+                           return shutting_down.load() || reporter.stop_requested().has_value();
+                         }).string();
+    } else {
+      recording = PrepareRecording(options.clip_dir, job.recording(), job_dir / "clip-from-dicom");
+      if (recording) options.clip_dir = recording->clip_dir.string();
+    }
 
     ReconstructHooks hooks;
     hooks.progress_interval_s = std::min(2.0, std::chrono::duration<double>(settings.heartbeat).count());
@@ -129,6 +142,7 @@ void RunLeasedJob(WorkerClient& client, const v1::LeaseResponse& lease, const De
     } else if (summary.cancelled) {
       Tell(client, lease.lease_id(), "worker " + client.worker_id() + " is shutting down", true, true);
     } else {
+      WriteJobDicom(options.out_dir, recording, job.dicom());
       v1::CompleteRequest complete;
       complete.set_lease_id(lease.lease_id());
       *complete.mutable_result() = ManifestOfDirectory(options.out_dir);
@@ -144,8 +158,9 @@ void RunLeasedJob(WorkerClient& client, const v1::LeaseResponse& lease, const De
     spdlog::error("[{}] job {}: {}: {}", device.name, job.id(), ErrorCodeName(e.code()), e.what());
     if (!reporter.stop_requested()) {
       const bool bad_input = e.code() == ErrorCode::kInvalidArgument;
+      // Issue 16: stopped by a shutdown while preparing: handed back without counting an attempt.
       Tell(client, lease.lease_id(), std::string(ErrorCodeName(e.code())) + ": " + e.what(), !bad_input,
-           false);
+           e.code() == ErrorCode::kCancelled);
     }
   } catch (const std::exception& e) {
     reporter.Stop();

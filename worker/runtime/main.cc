@@ -1,5 +1,5 @@
-// endorecon-worker: the engine's command line (synth, reconstruct, render) and the service worker
-// (serve), which leases jobs from endorecon-server and runs one engine per device.
+// endorecon-worker: the engine's command line (synth, reconstruct, render, prepare, calibrate) and the
+// service worker (serve), which leases jobs from endorecon-server and runs one engine per device.
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
@@ -17,6 +17,9 @@ int main(int argc, char** argv) {
   commands["reconstruct"] = endorecon::worker::AddReconstructCommand(app);
   commands["render"] = endorecon::worker::AddRenderCommand(app);
   commands["serve"] = endorecon::worker::AddServeCommand(app);
+  commands["prepare"] = endorecon::worker::AddPrepareCommand(app);
+  commands["calibrate"] = endorecon::worker::AddCalibrateCommand(app);
+  commands["to-dicom"] = endorecon::worker::AddToDicomCommand(app);
   CLI11_PARSE(app, argc, argv);
   try {
     for (auto* sub : app.get_subcommands()) return commands.at(sub->get_name())();

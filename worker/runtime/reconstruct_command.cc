@@ -9,6 +9,7 @@
 #include "worker/engine/reconstruct.h"
 #include "worker/engine/scene/json_file.h"
 #include "worker/runtime/commands.h"
+#include "worker/runtime/dicom_job.h"
 
 namespace endorecon::worker {
 
@@ -29,20 +30,56 @@ void AddReconstructOptions(CLI::App& cmd, ReconstructOptions& options, std::stri
   cmd.add_flag("--static", options.force_static, "treat the clip as static (no deformation network)");
 }
 
+void AddDicomOptions(CLI::App& cmd, v1::RecordingOptions& recording, v1::DicomOutputOptions& dicom) {
+  cmd.add_option_function<std::string>(
+         "--stereo", [&](const std::string& v) { recording.set_stereo(v); },
+         "DICOM recording: side-by-side, top-bottom, or series (two series: left, right)")
+      ->check(CLI::IsMember({"mono", "side-by-side", "top-bottom", "series"}));
+  cmd.add_option_function<std::string>(
+      "--frames", [&](const std::string& v) { recording.set_frames(v); },
+      "DICOM recording: frames START:END:STEP (as a Python slice)");
+  cmd.add_option_function<double>(
+         "--fps", [&](double v) { recording.set_fps(v); },
+         "DICOM recording: keep at most this many frames per second")
+      ->check(CLI::NonNegativeNumber);
+  cmd.add_flag_function(
+      "--dicom", [&](std::int64_t) { dicom.set_enabled(true); },
+      "write dicom/ for a clip that is not DICOM (always written for a DICOM recording)");
+  cmd.add_option_function<std::string>(
+      "--patient-id", [&](const std::string& v) { dicom.set_patient_id(v); },
+      "with --dicom: the patient's ID");
+  cmd.add_option_function<std::string>(
+      "--patient-name", [&](const std::string& v) { dicom.set_patient_name(v); },
+      "with --dicom: the patient's name (DICOM PN, e.g. Doe^Jane)");
+  cmd.add_option_function<std::string>(
+      "--study-uid", [&](const std::string& v) { dicom.set_study_uid(v); },
+      "with --dicom: the study the results join (default: a new study)");
+  cmd.add_option_function<std::string>(
+      "--uid-root", [&](const std::string& v) { dicom.set_uid_root(v); },
+      "root of the DICOM results' new UIDs (default: 2.25 UUID-derived UIDs)");
+}
+
 }  // namespace
 
 Command AddReconstructCommand(CLI::App& app) {
   auto* cmd = app.add_subcommand("reconstruct", "reconstruct a clip here and write the results folder");
   auto options = std::make_shared<ReconstructOptions>();
   auto config_file = std::make_shared<std::string>();
-  cmd->add_option("clip", options->clip_dir, "clip folder (EndoNeRF layout or transforms.json)")->required();
+  auto recording = std::make_shared<v1::RecordingOptions>();
+  auto dicom = std::make_shared<v1::DicomOutputOptions>();
+  cmd->add_option("clip", options->clip_dir,
+                  "clip folder (EndoNeRF layout or transforms.json), or a DICOM recording (file or folder)")
+      ->required();
   cmd->add_option("-o,--out", options->out_dir, "results folder")->required();
   AddReconstructOptions(*cmd, *options, *config_file);
   cmd->add_option("--threads", options->threads, "worker threads (0: all cores)")->capture_default_str();
   cmd->add_option("--device", options->device, "where the training steps run: cpu or cuda:N")->capture_default_str();
   cmd->add_option("--resume", options->resume_from, "checkpoint file to resume from");
-  return [options, config_file] {
+  AddDicomOptions(*cmd, *recording, *dicom);
+  return [options, config_file, recording, dicom] {
     if (!config_file->empty()) options->config = scene::ReadJsonFile(*config_file);
+    const auto from_dicom = PrepareRecording(options->clip_dir, *recording, options->out_dir + ".clip");
+    if (from_dicom) options->clip_dir = from_dicom->clip_dir.string();
     ReconstructHooks hooks;
     hooks.progress_interval_s = 1.0;
     hooks.on_progress = [](const Progress& p) {
@@ -59,6 +96,7 @@ Command AddReconstructCommand(CLI::App& app) {
                  summary.cancelled ? "stopped after" : "done:", summary.iterations, summary.train_seconds,
                  summary.train_psnr,
                  summary.heldout_psnr >= 0 ? fmt::format("{:.2f} dB", summary.heldout_psnr) : "n/a");
+    if (!summary.cancelled) WriteJobDicom(options->out_dir, from_dicom, *dicom);
     spdlog::info("results: {}  (metrics: {})", options->out_dir, summary.metrics_path);
     return 0;
   };

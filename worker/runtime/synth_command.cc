@@ -15,20 +15,33 @@ Command AddSynthCommand(CLI::App& app) {
   auto options = std::make_shared<scene::SynthOptions>();
   auto flags = std::make_shared<std::pair<bool, bool>>(false, false);  // --no-tool, --no-depth
   cmd->add_option("out", *out, "output folder")->required();
-  cmd->add_option("--frames", options->frames, "number of frames")->capture_default_str()->check(CLI::Range(1, 100000));
-  cmd->add_option("--width", options->width, "frame width")->capture_default_str()->check(CLI::Range(8, 8192));
-  cmd->add_option("--height", options->height, "frame height")->capture_default_str()->check(CLI::Range(8, 8192));
+  cmd->add_option("--frames", options->frames, "number of frames")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 100000));
+  cmd->add_option("--width", options->width, "frame width")
+      ->capture_default_str()
+      ->check(CLI::Range(8, 8192));
+  cmd->add_option("--height", options->height, "frame height")
+      ->capture_default_str()
+      ->check(CLI::Range(8, 8192));
   cmd->add_option("--seed", options->seed, "random seed")->capture_default_str();
   cmd->add_flag("--static", options->static_scene, "nothing moves");
   cmd->add_flag("--no-tool", flags->first, "no tool, no masks/ folder");
   cmd->add_flag("--no-depth", flags->second, "no depth/ folder");
-  cmd->add_flag("--stiff", options->stiff, "thin depth range, near-opaque surface, near-black tissue, saturated speculars");
+  cmd->add_flag("--stiff", options->stiff,
+                "thin depth range, near-opaque surface, near-black tissue, saturated speculars");
   cmd->add_flag("--stereo", options->stereo, "also write the right eye (images_right/, stereo.json)");
+  cmd->add_flag("--moving", options->moving,
+                "the endoscope moves along a known path (poses in poses_bounds.npy)");
+  cmd->add_flag("--recording", options->recording,
+                "also write recording/: the raw stereo pair with lens distortion, its calibration, poses and "
+                "checkerboard views (input for prepare and calibrate)");
   return [out, options, flags] {
     options->tool = !flags->first;
     options->depth = !flags->second;
     scene::WriteSyntheticClip(*options, *out);
-    spdlog::info("wrote synthetic clip: {} ({} frames, {}x{})", *out, options->frames, options->width, options->height);
+    spdlog::info("wrote synthetic clip: {} ({} frames, {}x{})", *out, options->frames, options->width,
+                 options->height);
     return 0;
   };
 }

@@ -8,6 +8,7 @@
 #include "worker/engine/eval/image_metrics.h"
 #include "worker/engine/eval/pixel_error.h"
 #include "worker/engine/eval/point_cloud.h"
+#include "worker/engine/eval/surface_mesh.h"
 #include "worker/engine/eval/video_writer.h"
 
 namespace endorecon::eval {
@@ -114,6 +115,10 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
       WritePly(
           out_dir / "pointcloud" / FrameFileName(f, ".ply"),
           BackProject(clip.cameras[f], frame.depth, frame.rgb, clip.has_masks() ? clip.tool_mask[f] : mask));
+      if (f == 0) {  // the canonical frame's surface (t = 0)
+        WriteSurfaceMesh(out_dir, TriangulateDepth(clip.cameras[f], frame.depth, frame.rgb,
+                                                   clip.has_masks() ? clip.tool_mask[f] : mask, clip.far));
+      }
       video.push_back(frame.rgb);
     }
     if (what.on_frame) what.on_frame(f + 1, count);

@@ -4,15 +4,14 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
-#include <fstream>
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 
 #include "common/error.h"
 #include "worker/engine/scene/npy.h"
 #include "worker/engine/scene/portable_random.h"
+#include "worker/engine/scene/synthetic_files.h"
+#include "worker/engine/scene/synthetic_recording.h"
 
 namespace endorecon::scene {
 namespace {
@@ -24,7 +23,8 @@ constexpr double kSpecularHole = 0.35;  // stereo matching fails on highlights b
 nlohmann::json OptionsJson(const SynthOptions& o) {
   return {{"frames", o.frames}, {"width", o.width},         {"height", o.height},
           {"seed", o.seed},     {"static", o.static_scene}, {"tool", o.tool},
-          {"depth", o.depth},   {"stiff", o.stiff},         {"stereo", o.stereo}};
+          {"depth", o.depth},   {"stiff", o.stiff},         {"stereo", o.stereo},
+          {"moving", o.moving}, {"recording", o.recording}, {"checkerboard_views", o.checkerboard_views}};
 }
 
 void PrepareFolder(const fs::path& out, const SynthOptions& options) {
@@ -33,7 +33,7 @@ void PrepareFolder(const fs::path& out, const SynthOptions& options) {
       FailInvalid(out.string() + ": exists and is not empty (and holds no synthetic clip to replace)");
     }
     for (const char* entry :
-         {"images", "depth", "masks", "images_right", "gt", "poses_bounds.npy", "stereo.json"}) {
+         {"images", "depth", "masks", "images_right", "gt", "recording", "poses_bounds.npy", "stereo.json"}) {
       fs::remove_all(out / entry);
     }
   }
@@ -41,25 +41,6 @@ void PrepareFolder(const fs::path& out, const SynthOptions& options) {
   if (options.depth) fs::create_directories(out / "depth");
   if (options.tool) fs::create_directories(out / "masks");
   if (options.stereo) fs::create_directories(out / "images_right");
-}
-
-void WriteText(const fs::path& path, const std::string& text) {
-  std::ofstream file(path, std::ios::trunc);
-  file << text;
-  file.close();
-  if (!file) Fail(ErrorCode::kUnavailable, "cannot write " + path.string());
-}
-
-void WritePng(const fs::path& path, const cv::Mat& image) {
-  if (!cv::imwrite(path.string(), image)) Fail(ErrorCode::kUnavailable, "cannot write " + path.string());
-}
-
-std::uint8_t ToByte(float value) {
-  return static_cast<std::uint8_t>(std::clamp(value, 0.f, 1.f) * 255.f + 0.5f);
-}
-
-void PutRgb(cv::Mat& bgr, int u, int v, const std::array<float, 3>& rgb) {
-  bgr.at<cv::Vec3b>(v, u) = {ToByte(rgb[2]), ToByte(rgb[1]), ToByte(rgb[0])};
 }
 
 // Observed z-depth plus truncated, depth-dependent noise, rounded to the 8-bit grid (1..255).
@@ -85,22 +66,23 @@ void PunchHoles(cv::Mat& depth, PortableRandom& random) {
 }
 
 void WriteFrame(const SyntheticScene& scene, const SynthOptions& options, int index, const fs::path& out) {
-  const double time = options.frames == 1 ? 0.0 : static_cast<double>(index) / (options.frames - 1);
+  const double time = FrameTime(options, index);
   const SyntheticScene::State state = scene.At(time);
-  const Camera camera = scene.LeftCamera();
+  Camera camera = scene.LeftCamera();
+  camera.c2w = scene.LeftPose(time);
   const int w = options.width, h = options.height;
   cv::Mat rgb(h, w, CV_8UC3), gt_rgb(h, w, CV_8UC3), right(h, w, CV_8UC3), depth(h, w, CV_8UC1),
       mask(h, w, CV_8UC1);
   std::vector<float> gt_depth(static_cast<std::size_t>(w) * h);
   PortableRandom random(StreamSeed(options.seed, static_cast<std::uint64_t>(index)));
-  const Eigen::Vector3d right_origin(scene.baseline(), 0, 0);
+  const Eigen::Vector3d right_origin = camera.c2w.col(3) + scene.baseline() * camera.c2w.col(0);
 
   for (int v = 0; v < h; ++v) {
     double guess = 0, right_guess = 0;
     for (int u = 0; u < w; ++u) {
       Eigen::Vector3d origin, direction;
       camera.Ray(u, v, origin, direction);
-      const SceneHit hit = scene.Trace(state, origin, direction, guess);
+      const SceneHit hit = scene.TraceAlong(state, origin, direction, guess);
       guess = hit.tissue_depth;
       PutRgb(rgb, u, v, hit.rgb);
       PutRgb(gt_rgb, u, v, hit.tissue_rgb);
@@ -109,7 +91,7 @@ void WriteFrame(const SyntheticScene& scene, const SynthOptions& options, int in
       const std::uint8_t noisy = NoisyDepth(hit.depth, random);
       depth.at<std::uint8_t>(v, u) = hit.specular > kSpecularHole ? 0 : noisy;
       if (options.stereo) {
-        const SceneHit right_hit = scene.Trace(state, right_origin, direction, right_guess);
+        const SceneHit right_hit = scene.TraceAlong(state, right_origin, direction, right_guess);
         right_guess = right_hit.tissue_depth;
         PutRgb(right, u, v, right_hit.rgb);
       }
@@ -117,40 +99,29 @@ void WriteFrame(const SyntheticScene& scene, const SynthOptions& options, int in
   }
   PunchHoles(depth, random);
 
-  char name[32];
-  std::snprintf(name, sizeof(name), "%06d", index);
-  const std::string png = std::string(name) + ".png";
+  const std::string name = FrameName(index), png = name + ".png";
   WritePng(out / "images" / png, rgb);
   WritePng(out / "gt/images" / png, gt_rgb);
-  WriteNpyFloat32(out / "gt/depth" / (std::string(name) + ".npy"), gt_depth.data(),
+  WriteNpyFloat32(out / "gt/depth" / (name + ".npy"), gt_depth.data(),
                   {static_cast<std::size_t>(h), static_cast<std::size_t>(w)});
   if (options.depth) WritePng(out / "depth" / png, depth);
   if (options.tool) WritePng(out / "masks" / png, mask);
   if (options.stereo) WritePng(out / "images_right" / png, right);
 }
 
-// EndoNeRF rows: LLFF [down, right, back] columns chosen so the loaded OpenGL pose is the identity.
+// EndoNeRF rows: the OpenGL pose [right, up, back | t] stored in LLFF's [down, right, back | t] order.
 void WritePoses(const SyntheticScene& scene, const SynthOptions& options, const fs::path& path) {
-  const Camera camera = scene.LeftCamera();
-  const double row[17] = {0,
-                          1,
-                          0,
-                          0,
-                          static_cast<double>(options.height),
-                          -1,
-                          0,
-                          0,
-                          0,
-                          static_cast<double>(options.width),
-                          0,
-                          0,
-                          1,
-                          0,
-                          camera.fx,
-                          scene.near(),
-                          scene.far()};
+  const double hwf[3] = {static_cast<double>(options.height), static_cast<double>(options.width),
+                         scene.LeftCamera().fx};
   std::vector<double> rows;
-  for (int i = 0; i < options.frames; ++i) rows.insert(rows.end(), row, row + 17);
+  for (int i = 0; i < options.frames; ++i) {
+    const Eigen::Matrix<double, 3, 4> pose = scene.LeftPose(FrameTime(options, i));
+    for (int r = 0; r < 3; ++r) {
+      // 0.0 - x keeps an identity's zeros positive (-0.0 would change the file's bytes).
+      rows.insert(rows.end(), {0.0 - pose(r, 1), pose(r, 0), pose(r, 2), pose(r, 3), hwf[r]});
+    }
+    rows.insert(rows.end(), {scene.near(), scene.far()});
+  }
   WriteNpyFloat64(path, rows.data(), {static_cast<std::size_t>(options.frames), 17});
 }
 
@@ -169,6 +140,7 @@ void WriteSyntheticClip(const SynthOptions& options, const fs::path& out) {
   if (options.stereo)
     WriteText(out / "stereo.json", nlohmann::json{{"baseline", scene.baseline()}}.dump() + "\n");
   tbb::parallel_for(0, options.frames, [&](int index) { WriteFrame(scene, options, index, out); });
+  if (options.recording) WriteSyntheticRecording(scene, options, out / "recording");
 }
 
 }  // namespace endorecon::scene

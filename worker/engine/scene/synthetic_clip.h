@@ -2,8 +2,10 @@
 //   images/NNNNNN.png        observed frames (RGB, tool drawn)
 //   depth/NNNNNN.png         stereo-like 8-bit depth of what is seen, clip units (0 = hole)  [depth]
 //   masks/NNNNNN.png         255 where the tool is visible, 0 elsewhere                      [tool]
-//   poses_bounds.npy         N rows: the fixed endoscope (identity camera-to-world once loaded), near, far
+//   poses_bounds.npy         N rows: the endoscope's camera-to-world (the identity once loaded unless
+//                            moving), near, far
 //   images_right/, stereo.json  the right eye, shifted by the baseline along x             [stereo]
+//   recording/               the raw stereo recording and its calibration (synthetic_recording.h) [recording]
 //   gt/images/NNNNNN.png     the same frames without the tool
 //   gt/depth/NNNNNN.npy      float32 z-depth of the tissue (no tool), clip units
 //   synth.json               the options used (and the mark of a synthetic clip folder)

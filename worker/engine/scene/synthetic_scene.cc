@@ -144,14 +144,15 @@ double IntersectCapsule(const Eigen::Vector3d& o, const Eigen::Vector3d& d, cons
   return h > 0 ? (-sb - std::sqrt(h)) / dd : -1;
 }
 
-// Blinn-Phong with the light at the origin (the endoscope's tip) and inverse-square falloff.
+// Blinn-Phong with the light at the endoscope's tip and inverse-square falloff.
 std::array<float, 3> Shade(const std::array<float, 3>& albedo, const Eigen::Vector3d& normal,
-                           const Eigen::Vector3d& point, const Eigen::Vector3d& eye, double ks,
-                           double (*lobe)(double), float* specular) {
-  const Eigen::Vector3d l = (-point).normalized(), v = (eye - point).normalized();
+                           const Eigen::Vector3d& point, const Eigen::Vector3d& eye,
+                           const Eigen::Vector3d& light, double ks, double (*lobe)(double), float* specular) {
+  const Eigen::Vector3d to_light = light - point;
+  const Eigen::Vector3d l = to_light.normalized(), v = (eye - point).normalized();
   const double diffuse = std::max(0.0, normal.dot(l));
   const double spec = ks * lobe(std::max(0.0, normal.dot((l + v).normalized())));
-  const double falloff = kBaseDepth * kBaseDepth / point.squaredNorm();
+  const double falloff = kBaseDepth * kBaseDepth / to_light.squaredNorm();
   *specular = static_cast<float>(spec * falloff);
   std::array<float, 3> rgb;
   for (int c = 0; c < 3; ++c)
@@ -198,8 +199,9 @@ SyntheticScene::SyntheticScene(const SynthOptions& options)
 
 void SyntheticScene::BuildAtlas(std::uint32_t salt, double aspect) {
   // The texture is sampled once, finer than a pixel of the nearest tissue, over everything either
-  // eye can see (deepest tissue, plus the pull and the stereo baseline); rays read it bilinearly.
-  const double margin = 16, reach = kDeepestTissue * 0.5 / kFocalPerWidth;
+  // eye can see (deepest tissue, plus the pull, the stereo baseline and the moving camera's reach);
+  // rays read it bilinearly.
+  const double margin = options_.moving ? 40 : 16, reach = kDeepestTissue * 0.5 / kFocalPerWidth;
   const double half_width = reach + margin, half_height = reach * aspect + margin;
   texel_ = kNearestTissue / (kFocalPerWidth * options_.width);
   atlas_width_ = static_cast<int>(std::ceil(2 * half_width / texel_)) + 2;
@@ -223,6 +225,20 @@ Camera SyntheticScene::LeftCamera() const {
   camera.cx = options_.width / 2.0;
   camera.cy = options_.height / 2.0;
   return camera;
+}
+
+Eigen::Matrix<double, 3, 4> SyntheticScene::LeftPose(double t) const {
+  Eigen::Matrix<double, 3, 4> pose = Eigen::Matrix<double, 3, 4>::Identity();
+  if (!options_.moving) return pose;
+  // Turned back towards the middle at both ends (rotation about y against the sideways offset), so
+  // the tissue stays in view.
+  const Eigen::Matrix3d rotation = (Eigen::AngleAxisd(0.06 * t, Eigen::Vector3d::UnitZ()) *
+                                    Eigen::AngleAxisd(0.05 * (2 * t - 1), Eigen::Vector3d::UnitY()) *
+                                    Eigen::AngleAxisd(0.04 * std::sin(2 * kPi * t), Eigen::Vector3d::UnitX()))
+                                       .toRotationMatrix();
+  pose.leftCols<3>() = rotation;
+  pose.col(3) = Eigen::Vector3d(6 * std::sin(kPi * (t - 0.5)), 3 * std::sin(2 * kPi * t), -5 * t);
+  return pose;
 }
 
 double SyntheticScene::SeenDepth(double nominal) const {
@@ -249,6 +265,7 @@ SyntheticScene::State SyntheticScene::At(double t) const {
   state.tool_base = tool_base_;
   state.tool_tip = tool_start_ + (tool_end_ - tool_start_) * u;
   state.tool_tip.y() += 3 * std::sin(2 * kPi * u);
+  state.light = LeftPose(t).col(3);
   return state;
 }
 
@@ -293,23 +310,25 @@ std::array<float, 3> SyntheticScene::Albedo(const State& state, double x, double
 
 SceneHit SyntheticScene::Trace(const State& state, const Eigen::Vector3d& origin,
                                const Eigen::Vector3d& direction, double depth_guess) const {
-  // Tissue: solve s = D(origin.xy + s direction.xy) by Newton's method; the slope bound makes the
-  // residual strictly increasing in s, so the root is unique. Bisection on [near, far] backs it up.
-  double s = depth_guess > near() && depth_guess < far() ? depth_guess : kSquashCentre, gx = 0, gy = 0,
-         depth = 0;
+  // Tissue: solve s = D(origin.xy + s direction.xy) + origin.z by Newton's method (the surface is
+  // z = -D); the slope bound makes the residual strictly increasing in s, so the root is unique.
+  // Bisection on [near, far] (from the origin's plane) backs it up.
+  const double z0 = origin.z();
+  double s = depth_guess > near() + z0 && depth_guess < far() + z0 ? depth_guess : kSquashCentre + z0, gx = 0,
+         gy = 0, depth = 0;
   bool converged = false;
   for (int iteration = 0; iteration < 30 && !converged; ++iteration) {
     depth = TissueDepth(state, origin.x() + s * direction.x(), origin.y() + s * direction.y(), &gx, &gy);
-    const double step = (s - depth) / (1 - (gx * direction.x() + gy * direction.y()));
+    const double step = (s - (depth + z0)) / (1 - (gx * direction.x() + gy * direction.y()));
     s -= step;
     converged = std::abs(step) < 1e-6;  // Newton: the error after this step is ~1e-12
   }
-  if (!converged || !(s > near() && s < far())) {
-    double lo = near(), hi = far();
+  if (!converged || !(s > near() + z0 && s < far() + z0)) {
+    double lo = near() + z0, hi = far() + z0;
     for (int iteration = 0; iteration < 100; ++iteration) {
       s = 0.5 * (lo + hi);
       depth = TissueDepth(state, origin.x() + s * direction.x(), origin.y() + s * direction.y(), &gx, &gy);
-      (s < depth ? lo : hi) = s;
+      (s < depth + z0 ? lo : hi) = s;
     }
   }
   const Eigen::Vector3d point = origin + s * direction;
@@ -320,7 +339,7 @@ SceneHit SyntheticScene::Trace(const State& state, const Eigen::Vector3d& origin
   SceneHit hit;
   hit.tissue_depth = hit.depth = s;
   const double ks = options_.stiff ? 4.0 : 0.8;
-  hit.tissue_rgb = hit.rgb = Shade(albedo, normal, point, origin, ks, TissueLobe, &hit.specular);
+  hit.tissue_rgb = hit.rgb = Shade(albedo, normal, point, origin, state.light, ks, TissueLobe, &hit.specular);
   if (!options_.tool) return hit;
 
   // Tool: intersect the capsule in unsquashed space (the ray parameter is unchanged by the affine map).
@@ -339,7 +358,18 @@ SceneHit SyntheticScene::Trace(const State& state, const Eigen::Vector3d& origin
   hit.tool = true;
   hit.depth = s_tool;
   hit.rgb = Shade({grey, grey, grey * 1.04f}, normal_tool.normalized(), origin + s_tool * direction, origin,
-                  0.5, ToolLobe, &hit.specular);
+                  state.light, 0.5, ToolLobe, &hit.specular);
+  return hit;
+}
+
+SceneHit SyntheticScene::TraceAlong(const State& state, const Eigen::Vector3d& origin,
+                                    const Eigen::Vector3d& direction, double depth_guess) const {
+  // Trace solves for world z-depth; a direction of world z -1 makes the two the same (and the
+  // identity camera's rays pass through unchanged, bit for bit).
+  const double k = -direction.z();
+  SceneHit hit = Trace(state, origin, direction / k, depth_guess * k);
+  hit.depth /= k;
+  hit.tissue_depth /= k;
   return hit;
 }
 

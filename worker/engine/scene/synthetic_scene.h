@@ -1,6 +1,7 @@
 // The analytic scene behind synthetic clips: a textured tissue height field that deforms smoothly
-// over time (breathing bumps, one pulled sideways), seen by a fixed endoscope (OpenGL camera at the
-// origin looking down -z, light at the camera), and a grey capsule-shaped tool that sweeps across
+// over time (breathing bumps, one pulled sideways), seen by an endoscope (OpenGL camera at the
+// origin looking down -z, light at the camera; with `moving`, the camera follows a known smooth
+// path of a few degrees and some 20 units), and a grey capsule-shaped tool that sweeps across
 // it. Rays are intersected exactly, so colour and z-depth are known truth. Units: tissue at z-depth
 // ~60-105, tool ~42-58, near 40, far 130, so 8-bit depth PNGs hold them at one unit per level (a
 // unit is about a millimetre). `stiff` squashes every depth towards 85 by a factor 0.08 (near 81.4,
@@ -24,7 +25,16 @@ struct SynthOptions {
   bool depth = true;          // write depth/
   bool stiff = false;         // thin depth range, near-opaque near-black tissue, saturated speculars
   bool stereo = false;        // also render the right eye (images_right/, stereo.json)
+  bool moving = false;        // the endoscope moves (LeftPose); the tissue still deforms unless static_scene
+  bool recording =
+      false;  // also write recording/: the raw pair as a real rig records it (synthetic_recording.h)
+  int checkerboard_views = 24;  // with `recording`: views of the calibration checkerboard (0: none)
 };
+
+// Frame `index`'s time in [0, 1]: evenly spaced, 0 for a single frame.
+inline double FrameTime(const SynthOptions& options, int index) {
+  return options.frames == 1 ? 0.0 : static_cast<double>(index) / (options.frames - 1);
+}
 
 // What a ray sees. Colours are linear in [0, 1] before clamping (speculars may exceed 1).
 struct SceneHit {
@@ -46,14 +56,19 @@ class SyntheticScene {
       double x, y, sigma, amplitude;
     };
     std::array<Bump, kBumps> bumps;
-    Eigen::Vector2d pull = Eigen::Vector2d::Zero();  // texture displacement of the pulled bump
-    Eigen::Vector3d tool_base, tool_tip;             // capsule axis, undeformed (nominal) depths
+    Eigen::Vector2d pull = Eigen::Vector2d::Zero();   // texture displacement of the pulled bump
+    Eigen::Vector3d tool_base, tool_tip;              // capsule axis, undeformed (nominal) depths
+    Eigen::Vector3d light = Eigen::Vector3d::Zero();  // the endoscope's tip (the left eye's centre)
   };
 
   // Draws the scene's parameters from options.seed; the image size fixes the field of view's aspect.
   explicit SyntheticScene(const SynthOptions& options);
 
   Camera LeftCamera() const;  // identity pose, f = 0.8898 W, cx = W/2, cy = H/2
+  // The left eye's camera-to-world pose (OpenGL convention) at time t in [0, 1]: the identity, or
+  // with `moving` a smooth path (x from -6 to 6, a sideways wiggle of 3, 5 units towards the tissue;
+  // rotations of up to 2-3.5 degrees about each axis). It moves in static scenes too.
+  Eigen::Matrix<double, 3, 4> LeftPose(double t) const;
   double near() const;
   double far() const;
   double baseline() const { return 5.0; }  // the right eye sits at (+baseline, 0, 0)
@@ -61,13 +76,20 @@ class SyntheticScene {
   // The state at time t in [0, 1] (as at 0 for a static scene).
   State At(double t) const;
 
-  // Traces a ray from `origin` with direction `direction` (unit z-depth: direction.z() == -1).
-  // `depth_guess` (e.g. the neighbouring pixel's tissue depth) only speeds up the solve.
+  // Traces a ray from `origin` with direction `direction` (unit z-depth: direction.z() == -1);
+  // depths are along it from the origin. `depth_guess` (e.g. the neighbouring pixel's tissue
+  // depth) only speeds up the solve.
   SceneHit Trace(const State& state, const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
                  double depth_guess = 0) const;
+  // The same for any direction looking into the scene (direction.z() < 0): depths (and the guess)
+  // are in units of `direction`, the hit at origin + depth * direction. With a camera ray of unit
+  // z-depth (Camera::Ray) they are the camera's z-depths, whatever its pose.
+  SceneHit TraceAlong(const State& state, const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
+                      double depth_guess = 0) const;
 
   // The tissue's z-depth under lateral position (x, y) (the surface is z = -depth), and its
-  // gradient in *dx, *dy. Trace's tissue_depth s solves s = TissueDepth(origin.xy + s direction.xy).
+  // gradient in *dx, *dy. Trace's tissue_depth s solves s = TissueDepth(origin.xy + s direction.xy)
+  // + origin.z.
   double TissueDepth(const State& state, double x, double y, double* dx, double* dy) const;
 
  private:

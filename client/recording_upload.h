@@ -1,0 +1,39 @@
+// A raw stereo recording's files gathered under fixed names in a temporary folder (symbolic links,
+// no copies), so `submit` uploads one folder (resumably, as a clip) and the job names its files
+// the same way wherever it runs: left.<ext> or left/ (a folder's files), right, side_by_side,
+// top_bottom likewise, calibration.<ext> or calibration_left.<ext> and calibration_right.<ext>,
+// masks.<ext> or masks/, poses.<ext>. The folder goes with the object.
+#pragma once
+
+#include <filesystem>
+#include <string>
+
+#include "common/prepare_flags.h"
+
+namespace endorecon::client {
+
+class StagedRecording {
+ public:
+  // Checks the flags (CheckPrepareFlags); throws Error(kNotFound) naming a file that does not exist.
+  explicit StagedRecording(const PrepareFlags& flags);
+  ~StagedRecording();
+  StagedRecording(const StagedRecording&) = delete;
+  StagedRecording& operator=(const StagedRecording&) = delete;
+
+  const std::filesystem::path& dir() const { return dir_; }
+  // The flags with the staged names.
+  const PrepareFlags& flags() const { return flags_; }
+  // A name for the job: the file name of the recording (left eye, or the combined one).
+  const std::string& name() const { return name_; }
+
+ private:
+  // Links `path` (a file, or a folder's visible files) as `name` (+ the file's extension); returns
+  // the staged name.
+  std::string Stage(const std::string& path, const std::string& name);
+
+  std::filesystem::path dir_;
+  PrepareFlags flags_;
+  std::string name_;
+};
+
+}  // namespace endorecon::client

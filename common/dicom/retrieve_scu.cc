@@ -1,0 +1,185 @@
+#include "common/dicom/retrieve_scu.h"
+
+#include <dcmtk/dcmdata/dctk.h>
+#include <dcmtk/dcmnet/diutil.h>
+#include <dcmtk/dcmnet/scu.h>
+
+#include "common/dicom/dataset_access.h"
+#include "common/dicom/dcmtk_logging.h"
+#include "common/dicom/storage_classes.h"
+#include "common/error.h"
+
+namespace endorecon::dicom {
+namespace fs = std::filesystem;
+namespace {
+
+// DcmSCU counting what C-GET stores (DcmSCU writes each instance into its storage folder, under
+// the name it asks createStorageFilename for).
+class RetrievingScu : public DcmSCU {
+ public:
+  RetrieveProgress progress;
+  int instances = 0;
+  std::int64_t bytes = 0;
+
+ protected:
+  OFString createStorageFilename(DcmDataset* dataset) override {
+    last_file_ = DcmSCU::createStorageFilename(dataset);
+    return last_file_;
+  }
+
+  OFCondition handleSTORERequest(const T_ASC_PresentationContextID id, DcmDataset* incoming, OFBool& go_on,
+                                 Uint16& status) override {
+    last_file_.clear();
+    const OFCondition result = DcmSCU::handleSTORERequest(id, incoming, go_on, status);
+    std::error_code error;
+    const auto size = last_file_.empty() ? 0 : fs::file_size(last_file_.c_str(), error);
+    if (result.good() && !error) {
+      ++instances;
+      bytes += static_cast<std::int64_t>(size);
+      if (progress) progress(instances, bytes);
+    }
+    return result;
+  }
+
+ private:
+  OFString last_file_;
+};
+
+void Configure(DcmSCU& scu, const RetrieveRequest& request) {
+  scu.setAETitle(request.calling_ae_title.c_str());
+  scu.setPeerAETitle(request.peer.ae_title.c_str());
+  scu.setPeerHostName(request.peer.host.c_str());
+  scu.setPeerPort(static_cast<Uint16>(request.peer.port));
+  scu.setACSETimeout(static_cast<Uint32>(request.timeout_s));
+  scu.setDIMSETimeout(static_cast<Uint32>(request.timeout_s));
+  scu.setDIMSEBlockingMode(DIMSE_NONBLOCKING);
+  scu.setConnectionTimeout(request.timeout_s);
+}
+
+void Connect(DcmSCU& scu, const RetrieveRequest& request) {
+  const std::string where = "association with " + PeerText(request.peer);
+  OFCondition status = scu.initNetwork();
+  if (status.good()) status = scu.negotiateAssociation();
+  if (status.bad()) Fail(ErrorCode::kUnavailable, where + " failed: " + status.text());
+}
+
+DcmDataset Query(const RetrieveRequest& request) {
+  DcmDataset query;
+  Put(query, DCM_QueryRetrieveLevel, request.series_uid.empty() ? "STUDY" : "SERIES");
+  Put(query, DCM_StudyInstanceUID, request.study_uid);
+  if (!request.series_uid.empty()) Put(query, DCM_SeriesInstanceUID, request.series_uid);
+  return query;
+}
+
+// Messages name the level, not the UIDs: they reach logs, and UIDs lead to a patient.
+std::string What(const RetrieveRequest& request) {
+  return request.series_uid.empty() ? "the study" : "the series";
+}
+
+// Checks the final response; returns the completed sub-operations.
+int Finish(const OFList<RetrieveResponse*>& responses, const RetrieveRequest& request,
+           const std::string& verb) {
+  if (responses.empty()) Fail(ErrorCode::kUnavailable, verb + " of " + What(request) + ": no response");
+  const RetrieveResponse* last = responses.back();
+  char hex[8];
+  std::snprintf(hex, sizeof(hex), "0x%04X", last->m_status);
+  const std::string status = std::string(hex);
+  if (last->m_status != STATUS_Success && (last->m_status & 0xf000) != 0xb000) {
+    Fail(ErrorCode::kUnavailable,
+         verb + " of " + What(request) + " refused by " + PeerText(request.peer) + " with status " + status);
+  }
+  if (last->m_numberOfFailedSubops > 0) {
+    Fail(ErrorCode::kDataLoss, verb + " of " + What(request) + ": " +
+                                   std::to_string(last->m_numberOfFailedSubops) +
+                                   " instance(s) failed (status " + status + ")");
+  }
+  return last->m_numberOfCompletedSubops;
+}
+
+void FreeAll(OFList<RetrieveResponse*>& responses) {
+  for (auto* response : responses) delete response;
+  responses.clear();
+}
+
+// Connects, finds the presentation context of `model`, sends the request through `send` and
+// checks the final response; returns the completed sub-operations. The association is released
+// on every path.
+using SendRequest =
+    std::function<OFCondition(T_ASC_PresentationContextID, DcmDataset*, OFList<RetrieveResponse*>*)>;
+int Retrieve(DcmSCU& scu, const RetrieveRequest& request, const char* model, const std::string& verb,
+             const SendRequest& send) {
+  Connect(scu, request);
+  const T_ASC_PresentationContextID id = scu.findPresentationContextID(model, "");
+  if (id == 0) {
+    scu.releaseAssociation();
+    Fail(ErrorCode::kUnavailable, PeerText(request.peer) + " does not offer " + verb + " (Study Root)");
+  }
+  DcmDataset query = Query(request);
+  OFList<RetrieveResponse*> responses;
+  const OFCondition status = send(id, &query, &responses);
+  scu.releaseAssociation();
+  try {
+    if (status.bad())
+      Fail(ErrorCode::kUnavailable, verb + " of " + What(request) + " failed: " + status.text());
+    const int completed = Finish(responses, request, verb);
+    FreeAll(responses);
+    return completed;
+  } catch (...) {
+    FreeAll(responses);
+    throw;
+  }
+}
+
+OFList<OFString> Uncompressed() {
+  OFList<OFString> plain;
+  plain.push_back(UID_LittleEndianExplicitTransferSyntax);
+  plain.push_back(UID_LittleEndianImplicitTransferSyntax);
+  return plain;
+}
+
+}  // namespace
+
+int GetStudy(const RetrieveRequest& request, const fs::path& out_dir, const RetrieveProgress& progress) {
+  QuietDcmtkLogs();
+  fs::create_directories(out_dir);
+  RetrievingScu scu;
+  Configure(scu, request);
+  scu.progress = progress;
+  scu.setStorageDir(out_dir.c_str());
+  scu.setStorageMode(DCMSCU_STORAGE_DISK);
+  scu.addPresentationContext(UID_GETStudyRootQueryRetrieveInformationModel, Uncompressed());
+  // One context per transfer syntax: the PACS sends each instance as it holds it, and a video
+  // cannot be transcoded.
+  for (const auto& storage : RecordingStorageClasses()) {
+    for (const auto& ts : storage.transfer_syntaxes) {
+      OFList<OFString> one;
+      one.push_back(ts.c_str());
+      scu.addPresentationContext(storage.sop_class.c_str(), one, ASC_SC_ROLE_SCP);
+    }
+  }
+  Retrieve(scu, request, UID_GETStudyRootQueryRetrieveInformationModel, "C-GET",
+           [&](T_ASC_PresentationContextID id, DcmDataset* query, OFList<RetrieveResponse*>* responses) {
+             return scu.sendCGETRequest(id, query, responses);
+           });
+  if (scu.instances == 0) {
+    Fail(ErrorCode::kNotFound, PeerText(request.peer) + " holds no instance of " + What(request));
+  }
+  return scu.instances;
+}
+
+int MoveStudy(const RetrieveRequest& request, const std::string& destination_ae) {
+  QuietDcmtkLogs();
+  DcmSCU scu;
+  Configure(scu, request);
+  scu.addPresentationContext(UID_MOVEStudyRootQueryRetrieveInformationModel, Uncompressed());
+  const int moved =
+      Retrieve(scu, request, UID_MOVEStudyRootQueryRetrieveInformationModel, "C-MOVE to " + destination_ae,
+               [&](T_ASC_PresentationContextID id, DcmDataset* query, OFList<RetrieveResponse*>* responses) {
+                 return scu.sendMOVERequest(id, destination_ae.c_str(), query, responses);
+               });
+  if (moved == 0)
+    Fail(ErrorCode::kNotFound, PeerText(request.peer) + " holds no instance of " + What(request));
+  return moved;
+}
+
+}  // namespace endorecon::dicom

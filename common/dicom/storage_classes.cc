@@ -1,0 +1,38 @@
+#include "common/dicom/storage_classes.h"
+
+#include <dcmtk/dcmdata/dcuid.h>
+
+namespace endorecon::dicom {
+
+const std::vector<StorageClass>& RecordingStorageClasses() {
+  static const std::vector<StorageClass> classes = [] {
+    const std::vector<std::string> video = {UID_MPEG4HighProfileLevel4_1TransferSyntax,
+                                            UID_MPEG4BDcompatibleHighProfileLevel4_1TransferSyntax,
+                                            UID_MPEG4HighProfileLevel4_2_For2DVideoTransferSyntax,
+                                            UID_MPEG4HighProfileLevel4_2_For3DVideoTransferSyntax,
+                                            UID_MPEG4StereoHighProfileLevel4_2TransferSyntax,
+                                            UID_MPEG2MainProfileAtMainLevelTransferSyntax,
+                                            UID_MPEG2MainProfileAtHighLevelTransferSyntax,
+                                            UID_HEVCMainProfileLevel5_1TransferSyntax,
+                                            UID_HEVCMain10ProfileLevel5_1TransferSyntax};
+    const std::vector<std::string> image = {
+        UID_LittleEndianExplicitTransferSyntax, UID_LittleEndianImplicitTransferSyntax,
+        UID_JPEGProcess1TransferSyntax,         UID_JPEGProcess2_4TransferSyntax,
+        UID_JPEGProcess14SV1TransferSyntax,     UID_RLELosslessTransferSyntax};
+    std::vector<StorageClass> all;
+    for (const char* sop : {UID_VideoEndoscopicImageStorage, UID_VideoPhotographicImageStorage,
+                            UID_VideoMicroscopicImageStorage}) {
+      all.push_back({sop, video});
+    }
+    for (const char* sop :
+         {UID_VLEndoscopicImageStorage, UID_VLPhotographicImageStorage, UID_SecondaryCaptureImageStorage,
+          UID_MultiframeTrueColorSecondaryCaptureImageStorage,
+          UID_MultiframeGrayscaleByteSecondaryCaptureImageStorage}) {
+      all.push_back({sop, image});
+    }
+    return all;
+  }();
+  return classes;
+}
+
+}  // namespace endorecon::dicom

@@ -1,0 +1,56 @@
+#include "common/prepare_flags_cli.h"
+
+#include <CLI/CLI.hpp>
+
+namespace endorecon {
+
+void AddPrepareFlags(CLI::App& cmd, PrepareFlags& f) {
+  const std::string recording = "Recording (one form)", calibration = "Calibration (one form)",
+                    extras = "Masks, frames, poses", depth = "Depth";
+  cmd.add_option("--left", f.left, "the left eye: a video file or a folder of frames")->group(recording);
+  cmd.add_option("--right", f.right, "the right eye: a video file or a folder of frames")->group(recording);
+  cmd.add_option("--side-by-side", f.side_by_side,
+                 "one video (or folder) of both eyes, left eye in the left half")
+      ->group(recording);
+  cmd.add_option("--top-bottom", f.top_bottom, "one video (or folder) of both eyes, left eye on top")
+      ->group(recording);
+  cmd.add_option("--calibration", f.calibration,
+                 "OpenCV stereo calibration (K1 D1 K2 D2 R T; YAML or XML), or two ROS camera_info YAMLs "
+                 "(left right)")
+      ->expected(1, 2)
+      ->group(calibration);
+  cmd.add_flag("--rectified", f.rectified, "the recording is rectified already (give --focal and --baseline)")
+      ->group(calibration);
+  cmd.add_option("--focal", f.focal, "with --rectified: focal length in pixels")->group(calibration);
+  cmd.add_option("--baseline", f.baseline, "with --rectified: distance between the eyes (the clip's unit)")
+      ->group(calibration);
+  cmd.add_option("--masks", f.masks, "the left eye's tool masks: a video or a folder, one per frame")
+      ->group(extras);
+  cmd.add_option("--mask-tool", f.mask_tool, "which mask value marks the tool: white (255) or black (0)")
+      ->capture_default_str()
+      ->group(extras);
+  cmd.add_option(
+         "--exclude", f.exclude,
+         "X,Y,W,H: a fixed screen region (overlay, toolbar) excluded from training and metrics; repeatable")
+      ->group(extras);
+  cmd.add_option("--frames", f.frames,
+                 "START:END:STEP: the recording's frames to use (0-based, END exclusive)")
+      ->group(extras);
+  cmd.add_option("--size", f.size, "WxH: the clip's frame size (default: the calibration's resolution)")
+      ->group(extras);
+  cmd.add_option("--poses", f.poses,
+                 "per-frame camera-to-world of the left eye (JSON or CSV, docs/formats.md)")
+      ->group(extras);
+  cmd.add_flag("--estimate-poses", f.estimate_poses,
+               "estimate a moving endoscope's poses from the stereo frames")
+      ->group(extras);
+  cmd.add_flag("--depth-refine", f.depth_refine,
+               "Lucas-Kanade sub-pixel refinement of every disparity (slower)")
+      ->group(depth);
+  cmd.add_option("--depth-paths", f.depth_paths,
+                 "SGBM directions: 3 (fast) or 8 (3x slower; the default with --estimate-poses)")
+      ->capture_default_str()
+      ->group(depth);
+}
+
+}  // namespace endorecon

@@ -1,0 +1,209 @@
+#include "server/dicom_retriever.h"
+
+#include <spdlog/spdlog.h>
+
+#include <fstream>
+
+#include "common/dicom/retrieve_scu.h"
+#include "common/error.h"
+#include "common/safe_path.h"
+#include "common/sha256.h"
+
+namespace endorecon::server {
+namespace fs = std::filesystem;
+
+DicomRetriever::DicomRetriever(JobCoordinator& coordinator, BlobStore& blobs, const PacsDirectory& pacs,
+                               const DicomSettings& settings, Metrics& metrics, fs::path work_dir,
+                               const dicom::StorageScp* scp, PacsAudit audit)
+    : coordinator_(coordinator),
+      blobs_(blobs),
+      pacs_(pacs),
+      settings_(settings),
+      metrics_(metrics),
+      work_dir_(std::move(work_dir)),
+      scp_(scp),
+      audit_(std::move(audit)),
+      thread_([this] { Loop(); }) {}
+
+DicomRetriever::~DicomRetriever() {
+  {
+    std::lock_guard lock(mutex_);
+    stopping_ = true;
+  }
+  wake_.notify_all();
+  thread_.join();
+}
+
+void DicomRetriever::Retrieve(const std::string& job_id) {
+  {
+    std::lock_guard lock(mutex_);
+    queue_.push_back(job_id);
+  }
+  wake_.notify_all();
+}
+
+void DicomRetriever::Received(const std::string& study_uid, std::int64_t bytes) {
+  std::string job;
+  int instances = 0;
+  std::int64_t total = 0;
+  {
+    std::lock_guard lock(mutex_);
+    if (study_uid != moving_study_ || moving_job_.empty()) return;
+    job = moving_job_;
+    instances = ++moved_instances_;
+    total = moved_bytes_ += bytes;
+  }
+  Progress(job, instances, total);
+}
+
+void DicomRetriever::Loop() {
+  while (true) {
+    std::string job_id;
+    {
+      std::unique_lock lock(mutex_);
+      wake_.wait(lock, [&] { return stopping_ || !queue_.empty(); });
+      if (stopping_) return;
+      job_id = queue_.front();
+      queue_.pop_front();
+    }
+    try {
+      Run(job_id);
+    } catch (const std::exception& e) {
+      spdlog::error("job {}: retrieval: {}", job_id, e.what());
+    }
+  }
+}
+
+void DicomRetriever::Progress(const std::string& job_id, int instances, std::int64_t bytes) {
+  coordinator_.Update(job_id, [&](v1::Job& job) {
+    metrics_.RetrievalBytes(bytes - job.retrieval().bytes());
+    job.mutable_retrieval()->set_instances(instances);
+    job.mutable_retrieval()->set_bytes(bytes);
+  });
+}
+
+std::pair<fs::path, std::string> DicomRetriever::Fetch(const std::string& job_id,
+                                                       const v1::PacsSource& source) {
+  dicom::RetrieveRequest request;
+  request.peer = pacs_.Find(source.pacs());
+  request.calling_ae_title = settings_.ae_title;
+  request.study_uid = source.study_uid();
+  request.series_uid = source.series_uid();
+  request.timeout_s = settings_.timeout_s;
+  const fs::path folder = work_dir_ / job_id;
+  fs::remove_all(folder);
+  coordinator_.Update(job_id, [](v1::Job& job) { job.mutable_retrieval()->set_method("C-GET"); });
+  std::string get_error;
+  try {
+    dicom::GetStudy(request, folder,
+                    [&](int instances, std::int64_t bytes) { Progress(job_id, instances, bytes); });
+    return {folder, "C-GET"};
+  } catch (const Error& e) {
+    if (scp_ == nullptr || e.code() == ErrorCode::kNotFound) throw;
+    get_error = e.what();
+    spdlog::warn("job {}: C-GET from {} failed ({}); trying C-MOVE to this server's storage SCP", job_id,
+                 source.pacs(), get_error);
+  }
+  coordinator_.Update(job_id, [](v1::Job& job) { job.mutable_retrieval()->set_method("C-MOVE"); });
+  const fs::path study_folder = scp_->settings().folder / source.study_uid();
+  fs::remove_all(study_folder);
+  {
+    std::lock_guard lock(mutex_);
+    moving_study_ = source.study_uid();
+    moving_job_ = job_id;
+    moved_instances_ = 0;
+    moved_bytes_ = 0;
+  }
+  try {
+    dicom::MoveStudy(request, settings_.ae_title);
+  } catch (const Error& e) {
+    {
+      std::lock_guard lock(mutex_);
+      moving_job_.clear();
+    }
+    // Both ways failed: say both, the first is often the telling one.
+    Fail(e.code(), "C-GET: " + get_error + "; then C-MOVE: " + e.what());
+  } catch (...) {
+    std::lock_guard lock(mutex_);
+    moving_job_.clear();
+    throw;
+  }
+  {
+    std::lock_guard lock(mutex_);
+    moving_job_.clear();
+  }
+  fs::create_directories(folder);
+  for (const auto& entry : fs::recursive_directory_iterator(study_folder)) {
+    const bool wanted =
+        source.series_uid().empty() || entry.path().parent_path().filename() == source.series_uid();
+    if (entry.is_regular_file() && entry.path().extension() == ".dcm" && wanted) {
+      fs::rename(entry.path(), folder / entry.path().filename());
+    }
+  }
+  fs::remove_all(study_folder);
+  return {folder, "C-MOVE"};
+}
+
+// Each retrieved file is an entry of the clip, named after the file.
+std::vector<std::pair<fs::path, v1::FileEntry>> DicomRetriever::Describe(const fs::path& folder) {
+  std::vector<fs::path> files;
+  for (const auto& entry : fs::directory_iterator(folder)) {
+    if (entry.is_regular_file()) files.push_back(entry.path());
+  }
+  std::sort(files.begin(), files.end());
+  std::vector<std::pair<fs::path, v1::FileEntry>> described;
+  for (const auto& file : files) {
+    v1::FileEntry entry;
+    entry.set_path(file.filename().string() + (file.extension() == ".dcm" ? "" : ".dcm"));
+    CheckRelativePath(entry.path());
+    entry.set_size(static_cast<std::int64_t>(fs::file_size(file)));
+    entry.set_sha256(Sha256File(file));
+    described.emplace_back(file, std::move(entry));
+  }
+  return described;
+}
+
+// Each file becomes a blob, streamed from disk and verified as uploads are.
+void DicomRetriever::StoreBlobs(const std::vector<std::pair<fs::path, v1::FileEntry>>& files) {
+  for (const auto& [file, entry] : files) {
+    if (blobs_.Has(entry.sha256())) continue;
+    auto writer = blobs_.TryOpenWriter(entry, std::chrono::seconds(60));
+    if (!writer) continue;  // the same content was being written by another stream, and is now a blob
+    std::ifstream in(file, std::ios::binary);
+    std::string chunk(1 << 20, '\0');
+    std::int64_t offset = 0;
+    while (in.read(chunk.data(), static_cast<std::streamsize>(chunk.size())) || in.gcount() > 0) {
+      writer->Append(offset, std::string_view(chunk.data(), static_cast<std::size_t>(in.gcount())));
+      offset += in.gcount();
+    }
+    writer->Promote();
+  }
+}
+
+void DicomRetriever::Run(const std::string& job_id) {
+  const v1::Job job = coordinator_.Get(job_id, ServerPrincipal());
+  if (job.state() != v1::QUEUED) return;
+  const auto& source = job.retrieval().source();
+  spdlog::info("job {}: retrieving its recording from PACS {}", job_id, source.pacs());
+  try {
+    const auto [folder, method] = Fetch(job_id, source);
+    const auto files = Describe(folder);
+    if (files.empty()) Fail(ErrorCode::kNotFound, "no instance arrived");
+    v1::Manifest clip;
+    for (const auto& [file, entry] : files) *clip.add_files() = entry;
+    // The job's tenant pays for the recording: refused before any byte enters the blob store.
+    coordinator_.CheckRetrievalQuota(job_id, clip);
+    StoreBlobs(files);
+    fs::remove_all(folder);
+    coordinator_.RetrievalDone(job_id, clip);
+    audit_("PacsRetrieve", job_id, "OK", source.pacs());
+    spdlog::info("job {}: recording retrieved from PACS {} by {}", job_id, source.pacs(), method);
+  } catch (const Error& e) {
+    std::error_code ignored;
+    fs::remove_all(work_dir_ / job_id, ignored);
+    audit_("PacsRetrieve", job_id, ErrorCodeName(e.code()), source.pacs());
+    coordinator_.RetrievalFailed(job_id, std::string(ErrorCodeName(e.code())) + ": " + e.what());
+  }
+}
+
+}  // namespace endorecon::server

@@ -1,0 +1,70 @@
+// Retrieves the recordings of jobs submitted by Study UID from their PACS, one job at a time in a
+// thread of its own: C-GET into <data>/retrievals/<job>/, or, when the PACS refuses C-GET and the
+// server runs its storage SCP, C-MOVE to it. The files become blobs and the job's clip, and the job
+// is queued; the job's `retrieval` shows instances and bytes as they arrive. A failure FAILS the job
+// with the PACS's reason; so does a recording that would take the job's tenant over its byte quota
+// (checked before the files enter the blob store).
+#pragma once
+
+#include <condition_variable>
+#include <deque>
+#include <filesystem>
+#include <mutex>
+#include <string>
+#include <thread>
+
+#include "common/dicom/storage_scp.h"
+#include "server/blob_store.h"
+#include "server/job_coordinator.h"
+#include "server/metrics.h"
+#include "server/pacs_directory.h"
+
+namespace endorecon::server {
+
+class DicomRetriever {
+ public:
+  // `scp` (may be null) is the server's storage SCP, whose folder C-MOVE fills.
+  DicomRetriever(JobCoordinator& coordinator, BlobStore& blobs, const PacsDirectory& pacs,
+                 const DicomSettings& settings, Metrics& metrics, std::filesystem::path work_dir,
+                 const dicom::StorageScp* scp, PacsAudit audit);
+  // Stops after the retrieval in progress and joins the thread.
+  ~DicomRetriever();
+  DicomRetriever(const DicomRetriever&) = delete;
+  DicomRetriever& operator=(const DicomRetriever&) = delete;
+
+  // Queues the job's retrieval.
+  void Retrieve(const std::string& job_id);
+  // The storage SCP received an instance (for the progress of a C-MOVE).
+  void Received(const std::string& study_uid, std::int64_t bytes);
+
+ private:
+  void Loop();
+  void Run(const std::string& job_id);
+  // Returns the folder holding the retrieved files and the method used.
+  std::pair<std::filesystem::path, std::string> Fetch(const std::string& job_id,
+                                                      const v1::PacsSource& source);
+  std::vector<std::pair<std::filesystem::path, v1::FileEntry>> Describe(const std::filesystem::path& folder);
+  void StoreBlobs(const std::vector<std::pair<std::filesystem::path, v1::FileEntry>>& files);
+  void Progress(const std::string& job_id, int instances, std::int64_t bytes);
+
+  JobCoordinator& coordinator_;
+  BlobStore& blobs_;
+  const PacsDirectory& pacs_;
+  DicomSettings settings_;
+  Metrics& metrics_;
+  std::filesystem::path work_dir_;
+  const dicom::StorageScp* scp_;
+  PacsAudit audit_;
+
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  std::deque<std::string> queue_;
+  bool stopping_ = false;
+  // The C-MOVE in progress: its study, job and what arrived so far.
+  std::string moving_study_, moving_job_;
+  int moved_instances_ = 0;
+  std::int64_t moved_bytes_ = 0, reported_bytes_ = 0;
+  std::thread thread_;
+};
+
+}  // namespace endorecon::server

@@ -1,0 +1,238 @@
+// A real PACS at both ends (Orthanc on loopback): an endoscopic H.264 recording made here is
+// stored in it, a job is submitted by its Study UID (the server retrieves it by C-GET), runs, and
+// its DICOM results go back into the same patient and study. Then: the PACS down during a send
+// (the send fails, the job stays SUCCEEDED, a resend after it is back succeeds), an association
+// refused by AE title, an unknown study, and a retrieval by C-MOVE to the server's storage SCP.
+#include <gtest/gtest.h>
+
+#include "common/dicom/uid.h"
+#include "tests/integration/audit_reader.h"
+#include "tests/integration/orthanc_harness.h"
+#include "tests/unit/dciodvfy.h"
+
+namespace endorecon::testing {
+namespace {
+namespace fs = std::filesystem;
+
+constexpr const char* kPatient = "PAT-15";
+
+// The synthetic clip's frames as an H.264 Video Endoscopic recording (endorecon-worker to-dicom:
+// OpenCV's FFmpeg encodes, DCMTK wraps) of a new study; returns its Study Instance UID.
+std::string MakeRecording(const fs::path& dir, const fs::path& out) {
+  MakeClip(dir / "clip");
+  const std::string study = dicom::NewUid("");
+  Process writer({BuiltBinary("worker/runtime/endorecon-worker"), "to-dicom",
+                  (dir / "clip" / "images").string(), "-o", out.string(), "--fps", "10", "--patient-id",
+                  kPatient, "--patient-name", "Test^Patient", "--study-uid", study},
+                 dir / "to-dicom.log");
+  EXPECT_EQ(writer.Wait(), 0) << writer.Log();
+  return study;
+}
+
+std::string JobIdIn(const std::string& out) {
+  const auto at = out.find("job ");
+  return at == std::string::npos ? "" : out.substr(at + 4, 12);
+}
+
+// A string field of a JSON answer, "" when absent or not a string (Orthanc writes null for some).
+std::string Text(const nlohmann::json& json, const std::string& key) {
+  return json.is_object() && json.contains(key) && json[key].is_string() ? json[key].get<std::string>() : "";
+}
+
+const v1::DicomSend* SendTo(const v1::Job& job, const std::string& destination) {
+  for (const auto& send : job.sends()) {
+    if (send.destination() == destination) return &send;
+  }
+  return nullptr;
+}
+
+class PacsRoundTripTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    scp_port_ = FreePort();
+    mover_port_ = FreePort();
+    orthanc_ = std::make_unique<Orthanc>(
+        dir_ / "orthanc",
+        std::vector<OrthancModality>{{"ENDORECON", scp_port_, true}, {"MOVER", mover_port_, false}});
+    const std::string why = orthanc_->Start();
+    if (!why.empty()) GTEST_SKIP() << "Orthanc cannot start, PACS tests skipped: " << why;
+  }
+
+  TempDir dir_{"pacs"};
+  int scp_port_ = 0, mover_port_ = 0;
+  std::unique_ptr<Orthanc> orthanc_;
+};
+
+TEST_F(PacsRoundTripTest, RecordingFromThePacsResultsBackIntoItsStudy) {
+  const std::string study = MakeRecording(dir_.path(), dir_ / "recording.dcm");
+  const auto stored = orthanc_->Store(dir_ / "recording.dcm");
+  ASSERT_EQ(Text(stored, "Status"), "Success") << stored.dump();
+  const std::string orthanc_study = Text(stored, "ParentStudy");
+
+  Cluster cluster({"--ae-title", "ENDORECON", "--pacs", "orthanc=" + orthanc_->Address(), "--pacs",
+                   "wrongae=WRONGAE@127.0.0.1:" + std::to_string(orthanc_->dicom_port()), "--dicom-listen",
+                   "127.0.0.1:" + std::to_string(scp_port_), "--send-attempts", "2", "--send-backoff-ms",
+                   "200", "--dicom-timeout", "5"});
+  cluster.StartWorker("w1");
+  const auto submitted = RunCli(cluster.address(), {"submit", "--pacs", "orthanc", "--study", study,
+                                                    "--send-to", "orthanc", "--iterations", "30", "--wait"});
+  ASSERT_EQ(submitted.exit_code, 0) << submitted.out << submitted.err << cluster.ServerLog();
+  EXPECT_NE(submitted.out.find("retrieval from PACS orthanc by C-GET"), std::string::npos) << submitted.out;
+  EXPECT_NE(submitted.out.find("send to orthanc: sent 4 of 4"), std::string::npos) << submitted.out;
+  const std::string id = JobIdIn(submitted.out);
+  v1::Job job = cluster.Job(id);
+  EXPECT_EQ(job.state(), v1::SUCCEEDED);
+  EXPECT_EQ(job.retrieval().state(), v1::Retrieval::RETRIEVED);
+  EXPECT_EQ(job.retrieval().instances(), 1);
+  ASSERT_EQ(job.clip().files_size(), 1);
+  EXPECT_EQ(job.retrieval().bytes(), job.clip().files(0).size());
+  EXPECT_GT(job.retrieval().bytes(), 1000);
+
+  // In the PACS: the recording's study now holds four more series, of the same patient.
+  const auto series = orthanc_->Post(
+      "/tools/find",
+      nlohmann::json{{"Level", "Series"}, {"Query", {{"StudyInstanceUID", study}}}, {"Expand", true}}.dump());
+  ASSERT_TRUE(series.is_array()) << series.dump();
+  EXPECT_EQ(series.size(), 5u) << series.dump();
+  std::map<std::string, nlohmann::json> by_class;
+  for (const auto& one : series) {
+    EXPECT_EQ(Text(one, "ParentStudy"), orthanc_study);
+    ASSERT_TRUE(one.contains("Instances") && !one["Instances"].empty()) << one.dump();
+    const std::string instance = one["Instances"][0].get<std::string>();
+    auto tags = orthanc_->Get("/instances/" + instance + "/simplified-tags");
+    ASSERT_TRUE(tags.is_object()) << instance;
+    EXPECT_EQ(Text(tags, "PatientID"), kPatient);
+    tags["ID"] = instance;
+    by_class[Text(tags, "SOPClassUID")] = tags;
+  }
+  const auto rendered = by_class["1.2.840.10008.5.1.4.1.1.7.4"];
+  EXPECT_EQ(Text(rendered, "NumberOfFrames"), "8") << rendered.dump();
+  // Orthanc's JSON leaves out long values: read this one as it is.
+  EXPECT_NE(orthanc_->GetText("/instances/" + Text(rendered, "ID") + "/content/0008-2111").find("endorecon"),
+            std::string::npos);
+  EXPECT_EQ(Text(by_class["1.2.840.10008.5.1.4.1.1.7.3"], "NumberOfFrames"), "8");
+  EXPECT_EQ(by_class.count("1.2.840.10008.5.1.4.1.1.104.3"), 1u);
+  EXPECT_EQ(by_class.count("1.2.840.10008.5.1.4.1.1.77.1.1.1"), 1u);
+  const auto patients = orthanc_->Get("/patients");
+  ASSERT_TRUE(patients.is_array() && patients.size() == 1u) << patients.dump();
+  EXPECT_EQ(Text(orthanc_->Get("/studies/" + orthanc_study), "ParentPatient"),
+            patients[0].get<std::string>());
+
+  // What the worker wrote conforms, and the mesh is there in the open formats too.
+  ASSERT_EQ(RunCli(cluster.address(), {"fetch", id, "-o", (dir_ / "results").string()}).exit_code, 0);
+  for (const char* name : {"rendered.dcm", "depth.dcm", "uncertainty.dcm", "mesh.dcm"}) {
+    EXPECT_EQ(DciodvfyErrors(dir_ / "results" / "dicom" / name), "") << name;
+  }
+  EXPECT_TRUE(fs::exists(dir_ / "results" / "mesh.ply"));
+  EXPECT_TRUE(fs::exists(dir_ / "results" / "mesh.obj"));
+
+  const auto metrics =
+      Capture("curl -s http://127.0.0.1:" + std::to_string(cluster.metrics_port()) + "/metrics");
+  EXPECT_NE(metrics.find("endorecon_dicom_instances_sent_total{destination=\"orthanc\"} 4"),
+            std::string::npos)
+      << metrics;
+  EXPECT_EQ(metrics.find("endorecon_dicom_retrieval_bytes_total 0\n"), std::string::npos);
+
+  // An association the PACS refuses by AE title: the send fails with the PACS's reason.
+  const auto refused = RunCli(cluster.address(), {"send", id, "--to", "wrongae", "--wait"});
+  EXPECT_EQ(refused.exit_code, 5) << refused.out << refused.err;
+  job = cluster.Job(id);
+  ASSERT_NE(SendTo(job, "wrongae"), nullptr);
+  EXPECT_EQ(SendTo(job, "wrongae")->state(), v1::DicomSend::SEND_FAILED);
+  EXPECT_NE(SendTo(job, "wrongae")->error().find("rejected"), std::string::npos)
+      << SendTo(job, "wrongae")->error();
+
+  // The PACS down: the send fails and the job keeps its results; back up, a resend goes through.
+  orthanc_->Stop();
+  const auto down = RunCli(cluster.address(), {"send", id, "--to", "orthanc", "--wait"});
+  EXPECT_EQ(down.exit_code, 5) << down.out << down.err;
+  job = cluster.Job(id);
+  EXPECT_EQ(job.state(), v1::SUCCEEDED);
+  EXPECT_EQ(SendTo(job, "orthanc")->state(), v1::DicomSend::SEND_FAILED);
+  EXPECT_EQ(SendTo(job, "orthanc")->attempts(), 2);
+  EXPECT_NE(metrics.size(), 0u);
+  ASSERT_EQ(orthanc_->Start(), "");
+  const auto resent = RunCli(cluster.address(), {"send", id, "--to", "orthanc", "--wait"});
+  EXPECT_EQ(resent.exit_code, 0) << resent.out << resent.err;
+  EXPECT_EQ(SendTo(cluster.Job(id), "orthanc")->state(), v1::DicomSend::SENT);
+  EXPECT_EQ(SendTo(cluster.Job(id), "orthanc")->sent(), 4);
+
+  // A study the PACS does not hold: the job fails with the reason, before any worker sees it.
+  const auto missing =
+      RunCli(cluster.address(), {"submit", "--pacs", "orthanc", "--study", "1.2.3.4.5", "--wait"});
+  EXPECT_EQ(missing.exit_code, 5) << missing.out << missing.err;
+  EXPECT_NE(missing.out.find("FAILED: retrieval from PACS orthanc failed"), std::string::npos) << missing.out;
+}
+
+TEST_F(PacsRoundTripTest, CMoveToTheServersStorageScpWhenCGetIsRefused) {
+  const std::string study = MakeRecording(dir_.path(), dir_ / "recording.dcm");
+  ASSERT_EQ(Text(orthanc_->Store(dir_ / "recording.dcm"), "Status"), "Success");
+  // Orthanc lets the AE MOVER move but not get; without a worker the job waits in the queue.
+  Cluster cluster({"--ae-title", "MOVER", "--pacs", "orthanc=" + orthanc_->Address(), "--dicom-listen",
+                   "127.0.0.1:" + std::to_string(mover_port_), "--dicom-timeout", "5"});
+  const auto submitted = RunCli(cluster.address(), {"submit", "--pacs", "orthanc", "--study", study});
+  ASSERT_EQ(submitted.exit_code, 0) << submitted.err;
+  const std::string id = JobIdIn(submitted.out);
+  ASSERT_TRUE(WaitUntil([&] { return cluster.Job(id).retrieval().state() != v1::Retrieval::RETRIEVING; },
+                        std::chrono::seconds(60)));
+  const v1::Job job = cluster.Job(id);
+  EXPECT_EQ(job.retrieval().state(), v1::Retrieval::RETRIEVED)
+      << job.retrieval().error() << cluster.ServerLog();
+  EXPECT_EQ(job.retrieval().method(), "C-MOVE");
+  EXPECT_EQ(job.retrieval().instances(), 1);
+  EXPECT_EQ(job.state(), v1::QUEUED);
+  ASSERT_EQ(job.clip().files_size(), 1);
+  EXPECT_EQ(job.clip().files(0).size(), job.retrieval().bytes());
+}
+
+// With tokens: a recording retrieved for a job is the submitting tenant's, and its bytes count
+// against that tenant's byte quota; a tenant whose quota it would pass gets a FAILED job, and not
+// a byte of the recording enters the blob store.
+TEST_F(PacsRoundTripTest, ARetrievedRecordingCountsAgainstTheSubmittersByteQuota) {
+  const std::string study = MakeRecording(dir_.path(), dir_ / "recording.dcm");
+  ASSERT_EQ(Text(orthanc_->Store(dir_ / "recording.dcm"), "Status"), "Success");
+  const auto recording_bytes = fs::file_size(dir_ / "recording.dcm");
+  WriteBytes(dir_ / "quotas.json", nlohmann::json{{"radiology", {{"max_bytes", recording_bytes + 100}}},
+                                                  {"research", {{"max_bytes", 1000}}}}
+                                       .dump());
+  Cluster cluster({"--pacs", "orthanc=" + orthanc_->Address(), "--dicom-timeout", "5", "--quotas",
+                   (dir_ / "quotas.json").string()},
+                  false);
+  const auto alice = MakeCredentials(cluster, "", "client", "radiology", "alice");
+  const auto carol = MakeCredentials(cluster, "", "client", "research", "carol");
+  cluster.UseCredentials(alice);
+  cluster.StartServer();
+  const auto as = [&](const ClientCredentials& who, std::vector<std::string> args) {
+    auto argv = who.CliFlags();
+    argv.insert(argv.end(), args.begin(), args.end());
+    return RunCli(cluster.address(), argv);
+  };
+
+  const auto refused = as(carol, {"submit", "--pacs", "orthanc", "--study", study, "--wait"});
+  EXPECT_EQ(refused.exit_code, 5) << refused.out << refused.err;
+  EXPECT_NE(refused.out.find("max_bytes of 1000 bytes"), std::string::npos) << refused.out;
+  EXPECT_TRUE(fs::is_empty(cluster.data_dir() / "blobs"));
+
+  const auto kept = as(alice, {"submit", "--pacs", "orthanc", "--study", study});
+  ASSERT_EQ(kept.exit_code, 0) << kept.err;
+  const std::string id = JobIdIn(kept.out);
+  ASSERT_TRUE(WaitUntil([&] { return cluster.Job(id).retrieval().state() != v1::Retrieval::RETRIEVING; },
+                        std::chrono::seconds(60)));
+  const v1::Job job = cluster.Job(id);
+  EXPECT_EQ(job.retrieval().state(), v1::Retrieval::RETRIEVED) << job.retrieval().error();
+  EXPECT_EQ(job.tenant(), "radiology");
+  EXPECT_EQ(job.submitted_by(), "alice");
+  // The recording now fills radiology's quota: another clip does not fit.
+  MakeClip(cluster.path("clip"));
+  const auto over = as(alice, {"submit", cluster.path("clip").string()});
+  EXPECT_EQ(over.exit_code, 8) << over.err;
+  EXPECT_NE(over.err.find("keeps " + std::to_string(recording_bytes) + " bytes"), std::string::npos)
+      << over.err;
+
+  const auto audit = AuditLines(cluster.data_dir() / "audit.jsonl");
+  EXPECT_EQ(AuditFind(audit, "PacsRetrieve", "RESOURCE_EXHAUSTED", "server").size(), 1u);
+  EXPECT_EQ(AuditFind(audit, "PacsRetrieve", "OK", "server", id).size(), 1u);
+}
+
+}  // namespace
+}  // namespace endorecon::testing

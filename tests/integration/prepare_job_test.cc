@@ -1,0 +1,108 @@
+// A raw stereo recording as a job: the CLI uploads the two videos, the calibration and the masks,
+// the worker prepares the clip and reconstructs it in the same job, `watch` shows the preparation,
+// and the prepared clip comes back with the results.
+#include <gtest/gtest.h>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/videoio.hpp>
+
+#include "tests/integration/service_harness.h"
+#include "worker/engine/scene/synthetic_clip.h"
+
+namespace endorecon::testing {
+namespace {
+
+namespace fs = std::filesystem;
+
+// The synthetic recording's eyes as Motion-JPEG videos beside its calibration and masks.
+void MakeRecording(const fs::path& dir) {
+  scene::SynthOptions options;
+  options.frames = 6;
+  options.width = 128;
+  options.height = 96;
+  options.recording = true;
+  scene::WriteSyntheticClip(options, dir / "synth");
+  for (const char* eye : {"left", "right"}) {
+    cv::VideoWriter video((dir / (std::string(eye) + ".avi")).string(), cv::CAP_OPENCV_MJPEG,
+                          cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 25, cv::Size(128, 96));
+    for (int i = 0; i < options.frames; ++i) {
+      char name[32];
+      std::snprintf(name, sizeof(name), "%06d.png", i);
+      video.write(cv::imread((dir / "synth/recording" / eye / name).string()));
+    }
+  }
+}
+
+TEST(PrepareJobTest, RecordingInPreparedClipAndResultsOut) {
+  Cluster cluster;
+  cluster.StartWorker("w1");
+  MakeRecording(cluster.path("rec"));
+  const fs::path rec = cluster.path("rec");
+  const auto submitted =
+      RunCli(cluster.address(),
+             {"submit", "--left", (rec / "left.avi").string(), "--right", (rec / "right.avi").string(),
+              "--calibration", (rec / "synth/recording/calibration.yaml").string(), "--masks",
+              (rec / "synth/recording/masks").string(), "--frames", "0:6:1", "--iterations", "20", "--wait",
+              "--previews", cluster.path("previews").string()});
+  ASSERT_EQ(submitted.exit_code, 0) << submitted.err << submitted.out << cluster.ServerLog();
+  EXPECT_NE(submitted.out.find("SUCCEEDED"), std::string::npos) << submitted.out;
+  EXPECT_NE(submitted.err.find("uploaded 9 file(s)"), std::string::npos) << submitted.err;
+  EXPECT_TRUE(fs::exists(cluster.path("previews/prepare-it0.png"))) << submitted.out;
+
+  const auto listed = RunCli(cluster.address(), {"--json", "list"});
+  const auto id = listed.out.substr(listed.out.find("\"id\":\"") + 6, 12);
+  const v1::Job job = cluster.Job(id);
+  ASSERT_TRUE(job.has_prepare());
+  EXPECT_EQ(job.prepare().left(), "left.avi");
+  EXPECT_EQ(job.prepare().calibration(0), "calibration.yaml");
+  EXPECT_EQ(job.prepare().masks(), "masks");
+  const auto status = RunCli(cluster.address(), {"status", id});
+  EXPECT_NE(status.out.find("recording  9 file(s)"), std::string::npos) << status.out;
+
+  const auto fetched = RunCli(cluster.address(), {"fetch", id, "-o", cluster.path("results").string()});
+  ASSERT_EQ(fetched.exit_code, 0) << fetched.err;
+  for (const char* file : {"metrics.json", "clip/prepare.json", "clip/preview.png", "clip/poses_bounds.npy",
+                           "clip/images/000005.png", "clip/depth/000005.npy", "clip/masks/000005.png"}) {
+    EXPECT_TRUE(fs::exists(cluster.path("results") / file)) << file;
+  }
+
+  // The same recording again: nothing is uploaded twice.
+  const auto again =
+      RunCli(cluster.address(),
+             {"submit", "--left", (rec / "left.avi").string(), "--right", (rec / "right.avi").string(),
+              "--calibration", (rec / "synth/recording/calibration.yaml").string(), "--masks",
+              (rec / "synth/recording/masks").string(), "--iterations", "20"});
+  EXPECT_EQ(again.exit_code, 0) << again.err;
+  EXPECT_NE(again.err.find(": 0 B sent"), std::string::npos) << again.err;
+}
+
+TEST(PrepareJobTest, BadRecordingOptionsAreRefusedBeforeAnyUpload) {
+  Cluster cluster;
+  const auto result = RunCli(cluster.address(), {"submit", "--left", "L.mp4", "--right", "R.mp4",
+                                                 "--calibration", "c.yaml", "--frames", "1:x"});
+  EXPECT_EQ(result.exit_code, 2) << result.err;
+  EXPECT_NE(result.err.find("'1:x': expected START:END:STEP"), std::string::npos) << result.err;
+  const auto both = RunCli(cluster.address(), {"submit", cluster.path("clip").string(), "--side-by-side",
+                                               "s.mp4", "--rectified", "--focal", "500", "--baseline", "4"});
+  EXPECT_EQ(both.exit_code, 2) << both.err;
+
+  // The server checks that the options name uploaded files.
+  v1::SubmitRequest request;
+  auto* file = request.mutable_clip()->add_files();
+  file->set_path("left.mp4");
+  file->set_size(1);
+  file->set_sha256(std::string(64, 'a'));
+  request.mutable_prepare()->set_left("left.mp4");
+  request.mutable_prepare()->set_right("right.mp4");
+  request.mutable_prepare()->add_calibration("calibration.yaml");
+  grpc::ClientContext context;
+  v1::Job job;
+  const grpc::Status status = cluster.stub().Submit(&context, request, &job);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(status.error_message().find("'right.mp4' is not a file (or folder) of the uploaded recording"),
+            std::string::npos)
+      << status.error_message();
+}
+
+}  // namespace
+}  // namespace endorecon::testing

@@ -1,0 +1,210 @@
+// Every bad input of issue 16 (section 4): a clear error naming the file and the frame, and no
+// clip, half-written or otherwise, left behind.
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/videoio.hpp>
+
+#include "tests/unit/clip_fixture.h"
+#include "tests/unit/temp_dir.h"
+#include "worker/prepare/prepare_clip.h"
+#include "worker/prepare/stereo_calibration.h"
+
+namespace endorecon::testing {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Textured frames and copies shifted by 6 pixels: a rectified pair.
+cv::Mat Texture(int i, cv::Size size) {
+  cv::Mat image(size, CV_8UC3);
+  cv::RNG random(static_cast<std::uint64_t>(i) + 7);
+  random.fill(image, cv::RNG::UNIFORM, 30, 200);
+  return image;
+}
+
+void WritePair(const fs::path& dir, int frames, cv::Size size = {64, 48}) {
+  for (int i = 0; i < frames; ++i) {
+    const cv::Mat left = Texture(i, size);
+    cv::Mat right(size, CV_8UC3, cv::Scalar::all(0));
+    left(cv::Rect(6, 0, size.width - 6, size.height))
+        .copyTo(right(cv::Rect(0, 0, size.width - 6, size.height)));
+    WriteImage(dir / "left" / (std::to_string(100 + i) + ".png"), left);
+    WriteImage(dir / "right" / (std::to_string(100 + i) + ".png"), right);
+  }
+}
+
+class BadRecordingTest : public ::testing::Test {
+ protected:
+  void SetUp() override { WritePair(dir_.path(), 6); }
+
+  prepare::PrepareOptions Options() const {
+    prepare::PrepareOptions options;
+    options.recording = {prepare::StereoLayout::kTwoSources, dir_ / "left", dir_ / "right", {}};
+    options.rectified = true;
+    options.focal = 60;
+    options.baseline = 4;
+    options.out = dir_ / "clip";
+    return options;
+  }
+
+  // The error PrepareClip throws; checks that nothing was left in the output's folder.
+  std::string Refused(const prepare::PrepareOptions& options, ErrorCode code = ErrorCode::kInvalidArgument) {
+    const std::string message = ErrorFrom([&] { prepare::PrepareClip(options); }, code);
+    EXPECT_FALSE(fs::exists(options.out)) << "a clip was left behind";
+    for (const auto& entry : fs::directory_iterator(options.out.parent_path())) {
+      EXPECT_EQ(entry.path().filename().string().find(".preparing"), std::string::npos) << entry.path();
+    }
+    return message;
+  }
+
+  TempDir dir_{"bad-recording"};
+};
+
+TEST_F(BadRecordingTest, GoodRecordingPasses) { EXPECT_EQ(prepare::PrepareClip(Options()).frames, 6); }
+
+TEST_F(BadRecordingTest, EyesOfDifferentLengths) {
+  fs::remove(dir_ / "right/105.png");
+  const std::string message = Refused(Options());
+  EXPECT_NE(message.find("right frame 5: it ends after 5 frames while"), std::string::npos) << message;
+}
+
+TEST_F(BadRecordingTest, EyesOfDifferentSizes) {
+  fs::remove_all(dir_ / "right");
+  for (int i = 0; i < 6; ++i) WriteImage(dir_ / "right" / (std::to_string(i) + ".png"), Texture(i, {64, 40}));
+  const std::string message = Refused(Options());
+  EXPECT_NE(message.find("right: frames of 64x40 differ from"), std::string::npos) << message;
+}
+
+TEST_F(BadRecordingTest, FrameOfAnotherSizeMidway) {
+  WriteImage(dir_ / "left/103.png", Texture(3, {32, 48}));
+  const std::string message = Refused(Options());
+  EXPECT_NE(message.find("103.png: size 32x48 differs from the recording's 64x48"), std::string::npos)
+      << message;
+}
+
+TEST_F(BadRecordingTest, CalibrationForAnotherImageSize) {
+  prepare::WriteStereoCalibration(dir_ / "calibration.yaml", prepare::RectifiedCalibration({128, 96}, 60, 4));
+  prepare::PrepareOptions options = Options();
+  options.rectified = false;
+  options.calibration = {dir_ / "calibration.yaml"};
+  const std::string message = Refused(options);
+  EXPECT_NE(message.find(
+                "calibration.yaml: the calibration is for 128x96 images but the recording's eyes are 64x48"),
+            std::string::npos)
+      << message;
+}
+
+TEST_F(BadRecordingTest, UnreadableAndTruncatedVideos) {
+  WriteBytes(dir_ / "noise.mp4", std::string(4096, 'z'));
+  prepare::PrepareOptions options = Options();
+  options.recording.left = dir_ / "noise.mp4";
+  std::string message = Refused(options);
+  EXPECT_NE(message.find("noise.mp4: cannot open it as a video"), std::string::npos) << message;
+
+  cv::VideoWriter writer((dir_ / "full.avi").string(), cv::CAP_OPENCV_MJPEG,
+                         cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 25, cv::Size(64, 48));
+  for (int i = 0; i < 40; ++i) writer.write(Texture(i, {64, 48}));
+  writer.release();
+  const std::string bytes = ReadBytes(dir_ / "full.avi");
+  WriteBytes(dir_ / "cut.avi", bytes.substr(0, bytes.size() / 2));
+  options.recording = {prepare::StereoLayout::kSideBySide, {}, {}, dir_ / "cut.avi"};
+  message = Refused(options);
+  EXPECT_NE(message.find("cut.avi frame "), std::string::npos) << message;
+  EXPECT_NE(message.find("truncated or damaged"), std::string::npos) << message;
+}
+
+TEST_F(BadRecordingTest, SideBySideFrameOfOddWidth) {
+  for (int i = 0; i < 3; ++i) WriteImage(dir_ / "sbs" / (std::to_string(i) + ".png"), Texture(i, {65, 48}));
+  prepare::PrepareOptions options = Options();
+  options.recording = {prepare::StereoLayout::kSideBySide, {}, {}, dir_ / "sbs"};
+  const std::string message = Refused(options);
+  EXPECT_NE(message.find("sbs frame 0: a side-by-side frame must have an even width, found 65x48"),
+            std::string::npos)
+      << message;
+  options.recording.layout = prepare::StereoLayout::kTopBottom;
+  for (int i = 0; i < 3; ++i) WriteImage(dir_ / "sbs" / (std::to_string(i) + ".png"), Texture(i, {64, 47}));
+  EXPECT_NE(Refused(options).find("must have an even height, found 64x47"), std::string::npos);
+}
+
+TEST_F(BadRecordingTest, MasksThatDoNotMatch) {
+  prepare::PrepareOptions options = Options();
+  options.masks = dir_ / "masks";
+  for (int i = 0; i < 6; ++i)
+    WriteImage(dir_ / "masks" / (std::to_string(i) + ".png"), cv::Mat(40, 64, CV_8U, cv::Scalar(0)));
+  std::string message = Refused(options);
+  EXPECT_NE(message.find("masks frame 0: masks of 64x40 do not match the left eye's 64x48 frames"),
+            std::string::npos)
+      << message;
+
+  fs::remove_all(dir_ / "masks");
+  for (int i = 0; i < 5; ++i)
+    WriteImage(dir_ / "masks" / (std::to_string(i) + ".png"), cv::Mat(48, 64, CV_8U, cv::Scalar(0)));
+  message = Refused(options);
+  EXPECT_NE(message.find("masks frame 5: the masks end after 5 frames while the recording goes on"),
+            std::string::npos)
+      << message;
+
+  for (int i = 5; i < 7; ++i)
+    WriteImage(dir_ / "masks" / (std::to_string(i) + ".png"), cv::Mat(48, 64, CV_8U, cv::Scalar(0)));
+  message = Refused(options);
+  EXPECT_NE(message.find("masks: holds more mask frames than the recording's 6"), std::string::npos)
+      << message;
+}
+
+TEST_F(BadRecordingTest, PoseFilesOfTheWrongCountOrNotRigid) {
+  prepare::PrepareOptions options = Options();
+  options.poses = dir_ / "poses.csv";
+  {
+    std::ofstream csv(options.poses);
+    for (int i = 0; i < 5; ++i) csv << "1,0,0,0, 0,1,0,0, 0,0,1," << i << "\n";
+  }
+  std::string message = Refused(options);
+  EXPECT_NE(message.find("poses.csv: holds 5 poses but the recording has more frames (frame 5 has none)"),
+            std::string::npos)
+      << message;
+  {
+    std::ofstream csv(options.poses);
+    for (int i = 0; i < 7; ++i) csv << "1,0,0,0, 0,1,0,0, 0,0,1," << i << "\n";
+  }
+  message = Refused(options);
+  EXPECT_NE(message.find("poses.csv: holds 7 poses but the recording has 6 frames"), std::string::npos)
+      << message;
+
+  options.poses = dir_ / "poses.json";
+  WriteBytes(
+      options.poses,
+      R"({"poses": [[[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]], [[2,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]]})");
+  message = Refused(options);
+  EXPECT_NE(message.find("poses.json frame 1: the rotation is not orthonormal"), std::string::npos)
+      << message;
+  WriteBytes(options.poses, R"({"poses": [[[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0.5,0,1]]]})");
+  message = Refused(options);
+  EXPECT_NE(message.find("poses.json frame 0: the last row must be [0, 0, 0, 1]"), std::string::npos)
+      << message;
+}
+
+TEST_F(BadRecordingTest, OptionsThatContradictEachOther) {
+  prepare::PrepareOptions options = Options();
+  options.calibration = {dir_ / "calibration.yaml"};
+  EXPECT_NE(Refused(options).find("give either --calibration"), std::string::npos);
+  options = Options();
+  options.poses = dir_ / "poses.csv";
+  options.estimate_poses = true;
+  EXPECT_NE(Refused(options).find("not both"), std::string::npos);
+  options = Options();
+  options.exclude = {ParsePixelRect("60,40,10,10")};
+  EXPECT_NE(Refused(options).find("--exclude 60,40,10,10 reaches outside the recording's 64x48 frames"),
+            std::string::npos);
+  options = Options();
+  options.frames = ParseFrameRange("10:");
+  EXPECT_NE(Refused(options).find("no frame selected by --frames 10::1 (the recording has 6)"),
+            std::string::npos);
+  options = Options();
+  options.recording.right = dir_ / "absent";
+  Refused(options, ErrorCode::kNotFound);
+}
+
+}  // namespace
+}  // namespace endorecon::testing

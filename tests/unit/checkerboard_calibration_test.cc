@@ -1,0 +1,61 @@
+// `calibrate` on the synthetic rig's checkerboard views: the RMS reprojection error is small, the
+// rig comes back, and rectifying with the estimate keeps the true rig's rows aligned (issue 16:
+// epipolar error under 0.5 px).
+#include "worker/prepare/checkerboard_calibration.h"
+
+#include <gtest/gtest.h>
+
+#include "tests/unit/clip_fixture.h"
+#include "tests/unit/synthetic_recording_fixture.h"
+
+namespace endorecon::testing {
+namespace {
+
+TEST(CheckerboardCalibrationTest, RecoversTheSyntheticRig) {
+  TempDir dir("checkerboard");
+  scene::SynthOptions options = RecordingOptions(320, 256, 1, 24);
+  scene::WriteSyntheticClip(options, dir / "synth");
+  prepare::CheckerboardOptions board;
+  board.inner_corners = {scene::kCheckerboardColumns, scene::kCheckerboardRows};
+  board.square = scene::kCheckerboardSquare;
+  const prepare::RecordingInput recording{prepare::StereoLayout::kTwoSources,
+                                          dir / "synth/recording/checkerboard/left",
+                                          dir / "synth/recording/checkerboard/right",
+                                          {}};
+  const prepare::CheckerboardCalibration result = prepare::CalibrateFromCheckerboard(recording, board);
+  EXPECT_EQ(result.frames_read, options.checkerboard_views);
+  EXPECT_GE(result.views_used, options.checkerboard_views * 3 / 4);
+  EXPECT_LT(result.rms_px, 0.5);
+
+  const prepare::StereoCalibration truth = SyntheticCalibration(options);
+  const prepare::StereoCalibration& estimate = result.calibration;
+  EXPECT_NEAR(estimate.k1(0, 0), truth.k1(0, 0), 0.01 * truth.k1(0, 0));
+  EXPECT_NEAR(estimate.k2(1, 2), truth.k2(1, 2), 2.0);
+  EXPECT_NEAR(estimate.d1.at<double>(0, 0), truth.d1.at<double>(0, 0), 0.03);
+  EXPECT_NEAR(estimate.baseline(), truth.baseline(), 0.01 * truth.baseline());
+  const auto [epipolar, projection] =
+      EpipolarAndProjectionError(truth, prepare::StereoRectifier(estimate, {}));
+  EXPECT_LT(epipolar, 0.5);
+
+  prepare::WriteStereoCalibration(dir / "calibration.yaml", estimate,
+                                  {{"rms_reprojection_error_px", result.rms_px}});
+  EXPECT_EQ(prepare::LoadStereoCalibration({dir / "calibration.yaml"}).image_size, cv::Size(320, 256));
+}
+
+TEST(CheckerboardCalibrationTest, TooFewViewsOfTheBoardIsAClearError) {
+  TempDir dir("checkerboard");
+  scene::WriteSyntheticClip(RecordingOptions(160, 128, 1, 6), dir / "synth");
+  prepare::CheckerboardOptions board;
+  board.inner_corners = {7, 7};  // not this board
+  board.square = 4;
+  const prepare::RecordingInput recording{prepare::StereoLayout::kTwoSources,
+                                          dir / "synth/recording/checkerboard/left",
+                                          dir / "synth/recording/checkerboard/right",
+                                          {}};
+  const std::string message = ErrorFrom([&] { prepare::CalibrateFromCheckerboard(recording, board); });
+  EXPECT_NE(message.find("board (inner corners) shows in both eyes in 0 of 6 frames"), std::string::npos)
+      << message;
+}
+
+}  // namespace
+}  // namespace endorecon::testing

@@ -1,0 +1,230 @@
+// DICOM recordings in: video (H.264 through FFmpeg), multi-frame images (uncompressed and JPEG),
+// stereo layouts, frame times and windows, and every bad input refused with what and where.
+#include <dcmtk/dcmdata/dctk.h>
+#include <gtest/gtest.h>
+
+#include <opencv2/imgproc.hpp>
+#include <opencv2/videoio.hpp>
+
+#include "common/dicom/recording.h"
+#include "common/dicom/recording_writer.h"
+#include "common/dicom/result_instances.h"
+#include "common/dicom/uid.h"
+#include "common/error.h"
+#include "tests/unit/temp_dir.h"
+
+namespace endorecon::dicom {
+namespace {
+
+using testing::TempDir;
+using testing::WriteBytes;
+
+// Frames whose colours say their index: a gradient plus a block that moves one step per frame.
+std::vector<cv::Mat> Frames(int count, int width, int height) {
+  std::vector<cv::Mat> frames;
+  for (int f = 0; f < count; ++f) {
+    cv::Mat frame(height, width, CV_8UC3);
+    for (int y = 0; y < height; ++y) {
+      for (int x = 0; x < width; ++x) {
+        frame.at<cv::Vec3b>(y, x) =
+            cv::Vec3b(static_cast<uchar>(4 * x), static_cast<uchar>(6 * y), static_cast<uchar>(20 * f + 10));
+      }
+    }
+    cv::rectangle(frame, cv::Rect(2 * f % width, 4, 8, 8), cv::Scalar(255, 255, 255), cv::FILLED);
+    frames.push_back(frame);
+  }
+  return frames;
+}
+
+RecordingHeader Header(int series_number = 1) {
+  RecordingHeader header;
+  header.study = NewStudyContext("P-1", "Doe^Jane", "", "");
+  header.series_number = series_number;
+  return header;
+}
+
+double MeanAbsDifference(const cv::Mat& a, const cv::Mat& b) {
+  cv::Mat difference;
+  cv::absdiff(a, b, difference);
+  const cv::Scalar mean = cv::mean(difference);
+  return (mean[0] + mean[1] + mean[2]) / 3;
+}
+
+std::string ErrorOf(const std::filesystem::path& path, const RecordingOptions& options = {}) {
+  try {
+    ReadRecording(path, options);
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(DicomRecordingTest, UncompressedFramesAndTheirTimeVector) {
+  TempDir dir;
+  const auto frames = Frames(6, 32, 24);
+  const std::vector<double> times = {0, 0.04, 0.1, 0.14, 0.3, 0.34};
+  WriteEndoscopicFrames(frames, times, false, Header(), dir / "rec.dcm");
+  const Recording recording = ReadRecording(dir / "rec.dcm", {});
+  ASSERT_EQ(recording.left.size(), 6u);
+  EXPECT_TRUE(recording.right.empty());
+  for (int f = 0; f < 6; ++f) {
+    EXPECT_EQ(MeanAbsDifference(recording.left[f], frames[f]), 0.0) << "frame " << f;
+    EXPECT_NEAR(recording.times_s[f], times[f], 1e-6);
+  }
+  EXPECT_NE(recording.times_from.find("Frame Time Vector"), std::string::npos);
+  EXPECT_EQ(recording.study.patient_id, "P-1");
+  EXPECT_EQ(recording.study.source_instances.size(), 1u);
+}
+
+TEST(DicomRecordingTest, WindowAndFrameRatePickFrames) {
+  TempDir dir;
+  const auto frames = Frames(8, 32, 24);
+  std::vector<double> times;
+  for (int f = 0; f < 8; ++f) times.push_back(0.05 * f);
+  WriteEndoscopicFrames(frames, times, false, Header(), dir / "rec.dcm");
+  RecordingOptions options;
+  options.frames = ParseFrameWindow("1:7:2");
+  const Recording window = ReadRecording(dir / "rec.dcm", options);
+  ASSERT_EQ(window.left.size(), 3u);
+  EXPECT_EQ(MeanAbsDifference(window.left[1], frames[3]), 0.0);
+  EXPECT_NEAR(window.times_s[2], 0.2, 1e-9);  // frame 5, from the window's first frame
+  EXPECT_EQ(window.recording_frames, 8);
+
+  RecordingOptions slower;
+  slower.fps = 10;  // every other frame of a 20 frames/s recording
+  const Recording thinned = ReadRecording(dir / "rec.dcm", slower);
+  ASSERT_EQ(thinned.left.size(), 4u);
+  EXPECT_EQ(MeanAbsDifference(thinned.left[1], frames[2]), 0.0);
+}
+
+TEST(DicomRecordingTest, JpegFramesDecodeCloseToTheOriginal) {
+  TempDir dir;
+  const auto frames = Frames(4, 32, 24);
+  WriteEndoscopicFrames(frames, {0, 0.1, 0.2, 0.3}, true, Header(), dir / "jpeg.dcm");
+  const Recording recording = ReadRecording(dir / "jpeg.dcm", {});
+  ASSERT_EQ(recording.left.size(), 4u);
+  for (int f = 0; f < 4; ++f)
+    EXPECT_LT(MeanAbsDifference(recording.left[f], frames[f]), 6.0) << "frame " << f;
+  EXPECT_NE(recording.description.find("JPEG"), std::string::npos) << recording.description;
+}
+
+TEST(DicomRecordingTest, H264VideoDecodesEveryFrameAtItsFrameTime) {
+  TempDir dir;
+  const auto frames = Frames(12, 64, 48);
+  cv::VideoWriter writer((dir / "video.mp4").string(), cv::VideoWriter::fourcc('a', 'v', 'c', '1'), 25.0,
+                         cv::Size(64, 48));
+  ASSERT_TRUE(writer.isOpened()) << "OpenCV's FFmpeg cannot write H.264 here";
+  for (const auto& frame : frames) writer.write(frame);
+  writer.release();
+  WriteVideoEndoscopic(dir / "video.mp4", 12, 64, 48, 25.0, Header(), dir / "video.dcm");
+
+  const Recording recording = ReadRecording(dir / "video.dcm", {});
+  ASSERT_EQ(recording.left.size(), 12u);
+  EXPECT_NEAR(recording.times_s[11], 11 * 0.04, 1e-6);
+  for (int f = 0; f < 12; ++f)
+    EXPECT_LT(MeanAbsDifference(recording.left[f], frames[f]), 12.0) << "frame " << f;
+  EXPECT_NE(recording.description.find("VideoEndoscopic"), std::string::npos) << recording.description;
+
+  // Number of Frames larger than the stream holds: a truncated stream, said so.
+  WriteVideoEndoscopic(dir / "video.mp4", 20, 64, 48, 25.0, Header(), dir / "short.dcm");
+  const std::string error = ErrorOf(dir / "short.dcm");
+  EXPECT_NE(error.find("short.dcm: truncated pixel stream"), std::string::npos) << error;
+  EXPECT_NE(error.find("decodes to 12"), std::string::npos) << error;
+}
+
+TEST(DicomRecordingTest, SideBySideAndTopBottomSplitTheEyes) {
+  TempDir dir;
+  const auto frames = Frames(2, 64, 24);
+  WriteEndoscopicFrames(frames, {0, 0.1}, false, Header(), dir / "sbs.dcm");
+  RecordingOptions options;
+  options.stereo = StereoLayout::kSideBySide;
+  const Recording sbs = ReadRecording(dir / "sbs.dcm", options);
+  ASSERT_EQ(sbs.right.size(), 2u);
+  EXPECT_EQ(sbs.left[0].cols, 32);
+  EXPECT_EQ(MeanAbsDifference(sbs.right[1], frames[1](cv::Rect(32, 0, 32, 24))), 0.0);
+
+  options.stereo = StereoLayout::kTopBottom;
+  const Recording tb = ReadRecording(dir / "sbs.dcm", options);
+  EXPECT_EQ(tb.left[0].rows, 12);
+  EXPECT_EQ(MeanAbsDifference(tb.right[0], frames[0](cv::Rect(0, 12, 64, 12))), 0.0);
+
+  WriteEndoscopicFrames(Frames(1, 33, 24), {0}, false, Header(), dir / "odd.dcm");
+  options.stereo = StereoLayout::kSideBySide;
+  const std::string error = ErrorOf(dir / "odd.dcm", options);
+  EXPECT_NE(error.find("odd.dcm: a side-by-side frame must have an even width, found 33"), std::string::npos)
+      << error;
+}
+
+TEST(DicomRecordingTest, TwoSeriesAreTheLeftAndRightEyes) {
+  TempDir dir;
+  std::filesystem::create_directories(dir / "pair");
+  auto header = Header(2);
+  const auto left = Frames(3, 32, 24), right = Frames(3, 32, 24);
+  WriteEndoscopicFrames(right, {0, 0.1, 0.2}, false, header, dir / "pair" / "b.dcm");
+  header.series_number = 1;
+  std::vector<cv::Mat> flipped;
+  for (const auto& frame : left) flipped.push_back(255 - frame);
+  WriteEndoscopicFrames(flipped, {0, 0.1, 0.2}, false, header, dir / "pair" / "a.dcm");
+  std::ofstream(dir / "pair" / "notes.txt") << "not DICOM, ignored";
+
+  RecordingOptions options;
+  options.stereo = StereoLayout::kTwoSeries;
+  const Recording recording = ReadRecording(dir / "pair", options);
+  ASSERT_EQ(recording.right.size(), 3u);
+  EXPECT_EQ(MeanAbsDifference(recording.left[2], flipped[2]), 0.0);  // series 1 is the left eye
+  EXPECT_EQ(MeanAbsDifference(recording.right[2], right[2]), 0.0);
+
+  const std::string mono = ErrorOf(dir / "pair");
+  EXPECT_NE(mono.find("holds 2 series"), std::string::npos) << mono;
+}
+
+TEST(DicomRecordingTest, BadInputsAreNamed) {
+  TempDir dir;
+  WriteBytes(dir / "text.dcm", std::string(300, 'x'));
+  EXPECT_NE(ErrorOf(dir / "text.dcm").find("text.dcm: not a DICOM file"), std::string::npos);
+
+  SeriesHeader derived;
+  derived.study = NewStudyContext("P-1", "", "", "");
+  WriteScalarFrames(dir / "depth.dcm", derived, {std::vector<float>(12, 1.f)}, 4, 3, {"US", "values"});
+  const std::string sop = ErrorOf(dir / "depth.dcm");
+  EXPECT_NE(sop.find("depth.dcm: SOP class MultiframeGrayscaleWordSecondaryCaptureImageStorage"),
+            std::string::npos)
+      << sop;
+
+  WriteEndoscopicFrames(Frames(4, 32, 24), {0, 0.1, 0.2, 0.3}, false, Header(), dir / "full.dcm");
+  const auto size = std::filesystem::file_size(dir / "full.dcm");
+  std::filesystem::copy_file(dir / "full.dcm", dir / "cut.dcm");
+  std::filesystem::resize_file(dir / "cut.dcm", size - 5000);
+  const std::string cut = ErrorOf(dir / "cut.dcm");
+  EXPECT_NE(cut.find("cut.dcm"), std::string::npos) << cut;
+  EXPECT_TRUE(cut.find("truncated") != std::string::npos || cut.find("not a readable") != std::string::npos)
+      << cut;
+
+  DcmFileFormat file;
+  ASSERT_TRUE(file.loadFile((dir / "full.dcm").c_str()).good());
+  file.getMetaInfo()->putAndInsertString(DCM_TransferSyntaxUID, "1.2.840.10008.1.2.4.999");
+  ASSERT_TRUE(file.saveFile((dir / "syntax.dcm").c_str(), EXS_LittleEndianExplicit, EET_ExplicitLength,
+                            EGL_recalcGL, EPD_noChange, 0, 0, EWM_dontUpdateMeta)
+                  .good());
+  const std::string syntax = ErrorOf(dir / "syntax.dcm");
+  EXPECT_NE(syntax.find("syntax.dcm: unknown transfer syntax '1.2.840.10008.1.2.4.999'"), std::string::npos)
+      << syntax;
+
+  ASSERT_TRUE(file.loadFile((dir / "full.dcm").c_str()).good());
+  file.getDataset()->putAndInsertString(DCM_NumberOfFrames, "0");
+  ASSERT_TRUE(file.saveFile((dir / "zero.dcm").c_str(), EXS_LittleEndianExplicit).good());
+  EXPECT_NE(ErrorOf(dir / "zero.dcm").find("zero.dcm: zero frames"), std::string::npos);
+
+  RecordingOptions past_the_end;
+  past_the_end.frames = ParseFrameWindow("10:");
+  EXPECT_NE(ErrorOf(dir / "full.dcm", past_the_end).find("zero frames: the window 10::1"), std::string::npos);
+
+  EXPECT_THROW(ParseFrameWindow("5:2"), Error);
+  EXPECT_THROW(ParseFrameWindow("1:2:0"), Error);
+  EXPECT_THROW(ParseFrameWindow("a:b"), Error);
+  EXPECT_THROW(ParseStereoLayout("diagonal"), Error);
+  EXPECT_FALSE(HoldsDicom(dir / "missing"));
+}
+
+}  // namespace
+}  // namespace endorecon::dicom

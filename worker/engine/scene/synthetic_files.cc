@@ -1,0 +1,37 @@
+#include "worker/engine/scene/synthetic_files.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <fstream>
+#include <opencv2/imgcodecs.hpp>
+
+#include "common/error.h"
+
+namespace endorecon::scene {
+
+std::uint8_t ToByte(float value) {
+  return static_cast<std::uint8_t>(std::clamp(value, 0.f, 1.f) * 255.f + 0.5f);
+}
+
+void PutRgb(cv::Mat& bgr, int u, int v, const std::array<float, 3>& rgb) {
+  bgr.at<cv::Vec3b>(v, u) = {ToByte(rgb[2]), ToByte(rgb[1]), ToByte(rgb[0])};
+}
+
+void WritePng(const std::filesystem::path& path, const cv::Mat& image) {
+  if (!cv::imwrite(path.string(), image)) Fail(ErrorCode::kUnavailable, "cannot write " + path.string());
+}
+
+void WriteText(const std::filesystem::path& path, const std::string& text) {
+  std::ofstream file(path, std::ios::trunc);
+  file << text;
+  file.close();
+  if (!file) Fail(ErrorCode::kUnavailable, "cannot write " + path.string());
+}
+
+std::string FrameName(int index) {
+  char name[32];
+  std::snprintf(name, sizeof(name), "%06d", index);
+  return name;
+}
+
+}  // namespace endorecon::scene

@@ -1,0 +1,23 @@
+// Writing the files of synthetic clips and recordings: PNG frames from linear colours, text files.
+#pragma once
+
+#include <array>
+#include <filesystem>
+#include <opencv2/core.hpp>
+#include <string>
+
+namespace endorecon::scene {
+
+// Linear colour in [0, 1] (clamped) as an 8-bit value, rounded.
+std::uint8_t ToByte(float value);
+// Sets pixel (u, v) of an 8-bit BGR image from an RGB colour in [0, 1].
+void PutRgb(cv::Mat& bgr, int u, int v, const std::array<float, 3>& rgb);
+
+// Throw Error(kUnavailable) naming the file when it cannot be written.
+void WritePng(const std::filesystem::path& path, const cv::Mat& image);
+void WriteText(const std::filesystem::path& path, const std::string& text);
+
+// "000042": frame file names, six digits.
+std::string FrameName(int index);
+
+}  // namespace endorecon::scene

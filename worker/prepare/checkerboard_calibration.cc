@@ -1,0 +1,108 @@
+#include "worker/prepare/checkerboard_calibration.h"
+
+#include <spdlog/spdlog.h>
+#include <tbb/parallel_for.h>
+
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
+#include <vector>
+
+#include "common/error.h"
+
+namespace endorecon::prepare {
+namespace {
+
+constexpr int kMinViews = 4;
+
+bool FindBoard(const cv::Mat& bgr, cv::Size corners, std::vector<cv::Point2f>& found) {
+  cv::Mat grey;
+  cv::cvtColor(bgr, grey, cv::COLOR_BGR2GRAY);
+  return cv::findChessboardCornersSB(grey, corners, found,
+                                     cv::CALIB_CB_NORMALIZE_IMAGE | cv::CALIB_CB_ACCURACY);
+}
+
+}  // namespace
+
+CheckerboardCalibration CalibrateFromCheckerboard(const RecordingInput& recording,
+                                                  const CheckerboardOptions& options) {
+  if (options.inner_corners.width < 2 || options.inner_corners.height < 2 || !(options.square > 0)) {
+    FailInvalid("the board needs at least 2x2 inner corners and a square size > 0");
+  }
+  StereoSource source(recording);
+  CheckerboardCalibration result;
+  // Corners only are kept: frames are read in batches and searched in parallel.
+  std::vector<std::vector<cv::Point2f>> left, right;
+  const std::size_t batch_size = 16;
+  bool more = true;
+  for (int index = 0; more;) {
+    std::vector<StereoFrame> batch;
+    while (batch.size() < batch_size && (options.frames.end < 0 || index < options.frames.end)) {
+      StereoFrame frame;
+      more = options.frames.Selects(index) ? source.Next(frame) : source.Skip();
+      if (!more) break;
+      if (options.frames.Selects(index++)) batch.push_back(std::move(frame));
+    }
+    if (options.frames.end >= 0 && index >= options.frames.end) more = false;
+    std::vector<std::vector<cv::Point2f>> l(batch.size()), r(batch.size());
+    std::vector<char> found(batch.size(), 0);
+    tbb::parallel_for(std::size_t{0}, batch.size(), [&](std::size_t i) {
+      found[i] = FindBoard(batch[i].left, options.inner_corners, l[i]) &&
+                 FindBoard(batch[i].right, options.inner_corners, r[i]);
+    });
+    for (std::size_t i = 0; i < batch.size(); ++i) {
+      if (!found[i]) continue;
+      left.push_back(std::move(l[i]));
+      right.push_back(std::move(r[i]));
+    }
+    result.frames_read += static_cast<int>(batch.size());
+  }
+  result.views_found = static_cast<int>(left.size());
+  if (result.views_found < kMinViews) {
+    FailInvalid(source.name() + ": the whole " + std::to_string(options.inner_corners.width) + "x" +
+                std::to_string(options.inner_corners.height) +
+                " board (inner corners) shows in both eyes in " + std::to_string(result.views_found) +
+                " of " + std::to_string(result.frames_read) + " frames; at least " +
+                std::to_string(kMinViews) +
+                " are needed (check --board, and move the board through the view)");
+  }
+  const std::size_t views = left.size(),
+                    count = std::min<std::size_t>(static_cast<std::size_t>(options.max_views), views);
+  std::vector<std::size_t> used;
+  for (std::size_t k = 0; k < count; ++k) used.push_back(k * views / count);
+  result.views_used = static_cast<int>(used.size());
+
+  std::vector<cv::Point3f> board;
+  for (int r = 0; r < options.inner_corners.height; ++r) {
+    for (int c = 0; c < options.inner_corners.width; ++c) {
+      board.emplace_back(static_cast<float>(c * options.square), static_cast<float>(r * options.square), 0.f);
+    }
+  }
+  std::vector<std::vector<cv::Point3f>> objects(used.size(), board);
+  std::vector<std::vector<cv::Point2f>> left_used, right_used;
+  for (std::size_t i : used) {
+    left_used.push_back(left[i]);
+    right_used.push_back(right[i]);
+  }
+  const cv::Size size = source.eye_size();
+  StereoCalibration& c = result.calibration;
+  cv::Mat k1, d1, k2, d2, r, t, e, f;
+  std::vector<cv::Mat> rvecs, tvecs;
+  const int lens = options.fit_k3 ? 0 : cv::CALIB_FIX_K3;
+  result.left_rms_px = cv::calibrateCamera(objects, left_used, size, k1, d1, rvecs, tvecs, lens);
+  result.right_rms_px = cv::calibrateCamera(objects, right_used, size, k2, d2, rvecs, tvecs, lens);
+  result.rms_px = cv::stereoCalibrate(
+      objects, left_used, right_used, k1, d1, k2, d2, size, r, t, e, f, cv::CALIB_USE_INTRINSIC_GUESS | lens,
+      cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 100, 1e-7));
+  c.image_size = size;
+  c.k1 = cv::Matx33d(k1);
+  c.k2 = cv::Matx33d(k2);
+  c.d1 = d1.reshape(1, 1);
+  c.d2 = d2.reshape(1, 1);
+  c.r = cv::Matx33d(r);
+  c.t = cv::Vec3d(t);
+  c.kind = "opencv";
+  c.source = source.name();
+  return result;
+}
+
+}  // namespace endorecon::prepare

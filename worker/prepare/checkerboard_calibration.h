@@ -1,0 +1,37 @@
+// Stereo calibration from a checkerboard recording (`endorecon-worker calibrate`): the board's
+// inner corners found in both eyes (OpenCV's sector-based detector), each eye calibrated
+// (calibrateCamera; k1, k2, p1, p2, and k3 only when asked), then both together (stereoCalibrate,
+// intrinsics refined jointly).
+#pragma once
+
+#include <opencv2/core.hpp>
+
+#include "common/prepare_flags.h"
+#include "worker/prepare/stereo_calibration.h"
+#include "worker/prepare/stereo_source.h"
+
+namespace endorecon::prepare {
+
+struct CheckerboardOptions {
+  cv::Size inner_corners{9, 6};  // columns x rows of inner corners
+  double square = 1;             // side of a square, in the unit the calibration (and clips) will use
+  FrameRange frames;
+  int max_views = 40;  // views used, spread evenly over those where both eyes see the board
+  // Fit the radial term k3 too (wide-angle lenses). Off by default: with k1 and k2 free, k3 trades
+  // off against k2 inside the views' reach and bends the corners the board never reached.
+  bool fit_k3 = false;
+};
+
+struct CheckerboardCalibration {
+  StereoCalibration calibration;
+  double rms_px = 0;  // stereoCalibrate's RMS reprojection error over both eyes
+  double left_rms_px = 0, right_rms_px = 0;
+  int frames_read = 0, views_found = 0, views_used = 0;
+};
+
+// Throws the source's errors, and FailInvalid naming the recording when fewer than 4 frames show
+// the whole board to both eyes.
+CheckerboardCalibration CalibrateFromCheckerboard(const RecordingInput& recording,
+                                                  const CheckerboardOptions& options);
+
+}  // namespace endorecon::prepare

@@ -1,0 +1,92 @@
+#include "worker/prepare/stereo_source.h"
+
+#include "common/error.h"
+
+namespace endorecon::prepare {
+namespace {
+
+std::string SizeText(cv::Size size) { return std::to_string(size.width) + "x" + std::to_string(size.height); }
+
+}  // namespace
+
+StereoSource::StereoSource(const RecordingInput& input) : layout_(input.layout) {
+  if (layout_ == StereoLayout::kTwoSources) {
+    first_ = OpenFrameSource(input.left);
+    second_ = OpenFrameSource(input.right);
+    eye_size_ = first_->frame_size();
+    if (second_->frame_size() != eye_size_) {
+      FailInvalid(second_->name() + ": frames of " + SizeText(second_->frame_size()) + " differ from " +
+                  first_->name() + "'s " + SizeText(eye_size_) + " (both eyes must have one size)");
+    }
+    return;
+  }
+  first_ = OpenFrameSource(input.combined);
+  const cv::Size whole = first_->frame_size();
+  if (layout_ == StereoLayout::kSideBySide) {
+    if (whole.width % 2 != 0) {
+      FailInvalid(first_->name() + " frame 0: a side-by-side frame must have an even width, found " +
+                  SizeText(whole));
+    }
+    eye_size_ = {whole.width / 2, whole.height};
+  } else {
+    if (whole.height % 2 != 0) {
+      FailInvalid(first_->name() + " frame 0: a top-bottom frame must have an even height, found " +
+                  SizeText(whole));
+    }
+    eye_size_ = {whole.width, whole.height / 2};
+  }
+}
+
+int StereoSource::announced_frames() const {
+  const int first = first_->announced_frames();
+  if (!second_) return first;
+  const int second = second_->announced_frames();
+  return first < 0 ? second : second < 0 ? first : std::min(first, second);
+}
+
+std::string StereoSource::name() const {
+  return second_ ? first_->name() + " + " + second_->name() : first_->name();
+}
+
+bool StereoSource::Ended(bool first, bool second, int index) const {
+  if (first == second) return !first;
+  const FrameSource& ended = first ? *second_ : *first_;
+  const FrameSource& going = first ? *first_ : *second_;
+  FailInvalid(ended.name() + " frame " + std::to_string(index) + ": it ends after " + std::to_string(index) +
+              " frames while " + going.name() + " goes on (both eyes' recordings must have the same length)");
+}
+
+bool StereoSource::Next(StereoFrame& frame) {
+  const int index = next_;
+  if (second_) {
+    SourceFrame left, right;
+    const bool a = first_->Next(left), b = second_->Next(right);
+    if (Ended(a, b, index)) return false;
+    frame.left = std::move(left.image);
+    frame.right = std::move(right.image);
+    frame.time_s = left.time_s;
+  } else {
+    SourceFrame both;
+    if (!first_->Next(both)) return false;
+    const cv::Rect first_half(0, 0, eye_size_.width, eye_size_.height);
+    const cv::Rect second_half = layout_ == StereoLayout::kSideBySide
+                                     ? cv::Rect(eye_size_.width, 0, eye_size_.width, eye_size_.height)
+                                     : cv::Rect(0, eye_size_.height, eye_size_.width, eye_size_.height);
+    frame.left = both.image(first_half).clone();
+    frame.right = both.image(second_half).clone();
+    frame.time_s = both.time_s;
+  }
+  frame.index = index;
+  ++next_;
+  return true;
+}
+
+bool StereoSource::Skip() {
+  const int index = next_;
+  const bool a = first_->Skip();
+  if (second_ ? Ended(a, second_->Skip(), index) : !a) return false;
+  ++next_;
+  return true;
+}
+
+}  // namespace endorecon::prepare

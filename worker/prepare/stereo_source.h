@@ -1,0 +1,55 @@
+// The two eyes of a stereo recording, frame by frame: two frame sources (one per eye), or one
+// whose frames hold both eyes side by side (left eye in the left half) or top-bottom (left eye on
+// top). Checks what pairing needs: equal sizes and lengths, even widths or heights to split.
+#pragma once
+
+#include <filesystem>
+#include <memory>
+#include <opencv2/core.hpp>
+#include <string>
+
+#include "worker/prepare/frame_source.h"
+
+namespace endorecon::prepare {
+
+enum class StereoLayout { kTwoSources, kSideBySide, kTopBottom };
+
+struct RecordingInput {
+  StereoLayout layout = StereoLayout::kTwoSources;
+  std::filesystem::path left, right;  // kTwoSources: a video or a folder per eye
+  std::filesystem::path combined;     // kSideBySide, kTopBottom: one video or folder
+};
+
+struct StereoFrame {
+  cv::Mat left, right;  // 8-bit BGR, each eye's own pixels
+  double time_s = 0;
+  int index = 0;  // 0-based position in the recording
+};
+
+class StereoSource {
+ public:
+  // Opens the sources (OpenFrameSource's errors), and throws FailInvalid naming the file when the
+  // eyes differ in size or a combined frame cannot be split in equal halves.
+  explicit StereoSource(const RecordingInput& input);
+
+  cv::Size eye_size() const { return eye_size_; }
+  // The recording's announced frame count (-1: unknown); the lower of two sources'.
+  int announced_frames() const;
+  // The file(s), for messages.
+  std::string name() const;
+
+  // The next pair; false after the last. Throws the sources' errors, and FailInvalid naming both
+  // when one eye's recording ends before the other's.
+  bool Next(StereoFrame& frame);
+  bool Skip();
+
+ private:
+  bool Ended(bool first, bool second, int index) const;
+
+  StereoLayout layout_;
+  std::unique_ptr<FrameSource> first_, second_;  // second_ only for two sources
+  cv::Size eye_size_;
+  int next_ = 0;
+};
+
+}  // namespace endorecon::prepare

@@ -1,0 +1,55 @@
+// endorecon-worker prepare: a clip from a raw stereo recording (two videos or folders, one
+// side-by-side or top-bottom video) and its calibration; see worker/prepare/prepare_clip.h.
+#include <spdlog/spdlog.h>
+
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <memory>
+
+#include "common/prepare_flags_cli.h"
+#include "worker/prepare/options_from_flags.h"
+#include "worker/runtime/commands.h"
+
+namespace endorecon::worker {
+
+Command AddPrepareCommand(CLI::App& app) {
+  auto* cmd =
+      app.add_subcommand("prepare", "make a clip from a raw stereo recording (rectify, depth, masks, poses)");
+  auto flags = std::make_shared<endorecon::PrepareFlags>();
+  auto out = std::make_shared<std::string>();
+  cmd->add_option("-o,--out", *out, "clip folder to write (replaces an earlier prepared clip there)")
+      ->required();
+  AddPrepareFlags(*cmd, *flags);
+  return [flags, out] {
+    prepare::PrepareOptions options = prepare::OptionsFromFlags(*flags);
+    options.out = *out;
+    prepare::PrepareHooks hooks;
+    hooks.on_frame = [](int done, int total) {
+      if (total > 0) {
+        std::fprintf(stderr, "\r prepared %d/%d frames ", done, total);
+      } else {
+        std::fprintf(stderr, "\r prepared %d frames ", done);
+      }
+    };
+    const prepare::PrepareSummary summary = prepare::PrepareClip(options, hooks);
+    std::fprintf(stderr, "\n");
+    spdlog::info(
+        "wrote {} ({} layout): {} frames of the recording's {}{}, {:.1f} s ({:.2f} frames/s)",
+        summary.clip.string(), summary.layout, summary.frames, summary.recording_frames,
+        summary.dropped > 0 ? fmt::format(", {} dropped (could not be placed)", summary.dropped) : "",
+        summary.seconds, (summary.frames + summary.dropped) / std::max(1e-9, summary.seconds));
+    spdlog::info(
+        "rectification: epipolar error median {:.3f} px, RMS {:.3f} px ({} matches); depth coverage {:.1f}%",
+        summary.epipolar_error.median, summary.epipolar_error.rms, summary.epipolar_error.count,
+        100 * summary.depth_coverage);
+    if (options.estimate_poses) {
+      spdlog::info("poses: reprojection error median {:.3f} px, RMS {:.3f} px",
+                   summary.pose_reprojection.median, summary.pose_reprojection.rms);
+    }
+    spdlog::info("every choice and per-frame numbers: {}/prepare.json; preview: {}/preview.png",
+                 summary.clip.string(), summary.clip.string());
+    return 0;
+  };
+}
+
+}  // namespace endorecon::worker

@@ -1,0 +1,122 @@
+#include "worker/runtime/recording_clip.h"
+
+#include <spdlog/spdlog.h>
+
+#include <cmath>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "common/error.h"
+#include "common/file_write.h"
+#include "worker/engine/eval/exports.h"
+#include "worker/engine/scene/npy.h"
+
+namespace endorecon::worker {
+namespace fs = std::filesystem;
+namespace {
+
+// EndoNeRF's field of view (f = 569.468 px at 640 px), the synthetic clips' too.
+constexpr double kFocalPerWidth = 0.8898;
+constexpr double kNear = 40, kFar = 130;
+
+void WriteFrames(const std::vector<cv::Mat>& frames, const fs::path& folder) {
+  fs::create_directories(folder);
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    const fs::path path = folder / eval::FrameFileName(static_cast<int>(i), ".png");
+    if (!cv::imwrite(path.string(), frames[i]))
+      Fail(ErrorCode::kUnavailable, "cannot write " + path.string());
+  }
+}
+
+void WriteTransforms(const dicom::Recording& recording, const fs::path& clip_dir) {
+  const int w = recording.left[0].cols, h = recording.left[0].rows;
+  nlohmann::json frames = nlohmann::json::array();
+  const nlohmann::json identity = {{1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}, {0, 0, 0, 1}};
+  // The engine's times are in [0, 1]: the recording's span maps onto it.
+  const double span = recording.times_s.back() > 0 ? recording.times_s.back() : 1.0;
+  for (std::size_t i = 0; i < recording.left.size(); ++i) {
+    frames.push_back({{"file_path", "images/" + eval::FrameFileName(static_cast<int>(i), ".png")},
+                      {"transform_matrix", identity},
+                      {"time", recording.times_s[i] / span}});
+  }
+  const nlohmann::json transforms = {{"fl_x", kFocalPerWidth * w},
+                                     {"fl_y", kFocalPerWidth * w},
+                                     {"cx", w / 2.0},
+                                     {"cy", h / 2.0},
+                                     {"w", w},
+                                     {"h", h},
+                                     {"near", kNear},
+                                     {"far", kFar},
+                                     {"frames", frames}};
+  WriteFile(clip_dir / "transforms.json", transforms.dump(1), "clip cameras");
+}
+
+void WritePosesBounds(const dicom::Recording& recording, const fs::path& clip_dir) {
+  const int w = recording.left[0].cols, h = recording.left[0].rows;
+  const std::size_t n = recording.left.size();
+  std::vector<double> rows(n * 17, 0.0);
+  for (std::size_t i = 0; i < n; ++i) {
+    double* row = &rows[i * 17];
+    // LLFF's rotation columns are [down, right, back]: this is the identity once loaded (OpenGL).
+    row[0 * 5 + 1] = 1;
+    row[1 * 5 + 0] = -1;
+    row[2 * 5 + 2] = 1;
+    row[4] = h;
+    row[9] = w;
+    row[14] = kFocalPerWidth * w;
+    row[15] = kNear;
+    row[16] = kFar;
+  }
+  scene::WriteNpyFloat64(clip_dir / "poses_bounds.npy", rows.data(), {n, 17});
+  if (n > 2) {
+    const double step = recording.times_s.back() / static_cast<double>(n - 1);
+    for (std::size_t i = 1; i < n; ++i) {
+      if (std::abs(recording.times_s[i] - recording.times_s[i - 1] - step) > 0.25 * step) {
+        spdlog::warn("stereo recording: frame times are uneven; the clip's times are evenly spaced");
+        break;
+      }
+    }
+  }
+}
+
+}  // namespace
+
+std::optional<RecordingClip> ClipFromRecording(const fs::path& input, const dicom::RecordingOptions& options,
+                                               const fs::path& clip_dir) {
+  if (!dicom::HoldsDicom(input)) return std::nullopt;
+  const dicom::Recording recording = dicom::ReadRecording(input, options);
+  fs::remove_all(clip_dir);
+  fs::create_directories(clip_dir);
+  WriteFrames(recording.left, clip_dir / "images");
+  if (recording.right.empty()) {
+    WriteTransforms(recording, clip_dir);
+  } else {
+    WriteFrames(recording.right, clip_dir / "images_right");
+    WritePosesBounds(recording, clip_dir);
+  }
+  RecordingClip clip;
+  clip.clip_dir = clip_dir;
+  clip.study = recording.study;
+  clip.times_s = recording.times_s;
+  clip.summary = recording.description + "; " + std::to_string(recording.left.size()) + " of " +
+                 std::to_string(recording.recording_frames) + " frame(s) kept, times from " +
+                 recording.times_from +
+                 (recording.right.empty() ? "" : ", stereo " + dicom::StereoLayoutName(options.stereo));
+  const nlohmann::json record = {
+      {"source", recording.description},
+      {"stereo", dicom::StereoLayoutName(options.stereo)},
+      {"frames",
+       {{"start", options.frames.start}, {"end", options.frames.end}, {"step", options.frames.step}}},
+      {"fps", options.fps},
+      {"recording_frames", recording.recording_frames},
+      {"times_from", recording.times_from},
+      {"times_s", recording.times_s},
+      {"focal_per_width", kFocalPerWidth},
+      {"near", kNear},
+      {"far", kFar}};
+  WriteFile(clip_dir / "recording.json", record.dump(1), "recording description");
+  spdlog::info("DICOM recording: {}", clip.summary);
+  return clip;
+}
+
+}  // namespace endorecon::worker
