@@ -9,7 +9,9 @@
 #include "common/error.h"
 #include "common/file_write.h"
 #include "worker/engine/eval/exports.h"
+#include "worker/engine/scene/endonerf_loader.h"
 #include "worker/engine/scene/npy.h"
+#include "worker/prepare/prepare_clip.h"
 
 namespace endorecon::worker {
 namespace fs = std::filesystem;
@@ -68,15 +70,53 @@ void WritePosesBounds(const dicom::Recording& recording, const fs::path& clip_di
     row[16] = kFar;
   }
   scene::WriteNpyFloat64(clip_dir / "poses_bounds.npy", rows.data(), {n, 17});
-  if (n > 2) {
-    const double step = recording.times_s.back() / static_cast<double>(n - 1);
-    for (std::size_t i = 1; i < n; ++i) {
-      if (std::abs(recording.times_s[i] - recording.times_s[i - 1] - step) > 0.25 * step) {
-        spdlog::warn("stereo recording: frame times are uneven; the clip's times are evenly spaced");
-        break;
-      }
+}
+
+// The EndoNeRF layout a stereo clip takes spaces its frames evenly in time.
+void WarnIfUneven(const std::vector<double>& times_s) {
+  const std::size_t n = times_s.size();
+  if (n <= 2) return;
+  const double step = times_s.back() / static_cast<double>(n - 1);
+  for (std::size_t i = 1; i < n; ++i) {
+    if (std::abs(times_s[i] - times_s[i - 1] - step) > 0.25 * step) {
+      spdlog::warn("stereo recording: frame times are uneven; the clip's times are evenly spaced");
+      return;
     }
   }
+}
+
+// Stereo: both eyes go through the recording preparation (worker/prepare, issue 16) as a rectified
+// pair with the nominal focal length and the loader's default baseline, which gives the clip a
+// depth prior by stereo matching (in nominal units, as the recording has no calibration). A pair
+// it cannot use (no matches to survey the disparities on) becomes a clip of both eyes without
+// depth, as the log says; any other failure fails the job.
+void WriteStereoClip(const dicom::Recording& recording, const fs::path& clip_dir) {
+  WarnIfUneven(recording.times_s);
+  const fs::path eyes = clip_dir.string() + ".eyes";
+  fs::remove_all(eyes);
+  WriteFrames(recording.left, eyes / "left");
+  WriteFrames(recording.right, eyes / "right");
+  prepare::PrepareOptions options;
+  options.recording.left = eyes / "left";
+  options.recording.right = eyes / "right";
+  options.rectified = true;
+  options.focal = kFocalPerWidth * recording.left[0].cols;
+  options.baseline = scene::kDefaultStereoBaseline;
+  options.out = clip_dir;
+  fs::remove_all(clip_dir);
+  try {
+    const prepare::PrepareSummary summary = prepare::PrepareClip(options);
+    spdlog::info("stereo recording: depth prior by stereo matching, {:.0f}% of the pixels",
+                 100 * summary.depth_coverage);
+  } catch (const Error& e) {
+    if (e.code() != ErrorCode::kInvalidArgument) throw;
+    spdlog::warn("stereo recording: no depth prior ({}); the clip has both eyes without depth", e.what());
+    fs::create_directories(clip_dir);
+    WriteFrames(recording.left, clip_dir / "images");
+    WriteFrames(recording.right, clip_dir / "images_right");
+    WritePosesBounds(recording, clip_dir);
+  }
+  fs::remove_all(eyes);
 }
 
 }  // namespace
@@ -85,14 +125,13 @@ std::optional<RecordingClip> ClipFromRecording(const fs::path& input, const dico
                                                const fs::path& clip_dir) {
   if (!dicom::HoldsDicom(input)) return std::nullopt;
   const dicom::Recording recording = dicom::ReadRecording(input, options);
-  fs::remove_all(clip_dir);
-  fs::create_directories(clip_dir);
-  WriteFrames(recording.left, clip_dir / "images");
   if (recording.right.empty()) {
+    fs::remove_all(clip_dir);
+    fs::create_directories(clip_dir);
+    WriteFrames(recording.left, clip_dir / "images");
     WriteTransforms(recording, clip_dir);
   } else {
-    WriteFrames(recording.right, clip_dir / "images_right");
-    WritePosesBounds(recording, clip_dir);
+    WriteStereoClip(recording, clip_dir);
   }
   RecordingClip clip;
   clip.clip_dir = clip_dir;
