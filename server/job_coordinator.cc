@@ -67,12 +67,13 @@ std::int64_t NowUnixMs() {
       .count();
 }
 
-JobCoordinator::JobCoordinator(CoordinatorParts parts, int max_attempts, TenantQuotas quotas)
-    : parts_(parts), max_attempts_(max_attempts), quotas_(std::move(quotas)) {}
+JobCoordinator::JobCoordinator(CoordinatorParts parts, int max_attempts, TenantQuotas quotas,
+                               std::function<Clock::time_point()> clock)
+    : parts_(parts), max_attempts_(max_attempts), quotas_(std::move(quotas)), clock_(std::move(clock)) {}
 
 void JobCoordinator::Recover() {
   std::lock_guard lock(mutex_);
-  const auto now = Clock::now();
+  const auto now = clock_();
   int queued = 0, running = 0;
   std::vector<std::string> retrieving, sending;
   for (const auto& stored : parts_.store.Unfinished()) {
@@ -305,7 +306,7 @@ std::optional<JobCoordinator::Granted> JobCoordinator::Lease(const std::string& 
     auto stored = parts_.store.Get(*next);
     if (!stored || stored->job.state() != v1::QUEUED) continue;
     auto& job = stored->job;
-    const auto lease = parts_.leases.Grant(job.id(), worker_id, Clock::now());
+    const auto lease = parts_.leases.Grant(job.id(), worker_id, clock_());
     job.set_state(v1::RUNNING);
     job.set_lease_id(lease.id);
     job.set_worker_id(worker_id);
@@ -320,7 +321,7 @@ std::optional<JobCoordinator::Granted> JobCoordinator::Lease(const std::string& 
 
 v1::ProgressReply::Action JobCoordinator::Report(const v1::ProgressUpdate& update, std::string* job_id) {
   std::lock_guard lock(mutex_);
-  const auto lease = parts_.leases.Renew(update.lease_id(), Clock::now());
+  const auto lease = parts_.leases.Renew(update.lease_id(), clock_());
   if (!lease) return v1::ProgressReply::STOP_LEASE_LOST;
   if (job_id) *job_id = lease->job_id;
   parts_.workers.Touch(lease->worker_id);

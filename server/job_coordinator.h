@@ -57,7 +57,10 @@ struct DicomHooks {
 
 class JobCoordinator {
  public:
-  JobCoordinator(CoordinatorParts parts, int max_attempts, TenantQuotas quotas = {});
+  // `clock` stamps leases (grants, renewals, re-grants on recovery); tests pass their own to move
+  // time without waiting.
+  JobCoordinator(CoordinatorParts parts, int max_attempts, TenantQuotas quotas = {},
+                 std::function<Clock::time_point()> clock = Clock::now);
 
   void SetDicomHooks(DicomHooks hooks);
 
@@ -139,6 +142,7 @@ class JobCoordinator {
   DicomHooks dicom_;
   int max_attempts_;
   TenantQuotas quotas_;
+  std::function<Clock::time_point()> clock_;
   std::mutex mutex_;
 };
 

@@ -1,0 +1,255 @@
+// The job state machine on its own, with a clock the test moves: every transition of
+// server/job_coordinator.h's diagram, lease expiry, attempt counting and the races of a cancel
+// with a worker's report, failure, completion and vanishing.
+#include "server/job_coordinator.h"
+
+#include <gtest/gtest.h>
+
+#include <functional>
+#include <optional>
+#include <string>
+
+#include "common/error.h"
+#include "tests/unit/temp_dir.h"
+
+namespace endorecon::server {
+namespace {
+
+using std::chrono::seconds;
+
+constexpr auto kTtl = seconds(30);
+
+// The code of the Error `call` throws; nullopt when it throws none.
+std::optional<ErrorCode> CodeOf(const std::function<void()>& call) {
+  try {
+    call();
+  } catch (const Error& e) {
+    return e.code();
+  }
+  return std::nullopt;
+}
+
+class JobCoordinatorTest : public ::testing::Test {
+ protected:
+  JobCoordinatorTest()
+      : store_(dir_ / "jobs.sqlite"),
+        blobs_(dir_ / "blobs"),
+        leases_(kTtl),
+        workers_(kTtl),
+        metrics_(""),
+        coordinator_({store_, blobs_, scheduler_, leases_, workers_, hub_, metrics_}, 2, {},
+                     [this] { return now_; }) {}
+
+  // A manifest of one uploaded file with these bytes.
+  v1::Manifest Uploaded(const std::string& path, const std::string& bytes) {
+    v1::Manifest manifest;
+    auto* file = manifest.add_files();
+    file->set_path(path);
+    file->set_size(static_cast<std::int64_t>(bytes.size()));
+    file->set_sha256(blobs_.Put(bytes));
+    return manifest;
+  }
+
+  std::string Submit() {
+    v1::SubmitRequest request;
+    *request.mutable_clip() = Uploaded("images/000000.png", "frame of job " + std::to_string(++submitted_));
+    return coordinator_.Submit(request, AnonymousPrincipal()).id();
+  }
+
+  // The next queued job for `worker` (no waiting).
+  std::optional<JobCoordinator::Granted> LeaseNext(const std::string& worker = "worker-1") {
+    return coordinator_.Lease(worker, Clock::now());
+  }
+
+  v1::Job Get(const std::string& id) { return coordinator_.Get(id, AnonymousPrincipal()); }
+
+  v1::ProgressReply::Action Report(const std::string& lease_id) {
+    v1::ProgressUpdate update;
+    update.set_lease_id(lease_id);
+    update.mutable_progress()->set_iteration(1);
+    return coordinator_.Report(update);
+  }
+
+  v1::Job Complete(const std::string& lease_id, const v1::Manifest& result) {
+    v1::CompleteRequest request;
+    request.set_lease_id(lease_id);
+    *request.mutable_result() = result;
+    return coordinator_.Complete(request);
+  }
+
+  v1::Job Fail(const std::string& lease_id, bool retry, bool release = false) {
+    v1::FailRequest request;
+    request.set_lease_id(lease_id);
+    request.set_reason("out of memory");
+    request.set_retry(retry);
+    request.set_release(release);
+    return coordinator_.Fail(request);
+  }
+
+  // Moves the clock and takes back what expired.
+  void Advance(Clock::duration by) {
+    now_ += by;
+    coordinator_.ExpireLeases(now_);
+  }
+
+  testing::TempDir dir_{"coordinator"};
+  JobStore store_;
+  BlobStore blobs_;
+  Scheduler scheduler_;
+  LeaseTable leases_;
+  WorkerRegistry workers_;
+  WatchHub hub_;
+  Metrics metrics_;
+  Clock::time_point now_ = Clock::now();
+  JobCoordinator coordinator_;
+  int submitted_ = 0;
+};
+
+TEST_F(JobCoordinatorTest, AJobIsQueuedLeasedAndCompleted) {
+  const std::string id = Submit();
+  EXPECT_EQ(Get(id).state(), v1::QUEUED);
+  const auto granted = LeaseNext();
+  ASSERT_TRUE(granted.has_value());
+  EXPECT_EQ(granted->job.id(), id);
+  EXPECT_EQ(granted->attempt, 1);
+  EXPECT_EQ(Get(id).state(), v1::RUNNING);
+  EXPECT_EQ(Get(id).worker_id(), "worker-1");
+  EXPECT_FALSE(LeaseNext("worker-2").has_value()) << "a running job is leased once";
+  EXPECT_EQ(Report(granted->lease_id), v1::ProgressReply::CONTINUE);
+
+  const v1::Job done = Complete(granted->lease_id, Uploaded("metrics.json", "{}"));
+  EXPECT_EQ(done.state(), v1::SUCCEEDED);
+  EXPECT_EQ(Get(id).result().files(0).path(), "metrics.json");
+  EXPECT_TRUE(Get(id).lease_id().empty());
+  EXPECT_EQ(CodeOf([&] { coordinator_.CheckLease(granted->lease_id); }), ErrorCode::kFailedPrecondition);
+  EXPECT_EQ(Report(granted->lease_id), v1::ProgressReply::STOP_LEASE_LOST);
+  EXPECT_EQ(CodeOf([&] { coordinator_.Cancel(id, AnonymousPrincipal()); }), ErrorCode::kFailedPrecondition);
+}
+
+TEST_F(JobCoordinatorTest, AResultFileNotUploadedKeepsTheJobRunning) {
+  const std::string id = Submit();
+  const auto granted = LeaseNext();
+  ASSERT_TRUE(granted.has_value());
+  v1::Manifest result;
+  auto* file = result.add_files();
+  file->set_path("metrics.json");
+  file->set_size(2);
+  file->set_sha256(std::string(64, 'a'));
+  EXPECT_EQ(CodeOf([&] { Complete(granted->lease_id, result); }), ErrorCode::kFailedPrecondition);
+  EXPECT_EQ(Get(id).state(), v1::RUNNING);
+}
+
+TEST_F(JobCoordinatorTest, ReportsKeepTheLeaseAndSilenceExpiresIt) {
+  const std::string id = Submit();
+  const auto granted = LeaseNext();
+  ASSERT_TRUE(granted.has_value());
+  Advance(kTtl - seconds(5));
+  EXPECT_EQ(Report(granted->lease_id), v1::ProgressReply::CONTINUE);
+  Advance(seconds(10));  // past the first expiry, not the renewed one
+  EXPECT_EQ(Get(id).state(), v1::RUNNING);
+
+  Advance(kTtl);
+  const v1::Job requeued = Get(id);
+  EXPECT_EQ(requeued.state(), v1::QUEUED);
+  EXPECT_EQ(requeued.attempts(), 1);
+  EXPECT_NE(requeued.error().find("lease expired"), std::string::npos) << requeued.error();
+  // The vanished worker comes back: its lease is gone, whatever it sends.
+  EXPECT_EQ(Report(granted->lease_id), v1::ProgressReply::STOP_LEASE_LOST);
+  EXPECT_EQ(CodeOf([&] { Complete(granted->lease_id, Uploaded("metrics.json", "{}")); }),
+            ErrorCode::kFailedPrecondition);
+  const auto again = LeaseNext("worker-2");
+  ASSERT_TRUE(again.has_value());
+  EXPECT_EQ(again->attempt, 2);
+}
+
+TEST_F(JobCoordinatorTest, TheJobFailsWhenItsAttemptsAreUsedUp) {
+  const std::string id = Submit();  // max_attempts 2
+  ASSERT_TRUE(LeaseNext().has_value());
+  Advance(kTtl + seconds(1));
+  EXPECT_EQ(Get(id).state(), v1::QUEUED);
+  ASSERT_TRUE(LeaseNext().has_value());
+  Advance(kTtl + seconds(1));
+  const v1::Job failed = Get(id);
+  EXPECT_EQ(failed.state(), v1::FAILED);
+  EXPECT_EQ(failed.attempts(), 2);
+  EXPECT_NE(failed.error().find("gave up after 2 attempt(s)"), std::string::npos) << failed.error();
+  EXPECT_FALSE(LeaseNext().has_value());
+}
+
+TEST_F(JobCoordinatorTest, ARetryableFailureCountsAnAttemptAHandBackDoesNot) {
+  const std::string id = Submit();
+  auto granted = LeaseNext();
+  ASSERT_TRUE(granted.has_value());
+  EXPECT_EQ(Fail(granted->lease_id, true, true).state(), v1::QUEUED);
+  EXPECT_EQ(Get(id).attempts(), 0);
+  granted = LeaseNext();
+  ASSERT_TRUE(granted.has_value());
+  EXPECT_EQ(Fail(granted->lease_id, true).state(), v1::QUEUED);
+  EXPECT_EQ(Get(id).attempts(), 1);
+  granted = LeaseNext();
+  ASSERT_TRUE(granted.has_value());
+  const v1::Job failed = Fail(granted->lease_id, false);
+  EXPECT_EQ(failed.state(), v1::FAILED);
+  EXPECT_NE(failed.error().find("worker worker-1: out of memory"), std::string::npos) << failed.error();
+  EXPECT_EQ(CodeOf([&] { Fail(granted->lease_id, true); }), ErrorCode::kFailedPrecondition);
+}
+
+TEST_F(JobCoordinatorTest, ACancelEndsAQueuedJobAtOnceAndARunningOneAtItsNextReport) {
+  const std::string queued = Submit();
+  EXPECT_EQ(coordinator_.Cancel(queued, AnonymousPrincipal()).state(), v1::CANCELLED);
+  EXPECT_FALSE(LeaseNext().has_value()) << "a cancelled job leaves the queue";
+
+  const std::string running = Submit();
+  const auto granted = LeaseNext();
+  ASSERT_TRUE(granted.has_value());
+  const v1::Job asked = coordinator_.Cancel(running, AnonymousPrincipal());
+  EXPECT_EQ(asked.state(), v1::RUNNING);
+  EXPECT_TRUE(asked.cancel_requested());
+  EXPECT_EQ(Report(granted->lease_id), v1::ProgressReply::STOP_CANCELLED);
+  EXPECT_EQ(Get(running).state(), v1::CANCELLED);
+  EXPECT_EQ(CodeOf([&] { coordinator_.CheckLease(granted->lease_id); }), ErrorCode::kFailedPrecondition);
+}
+
+TEST_F(JobCoordinatorTest, ACancelRacingTheWorkerEndsTheJobOnceAndNeverRequeuesIt) {
+  // The worker vanishes after the cancel: cancelled at expiry, not queued again.
+  const std::string vanished = Submit();
+  ASSERT_TRUE(LeaseNext().has_value());
+  coordinator_.Cancel(vanished, AnonymousPrincipal());
+  Advance(kTtl + seconds(1));
+  EXPECT_EQ(Get(vanished).state(), v1::CANCELLED);
+  EXPECT_EQ(Get(vanished).attempts(), 0);
+
+  // The worker fails retryably after the cancel: cancelled, not retried.
+  const std::string failing = Submit();
+  auto granted = LeaseNext();
+  ASSERT_TRUE(granted.has_value());
+  coordinator_.Cancel(failing, AnonymousPrincipal());
+  EXPECT_EQ(Fail(granted->lease_id, true).state(), v1::CANCELLED);
+  EXPECT_FALSE(LeaseNext().has_value());
+
+  // The worker completes before it next reports: its results exist and are kept (SUCCEEDED); a
+  // second cancel is then refused as for any finished job.
+  const std::string finishing = Submit();
+  granted = LeaseNext();
+  ASSERT_TRUE(granted.has_value());
+  coordinator_.Cancel(finishing, AnonymousPrincipal());
+  EXPECT_EQ(Complete(granted->lease_id, Uploaded("metrics.json", "{\"psnr\": 30}")).state(), v1::SUCCEEDED);
+  EXPECT_EQ(CodeOf([&] { coordinator_.Cancel(finishing, AnonymousPrincipal()); }),
+            ErrorCode::kFailedPrecondition);
+}
+
+TEST_F(JobCoordinatorTest, AnotherTenantsJobIsNotFoundLikeAMissingOne) {
+  v1::SubmitRequest request;
+  *request.mutable_clip() = Uploaded("images/000000.png", "tenant a's frame");
+  const Principal a{"a-client", Role::kClient, "a", false};
+  const Principal b{"b-client", Role::kClient, "b", false};
+  const std::string id = coordinator_.Submit(request, a).id();
+  EXPECT_EQ(coordinator_.Get(id, a).tenant(), "a");
+  EXPECT_EQ(CodeOf([&] { coordinator_.Get(id, b); }), ErrorCode::kNotFound);
+  EXPECT_EQ(CodeOf([&] { coordinator_.Cancel(id, b); }), ErrorCode::kNotFound);
+  EXPECT_EQ(CodeOf([&] { coordinator_.Get("no-such-job", a); }), ErrorCode::kNotFound);
+  EXPECT_EQ(Get(id).state(), v1::QUEUED);
+}
+
+}  // namespace
+}  // namespace endorecon::server
