@@ -128,6 +128,7 @@ int Run(const ServerFlags& flags) {
   JobCoordinator coordinator({store, blobs, scheduler, leases, workers, hub, metrics}, flags.max_attempts,
                              TenantQuotas(flags.tenant_quota, flags.quotas_file));
   const PacsDirectory pacs(flags.pacs);
+  for (const auto& name : pacs.Names()) metrics.DeclarePacs(name);
   DicomRetriever* retriever_for_scp = nullptr;
   std::vector<std::string> pacs_ae_titles;
   for (const auto& name : pacs.Names()) pacs_ae_titles.push_back(pacs.Find(name).ae_title);

@@ -57,6 +57,11 @@ class Metrics {
   void SetJobsByState(const std::map<v1::JobState, std::int64_t>& counts);
   void SetQueueDepth(std::size_t depth) { queue_depth_.Set(static_cast<double>(depth)); }
   void SetWorkersConnected(int workers) { workers_connected_.Set(workers); }
+  // Starts the per-PACS series at 0, so that rates and alerts see a destination before its first send.
+  void DeclarePacs(const std::string& destination) {
+    dicom_sent_.Add({{"destination", destination}});
+    dicom_send_failures_.Add({{"destination", destination}});
+  }
   void DicomInstanceSent(const std::string& destination) {
     dicom_sent_.Add({{"destination", destination}}).Increment();
   }

@@ -31,7 +31,8 @@ TEST(PrometheusRulesTest, PromtoolAcceptsTheRulesAndTheirTests) {
 }
 
 TEST(PrometheusRulesTest, AlertsAndDashboardUseOnlyExportedMetrics) {
-  Cluster cluster;
+  // A PACS destination (nothing listens there: it is only named) so that the per-PACS series exist.
+  Cluster cluster({"--pacs", "pacs1=PACS1@127.0.0.1:1"});
   cluster.StartWorker("w1");
   const auto metrics_of = [](int port) {
     return Capture("curl -s --max-time 5 http://127.0.0.1:" + std::to_string(port) + "/metrics");
