@@ -291,9 +291,10 @@ fs::path WriteReport(const fs::path& results_dir) {
     data["kind"] = "reconstruction";
     data["title"] = FolderName(clip_dir);
     data["clip"] = clip_dir;
-    data["run"]["device"] = config.contains("device")
-                                ? config["device"].get<std::string>()
-                                : fmt::format("CPU, {} threads", config.value("threads", 0));
+    const std::string device = config.value("device", "cpu");
+    const int threads = config.value("threads", 0);
+    data["run"]["device"] = device == "cpu" ? fmt::format("CPU, {} threads", threads)
+                                            : fmt::format("{} ({} host threads)", device, threads);
     data["metrics"] = record;
     data["config"] = config;
     heat = "/uncertainty_maps/heatmap_scale";
