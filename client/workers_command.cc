@@ -13,7 +13,8 @@
 namespace endorecon::client {
 
 Command AddWorkersCommand(CLI::App& app) {
-  app.add_subcommand("workers", "list the workers: alive or not, devices, jobs");
+  app.add_subcommand("workers",
+                     "list the workers: alive or not, devices (kind, model, memory, threads), jobs");
   return [](const Globals& globals) {
     v1::ListWorkersResponse response;
     auto context = CallContext(globals.timeout());
@@ -29,6 +30,10 @@ Command AddWorkersCommand(CLI::App& app) {
                                fmt::format("{}", fmt::join(worker.devices(), ",")),
                                HumanTime(worker.last_seen_unix_ms()),
                                fmt::format("{}", fmt::join(worker.job_ids(), ",")));
+      for (const auto& device : worker.device_info()) {
+        std::cout << fmt::format("  {}: {}, {}, {}, {} host thread(s)\n", device.name(), device.kind(),
+                                 device.model(), HumanBytes(device.memory_bytes()), device.threads());
+      }
     }
     return kExitOk;
   };

@@ -19,13 +19,12 @@ WorkerRegistry::Entry& WorkerRegistry::At(const std::string& worker_id) {
   return entry;
 }
 
-void WorkerRegistry::Register(const std::string& worker_id, const std::string& hostname,
-                              const std::vector<std::string>& devices) {
+void WorkerRegistry::Register(const v1::RegisterRequest& request) {
   std::lock_guard lock(mutex_);
-  auto& entry = At(worker_id);
-  entry.info.set_hostname(hostname);
-  entry.info.clear_devices();
-  for (const auto& device : devices) entry.info.add_devices(device);
+  auto& entry = At(request.worker_id());
+  entry.info.set_hostname(request.hostname());
+  *entry.info.mutable_devices() = request.devices();
+  *entry.info.mutable_device_info() = request.device_info();
 }
 
 void WorkerRegistry::Touch(const std::string& worker_id) {

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "endorecon/v1/job_service.pb.h"
+#include "endorecon/v1/worker_service.pb.h"
 
 namespace endorecon::server {
 
@@ -18,8 +19,8 @@ class WorkerRegistry {
   // A worker counts as alive (connected) for `alive_window` after its last call.
   explicit WorkerRegistry(std::chrono::milliseconds alive_window) : alive_window_(alive_window) {}
 
-  void Register(const std::string& worker_id, const std::string& hostname,
-                const std::vector<std::string>& devices);
+  // Records the worker's host and devices (names and what they are) from its registration.
+  void Register(const v1::RegisterRequest& request);
   void Touch(const std::string& worker_id);
   void AddJob(const std::string& worker_id, const std::string& job_id);
   void RemoveJob(const std::string& worker_id, const std::string& job_id);

@@ -23,8 +23,7 @@ grpc::Status WorkerServiceImpl::Register(grpc::ServerContext* context, const v1:
                                          v1::RegisterResponse* response) {
   return guard_.Run(context, {"Register", Access::kWorker, kWrites, ""}, [&](Call&) {
     if (request->worker_id().empty()) FailInvalid("worker_id is empty");
-    workers_.Register(request->worker_id(), request->hostname(),
-                      std::vector<std::string>(request->devices().begin(), request->devices().end()));
+    workers_.Register(*request);
     response->set_lease_ttl_ms(timing_.lease_ttl.count());
     response->set_heartbeat_interval_ms(timing_.heartbeat_interval.count());
     return grpc::Status::OK;

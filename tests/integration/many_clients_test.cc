@@ -48,6 +48,9 @@ TEST(ManyClientsTest, ConcurrentUploadsSubmissionsAndWatchers) {
   const auto workers = RunCli(cluster.address(), {"workers"});
   EXPECT_NE(workers.out.find("w1"), std::string::npos);
   EXPECT_NE(workers.out.find("w2"), std::string::npos);
+  // Each worker's devices with their kind, model, memory and threads.
+  EXPECT_NE(workers.out.find("  cpu0: cpu, "), std::string::npos) << workers.out;
+  EXPECT_NE(workers.out.find("host thread(s)"), std::string::npos) << workers.out;
 }
 
 }  // namespace

@@ -37,9 +37,14 @@ TEST(DeviceList, GpuIndicesAreCudaEnginesOneEach) {
 // A GPU that is not there is refused at start naming it, never run on the CPU instead (this machine
 // has no device 99, with or without a CUDA build).
 TEST(DeviceList, AGpuThatCannotRunIsRefusedNamingIt) {
-  EXPECT_NO_THROW(CheckDevices(ParseDevices("cpu:2", 0, 2)));
+  auto cpus = ParseDevices("cpu:2", 0, 2);
+  DescribeDevices(cpus);
+  EXPECT_EQ(cpus[1].description.kind, "cpu");
+  EXPECT_FALSE(cpus[1].description.model.empty());
+  EXPECT_GT(cpus[1].description.memory_bytes, 0);
+  auto missing = ParseDevices("99", 0, 2);
   try {
-    CheckDevices(ParseDevices("99", 0, 2));
+    DescribeDevices(missing);
     FAIL() << "accepted CUDA device 99";
   } catch (const Error& e) {
     EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument);

@@ -1,8 +1,8 @@
 #include "worker/engine/run_config.h"
 
 #include "common/error.h"
+#include "worker/engine/device_description.h"
 #ifdef ENDORECON_WITH_CUDA
-#include "worker/engine/cuda/device.h"
 #include "worker/engine/cuda/device_step.h"
 #endif
 #include "worker/engine/train/checkpoint.h"
@@ -31,22 +31,12 @@ FrameSplit SplitFrames(int frames, int holdout) {
 }
 
 train::StepBackendFactory BackendFor(const std::string& device) {
-  if (device == "cpu") return train::MakeCpuStep;
-  const std::string prefix = "cuda:";
-  const std::string number = device.rfind(prefix, 0) == 0 ? device.substr(prefix.size()) : "";
-  if (number.empty() || number.size() > 3 || number.find_first_not_of("0123456789") != std::string::npos) {
-    FailInvalid("device '" + device + "': expected cpu or cuda:N (N a CUDA device index)");
-  }
+  const DeviceDescription described = DescribeDevice(device);
+  if (described.kind == "cpu") return train::MakeCpuStep;
 #ifdef ENDORECON_WITH_CUDA
-  const int index = std::stoi(number);
-  const cuda::DeviceList list = cuda::ListDevices();
-  if (index >= static_cast<int>(list.devices.size())) {
-    FailInvalid("device " + device + ": no such CUDA device (" +
-                (list.problem.empty() ? std::to_string(list.devices.size()) + " found" : list.problem) + ")");
-  }
-  return cuda::DeviceStepFactory(index);
+  return cuda::DeviceStepFactory(described.cuda_index);
 #else
-  FailInvalid("device " + device + ": this build has no CUDA engine (it was built without a CUDA toolkit)");
+  Fail(ErrorCode::kInternal, "DescribeDevice accepted " + device + " in a build without CUDA");
 #endif
 }
 

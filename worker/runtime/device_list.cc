@@ -4,7 +4,6 @@
 #include <sstream>
 
 #include "common/error.h"
-#include "worker/engine/run_config.h"
 
 namespace endorecon::worker {
 namespace {
@@ -39,10 +38,8 @@ std::vector<Device> ParseDevices(const std::string& spec, int threads, int cores
   return devices;
 }
 
-void CheckDevices(const std::vector<Device>& devices) {
-  for (const auto& device : devices) {
-    if (device.kind == "cuda") BackendFor(device.EngineDevice());
-  }
+void DescribeDevices(std::vector<Device>& devices) {
+  for (auto& device : devices) device.description = DescribeDevice(device.EngineDevice());
 }
 
 }  // namespace endorecon::worker

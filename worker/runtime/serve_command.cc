@@ -84,9 +84,9 @@ int Serve(const ServeFlags& flags) {
   sigaddset(&stop_signals, SIGTERM);
   pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
 
-  const auto devices =
+  auto devices =
       ParseDevices(flags.devices, flags.threads, static_cast<int>(std::thread::hardware_concurrency()));
-  CheckDevices(devices);
+  DescribeDevices(devices);
   const std::string worker_id = flags.id.empty() ? Hostname() + "-" + std::to_string(getpid()) : flags.id;
   WorkerMetrics metrics(
       flags.metrics_port >= 0 ? flags.metrics_host + ":" + std::to_string(flags.metrics_port) : "", devices);
@@ -111,7 +111,7 @@ int Serve(const ServeFlags& flags) {
   });
   while (!shutting_down) {
     try {
-      const auto registered = client.Register(Hostname(), names);
+      const auto registered = client.Register(Hostname(), devices);
       settings.heartbeat = std::chrono::milliseconds(registered.heartbeat_interval_ms());
       break;
     } catch (const Error& e) {
@@ -146,7 +146,8 @@ Command AddServeCommand(CLI::App& app) {
   auto* cmd =
       app.add_subcommand("serve", "lease jobs from endorecon-server and run them, one engine per device");
   cmd->add_option("--server", flags->server, "server address host:port")->capture_default_str();
-  cmd->add_option("--devices", flags->devices, "cpu, cpu:N (N slots) or CUDA device indices 0,1,... (one engine each)")
+  cmd->add_option("--devices", flags->devices,
+                  "cpu, cpu:N (N slots) or CUDA device indices 0,1,... (one engine each)")
       ->capture_default_str();
   cmd->add_option("--metrics-port", flags->metrics_port,
                   "Prometheus /metrics port (0 picks one, -1 disables)")

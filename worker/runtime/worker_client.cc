@@ -12,12 +12,19 @@ WorkerClient::WorkerClient(const std::string& server, const ChannelSecurity& sec
       worker_id_(std::move(worker_id)),
       timeout_(timeout) {}
 
-v1::RegisterResponse WorkerClient::Register(const std::string& hostname,
-                                            const std::vector<std::string>& devices) {
+v1::RegisterResponse WorkerClient::Register(const std::string& hostname, const std::vector<Device>& devices) {
   v1::RegisterRequest request;
   request.set_worker_id(worker_id_);
   request.set_hostname(hostname);
-  for (const auto& device : devices) request.add_devices(device);
+  for (const auto& device : devices) {
+    request.add_devices(device.name);
+    auto* info = request.add_device_info();
+    info->set_name(device.name);
+    info->set_kind(device.kind);
+    info->set_model(device.description.model);
+    info->set_memory_bytes(device.description.memory_bytes);
+    info->set_threads(device.threads);
+  }
   request.set_version("0.1.0");
   v1::RegisterResponse response;
   auto context = CallContext(timeout_);

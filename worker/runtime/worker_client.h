@@ -13,6 +13,7 @@
 
 #include "common/transport_security.h"
 #include "endorecon/v1/worker_service.grpc.pb.h"
+#include "worker/runtime/device_list.h"
 
 namespace endorecon::worker {
 
@@ -23,7 +24,7 @@ class WorkerClient {
                std::chrono::milliseconds timeout);
 
   const std::string& worker_id() const { return worker_id_; }
-  v1::RegisterResponse Register(const std::string& hostname, const std::vector<std::string>& devices);
+  v1::RegisterResponse Register(const std::string& hostname, const std::vector<Device>& devices);
   // Waits up to `wait` for a job; nullopt when none came (or CancelLeases() was called).
   std::optional<v1::LeaseResponse> Lease(const std::string& device, std::chrono::milliseconds wait);
   // Ends every Lease call in flight (at shutdown).

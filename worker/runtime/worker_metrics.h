@@ -5,6 +5,9 @@
 //   endorecon_worker_busy{device}                gauge: 1 while the device runs a job
 //   endorecon_worker_memory_bytes                gauge: resident memory of the worker process
 //   endorecon_worker_device_info{device,kind}    gauge, always 1: the devices and what they are
+//   endorecon_worker_gpu_memory_used_bytes{device}, endorecon_worker_gpu_memory_total_bytes{device},
+//   endorecon_worker_gpu_utilization{device}     gauges of each GPU (0..1: the share of time a kernel
+//                                                ran), read through NVML where the driver has it
 #pragma once
 
 #include <prometheus/counter.h>
@@ -17,6 +20,7 @@
 #include <vector>
 
 #include "worker/runtime/device_list.h"
+#include "worker/runtime/gpu_monitor.h"
 
 namespace endorecon::worker {
 
@@ -34,14 +38,23 @@ class WorkerMetrics {
     prometheus::Gauge& busy;
   };
   DeviceGauges& For(const std::string& device);
-  // Refreshes the memory gauge from /proc/self/statm.
+  // Refreshes the memory gauge from /proc/self/statm and the GPUs' gauges from NVML.
   void UpdateMemory();
 
  private:
+  void AddGpuGauges(const std::vector<Device>& devices);
   std::shared_ptr<prometheus::Registry> registry_;
   std::unique_ptr<prometheus::Exposer> exposer_;
   prometheus::Gauge& memory_;
   std::vector<std::pair<std::string, DeviceGauges>> devices_;
+  struct GpuGauges {
+    std::string pci_bus_id;
+    prometheus::Gauge& used;
+    prometheus::Gauge& total;
+    prometheus::Gauge& utilization;
+  };
+  std::unique_ptr<GpuMonitor> gpu_monitor_;  // null without GPUs or without NVML
+  std::vector<GpuGauges> gpus_;
 };
 
 }  // namespace endorecon::worker

@@ -1,5 +1,6 @@
 #include <cuda_runtime.h>
 
+#include <cstdio>
 #include <string>
 
 #include "common/error.h"
@@ -63,6 +64,9 @@ DeviceList ListDevices() {
     info.compute_minor = prop.minor;
     info.multiprocessors = prop.multiProcessorCount;
     info.total_memory_bytes = prop.totalGlobalMem;
+    char bus_id[32] = {};
+    std::snprintf(bus_id, sizeof bus_id, "%04x:%02x:%02x.0", prop.pciDomainID, prop.pciBusID, prop.pciDeviceID);
+    info.pci_bus_id = bus_id;
     list.devices.push_back(info);
   }
   return list;

@@ -23,6 +23,7 @@ struct DeviceInfo {
   int compute_major = 0, compute_minor = 0;
   int multiprocessors = 0;
   std::size_t total_memory_bytes = 0;
+  std::string pci_bus_id;  // "0000:3b:00.0": how NVML and nvidia-smi name the same device
 };
 
 // What ListDevices found: the devices, or none and why (no driver, no device, driver too old).
