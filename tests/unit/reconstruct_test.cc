@@ -8,6 +8,7 @@
 #include <chrono>
 #include <fstream>
 #include <thread>
+#include <vector>
 
 #include "tests/unit/temp_dir.h"
 #include "worker/engine/scene/synthetic_clip.h"
@@ -70,6 +71,39 @@ TEST(Reconstruct, TwoRunsInOneProcessEachKeepTheirThreadCount) {
   EXPECT_LT(two.first, one.last);
   EXPECT_EQ(one.summary.iterations, 60);
   EXPECT_EQ(two.summary.iterations, 60);
+}
+
+// A run ended by its time budget, far below its iteration cap: the progress it reports goes on
+// towards 100% of the budget (not of the cap), and its last report is the run's end.
+TEST(Reconstruct, ProgressUnderABudgetEndsAtTheIterationsRun) {
+  testing::TempDir dir("reconstruct-budget");
+  scene::SynthOptions synth;
+  synth.frames = 8;
+  synth.width = 40;
+  synth.height = 32;
+  scene::WriteSyntheticClip(synth, dir / "clip");
+  ReconstructOptions options;
+  options.clip_dir = (dir / "clip").string();
+  options.out_dir = (dir / "out").string();
+  options.iterations = 1'000'000;
+  options.time_budget_s = 1.5;
+  options.holdout = 4;
+  options.config = {
+      {"rays_per_batch", 256}, {"mc_passes", 1}, {"eval_coarse_samples", 8}, {"eval_fine_samples", 8}};
+  std::vector<Progress> reports;
+  ReconstructHooks hooks;
+  hooks.progress_interval_s = 0.2;
+  hooks.on_progress = [&](const Progress& p) { reports.push_back(p); };
+  const ReconstructSummary summary = Reconstruct(options, hooks);
+  ASSERT_GE(reports.size(), 2u);
+  const Progress& last = reports.back();
+  EXPECT_EQ(last.iteration, summary.iterations);
+  EXPECT_EQ(last.total_iterations, summary.iterations) << "the last report says the run is complete";
+  EXPECT_EQ(last.eta_s, 0);
+  EXPECT_LT(summary.iterations, 1'000'000);
+  const Progress& middle = reports[reports.size() / 2];
+  const double share = static_cast<double>(middle.iteration) / middle.total_iterations;
+  EXPECT_NEAR(share, middle.seconds / options.time_budget_s, 0.1) << "the share done is the budget's";
 }
 
 }  // namespace

@@ -34,6 +34,8 @@ struct ReconstructOptions {
 
 struct Progress {
   int iteration = 0;
+  // The iteration cap, or with a time budget the iterations the current pace reaches within it
+  // (iteration / total_iterations is the share of the run done; at the end, the iterations run).
   int total_iterations = 0;
   double seconds = 0;
   double eta_s = 0;

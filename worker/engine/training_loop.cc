@@ -1,6 +1,8 @@
 #include "worker/engine/training_loop.h"
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 
 #include "worker/engine/eval/curve_probe.h"
 #include "worker/engine/train/run_clock.h"
@@ -49,6 +51,8 @@ class TrainingLoop {
         extras_.curve.back().at("iteration").get<int>() != run_.trainer.iteration()) {
       AddCurvePoint(result.last);
     }
+    // The last word on training: a finished job shows where it ended, not its last interval.
+    if (!result.cancelled) ReportProgress(result.last);
     Checkpoint();
     result.samples_per_second = clock_.SamplesPerSecond();
     return result;
@@ -72,7 +76,16 @@ class TrainingLoop {
   }
 
   void ReportProgress(const train::StepStats& stats) {
-    progress_.iteration = run_.trainer.iteration();
+    const int iteration = run_.trainer.iteration();
+    // With a time budget the run may end before its iteration cap: the total is then the count the
+    // current pace reaches within the budget, so iteration / total is the share of the run done
+    // (and at the end the iterations run).
+    const double done = clock_.Progress(iteration);
+    progress_.total_iterations =
+        done > 0 ? std::min(config_.iterations,
+                            std::max(iteration, static_cast<int>(std::lround(iteration / done))))
+                 : config_.iterations;
+    progress_.iteration = iteration;
     progress_.seconds = clock_.seconds();
     progress_.loss = stats.loss;
     progress_.train_psnr = stats.psnr;
