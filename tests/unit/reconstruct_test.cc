@@ -26,6 +26,20 @@ struct Observed {
   nlohmann::json metrics;
 };
 
+// A small synthetic clip (8 frames of 40 x 32) at `dir`.
+void WriteSmallClip(const fs::path& dir) {
+  scene::SynthOptions synth;
+  synth.frames = 8;
+  synth.width = 40;
+  synth.height = 32;
+  scene::WriteSyntheticClip(synth, dir);
+}
+
+// A cheap configuration for runs on that clip.
+nlohmann::json SmallRunConfig() {
+  return {{"rays_per_batch", 256}, {"mc_passes", 1}, {"eval_coarse_samples", 8}, {"eval_fine_samples", 8}};
+}
+
 Observed RunReconstruct(const fs::path& clip, const fs::path& out, int threads) {
   ReconstructOptions options;
   options.clip_dir = clip.string();
@@ -33,8 +47,7 @@ Observed RunReconstruct(const fs::path& clip, const fs::path& out, int threads) 
   options.threads = threads;
   options.iterations = 60;
   options.holdout = 4;
-  options.config = {
-      {"rays_per_batch", 256}, {"mc_passes", 1}, {"eval_coarse_samples", 8}, {"eval_fine_samples", 8}};
+  options.config = SmallRunConfig();
   Observed observed;
   ReconstructHooks hooks;
   hooks.progress_interval_s = 0;
@@ -50,11 +63,7 @@ Observed RunReconstruct(const fs::path& clip, const fs::path& out, int threads) 
 
 TEST(Reconstruct, TwoRunsInOneProcessEachKeepTheirThreadCount) {
   testing::TempDir dir("reconstruct-threads");
-  scene::SynthOptions synth;
-  synth.frames = 8;
-  synth.width = 40;
-  synth.height = 32;
-  scene::WriteSyntheticClip(synth, dir / "clip");
+  WriteSmallClip(dir / "clip");
   Observed one, two;
   std::thread a([&] { one = RunReconstruct(dir / "clip", dir / "one", 1); });
   std::thread b([&] { two = RunReconstruct(dir / "clip", dir / "two", 2); });
@@ -77,19 +86,14 @@ TEST(Reconstruct, TwoRunsInOneProcessEachKeepTheirThreadCount) {
 // towards 100% of the budget (not of the cap), and its last report is the run's end.
 TEST(Reconstruct, ProgressUnderABudgetEndsAtTheIterationsRun) {
   testing::TempDir dir("reconstruct-budget");
-  scene::SynthOptions synth;
-  synth.frames = 8;
-  synth.width = 40;
-  synth.height = 32;
-  scene::WriteSyntheticClip(synth, dir / "clip");
+  WriteSmallClip(dir / "clip");
   ReconstructOptions options;
   options.clip_dir = (dir / "clip").string();
   options.out_dir = (dir / "out").string();
   options.iterations = 1'000'000;
   options.time_budget_s = 1.5;
   options.holdout = 4;
-  options.config = {
-      {"rays_per_batch", 256}, {"mc_passes", 1}, {"eval_coarse_samples", 8}, {"eval_fine_samples", 8}};
+  options.config = SmallRunConfig();
   std::vector<Progress> reports;
   ReconstructHooks hooks;
   hooks.progress_interval_s = 0.2;

@@ -1,38 +1,21 @@
 #include "worker/engine/device_description.h"
 
-#include <unistd.h>
-
-#include <fstream>
-
 #include "common/error.h"
+#include "worker/engine/eval/run_environment.h"
 #ifdef ENDORECON_WITH_CUDA
 #include "worker/engine/cuda/device.h"
 #endif
 
 namespace endorecon {
-namespace {
-
-// /proc/cpuinfo's first "model name" (x86; other machines may have none: then "CPU").
-std::string CpuModel() {
-  std::ifstream cpuinfo("/proc/cpuinfo");
-  std::string line;
-  while (std::getline(cpuinfo, line)) {
-    if (line.rfind("model name", 0) != 0) continue;
-    const auto colon = line.find(':');
-    if (colon != std::string::npos && colon + 2 <= line.size()) return line.substr(colon + 2);
-  }
-  return "CPU";
-}
-
-}  // namespace
 
 DeviceDescription DescribeDevice(const std::string& device) {
   DeviceDescription d;
   d.device = device;
   if (device == "cpu") {
     d.kind = "cpu";
-    d.model = CpuModel();
-    d.memory_bytes = static_cast<std::int64_t>(sysconf(_SC_PHYS_PAGES)) * sysconf(_SC_PAGESIZE);
+    const nlohmann::json machine = eval::DescribeRunEnvironment().at("machine");
+    d.model = machine.at("cpu").get<std::string>();
+    d.memory_bytes = static_cast<std::int64_t>(machine.at("memory_gib").get<double>() * (1 << 30));
     return d;
   }
   const std::string prefix = "cuda:";

@@ -31,11 +31,12 @@ FrameSplit SplitFrames(int frames, int holdout) {
 }
 
 train::StepBackendFactory BackendFor(const std::string& device) {
-  const DeviceDescription described = DescribeDevice(device);
-  if (described.kind == "cpu") return train::MakeCpuStep;
+  if (device == "cpu") return train::MakeCpuStep;
+    // DescribeDevice refuses, naming the reason, a device this build or machine cannot run.
 #ifdef ENDORECON_WITH_CUDA
-  return cuda::DeviceStepFactory(described.cuda_index);
+  return cuda::DeviceStepFactory(DescribeDevice(device).cuda_index);
 #else
+  DescribeDevice(device);
   Fail(ErrorCode::kInternal, "DescribeDevice accepted " + device + " in a build without CUDA");
 #endif
 }

@@ -112,8 +112,8 @@ void WriteStereoClip(const dicom::Recording& recording, const fs::path& clip_dir
     if (e.code() != ErrorCode::kInvalidArgument) throw;
     spdlog::warn("stereo recording: no depth prior ({}); the clip has both eyes without depth", e.what());
     fs::create_directories(clip_dir);
-    WriteFrames(recording.left, clip_dir / "images");
-    WriteFrames(recording.right, clip_dir / "images_right");
+    fs::rename(eyes / "left", clip_dir / "images");
+    fs::rename(eyes / "right", clip_dir / "images_right");
     WritePosesBounds(recording, clip_dir);
   }
   fs::remove_all(eyes);

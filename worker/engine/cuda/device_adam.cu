@@ -1,15 +1,10 @@
-#include <algorithm>
-#include <cmath>
 #include <cstring>
 #include <istream>
-#include <limits>
 #include <ostream>
 
-#include "common/error.h"
 #include "worker/engine/cuda/device.h"
 #include "worker/engine/cuda/device_adam.h"
 #include "worker/engine/cuda/launch.cuh"
-#include "worker/engine/train/adam_math.h"
 
 namespace endorecon::cuda {
 namespace {
@@ -58,91 +53,47 @@ DeviceAdam::~DeviceAdam() = default;
 
 train::AdamStepReport DeviceAdam::Step(double progress) {
   Impl& a = *impl_;
-  train::AdamStepReport report;
-  double total_sq = 0;
-  std::vector<double> group_max(a.blocks.size(), 0.0);
+  std::vector<train::GradientNorms> norms(a.blocks.size());
   for (std::size_t k = 0; k < a.blocks.size(); ++k) {
     const auto& b = a.blocks[k];
     a.sum_sq.Zero();
     a.max_bits.Zero();
     NormKernel<<<Blocks(b.size), kThreads>>>(b.grad, b.size, a.sum_sq.data(), a.max_bits.data());
     CheckLaunch("gradient norm kernel");
-    const double sq = a.sum_sq.Download()[0];
     const unsigned bits = a.max_bits.Download()[0];
     float max = 0;
     std::memcpy(&max, &bits, sizeof(max));
-    group_max[k] = max;
-    if ((!std::isfinite(sq) || !std::isfinite(max)) && report.finite) {
-      report.finite = false;
-      report.bad_group = b.name;
-    }
-    total_sq += sq;
+    norms[k] = {a.sum_sq.Download()[0], max};
   }
-  report.grad_norm = std::sqrt(total_sq);
-  if (!report.finite) return report;
-  float scale = 1.0f;
-  if (a.config.clip_norm > 0 && report.grad_norm > a.config.clip_norm) {
-    scale = static_cast<float>(a.config.clip_norm / report.grad_norm);
-  }
-  const double largest = std::sqrt(double(std::numeric_limits<float>::max()));
-  for (std::size_t k = 0; k < a.blocks.size(); ++k) {
-    if (group_max[k] * scale > largest) {
-      report.finite = false;
-      report.bad_group = a.blocks[k].name;
-      return report;
-    }
-  }
+  const train::StepPlan plan = train::PlanStep(norms, a.blocks, a.config);
+  if (!plan.report.finite) return plan.report;
   ++a.steps;
-  const float decay =
-      static_cast<float>(std::pow(double(a.config.final_lr_factor), std::clamp(progress, 0.0, 1.0)));
-  const float c1 = 1.0f - static_cast<float>(std::pow(double(a.config.beta1), double(a.steps)));
-  const float c2 = 1.0f - static_cast<float>(std::pow(double(a.config.beta2), double(a.steps)));
   for (std::size_t k = 0; k < a.blocks.size(); ++k) {
     const auto& b = a.blocks[k];
-    const auto it = a.config.lr.find(b.name);
-    const float lr = (it == a.config.lr.end() ? a.config.default_lr : it->second) * decay;
-    const train::AdamCoefficients coefficients{a.config.beta1, a.config.beta2, lr * std::sqrt(c2) / c1,
-                                               a.config.eps * std::sqrt(c2), scale};
-    UpdateKernel<<<Blocks(b.size), kThreads>>>(b.value, b.grad, a.m[k].data(), a.v[k].data(), b.size,
-                                               coefficients);
+    UpdateKernel<<<Blocks(b.size), kThreads>>>(
+        b.value, b.grad, a.m[k].data(), a.v[k].data(), b.size,
+        train::CoefficientsFor(a.config, b.name, a.steps, progress, plan.scale));
     CheckLaunch("Adam update kernel");
   }
-  return report;
+  return plan.report;
 }
 
 void DeviceAdam::Save(std::ostream& out) const {
   const Impl& a = *impl_;
-  const std::uint64_t count = a.blocks.size();
-  out.write(reinterpret_cast<const char*>(&a.steps), sizeof(a.steps));
-  out.write(reinterpret_cast<const char*>(&count), sizeof(count));
+  train::WriteAdamHeader(out, a.steps, a.blocks.size());
   for (std::size_t k = 0; k < a.blocks.size(); ++k) {
-    const std::uint64_t size = a.blocks[k].size;
-    out.write(reinterpret_cast<const char*>(&size), sizeof(size));
-    for (const auto* moment : {&a.m[k], &a.v[k]}) {
-      const std::vector<float> host = moment->Download();
-      out.write(reinterpret_cast<const char*>(host.data()), std::streamsize(size * sizeof(float)));
-    }
+    train::WriteAdamBlock(out, a.blocks[k].size, a.m[k].Download().data(), a.v[k].Download().data());
   }
 }
 
 void DeviceAdam::Load(std::istream& in) {
   Impl& a = *impl_;
-  std::uint64_t count = 0;
-  in.read(reinterpret_cast<char*>(&a.steps), sizeof(a.steps));
-  in.read(reinterpret_cast<char*>(&count), sizeof(count));
-  if (!in || count != a.blocks.size()) Fail(ErrorCode::kDataLoss, "optimiser state: group count mismatch");
+  a.steps = train::ReadAdamHeader(in, a.blocks.size());
   for (std::size_t k = 0; k < a.blocks.size(); ++k) {
-    std::uint64_t size = 0;
-    in.read(reinterpret_cast<char*>(&size), sizeof(size));
-    if (!in || size != a.blocks[k].size) {
-      Fail(ErrorCode::kDataLoss, "optimiser state: size mismatch in group " + a.blocks[k].name);
-    }
-    for (auto* moment : {&a.m[k], &a.v[k]}) {
-      std::vector<float> host(size);
-      in.read(reinterpret_cast<char*>(host.data()), std::streamsize(size * sizeof(float)));
-      if (!in) Fail(ErrorCode::kDataLoss, "optimiser state: truncated in group " + a.blocks[k].name);
-      moment->Upload(host);
-    }
+    std::vector<float> m(a.blocks[k].size), v(a.blocks[k].size);
+    train::ReadAdamBlock(in, a.blocks[k], m.data(), v.data());
+    a.m[k].Upload(m);
+    a.v[k].Upload(v);
   }
 }
 

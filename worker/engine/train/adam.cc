@@ -10,7 +10,6 @@
 #include <ostream>
 
 #include "common/error.h"
-#include "worker/engine/train/adam_math.h"
 
 namespace endorecon::train {
 
@@ -22,22 +21,84 @@ Adam::Adam(std::vector<field::ParamBlock<float>> groups, AdamConfig config)
   }
 }
 
-AdamStepReport Adam::Step(double progress) {
-  AdamStepReport report;
+StepPlan PlanStep(const std::vector<GradientNorms>& norms,
+                  const std::vector<field::ParamBlock<float>>& blocks, const AdamConfig& config) {
+  StepPlan plan;
   double sum_sq = 0;
-  std::vector<double> group_max(groups_.size(), 0.0);
+  for (std::size_t k = 0; k < norms.size(); ++k) {
+    if ((!std::isfinite(norms[k].sq) || !std::isfinite(norms[k].max)) && plan.report.finite) {
+      plan.report.finite = false;
+      plan.report.bad_group = blocks[k].name;
+    }
+    sum_sq += norms[k].sq;
+  }
+  plan.report.grad_norm = std::sqrt(sum_sq);
+  if (!plan.report.finite) return plan;
+  if (config.clip_norm > 0 && plan.report.grad_norm > config.clip_norm) {
+    plan.scale = static_cast<float>(config.clip_norm / plan.report.grad_norm);
+  }
+  const double largest = std::sqrt(double(std::numeric_limits<float>::max()));
+  for (std::size_t k = 0; k < norms.size(); ++k) {
+    if (norms[k].max * plan.scale > largest) {
+      plan.report.finite = false;
+      plan.report.bad_group = blocks[k].name;
+      return plan;
+    }
+  }
+  return plan;
+}
+
+AdamCoefficients CoefficientsFor(const AdamConfig& config, const std::string& name, long long steps,
+                                 double progress, float scale) {
+  const float decay =
+      static_cast<float>(std::pow(double(config.final_lr_factor), std::clamp(progress, 0.0, 1.0)));
+  const float c1 = 1.0f - static_cast<float>(std::pow(double(config.beta1), double(steps)));
+  const float c2 = 1.0f - static_cast<float>(std::pow(double(config.beta2), double(steps)));
+  const auto it = config.lr.find(name);
+  const float lr = (it == config.lr.end() ? config.default_lr : it->second) * decay;
+  return {config.beta1, config.beta2, lr * std::sqrt(c2) / c1, config.eps * std::sqrt(c2), scale};
+}
+
+void WriteAdamHeader(std::ostream& out, long long steps, std::size_t blocks) {
+  const std::uint64_t count = blocks;
+  out.write(reinterpret_cast<const char*>(&steps), sizeof(steps));
+  out.write(reinterpret_cast<const char*>(&count), sizeof(count));
+}
+
+void WriteAdamBlock(std::ostream& out, std::uint64_t size, const float* m, const float* v) {
+  out.write(reinterpret_cast<const char*>(&size), sizeof(size));
+  out.write(reinterpret_cast<const char*>(m), std::streamsize(size * sizeof(float)));
+  out.write(reinterpret_cast<const char*>(v), std::streamsize(size * sizeof(float)));
+}
+
+long long ReadAdamHeader(std::istream& in, std::size_t blocks) {
+  long long steps = 0;
+  std::uint64_t count = 0;
+  in.read(reinterpret_cast<char*>(&steps), sizeof(steps));
+  in.read(reinterpret_cast<char*>(&count), sizeof(count));
+  if (!in || count != blocks) Fail(ErrorCode::kDataLoss, "optimiser state: group count mismatch");
+  return steps;
+}
+
+void ReadAdamBlock(std::istream& in, const field::ParamBlock<float>& block, float* m, float* v) {
+  std::uint64_t size = 0;
+  in.read(reinterpret_cast<char*>(&size), sizeof(size));
+  if (!in || size != block.size)
+    Fail(ErrorCode::kDataLoss, "optimiser state: size mismatch in group " + block.name);
+  in.read(reinterpret_cast<char*>(m), std::streamsize(size * sizeof(float)));
+  in.read(reinterpret_cast<char*>(v), std::streamsize(size * sizeof(float)));
+  if (!in) Fail(ErrorCode::kDataLoss, "optimiser state: truncated in group " + block.name);
+}
+
+AdamStepReport Adam::Step(double progress) {
+  std::vector<GradientNorms> norms(groups_.size());
   for (std::size_t k = 0; k < groups_.size(); ++k) {
     const auto& g = groups_[k];
     // Sum of squares and largest magnitude, over blocks in parallel (a serial pass over the ~10^6
     // grid gradients left the second core idle for a few per cent of every step).
-    struct Norms {
-      double sq = 0, max = 0;
-    };
-    const Norms norms = tbb::parallel_reduce(
-        tbb::blocked_range<std::size_t>(0, g.size, 1 << 14), Norms{},
-        [&](const tbb::blocked_range<std::size_t>& r, Norms acc) {
-          // Squares in double: a gradient the clipping can still rescue (above sqrt(FLT_MAX)) must not
-          // read as Inf here.
+    norms[k] = tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, g.size, 1 << 14), GradientNorms{},
+        [&](const tbb::blocked_range<std::size_t>& r, GradientNorms acc) {
           double sq = 0;
           float max = 0;
           for (std::size_t i = r.begin(); i != r.end(); ++i) {
@@ -48,45 +109,16 @@ AdamStepReport Adam::Step(double progress) {
           acc.max = std::max(acc.max, double(max));
           return acc;
         },
-        [](Norms a, const Norms& b) {
-          return Norms{a.sq + b.sq, std::max(a.max, b.max)};
+        [](GradientNorms a, const GradientNorms& b) {
+          return GradientNorms{a.sq + b.sq, std::max(a.max, b.max)};
         });
-    const double group_sq = norms.sq;
-    group_max[k] = norms.max;
-    if (!std::isfinite(group_sq) && report.finite) {
-      report.finite = false;
-      report.bad_group = g.name;
-    }
-    sum_sq += group_sq;
   }
-  report.grad_norm = std::sqrt(sum_sq);
-  if (!report.finite) return report;
-
-  float scale = 1.0f;
-  if (config_.clip_norm > 0 && report.grad_norm > config_.clip_norm) {
-    scale = static_cast<float>(config_.clip_norm / report.grad_norm);
-  }
-  // The second moment is kept in float: a (scaled) gradient above sqrt(FLT_MAX) would make it Inf and
-  // freeze that parameter for good (m / sqrt(Inf) = 0) without any NaN. Refuse the step instead.
-  const double largest = std::sqrt(double(std::numeric_limits<float>::max()));
-  for (std::size_t k = 0; k < groups_.size(); ++k) {
-    if (group_max[k] * scale > largest) {
-      report.finite = false;
-      report.bad_group = groups_[k].name;
-      return report;
-    }
-  }
+  const StepPlan plan = PlanStep(norms, groups_, config_);
+  if (!plan.report.finite) return plan.report;
   ++steps_;
-  const float decay =
-      static_cast<float>(std::pow(double(config_.final_lr_factor), std::clamp(progress, 0.0, 1.0)));
-  const float c1 = 1.0f - static_cast<float>(std::pow(double(config_.beta1), double(steps_)));
-  const float c2 = 1.0f - static_cast<float>(std::pow(double(config_.beta2), double(steps_)));
   for (std::size_t k = 0; k < groups_.size(); ++k) {
     const auto& g = groups_[k];
-    auto it = config_.lr.find(g.name);
-    const float lr = (it == config_.lr.end() ? config_.default_lr : it->second) * decay;
-    const AdamCoefficients coefficients{config_.beta1, config_.beta2, lr * std::sqrt(c2) / c1,
-                                        config_.eps * std::sqrt(c2), scale};
+    const AdamCoefficients coefficients = CoefficientsFor(config_, g.name, steps_, progress, plan.scale);
     float* m = m_[k].data();
     float* v = v_[k].data();
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, g.size, 1 << 14), [&](const auto& r) {
@@ -94,36 +126,18 @@ AdamStepReport Adam::Step(double progress) {
         AdamUpdate(g.value[i], g.grad[i], m[i], v[i], coefficients);
     });
   }
-  return report;
+  return plan.report;
 }
 
 void Adam::Save(std::ostream& out) const {
-  const std::uint64_t count = groups_.size();
-  out.write(reinterpret_cast<const char*>(&steps_), sizeof(steps_));
-  out.write(reinterpret_cast<const char*>(&count), sizeof(count));
-  for (std::size_t k = 0; k < groups_.size(); ++k) {
-    const std::uint64_t size = groups_[k].size;
-    out.write(reinterpret_cast<const char*>(&size), sizeof(size));
-    out.write(reinterpret_cast<const char*>(m_[k].data()), std::streamsize(size * sizeof(float)));
-    out.write(reinterpret_cast<const char*>(v_[k].data()), std::streamsize(size * sizeof(float)));
-  }
+  WriteAdamHeader(out, steps_, groups_.size());
+  for (std::size_t k = 0; k < groups_.size(); ++k)
+    WriteAdamBlock(out, groups_[k].size, m_[k].data(), v_[k].data());
 }
 
 void Adam::Load(std::istream& in) {
-  std::uint64_t count = 0;
-  in.read(reinterpret_cast<char*>(&steps_), sizeof(steps_));
-  in.read(reinterpret_cast<char*>(&count), sizeof(count));
-  if (!in || count != groups_.size()) Fail(ErrorCode::kDataLoss, "optimiser state: group count mismatch");
-  for (std::size_t k = 0; k < groups_.size(); ++k) {
-    std::uint64_t size = 0;
-    in.read(reinterpret_cast<char*>(&size), sizeof(size));
-    if (!in || size != groups_[k].size) {
-      Fail(ErrorCode::kDataLoss, "optimiser state: size mismatch in group " + groups_[k].name);
-    }
-    in.read(reinterpret_cast<char*>(m_[k].data()), std::streamsize(size * sizeof(float)));
-    in.read(reinterpret_cast<char*>(v_[k].data()), std::streamsize(size * sizeof(float)));
-    if (!in) Fail(ErrorCode::kDataLoss, "optimiser state: truncated in group " + groups_[k].name);
-  }
+  steps_ = ReadAdamHeader(in, groups_.size());
+  for (std::size_t k = 0; k < groups_.size(); ++k) ReadAdamBlock(in, groups_[k], m_[k].data(), v_[k].data());
 }
 
 }  // namespace endorecon::train

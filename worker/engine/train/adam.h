@@ -1,12 +1,14 @@
 // Adam with per-group learning rates, exponential decay and optional global-norm gradient clipping.
 #pragma once
 
+#include <cstdint>
 #include <iosfwd>
 #include <map>
 #include <string>
 #include <vector>
 
 #include "worker/engine/field/param_block.h"
+#include "worker/engine/train/adam_math.h"
 
 namespace endorecon::train {
 
@@ -25,6 +27,32 @@ struct AdamStepReport {
   bool finite = true;
   std::string bad_group;  // the first group holding such a gradient
 };
+
+// What train::Adam and cuda::DeviceAdam share on the host, so the two differ only in where the
+// loops run.
+// One block's gradient over a step: the sum of squares (in double: a gradient the clipping can
+// still rescue, above sqrt(FLT_MAX), must not read as Inf) and the largest magnitude.
+struct GradientNorms {
+  double sq = 0, max = 0;
+};
+struct StepPlan {
+  AdamStepReport report;
+  float scale = 1;  // gradient clipping's factor
+};
+// The report and the clip scale of a step from each block's norms: not finite when a block's
+// gradient is NaN/Inf, or when after clipping its largest value's square would overflow the float
+// second moment (which would freeze that parameter for good, m / sqrt(Inf) = 0, without any NaN).
+StepPlan PlanStep(const std::vector<GradientNorms>& norms,
+                  const std::vector<field::ParamBlock<float>>& blocks, const AdamConfig& config);
+// The update coefficients of block `name` at step `steps` (counted from 1) and run `progress`.
+AdamCoefficients CoefficientsFor(const AdamConfig& config, const std::string& name, long long steps,
+                                 double progress, float scale);
+// The optimiser state's stream format: steps and block count, then per block its size, m and v.
+void WriteAdamHeader(std::ostream& out, long long steps, std::size_t blocks);
+void WriteAdamBlock(std::ostream& out, std::uint64_t size, const float* m, const float* v);
+// Throw Error(kDataLoss) on another block count, another size or a truncated stream.
+long long ReadAdamHeader(std::istream& in, std::size_t blocks);
+void ReadAdamBlock(std::istream& in, const field::ParamBlock<float>& block, float* m, float* v);
 
 class Adam {
  public:
