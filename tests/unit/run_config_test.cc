@@ -24,6 +24,18 @@ TEST(RunConfig, TheOptionsGoOverThePreset) {
   EXPECT_EQ(config.holdout, 0);
 }
 
+TEST(RunConfig, WithABudgetTheIterationCountIsACapOnlyWhenGiven) {
+  ReconstructOptions options;
+  options.time_budget_s = 120;
+  EXPECT_EQ(ResolveConfig(options).iterations, 0) << "no cap: the schedule runs on time";
+  options.iterations = 500;
+  EXPECT_EQ(ResolveConfig(options).iterations, 500);
+  options = {};
+  EXPECT_EQ(ResolveConfig(options).iterations, train::TrainConfig::Preset("cpu").iterations);
+  options.config = {{"iterations", 0}};  // e.g. a budgeted run's configuration, run without a budget
+  EXPECT_EQ(ResolveConfig(options).iterations, train::TrainConfig::Preset("cpu").iterations);
+}
+
 TEST(RunConfig, AConfigThatIsNoObjectOrHasAnUnknownKeyIsRefused) {
   ReconstructOptions options;
   options.config = nlohmann::json::array({1, 2});

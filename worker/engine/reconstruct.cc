@@ -5,11 +5,13 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <chrono>
 #include <filesystem>
 #include <thread>
 
 #include "common/file_write.h"
 #include "worker/engine/eval/clip_evaluator.h"
+#include "worker/engine/eval/eval_plan.h"
 #include "worker/engine/eval/report.h"
 #include "worker/engine/eval/run_outputs.h"
 #include "worker/engine/field/field_description.h"
@@ -27,28 +29,37 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::literals::operator""_json_pointer;
 
-// Renders and measures every frame into out_dir with the final field (occupancy rebuilt from it), and
-// records what the occupancy grid left out.
-nlohmann::json Evaluate(train::Trainer& trainer, const scene::Clip& clip, const FrameSplit& split,
-                        render::FrameRenderer& renderer, const fs::path& out_dir, nlohmann::json& left_out) {
+using Clock = std::chrono::steady_clock;
+
+double Since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+
+// Evaluation's share of a run by default: the budget is the job's, and training is its main work.
+constexpr double kEvaluationShare = 0.25;
+
+// Seconds writing takes after the last frame renders (the uncertainty heat maps, video, model,
+// metrics and report page), per pixel of the clip: measured on the 2-core VM (docs/benchmarks.md,
+// "The budget is the job") and rounded up.
+constexpr double kTailSecondsPerPixel = 1.0e-6;
+
+double TailSeconds(const scene::Clip& clip) {
+  return kTailSecondsPerPixel * double(clip.frame_count()) * clip.width * clip.height;
+}
+
+// Records what the occupancy grid leaves out of the final field's renders (rebuilt from it).
+void RebuildOccupancy(train::Trainer& trainer, nlohmann::json& left_out) {
   trainer.RebuildOccupancy();
-  if (!trainer.occupancy().empty()) {
-    const auto& config = trainer.config();
-    left_out.push_back(
-        {{"what", fmt::format("sampling of {:.1f}% of the rays' range (occupancy grid {}^3, {:.1f}% of the "
-                              "scene box empty)",
-                              100.0 * (1.0 - trainer.occupancy_span_fraction()), config.occupancy_resolution,
-                              100.0 * (1.0 - trainer.occupancy().occupied_fraction()))},
-         {"why",
-          fmt::format("empty: alpha below {} per cell at every probed time", config.occupancy_min_alpha)}});
-  }
-  eval::ClipEvaluation what;
-  what.train_frames = split.train;
-  what.heldout_frames = split.heldout;
-  return eval::EvaluateClip(clip, renderer, what, out_dir);
+  if (trainer.occupancy().empty()) return;
+  const auto& config = trainer.config();
+  left_out.push_back(
+      {{"what", fmt::format("sampling of {:.1f}% of the rays' range (occupancy grid {}^3, {:.1f}% of the "
+                            "scene box empty)",
+                            100.0 * (1.0 - trainer.occupancy_span_fraction()), config.occupancy_resolution,
+                            100.0 * (1.0 - trainer.occupancy().occupied_fraction()))},
+       {"why", fmt::format("empty: alpha below {} per cell at every probed time", config.occupancy_min_alpha)}});
 }
 
 ReconstructSummary RunPipeline(const ReconstructOptions& options, const ReconstructHooks& hooks) {
+  const auto run_start = Clock::now();
   const int threads = tbb::this_task_arena::max_concurrency();
   scene::LoadOptions load;
   load.force_static = options.force_static;
@@ -77,6 +88,18 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
   renderer.SetOccupancy(&trainer.occupancy());
   uncertainty_renderer.SetOccupancy(&trainer.occupancy());
 
+  // Reduced frames' colour and depth (eval/eval_plan.h): half the samples per ray.
+  render::FrameRenderer reduced_renderer(trainer.field(), trainer.box(),
+                                         train::ReducedRenderSettings(config, clip.near, clip.far));
+  reduced_renderer.SetOccupancy(&trainer.occupancy());
+  const auto MeasureCost = [&] {
+    const int f = split.heldout.empty() ? 0 : split.heldout.front();
+    return eval::MeasureRenderCost(uncertainty_renderer, reduced_renderer, clip.cameras[f], clip.times[f]);
+  };
+  const int pixels = clip.width * clip.height;
+  const double tail_s = TailSeconds(clip);
+  const bool full_evaluation = options.full_evaluation;
+  const double load_s = Since(run_start);
   const TrainingRun run{trainer,
                         clip,
                         split,
@@ -84,16 +107,49 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
                         renderer,
                         uncertainty_renderer,
                         options.time_budget_s,
+                        run_start,
+                        // Evaluation's reserve: its plan within its share, never more than the share
+                        // (when even the leanest plan costs more, evaluation overruns, not training).
+                        [&] {
+                          const double share = kEvaluationShare * options.time_budget_s;
+                          if (full_evaluation) return share + tail_s;
+                          const double plan = eval::PlanEvaluation(clip.frame_count(), split.heldout, pixels,
+                                                                   MeasureCost(), share)
+                                                  .seconds;
+                          return std::min(plan, share) + tail_s;
+                        },
                         out_dir / "model" / "checkpoint.bin"};
   const TrainingResult trained = Train(run, hooks, extras);
+  const auto after_training = Clock::now();
   trainer.SyncField();
   train::WriteModel(out_dir / "model" / "model.bin", config, trainer.box(), clip.near, clip.far,
                     trainer.field());
 
   nlohmann::json left_out = fit.left_out;
-  nlohmann::json metrics = trained.cancelled
-                               ? nlohmann::json::object()
-                               : Evaluate(trainer, clip, split, uncertainty_renderer, out_dir, left_out);
+  nlohmann::json metrics = nlohmann::json::object();
+  double evaluation_s = 0;
+  if (!trained.cancelled) {
+    const auto start = Clock::now();
+    RebuildOccupancy(trainer, left_out);
+    eval::ClipEvaluation what;
+    what.train_frames = split.train;
+    what.heldout_frames = split.heldout;
+    what.plain = &reduced_renderer;
+    if (!full_evaluation) {
+      // The time evaluation may take: what the budget has left (less the writing after it), or
+      // without a budget a third of the training phase (a quarter of the run).
+      const double available = options.time_budget_s > 0
+                                   ? options.time_budget_s - extras.train_seconds + trained.step_seconds -
+                                         Since(run_start) - tail_s
+                                   : trained.wall_seconds * kEvaluationShare / (1 - kEvaluationShare);
+      what.plan = eval::PlanEvaluation(clip.frame_count(), split.heldout, pixels, MeasureCost(),
+                                       std::max(available - Since(start), 1e-3));
+      what.deadline = start + std::chrono::duration_cast<Clock::duration>(
+                                  std::chrono::duration<double>(std::max(available, 0.0)));
+    }
+    metrics = eval::EvaluateClip(clip, uncertainty_renderer, what, out_dir);
+    evaluation_s = Since(start);
+  }
   metrics["iterations"] = trainer.iteration();
   metrics["train_seconds"] = extras.train_seconds;
   metrics["samples_per_second"] = trained.samples_per_second;
@@ -104,8 +160,20 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
   metrics["left_out"] = left_out;
   metrics["field"] = field::DescribeField(trainer.field());
   eval::WriteCurve(out_dir / "curve.svg", extras.curve);
+  // Where this process's time went, up to this file; the report page, written last from it (and
+  // showing it as it is), takes a few tenths of a second more, logged.
+  metrics["time"] = {{"budget_s", options.time_budget_s},
+                     {"total_s", Since(run_start)},
+                     {"load_s", load_s},
+                     {"training_s", trained.wall_seconds},
+                     {"training_steps_s", trained.step_seconds},
+                     {"evaluation_s", evaluation_s},
+                     {"writing_s", Since(after_training) - evaluation_s}};
   eval::WriteMetrics(out_dir / "metrics.json", metrics);
   eval::WriteReport(out_dir);
+  spdlog::info("run took {:.1f} s ({:.1f} s training, {:.1f} s evaluation{})", Since(run_start),
+               trained.wall_seconds, evaluation_s,
+               options.time_budget_s > 0 ? fmt::format(", budget {:.0f} s", options.time_budget_s) : "");
 
   ReconstructSummary summary;
   summary.cancelled = trained.cancelled;

@@ -21,12 +21,17 @@ struct ReconstructOptions {
   nlohmann::json config = nlohmann::json::object();
   std::string preset = "cpu";  // "cpu" or "paper"
   int iterations = -1;         // -1: the preset's
-  double time_budget_s = 0;    // 0: none; otherwise training stops at this many seconds
+  // 0: none; otherwise the whole run's seconds (loading, training, evaluation, writing; within 10%),
+  // and the iteration count is a cap only when given.
+  double time_budget_s = 0;
   int holdout = -1;            // -1: the preset's; 0: none; K: every K-th frame held out
   int threads = 0;             // 0: all cores; the run's own TBB arena, other runs in the process keep theirs
   std::string device = "cpu";  // where the training steps run: "cpu" or "cuda:N" (run_config.h BackendFor)
   std::uint64_t seed = 0;
   bool force_static = false;  // treat the clip as static (no deformation network)
+  // Every frame rendered with all dropout passes at every pixel, whatever it costs; otherwise the
+  // evaluation keeps to a quarter of the run (eval/eval_plan.h).
+  bool full_evaluation = false;
   // Optional checkpoint file to resume training from; its configuration replaces the preset, and
   // config, iterations and holdout still apply over it (a field of another shape fails to load).
   std::string resume_from;

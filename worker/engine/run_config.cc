@@ -17,7 +17,14 @@ train::TrainConfig ResolveConfig(const ReconstructOptions& options) {
                 options.config.dump());
   }
   train::ApplyJson(options.config, config);
-  if (options.iterations > 0) config.iterations = options.iterations;
+  // With a budget the schedule runs on time and the iteration count is a cap only when given.
+  if (options.iterations > 0) {
+    config.iterations = options.iterations;
+  } else if (options.time_budget_s > 0) {
+    config.iterations = 0;
+  } else if (config.iterations == 0) {  // a checkpoint of a budgeted run, resumed without one
+    config.iterations = train::TrainConfig::Preset(options.preset).iterations;
+  }
   if (options.holdout >= 0) config.holdout = options.holdout;
   return config;
 }

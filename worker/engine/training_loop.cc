@@ -26,13 +26,17 @@ class TrainingLoop {
         curve_(config_.curve_interval_s, extras.curve.empty() ? -config_.curve_interval_s : clock_.seconds()),
         progress_line_(hooks.progress_interval_s, 0),
         previews_(hooks.preview_interval_s, 0),
-        checkpoints_(hooks.checkpoint_interval_s, 0) {
+        checkpoints_(hooks.checkpoint_interval_s, 0),
+        spent_before_(extras.train_seconds) {
     progress_.total_iterations = config_.iterations;
   }
 
   TrainingResult Run() {
     TrainingResult result;
     const auto wall = Clock::now();
+    wall_ = wall;
+    PriceAfterTraining();
+    UpdateBudget();
     while (!clock_.Finished(run_.trainer.iteration())) {
       if (hooks_.should_stop && hooks_.should_stop()) {
         result.cancelled = true;
@@ -41,9 +45,14 @@ class TrainingLoop {
       const auto start = Clock::now();
       result.last = run_.trainer.Step(clock_.Progress(run_.trainer.iteration()));
       clock_.AddStep(Since(start), result.last.samples);
-      if (curve_.Due(clock_.seconds()) || run_.trainer.iteration() == config_.iterations)
+      if (curve_.Due(clock_.seconds()) || run_.trainer.iteration() == config_.iterations) {
         AddCurvePoint(result.last);
-      if (progress_line_.Due(Since(wall))) ReportProgress(result.last);
+        PriceAfterTraining();
+      }
+      if (progress_line_.Due(Since(wall))) {
+        UpdateBudget();
+        ReportProgress(result.last);
+      }
       if (hooks_.on_preview && previews_.Due(Since(wall))) SendPreviews();
       if (checkpoints_.Due(Since(wall))) Checkpoint();
     }
@@ -55,10 +64,31 @@ class TrainingLoop {
     if (!result.cancelled) ReportProgress(result.last);
     Checkpoint();
     result.samples_per_second = clock_.SamplesPerSecond();
+    result.step_seconds = clock_.seconds() - spent_before_;
+    result.wall_seconds = Since(wall);
     return result;
   }
 
  private:
+  // With a time budget: the training budget (in step seconds) is what the run has left once the
+  // work after training is set aside, scaled by the share of this phase's wall time spent in steps
+  // (the rest is periodic work).
+  void UpdateBudget() {
+    if (run_.time_budget_s <= 0) return;
+    const double elapsed = spent_before_ + Since(run_.run_start);
+    const double reserve = reserve_s_;
+    const double wall = Since(wall_);
+    const double steps = clock_.seconds() - spent_before_;
+    const double share = wall > 1.0 ? std::clamp(steps / wall, 0.2, 1.0) : 1.0;
+    clock_.SetBudget(clock_.seconds() + std::max(0.0, run_.time_budget_s - elapsed - reserve) * share);
+  }
+
+  void PriceAfterTraining() {
+    if (run_.time_budget_s <= 0 || !run_.after_training_s) return;
+    run_.trainer.SyncField();
+    reserve_s_ = run_.after_training_s();
+  }
+
   void AddCurvePoint(const train::StepStats& stats) {
     nlohmann::json point = {{"seconds", clock_.seconds()},
                             {"iteration", run_.trainer.iteration()},
@@ -81,10 +111,9 @@ class TrainingLoop {
     // current pace reaches within the budget, so iteration / total is the share of the run done
     // (and at the end the iterations run).
     const double done = clock_.Progress(iteration);
-    progress_.total_iterations =
-        done > 0 ? std::min(config_.iterations,
-                            std::max(iteration, static_cast<int>(std::lround(iteration / done))))
-                 : config_.iterations;
+    const int projected = done > 0 ? std::max(iteration, static_cast<int>(std::lround(iteration / done)))
+                                   : config_.iterations;
+    progress_.total_iterations = config_.iterations > 0 ? std::min(config_.iterations, projected) : projected;
     progress_.iteration = iteration;
     progress_.seconds = clock_.seconds();
     progress_.loss = stats.loss;
@@ -117,6 +146,9 @@ class TrainingLoop {
   const eval::CurveProbe probe_;
   train::Every curve_, progress_line_, previews_, checkpoints_;
   Progress progress_;
+  double spent_before_;  // training seconds of earlier processes (a resumed run)
+  Clock::time_point wall_;
+  double reserve_s_ = 0;  // seconds kept for after training
 };
 
 }  // namespace

@@ -21,9 +21,14 @@ void AddReconstructOptions(CLI::App& cmd, ReconstructOptions& options, std::stri
   cmd.add_option("--preset", options.preset, "cpu or paper")
       ->capture_default_str()
       ->check(CLI::IsMember({"cpu", "paper"}));
-  cmd.add_option("--iterations", options.iterations, "training iterations (default: the preset's)");
-  cmd.add_option("--time-budget", options.time_budget_s, "stop training after this many seconds (0: none)")
+  cmd.add_option("--iterations", options.iterations,
+                 "training iterations (default: the preset's; with --time-budget: no cap unless given)");
+  cmd.add_option("--time-budget", options.time_budget_s,
+                 "seconds for the whole run: training, evaluation and writing (0: none)")
       ->check(CLI::NonNegativeNumber);
+  cmd.add_flag("--full-eval", options.full_evaluation,
+               "render every frame with all dropout passes at every pixel (default: evaluation keeps to a "
+               "quarter of the run)");
   cmd.add_option("--holdout", options.holdout,
                  "hold every K-th frame out of training (0: none; default: the preset's)");
   cmd.add_option("--seed", options.seed, "random seed")->capture_default_str();

@@ -1,12 +1,19 @@
 #include "worker/engine/eval/clip_evaluator.h"
 
+#include <fmt/format.h>
+#include <tbb/parallel_for.h>
 #include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <future>
+#include <optional>
 
 #include "worker/engine/eval/calibration.h"
 #include "worker/engine/eval/depth_error.h"
 #include "worker/engine/eval/exports.h"
 #include "worker/engine/eval/image_metrics.h"
 #include "worker/engine/eval/pixel_error.h"
+#include "worker/engine/eval/strided_map.h"
 #include "worker/engine/eval/point_cloud.h"
 #include "worker/engine/eval/surface_mesh.h"
 #include "worker/engine/eval/video_writer.h"
@@ -52,7 +59,8 @@ struct UncertaintyMaps {
     const double scale = HeatmapUpperBound(total);
     const double error_scale = HeatmapUpperBound(error);
     for (const char* sub : {"uncertainty", "error"}) std::filesystem::create_directories(out_dir / sub);
-    for (std::size_t f = 0; f < total.size(); ++f) {
+    // Frames are independent files: written on every core.
+    tbb::parallel_for(std::size_t(0), total.size(), [&](std::size_t f) {
       const int i = int(f);
       const auto& frame = aleatoric_epistemic[f];
       WriteDepthNpy(out_dir / "uncertainty" / FrameFileName(i, ".npy"), total[f], w, h);
@@ -60,9 +68,84 @@ struct UncertaintyMaps {
       WriteDepthNpy(out_dir / "uncertainty" / FrameFileName(i, "_epistemic.npy"), frame.epistemic, w, h);
       WriteHeatmapPng(out_dir / "uncertainty" / FrameFileName(i, ".png"), total[f], w, h, 0.0, scale);
       WriteHeatmapPng(out_dir / "error" / FrameFileName(i, ".png"), error[f], w, h, 0.0, error_scale);
-    }
+    });
     json["heatmap_scale"] = {{"uncertainty", {0.0, scale}}, {"error", {0.0, error_scale}}};
   }
+};
+
+
+using Clock = std::chrono::steady_clock;
+
+double Since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+
+// A frame rendered as the plan says: full, or reduced (colour and depth from `plain`, the uncertainty
+// maps from the dropout passes on a strided grid, upsampled). A reduced frame's calibration is
+// measured where the uncertainty was estimated: on the grid, against the error of the dropout
+// passes' mean colour there (what the uncertainty describes), not against the cheaper render's error
+// through interpolated values.
+struct EvaluatedFrame {
+  render::RenderedFrame frame;
+  std::optional<Calibration> calibration;  // reduced frames with uncertainty
+};
+
+EvaluatedFrame RenderFrame(const scene::Clip& clip, int f, FrameRender how, int stride,
+                           render::FrameRenderer& full, render::FrameRenderer* plain) {
+  const scene::Camera& camera = clip.cameras[f];
+  if (how == FrameRender::kFull || plain == nullptr) return {full.Render(camera, clip.times[f]), {}};
+  EvaluatedFrame out{plain->Render(camera, clip.times[f]), {}};
+  if (full.settings().mc_passes == 0) return out;
+  const std::vector<int> pixels = StridedPixels(camera.width, camera.height, stride);
+  const int n = int(pixels.size());
+  std::vector<float> rgb(3 * std::size_t(n)), depth(n), opacity(n), total(n), aleatoric(n), epistemic(n);
+  full.RenderPixels(camera, clip.times[f], pixels.data(), n,
+                    {rgb.data(), depth.data(), opacity.data(), total.data(), aleatoric.data(), epistemic.data()});
+  std::vector<std::uint8_t> truth(3 * std::size_t(n)), mask;
+  const auto& full_mask = EvaluationMask(clip, f);
+  if (!full_mask.empty()) mask.resize(n);
+  for (int i = 0; i < n; ++i) {
+    const std::size_t p = std::size_t(pixels[i]);
+    for (int c = 0; c < 3; ++c) truth[3 * std::size_t(i) + c] = clip.rgb[f][3 * p + c];
+    if (!mask.empty()) mask[i] = full_mask[p];
+  }
+  out.calibration = MeasureCalibration(total, PixelRmse(rgb, truth, n, 1), mask);
+  render::RenderedFrame& frame = out.frame;
+  frame.uncertainty = UpsampleStrided(total, camera.width, camera.height, stride);
+  frame.aleatoric = UpsampleStrided(aleatoric, camera.width, camera.height, stride);
+  frame.epistemic = UpsampleStrided(epistemic, camera.width, camera.height, stride);
+  return out;
+}
+
+// Keeps a run's evaluation to its deadline: a training frame planned full is rendered reduced when
+// it and the frames after it, at the pace measured so far (the plan's costs until a frame of the
+// kind is measured), would end past the deadline.
+class FramePacer {
+ public:
+  FramePacer(const ClipEvaluation& what, int pixels) : what_(what) {
+    for (FrameRender how : {FrameRender::kFull, FrameRender::kReduced})
+      pace_[int(how)] = FrameSeconds(how, what.plan.stride, what.plan.cost, pixels);
+  }
+
+  FrameRender Choose(int f) const {
+    const FrameRender planned = what_.plan.at(f);
+    if (planned == FrameRender::kReduced || what_.plain == nullptr ||
+        what_.deadline == Clock::time_point::max() || !what_.plan.cost.known() || heldout(f)) {
+      return planned;
+    }
+    double left = pace_[int(FrameRender::kFull)];
+    for (int g = f + 1; g < int(what_.plan.frames.size()); ++g) left += pace_[int(what_.plan.at(g))];
+    return Clock::now() + std::chrono::duration<double>(left) > what_.deadline ? FrameRender::kReduced
+                                                                               : planned;
+  }
+
+  void Rendered(FrameRender how, double seconds) { pace_[int(how)] = seconds; }
+
+ private:
+  bool heldout(int f) const {
+    return std::find(what_.heldout_frames.begin(), what_.heldout_frames.end(), f) != what_.heldout_frames.end();
+  }
+
+  const ClipEvaluation& what_;
+  double pace_[2];
 };
 
 }  // namespace
@@ -77,6 +160,7 @@ nlohmann::json UncertaintySettings(const render::FrameRenderSettings& settings) 
 
 nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& renderer,
                             const ClipEvaluation& what, const std::filesystem::path& out_dir) {
+  const auto wall = Clock::now();
   const int count = clip.frame_count();
   const int w = clip.width, h = clip.height;
   const double depth_scale = DepthPngScale(clip.far);
@@ -90,13 +174,24 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
   std::vector<Calibration> calibration(uncertain ? count : 0);
   UncertaintyMaps maps;
   std::vector<render::RenderedFrame> components;  // aleatoric and epistemic maps only
+  FramePacer pacer(what, w * h);
+  std::future<double> writing;  // the previous frame's files; returns the seconds they took
+  double render_seconds = 0, write_seconds = 0;
+  std::vector<int> full_frames, reduced_frames;
   for (int f = 0; f < count; ++f) {
-    render::RenderedFrame frame = renderer.Render(clip.cameras[f], clip.times[f]);
+    const FrameRender how = pacer.Choose(f);
+    const auto start = Clock::now();
+    EvaluatedFrame evaluated = RenderFrame(clip, f, how, what.plan.stride, renderer, what.plain);
+    render::RenderedFrame& frame = evaluated.frame;
+    pacer.Rendered(how, Since(start));
+    render_seconds += Since(start);
+    (how == FrameRender::kFull ? full_frames : reduced_frames).push_back(f);
     const auto& mask = EvaluationMask(clip, f);
     images[f] = MeasureImage(frame.rgb, clip.rgb[f], mask, w, h);
     if (uncertain) {
       std::vector<float> error = PixelRmse(frame.rgb, clip.rgb[f], w, h);
-      calibration[f] = MeasureCalibration(frame.uncertainty, error, mask);
+      calibration[f] = evaluated.calibration ? *evaluated.calibration
+                                             : MeasureCalibration(frame.uncertainty, error, mask);
       if (what.write_files) {
         maps.total.push_back(std::move(frame.uncertainty));
         maps.error.push_back(std::move(error));
@@ -109,25 +204,32 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
     if (!depths.empty())
       depths[f] = MeasureDepth(frame.depth, clip.gt_depth[f], mask, w, h, clip.near, clip.far);
     if (what.write_files) {
-      WritePng8(out_dir / "rgb" / FrameFileName(f, ".png"), frame.rgb, w, h);
-      WriteDepthNpy(out_dir / "depth" / FrameFileName(f, ".npy"), frame.depth, w, h);
-      WriteDepthPng16(out_dir / "depth" / FrameFileName(f, ".png"), frame.depth, w, h, depth_scale);
-      WritePly(
-          out_dir / "pointcloud" / FrameFileName(f, ".ply"),
-          BackProject(clip.cameras[f], frame.depth, frame.rgb, clip.has_masks() ? clip.tool_mask[f] : mask));
-      if (f == 0) {  // the canonical frame's surface (t = 0)
-        WriteSurfaceMesh(out_dir, TriangulateDepth(clip.cameras[f], frame.depth, frame.rgb,
-                                                   clip.has_masks() ? clip.tool_mask[f] : mask, clip.far));
-      }
       video.push_back(frame.rgb);
+      if (writing.valid()) write_seconds += writing.get();  // one frame's files in flight at a time
+      const auto& cloud_mask = clip.has_masks() ? clip.tool_mask[f] : mask;
+      writing = std::async(std::launch::async, [&clip, &out_dir, &cloud_mask, f, w, h, depth_scale,
+                                                rgb = std::move(frame.rgb), depth = std::move(frame.depth)] {
+        const auto start = Clock::now();
+        WritePng8(out_dir / "rgb" / FrameFileName(f, ".png"), rgb, w, h);
+        WriteDepthNpy(out_dir / "depth" / FrameFileName(f, ".npy"), depth, w, h);
+        WriteDepthPng16(out_dir / "depth" / FrameFileName(f, ".png"), depth, w, h, depth_scale);
+        WritePly(out_dir / "pointcloud" / FrameFileName(f, ".ply"),
+                 BackProject(clip.cameras[f], depth, rgb, cloud_mask));
+        if (f == 0) {  // the canonical frame's surface (t = 0)
+          WriteSurfaceMesh(out_dir, TriangulateDepth(clip.cameras[f], depth, rgb, cloud_mask, clip.far));
+        }
+        return Since(start);
+      });
     }
     if (what.on_frame) what.on_frame(f + 1, count);
   }
+  if (writing.valid()) write_seconds += writing.get();
   nlohmann::json json;
   json["train"] = SplitMetrics(clip, what.train_frames, images, depths, calibration);
   if (!what.heldout_frames.empty()) {
     json["heldout"] = SplitMetrics(clip, what.heldout_frames, images, depths, calibration);
   }
+  const auto tail = Clock::now();
   if (uncertain) {
     json["uncertainty_maps"] = UncertaintySettings(renderer.settings());
     if (what.write_files) maps.Write(out_dir, components, w, h, json["uncertainty_maps"]);
@@ -138,6 +240,25 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
     const VideoInfo info = WriteVideo(out_dir / "video.mp4", video, w, h, 15.0);
     json["video"] = {{"path", info.path.filename().string()}, {"codec", info.codec}, {"frames", info.frames}};
   }
+  write_seconds += Since(tail);
+  nlohmann::json& how = json["evaluation"];
+  how["full_frames"] = full_frames;
+  const auto& full = renderer.settings();
+  how["full"] = uncertain ? fmt::format("{} dropout passes at every pixel ({} + {} samples per ray): colour "
+                                        "and depth from their mean",
+                                        full.mc_passes, full.coarse_samples, full.fine_samples)
+                          : "one pass at every pixel";
+  if (!reduced_frames.empty()) {
+    how["reduced_frames"] = reduced_frames;
+    how["uncertainty_stride"] = what.plan.stride;
+    const auto& plain = what.plain->settings();
+    how["reduced"] = fmt::format(
+        "colour and depth from one dropout-off pass at every pixel ({0} + {1} samples per ray); uncertainty "
+        "from the dropout passes at every {2}th pixel of every {2}th row, bilinearly upsampled; their "
+        "calibration on that grid, against the error of the dropout passes' mean colour there",
+        plain.coarse_samples, plain.fine_samples, what.plan.stride);
+  }
+  how["seconds"] = {{"render", render_seconds}, {"write", write_seconds}, {"wall", Since(wall)}};
   return json;
 }
 

@@ -1,13 +1,16 @@
 // Renders every frame of a clip from a trained field, measures it against the clip, and writes
 // the per-frame results (rgb/, depth/, pointcloud/, video.mp4, and with a renderer that estimates
-// uncertainty: uncertainty/ and error/). Returns the metrics as JSON.
+// uncertainty: uncertainty/ and error/). Each frame is rendered as its plan says (eval_plan.h); a
+// frame's files are written while the next frame renders. Returns the metrics as JSON.
 #pragma once
 
+#include <chrono>
 #include <filesystem>
 #include <functional>
 #include <nlohmann/json_fwd.hpp>
 #include <vector>
 
+#include "worker/engine/eval/eval_plan.h"
 #include "worker/engine/render/frame_renderer.h"
 #include "worker/engine/scene/clip.h"
 
@@ -17,6 +20,13 @@ struct ClipEvaluation {
   std::vector<int> train_frames, heldout_frames;
   bool write_files = true;
   std::function<void(int done, int total)> on_frame;  // progress while rendering
+  // How each frame is rendered (empty: every frame full). Reduced frames need `plain`, a renderer
+  // of the same field without dropout passes.
+  EvalPlan plan;
+  render::FrameRenderer* plain = nullptr;
+  // When set, a training frame planned full is rendered reduced once the frames left would not
+  // finish by then at the pace measured so far.
+  std::chrono::steady_clock::time_point deadline = std::chrono::steady_clock::time_point::max();
 };
 
 // Metrics: "train" and "heldout" splits each with per-frame and summarised image metrics (tissue
@@ -25,7 +35,9 @@ struct ClipEvaluation {
 // mc_passes > 0): each split gets "calibration" (MeasureCalibration of the total uncertainty against
 // PixelRmse on tissue pixels, summarised over frames, with the mean sparsification curves), and
 // "uncertainty_maps" records the heat-map scales (one per clip: HeatmapUpperBound of every frame's
-// total uncertainty, and of every frame's error) and the estimator's settings.
+// total uncertainty, and of every frame's error) and the estimator's settings. "evaluation" says
+// which frames were rendered how and where the seconds went (render, write: the writing thread's
+// busy time, wall).
 nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& renderer,
                             const ClipEvaluation& what, const std::filesystem::path& out_dir);
 

@@ -1,5 +1,7 @@
 #include "worker/engine/train/render_settings.h"
 
+#include <algorithm>
+
 namespace endorecon::train {
 
 render::FrameRenderSettings EvalRenderSettings(const TrainConfig& config, double near, double far) {
@@ -19,6 +21,13 @@ render::FrameRenderSettings UncertaintyRenderSettings(const TrainConfig& config,
   settings.color_weight = config.uncertainty_lambda;
   settings.variance_eps = config.variance_eps;
   settings.mc_seed = seed;
+  return settings;
+}
+
+render::FrameRenderSettings ReducedRenderSettings(const TrainConfig& config, double near, double far) {
+  render::FrameRenderSettings settings = EvalRenderSettings(config, near, far);
+  settings.coarse_samples = std::max(8, settings.coarse_samples / 2);
+  settings.fine_samples = std::max(8, settings.fine_samples / 2);
   return settings;
 }
 

@@ -13,8 +13,13 @@ double RunProgress(int iteration, int iterations, double seconds, double budget_
 RunClock::RunClock(int iterations, double budget_s, double seconds)
     : iterations_(iterations), budget_s_(budget_s), seconds_(seconds) {}
 
+double RunClock::Progress(int iteration) {
+  reached_ = std::max(reached_, RunProgress(iteration, iterations_, seconds_, budget_s_));
+  return reached_;
+}
+
 bool RunClock::Finished(int iteration) const {
-  return iteration >= iterations_ || (budget_s_ > 0 && seconds_ >= budget_s_);
+  return (iterations_ > 0 && iteration >= iterations_) || (budget_s_ > 0 && seconds_ >= budget_s_);
 }
 
 void RunClock::AddStep(double seconds, long long samples) {
@@ -34,7 +39,7 @@ double RunClock::TakeWindowRate() {
 }
 
 double RunClock::Eta(int iteration) const {
-  double eta = (iterations_ - iteration) * (seconds_ / std::max(1, iteration));
+  double eta = iterations_ > 0 ? (iterations_ - iteration) * (seconds_ / std::max(1, iteration)) : 1e30;
   if (budget_s_ > 0) eta = std::min(eta, budget_s_ - seconds_);
   return std::max(0.0, eta);
 }

@@ -1,13 +1,15 @@
 // The clock of a training run: how far along the run is (the schedule the learning-rate decay and
 // every periodic round follow), when it ends, how fast it goes and how long is left. A run ends at its
-// iteration cap or when its time budget is spent, whichever comes first; with a budget the schedule
-// runs on time.
+// iteration cap (0: none) or when its training budget is spent, whichever comes first; with a budget
+// the schedule runs on time. The training budget, in seconds of steps, may be revised as the run goes
+// (the whole run's budget less what evaluation will need and what periodic work costs); the share
+// of the run done never goes back.
 #pragma once
 
 namespace endorecon::train {
 
-// The share of a run done in [0, 1]: iteration / iterations, or seconds / budget_s when there is a
-// budget and time is further along.
+// The share of a run done in [0, 1]: iteration / iterations (iterations 0: no cap), or
+// seconds / budget_s when there is a budget and time is further along.
 double RunProgress(int iteration, int iterations, double seconds, double budget_s);
 
 class RunClock {
@@ -15,7 +17,9 @@ class RunClock {
   // `seconds`: training time already spent (a resumed run's); budget_s 0: no budget.
   RunClock(int iterations, double budget_s, double seconds);
 
-  double Progress(int iteration) const { return RunProgress(iteration, iterations_, seconds_, budget_s_); }
+  double Progress(int iteration);
+  void SetBudget(double budget_s) { budget_s_ = budget_s; }
+  double budget() const { return budget_s_; }
   // True when no further step should run: the cap is reached or the budget spent.
   bool Finished(int iteration) const;
   // Accounts one step of `seconds` that processed `samples`.
@@ -33,6 +37,7 @@ class RunClock {
   int iterations_;
   double budget_s_;
   double seconds_;
+  double reached_ = 0;  // the largest share Progress returned
   double run_seconds_ = 0, run_samples_ = 0;
   double window_seconds_ = 0, window_samples_ = 0;
 };

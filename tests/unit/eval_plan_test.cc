@@ -1,0 +1,66 @@
+// The results' evaluation plan: every frame full when that fits, else held-out frames full, training
+// frames reduced (stride 2, then 4) and as many promoted back to full as the time left allows.
+#include "worker/engine/eval/eval_plan.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+
+namespace endorecon::eval {
+namespace {
+
+constexpr int kPixels = 1000;
+const RenderCost kCost{/*full=*/1e-3, /*plain=*/2e-4};  // a full frame 1 s, a plain pass 0.2 s
+
+int Count(const EvalPlan& plan, FrameRender how) {
+  return int(std::count(plan.frames.begin(), plan.frames.end(), how));
+}
+
+TEST(EvalPlan, EveryFrameFullWhenItFitsOrWithoutALimit) {
+  for (double available : {0.0, 10.0, 50.0}) {
+    const EvalPlan plan = PlanEvaluation(10, {4, 9}, kPixels, kCost, available);
+    EXPECT_TRUE(plan.all_full()) << available;
+    EXPECT_NEAR(plan.seconds, 10.0, 1e-9);
+  }
+  EXPECT_TRUE(PlanEvaluation(10, {4, 9}, kPixels, RenderCost{}, 1.0).all_full()) << "cost unknown";
+}
+
+TEST(EvalPlan, HeldOutFullTrainingReducedAndPromotedWithinTheTime) {
+  // Reduced at stride 2: 0.2 + 1/4 = 0.45 s. Base: 2 full + 8 reduced = 5.6 s; 7 s promotes 2 frames.
+  const EvalPlan plan = PlanEvaluation(10, {4, 9}, kPixels, kCost, 7.0);
+  EXPECT_EQ(plan.stride, 2);
+  EXPECT_EQ(plan.at(4), FrameRender::kFull);
+  EXPECT_EQ(plan.at(9), FrameRender::kFull);
+  EXPECT_EQ(Count(plan, FrameRender::kFull), 4);
+  EXPECT_NEAR(plan.seconds, 5.6 + 2 * 0.55, 1e-9);
+  EXPECT_LE(plan.seconds, 7.0);
+  // The promoted ones spread out: not two neighbours at the start.
+  std::vector<int> promoted;
+  for (int f = 0; f < 10; ++f) {
+    if (f != 4 && f != 9 && plan.at(f) == FrameRender::kFull) promoted.push_back(f);
+  }
+  ASSERT_EQ(promoted.size(), 2u);
+  EXPECT_GE(promoted[1] - promoted[0], 3);
+}
+
+TEST(EvalPlan, StrideFourWhenTwoDoesNotFitAndHeldOutNeverReduced) {
+  // Stride 4: 0.2 + 1/16 = 0.2625 s; base 2 + 8 * 0.2625 = 4.1 s.
+  const EvalPlan plan = PlanEvaluation(10, {4, 9}, kPixels, kCost, 4.2);
+  EXPECT_EQ(plan.stride, 4);
+  EXPECT_EQ(Count(plan, FrameRender::kFull), 2);
+  // Not even the held-out frames fit: they stay full, everything else is reduced.
+  const EvalPlan late = PlanEvaluation(10, {4, 9}, kPixels, kCost, 0.5);
+  EXPECT_EQ(late.stride, 4);
+  EXPECT_EQ(late.at(4), FrameRender::kFull);
+  EXPECT_EQ(late.at(9), FrameRender::kFull);
+  EXPECT_EQ(Count(late, FrameRender::kReduced), 8);
+  EXPECT_GT(late.seconds, 0.5);
+}
+
+TEST(EvalPlan, FrameSecondsAddsThePlainPassAndTheStridedPasses) {
+  EXPECT_DOUBLE_EQ(FrameSeconds(FrameRender::kFull, 2, kCost, kPixels), 1.0);
+  EXPECT_DOUBLE_EQ(FrameSeconds(FrameRender::kReduced, 2, kCost, kPixels), 0.45);
+}
+
+}  // namespace
+}  // namespace endorecon::eval

@@ -1,0 +1,53 @@
+// How the results' evaluation renders each frame within the time it may take (by default a quarter
+// of the run: the time budget names the whole job, and evaluation is not its main work). A frame is
+// rendered one of two ways:
+//  - full: K dropout passes at every pixel (the K-pass mean colour and depth, full-resolution
+//    uncertainty maps). Every held-out frame is, and as many training frames as the time allows,
+//    spread evenly over the clip;
+//  - reduced: one dropout-off pass at every pixel for colour and depth, and the K passes at every
+//    s-th pixel of every s-th row for the uncertainty maps, upsampled (strided_map.h).
+// The costs come from the field being evaluated (MeasureRenderCost), not from constants.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "worker/engine/render/frame_renderer.h"
+#include "worker/engine/scene/camera.h"
+
+namespace endorecon::eval {
+
+// Rendering seconds per pixel.
+struct RenderCost {
+  double full = 0;   // K dropout passes
+  double plain = 0;  // one dropout-off pass
+  bool known() const { return full > 0 && plain > 0; }
+};
+
+enum class FrameRender { kFull, kReduced };
+
+struct EvalPlan {
+  std::vector<FrameRender> frames;  // one per frame of the clip; empty: every frame full
+  int stride = 2;                   // uncertainty stride of the reduced frames
+  double seconds = 0;               // rendering seconds the plan is predicted to take
+  RenderCost cost;                  // what it was priced with
+  bool all_full() const;
+  FrameRender at(int frame) const { return frames.empty() ? FrameRender::kFull : frames[frame]; }
+};
+
+// Predicted seconds to render one frame of `pixels` pixels.
+double FrameSeconds(FrameRender how, int stride, const RenderCost& cost, int pixels);
+
+// The plan that fits `seconds_available`: every frame full when that fits, when the cost is not known,
+// or with seconds_available <= 0 (no limit); else every held-out frame full, the training frames
+// reduced with stride 2 (4 when 2 does not fit) and as many of them full as the rest of the time
+// allows, evenly spread. Held-out frames are never reduced, even when they alone overrun.
+EvalPlan PlanEvaluation(int frame_count, const std::vector<int>& heldout, int pixels, const RenderCost& cost,
+                        double seconds_available);
+
+// Times both renderers on `samples` pixels of one view spread over the image (a few tenths of a second
+// on a 2-core machine at the default 2,048), to price a plan on the field as it is now.
+RenderCost MeasureRenderCost(render::FrameRenderer& full, render::FrameRenderer& plain,
+                             const scene::Camera& camera, float time, int samples = 2048);
+
+}  // namespace endorecon::eval
