@@ -87,7 +87,9 @@ TEST(SyntheticClipTest, LoadsAsAValidEndoNerfClip) {
 
 TEST(SyntheticClipTest, ToolMaskCoversTheToolAndNothingElse) {
   TempDir dir("synth");
-  WriteSyntheticClip(Small(), dir.path());
+  SynthOptions options = Small();
+  options.noise = false;  // the seen tissue is then exactly the tool-free truth
+  WriteSyntheticClip(options, dir.path());
   const Clip clip = LoadClip(dir.path());
   for (int f = 0; f < clip.frame_count(); ++f) {
     std::size_t tool = 0, tool_differs = 0;
@@ -168,6 +170,7 @@ TEST(SyntheticClipTest, NoToolAndNoDepthLeaveTheirFoldersOut) {
   SynthOptions options = Small();
   options.tool = false;
   options.depth = false;
+  options.noise = false;
   WriteSyntheticClip(options, dir.path());
   EXPECT_FALSE(fs::exists(dir / "masks"));
   EXPECT_FALSE(fs::exists(dir / "depth"));
@@ -186,10 +189,50 @@ TEST(SyntheticClipTest, StaticSceneDoesNotMove) {
   const Clip clip = LoadClip(dir.path());
   EXPECT_FLOAT_EQ(clip.times.back(), 1.f);
   for (int f = 1; f < clip.frame_count(); ++f) {
-    EXPECT_EQ(clip.rgb[f], clip.rgb[0]) << f;
+    EXPECT_EQ(clip.gt_rgb[f], clip.gt_rgb[0]) << f;  // the seen images differ by their noise only
+    EXPECT_NE(clip.rgb[f], clip.rgb[0]) << f;
     EXPECT_EQ(clip.gt_depth[f], clip.gt_depth[0]) << f;
     EXPECT_EQ(clip.tool_mask[f], clip.tool_mask[0]) << f;
   }
+}
+
+TEST(SyntheticClipTest, CameraNoiseIsSignalDependentStrongerInTheDarkAndLeavesTheTruthClean) {
+  TempDir dir("synth");
+  SynthOptions options = Small();
+  options.tool = false;  // every pixel tissue: images/ = gt/images + noise
+  WriteSyntheticClip(options, dir.path());
+  const Clip clip = LoadClip(dir.path());
+  // Noise per stored level of the truth, over all frames and channels: mean zero within sampling
+  // (its mean in stored values is near zero at mid levels), a standard deviation that falls from
+  // dark to bright as the model says (about 3.3 levels at 0.3, 2.5 at 0.7, 255ths).
+  double dark_sum2 = 0, bright_sum2 = 0, differ = 0, values = 0;
+  long dark = 0, bright = 0;
+  for (int f = 0; f < clip.frame_count(); ++f) {
+    for (std::size_t i = 0; i < clip.rgb[f].size(); ++i) {
+      const double truth = clip.gt_rgb[f][i], seen = clip.rgb[f][i], d = seen - truth;
+      differ += d != 0;
+      ++values;
+      if (truth > 60 && truth < 95) dark_sum2 += d * d, ++dark;
+      if (truth > 160 && truth < 200) bright_sum2 += d * d, ++bright;
+    }
+  }
+  ASSERT_GT(dark, 1000);
+  ASSERT_GT(bright, 1000);
+  const double dark_sigma = std::sqrt(dark_sum2 / double(dark)), bright_sigma = std::sqrt(bright_sum2 / double(bright));
+  EXPECT_NEAR(dark_sigma, 3.3, 0.8);
+  EXPECT_NEAR(bright_sigma, 2.5, 0.6);
+  EXPECT_GT(dark_sigma, bright_sigma);
+  EXPECT_GT(differ / values, 0.5) << "most values carry noise";
+  // The same seed gives the same noise; --no-noise gives the truth.
+  TempDir again("synth-again");
+  WriteSyntheticClip(options, again.path());
+  EXPECT_EQ(LoadClip(again.path()).rgb, clip.rgb);
+  options.noise = false;
+  TempDir clean("synth-clean");
+  WriteSyntheticClip(options, clean.path());
+  const Clip clean_clip = LoadClip(clean.path());
+  EXPECT_EQ(clean_clip.rgb, clean_clip.gt_rgb);
+  EXPECT_EQ(clean_clip.gt_rgb, clip.gt_rgb);
 }
 
 TEST(SyntheticClipTest, StiffSceneIsThinDarkAndSaturated) {

@@ -55,6 +55,12 @@ TEST(UncertaintyResults, FilesAndOneHeatmapScalePerClip) {
     EXPECT_TRUE(calibration.contains("spearman")) << split;
     EXPECT_TRUE(calibration.at("curves").contains("oracle")) << split;
     EXPECT_EQ(calibration.at("per_frame").size(), std::string(split) == "train" ? 3u : 1u);
+    // The synthetic clip has its noise-free truth (gt/images): calibration against it too.
+    const auto& noise_free = metrics.at(split).at("calibration_noise_free");
+    EXPECT_TRUE(noise_free.contains("spearman")) << split;
+    EXPECT_EQ(noise_free.at("per_frame").size(), calibration.at("per_frame").size()) << split;
+    EXPECT_NE(noise_free.at("spearman").at("mean"), calibration.at("spearman").at("mean"))
+        << split << ": the noisy images and their truth give different errors";
   }
 }
 

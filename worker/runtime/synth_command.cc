@@ -14,6 +14,7 @@ Command AddSynthCommand(CLI::App& app) {
   auto out = std::make_shared<std::string>();
   auto options = std::make_shared<scene::SynthOptions>();
   auto flags = std::make_shared<std::pair<bool, bool>>(false, false);  // --no-tool, --no-depth
+  auto no_noise = std::make_shared<bool>(false);
   cmd->add_option("out", *out, "output folder")->required();
   cmd->add_option("--frames", options->frames, "number of frames")
       ->capture_default_str()
@@ -28,6 +29,9 @@ Command AddSynthCommand(CLI::App& app) {
   cmd->add_flag("--static", options->static_scene, "nothing moves");
   cmd->add_flag("--no-tool", flags->first, "no tool, no masks/ folder");
   cmd->add_flag("--no-depth", flags->second, "no depth/ folder");
+  cmd->add_flag("--no-noise", *no_noise,
+                "images without camera noise (default: shot and read noise per channel, as a camera; gt/images "
+                "stays noise-free)");
   cmd->add_flag("--stiff", options->stiff,
                 "thin depth range, near-opaque surface, near-black tissue, saturated speculars");
   cmd->add_flag("--stereo", options->stereo, "also write the right eye (images_right/, stereo.json)");
@@ -36,8 +40,9 @@ Command AddSynthCommand(CLI::App& app) {
   cmd->add_flag("--recording", options->recording,
                 "also write recording/: the raw stereo pair with lens distortion, its calibration, poses and "
                 "checkerboard views (input for prepare and calibrate)");
-  return [out, options, flags] {
+  return [out, options, flags, no_noise] {
     options->tool = !flags->first;
+    options->noise = !*no_noise;
     options->depth = !flags->second;
     scene::WriteSyntheticClip(*options, *out);
     spdlog::info("wrote synthetic clip: {} ({} frames, {}x{})", *out, options->frames, options->width,

@@ -6,7 +6,7 @@
 
 #include <algorithm>
 #include <future>
-#include <optional>
+#include <span>
 
 #include "worker/engine/eval/calibration.h"
 #include "worker/engine/eval/depth_error.h"
@@ -31,20 +31,26 @@ namespace {
 
 nlohmann::json SplitMetrics(const scene::Clip& clip, const std::vector<int>& frames,
                             const std::vector<ImageMetrics>& images, const std::vector<DepthError>& depths,
-                            const std::vector<Calibration>& calibration) {
+                            const std::vector<Calibration>& calibration,
+                            const std::vector<Calibration>& noise_free) {
   std::vector<ImageMetrics> image_subset;
   std::vector<DepthError> depth_subset;
-  std::vector<Calibration> calibration_subset;
+  std::vector<Calibration> calibration_subset, noise_free_subset;
   for (int f : frames) {
     image_subset.push_back(images[f]);
     if (!depths.empty()) depth_subset.push_back(depths[f]);
     if (!calibration.empty()) calibration_subset.push_back(calibration[f]);
+    if (!noise_free.empty()) noise_free_subset.push_back(noise_free[f]);
   }
   nlohmann::json json;
   json["frames"] = frames;
   json["image"] = ToJson(std::span<const ImageMetrics>(image_subset));
   if (!clip.gt_depth.empty()) json["depth"] = ToJson(std::span<const DepthError>(depth_subset));
   if (!calibration.empty()) json["calibration"] = ToJson(std::span<const Calibration>(calibration_subset));
+  if (!noise_free.empty()) {
+    json["calibration_noise_free"] = ToJson(std::span<const Calibration>(noise_free_subset));
+    json["calibration_noise_free"]["error_against"] = "gt/images: the noise-free tissue (tool pixels left out)";
+  }
   return json;
 }
 
@@ -85,34 +91,47 @@ double Since(Clock::time_point start) { return std::chrono::duration<double>(Clo
 // through interpolated values.
 struct EvaluatedFrame {
   render::RenderedFrame frame;
-  std::optional<Calibration> calibration;  // reduced frames with uncertainty
+  // Reduced frames with uncertainty: the grid's pixels, the passes' mean colour and total there.
+  std::vector<int> grid;
+  std::vector<float> grid_rgb, grid_total;
 };
 
 EvaluatedFrame RenderFrame(const scene::Clip& clip, int f, FrameRender how, int stride,
                            render::FrameRenderer& full, render::FrameRenderer* plain) {
   const scene::Camera& camera = clip.cameras[f];
-  if (how == FrameRender::kFull || plain == nullptr) return {full.Render(camera, clip.times[f]), {}};
-  EvaluatedFrame out{plain->Render(camera, clip.times[f]), {}};
+  if (how == FrameRender::kFull || plain == nullptr) return {full.Render(camera, clip.times[f]), {}, {}, {}};
+  EvaluatedFrame out{plain->Render(camera, clip.times[f]), {}, {}, {}};
   if (full.settings().mc_passes == 0) return out;
-  const std::vector<int> pixels = StridedPixels(camera.width, camera.height, stride);
-  const int n = int(pixels.size());
-  std::vector<float> rgb(3 * std::size_t(n)), depth(n), opacity(n), total(n), aleatoric(n), epistemic(n);
-  full.RenderPixels(camera, clip.times[f], pixels.data(), n,
-                    {rgb.data(), depth.data(), opacity.data(), total.data(), aleatoric.data(), epistemic.data()});
-  std::vector<std::uint8_t> truth(3 * std::size_t(n)), mask;
-  const auto& full_mask = EvaluationMask(clip, f);
-  if (!full_mask.empty()) mask.resize(n);
-  for (int i = 0; i < n; ++i) {
-    const std::size_t p = std::size_t(pixels[i]);
-    for (int c = 0; c < 3; ++c) truth[3 * std::size_t(i) + c] = clip.rgb[f][3 * p + c];
-    if (!mask.empty()) mask[i] = full_mask[p];
-  }
-  out.calibration = MeasureCalibration(total, PixelRmse(rgb, truth, n, 1), mask);
+  out.grid = StridedPixels(camera.width, camera.height, stride);
+  const int n = int(out.grid.size());
+  out.grid_rgb.resize(3 * std::size_t(n));
+  out.grid_total.resize(n);
+  std::vector<float> depth(n), opacity(n), aleatoric(n), epistemic(n);
+  full.RenderPixels(camera, clip.times[f], out.grid.data(), n,
+                    {out.grid_rgb.data(), depth.data(), opacity.data(), out.grid_total.data(), aleatoric.data(),
+                     epistemic.data()});
   render::RenderedFrame& frame = out.frame;
-  frame.uncertainty = UpsampleStrided(total, camera.width, camera.height, stride);
+  frame.uncertainty = UpsampleStrided(out.grid_total, camera.width, camera.height, stride);
   frame.aleatoric = UpsampleStrided(aleatoric, camera.width, camera.height, stride);
   frame.epistemic = UpsampleStrided(epistemic, camera.width, camera.height, stride);
   return out;
+}
+
+// A frame's calibration against a reference image (the clip's, or its noise-free truth).
+Calibration FrameCalibration(const EvaluatedFrame& evaluated, std::span<const std::uint8_t> reference,
+                             const std::vector<std::uint8_t>& mask, int w, int h) {
+  if (evaluated.grid.empty()) {
+    return MeasureCalibration(evaluated.frame.uncertainty, PixelRmse(evaluated.frame.rgb, reference, w, h),
+                              mask);
+  }
+  const int n = int(evaluated.grid.size());
+  std::vector<std::uint8_t> truth(3 * std::size_t(n)), grid_mask(mask.empty() ? 0 : n);
+  for (int i = 0; i < n; ++i) {
+    const std::size_t p = std::size_t(evaluated.grid[i]);
+    for (int c = 0; c < 3; ++c) truth[3 * std::size_t(i) + c] = reference[3 * p + c];
+    if (!mask.empty()) grid_mask[i] = mask[p];
+  }
+  return MeasureCalibration(evaluated.grid_total, PixelRmse(evaluated.grid_rgb, truth, n, 1), grid_mask);
 }
 
 // Keeps a run's evaluation to its deadline: a training frame planned full is rendered reduced when
@@ -172,6 +191,7 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
   std::vector<std::vector<float>> video;
   const bool uncertain = renderer.settings().mc_passes > 0;
   std::vector<Calibration> calibration(uncertain ? count : 0);
+  std::vector<Calibration> noise_free(uncertain && !clip.gt_rgb.empty() ? count : 0);
   UncertaintyMaps maps;
   std::vector<render::RenderedFrame> components;  // aleatoric and epistemic maps only
   FramePacer pacer(what, w * h);
@@ -190,8 +210,8 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
     images[f] = MeasureImage(frame.rgb, clip.rgb[f], mask, w, h);
     if (uncertain) {
       std::vector<float> error = PixelRmse(frame.rgb, clip.rgb[f], w, h);
-      calibration[f] = evaluated.calibration ? *evaluated.calibration
-                                             : MeasureCalibration(frame.uncertainty, error, mask);
+      calibration[f] = FrameCalibration(evaluated, clip.rgb[f], mask, w, h);
+      if (!clip.gt_rgb.empty()) noise_free[f] = FrameCalibration(evaluated, clip.gt_rgb[f], mask, w, h);
       if (what.write_files) {
         maps.total.push_back(std::move(frame.uncertainty));
         maps.error.push_back(std::move(error));
@@ -225,9 +245,9 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
   }
   if (writing.valid()) write_seconds += writing.get();
   nlohmann::json json;
-  json["train"] = SplitMetrics(clip, what.train_frames, images, depths, calibration);
+  json["train"] = SplitMetrics(clip, what.train_frames, images, depths, calibration, noise_free);
   if (!what.heldout_frames.empty()) {
-    json["heldout"] = SplitMetrics(clip, what.heldout_frames, images, depths, calibration);
+    json["heldout"] = SplitMetrics(clip, what.heldout_frames, images, depths, calibration, noise_free);
   }
   const auto tail = Clock::now();
   if (uncertain) {

@@ -24,7 +24,8 @@ nlohmann::json OptionsJson(const SynthOptions& o) {
   return {{"frames", o.frames}, {"width", o.width},         {"height", o.height},
           {"seed", o.seed},     {"static", o.static_scene}, {"tool", o.tool},
           {"depth", o.depth},   {"stiff", o.stiff},         {"stereo", o.stereo},
-          {"moving", o.moving}, {"recording", o.recording}, {"checkerboard_views", o.checkerboard_views}};
+          {"moving", o.moving}, {"recording", o.recording}, {"checkerboard_views", o.checkerboard_views},
+          {"noise", o.noise}};
 }
 
 void PrepareFolder(const fs::path& out, const SynthOptions& options) {
@@ -48,6 +49,23 @@ std::uint8_t NoisyDepth(double depth, PortableRandom& random) {
   const double sigma = 0.25 + 0.5 * (depth / 90) * (depth / 90);
   const double noisy = depth + sigma * std::clamp(random.Normal(), -3.0, 3.0);
   return static_cast<std::uint8_t>(std::clamp(std::lround(noisy), 1L, 255L));
+}
+
+// A camera's noise on a pixel's colour: in linear light (the stored value to the power 2.2) each
+// channel gets independent Gaussian noise of variance kShot * signal + kRead^2 (shot noise and read
+// noise), then goes back to stored values. Dark pixels are the noisiest in stored values (the
+// gamma curve is steepest there): σ about 3.3 levels of 255 at a stored 0.3, 2.5 at 0.7.
+constexpr double kShot = 4e-4, kRead = 0.004;
+
+std::array<float, 3> CameraNoise(const std::array<float, 3>& rgb, PortableRandom& random) {
+  std::array<float, 3> out;
+  for (int c = 0; c < 3; ++c) {
+    const double linear = std::pow(std::clamp(double(rgb[c]), 0.0, 1.0), 2.2);
+    const double sigma = std::sqrt(kShot * linear + kRead * kRead);
+    const double noisy = std::max(0.0, linear + sigma * random.Normal());
+    out[c] = float(std::pow(noisy, 1.0 / 2.2));
+  }
+  return out;
 }
 
 void PunchHoles(cv::Mat& depth, PortableRandom& random) {
@@ -75,6 +93,9 @@ void WriteFrame(const SyntheticScene& scene, const SynthOptions& options, int in
       mask(h, w, CV_8UC1);
   std::vector<float> gt_depth(static_cast<std::size_t>(w) * h);
   PortableRandom random(StreamSeed(options.seed, static_cast<std::uint64_t>(index)));
+  // Camera noise draws from its own stream, so the clip's other random parts stay as without it.
+  PortableRandom noise(StreamSeed(StreamSeed(options.seed, 0x6e6f697365), static_cast<std::uint64_t>(index)));
+  const auto seen = [&](const std::array<float, 3>& rgb) { return options.noise ? CameraNoise(rgb, noise) : rgb; };
   const Eigen::Vector3d right_origin = camera.c2w.col(3) + scene.baseline() * camera.c2w.col(0);
 
   for (int v = 0; v < h; ++v) {
@@ -84,7 +105,7 @@ void WriteFrame(const SyntheticScene& scene, const SynthOptions& options, int in
       camera.Ray(u, v, origin, direction);
       const SceneHit hit = scene.TraceAlong(state, origin, direction, guess);
       guess = hit.tissue_depth;
-      PutRgb(rgb, u, v, hit.rgb);
+      PutRgb(rgb, u, v, seen(hit.rgb));
       PutRgb(gt_rgb, u, v, hit.tissue_rgb);
       gt_depth[static_cast<std::size_t>(v) * w + u] = static_cast<float>(hit.tissue_depth);
       mask.at<std::uint8_t>(v, u) = hit.tool ? 255 : 0;
@@ -93,7 +114,7 @@ void WriteFrame(const SyntheticScene& scene, const SynthOptions& options, int in
       if (options.stereo) {
         const SceneHit right_hit = scene.TraceAlong(state, right_origin, direction, right_guess);
         right_guess = right_hit.tissue_depth;
-        PutRgb(right, u, v, right_hit.rgb);
+        PutRgb(right, u, v, seen(right_hit.rgb));
       }
     }
   }

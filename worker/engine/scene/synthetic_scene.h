@@ -29,6 +29,9 @@ struct SynthOptions {
   bool recording =
       false;  // also write recording/: the raw pair as a real rig records it (synthetic_recording.h)
   int checkerboard_views = 24;  // with `recording`: views of the calibration checkerboard (0: none)
+  // Camera noise in images/ and images_right/ (CameraNoise in synthetic_clip.cc); gt/images is
+  // always noise-free, and so is recording/.
+  bool noise = true;
 };
 
 // Frame `index`'s time in [0, 1]: evenly spaced, 0 for a single frame.
