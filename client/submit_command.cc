@@ -190,7 +190,8 @@ Command AddSubmitCommand(CLI::App& app) {
                   "JSON file overriding the preset (as endorecon-worker reconstruct)");
   sub->add_option("--preset", flags->preset, "cpu or paper (default: the worker's, cpu)");
   sub->add_option("--iterations", flags->iterations, "training iterations (default: the preset's)");
-  sub->add_option("--time-budget", flags->time_budget_s, "stop training after this many seconds (0: none)");
+  sub->add_option("--time-budget", flags->time_budget_s,
+                  "seconds for the whole run on the worker: training, evaluation, writing (0: none)");
   sub->add_option("--holdout", flags->holdout, "hold out every K-th frame (0: none; default: the preset's)");
   sub->add_option("--seed", flags->seed, "random seed");
   sub->add_flag("--static", flags->force_static, "treat the clip as static (no deformation)");
