@@ -13,8 +13,14 @@ namespace endorecon::server {
 namespace fs = std::filesystem;
 namespace {
 
-[[noreturn]] void FailErrno(const std::string& what, const fs::path& path) {
-  Fail(ErrorCode::kUnavailable, what + " " + path.string() + ": " + std::strerror(errno));
+// A full disk (ENOSPC, EDQUOT) is a limit that lifts once space is freed: RESOURCE_EXHAUSTED, so the
+// uploader keeps its committed bytes and retries later; other failures are UNAVAILABLE.
+[[noreturn]] void FailErrno(const std::string& what, const fs::path& path, int error = errno) {
+  const std::string message = what + " " + path.string() + ": " + std::strerror(error);
+  if (error == ENOSPC || error == EDQUOT) {
+    Fail(ErrorCode::kResourceExhausted, message + " (the server's data disk is full; committed bytes are kept)");
+  }
+  Fail(ErrorCode::kUnavailable, message);
 }
 
 void FsyncDirectory(const fs::path& dir) {

@@ -30,7 +30,7 @@ JobServiceImpl::JobServiceImpl(CallGuard& guard, JobCoordinator& coordinator, Up
 grpc::Status JobServiceImpl::QueryUpload(grpc::ServerContext* context, const v1::Manifest* manifest,
                                          v1::UploadStatus* status) {
   return guard_.Run(context, {"QueryUpload", Access::kJobs, kReads, ""}, [&](Call& call) {
-    *status = uploads_.Query(*manifest);
+    *status = uploads_.Query(*manifest, Uploader::kClient);
     coordinator_.CheckUploadQuota(*manifest, call.caller);
     return grpc::Status::OK;
   });
@@ -40,7 +40,7 @@ grpc::Status JobServiceImpl::Upload(grpc::ServerContext* context,
                                     grpc::ServerReader<v1::UploadRequest>* reader, v1::UploadStatus* status) {
   return guard_.Run(context, {"Upload", Access::kJobs, kWrites, ""}, [&](Call& call) {
     *status = uploads_.Receive(
-        *reader, [&](const v1::Manifest& manifest) { coordinator_.CheckUploadQuota(manifest, call.caller); });
+        *reader, Uploader::kClient, [&](const v1::Manifest& manifest) { coordinator_.CheckUploadQuota(manifest, call.caller); });
     return grpc::Status::OK;
   });
 }

@@ -35,6 +35,7 @@ struct ServerFlags {
   int metrics_port = 9464;
   std::string metrics_host = "127.0.0.1";
   std::int64_t max_upload_bytes = std::int64_t{20} << 30;
+  std::int64_t min_free_bytes = std::int64_t{256} << 20;
   int max_attempts = 3;
   std::int64_t lease_ttl_ms = 30000;
   std::int64_t heartbeat_ms = 2000;
@@ -149,7 +150,7 @@ int Run(const ServerFlags& flags) {
                  flags.dicom.ae_title);
   }
   coordinator.Recover();
-  UploadReceiver uploads(blobs, flags.max_upload_bytes,
+  UploadReceiver uploads(blobs, flags.max_upload_bytes, flags.min_free_bytes,
                          [&](std::int64_t bytes) { metrics.UploadBytes(bytes); });
   JobServiceImpl job_service(guard, coordinator, uploads, blobs, hub, workers, metrics);
   WorkerServiceImpl worker_service(
@@ -317,6 +318,10 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--max-upload-bytes", flags.max_upload_bytes, "largest upload accepted (sum of its files)")
       ->capture_default_str();
+  app.add_option("--min-free-bytes", flags.min_free_bytes,
+                 "free space uploads leave on the data disk, for the job store and accepted jobs' results")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
   app.add_option("--max-attempts", flags.max_attempts,
                  "attempts before a job whose workers keep vanishing fails")
       ->capture_default_str()

@@ -11,11 +11,35 @@
 
 namespace endorecon::server {
 
-UploadReceiver::UploadReceiver(BlobStore& blobs, std::int64_t max_upload_bytes,
+UploadReceiver::UploadReceiver(BlobStore& blobs, std::int64_t max_upload_bytes, std::int64_t min_free_bytes,
                                std::function<void(std::int64_t)> on_bytes)
-    : blobs_(blobs), max_upload_bytes_(max_upload_bytes), on_bytes_(std::move(on_bytes)) {}
+    : blobs_(blobs),
+      max_upload_bytes_(max_upload_bytes),
+      min_free_bytes_(min_free_bytes),
+      on_bytes_(std::move(on_bytes)) {}
 
-v1::UploadStatus UploadReceiver::Query(const v1::Manifest& manifest) const {
+void UploadReceiver::CheckSpace(std::int64_t bytes, Uploader uploader) const {
+  if (bytes <= 0) return;
+  const std::int64_t reserve = uploader == Uploader::kClient ? min_free_bytes_ : min_free_bytes_ / 4;
+  std::error_code error;
+  const auto space = std::filesystem::space(blobs_.root(), error);
+  if (error) {
+    Fail(ErrorCode::kUnavailable,
+         "cannot read the free space of " + blobs_.root().string() + ": " + error.message());
+  }
+  const auto free_bytes = static_cast<std::int64_t>(space.available);
+  if (bytes > free_bytes - reserve) {
+    Fail(ErrorCode::kResourceExhausted,
+         "upload needs " + std::to_string(bytes) + " more bytes but the server's data disk has " +
+             std::to_string(free_bytes) + " bytes free and keeps " + std::to_string(reserve) +
+             (uploader == Uploader::kClient
+                  ? " of them for the job store and accepted jobs' results (--min-free-bytes)"
+                  : " of them for the job store (a quarter of --min-free-bytes)") +
+             "; committed bytes are kept: retry once space is freed");
+  }
+}
+
+v1::UploadStatus UploadReceiver::Query(const v1::Manifest& manifest, Uploader uploader) const {
   ValidateManifest(manifest);
   const std::int64_t total = TotalBytes(manifest);
   if (total > max_upload_bytes_) {
@@ -32,12 +56,7 @@ v1::UploadStatus UploadReceiver::Query(const v1::Manifest& manifest) const {
     file->set_committed(blobs_.Committed(entry));
     committed += file->committed();
   }
-  const auto free_bytes = static_cast<std::int64_t>(std::filesystem::space(blobs_.root()).available);
-  if (total - committed > free_bytes) {
-    Fail(ErrorCode::kResourceExhausted, "upload needs " + std::to_string(total - committed) +
-                                            " more bytes but only " + std::to_string(free_bytes) +
-                                            " are free on the server's disk");
-  }
+  CheckSpace(total - committed, uploader);
   status.set_committed_bytes(committed);
   status.set_total_bytes(total);
   bool complete = true;
@@ -47,7 +66,7 @@ v1::UploadStatus UploadReceiver::Query(const v1::Manifest& manifest) const {
 }
 
 v1::UploadStatus UploadReceiver::Receive(grpc::ServerReaderInterface<v1::UploadRequest>& reader,
-                                         const std::function<void(const v1::Manifest&)>& admit) {
+                                         Uploader uploader, const std::function<void(const v1::Manifest&)>& admit) {
   v1::UploadRequest request;
   if (!reader.Read(&request)) FailInvalid("empty upload stream: the first message must be the manifest");
   if (!request.has_manifest()) {
@@ -55,7 +74,7 @@ v1::UploadStatus UploadReceiver::Receive(grpc::ServerReaderInterface<v1::UploadR
                 request.chunk().path() + "'");
   }
   const v1::Manifest manifest = request.manifest();
-  Query(manifest);
+  Query(manifest, uploader);
   if (admit) admit(manifest);
   std::map<std::string, const v1::FileEntry*> entries;
   for (const auto& entry : manifest.files()) entries[entry.path()] = &entry;
@@ -91,6 +110,7 @@ v1::UploadStatus UploadReceiver::Receive(grpc::ServerReaderInterface<v1::UploadR
       }
       writer_path = entry.path();
     }
+    CheckSpace(static_cast<std::int64_t>(chunk.data().size()), uploader);
     writer->Append(chunk.offset(), chunk.data());
     if (on_bytes_) on_bytes_(static_cast<std::int64_t>(chunk.data().size()));
     if (writer->full()) {
@@ -100,7 +120,7 @@ v1::UploadStatus UploadReceiver::Receive(grpc::ServerReaderInterface<v1::UploadR
     }
   }
   writer.reset();
-  return Query(manifest);
+  return Query(manifest, uploader);
 }
 
 }  // namespace endorecon::server

@@ -1,9 +1,12 @@
 // The receiving side of uploads (JobService.Upload from clients, WorkerService.PutBlobs from
 // workers): a manifest first, then chunks continuing each file from its committed size.
 // Rejections: no manifest first or a second manifest, an unsafe or unknown path, a chunk over
-// 4 MiB or past its file's size (INVALID_ARGUMENT); an upload over the size limit or the free disk
-// (RESOURCE_EXHAUSTED, before any byte is written); a wrong digest (DATA_LOSS; the bytes are
-// discarded). A stream that ends early keeps its committed bytes for the next one. Chunks of a
+// 4 MiB or past its file's size (INVALID_ARGUMENT); an upload over the size limit, or one that
+// would leave less than the reserve free on the data disk (RESOURCE_EXHAUSTED, before any byte is
+// written, and again before every chunk: a disk that fills from elsewhere mid-stream stops the
+// stream there, its committed bytes kept for the resume once space is freed); a write the disk
+// refuses anyway (ENOSPC: RESOURCE_EXHAUSTED naming the file); a wrong digest (DATA_LOSS; the bytes
+// are discarded). The reserve keeps room for the job store and for the results of accepted jobs. A stream that ends early keeps its committed bytes for the next one. Chunks of a
 // file that another stream is writing at the same moment are skipped; the returned status then
 // says the upload is incomplete and the client asks again.
 #pragma once
@@ -18,21 +21,30 @@
 
 namespace endorecon::server {
 
+// Who uploads: a client's clip, or a worker's checkpoint and results (which keep only a quarter
+// of the reserve: the reserve is there for them).
+enum class Uploader { kClient, kWorker };
+
 class UploadReceiver {
  public:
   // `on_bytes` is told every committed chunk's size (for the metrics).
-  UploadReceiver(BlobStore& blobs, std::int64_t max_upload_bytes, std::function<void(std::int64_t)> on_bytes);
+  UploadReceiver(BlobStore& blobs, std::int64_t max_upload_bytes, std::int64_t min_free_bytes,
+                 std::function<void(std::int64_t)> on_bytes);
 
   // Validates `manifest` (and the size limit) and says how much of each file is committed.
-  v1::UploadStatus Query(const v1::Manifest& manifest) const;
+  v1::UploadStatus Query(const v1::Manifest& manifest, Uploader uploader) const;
   // Consumes one upload stream. Throws Error as described above. `admit`, when given, sees the
   // manifest before any byte is written and throws to refuse it (a tenant's quota).
-  v1::UploadStatus Receive(grpc::ServerReaderInterface<v1::UploadRequest>& reader,
+  v1::UploadStatus Receive(grpc::ServerReaderInterface<v1::UploadRequest>& reader, Uploader uploader,
                            const std::function<void(const v1::Manifest&)>& admit = {});
 
  private:
+  // Refuses `bytes` more that would leave less than the reserve free.
+  void CheckSpace(std::int64_t bytes, Uploader uploader) const;
+
   BlobStore& blobs_;
   std::int64_t max_upload_bytes_;
+  std::int64_t min_free_bytes_;
   std::function<void(std::int64_t)> on_bytes_;
 };
 

@@ -94,7 +94,7 @@ grpc::Status WorkerServiceImpl::Fail(grpc::ServerContext* context, const v1::Fai
 grpc::Status WorkerServiceImpl::QueryBlobs(grpc::ServerContext* context, const v1::Manifest* manifest,
                                            v1::UploadStatus* status) {
   return guard_.Run(context, {"QueryBlobs", Access::kWorker, kReads, ""}, [&](Call&) {
-    *status = uploads_.Query(*manifest);
+    *status = uploads_.Query(*manifest, Uploader::kWorker);
     return grpc::Status::OK;
   });
 }
@@ -103,7 +103,7 @@ grpc::Status WorkerServiceImpl::PutBlobs(grpc::ServerContext* context,
                                          grpc::ServerReader<v1::UploadRequest>* reader,
                                          v1::UploadStatus* status) {
   return guard_.Run(context, {"PutBlobs", Access::kWorker, kWrites, ""}, [&](Call&) {
-    *status = uploads_.Receive(*reader);
+    *status = uploads_.Receive(*reader, Uploader::kWorker);
     return grpc::Status::OK;
   });
 }

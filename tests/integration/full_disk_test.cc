@@ -1,0 +1,125 @@
+// The server's data disk fills up: uploads that do not fit are refused with RESOURCE_EXHAUSTED
+// naming the limit (before any byte, or at the chunk where a disk filled from elsewhere runs out),
+// what is stored stays intact and verifiable, committed bytes are kept, and once space is freed the
+// same upload resumes and completes on the same server. The data folder is a 16 MiB tmpfs.
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <random>
+
+#include "common/sha256.h"
+#include "tests/integration/service_harness.h"
+#include "tests/integration/small_filesystem.h"
+
+namespace endorecon::testing {
+namespace {
+namespace fs = std::filesystem;
+
+constexpr std::int64_t kMiB = 1 << 20;
+constexpr std::size_t kChunk = 256 * 1024;
+
+std::string RandomBytes(std::size_t n, unsigned seed) {
+  std::mt19937 random(seed);
+  std::string bytes(n, '\0');
+  for (auto& c : bytes) c = static_cast<char>(random() & 0xff);
+  return bytes;
+}
+
+v1::Manifest ManifestOf(const std::string& path, const std::string& bytes) {
+  v1::Manifest manifest;
+  auto* entry = manifest.add_files();
+  entry->set_path(path);
+  entry->set_size(static_cast<std::int64_t>(bytes.size()));
+  entry->set_sha256(Sha256Hex(bytes));
+  return manifest;
+}
+
+v1::UploadRequest Chunk(const std::string& path, std::size_t offset, const std::string& bytes) {
+  v1::UploadRequest request;
+  request.mutable_chunk()->set_path(path);
+  request.mutable_chunk()->set_offset(static_cast<std::int64_t>(offset));
+  request.mutable_chunk()->set_data(bytes.substr(offset, kChunk));
+  return request;
+}
+
+v1::UploadStatus Query(Cluster& cluster, const v1::Manifest& manifest) {
+  grpc::ClientContext context;
+  v1::UploadStatus status;
+  const grpc::Status rpc = cluster.stub().QueryUpload(&context, manifest, &status);
+  EXPECT_TRUE(rpc.ok() || rpc.error_code() == grpc::StatusCode::RESOURCE_EXHAUSTED) << rpc.error_message();
+  return status;
+}
+
+// Uploads `bytes` from `from` on one stream; `midway`, when given, runs once the first chunk is
+// committed (the test fills the disk there).
+grpc::Status Upload(Cluster& cluster, const std::string& path, const std::string& bytes, std::size_t from = 0,
+                    const std::function<void()>& midway = {}) {
+  grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(30));
+  v1::UploadStatus status;
+  auto writer = cluster.stub().Upload(&context, &status);
+  v1::UploadRequest first;
+  *first.mutable_manifest() = ManifestOf(path, bytes);
+  writer->Write(first);
+  for (std::size_t offset = from; offset < bytes.size(); offset += kChunk) {
+    if (!writer->Write(Chunk(path, offset, bytes))) break;
+    if (offset == from && midway) {
+      WaitUntil([&] { return Query(cluster, first.manifest()).committed_bytes() > std::int64_t(from); },
+                std::chrono::seconds(10));
+      midway();
+    }
+  }
+  writer->WritesDone();
+  return writer->Finish();
+}
+
+TEST(FullDiskTest, UploadsThatDoNotFitAreRefusedWhatIsStoredSurvivesAndTheUploadResumesOnceSpaceIsFreed) {
+  Cluster cluster({"--min-free-bytes", std::to_string(2 * kMiB)}, /*start=*/false);
+  SmallFilesystem disk(cluster.data_dir(), 16 * kMiB);
+  if (!disk.mounted()) GTEST_SKIP() << disk.why();
+  cluster.StartServer();
+
+  // Stored while there is room.
+  const std::string kept = RandomBytes(kMiB, 1);
+  ASSERT_TRUE(Upload(cluster, "kept.bin", kept).ok());
+  ASSERT_TRUE(Query(cluster, ManifestOf("kept.bin", kept)).complete());
+
+  // 3 MiB free, 2 MiB of them the reserve: a 2 MiB upload is refused before any byte is written.
+  const fs::path filler = cluster.data_dir() / "filler";
+  FillLeaving(filler, 3 * kMiB);
+  const std::string big = RandomBytes(2 * kMiB, 2);
+  const grpc::Status refused = Upload(cluster, "big.bin", big);
+  EXPECT_EQ(refused.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << refused.error_message();
+  EXPECT_NE(refused.error_message().find("--min-free-bytes"), std::string::npos) << refused.error_message();
+  EXPECT_NE(refused.error_message().find("bytes free"), std::string::npos) << refused.error_message();
+  EXPECT_EQ(Query(cluster, ManifestOf("big.bin", big)).committed_bytes(), 0);
+
+  // With 5 MiB free it fits at first; the disk then fills from elsewhere while it streams: the
+  // upload stops at that chunk with RESOURCE_EXHAUSTED and keeps what it committed.
+  fs::remove(filler);
+  FillLeaving(filler, 5 * kMiB);
+  const grpc::Status stopped =
+      Upload(cluster, "big.bin", big, 0, [&] { FillLeaving(cluster.data_dir() / "filler2", kMiB / 2); });
+  EXPECT_EQ(stopped.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << stopped.error_message();
+
+  // What was stored before is intact: the server still vouches for it, and its bytes are the same.
+  EXPECT_TRUE(Query(cluster, ManifestOf("kept.bin", kept)).complete());
+  const std::string digest = Sha256Hex(kept);
+  std::ifstream blob(cluster.data_dir() / "blobs" / digest.substr(0, 2) / digest, std::ios::binary);
+  const std::string stored((std::istreambuf_iterator<char>(blob)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(stored, kept);
+
+  // Space freed: the committed bytes are there (while the disk was full, asking was refused too),
+  // the same server takes the rest from the committed size, and the blob verifies.
+  fs::remove(filler);
+  fs::remove(cluster.data_dir() / "filler2");
+  const std::int64_t committed = Query(cluster, ManifestOf("big.bin", big)).committed_bytes();
+  EXPECT_GE(committed, std::int64_t(kChunk));
+  EXPECT_LT(committed, std::int64_t(big.size()));
+  const grpc::Status resumed = Upload(cluster, "big.bin", big, std::size_t(committed));
+  ASSERT_TRUE(resumed.ok()) << resumed.error_message();
+  EXPECT_TRUE(Query(cluster, ManifestOf("big.bin", big)).complete());
+}
+
+}  // namespace
+}  // namespace endorecon::testing
