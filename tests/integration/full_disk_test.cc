@@ -1,7 +1,8 @@
 // The server's data disk fills up: uploads that do not fit are refused with RESOURCE_EXHAUSTED
 // naming the limit (before any byte, or at the chunk where a disk filled from elsewhere runs out),
 // what is stored stays intact and verifiable, committed bytes are kept, and once space is freed the
-// same upload resumes and completes on the same server. The data folder is a 16 MiB tmpfs.
+// same upload resumes and completes on the same server. The data folder is a 16 MiB tmpfs. And a
+// worker's scratch folder that fills up hands its job back rather than failing it.
 #include <gtest/gtest.h>
 
 #include <fstream>
@@ -119,6 +120,31 @@ TEST(FullDiskTest, UploadsThatDoNotFitAreRefusedWhatIsStoredSurvivesAndTheUpload
   const grpc::Status resumed = Upload(cluster, "big.bin", big, std::size_t(committed));
   ASSERT_TRUE(resumed.ok()) << resumed.error_message();
   EXPECT_TRUE(Query(cluster, ManifestOf("big.bin", big)).complete());
+}
+
+// A worker whose scratch folder (a 3 MiB tmpfs: the job's checkpoint alone is larger) runs out of
+// space hands the job back without counting an attempt, names its scratch folder, and leaves jobs to
+// others for a while; a worker with room then finishes the job.
+TEST(FullDiskTest, AWorkerWhoseScratchFillsHandsTheJobBackUncountedAndAnotherWorkerFinishesIt) {
+  Cluster cluster;
+  MakeClip(cluster.path("clip"));
+  SmallFilesystem scratch(cluster.path("work-small"), 3 * kMiB);  // StartWorker's --work-dir for "small"
+  if (!scratch.mounted()) GTEST_SKIP() << scratch.why();
+  auto& small = cluster.StartWorker("small", {"--min-free-bytes", std::to_string(kMiB)});
+  const auto id = cluster.Submit(cluster.path("clip"), {"--iterations", "30"});
+  ASSERT_TRUE(WaitUntil([&] { return cluster.Job(id).error().find("scratch folder") != std::string::npos; },
+                        std::chrono::seconds(120)))
+      << cluster.ServerLog() << small.Log();
+  const v1::Job requeued = cluster.Job(id);
+  EXPECT_EQ(requeued.state(), v1::QUEUED) << requeued.error();
+  EXPECT_EQ(requeued.attempts(), 0) << "a full disk is not the job's attempt";
+  EXPECT_NE(requeued.error().find(cluster.path("work-small").string()), std::string::npos) << requeued.error();
+
+  cluster.StartWorker("roomy");
+  const v1::Job done = cluster.WaitForState(id, v1::SUCCEEDED, std::chrono::seconds(120));
+  EXPECT_EQ(done.state(), v1::SUCCEEDED) << done.error() << cluster.ServerLog();
+  EXPECT_EQ(done.attempts(), 0);
+  EXPECT_EQ(done.worker_id(), "roomy");
 }
 
 }  // namespace

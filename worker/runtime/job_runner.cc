@@ -3,6 +3,9 @@
 #include <spdlog/spdlog.h>
 
 #include <nlohmann/json.hpp>
+#include <cerrno>
+#include <cstring>
+#include <string_view>
 #include <thread>
 
 #include "common/error.h"
@@ -81,7 +84,17 @@ void Tell(WorkerClient& client, const std::string& lease_id, const std::string& 
 
 }  // namespace
 
-void RunLeasedJob(WorkerClient& client, const v1::LeaseResponse& lease, const Device& device,
+std::int64_t ScratchFree(const std::filesystem::path& work_dir) {
+  // The folder may not exist yet (made with the first job): its nearest existing parent's disk.
+  fs::path probe = work_dir;
+  std::error_code error;
+  while (!probe.empty() && !fs::exists(probe, error) && probe.has_parent_path() && probe != probe.parent_path())
+    probe = probe.parent_path();
+  const auto space = fs::space(probe, error);
+  return error ? -1 : static_cast<std::int64_t>(space.available);
+}
+
+bool RunLeasedJob(WorkerClient& client, const v1::LeaseResponse& lease, const Device& device,
                   const RunnerSettings& settings, WorkerMetrics& metrics,
                   const std::atomic<bool>& shutting_down) {
   const auto& job = lease.job();
@@ -93,6 +106,7 @@ void RunLeasedJob(WorkerClient& client, const v1::LeaseResponse& lease, const De
   gauges.busy.Set(1);
   ProgressReporter reporter(client, lease.lease_id(), settings.heartbeat);
   int last_iteration = 0;
+  bool disk_full = false;
   try {
     client.GetFiles(lease.lease_id(), job_dir / "clip", job.clip());
     if (job.has_checkpoint() && !job.checkpoint().sha256().empty()) {
@@ -156,11 +170,23 @@ void RunLeasedJob(WorkerClient& client, const v1::LeaseResponse& lease, const De
     reporter.Stop();
     gauges.busy.Set(0);
     spdlog::error("[{}] job {}: {}: {}", device.name, job.id(), ErrorCodeName(e.code()), e.what());
+    // A write the disk refused (its message carries the system's words for ENOSPC or EDQUOT; the
+    // file written in part may already be gone), or any failure while the scratch folder is full (an
+    // image codec reports a full disk as a failed write): the disk's fault, the job goes back uncounted.
+    const std::int64_t free_bytes = ScratchFree(settings.work_dir);
+    const std::string_view message = e.what();
+    disk_full = (free_bytes >= 0 && free_bytes < settings.min_free_bytes) ||
+                message.find(std::strerror(ENOSPC)) != std::string_view::npos ||
+                message.find(std::strerror(EDQUOT)) != std::string_view::npos;
     if (!reporter.stop_requested()) {
-      const bool bad_input = e.code() == ErrorCode::kInvalidArgument;
+      const bool bad_input = e.code() == ErrorCode::kInvalidArgument && !disk_full;
+      const std::string reason =
+          disk_full ? "worker " + client.worker_id() + ": its scratch folder " + settings.work_dir.string() +
+                          " ran out of space (" + std::to_string(free_bytes) + " bytes free now, needs " +
+                          std::to_string(settings.min_free_bytes) + " to take a job): " + e.what()
+                    : std::string(ErrorCodeName(e.code())) + ": " + e.what();
       // Issue 16: stopped by a shutdown while preparing: handed back without counting an attempt.
-      Tell(client, lease.lease_id(), std::string(ErrorCodeName(e.code())) + ": " + e.what(), !bad_input,
-           e.code() == ErrorCode::kCancelled);
+      Tell(client, lease.lease_id(), reason, !bad_input, e.code() == ErrorCode::kCancelled || disk_full);
     }
   } catch (const std::exception& e) {
     reporter.Stop();
@@ -170,6 +196,7 @@ void RunLeasedJob(WorkerClient& client, const v1::LeaseResponse& lease, const De
   }
   std::error_code ignored;
   fs::remove_all(job_dir, ignored);
+  return disk_full;
 }
 
 }  // namespace endorecon::worker

@@ -9,6 +9,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <cstdint>
 #include <filesystem>
 
 #include "endorecon/v1/worker_service.pb.h"
@@ -22,11 +23,20 @@ struct RunnerSettings {
   std::chrono::milliseconds heartbeat{2000};  // report interval (the server's)
   double preview_interval_s = 30;
   double checkpoint_interval_s = 120;
+  // A job that fails while the scratch folder has less than this free is handed back without
+  // counting an attempt (the disk, not the job, was at fault), and no job is leased until there is
+  // this much free again (ScratchFree).
+  std::int64_t min_free_bytes = std::int64_t{256} << 20;
 };
 
+// Bytes free on the scratch folder's filesystem (its nearest existing parent's while it does not
+// exist; -1 when that cannot be read).
+std::int64_t ScratchFree(const std::filesystem::path& work_dir);
+
 // Never throws for the job's own failures (they are reported to the server); throws Error only
-// when the server cannot be told.
-void RunLeasedJob(WorkerClient& client, const v1::LeaseResponse& lease, const Device& device,
+// when the server cannot be told. Returns true when the job failed on a full scratch folder (and
+// was handed back uncounted): the caller then leaves jobs to other workers for a while.
+bool RunLeasedJob(WorkerClient& client, const v1::LeaseResponse& lease, const Device& device,
                   const RunnerSettings& settings, WorkerMetrics& metrics,
                   const std::atomic<bool>& shutting_down);
 

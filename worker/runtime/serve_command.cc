@@ -27,6 +27,7 @@ struct ServeFlags {
   std::string metrics_host = "127.0.0.1";
   int metrics_port = 9465;
   std::string work_dir;
+  std::int64_t min_free_bytes = std::int64_t{256} << 20;
   std::string id;
   int threads = 0;
   double timeout_s = 30;
@@ -63,11 +64,38 @@ void LeaseLoop(WorkerClient& client, const Device& device, const RunnerSettings&
                WorkerMetrics& metrics, const std::atomic<bool>& shutting_down,
                std::chrono::milliseconds wait) {
   auto backoff = std::chrono::milliseconds(500);
+  bool waiting_for_space = false;
+  auto disk_backoff = std::chrono::seconds(30);
   while (!shutting_down) {
+    // A full scratch folder takes no job: it would only fail there.
+    const std::int64_t free_bytes = ScratchFree(settings.work_dir);
+    if (free_bytes >= 0 && free_bytes < settings.min_free_bytes) {
+      if (!waiting_for_space) {
+        spdlog::warn("[{}] scratch folder {} has {} bytes free (--min-free-bytes {}): leasing no job until "
+                     "there is room",
+                     device.name, settings.work_dir.string(), free_bytes, settings.min_free_bytes);
+      }
+      waiting_for_space = true;
+      std::this_thread::sleep_for(std::chrono::seconds(1));
+      continue;
+    }
+    if (waiting_for_space) spdlog::info("[{}] scratch folder has room again", device.name);
+    waiting_for_space = false;
     try {
       const auto lease = client.Lease(device.name, wait);
       backoff = std::chrono::milliseconds(500);
-      if (lease) RunLeasedJob(client, *lease, device, settings, metrics, shutting_down);
+      if (lease && RunLeasedJob(client, *lease, device, settings, metrics, shutting_down)) {
+        // The job needed more scratch than this worker has: leave it to others for a while
+        // (30 s, doubling to 10 minutes while it keeps happening).
+        spdlog::warn("[{}] scratch folder full: taking no job for {} s", device.name, disk_backoff.count());
+        for (auto waited = std::chrono::seconds(0); waited < disk_backoff && !shutting_down;
+             waited += std::chrono::seconds(1)) {
+          std::this_thread::sleep_for(std::chrono::seconds(1));
+        }
+        disk_backoff = std::min(disk_backoff * 2, std::chrono::seconds(600));
+      } else if (lease) {
+        disk_backoff = std::chrono::seconds(30);
+      }
     } catch (const Error& e) {
       spdlog::warn("[{}] {}: {}; retrying in {} ms", device.name, ErrorCodeName(e.code()), e.what(),
                    backoff.count());
@@ -99,6 +127,7 @@ int Serve(const ServeFlags& flags) {
   settings.work_dir = flags.work_dir.empty()
                           ? std::filesystem::temp_directory_path() / ("endorecon-" + worker_id)
                           : std::filesystem::path(flags.work_dir);
+  settings.min_free_bytes = flags.min_free_bytes;
   settings.preview_interval_s = flags.preview_interval_s;
   settings.checkpoint_interval_s = flags.checkpoint_interval_s;
   std::atomic<bool> shutting_down{false};
@@ -154,6 +183,11 @@ Command AddServeCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--metrics-host", flags->metrics_host, "interface for /metrics")->capture_default_str();
   cmd->add_option("--work-dir", flags->work_dir, "scratch folder for running jobs (default: in $TMPDIR)");
+  cmd->add_option("--min-free-bytes", flags->min_free_bytes,
+                  "free space the scratch folder needs to take a job; a job failing below it is handed back "
+                  "uncounted")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
   cmd->add_option("--id", flags->id, "worker id (default: hostname-pid)");
   cmd->add_option("--threads", flags->threads, "engine threads per device (0: cores / devices)")
       ->capture_default_str();
