@@ -10,7 +10,8 @@ namespace endorecon::server {
 
 std::int64_t SendFiles(const BlobStore& blobs,
                        const std::vector<std::pair<v1::FileEntry, std::int64_t>>& files,
-                       grpc::ServerWriterInterface<v1::FileChunk>& writer) {
+                       grpc::ServerWriterInterface<v1::FileChunk>& writer, StallWatch& watch,
+                       grpc::ServerContext* context) {
   std::int64_t sent = 0;
   std::string buffer(kChunkBytes, '\0');
   for (const auto& [entry, start] : files) {
@@ -32,8 +33,8 @@ std::int64_t SendFiles(const BlobStore& blobs,
       if (first) *chunk.mutable_file() = entry;
       chunk.set_offset(offset);
       chunk.set_data(buffer.data(), static_cast<std::size_t>(want));
-      if (!writer.Write(chunk))
-        Fail(ErrorCode::kUnavailable, "the receiver went away during '" + entry.path() + "'");
+      if (!watch.Write(context, [&] { return writer.Write(chunk); }))
+        Fail(ErrorCode::kUnavailable, "the receiver went away or stopped reading during '" + entry.path() + "'");
       offset += want;
       sent += want;
       first = false;

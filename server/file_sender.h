@@ -11,13 +11,16 @@
 
 #include "endorecon/v1/files.pb.h"
 #include "server/blob_store.h"
+#include "server/stall_watch.h"
 
 namespace endorecon::server {
 
-// Sends each (entry, offset). Throws kInvalidArgument for an offset past a file's size, kNotFound
-// for a missing blob, kUnavailable when the receiver went away. Returns the bytes sent.
+// Sends each (entry, offset), every chunk's Write watched by `watch` (a receiver that stops reading
+// has its call cancelled). Throws kInvalidArgument for an offset past a file's size, kNotFound for
+// a missing blob, kUnavailable when the receiver went away or stalled. Returns the bytes sent.
 std::int64_t SendFiles(const BlobStore& blobs,
                        const std::vector<std::pair<v1::FileEntry, std::int64_t>>& files,
-                       grpc::ServerWriterInterface<v1::FileChunk>& writer);
+                       grpc::ServerWriterInterface<v1::FileChunk>& writer, StallWatch& watch,
+                       grpc::ServerContext* context);
 
 }  // namespace endorecon::server

@@ -18,14 +18,16 @@ bool Settled(const v1::Job& job) { return Terminal(job.state()) && !SendsWaiting
 }  // namespace
 
 JobServiceImpl::JobServiceImpl(CallGuard& guard, JobCoordinator& coordinator, UploadReceiver& uploads,
-                               BlobStore& blobs, WatchHub& hub, WorkerRegistry& workers, Metrics& metrics)
+                               BlobStore& blobs, WatchHub& hub, WorkerRegistry& workers, Metrics& metrics,
+                               StallWatch& stalls)
     : guard_(guard),
       coordinator_(coordinator),
       uploads_(uploads),
       blobs_(blobs),
       hub_(hub),
       workers_(workers),
-      metrics_(metrics) {}
+      metrics_(metrics),
+      stalls_(stalls) {}
 
 grpc::Status JobServiceImpl::QueryUpload(grpc::ServerContext* context, const v1::Manifest* manifest,
                                          v1::UploadStatus* status) {
@@ -101,7 +103,10 @@ grpc::Status JobServiceImpl::Watch(grpc::ServerContext* context, const v1::Watch
     v1::JobEvent first;
     *first.mutable_job() = coordinator_.Get(request->id(), call.caller);
     first.mutable_job()->clear_clip();
-    if (!writer->Write(first) || Settled(first.job())) return grpc::Status::OK;
+    const auto write = [&](const v1::JobEvent& event) {
+      return stalls_.Write(context, [&] { return writer->Write(event); });
+    };
+    if (!write(first) || Settled(first.job())) return grpc::Status::OK;
     std::uint64_t seen = 0;
     while (!context->IsCancelled()) {
       auto changes =
@@ -114,7 +119,7 @@ grpc::Status JobServiceImpl::Watch(grpc::ServerContext* context, const v1::Watch
       }
       if (changes.job) *events.emplace_back().mutable_job() = *changes.job;
       for (const auto& event : events) {
-        if (!writer->Write(event)) return grpc::Status::OK;
+        if (!write(event)) return grpc::Status::OK;
       }
       if (changes.job && Settled(*changes.job)) return grpc::Status::OK;
     }
@@ -148,7 +153,7 @@ grpc::Status JobServiceImpl::Fetch(grpc::ServerContext* context, const v1::Fetch
         Fail(ErrorCode::kNotFound, "job " + job.id() + " has no result '" + range.path() + "'");
       files.emplace_back(found->second, range.offset());
     }
-    metrics_.DownloadBytes(SendFiles(blobs_, files, *writer));
+    metrics_.DownloadBytes(SendFiles(blobs_, files, *writer, stalls_, context));
     return grpc::Status::OK;
   });
 }

@@ -8,6 +8,7 @@
 #include "endorecon/v1/job_service.grpc.pb.h"
 #include "server/call_guard.h"
 #include "server/job_coordinator.h"
+#include "server/stall_watch.h"
 #include "server/upload_receiver.h"
 
 namespace endorecon::server {
@@ -15,7 +16,7 @@ namespace endorecon::server {
 class JobServiceImpl final : public v1::JobService::Service {
  public:
   JobServiceImpl(CallGuard& guard, JobCoordinator& coordinator, UploadReceiver& uploads, BlobStore& blobs,
-                 WatchHub& hub, WorkerRegistry& workers, Metrics& metrics);
+                 WatchHub& hub, WorkerRegistry& workers, Metrics& metrics, StallWatch& stalls);
 
   grpc::Status QueryUpload(grpc::ServerContext*, const v1::Manifest*, v1::UploadStatus*) override;
   grpc::Status Upload(grpc::ServerContext*, grpc::ServerReader<v1::UploadRequest>*,
@@ -40,6 +41,7 @@ class JobServiceImpl final : public v1::JobService::Service {
   WatchHub& hub_;
   WorkerRegistry& workers_;
   Metrics& metrics_;
+  StallWatch& stalls_;
 };
 
 }  // namespace endorecon::server

@@ -36,6 +36,7 @@ struct ServerFlags {
   std::string metrics_host = "127.0.0.1";
   std::int64_t max_upload_bytes = std::int64_t{20} << 30;
   std::int64_t min_free_bytes = std::int64_t{256} << 20;
+  double stall_timeout_s = 60;
   int max_attempts = 3;
   std::int64_t lease_ttl_ms = 30000;
   std::int64_t heartbeat_ms = 2000;
@@ -152,9 +153,10 @@ int Run(const ServerFlags& flags) {
   coordinator.Recover();
   UploadReceiver uploads(blobs, flags.max_upload_bytes, flags.min_free_bytes,
                          [&](std::int64_t bytes) { metrics.UploadBytes(bytes); });
-  JobServiceImpl job_service(guard, coordinator, uploads, blobs, hub, workers, metrics);
+  StallWatch stalls(std::chrono::milliseconds(static_cast<std::int64_t>(flags.stall_timeout_s * 1000)));
+  JobServiceImpl job_service(guard, coordinator, uploads, blobs, hub, workers, metrics, stalls);
   WorkerServiceImpl worker_service(
-      guard, coordinator, uploads, blobs, workers, metrics,
+      guard, coordinator, uploads, blobs, workers, metrics, stalls,
       {std::chrono::milliseconds(flags.lease_ttl_ms), std::chrono::milliseconds(flags.heartbeat_ms),
        std::chrono::milliseconds(20000)});
 
@@ -322,6 +324,11 @@ int main(int argc, char** argv) {
                  "free space uploads leave on the data disk, for the job store and accepted jobs' results")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
+  app.add_option("--stall-timeout", flags.stall_timeout_s,
+                 "seconds a download or watch stream may wait on a peer that takes no data before it is "
+                 "cancelled")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
   app.add_option("--max-attempts", flags.max_attempts,
                  "attempts before a job whose workers keep vanishing fails")
       ->capture_default_str()

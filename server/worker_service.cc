@@ -10,13 +10,14 @@ namespace endorecon::server {
 
 WorkerServiceImpl::WorkerServiceImpl(CallGuard& guard, JobCoordinator& coordinator, UploadReceiver& uploads,
                                      BlobStore& blobs, WorkerRegistry& workers, Metrics& metrics,
-                                     WorkerTiming timing)
+                                     StallWatch& stalls, WorkerTiming timing)
     : guard_(guard),
       coordinator_(coordinator),
       uploads_(uploads),
       blobs_(blobs),
       workers_(workers),
       metrics_(metrics),
+      stalls_(stalls),
       timing_(timing) {}
 
 grpc::Status WorkerServiceImpl::Register(grpc::ServerContext* context, const v1::RegisterRequest* request,
@@ -127,7 +128,7 @@ grpc::Status WorkerServiceImpl::GetBlobs(grpc::ServerContext* context, const v1:
       entry.set_size(static_cast<std::int64_t>(std::filesystem::file_size(blobs_.PathOf(range.sha256()))));
       files.emplace_back(entry, range.offset());
     }
-    metrics_.DownloadBytes(SendFiles(blobs_, files, *writer));
+    metrics_.DownloadBytes(SendFiles(blobs_, files, *writer, stalls_, context));
     return grpc::Status::OK;
   });
 }

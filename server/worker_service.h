@@ -8,6 +8,7 @@
 #include "endorecon/v1/worker_service.grpc.pb.h"
 #include "server/call_guard.h"
 #include "server/job_coordinator.h"
+#include "server/stall_watch.h"
 #include "server/upload_receiver.h"
 
 namespace endorecon::server {
@@ -21,7 +22,7 @@ struct WorkerTiming {
 class WorkerServiceImpl final : public v1::WorkerService::Service {
  public:
   WorkerServiceImpl(CallGuard& guard, JobCoordinator& coordinator, UploadReceiver& uploads, BlobStore& blobs,
-                    WorkerRegistry& workers, Metrics& metrics, WorkerTiming timing);
+                    WorkerRegistry& workers, Metrics& metrics, StallWatch& stalls, WorkerTiming timing);
 
   grpc::Status Register(grpc::ServerContext*, const v1::RegisterRequest*, v1::RegisterResponse*) override;
   grpc::Status Lease(grpc::ServerContext*, const v1::LeaseRequest*, v1::LeaseResponse*) override;
@@ -42,6 +43,7 @@ class WorkerServiceImpl final : public v1::WorkerService::Service {
   BlobStore& blobs_;
   WorkerRegistry& workers_;
   Metrics& metrics_;
+  StallWatch& stalls_;
   WorkerTiming timing_;
 };
 

@@ -1,0 +1,58 @@
+#include "server/stall_watch.h"
+
+#include <spdlog/spdlog.h>
+
+namespace endorecon::server {
+
+StallWatch::StallWatch(std::chrono::milliseconds limit) : limit_(limit), thread_([this] { Loop(); }) {}
+
+StallWatch::~StallWatch() {
+  {
+    std::lock_guard lock(mutex_);
+    stopping_ = true;
+  }
+  changed_.notify_all();
+  thread_.join();
+}
+
+bool StallWatch::Write(grpc::ServerContext* context, const std::function<bool()>& write) {
+  std::uint64_t id;
+  {
+    std::lock_guard lock(mutex_);
+    id = next_++;
+    armed_[id] = {context, Clock::now() + limit_};
+  }
+  changed_.notify_all();
+  const bool written = write();
+  std::lock_guard lock(mutex_);
+  armed_.erase(id);
+  return written;
+}
+
+std::uint64_t StallWatch::cancelled() const {
+  std::lock_guard lock(mutex_);
+  return cancelled_;
+}
+
+void StallWatch::Loop() {
+  std::unique_lock lock(mutex_);
+  while (!stopping_) {
+    // Writes are armed in order and all with the same limit: the first is the next to expire.
+    if (armed_.empty()) {
+      changed_.wait(lock);
+      continue;
+    }
+    auto first = armed_.begin();
+    if (Clock::now() < first->second.deadline) {
+      changed_.wait_until(lock, first->second.deadline);
+      continue;
+    }
+    grpc::ServerContext* context = first->second.context;
+    armed_.erase(first);
+    ++cancelled_;
+    spdlog::warn("a stream to {} took no data for {} ms: cancelled", context->peer(), limit_.count());
+    context->TryCancel();
+  }
+}
+
+}  // namespace endorecon::server

@@ -1,0 +1,93 @@
+// A peer that stops reading a download does not keep the server's thread: the server cancels the
+// stream once a Write has waited --stall-timeout, serves everyone else meanwhile and after, and the
+// same peer can fetch the file again when it reads.
+#include <gtest/gtest.h>
+#include <grpcpp/grpcpp.h>
+
+#include <fstream>
+#include <random>
+#include <thread>
+
+#include "common/sha256.h"
+#include "endorecon/v1/worker_service.grpc.pb.h"
+#include "tests/integration/service_harness.h"
+
+namespace endorecon::testing {
+namespace {
+namespace fs = std::filesystem;
+
+TEST(StalledPeerTest, ADownloadWhoseReaderStopsIsCancelledAndTheServerCarriesOn) {
+  Cluster cluster({"--stall-timeout", "2"});
+  MakeClip(cluster.path("clip"));
+  // A 16 MiB file in the clip: far more than the reader's flow-control window below.
+  std::string bytes(16 << 20, '\0');
+  std::mt19937 random(3);
+  for (auto& c : bytes) c = static_cast<char>(random() & 0xff);
+  std::ofstream(cluster.path("clip") / "extra.bin", std::ios::binary).write(bytes.data(), std::streamsize(bytes.size()));
+  const std::string id = cluster.Submit(cluster.path("clip"), {"--iterations", "10"});
+
+  // A worker by hand, whose channel takes at most 64 KiB ahead of its reads.
+  grpc::ChannelArguments args;
+  args.SetInt(GRPC_ARG_HTTP2_BDP_PROBE, 0);
+  args.SetInt(GRPC_ARG_HTTP2_STREAM_LOOKAHEAD_BYTES, 64 * 1024);
+  args.SetMaxReceiveMessageSize(64 << 20);
+  auto worker = v1::WorkerService::NewStub(
+      grpc::CreateCustomChannel(cluster.address(), grpc::InsecureChannelCredentials(), args));
+  {
+    grpc::ClientContext context;
+    v1::RegisterRequest request;
+    request.set_worker_id("stalled");
+    request.add_devices("cpu");
+    v1::RegisterResponse response;
+    ASSERT_TRUE(worker->Register(&context, request, &response).ok());
+  }
+  // Leases the job (again once a lease this hand-made worker never renews has expired) and asks
+  // for the file.
+  const auto get_blobs = [&] {
+    v1::LeaseResponse lease;
+    grpc::ClientContext context;
+    v1::LeaseRequest lease_request;
+    lease_request.set_worker_id("stalled");
+    lease_request.set_device("cpu");
+    lease_request.set_wait_ms(15000);
+    EXPECT_TRUE(worker->Lease(&context, lease_request, &lease).ok());
+    EXPECT_EQ(lease.job().id(), id);
+    v1::GetBlobsRequest request;
+    request.set_lease_id(lease.lease_id());
+    auto* range = request.add_files();
+    range->set_path("extra.bin");
+    range->set_sha256(Sha256Hex(bytes));
+    return request;
+  };
+  const v1::GetBlobsRequest request = get_blobs();
+
+  // Read one chunk, then stop reading.
+  grpc::ClientContext stalled;
+  auto reader = worker->GetBlobs(&stalled, request);
+  v1::FileChunk chunk;
+  ASSERT_TRUE(reader->Read(&chunk));
+  std::this_thread::sleep_for(std::chrono::seconds(5));
+  // Meanwhile and after, the server answers others.
+  EXPECT_EQ(cluster.Job(id).id(), id);
+  // The stream was cancelled: what is left to read ends short of the file, with an error.
+  std::int64_t received = static_cast<std::int64_t>(chunk.data().size());
+  while (reader->Read(&chunk)) received += static_cast<std::int64_t>(chunk.data().size());
+  const grpc::Status status = reader->Finish();
+  EXPECT_FALSE(status.ok());
+  EXPECT_LT(received, std::int64_t(bytes.size()));
+  EXPECT_NE(cluster.ServerLog().find("took no data for 2000 ms: cancelled"), std::string::npos)
+      << cluster.ServerLog();
+
+  // A reader that reads gets the whole file.
+  const v1::GetBlobsRequest request_again = get_blobs();
+  grpc::ClientContext again;
+  auto full = worker->GetBlobs(&again, request_again);
+  std::string got;
+  while (full->Read(&chunk)) got += chunk.data();
+  const grpc::Status finished = full->Finish();
+  ASSERT_TRUE(finished.ok()) << finished.error_message();
+  EXPECT_EQ(got, bytes);
+}
+
+}  // namespace
+}  // namespace endorecon::testing
