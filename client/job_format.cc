@@ -47,6 +47,10 @@ std::string ProgressLine(const v1::Progress& p) {
                ? fmt::format("preparing the recording: frame {}/{}", p.iteration(), p.total_iterations())
                : fmt::format("preparing the recording: frame {}", p.iteration());
   }
+  if (p.phase() == "evaluate") {
+    return fmt::format("evaluating the results: frame {}/{}  {:.0f} s  ETA {}", p.iteration(), p.total_iterations(),
+                       p.seconds(), HumanDuration(p.eta_s()));
+  }
   const double fraction =
       p.total_iterations() > 0
           ? std::clamp(static_cast<double>(p.iteration()) / p.total_iterations(), 0.0, 1.0)

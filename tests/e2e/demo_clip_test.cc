@@ -18,7 +18,7 @@ TEST(DemoClipTest, CpuPresetReconstructsTheDemoClip) {
   ReconstructOptions options;
   options.clip_dir = (dir / "clip").string();
   options.out_dir = (dir / "out").string();
-  options.time_budget_s = 20;
+  options.time_budget_s = 30;  // the whole run's: about 20 s of it training
   int progress_calls = 0;
   ReconstructHooks hooks;
   hooks.progress_interval_s = 1;
@@ -27,7 +27,7 @@ TEST(DemoClipTest, CpuPresetReconstructsTheDemoClip) {
 
   EXPECT_FALSE(summary.cancelled);
   EXPECT_GT(progress_calls, 3);
-  EXPECT_GT(summary.heldout_psnr, 20.0) << "held-out tissue PSNR after 20 s of training";
+  EXPECT_GT(summary.heldout_psnr, 20.0) << "held-out tissue PSNR after a 30 s run";
   for (const char* file : {"metrics.json", "config.json", "curve.svg", "video.mp4", "model/model.bin",
                            "model/checkpoint.bin", "rgb/000000.png", "depth/000047.npy", "depth/000047.png",
                            "pointcloud/000010.ply", "report.html", "mesh.ply", "mesh.obj", "mesh.stl"}) {

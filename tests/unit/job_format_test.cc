@@ -42,6 +42,16 @@ TEST(ProgressLine, ShowsHeldOutPsnrAndDepthErrorOnceMeasured) {
   EXPECT_NE(line.find("depth RMSE 1.25% of range"), std::string::npos) << line;
 }
 
+TEST(ProgressLine, SaysWhenTheResultsAreBeingRendered) {
+  v1::Progress p = MidRun();
+  p.set_phase("evaluate");
+  p.set_iteration(12);
+  p.set_total_iterations(48);
+  p.set_seconds(6);
+  p.set_eta_s(18);
+  EXPECT_EQ(ProgressLine(p), "evaluating the results: frame 12/48  6 s  ETA 18s");
+}
+
 TEST(ProgressLine, ClampsTheBarAndHandlesAnUnknownTotal) {
   v1::Progress p = MidRun();
   p.set_iteration(12000);

@@ -101,7 +101,18 @@ TEST(Reconstruct, ProgressUnderABudgetEndsAtTheIterationsRun) {
   hooks.progress_interval_s = 0.2;
   hooks.on_progress = [&](const Progress& p) { reports.push_back(p); };
   const ReconstructSummary summary = Reconstruct(options, hooks);
+  // Training's reports, then evaluation's (frames done of all, ending complete).
+  std::vector<Progress> evaluating;
+  while (!reports.empty() && reports.back().phase == "evaluate") {
+    evaluating.insert(evaluating.begin(), reports.back());
+    reports.pop_back();
+  }
+  ASSERT_EQ(evaluating.size(), 8u) << "one report per frame";
+  EXPECT_EQ(evaluating.back().iteration, 8);
+  EXPECT_EQ(evaluating.back().total_iterations, 8);
+  EXPECT_EQ(evaluating.back().eta_s, 0);
   ASSERT_GE(reports.size(), 2u);
+  for (const Progress& p : reports) EXPECT_EQ(p.phase, "");
   const Progress& last = reports.back();
   EXPECT_EQ(last.iteration, summary.iterations);
   EXPECT_EQ(last.total_iterations, summary.iterations) << "the last report says the run is complete";
@@ -122,7 +133,8 @@ TEST(Reconstruct, ProgressUnderABudgetEndsAtTheIterationsRun) {
   EXPECT_LT(time.at("training_s").get<double>() + time.at("evaluation_s").get<double>(),
             time.at("total_s").get<double>());
   const auto& evaluation = metrics.at("evaluation");
-  const std::size_t rendered = evaluation.at("full_frames").size() + evaluation.value("reduced_frames", nlohmann::json::array()).size();
+  const std::size_t rendered =
+      evaluation.at("full_frames").size() + evaluation.value("reduced_frames", nlohmann::json::array()).size();
   EXPECT_EQ(rendered, 8u);
   for (int f : metrics.at("heldout").at("frames")) {
     EXPECT_NE(std::find(evaluation.at("full_frames").begin(), evaluation.at("full_frames").end(), f),

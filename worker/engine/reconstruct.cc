@@ -150,6 +150,18 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
       what.deadline = start + std::chrono::duration_cast<Clock::duration>(
                                   std::chrono::duration<double>(std::max(available, 0.0)));
     }
+    if (hooks.on_progress) {
+      // The job's progress goes on through evaluation: frames done of all, and the time left at
+      // the pace so far.
+      what.on_frame = [&, last = trained.progress](int done, int total) mutable {
+        last.phase = "evaluate";
+        last.iteration = done;
+        last.total_iterations = total;
+        last.seconds = Since(start);
+        last.eta_s = last.seconds / std::max(done, 1) * (total - done);
+        hooks.on_progress(last);
+      };
+    }
     metrics = eval::EvaluateClip(clip, uncertainty_renderer, what, out_dir);
     evaluation_s = Since(start);
   }

@@ -50,6 +50,9 @@ struct Progress {
   double depth_rmse =
       -1;  // held-out depth RMSE / (far - near); -1 without ground-truth depth or not yet measured
   double samples_per_second = 0;
+  // "" while training; "evaluate" while the results are rendered: iteration / total_iterations
+  // then count frames, seconds and eta_s are the evaluation's, the other fields keep training's last.
+  std::string phase;
 };
 
 struct ReconstructHooks {

@@ -66,6 +66,7 @@ class TrainingLoop {
     result.samples_per_second = clock_.SamplesPerSecond();
     result.step_seconds = clock_.seconds() - spent_before_;
     result.wall_seconds = Since(wall);
+    result.progress = progress_;
     return result;
   }
 

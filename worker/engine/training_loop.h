@@ -42,6 +42,7 @@ struct TrainingResult {
   double samples_per_second = 0;  // this process's steps on average (periodic rounds included)
   double step_seconds = 0;        // this process's seconds in steps
   double wall_seconds = 0;        // this process's seconds in the phase (periodic work included)
+  Progress progress;              // the last progress reported
 };
 
 // Runs the phase and writes a last checkpoint; extras (the curve, the training seconds) are updated

@@ -33,6 +33,7 @@ v1::Progress ToProto(const Progress& p) {
   out.set_heldout_psnr(p.heldout_psnr);
   out.set_depth_rmse(p.depth_rmse);
   out.set_samples_per_second(p.samples_per_second);
+  out.set_phase(p.phase);
   return out;
 }
 
@@ -134,6 +135,7 @@ bool RunLeasedJob(WorkerClient& client, const v1::LeaseResponse& lease, const De
     hooks.checkpoint_interval_s = settings.checkpoint_interval_s;
     hooks.on_progress = [&](const Progress& p) {
       reporter.SetProgress(ToProto(p));
+      if (!p.phase.empty()) return;  // evaluation: the training gauges keep their last values
       gauges.samples_per_second.Set(p.samples_per_second);
       gauges.psnr.Set(p.train_psnr);
       if (p.iteration > last_iteration) gauges.iterations.Increment(p.iteration - last_iteration);

@@ -88,6 +88,11 @@ Command AddReconstructCommand(CLI::App& app) {
     ReconstructHooks hooks;
     hooks.progress_interval_s = 1.0;
     hooks.on_progress = [](const Progress& p) {
+      if (p.phase == "evaluate") {
+        std::fprintf(stderr, "\r evaluating the results: frame %d/%d  ETA %4.0fs%60s", p.iteration,
+                     p.total_iterations, p.eta_s, "");
+        return;
+      }
       const double percent = p.total_iterations > 0 ? 100.0 * p.iteration / p.total_iterations : 0.0;
       std::fprintf(stderr,
                    "\r iter %6d/%d %5.1f%%  ETA %5.0fs  loss %.4f  PSNR %5.2f dB  held-out %5.2f dB  %.2f M "
