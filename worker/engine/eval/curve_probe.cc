@@ -20,8 +20,10 @@ CurveProbe::CurveProbe(const scene::Clip& clip, const std::vector<int>& heldout,
 
 CurveProbe::Point CurveProbe::Measure(render::FrameRenderer& renderer) const {
   const int w = clip_.width, h = clip_.height;
-  const std::vector<int> picked = StridedPixels(w, h, kStride);
-  const int n = int(picked.size()), gw = GridSize(w, kStride), gh = GridSize(h, kStride);
+  int stride = 2;
+  while (GridSize(w, stride) * GridSize(h, stride) > kMaxPixels) ++stride;
+  const std::vector<int> picked = StridedPixels(w, h, stride);
+  const int n = int(picked.size()), gw = GridSize(w, stride), gh = GridSize(h, stride);
   std::vector<float> rgb(3 * std::size_t(n)), depth(n), opacity(n), truth_depth(n);
   std::vector<std::uint8_t> truth_rgb(3 * std::size_t(n));
   std::vector<std::uint8_t> mask;
