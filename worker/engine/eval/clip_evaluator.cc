@@ -15,6 +15,7 @@
 #include "worker/engine/eval/pixel_error.h"
 #include "worker/engine/eval/strided_map.h"
 #include "worker/engine/eval/point_cloud.h"
+#include "worker/engine/eval/summary.h"
 #include "worker/engine/eval/surface_mesh.h"
 #include "worker/engine/eval/video_writer.h"
 
@@ -279,6 +280,19 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
         plain.coarse_samples, plain.fine_samples, what.plan.stride);
   }
   how["seconds"] = {{"render", render_seconds}, {"write", write_seconds}, {"wall", Since(wall)}};
+  // The training split's tissue PSNR by how its frames were rendered: a reduced frame's colour is a
+  // cheaper render's, so the split's summary mixes two renders; the full frames' is the one to
+  // compare across runs.
+  if (!reduced_frames.empty()) {
+    for (const auto& [name, frames] : {std::pair{"full", &full_frames}, std::pair{"reduced", &reduced_frames}}) {
+      std::vector<double> psnr;
+      for (int f : *frames) {
+        if (std::find(what.train_frames.begin(), what.train_frames.end(), f) != what.train_frames.end())
+          psnr.push_back(images[f].psnr_tissue);
+      }
+      how["train_psnr_tissue"][name] = ToJson(Summarise(psnr));
+    }
+  }
   return json;
 }
 
