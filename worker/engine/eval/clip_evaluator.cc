@@ -290,7 +290,8 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
         if (std::find(what.train_frames.begin(), what.train_frames.end(), f) != what.train_frames.end())
           psnr.push_back(images[f].psnr_tissue);
       }
-      how["train_psnr_tissue"][name] = ToJson(Summarise(psnr));
+      const Summary summary = Summarise(psnr);
+      if (summary.count > 0) how["train_psnr_tissue"][name] = ToJson(summary);  // no NaN for none
     }
   }
   return json;
