@@ -14,6 +14,17 @@ TEST(StridedMap, PixelsAreTheGridRowByRow) {
   EXPECT_EQ(StridedPixels(4, 2, 1).size(), 8u);
 }
 
+TEST(StridedMap, StrideForKeepsTheGridWithinTheLimitAndGatherPicksThePixels) {
+  EXPECT_EQ(StrideFor(160, 128, 20000, 2), 2);  // 80 x 64
+  EXPECT_EQ(StrideFor(640, 512, 20000, 2), 5);  // 4: 160 x 128 = 20,480; 5: 128 x 103
+  EXPECT_EQ(StrideFor(40, 30, 5000), 1);
+  const std::vector<int> image{0, 1, 2, 10, 11, 12};  // 3 x 2, one channel
+  EXPECT_EQ(Gather<int>(image, StridedPixels(3, 2, 2)), (std::vector<int>{0, 2}));
+  const std::vector<int> rgb{0, 1, 2, 3, 4, 5};  // 2 pixels, three channels
+  EXPECT_EQ(Gather<int>(rgb, {1}, 3), (std::vector<int>{3, 4, 5}));
+  EXPECT_TRUE(Gather<int>(std::vector<int>{}, {0, 1}).empty()) << "no mask gives no mask";
+}
+
 TEST(StridedMap, UpsamplingReproducesALinearFunctionAndHoldsPastTheGrid) {
   const int w = 10, h = 7, stride = 4;  // grid columns 0, 4, 8; rows 0, 4
   const auto f = [](int x, int y) { return 0.5f + 0.25f * float(x) - 0.125f * float(y); };

@@ -10,6 +10,7 @@
 #include <thread>
 
 #include "common/file_write.h"
+#include "worker/engine/base/seconds_since.h"
 #include "worker/engine/eval/clip_evaluator.h"
 #include "worker/engine/eval/eval_plan.h"
 #include "worker/engine/eval/report.h"
@@ -31,7 +32,7 @@ using nlohmann::literals::operator""_json_pointer;
 
 using Clock = std::chrono::steady_clock;
 
-double Since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+using base::SecondsSince;
 
 // Evaluation's share of a run by default: the budget is the job's, and training is its main work.
 // When even the leanest plan (held-out frames full, the rest reduced) costs more, training gives
@@ -102,7 +103,7 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
   const int pixels = clip.width * clip.height;
   const double tail_s = TailSeconds(clip);
   const bool full_evaluation = options.full_evaluation;
-  const double load_s = Since(run_start);
+  const double load_s = SecondsSince(run_start);
   const TrainingRun run{trainer,
                         clip,
                         split,
@@ -143,10 +144,10 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
       // without a budget a third of the training phase (a quarter of the run).
       const double available = options.time_budget_s > 0
                                    ? options.time_budget_s - extras.train_seconds + trained.step_seconds -
-                                         Since(run_start) - tail_s
+                                         SecondsSince(run_start) - tail_s
                                    : trained.wall_seconds * kEvaluationShare / (1 - kEvaluationShare);
       what.plan = eval::PlanEvaluation(clip.frame_count(), split.heldout, pixels, MeasureCost(),
-                                       std::max(available - Since(start), 1e-3));
+                                       std::max(available - SecondsSince(start), 1e-3));
       what.deadline = start + std::chrono::duration_cast<Clock::duration>(
                                   std::chrono::duration<double>(std::max(available, 0.0)));
     }
@@ -157,13 +158,13 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
         last.phase = "evaluate";
         last.iteration = done;
         last.total_iterations = total;
-        last.seconds = Since(start);
+        last.seconds = SecondsSince(start);
         last.eta_s = last.seconds / std::max(done, 1) * (total - done);
         hooks.on_progress(last);
       };
     }
     metrics = eval::EvaluateClip(clip, uncertainty_renderer, what, out_dir);
-    evaluation_s = Since(start);
+    evaluation_s = SecondsSince(start);
   }
   metrics["iterations"] = trainer.iteration();
   metrics["train_seconds"] = extras.train_seconds;
@@ -178,15 +179,15 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
   // Where this process's time went, up to this file; the report page, written last from it (and
   // showing it as it is), takes a few tenths of a second more, logged.
   metrics["time"] = {{"budget_s", options.time_budget_s},
-                     {"total_s", Since(run_start)},
+                     {"total_s", SecondsSince(run_start)},
                      {"load_s", load_s},
                      {"training_s", trained.wall_seconds},
                      {"training_steps_s", trained.step_seconds},
                      {"evaluation_s", evaluation_s},
-                     {"writing_s", Since(after_training) - evaluation_s}};
+                     {"writing_s", SecondsSince(after_training) - evaluation_s}};
   eval::WriteMetrics(out_dir / "metrics.json", metrics);
   eval::WriteReport(out_dir);
-  spdlog::info("run took {:.1f} s ({:.1f} s training, {:.1f} s evaluation{})", Since(run_start),
+  spdlog::info("run took {:.1f} s ({:.1f} s training, {:.1f} s evaluation{})", SecondsSince(run_start),
                trained.wall_seconds, evaluation_s,
                options.time_budget_s > 0 ? fmt::format(", budget {:.0f} s", options.time_budget_s) : "");
 

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 
+#include "worker/engine/base/seconds_since.h"
 #include "worker/engine/eval/curve_probe.h"
 #include "worker/engine/train/run_clock.h"
 
@@ -12,7 +13,7 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-double Since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+using base::SecondsSince;
 
 class TrainingLoop {
  public:
@@ -33,8 +34,7 @@ class TrainingLoop {
 
   TrainingResult Run() {
     TrainingResult result;
-    const auto wall = Clock::now();
-    wall_ = wall;
+    wall_ = Clock::now();
     PriceAfterTraining();
     UpdateBudget();
     while (!clock_.Finished(run_.trainer.iteration())) {
@@ -44,20 +44,22 @@ class TrainingLoop {
       }
       const auto start = Clock::now();
       result.last = run_.trainer.Step(clock_.Progress(run_.trainer.iteration()));
-      clock_.AddStep(Since(start), result.last.samples);
+      clock_.AddStep(SecondsSince(start), result.last.samples);
       if (curve_.Due(clock_.seconds()) || run_.trainer.iteration() == config_.iterations) {
+        run_.trainer.SyncField();  // the probe and the pricing render the field as it is now
         AddCurvePoint(result.last);
         PriceAfterTraining();
       }
-      if (progress_line_.Due(Since(wall))) {
+      if (progress_line_.Due(SecondsSince(wall_))) {
         UpdateBudget();
         ReportProgress(result.last);
       }
-      if (hooks_.on_preview && previews_.Due(Since(wall))) SendPreviews();
-      if (checkpoints_.Due(Since(wall))) Checkpoint();
+      if (hooks_.on_preview && previews_.Due(SecondsSince(wall_))) SendPreviews();
+      if (checkpoints_.Due(SecondsSince(wall_))) Checkpoint();
     }
     if (extras_.curve.empty() ||
         extras_.curve.back().at("iteration").get<int>() != run_.trainer.iteration()) {
+      run_.trainer.SyncField();
       AddCurvePoint(result.last);
     }
     // The last word on training: a finished job shows where it ended, not its last interval.
@@ -65,7 +67,7 @@ class TrainingLoop {
     Checkpoint();
     result.samples_per_second = clock_.SamplesPerSecond();
     result.step_seconds = clock_.seconds() - spent_before_;
-    result.wall_seconds = Since(wall);
+    result.wall_seconds = SecondsSince(wall_);
     result.progress = progress_;
     return result;
   }
@@ -76,17 +78,16 @@ class TrainingLoop {
   // (the rest is periodic work).
   void UpdateBudget() {
     if (run_.time_budget_s <= 0) return;
-    const double elapsed = spent_before_ + Since(run_.run_start);
-    const double reserve = reserve_s_;
-    const double wall = Since(wall_);
+    const double elapsed = spent_before_ + SecondsSince(run_.run_start);
+    const double wall = SecondsSince(wall_);
     const double steps = clock_.seconds() - spent_before_;
     const double share = wall > 1.0 ? std::clamp(steps / wall, 0.2, 1.0) : 1.0;
-    clock_.SetBudget(clock_.seconds() + std::max(0.0, run_.time_budget_s - elapsed - reserve) * share);
+    clock_.SetBudget(clock_.seconds() + std::max(0.0, run_.time_budget_s - elapsed - reserve_s_) * share);
   }
 
+  // Re-prices what comes after training on the host field (synced by the caller).
   void PriceAfterTraining() {
     if (run_.time_budget_s <= 0 || !run_.after_training_s) return;
-    run_.trainer.SyncField();
     reserve_s_ = run_.after_training_s();
   }
 
@@ -95,8 +96,7 @@ class TrainingLoop {
                             {"iteration", run_.trainer.iteration()},
                             {"loss", stats.loss},
                             {"train_psnr", stats.psnr}};
-    if (!probe_.empty()) {
-      run_.trainer.SyncField();
+    if (!probe_.empty()) {  // on the host field, synced by the caller
       const eval::CurveProbe::Point measured = probe_.Measure(run_.renderer);
       progress_.heldout_psnr = measured.psnr;
       progress_.depth_rmse = measured.depth_rmse;

@@ -8,13 +8,14 @@
 #include <future>
 #include <span>
 
+#include "worker/engine/base/seconds_since.h"
 #include "worker/engine/eval/calibration.h"
 #include "worker/engine/eval/depth_error.h"
 #include "worker/engine/eval/exports.h"
 #include "worker/engine/eval/image_metrics.h"
 #include "worker/engine/eval/pixel_error.h"
-#include "worker/engine/eval/strided_map.h"
 #include "worker/engine/eval/point_cloud.h"
+#include "worker/engine/eval/strided_map.h"
 #include "worker/engine/eval/summary.h"
 #include "worker/engine/eval/surface_mesh.h"
 #include "worker/engine/eval/video_writer.h"
@@ -83,7 +84,7 @@ struct UncertaintyMaps {
 
 using Clock = std::chrono::steady_clock;
 
-double Since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+using base::SecondsSince;
 
 // A frame rendered as the plan says: full, or reduced (colour and depth from `plain`, the uncertainty
 // maps from the dropout passes on a strided grid, upsampled). A reduced frame's calibration is
@@ -118,21 +119,19 @@ EvaluatedFrame RenderFrame(const scene::Clip& clip, int f, FrameRender how, int 
   return out;
 }
 
-// A frame's calibration against a reference image (the clip's, or its noise-free truth).
+// A frame's calibration against a reference image (the clip's, or its noise-free truth); `error`, when
+// given, is a full frame's per-pixel error against that reference, already computed.
 Calibration FrameCalibration(const EvaluatedFrame& evaluated, std::span<const std::uint8_t> reference,
-                             const std::vector<std::uint8_t>& mask, int w, int h) {
+                             const std::vector<std::uint8_t>& mask, int w, int h,
+                             std::span<const float> error = {}) {
   if (evaluated.grid.empty()) {
-    return MeasureCalibration(evaluated.frame.uncertainty, PixelRmse(evaluated.frame.rgb, reference, w, h),
-                              mask);
+    if (!error.empty()) return MeasureCalibration(evaluated.frame.uncertainty, error, mask);
+    return MeasureCalibration(evaluated.frame.uncertainty, PixelRmse(evaluated.frame.rgb, reference, w, h), mask);
   }
   const int n = int(evaluated.grid.size());
-  std::vector<std::uint8_t> truth(3 * std::size_t(n)), grid_mask(mask.empty() ? 0 : n);
-  for (int i = 0; i < n; ++i) {
-    const std::size_t p = std::size_t(evaluated.grid[i]);
-    for (int c = 0; c < 3; ++c) truth[3 * std::size_t(i) + c] = reference[3 * p + c];
-    if (!mask.empty()) grid_mask[i] = mask[p];
-  }
-  return MeasureCalibration(evaluated.grid_total, PixelRmse(evaluated.grid_rgb, truth, n, 1), grid_mask);
+  return MeasureCalibration(evaluated.grid_total,
+                            PixelRmse(evaluated.grid_rgb, Gather(reference, evaluated.grid, 3), n, 1),
+                            Gather<std::uint8_t>(mask, evaluated.grid));
 }
 
 // Keeps a run's evaluation to its deadline: a training frame planned full is rendered reduced when
@@ -204,14 +203,15 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
     const auto start = Clock::now();
     EvaluatedFrame evaluated = RenderFrame(clip, f, how, what.plan.stride, renderer, what.plain);
     render::RenderedFrame& frame = evaluated.frame;
-    pacer.Rendered(how, Since(start));
-    render_seconds += Since(start);
+    const double rendered_in = SecondsSince(start);
+    pacer.Rendered(how, rendered_in);
+    render_seconds += rendered_in;
     (how == FrameRender::kFull ? full_frames : reduced_frames).push_back(f);
     const auto& mask = EvaluationMask(clip, f);
     images[f] = MeasureImage(frame.rgb, clip.rgb[f], mask, w, h);
     if (uncertain) {
       std::vector<float> error = PixelRmse(frame.rgb, clip.rgb[f], w, h);
-      calibration[f] = FrameCalibration(evaluated, clip.rgb[f], mask, w, h);
+      calibration[f] = FrameCalibration(evaluated, clip.rgb[f], mask, w, h, error);
       if (!clip.gt_rgb.empty()) noise_free[f] = FrameCalibration(evaluated, clip.gt_rgb[f], mask, w, h);
       if (what.write_files) {
         maps.total.push_back(std::move(frame.uncertainty));
@@ -239,7 +239,7 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
         if (f == 0) {  // the canonical frame's surface (t = 0)
           WriteSurfaceMesh(out_dir, TriangulateDepth(clip.cameras[f], depth, rgb, cloud_mask, clip.far));
         }
-        return Since(start);
+        return SecondsSince(start);
       });
     }
     if (what.on_frame) what.on_frame(f + 1, count);
@@ -261,7 +261,7 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
     const VideoInfo info = WriteVideo(out_dir / "video.mp4", video, w, h, 15.0);
     json["video"] = {{"path", info.path.filename().string()}, {"codec", info.codec}, {"frames", info.frames}};
   }
-  write_seconds += Since(tail);
+  write_seconds += SecondsSince(tail);
   nlohmann::json& how = json["evaluation"];
   how["full_frames"] = full_frames;
   const auto& full = renderer.settings();
@@ -279,7 +279,7 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
         "calibration on that grid, against the error of the dropout passes' mean colour there",
         plain.coarse_samples, plain.fine_samples, what.plan.stride);
   }
-  how["seconds"] = {{"render", render_seconds}, {"write", write_seconds}, {"wall", Since(wall)}};
+  how["seconds"] = {{"render", render_seconds}, {"write", write_seconds}, {"wall", SecondsSince(wall)}};
   // The training split's tissue PSNR by how its frames were rendered: a reduced frame's colour is a
   // cheaper render's, so the split's summary mixes two renders; the full frames' is the one to
   // compare across runs.

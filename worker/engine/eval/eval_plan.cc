@@ -52,10 +52,8 @@ EvalPlan PlanEvaluation(int frame_count, const std::vector<int>& heldout, int pi
 
 RenderCost MeasureRenderCost(render::FrameRenderer& full, render::FrameRenderer& plain,
                              const scene::Camera& camera, float time, int samples) {
-  const int pixels = camera.width * camera.height;
-  int stride = 1;
-  while (stride < 64 && pixels / (stride * stride) > samples) ++stride;
-  const std::vector<int> picked = StridedPixels(camera.width, camera.height, stride);
+  const std::vector<int> picked =
+      StridedPixels(camera.width, camera.height, StrideFor(camera.width, camera.height, samples));
   const int n = int(picked.size());
   std::vector<float> rgb(3 * std::size_t(n)), depth(n), opacity(n), u(n), a(n), e(n);
   const auto time_it = [&](render::FrameRenderer& renderer, const render::PixelOutputs& out) {

@@ -6,6 +6,12 @@ namespace endorecon::eval {
 
 int GridSize(int extent, int stride) { return (extent - 1) / stride + 1; }
 
+int StrideFor(int width, int height, int max_pixels, int min_stride) {
+  int stride = std::max(1, min_stride);
+  while (GridSize(width, stride) * GridSize(height, stride) > max_pixels) ++stride;
+  return stride;
+}
+
 std::vector<int> StridedPixels(int width, int height, int stride) {
   std::vector<int> pixels;
   pixels.reserve(std::size_t(GridSize(width, stride)) * GridSize(height, stride));
