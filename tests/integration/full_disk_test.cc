@@ -122,6 +122,23 @@ TEST(FullDiskTest, UploadsThatDoNotFitAreRefusedWhatIsStoredSurvivesAndTheUpload
   EXPECT_TRUE(Query(cluster, ManifestOf("big.bin", big)).complete());
 }
 
+// The limits' bad values are refused at start, naming the option.
+TEST(FullDiskTest, ANegativeFreeSpaceLimitOrANonPositiveStallTimeoutIsRefusedAtStart) {
+  TempDir dir("limits");
+  const std::string server = BuiltBinary("server/endorecon-server") + " --data-dir " + (dir / "data").string();
+  const std::string worker = BuiltBinary("worker/runtime/endorecon-worker") + " serve --work-dir " +
+                             (dir / "work").string();
+  for (const auto& [command, option] : std::vector<std::pair<std::string, std::string>>{
+           {server + " --min-free-bytes -1", "--min-free-bytes"},
+           {server + " --stall-timeout 0", "--stall-timeout"},
+           {worker + " --min-free-bytes -5", "--min-free-bytes"}}) {
+    const std::string output = Capture(command + " 2>&1; echo \"exit=$?\"");
+    EXPECT_NE(output.find(option + ": Value"), std::string::npos) << command << "\n" << output;
+    EXPECT_EQ(output.find("exit=0"), std::string::npos) << command << "\n" << output;
+  }
+  EXPECT_FALSE(fs::exists(dir / "data" / "jobs.sqlite")) << "nothing started";
+}
+
 // A worker whose scratch folder (a 3 MiB tmpfs: the job's checkpoint alone is larger) runs out of
 // space hands the job back without counting an attempt, names its scratch folder, and leaves jobs to
 // others for a while; a worker with room then finishes the job.
