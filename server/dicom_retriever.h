@@ -63,7 +63,7 @@ class DicomRetriever {
   // The C-MOVE in progress: its study, job and what arrived so far.
   std::string moving_study_, moving_job_;
   int moved_instances_ = 0;
-  std::int64_t moved_bytes_ = 0, reported_bytes_ = 0;
+  std::int64_t moved_bytes_ = 0;
   std::thread thread_;
 };
 

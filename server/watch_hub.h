@@ -38,7 +38,9 @@ class WatchHub {
  private:
   template <typename T>
   struct Versioned {
-    std::uint64_t version = 0;
+    // No default member initializer: clang 14 cannot compile reads of one in a nested template
+    // ("cannot compile this scalar expression yet"); value-initialisation zeroes it all the same.
+    std::uint64_t version;
     T value;
   };
   struct Entry {

@@ -1,6 +1,8 @@
 // GCC 12 reports a false "maybe uninitialized" inside its own AVX-512 intrinsics when Eigen's GEMM
 // kernels are inlined here; the warning is located in those headers, so it is silenced for this file.
+#if !defined(__clang__)  // clang has no such warning, and refuses to ignore an unknown one
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#endif
 
 #include "worker/engine/field/mlp.h"
 

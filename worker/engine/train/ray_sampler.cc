@@ -6,7 +6,7 @@
 
 namespace endorecon::train {
 
-RaySampler::RaySampler(const scene::Clip& clip, std::vector<int> frames) : clip_(clip) {
+RaySampler::RaySampler(const scene::Clip& clip, std::vector<int> frames) {
   const std::size_t pixels = std::size_t(clip.width) * clip.height;
   if (clip.has_masks()) {
     std::vector<int> tool_count(pixels, 0);

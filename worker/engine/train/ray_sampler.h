@@ -32,7 +32,6 @@ class RaySampler {
   float Weight(int frame, int pixel) const;
 
  private:
-  const scene::Clip& clip_;
   std::vector<int> frames_;
   std::vector<float> occlusion_weight_;           // per pixel, in [1, 2]; empty without masks
   std::vector<const std::uint8_t*> mask_frames_;  // per clip frame; empty without masks

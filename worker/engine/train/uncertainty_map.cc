@@ -13,8 +13,6 @@ namespace endorecon::train {
 
 UncertaintyMap::UncertaintyMap(const RaySampler& sampler, int width, int height, int stride)
     : sampler_(sampler),
-      width_(width),
-      height_(height),
       stride_(stride),
       cells_x_((width + stride - 1) / stride),
       cells_y_((height + stride - 1) / stride) {

@@ -41,7 +41,7 @@ class UncertaintyMap {
 
  private:
   const RaySampler& sampler_;
-  int width_, height_, stride_, cells_x_, cells_y_;
+  int stride_, cells_x_, cells_y_;
   std::vector<RayPick> probe_;
   std::vector<float> scores_;
   std::vector<double> cumulative_;  // inclusive prefix sums of scores_
