@@ -21,7 +21,10 @@ class PartialFile {
   PartialFile(const fs::path& dir, const v1::FileEntry& entry, std::int64_t offset) : entry_(entry) {
     CheckRelativePath(entry.path());
     target_ = dir / entry.path();
-    fs::create_directories(target_.parent_path());
+    std::error_code error;
+    fs::create_directories(target_.parent_path(), error);
+    // A path under another file's name (a/b after a file a) cannot be made (tests/fuzz/download_stream_fuzz.cc).
+    if (error) FailInvalid("download of '" + entry.path() + "': cannot make its folder: " + error.message());
     const auto part = PartPath(target_);
     const std::int64_t have = fs::exists(part) ? static_cast<std::int64_t>(fs::file_size(part)) : 0;
     if (offset > have) FailInvalid("download of '" + entry.path() + "' starts past its partial file");

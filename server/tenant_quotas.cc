@@ -17,7 +17,11 @@ TenantQuotas::TenantQuotas(Quota defaults, const std::filesystem::path& file) : 
   if (json.is_discarded() || !json.is_object())
     FailInvalid("--quotas " + file.string() + ": expected a JSON object of tenants");
   for (const auto& [tenant, limits] : json.items()) {
-    ValidateTenant(tenant);
+    try {
+      ValidateTenant(tenant);
+    } catch (const Error& e) {
+      FailInvalid("--quotas " + file.string() + ": " + e.what());
+    }
     if (!limits.is_object()) FailInvalid("--quotas " + file.string() + ": '" + tenant + "' is not an object");
     Quota quota = defaults;
     for (const auto& [key, value] : limits.items()) {

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "common/error.h"
+#include "common/sha256.h"
 #include "tests/unit/small_clip_fixture.h"
 
 namespace endorecon::train {
@@ -109,6 +110,22 @@ TEST_F(CheckpointTest, AFieldOfAnotherShapeIsNamed) {
     FAIL() << "loaded a field of another shape";
   } catch (const Error& e) {
     ExpectNamed(e, ErrorCode::kDataLoss, "'color'");
+  }
+}
+
+// Found by tests/fuzz/checkpoint_fuzz.cc: a sealed checkpoint whose configuration has a key this build
+// does not know said "config: unknown key" without naming the file.
+TEST_F(CheckpointTest, AConfigurationThisBuildCannotUseIsNamed) {
+  std::string body = bytes_.substr(0, bytes_.size() - 64);
+  const auto at = body.find("deformation");
+  ASSERT_NE(at, std::string::npos);
+  body.replace(at, 11, "dJformation");  // same length: the body stays well formed
+  WriteBytes(path_, body + Sha256Hex(body));
+  try {
+    ReadCheckpointConfig(path_);
+    FAIL() << "read a configuration with an unknown key";
+  } catch (const Error& e) {
+    ExpectNamed(e, ErrorCode::kInvalidArgument, "unknown key /field/dJformation");
   }
 }
 

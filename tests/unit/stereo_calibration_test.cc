@@ -111,6 +111,26 @@ TEST(StereoCalibrationTest, FaultsNameTheFileAndField) {
   message = ErrorFrom([&] { prepare::LoadStereoCalibration({dir / "bad_ros.yaml", dir / "bad_ros.yaml"}); });
   EXPECT_NE(message.find("bad_ros.yaml: not a ROS camera_info YAML"), std::string::npos) << message;
   ErrorFrom([&] { prepare::LoadStereoCalibration({dir / "absent.yaml"}); }, ErrorCode::kNotFound);
+
+  // Found by tests/fuzz/stereo_calibration_fuzz.cc: OpenCV 4.6's parser threw std::length_error on
+  // this file, which escaped as no endorecon error.
+  WriteBytes(dir / "length.yaml", "%YAML:1.\n   o:3\n   :\n");
+  ErrorFrom([&] { prepare::LoadStereoCalibration({dir / "length.yaml"}); });
+
+  // Found by tests/fuzz/stereo_calibration_fuzz.cc: a ROS matrix given as a scalar made yaml-cpp
+  // throw from operator[].
+  WriteBytes(dir / "scalar_ros.yaml", "image_width: 640\nimage_height: 512\ncamera_matrix: 3\n");
+  message = ErrorFrom([&] { prepare::LoadStereoCalibration({dir / "scalar_ros.yaml", dir / "scalar_ros.yaml"}); });
+  EXPECT_NE(message.find("scalar_ros.yaml: 'camera_matrix' is missing"), std::string::npos) << message;
+
+  // Found by tests/fuzz/stereo_calibration_fuzz.cc: OpenCV allocated a declared size of 10^9 rows
+  // before reading the data (gigabytes); such a size is refused before anything is allocated.
+  WriteBytes(dir / "huge.yaml",
+             "%YAML:1.0\n---\nK1: !!opencv-matrix\n   rows: 1000000000\n   cols: 3\n   dt: d\n"
+             "   data: [ 1., 0., 0. ]\n");
+  message = ErrorFrom([&] { prepare::LoadStereoCalibration({dir / "huge.yaml"}); });
+  EXPECT_NE(message.find("huge.yaml: 'K1' must declare rows and cols between 1 and 16"), std::string::npos)
+      << message;
 }
 
 TEST(StereoCalibrationTest, ACalibrationForAnotherSizeIsRefused) {

@@ -33,6 +33,15 @@ TEST(TenantQuotasTest, BadFilesNameWhatIsWrong) {
     EXPECT_NE(std::string(e.what()).find("x.max_job"), std::string::npos) << e.what();
   }
   EXPECT_THROW(TenantQuotas({}, dir / "missing.json"), Error);
+  // Found by tests/fuzz/quotas_fuzz.cc: a bad tenant name did not say which file it came from.
+  try {
+    testing::WriteBytes(dir / "quotas.json", R"({"ra`iology": {"max_jobs": 1}})");
+    TenantQuotas({}, dir / "quotas.json");
+    ADD_FAILURE() << "accepted a bad tenant name";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find((dir / "quotas.json").string() + ": tenant 'ra`iology'"), std::string::npos)
+        << e.what();
+  }
 }
 
 }  // namespace

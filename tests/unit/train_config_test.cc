@@ -229,5 +229,28 @@ TEST(TrainConfigTest, BadValuesAreRejected) {
   }
 }
 
+// Found by tests/fuzz/train_config_fuzz.cc: a number that does not fit its key's type was cast
+// (undefined behaviour); it is refused, naming the key.
+TEST(TrainConfigTest, NumbersThatDoNotFitTheirTypeAreRefused) {
+  for (const auto& bad : {nlohmann::json{{"iterations", 4.8e39}}, nlohmann::json{{"iterations", 2.5}},
+                          nlohmann::json{{"curve_frames", -4294967296.0}},
+                          nlohmann::json{{"field", {{"heads", {{"density_hidden", {64, 1e20}}}}}}},
+                          nlohmann::json{{"adam", {{"lr", {{"grid", 1e300}}}}}}}) {
+    TrainConfig config;
+    const std::string key = bad.flatten().begin().key();  // e.g. "/adam/lr/grid"
+    const std::string top = key.substr(1, key.find('/', 1) - 1);
+    try {
+      ApplyJson(bad, config);
+      ADD_FAILURE() << bad.dump() << " was accepted";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument);
+      EXPECT_NE(std::string(e.what()).find(top), std::string::npos) << e.what();
+    }
+  }
+  TrainConfig whole;
+  ApplyJson(nlohmann::json{{"iterations", 300.0}}, whole);  // a whole number written as a float is fine
+  EXPECT_EQ(whole.iterations, 300);
+}
+
 }  // namespace
 }  // namespace endorecon::train

@@ -68,10 +68,18 @@ cv::Mat ReadMatrix(const cv::FileStorage& file, const std::string& name,
   for (const char* key : keys) {
     const cv::FileNode node = file[key];
     if (node.empty()) continue;
+    // OpenCV allocates a matrix's declared size before it reads the data, so a file saying
+    // rows: 1000000000 asked for gigabytes (tests/fuzz/stereo_calibration_fuzz.cc): no calibration
+    // matrix is larger than 16 x 16.
+    if (node.isMap()) {
+      const cv::FileNode rows = node["rows"], cols = node["cols"];
+      if (!rows.isInt() || !cols.isInt() || int(rows) < 1 || int(rows) > 16 || int(cols) < 1 || int(cols) > 16)
+        FailInvalid(name + ": '" + key + "' must declare rows and cols between 1 and 16");
+    }
     cv::Mat m;
     try {
       node >> m;
-    } catch (const cv::Exception&) {
+    } catch (const std::exception&) {  // cv::Exception, or a standard one from OpenCV's parser
       FailInvalid(name + ": '" + key + "' is not a matrix (expected an opencv-matrix)");
     }
     if (m.empty()) FailInvalid(name + ": '" + key + "' is not a matrix (expected an opencv-matrix)");
@@ -110,13 +118,18 @@ StereoCalibration LoadOpenCv(const fs::path& path) {
   cv::FileStorage file;
   try {
     file.open(name, cv::FileStorage::READ);
-  } catch (const cv::Exception&) {
+  } catch (const std::exception&) {
+    // Not only cv::Exception: OpenCV 4.6's YAML parser lets std::length_error out on some broken
+    // files (tests/fuzz/stereo_calibration_fuzz.cc); the file is refused below either way.
   }
   if (!file.isOpened()) {
     FailInvalid(name +
                 ": not an OpenCV calibration file (cv::FileStorage YAML or XML; a ROS camera_info "
                 "pair is given as two files, left then right)");
   }
+  // OpenCV asserts (cv::Exception) when the top level is not a map and a key is looked up
+  // (tests/fuzz/stereo_calibration_fuzz.cc).
+  if (!file.root().isMap()) FailInvalid(name + ": not an OpenCV calibration file (its top level is no map)");
   StereoCalibration c;
   c.source = name;
   c.kind = "opencv";
@@ -139,7 +152,8 @@ struct RosCameraInfo {
 cv::Mat RosMatrix(const YAML::Node& top, const char* key, int rows, int cols, const std::string& name) {
   const YAML::Node node = top[key];
   const std::string where = name + ": '" + key + "'";
-  if (!node || !node["data"] || !node["data"].IsSequence())
+  // A node that is not a map throws on operator[] (tests/fuzz/stereo_calibration_fuzz.cc found it).
+  if (!node || !node.IsMap() || !node["data"] || !node["data"].IsSequence())
     FailInvalid(where + " is missing (or has no 'data' list)");
   const YAML::Node data = node["data"];
   if (cols > 0 && data.size() != static_cast<std::size_t>(rows * cols)) {
@@ -177,7 +191,11 @@ RosCameraInfo LoadRos(const fs::path& path) {
   } catch (const YAML::Exception&) {
     FailInvalid(name + ": 'image_width' and 'image_height' must be whole numbers");
   }
-  const std::string model = top["distortion_model"] ? top["distortion_model"].as<std::string>() : "plumb_bob";
+  std::string model = "plumb_bob";
+  if (const YAML::Node node = top["distortion_model"]) {
+    if (!node.IsScalar()) FailInvalid(name + ": 'distortion_model' must be a name (plumb_bob or rational_polynomial)");
+    model = node.as<std::string>();
+  }
   if (model != "plumb_bob" && model != "rational_polynomial") {
     FailInvalid(
         name + ": distortion_model '" + model +

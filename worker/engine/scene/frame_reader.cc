@@ -7,6 +7,7 @@
 #include <cctype>
 #include <cmath>
 #include <exception>
+#include <fstream>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -25,8 +26,25 @@ std::string Lower(std::string text) {
   return text;
 }
 
+// OpenCV picks a decoder by the file's content, not its name, and some of the decoders it carries
+// abort the process on a broken file (tests/fuzz/image_decode_fuzz.cc: GDCM's DICOM reader asserts).
+// Only the formats the loaders accept reach it: PNG, JPEG, BMP and TIFF, told by their first bytes.
+bool HasImageSignature(const fs::path& path) {
+  char head[8] = {};
+  std::ifstream in(path, std::ios::binary);
+  in.read(head, sizeof(head));
+  const std::string_view bytes(head, static_cast<std::size_t>(in.gcount()));
+  for (const std::string_view magic : {std::string_view("\x89PNG\r\n\x1a\n", 8), std::string_view("\xff\xd8\xff", 3),
+                                       std::string_view("BM", 2), std::string_view("II*\0", 4),
+                                       std::string_view("MM\0*", 4)}) {
+    if (bytes.substr(0, magic.size()) == magic) return true;
+  }
+  return false;
+}
+
 cv::Mat Decode(const fs::path& path) {
   if (!fs::is_regular_file(path)) FailInvalid(path.string() + ": file does not exist");
+  if (!HasImageSignature(path)) FailInvalid(path.string() + ": not a PNG, JPEG, BMP or TIFF image");
   cv::Mat image = cv::imread(path.string(), cv::IMREAD_UNCHANGED);
   if (image.empty()) {
     FailInvalid(path.string() + ": cannot decode the image (unreadable, truncated or not an image)");

@@ -26,6 +26,14 @@ std::string ReadString(std::istream& in, const std::filesystem::path& path) {
   std::uint64_t size = 0;
   in.read(reinterpret_cast<char*>(&size), sizeof(size));
   if (!in || size > (std::uint64_t(1) << 30)) Fail(ErrorCode::kDataLoss, path.string() + ": corrupt header");
+  // A length past the end of the file is refused before it is allocated (tests/fuzz/model_fuzz.cc:
+  // a crafted file with a valid checksum made every read allocate up to a gigabyte).
+  const auto here = in.tellg();
+  in.seekg(0, std::ios::end);
+  const auto end = in.tellg();
+  in.seekg(here);
+  if (here < 0 || end < here || size > std::uint64_t(end - here))
+    Fail(ErrorCode::kDataLoss, path.string() + ": truncated header");
   std::string s(size, '\0');
   in.read(s.data(), std::streamsize(size));
   if (!in) Fail(ErrorCode::kDataLoss, path.string() + ": truncated header");
@@ -38,6 +46,8 @@ TrainConfig ConfigFromString(const std::string& text, const std::filesystem::pat
     ApplyJson(nlohmann::json::parse(text), config);
   } catch (const nlohmann::json::exception& e) {
     Fail(ErrorCode::kDataLoss, path.string() + ": its configuration does not parse: " + e.what());
+  } catch (const Error& e) {
+    Fail(e.code(), path.string() + ": its configuration: " + e.what());
   }
   return config;
 }
