@@ -3,6 +3,7 @@
 // Subcommands: `token create|list|revoke` and `retention --dry-run` (server/commands.h).
 #include <grpcpp/grpcpp.h>
 #include <grpcpp/health_check_service_interface.h>
+#include <grpcpp/resource_quota.h>
 #include <signal.h>
 #include <spdlog/spdlog.h>
 
@@ -37,6 +38,7 @@ struct ServerFlags {
   std::int64_t max_upload_bytes = std::int64_t{20} << 30;
   std::int64_t min_free_bytes = std::int64_t{256} << 20;
   double stall_timeout_s = 60;
+  int max_threads = 512;
   int max_attempts = 3;
   std::int64_t lease_ttl_ms = 30000;
   std::int64_t heartbeat_ms = 2000;
@@ -166,6 +168,12 @@ int Run(const ServerFlags& flags) {
   builder.AddListeningPort(flags.listen, credentials, &port);
   builder.SetMaxReceiveMessageSize(kMaxMessageBytes);
   builder.SetMaxSendMessageSize(kMaxMessageBytes);
+  // The sync server takes a thread per call in progress; the quota caps them, so peers that hold
+  // calls open (a stalled download waits up to --stall-timeout) cannot take more threads, and the
+  // memory of their chunks in flight, than this. Calls beyond it get RESOURCE_EXHAUSTED from gRPC.
+  grpc::ResourceQuota quota("endorecon-server");
+  quota.SetMaxThreads(flags.max_threads);
+  builder.SetResourceQuota(quota);
   builder.RegisterService(&job_service);
   builder.RegisterService(&worker_service);
   const auto server = builder.BuildAndStart();
@@ -329,6 +337,10 @@ int main(int argc, char** argv) {
                  "cancelled")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
+  app.add_option("--max-threads", flags.max_threads,
+                 "calls the server serves at once (a thread each); more are refused with RESOURCE_EXHAUSTED")
+      ->capture_default_str()
+      ->check(CLI::Range(8, 100000));
   app.add_option("--max-attempts", flags.max_attempts,
                  "attempts before a job whose workers keep vanishing fails")
       ->capture_default_str()

@@ -89,6 +89,7 @@ class Cluster {
   void StopWorker(const std::string& id, int signal);
 
   const std::string& address() const { return address_; }
+  pid_t server_pid() const { return server_->pid(); }
   int metrics_port() const { return metrics_port_; }
   int worker_metrics_port(const std::string& id) const;
   std::filesystem::path path(const std::string& name) const { return dir_ / name; }

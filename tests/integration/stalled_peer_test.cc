@@ -1,6 +1,7 @@
 // A peer that stops reading a download does not keep the server's thread: the server cancels the
 // stream once a Write has waited --stall-timeout, serves everyone else meanwhile and after, and the
-// same peer can fetch the file again when it reads.
+// same peer can fetch the file again when it reads. Many such peers hold no more threads or memory
+// than --max-threads allows.
 #include <gtest/gtest.h>
 #include <grpcpp/grpcpp.h>
 
@@ -9,6 +10,7 @@
 #include <thread>
 
 #include "common/sha256.h"
+#include "common/transport_security.h"
 #include "endorecon/v1/worker_service.grpc.pb.h"
 #include "tests/integration/service_harness.h"
 
@@ -87,6 +89,108 @@ TEST(StalledPeerTest, ADownloadWhoseReaderStopsIsCancelledAndTheServerCarriesOn)
   const grpc::Status finished = full->Finish();
   ASSERT_TRUE(finished.ok()) << finished.error_message();
   EXPECT_EQ(got, bytes);
+}
+
+// What /proc says of a process: its threads and resident memory.
+struct ProcessUse {
+  int threads = 0;
+  std::int64_t rss_kib = 0;
+};
+ProcessUse UseOf(pid_t pid) {
+  ProcessUse use;
+  std::ifstream status("/proc/" + std::to_string(pid) + "/status");
+  std::string key;
+  while (status >> key) {
+    if (key == "Threads:") status >> use.threads;
+    if (key == "VmRSS:") status >> use.rss_kib;
+  }
+  return use;
+}
+
+TEST(StalledPeerTest, ManyStalledDownloadsHoldNoMoreThreadsOrMemoryThanTheCap) {
+  constexpr int kCap = 16, kPeers = 40;
+  Cluster cluster({"--stall-timeout", "3", "--max-threads", std::to_string(kCap)});
+  MakeClip(cluster.path("clip"));
+  std::string bytes(16 << 20, '\0');
+  std::mt19937 random(5);
+  for (auto& c : bytes) c = static_cast<char>(random() & 0xff);
+  std::ofstream(cluster.path("clip") / "extra.bin", std::ios::binary).write(bytes.data(), std::streamsize(bytes.size()));
+  const std::string id = cluster.Submit(cluster.path("clip"), {"--iterations", "10"});
+
+  // Each peer on a channel of its own (a shared connection's window would stall them all at once),
+  // taking at most 64 KiB ahead of its reads.
+  const auto channel = [&](int peer) {
+    grpc::ChannelArguments args;
+    args.SetInt(GRPC_ARG_HTTP2_BDP_PROBE, 0);
+    args.SetInt(GRPC_ARG_HTTP2_STREAM_LOOKAHEAD_BYTES, 64 * 1024);
+    args.SetMaxReceiveMessageSize(64 << 20);
+    args.SetInt("endorecon.test.peer", peer);  // no subchannel sharing
+    return grpc::CreateCustomChannel(cluster.address(), grpc::InsecureChannelCredentials(), args);
+  };
+  auto worker = v1::WorkerService::NewStub(channel(-1));
+  {
+    grpc::ClientContext context;
+    v1::RegisterRequest request;
+    request.set_worker_id("stalled");
+    request.add_devices("cpu");
+    v1::RegisterResponse response;
+    ASSERT_TRUE(worker->Register(&context, request, &response).ok());
+  }
+  v1::LeaseResponse lease;
+  {
+    grpc::ClientContext context;
+    v1::LeaseRequest request;
+    request.set_worker_id("stalled");
+    request.set_device("cpu");
+    request.set_wait_ms(15000);
+    ASSERT_TRUE(worker->Lease(&context, request, &lease).ok());
+    ASSERT_EQ(lease.job().id(), id);
+  }
+  v1::GetBlobsRequest request;
+  request.set_lease_id(lease.lease_id());
+  request.add_files()->set_path("extra.bin");
+  request.mutable_files(0)->set_sha256(Sha256Hex(bytes));
+
+  const ProcessUse idle = UseOf(cluster.server_pid());
+  struct Peer {
+    std::unique_ptr<v1::WorkerService::Stub> stub;
+    grpc::ClientContext context;
+    std::unique_ptr<grpc::ClientReader<v1::FileChunk>> reader;
+  };
+  std::vector<std::unique_ptr<Peer>> peers;
+  int reading = 0;
+  for (int i = 0; i < kPeers; ++i) {
+    auto peer = std::make_unique<Peer>();
+    peer->stub = v1::WorkerService::NewStub(channel(i));
+    peer->reader = peer->stub->GetBlobs(&peer->context, request);
+    v1::FileChunk chunk;
+    if (peer->reader->Read(&chunk)) ++reading;  // then it stops reading
+    peers.push_back(std::move(peer));
+  }
+  const ProcessUse stalled = UseOf(cluster.server_pid());
+  // The cap held: not every peer got a stream, and the threads (one per call in progress) and the
+  // memory (a chunk in flight per stream) stayed within it.
+  EXPECT_GT(reading, 0);
+  EXPECT_LE(reading, kCap);
+  EXPECT_LE(stalled.threads, idle.threads + kCap) << "idle " << idle.threads;
+  // A stalled stream keeps its chunk in about three copies (the file's buffer, the message, gRPC's
+  // send buffer): measured 13 MiB a stream.
+  EXPECT_LE(stalled.rss_kib - idle.rss_kib, std::int64_t{kCap} * 4 * (kChunkBytes / 1024) + 64 * 1024);
+
+  // Once the stall timeout has cancelled them, the threads are back and the server serves.
+  std::this_thread::sleep_for(std::chrono::seconds(6));
+  EXPECT_LE(UseOf(cluster.server_pid()).threads, idle.threads + 2);
+  EXPECT_EQ(cluster.Job(id).id(), id);
+  for (auto& peer : peers) {
+    v1::FileChunk chunk;
+    while (peer->reader->Read(&chunk)) {
+    }
+    const grpc::Status status = peer->reader->Finish();
+    EXPECT_FALSE(status.ok());
+    EXPECT_TRUE(status.error_code() == grpc::StatusCode::RESOURCE_EXHAUSTED ||
+                status.error_code() == grpc::StatusCode::CANCELLED)
+        << status.error_code() << " " << status.error_message();
+  }
 }
 
 }  // namespace
