@@ -547,15 +547,18 @@ class Campaign {
     std::int64_t unix_ms;
     std::string job_id;
     int resumed_from;  // -1: started from scratch
+    bool trained;      // it reached the engine (an attempt killed while it fetched the clip did not)
   };
 
-  // "[2026-12-01 15:20:31.123] ... [cpu0] job ID (attempt K)" and the engine's "resumed from
-  // .../ID/checkpoint/... at iteration N" that follows it, from every worker log.
+  // "[2026-12-01 15:20:31.123] ... [cpu0] job ID (attempt K)", the engine's "resumed from
+  // .../ID/checkpoint/... at iteration N" and its "clip .../ID/clip: ..." (training starts) that follow
+  // it, from every worker log.
   std::vector<Attempt> Attempts() {
     std::vector<Attempt> attempts;
     const std::regex started(
         R"(^\[(\d+)-(\d+)-(\d+) (\d+):(\d+):(\d+)\.(\d+)\].* job ([0-9a-f]{12}) \(attempt \d+\))");
     const std::regex resumed(R"(resumed from .*/([0-9a-f]{12})/checkpoint/\S* at iteration (\d+))");
+    const std::regex training(R"(\] clip .*/([0-9a-f]{12})/clip: )");
     for (std::size_t w = 0; w < work_dirs_.size(); ++w) {
       std::ifstream log(dir_ / "logs" / ("worker-" + std::to_string(w) + ".log"));
       std::string line;
@@ -571,11 +574,18 @@ class Campaign {
           tm.tm_sec = std::stoi(match[6]);
           tm.tm_isdst = -1;
           attempts.push_back(
-              {static_cast<std::int64_t>(std::mktime(&tm)) * 1000 + std::stoi(match[7]), match[8], -1});
+              {static_cast<std::int64_t>(std::mktime(&tm)) * 1000 + std::stoi(match[7]), match[8], -1, false});
         } else if (std::regex_search(line, match, resumed)) {
           for (auto it = attempts.rbegin(); it != attempts.rend(); ++it) {
             if (it->job_id == match[1]) {
               it->resumed_from = std::stoi(match[2]);
+              break;
+            }
+          }
+        } else if (std::regex_search(line, match, training)) {
+          for (auto it = attempts.rbegin(); it != attempts.rend(); ++it) {
+            if (it->job_id == match[1]) {
+              it->trained = true;
               break;
             }
           }
@@ -640,14 +650,15 @@ class Campaign {
                 lost);
     std::printf("fetched files: %d verified against their SHA-256, %d corrupt\n", fetched_files, corrupt);
 
-    // Resumed runs: the first attempt after each worker kill that found a checkpoint.
+    // Resumed runs: after each worker kill that found a checkpoint, the first attempt that reached
+    // training (one killed again while it fetched its clip never read the checkpoint).
     const auto attempts = Attempts();
     int resumed = 0, kept = 0;
     double worst = 1.0;
     for (const auto& kill : kills_) {
       if (kill.job_id.empty() || kill.checkpoint_iteration <= 0) continue;
       const auto next = std::find_if(attempts.begin(), attempts.end(), [&](const Attempt& a) {
-        return a.job_id == kill.job_id && a.unix_ms > kill.unix_ms;
+        return a.job_id == kill.job_id && a.unix_ms > kill.unix_ms && a.trained;
       });
       if (next == attempts.end()) continue;  // the job did not run again (it had completed, or was cancelled)
       ++resumed;
