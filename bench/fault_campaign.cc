@@ -336,18 +336,19 @@ class Campaign {
         for (const auto& file : manifest.files()) client.digests.push_back(file.sha256());
       }
       const fs::path log = dir_ / "logs" / ("client-" + std::to_string(c) + ".log");
-      // A killed submit may or may not have reached Submit: the job's name tells.
+      // A killed submit may or may not have reached Submit: the job's name tells, once the server
+      // answers (a List refused while it restarts is asked again, not taken for "no such job").
       while (!give_up_ && submission.job_id.empty()) {
         RunCli(client, Client::kSubmitting,
                {"submit", clip.string(), "--name", submission.name, "--iterations",
                 std::to_string(flags_.iterations), "--holdout", "0"},
                log);
-        const auto found = JobNamed(submission.name);
-        if (found && !found->empty()) {
-          submission.job_id = *found;
-        } else {
+        auto found = JobNamed(submission.name);
+        while (!found && !give_up_) {
           std::this_thread::sleep_for(milliseconds(200));
+          found = JobNamed(submission.name);
         }
+        if (found) submission.job_id = *found;
       }
       if (submission.job_id.empty()) break;
       bool cancel_sent = false;
