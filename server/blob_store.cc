@@ -46,6 +46,15 @@ fs::path BlobStore::PathOf(const std::string& sha256) const {
   return root_ / "blobs" / sha256.substr(0, 2) / sha256;
 }
 
+bool BlobStore::PromoteIfFull(const v1::FileEntry& entry) {
+  if (Has(entry.sha256())) return true;
+  if (Committed(entry) != entry.size()) return false;
+  const auto writer = TryOpenWriter(entry);
+  if (!writer) return false;
+  if (!Has(entry.sha256()) && writer->full()) writer->Promote();
+  return Has(entry.sha256());
+}
+
 void BlobStore::Remove(const std::string& sha256) {
   if (!Has(sha256)) return;
   std::error_code error;

@@ -62,6 +62,11 @@ class BlobStore {
   std::unique_ptr<Writer> TryOpenWriter(const v1::FileEntry& entry,
                                         std::chrono::milliseconds wait = std::chrono::milliseconds(0));
 
+  // Promotes the partial of `entry` when it already holds every byte (the server died between the
+  // last write and the rename: no client sends more for it, so nothing else would). Returns whether
+  // the blob exists now; false also while another stream writes the content. Throws as Promote.
+  bool PromoteIfFull(const v1::FileEntry& entry);
+
   // Deletes the blob (retention); a missing blob is not an error. Throws Error(kUnavailable) when
   // the file exists but cannot be removed.
   void Remove(const std::string& sha256);

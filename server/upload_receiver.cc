@@ -120,6 +120,10 @@ v1::UploadStatus UploadReceiver::Receive(grpc::ServerReaderInterface<v1::UploadR
     }
   }
   writer.reset();
+  // A file whose bytes all arrived before a server crash is sent no more: promote it here.
+  for (const auto& entry : manifest.files()) {
+    if (!busy.count(entry.path())) blobs_.PromoteIfFull(entry);
+  }
   return Query(manifest, uploader);
 }
 

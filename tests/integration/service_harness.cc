@@ -8,6 +8,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <cstdio>
 #include <stdexcept>
 #include <thread>
@@ -46,17 +47,21 @@ Process::Process(const std::vector<std::string>& argv, const fs::path& log, cons
 }
 
 Process::~Process() {
-  if (!reaped_) {
-    kill(pid_, SIGKILL);
-    Wait();
-  }
+  Signal(SIGKILL);
+  Wait();
 }
 
-void Process::Signal(int signal) {
-  if (!reaped_) kill(pid_, signal);
+bool Process::Signal(int signal) {
+  std::lock_guard lock(mutex_);
+  return !reaped_ && kill(pid_, signal) == 0;
 }
 
 int Process::Wait() {
+  // Waits without reaping, then reaps under the lock Signal takes.
+  siginfo_t info{};
+  while (waitid(P_PID, static_cast<id_t>(pid_), &info, WEXITED | WNOWAIT) != 0 && errno == EINTR) {
+  }
+  std::lock_guard lock(mutex_);
   if (!reaped_) {
     waitpid(pid_, &status_, 0);
     reaped_ = true;

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <functional>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -16,8 +17,10 @@
 
 namespace endorecon::testing {
 
-// A child process whose stdout and stderr go to `log` (stderr to `err_log` when given). The
-// destructor kills it (SIGKILL) if alive.
+// A child process whose stdout and stderr are appended to `log` (stderr to `err_log` when given).
+// The destructor kills it (SIGKILL) if alive. One thread may Signal while another Waits: the pid is
+// signalled only while the child is not reaped, so a recycled pid is never hit (bench/fault_campaign
+// kills clients that other threads wait for).
 class Process {
  public:
   Process(const std::vector<std::string>& argv, const std::filesystem::path& log,
@@ -25,7 +28,8 @@ class Process {
   ~Process();
   Process(const Process&) = delete;
   Process& operator=(const Process&) = delete;
-  void Signal(int signal);
+  // Sends `signal` unless the child was reaped; returns whether it was sent.
+  bool Signal(int signal);
   // Waits for the exit; returns the exit code (128 + signal if killed).
   int Wait();
   std::string Log() const;
@@ -33,6 +37,7 @@ class Process {
 
  private:
   pid_t pid_ = -1;
+  std::mutex mutex_;
   bool reaped_ = false;
   int status_ = 0;
   std::filesystem::path log_;

@@ -62,6 +62,24 @@ TEST(BlobStoreTest, PartialBytesSurviveAndResume) {
   EXPECT_EQ(reopened.Committed(entry), entry.size());
 }
 
+// Found by bench/fault_campaign: a server killed between the last write and the rename left a full
+// partial, which every later upload reported as committed and never promoted.
+TEST(BlobStoreTest, AFullPartialLeftByACrashIsPromoted) {
+  testing::TempDir dir("blobs");
+  const std::string bytes = "0123456789abcdefghij";
+  const auto entry = EntryOf("clip/a.png", bytes);
+  BlobStore store(dir.path());
+  EXPECT_FALSE(store.PromoteIfFull(entry));
+  testing::WriteBytes(dir / ("partial/" + entry.sha256() + ".part"), bytes.substr(0, 8));
+  EXPECT_FALSE(store.PromoteIfFull(entry));
+  testing::WriteBytes(dir / ("partial/" + entry.sha256() + ".part"), bytes);
+  EXPECT_EQ(store.Committed(entry), entry.size());
+  EXPECT_FALSE(store.Has(entry.sha256()));
+  EXPECT_TRUE(store.PromoteIfFull(entry));
+  EXPECT_EQ(testing::ReadBytes(store.PathOf(entry.sha256())), bytes);
+  EXPECT_TRUE(store.PromoteIfFull(entry));
+}
+
 TEST(BlobStoreTest, WrongDigestDiscardsTheBytes) {
   testing::TempDir dir("blobs");
   BlobStore store(dir.path());

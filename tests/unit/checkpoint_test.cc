@@ -69,6 +69,12 @@ TEST_F(CheckpointTest, AnIntactCheckpointResumesAtItsIteration) {
   EXPECT_EQ(ToJson(ReadCheckpointConfig(path_)), ToJson(config_));
 }
 
+TEST_F(CheckpointTest, ItsIterationIsReadWithoutATrainer) {
+  EXPECT_EQ(ReadCheckpointIteration(path_), 3);
+  WriteBytes(path_, bytes_.substr(0, bytes_.size() / 2));
+  EXPECT_THROW(ReadCheckpointIteration(path_), Error);
+}
+
 TEST_F(CheckpointTest, ATruncatedCheckpointIsDataLoss) {
   for (std::size_t keep : {std::size_t{4}, std::size_t{60}, bytes_.size() / 2, bytes_.size() - 1}) {
     WriteBytes(path_, bytes_.substr(0, keep));

@@ -95,6 +95,17 @@ std::int64_t ScratchFree(const std::filesystem::path& work_dir) {
   return error ? -1 : static_cast<std::int64_t>(space.available);
 }
 
+int RemoveLeftoverJobs(const std::filesystem::path& work_dir) {
+  int removed = 0;
+  std::error_code error;
+  for (auto it = fs::directory_iterator(work_dir, error); !error && it != fs::directory_iterator();
+       it.increment(error)) {
+    std::error_code ignored;
+    if (it->is_directory(ignored) && fs::remove_all(it->path(), ignored) > 0) ++removed;
+  }
+  return removed;
+}
+
 bool RunLeasedJob(WorkerClient& client, const v1::LeaseResponse& lease, const Device& device,
                   const RunnerSettings& settings, WorkerMetrics& metrics,
                   const std::atomic<bool>& shutting_down) {

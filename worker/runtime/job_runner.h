@@ -32,6 +32,10 @@ struct RunnerSettings {
 // Bytes free on the scratch folder's filesystem (its nearest existing parent's while it does not
 // exist; -1 when that cannot be read).
 std::int64_t ScratchFree(const std::filesystem::path& work_dir);
+// Removes the job folders an earlier run of this worker left in its scratch folder (a kill -9 skips
+// the removal after each job; the server gives such a job to a worker again, from its checkpoint).
+// Called at start, before any job runs; a scratch folder is one worker's own. Returns how many.
+int RemoveLeftoverJobs(const std::filesystem::path& work_dir);
 
 // Never throws for the job's own failures (they are reported to the server); throws Error only
 // when the server cannot be told. Returns true when the job failed on a full scratch folder (and

@@ -130,6 +130,8 @@ int Serve(const ServeFlags& flags) {
   settings.min_free_bytes = flags.min_free_bytes;
   settings.preview_interval_s = flags.preview_interval_s;
   settings.checkpoint_interval_s = flags.checkpoint_interval_s;
+  if (const int removed = RemoveLeftoverJobs(settings.work_dir))
+    spdlog::info("removed {} job folder(s) an earlier run left in {}", removed, settings.work_dir.string());
   std::atomic<bool> shutting_down{false};
   std::thread signal_waiter([&] {
     int signal = 0;

@@ -98,6 +98,15 @@ CheckpointExtras ReadCheckpointState(const std::filesystem::path& path, Trainer&
   });
 }
 
+int ReadCheckpointIteration(const std::filesystem::path& path) {
+  auto in = OpenSealedFile(path, kCheckpointMagic, "checkpoint");
+  return NamingTheFile(path, [&] {
+    ReadString(in, path);
+    ReadString(in, path);
+    return Trainer::ReadIteration(in);
+  });
+}
+
 void WriteModel(const std::filesystem::path& path, const TrainConfig& config, const scene::SceneBox& box,
                 double near, double far, const field::Field& field) {
   WriteSealedFile(

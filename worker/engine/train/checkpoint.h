@@ -26,6 +26,9 @@ void WriteCheckpoint(const std::filesystem::path& path, const Trainer& trainer,
 TrainConfig ReadCheckpointConfig(const std::filesystem::path& path);
 // Throws Error(kDataLoss) for a corrupt or truncated file, kInvalidArgument for a file that is no checkpoint.
 CheckpointExtras ReadCheckpointState(const std::filesystem::path& path, Trainer& trainer);
+// The iteration a run resumed from the checkpoint starts at, without building a trainer (how much
+// progress a checkpoint holds: bench/fault_campaign). Throws as ReadCheckpointState.
+int ReadCheckpointIteration(const std::filesystem::path& path);
 
 struct Model {
   TrainConfig config;

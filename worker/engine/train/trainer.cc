@@ -185,9 +185,15 @@ void Trainer::Save(std::ostream& out) const {
   occupancy_.Save(out);
 }
 
-void Trainer::Load(std::istream& in) {
-  in.read(reinterpret_cast<char*>(&iteration_), sizeof(iteration_));
+int Trainer::ReadIteration(std::istream& in) {
+  int iteration = 0;
+  in.read(reinterpret_cast<char*>(&iteration), sizeof(iteration));
   if (!in) Fail(ErrorCode::kDataLoss, "checkpoint: truncated before the iteration count");
+  return iteration;
+}
+
+void Trainer::Load(std::istream& in) {
+  iteration_ = ReadIteration(in);
   field::LoadFieldState(*field_, in);
   backend_->PushField();
   backend_->LoadOptimizer(in);

@@ -76,6 +76,9 @@ class Trainer {
   // their samples on the priors, so a resumed run repeats the same loss curve).
   void Save(std::ostream& out) const;
   void Load(std::istream& in);
+  // The iteration at the start of what Save wrote, read without loading the rest (the checkpoint's
+  // progress). Throws Error(kDataLoss) when `in` ends first.
+  static int ReadIteration(std::istream& in);
 
  private:
   // Points the step tables at the current priors, occupancy grid and map (after a refinement, a

@@ -1,0 +1,466 @@
+// service_load: the service under many clients at once, against a real endorecon-server over
+// loopback. Each round: --clients clients (one channel each) upload --upload-mib MiB between them
+// at the same time, then submit --jobs jobs in all, then --watchers watch queued jobs while every
+// client keeps calling each unary RPC of the job API and a few in-process workers lease, complete
+// and fail jobs through the worker API; then everything still queued is cancelled. Reports errors,
+// p50/p99 latency of each unary RPC (target p99 < 50 ms), and the server's memory, file descriptors
+// and threads at the peak of the round and after it; a second round must not grow what is held
+// after it (a leak of memory, descriptors or threads shows as growth).
+// Usage: service_load [--clients N] [--jobs N] [--upload-mib N] [--watchers N] [--rounds N] [--dir D]
+#include <signal.h>
+#include <unistd.h>
+
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <random>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "common/file_upload.h"
+#include "common/grpc_status.h"
+#include "common/manifest.h"
+#include "common/transport_security.h"
+#include "endorecon/v1/job_service.grpc.pb.h"
+#include "endorecon/v1/worker_service.grpc.pb.h"
+#include "tests/integration/service_harness.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using namespace endorecon;
+using namespace endorecon::testing;
+using Clock = std::chrono::steady_clock;
+using std::chrono::milliseconds;
+
+struct Flags {
+  int clients = 100;
+  int jobs = 1000;
+  int upload_mib = 1024;
+  int watchers = 100;
+  int rounds = 2;
+  int calls_per_client = 20;  // of each job-API unary RPC, per client and round, under the watchers
+  int workers = 4;
+  std::string dir;
+};
+
+// What a process holds, from /proc/<pid>/: resident memory, open file descriptors, threads.
+struct ProcessUsage {
+  long rss_kib = -1;
+  int fds = -1;
+  int threads = -1;
+};
+
+ProcessUsage UsageOf(pid_t pid) {
+  const fs::path proc = "/proc/" + std::to_string(pid);
+  ProcessUsage usage;
+  std::ifstream status(proc / "status");
+  std::string line;
+  while (std::getline(status, line)) {
+    if (line.starts_with("VmRSS:")) usage.rss_kib = std::stol(line.substr(6));
+    if (line.starts_with("Threads:")) usage.threads = std::stoi(line.substr(8));
+  }
+  std::error_code error;
+  int fds = 0;
+  for (auto it = fs::directory_iterator(proc / "fd", error); !error && it != fs::directory_iterator();
+       it.increment(error)) {
+    ++fds;
+  }
+  if (!error) usage.fds = fds;
+  return usage;
+}
+
+double MsSince(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+// Latencies and errors of every RPC, from every thread.
+class Calls {
+ public:
+  // Runs `call` (returning a grpc::Status) and records its latency under `rpc`.
+  template <typename Call>
+  bool Timed(const std::string& rpc, Call&& call) {
+    const auto start = Clock::now();
+    const grpc::Status status = call();
+    const double ms = MsSince(start);
+    std::lock_guard lock(mutex_);
+    auto& record = records_[rpc];
+    record.ms.push_back(ms);
+    if (!status.ok()) {
+      ++record.errors;
+      if (record.first_error.empty())
+        record.first_error = std::to_string(status.error_code()) + " " + status.error_message();
+    }
+    return status.ok();
+  }
+  void Error(const std::string& what, const std::string& message) {
+    std::lock_guard lock(mutex_);
+    auto& record = records_[what];
+    ++record.errors;
+    if (record.first_error.empty()) record.first_error = message;
+  }
+
+  // Prints one line per RPC; returns the errors in all.
+  int Print(const std::vector<std::string>& unary) {
+    std::lock_guard lock(mutex_);
+    int errors = 0;
+    std::printf("  %-12s %7s %6s %9s %9s %9s %s\n", "rpc", "calls", "errors", "p50 ms", "p99 ms", "max ms",
+                "");
+    for (auto& [rpc, record] : records_) {
+      std::sort(record.ms.begin(), record.ms.end());
+      const auto at = [&](double q) {
+        return record.ms.empty() ? 0.0 : record.ms[static_cast<std::size_t>(q * (record.ms.size() - 1))];
+      };
+      const bool is_unary = std::find(unary.begin(), unary.end(), rpc) != unary.end();
+      std::printf("  %-12s %7zu %6d %9.2f %9.2f %9.2f %s%s\n", rpc.c_str(), record.ms.size(), record.errors,
+                  at(0.5), at(0.99), record.ms.empty() ? 0.0 : record.ms.back(),
+                  is_unary ? (at(0.99) < 50 ? "p99 < 50 ms" : "p99 OVER 50 ms") : "(stream)",
+                  record.first_error.empty() ? "" : ("  first error: " + record.first_error).c_str());
+      errors += record.errors;
+    }
+    records_.clear();
+    return errors;
+  }
+
+ private:
+  struct Record {
+    std::vector<double> ms;
+    int errors = 0;
+    std::string first_error;
+  };
+  std::mutex mutex_;
+  std::map<std::string, Record> records_;
+};
+
+std::unique_ptr<grpc::ClientContext> Context(int seconds = 30) {
+  return CallContext(std::chrono::seconds(seconds));
+}
+
+// Samples the server's usage every 100 ms; keeps the largest of each.
+class UsageSampler {
+ public:
+  explicit UsageSampler(pid_t pid) : pid_(pid), thread_([this] { Loop(); }) {}
+  ~UsageSampler() {
+    stop_ = true;
+    thread_.join();
+  }
+  ProcessUsage peak() {
+    std::lock_guard lock(mutex_);
+    return peak_;
+  }
+
+ private:
+  void Loop() {
+    while (!stop_) {
+      const auto now = UsageOf(pid_);
+      {
+        std::lock_guard lock(mutex_);
+        peak_.rss_kib = std::max(peak_.rss_kib, now.rss_kib);
+        peak_.fds = std::max(peak_.fds, now.fds);
+        peak_.threads = std::max(peak_.threads, now.threads);
+      }
+      std::this_thread::sleep_for(milliseconds(100));
+    }
+  }
+  pid_t pid_;
+  std::atomic<bool> stop_{false};
+  std::mutex mutex_;
+  ProcessUsage peak_;
+  std::thread thread_;
+};
+
+void WriteRandom(const fs::path& path, std::int64_t bytes, std::uint64_t seed) {
+  fs::create_directories(path.parent_path());
+  std::ofstream out(path, std::ios::binary);
+  std::mt19937_64 random(seed);
+  std::vector<std::uint64_t> block(1 << 15);
+  for (std::int64_t done = 0; done < bytes; done += static_cast<std::int64_t>(block.size() * 8)) {
+    for (auto& word : block) word = random();
+    const auto n = std::min<std::int64_t>(bytes - done, static_cast<std::int64_t>(block.size() * 8));
+    out.write(reinterpret_cast<const char*>(block.data()), static_cast<std::streamsize>(n));
+  }
+}
+
+class Load {
+ public:
+  Load(const Flags& flags, pid_t server, std::string address, fs::path dir)
+      : flags_(flags), server_(server), address_(std::move(address)), dir_(std::move(dir)) {}
+
+  // One round; returns its errors.
+  int Round(int round) {
+    std::printf("round %d: %d clients, %d MiB uploaded at once, %d jobs, %d watchers\n", round,
+                flags_.clients, flags_.upload_mib, flags_.jobs, flags_.watchers);
+    std::vector<std::shared_ptr<grpc::Channel>> channels;
+    for (int c = 0; c < flags_.clients; ++c) channels.push_back(OpenChannel(address_));
+    UsageSampler sampler(server_);
+
+    // Every client's clip: a file of its share of the upload, unique to the round.
+    const std::int64_t share = (static_cast<std::int64_t>(flags_.upload_mib) << 20) / flags_.clients;
+    std::vector<v1::Manifest> clips(static_cast<std::size_t>(flags_.clients));
+    for (int c = 0; c < flags_.clients; ++c) {
+      const fs::path clip = dir_ / ("round-" + std::to_string(round)) / ("client-" + std::to_string(c));
+      WriteRandom(clip / "video.bin", share, static_cast<std::uint64_t>(round) * 100003 + c);
+      clips[static_cast<std::size_t>(c)] = ManifestOfDirectory(clip);
+    }
+    const auto upload_start = Clock::now();
+    EachClient(
+        [&](int c, v1::JobService::Stub& stub) {
+          UploadCalls upload;
+          upload.query = [&](grpc::ClientContext* context, const v1::Manifest& m, v1::UploadStatus* s) {
+            return stub.QueryUpload(context, m, s);
+          };
+          upload.open = [&](grpc::ClientContext* context, v1::UploadStatus* s) {
+            return stub.Upload(context, s);
+          };
+          const fs::path clip = dir_ / ("round-" + std::to_string(round)) / ("client-" + std::to_string(c));
+          calls_.Timed("Upload", [&] {
+            try {
+              const auto result =
+                  UploadFiles(clip, clips[static_cast<std::size_t>(c)], upload, UploadOptions{});
+              return result.status.complete()
+                         ? grpc::Status::OK
+                         : grpc::Status(grpc::StatusCode::UNAVAILABLE, "upload incomplete");
+            } catch (const endorecon::Error& e) {
+              return grpc::Status(ToGrpcCode(e.code()), e.what());
+            }
+          });
+        },
+        channels);
+    const double upload_s = MsSince(upload_start) / 1000;
+    std::printf("  upload: %d MiB from %d clients at once in %.1f s (%.0f MiB/s)\n", flags_.upload_mib,
+                flags_.clients, upload_s, flags_.upload_mib / upload_s);
+
+    // 1,000 jobs, submitted by every client at once.
+    std::mutex ids_mutex;
+    std::vector<std::string> ids;
+    EachClient(
+        [&](int c, v1::JobService::Stub& stub) {
+          for (int j = c; j < flags_.jobs; j += flags_.clients) {
+            v1::SubmitRequest request;
+            *request.mutable_clip() = clips[static_cast<std::size_t>(c)];
+            request.mutable_options()->set_iterations(100);
+            request.set_name("load-" + std::to_string(round) + "-" + std::to_string(j));
+            v1::Job job;
+            if (calls_.Timed("Submit", [&] { return stub.Submit(Context().get(), request, &job); })) {
+              std::lock_guard lock(ids_mutex);
+              ids.push_back(job.id());
+            }
+          }
+        },
+        channels);
+
+    // Watchers on queued jobs, while clients call every unary RPC and workers lease.
+    std::vector<std::unique_ptr<grpc::ClientContext>> watch_contexts;
+    std::vector<std::thread> watchers;
+    std::atomic<int> watch_events{0};
+    for (int w = 0; w < flags_.watchers && !ids.empty(); ++w) {
+      watch_contexts.push_back(CallContext(std::chrono::minutes(10)));
+      auto* context = watch_contexts.back().get();
+      watchers.emplace_back([&, context, w] {
+        auto stub = v1::JobService::NewStub(channels[static_cast<std::size_t>(w) % channels.size()]);
+        v1::WatchJobRequest request;
+        request.set_id(ids[static_cast<std::size_t>(w) % ids.size()]);
+        auto stream = stub->Watch(context, request);
+        v1::JobEvent event;
+        while (stream->Read(&event)) ++watch_events;
+        const auto status = stream->Finish();
+        if (!status.ok() && status.error_code() != grpc::StatusCode::CANCELLED)
+          calls_.Error("Watch", status.error_message());
+      });
+    }
+    std::atomic<bool> leasing{true};
+    std::vector<std::thread> workers;
+    for (int w = 0; w < flags_.workers; ++w) {
+      workers.emplace_back(
+          [&, w] { Worker(channels[static_cast<std::size_t>(w) % channels.size()], w, clips[0], leasing); });
+    }
+    EachClient(
+        [&](int c, v1::JobService::Stub& stub) {
+          for (int i = 0; i < flags_.calls_per_client; ++i) {
+            const auto& id = ids[static_cast<std::size_t>(c * flags_.calls_per_client + i) % ids.size()];
+            v1::GetJobRequest get;
+            get.set_id(id);
+            v1::Job job;
+            calls_.Timed("Get", [&] { return stub.Get(Context().get(), get, &job); });
+            v1::ListJobsRequest list;
+            list.set_page_size(50);
+            v1::ListJobsResponse page;
+            calls_.Timed("List", [&] { return stub.List(Context().get(), list, &page); });
+            v1::UploadStatus status;
+            calls_.Timed("QueryUpload", [&] {
+              return stub.QueryUpload(Context().get(), clips[static_cast<std::size_t>(c)], &status);
+            });
+            v1::ListWorkersResponse workers_list;
+            calls_.Timed("ListWorkers", [&] { return stub.ListWorkers(Context().get(), {}, &workers_list); });
+          }
+        },
+        channels);
+    leasing = false;
+    for (auto& worker : workers) worker.join();
+    const auto peak_under_load = sampler.peak();
+
+    // Cancel what is still queued, which ends every watch.
+    EachClient(
+        [&](int c, v1::JobService::Stub& stub) {
+          for (std::size_t j = static_cast<std::size_t>(c); j < ids.size();
+               j += static_cast<std::size_t>(flags_.clients)) {
+            v1::CancelJobRequest cancel;
+            cancel.set_id(ids[j]);
+            v1::Job job;
+            calls_.Timed("Cancel", [&] {
+              const auto status = stub.Cancel(Context().get(), cancel, &job);
+              // A job the workers finished first cannot be cancelled: not an error of the server.
+              return status.error_code() == grpc::StatusCode::FAILED_PRECONDITION ? grpc::Status::OK : status;
+            });
+          }
+        },
+        channels);
+    for (auto& watcher : watchers) watcher.join();
+    const auto peak = sampler.peak();
+    channels.clear();
+    std::this_thread::sleep_for(std::chrono::seconds(3));
+    after_ = UsageOf(server_);
+    std::printf("  watch events received: %d\n", watch_events.load());
+    const int errors = calls_.Print({"Submit", "Get", "List", "QueryUpload", "ListWorkers", "Cancel",
+                                     "Register", "Lease", "Complete", "Fail", "QueryBlobs"});
+    std::printf(
+        "  server at the peak: %.1f MB resident, %d fds, %d threads (%.1f MB, %d fds, %d threads under the "
+        "watchers)\n",
+        peak.rss_kib / 1024.0, peak.fds, peak.threads, peak_under_load.rss_kib / 1024.0, peak_under_load.fds,
+        peak_under_load.threads);
+    std::printf("  server after the round (3 s idle): %.1f MB resident, %d fds, %d threads\n",
+                after_.rss_kib / 1024.0, after_.fds, after_.threads);
+    std::printf("  errors: %d\n", errors);
+    return errors;
+  }
+
+  ProcessUsage after() const { return after_; }
+
+ private:
+  template <typename Body>
+  void EachClient(Body&& body, const std::vector<std::shared_ptr<grpc::Channel>>& channels) {
+    std::vector<std::thread> threads;
+    for (int c = 0; c < flags_.clients; ++c) {
+      threads.emplace_back([&, c] {
+        auto stub = v1::JobService::NewStub(channels[static_cast<std::size_t>(c)]);
+        body(c, *stub);
+      });
+    }
+    for (auto& thread : threads) thread.join();
+  }
+
+  // A worker that leases with no wait and completes (every other job) or hands back (the rest).
+  void Worker(const std::shared_ptr<grpc::Channel>& channel, int w, const v1::Manifest& result,
+              const std::atomic<bool>& leasing) {
+    auto stub = v1::WorkerService::NewStub(channel);
+    const std::string id = "load-worker-" + std::to_string(w);
+    v1::RegisterRequest reg;
+    reg.set_worker_id(id);
+    reg.add_devices("cpu");
+    v1::RegisterResponse registered;
+    calls_.Timed("Register", [&] { return stub->Register(Context().get(), reg, &registered); });
+    for (int n = 0; leasing; ++n) {
+      v1::LeaseRequest request;
+      request.set_worker_id(id);
+      request.set_wait_ms(0);
+      v1::LeaseResponse lease;
+      if (!calls_.Timed("Lease", [&] { return stub->Lease(Context().get(), request, &lease); }) ||
+          !lease.has_job()) {
+        std::this_thread::sleep_for(milliseconds(20));
+        continue;
+      }
+      v1::UploadStatus status;
+      calls_.Timed("QueryBlobs", [&] { return stub->QueryBlobs(Context().get(), result, &status); });
+      v1::Job job;
+      if (n % 2 == 0) {
+        v1::CompleteRequest complete;
+        complete.set_lease_id(lease.lease_id());
+        *complete.mutable_result() = result;
+        calls_.Timed("Complete", [&] { return stub->Complete(Context().get(), complete, &job); });
+      } else {
+        v1::FailRequest fail;
+        fail.set_lease_id(lease.lease_id());
+        fail.set_reason("service_load hands it back");
+        fail.set_retry(true);
+        fail.set_release(true);
+        calls_.Timed("Fail", [&] { return stub->Fail(Context().get(), fail, &job); });
+      }
+      std::this_thread::sleep_for(milliseconds(50));
+    }
+  }
+
+  Flags flags_;
+  pid_t server_;
+  std::string address_;
+  fs::path dir_;
+  Calls calls_;
+  ProcessUsage after_;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Flags flags;
+  CLI::App app{"service_load: many clients, queued jobs, a large concurrent upload and watchers at once"};
+  app.add_option("--clients", flags.clients, "concurrent clients, one channel each")->capture_default_str();
+  app.add_option("--jobs", flags.jobs, "jobs queued each round")->capture_default_str();
+  app.add_option("--upload-mib", flags.upload_mib, "MiB uploaded by all clients at once")
+      ->capture_default_str();
+  app.add_option("--watchers", flags.watchers, "concurrent Watch streams")->capture_default_str();
+  app.add_option("--rounds", flags.rounds, "rounds (the second must not grow what the first left)")
+      ->capture_default_str();
+  app.add_option("--calls", flags.calls_per_client, "calls of each unary RPC per client and round")
+      ->capture_default_str();
+  app.add_option("--workers", flags.workers, "in-process workers leasing through the worker API")
+      ->capture_default_str();
+  app.add_option("--dir", flags.dir, "scratch folder (default: a new one in $TMPDIR)");
+  CLI11_PARSE(app, argc, argv);
+  signal(SIGPIPE, SIG_IGN);
+
+  const fs::path dir = flags.dir.empty()
+                           ? fs::temp_directory_path() / ("endorecon-load-" + std::to_string(getpid()))
+                           : fs::path(flags.dir);
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string address = "127.0.0.1:" + std::to_string(FreePort());
+  Process server({BuiltBinary("server/endorecon-server"), "--listen", address, "--data-dir",
+                  (dir / "data").string(), "--metrics-port", "-1"},
+                 dir / "server.log");
+  for (int i = 0; i < 200 && !OpenChannel(address)->WaitForConnected(std::chrono::system_clock::now() +
+                                                                     std::chrono::milliseconds(50));
+       ++i) {
+  }
+  const auto idle = UsageOf(server.pid());
+  std::printf("server idle: %.1f MB resident, %d fds, %d threads\n", idle.rss_kib / 1024.0, idle.fds,
+              idle.threads);
+  Load load(flags, server.pid(), address, dir);
+  int errors = 0;
+  std::vector<ProcessUsage> after;
+  for (int round = 1; round <= flags.rounds; ++round) {
+    errors += load.Round(round);
+    after.push_back(load.after());
+  }
+  bool grew = false;
+  if (after.size() >= 2) {
+    const auto& first = after.front();
+    const auto& last = after.back();
+    // Descriptors and threads come back exactly; memory within 10% (allocator caches, the job store's pages).
+    grew = last.fds > first.fds || last.threads > first.threads || last.rss_kib > first.rss_kib * 11 / 10;
+    std::printf("after round 1 -> after round %zu: %.1f -> %.1f MB, %d -> %d fds, %d -> %d threads: %s\n",
+                after.size(), first.rss_kib / 1024.0, last.rss_kib / 1024.0, first.fds, last.fds,
+                first.threads, last.threads, grew ? "GROWTH" : "no growth");
+  }
+  server.Signal(SIGTERM);
+  server.Wait();
+  fs::remove_all(dir);
+  std::printf("errors=%d growth=%s\n", errors, grew ? "yes" : "no");
+  return errors == 0 && !grew ? 0 : 1;
+}
