@@ -204,7 +204,7 @@ TEST_F(EndoNerfLoaderTest, RejectsTruncatedImage) {
 
 TEST_F(EndoNerfLoaderTest, RejectsNonImageFile) {
   testing::WriteBytes(dir_ / "images" / Name(0), "not a png at all");
-  ExpectError(Name(0), "cannot decode the image");
+  ExpectError(Name(0), "not a PNG, JPEG, BMP or TIFF image");
 }
 
 TEST_F(EndoNerfLoaderTest, RejectsNonFinitePose) {
