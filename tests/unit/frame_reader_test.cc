@@ -28,5 +28,21 @@ TEST(FrameReaderTest, AFileOfAnotherFormatIsRefusedBeforeDecoding) {
   EXPECT_EQ(image.height, 3);
 }
 
+// Found by tests/fuzz/image_decode_fuzz.cc: a BMP whose header declares a width of 4,194,308 made
+// OpenCV throw cv::Exception (its size limit), which escaped as no endorecon error.
+TEST(FrameReaderTest, AnImageDeclaringASizeOverOpenCvsLimitIsRefused) {
+  testing::TempDir dir("frames");
+  const std::string bmp(
+      "\x42\x4d\x5a\x00\x00\x00\x00\x00\x00\x00\x36\x00\x00\x00\x28\x00\x00\x00\x04\x00"
+      "\x40\x00\x03\x00\x00\x00\x01\x00\x18\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00"
+      "\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x0a\x14\x1e\x0a\x14\x1e"
+      "\x0a\x14\x1e\x0a\x14\x1e\x0a\x14\x1e\x0a\x14\x1e\x0a\x14\x1f\x0a\x14\x1e\x0a\x14"
+      "\x1e\x0a\x14\x1e\x0a\x14\x1e\x0a\x14\x1e",
+      90);
+  testing::WriteBytes(dir.path() / "wide.bmp", bmp);
+  const std::string message = testing::ErrorFrom([&] { ReadRgbImage(dir.path() / "wide.bmp"); });
+  EXPECT_NE(message.find("wide.bmp: cannot decode the image"), std::string::npos) << message;
+}
+
 }  // namespace
 }  // namespace endorecon::scene

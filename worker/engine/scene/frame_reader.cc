@@ -45,7 +45,13 @@ bool HasImageSignature(const fs::path& path) {
 cv::Mat Decode(const fs::path& path) {
   if (!fs::is_regular_file(path)) FailInvalid(path.string() + ": file does not exist");
   if (!HasImageSignature(path)) FailInvalid(path.string() + ": not a PNG, JPEG, BMP or TIFF image");
-  cv::Mat image = cv::imread(path.string(), cv::IMREAD_UNCHANGED);
+  cv::Mat image;
+  try {
+    image = cv::imread(path.string(), cv::IMREAD_UNCHANGED);
+  } catch (const cv::Exception& e) {
+    // OpenCV asserts on a header declaring a size over its limits (tests/fuzz/image_decode_fuzz.cc).
+    FailInvalid(path.string() + ": cannot decode the image (" + e.err + ")");
+  }
   if (image.empty()) {
     FailInvalid(path.string() + ": cannot decode the image (unreadable, truncated or not an image)");
   }
