@@ -18,49 +18,63 @@ namespace endorecon::testing {
 namespace {
 namespace fs = std::filesystem;
 
-TEST(StalledPeerTest, ADownloadWhoseReaderStopsIsCancelledAndTheServerCarriesOn) {
-  Cluster cluster({"--stall-timeout", "2"});
+// Submits a clip carrying a 16 MiB random file (far more than a slow reader's flow-control window);
+// returns the job id and fills `bytes` with the file.
+std::string SubmitWithLargeFile(Cluster& cluster, std::uint32_t seed, std::string& bytes) {
   MakeClip(cluster.path("clip"));
-  // A 16 MiB file in the clip: far more than the reader's flow-control window below.
-  std::string bytes(16 << 20, '\0');
-  std::mt19937 random(3);
+  bytes.assign(16 << 20, '\0');
+  std::mt19937 random(seed);
   for (auto& c : bytes) c = static_cast<char>(random() & 0xff);
   std::ofstream(cluster.path("clip") / "extra.bin", std::ios::binary).write(bytes.data(), std::streamsize(bytes.size()));
-  const std::string id = cluster.Submit(cluster.path("clip"), {"--iterations", "10"});
+  return cluster.Submit(cluster.path("clip"), {"--iterations", "10"});
+}
 
-  // A worker by hand, whose channel takes at most 64 KiB ahead of its reads.
+// A worker's channel that takes at most 64 KiB ahead of its reads; `peer` keeps channels apart (a
+// shared connection's window would stall every stream on it at once).
+std::unique_ptr<v1::WorkerService::Stub> SlowReader(const Cluster& cluster, int peer = 0) {
   grpc::ChannelArguments args;
   args.SetInt(GRPC_ARG_HTTP2_BDP_PROBE, 0);
   args.SetInt(GRPC_ARG_HTTP2_STREAM_LOOKAHEAD_BYTES, 64 * 1024);
   args.SetMaxReceiveMessageSize(64 << 20);
-  auto worker = v1::WorkerService::NewStub(
+  args.SetInt("endorecon.test.peer", peer);  // no subchannel sharing
+  return v1::WorkerService::NewStub(
       grpc::CreateCustomChannel(cluster.address(), grpc::InsecureChannelCredentials(), args));
+}
+
+// Registers the hand-made worker "stalled" and leases job `id` (again once a lease it never renews
+// has expired); returns the request for extra.bin under that lease.
+v1::GetBlobsRequest LeaseLargeFile(v1::WorkerService::Stub& worker, const std::string& id,
+                                   const std::string& bytes) {
   {
     grpc::ClientContext context;
     v1::RegisterRequest request;
     request.set_worker_id("stalled");
     request.add_devices("cpu");
     v1::RegisterResponse response;
-    ASSERT_TRUE(worker->Register(&context, request, &response).ok());
+    EXPECT_TRUE(worker.Register(&context, request, &response).ok());
   }
-  // Leases the job (again once a lease this hand-made worker never renews has expired) and asks
-  // for the file.
-  const auto get_blobs = [&] {
-    v1::LeaseResponse lease;
-    grpc::ClientContext context;
-    v1::LeaseRequest lease_request;
-    lease_request.set_worker_id("stalled");
-    lease_request.set_device("cpu");
-    lease_request.set_wait_ms(15000);
-    EXPECT_TRUE(worker->Lease(&context, lease_request, &lease).ok());
-    EXPECT_EQ(lease.job().id(), id);
-    v1::GetBlobsRequest request;
-    request.set_lease_id(lease.lease_id());
-    auto* range = request.add_files();
-    range->set_path("extra.bin");
-    range->set_sha256(Sha256Hex(bytes));
-    return request;
-  };
+  v1::LeaseResponse lease;
+  grpc::ClientContext context;
+  v1::LeaseRequest lease_request;
+  lease_request.set_worker_id("stalled");
+  lease_request.set_device("cpu");
+  lease_request.set_wait_ms(15000);
+  EXPECT_TRUE(worker.Lease(&context, lease_request, &lease).ok());
+  EXPECT_EQ(lease.job().id(), id);
+  v1::GetBlobsRequest request;
+  request.set_lease_id(lease.lease_id());
+  auto* range = request.add_files();
+  range->set_path("extra.bin");
+  range->set_sha256(Sha256Hex(bytes));
+  return request;
+}
+
+TEST(StalledPeerTest, ADownloadWhoseReaderStopsIsCancelledAndTheServerCarriesOn) {
+  Cluster cluster({"--stall-timeout", "2"});
+  std::string bytes;
+  const std::string id = SubmitWithLargeFile(cluster, 3, bytes);
+  auto worker = SlowReader(cluster);
+  const auto get_blobs = [&] { return LeaseLargeFile(*worker, id, bytes); };
   const v1::GetBlobsRequest request = get_blobs();
 
   // Read one chunk, then stop reading.
@@ -110,46 +124,10 @@ ProcessUse UseOf(pid_t pid) {
 TEST(StalledPeerTest, ManyStalledDownloadsHoldNoMoreThreadsOrMemoryThanTheCap) {
   constexpr int kCap = 16, kPeers = 40;
   Cluster cluster({"--stall-timeout", "3", "--max-threads", std::to_string(kCap)});
-  MakeClip(cluster.path("clip"));
-  std::string bytes(16 << 20, '\0');
-  std::mt19937 random(5);
-  for (auto& c : bytes) c = static_cast<char>(random() & 0xff);
-  std::ofstream(cluster.path("clip") / "extra.bin", std::ios::binary).write(bytes.data(), std::streamsize(bytes.size()));
-  const std::string id = cluster.Submit(cluster.path("clip"), {"--iterations", "10"});
-
-  // Each peer on a channel of its own (a shared connection's window would stall them all at once),
-  // taking at most 64 KiB ahead of its reads.
-  const auto channel = [&](int peer) {
-    grpc::ChannelArguments args;
-    args.SetInt(GRPC_ARG_HTTP2_BDP_PROBE, 0);
-    args.SetInt(GRPC_ARG_HTTP2_STREAM_LOOKAHEAD_BYTES, 64 * 1024);
-    args.SetMaxReceiveMessageSize(64 << 20);
-    args.SetInt("endorecon.test.peer", peer);  // no subchannel sharing
-    return grpc::CreateCustomChannel(cluster.address(), grpc::InsecureChannelCredentials(), args);
-  };
-  auto worker = v1::WorkerService::NewStub(channel(-1));
-  {
-    grpc::ClientContext context;
-    v1::RegisterRequest request;
-    request.set_worker_id("stalled");
-    request.add_devices("cpu");
-    v1::RegisterResponse response;
-    ASSERT_TRUE(worker->Register(&context, request, &response).ok());
-  }
-  v1::LeaseResponse lease;
-  {
-    grpc::ClientContext context;
-    v1::LeaseRequest request;
-    request.set_worker_id("stalled");
-    request.set_device("cpu");
-    request.set_wait_ms(15000);
-    ASSERT_TRUE(worker->Lease(&context, request, &lease).ok());
-    ASSERT_EQ(lease.job().id(), id);
-  }
-  v1::GetBlobsRequest request;
-  request.set_lease_id(lease.lease_id());
-  request.add_files()->set_path("extra.bin");
-  request.mutable_files(0)->set_sha256(Sha256Hex(bytes));
+  std::string bytes;
+  const std::string id = SubmitWithLargeFile(cluster, 5, bytes);
+  auto worker = SlowReader(cluster, -1);
+  const v1::GetBlobsRequest request = LeaseLargeFile(*worker, id, bytes);
 
   const ProcessUse idle = UseOf(cluster.server_pid());
   struct Peer {
@@ -161,7 +139,7 @@ TEST(StalledPeerTest, ManyStalledDownloadsHoldNoMoreThreadsOrMemoryThanTheCap) {
   int reading = 0;
   for (int i = 0; i < kPeers; ++i) {
     auto peer = std::make_unique<Peer>();
-    peer->stub = v1::WorkerService::NewStub(channel(i));
+    peer->stub = SlowReader(cluster, i);
     peer->reader = peer->stub->GetBlobs(&peer->context, request);
     v1::FileChunk chunk;
     if (peer->reader->Read(&chunk)) ++reading;  // then it stops reading
