@@ -6,6 +6,7 @@
 #include <set>
 
 #include "common/error.h"
+#include "worker/prepare/opencv_storage.h"
 
 namespace endorecon::prepare {
 namespace {
@@ -63,47 +64,29 @@ void RequireFile(const fs::path& path) {
     Fail(ErrorCode::kNotFound, path.string() + ": calibration file does not exist");
 }
 
-cv::Mat ReadMatrix(const cv::FileStorage& file, const std::string& name,
+cv::Mat ReadMatrix(const OpenCvStorage& file, const std::string& name,
                    std::initializer_list<const char*> keys) {
   for (const char* key : keys) {
-    const cv::FileNode node = file[key];
-    if (node.empty()) continue;
-    // OpenCV allocates a matrix's declared size before it reads the data, so a file saying
-    // rows: 1000000000 asked for gigabytes (tests/fuzz/stereo_calibration_fuzz.cc): no calibration
-    // matrix is larger than 16 x 16.
-    if (node.isMap()) {
-      const cv::FileNode rows = node["rows"], cols = node["cols"];
-      if (!rows.isInt() || !cols.isInt() || int(rows) < 1 || int(rows) > 16 || int(cols) < 1 || int(cols) > 16)
-        FailInvalid(name + ": '" + key + "' must declare rows and cols between 1 and 16");
-    }
-    cv::Mat m;
-    try {
-      node >> m;
-    } catch (const std::exception&) {  // cv::Exception, or a standard one from OpenCV's parser
-      FailInvalid(name + ": '" + key + "' is not a matrix (expected an opencv-matrix)");
-    }
-    if (m.empty()) FailInvalid(name + ": '" + key + "' is not a matrix (expected an opencv-matrix)");
-    cv::Mat d;
-    m.convertTo(d, CV_64F);
-    return d;
+    if (std::optional<cv::Mat> m = file.Matrix(key)) return *m;
   }
   FailInvalid(name + ": no '" + *keys.begin() +
               "' (an OpenCV stereo calibration holds K1 D1 K2 D2 R T; see docs/formats.md)");
 }
 
 // image_width/image_height, or image_size/imageSize as [w, h]; 0x0 if absent.
-cv::Size ReadSize(const cv::FileStorage& file, const std::string& name) {
+cv::Size ReadSize(const OpenCvStorage& file, const std::string& name) {
   cv::Size size;
-  if (!file["image_width"].empty() || !file["image_height"].empty()) {
-    size = {static_cast<int>(file["image_width"]), static_cast<int>(file["image_height"])};
+  if (file.Has("image_width") || file.Has("image_height")) {
+    const auto width = file.Ints("image_width"), height = file.Ints("image_height");
+    if (!width || !height || width->size() != 1 || height->size() != 1)
+      FailInvalid(name + ": 'image_width' and 'image_height' must be given together, a whole number each");
+    size = {width->front(), height->front()};
   } else {
     for (const char* key : {"image_size", "imageSize"}) {
-      const cv::FileNode node = file[key];
-      if (node.empty()) continue;
-      std::vector<int> wh;
-      node >> wh;
-      if (wh.size() == 2) size = {wh[0], wh[1]};
-      if (wh.size() != 2) FailInvalid(name + ": '" + key + "' must be [width, height]");
+      const auto wh = file.Ints(key);
+      if (!wh) continue;
+      if (wh->size() != 2) FailInvalid(name + ": '" + key + "' must be [width, height]");
+      size = {(*wh)[0], (*wh)[1]};
     }
   }
   if (size != cv::Size() && (size.width < 1 || size.height < 1))
@@ -113,23 +96,8 @@ cv::Size ReadSize(const cv::FileStorage& file, const std::string& name) {
 }
 
 StereoCalibration LoadOpenCv(const fs::path& path) {
-  RequireFile(path);
   const std::string name = path.string();
-  cv::FileStorage file;
-  try {
-    file.open(name, cv::FileStorage::READ);
-  } catch (const std::exception&) {
-    // Not only cv::Exception: OpenCV 4.6's YAML parser lets std::length_error out on some broken
-    // files (tests/fuzz/stereo_calibration_fuzz.cc); the file is refused below either way.
-  }
-  if (!file.isOpened()) {
-    FailInvalid(name +
-                ": not an OpenCV calibration file (cv::FileStorage YAML or XML; a ROS camera_info "
-                "pair is given as two files, left then right)");
-  }
-  // OpenCV asserts (cv::Exception) when the top level is not a map and a key is looked up
-  // (tests/fuzz/stereo_calibration_fuzz.cc).
-  if (!file.root().isMap()) FailInvalid(name + ": not an OpenCV calibration file (its top level is no map)");
+  const OpenCvStorage file = OpenCvStorage::Load(path);
   StereoCalibration c;
   c.source = name;
   c.kind = "opencv";
@@ -193,7 +161,8 @@ RosCameraInfo LoadRos(const fs::path& path) {
   }
   std::string model = "plumb_bob";
   if (const YAML::Node node = top["distortion_model"]) {
-    if (!node.IsScalar()) FailInvalid(name + ": 'distortion_model' must be a name (plumb_bob or rational_polynomial)");
+    if (!node.IsScalar())
+      FailInvalid(name + ": 'distortion_model' must be a name (plumb_bob or rational_polynomial)");
     model = node.as<std::string>();
   }
   if (model != "plumb_bob" && model != "rational_polynomial") {
