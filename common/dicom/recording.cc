@@ -93,9 +93,15 @@ struct Instance {
 
 std::string Where(const Instance& instance) { return instance.path.string(); }
 
-// Writes the fragments of the encapsulated pixel data (the offset table left out) to a file that
-// FFmpeg opens: DICOM carries the MPEG stream in fragments, in order.
-void ExtractStream(Instance& instance) {
+// One fragment of encapsulated pixel data (item 0 is the basic offset table).
+struct Fragment {
+  const Uint8* data = nullptr;
+  std::size_t size = 0;
+};
+
+// The encapsulated pixel data's items, the offset table first. Throws FailInvalid naming the file for
+// pixel data that is not encapsulated or a fragment that cannot be read.
+std::vector<Fragment> Fragments(const Instance& instance) {
   DcmElement* element = nullptr;
   if (instance.dataset->findAndGetElement(DCM_PixelData, element).bad() || element == nullptr) {
     FailInvalid(Where(instance) + ": no Pixel Data (7FE0,0010)");
@@ -103,16 +109,12 @@ void ExtractStream(Instance& instance) {
   auto* pixels = static_cast<DcmPixelData*>(element);
   DcmPixelSequence* sequence = nullptr;
   const OFCondition status = pixels->getEncapsulatedRepresentation(instance.xfer, nullptr, sequence);
-  if (status.bad() || sequence == nullptr) {
-    FailInvalid(Where(instance) + ": the pixel data is not an encapsulated video stream (" + status.text() +
-                ")");
+  if (status.bad() || sequence == nullptr || sequence->card() == 0) {
+    FailInvalid(Where(instance) + ": the pixel data is not encapsulated as " +
+                UidName(instance.transfer_syntax) + " says (" + status.text() + ")");
   }
-  const bool mpeg2 = instance.transfer_syntax == UID_MPEG2MainProfileAtMainLevelTransferSyntax ||
-                     instance.transfer_syntax == UID_MPEG2MainProfileAtHighLevelTransferSyntax;
-  instance.stream = std::make_unique<TempFile>(mpeg2 ? ".mpg" : ".mp4");
-  std::ofstream out(instance.stream->path(), std::ios::binary);
-  std::uint64_t bytes = 0;
-  for (unsigned long i = 1; i < sequence->card(); ++i) {
+  std::vector<Fragment> fragments(sequence->card());
+  for (unsigned long i = 0; i < sequence->card(); ++i) {
     DcmPixelItem* item = nullptr;
     Uint8* data = nullptr;
     if (sequence->getItem(item, i).bad() || item->getUint8Array(data).bad() ||
@@ -120,12 +122,98 @@ void ExtractStream(Instance& instance) {
       FailInvalid(Where(instance) + ": truncated pixel stream: fragment " + std::to_string(i) + " of " +
                   std::to_string(sequence->card() - 1) + " cannot be read");
     }
-    out.write(reinterpret_cast<const char*>(data), item->getLength());
-    bytes += item->getLength();
+    fragments[i] = {data, item->getLength()};
+  }
+  return fragments;
+}
+
+// Writes the fragments of the encapsulated pixel data (the offset table left out) to a file that
+// FFmpeg opens: DICOM carries the MPEG stream in fragments, in order.
+void ExtractStream(Instance& instance) {
+  const std::vector<Fragment> fragments = Fragments(instance);
+  const bool mpeg2 = instance.transfer_syntax == UID_MPEG2MainProfileAtMainLevelTransferSyntax ||
+                     instance.transfer_syntax == UID_MPEG2MainProfileAtHighLevelTransferSyntax;
+  instance.stream = std::make_unique<TempFile>(mpeg2 ? ".mpg" : ".mp4");
+  std::ofstream out(instance.stream->path(), std::ios::binary);
+  std::uint64_t bytes = 0;
+  for (std::size_t i = 1; i < fragments.size(); ++i) {
+    out.write(reinterpret_cast<const char*>(fragments[i].data),
+              static_cast<std::streamsize>(fragments[i].size));
+    bytes += fragments[i].size;
   }
   out.close();
   if (!out) Fail(ErrorCode::kUnavailable, "cannot write " + instance.stream->path().string());
   if (bytes == 0) FailInvalid(Where(instance) + ": the encapsulated video stream is empty");
+}
+
+// Whether a JPEG stream's header leads, by the standard's rules (ITU-T T.81 B.1.1), from its SOI
+// marker through length-prefixed marker segments and fill bytes to a frame header (SOFn).
+bool JpegHeaderReachesAFrame(const Fragment& fragment) {
+  const Uint8* data = fragment.data;
+  if (fragment.size < 4 || data[0] != 0xFF || data[1] != 0xD8) return false;
+  std::size_t at = 2;
+  while (at + 4 < fragment.size) {
+    if (data[at] != 0xFF) return false;
+    const Uint8 marker = data[at + 1];
+    if (marker == 0xFF) {  // a fill byte
+      ++at;
+      continue;
+    }
+    if (marker >= 0xC0 && marker <= 0xCF && marker != 0xC4 && marker != 0xC8 && marker != 0xCC) return true;
+    // Stand-alone markers (TEM, RSTn, SOI, EOI) and stuffed zeros have no place in a header.
+    if (marker == 0x00 || marker == 0x01 || (marker >= 0xD0 && marker <= 0xD9)) return false;
+    const std::size_t length = std::size_t(data[at + 2]) << 8 | data[at + 3];
+    if (length < 2) return false;
+    at += 2 + length;
+  }
+  return false;
+}
+
+// DCMTK 3.6.7 scans each JPEG frame's header for its bit depth before decoding it, and never returns
+// on some malformed headers (a TEM marker before the frame header: tests/fuzz/dicom_recording_fuzz.cc
+// found it). So the first fragment of every frame is walked here first; the frames' first fragments
+// are those the offset table points at, every fragment when there is one per frame, or else those
+// that start with SOI, as DCMTK finds them.
+void CheckJpegHeaders(const Instance& instance) {
+  const std::vector<Fragment> fragments = Fragments(instance);
+  const std::size_t count = fragments.size() - 1;
+  std::vector<std::size_t> starts;
+  if (fragments[0].size == 4 * static_cast<std::size_t>(instance.frames)) {
+    std::map<std::uint64_t, std::size_t> item_at;  // byte offset after the offset table -> item
+    std::uint64_t offset = 0;
+    for (std::size_t i = 1; i < fragments.size(); ++i) {
+      item_at[offset] = i;
+      offset += 8 + fragments[i].size;
+    }
+    for (int f = 0; f < instance.frames; ++f) {
+      const Uint8* entry = fragments[0].data + 4 * f;
+      const std::uint64_t value = entry[0] | entry[1] << 8 | entry[2] << 16 | std::uint64_t(entry[3]) << 24;
+      const auto found = item_at.find(value);
+      if (found == item_at.end()) {
+        FailInvalid(Where(instance) + ": the pixel data's offset table entry " + std::to_string(f) + " (" +
+                    std::to_string(value) + ") points at no fragment");
+      }
+      starts.push_back(found->second);
+    }
+  } else if (count == static_cast<std::size_t>(instance.frames)) {
+    for (std::size_t i = 1; i < fragments.size(); ++i) starts.push_back(i);
+  } else {
+    for (std::size_t i = 1; i < fragments.size(); ++i) {
+      if (fragments[i].size >= 2 && fragments[i].data[0] == 0xFF && fragments[i].data[1] == 0xD8)
+        starts.push_back(i);
+    }
+    if (starts.size() != static_cast<std::size_t>(instance.frames)) {
+      FailInvalid(Where(instance) + ": Number of Frames is " + std::to_string(instance.frames) +
+                  " but the pixel data holds " + std::to_string(starts.size()) + " JPEG streams in " +
+                  std::to_string(count) + " fragments (and no offset table)");
+    }
+  }
+  for (std::size_t f = 0; f < starts.size(); ++f) {
+    if (!JpegHeaderReachesAFrame(fragments[starts[f]])) {
+      FailInvalid(Where(instance) + " frame " + std::to_string(f) +
+                  ": not a well-formed JPEG stream (no SOI, or its header does not lead to a frame header)");
+    }
+  }
 }
 
 cv::VideoCapture OpenStream(const Instance& instance) {
@@ -224,6 +312,10 @@ Instance LoadInstance(const fs::path& path) {
     FailInvalid(path.string() + ": zero frames (Number of Frames is " + std::to_string(frames) + ")");
   instance.frames = static_cast<int>(frames);
   if (instance.video) ExtractStream(instance);
+  if (instance.xfer == EXS_JPEGProcess1 || instance.xfer == EXS_JPEGProcess2_4 ||
+      instance.xfer == EXS_JPEGProcess14 || instance.xfer == EXS_JPEGProcess14SV1) {
+    CheckJpegHeaders(instance);
+  }
   ReadTimes(instance);
   return instance;
 }

@@ -3,6 +3,7 @@
 #include <dcmtk/dcmdata/dctk.h>
 #include <gtest/gtest.h>
 
+#include <fstream>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 
@@ -176,6 +177,24 @@ TEST(DicomRecordingTest, TwoSeriesAreTheLeftAndRightEyes) {
 
   const std::string mono = ErrorOf(dir / "pair");
   EXPECT_NE(mono.find("holds 2 series"), std::string::npos) << mono;
+}
+
+// Found by tests/fuzz/dicom_recording_fuzz.cc: a TEM marker (FF 01) in place of a frame's first
+// quantisation table made DCMTK 3.6.7's bit-depth scan loop for ever (the fuzzer's 30 s timeout);
+// such a header is refused before DCMTK sees it, naming the file and the frame.
+TEST(DicomRecordingTest, AJpegFrameWhoseHeaderLeadsNowhereIsRefusedBeforeDecoding) {
+  TempDir dir;
+  WriteEndoscopicFrames(Frames(2, 8, 6), {0, 0.1}, true, Header(), dir / "jpeg.dcm");
+  std::ifstream in(dir / "jpeg.dcm", std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::size_t second_soi = bytes.find("\xFF\xD8\xFF", bytes.find("\xFF\xD8\xFF") + 1);
+  ASSERT_NE(second_soi, std::string::npos);
+  const std::size_t table = bytes.find("\xFF\xDB", second_soi);
+  ASSERT_NE(table, std::string::npos);
+  bytes[table + 1] = '\x01';
+  WriteBytes(dir / "tem.dcm", bytes);
+  const std::string message = ErrorOf(dir / "tem.dcm");
+  EXPECT_NE(message.find("tem.dcm frame 1: not a well-formed JPEG stream"), std::string::npos) << message;
 }
 
 TEST(DicomRecordingTest, BadInputsAreNamed) {
