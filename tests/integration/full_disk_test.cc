@@ -123,14 +123,17 @@ TEST(FullDiskTest, UploadsThatDoNotFitAreRefusedWhatIsStoredSurvivesAndTheUpload
 }
 
 // The limits' bad values are refused at start, naming the option.
-TEST(FullDiskTest, ANegativeFreeSpaceLimitOrANonPositiveStallTimeoutIsRefusedAtStart) {
+TEST(FullDiskTest, ANegativeFreeSpaceLimitANonPositiveStallTimeoutOrATooSmallThreadCapIsRefusedAtStart) {
   TempDir dir("limits");
-  const std::string server = BuiltBinary("server/endorecon-server") + " --data-dir " + (dir / "data").string();
-  const std::string worker = BuiltBinary("worker/runtime/endorecon-worker") + " serve --work-dir " +
-                             (dir / "work").string();
+  const std::string server =
+      BuiltBinary("server/endorecon-server") + " --data-dir " + (dir / "data").string();
+  const std::string worker =
+      BuiltBinary("worker/runtime/endorecon-worker") + " serve --work-dir " + (dir / "work").string();
   for (const auto& [command, option] : std::vector<std::pair<std::string, std::string>>{
            {server + " --min-free-bytes -1", "--min-free-bytes"},
            {server + " --stall-timeout 0", "--stall-timeout"},
+           {server + " --max-threads 4", "--max-threads"},
+           {server + " --max-threads many", "--max-threads"},
            {worker + " --min-free-bytes -5", "--min-free-bytes"}}) {
     const std::string output = Capture(command + " 2>&1; echo \"exit=$?\"");
     EXPECT_NE(output.find(option + ": Value"), std::string::npos) << command << "\n" << output;
@@ -155,7 +158,8 @@ TEST(FullDiskTest, AWorkerWhoseScratchFillsHandsTheJobBackUncountedAndAnotherWor
   const v1::Job requeued = cluster.Job(id);
   EXPECT_EQ(requeued.state(), v1::QUEUED) << requeued.error();
   EXPECT_EQ(requeued.attempts(), 0) << "a full disk is not the job's attempt";
-  EXPECT_NE(requeued.error().find(cluster.path("work-small").string()), std::string::npos) << requeued.error();
+  EXPECT_NE(requeued.error().find(cluster.path("work-small").string()), std::string::npos)
+      << requeued.error();
 
   cluster.StartWorker("roomy");
   const v1::Job done = cluster.WaitForState(id, v1::SUCCEEDED, std::chrono::seconds(120));
