@@ -69,11 +69,22 @@ TEST(FrameSourceTest, FolderFramesOfAnotherSizeOrUnreadableAreNamed) {
   EXPECT_NE(message.find("b.png: size 32x48 differs from the recording's 64x48"), std::string::npos)
       << message;
   fs::remove(dir / "b.png");
-  WriteBytes(dir / "c.png", "not a png");
+  // A broken DICOM named .png (OpenCV would hand it to GDCM, which aborts the process) and a PNG
+  // cut short: both refused naming the file and the frame.
+  WriteBytes(dir / "c.png", std::string(128, '\0') + "DICM" + std::string(64, 'x'));
   source = prepare::OpenFrameSource(dir.path());
   ASSERT_TRUE(source->Next(frame));
   message = ErrorFrom([&] { source->Next(frame); });
-  EXPECT_NE(message.find("c.png (frame 1): cannot decode"), std::string::npos) << message;
+  EXPECT_NE(message.find("c.png: not a PNG, JPEG, BMP or TIFF image (frame 1)"), std::string::npos)
+      << message;
+  std::vector<std::uint8_t> png;
+  cv::imencode(".png", Frame(2), png);
+  WriteBytes(dir / "c.png", std::string(png.begin(), png.begin() + png.size() / 2));
+  source = prepare::OpenFrameSource(dir.path());
+  ASSERT_TRUE(source->Next(frame));
+  message = ErrorFrom([&] { source->Next(frame); });
+  EXPECT_NE(message.find("c.png: cannot decode the image"), std::string::npos) << message;
+  EXPECT_NE(message.find("(frame 1)"), std::string::npos) << message;
 }
 
 TEST(FrameSourceTest, ReadsAVideoWithItsTimes) {

@@ -10,6 +10,7 @@
 
 #include "common/error.h"
 #include "worker/engine/scene/frame_reader.h"
+#include "worker/engine/scene/image_file.h"
 
 namespace endorecon::prepare {
 namespace {
@@ -63,8 +64,13 @@ class ImageFolderSource final : public FrameSource {
 
  private:
   cv::Mat Decode(std::size_t i) const {
-    const cv::Mat image = cv::imread(files_[i].string(), cv::IMREAD_UNCHANGED);
-    if (image.empty() || (image.depth() != CV_8U && image.depth() != CV_16U) || image.channels() == 2) {
+    cv::Mat image;
+    try {
+      image = scene::DecodeImageFile(files_[i]);
+    } catch (const Error& e) {
+      FailInvalid(std::string(e.what()) + " (frame " + std::to_string(i) + ")");
+    }
+    if ((image.depth() != CV_8U && image.depth() != CV_16U) || image.channels() == 2) {
       FailInvalid(files_[i].string() + " (frame " + std::to_string(i) +
                   "): cannot decode it as an 8- or 16-bit grey or colour image (unreadable, truncated or not "
                   "an image)");

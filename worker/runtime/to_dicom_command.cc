@@ -6,11 +6,12 @@
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <memory>
-#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 
 #include "common/dicom/recording_writer.h"
 #include "common/error.h"
+#include "worker/engine/scene/image_file.h"
 #include "worker/runtime/commands.h"
 
 namespace endorecon::worker {
@@ -32,8 +33,13 @@ std::vector<cv::Mat> ReadFrames(const fs::path& folder) {
   std::sort(files.begin(), files.end());
   std::vector<cv::Mat> frames;
   for (const auto& file : files) {
-    frames.push_back(cv::imread(file.string(), cv::IMREAD_COLOR));
-    if (frames.back().empty()) FailInvalid(file.string() + ": not an image");
+    cv::Mat image = scene::DecodeImageFile(file);
+    if (image.depth() == CV_16U) image.convertTo(image, CV_8U, 1.0 / 257);
+    if (image.depth() != CV_8U) FailInvalid(file.string() + ": not an 8- or 16-bit image");
+    if (image.channels() == 1) cv::cvtColor(image, image, cv::COLOR_GRAY2BGR);
+    if (image.channels() == 4) cv::cvtColor(image, image, cv::COLOR_BGRA2BGR);
+    if (image.channels() != 3) FailInvalid(file.string() + ": not a grey or colour image");
+    frames.push_back(image);
     if (frames.back().size() != frames.front().size())
       FailInvalid(file.string() + ": differs in size from the first frame");
   }

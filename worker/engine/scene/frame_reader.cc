@@ -7,13 +7,12 @@
 #include <cctype>
 #include <cmath>
 #include <exception>
-#include <fstream>
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "common/error.h"
 #include "worker/engine/scene/clip_checks.h"
+#include "worker/engine/scene/image_file.h"
 #include "worker/engine/scene/npy.h"
 
 namespace endorecon::scene {
@@ -24,38 +23,6 @@ namespace fs = std::filesystem;
 std::string Lower(std::string text) {
   std::transform(text.begin(), text.end(), text.begin(), [](unsigned char c) { return std::tolower(c); });
   return text;
-}
-
-// OpenCV picks a decoder by the file's content, not its name, and some of the decoders it carries
-// abort the process on a broken file (tests/fuzz/image_decode_fuzz.cc: GDCM's DICOM reader asserts).
-// Only the formats the loaders accept reach it: PNG, JPEG, BMP and TIFF, told by their first bytes.
-bool HasImageSignature(const fs::path& path) {
-  char head[8] = {};
-  std::ifstream in(path, std::ios::binary);
-  in.read(head, sizeof(head));
-  const std::string_view bytes(head, static_cast<std::size_t>(in.gcount()));
-  for (const std::string_view magic : {std::string_view("\x89PNG\r\n\x1a\n", 8), std::string_view("\xff\xd8\xff", 3),
-                                       std::string_view("BM", 2), std::string_view("II*\0", 4),
-                                       std::string_view("MM\0*", 4)}) {
-    if (bytes.substr(0, magic.size()) == magic) return true;
-  }
-  return false;
-}
-
-cv::Mat Decode(const fs::path& path) {
-  if (!fs::is_regular_file(path)) FailInvalid(path.string() + ": file does not exist");
-  if (!HasImageSignature(path)) FailInvalid(path.string() + ": not a PNG, JPEG, BMP or TIFF image");
-  cv::Mat image;
-  try {
-    image = cv::imread(path.string(), cv::IMREAD_UNCHANGED);
-  } catch (const cv::Exception& e) {
-    // OpenCV asserts on a header declaring a size over its limits (tests/fuzz/image_decode_fuzz.cc).
-    FailInvalid(path.string() + ": cannot decode the image (" + e.err + ")");
-  }
-  if (image.empty()) {
-    FailInvalid(path.string() + ": cannot decode the image (unreadable, truncated or not an image)");
-  }
-  return image;
 }
 
 void CheckSize(const fs::path& path, int found_width, int found_height, int width, int height) {
@@ -89,7 +56,7 @@ std::string ValuesText(const std::array<std::size_t, 256>& histogram) {
 
 std::vector<std::uint8_t> ReadMask(const fs::path& path, const FrameReadOptions& options, int width,
                                    int height) {
-  const cv::Mat image = Decode(path);
+  const cv::Mat image = DecodeImageFile(path);
   CheckSingleChannel(path, image, "mask");
   if (image.depth() != CV_8U) FailInvalid(path.string() + ": a mask must be 8-bit with values 0 and 255");
   CheckSize(path, image.cols, image.rows, width, height);
@@ -123,7 +90,7 @@ std::vector<float> ReadDepth(const fs::path& path, const FrameReadOptions& optio
     }
     raw = array.data;
   } else {
-    const cv::Mat image = Decode(path);
+    const cv::Mat image = DecodeImageFile(path);
     CheckSingleChannel(path, image, "depth map");
     CheckSize(path, image.cols, image.rows, width, height);
     cv::Mat values;
@@ -181,7 +148,7 @@ std::vector<fs::path> ListFiles(const fs::path& dir, const std::vector<std::stri
 }
 
 RgbImage ReadRgbImage(const fs::path& path) {
-  cv::Mat image = Decode(path);
+  cv::Mat image = DecodeImageFile(path);
   if (image.depth() == CV_16U) image.convertTo(image, CV_8U, 1.0 / 257.0);
   if (image.depth() != CV_8U) FailInvalid(path.string() + ": colour images must be 8- or 16-bit");
   switch (image.channels()) {

@@ -1,0 +1,17 @@
+// Decoding one image file from outside (a clip's frames, a recording's image folder, frames for
+// `to-dicom`): the single path by which untrusted image bytes reach OpenCV.
+#pragma once
+
+#include <filesystem>
+#include <opencv2/core.hpp>
+
+namespace endorecon::scene {
+
+// The file's pixels as OpenCV stores them (IMREAD_UNCHANGED: 8- or 16-bit, 1, 3 or 4 channels,
+// BGR order). Only PNG, JPEG, BMP and TIFF files, told by their first bytes, reach OpenCV: it picks
+// a decoder by content, and some of the decoders it carries abort the process on a broken file
+// (tests/fuzz/image_decode_fuzz.cc: GDCM's DICOM reader asserts on a broken DICOM named .png).
+// Throws FailInvalid naming the file when it is missing, of another format, unreadable or truncated.
+cv::Mat DecodeImageFile(const std::filesystem::path& path);
+
+}  // namespace endorecon::scene
