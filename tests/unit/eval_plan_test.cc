@@ -57,6 +57,18 @@ TEST(EvalPlan, StrideFourWhenTwoDoesNotFitAndHeldOutNeverReduced) {
   EXPECT_GT(late.seconds, 0.5);
 }
 
+// Found by UndefinedBehaviorSanitizer (scripts/test --sanitize address): a run far behind its budget
+// with a plain pass costing as much as a full one divided -4 s by a 1e-12 gain and cast -4e12 to int.
+TEST(EvalPlan, FarBehindTimeWithNothingToGainPromotesNone) {
+  const RenderCost flat{/*full=*/1e-3, /*plain=*/1e-3};
+  const EvalPlan plan = PlanEvaluation(10, {4, 9}, kPixels, flat, 1e-3);
+  EXPECT_EQ(plan.stride, 4);
+  EXPECT_EQ(Count(plan, FrameRender::kFull), 2);
+  EXPECT_EQ(Count(plan, FrameRender::kReduced), 8);
+  const EvalPlan ahead = PlanEvaluation(10, {4, 9}, kPixels, flat, 1e15);
+  EXPECT_TRUE(ahead.all_full());
+}
+
 TEST(EvalPlan, FrameSecondsAddsThePlainPassAndTheStridedPasses) {
   EXPECT_DOUBLE_EQ(FrameSeconds(FrameRender::kFull, 2, kCost, kPixels), 1.0);
   EXPECT_DOUBLE_EQ(FrameSeconds(FrameRender::kReduced, 2, kCost, kPixels), 0.45);

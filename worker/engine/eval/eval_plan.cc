@@ -37,8 +37,10 @@ EvalPlan PlanEvaluation(int frame_count, const std::vector<int>& heldout, int pi
     const double base = double(heldout.size()) * full + double(train.size()) * reduced;
     if (base > seconds_available && stride != 4) continue;
     // Training frames promoted to full with the time left, evenly spread over the training frames.
+    // Clamped as a double: far behind time with a tiny gain the count is -1e12 (no int holds it).
     const double gain = std::max(full - reduced, 1e-12);
-    const int promoted = std::clamp(int(std::floor((seconds_available - base) / gain)), 0, int(train.size()));
+    const int promoted =
+        int(std::clamp(std::floor((seconds_available - base) / gain), 0.0, double(train.size())));
     for (int f : train) plan.frames[f] = FrameRender::kReduced;
     for (int i = 0; i < promoted; ++i) {
       plan.frames[train[std::size_t((i + 0.5) * double(train.size()) / promoted)]] = FrameRender::kFull;
