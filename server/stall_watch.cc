@@ -43,8 +43,11 @@ void StallWatch::Loop() {
       continue;
     }
     auto first = armed_.begin();
-    if (Clock::now() < first->second.deadline) {
-      changed_.wait_until(lock, first->second.deadline);
+    // A copy: wait_until reads its deadline again after waking, when the Write may have returned
+    // and erased the entry (AddressSanitizer found the read of the freed node).
+    const Clock::time_point deadline = first->second.deadline;
+    if (Clock::now() < deadline) {
+      changed_.wait_until(lock, deadline);
       continue;
     }
     grpc::ServerContext* context = first->second.context;
