@@ -3,6 +3,10 @@
 #include <dcmtk/dcmdata/dcpixseq.h>
 #include <dcmtk/dcmdata/dcpxitem.h>
 #include <dcmtk/dcmdata/dctk.h>
+// DCMTK's JPEG encoder reads colour frames through dcmimage's colour support, which this header's
+// static object registers: without it a program that never reads DICOM (fuzz_seed_maker) could not
+// compress RGB ("unsupported value for 'PhotometricInterpretation' (RGB)").
+#include <dcmtk/dcmimage/diregist.h>
 #include <dcmtk/dcmjpeg/djencode.h>
 #include <dcmtk/dcmjpeg/djrploss.h>
 
