@@ -1,5 +1,7 @@
 #include "common/file_download.h"
 
+#include <cerrno>
+#include <cstring>
 #include <fstream>
 #include <optional>
 #include <string>
@@ -23,7 +25,8 @@ class PartialFile {
     target_ = dir / entry.path();
     std::error_code error;
     fs::create_directories(target_.parent_path(), error);
-    // A path under another file's name (a/b after a file a) cannot be made (tests/fuzz/download_stream_fuzz.cc).
+    // A path under another file's name (a/b after a file a) cannot be made
+    // (tests/fuzz/download_stream_fuzz.cc).
     if (error) FailInvalid("download of '" + entry.path() + "': cannot make its folder: " + error.message());
     const auto part = PartPath(target_);
     const std::int64_t have = fs::exists(part) ? static_cast<std::int64_t>(fs::file_size(part)) : 0;
@@ -39,14 +42,18 @@ class PartialFile {
       FailInvalid("chunk of '" + entry_.path() + "' at offset " + std::to_string(offset) + ", expected " +
                   std::to_string(written_));
     }
+    errno = 0;
     out_.write(data.data(), static_cast<std::streamsize>(data.size()));
+    if (!out_) WriteFailed(errno);
     written_ += static_cast<std::int64_t>(data.size());
   }
 
   bool Done() const { return written_ >= entry_.size(); }
 
   void Finish() {
+    errno = 0;
     out_.close();
+    if (!out_) WriteFailed(errno);
     const auto part = PartPath(target_);
     const auto digest = Sha256File(part);
     if (digest != entry_.sha256()) {
@@ -58,6 +65,16 @@ class PartialFile {
   }
 
  private:
+  // A write the disk refused says so, with the system's words (a full disk is RESOURCE_EXHAUSTED and
+  // reads "No space left on device", which the job runner takes for its scratch folder's fault).
+  // Unchecked, the short file failed its digest and was reported as data lost in transit.
+  [[noreturn]] void WriteFailed(int error) const {
+    const bool full = error == ENOSPC || error == EDQUOT;
+    Fail(full ? ErrorCode::kResourceExhausted : ErrorCode::kUnavailable,
+         "cannot write " + PartPath(target_).string() + ": " +
+             (error != 0 ? std::strerror(error) : "the write failed") + "; what arrived so far is kept");
+  }
+
   v1::FileEntry entry_;
   fs::path target_;
   std::ofstream out_;
