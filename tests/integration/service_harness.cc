@@ -15,6 +15,7 @@
 
 #include "common/grpc_status.h"
 #include "common/transport_security.h"
+#include "tests/integration/sanitizer_build.h"
 
 namespace endorecon::testing {
 namespace fs = std::filesystem;
@@ -100,7 +101,7 @@ bool PortOpen(int port) {
 }
 
 bool WaitUntil(const std::function<bool()>& condition, std::chrono::seconds limit) {
-  const auto give_up = std::chrono::steady_clock::now() + limit;
+  const auto give_up = std::chrono::steady_clock::now() + limit * kSlowdown;
   while (std::chrono::steady_clock::now() < give_up) {
     if (condition()) return true;
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
@@ -198,7 +199,7 @@ void Cluster::StartServer() {
                                 "--metrics-port",
                                 std::to_string(metrics_port_),
                                 "--lease-ttl-ms",
-                                "3000",
+                                std::to_string(3000 * kSlowdown),
                                 "--heartbeat-ms",
                                 "300"};
   argv.insert(argv.end(), server_flags_.begin(), server_flags_.end());

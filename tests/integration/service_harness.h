@@ -55,7 +55,8 @@ std::string BuiltBinary(const std::string& relative);
 int FreePort();
 // True when something accepts TCP connections on 127.0.0.1:`port`.
 bool PortOpen(int port);
-// Polls `condition` every 100 ms until it holds or `limit` passes; returns whether it held.
+// Polls `condition` every 100 ms until it holds or `limit` (times kSlowdown in a sanitizer build)
+// passes; returns whether it held.
 bool WaitUntil(const std::function<bool()>& condition, std::chrono::seconds limit = std::chrono::seconds(60));
 // Runs `endorecon --server ADDRESS args...` to completion.
 CliResult RunCli(const std::string& address, const std::vector<std::string>& args);

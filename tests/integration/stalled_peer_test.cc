@@ -2,8 +2,8 @@
 // stream once a Write has waited --stall-timeout, serves everyone else meanwhile and after, and the
 // same peer can fetch the file again when it reads. Many such peers hold no more threads or memory
 // than --max-threads allows.
-#include <gtest/gtest.h>
 #include <grpcpp/grpcpp.h>
+#include <gtest/gtest.h>
 
 #include <fstream>
 #include <random>
@@ -12,22 +12,11 @@
 #include "common/sha256.h"
 #include "common/transport_security.h"
 #include "endorecon/v1/worker_service.grpc.pb.h"
+#include "tests/integration/sanitizer_build.h"
 #include "tests/integration/service_harness.h"
 
 namespace endorecon::testing {
 namespace {
-
-#if defined(__SANITIZE_ADDRESS__)
-constexpr bool kAddressSanitizer = true;
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-constexpr bool kAddressSanitizer = true;
-#else
-constexpr bool kAddressSanitizer = false;
-#endif
-#else
-constexpr bool kAddressSanitizer = false;
-#endif
 namespace fs = std::filesystem;
 
 // Submits a clip carrying a 16 MiB random file (far more than a slow reader's flow-control window);
@@ -37,7 +26,8 @@ std::string SubmitWithLargeFile(Cluster& cluster, std::uint32_t seed, std::strin
   bytes.assign(16 << 20, '\0');
   std::mt19937 random(seed);
   for (auto& c : bytes) c = static_cast<char>(random() & 0xff);
-  std::ofstream(cluster.path("clip") / "extra.bin", std::ios::binary).write(bytes.data(), std::streamsize(bytes.size()));
+  std::ofstream(cluster.path("clip") / "extra.bin", std::ios::binary)
+      .write(bytes.data(), std::streamsize(bytes.size()));
   return cluster.Submit(cluster.path("clip"), {"--iterations", "10"});
 }
 
