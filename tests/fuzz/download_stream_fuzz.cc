@@ -15,27 +15,6 @@ namespace {
 namespace fs = std::filesystem;
 using namespace endorecon;
 
-class StreamOf : public grpc::ClientReaderInterface<v1::FileChunk> {
- public:
-  explicit StreamOf(std::vector<v1::FileChunk> messages) : messages_(std::move(messages)) {}
-  void WaitForInitialMetadata() override {}
-  grpc::Status Finish() override { return grpc::Status::OK; }
-  bool NextMessageSize(std::uint32_t* size) override {
-    if (next_ >= messages_.size()) return false;
-    *size = static_cast<std::uint32_t>(messages_[next_].ByteSizeLong());
-    return true;
-  }
-  bool Read(v1::FileChunk* message) override {
-    if (next_ >= messages_.size()) return false;
-    *message = messages_[next_++];
-    return true;
-  }
-
- private:
-  std::vector<v1::FileChunk> messages_;
-  std::size_t next_ = 0;
-};
-
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
@@ -44,7 +23,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const fs::path dir = root / "into";
   fs::create_directories(dir);
   const auto messages = fuzz::MessagesOf<v1::FileChunk>(data, size);
-  StreamOf stream(messages);
+  fuzz::ClientStreamOf<v1::FileChunk> stream(messages);
   fuzz::Accepts([&] { ReceiveFiles(stream, dir); },
                 {ErrorCode::kInvalidArgument, ErrorCode::kDataLoss, ErrorCode::kUnavailable});
   std::set<std::pair<std::string, std::string>> promised;  // (path, sha256) of every file header

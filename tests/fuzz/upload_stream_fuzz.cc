@@ -15,26 +15,6 @@ namespace {
 namespace fs = std::filesystem;
 using namespace endorecon;
 
-class StreamOf : public grpc::ServerReaderInterface<v1::UploadRequest> {
- public:
-  explicit StreamOf(std::vector<v1::UploadRequest> messages) : messages_(std::move(messages)) {}
-  void SendInitialMetadata() override {}
-  bool NextMessageSize(std::uint32_t* size) override {
-    if (next_ >= messages_.size()) return false;
-    *size = static_cast<std::uint32_t>(messages_[next_].ByteSizeLong());
-    return true;
-  }
-  bool Read(v1::UploadRequest* message) override {
-    if (next_ >= messages_.size()) return false;
-    *message = messages_[next_++];
-    return true;
-  }
-
- private:
-  std::vector<v1::UploadRequest> messages_;
-  std::size_t next_ = 0;
-};
-
 void CheckStore(const fs::path& root) {
   for (const auto& entry : fs::recursive_directory_iterator(root)) {
     const auto relative = fs::relative(entry.path(), root);
@@ -54,7 +34,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   fs::remove_all(root);
   server::BlobStore blobs(root);
   server::UploadReceiver receiver(blobs, 1 << 20, 0, {});
-  StreamOf stream(fuzz::MessagesOf<v1::UploadRequest>(data, size));
+  fuzz::ServerStreamOf<v1::UploadRequest> stream(fuzz::MessagesOf<v1::UploadRequest>(data, size));
   // Each refusal the handler documents; kFailedPrecondition: a chunk past the committed bytes.
   fuzz::Accepts([&] { receiver.Receive(stream, server::Uploader::kClient); },
                 {ErrorCode::kInvalidArgument, ErrorCode::kResourceExhausted, ErrorCode::kDataLoss,

@@ -13,6 +13,7 @@
 #include "common/error.h"
 #include "common/file_download.h"
 #include "common/sha256.h"
+#include "tests/fuzz/message_stream.h"
 #include "tests/integration/service_harness.h"
 #include "tests/integration/small_filesystem.h"
 
@@ -146,28 +147,6 @@ TEST(FullDiskTest, ANegativeFreeSpaceLimitANonPositiveStallTimeoutOrATooSmallThr
   EXPECT_FALSE(fs::exists(dir / "data" / "jobs.sqlite")) << "nothing started";
 }
 
-// A download's chunks from memory, as the server streams them.
-class ChunkStream : public grpc::ClientReaderInterface<v1::FileChunk> {
- public:
-  explicit ChunkStream(std::vector<v1::FileChunk> chunks) : chunks_(std::move(chunks)) {}
-  void WaitForInitialMetadata() override {}
-  grpc::Status Finish() override { return grpc::Status::OK; }
-  bool NextMessageSize(std::uint32_t* size) override {
-    if (next_ >= chunks_.size()) return false;
-    *size = static_cast<std::uint32_t>(chunks_[next_].ByteSizeLong());
-    return true;
-  }
-  bool Read(v1::FileChunk* chunk) override {
-    if (next_ >= chunks_.size()) return false;
-    *chunk = chunks_[next_++];
-    return true;
-  }
-
- private:
-  std::vector<v1::FileChunk> chunks_;
-  std::size_t next_ = 0;
-};
-
 // A download into a folder that fills up says the disk is full (RESOURCE_EXHAUSTED, the system's
 // words), keeps what arrived, and is not taken for data damaged in transit: found under
 // AddressSanitizer, where a worker handed a checkpoint into a full scratch folder reported DATA_LOSS
@@ -191,7 +170,7 @@ TEST(FullDiskTest, ADownloadIntoAFullFolderSaysTheDiskIsFullNotThatTheDataWasDam
     chunk.set_data(bytes.substr(std::size_t(offset), 256 * 1024));
     chunks.push_back(chunk);
   }
-  ChunkStream stream(chunks);
+  fuzz::ClientStreamOf<v1::FileChunk> stream(chunks);
   try {
     ReceiveFiles(stream, dir / "small");
     ADD_FAILURE() << "3 MiB fit in a 1 MiB filesystem";

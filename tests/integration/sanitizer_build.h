@@ -5,29 +5,23 @@
 
 namespace endorecon::testing {
 
-#if defined(__SANITIZE_ADDRESS__)
-inline constexpr bool kAddressSanitizer = true;
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
+// GCC says __SANITIZE_ADDRESS__ / __SANITIZE_THREAD__; clang answers __has_feature.
+#if defined(__has_feature)
+#define ENDORECON_HAS_FEATURE(name) __has_feature(name)
+#else
+#define ENDORECON_HAS_FEATURE(name) 0
+#endif
+#if defined(__SANITIZE_ADDRESS__) || ENDORECON_HAS_FEATURE(address_sanitizer)
 inline constexpr bool kAddressSanitizer = true;
 #else
 inline constexpr bool kAddressSanitizer = false;
 #endif
-#else
-inline constexpr bool kAddressSanitizer = false;
-#endif
-
-#if defined(__SANITIZE_THREAD__)
-inline constexpr bool kThreadSanitizer = true;
-#elif defined(__has_feature)
-#if __has_feature(thread_sanitizer)
+#if defined(__SANITIZE_THREAD__) || ENDORECON_HAS_FEATURE(thread_sanitizer)
 inline constexpr bool kThreadSanitizer = true;
 #else
 inline constexpr bool kThreadSanitizer = false;
 #endif
-#else
-inline constexpr bool kThreadSanitizer = false;
-#endif
+#undef ENDORECON_HAS_FEATURE
 
 // Measured 2026-12-01: training under ASan + UBSan runs about 5x slower than the Release build on
 // the 2-core VM, and TSan slower still.

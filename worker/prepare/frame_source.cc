@@ -4,7 +4,6 @@
 
 #include <cmath>
 #include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 #include <vector>
 
@@ -20,14 +19,6 @@ namespace fs = std::filesystem;
 std::string SizeText(cv::Size size) { return std::to_string(size.width) + "x" + std::to_string(size.height); }
 
 // Any 8- or 16-bit grey, BGR or BGRA image as 8-bit BGR.
-cv::Mat ToBgr8(const cv::Mat& image) {
-  cv::Mat bgr = image;
-  if (image.depth() == CV_16U) image.convertTo(bgr, CV_8U, 1.0 / 257);
-  if (bgr.channels() == 1) cv::cvtColor(bgr, bgr, cv::COLOR_GRAY2BGR);
-  if (bgr.channels() == 4) cv::cvtColor(bgr, bgr, cv::COLOR_BGRA2BGR);
-  return bgr;
-}
-
 void CheckFrameSize(const std::string& where, cv::Size found, cv::Size expected) {
   if (found != expected) {
     FailInvalid(where + ": size " + SizeText(found) + " differs from the recording's " + SizeText(expected) +
@@ -64,18 +55,11 @@ class ImageFolderSource final : public FrameSource {
 
  private:
   cv::Mat Decode(std::size_t i) const {
-    cv::Mat image;
     try {
-      image = scene::DecodeImageFile(files_[i]);
+      return scene::DecodeImageFileAsBgr8(files_[i]);
     } catch (const Error& e) {
       FailInvalid(std::string(e.what()) + " (frame " + std::to_string(i) + ")");
     }
-    if ((image.depth() != CV_8U && image.depth() != CV_16U) || image.channels() == 2) {
-      FailInvalid(files_[i].string() + " (frame " + std::to_string(i) +
-                  "): cannot decode it as an 8- or 16-bit grey or colour image (unreadable, truncated or not "
-                  "an image)");
-    }
-    return ToBgr8(image);
   }
 
   std::string name_;
@@ -97,7 +81,7 @@ class VideoFileSource final : public FrameSource {
     const double count = capture_.get(cv::CAP_PROP_FRAME_COUNT);
     announced_ = count >= 1 && std::isfinite(count) ? static_cast<int>(std::lround(count)) : -1;
     fps_ = capture_.get(cv::CAP_PROP_FPS);
-    pending_ = ToBgr8(first);
+    pending_ = scene::ToBgr8(first);
   }
 
   const std::string& name() const override { return name_; }
@@ -124,7 +108,7 @@ class VideoFileSource final : public FrameSource {
         FailInvalid(name_ + " frame " + std::to_string(index) +
                     ": cannot decode the frame (a damaged video?)");
       }
-      frame->image = ToBgr8(image);
+      frame->image = scene::ToBgr8(image);
       CheckFrameSize(name_ + " frame " + std::to_string(index), frame->image.size(), size_);
     }
     ++decoded_;

@@ -6,7 +6,6 @@
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <memory>
-#include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 
 #include "common/dicom/recording_writer.h"
@@ -33,13 +32,7 @@ std::vector<cv::Mat> ReadFrames(const fs::path& folder) {
   std::sort(files.begin(), files.end());
   std::vector<cv::Mat> frames;
   for (const auto& file : files) {
-    cv::Mat image = scene::DecodeImageFile(file);
-    if (image.depth() == CV_16U) image.convertTo(image, CV_8U, 1.0 / 257);
-    if (image.depth() != CV_8U) FailInvalid(file.string() + ": not an 8- or 16-bit image");
-    if (image.channels() == 1) cv::cvtColor(image, image, cv::COLOR_GRAY2BGR);
-    if (image.channels() == 4) cv::cvtColor(image, image, cv::COLOR_BGRA2BGR);
-    if (image.channels() != 3) FailInvalid(file.string() + ": not a grey or colour image");
-    frames.push_back(image);
+    frames.push_back(scene::DecodeImageFileAsBgr8(file));
     if (frames.back().size() != frames.front().size())
       FailInvalid(file.string() + ": differs in size from the first frame");
   }

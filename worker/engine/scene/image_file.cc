@@ -2,6 +2,7 @@
 
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <string_view>
 
 #include "common/error.h"
@@ -40,6 +41,21 @@ cv::Mat DecodeImageFile(const fs::path& path) {
     FailInvalid(path.string() + ": cannot decode the image (unreadable, truncated or not an image)");
   }
   return image;
+}
+
+cv::Mat ToBgr8(const cv::Mat& image) {
+  cv::Mat bgr = image;
+  if (image.depth() == CV_16U) image.convertTo(bgr, CV_8U, 1.0 / 257);
+  if (bgr.channels() == 1) cv::cvtColor(bgr, bgr, cv::COLOR_GRAY2BGR);
+  if (bgr.channels() == 4) cv::cvtColor(bgr, bgr, cv::COLOR_BGRA2BGR);
+  return bgr;
+}
+
+cv::Mat DecodeImageFileAsBgr8(const fs::path& path) {
+  const cv::Mat image = DecodeImageFile(path);
+  if ((image.depth() != CV_8U && image.depth() != CV_16U) || image.channels() == 2)
+    FailInvalid(path.string() + ": not an 8- or 16-bit grey or colour image");
+  return ToBgr8(image);
 }
 
 }  // namespace endorecon::scene

@@ -14,4 +14,11 @@ namespace endorecon::scene {
 // Throws FailInvalid naming the file when it is missing, of another format, unreadable or truncated.
 cv::Mat DecodeImageFile(const std::filesystem::path& path);
 
+// An 8- or 16-bit grey, BGR or BGRA image as 8-bit BGR (16-bit scaled by 1/257).
+cv::Mat ToBgr8(const cv::Mat& image);
+
+// DecodeImageFile, then ToBgr8; also throws FailInvalid naming the file for another depth or a
+// two-channel image.
+cv::Mat DecodeImageFileAsBgr8(const std::filesystem::path& path);
+
 }  // namespace endorecon::scene
