@@ -422,6 +422,10 @@ int main(int argc, char** argv) {
   app.add_option("--workers", flags.workers, "in-process workers leasing through the worker API")
       ->capture_default_str();
   app.add_option("--dir", flags.dir, "scratch folder (default: a new one in $TMPDIR)");
+  std::string server_binary = BuiltBinary("server/endorecon-server");
+  app.add_option("--server-binary", server_binary,
+                 "the endorecon-server to load (a baseline build's, to compare)")
+      ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   signal(SIGPIPE, SIG_IGN);
 
@@ -431,9 +435,9 @@ int main(int argc, char** argv) {
   fs::remove_all(dir);
   fs::create_directories(dir);
   const std::string address = "127.0.0.1:" + std::to_string(FreePort());
-  Process server({BuiltBinary("server/endorecon-server"), "--listen", address, "--data-dir",
-                  (dir / "data").string(), "--metrics-port", "-1"},
-                 dir / "server.log");
+  Process server(
+      {server_binary, "--listen", address, "--data-dir", (dir / "data").string(), "--metrics-port", "-1"},
+      dir / "server.log");
   for (int i = 0; i < 200 && !OpenChannel(address)->WaitForConnected(std::chrono::system_clock::now() +
                                                                      std::chrono::milliseconds(50));
        ++i) {

@@ -242,13 +242,15 @@ v1::Job JobCoordinator::Submit(const v1::SubmitRequest& request, const Principal
     // submits cannot both take a tenant's last job slot.
     std::lock_guard lock(mutex_);
     if (!from_pacs) RequireBlobs(parts_.blobs, request.clip(), request.has_prepare() ? "recording" : "clip");
-    const auto quota = quotas_.For(caller.tenant);
-    const auto usage = parts_.store.UsageOf(caller.tenant);
-    if (quota.max_jobs > 0 && usage.active_jobs >= quota.max_jobs) {
-      endorecon::Fail(ErrorCode::kResourceExhausted,
-                      "tenant '" + caller.tenant + "' has " + std::to_string(usage.active_jobs) +
-                          " job(s) queued or running, its quota max_jobs is " +
-                          std::to_string(quota.max_jobs) + "; submit again when one has finished");
+    // A tenant's usage is a scan of its jobs: counted only when a quota needs it.
+    if (const auto quota = quotas_.For(caller.tenant); quota.max_jobs > 0) {
+      const auto usage = parts_.store.UsageOf(caller.tenant);
+      if (usage.active_jobs >= quota.max_jobs) {
+        endorecon::Fail(ErrorCode::kResourceExhausted,
+                        "tenant '" + caller.tenant + "' has " + std::to_string(usage.active_jobs) +
+                            " job(s) queued or running, its quota max_jobs is " +
+                            std::to_string(quota.max_jobs) + "; submit again when one has finished");
+      }
     }
     CheckUploadQuota(request.clip(), caller);
     const auto seq = parts_.store.Insert(job);

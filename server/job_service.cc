@@ -9,13 +9,6 @@
 #include "server/job_states.h"
 
 namespace endorecon::server {
-namespace {
-
-// A watch ends when nothing more will happen to the job: it is finished and none of its DICOM
-// sends is still waiting for an attempt or in one.
-bool Settled(const v1::Job& job) { return Terminal(job.state()) && !SendsWaiting(job); }
-
-}  // namespace
 
 JobServiceImpl::JobServiceImpl(CallGuard& guard, JobCoordinator& coordinator, UploadReceiver& uploads,
                                BlobStore& blobs, WatchHub& hub, WorkerRegistry& workers, Metrics& metrics,
@@ -41,8 +34,9 @@ grpc::Status JobServiceImpl::QueryUpload(grpc::ServerContext* context, const v1:
 grpc::Status JobServiceImpl::Upload(grpc::ServerContext* context,
                                     grpc::ServerReader<v1::UploadRequest>* reader, v1::UploadStatus* status) {
   return guard_.Run(context, {"Upload", Access::kJobs, kWrites, ""}, [&](Call& call) {
-    *status = uploads_.Receive(
-        *reader, Uploader::kClient, [&](const v1::Manifest& manifest) { coordinator_.CheckUploadQuota(manifest, call.caller); });
+    *status = uploads_.Receive(*reader, Uploader::kClient, [&](const v1::Manifest& manifest) {
+      coordinator_.CheckUploadQuota(manifest, call.caller);
+    });
     return grpc::Status::OK;
   });
 }
@@ -118,6 +112,17 @@ grpc::Status JobServiceImpl::Watch(grpc::ServerContext* context, const v1::Watch
         for (auto& preview : changes.previews) *events.emplace_back().mutable_preview() = std::move(preview);
       }
       if (changes.job) *events.emplace_back().mutable_job() = *changes.job;
+      if (events.empty()) {
+        // A quiet second: the hub drops a settled job's entry a minute after it settled, so ask the
+        // store whether this one settled meanwhile.
+        auto stored = coordinator_.Get(request->id(), call.caller);
+        if (Settled(stored)) {
+          stored.clear_clip();
+          stored.clear_result();
+          *events.emplace_back().mutable_job() = std::move(stored);
+          changes.job = events.back().job();
+        }
+      }
       for (const auto& event : events) {
         if (!write(event)) return grpc::Status::OK;
       }

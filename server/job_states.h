@@ -21,4 +21,8 @@ inline bool SendsWaiting(const v1::Job& job) {
   return std::any_of(job.sends().begin(), job.sends().end(), SendWaiting);
 }
 
+// Nothing more will happen to the job: it is finished and none of its DICOM sends is still
+// waiting for an attempt or in one (a watch ends here).
+inline bool Settled(const v1::Job& job) { return Terminal(job.state()) && !SendsWaiting(job); }
+
 }  // namespace endorecon::server

@@ -70,13 +70,17 @@ JobStore::JobStore(const std::filesystem::path& db_file) : db_(OpenDatabase(db_f
     Exec(db_, "CREATE INDEX IF NOT EXISTS jobs_state ON jobs(state, seq)", kStore);
     AddAccessColumns(db_);
     Exec(db_, "CREATE INDEX IF NOT EXISTS jobs_tenant ON jobs(tenant, state)", kStore);
+    reader_ = OpenDatabase(db_file, kStore);
   } catch (...) {
     sqlite3_close(db_);
     throw;
   }
 }
 
-JobStore::~JobStore() { sqlite3_close(db_); }
+JobStore::~JobStore() {
+  sqlite3_close(reader_);
+  sqlite3_close(db_);
+}
 
 std::int64_t JobStore::Insert(const v1::Job& job) {
   std::lock_guard lock(mutex_);
@@ -105,8 +109,8 @@ void JobStore::Update(const v1::Job& job) {
 }
 
 std::optional<StoredJob> JobStore::Get(const std::string& id) {
-  std::lock_guard lock(mutex_);
-  Statement select(db_, "SELECT seq, job FROM jobs WHERE id = ?", kStore);
+  std::lock_guard lock(read_mutex_);
+  Statement select(reader_, "SELECT seq, job FROM jobs WHERE id = ?", kStore);
   select.BindText(1, id);
   if (!select.Step()) return std::nullopt;
   return StoredJob{select.Int(0), Parse(select.Blob(1), select.Int(0))};
@@ -122,8 +126,8 @@ JobStore::Page JobStore::List(const std::vector<v1::JobState>& states, int limit
     sql += ")";
   }
   sql += " ORDER BY seq DESC LIMIT ?";
-  std::lock_guard lock(mutex_);
-  Statement select(db_, sql.c_str(), kStore);
+  std::lock_guard lock(read_mutex_);
+  Statement select(reader_, sql.c_str(), kStore);
   int index = 1;
   select.Bind(index++, before_seq > 0 ? before_seq : INT64_MAX);
   if (tenant) select.BindText(index++, *tenant);

@@ -1,7 +1,8 @@
 // The durable record of every job: one SQLite database in WAL mode with synchronous=FULL, so a
 // job is on disk when Insert/Update return and survives a kill -9 of the server. Each row keeps
 // the whole v1::Job (serialized) plus the columns the queries need (state, priority, tenant and the
-// bytes the job keeps stored, for quotas). Thread-safe.
+// bytes the job keeps stored, for quotas). Thread-safe. Reads of one job or one page (Get, List)
+// go through a second connection, so in WAL mode they never wait behind a write's fsync.
 #pragma once
 
 #include <sqlite3.h>
@@ -63,8 +64,10 @@ class JobStore {
   bool Writable();
 
  private:
-  sqlite3* db_ = nullptr;
+  sqlite3* db_ = nullptr;  // writes, and the reads writers depend on
   std::mutex mutex_;
+  sqlite3* reader_ = nullptr;  // Get and List: sees every committed write
+  std::mutex read_mutex_;
 };
 
 // The bytes `job` keeps in the blob store (clip, result, checkpoint; 0 once expired), counted per

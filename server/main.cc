@@ -22,6 +22,7 @@
 #include "server/dicom_retriever.h"
 #include "server/dicom_sender.h"
 #include "server/health_port.h"
+#include "server/idle_trim.h"
 #include "server/job_service.h"
 #include "server/worker_service.h"
 
@@ -153,8 +154,11 @@ int Run(const ServerFlags& flags) {
                  flags.dicom.ae_title);
   }
   coordinator.Recover();
-  UploadReceiver uploads(blobs, flags.max_upload_bytes, flags.min_free_bytes,
-                         [&](std::int64_t bytes) { metrics.UploadBytes(bytes); });
+  IdleTrim idle_trim;
+  UploadReceiver uploads(blobs, flags.max_upload_bytes, flags.min_free_bytes, [&](std::int64_t bytes) {
+    metrics.UploadBytes(bytes);
+    idle_trim.Received(bytes);
+  });
   StallWatch stalls(std::chrono::milliseconds(static_cast<std::int64_t>(flags.stall_timeout_s * 1000)));
   JobServiceImpl job_service(guard, coordinator, uploads, blobs, hub, workers, metrics, stalls);
   WorkerServiceImpl worker_service(
@@ -227,6 +231,14 @@ int Run(const ServerFlags& flags) {
           metrics.SetDataDisk(static_cast<std::int64_t>(space.available),
                               static_cast<std::int64_t>(space.capacity));
         guard.Refresh();
+        hub.Prune(std::chrono::steady_clock::now(), std::chrono::seconds(60));
+        const auto trim_start = IdleTrim::Clock::now();
+        if (idle_trim.Tick(trim_start)) {
+          spdlog::info(
+              "uploads quiet: memory returned to the system in {} ms",
+              std::chrono::duration_cast<std::chrono::milliseconds>(IdleTrim::Clock::now() - trim_start)
+                  .count());
+        }
       }
       if (flags.retention_days > 0 && std::chrono::steady_clock::now() >= next_retention) {
         next_retention +=

@@ -22,7 +22,7 @@ RetentionPlan PlanRetention(JobStore& store, const BlobStore& blobs, std::int64_
   store.Scan([&](const StoredJob& stored) {
     const auto& job = stored.job;
     if (job.expired_unix_ms() > 0) return;
-    if (Terminal(job.state()) && job.finished_unix_ms() < cutoff_unix_ms && !SendsWaiting(job)) {
+    if (Settled(job) && job.finished_unix_ms() < cutoff_unix_ms) {
       plan.jobs.push_back(job);
       AddBlobs(job, expiring);
     } else {

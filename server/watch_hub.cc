@@ -1,5 +1,7 @@
 #include "server/watch_hub.h"
 
+#include <algorithm>
+
 #include "server/job_states.h"
 
 namespace endorecon::server {
@@ -16,8 +18,10 @@ void WatchHub::Publish(const std::string& job_id, Update&& update) {
   const auto entry = EntryOf(job_id);
   {
     std::lock_guard lock(entry->mutex);
-    update(*entry, ++entry->version);
+    entry->version = ++last_version_;
+    update(*entry, entry->version);
   }
+  entry->published = true;
   entry->changed.notify_all();
 }
 
@@ -27,6 +31,7 @@ void WatchHub::PublishJob(const v1::Job& job) {
     entry.job->value.clear_clip();
     entry.job->value.clear_result();
     if (Terminal(job.state())) entry.previews.clear();
+    entry.settled_ns = Settled(job) ? std::chrono::steady_clock::now().time_since_epoch().count() : 0;
   });
 }
 
@@ -51,7 +56,7 @@ WatchHub::Changes WatchHub::Wait(const std::string& job_id, std::uint64_t seen,
     std::lock_guard hub_lock(mutex_);
     return shutdown_ || entry->version > seen;
   });
-  changes.version = entry->version;
+  changes.version = std::max(seen, entry->version);
   if (entry->version <= seen) return changes;
   if (entry->job && entry->job->version > seen) changes.job = entry->job->value;
   if (entry->progress && entry->progress->version > seen) changes.progress = entry->progress->value;
@@ -59,6 +64,30 @@ WatchHub::Changes WatchHub::Wait(const std::string& job_id, std::uint64_t seen,
     if (preview.version > seen) changes.previews.push_back(preview.value);
   }
   return changes;
+}
+
+std::size_t WatchHub::Prune(std::chrono::steady_clock::time_point now, std::chrono::seconds grace) {
+  const auto cutoff = (now - grace).time_since_epoch().count();
+  std::lock_guard lock(mutex_);
+  std::size_t dropped = 0;
+  for (auto it = entries_.begin(); it != entries_.end();) {
+    // Under the hub's mutex nobody can take a new reference, so a count of 1 stays 1.
+    const auto& entry = *it->second;
+    const std::int64_t settled = entry.settled_ns;
+    const bool done = settled != 0 && settled <= cutoff;
+    if (it->second.use_count() == 1 && (done || !entry.published)) {
+      it = entries_.erase(it);
+      ++dropped;
+    } else {
+      ++it;
+    }
+  }
+  return dropped;
+}
+
+std::size_t WatchHub::Size() {
+  std::lock_guard lock(mutex_);
+  return entries_.size();
 }
 
 void WatchHub::Shutdown() {

@@ -40,7 +40,8 @@ DelayingProxy::DelayingProxy(int upstream_port, std::chrono::milliseconds delay)
   sockaddr_in address = Loopback(0);
   socklen_t length = sizeof(address);
   if (listener_ < 0 || bind(listener_, reinterpret_cast<sockaddr*>(&address), sizeof(address)) != 0 ||
-      listen(listener_, 16) != 0 || getsockname(listener_, reinterpret_cast<sockaddr*>(&address), &length) != 0)
+      listen(listener_, 16) != 0 ||
+      getsockname(listener_, reinterpret_cast<sockaddr*>(&address), &length) != 0)
     throw std::runtime_error("DelayingProxy: cannot listen on 127.0.0.1");
   port_ = ntohs(address.sin_port);
   acceptor_ = std::thread([this] { Accept(); });
@@ -64,7 +65,8 @@ void DelayingProxy::Accept() {
 
 void DelayingProxy::Relay(int client) const {
   // The client's first bytes (its HTTP/2 preface, or its TLS hello) wait in the socket meanwhile.
-  for (auto waited = std::chrono::milliseconds(0); waited < delay_ && !stop_; waited += std::chrono::milliseconds(10))
+  for (auto waited = std::chrono::milliseconds(0); waited < delay_ && !stop_;
+       waited += std::chrono::milliseconds(10))
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   const int server = socket(AF_INET, SOCK_STREAM, 0);
   const sockaddr_in address = Loopback(upstream_port_);

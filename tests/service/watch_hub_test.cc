@@ -55,3 +55,58 @@ TEST(WatchHubTest, TerminalJobDropsPreviewsAndWakesWaiters) {
 
 }  // namespace
 }  // namespace endorecon::server
+
+namespace endorecon::server {
+namespace {
+
+v1::Job JobIn(const std::string& id, v1::JobState state) {
+  v1::Job job;
+  job.set_id(id);
+  job.set_state(state);
+  return job;
+}
+
+TEST(WatchHubTest, SettledJobsAreDroppedAfterTheirGraceAndComeBackWithNewerVersions) {
+  using std::chrono::seconds;
+  WatchHub hub;
+  const auto now = std::chrono::steady_clock::now();
+  hub.PublishJob(JobIn("running", v1::RUNNING));
+  auto sending = JobIn("sending", v1::SUCCEEDED);
+  sending.add_sends()->set_state(v1::DicomSend::PENDING);
+  hub.PublishJob(sending);
+  hub.PublishJob(JobIn("done", v1::SUCCEEDED));
+  hub.Wait("never-published", 0, Soon());  // a watcher's empty entry
+  ASSERT_EQ(hub.Size(), 4u);
+
+  EXPECT_EQ(hub.Prune(now, seconds(60)), 1u) << "only the empty entry goes at once";
+  EXPECT_EQ(hub.Prune(now + seconds(120), seconds(60)), 1u) << "then the settled job, after its grace";
+  EXPECT_EQ(hub.Size(), 2u) << "a running job and a job with a DICOM send waiting stay";
+
+  // A watcher that saw the dropped entry still sees what is published for the job later (a send
+  // requested again), though the entry is a new one.
+  const auto seen = hub.Wait("sending", 0, Soon()).version;
+  hub.Prune(now + seconds(120), seconds(60));
+  auto resent = JobIn("done", v1::SUCCEEDED);
+  resent.add_sends()->set_state(v1::DicomSend::PENDING);
+  hub.PublishJob(resent);
+  const auto changes = hub.Wait("done", seen, Soon());
+  ASSERT_TRUE(changes.job.has_value());
+  EXPECT_EQ(changes.job->sends_size(), 1);
+}
+
+TEST(WatchHubTest, AnEntryAWatcherIsWaitingOnIsNotDropped) {
+  WatchHub hub;
+  hub.PublishJob(JobIn("done", v1::CANCELLED));
+  const auto seen = hub.Wait("done", 0, Soon()).version;
+  std::thread watcher(
+      [&] { hub.Wait("done", seen, std::chrono::steady_clock::now() + std::chrono::seconds(2)); });
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  EXPECT_EQ(hub.Prune(std::chrono::steady_clock::now() + std::chrono::hours(1), std::chrono::seconds(60)),
+            0u);
+  watcher.join();
+  EXPECT_EQ(hub.Prune(std::chrono::steady_clock::now() + std::chrono::hours(1), std::chrono::seconds(60)),
+            1u);
+}
+
+}  // namespace
+}  // namespace endorecon::server
