@@ -2,9 +2,9 @@
 
 #include <spdlog/spdlog.h>
 
-#include <nlohmann/json.hpp>
 #include <cerrno>
 #include <cstring>
+#include <nlohmann/json.hpp>
 #include <string_view>
 #include <thread>
 
@@ -13,8 +13,8 @@
 #include "common/sha256.h"
 #include "worker/engine/reconstruct.h"
 #include "worker/runtime/dicom_job.h"
-#include "worker/runtime/job_preparation.h"
 #include "worker/runtime/job_options.h"
+#include "worker/runtime/job_preparation.h"
 #include "worker/runtime/preview_png.h"
 #include "worker/runtime/progress_reporter.h"
 
@@ -79,9 +79,32 @@ void Tell(WorkerClient& client, const std::string& lease_id, const std::string& 
   request.set_reason(reason);
   request.set_retry(retry);
   request.set_release(release);
-  const auto job = WhileUnavailable([&] { return client.Fail(request); });
-  spdlog::info("job {} handed back: {} -> {}", job.id(), reason, v1::JobState_Name(job.state()));
+  try {
+    const auto job = WhileUnavailable([&] { return client.Fail(request); });
+    spdlog::info("job {} handed back: {} -> {}", job.id(), reason, v1::JobState_Name(job.state()));
+  } catch (const Error& e) {
+    // The lease is gone already (expired, or the job went to another worker): nothing to hand back.
+    spdlog::warn("lease {}: not handed back: {}: {}", lease_id, ErrorCodeName(e.code()), e.what());
+  }
 }
+
+// Removes a job's scratch folder however its run ends. Without it, a run whose hand-back failed
+// (an exception out of the catch block) left the whole clip and results behind until the worker
+// restarted (found by the fault campaign under TSan, where leases expire).
+class JobFolder {
+ public:
+  explicit JobFolder(fs::path dir) : dir_(std::move(dir)) {}
+  ~JobFolder() {
+    std::error_code ignored;
+    fs::remove_all(dir_, ignored);
+  }
+  JobFolder(const JobFolder&) = delete;
+  JobFolder& operator=(const JobFolder&) = delete;
+  const fs::path& path() const { return dir_; }
+
+ private:
+  fs::path dir_;
+};
 
 }  // namespace
 
@@ -89,7 +112,8 @@ std::int64_t ScratchFree(const std::filesystem::path& work_dir) {
   // The folder may not exist yet (made with the first job): its nearest existing parent's disk.
   fs::path probe = work_dir;
   std::error_code error;
-  while (!probe.empty() && !fs::exists(probe, error) && probe.has_parent_path() && probe != probe.parent_path())
+  while (!probe.empty() && !fs::exists(probe, error) && probe.has_parent_path() &&
+         probe != probe.parent_path())
     probe = probe.parent_path();
   const auto space = fs::space(probe, error);
   return error ? -1 : static_cast<std::int64_t>(space.available);
@@ -110,7 +134,8 @@ bool RunLeasedJob(WorkerClient& client, const v1::LeaseResponse& lease, const De
                   const RunnerSettings& settings, WorkerMetrics& metrics,
                   const std::atomic<bool>& shutting_down) {
   const auto& job = lease.job();
-  const fs::path job_dir = settings.work_dir / job.id();
+  const JobFolder folder(settings.work_dir / job.id());
+  const fs::path& job_dir = folder.path();
   spdlog::info(
       "[{}] job {} (attempt {}){}", device.name, job.id(), lease.attempt(),
       job.has_checkpoint() ? " resuming from checkpoint " + job.checkpoint().sha256().substr(0, 12) : "");
@@ -207,8 +232,6 @@ bool RunLeasedJob(WorkerClient& client, const v1::LeaseResponse& lease, const De
     spdlog::error("[{}] job {}: {}", device.name, job.id(), e.what());
     if (!reporter.stop_requested()) Tell(client, lease.lease_id(), e.what(), true, false);
   }
-  std::error_code ignored;
-  fs::remove_all(job_dir, ignored);
   return disk_full;
 }
 
