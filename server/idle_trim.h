@@ -24,7 +24,7 @@ class IdleTrim {
 
  private:
   std::chrono::milliseconds quiet_;
-  std::atomic<std::int64_t> last_received_ns_{0};  // Clock ticks since its epoch; 0: none since a trim
+  std::atomic<Clock::rep> last_received_{0};  // Clock ticks since its epoch; 0: none since a trim
 };
 
 }  // namespace endorecon::server

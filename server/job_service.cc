@@ -115,12 +115,13 @@ grpc::Status JobServiceImpl::Watch(grpc::ServerContext* context, const v1::Watch
       if (events.empty()) {
         // A quiet second: the hub drops a settled job's entry a minute after it settled, so ask the
         // store whether this one settled meanwhile.
-        auto stored = coordinator_.Get(request->id(), call.caller);
-        if (Settled(stored)) {
-          stored.clear_clip();
-          stored.clear_result();
-          *events.emplace_back().mutable_job() = std::move(stored);
-          changes.job = events.back().job();
+        v1::JobEvent last;
+        *last.mutable_job() = coordinator_.Get(request->id(), call.caller);
+        if (Settled(last.job())) {
+          last.mutable_job()->clear_clip();
+          last.mutable_job()->clear_result();
+          write(last);
+          return grpc::Status::OK;
         }
       }
       for (const auto& event : events) {

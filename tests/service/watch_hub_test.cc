@@ -53,12 +53,6 @@ TEST(WatchHubTest, TerminalJobDropsPreviewsAndWakesWaiters) {
   EXPECT_TRUE(hub.Wait("j", 0, Soon()).previews.empty());
 }
 
-}  // namespace
-}  // namespace endorecon::server
-
-namespace endorecon::server {
-namespace {
-
 v1::Job JobIn(const std::string& id, v1::JobState state) {
   v1::Job job;
   job.set_id(id);

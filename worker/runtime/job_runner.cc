@@ -83,7 +83,8 @@ void Tell(WorkerClient& client, const std::string& lease_id, const std::string& 
     const auto job = WhileUnavailable([&] { return client.Fail(request); });
     spdlog::info("job {} handed back: {} -> {}", job.id(), reason, v1::JobState_Name(job.state()));
   } catch (const Error& e) {
-    // The lease is gone already (expired, or the job went to another worker): nothing to hand back.
+    // Refused (the lease expired, or the job went to another worker) or not delivered: either way
+    // the server's lease expiry decides the job, and the run still ends here.
     spdlog::warn("lease {}: not handed back: {}: {}", lease_id, ErrorCodeName(e.code()), e.what());
   }
 }

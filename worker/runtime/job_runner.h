@@ -38,8 +38,9 @@ std::int64_t ScratchFree(const std::filesystem::path& work_dir);
 int RemoveLeftoverJobs(const std::filesystem::path& work_dir);
 
 // Never throws for the job's own failures (they are reported to the server) nor for a lease that
-// is gone (nothing is then handed back); removes the job's folder however the run ends. Returns true when the job failed on a full scratch folder (and
-// was handed back uncounted): the caller then leaves jobs to other workers for a while.
+// is gone (nothing is then handed back); removes the job's folder however the run ends. Returns
+// true when the job failed on a full scratch folder (and was handed back uncounted): the caller
+// then leaves jobs to other workers for a while.
 bool RunLeasedJob(WorkerClient& client, const v1::LeaseResponse& lease, const Device& device,
                   const RunnerSettings& settings, WorkerMetrics& metrics,
                   const std::atomic<bool>& shutting_down);
