@@ -17,6 +17,7 @@
 
 #include <grpcpp/server_context.h>
 
+#include <chrono>
 #include <filesystem>
 #include <memory>
 #include <mutex>
@@ -63,6 +64,7 @@ class CallGuard {
 
   template <typename Body>
   grpc::Status Run(grpc::ServerContext* context, const Rpc& rpc, Body&& body) {
+    const auto start = std::chrono::steady_clock::now();
     Call call;
     call.job_id = rpc.job_id;
     const grpc::Status status = GuardStatus([&] {
@@ -70,6 +72,8 @@ class CallGuard {
       return body(call);
     });
     Record(*context, rpc, call, status);
+    metrics_.CallHandled(rpc.method,
+                         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
     return status;
   }
 

@@ -237,10 +237,9 @@ v1::Job JobCoordinator::Submit(const v1::SubmitRequest& request, const Principal
   job.set_max_attempts(max_attempts_);
   job.set_tenant(caller.tenant);
   if (!caller.anonymous) job.set_submitted_by(caller.name);
-  {
-    // Under the lock, so retention cannot delete a blob between this check and the insert, and two
-    // submits cannot both take a tenant's last job slot.
-    std::lock_guard lock(mutex_);
+  // Under the lock, so retention cannot delete a blob between this check and the insert, and two
+  // submits cannot both take a tenant's last job slot.
+  Locked([&] {
     if (!from_pacs) RequireBlobs(parts_.blobs, request.clip(), request.has_prepare() ? "recording" : "clip");
     // A tenant's usage is a scan of its jobs: counted only when a quota needs it.
     if (const auto quota = quotas_.For(caller.tenant); quota.max_jobs > 0) {
@@ -257,7 +256,7 @@ v1::Job JobCoordinator::Submit(const v1::SubmitRequest& request, const Principal
     parts_.hub.PublishJob(job);
     if (!from_pacs) parts_.scheduler.Push(job.id(), job.priority(), seq);
     parts_.metrics.JobSubmitted();
-  }
+  });
   if (from_pacs) {
     spdlog::info("job {} submitted: its recording is retrieved from PACS {}", job.id(),
                  request.pacs().pacs());
@@ -281,21 +280,21 @@ JobStore::Page JobCoordinator::List(const std::vector<v1::JobState>& states, int
 }
 
 v1::Job JobCoordinator::Cancel(const std::string& id, const Principal& caller) {
-  std::lock_guard lock(mutex_);
-  auto stored = LoadVisible(id, caller);
-  auto& job = stored.job;
-  if (Terminal(job.state())) {
-    endorecon::Fail(ErrorCode::kFailedPrecondition,
-                    "job " + id + " is already " + v1::JobState_Name(job.state()));
-  }
-  if (job.state() == v1::QUEUED) {
-    parts_.scheduler.Remove(id);
-    Finish(job, v1::CANCELLED, "cancelled by request while queued");
-  } else {
-    job.set_cancel_requested(true);
-    Save(job);
-  }
-  return job;
+  return Locked([&] {
+    auto job = LoadVisible(id, caller).job;
+    if (Terminal(job.state())) {
+      endorecon::Fail(ErrorCode::kFailedPrecondition,
+                      "job " + id + " is already " + v1::JobState_Name(job.state()));
+    }
+    if (job.state() == v1::QUEUED) {
+      parts_.scheduler.Remove(id);
+      Finish(job, v1::CANCELLED, "cancelled by request while queued");
+    } else {
+      job.set_cancel_requested(true);
+      Save(job);
+    }
+    return job;
+  });
 }
 
 std::optional<JobCoordinator::Granted> JobCoordinator::Lease(const std::string& worker_id,
@@ -304,25 +303,33 @@ std::optional<JobCoordinator::Granted> JobCoordinator::Lease(const std::string& 
   while (true) {
     const auto next = parts_.scheduler.PopWait(deadline);
     if (!next) return std::nullopt;
-    std::lock_guard lock(mutex_);
-    auto stored = parts_.store.Get(*next);
-    if (!stored || stored->job.state() != v1::QUEUED) continue;
-    auto& job = stored->job;
-    const auto lease = parts_.leases.Grant(job.id(), worker_id, clock_());
-    job.set_state(v1::RUNNING);
-    job.set_lease_id(lease.id);
-    job.set_worker_id(worker_id);
-    job.set_started_unix_ms(NowUnixMs());
-    Save(job);
-    parts_.workers.AddJob(worker_id, job.id());
-    parts_.metrics.LeaseGranted();
-    spdlog::info("job {} leased to {} (attempt {})", job.id(), worker_id, job.attempts() + 1);
-    return Granted{job, lease.id, job.attempts() + 1};
+    auto granted = Locked([&]() -> std::optional<Granted> {
+      auto stored = parts_.store.Get(*next);
+      if (!stored || stored->job.state() != v1::QUEUED) return std::nullopt;
+      auto& job = stored->job;
+      const auto lease = parts_.leases.Grant(job.id(), worker_id, clock_());
+      job.set_state(v1::RUNNING);
+      job.set_lease_id(lease.id);
+      job.set_worker_id(worker_id);
+      job.set_started_unix_ms(NowUnixMs());
+      Save(job);
+      parts_.workers.AddJob(worker_id, job.id());
+      parts_.metrics.LeaseGranted();
+      return Granted{job, lease.id, job.attempts() + 1};
+    });
+    if (granted) {
+      spdlog::info("job {} leased to {} (attempt {})", granted->job.id(), worker_id, granted->attempt);
+      return granted;
+    }
   }
 }
 
 v1::ProgressReply::Action JobCoordinator::Report(const v1::ProgressUpdate& update, std::string* job_id) {
-  std::lock_guard lock(mutex_);
+  return Locked([&] { return ReportLocked(update, job_id); });
+}
+
+v1::ProgressReply::Action JobCoordinator::ReportLocked(const v1::ProgressUpdate& update,
+                                                       std::string* job_id) {
   const auto lease = parts_.leases.Renew(update.lease_id(), clock_());
   if (!lease) return v1::ProgressReply::STOP_LEASE_LOST;
   if (job_id) *job_id = lease->job_id;
@@ -351,30 +358,32 @@ v1::ProgressReply::Action JobCoordinator::Report(const v1::ProgressUpdate& updat
 
 v1::Job JobCoordinator::Complete(const v1::CompleteRequest& request) {
   ValidateManifest(request.result());
-  std::lock_guard lock(mutex_);
-  auto stored = LoadLeased(request.lease_id());
-  RequireBlobs(parts_.blobs, request.result(), "result");
-  auto& job = stored.job;
-  *job.mutable_result() = request.result();
-  job.set_summary_json(request.summary_json());
-  Finish(job, v1::SUCCEEDED, "");
+  auto job = Locked([&] {
+    auto job = LoadLeased(request.lease_id()).job;
+    RequireBlobs(parts_.blobs, request.result(), "result");
+    *job.mutable_result() = request.result();
+    job.set_summary_json(request.summary_json());
+    Finish(job, v1::SUCCEEDED, "");
+    return job;
+  });
   if (SendsWaiting(job) && dicom_.send) dicom_.send(job.id());
   return job;
 }
 
 v1::Job JobCoordinator::Fail(const v1::FailRequest& request) {
-  std::lock_guard lock(mutex_);
-  auto stored = LoadLeased(request.lease_id());
-  auto& job = stored.job;
-  const std::string reason = request.reason().empty() ? "the worker gave no reason" : request.reason();
-  if (job.cancel_requested()) {
-    Finish(job, v1::CANCELLED, "cancelled by request while running on " + job.worker_id());
-  } else if (request.retry()) {
-    Requeue(stored, !request.release(), "worker " + job.worker_id() + ": " + reason);
-  } else {
-    Finish(job, v1::FAILED, "worker " + job.worker_id() + ": " + reason);
-  }
-  return job;
+  return Locked([&] {
+    auto stored = LoadLeased(request.lease_id());
+    auto& job = stored.job;
+    const std::string reason = request.reason().empty() ? "the worker gave no reason" : request.reason();
+    if (job.cancel_requested()) {
+      Finish(job, v1::CANCELLED, "cancelled by request while running on " + job.worker_id());
+    } else if (request.retry()) {
+      Requeue(stored, !request.release(), "worker " + job.worker_id() + ": " + reason);
+    } else {
+      Finish(job, v1::FAILED, "worker " + job.worker_id() + ": " + reason);
+    }
+    return job;
+  });
 }
 
 v1::Job JobCoordinator::CheckLease(const std::string& lease_id) {
@@ -383,16 +392,18 @@ v1::Job JobCoordinator::CheckLease(const std::string& lease_id) {
 }
 
 RetentionPlan JobCoordinator::ExpireFinishedBefore(std::int64_t cutoff_unix_ms) {
-  std::lock_guard lock(mutex_);
-  auto plan = PlanRetention(parts_.store, parts_.blobs, cutoff_unix_ms);
-  // Files first: a crash in between leaves jobs that the next run expires (their blobs already
-  // gone), never a job marked expired whose files are still kept.
-  for (const auto& digest : plan.blobs) parts_.blobs.Remove(digest);
-  const auto now = NowUnixMs();
-  for (auto& job : plan.jobs) {
-    job.set_expired_unix_ms(now);
-    Save(job);
-  }
+  auto plan = Locked([&] {
+    auto plan = PlanRetention(parts_.store, parts_.blobs, cutoff_unix_ms);
+    // Files first: a crash in between leaves jobs that the next run expires (their blobs already
+    // gone), never a job marked expired whose files are still kept.
+    for (const auto& digest : plan.blobs) parts_.blobs.Remove(digest);
+    const auto now = NowUnixMs();
+    for (auto& job : plan.jobs) {
+      job.set_expired_unix_ms(now);
+      Save(job);
+    }
+    return plan;
+  });
   parts_.metrics.JobsExpired(plan.jobs.size());
   if (!plan.jobs.empty()) {
     spdlog::info(
@@ -405,18 +416,19 @@ RetentionPlan JobCoordinator::ExpireFinishedBefore(std::int64_t cutoff_unix_ms) 
 void JobCoordinator::ExpireLeases(Clock::time_point now) {
   const auto expired = parts_.leases.TakeExpired(now);
   if (expired.empty()) return;
-  std::lock_guard lock(mutex_);
-  for (const auto& lease : expired) {
-    auto stored = parts_.store.Get(lease.job_id);
-    if (!stored || stored->job.state() != v1::RUNNING || stored->job.lease_id() != lease.id) continue;
-    parts_.metrics.LeaseExpired();
-    const std::string reason = "worker " + lease.worker_id + " stopped reporting; its lease expired";
-    if (stored->job.cancel_requested()) {
-      Finish(stored->job, v1::CANCELLED, "cancelled by request; " + reason);
-    } else {
-      Requeue(*stored, true, reason);
+  Locked([&] {
+    for (const auto& lease : expired) {
+      auto stored = parts_.store.Get(lease.job_id);
+      if (!stored || stored->job.state() != v1::RUNNING || stored->job.lease_id() != lease.id) continue;
+      parts_.metrics.LeaseExpired();
+      const std::string reason = "worker " + lease.worker_id + " stopped reporting; its lease expired";
+      if (stored->job.cancel_requested()) {
+        Finish(stored->job, v1::CANCELLED, "cancelled by request; " + reason);
+      } else {
+        Requeue(*stored, true, reason);
+      }
     }
-  }
+  });
 }
 
 v1::Job JobCoordinator::RequestSend(const std::string& id, const std::string& destination,
@@ -462,41 +474,45 @@ v1::Job JobCoordinator::RequestSend(const std::string& id, const std::string& de
     send->set_next_attempt_unix_ms(0);
     Save(job);
   }
+  parts_.store.Flush();
   spdlog::info("job {}: DICOM results to be sent to {}", id, destination);
   if (dicom_.send) dicom_.send(id);
   return job;
 }
 
 v1::Job JobCoordinator::Update(const std::string& id, const std::function<void(v1::Job&)>& change) {
-  std::lock_guard lock(mutex_);
-  auto job = Load(id).job;
-  change(job);
-  Save(job);
-  return job;
+  return Locked([&] {
+    auto job = Load(id).job;
+    change(job);
+    Save(job);
+    return job;
+  });
 }
 
 void JobCoordinator::RetrievalDone(const std::string& id, const v1::Manifest& clip) {
-  std::lock_guard lock(mutex_);
-  auto stored = Load(id);
-  auto& job = stored.job;
-  if (job.state() != v1::QUEUED) return;  // cancelled meanwhile
-  CheckBytesQuota(job.tenant(), TotalBytes(clip));
-  RequireBlobs(parts_.blobs, clip, "retrieved recording");  // retention may share and delete blobs
-  *job.mutable_clip() = clip;
-  job.mutable_retrieval()->set_state(v1::Retrieval::RETRIEVED);
-  Save(job);
-  parts_.scheduler.Push(job.id(), job.priority(), stored.seq);
-  spdlog::info("job {}: recording retrieved ({} file(s), {} bytes); queued", id, clip.files_size(),
-               TotalBytes(clip));
+  Locked([&] {
+    auto stored = Load(id);
+    auto& job = stored.job;
+    if (job.state() != v1::QUEUED) return;  // cancelled meanwhile
+    CheckBytesQuota(job.tenant(), TotalBytes(clip));
+    RequireBlobs(parts_.blobs, clip, "retrieved recording");  // retention may share and delete blobs
+    *job.mutable_clip() = clip;
+    job.mutable_retrieval()->set_state(v1::Retrieval::RETRIEVED);
+    Save(job);
+    parts_.scheduler.Push(job.id(), job.priority(), stored.seq);
+    spdlog::info("job {}: recording retrieved ({} file(s), {} bytes); queued", id, clip.files_size(),
+                 TotalBytes(clip));
+  });
 }
 
 void JobCoordinator::RetrievalFailed(const std::string& id, const std::string& reason) {
-  std::lock_guard lock(mutex_);
-  auto job = Load(id).job;
-  if (job.state() != v1::QUEUED) return;
-  job.mutable_retrieval()->set_state(v1::Retrieval::RETRIEVAL_FAILED);
-  job.mutable_retrieval()->set_error(reason);
-  Finish(job, v1::FAILED, "retrieval from PACS " + job.retrieval().source().pacs() + " failed: " + reason);
+  Locked([&] {
+    auto job = Load(id).job;
+    if (job.state() != v1::QUEUED) return;
+    job.mutable_retrieval()->set_state(v1::Retrieval::RETRIEVAL_FAILED);
+    job.mutable_retrieval()->set_error(reason);
+    Finish(job, v1::FAILED, "retrieval from PACS " + job.retrieval().source().pacs() + " failed: " + reason);
+  });
 }
 
 }  // namespace endorecon::server

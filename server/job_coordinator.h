@@ -12,6 +12,12 @@
 //
 // Jobs belong to the submitter's tenant. A caller limited to one tenant (Principal) sees only that
 // tenant's jobs: any other id is NOT_FOUND with the same message as an id that does not exist.
+//
+// Every call that writes returns only once the job store has committed its writes, but waits for
+// that commit outside the coordinator's lock, so calls that arrive meanwhile stage theirs for the
+// next commit (JobStore's group commit). The queue, leases and watchers may learn of a change up
+// to one commit before it is on disk; a crash in between loses that change together with the
+// memory that knew it, and no caller was told it happened.
 #pragma once
 
 #include <chrono>
@@ -19,6 +25,7 @@
 #include <mutex>
 #include <optional>
 #include <string>
+#include <type_traits>
 
 #include "endorecon/v1/job_service.pb.h"
 #include "endorecon/v1/worker_service.pb.h"
@@ -127,6 +134,26 @@ class JobCoordinator {
   void RetrievalFailed(const std::string& id, const std::string& reason);
 
  private:
+  // Runs `body` under the lock, then waits (outside it) until the store has committed what `body`
+  // wrote. When `body` throws, what it staged goes to disk with the next commit.
+  template <typename Body>
+  auto Locked(Body&& body) -> decltype(body()) {
+    if constexpr (std::is_void_v<decltype(body())>) {
+      {
+        std::lock_guard lock(mutex_);
+        body();
+      }
+      parts_.store.Flush();
+    } else {
+      auto result = [&] {
+        std::lock_guard lock(mutex_);
+        return body();
+      }();
+      parts_.store.Flush();
+      return result;
+    }
+  }
+  v1::ProgressReply::Action ReportLocked(const v1::ProgressUpdate& update, std::string* job_id);
   StoredJob Load(const std::string& id);
   // Load, but another tenant's job is kNotFound exactly as a missing one.
   StoredJob LoadVisible(const std::string& id, const Principal& caller);

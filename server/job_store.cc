@@ -1,5 +1,7 @@
 #include "server/job_store.h"
 
+#include <spdlog/spdlog.h>
+
 #include "common/error.h"
 #include "common/manifest.h"
 #include "server/sqlite_statement.h"
@@ -57,7 +59,8 @@ std::int64_t StoredBytes(const v1::Job& job) {
   return TotalBytes(job.clip()) + TotalBytes(job.result()) + job.checkpoint().size();
 }
 
-JobStore::JobStore(const std::filesystem::path& db_file) : db_(OpenDatabase(db_file, kStore)) {
+JobStore::JobStore(const std::filesystem::path& db_file)
+    : file_(db_file), db_(OpenDatabase(db_file, kStore)) {
   try {
     Exec(db_,
          "CREATE TABLE IF NOT EXISTS jobs ("
@@ -70,6 +73,13 @@ JobStore::JobStore(const std::filesystem::path& db_file) : db_(OpenDatabase(db_f
     Exec(db_, "CREATE INDEX IF NOT EXISTS jobs_state ON jobs(state, seq)", kStore);
     AddAccessColumns(db_);
     Exec(db_, "CREATE INDEX IF NOT EXISTS jobs_tenant ON jobs(tenant, state)", kStore);
+    // Staged inserts take their seq here, past every seq AUTOINCREMENT ever gave out.
+    Statement last(db_,
+                   "SELECT MAX(COALESCE((SELECT MAX(seq) FROM jobs), 0),"
+                   " COALESCE((SELECT seq FROM sqlite_sequence WHERE name = 'jobs'), 0))",
+                   kStore);
+    last.Step();
+    next_seq_ = last.Int(0) + 1;
     reader_ = OpenDatabase(db_file, kStore);
   } catch (...) {
     sqlite3_close(db_);
@@ -78,37 +88,138 @@ JobStore::JobStore(const std::filesystem::path& db_file) : db_(OpenDatabase(db_f
 }
 
 JobStore::~JobStore() {
+  try {
+    Flush();
+  } catch (const Error& e) {
+    spdlog::error("{}", e.what());
+  }
   sqlite3_close(reader_);
   sqlite3_close(db_);
 }
 
+void JobStore::ThrowIfBroken() const {
+  if (!broken_.empty()) Fail(ErrorCode::kUnavailable, broken_);
+}
+
+std::int64_t JobStore::CommittedSeq(const std::string& id) {
+  std::lock_guard lock(read_mutex_);
+  Statement select(reader_, "SELECT seq FROM jobs WHERE id = ?", kStore);
+  select.BindText(1, id);
+  return select.Step() ? select.Int(0) : 0;
+}
+
+std::int64_t JobStore::StageLocked(bool insert, std::int64_t seq, const v1::Job& job) {
+  ThrowIfBroken();
+  if (insert) seq = next_seq_++;
+  pending_.push_back({insert, seq, job});
+  staged_[job.id()] = Staged{seq, job, ++writes_staged_};
+  return seq;
+}
+
 std::int64_t JobStore::Insert(const v1::Job& job) {
-  std::lock_guard lock(mutex_);
-  Statement insert(db_, "INSERT INTO jobs(id, state, priority, tenant, bytes, job) VALUES(?, ?, ?, ?, ?, ?)",
-                   kStore);
-  insert.BindText(1, job.id());
-  insert.Bind(2, job.state());
-  insert.Bind(3, job.priority());
-  insert.BindText(4, job.tenant());
-  insert.Bind(5, StoredBytes(job));
-  insert.Bind(6, job.SerializeAsString());
-  insert.Step();
-  return sqlite3_last_insert_rowid(db_);
+  const bool committed = CommittedSeq(job.id()) != 0;
+  std::lock_guard lock(staged_mutex_);
+  if (committed || staged_.count(job.id()) > 0)
+    Fail(ErrorCode::kInternal, "job store: job " + job.id() + " exists");
+  return StageLocked(true, 0, job);
 }
 
 void JobStore::Update(const v1::Job& job) {
+  {
+    std::lock_guard lock(staged_mutex_);
+    if (const auto found = staged_.find(job.id()); found != staged_.end()) {
+      StageLocked(false, found->second.seq, job);
+      return;
+    }
+  }
+  // Not staged: committed or nowhere. Its seq never changes, so asking outside the lock is safe.
+  const auto seq = CommittedSeq(job.id());
+  if (seq == 0) Fail(ErrorCode::kNotFound, "no job " + job.id());
+  std::lock_guard lock(staged_mutex_);
+  StageLocked(false, seq, job);
+}
+
+void JobStore::Flush() {
+  std::unique_lock lock(staged_mutex_);
+  const auto target = writes_staged_;
+  while (writes_durable_ < target) {
+    ThrowIfBroken();
+    if (committing_) {
+      committed_.wait(lock);
+      continue;
+    }
+    // This thread commits everything staged so far, its own writes and those of the threads waiting.
+    committing_ = true;
+    const auto batch = std::move(pending_);
+    pending_.clear();
+    const auto upto = writes_staged_;
+    lock.unlock();
+    std::string failure;
+    try {
+      Commit(batch);
+    } catch (const Error& e) {
+      failure = e.what();
+    }
+    lock.lock();
+    committing_ = false;
+    if (failure.empty()) {
+      writes_durable_ = upto;
+      for (auto it = staged_.begin(); it != staged_.end();) {
+        it = it->second.write <= upto ? staged_.erase(it) : std::next(it);
+      }
+    } else {
+      broken_ = "job store " + file_.string() + ": a commit of " + std::to_string(batch.size()) +
+                " write(s) failed (" + failure + "); the server must restart to recover from the disk";
+      spdlog::critical("{}", broken_);
+    }
+    committed_.notify_all();
+  }
+}
+
+void JobStore::Commit(const std::vector<Write>& batch) {
   std::lock_guard lock(mutex_);
-  Statement update(db_, "UPDATE jobs SET state = ?, priority = ?, bytes = ?, job = ? WHERE id = ?", kStore);
-  update.Bind(1, job.state());
-  update.Bind(2, job.priority());
-  update.Bind(3, StoredBytes(job));
-  update.Bind(4, job.SerializeAsString());
-  update.BindText(5, job.id());
-  update.Step();
-  if (sqlite3_changes(db_) == 0) Fail(ErrorCode::kNotFound, "no job " + job.id());
+  Exec(db_, "BEGIN IMMEDIATE", kStore);
+  try {
+    Statement insert(
+        db_, "INSERT INTO jobs(seq, id, state, priority, tenant, bytes, job) VALUES(?, ?, ?, ?, ?, ?, ?)",
+        kStore);
+    Statement update(db_, "UPDATE jobs SET state = ?, priority = ?, bytes = ?, job = ? WHERE seq = ?",
+                     kStore);
+    for (const auto& write : batch) {
+      const auto& job = write.job;
+      if (write.insert) {
+        insert.Reset();
+        insert.Bind(1, write.seq);
+        insert.BindText(2, job.id());
+        insert.Bind(3, job.state());
+        insert.Bind(4, job.priority());
+        insert.BindText(5, job.tenant());
+        insert.Bind(6, StoredBytes(job));
+        insert.Bind(7, job.SerializeAsString());
+        insert.Step();
+      } else {
+        update.Reset();
+        update.Bind(1, job.state());
+        update.Bind(2, job.priority());
+        update.Bind(3, StoredBytes(job));
+        update.Bind(4, job.SerializeAsString());
+        update.Bind(5, write.seq);
+        update.Step();
+      }
+    }
+    Exec(db_, "COMMIT", kStore);
+  } catch (...) {
+    sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr);
+    throw;
+  }
 }
 
 std::optional<StoredJob> JobStore::Get(const std::string& id) {
+  {
+    std::lock_guard lock(staged_mutex_);
+    if (const auto found = staged_.find(id); found != staged_.end())
+      return StoredJob{found->second.seq, found->second.job};
+  }
   std::lock_guard lock(read_mutex_);
   Statement select(reader_, "SELECT seq, job FROM jobs WHERE id = ?", kStore);
   select.BindText(1, id);
@@ -147,6 +258,7 @@ JobStore::Page JobStore::List(const std::vector<v1::JobState>& states, int limit
 }
 
 std::vector<StoredJob> JobStore::Unfinished() {
+  Flush();
   std::lock_guard lock(mutex_);
   Statement select(db_, "SELECT seq, job FROM jobs WHERE state IN (?, ?) ORDER BY seq", kStore);
   select.Bind(1, v1::QUEUED);
@@ -157,6 +269,7 @@ std::vector<StoredJob> JobStore::Unfinished() {
 }
 
 std::map<v1::JobState, std::int64_t> JobStore::CountByState() {
+  Flush();
   std::lock_guard lock(mutex_);
   Statement select(db_, "SELECT state, COUNT(*) FROM jobs GROUP BY state", kStore);
   std::map<v1::JobState, std::int64_t> counts;
@@ -165,6 +278,7 @@ std::map<v1::JobState, std::int64_t> JobStore::CountByState() {
 }
 
 JobStore::Usage JobStore::UsageOf(const std::string& tenant) {
+  Flush();
   std::lock_guard lock(mutex_);
   Statement select(
       db_, "SELECT COALESCE(SUM(state IN (?, ?)), 0), COALESCE(SUM(bytes), 0) FROM jobs WHERE tenant = ?",
@@ -177,12 +291,23 @@ JobStore::Usage JobStore::UsageOf(const std::string& tenant) {
 }
 
 void JobStore::Scan(const std::function<void(const StoredJob&)>& visit) {
+  Flush();
   std::lock_guard lock(mutex_);
   Statement select(db_, "SELECT seq, job FROM jobs ORDER BY seq", kStore);
   while (select.Step()) visit({select.Int(0), Parse(select.Blob(1), select.Int(0))});
 }
 
+bool JobStore::Broken() {
+  std::lock_guard lock(staged_mutex_);
+  return !broken_.empty();
+}
+
 bool JobStore::Writable() {
+  try {
+    Flush();
+  } catch (const Error&) {
+    return false;
+  }
   std::lock_guard lock(mutex_);
   return sqlite3_exec(db_, "BEGIN IMMEDIATE; COMMIT;", nullptr, nullptr, nullptr) == SQLITE_OK;
 }

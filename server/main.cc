@@ -6,6 +6,7 @@
 #include <grpcpp/resource_quota.h>
 #include <signal.h>
 #include <spdlog/spdlog.h>
+#include <unistd.h>
 
 #include <CLI/CLI.hpp>
 #include <atomic>
@@ -214,15 +215,31 @@ int Run(const ServerFlags& flags) {
   }
 
   std::atomic<bool> stopping{false};
+  std::atomic<int> exit_code{0};
   std::thread maintenance([&] {
     auto next_retention = std::chrono::steady_clock::now();
     for (int tick = 0; !stopping; ++tick) {
-      coordinator.ExpireLeases(Clock::now());
+      if (store.Broken()) {
+        // What the coordinator holds may be ahead of the disk: restart and recover from the disk.
+        spdlog::critical("stopping: the job store cannot commit (exit 75, for a supervisor to restart it)");
+        exit_code = 75;
+        ::kill(::getpid(), SIGTERM);
+        return;
+      }
+      try {
+        coordinator.ExpireLeases(Clock::now());
+      } catch (const Error& e) {
+        spdlog::error("lease expiry: {}: {}", ErrorCodeName(e.code()), e.what());
+      }
       if (tick % 5 == 0) {
         const bool writable = store.Writable();
         server->GetHealthCheckService()->SetServingStatus(writable);
         if (health_port) health_port->SetServing(writable);
-        metrics.SetJobsByState(store.CountByState());
+        try {
+          metrics.SetJobsByState(store.CountByState());
+        } catch (const Error& e) {
+          spdlog::error("job counts: {}: {}", ErrorCodeName(e.code()), e.what());
+        }
         metrics.SetQueueDepth(scheduler.Depth());
         metrics.SetWorkersConnected(workers.CountAlive());
         std::error_code error;
@@ -267,7 +284,7 @@ int Run(const ServerFlags& flags) {
   signal_waiter.join();
   maintenance.join();
   spdlog::info("endorecon-server stopped");
-  return 0;
+  return exit_code;
 }
 
 void AddSecurityFlags(CLI::App& app, ServerFlags& flags) {

@@ -56,7 +56,11 @@ Metrics::Metrics(const std::string& bind_address)
       data_available_(
           Gauge(*registry_, "endorecon_data_available_bytes", "Free bytes on the data folder's file system")),
       data_capacity_(
-          Gauge(*registry_, "endorecon_data_capacity_bytes", "Size of the data folder's file system")) {
+          Gauge(*registry_, "endorecon_data_capacity_bytes", "Size of the data folder's file system")),
+      rpc_seconds_(BuildHistogram()
+                       .Name("endorecon_rpc_seconds")
+                       .Help("Time the server spent on each call, by method (streams: the whole stream)")
+                       .Register(*registry_)) {
   for (const auto* code : {"UNAUTHENTICATED", "PERMISSION_DENIED"}) refused_.Add({{"code", code}});
   for (const auto state : {v1::QUEUED, v1::RUNNING, v1::SUCCEEDED, v1::FAILED, v1::CANCELLED}) {
     jobs_.Add({{"state", v1::JobState_Name(state)}}).Set(0);
@@ -91,6 +95,12 @@ void Metrics::SetJobsByState(const std::map<v1::JobState, std::int64_t>& counts)
     jobs_.Add({{"state", v1::JobState_Name(state)}})
         .Set(found == counts.end() ? 0.0 : static_cast<double>(found->second));
   }
+}
+
+void Metrics::CallHandled(const char* method, double seconds) {
+  static const prometheus::Histogram::BucketBoundaries kBounds{0.001, 0.0025, 0.005, 0.01, 0.025, 0.05, 0.1,
+                                                               0.25,  0.5,    1,     2.5,  10,    60};
+  rpc_seconds_.Add({{"method", method}}, kBounds).Observe(seconds);
 }
 
 }  // namespace endorecon::server

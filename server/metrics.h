@@ -19,6 +19,9 @@
 //   endorecon_jobs_expired_total             counter: finished jobs whose files retention deleted
 //   endorecon_data_available_bytes           gauge: free bytes on the data folder's file system
 //   endorecon_data_capacity_bytes            gauge: size of that file system
+//   endorecon_rpc_seconds{method}            histogram: time the server spent on each call, from the
+//                                            gate to its status (streams: the whole stream); the time
+//                                            a call waits for a server thread is not in it
 #pragma once
 
 #include <prometheus/counter.h>
@@ -69,6 +72,8 @@ class Metrics {
     dicom_send_failures_.Add({{"destination", destination}}).Increment();
   }
   void RetrievalBytes(std::int64_t bytes) { retrieval_bytes_.Increment(static_cast<double>(bytes)); }
+  // `method`: the RPC's name (a literal: few distinct values).
+  void CallHandled(const char* method, double seconds);
 
  private:
   std::shared_ptr<prometheus::Registry> registry_;
@@ -92,6 +97,7 @@ class Metrics {
   prometheus::Counter& expired_;
   prometheus::Gauge& data_available_;
   prometheus::Gauge& data_capacity_;
+  prometheus::Family<prometheus::Histogram>& rpc_seconds_;
 };
 
 }  // namespace endorecon::server

@@ -21,6 +21,8 @@ class Statement {
   void Bind(int index, std::int64_t value);
   void Bind(int index, const std::string& value);  // as a blob
   void BindText(int index, const std::string& value);
+  // Makes the statement ready to run again with new bindings.
+  void Reset();
   // True while there is a row; false when done. Throws Error(kUnavailable) on an error.
   bool Step();
   std::int64_t Int(int column);

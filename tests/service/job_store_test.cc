@@ -1,6 +1,10 @@
 #include "server/job_store.h"
 
 #include <gtest/gtest.h>
+#include <sqlite3.h>
+
+#include <thread>
+#include <vector>
 
 #include "common/error.h"
 #include "tests/unit/temp_dir.h"
@@ -40,6 +44,95 @@ TEST(JobStoreTest, JobsSurviveReopening) {
   EXPECT_FALSE(reopened.Get("missing").has_value());
 }
 
+TEST(JobStoreTest, StagedWritesAreSeenByGetAtOnceAndReachTheDiskAndPagesOnlyWithFlush) {
+  testing::TempDir dir("jobstore");
+  JobStore store(dir / "jobs.sqlite");
+  const auto seq = store.Insert(MakeJob("a", v1::QUEUED));
+  store.Update(MakeJob("a", v1::RUNNING));
+  ASSERT_TRUE(store.Get("a").has_value());
+  EXPECT_EQ(store.Get("a")->job.state(), v1::RUNNING);
+  EXPECT_EQ(store.Get("a")->seq, seq);
+  EXPECT_TRUE(store.List({}, 10, 0).jobs.empty()) << "a page shows what is committed";
+  {
+    // Another process opening the file now (a server restarted after a kill -9) finds nothing.
+    JobStore other(dir / "jobs.sqlite");
+    EXPECT_FALSE(other.Get("a").has_value());
+  }
+  store.Flush();
+  ASSERT_EQ(store.List({}, 10, 0).jobs.size(), 1u);
+  JobStore other(dir / "jobs.sqlite");
+  ASSERT_TRUE(other.Get("a").has_value());
+  EXPECT_EQ(other.Get("a")->job.state(), v1::RUNNING);
+  EXPECT_EQ(other.Get("a")->seq, seq);
+}
+
+TEST(JobStoreTest, ManyThreadsWritingAndFlushingAtOnceAllReachTheDiskInOrder) {
+  testing::TempDir dir("jobstore");
+  constexpr int kThreads = 16, kJobsEach = 25;
+  {
+    JobStore store(dir / "jobs.sqlite");
+    std::vector<std::thread> threads;
+    for (int t = 0; t < kThreads; ++t) {
+      threads.emplace_back([&store, t] {
+        for (int j = 0; j < kJobsEach; ++j) {
+          const auto id = std::string("t").append(std::to_string(t)).append("-").append(std::to_string(j));
+          store.Insert(MakeJob(id, v1::QUEUED));
+          store.Flush();
+          store.Update(MakeJob(id, v1::SUCCEEDED));
+          store.Flush();
+        }
+      });
+    }
+    for (auto& thread : threads) thread.join();
+    // A kill -9 now loses nothing: read through a second store without the first's destructor.
+    JobStore other(dir / "jobs.sqlite");
+    EXPECT_EQ(other.CountByState()[v1::SUCCEEDED], kThreads * kJobsEach);
+    EXPECT_EQ(other.CountByState().count(v1::QUEUED), 0u);
+  }
+  JobStore store(dir / "jobs.sqlite");
+  const auto seq = store.Insert(MakeJob("later", v1::QUEUED));
+  EXPECT_GT(seq, kThreads * kJobsEach) << "a new job never takes an old seq";
+}
+
+TEST(JobStoreTest, ACommitTheDatabaseRefusesBreaksTheStoreAndKeepsNothingOfItsBatch) {
+  testing::TempDir dir("jobstore");
+  JobStore store(dir / "jobs.sqlite");
+  store.Insert(MakeJob("kept", v1::QUEUED));
+  store.Flush();
+  {
+    // Stands in for a disk that refuses the write: the database itself refuses one row.
+    sqlite3* db = nullptr;
+    ASSERT_EQ(sqlite3_open((dir / "jobs.sqlite").c_str(), &db), SQLITE_OK);
+    ASSERT_EQ(sqlite3_exec(db,
+                           "CREATE TRIGGER refuse BEFORE INSERT ON jobs WHEN NEW.id = 'poison' "
+                           "BEGIN SELECT RAISE(ABORT, 'refused by the test'); END",
+                           nullptr, nullptr, nullptr),
+              SQLITE_OK);
+    sqlite3_close(db);
+  }
+  store.Insert(MakeJob("innocent", v1::QUEUED));
+  store.Update(MakeJob("kept", v1::RUNNING));
+  store.Insert(MakeJob("poison", v1::QUEUED));
+  try {
+    store.Flush();
+    FAIL() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kUnavailable);
+    EXPECT_NE(std::string(e.what()).find("jobs.sqlite"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("refused by the test"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("must restart"), std::string::npos) << e.what();
+  }
+  EXPECT_TRUE(store.Broken());
+  EXPECT_FALSE(store.Writable());
+  EXPECT_THROW(store.Update(MakeJob("kept", v1::FAILED)), Error);
+  EXPECT_THROW(store.Flush(), Error);
+  JobStore reopened(dir / "jobs.sqlite");
+  EXPECT_FALSE(reopened.Get("innocent").has_value()) << "the whole batch was rolled back";
+  ASSERT_TRUE(reopened.Get("kept").has_value());
+  EXPECT_EQ(reopened.Get("kept")->job.state(), v1::QUEUED);
+  EXPECT_FALSE(reopened.Broken());
+}
+
 TEST(JobStoreTest, UnfinishedListsQueuedAndRunningOldestFirst) {
   testing::TempDir dir("jobstore");
   JobStore store(dir / "jobs.sqlite");
@@ -63,6 +156,7 @@ TEST(JobStoreTest, ListPagesNewestFirstWithStateFilter) {
   JobStore store(dir / "jobs.sqlite");
   for (int i = 0; i < 7; ++i)
     store.Insert(MakeJob(std::string("j").append(std::to_string(i)), i % 2 ? v1::FAILED : v1::QUEUED));
+  store.Flush();
   const auto first = store.List({}, 3, 0);
   ASSERT_EQ(first.jobs.size(), 3u);
   EXPECT_EQ(first.jobs[0].id(), "j6");
