@@ -33,8 +33,9 @@ std::int64_t SendFiles(const BlobStore& blobs,
       if (first) *chunk.mutable_file() = entry;
       chunk.set_offset(offset);
       chunk.set_data(buffer.data(), static_cast<std::size_t>(want));
-      if (!watch.Write(context, [&] { return writer.Write(chunk); }))
-        Fail(ErrorCode::kUnavailable, "the receiver went away or stopped reading during '" + entry.path() + "'");
+      if (!watch.Guard(context, [&] { return writer.Write(chunk); }))
+        Fail(ErrorCode::kUnavailable,
+             "the receiver went away or stopped reading during '" + entry.path() + "'");
       offset += want;
       sent += want;
       first = false;

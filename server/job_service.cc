@@ -34,9 +34,10 @@ grpc::Status JobServiceImpl::QueryUpload(grpc::ServerContext* context, const v1:
 grpc::Status JobServiceImpl::Upload(grpc::ServerContext* context,
                                     grpc::ServerReader<v1::UploadRequest>* reader, v1::UploadStatus* status) {
   return guard_.Run(context, {"Upload", Access::kJobs, kWrites, ""}, [&](Call& call) {
-    *status = uploads_.Receive(*reader, Uploader::kClient, [&](const v1::Manifest& manifest) {
-      coordinator_.CheckUploadQuota(manifest, call.caller);
-    });
+    *status = uploads_.Receive(
+        *reader, Uploader::kClient,
+        [&](const v1::Manifest& manifest) { coordinator_.CheckUploadQuota(manifest, call.caller); },
+        [&](const std::function<bool()>& read) { return stalls_.Guard(context, read); });
     return grpc::Status::OK;
   });
 }
@@ -98,7 +99,7 @@ grpc::Status JobServiceImpl::Watch(grpc::ServerContext* context, const v1::Watch
     *first.mutable_job() = coordinator_.Get(request->id(), call.caller);
     first.mutable_job()->clear_clip();
     const auto write = [&](const v1::JobEvent& event) {
-      return stalls_.Write(context, [&] { return writer->Write(event); });
+      return stalls_.Guard(context, [&] { return writer->Write(event); });
     };
     if (!write(first) || Settled(first.job())) return grpc::Status::OK;
     std::uint64_t seen = 0;

@@ -41,6 +41,7 @@ struct ServerFlags {
   std::int64_t min_free_bytes = std::int64_t{256} << 20;
   double stall_timeout_s = 60;
   int max_threads = 512;
+  int max_uploads = 16;
   int max_attempts = 3;
   std::int64_t lease_ttl_ms = 30000;
   std::int64_t heartbeat_ms = 2000;
@@ -156,10 +157,11 @@ int Run(const ServerFlags& flags) {
   }
   coordinator.Recover();
   IdleTrim idle_trim;
-  UploadReceiver uploads(blobs, flags.max_upload_bytes, flags.min_free_bytes, [&](std::int64_t bytes) {
-    metrics.UploadBytes(bytes);
-    idle_trim.Received(bytes);
-  });
+  UploadReceiver uploads(blobs, flags.max_upload_bytes, flags.min_free_bytes, flags.max_uploads,
+                         [&](std::int64_t bytes) {
+                           metrics.UploadBytes(bytes);
+                           idle_trim.Received(bytes);
+                         });
   StallWatch stalls(std::chrono::milliseconds(static_cast<std::int64_t>(flags.stall_timeout_s * 1000)));
   JobServiceImpl job_service(guard, coordinator, uploads, blobs, hub, workers, metrics, stalls);
   WorkerServiceImpl worker_service(
@@ -179,6 +181,10 @@ int Run(const ServerFlags& flags) {
   grpc::ResourceQuota quota("endorecon-server");
   quota.SetMaxThreads(flags.max_threads);
   builder.SetResourceQuota(quota);
+  // No BDP probing: it widens every stream's receive window to megabytes, so each upload waiting
+  // for its slot (UploadReceiver) would hold that much of its sender's bytes here. Without it a
+  // stream that is read still gets a window as large as the message it waits for.
+  builder.AddChannelArgument(GRPC_ARG_HTTP2_BDP_PROBE, 0);
   builder.RegisterService(&job_service);
   builder.RegisterService(&worker_service);
   const auto server = builder.BuildAndStart();
@@ -370,6 +376,11 @@ int main(int argc, char** argv) {
                  "calls the server serves at once (a thread each); more are refused with RESOURCE_EXHAUSTED")
       ->capture_default_str()
       ->check(CLI::Range(8, 100000));
+  app.add_option("--max-uploads", flags.max_uploads,
+                 "upload streams (clients' and workers') receiving at once; more wait their turn, their "
+                 "bytes held in the sender")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 10000));
   app.add_option("--max-attempts", flags.max_attempts,
                  "attempts before a job whose workers keep vanishing fails")
       ->capture_default_str()

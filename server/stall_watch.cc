@@ -15,7 +15,7 @@ StallWatch::~StallWatch() {
   thread_.join();
 }
 
-bool StallWatch::Write(grpc::ServerContext* context, const std::function<bool()>& write) {
+bool StallWatch::Guard(grpc::ServerContext* context, const std::function<bool()>& operation) {
   std::uint64_t id;
   {
     std::lock_guard lock(mutex_);
@@ -23,10 +23,10 @@ bool StallWatch::Write(grpc::ServerContext* context, const std::function<bool()>
     armed_[id] = {context, Clock::now() + limit_};
   }
   changed_.notify_all();
-  const bool written = write();
+  const bool done = operation();
   std::lock_guard lock(mutex_);
   armed_.erase(id);
-  return written;
+  return done;
 }
 
 std::uint64_t StallWatch::cancelled() const {
@@ -37,13 +37,13 @@ std::uint64_t StallWatch::cancelled() const {
 void StallWatch::Loop() {
   std::unique_lock lock(mutex_);
   while (!stopping_) {
-    // Writes are armed in order and all with the same limit: the first is the next to expire.
+    // Operations are armed in order and all with the same limit: the first is the next to expire.
     if (armed_.empty()) {
       changed_.wait(lock);
       continue;
     }
     auto first = armed_.begin();
-    // A copy: wait_until reads its deadline again after waking, when the Write may have returned
+    // A copy: wait_until reads its deadline again after waking, when the operation may have returned
     // and erased the entry (AddressSanitizer found the read of the freed node).
     const Clock::time_point deadline = first->second.deadline;
     if (Clock::now() < deadline) {

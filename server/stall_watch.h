@@ -1,10 +1,11 @@
-// Ends the server streams whose peer stops reading. A blocking Write of a server stream returns
-// only once the peer's flow-control window takes the message; a client or worker that stops
-// reading (a hung process, a dead NAT mapping that still acknowledges) would hold the handler's
-// thread and its buffered chunk for as long as the connection lives. Every such Write goes through
-// a StallWatch: one that has not returned within the limit cancels its call, the Write then returns
-// false and the handler ends, freeing the thread. What a stream holds meanwhile is bounded by one
-// message (a 4 MiB chunk) plus gRPC's flow-control window.
+// Ends the server streams whose peer stops reading or sending. A blocking Write of a server stream
+// returns only once the peer's flow-control window takes the message, a blocking Read once the
+// peer sends; a client or worker that stops (a hung process, a dead NAT mapping that still
+// acknowledges) would hold the handler's thread, its buffered chunk and, for an upload, its upload
+// slot for as long as the connection lives. Every such Write and every Read of an upload's chunks
+// goes through a StallWatch: one that has not returned within the limit cancels its call, the
+// Write or Read then returns false and the handler ends, freeing the thread. What a stream holds meanwhile is
+// bounded by one message (a 4 MiB chunk) plus gRPC's flow-control window.
 #pragma once
 
 #include <grpcpp/server_context.h>
@@ -26,9 +27,9 @@ class StallWatch {
   StallWatch(const StallWatch&) = delete;
   StallWatch& operator=(const StallWatch&) = delete;
 
-  // Runs `write` (a stream's Write), cancelling `context` if it has not returned within the limit;
-  // returns what `write` returned.
-  bool Write(grpc::ServerContext* context, const std::function<bool()>& write);
+  // Runs `operation` (a stream's Write or Read), cancelling `context` if it has not returned within
+  // the limit; returns what `operation` returned.
+  bool Guard(grpc::ServerContext* context, const std::function<bool()>& operation);
 
   // Streams cancelled so far for a stalled peer.
   std::uint64_t cancelled() const;

@@ -12,10 +12,11 @@
 namespace endorecon::server {
 
 UploadReceiver::UploadReceiver(BlobStore& blobs, std::int64_t max_upload_bytes, std::int64_t min_free_bytes,
-                               std::function<void(std::int64_t)> on_bytes)
+                               int max_streams, std::function<void(std::int64_t)> on_bytes)
     : blobs_(blobs),
       max_upload_bytes_(max_upload_bytes),
       min_free_bytes_(min_free_bytes),
+      slots_(max_streams),
       on_bytes_(std::move(on_bytes)) {}
 
 void UploadReceiver::CheckSpace(std::int64_t bytes, Uploader uploader) const {
@@ -66,7 +67,9 @@ v1::UploadStatus UploadReceiver::Query(const v1::Manifest& manifest, Uploader up
 }
 
 v1::UploadStatus UploadReceiver::Receive(grpc::ServerReaderInterface<v1::UploadRequest>& reader,
-                                         Uploader uploader, const std::function<void(const v1::Manifest&)>& admit) {
+                                         Uploader uploader,
+                                         const std::function<void(const v1::Manifest&)>& admit,
+                                         const ReadGuard& guard) {
   v1::UploadRequest request;
   if (!reader.Read(&request)) FailInvalid("empty upload stream: the first message must be the manifest");
   if (!request.has_manifest()) {
@@ -79,10 +82,16 @@ v1::UploadStatus UploadReceiver::Receive(grpc::ServerReaderInterface<v1::UploadR
   std::map<std::string, const v1::FileEntry*> entries;
   for (const auto& entry : manifest.files()) entries[entry.path()] = &entry;
 
+  slots_.acquire();
+  const std::unique_ptr<std::counting_semaphore<>, void (*)(std::counting_semaphore<>*)> slot(
+      &slots_, [](std::counting_semaphore<>* slots) { slots->release(); });
+  const auto read = [&] {
+    return guard ? guard([&] { return reader.Read(&request); }) : reader.Read(&request);
+  };
   std::unique_ptr<BlobStore::Writer> writer;
   std::string writer_path;
   std::set<std::string> busy;
-  while (reader.Read(&request)) {
+  while (read()) {
     if (request.has_manifest())
       FailInvalid("a second manifest in one upload stream; open a new stream instead");
     const auto& chunk = request.chunk();

@@ -6,15 +6,24 @@
 // written, and again before every chunk: a disk that fills from elsewhere mid-stream stops the
 // stream there, its committed bytes kept for the resume once space is freed); a write the disk
 // refuses anyway (ENOSPC: RESOURCE_EXHAUSTED naming the file); a wrong digest (DATA_LOSS; the bytes
-// are discarded). The reserve keeps room for the job store and for the results of accepted jobs. A stream that ends early keeps its committed bytes for the next one. Chunks of a
-// file that another stream is writing at the same moment are skipped; the returned status then
-// says the upload is incomplete and the client asks again.
+// are discarded). The reserve keeps room for the job store and for the results of accepted jobs. A stream
+// that ends early keeps its committed bytes for the next one. Chunks of a file that another stream is writing
+// at the same moment are skipped; the returned status then says the upload is incomplete and the client asks
+// again.
+//
+// Memory: at most `max_streams` streams receive chunks at once (all uploads, clients' and
+// workers'); the others wait after their manifest, and their bytes wait in their senders, held
+// back by HTTP/2 flow control (the server runs without gRPC's BDP probing, which would otherwise
+// widen every waiting stream's window to megabytes). A hundred clients uploading 10 MiB each at
+// once peaked at ~900 MB resident without the slots and ~290 MB with 16, at the same throughput
+// (docs/benchmarks.md).
 #pragma once
 
 #include <grpcpp/support/sync_stream.h>
 
 #include <cstdint>
 #include <functional>
+#include <semaphore>
 
 #include "endorecon/v1/files.pb.h"
 #include "server/blob_store.h"
@@ -29,14 +38,18 @@ class UploadReceiver {
  public:
   // `on_bytes` is told every committed chunk's size (for the metrics).
   UploadReceiver(BlobStore& blobs, std::int64_t max_upload_bytes, std::int64_t min_free_bytes,
-                 std::function<void(std::int64_t)> on_bytes);
+                 int max_streams, std::function<void(std::int64_t)> on_bytes);
 
   // Validates `manifest` (and the size limit) and says how much of each file is committed.
   v1::UploadStatus Query(const v1::Manifest& manifest, Uploader uploader) const;
+  // Runs one blocking Read of the stream (a StallWatch's Guard); returns what the Read returned.
+  using ReadGuard = std::function<bool(const std::function<bool()>& read)>;
   // Consumes one upload stream. Throws Error as described above. `admit`, when given, sees the
-  // manifest before any byte is written and throws to refuse it (a tenant's quota).
+  // manifest before any byte is written and throws to refuse it (a tenant's quota). `guard`, when
+  // given, runs each Read of a chunk, so a sender that stops cannot keep its slot.
   v1::UploadStatus Receive(grpc::ServerReaderInterface<v1::UploadRequest>& reader, Uploader uploader,
-                           const std::function<void(const v1::Manifest&)>& admit = {});
+                           const std::function<void(const v1::Manifest&)>& admit = {},
+                           const ReadGuard& guard = {});
 
  private:
   // Refuses `bytes` more that would leave less than the reserve free.
@@ -45,6 +58,7 @@ class UploadReceiver {
   BlobStore& blobs_;
   std::int64_t max_upload_bytes_;
   std::int64_t min_free_bytes_;
+  std::counting_semaphore<> slots_;
   std::function<void(std::int64_t)> on_bytes_;
 };
 

@@ -104,7 +104,9 @@ grpc::Status WorkerServiceImpl::PutBlobs(grpc::ServerContext* context,
                                          grpc::ServerReader<v1::UploadRequest>* reader,
                                          v1::UploadStatus* status) {
   return guard_.Run(context, {"PutBlobs", Access::kWorker, kWrites, ""}, [&](Call&) {
-    *status = uploads_.Receive(*reader, Uploader::kWorker);
+    *status = uploads_.Receive(*reader, Uploader::kWorker, {}, [&](const std::function<bool()>& read) {
+      return stalls_.Guard(context, read);
+    });
     return grpc::Status::OK;
   });
 }

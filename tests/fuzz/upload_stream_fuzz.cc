@@ -33,7 +33,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const fs::path root = fuzz::ScratchDir() / "store";
   fs::remove_all(root);
   server::BlobStore blobs(root);
-  server::UploadReceiver receiver(blobs, 1 << 20, 0, {});
+  server::UploadReceiver receiver(blobs, 1 << 20, 0, 1, {});
   fuzz::ServerStreamOf<v1::UploadRequest> stream(fuzz::MessagesOf<v1::UploadRequest>(data, size));
   // Each refusal the handler documents; kFailedPrecondition: a chunk past the committed bytes.
   fuzz::Accepts([&] { receiver.Receive(stream, server::Uploader::kClient); },

@@ -1,10 +1,11 @@
 // A peer that stops reading a download does not keep the server's thread: the server cancels the
 // stream once a Write has waited --stall-timeout, serves everyone else meanwhile and after, and the
 // same peer can fetch the file again when it reads. Many such peers hold no more threads or memory
-// than --max-threads allows.
+// than --max-threads allows. A sender that stops mid-upload loses its upload slot the same way.
 #include <grpcpp/grpcpp.h>
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <fstream>
 #include <random>
 #include <thread>
@@ -121,6 +122,67 @@ ProcessUse UseOf(pid_t pid) {
     if (key == "VmRSS:") status >> use.rss_kib;
   }
   return use;
+}
+
+v1::UploadRequest ManifestOf(const std::string& path, const std::string& bytes) {
+  v1::UploadRequest request;
+  auto* entry = request.mutable_manifest()->add_files();
+  entry->set_path(path);
+  entry->set_size(static_cast<std::int64_t>(bytes.size()));
+  entry->set_sha256(Sha256Hex(bytes));
+  return request;
+}
+
+v1::UploadRequest ChunkOf(const std::string& path, std::int64_t offset, const std::string& data) {
+  v1::UploadRequest request;
+  request.mutable_chunk()->set_path(path);
+  request.mutable_chunk()->set_offset(offset);
+  request.mutable_chunk()->set_data(data);
+  return request;
+}
+
+TEST(StalledPeerTest, AnUploadWhoseSenderStopsLosesItsSlotAndTheNextUploadThenProceeds) {
+  Cluster cluster({"--stall-timeout", "2", "--max-uploads", "1"});
+  const std::string stalled_bytes(200000, 's');
+  const auto stalled_manifest = ManifestOf("stalled.bin", stalled_bytes);
+  grpc::ClientContext stalled_context;
+  stalled_context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60 * kSlowdown));
+  v1::UploadStatus stalled_status;
+  auto stalled = cluster.stub().Upload(&stalled_context, &stalled_status);
+  ASSERT_TRUE(stalled->Write(stalled_manifest));
+  ASSERT_TRUE(stalled->Write(ChunkOf("stalled.bin", 0, stalled_bytes.substr(0, 100000))));
+  // It holds the only slot once its first chunk is committed; then it sends nothing more.
+  ASSERT_TRUE(WaitUntil(
+      [&] {
+        grpc::ClientContext query;
+        v1::UploadStatus status;
+        cluster.stub().QueryUpload(&query, stalled_manifest.manifest(), &status);
+        return status.committed_bytes() == 100000;
+      },
+      std::chrono::seconds(10 * kSlowdown)));
+
+  const auto start = std::chrono::steady_clock::now();
+  const std::string next_bytes(50000, 'n');
+  grpc::ClientContext next_context;
+  next_context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(30 * kSlowdown));
+  v1::UploadStatus next_status;
+  auto next = cluster.stub().Upload(&next_context, &next_status);
+  ASSERT_TRUE(next->Write(ManifestOf("next.bin", next_bytes)));
+  ASSERT_TRUE(next->Write(ChunkOf("next.bin", 0, next_bytes)));
+  next->WritesDone();
+  const auto next_result = next->Finish();
+  const auto waited = std::chrono::steady_clock::now() - start;
+  ASSERT_TRUE(next_result.ok()) << next_result.error_message() << cluster.ServerLog();
+  EXPECT_TRUE(next_status.complete());
+  EXPECT_GE(waited, std::chrono::milliseconds(1500)) << "it waited for the stalled upload's slot";
+
+  const auto stalled_result = stalled->Finish();
+  EXPECT_EQ(stalled_result.error_code(), grpc::StatusCode::CANCELLED) << stalled_result.error_message();
+  // What the stalled sender committed is kept for its resume.
+  grpc::ClientContext query;
+  v1::UploadStatus status;
+  ASSERT_TRUE(cluster.stub().QueryUpload(&query, stalled_manifest.manifest(), &status).ok());
+  EXPECT_EQ(status.committed_bytes(), 100000);
 }
 
 TEST(StalledPeerTest, ManyStalledDownloadsHoldNoMoreThreadsOrMemoryThanTheCap) {

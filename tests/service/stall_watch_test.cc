@@ -23,7 +23,7 @@ TEST(StallWatchTest, WritesThatReturnInTimeAreNeverCancelled) {
   for (int t = 0; t < 4; ++t) {
     writers.emplace_back([&] {
       for (int i = 0; i < 500; ++i) {
-        const bool ok = watch.Write(&context, [&] {
+        const bool ok = watch.Guard(&context, [&] {
           std::this_thread::sleep_for(std::chrono::microseconds(50 * (i % 3)));
           return true;
         });
