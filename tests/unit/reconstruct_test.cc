@@ -118,6 +118,10 @@ TEST(Reconstruct, ProgressUnderABudgetEndsAtTheIterationsRun) {
   EXPECT_EQ(last.total_iterations, summary.iterations) << "the last report says the run is complete";
   EXPECT_EQ(last.eta_s, 0);
   EXPECT_LT(summary.iterations, 1'000'000);
+  // ... and its rate is the run's average, not the last interval's (which may hold no step).
+  const double average = scene::ReadJsonFile(dir / "out" / "metrics.json").at("samples_per_second");
+  EXPECT_GT(average, 0);
+  EXPECT_NEAR(last.samples_per_second, average, 1e-6 * average);
   const Progress& middle = reports[reports.size() / 2];
   const double share = static_cast<double>(middle.iteration) / middle.total_iterations;
   // The training budget is the run's less what evaluation and writing will need: the share done is
@@ -133,8 +137,8 @@ TEST(Reconstruct, ProgressUnderABudgetEndsAtTheIterationsRun) {
   EXPECT_LT(time.at("training_s").get<double>() + time.at("evaluation_s").get<double>(),
             time.at("total_s").get<double>());
   const auto& evaluation = metrics.at("evaluation");
-  const std::size_t rendered =
-      evaluation.at("full_frames").size() + evaluation.value("reduced_frames", nlohmann::json::array()).size();
+  const std::size_t rendered = evaluation.at("full_frames").size() +
+                               evaluation.value("reduced_frames", nlohmann::json::array()).size();
   EXPECT_EQ(rendered, 8u);
   if (evaluation.contains("reduced_frames")) {  // the training frames' PSNR by render, 6 in all
     const auto& by_render = evaluation.at("train_psnr_tissue");  // a render no training frame had: absent

@@ -52,7 +52,7 @@ class TrainingLoop {
       }
       if (progress_line_.Due(SecondsSince(wall_))) {
         UpdateBudget();
-        ReportProgress(result.last);
+        ReportProgress(result.last, clock_.TakeWindowRate());
       }
       if (hooks_.on_preview && previews_.Due(SecondsSince(wall_))) SendPreviews();
       if (checkpoints_.Due(SecondsSince(wall_))) Checkpoint();
@@ -63,7 +63,8 @@ class TrainingLoop {
       AddCurvePoint(result.last);
     }
     // The last word on training: a finished job shows where it ended, not its last interval.
-    if (!result.cancelled) ReportProgress(result.last);
+    // Its rate is the run's: the interval since the last report may hold no step at all.
+    if (!result.cancelled) ReportProgress(result.last, clock_.SamplesPerSecond());
     Checkpoint();
     result.samples_per_second = clock_.SamplesPerSecond();
     result.step_seconds = clock_.seconds() - spent_before_;
@@ -106,20 +107,20 @@ class TrainingLoop {
     extras_.curve.push_back(point);
   }
 
-  void ReportProgress(const train::StepStats& stats) {
+  void ReportProgress(const train::StepStats& stats, double samples_per_second) {
     const int iteration = run_.trainer.iteration();
     // With a time budget the run may end before its iteration cap: the total is then the count the
     // current pace reaches within the budget, so iteration / total is the share of the run done
     // (and at the end the iterations run).
     const double done = clock_.Progress(iteration);
-    const int projected = done > 0 ? std::max(iteration, static_cast<int>(std::lround(iteration / done)))
-                                   : config_.iterations;
+    const int projected =
+        done > 0 ? std::max(iteration, static_cast<int>(std::lround(iteration / done))) : config_.iterations;
     progress_.total_iterations = config_.iterations > 0 ? std::min(config_.iterations, projected) : projected;
     progress_.iteration = iteration;
     progress_.seconds = clock_.seconds();
     progress_.loss = stats.loss;
     progress_.train_psnr = stats.psnr;
-    progress_.samples_per_second = clock_.TakeWindowRate();
+    progress_.samples_per_second = samples_per_second;
     progress_.eta_s = clock_.Eta(run_.trainer.iteration());
     if (hooks_.on_progress) hooks_.on_progress(progress_);
   }
