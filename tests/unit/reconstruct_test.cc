@@ -11,6 +11,7 @@
 #include <thread>
 #include <vector>
 
+#include "tests/integration/sanitizer_build.h"
 #include "tests/unit/temp_dir.h"
 #include "worker/engine/scene/json_file.h"
 #include "worker/engine/scene/synthetic_clip.h"
@@ -93,7 +94,8 @@ TEST(Reconstruct, ProgressUnderABudgetEndsAtTheIterationsRun) {
   options.clip_dir = (dir / "clip").string();
   options.out_dir = (dir / "out").string();
   options.iterations = 1'000'000;
-  options.time_budget_s = 1.5;
+  // Instrumented builds step ~5x slower: the budget scales so that it still holds many reports.
+  options.time_budget_s = 1.5 * testing::kSlowdown;
   options.holdout = 4;
   options.config = SmallRunConfig();
   std::vector<Progress> reports;
