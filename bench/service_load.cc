@@ -118,7 +118,7 @@ RpcBuckets ScrapeRpcBuckets(int metrics_port) {
 }
 
 // The upper bound, in ms, of the bucket holding the 99th percentile of the calls between two scrapes
-// (-1: none).
+// (methods without calls in between are left out).
 std::map<std::string, double> ServerP99(const RpcBuckets& before, const RpcBuckets& after) {
   std::map<std::string, double> p99;
   for (const auto& [method, counts] : after) {

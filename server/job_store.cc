@@ -108,12 +108,9 @@ std::int64_t JobStore::CommittedSeq(const std::string& id) {
   return select.Step() ? select.Int(0) : 0;
 }
 
-std::int64_t JobStore::StageLocked(bool insert, std::int64_t seq, const v1::Job& job) {
+void JobStore::StageLocked(std::int64_t seq, bool insert, const v1::Job& job) {
   ThrowIfBroken();
-  if (insert) seq = next_seq_++;
-  pending_.push_back({insert, seq, job});
-  staged_[job.id()] = Staged{seq, job, ++writes_staged_};
-  return seq;
+  staged_[job.id()] = Staged{seq, job, ++writes_staged_, insert};
 }
 
 std::int64_t JobStore::Insert(const v1::Job& job) {
@@ -121,14 +118,16 @@ std::int64_t JobStore::Insert(const v1::Job& job) {
   std::lock_guard lock(staged_mutex_);
   if (committed || staged_.count(job.id()) > 0)
     Fail(ErrorCode::kInternal, "job store: job " + job.id() + " exists");
-  return StageLocked(true, 0, job);
+  const auto seq = next_seq_++;
+  StageLocked(seq, true, job);
+  return seq;
 }
 
 void JobStore::Update(const v1::Job& job) {
   {
     std::lock_guard lock(staged_mutex_);
     if (const auto found = staged_.find(job.id()); found != staged_.end()) {
-      StageLocked(false, found->second.seq, job);
+      StageLocked(found->second.seq, found->second.insert, job);
       return;
     }
   }
@@ -136,7 +135,7 @@ void JobStore::Update(const v1::Job& job) {
   const auto seq = CommittedSeq(job.id());
   if (seq == 0) Fail(ErrorCode::kNotFound, "no job " + job.id());
   std::lock_guard lock(staged_mutex_);
-  StageLocked(false, seq, job);
+  StageLocked(seq, false, job);
 }
 
 void JobStore::Flush() {
@@ -150,8 +149,9 @@ void JobStore::Flush() {
     }
     // This thread commits everything staged so far, its own writes and those of the threads waiting.
     committing_ = true;
-    const auto batch = std::move(pending_);
-    pending_.clear();
+    std::vector<Staged> batch;
+    batch.reserve(staged_.size());
+    for (const auto& [id, staged] : staged_) batch.push_back(staged);
     const auto upto = writes_staged_;
     lock.unlock();
     std::string failure;
@@ -164,8 +164,14 @@ void JobStore::Flush() {
     committing_ = false;
     if (failure.empty()) {
       writes_durable_ = upto;
-      for (auto it = staged_.begin(); it != staged_.end();) {
-        it = it->second.write <= upto ? staged_.erase(it) : std::next(it);
+      // A job written again meanwhile stays staged, now with its row.
+      for (const auto& written : batch) {
+        const auto found = staged_.find(written.job.id());
+        if (found->second.write <= upto) {
+          staged_.erase(found);
+        } else {
+          found->second.insert = false;
+        }
       }
     } else {
       broken_ = "job store " + file_.string() + ": a commit of " + std::to_string(batch.size()) +
@@ -176,7 +182,7 @@ void JobStore::Flush() {
   }
 }
 
-void JobStore::Commit(const std::vector<Write>& batch) {
+void JobStore::Commit(const std::vector<Staged>& batch) {
   std::lock_guard lock(mutex_);
   Exec(db_, "BEGIN IMMEDIATE", kStore);
   try {
@@ -185,11 +191,11 @@ void JobStore::Commit(const std::vector<Write>& batch) {
         kStore);
     Statement update(db_, "UPDATE jobs SET state = ?, priority = ?, bytes = ?, job = ? WHERE seq = ?",
                      kStore);
-    for (const auto& write : batch) {
-      const auto& job = write.job;
-      if (write.insert) {
+    for (const auto& staged : batch) {
+      const auto& job = staged.job;
+      if (staged.insert) {
         insert.Reset();
-        insert.Bind(1, write.seq);
+        insert.Bind(1, staged.seq);
         insert.BindText(2, job.id());
         insert.Bind(3, job.state());
         insert.Bind(4, job.priority());
@@ -203,7 +209,7 @@ void JobStore::Commit(const std::vector<Write>& batch) {
         update.Bind(2, job.priority());
         update.Bind(3, StoredBytes(job));
         update.Bind(4, job.SerializeAsString());
-        update.Bind(5, write.seq);
+        update.Bind(5, staged.seq);
         update.Step();
       }
     }

@@ -83,21 +83,19 @@ class JobStore {
   bool Broken();
 
  private:
+  // A job's latest write not yet committed (several writes of one job between commits are one row
+  // write at the next).
   struct Staged {
     std::int64_t seq = 0;
     v1::Job job;
     std::uint64_t write = 0;  // its number among all staged writes
-  };
-  struct Write {
-    bool insert = false;
-    std::int64_t seq = 0;
-    v1::Job job;
+    bool insert = false;      // the job has no row yet
   };
   // The seq of a committed job, or 0.
   std::int64_t CommittedSeq(const std::string& id);
-  std::int64_t StageLocked(bool insert, std::int64_t seq, const v1::Job& job);
+  void StageLocked(std::int64_t seq, bool insert, const v1::Job& job);
   // Writes `batch` in one transaction; throws (after rolling back) when the database refuses.
-  void Commit(const std::vector<Write>& batch);
+  void Commit(const std::vector<Staged>& batch);
   void ThrowIfBroken() const;
 
   std::filesystem::path file_;
@@ -108,8 +106,7 @@ class JobStore {
 
   std::mutex staged_mutex_;  // guards everything below
   std::condition_variable committed_;
-  std::unordered_map<std::string, Staged> staged_;  // by id: the latest write not yet committed
-  std::vector<Write> pending_;                      // what the next commit writes, in order
+  std::unordered_map<std::string, Staged> staged_;  // by id: what the next commit writes
   std::uint64_t writes_staged_ = 0;
   std::uint64_t writes_durable_ = 0;
   bool committing_ = false;

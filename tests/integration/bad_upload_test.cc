@@ -7,32 +7,11 @@
 
 #include "common/sha256.h"
 #include "tests/integration/service_harness.h"
+#include "tests/integration/upload_requests.h"
 
 namespace endorecon::testing {
 namespace {
 namespace fs = std::filesystem;
-
-v1::FileEntry Entry(const std::string& path, const std::string& bytes) {
-  v1::FileEntry entry;
-  entry.set_path(path);
-  entry.set_size(static_cast<std::int64_t>(bytes.size()));
-  entry.set_sha256(Sha256Hex(bytes));
-  return entry;
-}
-
-v1::UploadRequest ManifestOf(const std::vector<v1::FileEntry>& entries) {
-  v1::UploadRequest request;
-  for (const auto& entry : entries) *request.mutable_manifest()->add_files() = entry;
-  return request;
-}
-
-v1::UploadRequest Chunk(const std::string& path, std::int64_t offset, const std::string& data) {
-  v1::UploadRequest request;
-  request.mutable_chunk()->set_path(path);
-  request.mutable_chunk()->set_offset(offset);
-  request.mutable_chunk()->set_data(data);
-  return request;
-}
 
 struct Outcome {
   grpc::Status status;

@@ -15,6 +15,7 @@
 #include "endorecon/v1/worker_service.grpc.pb.h"
 #include "tests/integration/sanitizer_build.h"
 #include "tests/integration/service_harness.h"
+#include "tests/integration/upload_requests.h"
 
 namespace endorecon::testing {
 namespace {
@@ -124,33 +125,16 @@ ProcessUse UseOf(pid_t pid) {
   return use;
 }
 
-v1::UploadRequest ManifestOf(const std::string& path, const std::string& bytes) {
-  v1::UploadRequest request;
-  auto* entry = request.mutable_manifest()->add_files();
-  entry->set_path(path);
-  entry->set_size(static_cast<std::int64_t>(bytes.size()));
-  entry->set_sha256(Sha256Hex(bytes));
-  return request;
-}
-
-v1::UploadRequest ChunkOf(const std::string& path, std::int64_t offset, const std::string& data) {
-  v1::UploadRequest request;
-  request.mutable_chunk()->set_path(path);
-  request.mutable_chunk()->set_offset(offset);
-  request.mutable_chunk()->set_data(data);
-  return request;
-}
-
 TEST(StalledPeerTest, AnUploadWhoseSenderStopsLosesItsSlotAndTheNextUploadThenProceeds) {
   Cluster cluster({"--stall-timeout", "2", "--max-uploads", "1"});
   const std::string stalled_bytes(200000, 's');
-  const auto stalled_manifest = ManifestOf("stalled.bin", stalled_bytes);
+  const auto stalled_manifest = ManifestOf({Entry("stalled.bin", stalled_bytes)});
   grpc::ClientContext stalled_context;
   stalled_context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60 * kSlowdown));
   v1::UploadStatus stalled_status;
   auto stalled = cluster.stub().Upload(&stalled_context, &stalled_status);
   ASSERT_TRUE(stalled->Write(stalled_manifest));
-  ASSERT_TRUE(stalled->Write(ChunkOf("stalled.bin", 0, stalled_bytes.substr(0, 100000))));
+  ASSERT_TRUE(stalled->Write(Chunk("stalled.bin", 0, stalled_bytes.substr(0, 100000))));
   // It holds the only slot once its first chunk is committed; then it sends nothing more.
   ASSERT_TRUE(WaitUntil(
       [&] {
@@ -167,8 +151,8 @@ TEST(StalledPeerTest, AnUploadWhoseSenderStopsLosesItsSlotAndTheNextUploadThenPr
   next_context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(30 * kSlowdown));
   v1::UploadStatus next_status;
   auto next = cluster.stub().Upload(&next_context, &next_status);
-  ASSERT_TRUE(next->Write(ManifestOf("next.bin", next_bytes)));
-  ASSERT_TRUE(next->Write(ChunkOf("next.bin", 0, next_bytes)));
+  ASSERT_TRUE(next->Write(ManifestOf({Entry("next.bin", next_bytes)})));
+  ASSERT_TRUE(next->Write(Chunk("next.bin", 0, next_bytes)));
   next->WritesDone();
   const auto next_result = next->Finish();
   const auto waited = std::chrono::steady_clock::now() - start;
