@@ -44,5 +44,25 @@ TEST(FrameReaderTest, AnImageDeclaringASizeOverOpenCvsLimitIsRefused) {
   EXPECT_NE(message.find("wide.bmp: cannot decode the image"), std::string::npos) << message;
 }
 
+// Object captures store the background as transparency (NeRF-synthetic): RGBA is composited onto
+// the background it is read with, straight alpha, rounded.
+TEST(FrameReaderTest, RgbaImagesAreCompositedOntoTheBackground) {
+  testing::TempDir dir("frames");
+  cv::Mat bgra(1, 3, CV_8UC4);
+  bgra.at<cv::Vec4b>(0, 0) = {10, 20, 200, 255};  // opaque red-ish
+  bgra.at<cv::Vec4b>(0, 1) = {0, 0, 0, 0};        // transparent
+  bgra.at<cv::Vec4b>(0, 2) = {0, 100, 200, 51};   // a fifth opaque
+  cv::imwrite((dir.path() / "object.png").string(), bgra);
+  const RgbImage white = ReadRgbImage(dir.path() / "object.png");
+  EXPECT_TRUE(white.transparent);
+  EXPECT_EQ(white.rgb, (std::vector<std::uint8_t>{200, 20, 10, 255, 255, 255, 244, 224, 204}));
+  const RgbImage black = ReadRgbImage(dir.path() / "object.png", {0, 0, 0});
+  EXPECT_EQ(black.rgb, (std::vector<std::uint8_t>{200, 20, 10, 0, 0, 0, 40, 20, 0}));
+
+  cv::Mat opaque(2, 2, CV_8UC4, cv::Scalar(1, 2, 3, 255));
+  cv::imwrite((dir.path() / "opaque.png").string(), opaque);
+  EXPECT_FALSE(ReadRgbImage(dir.path() / "opaque.png").transparent);
+}
+
 }  // namespace
 }  // namespace endorecon::scene

@@ -59,6 +59,7 @@ TEST(TrainConfigTest, JsonRoundTripKeepsEveryKey) {
   c.occupancy_resolution = 33;
   c.occupancy_every = 0.1875;
   c.occupancy_min_alpha = 0.0078125f;
+  c.background = "white";
   c.curve_interval_s = 4.5;
   c.curve_frames = 7;
   c.field.encoding = "frequency";
@@ -87,6 +88,7 @@ TEST(TrainConfigTest, JsonRoundTripKeepsEveryKey) {
                                               "adaptive_refresh",
                                               "adaptive_sampling",
                                               "adaptive_warmup",
+                                              "background",
                                               "curve_frames",
                                               "curve_interval_s",
                                               "depth_loss",
@@ -170,6 +172,7 @@ TEST(TrainConfigTest, JsonRoundTripKeepsEveryKey) {
   EXPECT_EQ(b.occupancy_resolution, 33);
   EXPECT_EQ(b.occupancy_every, 0.1875);
   EXPECT_EQ(b.occupancy_min_alpha, 0.0078125f);
+  EXPECT_EQ(b.background, "white");
   EXPECT_EQ(b.curve_interval_s, 4.5);
   EXPECT_EQ(b.curve_frames, 7);
   EXPECT_EQ(b.field.encoding, "frequency");
@@ -211,6 +214,7 @@ TEST(TrainConfigTest, BadValuesAreRejected) {
   TrainConfig config;
   EXPECT_THROW(ApplyJson(nlohmann::json{{"iterations", "many"}}, config), Error);
   EXPECT_THROW(ApplyJson(nlohmann::json{{"depth_loss", "l3"}}, config), Error);
+  EXPECT_THROW(ApplyJson(nlohmann::json{{"background", "grey"}}, config), Error);
   EXPECT_THROW(ApplyJson(nlohmann::json{{"rays_per_batch", 0}}, config), Error);
   EXPECT_THROW(TrainConfig::Preset("gpu-ultra"), Error);
   // Each names its key.

@@ -121,6 +121,50 @@ TEST(VolumeRenderer, ConstantSlabMatchesClosedForm) {
   EXPECT_EQ(out.samples_used, 4000);
 }
 
+TEST(VolumeRenderer, BackgroundShowsThroughWhatTheSlabLets) {
+  // The constant slab in front of a background bg: C = c (1 - e^{-sigma L}) + bg e^{-sigma L}.
+  const double sigma = 0.7, length = 1.5, color[3] = {0.2, 0.5, 0.9}, background[3] = {1.0, 0.25, 0.0};
+  const Ray ray = UniformRay(500, 0.0, length, sigma, color);
+  std::vector<double> w;
+  RayComposite<double> out = Render(ray, w);
+  AddBackground(out, background);
+  const double through = std::exp(-sigma * length);
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(out.rgb[c], color[c] * (1 - through) + background[c] * through, 1e-12);
+}
+
+TEST(VolumeRenderer, BackgroundBackwardMatchesCentralDifferences) {
+  Ray ray = RandomRay(12, 5);
+  for (double& sigma : ray.sigma) sigma *= 0.05;  // a thin ray: the background carries weight
+  const int n = ray.n();
+  const double background[3] = {0.9, 0.6, 0.3};
+  const RayCompositeGrad<double> upstream{{0.3, -1.2, 0.7}, 0.45, -0.8};
+  auto loss = [&] {
+    std::vector<double> w;
+    RayComposite<double> out = Render(ray, w);
+    AddBackground(out, background);
+    double l = upstream.depth * out.depth + upstream.opacity * out.opacity;
+    for (int c = 0; c < 3; ++c) l += upstream.rgb[c] * out.rgb[c];
+    return l;
+  };
+  std::vector<double> w;
+  RayComposite<double> out = Render(ray, w);
+  AddBackground(out, background);
+  EXPECT_GT(out.transmittance, 0.2);
+  RayCompositeGrad<double> grad = upstream;
+  BackgroundBackward(background, grad);
+  std::vector<double> d_sigma(n, 0.0), d_rgb(3 * n, 0.0);
+  CompositeRayBackward(ray.sigma.data(), ray.rgb.data(), ray.s.data(), ray.delta.data(), w.data(), out, grad,
+                       static_cast<const double*>(nullptr), d_sigma.data(), d_rgb.data());
+  for (int j = 0; j < n; ++j) {
+    const double fd = CentralDifference(ray.sigma[j], 1e-6, loss);
+    EXPECT_TRUE(CloseRelative(d_sigma[j], fd, 1e-7)) << "sigma " << j << ": " << d_sigma[j] << " vs " << fd;
+    for (int c = 0; c < 3; ++c) {
+      const double fd_c = CentralDifference(ray.rgb[3 * j + c], 1e-6, loss);
+      EXPECT_TRUE(CloseRelative(d_rgb[3 * j + c], fd_c, 1e-7)) << "rgb " << j << "," << c;
+    }
+  }
+}
+
 TEST(VolumeRenderer, StepInDensityPutsDepthAtTheStep) {
   // Empty space, then an opaque medium from s0 on: all weight lands on the first opaque sample.
   const double color[3] = {0.1, 0.2, 0.3};

@@ -65,10 +65,11 @@ void RebuildOccupancy(train::Trainer& trainer, nlohmann::json& left_out) {
 ReconstructSummary RunPipeline(const ReconstructOptions& options, const ReconstructHooks& hooks) {
   const auto run_start = Clock::now();
   const int threads = tbb::this_task_arena::max_concurrency();
+  train::TrainConfig config = ResolveConfig(options);
   scene::LoadOptions load;
   load.force_static = options.force_static;
+  if (config.background == "black") load.alpha_background = {0, 0, 0};
   const scene::Clip clip = scene::LoadClip(options.clip_dir, load);
-  train::TrainConfig config = ResolveConfig(options);
   const FrameSplit split = SplitFrames(clip.frame_count(), config.holdout);
   const train::SceneFit fit = train::FitToScene(clip, config);
   const fs::path out_dir = options.out_dir;

@@ -1,10 +1,12 @@
-// endorecon-worker synth: writes a synthetic clip with known ground truth (EndoNeRF layout + gt/).
+// endorecon-worker synth: writes a synthetic clip with known ground truth (EndoNeRF layout + gt/), or
+// with --object an object capture in the NeRF-synthetic layout (transforms.json, RGBA images).
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
 #include <memory>
 
 #include "worker/engine/scene/synthetic_clip.h"
+#include "worker/engine/scene/synthetic_object.h"
 #include "worker/runtime/commands.h"
 
 namespace endorecon::worker {
@@ -15,14 +17,15 @@ Command AddSynthCommand(CLI::App& app) {
   auto options = std::make_shared<scene::SynthOptions>();
   auto flags = std::make_shared<std::pair<bool, bool>>(false, false);  // --no-tool, --no-depth
   auto no_noise = std::make_shared<bool>(false);
+  auto object = std::make_shared<bool>(false);
   cmd->add_option("out", *out, "output folder")->required();
-  cmd->add_option("--frames", options->frames, "number of frames")
+  cmd->add_option("--frames", options->frames, "number of frames (views with --object; default there 100)")
       ->capture_default_str()
       ->check(CLI::Range(1, 100000));
-  cmd->add_option("--width", options->width, "frame width")
+  cmd->add_option("--width", options->width, "frame width (with --object default 200)")
       ->capture_default_str()
       ->check(CLI::Range(8, 8192));
-  cmd->add_option("--height", options->height, "frame height")
+  cmd->add_option("--height", options->height, "frame height (with --object default 200)")
       ->capture_default_str()
       ->check(CLI::Range(8, 8192));
   cmd->add_option("--seed", options->seed, "random seed")->capture_default_str();
@@ -40,7 +43,21 @@ Command AddSynthCommand(CLI::App& app) {
   cmd->add_flag("--recording", options->recording,
                 "also write recording/: the raw stereo pair with lens distortion, its calibration, poses and "
                 "checkerboard views (input for prepare and calibrate)");
-  return [out, options, flags, no_noise] {
+  cmd->add_flag("--object", *object,
+                "an object capture instead: cameras around a textured object at the origin, RGBA images on "
+                "transparency, transforms.json as NeRF-synthetic (the endoscope options do not apply)");
+  return [cmd, out, options, flags, no_noise, object] {
+    if (*object) {
+      scene::ObjectSynthOptions object_options;
+      if (cmd->count("--frames") > 0) object_options.views = options->frames;
+      if (cmd->count("--width") > 0) object_options.width = options->width;
+      if (cmd->count("--height") > 0) object_options.height = options->height;
+      object_options.seed = options->seed;
+      scene::WriteSyntheticObject(object_options, *out);
+      spdlog::info("wrote synthetic object capture: {} ({} views, {}x{})", *out, object_options.views,
+                   object_options.width, object_options.height);
+      return 0;
+    }
     options->tool = !flags->first;
     options->noise = !*no_noise;
     options->depth = !flags->second;

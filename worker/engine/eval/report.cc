@@ -32,6 +32,7 @@ namespace {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
+using nlohmann::literals::operator""_json_pointer;
 
 constexpr int kDisplayWidth = 480;              // wider frames are downscaled for the page
 constexpr std::size_t kSurfacePoints = 600000;  // 3D grid points over all frames: ~6 MB of the page
@@ -285,7 +286,10 @@ fs::path WriteReport(const fs::path& results_dir) {
                   ": no \"clip\" (the clip folder) to show the input of");
     }
     const std::string clip_dir = config["clip"];
-    views.clip = scene::LoadClip(clip_dir);
+    scene::LoadOptions load;  // transparent inputs shown on the background the run used
+    if (config.contains("/train/background"_json_pointer) && config["train"]["background"] == "black")
+      load.alpha_background = {0, 0, 0};
+    views.clip = scene::LoadClip(clip_dir, load);
     views.cameras = views.clip->cameras;
     views.times = views.clip->times;
     data["kind"] = "reconstruction";

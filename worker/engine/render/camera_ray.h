@@ -27,12 +27,39 @@ struct OccupancyView {
   int res = 0;
 };
 
-// The ray of `pixel` (row-major index) of `view`; its span is [near, far], or the occupied span of
-// that range when the occupancy view has cells.
+// The part [*lo, *hi] of [near, far] where origin + s * direction lies in the box (slab test); a ray
+// that misses the box gets the empty span [near, near]: nothing is sampled and it sees the background.
+// Every ray of a frustum box stays inside it between near and far, so only object boxes cut rays.
+ENDORECON_HD void BoxSpan(const scene::BoxFrame& box, const double* origin, const double* direction, double near,
+                          double far, double* lo, double* hi) {
+  double enter = near, leave = far;
+  for (int c = 0; c < 3; ++c) {
+    const double low = box.min[c], high = box.min[c] + 1.0 / box.inv_size[c];
+    if (direction[c] == 0) {
+      if (origin[c] < low || origin[c] > high) leave = enter - 1;  // parallel to the slab, outside it
+      continue;
+    }
+    double t0 = (low - origin[c]) / direction[c], t1 = (high - origin[c]) / direction[c];
+    if (t0 > t1) {
+      const double t = t0;
+      t0 = t1;
+      t1 = t;
+    }
+    enter = t0 > enter ? t0 : enter;
+    leave = t1 < leave ? t1 : leave;
+  }
+  if (!(enter < leave)) enter = leave = near;
+  *lo = enter;
+  *hi = leave;
+}
+
+// The ray of `pixel` (row-major index) of `view`; its span is the part of [near, far] in the box, or
+// the occupied span of that part when the occupancy view has cells.
 ENDORECON_HD CameraRay CameraRayOfPixel(const scene::PinholeView& view, int pixel, const scene::BoxFrame& box,
                                         const OccupancyView& occupancy, double near, double far) {
   CameraRay ray;
   scene::PixelRay(view, pixel, ray.origin, ray.direction);
+  BoxSpan(box, ray.origin, ray.direction, near, far, &near, &far);
   double lo = near, hi = far;
   if (occupancy.cells != nullptr)
     RaySpan(occupancy.cells, occupancy.res, box, ray.origin, ray.direction, near, far, &lo, &hi);

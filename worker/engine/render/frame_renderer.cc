@@ -158,7 +158,8 @@ void FrameRenderer::RenderChunk(const scene::Camera& camera, float time, const i
   float* scores[3] = {result.uncertainty, result.aleatoric, result.epistemic};
   tbb::parallel_for(0, count, [&](int r) {
     const std::size_t o = std::size_t(r) * m;
-    const auto ray = CompositeRay(&sigma_[o], &color_[3 * o], &s_[o], &delta_[o], m, &weights_[o]);
+    auto ray = CompositeRay(&sigma_[o], &color_[3 * o], &s_[o], &delta_[o], m, &weights_[o]);
+    AddBackground(ray, settings_.background);
     for (int c = 0; c < 3; ++c) result.rgb[3 * r + c] = ray.rgb[c];
     result.depth[r] = ray.depth + (1.0f - ray.opacity) * far;
     result.opacity[r] = ray.opacity;

@@ -34,11 +34,12 @@ struct FrameRenderSettings {
   float color_weight = 1.0f;  // lambda of the ray score
   float variance_eps = field::kDefaultVarianceEps;  // eps in var = softplus(l) + eps
   std::uint64_t mc_seed = 0;  // dropout masks of pass k in a chunk: a pure function of (seed, k, first pixel)
+  float background[3] = {0, 0, 0};  // what rays see past the samples (RGB in [0, 1])
 };
 
 struct RenderedFrame {
   int width = 0, height = 0;
-  std::vector<float> rgb;      // H*W*3 in [0, 1]
+  std::vector<float> rgb;      // H*W*3 in [0, 1], the background seen through what is transparent
   std::vector<float> depth;    // H*W z-depth, clip units: sum_j w_j s_j + (1 - opacity) * far
   std::vector<float> opacity;  // H*W
   // H*W ray scores with mc_passes > 0, else empty: total = aleatoric + epistemic (per sample).

@@ -8,6 +8,8 @@
 // (past which alpha is 1 and exp(-tau) is 0 in double anyway), so densities up to float's maximum
 // and infinite intervals give finite results; the clamp's gradient is 0. NaN inputs propagate.
 //
+// A background colour seen through what the samples leave: AddBackground and BackgroundBackward.
+//
 // Depth is the unnormalised sum_j w_j s_j (EndoNeRF's convention): a ray that hits nothing reports
 // depth 0 and a partly transparent ray a depth pulled towards 0. Divide by the opacity (where it
 // is > 0) for the expected depth of the termination point.
@@ -111,6 +113,20 @@ ENDORECON_HD void CompositeRayBackward(const S* sigma, const S* rgb, const S* s,
     later += g * w;
     transmittance_after += w;
   }
+}
+
+// A background behind the samples (object scenes): the ray's colour gains T bg, the light the samples
+// let through, with T = 1 - sum_j w_j (the transmittance after the last sample used).
+template <typename S>
+ENDORECON_HD void AddBackground(RayComposite<S>& ray, const S* background) {
+  for (int c = 0; c < 3; ++c) ray.rgb[c] += ray.transmittance * background[c];
+}
+
+// Its backward, before CompositeRayBackward: C = sum_j w_j c_j + (1 - sum_j w_j) bg, so every weight
+// also carries -bg . dL/dC, which is a gradient on the opacity sum_j w_j.
+template <typename S>
+ENDORECON_HD void BackgroundBackward(const S* background, RayCompositeGrad<S>& grad) {
+  grad.opacity -= grad.rgb[0] * background[0] + grad.rgb[1] * background[1] + grad.rgb[2] * background[2];
 }
 
 }  // namespace endorecon::render

@@ -36,6 +36,13 @@ struct Clip {
 
   bool is_static = false;  // no per-frame time, or the user said --static
 
+  // Object captures (NeRF-synthetic style): the images had transparent pixels, composited onto
+  // LoadOptions::alpha_background when read; and the cameras stand around an object at the origin
+  // (a centred rig): it lies within object_radius of the origin, and the field's box is that
+  // sphere's cube instead of every frustum (scene_box.h). 0: not a centred rig.
+  bool transparent = false;
+  double object_radius = 0;
+
   int frame_count() const { return static_cast<int>(cameras.size()); }
   bool has_depth() const { return !depth.empty(); }
   bool has_masks() const { return !tool_mask.empty(); }

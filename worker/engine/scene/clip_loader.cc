@@ -37,6 +37,7 @@ void LoadGroundTruth(const fs::path& dir, const LoadOptions& options, Clip& clip
   truth.height = clip.height;
   FrameReadOptions read_options;
   read_options.max_pixels_per_frame = options.max_pixels_per_frame;
+  read_options.alpha_background = options.alpha_background;
   ReadFrames(frames, read_options, truth);
   clip.gt_rgb = std::move(truth.rgb);
   clip.gt_depth = std::move(truth.depth);

@@ -156,6 +156,7 @@ Clip LoadEndoNerfClip(const fs::path& dir, const LoadOptions& options) {
   clip.source = dir.string();
   FrameReadOptions read_options;
   read_options.max_pixels_per_frame = options.max_pixels_per_frame;
+  read_options.alpha_background = options.alpha_background;
   ReadFrames(frames, read_options, clip);
   MatchImageSize(images[0], clip.width, clip.height, poses.cameras);
 

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cctype>
 #include <cmath>
 #include <exception>
@@ -109,10 +110,30 @@ std::vector<float> ReadDepth(const fs::path& path, const FrameReadOptions& optio
   return depth;
 }
 
-std::vector<std::uint8_t> ReadRgb(const fs::path& path, int width, int height) {
-  RgbImage image = ReadRgbImage(path);
+std::vector<std::uint8_t> ReadRgb(const fs::path& path, const FrameReadOptions& options, int width, int height,
+                                  std::atomic<bool>& transparent) {
+  RgbImage image = ReadRgbImage(path, options.alpha_background);
   CheckSize(path, image.width, image.height, width, height);
+  if (image.transparent) transparent = true;
   return std::move(image.rgb);
+}
+
+// Straight-alpha RGBA (OpenCV's BGRA order) onto `background` (RGB), rounded; true when some pixel
+// was not opaque.
+bool CompositeOnto(const cv::Mat& bgra, const std::array<std::uint8_t, 3>& background, cv::Mat& rgb) {
+  rgb.create(bgra.rows, bgra.cols, CV_8UC3);
+  bool transparent = false;
+  for (int y = 0; y < bgra.rows; ++y) {
+    const std::uint8_t* in = bgra.ptr<std::uint8_t>(y);
+    std::uint8_t* out = rgb.ptr<std::uint8_t>(y);
+    for (int x = 0; x < bgra.cols; ++x, in += 4, out += 3) {
+      const int a = in[3];
+      transparent = transparent || a < 255;
+      for (int c = 0; c < 3; ++c)
+        out[c] = static_cast<std::uint8_t>((in[2 - c] * a + background[c] * (255 - a) + 127) / 255);
+    }
+  }
+  return transparent;
 }
 
 void CheckAllOrNone(const std::vector<FrameFiles>& frames, fs::path FrameFiles::*part, const char* what) {
@@ -147,8 +168,9 @@ std::vector<fs::path> ListFiles(const fs::path& dir, const std::vector<std::stri
   return files;
 }
 
-RgbImage ReadRgbImage(const fs::path& path) {
+RgbImage ReadRgbImage(const fs::path& path, const std::array<std::uint8_t, 3>& background) {
   cv::Mat image = DecodeImageFile(path);
+  bool transparent = false;
   if (image.depth() == CV_16U) image.convertTo(image, CV_8U, 1.0 / 257.0);
   if (image.depth() != CV_8U) FailInvalid(path.string() + ": colour images must be 8- or 16-bit");
   switch (image.channels()) {
@@ -158,14 +180,17 @@ RgbImage ReadRgbImage(const fs::path& path) {
     case 3:
       cv::cvtColor(image, image, cv::COLOR_BGR2RGB);
       break;
-    case 4:
-      cv::cvtColor(image, image, cv::COLOR_BGRA2RGB);
+    case 4: {
+      cv::Mat rgb;
+      transparent = CompositeOnto(image, background, rgb);
+      image = rgb;
       break;
+    }
     default:
       FailInvalid(path.string() + ": colour images must have 1, 3 or 4 channels, found " +
                   std::to_string(image.channels()));
   }
-  RgbImage result{image.cols, image.rows, {}};
+  RgbImage result{image.cols, image.rows, {}, transparent};
   result.rgb.assign(image.data, image.data + image.total() * 3);  // cvtColor's output is continuous
   return result;
 }
@@ -179,7 +204,7 @@ void ReadFrames(const std::vector<FrameFiles>& frames, const FrameReadOptions& o
 
   RgbImage first;
   if (clip.width == 0 && clip.height == 0) {
-    first = ReadRgbImage(frames[0].image);
+    first = ReadRgbImage(frames[0].image, options.alpha_background);
     clip.width = first.width;
     clip.height = first.height;
   }
@@ -194,15 +219,16 @@ void ReadFrames(const std::vector<FrameFiles>& frames, const FrameReadOptions& o
   clip.right_rgb.assign(f0.right_image.empty() ? 0 : n, {});
 
   std::vector<std::exception_ptr> errors(n);
+  std::atomic<bool> transparent = first.transparent;
   const int w = clip.width, h = clip.height;
   tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
     try {
       const FrameFiles& f = frames[i];
-      clip.rgb[i] = (i == 0 && !first.rgb.empty()) ? std::move(first.rgb) : ReadRgb(f.image, w, h);
+      clip.rgb[i] = (i == 0 && !first.rgb.empty()) ? std::move(first.rgb) : ReadRgb(f.image, options, w, h, transparent);
       if (!f.depth.empty()) clip.depth[i] = ReadDepth(f.depth, options, w, h);
       if (!f.tool_mask.empty()) clip.tool_mask[i] = ReadMask(f.tool_mask, options, w, h);
       if (!f.eval_mask.empty()) clip.eval_mask[i] = ReadMask(f.eval_mask, options, w, h);
-      if (!f.right_image.empty()) clip.right_rgb[i] = ReadRgb(f.right_image, w, h);
+      if (!f.right_image.empty()) clip.right_rgb[i] = ReadRgb(f.right_image, options, w, h, transparent);
     } catch (...) {
       errors[i] = std::current_exception();
     }
@@ -210,6 +236,7 @@ void ReadFrames(const std::vector<FrameFiles>& frames, const FrameReadOptions& o
   for (const std::exception_ptr& error : errors) {
     if (error) std::rethrow_exception(error);
   }
+  clip.transparent = transparent;
 }
 
 }  // namespace endorecon::scene

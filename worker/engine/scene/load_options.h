@@ -1,13 +1,18 @@
 // What a clip loader may accept, set by the caller (the reconstruct command, the service's limits).
 #pragma once
 
+#include <array>
 #include <cstddef>
+#include <cstdint>
 
 namespace endorecon::scene {
 
 struct LoadOptions {
   std::size_t max_pixels_per_frame = std::size_t{4096} * 4096;  // larger frames: RESOURCE_EXHAUSTED
   bool force_static = false;  // mark the clip static (one time for all frames) whatever its layout says
+  // The colour transparent pixels of RGBA images are composited onto (RGB): NeRF-synthetic's white
+  // unless the run's background is black (train_config.h "background").
+  std::array<std::uint8_t, 3> alpha_background = {255, 255, 255};
 };
 
 }  // namespace endorecon::scene

@@ -34,4 +34,16 @@ SceneBox FrustumBox(const std::vector<Camera>& cameras, double near, double far,
   return box;
 }
 
+SceneBox ObjectBox(double radius, double padding) {
+  SceneBox box;
+  const double half = radius * (1.0 + 2.0 * padding);
+  box.min.setConstant(-half);
+  box.max.setConstant(half);
+  return box;
+}
+
+SceneBox ClipBox(const Clip& clip) {
+  return clip.object_radius > 0 ? ObjectBox(clip.object_radius) : FrustumBox(clip.cameras, clip.near, clip.far);
+}
+
 }  // namespace endorecon::scene

@@ -1,12 +1,15 @@
 // The axis-aligned box the field lives in: every camera frustum between the clip's near and far,
-// padded. Field coordinates are positions mapped into [0,1]^3 by this box; distances along rays
-// are measured in units of the box's longest side so densities do not depend on the clip's units.
+// padded, or for a camera rig centred on an object the cube around the object (ClipBox). Field
+// coordinates are positions mapped into [0,1]^3 by this box; rays are sampled only inside it
+// (render/camera_ray.h); distances along rays are measured in units of the box's longest side so
+// densities do not depend on the clip's units.
 #pragma once
 
 #include <Eigen/Core>
 #include <vector>
 
 #include "worker/engine/scene/camera.h"
+#include "worker/engine/scene/clip.h"
 #include "worker/engine/scene/view_geometry.h"
 
 namespace endorecon::scene {
@@ -30,5 +33,13 @@ struct SceneBox {
 
 // The box around all cameras' frusta between near and far, padded by `padding` of its size per side.
 SceneBox FrustumBox(const std::vector<Camera>& cameras, double near, double far, double padding = 0.05);
+
+// The cube around the sphere of `radius` about the origin, padded by `padding` of its side per side.
+SceneBox ObjectBox(double radius, double padding = 0.05);
+
+// A clip's box: ObjectBox of a centred rig's object_radius, otherwise FrustumBox of its cameras
+// (a frustum box around cameras that circle an object would spend most of the field on empty space
+// outside the object).
+SceneBox ClipBox(const Clip& clip);
 
 }  // namespace endorecon::scene

@@ -29,15 +29,7 @@ nlohmann::json OptionsJson(const SynthOptions& o) {
 }
 
 void PrepareFolder(const fs::path& out, const SynthOptions& options) {
-  if (fs::exists(out) && !fs::is_empty(out)) {
-    if (!fs::exists(out / "synth.json")) {
-      FailInvalid(out.string() + ": exists and is not empty (and holds no synthetic clip to replace)");
-    }
-    for (const char* entry :
-         {"images", "depth", "masks", "images_right", "gt", "recording", "poses_bounds.npy", "stereo.json"}) {
-      fs::remove_all(out / entry);
-    }
-  }
+  ClearSyntheticFolder(out);
   for (const char* dir : {"images", "gt/images", "gt/depth"}) fs::create_directories(out / dir);
   if (options.depth) fs::create_directories(out / "depth");
   if (options.tool) fs::create_directories(out / "masks");

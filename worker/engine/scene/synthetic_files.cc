@@ -28,6 +28,18 @@ void WriteText(const std::filesystem::path& path, const std::string& text) {
   if (!file) Fail(ErrorCode::kUnavailable, "cannot write " + path.string());
 }
 
+void ClearSyntheticFolder(const std::filesystem::path& out) {
+  namespace fs = std::filesystem;
+  if (!fs::exists(out) || fs::is_empty(out)) return;
+  if (!fs::exists(out / "synth.json")) {
+    FailInvalid(out.string() + ": exists and is not empty (and holds no synthetic clip to replace)");
+  }
+  for (const char* entry : {"images", "depth", "masks", "images_right", "gt", "recording", "poses_bounds.npy",
+                            "stereo.json", "transforms.json"}) {
+    fs::remove_all(out / entry);
+  }
+}
+
 std::string FrameName(int index) {
   char name[32];
   std::snprintf(name, sizeof(name), "%06d", index);

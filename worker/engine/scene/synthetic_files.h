@@ -17,6 +17,11 @@ void PutRgb(cv::Mat& bgr, int u, int v, const std::array<float, 3>& rgb);
 void WritePng(const std::filesystem::path& path, const cv::Mat& image);
 void WriteText(const std::filesystem::path& path, const std::string& text);
 
+// Makes `out` ready for a synthetic clip: an empty or missing folder is fine; one that holds an
+// earlier synthetic clip (synth.json) loses what synth writes; any other non-empty folder is refused
+// (Error kInvalidArgument naming it).
+void ClearSyntheticFolder(const std::filesystem::path& out);
+
 // "000042": frame file names, six digits.
 std::string FrameName(int index);
 

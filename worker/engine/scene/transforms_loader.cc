@@ -4,7 +4,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <optional>
+#include <vector>
 
 #include "common/error.h"
 #include "worker/engine/scene/camera_json.h"
@@ -21,6 +23,7 @@ using nlohmann::json;
 // Near/far derived from depth maps or camera distances (see the header).
 constexpr double kDepthNearFactor = 0.8, kDepthFarFactor = 1.2;
 constexpr double kDistanceNearFactor = 0.05, kDistanceFarFactor = 2.5;
+constexpr double kObjectRadiusFactor = 0.5;
 
 fs::path ResolveFile(const fs::path& dir, const json& frame, const char* key, const std::string& where) {
   const json& value = frame[key];
@@ -108,9 +111,42 @@ void SetTimes(const json& frames, const std::string& file, Clip& clip) {
   clip.is_static = hi == lo;
 }
 
+// A centred rig: at least three cameras, each looking at the origin (its optical axis passes within
+// kCentredAxisMiss of its distance from it) from directions at least kCentredSpreadDeg apart from
+// their mean, as NeRF-synthetic and other object captures stand. A forward-facing capture (every
+// camera on one side) is not one.
+constexpr double kCentredAxisMiss = 0.25, kCentredSpreadDeg = 30;
+
+bool IsCentredRig(const std::vector<Camera>& cameras) {
+  if (cameras.size() < 3) return false;
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const Camera& camera : cameras) {
+    const Eigen::Vector3d origin = camera.c2w.col(3);
+    const Eigen::Vector3d forward = -camera.c2w.col(2).normalized();  // OpenGL: looking down -z
+    const double distance = origin.norm();
+    if (!(distance > 1e-9)) return false;
+    const double along = -origin.dot(forward);  // how far ahead the origin's closest point lies
+    if (!(along > 0) || (origin + along * forward).norm() > kCentredAxisMiss * distance) return false;
+    mean += origin / distance;
+  }
+  if (!(mean.norm() > 1e-9)) return true;  // directions cancel: cameras all round the object
+  mean.normalize();
+  double spread = 1;
+  for (const Camera& camera : cameras) spread = std::min(spread, mean.dot(camera.c2w.col(3).normalized()));
+  return spread < std::cos(kCentredSpreadDeg * std::numbers::pi / 180);
+}
+
 void SetNearFar(const json& top, const std::string& file, Clip& clip) {
   const std::optional<double> near = OptionalNumber(top, "near", file);
   const std::optional<double> far = OptionalNumber(top, "far", file);
+  std::vector<double> distances;
+  for (const Camera& camera : clip.cameras) distances.push_back(camera.c2w.col(3).norm());
+  std::vector<double> sorted = distances;
+  std::sort(sorted.begin(), sorted.end());
+  const double median = sorted[sorted.size() / 2];
+  // Object captures: the object fills at most the sphere of half the median camera distance (the
+  // NeRF-synthetic rig: cameras at 4.03, near 2, far 6).
+  if (IsCentredRig(clip.cameras)) clip.object_radius = kObjectRadiusFactor * median;
   double derived_near = 0, derived_far = 0;
   if (!near || !far) {
     float lo = INFINITY, hi = 0;
@@ -123,11 +159,10 @@ void SetNearFar(const json& top, const std::string& file, Clip& clip) {
     if (hi > 0) {
       derived_near = kDepthNearFactor * lo;
       derived_far = kDepthFarFactor * hi;
+    } else if (clip.object_radius > 0) {
+      derived_near = std::max(kDistanceNearFactor * median, sorted.front() - clip.object_radius);
+      derived_far = sorted.back() + clip.object_radius;
     } else {
-      std::vector<double> distances;
-      for (const Camera& camera : clip.cameras) distances.push_back(camera.c2w.col(3).norm());
-      std::nth_element(distances.begin(), distances.begin() + distances.size() / 2, distances.end());
-      const double median = distances[distances.size() / 2];
       if (!(median > 1e-9)) {
         FailInvalid(file +
                     ": cannot derive near and far (no depth maps, and the cameras sit at the origin); "
@@ -142,6 +177,10 @@ void SetNearFar(const json& top, const std::string& file, Clip& clip) {
   clip.near = near.value_or(derived_near);
   clip.far = far.value_or(derived_far);
   CheckNearFar(clip.near, clip.far, file);
+  if (clip.object_radius > 0) {
+    spdlog::info("{}: the cameras stand around the origin; the object is taken to lie within {:.6g} of it",
+                 file, clip.object_radius);
+  }
 }
 
 }  // namespace
@@ -173,6 +212,7 @@ Clip LoadTransformsClip(const fs::path& dir, const LoadOptions& options) {
   FrameReadOptions read_options;
   read_options.tool_value = 0;
   read_options.max_pixels_per_frame = options.max_pixels_per_frame;
+  read_options.alpha_background = options.alpha_background;
   read_options.depth_scale = OptionalNumber(top, "depth_unit_scale_factor", file).value_or(1.0);
   if (read_options.depth_scale <= 0) FailInvalid(file + ": \"depth_unit_scale_factor\" must be positive");
   ReadFrames(files, read_options, clip);

@@ -16,7 +16,11 @@ namespace endorecon::scene {
 // with a warning. Masks follow nerfstudio (0 = excluded, i.e. tool). Frames keep the file's order.
 // No "time" anywhere: a static clip with times 0; times outside [0, 1] are rescaled to it.
 // near/far: the top-level "near"/"far", otherwise 0.8 x the smallest and 1.2 x the largest depth
-// value, otherwise 0.05 and 2.5 x the median camera distance from the origin.
+// value, otherwise 0.05 and 2.5 x the median camera distance from the origin. A centred rig (every
+// camera looking at the origin, from directions spread at least 30 degrees about their mean: an object
+// capture) sets clip.object_radius to half the median camera distance, and without near/far or depth
+// its near/far are the nearest camera's distance less that radius and the farthest one's plus it.
+// RGBA images are composited onto LoadOptions::alpha_background (white: NeRF-synthetic's convention).
 // Throws Error naming the file, the frame and what is wrong.
 Clip LoadTransformsClip(const std::filesystem::path& dir, const LoadOptions& options);
 

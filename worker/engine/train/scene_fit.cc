@@ -46,12 +46,13 @@ SceneFit FitToScene(const scene::Clip& clip, TrainConfig& config) {
     leave_out("depth loss and depth-guided sampling", "the clip has no depth/");
     config.depth_weight = 0;
   }
+  if (config.background == "auto") config.background = clip.transparent ? "white" : "black";
   if (clip.is_static) {
     leave_out("deformation network", "the clip is static");
     config.field.deformation.enabled = false;
   }
   // Finest useful grid resolution: two cells per pixel footprint at the typical depth, over the box.
-  const scene::SceneBox box = scene::FrustumBox(clip.cameras, clip.near, clip.far);
+  const scene::SceneBox box = scene::ClipBox(clip);
   double focal = 0;
   for (const auto& camera : clip.cameras) focal = std::max({focal, camera.fx, camera.fy});
   const double footprint = TypicalDepth(clip) / std::max(focal, 1e-9);

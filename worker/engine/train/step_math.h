@@ -41,6 +41,7 @@ struct StepTables {
   float adaptive_floor = 0.2f;
   float uncertainty_lambda = 1;
   float variance_eps = 1e-6f;
+  float background[3] = {0, 0, 0};  // what rays see past the samples (train_config.h "background")
 };
 
 // A step's batch: ray-major arrays of `rays` rays with `samples` samples each (probe arrays hold a
@@ -133,7 +134,8 @@ ENDORECON_HD RayStepSums RayStepLoss(const StepTables& t, const StepBatch& b, in
   const int n = b.samples;
   const std::size_t o = static_cast<std::size_t>(r) * n;
   float* w = b.weights + o;
-  const auto ray = render::CompositeRay(b.sigma + o, b.rgb + 3 * o, b.s + o, b.delta + o, n, w);
+  auto ray = render::CompositeRay(b.sigma + o, b.rgb + 3 * o, b.s + o, b.delta + o, n, w);
+  render::AddBackground(ray, t.background);
   for (int j = 0; j < n; ++j) {
     b.d_rgb_logvar[o + j] = 0.0f;
     b.d_weights[o + j] = 0.0f;
@@ -145,6 +147,7 @@ ENDORECON_HD RayStepSums RayStepLoss(const StepTables& t, const StepBatch& b, in
   sums.loss = RayLoss(ray, w, b.rgb + 3 * o, b.rgb_logvar + o, n, b.target + 3 * r, b.prior[r], t.terms,
                       &grad, b.d_rgb + 3 * o, b.d_rgb_logvar + o);
   sums.rgb_mse = RenderedColorL2(ray.rgb, b.target + 3 * r, 1.0f / 3.0f, static_cast<float*>(nullptr));
+  render::BackgroundBackward(t.background, grad);
   render::CompositeRayBackward(b.sigma + o, b.rgb + 3 * o, b.s + o, b.delta + o, w, ray, grad,
                                b.d_weights + o, b.d_sigma + o, b.d_rgb + 3 * o);
   return sums;

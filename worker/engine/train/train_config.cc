@@ -85,6 +85,7 @@ void VisitKeys(TrainConfig& c, Visit&& visit) {
   visit("occupancy_resolution", c.occupancy_resolution);
   visit("occupancy_every", c.occupancy_every);
   visit("occupancy_min_alpha", c.occupancy_min_alpha);
+  visit("background", c.background);
   visit("curve_interval_s", c.curve_interval_s);
   visit("curve_frames", c.curve_frames);
   visit("field.encoding", c.field.encoding);
@@ -155,6 +156,8 @@ void Validate(const TrainConfig& c) {
   require(c.depth_loss == "huber" || c.depth_loss == "l1",
           "depth_loss must be huber or l1, got " + c.depth_loss);
   require(c.variance_eps > 0, "variance_eps must be > 0");
+  require(c.background == "auto" || c.background == "black" || c.background == "white",
+          "background must be auto, black or white, got " + c.background);
   require(c.nll_beta >= 0 && c.nll_beta <= 1, "nll_beta must be in [0, 1]");
   require(c.eval_coarse_samples >= 1 && c.eval_fine_samples >= 1, "eval samples must be >= 1");
   require(c.curve_interval_s > 0, "curve_interval_s must be > 0");
@@ -182,6 +185,11 @@ void Validate(const TrainConfig& c) {
 }
 
 }  // namespace
+
+std::array<float, 3> BackgroundColor(const TrainConfig& config) {
+  const float v = config.background == "white" ? 1.0f : 0.0f;
+  return {v, v, v};
+}
 
 nlohmann::json ToJson(const TrainConfig& config) {
   nlohmann::json json;

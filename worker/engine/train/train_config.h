@@ -3,6 +3,7 @@
 // "cpu" (sized for a 2-core machine: a small clip in minutes).
 #pragma once
 
+#include <array>
 #include <nlohmann/json_fwd.hpp>
 #include <string>
 
@@ -90,6 +91,12 @@ struct TrainConfig {
   double occupancy_every = 0.2;
   float occupancy_min_alpha = 0.01f;
 
+  // What a ray sees past its samples: "black" (an endoscope's dark beyond the light), "white" (object
+  // captures on white, NeRF-synthetic's convention), or "auto": white when the clip's images had
+  // transparent pixels (composited onto white as they are read), black otherwise. FitToScene
+  // resolves "auto", so config.json records the colour used.
+  std::string background = "auto";
+
   double curve_interval_s = 10.0;  // a point of the error-against-time curve every this many seconds
   int curve_frames = 4;            // held-out frames rendered for each curve point (evenly spread)
 
@@ -97,6 +104,9 @@ struct TrainConfig {
 
   static TrainConfig Preset(const std::string& name);  // throws Error(kInvalidArgument) for unknown names
 };
+
+// The background's RGB in [0, 1] ("auto" before FitToScene resolves it: black).
+std::array<float, 3> BackgroundColor(const TrainConfig& config);
 
 nlohmann::json ToJson(const TrainConfig& config);
 // Overrides the keys present in `json` (same names as ToJson); unknown keys are an error naming them.

@@ -22,7 +22,7 @@ Trainer::Trainer(const scene::Clip& clip, const TrainConfig& config, std::vector
     : clip_(clip),
       config_(config),
       seed_(seed),
-      box_(scene::FrustumBox(clip.cameras, clip.near, clip.far)),
+      box_(scene::ClipBox(clip)),
       sampler_(clip, std::move(train_frames)),
       map_(sampler_, clip.width, clip.height, config.adaptive_map_stride),
       refiner_(clip, sampler_.frames()) {
@@ -60,6 +60,8 @@ Trainer::Trainer(const scene::Clip& clip, const TrainConfig& config, std::vector
   t.adaptive_floor = config_.adaptive_floor;
   t.uncertainty_lambda = config_.uncertainty_lambda;
   t.variance_eps = config_.variance_eps;
+  const std::array<float, 3> background = BackgroundColor(config_);
+  for (int c = 0; c < 3; ++c) t.background[c] = background[c];
   field_ = std::make_unique<field::Field>(config_.field, seed);
   backend_ = backend(*field_, config_, tables_);
   UpdateTables();
