@@ -364,6 +364,87 @@ TEST(SyntheticClipTest, ReplacesAnEarlierSyntheticClipOnly) {
   EXPECT_TRUE(fs::exists(foreign / "notes.txt"));
 }
 
+// Mean absolute difference of two 8-bit images, in levels.
+double MeanDifference(const std::vector<std::uint8_t>& a, const std::vector<std::uint8_t>& b) {
+  double sum = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) sum += std::abs(int(a[i]) - int(b[i]));
+  return sum / double(a.size());
+}
+
+double Mean(const std::vector<std::uint8_t>& image) {
+  double sum = 0;
+  for (std::uint8_t v : image) sum += v;
+  return sum / double(image.size());
+}
+
+TEST(SyntheticClipTest, ATextureGivesTheTissueItsColours) {
+  TempDir dir("synth");
+  SynthOptions options = Small();
+  options.tool = false;
+  options.noise = false;
+  options.texture_width = 4;
+  options.texture_height = 2;
+  for (int i = 0; i < 8; ++i) options.texture.insert(options.texture.end(), {40, 160, 60});  // green
+  options.texture_source = "test";
+  WriteSyntheticClip(options, dir.path());
+  const Clip clip = LoadClip(dir.path());
+  int green = 0;
+  const auto& rgb = clip.gt_rgb[0];
+  for (std::size_t i = 0; i < rgb.size(); i += 3) green += rgb[i + 1] > rgb[i] && rgb[i + 1] > rgb[i + 2];
+  EXPECT_GT(green, clip.width * clip.height * 9 / 10) << "green tissue, but for saturated highlights";
+
+  options.texture.pop_back();
+  const std::string message = testing::ErrorFrom([&] { WriteSyntheticClip(options, dir.path()); });
+  EXPECT_NE(message.find("the texture must be at least 2 x 2 RGB pixels"), std::string::npos) << message;
+}
+
+TEST(SyntheticClipTest, MotionPushAndFlickerChangeWhatTheyShould) {
+  SynthOptions options = Small();
+  options.noise = false;
+  TempDir calm("synth"), lively("synth"), pushed("synth"), flickering("synth");
+  WriteSyntheticClip(options, calm.path());
+  SynthOptions more = options;
+  more.motion = 3;
+  WriteSyntheticClip(more, lively.path());
+  SynthOptions push = options;
+  push.push = true;
+  WriteSyntheticClip(push, pushed.path());
+  SynthOptions flicker = options;
+  flicker.flicker = 0.2;
+  WriteSyntheticClip(flicker, flickering.path());
+  const Clip a = LoadClip(calm.path()), b = LoadClip(lively.path()), c = LoadClip(pushed.path()),
+             d = LoadClip(flickering.path());
+  // Frame to frame, the lively tissue changes more.
+  double calm_change = 0, lively_change = 0;
+  for (int f = 1; f < a.frame_count(); ++f) {
+    calm_change += MeanDifference(a.gt_rgb[f], a.gt_rgb[f - 1]);
+    lively_change += MeanDifference(b.gt_rgb[f], b.gt_rgb[f - 1]);
+  }
+  EXPECT_GT(lively_change, 1.5 * calm_change);
+  // The push only deepens the tissue, somewhere in every frame, by about its 3.5 units (a ray meets the
+  // sloped surface a little aside of where it would have, so a z-depth may grow a little more).
+  for (int f = 0; f < a.frame_count(); ++f) {
+    float deepest = 0;
+    for (std::size_t i = 0; i < a.gt_depth[f].size(); ++i) {
+      const float deeper = c.gt_depth[f][i] - a.gt_depth[f][i];
+      EXPECT_GT(deeper, -1e-3f);
+      deepest = std::max(deepest, deeper);
+    }
+    EXPECT_GT(deepest, 1.0f) << f;
+    EXPECT_LT(deepest, 4.5f) << f;
+  }
+  // Flicker scales each frame's light (truth included) by 1 +- 0.2; geometry stays.
+  double spread = 0;
+  for (int f = 0; f < a.frame_count(); ++f) {
+    const double ratio = Mean(d.gt_rgb[f]) / Mean(a.gt_rgb[f]);
+    EXPECT_GT(ratio, 0.75) << f;
+    EXPECT_LT(ratio, 1.25) << f;
+    spread = std::max(spread, std::abs(ratio - 1));
+    EXPECT_EQ(d.gt_depth[f], a.gt_depth[f]);
+  }
+  EXPECT_GT(spread, 0.05);
+}
+
 TEST(SyntheticClipTest, RejectsBadOptions) {
   TempDir dir("synth");
   SynthOptions options = Small();

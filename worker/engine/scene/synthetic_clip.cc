@@ -25,7 +25,8 @@ nlohmann::json OptionsJson(const SynthOptions& o) {
           {"seed", o.seed},     {"static", o.static_scene}, {"tool", o.tool},
           {"depth", o.depth},   {"stiff", o.stiff},         {"stereo", o.stereo},
           {"moving", o.moving}, {"recording", o.recording}, {"checkerboard_views", o.checkerboard_views},
-          {"noise", o.noise}};
+          {"noise", o.noise},   {"texture", o.texture_source}, {"motion", o.motion},
+          {"push", o.push},     {"flicker", o.flicker}};
 }
 
 void PrepareFolder(const fs::path& out, const SynthOptions& options) {
@@ -87,7 +88,20 @@ void WriteFrame(const SyntheticScene& scene, const SynthOptions& options, int in
   PortableRandom random(StreamSeed(options.seed, static_cast<std::uint64_t>(index)));
   // Camera noise draws from its own stream, so the clip's other random parts stay as without it.
   PortableRandom noise(StreamSeed(StreamSeed(options.seed, 0x6e6f697365), static_cast<std::uint64_t>(index)));
-  const auto seen = [&](const std::array<float, 3>& rgb) { return options.noise ? CameraNoise(rgb, noise) : rgb; };
+  // The frame's exposure (flicker) scales what the scene sends, in gt/images too; then the camera's noise.
+  const float gain =
+      options.flicker > 0
+          ? float(1 + options.flicker *
+                          PortableRandom(StreamSeed(StreamSeed(options.seed, 0x666c69636b), std::uint64_t(index)))
+                              .Uniform(-1, 1))
+          : 1.0f;
+  const auto lit = [gain](std::array<float, 3> rgb) {
+    for (float& c : rgb) c *= gain;
+    return rgb;
+  };
+  const auto seen = [&](const std::array<float, 3>& rgb) {
+    return options.noise ? CameraNoise(lit(rgb), noise) : lit(rgb);
+  };
   const Eigen::Vector3d right_origin = camera.c2w.col(3) + scene.baseline() * camera.c2w.col(0);
 
   for (int v = 0; v < h; ++v) {
@@ -98,7 +112,7 @@ void WriteFrame(const SyntheticScene& scene, const SynthOptions& options, int in
       const SceneHit hit = scene.TraceAlong(state, origin, direction, guess);
       guess = hit.tissue_depth;
       PutRgb(rgb, u, v, seen(hit.rgb));
-      PutRgb(gt_rgb, u, v, hit.tissue_rgb);
+      PutRgb(gt_rgb, u, v, lit(hit.tissue_rgb));
       gt_depth[static_cast<std::size_t>(v) * w + u] = static_cast<float>(hit.tissue_depth);
       mask.at<std::uint8_t>(v, u) = hit.tool ? 255 : 0;
       const std::uint8_t noisy = NoisyDepth(hit.depth, random);
@@ -145,6 +159,16 @@ void WriteSyntheticClip(const SynthOptions& options, const fs::path& out) {
     FailInvalid("synthetic clip: frames, width and height must be positive (got " +
                 std::to_string(options.frames) + " frames of " + std::to_string(options.width) + "x" +
                 std::to_string(options.height) + ")");
+  }
+  if (!options.texture.empty() &&
+      (options.texture_width < 2 || options.texture_height < 2 ||
+       options.texture.size() != std::size_t(options.texture_width) * options.texture_height * 3)) {
+    FailInvalid("synthetic clip: the texture must be at least 2 x 2 RGB pixels (got " +
+                std::to_string(options.texture_width) + " x " + std::to_string(options.texture_height) + ", " +
+                std::to_string(options.texture.size()) + " bytes)");
+  }
+  if (!(options.motion >= 1 && options.motion <= 10) || !(options.flicker >= 0 && options.flicker < 1)) {
+    FailInvalid("synthetic clip: motion must be in [1, 10] and flicker in [0, 1)");
   }
   PrepareFolder(out, options);
   WriteText(out / "synth.json", OptionsJson(options).dump(2) + "\n");

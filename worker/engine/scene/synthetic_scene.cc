@@ -209,10 +209,25 @@ void SyntheticScene::BuildAtlas(std::uint32_t salt, double aspect) {
   atlas_x0_ = -half_width;
   atlas_y0_ = -half_height;
   atlas_.resize(static_cast<std::size_t>(atlas_width_) * atlas_height_);
+  const bool picture = !options_.texture.empty();
+  // A picture covers the atlas with its centre kept: one scale for both axes, the larger one cropped.
+  const int tw = options_.texture_width, th = options_.texture_height;
+  const double scale = picture ? std::min(double(tw) / atlas_width_, double(th) / atlas_height_) : 0;
   tbb::parallel_for(0, atlas_height_, [&](int row) {
     for (int column = 0; column < atlas_width_; ++column) {
-      atlas_[static_cast<std::size_t>(row) * atlas_width_ + column] =
-          ProceduralTexel(atlas_x0_ + column * texel_, atlas_y0_ + row * texel_, salt, options_.stiff);
+      Texel& texel = atlas_[static_cast<std::size_t>(row) * atlas_width_ + column];
+      texel = ProceduralTexel(atlas_x0_ + column * texel_, atlas_y0_ + row * texel_, salt, options_.stiff);
+      if (!picture) continue;
+      const double px = std::clamp(0.5 * tw + (column - 0.5 * atlas_width_) * scale, 0.0, tw - 1.001);
+      const double py = std::clamp(0.5 * th + (row - 0.5 * atlas_height_) * scale, 0.0, th - 1.001);
+      const int ix = int(px), iy = int(py);
+      const double fx = px - ix, fy = py - iy;
+      for (int c = 0; c < 3; ++c) {
+        const auto at = [&](int x, int y) { return options_.texture[(std::size_t(y) * tw + x) * 3 + c] / 255.0; };
+        const double top = at(ix, iy) + (at(ix + 1, iy) - at(ix, iy)) * fx;
+        const double bottom = at(ix, iy + 1) + (at(ix + 1, iy + 1) - at(ix, iy + 1)) * fx;
+        texel[c] = float((top + (bottom - top) * fy) * (options_.stiff ? 0.05 : 1.0));
+      }
     }
   });
 }
@@ -249,23 +264,35 @@ double SyntheticScene::far() const { return SeenDepth(kFar); }
 
 SyntheticScene::State SyntheticScene::At(double t) const {
   const double u = options_.static_scene ? 0.0 : t;
-  const double pull = std::pow(std::sin(kPi * u), 2);
+  // `motion` m > 1: a pull m times as long, back and forth (1 + m) / 2 times over the clip.
+  const double cycles = options_.motion > 1 ? 0.5 * (1 + options_.motion) : 1.0;
+  const Eigen::Vector2d reach = pull_ * options_.motion;
+  const double pull = std::pow(std::sin(kPi * cycles * u), 2);
   State state;
   for (int i = 0; i < kBumps; ++i) {
     State::Bump bump = bumps_[i];
     bump.amplitude *= 1 + breath_amount_[i] * std::sin(2 * kPi * breath_cycles_[i] * u + breath_phase_[i]);
     if (i == 0) {
       bump.amplitude *= 1 + 0.4 * pull;
-      bump.x += pull_.x() * pull;
-      bump.y += pull_.y() * pull;
+      bump.x += reach.x() * pull;
+      bump.y += reach.y() * pull;
     }
     state.bumps[i] = bump;
   }
-  state.pull = pull_ * pull;
+  state.pull = reach * pull;
   state.tool_base = tool_base_;
   state.tool_tip = tool_start_ + (tool_end_ - tool_start_) * u;
   state.tool_tip.y() += 3 * std::sin(2 * kPi * u);
   state.light = LeftPose(t).col(3);
+  if (options_.motion > 1) {
+    // The light circles the lens (at most 5 units off it) twice over the clip: the speculars move.
+    const double radius = std::min(5.0, 2 * (options_.motion - 1)), angle = 4 * kPi * u;
+    state.light += radius * Eigen::Vector3d(std::cos(angle), std::sin(angle), 0);
+  }
+  if (options_.push) {
+    // The tissue under the tool's tip pressed 3.5 units in, over a spot of sigma 7 (slope <= 0.31).
+    state.dent = {state.tool_tip.x(), state.tool_tip.y(), 7.0, 3.5};
+  }
   return state;
 }
 
@@ -276,6 +303,14 @@ double SyntheticScene::TissueDepth(const State& state, double x, double y, doubl
     const double r2 = ex * ex + ey * ey;
     if (r2 > 36 * s2) continue;  // exp(-18): below 1e-7 units
     const double g = bump.amplitude * std::exp(-r2 / (2 * s2));
+    depth += g;
+    gx -= g * ex / s2;
+    gy -= g * ey / s2;
+  }
+  if (state.dent.amplitude != 0) {
+    const State::Bump& dent = state.dent;
+    const double ex = x - dent.x, ey = y - dent.y, s2 = dent.sigma * dent.sigma;
+    const double g = dent.amplitude * std::exp(-(ex * ex + ey * ey) / (2 * s2));
     depth += g;
     gx -= g * ex / s2;
     gy -= g * ey / s2;

@@ -11,6 +11,7 @@
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "worker/engine/scene/camera.h"
@@ -32,6 +33,20 @@ struct SynthOptions {
   // Camera noise in images/ and images_right/ (CameraNoise in synthetic_clip.cc); gt/images is
   // always noise-free, and so is recording/.
   bool noise = true;
+
+  // What real recordings have and the default clip does not (issue 19), all off by default:
+  // the tissue's albedo taken from a picture (e.g. a frame of a real recording: row-major RGB bytes,
+  // stretched over the tissue, its centre kept where the aspects differ); the tissue's motion
+  // scaled (`motion` times the pull, which drags the texture, in as many back-and-forth cycles as
+  // it is over 1, and the light circling the endoscope's tip so the speculars move); the tissue
+  // pressed in under the tool's tip (a dent that follows it); the exposure of each frame scaled by
+  // 1 + flicker * u, u uniform in [-1, 1] (in gt/images too: it is the scene's light, not noise).
+  std::vector<std::uint8_t> texture;
+  int texture_width = 0, texture_height = 0;
+  std::string texture_source;  // where the picture came from (synth.json)
+  double motion = 1;
+  bool push = false;
+  double flicker = 0;
 };
 
 // Frame `index`'s time in [0, 1]: evenly spaced, 0 for a single frame.
@@ -62,6 +77,7 @@ class SyntheticScene {
     Eigen::Vector2d pull = Eigen::Vector2d::Zero();   // texture displacement of the pulled bump
     Eigen::Vector3d tool_base, tool_tip;              // capsule axis, undeformed (nominal) depths
     Eigen::Vector3d light = Eigen::Vector3d::Zero();  // the endoscope's tip (the left eye's centre)
+    Bump dent{0, 0, 1, 0};                            // with `push`: under the tool's tip (amplitude 0: none)
   };
 
   // Draws the scene's parameters from options.seed; the image size fixes the field of view's aspect.
