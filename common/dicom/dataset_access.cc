@@ -16,7 +16,8 @@ std::optional<std::string> FindString(DcmItem& item, const DcmTagKey& tag) {
 
 std::optional<long> FindInteger(DcmItem& item, const DcmTagKey& tag) {
   const auto number = FindNumber(item, tag);
-  if (!number) return std::nullopt;
+  // Out of long's range (or not finite) the cast would be undefined: such a value is no integer here.
+  if (!number || !(*number >= -9.2e18 && *number <= 9.2e18)) return std::nullopt;
   return static_cast<long>(*number);
 }
 

@@ -233,6 +233,17 @@ TEST(DicomRecordingTest, BadInputsAreNamed) {
   file.getDataset()->putAndInsertString(DCM_NumberOfFrames, "0");
   ASSERT_TRUE(file.saveFile((dir / "zero.dcm").c_str(), EXS_LittleEndianExplicit).good());
   EXPECT_NE(ErrorOf(dir / "zero.dcm").find("zero.dcm: zero frames"), std::string::npos);
+  // Found by tests/fuzz/dicom_recording_fuzz.cc: a small file declaring millions of frames was sized
+  // by them before anything looked at its pixel data (seconds of CPU); it is refused first.
+  file.getDataset()->putAndInsertString(DCM_NumberOfFrames, "10000000");
+  ASSERT_TRUE(file.saveFile((dir / "many.dcm").c_str(), EXS_LittleEndianExplicit).good());
+  const std::string many = ErrorOf(dir / "many.dcm");
+  EXPECT_NE(many.find("many.dcm: Number of Frames is 10000000 but the pixel data holds"), std::string::npos)
+      << many;
+  file.getDataset()->putAndInsertString(DCM_NumberOfFrames, "1e30");
+  ASSERT_TRUE(file.saveFile((dir / "huge.dcm").c_str(), EXS_LittleEndianExplicit).good());
+  const std::string huge = ErrorOf(dir / "huge.dcm");
+  EXPECT_NE(huge.find("huge.dcm: Number of Frames (0028,0008) is not a whole number"), std::string::npos) << huge;
 
   RecordingOptions past_the_end;
   past_the_end.frames = ParseFrameWindow("10:");
