@@ -3,65 +3,14 @@
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
-#include <algorithm>
-#include <cctype>
-#include <filesystem>
 #include <memory>
-#include <opencv2/imgproc.hpp>
 
-#include "common/error.h"
-#include "worker/engine/scene/frame_reader.h"
 #include "worker/engine/scene/synthetic_clip.h"
 #include "worker/engine/scene/synthetic_object.h"
-#include "worker/prepare/frame_source.h"
 #include "worker/runtime/commands.h"
+#include "worker/runtime/synth_texture.h"
 
 namespace endorecon::worker {
-namespace {
-
-// Fraction of the shorter side kept from the centre of a recording's frame: endoscopes see a
-// circle (black corners), and its centre is tissue.
-constexpr double kTextureCrop = 0.7;
-
-// The picture `synth --texture` maps onto the tissue: an image file as it is, or frame `index` of a
-// video or image folder (-1: the middle one) cropped to a centred square of kTextureCrop of its
-// shorter side.
-void LoadTexture(const std::string& path, int index, scene::SynthOptions& options) {
-  const std::string extension = std::filesystem::path(path).extension().string();
-  const auto& images = scene::ImageExtensions();
-  std::string lower = extension;
-  std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char c) { return std::tolower(c); });
-  if (std::filesystem::is_regular_file(path) && std::find(images.begin(), images.end(), lower) != images.end()) {
-    scene::RgbImage image = scene::ReadRgbImage(path);
-    options.texture = std::move(image.rgb);
-    options.texture_width = image.width;
-    options.texture_height = image.height;
-    options.texture_source = path;
-    return;
-  }
-  auto source = prepare::OpenFrameSource(path);
-  const int announced = source->announced_frames();
-  const int wanted = index >= 0 ? index : std::max(0, announced / 2);
-  prepare::SourceFrame frame;
-  for (int i = 0; i < wanted; ++i) {
-    if (!source->Skip()) {
-      FailInvalid(path + ": has no frame " + std::to_string(wanted) + " (it ended after " + std::to_string(i) +
-                  ")");
-    }
-  }
-  if (!source->Next(frame)) FailInvalid(path + ": has no frame " + std::to_string(wanted));
-  const int side = int(kTextureCrop * std::min(frame.image.cols, frame.image.rows));
-  const cv::Rect centre((frame.image.cols - side) / 2, (frame.image.rows - side) / 2, side, side);
-  cv::Mat rgb;
-  cv::cvtColor(frame.image(centre), rgb, cv::COLOR_BGR2RGB);
-  options.texture.assign(rgb.data, rgb.data + rgb.total() * 3);  // cvtColor's output is continuous
-  options.texture_width = side;
-  options.texture_height = side;
-  options.texture_source =
-      path + " frame " + std::to_string(wanted) + " (centre " + std::to_string(side) + " px square)";
-}
-
-}  // namespace
 
 Command AddSynthCommand(CLI::App& app) {
   auto* cmd = app.add_subcommand("synth", "write a synthetic clip with ground truth (EndoNeRF layout)");
@@ -126,7 +75,7 @@ Command AddSynthCommand(CLI::App& app) {
                    object_options.width, object_options.height);
       return 0;
     }
-    if (!texture->empty()) LoadTexture(*texture, *texture_frame, *options);
+    if (!texture->empty()) LoadSynthTexture(*texture, *texture_frame, *options);
     options->tool = !flags->first;
     options->noise = !*no_noise;
     options->depth = !flags->second;
