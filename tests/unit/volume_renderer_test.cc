@@ -51,6 +51,21 @@ RayComposite<double> Render(const Ray& ray, std::vector<double>& weights, double
                       weights.data(), min_transmittance);
 }
 
+// The backward pass's d_sigma and d_rgb against central differences of `loss` in every density and
+// colour of the ray.
+template <typename Loss>
+void ExpectCentralDifferences(Ray& ray, const Loss& loss, const std::vector<double>& d_sigma,
+                              const std::vector<double>& d_rgb) {
+  for (int j = 0; j < ray.n(); ++j) {
+    const double fd = CentralDifference(ray.sigma[j], 1e-6, loss);
+    EXPECT_TRUE(CloseRelative(d_sigma[j], fd, 1e-7)) << "sigma " << j << ": " << d_sigma[j] << " vs " << fd;
+    for (int c = 0; c < 3; ++c) {
+      const double fd_c = CentralDifference(ray.rgb[3 * j + c], 1e-6, loss);
+      EXPECT_TRUE(CloseRelative(d_rgb[3 * j + c], fd_c, 1e-7)) << "rgb " << j << "," << c;
+    }
+  }
+}
+
 TEST(VolumeRenderer, BackwardMatchesCentralDifferences) {
   Ray ray = RandomRay(16, 7);
   const int n = ray.n();
@@ -74,14 +89,7 @@ TEST(VolumeRenderer, BackwardMatchesCentralDifferences) {
   std::vector<double> d_sigma(n, 0.0), d_rgb(3 * n, 0.0);
   CompositeRayBackward(ray.sigma.data(), ray.rgb.data(), ray.s.data(), ray.delta.data(), w.data(), out, grad,
                        q.data(), d_sigma.data(), d_rgb.data());
-  for (int j = 0; j < n; ++j) {
-    const double fd = CentralDifference(ray.sigma[j], 1e-6, loss);
-    EXPECT_TRUE(CloseRelative(d_sigma[j], fd, 1e-7)) << "sigma " << j << ": " << d_sigma[j] << " vs " << fd;
-    for (int c = 0; c < 3; ++c) {
-      const double fd_c = CentralDifference(ray.rgb[3 * j + c], 1e-6, loss);
-      EXPECT_TRUE(CloseRelative(d_rgb[3 * j + c], fd_c, 1e-7)) << "rgb " << j << "," << c;
-    }
-  }
+  ExpectCentralDifferences(ray, loss, d_sigma, d_rgb);
 }
 
 TEST(VolumeRenderer, BackwardAddsToExistingGradients) {
@@ -155,14 +163,7 @@ TEST(VolumeRenderer, BackgroundBackwardMatchesCentralDifferences) {
   std::vector<double> d_sigma(n, 0.0), d_rgb(3 * n, 0.0);
   CompositeRayBackward(ray.sigma.data(), ray.rgb.data(), ray.s.data(), ray.delta.data(), w.data(), out, grad,
                        static_cast<const double*>(nullptr), d_sigma.data(), d_rgb.data());
-  for (int j = 0; j < n; ++j) {
-    const double fd = CentralDifference(ray.sigma[j], 1e-6, loss);
-    EXPECT_TRUE(CloseRelative(d_sigma[j], fd, 1e-7)) << "sigma " << j << ": " << d_sigma[j] << " vs " << fd;
-    for (int c = 0; c < 3; ++c) {
-      const double fd_c = CentralDifference(ray.rgb[3 * j + c], 1e-6, loss);
-      EXPECT_TRUE(CloseRelative(d_rgb[3 * j + c], fd_c, 1e-7)) << "rgb " << j << "," << c;
-    }
-  }
+  ExpectCentralDifferences(ray, loss, d_sigma, d_rgb);
 }
 
 TEST(VolumeRenderer, StepInDensityPutsDepthAtTheStep) {

@@ -1,7 +1,6 @@
 #include "worker/runtime/synth_texture.h"
 
 #include <algorithm>
-#include <cctype>
 #include <filesystem>
 #include <opencv2/imgproc.hpp>
 
@@ -19,11 +18,7 @@ constexpr double kTextureCrop = 0.7;
 }  // namespace
 
 void LoadSynthTexture(const std::string& path, int index, scene::SynthOptions& options) {
-  const std::string extension = std::filesystem::path(path).extension().string();
-  const auto& images = scene::ImageExtensions();
-  std::string lower = extension;
-  std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char c) { return std::tolower(c); });
-  if (std::filesystem::is_regular_file(path) && std::find(images.begin(), images.end(), lower) != images.end()) {
+  if (std::filesystem::is_regular_file(path) && scene::HasExtension(path, scene::ImageExtensions())) {
     scene::RgbImage image = scene::ReadRgbImage(path);
     options.texture = std::move(image.rgb);
     options.texture_width = image.width;
@@ -52,6 +47,5 @@ void LoadSynthTexture(const std::string& path, int index, scene::SynthOptions& o
   options.texture_source =
       path + " frame " + std::to_string(wanted) + " (centre " + std::to_string(side) + " px square)";
 }
-
 
 }  // namespace endorecon::worker

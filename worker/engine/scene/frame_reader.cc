@@ -154,13 +154,17 @@ const std::vector<std::string>& ImageExtensions() {
   return extensions;
 }
 
+bool HasExtension(const fs::path& path, const std::vector<std::string>& extensions) {
+  const std::string extension = Lower(path.extension().string());
+  return std::find(extensions.begin(), extensions.end(), extension) != extensions.end();
+}
+
 std::vector<fs::path> ListFiles(const fs::path& dir, const std::vector<std::string>& extensions) {
   if (!fs::is_directory(dir)) FailInvalid(dir.string() + ": folder does not exist");
   std::vector<fs::path> files;
   for (const fs::directory_entry& entry : fs::directory_iterator(dir)) {
-    const std::string extension = Lower(entry.path().extension().string());
     if (entry.is_regular_file() && !entry.path().filename().string().starts_with(".") &&
-        std::find(extensions.begin(), extensions.end(), extension) != extensions.end()) {
+        HasExtension(entry.path(), extensions)) {
       files.push_back(entry.path());
     }
   }
@@ -224,7 +228,8 @@ void ReadFrames(const std::vector<FrameFiles>& frames, const FrameReadOptions& o
   tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
     try {
       const FrameFiles& f = frames[i];
-      clip.rgb[i] = (i == 0 && !first.rgb.empty()) ? std::move(first.rgb) : ReadRgb(f.image, options, w, h, transparent);
+      clip.rgb[i] =
+          (i == 0 && !first.rgb.empty()) ? std::move(first.rgb) : ReadRgb(f.image, options, w, h, transparent);
       if (!f.depth.empty()) clip.depth[i] = ReadDepth(f.depth, options, w, h);
       if (!f.tool_mask.empty()) clip.tool_mask[i] = ReadMask(f.tool_mask, options, w, h);
       if (!f.eval_mask.empty()) clip.eval_mask[i] = ReadMask(f.eval_mask, options, w, h);

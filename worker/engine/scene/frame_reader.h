@@ -36,6 +36,9 @@ struct RgbImage {
 // The image file extensions the loaders read (lower case): .png .jpg .jpeg .bmp .tif .tiff.
 const std::vector<std::string>& ImageExtensions();
 
+// Whether the extension of `path` (any case) is one of `extensions` (lower case, with the dot).
+bool HasExtension(const std::filesystem::path& path, const std::vector<std::string>& extensions);
+
 // Sorted regular files in `dir` whose extension (any case) is one of `extensions`; hidden files
 // are skipped. Throws FailInvalid when `dir` is not a folder.
 std::vector<std::filesystem::path> ListFiles(const std::filesystem::path& dir,

@@ -298,23 +298,17 @@ SyntheticScene::State SyntheticScene::At(double t) const {
 
 double SyntheticScene::TissueDepth(const State& state, double x, double y, double* dx, double* dy) const {
   double depth = kBaseDepth + tilt_x_ * x + tilt_y_ * y, gx = tilt_x_, gy = tilt_y_;
-  for (const State::Bump& bump : state.bumps) {
+  const auto add = [&](const State::Bump& bump) {
     const double ex = x - bump.x, ey = y - bump.y, s2 = bump.sigma * bump.sigma;
     const double r2 = ex * ex + ey * ey;
-    if (r2 > 36 * s2) continue;  // exp(-18): below 1e-7 units
+    if (r2 > 36 * s2) return;  // exp(-18): below 1e-7 units
     const double g = bump.amplitude * std::exp(-r2 / (2 * s2));
     depth += g;
     gx -= g * ex / s2;
     gy -= g * ey / s2;
-  }
-  if (state.dent.amplitude != 0) {
-    const State::Bump& dent = state.dent;
-    const double ex = x - dent.x, ey = y - dent.y, s2 = dent.sigma * dent.sigma;
-    const double g = dent.amplitude * std::exp(-(ex * ex + ey * ey) / (2 * s2));
-    depth += g;
-    gx -= g * ex / s2;
-    gy -= g * ey / s2;
-  }
+  };
+  for (const State::Bump& bump : state.bumps) add(bump);
+  if (state.dent.amplitude != 0) add(state.dent);
   *dx = squash_ * gx;
   *dy = squash_ * gy;
   return SeenDepth(depth);

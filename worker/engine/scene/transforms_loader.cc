@@ -139,11 +139,10 @@ bool IsCentredRig(const std::vector<Camera>& cameras) {
 void SetNearFar(const json& top, const std::string& file, Clip& clip) {
   const std::optional<double> near = OptionalNumber(top, "near", file);
   const std::optional<double> far = OptionalNumber(top, "far", file);
-  std::vector<double> distances;
+  std::vector<double> distances;  // of the cameras from the origin, ascending
   for (const Camera& camera : clip.cameras) distances.push_back(camera.c2w.col(3).norm());
-  std::vector<double> sorted = distances;
-  std::sort(sorted.begin(), sorted.end());
-  const double median = sorted[sorted.size() / 2];
+  std::sort(distances.begin(), distances.end());
+  const double median = distances[distances.size() / 2];
   // Object captures: the object fills at most the sphere of half the median camera distance (the
   // NeRF-synthetic rig: cameras at 4.03, near 2, far 6).
   if (IsCentredRig(clip.cameras)) clip.object_radius = kObjectRadiusFactor * median;
@@ -160,8 +159,8 @@ void SetNearFar(const json& top, const std::string& file, Clip& clip) {
       derived_near = kDepthNearFactor * lo;
       derived_far = kDepthFarFactor * hi;
     } else if (clip.object_radius > 0) {
-      derived_near = std::max(kDistanceNearFactor * median, sorted.front() - clip.object_radius);
-      derived_far = sorted.back() + clip.object_radius;
+      derived_near = std::max(kDistanceNearFactor * median, distances.front() - clip.object_radius);
+      derived_far = distances.back() + clip.object_radius;
     } else {
       if (!(median > 1e-9)) {
         FailInvalid(file +

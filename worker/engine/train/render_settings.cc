@@ -11,8 +11,7 @@ render::FrameRenderSettings EvalRenderSettings(const TrainConfig& config, double
   settings.coarse_samples = config.eval_coarse_samples;
   settings.fine_samples = config.eval_fine_samples;
   settings.floor = config.eval_floor;
-  const std::array<float, 3> background = BackgroundColor(config);
-  for (int c = 0; c < 3; ++c) settings.background[c] = background[c];
+  BackgroundColor(config, settings.background);
   return settings;
 }
 

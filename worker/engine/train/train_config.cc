@@ -186,9 +186,9 @@ void Validate(const TrainConfig& c) {
 
 }  // namespace
 
-std::array<float, 3> BackgroundColor(const TrainConfig& config) {
+void BackgroundColor(const TrainConfig& config, float (&rgb)[3]) {
   const float v = config.background == "white" ? 1.0f : 0.0f;
-  return {v, v, v};
+  rgb[0] = rgb[1] = rgb[2] = v;
 }
 
 nlohmann::json ToJson(const TrainConfig& config) {

@@ -3,7 +3,6 @@
 // "cpu" (sized for a 2-core machine: a small clip in minutes).
 #pragma once
 
-#include <array>
 #include <nlohmann/json_fwd.hpp>
 #include <string>
 
@@ -105,8 +104,8 @@ struct TrainConfig {
   static TrainConfig Preset(const std::string& name);  // throws Error(kInvalidArgument) for unknown names
 };
 
-// The background's RGB in [0, 1] ("auto" before FitToScene resolves it: black).
-std::array<float, 3> BackgroundColor(const TrainConfig& config);
+// Writes the background's RGB in [0, 1] to rgb ("auto" before FitToScene resolves it: black).
+void BackgroundColor(const TrainConfig& config, float (&rgb)[3]);
 
 nlohmann::json ToJson(const TrainConfig& config);
 // Overrides the keys present in `json` (same names as ToJson); unknown keys are an error naming them.

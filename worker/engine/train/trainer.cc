@@ -60,8 +60,7 @@ Trainer::Trainer(const scene::Clip& clip, const TrainConfig& config, std::vector
   t.adaptive_floor = config_.adaptive_floor;
   t.uncertainty_lambda = config_.uncertainty_lambda;
   t.variance_eps = config_.variance_eps;
-  const std::array<float, 3> background = BackgroundColor(config_);
-  for (int c = 0; c < 3; ++c) t.background[c] = background[c];
+  BackgroundColor(config_, t.background);
   field_ = std::make_unique<field::Field>(config_.field, seed);
   backend_ = backend(*field_, config_, tables_);
   UpdateTables();
