@@ -37,13 +37,14 @@ double Seconds(Clock::time_point since) {
 }
 
 pid_t StartServer(const fs::path& data, int port, const fs::path& log) {
+  // Made before fork: the child of a threaded process may only call async-signal-safe functions.
+  const std::string binary = std::string(ENDORECON_BINARY_DIR) + "/server/endorecon-server";
+  const std::string listen = "127.0.0.1:" + std::to_string(port);
   const pid_t pid = fork();
   if (pid == 0) {
     const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
     dup2(fd, STDOUT_FILENO);
     dup2(fd, STDERR_FILENO);
-    const std::string binary = std::string(ENDORECON_BINARY_DIR) + "/server/endorecon-server";
-    const std::string listen = "127.0.0.1:" + std::to_string(port);
     execl(binary.c_str(), binary.c_str(), "--listen", listen.c_str(), "--data-dir", data.c_str(),
           "--metrics-port", "-1", static_cast<char*>(nullptr));
     _exit(127);
