@@ -35,6 +35,7 @@ FieldConfig SmallConfig() {
   c.heads.color_hidden = {8, 6};
   c.heads.geo_features = 4;
   c.heads.dropout = 0.2;
+  c.exposure_times = {0.1f, 0.35f, 0.8f};  // samples before, between and after the knots
   return c;
 }
 
@@ -70,7 +71,11 @@ struct Samples {
 template <typename S>
 void Randomise(FieldT<S>& field, std::uint64_t seed) {
   for (auto& block : field.Blocks()) {
-    const double scale = block.name == "deform" ? 0.03 : block.name == "grid" ? 0.5 : 0.6;
+    // Exposure log-gains of +-0.2: a camera's frame-to-frame changes, not a field's weights.
+    const double scale = block.name == "deform"     ? 0.03
+                         : block.name == "grid"     ? 0.5
+                         : block.name == "exposure" ? 0.2
+                                                    : 0.6;
     const auto v = RandomValues(block.size, -scale, scale, seed++);
     std::copy(v.begin(), v.end(), block.value);
   }
@@ -92,7 +97,7 @@ TEST(FieldTest, GradientsOfEveryGroupMatchFiniteDifferencesWithDropout) {
   field.ZeroGrad();
   field.Backward(s.batch(), {ws.data(), wsl.data(), wc.data(), wcl.data()});
   const auto blocks = field.Blocks();
-  ASSERT_EQ(blocks.size(), 5u);
+  ASSERT_EQ(blocks.size(), 6u);
   std::uint64_t pick = 1;
   for (const auto& b : blocks) {
     const std::vector<double> grad(b.grad, b.grad + b.size);
@@ -135,7 +140,7 @@ TEST(FieldTest, FrequencyEncodingFieldGradientsMatchFiniteDifferences) {
         ExpectGradientMatches(b.value, grad.data(), indices, loss, b.name, {1e-6, 1e-5, 1e-8});
     EXPECT_GE(nonzero, static_cast<int>(indices.size()) / 4) << b.name;
   }
-  EXPECT_EQ(names, (std::vector<std::string>{"deform", "density", "color"}));
+  EXPECT_EQ(names, (std::vector<std::string>{"deform", "density", "color", "exposure"}));
   EXPECT_NE(DescribeField(field).find("frequency encoding: 4 frequencies, 27 values"), std::string::npos)
       << DescribeField(field);
   // Encode/Decode split the same way.
@@ -253,7 +258,8 @@ TEST(FieldTest, OutputsStayInRangeForWildInputs) {
   for (int i = 0; i < s.n; ++i) {
     EXPECT_TRUE(std::isfinite(s.sigma[i]) && s.sigma[i] >= 0) << i;
     EXPECT_TRUE(std::isfinite(s.sigma_logvar[i]) && std::isfinite(s.rgb_logvar[i])) << i;
-    for (int c = 0; c < 3; ++c) EXPECT_TRUE(s.rgb[3 * i + c] > 0 && s.rgb[3 * i + c] < 1) << i;
+    // The tissue's colour is in (0, 1); the exposure's gains (exp(+-0.2) here) scale it.
+    for (int c = 0; c < 3; ++c) EXPECT_TRUE(s.rgb[3 * i + c] > 0 && s.rgb[3 * i + c] < 2) << i;
   }
 }
 

@@ -103,6 +103,8 @@ TEST(TrainConfigTest, JsonRoundTripKeepsEveryKey) {
                                               "eval_coarse_samples",
                                               "eval_fine_samples",
                                               "eval_floor",
+                                              "exposure",
+                                              "exposure_threshold",
                                               "field",
                                               "holdout",
                                               "huber_delta",
@@ -124,7 +126,8 @@ TEST(TrainConfigTest, JsonRoundTripKeepsEveryKey) {
   for (const auto& [key, value] : json.items()) top.insert(key);
   EXPECT_EQ(top, expected_top);
   EXPECT_EQ(json.at("adam").size(), 7u);
-  EXPECT_EQ(json.at("field").size(), 6u);  // encoding, frequencies, grids, blend_hidden, deformation, heads
+  // encoding, frequencies, grids, blend_hidden, deformation, heads, exposure_times
+  EXPECT_EQ(json.at("field").size(), 7u);
   EXPECT_EQ(json.at("field").at("grids").size(), 6u);
   EXPECT_EQ(json.at("field").at("deformation").size(), 3u);
   EXPECT_EQ(json.at("field").at("heads").size(), 5u);

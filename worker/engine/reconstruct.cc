@@ -71,7 +71,7 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
   if (config.background == "black") load.alpha_background = {0, 0, 0};
   const scene::Clip clip = scene::LoadClip(options.clip_dir, load);
   const FrameSplit split = SplitFrames(clip.frame_count(), config.holdout);
-  const train::SceneFit fit = train::FitToScene(clip, config);
+  const train::SceneFit fit = train::FitToScene(clip, config, split.train);
   const fs::path out_dir = options.out_dir;
   WriteFile(out_dir / "config.json", RunConfigJson(config, options, threads).dump(2), "run configuration");
 

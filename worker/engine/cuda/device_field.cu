@@ -11,6 +11,7 @@
 #include "worker/engine/cuda/launch.cuh"
 #include "worker/engine/field/blend_math.h"
 #include "worker/engine/field/deformation_math.h"
+#include "worker/engine/field/exposure_math.h"
 #include "worker/engine/field/frequency_encoding.h"
 #include "worker/engine/field/heads_math.h"
 
@@ -42,16 +43,20 @@ struct DeviceField::Impl {
   const field::Deformation<float>* deform;
   const field::DensityHead<float>& density;
   const field::ColorHead<float>& color;
+  const field::Exposure<float>* exposure;
+  DeviceArray<float> exposure_times;   // the knots' times, when the field has an exposure
+  DeviceArray<float> exposure_prior;   // ExposurePrior of the current log-gains
+  DeviceArray<float> exposure_dprior;  // dL/d(prior) of a backward pass
   std::optional<DeviceMlp> blend_mlp;
   DeviceMlp density_mlp, color_mlp;
   int geo, d;  // geometry features; encoder width D
 
   // Activations of the last pass (Forward keeps them for Backward).
-  Buffer x0, gfeat, blend_hidden, beta, feat, dens_raw, col_in, col_raw, scratch;
+  Buffer x0, gfeat, blend_hidden, beta, feat, dens_raw, col_in, col_raw, rgb0, scratch;
   std::vector<Buffer> dens_hidden, col_hidden;
   std::vector<float*> dens_hidden_ptr, col_hidden_ptr, blend_hidden_ptr;
   // Gradients of the backward pass.
-  Buffer d_col_raw, d_col_in, dgeo, d_dens_raw, dfeat, dbeta, dlogits, dx0;
+  Buffer d_col_raw, d_col_in, dgeo, d_dens_raw, dfeat, dbeta, dlogits, dx0, drgb0;
   int last_n = -1;
   field::DropoutPass last_pass;
 
@@ -62,6 +67,7 @@ struct DeviceField::Impl {
         deform(host.deformation()),
         density(host.density()),
         color(host.color()),
+        exposure(host.exposure()),
         density_mlp(host.density().mlp()),
         color_mlp(host.color().mlp()),
         geo(host.config().heads.geo_features),
@@ -69,6 +75,11 @@ struct DeviceField::Impl {
         dens_hidden(host.density().mlp().hidden_layers()),
         col_hidden(host.color().mlp().hidden_layers()) {
     if (blend) blend_mlp.emplace(blend->mlp());
+    if (exposure) {
+      exposure_times = DeviceArray<float>(exposure->times());
+      exposure_prior = DeviceArray<float>(field::kExposurePriorSize);
+      exposure_dprior = DeviceArray<float>(field::kExposurePriorSize);
+    }
     for (const auto& b : host.Blocks()) {
       index[b.name] = static_cast<int>(blocks.size());
       blocks.push_back({b.name, DeviceArray<float>(b.size), DeviceArray<float>(b.size)});
@@ -91,6 +102,7 @@ struct DeviceField::Impl {
     dens_raw.Reserve(rows * density.raw_dim());
     col_in.Reserve(rows * color.in_dim());
     col_raw.Reserve(rows * 4);
+    if (exposure) rgb0.Reserve(rows * 3);
     dens_hidden_ptr.clear();
     for (int k = 0; k < density_mlp.hidden_layers(); ++k)
       dens_hidden_ptr.push_back(dens_hidden[k].Reserve(rows * density_mlp.hidden_dim(k)));
@@ -177,8 +189,28 @@ struct DeviceField::Impl {
         "density outputs kernel");
     float* craw = col_raw.array.data();
     color_mlp.Forward(value("color"), cin, n, col_hidden_ptr.data(), craw, pass);
+    if (!exposure) {
+      ForEach(
+          n, [=] __device__(std::size_t i) { field::ColorOutputs(craw + 4 * i, rgb + 3 * i, rgb_lv + i); },
+          "colour outputs kernel");
+      return;
+    }
+    // The tissue's colour, kept for the backward pass, then the camera's gains at the sample's time.
+    float* tissue = rgb0.array.data();
+    const float* params = value("exposure");
+    const float* times = exposure_times.data();
+    const int knots = exposure->knots();
+    const float* time = batch.time;
+    float* prior = exposure_prior.data();
     ForEach(
-        n, [=] __device__(std::size_t i) { field::ColorOutputs(craw + 4 * i, rgb + 3 * i, rgb_lv + i); },
+        1, [=] __device__(std::size_t) { field::ExposurePrior(params, knots, prior); },
+        "exposure prior kernel");
+    ForEach(
+        n,
+        [=] __device__(std::size_t i) {
+          field::ColorOutputs(craw + 4 * i, tissue + 3 * i, rgb_lv + i);
+          field::ExposureSample(params, prior, times, knots, time[i], tissue + 3 * i, rgb + 3 * i);
+        },
         "colour outputs kernel");
   }
 
@@ -192,6 +224,29 @@ struct DeviceField::Impl {
     float* dcr = d_col_raw.Reserve(rows * 4);
     const float* craw = col_raw.array.data();
     const float *drgb = g.rgb, *drgb_lv = g.rgb_logvar;
+    if (exposure && drgb) {
+      // Through the camera's gains to the tissue's colour; the gains' gradient by atomic adds.
+      float* dtissue = drgb0.Reserve(rows * 3);
+      const float *params = value("exposure"), *times = exposure_times.data(), *time = batch.time;
+      const float* tissue = rgb0.array.data();
+      float* grads = grad("exposure");
+      const int knots = exposure->knots();
+      const float* prior = exposure_prior.data();  // the forward pass's, of the same parameters
+      float* dprior = exposure_dprior.data();
+      exposure_dprior.Zero();
+      ForEach(
+          n,
+          [=] __device__(std::size_t i) {
+            field::ExposureSampleBackward(params, prior, times, knots, time[i], tissue + 3 * i, drgb + 3 * i,
+                                          dtissue + 3 * i, grads, dprior, AtomicAdd{});
+          },
+          "exposure backward kernel");
+      ForEach(
+          1,
+          [=] __device__(std::size_t) { field::ExposurePriorBackward(params, knots, prior, dprior, grads); },
+          "exposure prior backward kernel");
+      drgb = dtissue;
+    }
     ForEach(
         n,
         [=] __device__(std::size_t i) {

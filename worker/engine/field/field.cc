@@ -15,8 +15,9 @@
 namespace endorecon::field {
 namespace {
 
-enum Group { kGrid, kBlend, kDeform, kDensity, kColor, kGroups };
-constexpr std::array<const char*, kGroups> kGroupNames = {"grid", "blend", "deform", "density", "color"};
+enum Group { kGrid, kBlend, kDeform, kDensity, kColor, kExposure, kGroups };
+constexpr std::array<const char*, kGroups> kGroupNames = {"grid",    "blend", "deform",
+                                                          "density", "color", "exposure"};
 
 template <typename S>
 void CheckBatch(const SampleBatchT<S>& batch, const char* what) {
@@ -43,13 +44,13 @@ struct FieldT<S>::Impl {
   // Batch-major activations of a pass over `rows` samples: Forward keeps the whole batch's for
   // Backward; Infer, Encode and Decode use one segment's per thread.
   struct Acts {
-    AlignedVector<S> x0, gfeat, blend_hidden, beta, feat, dens_raw, col_in, col_raw;
+    AlignedVector<S> x0, gfeat, blend_hidden, beta, feat, dens_raw, col_in, col_raw, rgb0;
     std::array<AlignedVector<S>, kMaxLayers> dens_hidden, col_hidden;
     int rows = 0;
   };
   // Acts from one row on.
   struct View {
-    S *x0, *gfeat, *blend_hidden, *beta, *feat, *dens_raw, *col_in, *col_raw;
+    S *x0, *gfeat, *blend_hidden, *beta, *feat, *dens_raw, *col_in, *col_raw, *rgb0;
     std::array<S*, kMaxLayers> dens_hidden, col_hidden;
   };
 
@@ -59,11 +60,12 @@ struct FieldT<S>::Impl {
   std::optional<Deformation<S>> deform;
   DensityHead<S> density;
   ColorHead<S> color;
+  std::optional<Exposure<S>> exposure;
 
   std::array<AlignedVector<S>, kGroups> value, grad;
   Acts acts;                                       // Forward's, kept for Backward
   tbb::enumerable_thread_specific<Acts> segments;  // Infer's, Encode's and Decode's
-  AlignedVector<S> dgeo, dfeat, dbeta, dx0;
+  AlignedVector<S> dgeo, dfeat, dbeta, dx0, drgb0;
   int last_n = -1;
   DropoutPass last_pass;
 
@@ -82,9 +84,13 @@ struct FieldT<S>::Impl {
       blend.emplace(grids->grids(), config.blend_hidden);
     }
     if (config.deformation.enabled) deform.emplace(config.deformation);
-    const std::array<std::size_t, kGroups> sizes = {
-        grids ? grids->param_count() : 0, blend ? blend->param_count() : 0,
-        deform ? deform->param_count() : 0, density.param_count(), color.param_count()};
+    if (!config.exposure_times.empty()) exposure.emplace(config.exposure_times);
+    const std::array<std::size_t, kGroups> sizes = {grids ? grids->param_count() : 0,
+                                                    blend ? blend->param_count() : 0,
+                                                    deform ? deform->param_count() : 0,
+                                                    density.param_count(),
+                                                    color.param_count(),
+                                                    exposure ? exposure->param_count() : 0};
     for (int g = 0; g < kGroups; ++g) {
       value[g].assign(sizes[g], S(0));
       grad[g].assign(sizes[g], S(0));
@@ -107,6 +113,7 @@ struct FieldT<S>::Impl {
     GrowTo(a.dens_raw, n * density.raw_dim());
     GrowTo(a.col_in, n * color.in_dim());
     GrowTo(a.col_raw, n * 4);
+    if (exposure) GrowTo(a.rgb0, n * 3);
     for (int k = 0; k < density.mlp().hidden_layers(); ++k)
       GrowTo(a.dens_hidden[k], n * density.mlp().hidden_dim(k));
     for (int k = 0; k < color.mlp().hidden_layers(); ++k)
@@ -126,6 +133,7 @@ struct FieldT<S>::Impl {
     v.dens_raw = at(a.dens_raw, density.raw_dim());
     v.col_in = at(a.col_in, color.in_dim());
     v.col_raw = at(a.col_raw, 4);
+    v.rgb0 = at(a.rgb0, 3);
     for (int k = 0; k < density.mlp().hidden_layers(); ++k)
       v.dens_hidden[k] = at(a.dens_hidden[k], density.mlp().hidden_dim(k));
     for (int k = 0; k < color.mlp().hidden_layers(); ++k)
@@ -168,10 +176,14 @@ struct FieldT<S>::Impl {
       S* dens_raw = v.dens_raw + t * raw;
       density.Forward(value[kDensity].data(), {n, feat + t * d},
                       {dens_hidden.data(), dens_raw, out.sigma + r, out.sigma_logvar + r}, pass);
-      color.Forward(value[kColor].data(), {n, dens_raw + 2, density.raw_dim(), batch.dir + 3 * r},
-                    {v.col_in + t * color.in_dim(), col_hidden.data(), v.col_raw + 4 * t, out.rgb + 3 * r,
-                     out.rgb_logvar + r},
-                    pass);
+      // With exposure the colour head writes the tissue's colour, which the camera's gains then scale.
+      S* rgb = exposure ? v.rgb0 + 3 * t : out.rgb + 3 * r;
+      color.Forward(
+          value[kColor].data(), {n, dens_raw + 2, density.raw_dim(), batch.dir + 3 * r},
+          {v.col_in + t * color.in_dim(), col_hidden.data(), v.col_raw + 4 * t, rgb, out.rgb_logvar + r},
+          pass);
+      if (exposure)
+        exposure->Forward(value[kExposure].data(), {n, batch.time + r, rgb}, {out.rgb + 3 * r}, pass);
     });
   }
 
@@ -196,6 +208,7 @@ FieldT<S>::FieldT(const FieldConfig& config, std::uint64_t seed)
   if (m.deform) m.deform->Init(m.value[kDeform].data(), seed);
   m.density.Init(m.value[kDensity].data(), seed + 2);
   m.color.Init(m.value[kColor].data(), seed + 3);
+  if (m.exposure) m.exposure->Init(m.value[kExposure].data(), seed + 4);
 }
 
 template <typename S>
@@ -269,8 +282,15 @@ void FieldT<S>::Backward(const SampleBatchT<S>& batch, const FieldOutputGradT<S>
   const DropoutPass& pass = m.last_pass;
   GrowTo(m.dgeo, rows * std::size_t(config_.heads.geo_features));
   GrowTo(m.dfeat, rows * m.feature_dim());
+  const S* drgb = g.rgb;
+  if (m.exposure && g.rgb) {
+    GrowTo(m.drgb0, rows * 3);
+    m.exposure->Backward(m.value[kExposure].data(), {n, batch.time, a.rgb0}, {}, {g.rgb},
+                         m.grad[kExposure].data(), {m.drgb0.data()}, pass);
+    drgb = m.drgb0.data();
+  }
   m.color.Backward(m.value[kColor].data(), {n, a.dens_raw + 2, m.density.raw_dim(), batch.dir},
-                   {a.col_in, a.col_hidden.data(), a.col_raw, nullptr, nullptr}, {g.rgb, g.rgb_logvar},
+                   {a.col_in, a.col_hidden.data(), a.col_raw, nullptr, nullptr}, {drgb, g.rgb_logvar},
                    m.grad[kColor].data(), {m.dgeo.data()}, pass);
   m.density.Backward(
       m.value[kDensity].data(), {n, a.feat}, {a.dens_hidden.data(), a.dens_raw, nullptr, nullptr},
@@ -349,6 +369,11 @@ const DensityHead<S>& FieldT<S>::density() const {
 template <typename S>
 const ColorHead<S>& FieldT<S>::color() const {
   return impl_->color;
+}
+
+template <typename S>
+const Exposure<S>* FieldT<S>::exposure() const {
+  return impl_->exposure ? &*impl_->exposure : nullptr;
 }
 
 template <typename S>

@@ -5,6 +5,7 @@
 //                                              FrequencyEncoder)
 //   (mu_sigma, l_sigma, geo) = MLP_dense(f)    DensityHead
 //   (mu_c, l_c) = MLP_color([geo, SH(d)])      ColorHead
+//   mu_c <- exp(a(t)) mu_c                     Exposure (per-frame camera gains; only when configured)
 // A thin composition: each module (module.h) runs its own forward, backward and parallel loop over
 // the batch; the field owns the parameter blocks and the activations that pass between them. Every
 // module's split depends only on the batch size and partial gradients are reduced in a fixed order,
@@ -18,6 +19,7 @@
 #include <vector>
 
 #include "worker/engine/field/deformation.h"
+#include "worker/engine/field/exposure.h"
 #include "worker/engine/field/field_config.h"
 #include "worker/engine/field/frequency_encoder.h"
 #include "worker/engine/field/grid_ensemble.h"
@@ -88,7 +90,7 @@ class FieldT {
   void ZeroGrad();
 
   // Blocks "grid", "blend" (both absent with the frequency encoding), "deform" (absent for a static
-  // scene), "density", "color", in that order.
+  // scene), "density", "color", "exposure" (absent without exposure knots), in that order.
   std::vector<ParamBlock<S>> Blocks();
   std::vector<ParamBlock<const S>> Blocks() const;
 
@@ -100,6 +102,7 @@ class FieldT {
   const Deformation<S>* deformation() const;
   const DensityHead<S>& density() const;
   const ColorHead<S>& color() const;
+  const Exposure<S>* exposure() const;
   // Multiply-adds per sample of the two heads' forward passes (backward does twice as many).
   std::size_t head_macs_per_sample() const;
 

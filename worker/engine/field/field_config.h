@@ -3,6 +3,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "worker/engine/field/deformation.h"
 #include "worker/engine/field/grid_ensemble.h"
@@ -20,6 +21,9 @@ struct FieldConfig {
   int blend_hidden = 16;  // width of the temporal blend's hidden layer
   DeformationConfig deformation;
   HeadsConfig heads;
+  // Times of the exposure's knots (exposure.h): the training frames' when the run models exposure
+  // (train_config.h "exposure"); empty: no exposure module, the colour head's output is the colour.
+  std::vector<float> exposure_times;
 
   // The paper's sizes: grids {8, 16, 32} x scales {1.4, 1.7, 1.9}, 16 levels x 8 features, 2^19 tables.
   static FieldConfig Paper();

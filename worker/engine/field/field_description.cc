@@ -48,6 +48,10 @@ std::string DescribeField(const FieldT<S>& field) {
   } else {
     s << "deformation: left out (static scene)\n";
   }
+  if (field.exposure()) {
+    s << "exposure: a gain per colour channel at " << field.exposure()->knots()
+      << " knots (the training frames' times)\n";
+  }
   s << "density head: " << Widths(field.density().mlp()) << ", colour head: " << Widths(field.color().mlp())
     << ", dropout " << config.heads.dropout;
   if (config.heads.ColorDropout() != config.heads.dropout)

@@ -1,9 +1,13 @@
 #include "worker/engine/train/scene_fit.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 #include "worker/engine/field/hash_grid.h"
+#include "worker/engine/scene/exposure_change.h"
 #include "worker/engine/scene/scene_box.h"
 
 namespace endorecon::train {
@@ -22,6 +26,39 @@ double TypicalDepth(const scene::Clip& clip) {
   return values[values.size() / 2];
 }
 
+// Resolves config.exposure and gives the field a knot at each training frame's time (distinct times
+// only: a static clip's frames share one).
+template <typename LeaveOut>
+void FitExposure(const scene::Clip& clip, TrainConfig& config, std::vector<int> frames,
+                 const LeaveOut& leave_out) {
+  if (!config.field.exposure_times.empty()) return;  // fitted already
+  if (frames.empty()) {
+    for (int f = 0; f < clip.frame_count(); ++f) frames.push_back(f);
+  }
+  std::sort(frames.begin(), frames.end(),
+            [&](int a, int b) { return clip.times[std::size_t(a)] < clip.times[std::size_t(b)]; });
+  std::vector<float> times;
+  for (const int f : frames) {
+    const float t = clip.times[std::size_t(f)];
+    if (times.empty() || t > times.back()) times.push_back(t);
+  }
+  if (config.exposure == "auto") {
+    const double change = scene::ExposureChange(clip, frames);
+    config.exposure = change > config.exposure_threshold ? "on" : "off";
+    if (config.exposure == "off") {
+      leave_out("per-frame exposure gains",
+                fmt::format("the frames' brightness changes by {:.2g}% from one to the "
+                            "next (median), at most {:.2g}%",
+                            100 * change, 100 * config.exposure_threshold));
+    }
+  }
+  if (config.exposure == "on" && times.size() < 2) {
+    config.exposure = "off";
+    leave_out("per-frame exposure gains", "training sees fewer than two distinct times");
+  }
+  if (config.exposure == "on") config.field.exposure_times = std::move(times);
+}
+
 }  // namespace
 
 scene::Camera SceneFit::preview_camera(const scene::Camera& camera) const {
@@ -36,7 +73,7 @@ scene::Camera SceneFit::preview_camera(const scene::Camera& camera) const {
   return small;
 }
 
-SceneFit FitToScene(const scene::Clip& clip, TrainConfig& config) {
+SceneFit FitToScene(const scene::Clip& clip, TrainConfig& config, std::vector<int> train_frames) {
   SceneFit fit;
   const auto leave_out = [&](const std::string& what, const std::string& why) {
     fit.left_out.push_back({{"what", what}, {"why", why}});
@@ -51,6 +88,7 @@ SceneFit FitToScene(const scene::Clip& clip, TrainConfig& config) {
     leave_out("deformation network", "the clip is static");
     config.field.deformation.enabled = false;
   }
+  FitExposure(clip, config, std::move(train_frames), leave_out);
   // Finest useful grid resolution: two cells per pixel footprint at the typical depth, over the box.
   const scene::SceneBox box = scene::ClipBox(clip);
   double focal = 0;

@@ -86,6 +86,8 @@ void VisitKeys(TrainConfig& c, Visit&& visit) {
   visit("occupancy_every", c.occupancy_every);
   visit("occupancy_min_alpha", c.occupancy_min_alpha);
   visit("background", c.background);
+  visit("exposure", c.exposure);
+  visit("exposure_threshold", c.exposure_threshold);
   visit("curve_interval_s", c.curve_interval_s);
   visit("curve_frames", c.curve_frames);
   visit("field.encoding", c.field.encoding);
@@ -105,6 +107,7 @@ void VisitKeys(TrainConfig& c, Visit&& visit) {
   visit("field.heads.geo_features", c.field.heads.geo_features);
   visit("field.heads.dropout", c.field.heads.dropout);
   visit("field.heads.color_dropout", c.field.heads.color_dropout);
+  visit("field.exposure_times", c.field.exposure_times);
 }
 
 nlohmann::json::json_pointer Pointer(const std::string& dotted) {
@@ -135,7 +138,8 @@ void RequireFits(const nlohmann::json& node, const char* key) {
     const double bound = std::is_integral_v<T> ? std::ldexp(1.0, std::numeric_limits<T>::digits)
                                                : double(std::numeric_limits<T>::max());
     const double low = std::is_signed_v<T> ? -bound : 0.0;
-    const bool fits = std::is_integral_v<T> ? v == std::floor(v) && v >= low && v < bound : std::abs(v) <= bound;
+    const bool fits =
+        std::is_integral_v<T> ? v == std::floor(v) && v >= low && v < bound : std::abs(v) <= bound;
     if (!fits) {
       FailInvalid(std::string("config: bad value for ") + key + ": " + node.dump() +
                   (std::is_integral_v<T> ? " is not a whole number in range" : " is out of a float's range"));
@@ -158,6 +162,14 @@ void Validate(const TrainConfig& c) {
   require(c.variance_eps > 0, "variance_eps must be > 0");
   require(c.background == "auto" || c.background == "black" || c.background == "white",
           "background must be auto, black or white, got " + c.background);
+  require(c.exposure == "auto" || c.exposure == "on" || c.exposure == "off",
+          "exposure must be auto, on or off, got " + c.exposure);
+  require(c.exposure_threshold >= 0, "exposure_threshold must be >= 0");
+  for (std::size_t k = 0; k < c.field.exposure_times.size(); ++k) {
+    const float t = c.field.exposure_times[k];
+    require(std::isfinite(t) && (k == 0 || t > c.field.exposure_times[k - 1]),
+            "field.exposure_times must be finite and ascending (knot " + std::to_string(k) + ")");
+  }
   require(c.nll_beta >= 0 && c.nll_beta <= 1, "nll_beta must be in [0, 1]");
   require(c.eval_coarse_samples >= 1 && c.eval_fine_samples >= 1, "eval samples must be >= 1");
   require(c.curve_interval_s > 0, "curve_interval_s must be > 0");

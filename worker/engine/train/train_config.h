@@ -34,10 +34,10 @@ struct TrainConfig {
   // 0: the paper's NLL; beta > 0: beta-NLL (train/losses.h), each sample's NLL weighted by its variance^beta.
   float nll_beta = 0.0f;
   float rgb_l2_weight = 1.0f;
-  float depth_weight = 1.0f;      // lambda_d
-  float variance_reg = 0.03f;     // eta
-  std::string depth_loss = "l1";  // "l1" or "huber", on depth in units of far - near
-  float huber_delta = 0.05f;      // in units of far - near
+  float depth_weight = 1.0f;                        // lambda_d
+  float variance_reg = 0.03f;                       // eta
+  std::string depth_loss = "l1";                    // "l1" or "huber", on depth in units of far - near
+  float huber_delta = 0.05f;                        // in units of far - near
   float variance_eps = field::kDefaultVarianceEps;  // eps in var = softplus(l) + eps (variance.h)
 
   AdamConfig adam;
@@ -95,6 +95,14 @@ struct TrainConfig {
   // transparent pixels (composited onto white as they are read), black otherwise. FitToScene
   // resolves "auto", so config.json records the colour used.
   std::string background = "auto";
+
+  // Per-frame camera exposure apart from the tissue's colour (field/exposure.h): "on" (a gain per
+  // colour channel at each training frame's time, learned with the field), "off", or "auto": on
+  // when the training frames' brightness changes by more than exposure_threshold (the median over
+  // neighbouring frames of the whole-frame shift in log intensity, scene/exposure_change.h).
+  // FitToScene resolves "auto" and fills field.exposure_times.
+  std::string exposure = "auto";
+  double exposure_threshold = 0.02;
 
   double curve_interval_s = 10.0;  // a point of the error-against-time curve every this many seconds
   int curve_frames = 4;            // held-out frames rendered for each curve point (evenly spread)

@@ -1,0 +1,86 @@
+#include "worker/engine/train/scene_fit.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "tests/unit/temp_dir.h"
+#include "worker/engine/scene/clip_loader.h"
+#include "worker/engine/scene/synthetic_clip.h"
+#include "worker/engine/train/trainer.h"
+
+namespace endorecon::train {
+namespace {
+
+// A small clip (12 frames, 48 x 40) whose exposure flickers by +-flicker.
+scene::Clip FlickeringClip(const testing::TempDir& dir, double flicker) {
+  scene::SynthOptions synth;
+  synth.frames = 12;
+  synth.width = 48;
+  synth.height = 40;
+  synth.flicker = flicker;
+  const auto path = dir.path() / ("flicker-" + std::to_string(flicker));
+  scene::WriteSyntheticClip(synth, path);
+  return scene::LoadClip(path);
+}
+
+std::string LeftOut(const SceneFit& fit) { return fit.left_out.dump(); }
+
+TEST(SceneFitTest, ExposureGainsOnlyWhereTheBrightnessChanges) {
+  testing::TempDir dir("scene-fit");
+  const scene::Clip steady = FlickeringClip(dir, 0), flickering = FlickeringClip(dir, 0.2);
+  TrainConfig config = TrainConfig::Preset("cpu");
+  const SceneFit fit = FitToScene(steady, config);
+  EXPECT_EQ(config.exposure, "off");
+  EXPECT_TRUE(config.field.exposure_times.empty());
+  EXPECT_NE(LeftOut(fit).find("per-frame exposure gains"), std::string::npos) << LeftOut(fit);
+
+  // The knots are the training frames' times, in time order, whatever order the frames came in.
+  config = TrainConfig::Preset("cpu");
+  const std::vector<int> train = {5, 0, 1, 2, 4, 6, 7, 9, 10, 11};
+  const SceneFit flickering_fit = FitToScene(flickering, config, train);
+  EXPECT_EQ(config.exposure, "on");
+  std::vector<float> expected;
+  for (const int f : {0, 1, 2, 4, 5, 6, 7, 9, 10, 11}) expected.push_back(flickering.times[f]);
+  EXPECT_EQ(config.field.exposure_times, expected);
+  EXPECT_EQ(LeftOut(flickering_fit).find("exposure"), std::string::npos) << LeftOut(flickering_fit);
+  // Fitting again keeps them; "off" is obeyed on a flickering clip.
+  FitToScene(flickering, config, train);
+  EXPECT_EQ(config.field.exposure_times, expected);
+  config = TrainConfig::Preset("cpu");
+  config.exposure = "off";
+  FitToScene(flickering, config, train);
+  EXPECT_TRUE(config.field.exposure_times.empty());
+}
+
+// On a clip whose exposure flickers, training frames fit better when the field has the gains.
+TEST(SceneFitTest, ExposureGainsFitAFlickeringClipBetter) {
+  testing::TempDir dir("scene-fit-train");
+  const scene::Clip clip = FlickeringClip(dir, 0.25);
+  std::vector<int> frames(clip.frame_count());
+  for (int i = 0; i < clip.frame_count(); ++i) frames[i] = i;
+  double psnr[2] = {0, 0};
+  for (const bool on : {true, false}) {
+    TrainConfig config = TrainConfig::Preset("cpu");
+    config.rays_per_batch = 256;
+    config.iterations = 400;
+    config.exposure = on ? "on" : "off";
+    FitToScene(clip, config);
+    Trainer trainer(clip, config, frames, 3);
+    double last = 0;
+    for (int i = 0; i < 400; ++i) {
+      const StepStats stats = trainer.Step();
+      ASSERT_TRUE(std::isfinite(stats.loss)) << config.exposure << " iteration " << i;
+      if (i >= 350) last += stats.psnr / 50;
+    }
+    psnr[on ? 0 : 1] = last;
+  }
+  std::printf("flickering clip after 400 steps: exposure on %.2f dB, off %.2f dB\n", psnr[0], psnr[1]);
+  EXPECT_GT(psnr[0], psnr[1] + 1.0) << "on " << psnr[0] << " dB against off " << psnr[1];
+}
+
+}  // namespace
+}  // namespace endorecon::train

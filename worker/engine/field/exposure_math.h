@@ -1,0 +1,155 @@
+// Per-sample math of the exposure module (exposure.h), shared by the CPU module and the CUDA kernels:
+// a camera's gain changes from frame to frame (auto exposure, a flickering light source) while the
+// tissue's colour does not, so the field's colour c is the tissue's and a sample at time t is seen as
+// exp(a(t)) * c per channel, a(t) piecewise linear between knots at the training frames' times (one
+// log-gain per channel per knot). A time on a knot (a training frame) gets that knot's gains, a time
+// outside the knots the end knot's, and a time between two knots (a held-out frame) the best guess
+// the knots allow: their blend shrunk toward the mean log-gain by rho, the correlation of
+// neighbouring knots' log-gains (ExposurePrior), so a drifting exposure is followed (rho near 1) and
+// a flicker independent from frame to frame is predicted by its mean (rho near 0), which is closer to
+// the held-out frame's gain than its neighbours' blend. The gradients include the prior's (through
+// every knot), so the module differentiates exactly.
+#pragma once
+
+#include <cmath>
+
+#include "common/hd.h"
+
+namespace endorecon::field {
+
+// The knots around t: *k0 and *k1 = *k0 + 1 (both 0 with one knot) and the weight *w of k1. Knot
+// times ascend; NaN reads as the first knot.
+template <typename S>
+ENDORECON_HD void ExposureKnots(const float* times, int knots, S t, int* k0, int* k1, S* w) {
+  *w = S(0);
+  *k0 = *k1 = 0;
+  if (knots < 2 || !(t > S(times[0]))) return;
+  if (t >= S(times[knots - 1])) {
+    *k0 = *k1 = knots - 1;
+    return;
+  }
+  int lo = 0, hi = knots - 1;  // times[lo] < t < times[hi]... or equal at lo
+  while (hi - lo > 1) {
+    const int mid = (lo + hi) / 2;
+    if (S(times[mid]) <= t) {
+      lo = mid;
+    } else {
+      hi = mid;
+    }
+  }
+  *k0 = lo;
+  *k1 = hi;
+  *w = (t - S(times[lo])) / (S(times[hi]) - S(times[lo]));
+}
+
+// The prior of times between knots, from the log-gains: prior[0..3) the mean log-gain per channel,
+// prior[3] rho in [0, 1] (the lag-1 correlation of the centred log-gains, knots in time order, the
+// channels pooled; 1 while they are all equal, as at the start).
+inline constexpr int kExposurePriorSize = 4;
+
+template <typename S>
+ENDORECON_HD void ExposurePrior(const S* params, int knots, S* prior) {
+  for (int c = 0; c < 3; ++c) {
+    S sum = 0;
+    for (int k = 0; k < knots; ++k) sum += params[3 * k + c];
+    prior[c] = sum / S(knots);
+  }
+  S lag = 0, var = 0;
+  for (int k = 0; k < knots; ++k) {
+    for (int c = 0; c < 3; ++c) {
+      const S x = params[3 * k + c] - prior[c];
+      var += x * x;
+      if (k + 1 < knots) lag += x * (params[3 * (k + 1) + c] - prior[c]);
+    }
+  }
+  const S rho = var > S(1e-12) ? lag / var : S(1);
+  prior[3] = rho < S(0) ? S(0) : (rho > S(1) ? S(1) : rho);
+}
+
+// The log-gain of channel c at the knots' blend: the knot's own on a knot, shrunk toward the mean
+// between two knots (`between` says which).
+template <typename S>
+ENDORECON_HD S ExposureLogGain(const S* params, const S* prior, int k0, int k1, S w, int c, bool* between) {
+  const S blend = (S(1) - w) * params[3 * k0 + c] + w * params[3 * k1 + c];
+  *between = k1 != k0 && w > S(0);
+  return *between ? prior[c] + prior[3] * (blend - prior[c]) : blend;
+}
+
+// rgb_out = gain(t) * rgb_in, per channel (rgb_out may be rgb_in); prior from ExposurePrior.
+template <typename S>
+ENDORECON_HD void ExposureSample(const S* params, const S* prior, const float* times, int knots, S t,
+                                 const S* rgb_in, S* rgb_out) {
+  int k0, k1;
+  S w;
+  ExposureKnots(times, knots, t, &k0, &k1, &w);
+  for (int c = 0; c < 3; ++c) {
+    bool between;
+    rgb_out[c] = std::exp(ExposureLogGain(params, prior, k0, k1, w, c, &between)) * rgb_in[c];
+  }
+}
+
+// From drgb_out = dL/d(rgb_out): WRITES dL/d(rgb_in) to drgb_in (when not null), adds dL/d(log-gain)
+// of the two knots to dparams and, for a time between knots, dL/d(prior) to dprior (4 values; chained
+// to the log-gains by ExposurePriorBackward once the batch is done), through add(pointer, value)
+// (PlainAdd on the CPU, atomic in kernels).
+template <typename S, typename Add>
+ENDORECON_HD void ExposureSampleBackward(const S* params, const S* prior, const float* times, int knots, S t,
+                                         const S* rgb_in, const S* drgb_out, S* drgb_in, S* dparams,
+                                         S* dprior, const Add& add) {
+  int k0, k1;
+  S w;
+  ExposureKnots(times, knots, t, &k0, &k1, &w);
+  for (int c = 0; c < 3; ++c) {
+    bool between;
+    const S log_gain = ExposureLogGain(params, prior, k0, k1, w, c, &between);
+    const S gain = std::exp(log_gain);
+    const S g = drgb_out[c] * rgb_in[c] * gain;  // dL/d(log-gain)
+    if (drgb_in) drgb_in[c] = drgb_out[c] * gain;
+    S d_blend = g;
+    if (between) {
+      const S blend = (S(1) - w) * params[3 * k0 + c] + w * params[3 * k1 + c];
+      d_blend = prior[3] * g;
+      add(dprior + c, (S(1) - prior[3]) * g);
+      add(dprior + 3, (blend - prior[c]) * g);
+    }
+    add(dparams + 3 * k0 + c, (S(1) - w) * d_blend);
+    if (k1 != k0) add(dparams + 3 * k1 + c, w * d_blend);
+  }
+}
+
+// Adds to dparams what dL/d(prior) (dprior, 4 values) says of the log-gains: the means' share to
+// every knot, and rho's through the centred log-gains (nothing where rho is clamped or undefined).
+template <typename S>
+ENDORECON_HD void ExposurePriorBackward(const S* params, int knots, const S* prior, const S* dprior,
+                                        S* dparams) {
+  for (int k = 0; k < knots; ++k) {
+    for (int c = 0; c < 3; ++c) dparams[3 * k + c] += dprior[c] / S(knots);
+  }
+  S lag = 0, var = 0;
+  const auto x = [&](int k, int c) { return params[3 * k + c] - prior[c]; };
+  for (int k = 0; k < knots; ++k) {
+    for (int c = 0; c < 3; ++c) {
+      var += x(k, c) * x(k, c);
+      if (k + 1 < knots) lag += x(k, c) * x(k + 1, c);
+    }
+  }
+  if (!(var > S(1e-12))) return;
+  const S rho = lag / var;
+  if (rho < S(0) || rho > S(1) || dprior[3] == S(0)) return;
+  // d rho / d x_k = (x_{k-1} + x_{k+1} - 2 rho x_k) / var; the centring takes each channel's mean out.
+  for (int c = 0; c < 3; ++c) {
+    S mean = 0;
+    for (int k = 0; k < knots; ++k) {
+      const S dx =
+          ((k > 0 ? x(k - 1, c) : S(0)) + (k + 1 < knots ? x(k + 1, c) : S(0)) - S(2) * rho * x(k, c)) / var;
+      mean += dx / S(knots);
+    }
+    for (int k = 0; k < knots; ++k) {
+      const S dx =
+          ((k > 0 ? x(k - 1, c) : S(0)) + (k + 1 < knots ? x(k + 1, c) : S(0)) - S(2) * rho * x(k, c)) / var;
+      dparams[3 * k + c] += dprior[3] * (dx - mean);
+    }
+  }
+}
+
+}  // namespace endorecon::field
