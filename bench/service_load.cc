@@ -9,7 +9,11 @@
 // time), and the server's memory, file descriptors
 // and threads at the peak of the round and after it; a second round must not grow what is held
 // after it (a leak of memory, descriptors or threads shows as growth).
-// Usage: service_load [--clients N] [--jobs N] [--upload-mib N] [--watchers N] [--rounds N] [--dir D]
+// With --pace-ms P each client makes a call every P ms (clients spread over the interval, latency
+// counted from when a call was due) instead of back to back: the latency at a stated offered load
+// rather than at saturation, where a closed loop of 100 clients measures the queue they make.
+// Usage: service_load [--clients N] [--jobs N] [--upload-mib N] [--watchers N] [--rounds N]
+//                     [--pace-ms P] [--dir D]
 #include <signal.h>
 #include <unistd.h>
 
@@ -54,6 +58,7 @@ struct Flags {
   int rounds = 2;
   int calls_per_client = 20;  // of each job-API unary RPC, per client and round, under the watchers
   int workers = 4;
+  int pace_ms = 0;  // each client's interval between its calls; 0: back to back (saturating)
   std::string dir;
 };
 
@@ -142,10 +147,11 @@ std::map<std::string, double> ServerP99(const RpcBuckets& before, const RpcBucke
 // Latencies and errors of every RPC, from every thread.
 class Calls {
  public:
-  // Runs `call` (returning a grpc::Status) and records its latency under `rpc`.
+  // Runs `call` (returning a grpc::Status) and records its latency under `rpc`, from `start` (when
+  // the call was due: a paced client that falls behind counts its wait, so a slow server cannot hide
+  // its latency by slowing the load down).
   template <typename Call>
-  bool Timed(const std::string& rpc, Call&& call) {
-    const auto start = Clock::now();
+  bool Timed(const std::string& rpc, Call&& call, Clock::time_point start = Clock::now()) {
     const grpc::Status status = call();
     const double ms = MsSince(start);
     std::lock_guard lock(mutex_);
@@ -202,6 +208,26 @@ class Calls {
   };
   std::mutex mutex_;
   std::map<std::string, Record> records_;
+};
+
+// When a client's next call is due: at once when unpaced; with a pace, every pace_ms from a start
+// spread over the first interval (so the clients' calls are not in step), sleeping until then.
+class Pacer {
+ public:
+  Pacer(int pace_ms, int client) : pace_(pace_ms) {
+    if (pace_.count() > 0) next_ = Clock::now() + pace_ * ((client * 7919) % 1000) / 1000;
+  }
+  Clock::time_point Due() {
+    if (pace_.count() == 0) return Clock::now();
+    std::this_thread::sleep_until(next_);
+    const auto due = next_;
+    next_ += pace_;
+    return due;
+  }
+
+ private:
+  milliseconds pace_;
+  Clock::time_point next_;
 };
 
 std::unique_ptr<grpc::ClientContext> Context(int seconds = 30) {
@@ -264,8 +290,13 @@ class Load {
 
   // One round; returns its errors.
   int Round(int round) {
-    std::printf("round %d: %d clients, %d MiB uploaded at once, %d jobs, %d watchers\n", round,
-                flags_.clients, flags_.upload_mib, flags_.jobs, flags_.watchers);
+    std::printf("round %d: %d clients, %d MiB uploaded at once, %d jobs, %d watchers, %s\n", round,
+                flags_.clients, flags_.upload_mib, flags_.jobs, flags_.watchers,
+                flags_.pace_ms == 0
+                    ? "calls back to back"
+                    : ("a call every " + std::to_string(flags_.pace_ms) + " ms per client (" +
+                       std::to_string(flags_.clients * 1000 / flags_.pace_ms) + " calls/s offered)")
+                          .c_str());
     std::vector<std::shared_ptr<grpc::Channel>> channels;
     for (int c = 0; c < flags_.clients; ++c) channels.push_back(OpenChannel(address_));
     UsageSampler sampler(server_);
@@ -312,13 +343,16 @@ class Load {
     std::vector<std::string> ids;
     EachClient(
         [&](int c, v1::JobService::Stub& stub) {
+          Pacer pacer(flags_.pace_ms, c);
           for (int j = c; j < flags_.jobs; j += flags_.clients) {
+            const auto due = pacer.Due();
             v1::SubmitRequest request;
             *request.mutable_clip() = clips[static_cast<std::size_t>(c)];
             request.mutable_options()->set_iterations(100);
             request.set_name("load-" + std::to_string(round) + "-" + std::to_string(j));
             v1::Job job;
-            if (calls_.Timed("Submit", [&] { return stub.Submit(Context().get(), request, &job); })) {
+            if (calls_.Timed(
+                    "Submit", [&] { return stub.Submit(Context().get(), request, &job); }, due)) {
               std::lock_guard lock(ids_mutex);
               ids.push_back(job.id());
             }
@@ -326,7 +360,17 @@ class Load {
         },
         channels);
 
-    // Watchers on queued jobs, while clients call every unary RPC and workers lease.
+    // The workers register and start leasing first, as a cluster's workers are up before its users.
+    std::atomic<bool> leasing{true};
+    std::atomic<int> registered{0};
+    std::vector<std::thread> workers;
+    for (int w = 0; w < flags_.workers; ++w) {
+      workers.emplace_back([&, w] {
+        Worker(channels[static_cast<std::size_t>(w) % channels.size()], w, clips[0], leasing, registered);
+      });
+    }
+    while (registered < flags_.workers) std::this_thread::sleep_for(milliseconds(1));
+    // Watchers on queued jobs, while clients call every unary RPC and the workers lease.
     std::vector<std::unique_ptr<grpc::ClientContext>> watch_contexts;
     std::vector<std::thread> watchers;
     std::atomic<int> watch_events{0};
@@ -334,6 +378,7 @@ class Load {
       watch_contexts.push_back(CallContext(std::chrono::minutes(10)));
       auto* context = watch_contexts.back().get();
       watchers.emplace_back([&, context, w] {
+        Pacer(flags_.pace_ms, w).Due();  // paced: the watchers open over the first interval, not at once
         auto stub = v1::JobService::NewStub(channels[static_cast<std::size_t>(w) % channels.size()]);
         v1::WatchJobRequest request;
         request.set_id(ids[static_cast<std::size_t>(w) % ids.size()]);
@@ -345,30 +390,32 @@ class Load {
           calls_.Error("Watch", status.error_message());
       });
     }
-    std::atomic<bool> leasing{true};
-    std::vector<std::thread> workers;
-    for (int w = 0; w < flags_.workers; ++w) {
-      workers.emplace_back(
-          [&, w] { Worker(channels[static_cast<std::size_t>(w) % channels.size()], w, clips[0], leasing); });
-    }
     EachClient(
         [&](int c, v1::JobService::Stub& stub) {
+          Pacer pacer(flags_.pace_ms, c);
           for (int i = 0; i < flags_.calls_per_client; ++i) {
             const auto& id = ids[static_cast<std::size_t>(c * flags_.calls_per_client + i) % ids.size()];
             v1::GetJobRequest get;
             get.set_id(id);
             v1::Job job;
-            calls_.Timed("Get", [&] { return stub.Get(Context().get(), get, &job); });
+            calls_.Timed(
+                "Get", [&] { return stub.Get(Context().get(), get, &job); }, pacer.Due());
             v1::ListJobsRequest list;
             list.set_page_size(50);
             v1::ListJobsResponse page;
-            calls_.Timed("List", [&] { return stub.List(Context().get(), list, &page); });
+            calls_.Timed(
+                "List", [&] { return stub.List(Context().get(), list, &page); }, pacer.Due());
             v1::UploadStatus status;
-            calls_.Timed("QueryUpload", [&] {
-              return stub.QueryUpload(Context().get(), clips[static_cast<std::size_t>(c)], &status);
-            });
+            calls_.Timed(
+                "QueryUpload",
+                [&] {
+                  return stub.QueryUpload(Context().get(), clips[static_cast<std::size_t>(c)], &status);
+                },
+                pacer.Due());
             v1::ListWorkersResponse workers_list;
-            calls_.Timed("ListWorkers", [&] { return stub.ListWorkers(Context().get(), {}, &workers_list); });
+            calls_.Timed(
+                "ListWorkers", [&] { return stub.ListWorkers(Context().get(), {}, &workers_list); },
+                pacer.Due());
           }
         },
         channels);
@@ -379,16 +426,22 @@ class Load {
     // Cancel what is still queued, which ends every watch.
     EachClient(
         [&](int c, v1::JobService::Stub& stub) {
+          Pacer pacer(flags_.pace_ms, c);
           for (std::size_t j = static_cast<std::size_t>(c); j < ids.size();
                j += static_cast<std::size_t>(flags_.clients)) {
+            const auto due = pacer.Due();
             v1::CancelJobRequest cancel;
             cancel.set_id(ids[j]);
             v1::Job job;
-            calls_.Timed("Cancel", [&] {
-              const auto status = stub.Cancel(Context().get(), cancel, &job);
-              // A job the workers finished first cannot be cancelled: not an error of the server.
-              return status.error_code() == grpc::StatusCode::FAILED_PRECONDITION ? grpc::Status::OK : status;
-            });
+            calls_.Timed(
+                "Cancel",
+                [&] {
+                  const auto status = stub.Cancel(Context().get(), cancel, &job);
+                  // A job the workers finished first cannot be cancelled: not an error of the server.
+                  return status.error_code() == grpc::StatusCode::FAILED_PRECONDITION ? grpc::Status::OK
+                                                                                      : status;
+                },
+                due);
           }
         },
         channels);
@@ -429,14 +482,15 @@ class Load {
 
   // A worker that leases with no wait and completes (every other job) or hands back (the rest).
   void Worker(const std::shared_ptr<grpc::Channel>& channel, int w, const v1::Manifest& result,
-              const std::atomic<bool>& leasing) {
+              const std::atomic<bool>& leasing, std::atomic<int>& registered) {
     auto stub = v1::WorkerService::NewStub(channel);
     const std::string id = "load-worker-" + std::to_string(w);
     v1::RegisterRequest reg;
     reg.set_worker_id(id);
     reg.add_devices("cpu");
-    v1::RegisterResponse registered;
-    calls_.Timed("Register", [&] { return stub->Register(Context().get(), reg, &registered); });
+    v1::RegisterResponse response;
+    calls_.Timed("Register", [&] { return stub->Register(Context().get(), reg, &response); });
+    ++registered;
     for (int n = 0; leasing; ++n) {
       v1::LeaseRequest request;
       request.set_worker_id(id);
@@ -491,6 +545,9 @@ int main(int argc, char** argv) {
   app.add_option("--calls", flags.calls_per_client, "calls of each unary RPC per client and round")
       ->capture_default_str();
   app.add_option("--workers", flags.workers, "in-process workers leasing through the worker API")
+      ->capture_default_str();
+  app.add_option("--pace-ms", flags.pace_ms,
+                 "each client's interval between its calls (0: back to back, the server saturated)")
       ->capture_default_str();
   app.add_option("--dir", flags.dir, "scratch folder (default: a new one in $TMPDIR)");
   std::string server_binary = BuiltBinary("server/endorecon-server");
