@@ -27,6 +27,7 @@ class DeviceFieldTest : public ::testing::TestWithParam<bool> {
 field::FieldConfig Config(bool deformation) {
   field::FieldConfig c = field::FieldConfig::Cpu();
   c.deformation.enabled = deformation;
+  c.exposure_times = {0.1f, 0.3f, 0.5f, 0.7f, 0.9f};  // the exposure's kernels too
   return c;
 }
 
