@@ -221,9 +221,11 @@ TEST(TrainConfigTest, BadValuesAreRejected) {
   EXPECT_THROW(ApplyJson(nlohmann::json{{"rays_per_batch", 0}}, config), Error);
   EXPECT_THROW(TrainConfig::Preset("gpu-ultra"), Error);
   // Each names its key.
-  for (const auto& bad : {nlohmann::json{{"depth_refine_pixels", -1}},
-                          nlohmann::json{{"field", {{"heads", {{"dropout", 1.0}}}}}},
-                          nlohmann::json{{"field", {{"heads", {{"color_dropout", 1.5}}}}}}}) {
+  for (const auto& bad :
+       {nlohmann::json{{"depth_refine_pixels", -1}},
+        nlohmann::json{{"field", {{"heads", {{"dropout", 1.0}}}}}},
+        nlohmann::json{{"field", {{"heads", {{"color_dropout", 1.5}}}}}},
+        nlohmann::json{{"exposure", "sometimes"}}, nlohmann::json{{"exposure_threshold", -0.1}}}) {
     TrainConfig fresh;
     const std::string key = bad.flatten().begin().key();  // "/field/heads/dropout"
     const std::string leaf = key.substr(key.rfind('/') + 1);
@@ -234,6 +236,24 @@ TEST(TrainConfigTest, BadValuesAreRejected) {
       EXPECT_NE(std::string(e.what()).find(leaf), std::string::npos) << e.what();
     }
   }
+}
+
+// The exposure's knot times (config.json of a run that models exposure): descending, repeated or
+// not finite, refused naming the key and the knot.
+TEST(TrainConfigTest, ExposureKnotTimesMustAscend) {
+  for (const auto& times : {nlohmann::json{0.5, 0.2}, nlohmann::json{0.1, 0.1}, nlohmann::json{0.1, 1e39}}) {
+    TrainConfig config;
+    try {
+      ApplyJson(nlohmann::json{{"field", {{"exposure_times", times}}}}, config);
+      ADD_FAILURE() << times.dump() << " was accepted";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument);
+      EXPECT_NE(std::string(e.what()).find("exposure_times"), std::string::npos) << e.what();
+    }
+  }
+  TrainConfig config;
+  ApplyJson(nlohmann::json{{"field", {{"exposure_times", {0.0, 0.25, 1.0}}}}}, config);
+  EXPECT_EQ(config.field.exposure_times, (std::vector<float>{0.0f, 0.25f, 1.0f}));
 }
 
 // Found by tests/fuzz/train_config_fuzz.cc: a number that does not fit its key's type was cast

@@ -12,6 +12,9 @@
 
 namespace endorecon::field {
 
+// Throws Error(kInvalidArgument) naming the knot unless every time is finite and above the one before.
+void CheckExposureTimes(const std::vector<float>& times);
+
 template <typename S>
 class Exposure {
  public:

@@ -118,32 +118,25 @@ ENDORECON_HD void ExposureSampleBackward(const S* params, const S* prior, const 
 }
 
 // Adds to dparams what dL/d(prior) (dprior, 4 values) says of the log-gains: the means' share to
-// every knot, and rho's through the centred log-gains (nothing where rho is clamped or undefined).
+// every knot, and rho's through the centred log-gains (nothing where ExposurePrior clamped rho or
+// found it undefined, i.e. where prior[3] is 0 or 1).
 template <typename S>
 ENDORECON_HD void ExposurePriorBackward(const S* params, int knots, const S* prior, const S* dprior,
                                         S* dparams) {
   for (int k = 0; k < knots; ++k) {
     for (int c = 0; c < 3; ++c) dparams[3 * k + c] += dprior[c] / S(knots);
   }
-  S lag = 0, var = 0;
+  const S rho = prior[3];
+  if (!(rho > S(0) && rho < S(1)) || dprior[3] == S(0)) return;
   const auto x = [&](int k, int c) { return params[3 * k + c] - prior[c]; };
+  S var = 0;
   for (int k = 0; k < knots; ++k) {
-    for (int c = 0; c < 3; ++c) {
-      var += x(k, c) * x(k, c);
-      if (k + 1 < knots) lag += x(k, c) * x(k + 1, c);
-    }
+    for (int c = 0; c < 3; ++c) var += x(k, c) * x(k, c);
   }
-  if (!(var > S(1e-12))) return;
-  const S rho = lag / var;
-  if (rho < S(0) || rho > S(1) || dprior[3] == S(0)) return;
-  // d rho / d x_k = (x_{k-1} + x_{k+1} - 2 rho x_k) / var; the centring takes each channel's mean out.
+  // d rho / d x_k = (x_{k-1} + x_{k+1} - 2 rho x_k) / var. The centring takes each channel's mean of
+  // these out; as the centred values sum to 0, that mean is -(x_0 + x_{K-1}) / (K var).
   for (int c = 0; c < 3; ++c) {
-    S mean = 0;
-    for (int k = 0; k < knots; ++k) {
-      const S dx =
-          ((k > 0 ? x(k - 1, c) : S(0)) + (k + 1 < knots ? x(k + 1, c) : S(0)) - S(2) * rho * x(k, c)) / var;
-      mean += dx / S(knots);
-    }
+    const S mean = -(x(0, c) + x(knots - 1, c)) / (S(knots) * var);
     for (int k = 0; k < knots; ++k) {
       const S dx =
           ((k > 0 ? x(k - 1, c) : S(0)) + (k + 1 < knots ? x(k + 1, c) : S(0)) - S(2) * rho * x(k, c)) / var;

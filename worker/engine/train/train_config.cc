@@ -7,6 +7,7 @@
 #include <type_traits>
 
 #include "common/error.h"
+#include "worker/engine/field/exposure.h"
 
 namespace endorecon::train {
 
@@ -165,11 +166,7 @@ void Validate(const TrainConfig& c) {
   require(c.exposure == "auto" || c.exposure == "on" || c.exposure == "off",
           "exposure must be auto, on or off, got " + c.exposure);
   require(c.exposure_threshold >= 0, "exposure_threshold must be >= 0");
-  for (std::size_t k = 0; k < c.field.exposure_times.size(); ++k) {
-    const float t = c.field.exposure_times[k];
-    require(std::isfinite(t) && (k == 0 || t > c.field.exposure_times[k - 1]),
-            "field.exposure_times must be finite and ascending (knot " + std::to_string(k) + ")");
-  }
+  field::CheckExposureTimes(c.field.exposure_times);
   require(c.nll_beta >= 0 && c.nll_beta <= 1, "nll_beta must be in [0, 1]");
   require(c.eval_coarse_samples >= 1 && c.eval_fine_samples >= 1, "eval samples must be >= 1");
   require(c.curve_interval_s > 0, "curve_interval_s must be > 0");
