@@ -35,6 +35,7 @@ FieldConfig SmallConfig() {
   c.heads.color_hidden = {8, 6};
   c.heads.geo_features = 4;
   c.heads.dropout = 0.2;
+  c.heads.color_time_frequencies = 2;      // the colour sees the time
   c.exposure_times = {0.1f, 0.35f, 0.8f};  // samples before, between and after the knots
   return c;
 }

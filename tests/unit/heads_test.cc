@@ -98,7 +98,8 @@ struct ColorRun {
 };
 
 ColorRun RunColor(ColorHead<double>& head, const std::vector<double>& params, const std::vector<double>& geo,
-                  const std::vector<double>& dir, int n, const DropoutPass& drop) {
+                  const std::vector<double>& dir, int n, const DropoutPass& drop,
+                  const std::vector<double>& time = {}) {
   ColorRun r;
   r.in.resize(static_cast<std::size_t>(n) * head.in_dim());
   r.h0.resize(static_cast<std::size_t>(n) * 5);
@@ -107,7 +108,7 @@ ColorRun RunColor(ColorHead<double>& head, const std::vector<double>& params, co
   r.rgb.resize(3 * static_cast<std::size_t>(n));
   r.logvar.resize(n);
   double* const hidden[2] = {r.h0.data(), r.h1.data()};
-  head.Forward(params.data(), {n, geo.data(), 3, dir.data()},
+  head.Forward(params.data(), {n, geo.data(), 3, dir.data(), time.empty() ? nullptr : time.data()},
                {r.in.data(), hidden, r.raw.data(), r.rgb.data(), r.logvar.data()}, drop);
   return r;
 }
@@ -136,22 +137,49 @@ TEST(HeadsTest, TheColourHeadTakesItsOwnDropoutRateWhenOneIsGiven) {
   EXPECT_THROW(ColorHead<double>{config}, Error);
 }
 
+TEST(HeadsTest, TheColourSeesTheTimeThroughSinesAndCosinesOfDoublingFrequency) {
+  HeadsConfig config = SmallConfig();
+  config.color_time_frequencies = 3;
+  ColorHead<double> head(config);
+  EXPECT_EQ(head.in_dim(), 3 + kShDims + 6);
+  const std::vector<double> params = RandomValues(head.param_count(), -0.5, 0.5, 15);
+  const int n = 2;
+  const std::vector<double> geo(3 * n, 0.1), dir = {0, 0, 1, 0, 0, 1}, time = {0.25, 0.75};
+  const auto r = RunColor(head, params, geo, dir, n, {}, time);
+  const double kPi = 3.14159265358979323846;
+  for (int i = 0; i < n; ++i) {
+    const double* features = r.in.data() + i * head.in_dim() + 3 + kShDims;
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_NEAR(features[2 * k], std::sin(std::ldexp(kPi, k) * time[i]), 1e-15) << i << " " << k;
+      EXPECT_NEAR(features[2 * k + 1], std::cos(std::ldexp(kPi, k) * time[i]), 1e-15) << i << " " << k;
+    }
+  }
+  EXPECT_NE(r.rgb[0], r.rgb[3]);  // same geometry and direction, another time
+  config.color_time_frequencies = kMaxTimeFrequencies + 1;
+  EXPECT_THROW(ColorHead<double>{config}, Error);
+  config.color_time_frequencies = -1;
+  EXPECT_THROW(ColorHead<double>{config}, Error);
+}
+
 TEST(HeadsTest, ColorGradientsMatchFiniteDifferences) {
-  ColorHead<double> head(SmallConfig());
+  HeadsConfig config = SmallConfig();
+  config.color_time_frequencies = 2;
+  ColorHead<double> head(config);
   const int n = 8;
   std::vector<double> params = RandomValues(head.param_count(), -0.8, 0.8, 10);
   std::vector<double> geo = RandomValues(3 * n, -1, 1, 11);
   const std::vector<double> dir = UnitDirections(n, 12);
   const std::vector<double> wc = RandomValues(3 * n, -1, 1, 13), wl = RandomValues(n, -1, 1, 14);
+  const std::vector<double> time = RandomValues(n, 0, 1, 16);
   const DropoutPass drop{true, 5, 0};
   auto loss = [&] {
-    const auto r = RunColor(head, params, geo, dir, n, drop);
+    const auto r = RunColor(head, params, geo, dir, n, drop, time);
     return Dot(wc, r.rgb) + Dot(wl, r.logvar);
   };
-  auto r = RunColor(head, params, geo, dir, n, drop);
+  auto r = RunColor(head, params, geo, dir, n, drop, time);
   double* const hidden[2] = {r.h0.data(), r.h1.data()};
   std::vector<double> grads(params.size(), 0.0), dgeo(geo.size(), 0.0);
-  head.Backward(params.data(), {n, geo.data(), 3, dir.data()},
+  head.Backward(params.data(), {n, geo.data(), 3, dir.data(), time.data()},
                 {r.in.data(), hidden, r.raw.data(), r.rgb.data(), r.logvar.data()}, {wc.data(), wl.data()},
                 grads.data(), {dgeo.data()}, drop);
   EXPECT_GT(ExpectGradientMatches(params.data(), grads.data(), SomeIndices(params.size(), params.size(), 1),

@@ -74,6 +74,7 @@ TEST(TrainConfigTest, JsonRoundTripKeepsEveryKey) {
   c.field.deformation.enabled = false;
   c.field.deformation.resolution = 21;
   c.field.deformation.time_knots = 23;
+  c.field.heads.color_time_frequencies = 3;
   c.field.heads.density_hidden = {7, 9};
   c.field.heads.color_hidden = {10};
   c.field.heads.geo_features = 8;
@@ -130,7 +131,7 @@ TEST(TrainConfigTest, JsonRoundTripKeepsEveryKey) {
   EXPECT_EQ(json.at("field").size(), 7u);
   EXPECT_EQ(json.at("field").at("grids").size(), 6u);
   EXPECT_EQ(json.at("field").at("deformation").size(), 3u);
-  EXPECT_EQ(json.at("field").at("heads").size(), 5u);
+  EXPECT_EQ(json.at("field").at("heads").size(), 6u);
 
   TrainConfig b = TrainConfig::Preset("cpu");
   ApplyJson(json, b);
@@ -195,6 +196,7 @@ TEST(TrainConfigTest, JsonRoundTripKeepsEveryKey) {
   EXPECT_EQ(b.field.heads.geo_features, 8);
   EXPECT_EQ(b.field.heads.dropout, 0.15);
   EXPECT_EQ(b.field.heads.color_dropout, 0.35);
+  EXPECT_EQ(b.field.heads.color_time_frequencies, 3);
 }
 
 TEST(TrainConfigTest, EmptyObjectChangesNothing) {
@@ -225,6 +227,7 @@ TEST(TrainConfigTest, BadValuesAreRejected) {
        {nlohmann::json{{"depth_refine_pixels", -1}},
         nlohmann::json{{"field", {{"heads", {{"dropout", 1.0}}}}}},
         nlohmann::json{{"field", {{"heads", {{"color_dropout", 1.5}}}}}},
+        nlohmann::json{{"field", {{"heads", {{"color_time_frequencies", 9}}}}}},
         nlohmann::json{{"exposure", "sometimes"}}, nlohmann::json{{"exposure_threshold", -0.1}}}) {
     TrainConfig fresh;
     const std::string key = bad.flatten().begin().key();  // "/field/heads/dropout"

@@ -175,16 +175,18 @@ struct DeviceField::Impl {
   void Decode(const float* in_feat, const field::SampleBatch& batch, field::FieldOutput& out,
               const field::DropoutPass& pass) {
     const int n = batch.n, raw = density.raw_dim(), geo_count = geo, in_dim = color.in_dim();
+    const int time_frequencies = color.time_frequencies();
     float* draw = dens_raw.array.data();
     density_mlp.Forward(value("density"), in_feat, n, dens_hidden_ptr.data(), draw, pass);
     float *sigma = out.sigma, *sigma_lv = out.sigma_logvar, *rgb = out.rgb, *rgb_lv = out.rgb_logvar;
     float* cin = col_in.array.data();
-    const float* dir = batch.dir;
+    const float *dir = batch.dir, *time = batch.time;
     ForEach(
         n,
         [=] __device__(std::size_t i) {
           field::DensityOutputs(draw + i * raw, sigma + i, sigma_lv + i);
-          field::ColorInput(draw + i * raw + 2, geo_count, dir + 3 * i, cin + i * in_dim);
+          field::ColorInput(draw + i * raw + 2, geo_count, dir + 3 * i, time_frequencies ? time[i] : 0.0f,
+                            time_frequencies, cin + i * in_dim);
         },
         "density outputs kernel");
     float* craw = col_raw.array.data();
@@ -200,7 +202,6 @@ struct DeviceField::Impl {
     const float* params = value("exposure");
     const float* times = exposure_times.data();
     const int knots = exposure->knots();
-    const float* time = batch.time;
     float* prior = exposure_prior.data();
     ForEach(
         1, [=] __device__(std::size_t) { field::ExposurePrior(params, knots, prior); },

@@ -179,7 +179,7 @@ struct FieldT<S>::Impl {
       // With exposure the colour head writes the tissue's colour, which the camera's gains then scale.
       S* rgb = exposure ? v.rgb0 + 3 * t : out.rgb + 3 * r;
       color.Forward(
-          value[kColor].data(), {n, dens_raw + 2, density.raw_dim(), batch.dir + 3 * r},
+          value[kColor].data(), {n, dens_raw + 2, density.raw_dim(), batch.dir + 3 * r, batch.time + r},
           {v.col_in + t * color.in_dim(), col_hidden.data(), v.col_raw + 4 * t, rgb, out.rgb_logvar + r},
           pass);
       if (exposure)
@@ -289,7 +289,7 @@ void FieldT<S>::Backward(const SampleBatchT<S>& batch, const FieldOutputGradT<S>
                          m.grad[kExposure].data(), {m.drgb0.data()}, pass);
     drgb = m.drgb0.data();
   }
-  m.color.Backward(m.value[kColor].data(), {n, a.dens_raw + 2, m.density.raw_dim(), batch.dir},
+  m.color.Backward(m.value[kColor].data(), {n, a.dens_raw + 2, m.density.raw_dim(), batch.dir, batch.time},
                    {a.col_in, a.col_hidden.data(), a.col_raw, nullptr, nullptr}, {drgb, g.rgb_logvar},
                    m.grad[kColor].data(), {m.dgeo.data()}, pass);
   m.density.Backward(

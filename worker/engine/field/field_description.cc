@@ -52,8 +52,10 @@ std::string DescribeField(const FieldT<S>& field) {
     s << "exposure: a gain per colour channel at " << field.exposure()->knots()
       << " knots (the training frames' times)\n";
   }
-  s << "density head: " << Widths(field.density().mlp()) << ", colour head: " << Widths(field.color().mlp())
-    << ", dropout " << config.heads.dropout;
+  s << "density head: " << Widths(field.density().mlp()) << ", colour head: " << Widths(field.color().mlp());
+  if (field.color().time_frequencies() > 0)
+    s << " (" << field.color().time_frequencies() << " time frequencies in)";
+  s << ", dropout " << config.heads.dropout;
   if (config.heads.ColorDropout() != config.heads.dropout)
     s << " (colour " << config.heads.ColorDropout() << ")";
   s << "\n";

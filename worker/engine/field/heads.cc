@@ -1,7 +1,9 @@
 #include "worker/engine/field/heads.h"
 
 #include <algorithm>
+#include <string>
 
+#include "common/error.h"
 #include "worker/engine/field/heads_math.h"
 
 namespace endorecon::field {
@@ -43,13 +45,21 @@ void DensityHead<S>::Backward(const S* params, const Inputs& in, const Outputs& 
 template <typename S>
 ColorHead<S>::ColorHead(const HeadsConfig& config)
     : geo_(config.geo_features),
-      mlp_(config.geo_features + kShDims, config.color_hidden, 4, config.ColorDropout(), kColorStream) {}
+      time_frequencies_(config.color_time_frequencies),
+      mlp_(config.geo_features + kShDims + 2 * std::max(config.color_time_frequencies, 0),
+           config.color_hidden, 4, config.ColorDropout(), kColorStream) {
+  if (config.color_time_frequencies < 0 || config.color_time_frequencies > kMaxTimeFrequencies) {
+    FailInvalid("colour head: color_time_frequencies must be in [0, " + std::to_string(kMaxTimeFrequencies) +
+                "], got " + std::to_string(config.color_time_frequencies));
+  }
+}
 
 template <typename S>
 void ColorHead<S>::Forward(const S* params, const Inputs& in, const Outputs& out, const DropoutPass& pass) {
   const std::size_t w = static_cast<std::size_t>(in_dim());
   ParallelRows(in.n, [&](std::size_t i) {
-    ColorInput(in.geo + i * in.geo_stride, geo_, in.dir + 3 * i, out.in + i * w);
+    ColorInput(in.geo + i * in.geo_stride, geo_, in.dir + 3 * i, time_frequencies_ ? in.time[i] : S(0),
+               time_frequencies_, out.in + i * w);
   });
   mlp_.Forward(params, {in.n, out.in}, {out.hidden, out.raw}, pass);
   ParallelRows(in.n, [&](std::size_t i) { ColorOutputs(out.raw + 4 * i, out.rgb + 3 * i, out.logvar + i); });

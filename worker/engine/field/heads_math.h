@@ -1,7 +1,9 @@
 // Per-row math of the two heads' inputs and outputs (heads.h), written once for the CPU modules and
-// the CUDA kernels: the colour head's input [geo, SH(dir)], and each head's output activations and
-// their gradients.
+// the CUDA kernels: the colour head's input [geo, SH(dir), time features], and each head's output
+// activations and their gradients.
 #pragma once
+
+#include <cmath>
 
 #include "common/hd.h"
 #include "worker/engine/field/activations.h"
@@ -25,11 +27,21 @@ ENDORECON_HD void DensityOutputsBackward(const S* raw, const S* dsigma, const S*
   for (int j = 0; j < geo; ++j) draw[2 + j] = dgeo ? dgeo[j] : S(0);
 }
 
-// The colour head's input row: geo values, then the 16 SH values of the unit direction.
+// The colour head's input row: geo values, the 16 SH values of the unit direction, then for
+// k = 0 .. time_frequencies - 1 the pair sin(2^k pi t), cos(2^k pi t) of the sample's time (t read as
+// given; the lowest pair already tells every t in [0, 1] apart). The time features let the tissue's
+// appearance change with time apart from its motion: speculars that follow a moving light, tissue
+// that reddens or blanches.
 template <typename S>
-ENDORECON_HD void ColorInput(const S* geo, int geo_count, const S* dir, S* row) {
+ENDORECON_HD void ColorInput(const S* geo, int geo_count, const S* dir, S t, int time_frequencies, S* row) {
   for (int j = 0; j < geo_count; ++j) row[j] = geo[j];
   ShEncode(dir, row + geo_count);
+  S* time_row = row + geo_count + kShDims;
+  S angle = S(3.14159265358979323846) * t;
+  for (int k = 0; k < time_frequencies; ++k, angle *= S(2)) {
+    time_row[2 * k] = std::sin(angle);
+    time_row[2 * k + 1] = std::cos(angle);
+  }
 }
 
 // raw: 4 values -> rgb = sigmoid(raw0..2), logvar = raw3.

@@ -108,6 +108,7 @@ void VisitKeys(TrainConfig& c, Visit&& visit) {
   visit("field.heads.geo_features", c.field.heads.geo_features);
   visit("field.heads.dropout", c.field.heads.dropout);
   visit("field.heads.color_dropout", c.field.heads.color_dropout);
+  visit("field.heads.color_time_frequencies", c.field.heads.color_time_frequencies);
   visit("field.exposure_times", c.field.exposure_times);
 }
 
@@ -189,6 +190,10 @@ void Validate(const TrainConfig& c) {
   require(c.occupancy_every > 0 && c.occupancy_every <= 1, "occupancy_every must be in (0, 1]");
   require(c.occupancy_min_alpha > 0 && c.occupancy_min_alpha < 1, "occupancy_min_alpha must be in (0, 1)");
   require(c.field.heads.dropout >= 0 && c.field.heads.dropout < 1, "field.heads.dropout must be in [0, 1)");
+  require(c.field.heads.color_time_frequencies >= 0 &&
+              c.field.heads.color_time_frequencies <= field::kMaxTimeFrequencies,
+          "field.heads.color_time_frequencies must be in [0, " + std::to_string(field::kMaxTimeFrequencies) +
+              "]");
   require(c.field.heads.color_dropout < 1,
           "field.heads.color_dropout must be below 1 (negative: field.heads.dropout)");
 }
