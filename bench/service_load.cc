@@ -98,15 +98,16 @@ std::string FormatMs(double ms) {
   return text;
 }
 
-// The server's own view of its calls: endorecon_rpc_seconds's buckets by method (cumulative counts
-// by upper bound in seconds), scraped from its /metrics.
+// The server's own view of its work: a histogram's buckets by the value of one label (cumulative
+// counts by upper bound in seconds; "" for a histogram without the label), scraped from its /metrics.
+// endorecon_rpc_seconds by method, endorecon_store_commit_seconds (no label).
 using RpcBuckets = std::map<std::string, std::map<double, double>>;
 
-RpcBuckets ScrapeRpcBuckets(int metrics_port) {
+RpcBuckets ScrapeBuckets(int metrics_port, const std::string& histogram, const std::string& by_label) {
   RpcBuckets buckets;
   std::istringstream text(
       Capture("curl -s --max-time 5 http://127.0.0.1:" + std::to_string(metrics_port) + "/metrics"));
-  const std::string prefix = "endorecon_rpc_seconds_bucket{";
+  const std::string prefix = histogram + "_bucket{";
   for (std::string line; std::getline(text, line);) {
     if (line.rfind(prefix, 0) != 0) continue;
     const auto label = [&](const std::string& name) {
@@ -116,15 +117,22 @@ RpcBuckets ScrapeRpcBuckets(int metrics_port) {
       return line.substr(start, line.find('"', start) - start);
     };
     const auto le = label("le");
-    buckets[label("method")][le == "+Inf" ? INFINITY : std::stod(le)] =
+    buckets[by_label.empty() ? std::string() : label(by_label)][le == "+Inf" ? INFINITY : std::stod(le)] =
         std::stod(line.substr(line.rfind(' ') + 1));
   }
   return buckets;
 }
 
-// The upper bound, in ms, of the bucket holding the 99th percentile of the calls between two scrapes
-// (methods without calls in between are left out).
-std::map<std::string, double> ServerP99(const RpcBuckets& before, const RpcBuckets& after) {
+RpcBuckets ScrapeRpcBuckets(int metrics_port) {
+  return ScrapeBuckets(metrics_port, "endorecon_rpc_seconds", "method");
+}
+RpcBuckets ScrapeCommitBuckets(int metrics_port) {
+  return ScrapeBuckets(metrics_port, "endorecon_store_commit_seconds", "");
+}
+
+// The upper bound, in ms, of the bucket holding the quantile q of the observations between two
+// scrapes (keys without any in between are left out); q = 1: the slowest one's bucket.
+std::map<std::string, double> ServerQuantile(const RpcBuckets& before, const RpcBuckets& after, double q) {
   std::map<std::string, double> p99;
   for (const auto& [method, counts] : after) {
     const auto earlier = before.find(method);
@@ -135,13 +143,24 @@ std::map<std::string, double> ServerP99(const RpcBuckets& before, const RpcBucke
     const double total = count(INFINITY);
     if (total <= 0) continue;
     for (const auto& [le, unused] : counts) {
-      if (count(le) >= 0.99 * total) {
+      if (count(le) >= q * total) {
         p99[method] = le * 1000;
         break;
       }
     }
   }
   return p99;
+}
+std::map<std::string, double> ServerP99(const RpcBuckets& before, const RpcBuckets& after) {
+  return ServerQuantile(before, after, 0.99);
+}
+
+// Observations between two scrapes under `key`.
+double ObservedBetween(const RpcBuckets& before, const RpcBuckets& after, const std::string& key) {
+  const auto now = after.find(key);
+  if (now == after.end()) return 0;
+  const auto was = before.find(key);
+  return now->second.at(INFINITY) - (was == before.end() ? 0 : was->second.at(INFINITY));
 }
 
 // Latencies and errors of every RPC, from every thread.
@@ -301,6 +320,7 @@ class Load {
     for (int c = 0; c < flags_.clients; ++c) channels.push_back(OpenChannel(address_));
     UsageSampler sampler(server_);
     const auto rpc_before = ScrapeRpcBuckets(metrics_port_);
+    const auto commits_before = ScrapeCommitBuckets(metrics_port_);
 
     // Every client's clip: a file of its share of the upload, unique to the round.
     const std::int64_t share = (static_cast<std::int64_t>(flags_.upload_mib) << 20) / flags_.clients;
@@ -310,6 +330,10 @@ class Load {
       WriteRandom(clip / "video.bin", share, static_cast<std::uint64_t>(round) * 100003 + c);
       clips[static_cast<std::size_t>(c)] = ManifestOfDirectory(clip);
     }
+    // The clips on disk before any call: the kernel would otherwise write these 1 GiB back in one
+    // burst some seconds later, in the middle of the round, on the disk the server's job store
+    // fsyncs (real clients upload from other machines).
+    ::sync();
     const auto upload_start = Clock::now();
     EachClient(
         [&](int c, v1::JobService::Stub& stub) {
@@ -454,6 +478,15 @@ class Load {
     const int errors = calls_.Print({"Submit", "Get", "List", "QueryUpload", "ListWorkers", "Cancel",
                                      "Register", "Lease", "Complete", "Fail", "QueryBlobs"},
                                     ServerP99(rpc_before, ScrapeRpcBuckets(metrics_port_)));
+    // The job store's commits: a slow fsync holds every writing call that waits for it.
+    const auto commits_after = ScrapeCommitBuckets(metrics_port_);
+    const auto commit_bound = [&](double q) {
+      const auto bounds = ServerQuantile(commits_before, commits_after, q);
+      return bounds.count("") ? FormatMs(bounds.at("")) : std::string("-");
+    };
+    std::printf("  job store commits: %.0f, p50 <= %s ms, p99 <= %s ms, slowest <= %s ms\n",
+                ObservedBetween(commits_before, commits_after, ""), commit_bound(0.5).c_str(),
+                commit_bound(0.99).c_str(), commit_bound(1.0).c_str());
     std::printf(
         "  server at the peak: %.1f MB resident, %d fds, %d threads (%.1f MB, %d fds, %d threads under the "
         "watchers)\n",
@@ -461,6 +494,7 @@ class Load {
         peak_under_load.threads);
     std::printf("  server after the round (3 s idle): %.1f MB resident, %d fds, %d threads\n",
                 after_.rss_kib / 1024.0, after_.fds, after_.threads);
+    PrintServerWarnings();
     std::printf("  errors: %d\n", errors);
     return errors;
   }
@@ -468,6 +502,19 @@ class Load {
   ProcessUsage after() const { return after_; }
 
  private:
+  // The server's warnings (a slow commit, a stalled stream, ...) logged since the last call.
+  void PrintServerWarnings() {
+    std::ifstream log(dir_ / "server.log");
+    log.seekg(log_offset_);
+    for (std::string line; std::getline(log, line);) {
+      if (line.find("[warning]") != std::string::npos || line.find("[error]") != std::string::npos ||
+          line.find("[critical]") != std::string::npos) {
+        std::printf("  server: %s\n", line.c_str());
+      }
+      if (log.good()) log_offset_ = log.tellg();
+    }
+  }
+
   template <typename Body>
   void EachClient(Body&& body, const std::vector<std::shared_ptr<grpc::Channel>>& channels) {
     std::vector<std::thread> threads;
@@ -526,6 +573,7 @@ class Load {
   std::string address_;
   int metrics_port_;
   fs::path dir_;
+  std::streamoff log_offset_ = 0;
   Calls calls_;
   ProcessUsage after_;
 };

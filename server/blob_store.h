@@ -53,6 +53,7 @@ class BlobStore {
     std::filesystem::path partial_;
     int fd_ = -1;
     std::int64_t committed_ = 0;
+    std::int64_t written_back_ = 0;  // bytes handed to the kernel's writeback (write-behind)
     Sha256 digest_;
   };
   // Throws kFailedPrecondition when another stream is writing the same content right now.

@@ -2,6 +2,8 @@
 
 #include <spdlog/spdlog.h>
 
+#include <chrono>
+
 #include "common/error.h"
 #include "common/manifest.h"
 #include "server/sqlite_statement.h"
@@ -155,10 +157,15 @@ void JobStore::Flush() {
     const auto upto = writes_staged_;
     lock.unlock();
     std::string failure;
+    const auto start = std::chrono::steady_clock::now();
     try {
       Commit(batch);
     } catch (const Error& e) {
       failure = e.what();
+    }
+    if (failure.empty() && observer_) {
+      observer_(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
+                batch.size());
     }
     lock.lock();
     committing_ = false;

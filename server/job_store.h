@@ -27,6 +27,7 @@
 #include <optional>
 #include <string>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include "endorecon/v1/job.pb.h"
@@ -82,6 +83,12 @@ class JobStore {
   // True once a commit has failed (see above).
   bool Broken();
 
+  // Called after every successful commit, by the committing thread outside the store's locks, with
+  // the commit's duration (the transaction and its fsyncs) and the writes it carried: the server's
+  // metrics and its slow-commit log. Set it before the store is shared between threads.
+  using CommitObserver = std::function<void(double seconds, std::size_t writes)>;
+  void SetCommitObserver(CommitObserver observer) { observer_ = std::move(observer); }
+
  private:
   // A job's latest write not yet committed (several writes of one job between commits are one row
   // write at the next).
@@ -112,6 +119,7 @@ class JobStore {
   bool committing_ = false;
   std::int64_t next_seq_ = 1;
   std::string broken_;  // why the store is broken; empty while it is not
+  CommitObserver observer_;
 };
 
 // The bytes `job` keeps in the blob store (clip, result, checkpoint; 0 once expired), counted per

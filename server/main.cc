@@ -130,6 +130,15 @@ int Run(const ServerFlags& flags) {
   WatchHub hub;
   Metrics metrics(flags.metrics_port >= 0 ? flags.metrics_host + ":" + std::to_string(flags.metrics_port)
                                           : "");
+  // A commit slower than this is logged: a writing call waited for it (the disk's fsync, usually).
+  constexpr double kSlowCommitSeconds = 0.1;
+  store.SetCommitObserver([&metrics](double seconds, std::size_t writes) {
+    metrics.StoreCommitted(seconds);
+    if (seconds >= kSlowCommitSeconds) {
+      spdlog::warn("job store: a commit of {} write(s) took {:.0f} ms; the calls that wrote waited for it",
+                   writes, seconds * 1000);
+    }
+  });
   AuditLog audit(flags.audit_log.empty() ? data_dir / "audit.jsonl" : std::filesystem::path(flags.audit_log));
   CallGuard guard(TokenStore::PathIn(data_dir), !flags.tls.client_ca_file.empty(), audit, metrics);
   JobCoordinator coordinator({store, blobs, scheduler, leases, workers, hub, metrics}, flags.max_attempts,

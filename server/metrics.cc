@@ -60,7 +60,14 @@ Metrics::Metrics(const std::string& bind_address)
       rpc_seconds_(BuildHistogram()
                        .Name("endorecon_rpc_seconds")
                        .Help("Time the server spent on each call, by method (streams: the whole stream)")
-                       .Register(*registry_)) {
+                       .Register(*registry_)),
+      store_commit_seconds_(
+          BuildHistogram()
+              .Name("endorecon_store_commit_seconds")
+              .Help("Duration of the job store's commits (a transaction and its fsyncs)")
+              .Register(*registry_)
+              .Add({}, prometheus::Histogram::BucketBoundaries{0.001, 0.0025, 0.005, 0.01, 0.025, 0.05, 0.1,
+                                                               0.25, 0.5, 1, 2.5, 10})) {
   for (const auto* code : {"UNAUTHENTICATED", "PERMISSION_DENIED"}) refused_.Add({{"code", code}});
   for (const auto state : {v1::QUEUED, v1::RUNNING, v1::SUCCEEDED, v1::FAILED, v1::CANCELLED}) {
     jobs_.Add({{"state", v1::JobState_Name(state)}}).Set(0);

@@ -22,6 +22,9 @@
 //   endorecon_rpc_seconds{method}            histogram: time the server spent on each call, from the
 //                                            gate to its status (streams: the whole stream); the time
 //                                            a call waits for a server thread is not in it
+//   endorecon_store_commit_seconds           histogram: the job store's commits (one transaction and
+//                                            its fsyncs for every write staged meanwhile); a writing
+//                                            call waits for one or two of them
 #pragma once
 
 #include <prometheus/counter.h>
@@ -74,6 +77,7 @@ class Metrics {
   void RetrievalBytes(std::int64_t bytes) { retrieval_bytes_.Increment(static_cast<double>(bytes)); }
   // `method`: the RPC's name (a literal: few distinct values).
   void CallHandled(const char* method, double seconds);
+  void StoreCommitted(double seconds) { store_commit_seconds_.Observe(seconds); }
 
  private:
   std::shared_ptr<prometheus::Registry> registry_;
@@ -98,6 +102,7 @@ class Metrics {
   prometheus::Gauge& data_available_;
   prometheus::Gauge& data_capacity_;
   prometheus::Family<prometheus::Histogram>& rpc_seconds_;
+  prometheus::Histogram& store_commit_seconds_;
 };
 
 }  // namespace endorecon::server

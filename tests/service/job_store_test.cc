@@ -4,6 +4,7 @@
 #include <sqlite3.h>
 
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include "common/error.h"
@@ -64,6 +65,27 @@ TEST(JobStoreTest, StagedWritesAreSeenByGetAtOnceAndReachTheDiskAndPagesOnlyWith
   ASSERT_TRUE(other.Get("a").has_value());
   EXPECT_EQ(other.Get("a")->job.state(), v1::RUNNING);
   EXPECT_EQ(other.Get("a")->seq, seq);
+}
+
+TEST(JobStoreTest, EachCommitIsReportedWithItsDurationAndItsWrites) {
+  testing::TempDir dir("jobstore");
+  JobStore store(dir / "jobs.sqlite");
+  std::vector<std::pair<double, std::size_t>> commits;
+  store.SetCommitObserver([&](double seconds, std::size_t writes) { commits.emplace_back(seconds, writes); });
+  store.Flush();
+  EXPECT_TRUE(commits.empty()) << "nothing staged, nothing committed";
+  store.Insert(MakeJob("a", v1::QUEUED));
+  store.Insert(MakeJob("b", v1::QUEUED));
+  store.Update(MakeJob("a", v1::RUNNING));  // one row write for a's two
+  store.Flush();
+  ASSERT_EQ(commits.size(), 1u);
+  EXPECT_EQ(commits[0].second, 2u);
+  EXPECT_GT(commits[0].first, 0.0);
+  EXPECT_LT(commits[0].first, 60.0);
+  store.Update(MakeJob("b", v1::RUNNING));
+  store.Flush();
+  ASSERT_EQ(commits.size(), 2u);
+  EXPECT_EQ(commits[1].second, 1u);
 }
 
 TEST(JobStoreTest, ManyThreadsWritingAndFlushingAtOnceAllReachTheDiskInOrder) {
