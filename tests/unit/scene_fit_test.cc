@@ -56,6 +56,23 @@ TEST(SceneFitTest, ExposureGainsOnlyWhereTheBrightnessChanges) {
   EXPECT_TRUE(config.field.exposure_times.empty());
 }
 
+TEST(SceneFitTest, AStaticClipGetsNeitherADeformationNorTimeInTheColour) {
+  testing::TempDir dir("scene-fit-static");
+  scene::Clip clip = FlickeringClip(dir, 0);
+  TrainConfig config = TrainConfig::Preset("cpu");
+  ASSERT_GT(config.field.heads.color_time_frequencies, 0);
+  FitToScene(clip, config);
+  EXPECT_TRUE(config.field.deformation.enabled);
+  EXPECT_GT(config.field.heads.color_time_frequencies, 0);
+  clip.is_static = true;
+  config = TrainConfig::Preset("cpu");
+  const SceneFit fit = FitToScene(clip, config);
+  EXPECT_FALSE(config.field.deformation.enabled);
+  EXPECT_EQ(config.field.heads.color_time_frequencies, 0);
+  EXPECT_NE(LeftOut(fit).find("deformation network"), std::string::npos) << LeftOut(fit);
+  EXPECT_NE(LeftOut(fit).find("time inputs"), std::string::npos) << LeftOut(fit);
+}
+
 // On a clip whose exposure flickers, training frames fit better when the field has the gains.
 TEST(SceneFitTest, ExposureGainsFitAFlickeringClipBetter) {
   testing::TempDir dir("scene-fit-train");

@@ -19,8 +19,9 @@ FieldConfig FieldConfig::Paper() {
 // Sized on this machine kind (2 cores, AVX-512; bench/field_bench, 32768-sample batches): 3 grids x 10
 // levels x 2 features reach resolutions ~550-660 (a pixel's footprint for clips up to ~640 wide), 2^14-slot
 // tables (128 KiB per level, 3.5 MiB in all) stay in L2/L3 between steps (2^15 cost ~15% more), heads of
-// 32 hidden units (2304 multiply-adds per sample) keep the MLPs near a third of the time. Forward +
-// backward: ~2.4 M samples/s on 2 threads (~3.2 M without deformation); forward alone ~8.4 M.
+// 32 hidden units (2304 multiply-adds per sample; 256 more with the colour head's time inputs) keep the MLPs
+// near a third of the time. Forward + backward: ~2.4 M samples/s on 2 threads (~3.2 M without deformation);
+// forward alone ~8.4 M.
 FieldConfig FieldConfig::Cpu() {
   FieldConfig c;
   c.grids.base_resolutions = {8, 16, 32};

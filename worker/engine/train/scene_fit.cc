@@ -87,6 +87,10 @@ SceneFit FitToScene(const scene::Clip& clip, TrainConfig& config, std::vector<in
   if (clip.is_static) {
     leave_out("deformation network", "the clip is static");
     config.field.deformation.enabled = false;
+    if (config.field.heads.color_time_frequencies > 0) {
+      leave_out("the colour head's time inputs", "the clip is static");
+      config.field.heads.color_time_frequencies = 0;
+    }
   }
   FitExposure(clip, config, std::move(train_frames), leave_out);
   // Finest useful grid resolution: two cells per pixel footprint at the typical depth, over the box.
