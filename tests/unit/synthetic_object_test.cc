@@ -7,6 +7,7 @@
 #include "tests/unit/temp_dir.h"
 #include "worker/engine/scene/clip_loader.h"
 #include "worker/engine/scene/scene_box.h"
+#include "worker/engine/scene/view_geometry.h"
 
 namespace endorecon::scene {
 namespace {
@@ -44,6 +45,33 @@ TEST(SyntheticObjectTest, ReadsBackAsACentredRigOnWhite) {
   const Clip dark = LoadClip(dir.path(), black);
   EXPECT_EQ(dark.rgb[0][0], 0);
   EXPECT_EQ(clip.rgb[0][0], 255);
+}
+
+// With a backdrop: opaque images (nothing transparent, so "auto" would be black), and a pixel that
+// misses the object shows the backdrop's colour along the loader's ray through its centre.
+TEST(SyntheticObjectTest, ABackdropShowsItsColourAlongEachPixelsRay) {
+  testing::TempDir dir("backdrop");
+  ObjectSynthOptions options;
+  options.views = 3;
+  options.width = options.height = 32;
+  options.backdrop = true;
+  WriteSyntheticObject(options, dir.path());
+  const Clip clip = LoadClip(dir.path());
+  EXPECT_FALSE(clip.transparent);
+  for (int f = 0; f < clip.frame_count(); ++f) {
+    for (const int pixel : {0, 31, 32 * 31, 32 * 32 - 1}) {  // the corners miss the object
+      double origin[3], direction[3];
+      PixelRay(clip.cameras[f].View(), pixel, origin, direction);
+      const double length =
+          std::sqrt(direction[0] * direction[0] + direction[1] * direction[1] + direction[2] * direction[2]);
+      for (double& d : direction) d /= length;
+      float rgb[3];
+      BackdropColor(direction, rgb);
+      for (int c = 0; c < 3; ++c) {
+        EXPECT_NEAR(clip.rgb[f][3 * pixel + c], 255 * rgb[c], 1.0) << "frame " << f << " pixel " << pixel;
+      }
+    }
+  }
 }
 
 }  // namespace

@@ -59,7 +59,8 @@ TEST(TrainConfigTest, JsonRoundTripKeepsEveryKey) {
   c.occupancy_resolution = 33;
   c.occupancy_every = 0.1875;
   c.occupancy_min_alpha = 0.0078125f;
-  c.background = "white";
+  c.background = "learned";
+  c.field.learned_background = true;
   c.curve_interval_s = 4.5;
   c.curve_frames = 7;
   c.field.encoding = "frequency";
@@ -127,8 +128,8 @@ TEST(TrainConfigTest, JsonRoundTripKeepsEveryKey) {
   for (const auto& [key, value] : json.items()) top.insert(key);
   EXPECT_EQ(top, expected_top);
   EXPECT_EQ(json.at("adam").size(), 7u);
-  // encoding, frequencies, grids, blend_hidden, deformation, heads, exposure_times
-  EXPECT_EQ(json.at("field").size(), 7u);
+  // encoding, frequencies, grids, blend_hidden, deformation, heads, exposure_times, learned_background
+  EXPECT_EQ(json.at("field").size(), 8u);
   EXPECT_EQ(json.at("field").at("grids").size(), 6u);
   EXPECT_EQ(json.at("field").at("deformation").size(), 3u);
   EXPECT_EQ(json.at("field").at("heads").size(), 6u);
@@ -176,7 +177,8 @@ TEST(TrainConfigTest, JsonRoundTripKeepsEveryKey) {
   EXPECT_EQ(b.occupancy_resolution, 33);
   EXPECT_EQ(b.occupancy_every, 0.1875);
   EXPECT_EQ(b.occupancy_min_alpha, 0.0078125f);
-  EXPECT_EQ(b.background, "white");
+  EXPECT_EQ(b.background, "learned");
+  EXPECT_TRUE(b.field.learned_background);
   EXPECT_EQ(b.curve_interval_s, 4.5);
   EXPECT_EQ(b.curve_frames, 7);
   EXPECT_EQ(b.field.encoding, "frequency");
@@ -228,7 +230,8 @@ TEST(TrainConfigTest, BadValuesAreRejected) {
         nlohmann::json{{"field", {{"heads", {{"dropout", 1.0}}}}}},
         nlohmann::json{{"field", {{"heads", {{"color_dropout", 1.5}}}}}},
         nlohmann::json{{"field", {{"heads", {{"color_time_frequencies", 9}}}}}},
-        nlohmann::json{{"exposure", "sometimes"}}, nlohmann::json{{"exposure_threshold", -0.1}}}) {
+        nlohmann::json{{"exposure", "sometimes"}}, nlohmann::json{{"exposure_threshold", -0.1}},
+        nlohmann::json{{"field", {{"learned_background", true}}}}}) {
     TrainConfig fresh;
     const std::string key = bad.flatten().begin().key();  // "/field/heads/dropout"
     const std::string leaf = key.substr(key.rfind('/') + 1);

@@ -10,9 +10,13 @@
 
 #include "common/error.h"
 #include "tests/unit/small_clip_fixture.h"
+#include "worker/engine/eval/psnr.h"
+#include "worker/engine/render/frame_renderer.h"
 #include "worker/engine/scene/clip_loader.h"
+#include "worker/engine/scene/scene_box.h"
 #include "worker/engine/scene/synthetic_clip.h"
 #include "worker/engine/scene/synthetic_object.h"
+#include "worker/engine/train/render_settings.h"
 #include "worker/engine/train/scene_fit.h"
 
 namespace endorecon::train {
@@ -67,6 +71,59 @@ TEST(ObjectTrainerTest, AnObjectCaptureTrainsOnItsWhiteBackground) {
   EXPECT_GT(psnr[0], 20.0) << "white background";
   std::printf("object capture after 300 steps: white %.2f dB, black %.2f dB\n", psnr[0], psnr[1]);
   EXPECT_GT(psnr[0], psnr[1] + 2.5) << "white " << psnr[0] << " dB against black " << psnr[1];
+}
+
+// An object in front of a backdrop whose colour depends on the direction (synth --object --backdrop):
+// opaque images, so "auto" is black. The field can paint the backdrop onto the far walls of its box
+// for the views it trains on, but not for others: on held-out views a learned background renders
+// the backdrop, black does not.
+TEST(ObjectTrainerTest, ACaptureInFrontOfABackdropShowsItsBackdropToNewViewsWithALearnedBackground) {
+  testing::TempDir dir("backdrop-clip");
+  scene::ObjectSynthOptions synth;
+  synth.views = 24;
+  synth.width = synth.height = 40;
+  synth.backdrop = true;
+  scene::WriteSyntheticObject(synth, dir.path());
+  const scene::Clip clip = scene::LoadClip(dir.path());
+  EXPECT_FALSE(clip.transparent);
+  std::vector<int> frames, held_out;
+  for (int f = 0; f < clip.frame_count(); ++f) (f % 6 == 5 ? held_out : frames).push_back(f);
+  double psnr[2] = {0, 0};
+  for (const char* background : {"learned", "auto"}) {
+    TrainConfig config = TrainConfig::Preset("cpu");
+    config.rays_per_batch = 256;
+    config.iterations = 500;
+    config.background = background;
+    FitToScene(clip, config);
+    EXPECT_EQ(config.field.learned_background, background == std::string("learned"));
+    Trainer trainer(clip, config, frames, 7);
+    for (int i = 0; i < config.iterations; ++i) {
+      ASSERT_TRUE(std::isfinite(trainer.Step().loss)) << background << " iteration " << i;
+    }
+    render::FrameRenderer renderer(trainer.field(), scene::ClipBox(clip),
+                                   EvalRenderSettings(config, clip.near, clip.far));
+    for (const int f : held_out) {
+      const render::RenderedFrame frame = renderer.Render(clip.cameras[f], clip.times[f]);
+      psnr[background == std::string("auto")] +=
+          eval::Psnr(frame.rgb, clip.rgb[f], {}, clip.width, clip.height) / double(held_out.size());
+    }
+  }
+  std::printf("backdrop capture, held-out views after 500 steps: learned %.2f dB, black %.2f dB\n", psnr[0],
+              psnr[1]);
+  EXPECT_GT(psnr[0], psnr[1] + 2.0) << "learned " << psnr[0] << " dB against black " << psnr[1];
+}
+
+// FitToScene sets the field's background with the run's; a trainer refuses the two apart.
+TEST(ObjectTrainerTest, ALearnedBackgroundNeedsTheFieldsModule) {
+  testing::TempDir dir("object-clip");
+  scene::ObjectSynthOptions synth;
+  synth.views = 4;
+  synth.width = synth.height = 16;
+  scene::WriteSyntheticObject(synth, dir.path());
+  const scene::Clip clip = scene::LoadClip(dir.path());
+  TrainConfig config = TrainConfig::Preset("cpu");
+  config.background = "learned";
+  EXPECT_THROW(Trainer(clip, config, {0, 1, 2, 3}, 7), Error);
 }
 
 TEST_F(TrainerTest, FixedSeedOnOneThreadRepeats) {

@@ -5,6 +5,7 @@
 #include <CLI/CLI.hpp>
 #include <memory>
 
+#include "common/error.h"
 #include "worker/engine/scene/synthetic_clip.h"
 #include "worker/engine/scene/synthetic_object.h"
 #include "worker/runtime/commands.h"
@@ -19,6 +20,7 @@ Command AddSynthCommand(CLI::App& app) {
   auto flags = std::make_shared<std::pair<bool, bool>>(false, false);  // --no-tool, --no-depth
   auto no_noise = std::make_shared<bool>(false);
   auto object = std::make_shared<bool>(false);
+  auto backdrop = std::make_shared<bool>(false);
   auto texture = std::make_shared<std::string>();
   auto texture_frame = std::make_shared<int>(-1);
   cmd->add_option("out", *out, "output folder")->required();
@@ -35,9 +37,10 @@ Command AddSynthCommand(CLI::App& app) {
   cmd->add_flag("--static", options->static_scene, "nothing moves");
   cmd->add_flag("--no-tool", flags->first, "no tool, no masks/ folder");
   cmd->add_flag("--no-depth", flags->second, "no depth/ folder");
-  cmd->add_flag("--no-noise", *no_noise,
-                "images without camera noise (default: shot and read noise per channel, as a camera; gt/images "
-                "stays noise-free)");
+  cmd->add_flag(
+      "--no-noise", *no_noise,
+      "images without camera noise (default: shot and read noise per channel, as a camera; gt/images "
+      "stays noise-free)");
   cmd->add_flag("--stiff", options->stiff,
                 "thin depth range, near-opaque surface, near-black tissue, saturated speculars");
   cmd->add_flag("--stereo", options->stereo, "also write the right eye (images_right/, stereo.json)");
@@ -50,9 +53,10 @@ Command AddSynthCommand(CLI::App& app) {
                   "the tissue's albedo from a picture: an image file, or a frame of a video or image folder "
                   "(its centre, 70% of the shorter side), e.g. a real recording");
   cmd->add_option("--texture-frame", *texture_frame, "which frame of a video (default: the middle one)");
-  cmd->add_option("--motion", options->motion,
-                  "scale the tissue's motion: the pull (which drags the texture) K times as long, back and forth "
-                  "(1 + K) / 2 times, and the light circling the lens so the speculars move")
+  cmd->add_option(
+         "--motion", options->motion,
+         "scale the tissue's motion: the pull (which drags the texture) K times as long, back and forth "
+         "(1 + K) / 2 times, and the light circling the lens so the speculars move")
       ->capture_default_str()
       ->check(CLI::Range(1.0, 10.0));
   cmd->add_flag("--push", options->push, "the tool's tip presses a dent into the tissue that follows it");
@@ -63,13 +67,18 @@ Command AddSynthCommand(CLI::App& app) {
   cmd->add_flag("--object", *object,
                 "an object capture instead: cameras around a textured object at the origin, RGBA images on "
                 "transparency, transforms.json as NeRF-synthetic (the endoscope options do not apply)");
-  return [cmd, out, options, flags, no_noise, object, texture, texture_frame] {
+  cmd->add_flag("--backdrop", *backdrop,
+                "with --object: opaque images in front of a backdrop whose colour depends on the direction "
+                "(train it with background \"learned\")");
+  return [cmd, out, options, flags, no_noise, object, backdrop, texture, texture_frame] {
+    if (*backdrop && !*object) FailInvalid("synth: --backdrop needs --object");
     if (*object) {
       scene::ObjectSynthOptions object_options;
       if (cmd->count("--frames") > 0) object_options.views = options->frames;
       if (cmd->count("--width") > 0) object_options.width = options->width;
       if (cmd->count("--height") > 0) object_options.height = options->height;
       object_options.seed = options->seed;
+      object_options.backdrop = *backdrop;
       scene::WriteSyntheticObject(object_options, *out);
       spdlog::info("wrote synthetic object capture: {} ({} views, {}x{})", *out, object_options.views,
                    object_options.width, object_options.height);

@@ -9,6 +9,7 @@
 #include "worker/engine/cuda/device_mlp.h"
 #include "worker/engine/cuda/kernels.h"
 #include "worker/engine/cuda/launch.cuh"
+#include "worker/engine/field/background_math.h"
 #include "worker/engine/field/blend_math.h"
 #include "worker/engine/field/deformation_math.h"
 #include "worker/engine/field/exposure_math.h"
@@ -386,6 +387,18 @@ void DeviceField::Backward(const field::SampleBatch& batch, const field::FieldOu
                                              std::to_string(impl_->last_n));
   }
   impl_->Backward(batch, grad);
+}
+
+void DeviceField::BackgroundBackward(int n, const float* dir, const float* rgb, const float* drgb) {
+  if (!host_.background())
+    Fail(ErrorCode::kFailedPrecondition, "DeviceField::BackgroundBackward: the field has no background");
+  float* grads = impl_->grad("background");
+  ForEach(
+      n,
+      [=] __device__(std::size_t i) {
+        field::BackgroundSampleBackward(dir + 3 * i, rgb + 3 * i, drgb + 3 * i, grads, AtomicAdd{});
+      },
+      "background backward kernel");
 }
 
 void DeviceField::ZeroGrad() {

@@ -38,6 +38,8 @@ class DeviceField {
   void Decode(const float* encoding, const field::SampleBatch& batch, field::FieldOutput& out, bool dropout,
               std::uint64_t dropout_seed);
   void Backward(const field::SampleBatch& batch, const field::FieldOutputGrad& grad);
+  // As field::Field's BackgroundBackward (the field must have a learned background).
+  void BackgroundBackward(int n, const float* dir, const float* rgb, const float* drgb);
   void ZeroGrad();
 
   // The device blocks (values and gradients), in the host field's order and names.

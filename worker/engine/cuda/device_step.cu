@@ -78,6 +78,9 @@ class DeviceStep final : public train::StepBackend {
     device_.rays.rgb = rgb_.pointers.data();
     device_.rays.views = views_.data();
     device_.rays.times = times_.data();
+    for (const auto& block : field_.Blocks()) {
+      if (block.name == "background") device_.background_params = block.value;
+    }
     if (t.rays.priors) {
       priors_.Upload(std::vector<const float*>(t.rays.priors, t.rays.priors + frames_), pixels_);
       device_.rays.priors = priors_.pointers.data();
@@ -138,6 +141,7 @@ class DeviceStep final : public train::StepBackend {
     }
     field_.ZeroGrad();
     field_.Backward(in, {b.d_sigma, nullptr, b.d_rgb, b.d_rgb_logvar});
+    if (t.background_params) field_.BackgroundBackward(b.rays, b.ray_dir, b.background, b.d_background);
     const train::AdamStepReport report = adam_.Step(request.progress);
     if (!report.finite) {
       Fail(ErrorCode::kInternal,
@@ -214,6 +218,9 @@ class DeviceStep final : public train::StepBackend {
     batch_.d_sigma = floats(m);
     batch_.d_rgb = floats(3 * m);
     batch_.d_rgb_logvar = floats(m);
+    batch_.ray_dir = floats(3 * static_cast<std::size_t>(rays));
+    batch_.background = floats(3 * static_cast<std::size_t>(rays));
+    batch_.d_background = floats(3 * static_cast<std::size_t>(rays));
     batch_.probe_s = floats(m);
     batch_.probe_delta = floats(m);
     batch_.probe_score = floats(m);

@@ -15,9 +15,9 @@
 namespace endorecon::field {
 namespace {
 
-enum Group { kGrid, kBlend, kDeform, kDensity, kColor, kExposure, kGroups };
-constexpr std::array<const char*, kGroups> kGroupNames = {"grid",    "blend", "deform",
-                                                          "density", "color", "exposure"};
+enum Group { kGrid, kBlend, kDeform, kDensity, kColor, kExposure, kBackground, kGroups };
+constexpr std::array<const char*, kGroups> kGroupNames = {"grid",  "blend",    "deform",    "density",
+                                                          "color", "exposure", "background"};
 
 template <typename S>
 void CheckBatch(const SampleBatchT<S>& batch, const char* what) {
@@ -61,6 +61,7 @@ struct FieldT<S>::Impl {
   DensityHead<S> density;
   ColorHead<S> color;
   std::optional<Exposure<S>> exposure;
+  std::optional<Background<S>> background;
 
   std::array<AlignedVector<S>, kGroups> value, grad;
   Acts acts;                                       // Forward's, kept for Backward
@@ -85,12 +86,14 @@ struct FieldT<S>::Impl {
     }
     if (config.deformation.enabled) deform.emplace(config.deformation);
     if (!config.exposure_times.empty()) exposure.emplace(config.exposure_times);
+    if (config.learned_background) background.emplace();
     const std::array<std::size_t, kGroups> sizes = {grids ? grids->param_count() : 0,
                                                     blend ? blend->param_count() : 0,
                                                     deform ? deform->param_count() : 0,
                                                     density.param_count(),
                                                     color.param_count(),
-                                                    exposure ? exposure->param_count() : 0};
+                                                    exposure ? exposure->param_count() : 0,
+                                                    background ? background->param_count() : 0};
     for (int g = 0; g < kGroups; ++g) {
       value[g].assign(sizes[g], S(0));
       grad[g].assign(sizes[g], S(0));
@@ -209,6 +212,7 @@ FieldT<S>::FieldT(const FieldConfig& config, std::uint64_t seed)
   m.density.Init(m.value[kDensity].data(), seed + 2);
   m.color.Init(m.value[kColor].data(), seed + 3);
   if (m.exposure) m.exposure->Init(m.value[kExposure].data(), seed + 4);
+  if (m.background) m.background->Init(m.value[kBackground].data(), seed + 5);
 }
 
 template <typename S>
@@ -314,6 +318,23 @@ void FieldT<S>::Backward(const SampleBatchT<S>& batch, const FieldOutputGradT<S>
 }
 
 template <typename S>
+void FieldT<S>::BackgroundRgb(int n, const S* dir, S* rgb) {
+  Impl& m = *impl_;
+  if (!m.background)
+    Fail(ErrorCode::kFailedPrecondition, "Field::BackgroundRgb: the field has no background");
+  m.background->Forward(m.value[kBackground].data(), {n, dir}, {rgb}, {});
+}
+
+template <typename S>
+void FieldT<S>::BackgroundBackward(int n, const S* dir, const S* rgb, const S* drgb) {
+  Impl& m = *impl_;
+  if (!m.background)
+    Fail(ErrorCode::kFailedPrecondition, "Field::BackgroundBackward: the field has no background");
+  m.background->Backward(m.value[kBackground].data(), {n, dir}, {const_cast<S*>(rgb)}, {drgb},
+                         m.grad[kBackground].data(), {}, {});
+}
+
+template <typename S>
 void FieldT<S>::ZeroGrad() {
   for (auto& g : impl_->grad) {
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, g.size(), 1 << 16),
@@ -374,6 +395,11 @@ const ColorHead<S>& FieldT<S>::color() const {
 template <typename S>
 const Exposure<S>* FieldT<S>::exposure() const {
   return impl_->exposure ? &*impl_->exposure : nullptr;
+}
+
+template <typename S>
+const Background<S>* FieldT<S>::background() const {
+  return impl_->background ? &*impl_->background : nullptr;
 }
 
 template <typename S>

@@ -6,6 +6,8 @@
 //   (mu_sigma, l_sigma, geo) = MLP_dense(f)    DensityHead
 //   (mu_c, l_c) = MLP_color([geo, SH(d)])      ColorHead
 //   mu_c <- exp(a(t)) mu_c                     Exposure (per-frame camera gains; only when configured)
+// and, per ray rather than per sample, bg(d): what a ray sees past its samples (Background; only
+// when configured: FieldConfig::learned_background).
 // A thin composition: each module (module.h) runs its own forward, backward and parallel loop over
 // the batch; the field owns the parameter blocks and the activations that pass between them. Every
 // module's split depends only on the batch size and partial gradients are reduced in a fixed order,
@@ -18,6 +20,7 @@
 #include <memory>
 #include <vector>
 
+#include "worker/engine/field/background.h"
 #include "worker/engine/field/deformation.h"
 #include "worker/engine/field/exposure.h"
 #include "worker/engine/field/field_config.h"
@@ -89,8 +92,15 @@ class FieldT {
 
   void ZeroGrad();
 
+  // The learned background (only with one: background() not null): rgb (n x 3) of n unit ray
+  // directions (n x 3); BackgroundBackward adds dL/dparams from dL/d(rgb) (drgb, n x 3) given the
+  // rgb of those directions. Throws Error(kFailedPrecondition) when the field has no background.
+  void BackgroundRgb(int n, const S* dir, S* rgb);
+  void BackgroundBackward(int n, const S* dir, const S* rgb, const S* drgb);
+
   // Blocks "grid", "blend" (both absent with the frequency encoding), "deform" (absent for a static
-  // scene), "density", "color", "exposure" (absent without exposure knots), in that order.
+  // scene), "density", "color", "exposure" (absent without exposure knots), "background" (absent
+  // without a learned background), in that order.
   std::vector<ParamBlock<S>> Blocks();
   std::vector<ParamBlock<const S>> Blocks() const;
 
@@ -103,6 +113,7 @@ class FieldT {
   const DensityHead<S>& density() const;
   const ColorHead<S>& color() const;
   const Exposure<S>* exposure() const;
+  const Background<S>* background() const;
   // Multiply-adds per sample of the two heads' forward passes (backward does twice as many).
   std::size_t head_macs_per_sample() const;
 

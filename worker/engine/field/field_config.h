@@ -24,6 +24,9 @@ struct FieldConfig {
   // Times of the exposure's knots (exposure.h): the training frames' when the run models exposure
   // (train_config.h "exposure"); empty: no exposure module, the colour head's output is the colour.
   std::vector<float> exposure_times;
+  // A background learned per ray direction (background.h), when the run's background is "learned"
+  // (train_config.h; FitToScene sets it). Off: what rays see past the samples is a fixed colour.
+  bool learned_background = false;
 
   // The paper's sizes: grids {8, 16, 32} x scales {1.4, 1.7, 1.9}, 16 levels x 8 features, 2^19 tables.
   static FieldConfig Paper();

@@ -52,6 +52,7 @@ std::string DescribeField(const FieldT<S>& field) {
     s << "exposure: a gain per colour channel at " << field.exposure()->knots()
       << " knots (the training frames' times)\n";
   }
+  if (field.background()) s << "background: learned per ray direction (spherical harmonics to band 3)\n";
   s << "density head: " << Widths(field.density().mlp()) << ", colour head: " << Widths(field.color().mlp());
   if (field.color().time_frequencies() > 0)
     s << " (" << field.color().time_frequencies() << " time frequencies in)";

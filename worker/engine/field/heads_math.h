@@ -36,11 +36,18 @@ template <typename S>
 ENDORECON_HD void ColorInput(const S* geo, int geo_count, const S* dir, S t, int time_frequencies, S* row) {
   for (int j = 0; j < geo_count; ++j) row[j] = geo[j];
   ShEncode(dir, row + geo_count);
+  if (time_frequencies <= 0) return;
+  // One sin/cos pair, then the double-angle formulas for the higher frequencies (each step at most
+  // doubles the rounding error: a few ulp at kMaxTimeFrequencies, far below what the head resolves).
   S* time_row = row + geo_count + kShDims;
-  S angle = S(3.14159265358979323846) * t;
-  for (int k = 0; k < time_frequencies; ++k, angle *= S(2)) {
-    time_row[2 * k] = std::sin(angle);
-    time_row[2 * k + 1] = std::cos(angle);
+  const S angle = S(3.14159265358979323846) * t;
+  S sine = std::sin(angle), cosine = std::cos(angle);
+  for (int k = 0; k < time_frequencies; ++k) {
+    time_row[2 * k] = sine;
+    time_row[2 * k + 1] = cosine;
+    const S doubled = S(2) * sine * cosine;
+    cosine = (cosine - sine) * (cosine + sine);
+    sine = doubled;
   }
 }
 

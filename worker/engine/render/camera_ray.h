@@ -4,6 +4,7 @@
 // and intervals there, and RayPointsOf, which turns them into field inputs.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 
 #include "common/hd.h"
@@ -21,6 +22,14 @@ struct CameraRay {
   float lo = 0, hi = 1;
 };
 
+// The ray's unit direction (what a learned background reads, field/background_math.h).
+template <typename S>
+ENDORECON_HD void UnitDirection(const CameraRay& ray, S* dir) {
+  const double* d = ray.direction;
+  const double length = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+  for (int c = 0; c < 3; ++c) dir[c] = static_cast<S>(d[c] / length);
+}
+
 // The occupancy cells a ray consults: res^3 cells (occupancy_grid.h), none when cells is null.
 struct OccupancyView {
   const std::uint8_t* cells = nullptr;
@@ -30,8 +39,8 @@ struct OccupancyView {
 // The part [*lo, *hi] of [near, far] where origin + s * direction lies in the box (slab test); a ray
 // that misses the box gets the empty span [near, near]: nothing is sampled and it sees the background.
 // Every ray of a frustum box stays inside it between near and far, so only object boxes cut rays.
-ENDORECON_HD void BoxSpan(const scene::BoxFrame& box, const double* origin, const double* direction, double near,
-                          double far, double* lo, double* hi) {
+ENDORECON_HD void BoxSpan(const scene::BoxFrame& box, const double* origin, const double* direction,
+                          double near, double far, double* lo, double* hi) {
   double enter = near, leave = far;
   for (int c = 0; c < 3; ++c) {
     const double low = box.min[c], high = box.min[c] + 1.0 / box.inv_size[c];

@@ -24,6 +24,10 @@ FrameRenderer::FrameRenderer(field::Field& field, const scene::SceneBox& box,
   for (auto* v : {&s_, &delta_, &time_, &sigma_, &sigma_lv_, &color_lv_, &weights_, &fine_s_}) v->resize(n);
   for (auto* v : {&pos_, &dir_, &color_}) v->resize(3 * n);
   rays_.resize(settings_.rays_per_chunk);
+  if (field_.background()) {
+    ray_dir_.resize(3 * std::size_t(settings_.rays_per_chunk));
+    background_.resize(3 * std::size_t(settings_.rays_per_chunk));
+  }
   if (settings_.mc_passes > 0) {
     encoding_.resize(n * std::size_t(field_.encoding_dim()));
     density_moments_.resize(n);
@@ -155,11 +159,16 @@ void FrameRenderer::RenderChunk(const scene::Camera& camera, float time, const i
   place(m, true, !uncertain);
   if (uncertain)
     EstimateUncertainty(count * m, base::HashCombine(settings_.mc_seed, std::uint64_t(pixels[0])));
+  const bool learned_background = field_.background() != nullptr;
+  if (learned_background) {
+    tbb::parallel_for(0, count, [&](int r) { UnitDirection(rays_[r], &ray_dir_[3 * std::size_t(r)]); });
+    field_.BackgroundRgb(count, ray_dir_.data(), background_.data());
+  }
   float* scores[3] = {result.uncertainty, result.aleatoric, result.epistemic};
   tbb::parallel_for(0, count, [&](int r) {
     const std::size_t o = std::size_t(r) * m;
     auto ray = CompositeRay(&sigma_[o], &color_[3 * o], &s_[o], &delta_[o], m, &weights_[o]);
-    AddBackground(ray, settings_.background);
+    AddBackground(ray, learned_background ? &background_[3 * std::size_t(r)] : settings_.background);
     for (int c = 0; c < 3; ++c) result.rgb[3 * r + c] = ray.rgb[c];
     result.depth[r] = ray.depth + (1.0f - ray.opacity) * far;
     result.opacity[r] = ray.opacity;

@@ -34,7 +34,9 @@ struct FrameRenderSettings {
   float color_weight = 1.0f;  // lambda of the ray score
   float variance_eps = field::kDefaultVarianceEps;  // eps in var = softplus(l) + eps
   std::uint64_t mc_seed = 0;  // dropout masks of pass k in a chunk: a pure function of (seed, k, first pixel)
-  float background[3] = {0, 0, 0};  // what rays see past the samples (RGB in [0, 1])
+  // What rays see past the samples (RGB in [0, 1]); a field with a learned background (field.h
+  // BackgroundRgb) is rendered on that instead.
+  float background[3] = {0, 0, 0};
 };
 
 struct RenderedFrame {
@@ -86,8 +88,9 @@ class FrameRenderer {
   const OccupancyGrid* occupancy_ = nullptr;
   // Scratch for one chunk, reused across chunks and frames.
   std::vector<float> s_, delta_, pos_, dir_, time_, sigma_, sigma_lv_, color_, color_lv_, weights_, fine_s_;
-  std::vector<CameraRay> rays_;  // per ray of the chunk: the ray and the span sampled
-  std::vector<float> encoding_;  // the fine samples' field encoding, shared by the K passes
+  std::vector<CameraRay> rays_;              // per ray of the chunk: the ray and the span sampled
+  std::vector<float> ray_dir_, background_;  // per ray of the chunk, with a learned background: d, bg(d)
+  std::vector<float> encoding_;              // the fine samples' field encoding, shared by the K passes
   std::vector<McMoments<float>> density_moments_, color_moments_;  // n and 3n, with mc_passes > 0
   std::vector<float> var_density_[3], var_color_[3];               // total, aleatoric, epistemic
 };

@@ -130,6 +130,16 @@ Eigen::Matrix4d LookAtOrigin(const Vector3d& position) {
 
 }  // namespace
 
+// Smooth, as light from far away is, with a soft lobe toward a window (a kink where the lobe ends,
+// so a band-limited background fits it closely but not exactly).
+void BackdropColor(const double* d, float* rgb) {
+  const double window = std::max(0.0, 0.6 * d[0] + 0.48 * d[1] + 0.64 * d[2]);
+  const double lobe = 0.35 * window * window;
+  rgb[0] = float(std::clamp(0.45 + 0.25 * d[2] + 0.1 * d[0] + lobe, 0.0, 1.0));
+  rgb[1] = float(std::clamp(0.40 + 0.2 * d[2] - 0.1 * d[1] + lobe, 0.0, 1.0));
+  rgb[2] = float(std::clamp(0.35 + 0.3 * d[2] + 0.15 * d[0] * d[1] + 0.8 * lobe, 0.0, 1.0));
+}
+
 void WriteSyntheticObject(const ObjectSynthOptions& options, const fs::path& dir) {
   ClearSyntheticFolder(dir);
   fs::create_directories(dir / "images");
@@ -143,42 +153,53 @@ void WriteSyntheticObject(const ObjectSynthOptions& options, const fs::path& dir
     const double lo = std::sin(kMinElevationDeg * std::numbers::pi / 180);
     const double hi = std::sin(kMaxElevationDeg * std::numbers::pi / 180);
     const double elevation = std::asin(random.Uniform(lo, hi));
-    const Vector3d position = kCameraDistance * Vector3d(std::cos(elevation) * std::cos(azimuth),
-                                                         std::cos(elevation) * std::sin(azimuth),
-                                                         std::sin(elevation));
+    const Vector3d position =
+        kCameraDistance * Vector3d(std::cos(elevation) * std::cos(azimuth),
+                                   std::cos(elevation) * std::sin(azimuth), std::sin(elevation));
     const Eigen::Matrix4d c2w = LookAtOrigin(position);
     const Eigen::Matrix3d rotation = c2w.block<3, 3>(0, 0);
-    cv::Mat bgra(options.height, options.width, CV_8UC4);
+    cv::Mat image(options.height, options.width, options.backdrop ? CV_8UC3 : CV_8UC4);
     tbb::parallel_for(0, options.height, [&](int v) {
       for (int u = 0; u < options.width; ++u) {
         Rgb sum{};
         int hits = 0;
         for (int i = 0; i < kSubsamples * kSubsamples; ++i) {
-          const double su = u + (i % kSubsamples + 0.5) / kSubsamples - 0.5;
-          const double sv = v + (i / kSubsamples + 0.5) / kSubsamples - 0.5;
-          const Vector3d direction = (rotation * Vector3d((su - cx) / focal, -(sv - cy) / focal, -1)).normalized();
+          // Pixel (u, v) spans [u, u + 1) x [v, v + 1): its centre is where the loader's ray goes
+          // (scene/view_geometry.h PixelRay).
+          const double su = u + (i % kSubsamples + 0.5) / kSubsamples;
+          const double sv = v + (i / kSubsamples + 0.5) / kSubsamples;
+          const Vector3d direction =
+              (rotation * Vector3d((su - cx) / focal, -(sv - cy) / focal, -1)).normalized();
           if (const auto rgb = Trace(position, direction)) {
             for (int c = 0; c < 3; ++c) sum[c] += (*rgb)[c];
             ++hits;
+          } else if (options.backdrop) {
+            float rgb[3];
+            BackdropColor(direction.data(), rgb);
+            for (int c = 0; c < 3; ++c) sum[c] += rgb[c];
           }
         }
+        if (options.backdrop) {
+          constexpr float k = 1.0f / (kSubsamples * kSubsamples);
+          image.at<cv::Vec3b>(v, u) = {ToByte(sum[2] * k), ToByte(sum[1] * k), ToByte(sum[0] * k)};
+          continue;
+        }
         const float k = hits > 0 ? 1.0f / float(hits) : 0.0f;  // straight alpha: the hits' mean colour
-        bgra.at<cv::Vec4b>(v, u) = {ToByte(sum[2] * k), ToByte(sum[1] * k), ToByte(sum[0] * k),
-                                    ToByte(float(hits) / (kSubsamples * kSubsamples))};
+        image.at<cv::Vec4b>(v, u) = {ToByte(sum[2] * k), ToByte(sum[1] * k), ToByte(sum[0] * k),
+                                     ToByte(float(hits) / (kSubsamples * kSubsamples))};
       }
     });
     const std::string name = "r_" + FrameName(view);
-    WritePng(dir / "images" / (name + ".png"), bgra);
+    WritePng(dir / "images" / (name + ".png"), image);
     nlohmann::json matrix = nlohmann::json::array();
     for (int r = 0; r < 4; ++r) matrix.push_back({c2w(r, 0), c2w(r, 1), c2w(r, 2), c2w(r, 3)});
     frames.push_back({{"file_path", "./images/" + name}, {"transform_matrix", matrix}});
   }
-  WriteText(dir / "transforms.json", nlohmann::json{{"camera_angle_x", kCameraAngleX}, {"frames", frames}}.dump(2));
-  const nlohmann::json written = {{"object", true},
-                                   {"views", options.views},
-                                   {"width", options.width},
-                                   {"height", options.height},
-                                   {"seed", options.seed}};
+  WriteText(dir / "transforms.json",
+            nlohmann::json{{"camera_angle_x", kCameraAngleX}, {"frames", frames}}.dump(2));
+  const nlohmann::json written = {{"object", true},         {"views", options.views},
+                                  {"width", options.width}, {"height", options.height},
+                                  {"seed", options.seed},   {"backdrop", options.backdrop}};
   WriteText(dir / "synth.json", written.dump(2) + "\n");
 }
 

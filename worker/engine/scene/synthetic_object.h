@@ -3,7 +3,10 @@
 // banded sphere on a checkered pedestal with a small red ball), lit by a fixed light (Lambert, no
 // view-dependent shading), seen by cameras at 4 units from the origin on its upper hemisphere, each
 // looking at the origin (Blender's z-up world, as NeRF's lego). Edges are anti-aliased (3 x 3 rays a
-// pixel; alpha is the share that hit). The object lies within 1.9 units of the origin.
+// pixel; alpha is the share that hit). The object lies within 1.9 units of the origin. With a
+// backdrop the images are opaque RGB instead: what misses the object sees a colour that depends on
+// the direction only (BackdropColor: a room's light, brighter above and toward a window), as a
+// capture in front of a real backdrop, whose background neither black nor white fits.
 #pragma once
 
 #include <cstdint>
@@ -14,7 +17,11 @@ namespace endorecon::scene {
 struct ObjectSynthOptions {
   int views = 100, width = 200, height = 200;
   std::uint64_t seed = 1;  // the camera positions
+  bool backdrop = false;   // opaque images on BackdropColor instead of RGBA on transparency
 };
+
+// The backdrop's RGB in [0, 1] seen along the unit world direction d (x, y, z; z up).
+void BackdropColor(const double* d, float* rgb);
 
 // Writes dir/transforms.json, dir/images/r_NNNNNN.png and dir/synth.json (the options), replacing an
 // earlier synthetic clip there (synthetic_files.h ClearSyntheticFolder). Throws Error(kUnavailable)

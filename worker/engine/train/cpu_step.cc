@@ -20,6 +20,7 @@ struct HostBatch {
   std::vector<float> target, prior, s, delta, pos, dir, time;
   std::vector<float> sigma, sigma_logvar, rgb, rgb_logvar, weights;
   std::vector<float> d_weights, d_sigma, d_rgb, d_rgb_logvar;
+  std::vector<float> ray_dir, background, d_background;
   std::vector<RayPick> picks;
   std::vector<render::CameraRay> camera_rays;
   std::vector<float> probe_s, probe_delta, probe_score;
@@ -36,6 +37,7 @@ struct HostBatch {
       v->resize(m);
     }
     for (auto* v : {&pos, &dir, &rgb, &d_rgb}) v->resize(3 * m);
+    for (auto* v : {&ray_dir, &background, &d_background}) v->resize(3 * std::size_t(rays));
     view = {rays,
             samples,
             target.data(),
@@ -54,6 +56,9 @@ struct HostBatch {
             d_sigma.data(),
             d_rgb.data(),
             d_rgb_logvar.data(),
+            ray_dir.data(),
+            background.data(),
+            d_background.data(),
             picks.data(),
             camera_rays.data(),
             probe_s.data(),
@@ -111,6 +116,7 @@ class CpuStep final : public StepBackend {
     }
     field_.ZeroGrad();
     field_.Backward(in, {b.d_sigma, nullptr, b.d_rgb, b.d_rgb_logvar});
+    if (t.background_params) field_.BackgroundBackward(b.rays, b.ray_dir, b.background, b.d_background);
     const AdamStepReport report = adam_.Step(request.progress);
     if (!report.finite) {
       Fail(ErrorCode::kInternal,

@@ -84,6 +84,7 @@ SceneFit FitToScene(const scene::Clip& clip, TrainConfig& config, std::vector<in
     config.depth_weight = 0;
   }
   if (config.background == "auto") config.background = clip.transparent ? "white" : "black";
+  config.field.learned_background = config.background == "learned";
   if (clip.is_static) {
     leave_out("deformation network", "the clip is static");
     config.field.deformation.enabled = false;

@@ -9,6 +9,7 @@
 
 #include "common/hd.h"
 #include "worker/engine/base/counter_rng.h"
+#include "worker/engine/field/background_math.h"
 #include "worker/engine/field/variance.h"
 #include "worker/engine/render/adaptive_sampler.h"
 #include "worker/engine/render/camera_ray.h"
@@ -42,6 +43,8 @@ struct StepTables {
   float uncertainty_lambda = 1;
   float variance_eps = 1e-6f;
   float background[3] = {0, 0, 0};  // what rays see past the samples (train_config.h "background")
+  // The field's learned background (field/background.h), when it has one: then rays see bg(d) instead.
+  const float* background_params = nullptr;
 };
 
 // A step's batch: ray-major arrays of `rays` rays with `samples` samples each (probe arrays hold a
@@ -51,6 +54,7 @@ struct StepBatch {
   float *target, *prior, *s, *delta, *pos, *dir, *time;
   float *sigma, *sigma_logvar, *rgb, *rgb_logvar, *weights;
   float *d_weights, *d_sigma, *d_rgb, *d_rgb_logvar;
+  float *ray_dir, *background, *d_background;  // per ray (3 each): its unit direction, bg(d), dL/d(bg)
   RayPick* picks;
   render::CameraRay* camera_rays;
   float *probe_s, *probe_delta, *probe_score;
@@ -129,13 +133,21 @@ struct RayStepSums {
 };
 
 // Ray r after the forward pass: composite, the ray's loss and rendered-colour error, and the gradients
-// with respect to the samples' outputs (d_sigma, d_rgb, d_rgb_logvar; overwritten).
+// with respect to the samples' outputs (d_sigma, d_rgb, d_rgb_logvar; overwritten). With a learned
+// background also the ray's direction, bg(d) and dL/d(bg) (ray_dir, background, d_background; for
+// the background's backward pass once every ray is done).
 ENDORECON_HD RayStepSums RayStepLoss(const StepTables& t, const StepBatch& b, int r) {
   const int n = b.samples;
   const std::size_t o = static_cast<std::size_t>(r) * n;
   float* w = b.weights + o;
   auto ray = render::CompositeRay(b.sigma + o, b.rgb + 3 * o, b.s + o, b.delta + o, n, w);
-  render::AddBackground(ray, t.background);
+  const float* background = t.background;
+  if (t.background_params) {
+    render::UnitDirection(b.camera_rays[r], b.ray_dir + 3 * r);
+    field::BackgroundSample(t.background_params, b.ray_dir + 3 * r, b.background + 3 * r);
+    background = b.background + 3 * r;
+  }
+  render::AddBackground(ray, background);
   for (int j = 0; j < n; ++j) {
     b.d_rgb_logvar[o + j] = 0.0f;
     b.d_weights[o + j] = 0.0f;
@@ -147,7 +159,10 @@ ENDORECON_HD RayStepSums RayStepLoss(const StepTables& t, const StepBatch& b, in
   sums.loss = RayLoss(ray, w, b.rgb + 3 * o, b.rgb_logvar + o, n, b.target + 3 * r, b.prior[r], t.terms,
                       &grad, b.d_rgb + 3 * o, b.d_rgb_logvar + o);
   sums.rgb_mse = RenderedColorL2(ray.rgb, b.target + 3 * r, 1.0f / 3.0f, static_cast<float*>(nullptr));
-  render::BackgroundBackward(t.background, grad);
+  if (t.background_params) {
+    for (int c = 0; c < 3; ++c) b.d_background[3 * r + c] = grad.rgb[c] * ray.transmittance;
+  }
+  render::BackgroundBackward(background, grad);
   render::CompositeRayBackward(b.sigma + o, b.rgb + 3 * o, b.s + o, b.delta + o, w, ray, grad,
                                b.d_weights + o, b.d_sigma + o, b.d_rgb + 3 * o);
   return sums;

@@ -16,7 +16,10 @@ TrainConfig TrainConfig::Preset(const std::string& name) {
   c.preset = name;
   // Measured on the demo clip (3000 iterations, held-out tissue PSNR): these rates 34.5 dB against
   // 32.3 dB with grid 1e-2 and heads 1e-3 (docs/benchmarks.md).
-  c.adam.lr = {{"grid", 3e-2f}, {"blend", 1e-3f}, {"deform", 1e-3f}, {"density", 3e-3f}, {"color", 3e-3f}};
+  // The learned background starts fitted to the frames' borders (train/background_start.h) and moves
+  // at the heads' rate: 3e-2 let it chase the field's residuals (docs/benchmarks.md).
+  c.adam.lr = {{"grid", 3e-2f},    {"blend", 1e-3f}, {"deform", 1e-3f},
+               {"density", 3e-3f}, {"color", 3e-3f}, {"background", 3e-3f}};
   if (name == "cpu") {
     c.field = field::FieldConfig::Cpu();
     c.nll_weight = 0.0075f;  // train_config.h
@@ -110,6 +113,7 @@ void VisitKeys(TrainConfig& c, Visit&& visit) {
   visit("field.heads.color_dropout", c.field.heads.color_dropout);
   visit("field.heads.color_time_frequencies", c.field.heads.color_time_frequencies);
   visit("field.exposure_times", c.field.exposure_times);
+  visit("field.learned_background", c.field.learned_background);
 }
 
 nlohmann::json::json_pointer Pointer(const std::string& dotted) {
@@ -162,8 +166,12 @@ void Validate(const TrainConfig& c) {
   require(c.depth_loss == "huber" || c.depth_loss == "l1",
           "depth_loss must be huber or l1, got " + c.depth_loss);
   require(c.variance_eps > 0, "variance_eps must be > 0");
-  require(c.background == "auto" || c.background == "black" || c.background == "white",
-          "background must be auto, black or white, got " + c.background);
+  require(c.background == "auto" || c.background == "black" || c.background == "white" ||
+              c.background == "learned",
+          "background must be auto, black, white or learned, got " + c.background);
+  require(
+      !c.field.learned_background || c.background == "learned",
+      "field.learned_background is set by background \"learned\" only, but background is " + c.background);
   require(c.exposure == "auto" || c.exposure == "on" || c.exposure == "off",
           "exposure must be auto, on or off, got " + c.exposure);
   require(c.exposure_threshold >= 0, "exposure_threshold must be >= 0");

@@ -91,9 +91,11 @@ struct TrainConfig {
   float occupancy_min_alpha = 0.01f;
 
   // What a ray sees past its samples: "black" (an endoscope's dark beyond the light), "white" (object
-  // captures on white, NeRF-synthetic's convention), or "auto": white when the clip's images had
-  // transparent pixels (composited onto white as they are read), black otherwise. FitToScene
-  // resolves "auto", so config.json records the colour used.
+  // captures on white, NeRF-synthetic's convention), "learned" (a colour per ray direction learned
+  // with the field, field/background.h: a capture in front of a backdrop, a room; transparent pixels
+  // are still read onto white), or "auto": white when the clip's images had transparent pixels
+  // (composited onto white as they are read), black otherwise. FitToScene resolves "auto", so
+  // config.json records the colour used, and sets field.learned_background for "learned".
   std::string background = "auto";
 
   // Per-frame camera exposure apart from the tissue's colour (field/exposure.h): "on" (a gain per
@@ -112,7 +114,8 @@ struct TrainConfig {
   static TrainConfig Preset(const std::string& name);  // throws Error(kInvalidArgument) for unknown names
 };
 
-// Writes the background's RGB in [0, 1] to rgb ("auto" before FitToScene resolves it: black).
+// Writes the background's RGB in [0, 1] to rgb ("auto" before FitToScene resolves it, and "learned",
+// whose colour is the field's: black).
 void BackgroundColor(const TrainConfig& config, float (&rgb)[3]);
 
 nlohmann::json ToJson(const TrainConfig& config);

@@ -12,6 +12,7 @@
 #include "worker/engine/base/counter_rng.h"
 #include "worker/engine/field/field_state.h"
 #include "worker/engine/render/frame_renderer.h"
+#include "worker/engine/train/background_start.h"
 #include "worker/engine/train/render_settings.h"
 #include "worker/engine/train/run_clock.h"
 
@@ -62,6 +63,15 @@ Trainer::Trainer(const scene::Clip& clip, const TrainConfig& config, std::vector
   t.variance_eps = config_.variance_eps;
   BackgroundColor(config_, t.background);
   field_ = std::make_unique<field::Field>(config_.field, seed);
+  if ((config_.background == "learned") != config_.field.learned_background) {
+    FailInvalid("background '" + config_.background + "' with field.learned_background " +
+                (config_.field.learned_background ? "on" : "off") + ": FitToScene sets the two together");
+  }
+  for (const auto& block : field_->Blocks()) {
+    if (block.name != "background") continue;
+    FitBackgroundToBorders(clip, sampler_.frames(), block.value);
+    t.background_params = block.value;
+  }
   backend_ = backend(*field_, config_, tables_);
   UpdateTables();
 }
