@@ -10,6 +10,7 @@
 #include "tests/unit/temp_dir.h"
 #include "worker/engine/scene/clip_loader.h"
 #include "worker/engine/scene/synthetic_clip.h"
+#include "worker/engine/scene/synthetic_object.h"
 #include "worker/engine/train/trainer.h"
 
 namespace endorecon::train {
@@ -71,6 +72,33 @@ TEST(SceneFitTest, AStaticClipGetsNeitherADeformationNorTimeInTheColour) {
   EXPECT_EQ(config.field.heads.color_time_frequencies, 0);
   EXPECT_NE(LeftOut(fit).find("deformation network"), std::string::npos) << LeftOut(fit);
   EXPECT_NE(LeftOut(fit).find("time inputs"), std::string::npos) << LeftOut(fit);
+}
+
+// "auto" is white for an object on transparency, learned for an object in front of a backdrop
+// (opaque images around a centred rig), black for an endoscope; a background the user names stays.
+TEST(SceneFitTest, TheBackgroundFollowsTheCapture) {
+  testing::TempDir dir("scene-fit-background");
+  scene::ObjectSynthOptions object;
+  object.views = 4;
+  object.width = object.height = 16;
+  scene::WriteSyntheticObject(object, dir.path() / "transparent");
+  object.backdrop = true;
+  scene::WriteSyntheticObject(object, dir.path() / "backdrop");
+  const scene::Clip endoscope = FlickeringClip(dir, 0);
+  const scene::Clip transparent = scene::LoadClip(dir.path() / "transparent");
+  const scene::Clip backdrop = scene::LoadClip(dir.path() / "backdrop");
+  const auto fitted = [](const scene::Clip& clip, const std::string& background) {
+    TrainConfig config = TrainConfig::Preset("cpu");
+    config.background = background;
+    FitToScene(clip, config);
+    EXPECT_EQ(config.field.learned_background, config.background == "learned") << background;
+    return config.background;
+  };
+  EXPECT_EQ(fitted(transparent, "auto"), "white");
+  EXPECT_EQ(fitted(backdrop, "auto"), "learned");
+  EXPECT_EQ(fitted(endoscope, "auto"), "black");
+  EXPECT_EQ(fitted(backdrop, "white"), "white");
+  EXPECT_EQ(fitted(endoscope, "learned"), "learned");
 }
 
 // On a clip whose exposure flickers, training frames fit better when the field has the gains.

@@ -83,7 +83,12 @@ SceneFit FitToScene(const scene::Clip& clip, TrainConfig& config, std::vector<in
     leave_out("depth loss and depth-guided sampling", "the clip has no depth/");
     config.depth_weight = 0;
   }
-  if (config.background == "auto") config.background = clip.transparent ? "white" : "black";
+  // An object capture on transparency is seen on white (NeRF-synthetic's convention); one with opaque
+  // images stands in front of a real backdrop, which a colour per direction fits and black does not;
+  // an endoscope sees dark beyond its light.
+  if (config.background == "auto") {
+    config.background = clip.transparent ? "white" : clip.object_radius > 0 ? "learned" : "black";
+  }
   config.field.learned_background = config.background == "learned";
   if (clip.is_static) {
     leave_out("deformation network", "the clip is static");

@@ -94,8 +94,9 @@ struct TrainConfig {
   // captures on white, NeRF-synthetic's convention), "learned" (a colour per ray direction learned
   // with the field, field/background.h: a capture in front of a backdrop, a room; transparent pixels
   // are still read onto white), or "auto": white when the clip's images had transparent pixels
-  // (composited onto white as they are read), black otherwise. FitToScene resolves "auto", so
-  // config.json records the colour used, and sets field.learned_background for "learned".
+  // (composited onto white as they are read), learned for an object capture (a centred rig) with
+  // opaque images, black otherwise (an endoscope). FitToScene resolves "auto", so config.json records
+  // the background used, and sets field.learned_background for "learned".
   std::string background = "auto";
 
   // Per-frame camera exposure apart from the tissue's colour (field/exposure.h): "on" (a gain per
