@@ -10,12 +10,12 @@
 #include <sstream>
 #include <vector>
 
+#include "tests/unit/object_clip.h"
 #include "tests/unit/temp_dir.h"
 #include "worker/engine/cuda/device.h"
 #include "worker/engine/reconstruct.h"
 #include "worker/engine/scene/clip_loader.h"
 #include "worker/engine/scene/synthetic_clip.h"
-#include "worker/engine/scene/synthetic_object.h"
 #include "worker/engine/train/scene_fit.h"
 #include "worker/engine/train/trainer.h"
 
@@ -84,12 +84,7 @@ TEST_F(DeviceStepTest, AStepOnTheGpuIsTheCpuStep) {
 TEST(DeviceStepBackground, ALearnedBackgroundStepOnTheGpuIsTheCpuStep) {
   if (DeviceCount() == 0) GTEST_SKIP() << "no CUDA device: " << ListDevices().problem;
   testing::TempDir dir("device-backdrop");
-  scene::ObjectSynthOptions synth;
-  synth.views = 6;
-  synth.width = synth.height = 24;
-  synth.backdrop = true;
-  scene::WriteSyntheticObject(synth, dir.path());
-  const scene::Clip clip = scene::LoadClip(dir.path());
+  const scene::Clip clip = testing::ObjectClip(dir.path(), 6, 24, /*backdrop=*/true);
   train::TrainConfig config = train::TrainConfig::Preset("cpu");
   config.rays_per_batch = 256;
   config.iterations = 100;

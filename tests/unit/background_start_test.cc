@@ -9,10 +9,9 @@
 #include <cstdio>
 #include <vector>
 
+#include "tests/unit/object_clip.h"
 #include "tests/unit/temp_dir.h"
 #include "worker/engine/field/background_math.h"
-#include "worker/engine/scene/clip_loader.h"
-#include "worker/engine/scene/synthetic_object.h"
 #include "worker/engine/scene/view_geometry.h"
 
 namespace endorecon::train {
@@ -20,12 +19,7 @@ namespace {
 
 TEST(BackgroundStartTest, TheBordersOfAnObjectCaptureGiveItsBackdrop) {
   testing::TempDir dir("backdrop-start");
-  scene::ObjectSynthOptions synth;
-  synth.views = 10;
-  synth.width = synth.height = 32;
-  synth.backdrop = true;
-  scene::WriteSyntheticObject(synth, dir.path());
-  const scene::Clip clip = scene::LoadClip(dir.path());
+  const scene::Clip clip = testing::ObjectClip(dir.path(), 10, 32, /*backdrop=*/true);
   std::vector<float> params(field::kBackgroundParams, 0.0f);
   FitBackgroundToBorders(clip, {0, 1, 2, 3, 4, 5, 6, 7}, params.data());
   // Frames 8 and 9 were not fitted: their corners look along other rays.

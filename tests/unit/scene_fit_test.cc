@@ -7,10 +7,10 @@
 #include <string>
 #include <vector>
 
+#include "tests/unit/object_clip.h"
 #include "tests/unit/temp_dir.h"
 #include "worker/engine/scene/clip_loader.h"
 #include "worker/engine/scene/synthetic_clip.h"
-#include "worker/engine/scene/synthetic_object.h"
 #include "worker/engine/train/trainer.h"
 
 namespace endorecon::train {
@@ -78,15 +78,9 @@ TEST(SceneFitTest, AStaticClipGetsNeitherADeformationNorTimeInTheColour) {
 // (opaque images around a centred rig), black for an endoscope; a background the user names stays.
 TEST(SceneFitTest, TheBackgroundFollowsTheCapture) {
   testing::TempDir dir("scene-fit-background");
-  scene::ObjectSynthOptions object;
-  object.views = 4;
-  object.width = object.height = 16;
-  scene::WriteSyntheticObject(object, dir.path() / "transparent");
-  object.backdrop = true;
-  scene::WriteSyntheticObject(object, dir.path() / "backdrop");
   const scene::Clip endoscope = FlickeringClip(dir, 0);
-  const scene::Clip transparent = scene::LoadClip(dir.path() / "transparent");
-  const scene::Clip backdrop = scene::LoadClip(dir.path() / "backdrop");
+  const scene::Clip transparent = testing::ObjectClip(dir.path() / "transparent", 4, 16);
+  const scene::Clip backdrop = testing::ObjectClip(dir.path() / "backdrop", 4, 16, /*backdrop=*/true);
   const auto fitted = [](const scene::Clip& clip, const std::string& background) {
     TrainConfig config = TrainConfig::Preset("cpu");
     config.background = background;

@@ -9,13 +9,13 @@
 #include <sstream>
 
 #include "common/error.h"
+#include "tests/unit/object_clip.h"
 #include "tests/unit/small_clip_fixture.h"
 #include "worker/engine/eval/psnr.h"
 #include "worker/engine/render/frame_renderer.h"
 #include "worker/engine/scene/clip_loader.h"
 #include "worker/engine/scene/scene_box.h"
 #include "worker/engine/scene/synthetic_clip.h"
-#include "worker/engine/scene/synthetic_object.h"
 #include "worker/engine/train/render_settings.h"
 #include "worker/engine/train/scene_fit.h"
 
@@ -42,11 +42,7 @@ TEST_F(TrainerTest, ErrorFallsBelowBound) {
 // rays that miss the object's box cannot turn white).
 TEST(ObjectTrainerTest, AnObjectCaptureTrainsOnItsWhiteBackground) {
   testing::TempDir dir("object-clip");
-  scene::ObjectSynthOptions synth;
-  synth.views = 12;
-  synth.width = synth.height = 40;
-  scene::WriteSyntheticObject(synth, dir.path());
-  const scene::Clip clip = scene::LoadClip(dir.path());
+  const scene::Clip clip = testing::ObjectClip(dir.path(), 12, 40);
   std::vector<int> frames(clip.frame_count());
   for (int i = 0; i < clip.frame_count(); ++i) frames[i] = i;
   double psnr[2] = {0, 0};
@@ -79,12 +75,7 @@ TEST(ObjectTrainerTest, AnObjectCaptureTrainsOnItsWhiteBackground) {
 // renders the backdrop, black does not.
 TEST(ObjectTrainerTest, ACaptureInFrontOfABackdropShowsItsBackdropToNewViewsWithALearnedBackground) {
   testing::TempDir dir("backdrop-clip");
-  scene::ObjectSynthOptions synth;
-  synth.views = 24;
-  synth.width = synth.height = 40;
-  synth.backdrop = true;
-  scene::WriteSyntheticObject(synth, dir.path());
-  const scene::Clip clip = scene::LoadClip(dir.path());
+  const scene::Clip clip = testing::ObjectClip(dir.path(), 24, 40, /*backdrop=*/true);
   EXPECT_FALSE(clip.transparent);
   std::vector<int> frames, held_out;
   for (int f = 0; f < clip.frame_count(); ++f) (f % 6 == 5 ? held_out : frames).push_back(f);
@@ -117,11 +108,7 @@ TEST(ObjectTrainerTest, ACaptureInFrontOfABackdropShowsItsBackdropToNewViewsWith
 // FitToScene sets the field's background with the run's; a trainer refuses the two apart.
 TEST(ObjectTrainerTest, ALearnedBackgroundNeedsTheFieldsModule) {
   testing::TempDir dir("object-clip");
-  scene::ObjectSynthOptions synth;
-  synth.views = 4;
-  synth.width = synth.height = 16;
-  scene::WriteSyntheticObject(synth, dir.path());
-  const scene::Clip clip = scene::LoadClip(dir.path());
+  const scene::Clip clip = testing::ObjectClip(dir.path(), 4, 16);
   TrainConfig config = TrainConfig::Preset("cpu");
   config.background = "learned";
   EXPECT_THROW(Trainer(clip, config, {0, 1, 2, 3}, 7), Error);
