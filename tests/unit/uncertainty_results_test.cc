@@ -40,7 +40,7 @@ TEST(UncertaintyResults, FilesAndOneHeatmapScalePerClip) {
 
   std::vector<std::vector<float>> totals;
   for (int f = 0; f < 4; ++f) {
-    for (const char* name : {".npy", "_aleatoric.npy", "_epistemic.npy", ".png"}) {
+    for (const char* name : {".npy", "_aleatoric.npy", "_epistemic.npy", "_model.npy", ".png"}) {
       EXPECT_TRUE(std::filesystem::exists(dir.path() / "out" / "uncertainty" / FrameFileName(f, name)))
           << f << name;
     }
@@ -61,6 +61,13 @@ TEST(UncertaintyResults, FilesAndOneHeatmapScalePerClip) {
     EXPECT_EQ(noise_free.at("per_frame").size(), calibration.at("per_frame").size()) << split;
     EXPECT_NE(noise_free.at("spearman").at("mean"), calibration.at("spearman").at("mean"))
         << split << ": the noisy images and their truth give different errors";
+    // The model map (model_uncertainty.h), against both errors.
+    for (const char* key : {"calibration_model_map", "calibration_model_map_noise_free"}) {
+      EXPECT_EQ(metrics.at(split).at(key).at("per_frame").size(), calibration.at("per_frame").size()) << key;
+    }
+    EXPECT_NE(metrics.at(split).at("calibration_model_map").at("spearman").at("mean"),
+              calibration.at("spearman").at("mean"))
+        << split << ": another map ranks otherwise";
   }
 }
 

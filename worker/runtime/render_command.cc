@@ -9,6 +9,7 @@
 #include "common/file_write.h"
 #include "worker/engine/eval/clip_evaluator.h"
 #include "worker/engine/eval/exports.h"
+#include "worker/engine/eval/model_uncertainty.h"
 #include "worker/engine/eval/report.h"
 #include "worker/engine/render/frame_renderer.h"
 #include "worker/engine/scene/camera_list.h"
@@ -61,6 +62,8 @@ Command AddRenderCommand(CLI::App& app) {
       eval::WriteDepthNpy(path(".npy"), frame.uncertainty, w, h);
       eval::WriteDepthNpy(path("_aleatoric.npy"), frame.aleatoric, w, h);
       eval::WriteDepthNpy(path("_epistemic.npy"), frame.epistemic, w, h);
+      eval::WriteDepthNpy(path("_model.npy"),
+                          eval::ModelUncertainty(frame.rgb, frame.aleatoric, frame.epistemic, {}), w, h);
       totals.push_back(std::move(frame.uncertainty));
     }
     const double heat = eval::HeatmapUpperBound(totals);

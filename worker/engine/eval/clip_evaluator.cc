@@ -2,10 +2,10 @@
 
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
-#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <future>
+#include <nlohmann/json.hpp>
 #include <span>
 
 #include "worker/engine/base/seconds_since.h"
@@ -13,6 +13,7 @@
 #include "worker/engine/eval/depth_error.h"
 #include "worker/engine/eval/exports.h"
 #include "worker/engine/eval/image_metrics.h"
+#include "worker/engine/eval/model_uncertainty.h"
 #include "worker/engine/eval/pixel_error.h"
 #include "worker/engine/eval/point_cloud.h"
 #include "worker/engine/eval/strided_map.h"
@@ -31,27 +32,32 @@ const std::vector<std::uint8_t>& EvaluationMask(const scene::Clip& clip, int fra
 
 namespace {
 
+// Per frame, the calibration of one map against one error (empty: not measured).
+struct Calibrations {
+  const char* key;  // in metrics.json
+  std::vector<Calibration> frames;
+};
+
 nlohmann::json SplitMetrics(const scene::Clip& clip, const std::vector<int>& frames,
                             const std::vector<ImageMetrics>& images, const std::vector<DepthError>& depths,
-                            const std::vector<Calibration>& calibration,
-                            const std::vector<Calibration>& noise_free) {
+                            const std::vector<Calibrations>& calibrations) {
   std::vector<ImageMetrics> image_subset;
   std::vector<DepthError> depth_subset;
-  std::vector<Calibration> calibration_subset, noise_free_subset;
   for (int f : frames) {
     image_subset.push_back(images[f]);
     if (!depths.empty()) depth_subset.push_back(depths[f]);
-    if (!calibration.empty()) calibration_subset.push_back(calibration[f]);
-    if (!noise_free.empty()) noise_free_subset.push_back(noise_free[f]);
   }
   nlohmann::json json;
   json["frames"] = frames;
   json["image"] = ToJson(std::span<const ImageMetrics>(image_subset));
   if (!clip.gt_depth.empty()) json["depth"] = ToJson(std::span<const DepthError>(depth_subset));
-  if (!calibration.empty()) json["calibration"] = ToJson(std::span<const Calibration>(calibration_subset));
-  if (!noise_free.empty()) {
-    json["calibration_noise_free"] = ToJson(std::span<const Calibration>(noise_free_subset));
-    json["calibration_noise_free"]["error_against"] = "gt/images: the noise-free tissue (tool pixels left out)";
+  for (const auto& [key, all] : calibrations) {
+    if (all.empty()) continue;
+    std::vector<Calibration> subset;
+    for (int f : frames) subset.push_back(all[f]);
+    json[key] = ToJson(std::span<const Calibration>(subset));
+    if (std::string(key).ends_with("noise_free"))
+      json[key]["error_against"] = "gt/images: the noise-free tissue (tool pixels left out)";
   }
   return json;
 }
@@ -59,7 +65,7 @@ nlohmann::json SplitMetrics(const scene::Clip& clip, const std::vector<int>& fra
 // The uncertainty maps of every frame are kept until all are rendered, so one heat-map scale
 // serves the whole clip.
 struct UncertaintyMaps {
-  std::vector<std::vector<float>> total, error;
+  std::vector<std::vector<float>> total, error, model;
 
   void Write(const std::filesystem::path& out_dir,
              const std::vector<render::RenderedFrame>& aleatoric_epistemic, int w, int h,
@@ -74,13 +80,13 @@ struct UncertaintyMaps {
       WriteDepthNpy(out_dir / "uncertainty" / FrameFileName(i, ".npy"), total[f], w, h);
       WriteDepthNpy(out_dir / "uncertainty" / FrameFileName(i, "_aleatoric.npy"), frame.aleatoric, w, h);
       WriteDepthNpy(out_dir / "uncertainty" / FrameFileName(i, "_epistemic.npy"), frame.epistemic, w, h);
+      WriteDepthNpy(out_dir / "uncertainty" / FrameFileName(i, "_model.npy"), model[f], w, h);
       WriteHeatmapPng(out_dir / "uncertainty" / FrameFileName(i, ".png"), total[f], w, h, 0.0, scale);
       WriteHeatmapPng(out_dir / "error" / FrameFileName(i, ".png"), error[f], w, h, 0.0, error_scale);
     });
     json["heatmap_scale"] = {{"uncertainty", {0.0, scale}}, {"error", {0.0, error_scale}}};
   }
 };
-
 
 using Clock = std::chrono::steady_clock;
 
@@ -93,43 +99,66 @@ using base::SecondsSince;
 // through interpolated values.
 struct EvaluatedFrame {
   render::RenderedFrame frame;
-  // Reduced frames with uncertainty: the grid's pixels, the passes' mean colour and total there.
+  // Reduced frames with uncertainty: the grid's pixels, the passes' mean colour and the maps there.
   std::vector<int> grid;
-  std::vector<float> grid_rgb, grid_total;
+  std::vector<float> grid_rgb, grid_total, grid_aleatoric, grid_epistemic;
 };
 
 EvaluatedFrame RenderFrame(const scene::Clip& clip, int f, FrameRender how, int stride,
                            render::FrameRenderer& full, render::FrameRenderer* plain) {
   const scene::Camera& camera = clip.cameras[f];
-  if (how == FrameRender::kFull || plain == nullptr) return {full.Render(camera, clip.times[f]), {}, {}, {}};
-  EvaluatedFrame out{plain->Render(camera, clip.times[f]), {}, {}, {}};
+  if (how == FrameRender::kFull || plain == nullptr)
+    return {full.Render(camera, clip.times[f]), {}, {}, {}, {}, {}};
+  EvaluatedFrame out{plain->Render(camera, clip.times[f]), {}, {}, {}, {}, {}};
   if (full.settings().mc_passes == 0) return out;
   out.grid = StridedPixels(camera.width, camera.height, stride);
   const int n = int(out.grid.size());
   out.grid_rgb.resize(3 * std::size_t(n));
   out.grid_total.resize(n);
-  std::vector<float> depth(n), opacity(n), aleatoric(n), epistemic(n);
+  out.grid_aleatoric.resize(n);
+  out.grid_epistemic.resize(n);
+  std::vector<float> depth(n), opacity(n);
   full.RenderPixels(camera, clip.times[f], out.grid.data(), n,
-                    {out.grid_rgb.data(), depth.data(), opacity.data(), out.grid_total.data(), aleatoric.data(),
-                     epistemic.data()});
+                    {out.grid_rgb.data(), depth.data(), opacity.data(), out.grid_total.data(),
+                     out.grid_aleatoric.data(), out.grid_epistemic.data()});
   render::RenderedFrame& frame = out.frame;
   frame.uncertainty = UpsampleStrided(out.grid_total, camera.width, camera.height, stride);
-  frame.aleatoric = UpsampleStrided(aleatoric, camera.width, camera.height, stride);
-  frame.epistemic = UpsampleStrided(epistemic, camera.width, camera.height, stride);
+  frame.aleatoric = UpsampleStrided(out.grid_aleatoric, camera.width, camera.height, stride);
+  frame.epistemic = UpsampleStrided(out.grid_epistemic, camera.width, camera.height, stride);
   return out;
 }
 
-// A frame's calibration against a reference image (the clip's, or its noise-free truth); `error`, when
-// given, is a full frame's per-pixel error against that reference, already computed.
-Calibration FrameCalibration(const EvaluatedFrame& evaluated, std::span<const std::uint8_t> reference,
+// A frame's maps to calibrate: the paper's total and the model map (model_uncertainty.h), over the
+// whole frame, or on a reduced frame's grid; `model` is the whole frame's model map (written).
+struct FrameMaps {
+  std::vector<float> model, grid_model;
+};
+
+FrameMaps ModelMaps(const EvaluatedFrame& evaluated, const std::vector<std::uint8_t>& mask) {
+  const auto& frame = evaluated.frame;
+  FrameMaps maps;
+  maps.model = ModelUncertainty(frame.rgb, frame.aleatoric, frame.epistemic, mask);
+  if (!evaluated.grid.empty()) {
+    maps.grid_model = ModelUncertainty(
+        evaluated.grid_rgb, evaluated.grid_aleatoric, evaluated.grid_epistemic,
+        mask.empty() ? std::vector<std::uint8_t>{} : Gather<std::uint8_t>(mask, evaluated.grid));
+  }
+  return maps;
+}
+
+// A frame's calibration of a map (`map` over the whole frame, `grid_map` on a reduced frame's grid)
+// against a reference image (the clip's, or its noise-free truth); `error`, when given, is a full
+// frame's per-pixel error against that reference, already computed.
+Calibration FrameCalibration(const EvaluatedFrame& evaluated, std::span<const float> map,
+                             std::span<const float> grid_map, std::span<const std::uint8_t> reference,
                              const std::vector<std::uint8_t>& mask, int w, int h,
                              std::span<const float> error = {}) {
   if (evaluated.grid.empty()) {
-    if (!error.empty()) return MeasureCalibration(evaluated.frame.uncertainty, error, mask);
-    return MeasureCalibration(evaluated.frame.uncertainty, PixelRmse(evaluated.frame.rgb, reference, w, h), mask);
+    if (!error.empty()) return MeasureCalibration(map, error, mask);
+    return MeasureCalibration(map, PixelRmse(evaluated.frame.rgb, reference, w, h), mask);
   }
   const int n = int(evaluated.grid.size());
-  return MeasureCalibration(evaluated.grid_total,
+  return MeasureCalibration(grid_map,
                             PixelRmse(evaluated.grid_rgb, Gather(reference, evaluated.grid, 3), n, 1),
                             Gather<std::uint8_t>(mask, evaluated.grid));
 }
@@ -160,7 +189,8 @@ class FramePacer {
 
  private:
   bool heldout(int f) const {
-    return std::find(what_.heldout_frames.begin(), what_.heldout_frames.end(), f) != what_.heldout_frames.end();
+    return std::find(what_.heldout_frames.begin(), what_.heldout_frames.end(), f) !=
+           what_.heldout_frames.end();
   }
 
   const ClipEvaluation& what_;
@@ -170,11 +200,15 @@ class FramePacer {
 }  // namespace
 
 nlohmann::json UncertaintySettings(const render::FrameRenderSettings& settings) {
-  return {{"mc_passes", settings.mc_passes},
-          {"lambda", settings.color_weight},
-          {"variance_eps", settings.variance_eps},
-          {"error_measure", "per-pixel RMSE over the RGB channels, colours in [0, 1] (eval::PixelRmse)"},
-          {"score", "S_ray = sum_j w_j (var_sigma,j + lambda var_c,j) / sum_j w_j, raw variances"}};
+  return {
+      {"mc_passes", settings.mc_passes},
+      {"lambda", settings.color_weight},
+      {"variance_eps", settings.variance_eps},
+      {"error_measure", "per-pixel RMSE over the RGB channels, colours in [0, 1] (eval::PixelRmse)"},
+      {"score", "S_ray = sum_j w_j (var_sigma,j + lambda var_c,j) / sum_j w_j, raw variances"},
+      {"model_map",
+       "aleatoric score / the frame's median aleatoric score at the pixel's rendered brightness, plus the "
+       "epistemic score, each relative to its mean over the frame's tissue (eval/model_uncertainty.h)"}};
 }
 
 nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& renderer,
@@ -190,8 +224,14 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
   std::vector<DepthError> depths(clip.gt_depth.empty() ? 0 : count);
   std::vector<std::vector<float>> video;
   const bool uncertain = renderer.settings().mc_passes > 0;
-  std::vector<Calibration> calibration(uncertain ? count : 0);
-  std::vector<Calibration> noise_free(uncertain && !clip.gt_rgb.empty() ? count : 0);
+  const std::size_t calibrated = uncertain ? count : 0,
+                    with_truth = uncertain && !clip.gt_rgb.empty() ? count : 0;
+  // The paper's map and the model map, each against the observed image and the noise-free truth.
+  std::vector<Calibrations> calibrations = {
+      {"calibration", std::vector<Calibration>(calibrated)},
+      {"calibration_noise_free", std::vector<Calibration>(with_truth)},
+      {"calibration_model_map", std::vector<Calibration>(calibrated)},
+      {"calibration_model_map_noise_free", std::vector<Calibration>(with_truth)}};
   UncertaintyMaps maps;
   std::vector<render::RenderedFrame> components;  // aleatoric and epistemic maps only
   FramePacer pacer(what, w * h);
@@ -211,11 +251,20 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
     images[f] = MeasureImage(frame.rgb, clip.rgb[f], mask, w, h);
     if (uncertain) {
       std::vector<float> error = PixelRmse(frame.rgb, clip.rgb[f], w, h);
-      calibration[f] = FrameCalibration(evaluated, clip.rgb[f], mask, w, h, error);
-      if (!clip.gt_rgb.empty()) noise_free[f] = FrameCalibration(evaluated, clip.gt_rgb[f], mask, w, h);
+      FrameMaps model = ModelMaps(evaluated, mask);
+      const auto calibrate = [&](int k, std::span<const float> map, std::span<const float> grid_map) {
+        calibrations[k].frames[f] =
+            FrameCalibration(evaluated, map, grid_map, clip.rgb[f], mask, w, h, error);
+        if (!clip.gt_rgb.empty())
+          calibrations[k + 1].frames[f] =
+              FrameCalibration(evaluated, map, grid_map, clip.gt_rgb[f], mask, w, h);
+      };
+      calibrate(0, frame.uncertainty, evaluated.grid_total);
+      calibrate(2, model.model, model.grid_model);
       if (what.write_files) {
         maps.total.push_back(std::move(frame.uncertainty));
         maps.error.push_back(std::move(error));
+        maps.model.push_back(std::move(model.model));
         render::RenderedFrame parts;
         parts.aleatoric = std::move(frame.aleatoric);
         parts.epistemic = std::move(frame.epistemic);
@@ -246,9 +295,9 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
   }
   if (writing.valid()) write_seconds += writing.get();
   nlohmann::json json;
-  json["train"] = SplitMetrics(clip, what.train_frames, images, depths, calibration, noise_free);
+  json["train"] = SplitMetrics(clip, what.train_frames, images, depths, calibrations);
   if (!what.heldout_frames.empty()) {
-    json["heldout"] = SplitMetrics(clip, what.heldout_frames, images, depths, calibration, noise_free);
+    json["heldout"] = SplitMetrics(clip, what.heldout_frames, images, depths, calibrations);
   }
   const auto tail = Clock::now();
   if (uncertain) {
@@ -265,9 +314,10 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
   nlohmann::json& how = json["evaluation"];
   how["full_frames"] = full_frames;
   const auto& full = renderer.settings();
-  how["full"] = uncertain ? fmt::format("{} dropout passes at every pixel ({} + {} samples per ray): colour "
-                                        "and depth from their mean",
-                                        full.mc_passes, full.coarse_samples, full.fine_samples)
+  how["full"] = uncertain ? fmt::format(
+                                "{} dropout passes at every pixel ({} + {} samples per ray): colour "
+                                "and depth from their mean",
+                                full.mc_passes, full.coarse_samples, full.fine_samples)
                           : "one pass at every pixel";
   if (!reduced_frames.empty()) {
     how["reduced_frames"] = reduced_frames;
@@ -284,7 +334,8 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
   // cheaper render's, so the split's summary mixes two renders; the full frames' is the one to
   // compare across runs.
   if (!reduced_frames.empty()) {
-    for (const auto& [name, frames] : {std::pair{"full", &full_frames}, std::pair{"reduced", &reduced_frames}}) {
+    for (const auto& [name, frames] :
+         {std::pair{"full", &full_frames}, std::pair{"reduced", &reduced_frames}}) {
       std::vector<double> psnr;
       for (int f : *frames) {
         if (std::find(what.train_frames.begin(), what.train_frames.end(), f) != what.train_frames.end())

@@ -1,0 +1,30 @@
+// A second uncertainty map, of where the model itself is wrong apart from the camera's noise (the
+// "model" map, uncertainty/NNNNNN_model.npy). The paper's map (the ray score of the aleatoric and
+// epistemic variances) ranks the error against the observed image; with camera noise in the images
+// its aleatoric part learns mostly that noise, which is stronger where the tissue is brighter (shot
+// noise), so it ranks brightness as much as the model's error (docs/benchmarks.md, "Calibration on
+// noisy images"). The model map divides each pixel's aleatoric score by the frame's median at the
+// pixel's rendered brightness (the noise the camera adds there, as the model learned it), leaving
+// the excess, and adds the epistemic score; both terms are taken relative to their mean over the
+// frame's tissue, so neither swamps the other. It is for ranking pixels within a frame; its values
+// are not variances.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace endorecon::eval {
+
+// Brightness bins of the noise curve: the mean of R, G and B in [0, 1] split into this many.
+inline constexpr int kNoiseCurveBins = 20;
+
+// The model map of one frame (or of a grid of its pixels): rgb (3 per pixel, the rendered colour),
+// the aleatoric and epistemic ray scores (one per pixel), tool_mask empty or one per pixel (1 = tool,
+// left out of the medians and means; the map there is computed all the same). A bin with no tissue
+// pixel takes the nearest bin's median. Throws InvalidArgument when the lengths disagree.
+std::vector<float> ModelUncertainty(std::span<const float> rgb, std::span<const float> aleatoric,
+                                    std::span<const float> epistemic,
+                                    std::span<const std::uint8_t> tool_mask);
+
+}  // namespace endorecon::eval
