@@ -77,11 +77,19 @@ TEST_F(BadUploadTest, TruncatedStreamKeepsCommittedBytesAndPromotesNothing) {
       Send(cluster_, {ManifestOf({entry}), Chunk(entry.path(), 0, bytes.substr(0, 100000))}, true);
   EXPECT_FALSE(cut.status.ok());
   EXPECT_EQ(Blobs(), 0);
-  grpc::ClientContext query;
   v1::Manifest manifest;
   *manifest.add_files() = entry;
   v1::UploadStatus status;
-  ASSERT_TRUE(cluster_.stub().QueryUpload(&query, manifest, &status).ok());
+  // The cut stream's handler may still be writing the chunk it received when the client's cut
+  // returns (a query then sees the partial file part-written: 65,536 bytes once on a loaded
+  // machine); what the server received is committed once it has, within seconds.
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  do {
+    grpc::ClientContext query;
+    ASSERT_TRUE(cluster_.stub().QueryUpload(&query, manifest, &status).ok());
+    if (status.files(0).committed() == 100000) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  } while (std::chrono::steady_clock::now() < deadline);
   EXPECT_EQ(status.files(0).committed(), 100000);
   EXPECT_FALSE(status.complete());
   // The client continues from the committed size and the blob appears. Until the cut stream's
