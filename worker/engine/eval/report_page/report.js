@@ -114,6 +114,11 @@
       summary.append(card(`${splitName} Spearman (uncertainty, error)`, meanStd(`/${reported}/calibration/spearman`, { digits: 3 })));
       summary.append(card(`${splitName} AUSE`, meanStd(`/${reported}/calibration/ause`, { digits: 3 })));
     }
+    // Where the clip has its noise-free truth: how well the model map finds where the model is wrong.
+    if (lookup(metrics, `/${reported}/calibration_model_map_noise_free`)) {
+      summary.append(card(`${splitName} Spearman (model map, noise-free error)`,
+                          meanStd(`/${reported}/calibration_model_map_noise_free/spearman`, { digits: 3 })));
+    }
     summary.append(card("training", [metricSpan("/iterations", { digits: 0 }), " iterations"],
                         [metricSpan("/train_seconds", { digits: 1 }), " s, ",
                          metricSpan("/samples_per_second", { digits: 2, factor: 1e-6 }), " M samples/s"]));
