@@ -29,9 +29,8 @@ TEST(BackgroundStartTest, TheBordersOfAnObjectCaptureGiveItsBackdrop) {
     for (const int pixel : {0, 31, 32 * 31, 32 * 32 - 1}) {
       double origin[3], d[3];
       scene::PixelRay(clip.cameras[f].View(), pixel, origin, d);
-      const double length = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
       float dir[3];
-      for (int c = 0; c < 3; ++c) dir[c] = float(d[c] / length);
+      scene::UnitDirection(d, dir);
       float rgb[3];
       field::BackgroundSample(params.data(), dir, rgb);
       for (int c = 0; c < 3; ++c) {

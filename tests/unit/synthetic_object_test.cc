@@ -60,13 +60,11 @@ TEST(SyntheticObjectTest, ABackdropShowsItsColourAlongEachPixelsRay) {
   EXPECT_FALSE(clip.transparent);
   for (int f = 0; f < clip.frame_count(); ++f) {
     for (const int pixel : {0, 31, 32 * 31, 32 * 32 - 1}) {  // the corners miss the object
-      double origin[3], direction[3];
+      double origin[3], direction[3], unit[3];
       PixelRay(clip.cameras[f].View(), pixel, origin, direction);
-      const double length =
-          std::sqrt(direction[0] * direction[0] + direction[1] * direction[1] + direction[2] * direction[2]);
-      for (double& d : direction) d /= length;
+      UnitDirection(direction, unit);
       float rgb[3];
-      BackdropColor(direction, rgb);
+      BackdropColor(unit, rgb);
       for (int c = 0; c < 3; ++c) {
         EXPECT_NEAR(clip.rgb[f][3 * pixel + c], 255 * rgb[c], 1.0) << "frame " << f << " pixel " << pixel;
       }

@@ -37,6 +37,17 @@ TEST_F(TrainerTest, ErrorFallsBelowBound) {
   EXPECT_GT(last, 20.0);
 }
 
+// The CPU preset for a small object capture: 256 rays a step, `iterations` steps, on `background`,
+// fitted to the clip.
+TrainConfig ObjectConfig(const scene::Clip& clip, const char* background, int iterations) {
+  TrainConfig config = TrainConfig::Preset("cpu");
+  config.rays_per_batch = 256;
+  config.iterations = iterations;
+  config.background = background;
+  FitToScene(clip, config);
+  return config;
+}
+
 // An object capture on transparency (synth --object): "auto" resolves to the white it was composited
 // onto, and training against it fits; a black background the images never had fits worse (the
 // rays that miss the object's box cannot turn white).
@@ -47,11 +58,7 @@ TEST(ObjectTrainerTest, AnObjectCaptureTrainsOnItsWhiteBackground) {
   for (int i = 0; i < clip.frame_count(); ++i) frames[i] = i;
   double psnr[2] = {0, 0};
   for (const char* background : {"auto", "black"}) {
-    TrainConfig config = TrainConfig::Preset("cpu");
-    config.rays_per_batch = 256;
-    config.iterations = 300;
-    config.background = background;
-    FitToScene(clip, config);
+    const TrainConfig config = ObjectConfig(clip, background, 300);
     if (background == std::string("auto")) {
       EXPECT_EQ(config.background, "white");
     }
@@ -81,11 +88,7 @@ TEST(ObjectTrainerTest, ACaptureInFrontOfABackdropShowsItsBackdropToNewViewsWith
   for (int f = 0; f < clip.frame_count(); ++f) (f % 6 == 5 ? held_out : frames).push_back(f);
   double psnr[2] = {0, 0};
   for (const char* background : {"auto", "black"}) {
-    TrainConfig config = TrainConfig::Preset("cpu");
-    config.rays_per_batch = 256;
-    config.iterations = 500;
-    config.background = background;
-    FitToScene(clip, config);
+    const TrainConfig config = ObjectConfig(clip, background, 500);
     EXPECT_EQ(config.background, background == std::string("auto") ? "learned" : "black");
     EXPECT_EQ(config.field.learned_background, background == std::string("auto"));
     Trainer trainer(clip, config, frames, 7);

@@ -7,6 +7,7 @@
 #include <future>
 #include <nlohmann/json.hpp>
 #include <span>
+#include <string>
 
 #include "worker/engine/base/seconds_since.h"
 #include "worker/engine/eval/calibration.h"
@@ -32,15 +33,16 @@ const std::vector<std::uint8_t>& EvaluationMask(const scene::Clip& clip, int fra
 
 namespace {
 
-// Per frame, the calibration of one map against one error (empty: not measured).
-struct Calibrations {
-  const char* key;  // in metrics.json
-  std::vector<Calibration> frames;
+// Per frame, one map's calibration against the observed image (metrics.json's `key`) and against
+// the noise-free truth (`key`_noise_free); empty where not measured.
+struct MapCalibration {
+  std::string key;
+  std::vector<Calibration> observed, noise_free;
 };
 
 nlohmann::json SplitMetrics(const scene::Clip& clip, const std::vector<int>& frames,
                             const std::vector<ImageMetrics>& images, const std::vector<DepthError>& depths,
-                            const std::vector<Calibrations>& calibrations) {
+                            const std::vector<MapCalibration>& calibrations) {
   std::vector<ImageMetrics> image_subset;
   std::vector<DepthError> depth_subset;
   for (int f : frames) {
@@ -51,13 +53,16 @@ nlohmann::json SplitMetrics(const scene::Clip& clip, const std::vector<int>& fra
   json["frames"] = frames;
   json["image"] = ToJson(std::span<const ImageMetrics>(image_subset));
   if (!clip.gt_depth.empty()) json["depth"] = ToJson(std::span<const DepthError>(depth_subset));
-  for (const auto& [key, all] : calibrations) {
-    if (all.empty()) continue;
-    std::vector<Calibration> subset;
-    for (int f : frames) subset.push_back(all[f]);
-    json[key] = ToJson(std::span<const Calibration>(subset));
-    if (std::string(key).ends_with("noise_free"))
-      json[key]["error_against"] = "gt/images: the noise-free tissue (tool pixels left out)";
+  const auto subset = [&](const std::vector<Calibration>& all) {
+    std::vector<Calibration> part;
+    for (int f : frames) part.push_back(all[f]);
+    return ToJson(std::span<const Calibration>(part));
+  };
+  for (const auto& map : calibrations) {
+    if (!map.observed.empty()) json[map.key] = subset(map.observed);
+    if (map.noise_free.empty()) continue;
+    auto& noise_free = json[map.key + "_noise_free"] = subset(map.noise_free);
+    noise_free["error_against"] = "gt/images: the noise-free tissue (tool pixels left out)";
   }
   return json;
 }
@@ -227,11 +232,10 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
   const std::size_t calibrated = uncertain ? count : 0,
                     with_truth = uncertain && !clip.gt_rgb.empty() ? count : 0;
   // The paper's map and the model map, each against the observed image and the noise-free truth.
-  std::vector<Calibrations> calibrations = {
-      {"calibration", std::vector<Calibration>(calibrated)},
-      {"calibration_noise_free", std::vector<Calibration>(with_truth)},
-      {"calibration_model_map", std::vector<Calibration>(calibrated)},
-      {"calibration_model_map_noise_free", std::vector<Calibration>(with_truth)}};
+  std::vector<MapCalibration> calibrations;
+  for (const char* key : {"calibration", "calibration_model_map"}) {
+    calibrations.push_back({key, std::vector<Calibration>(calibrated), std::vector<Calibration>(with_truth)});
+  }
   UncertaintyMaps maps;
   std::vector<render::RenderedFrame> components;  // aleatoric and epistemic maps only
   FramePacer pacer(what, w * h);
@@ -252,15 +256,14 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
     if (uncertain) {
       std::vector<float> error = PixelRmse(frame.rgb, clip.rgb[f], w, h);
       FrameMaps model = ModelMaps(evaluated, mask);
-      const auto calibrate = [&](int k, std::span<const float> map, std::span<const float> grid_map) {
-        calibrations[k].frames[f] =
-            FrameCalibration(evaluated, map, grid_map, clip.rgb[f], mask, w, h, error);
-        if (!clip.gt_rgb.empty())
-          calibrations[k + 1].frames[f] =
-              FrameCalibration(evaluated, map, grid_map, clip.gt_rgb[f], mask, w, h);
+      const auto calibrate = [&](MapCalibration& into, std::span<const float> map,
+                                 std::span<const float> grid_map) {
+        into.observed[f] = FrameCalibration(evaluated, map, grid_map, clip.rgb[f], mask, w, h, error);
+        if (!into.noise_free.empty())
+          into.noise_free[f] = FrameCalibration(evaluated, map, grid_map, clip.gt_rgb[f], mask, w, h);
       };
-      calibrate(0, frame.uncertainty, evaluated.grid_total);
-      calibrate(2, model.model, model.grid_model);
+      calibrate(calibrations[0], frame.uncertainty, evaluated.grid_total);
+      calibrate(calibrations[1], model.model, model.grid_model);
       if (what.write_files) {
         maps.total.push_back(std::move(frame.uncertainty));
         maps.error.push_back(std::move(error));

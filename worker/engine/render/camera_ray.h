@@ -4,7 +4,6 @@
 // and intervals there, and RayPointsOf, which turns them into field inputs.
 #pragma once
 
-#include <cmath>
 #include <cstdint>
 
 #include "common/hd.h"
@@ -21,14 +20,6 @@ struct CameraRay {
   double origin[3] = {0, 0, 0}, direction[3] = {0, 0, 1};
   float lo = 0, hi = 1;
 };
-
-// The ray's unit direction (what a learned background reads, field/background_math.h).
-template <typename S>
-ENDORECON_HD void UnitDirection(const CameraRay& ray, S* dir) {
-  const double* d = ray.direction;
-  const double length = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-  for (int c = 0; c < 3; ++c) dir[c] = static_cast<S>(d[c] / length);
-}
 
 // The occupancy cells a ray consults: res^3 cells (occupancy_grid.h), none when cells is null.
 struct OccupancyView {

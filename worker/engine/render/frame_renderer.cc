@@ -161,7 +161,8 @@ void FrameRenderer::RenderChunk(const scene::Camera& camera, float time, const i
     EstimateUncertainty(count * m, base::HashCombine(settings_.mc_seed, std::uint64_t(pixels[0])));
   const bool learned_background = field_.background() != nullptr;
   if (learned_background) {
-    tbb::parallel_for(0, count, [&](int r) { UnitDirection(rays_[r], &ray_dir_[3 * std::size_t(r)]); });
+    tbb::parallel_for(
+        0, count, [&](int r) { scene::UnitDirection(rays_[r].direction, &ray_dir_[3 * std::size_t(r)]); });
     field_.BackgroundRgb(count, ray_dir_.data(), background_.data());
   }
   float* scores[3] = {result.uncertainty, result.aleatoric, result.epistemic};

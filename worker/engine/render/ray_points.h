@@ -25,10 +25,12 @@ ENDORECON_HD void RayPointsOf(const scene::BoxFrame& box, const double* origin, 
     start[c] = (origin[c] - box.min[c]) * box.inv_size[c];
     step[c] = direction[c] * box.inv_size[c];
   }
+  float unit[3];
+  scene::UnitDirection(direction, unit);
   for (int j = 0; j < n; ++j) {
     for (int c = 0; c < 3; ++c) {
       pos[3 * j + c] = static_cast<float>(start[c] + double(s[j]) * step[c]);
-      dir[3 * j + c] = static_cast<float>(direction[c] / length);
+      dir[3 * j + c] = unit[c];
     }
     times[j] = time;
     delta[j] = static_cast<float>(double(delta[j]) * to_box);

@@ -3,6 +3,8 @@
 // normalisation into the field's unit cube. scene::Camera and scene::SceneBox hand out these views.
 #pragma once
 
+#include <cmath>
+
 #include "common/hd.h"
 
 namespace endorecon::scene {
@@ -28,6 +30,15 @@ ENDORECON_HD void PixelRay(const double* c2w, double fx, double fy, double cx, d
 ENDORECON_HD void PixelRay(const PinholeView& view, int pixel, double* origin, double* direction) {
   PixelRay(view.c2w, view.fx, view.fy, view.cx, view.cy, pixel % view.width, pixel / view.width, origin,
            direction);
+}
+
+// A ray's direction scaled to unit length (the field's view direction, the learned background's
+// input), rounded to S once.
+template <typename S>
+ENDORECON_HD void UnitDirection(const double* direction, S* unit) {
+  const double length =
+      std::sqrt(direction[0] * direction[0] + direction[1] * direction[1] + direction[2] * direction[2]);
+  for (int c = 0; c < 3; ++c) unit[c] = static_cast<S>(direction[c] / length);
 }
 
 // The scene box as the field sees it: p_unit = (p - min) * inv_size; distances in box units are

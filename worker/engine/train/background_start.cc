@@ -28,10 +28,9 @@ void FitBackgroundToBorders(const scene::Clip& clip, const std::vector<int>& fra
   for (const int f : frames) {
     const scene::PinholeView view = clip.cameras[f].View();
     for (const int pixel : ring) {
-      double origin[3], d[3];
-      scene::PixelRay(view, pixel, origin, d);
-      const double length = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-      for (double& x : d) x /= length;
+      double origin[3], direction[3], d[3];
+      scene::PixelRay(view, pixel, origin, direction);
+      scene::UnitDirection(direction, d);
       double sh[kDims];
       field::ShEncode(d, sh);
       for (int k = 0; k < kDims; ++k) features(row, k) = sh[k];

@@ -143,7 +143,7 @@ ENDORECON_HD RayStepSums RayStepLoss(const StepTables& t, const StepBatch& b, in
   auto ray = render::CompositeRay(b.sigma + o, b.rgb + 3 * o, b.s + o, b.delta + o, n, w);
   const float* background = t.background;
   if (t.background_params) {
-    render::UnitDirection(b.camera_rays[r], b.ray_dir + 3 * r);
+    scene::UnitDirection(b.camera_rays[r].direction, b.ray_dir + 3 * r);
     field::BackgroundSample(t.background_params, b.ray_dir + 3 * r, b.background + 3 * r);
     background = b.background + 3 * r;
   }
