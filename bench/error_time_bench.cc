@@ -3,6 +3,7 @@
 // times, beside the 2D baseline of averaging the two neighbouring frames (t-1, t+1) of each held-out
 // frame, and the training frames' PSNR at the end.
 //   error_time_bench [--budget SECONDS] [--preset cpu|paper] [--out DIR] [--override JSON] [--clip DIR]
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -11,6 +12,7 @@
 #include <vector>
 
 #include "worker/engine/eval/clip_evaluator.h"
+#include "worker/engine/eval/gain_fit.h"
 #include "worker/engine/eval/psnr.h"
 #include "worker/engine/reconstruct.h"
 #include "worker/engine/scene/clip_loader.h"
@@ -20,16 +22,25 @@ namespace {
 
 using nlohmann::literals::operator""_json_pointer;
 
-double NeighbourBaselinePsnr(const endorecon::scene::Clip& clip, const std::vector<int>& heldout) {
+// Against `reference`: the clip's images, or its noise-free truth; `gain_fitted`: after the frame's
+// exposure is fitted, as the evaluation's image_gain_fitted (eval/gain_fit.h).
+double NeighbourBaselinePsnr(const endorecon::scene::Clip& clip, const std::vector<int>& heldout,
+                             const std::vector<std::vector<std::uint8_t>>& reference,
+                             bool gain_fitted = false) {
   double sum = 0;
   for (int f : heldout) {
-    const int a = std::max(0, f - 1), b = std::min(clip.frame_count() - 1, f + 1);
+    // The frames before and after; at either end of the clip the one neighbour it has (never the
+    // held-out frame itself, which the stand-in is to predict).
+    const int last = clip.frame_count() - 1;
+    const int a = f > 0 ? f - 1 : 1, b = f < last ? f + 1 : last - 1;
     std::vector<float> average(clip.rgb[f].size());
     for (std::size_t i = 0; i < average.size(); ++i) {
       average[i] = (float(clip.rgb[a][i]) + float(clip.rgb[b][i])) / (2.0f * 255.0f);
     }
-    sum += endorecon::eval::Psnr(average, clip.rgb[f], endorecon::eval::EvaluationMask(clip, f), clip.width,
-                                 clip.height);
+    const auto& mask = endorecon::eval::EvaluationMask(clip, f);
+    if (gain_fitted)
+      average = endorecon::eval::FitGain(average, reference[f], mask, clip.width, clip.height).rgb;
+    sum += endorecon::eval::Psnr(average, reference[f], mask, clip.width, clip.height);
   }
   return sum / double(heldout.size());
 }
@@ -73,7 +84,7 @@ int main(int argc, char** argv) {
   const auto metrics = nlohmann::json::parse(in);
   const auto heldout = metrics["heldout"]["frames"].get<std::vector<int>>();
   std::printf("neighbour-average baseline, held-out tissue PSNR: %.2f dB\n",
-              NeighbourBaselinePsnr(clip, heldout));
+              NeighbourBaselinePsnr(clip, heldout, clip.rgb));
   std::printf("%10s %10s %14s %22s\n", "seconds", "iteration", "held-out PSNR", "depth RMSE / range");
   for (const auto& point : metrics["curve"]) {
     std::printf("%10.1f %10d %14.2f %22.4f\n", point["seconds"].get<double>(), point["iteration"].get<int>(),
@@ -87,8 +98,37 @@ int main(int argc, char** argv) {
   // The training frames rendered in full (the evaluation renders the rest at reduced cost).
   const auto train_full = "/evaluation/train_psnr_tissue/full/mean"_json_pointer;
   if (metrics.contains(train_full)) {
-    std::printf("training frames rendered in full: PSNR %.2f dB (%d frames)\n", metrics[train_full].get<double>(),
+    std::printf("training frames rendered in full: PSNR %.2f dB (%d frames)\n",
+                metrics[train_full].get<double>(),
                 metrics["evaluation"]["train_psnr_tissue"]["full"]["count"].get<int>());
+  }
+  std::printf(
+      "with each held-out frame's exposure fitted (image_gain_fitted): PSNR %.2f dB (neighbour average %.2f "
+      "dB)\n",
+      metrics["heldout"]["image_gain_fitted"]["psnr_tissue"]["mean"].get<double>(),
+      NeighbourBaselinePsnr(clip, heldout, clip.rgb, true));
+  // A synthetic clip's camera noise bounds the PSNR against its images; the same against its truth.
+  if (!clip.gt_rgb.empty()) {
+    const auto mean = [&](const char* key) {
+      return metrics["heldout"][key]["psnr_tissue"]["mean"].get<double>();
+    };
+    std::printf("against the noise-free truth: held-out PSNR %.2f dB (neighbour average %.2f dB)\n",
+                mean("image_noise_free"), NeighbourBaselinePsnr(clip, heldout, clip.gt_rgb));
+    std::printf("  exposure fitted: held-out PSNR %.2f dB (neighbour average %.2f dB)\n",
+                mean("image_noise_free_gain_fitted"),
+                NeighbourBaselinePsnr(clip, heldout, clip.gt_rgb, true));
+    const auto truth_full = "/evaluation/train_psnr_tissue_noise_free/full/mean"_json_pointer;
+    if (metrics.contains(truth_full))
+      std::printf("  training frames rendered in full: PSNR %.2f dB\n", metrics[truth_full].get<double>());
+    double noise = 0;
+    for (int f = 0; f < clip.frame_count(); ++f) {
+      std::vector<float> truth(clip.gt_rgb[f].begin(), clip.gt_rgb[f].end());
+      for (float& v : truth) v /= 255.0f;
+      noise += endorecon::eval::Psnr(truth, clip.rgb[f], endorecon::eval::EvaluationMask(clip, f), clip.width,
+                                     clip.height);
+    }
+    std::printf("the truth against the images (the camera noise's bound): %.2f dB\n",
+                noise / clip.frame_count());
   }
   return 0;
 }

@@ -13,6 +13,7 @@
 #include "worker/engine/eval/calibration.h"
 #include "worker/engine/eval/depth_error.h"
 #include "worker/engine/eval/exports.h"
+#include "worker/engine/eval/gain_fit.h"
 #include "worker/engine/eval/image_metrics.h"
 #include "worker/engine/eval/model_uncertainty.h"
 #include "worker/engine/eval/pixel_error.h"
@@ -40,18 +41,37 @@ struct MapCalibration {
   std::vector<Calibration> observed, noise_free;
 };
 
-nlohmann::json SplitMetrics(const scene::Clip& clip, const std::vector<int>& frames,
-                            const std::vector<ImageMetrics>& images, const std::vector<DepthError>& depths,
+// Image metrics per frame against one reference: the observed images or, where the clip has it, the
+// noise-free truth; as rendered, or (held-out frames) after the frame's exposure is fitted
+// (gain_fit.h). `frames` is empty where not measured.
+struct ImageGroup {
+  const char* key;  // metrics.json's key in each split
+  bool noise_free, gain_fitted;
+  std::vector<ImageMetrics> frames;
+};
+
+constexpr const char* kAgainstNoiseFree = "gt/images: the noise-free tissue (tool pixels left out)";
+constexpr const char* kGainFitted =
+    "the render times one gain per colour channel fitted to the frame over its tissue (least squares), as "
+    "NeRF-W fits a test image's appearance: a held-out time's exposure cannot be predicted";
+
+nlohmann::json SplitMetrics(const scene::Clip& clip, const std::vector<int>& frames, bool heldout,
+                            const std::vector<ImageGroup>& images, const std::vector<DepthError>& depths,
                             const std::vector<MapCalibration>& calibrations) {
-  std::vector<ImageMetrics> image_subset;
   std::vector<DepthError> depth_subset;
   for (int f : frames) {
-    image_subset.push_back(images[f]);
     if (!depths.empty()) depth_subset.push_back(depths[f]);
   }
   nlohmann::json json;
   json["frames"] = frames;
-  json["image"] = ToJson(std::span<const ImageMetrics>(image_subset));
+  for (const ImageGroup& group : images) {
+    if (group.frames.empty() || (group.gain_fitted && !heldout)) continue;
+    std::vector<ImageMetrics> subset;
+    for (int f : frames) subset.push_back(group.frames[f]);
+    auto& image = json[group.key] = ToJson(std::span<const ImageMetrics>(subset));
+    if (group.noise_free) image["against"] = kAgainstNoiseFree;
+    if (group.gain_fitted) image["exposure"] = kGainFitted;
+  }
   if (!clip.gt_depth.empty()) json["depth"] = ToJson(std::span<const DepthError>(depth_subset));
   const auto subset = [&](const std::vector<Calibration>& all) {
     std::vector<Calibration> part;
@@ -62,7 +82,7 @@ nlohmann::json SplitMetrics(const scene::Clip& clip, const std::vector<int>& fra
     if (!map.observed.empty()) json[map.key] = subset(map.observed);
     if (map.noise_free.empty()) continue;
     auto& noise_free = json[map.key + "_noise_free"] = subset(map.noise_free);
-    noise_free["error_against"] = "gt/images: the noise-free tissue (tool pixels left out)";
+    noise_free["error_against"] = kAgainstNoiseFree;
   }
   return json;
 }
@@ -225,7 +245,15 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
   if (what.write_files) {
     for (const char* sub : {"rgb", "depth", "pointcloud"}) std::filesystem::create_directories(out_dir / sub);
   }
-  std::vector<ImageMetrics> images(count);
+  std::vector<ImageGroup> images;
+  for (const bool noise_free : {false, true}) {
+    for (const bool gain_fitted : {false, true}) {
+      const char* key = noise_free ? (gain_fitted ? "image_noise_free_gain_fitted" : "image_noise_free")
+                                   : (gain_fitted ? "image_gain_fitted" : "image");
+      const bool measured = !noise_free || !clip.gt_rgb.empty();
+      images.push_back({key, noise_free, gain_fitted, std::vector<ImageMetrics>(measured ? count : 0)});
+    }
+  }
   std::vector<DepthError> depths(clip.gt_depth.empty() ? 0 : count);
   std::vector<std::vector<float>> video;
   const bool uncertain = renderer.settings().mc_passes > 0;
@@ -252,7 +280,15 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
     render_seconds += rendered_in;
     (how == FrameRender::kFull ? full_frames : reduced_frames).push_back(f);
     const auto& mask = EvaluationMask(clip, f);
-    images[f] = MeasureImage(frame.rgb, clip.rgb[f], mask, w, h);
+    const bool heldout =
+        std::find(what.heldout_frames.begin(), what.heldout_frames.end(), f) != what.heldout_frames.end();
+    for (ImageGroup& group : images) {
+      if (group.frames.empty() || (group.gain_fitted && !heldout)) continue;
+      const auto& reference = group.noise_free ? clip.gt_rgb[f] : clip.rgb[f];
+      group.frames[f] =
+          MeasureImage(group.gain_fitted ? FitGain(frame.rgb, reference, mask, w, h).rgb : frame.rgb,
+                       reference, mask, w, h);
+    }
     if (uncertain) {
       std::vector<float> error = PixelRmse(frame.rgb, clip.rgb[f], w, h);
       FrameMaps model = ModelMaps(evaluated, mask);
@@ -298,9 +334,9 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
   }
   if (writing.valid()) write_seconds += writing.get();
   nlohmann::json json;
-  json["train"] = SplitMetrics(clip, what.train_frames, images, depths, calibrations);
+  json["train"] = SplitMetrics(clip, what.train_frames, false, images, depths, calibrations);
   if (!what.heldout_frames.empty()) {
-    json["heldout"] = SplitMetrics(clip, what.heldout_frames, images, depths, calibrations);
+    json["heldout"] = SplitMetrics(clip, what.heldout_frames, true, images, depths, calibrations);
   }
   const auto tail = Clock::now();
   if (uncertain) {
@@ -335,17 +371,21 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
   how["seconds"] = {{"render", render_seconds}, {"write", write_seconds}, {"wall", SecondsSince(wall)}};
   // The training split's tissue PSNR by how its frames were rendered: a reduced frame's colour is a
   // cheaper render's, so the split's summary mixes two renders; the full frames' is the one to
-  // compare across runs.
+  // compare across runs. Against the observed images, and against the noise-free truth where known.
   if (!reduced_frames.empty()) {
-    for (const auto& [name, frames] :
-         {std::pair{"full", &full_frames}, std::pair{"reduced", &reduced_frames}}) {
-      std::vector<double> psnr;
-      for (int f : *frames) {
-        if (std::find(what.train_frames.begin(), what.train_frames.end(), f) != what.train_frames.end())
-          psnr.push_back(images[f].psnr_tissue);
+    for (const auto& [key, metrics] : {std::pair{"train_psnr_tissue", &images[0].frames},  // as made above
+                                       std::pair{"train_psnr_tissue_noise_free", &images[2].frames}}) {
+      if (metrics->empty()) continue;
+      for (const auto& [name, frames] :
+           {std::pair{"full", &full_frames}, std::pair{"reduced", &reduced_frames}}) {
+        std::vector<double> psnr;
+        for (int f : *frames) {
+          if (std::find(what.train_frames.begin(), what.train_frames.end(), f) != what.train_frames.end())
+            psnr.push_back((*metrics)[f].psnr_tissue);
+        }
+        const Summary summary = Summarise(psnr);
+        if (summary.count > 0) how[key][name] = ToJson(summary);  // no NaN for none
       }
-      const Summary summary = Summarise(psnr);
-      if (summary.count > 0) how["train_psnr_tissue"][name] = ToJson(summary);  // no NaN for none
     }
   }
   return json;

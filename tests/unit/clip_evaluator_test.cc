@@ -1,0 +1,86 @@
+// The clip evaluator's image metrics: against the observed images, and against a synthetic clip's
+// noise-free truth (gt/images), which differ exactly by the camera's noise.
+#include "worker/engine/eval/clip_evaluator.h"
+
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include "tests/unit/temp_dir.h"
+#include "worker/engine/scene/clip_loader.h"
+#include "worker/engine/scene/synthetic_clip.h"
+#include "worker/engine/train/render_settings.h"
+#include "worker/engine/train/scene_fit.h"
+#include "worker/engine/train/trainer.h"
+
+namespace endorecon::eval {
+namespace {
+
+// A few steps on a tiny clip, evaluated without uncertainty (the image metrics only).
+nlohmann::json Evaluate(bool noise, const std::filesystem::path& dir, scene::Clip* loaded) {
+  scene::SynthOptions synth;
+  synth.frames = 3;
+  synth.width = 32;
+  synth.height = 24;
+  synth.noise = noise;
+  scene::WriteSyntheticClip(synth, dir / "clip");
+  *loaded = scene::LoadClip(dir / "clip");
+  const scene::Clip& clip = *loaded;
+  train::TrainConfig config = train::TrainConfig::Preset("cpu");
+  config.rays_per_batch = 128;
+  config.mc_passes = 0;
+  train::FitToScene(clip, config);
+  train::Trainer trainer(clip, config, {0, 2}, 1);
+  for (int i = 0; i < 10; ++i) trainer.Step();
+  render::FrameRenderer renderer(trainer.field(), trainer.box(),
+                                 train::UncertaintyRenderSettings(config, clip.near, clip.far, 5));
+  ClipEvaluation what;
+  what.train_frames = {0, 2};
+  what.heldout_frames = {1};
+  what.write_files = false;
+  return EvaluateClip(clip, renderer, what, dir / "out");
+}
+
+TEST(ClipEvaluatorTest, ImagesAreMeasuredAgainstTheNoiseFreeTruthToo) {
+  testing::TempDir dir("clip_evaluator");
+  scene::Clip clip;
+  const nlohmann::json metrics = Evaluate(true, dir.path(), &clip);
+  ASSERT_FALSE(clip.gt_rgb.empty());
+  for (const char* split : {"train", "heldout"}) {
+    const auto& observed = metrics.at(split).at("image").at("per_frame");
+    const auto& truth = metrics.at(split).at("image_noise_free").at("per_frame");
+    ASSERT_EQ(truth.size(), observed.size()) << split;
+    for (std::size_t i = 0; i < truth.size(); ++i) {
+      EXPECT_NE(truth[i].at("psnr_tissue").get<double>(), observed[i].at("psnr_tissue").get<double>())
+          << split << " frame " << i << ": the camera's noise is in the images, not in their truth";
+    }
+  }
+  EXPECT_TRUE(metrics.at("heldout").at("image_noise_free").contains("against"));
+  // Held-out frames are also scored after their exposure is fitted (gain_fit.h), never worse.
+  for (const char* key : {"image", "image_noise_free"}) {
+    const std::string fitted = std::string(key) + "_gain_fitted";
+    EXPECT_FALSE(metrics.at("train").contains(fitted)) << "a training frame's exposure is trained";
+    EXPECT_GE(metrics.at("heldout").at(fitted).at("psnr_tissue").at("mean").get<double>(),
+              metrics.at("heldout").at(key).at("psnr_tissue").at("mean").get<double>())
+        << key;
+  }
+}
+
+TEST(ClipEvaluatorTest, WithoutNoiseTheTruthScoresAsTheImages) {
+  testing::TempDir dir("clip_evaluator_clean");
+  scene::Clip clip;
+  const nlohmann::json metrics = Evaluate(false, dir.path(), &clip);
+  for (const char* split : {"train", "heldout"}) {
+    const auto& observed = metrics.at(split).at("image").at("per_frame");
+    const auto& truth = metrics.at(split).at("image_noise_free").at("per_frame");
+    ASSERT_EQ(truth.size(), observed.size()) << split;
+    for (std::size_t i = 0; i < truth.size(); ++i) {
+      // gt/images lacks only the tool, which the tissue numbers leave out.
+      EXPECT_DOUBLE_EQ(truth[i].at("psnr_tissue").get<double>(), observed[i].at("psnr_tissue").get<double>())
+          << split << " frame " << i;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace endorecon::eval
