@@ -46,7 +46,8 @@ TEST(ExposureTest, KnotsAroundATime) {
   EXPECT_EQ(k1, 0);
 }
 
-// A gain of e^a on a knot and past the ends; between knots the blend shrunk toward the mean by rho.
+// A gain of e^a on a knot; off the knots (between them or past the ends) the blend, or the end knot's,
+// shrunk toward the mean by rho.
 TEST(ExposureTest, GainsInClosedForm) {
   Exposure<double> exposure(kTimes);
   std::vector<double> params(exposure.param_count());
@@ -67,8 +68,10 @@ TEST(ExposureTest, GainsInClosedForm) {
   EXPECT_NEAR(out[2], 0.5 * std::exp(-0.1), 1e-7);
   EXPECT_NEAR(out[3], 0.5 * std::exp(-0.2 / 3), 1e-12);
   EXPECT_NEAR(out[4], 0.5 * std::exp(0.1 / 3), 1e-12);
-  EXPECT_NEAR(out[6], 0.25, 1e-12);  // past the last knot: its gain of 1
-  EXPECT_NEAR(out[8], 1.0, 1e-12);
+  // Past the last knot no frame was trained either: the mean too (the last knot's own gain, 1, is one
+  // draw of the flicker).
+  EXPECT_NEAR(out[6], 0.25 * std::exp(-0.2 / 3), 1e-12);
+  EXPECT_NEAR(out[8], 1.0 * std::exp(-0.1 / 3), 1e-12);
 }
 
 TEST(ExposureTest, PriorOfAFlickerADriftAndASteadyExposure) {
@@ -79,11 +82,20 @@ TEST(ExposureTest, PriorOfAFlickerADriftAndASteadyExposure) {
   EXPECT_NEAR(prior[1], 0.2, 1e-12);
   EXPECT_NEAR(prior[3], 0.4, 1e-12);
   // Halfway between the second and third knots: the blend 0.15 shrunk toward 0.2 by 0.4.
-  bool between = false;
-  EXPECT_NEAR(ExposureLogGain(ramp.data(), prior, 1, 2, 0.5, 0, &between), 0.2 + 0.4 * (0.15 - 0.2), 1e-12);
-  EXPECT_TRUE(between);
-  EXPECT_NEAR(ExposureLogGain(ramp.data(), prior, 1, 2, 0.0, 0, &between), 0.1, 1e-12);  // on a knot
-  EXPECT_FALSE(between);
+  const float times[5] = {0.0f, 0.25f, 0.5f, 0.75f, 1.0f};
+  bool unseen = false;
+  EXPECT_NEAR(ExposureLogGain(ramp.data(), prior, times, 0.375, 1, 2, 0.5, 0, &unseen),
+              0.2 + 0.4 * (0.15 - 0.2), 1e-12);
+  EXPECT_TRUE(unseen);
+  EXPECT_NEAR(ExposureLogGain(ramp.data(), prior, times, 0.25, 1, 2, 0.0, 0, &unseen), 0.1, 1e-12);  // a knot
+  EXPECT_FALSE(unseen);
+  EXPECT_NEAR(ExposureLogGain(ramp.data(), prior, times, 1.0, 4, 4, 0.0, 0, &unseen), 0.4,
+              1e-12);  // the last
+  EXPECT_FALSE(unseen);
+  // Past the last knot: its 0.4 shrunk toward 0.2 by 0.4, as a time between knots.
+  EXPECT_NEAR(ExposureLogGain(ramp.data(), prior, times, 1.2, 4, 4, 0.0, 0, &unseen), 0.2 + 0.4 * (0.4 - 0.2),
+              1e-12);
+  EXPECT_TRUE(unseen);
   const std::vector<double> steady(12, 0.3);
   ExposurePrior(steady.data(), 4, prior);
   EXPECT_EQ(prior[3], 1.0);

@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <sstream>
 #include <string>
@@ -108,6 +110,88 @@ TEST(FieldTest, GradientsOfEveryGroupMatchFiniteDifferencesWithDropout) {
         ExpectGradientMatches(b.value, grad.data(), indices, loss, b.name, {1e-6, 1e-5, 1e-8});
     // Some gradients are truly zero (grid slots no sample touches, ReLU units dead for all times).
     EXPECT_GE(nonzero, static_cast<int>(indices.size()) / 4) << b.name;
+  }
+}
+
+// Trained on [0.2, 0.8] only, the field's gradients at times outside are exactly those of a field
+// without the range at the times held inside it (which the test above checks against finite
+// differences: at times piled on the range's ends the differences meet the ReLUs' kinks).
+TEST(FieldTest, GradientsOutsideTheTrainedTimesAreThoseAtTheNearerEnd) {
+  FieldConfig held_config = SmallConfig();
+  held_config.exposure_times.clear();  // the exposure alone takes the raw time
+  held_config.trained_times = {0.2f, 0.8f};
+  FieldConfig plain_config = held_config;
+  plain_config.trained_times = {0.0f, 1.0f};
+  FieldT<double> held(held_config, 1), plain(plain_config, 1);
+  Randomise(held, 100);
+  Randomise(plain, 100);
+  Samples<double> raw(1100, 7), inside(1100, 7);
+  for (double& t : inside.time) t = std::clamp(t, double(0.2f), double(0.8f));  // the range is in floats
+  const auto ws = RandomValues(raw.n, -1, 1, 11), wsl = RandomValues(raw.n, -1, 1, 12);
+  const auto wc = RandomValues(3 * raw.n, -1, 1, 13), wcl = RandomValues(raw.n, -1, 1, 14);
+  auto o_raw = raw.out(), o_inside = inside.out();
+  held.Forward(raw.batch(), o_raw, true, 4242);
+  plain.Forward(inside.batch(), o_inside, true, 4242);
+  EXPECT_EQ(raw.rgb, inside.rgb);
+  held.ZeroGrad();
+  plain.ZeroGrad();
+  held.Backward(raw.batch(), {ws.data(), wsl.data(), wc.data(), wcl.data()});
+  plain.Backward(inside.batch(), {ws.data(), wsl.data(), wc.data(), wcl.data()});
+  const auto a = held.Blocks(), b = plain.Blocks();
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t k = 0; k < a.size(); ++k) {
+    EXPECT_EQ(std::vector<double>(a[k].grad, a[k].grad + a[k].size),
+              std::vector<double>(b[k].grad, b[k].grad + b[k].size))
+        << a[k].name;
+  }
+}
+
+TEST(FieldTest, OutsideItsTrainedTimesTheFieldHoldsItsStateButNotTheExposure) {
+  FieldConfig c = SmallConfig();
+  c.trained_times = {0.2f, 0.7f};
+  Samples<float> raw(2000, 4), held(2000, 4);
+  for (float& t : held.time) t = std::clamp(t, 0.2f, 0.7f);
+  // Without exposure the outputs at a time outside are those at the nearer end, exactly.
+  c.exposure_times.clear();
+  FieldT<float> field(c, 3);
+  Randomise(field, 320);
+  auto o_raw = raw.out(), o_held = held.out();
+  field.Infer(raw.batch(), o_raw, true, 5);
+  field.Infer(held.batch(), o_held, true, 5);
+  EXPECT_EQ(raw.sigma, held.sigma);
+  EXPECT_EQ(raw.rgb, held.rgb);
+  EXPECT_EQ(raw.rgb_logvar, held.rgb_logvar);
+  // With exposure the camera's gain still follows the frame's own time: log-gains drifting over five
+  // knots (rho 0.4, exposure_math.h), so a time past the last knot and one inside differ.
+  c.exposure_times = {0.1f, 0.3f, 0.5f, 0.8f, 0.9f};
+  FieldT<float> exposed(c, 3);
+  Randomise(exposed, 320);
+  for (auto& block : exposed.Blocks()) {
+    if (block.name != "exposure") continue;
+    for (std::size_t k = 0; k < block.size; ++k) block.value[k] = 0.1f * float(k / 3);
+  }
+  exposed.Infer(raw.batch(), o_raw, true, 5);
+  exposed.Infer(held.batch(), o_held, true, 5);
+  EXPECT_EQ(raw.sigma, held.sigma);
+  int differ = 0, outside = 0;
+  for (int i = 0; i < raw.n; ++i) {
+    if (raw.time[i] == held.time[i]) {
+      EXPECT_EQ(raw.rgb[3 * i], held.rgb[3 * i]) << i;
+      continue;
+    }
+    ++outside;
+    differ += raw.rgb[3 * i] != held.rgb[3 * i];
+  }
+  EXPECT_GT(outside, 500);
+  EXPECT_GT(differ, outside / 2);
+}
+
+TEST(FieldTest, TrainedTimesMustLieInTheUnitInterval) {
+  FieldConfig c = SmallConfig();
+  for (const std::array<float, 2> bad :
+       {std::array{0.6f, 0.4f}, std::array{-0.1f, 0.5f}, std::array{0.2f, 1.5f}}) {
+    c.trained_times = bad;
+    EXPECT_THROW(FieldT<float>(c, 1), Error) << bad[0] << " " << bad[1];
   }
 }
 

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -48,6 +49,13 @@ TEST(SceneFitTest, ExposureGainsOnlyWhereTheBrightnessChanges) {
   for (const int f : {0, 1, 2, 4, 5, 6, 7, 9, 10, 11}) expected.push_back(flickering.times[f]);
   EXPECT_EQ(config.field.exposure_times, expected);
   EXPECT_EQ(LeftOut(flickering_fit).find("exposure"), std::string::npos) << LeftOut(flickering_fit);
+  // The field is trained from the first to the last training frame's time: frames 8 and 3 lie
+  // inside, so the range is the whole clip's; without frame 11 it ends at frame 10's.
+  EXPECT_EQ(config.field.trained_times, (std::array{flickering.times[0], flickering.times[11]}));
+  TrainConfig without_last = TrainConfig::Preset("cpu");
+  FitToScene(flickering, without_last, {0, 1, 2, 4, 5, 6, 7, 9, 10});
+  EXPECT_EQ(without_last.field.trained_times, (std::array{flickering.times[0], flickering.times[10]}));
+  EXPECT_LT(without_last.field.trained_times[1], 1.0f);
   // Fitting again keeps them; "off" is obeyed on a flickering clip.
   FitToScene(flickering, config, train);
   EXPECT_EQ(config.field.exposure_times, expected);

@@ -61,6 +61,7 @@ TEST(TrainConfigTest, JsonRoundTripKeepsEveryKey) {
   c.occupancy_min_alpha = 0.0078125f;
   c.background = "learned";
   c.field.learned_background = true;
+  c.field.trained_times = {0.125f, 0.875f};
   c.curve_interval_s = 4.5;
   c.curve_frames = 7;
   c.field.encoding = "frequency";
@@ -128,8 +129,9 @@ TEST(TrainConfigTest, JsonRoundTripKeepsEveryKey) {
   for (const auto& [key, value] : json.items()) top.insert(key);
   EXPECT_EQ(top, expected_top);
   EXPECT_EQ(json.at("adam").size(), 7u);
-  // encoding, frequencies, grids, blend_hidden, deformation, heads, exposure_times, learned_background
-  EXPECT_EQ(json.at("field").size(), 8u);
+  // encoding, frequencies, grids, blend_hidden, deformation, heads, exposure_times, learned_background,
+  // trained_times
+  EXPECT_EQ(json.at("field").size(), 9u);
   EXPECT_EQ(json.at("field").at("grids").size(), 6u);
   EXPECT_EQ(json.at("field").at("deformation").size(), 3u);
   EXPECT_EQ(json.at("field").at("heads").size(), 6u);
@@ -151,7 +153,8 @@ TEST(TrainConfigTest, JsonRoundTripKeepsEveryKey) {
   EXPECT_EQ(b.depth_loss, "huber");
   EXPECT_EQ(b.huber_delta, 0.03125f);
   EXPECT_EQ(b.variance_eps, 2e-6f);
-  EXPECT_EQ(b.adam.lr, (std::map<std::string, float>{{"grid", 0.5f}, {"color", 0.25f}}));
+  EXPECT_EQ(b.adam.lr.at("grid"), 0.5f);  // the preset's other rates stay (a map merges)
+  EXPECT_EQ(b.adam.lr.at("color"), 0.25f);
   EXPECT_EQ(b.adam.default_lr, 0.015625f);
   EXPECT_EQ(b.adam.beta1, 0.8f);
   EXPECT_EQ(b.adam.beta2, 0.9f);
@@ -179,6 +182,7 @@ TEST(TrainConfigTest, JsonRoundTripKeepsEveryKey) {
   EXPECT_EQ(b.occupancy_min_alpha, 0.0078125f);
   EXPECT_EQ(b.background, "learned");
   EXPECT_TRUE(b.field.learned_background);
+  EXPECT_EQ(b.field.trained_times, (std::array<float, 2>{0.125f, 0.875f}));
   EXPECT_EQ(b.curve_interval_s, 4.5);
   EXPECT_EQ(b.curve_frames, 7);
   EXPECT_EQ(b.field.encoding, "frequency");
@@ -199,6 +203,20 @@ TEST(TrainConfigTest, JsonRoundTripKeepsEveryKey) {
   EXPECT_EQ(b.field.heads.dropout, 0.15);
   EXPECT_EQ(b.field.heads.color_dropout, 0.35);
   EXPECT_EQ(b.field.heads.color_time_frequencies, 3);
+}
+
+TEST(TrainConfigTest, ARateMapMergesIntoThePresets) {
+  TrainConfig c = TrainConfig::Preset("cpu");
+  const auto before = c.adam.lr;
+  ApplyJson(nlohmann::json::parse(R"({"adam": {"lr": {"grid": 0.05, "mine": 0.5}}})"), c);
+  EXPECT_EQ(c.adam.lr.at("grid"), 0.05f);
+  EXPECT_EQ(c.adam.lr.at("mine"), 0.5f);
+  for (const auto& [group, rate] : before) {
+    if (group != "grid") {
+      EXPECT_EQ(c.adam.lr.at(group), rate) << group << " kept";
+    }
+  }
+  EXPECT_EQ(c.adam.lr.size(), before.size() + 1);
 }
 
 TEST(TrainConfigTest, EmptyObjectChangesNothing) {
@@ -223,6 +241,7 @@ TEST(TrainConfigTest, BadValuesAreRejected) {
   EXPECT_THROW(ApplyJson(nlohmann::json{{"depth_loss", "l3"}}, config), Error);
   EXPECT_THROW(ApplyJson(nlohmann::json{{"background", "grey"}}, config), Error);
   EXPECT_THROW(ApplyJson(nlohmann::json{{"rays_per_batch", 0}}, config), Error);
+  EXPECT_THROW(ApplyJson(nlohmann::json{{"field", {{"trained_times", {0.8, 0.2}}}}}, config), Error);
   EXPECT_THROW(TrainConfig::Preset("gpu-ultra"), Error);
   // Each names its key.
   for (const auto& bad :

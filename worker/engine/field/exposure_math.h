@@ -2,13 +2,13 @@
 // a camera's gain changes from frame to frame (auto exposure, a flickering light source) while the
 // tissue's colour does not, so the field's colour c is the tissue's and a sample at time t is seen as
 // exp(a(t)) * c per channel, a(t) piecewise linear between knots at the training frames' times (one
-// log-gain per channel per knot). A time on a knot (a training frame) gets that knot's gains, a time
-// outside the knots the end knot's, and a time between two knots (a held-out frame) the best guess
-// the knots allow: their blend shrunk toward the mean log-gain by rho, the correlation of
+// log-gain per channel per knot). A time on a knot (a training frame) gets that knot's gains; a time
+// no frame was trained at (a held-out frame) the best guess the knots allow: between two knots their
+// blend, outside them the end knot's, shrunk toward the mean log-gain by rho, the correlation of
 // neighbouring knots' log-gains (ExposurePrior), so a drifting exposure is followed (rho near 1) and
 // a flicker independent from frame to frame is predicted by its mean (rho near 0), which is closer to
-// the held-out frame's gain than its neighbours' blend. The gradients include the prior's (through
-// every knot), so the module differentiates exactly.
+// the held-out frame's gain than its neighbours' blend or the last frame's own. The gradients include the
+// prior's (through every knot), so the module differentiates exactly.
 #pragma once
 
 #include <cmath>
@@ -42,7 +42,7 @@ ENDORECON_HD void ExposureKnots(const float* times, int knots, S t, int* k0, int
   *w = (t - S(times[lo])) / (S(times[hi]) - S(times[lo]));
 }
 
-// The prior of times between knots, from the log-gains: prior[0..3) the mean log-gain per channel,
+// The prior of times off the knots, from the log-gains: prior[0..3) the mean log-gain per channel,
 // prior[3] rho in [0, 1] (the lag-1 correlation of the centred log-gains, knots in time order, the
 // channels pooled; 1 while they are all equal, as at the start).
 inline constexpr int kExposurePriorSize = 4;
@@ -66,13 +66,14 @@ ENDORECON_HD void ExposurePrior(const S* params, int knots, S* prior) {
   prior[3] = rho < S(0) ? S(0) : (rho > S(1) ? S(1) : rho);
 }
 
-// The log-gain of channel c at the knots' blend: the knot's own on a knot, shrunk toward the mean
-// between two knots (`between` says which).
+// The log-gain of channel c at time t from the knots' blend (ExposureKnots): the knot's own on a knot,
+// shrunk toward the mean at a time off the knots, between them or outside (`unseen` says which).
 template <typename S>
-ENDORECON_HD S ExposureLogGain(const S* params, const S* prior, int k0, int k1, S w, int c, bool* between) {
+ENDORECON_HD S ExposureLogGain(const S* params, const S* prior, const float* times, S t, int k0, int k1, S w,
+                               int c, bool* unseen) {
   const S blend = (S(1) - w) * params[3 * k0 + c] + w * params[3 * k1 + c];
-  *between = k1 != k0 && w > S(0);
-  return *between ? prior[c] + prior[3] * (blend - prior[c]) : blend;
+  *unseen = k1 != k0 ? w > S(0) : !(static_cast<float>(t) == times[k0]);  // knot times are floats
+  return *unseen ? prior[c] + prior[3] * (blend - prior[c]) : blend;
 }
 
 // rgb_out = gain(t) * rgb_in, per channel (rgb_out may be rgb_in); prior from ExposurePrior.
@@ -83,13 +84,13 @@ ENDORECON_HD void ExposureSample(const S* params, const S* prior, const float* t
   S w;
   ExposureKnots(times, knots, t, &k0, &k1, &w);
   for (int c = 0; c < 3; ++c) {
-    bool between;
-    rgb_out[c] = std::exp(ExposureLogGain(params, prior, k0, k1, w, c, &between)) * rgb_in[c];
+    bool unseen;
+    rgb_out[c] = std::exp(ExposureLogGain(params, prior, times, t, k0, k1, w, c, &unseen)) * rgb_in[c];
   }
 }
 
 // From drgb_out = dL/d(rgb_out): WRITES dL/d(rgb_in) to drgb_in (when not null), adds dL/d(log-gain)
-// of the two knots to dparams and, for a time between knots, dL/d(prior) to dprior (4 values; chained
+// of the two knots to dparams and, for a time off the knots, dL/d(prior) to dprior (4 values; chained
 // to the log-gains by ExposurePriorBackward once the batch is done), through add(pointer, value)
 // (PlainAdd on the CPU, atomic in kernels).
 template <typename S, typename Add>
@@ -100,13 +101,13 @@ ENDORECON_HD void ExposureSampleBackward(const S* params, const S* prior, const 
   S w;
   ExposureKnots(times, knots, t, &k0, &k1, &w);
   for (int c = 0; c < 3; ++c) {
-    bool between;
-    const S log_gain = ExposureLogGain(params, prior, k0, k1, w, c, &between);
+    bool unseen;
+    const S log_gain = ExposureLogGain(params, prior, times, t, k0, k1, w, c, &unseen);
     const S gain = std::exp(log_gain);
     const S g = drgb_out[c] * rgb_in[c] * gain;  // dL/d(log-gain)
     if (drgb_in) drgb_in[c] = drgb_out[c] * gain;
     S d_blend = g;
-    if (between) {
+    if (unseen) {
       const S blend = (S(1) - w) * params[3 * k0 + c] + w * params[3 * k1 + c];
       d_blend = prior[3] * g;
       add(dprior + c, (S(1) - prior[3]) * g);

@@ -44,13 +44,13 @@ struct FieldT<S>::Impl {
   // Batch-major activations of a pass over `rows` samples: Forward keeps the whole batch's for
   // Backward; Infer, Encode and Decode use one segment's per thread.
   struct Acts {
-    AlignedVector<S> x0, gfeat, blend_hidden, beta, feat, dens_raw, col_in, col_raw, rgb0;
+    AlignedVector<S> time, x0, gfeat, blend_hidden, beta, feat, dens_raw, col_in, col_raw, rgb0;
     std::array<AlignedVector<S>, kMaxLayers> dens_hidden, col_hidden;
     int rows = 0;
   };
   // Acts from one row on.
   struct View {
-    S *x0, *gfeat, *blend_hidden, *beta, *feat, *dens_raw, *col_in, *col_raw, *rgb0;
+    S *time, *x0, *gfeat, *blend_hidden, *beta, *feat, *dens_raw, *col_in, *col_raw, *rgb0;
     std::array<S*, kMaxLayers> dens_hidden, col_hidden;
   };
 
@@ -69,12 +69,21 @@ struct FieldT<S>::Impl {
   AlignedVector<S> dgeo, dfeat, dbeta, dx0, drgb0;
   int last_n = -1;
   DropoutPass last_pass;
+  // FieldConfig::trained_times; `clamps` when they are narrower than [0, 1].
+  S first_time, last_time;
+  bool clamps;
 
   Impl(const FieldConfig& config, bool frequency_encoding)
       : density(frequency_encoding ? FrequencyEncoder<S>(config.frequencies).output_dim()
                                    : GridEnsemble<S>(config.grids).feature_dim(),
                 config.heads),
-        color(config.heads) {
+        color(config.heads),
+        first_time(config.trained_times[0]),
+        last_time(config.trained_times[1]),
+        clamps(first_time > S(0) || last_time < S(1)) {
+    if (!(first_time >= S(0) && first_time <= last_time && last_time <= S(1))) {
+      FailInvalid("field.trained_times must be [first, last] with 0 <= first <= last <= 1");
+    }
     if (config.heads.density_hidden.size() > kMaxLayers || config.heads.color_hidden.size() > kMaxLayers) {
       FailInvalid("field heads may have at most " + std::to_string(kMaxLayers) + " hidden layers each");
     }
@@ -106,6 +115,7 @@ struct FieldT<S>::Impl {
     if (rows <= a.rows) return;
     a.rows = rows;
     const std::size_t n = static_cast<std::size_t>(rows);
+    if (clamps) GrowTo(a.time, n);
     if (deform) GrowTo(a.x0, n * 3);
     if (grids) {
       GrowTo(a.gfeat, n * grids->output_dim());
@@ -128,6 +138,7 @@ struct FieldT<S>::Impl {
       return v.empty() ? nullptr : v.data() + r * width;
     };
     View v{};
+    v.time = at(a.time, 1);
     v.x0 = at(a.x0, 3);
     v.gfeat = grids ? at(a.gfeat, grids->output_dim()) : nullptr;
     v.blend_hidden = blend ? at(a.blend_hidden, blend->hidden_dim()) : nullptr;
@@ -144,11 +155,20 @@ struct FieldT<S>::Impl {
     return v;
   }
 
+  // The times the structure (deformation, blend, the colour head's time features) sees for rows
+  // [q, q + rows) of the batch: the batch's, or held inside the trained times (v.time from row q).
+  const S* StructureTimes(const SampleBatchT<S>& batch, std::size_t q, int rows, const View& v) const {
+    if (!clamps) return batch.time + q;
+    for (int i = 0; i < rows; ++i)
+      v.time[i] = std::clamp(batch.time[q + std::size_t(i)], first_time, last_time);
+    return v.time;
+  }
+
   // Deformation, blend weights and grids (or the frequency encoding): rows [q, q + rows) of the batch,
   // activations in v, features into feat (rows x feature_dim()).
   void EncodeRows(const SampleBatchT<S>& batch, std::size_t q, int rows, const View& v, S* feat) {
     const S* pos = batch.pos + 3 * q;
-    const S* time = batch.time + q;
+    const S* time = StructureTimes(batch, q, rows, v);
     const S* x0 = pos;
     if (deform) {
       deform->Forward(value[kDeform].data(), {rows, pos, time}, {v.x0}, {});
@@ -168,6 +188,7 @@ struct FieldT<S>::Impl {
                   const FieldOutputT<S>& out, DropoutPass pass) {
     const std::size_t d = static_cast<std::size_t>(feature_dim()),
                       raw = static_cast<std::size_t>(density.raw_dim());
+    const S* time = StructureTimes(batch, q, rows, v);  // row q on
     ForTiles(rows, [&](int t0, int n) {
       const std::size_t t = static_cast<std::size_t>(t0), r = q + t;
       std::array<S*, kMaxLayers> dens_hidden{}, col_hidden{};
@@ -182,7 +203,7 @@ struct FieldT<S>::Impl {
       // With exposure the colour head writes the tissue's colour, which the camera's gains then scale.
       S* rgb = exposure ? v.rgb0 + 3 * t : out.rgb + 3 * r;
       color.Forward(
-          value[kColor].data(), {n, dens_raw + 2, density.raw_dim(), batch.dir + 3 * r, batch.time + r},
+          value[kColor].data(), {n, dens_raw + 2, density.raw_dim(), batch.dir + 3 * r, time + t},
           {v.col_in + t * color.in_dim(), col_hidden.data(), v.col_raw + 4 * t, rgb, out.rgb_logvar + r},
           pass);
       if (exposure)
@@ -284,6 +305,7 @@ void FieldT<S>::Backward(const SampleBatchT<S>& batch, const FieldOutputGradT<S>
   const std::size_t rows = static_cast<std::size_t>(n);
   const auto a = m.ViewAt(m.acts, 0);
   const DropoutPass& pass = m.last_pass;
+  const S* time = m.clamps ? a.time : batch.time;  // as Forward gave the structure
   GrowTo(m.dgeo, rows * std::size_t(config_.heads.geo_features));
   GrowTo(m.dfeat, rows * m.feature_dim());
   const S* drgb = g.rgb;
@@ -293,7 +315,7 @@ void FieldT<S>::Backward(const SampleBatchT<S>& batch, const FieldOutputGradT<S>
                          m.grad[kExposure].data(), {m.drgb0.data()}, pass);
     drgb = m.drgb0.data();
   }
-  m.color.Backward(m.value[kColor].data(), {n, a.dens_raw + 2, m.density.raw_dim(), batch.dir, batch.time},
+  m.color.Backward(m.value[kColor].data(), {n, a.dens_raw + 2, m.density.raw_dim(), batch.dir, time},
                    {a.col_in, a.col_hidden.data(), a.col_raw, nullptr, nullptr}, {drgb, g.rgb_logvar},
                    m.grad[kColor].data(), {m.dgeo.data()}, pass);
   m.density.Backward(
@@ -308,12 +330,12 @@ void FieldT<S>::Backward(const SampleBatchT<S>& batch, const FieldOutputGradT<S>
     GrowTo(m.dbeta, rows * m.grids->grids());
     m.grids->Backward(m.value[kGrid].data(), {n, x0, a.beta}, {a.gfeat, a.feat}, {m.dfeat.data()},
                       m.grad[kGrid].data(), {dx0, m.dbeta.data()}, {});
-    m.blend->Backward(m.value[kBlend].data(), {n, batch.time}, {a.blend_hidden, a.beta}, {m.dbeta.data()},
+    m.blend->Backward(m.value[kBlend].data(), {n, time}, {a.blend_hidden, a.beta}, {m.dbeta.data()},
                       m.grad[kBlend].data(), {}, {});
   }
   if (m.deform) {
-    m.deform->Backward(m.value[kDeform].data(), {n, batch.pos, batch.time}, {a.x0}, {dx0},
-                       m.grad[kDeform].data(), {}, {});
+    m.deform->Backward(m.value[kDeform].data(), {n, batch.pos, time}, {a.x0}, {dx0}, m.grad[kDeform].data(),
+                       {}, {});
   }
 }
 

@@ -2,6 +2,7 @@
 // the two presets (the paper's sizes and a CPU-sized one; field_config.cc says why each value).
 #pragma once
 
+#include <array>
 #include <string>
 #include <vector>
 
@@ -27,6 +28,13 @@ struct FieldConfig {
   // A background learned per ray direction (background.h), when the run's background is "learned"
   // (train_config.h; FitToScene sets it). Off: what rays see past the samples is a fixed colour.
   bool learned_background = false;
+  // The first and last times the field was trained at (FitToScene: the training frames'). Outside
+  // them the deformation, the temporal blend and the colour head's time features hold their state at
+  // the nearer end: a held-out last frame is rendered as the field stood at the last frame trained
+  // on, not from a deformation knot only that frame's neighbours pulled on (docs/benchmarks.md).
+  // The exposure takes the time itself (exposure.h predicts a held-out time's gain). Training
+  // samples are at training times, inside the range, so the training step needs no clamp.
+  std::array<float, 2> trained_times{0.0f, 1.0f};
 
   // The paper's sizes: grids {8, 16, 32} x scales {1.4, 1.7, 1.9}, 16 levels x 8 features, 2^19 tables.
   static FieldConfig Paper();

@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "worker/engine/field/hash_grid.h"
 #include "worker/engine/scene/exposure_change.h"
@@ -24,6 +26,20 @@ double TypicalDepth(const scene::Clip& clip) {
   if (values.empty()) return 0.5 * (clip.near + clip.far);
   std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
   return values[values.size() / 2];
+}
+
+// The first and last times among the training frames (all frames when none are named).
+std::pair<float, float> TrainingTimes(const scene::Clip& clip, const std::vector<int>& frames) {
+  std::pair<float, float> range{1.0f, 0.0f};
+  const auto add = [&](int f) {
+    const float t = clip.times[std::size_t(f)];
+    range = {std::min(range.first, t), std::max(range.second, t)};
+  };
+  if (frames.empty()) {
+    for (int f = 0; f < clip.frame_count(); ++f) add(f);
+  }
+  for (const int f : frames) add(f);
+  return range;
 }
 
 // Resolves config.exposure and gives the field a knot at each training frame's time (distinct times
@@ -97,6 +113,11 @@ SceneFit FitToScene(const scene::Clip& clip, TrainConfig& config, std::vector<in
       leave_out("the colour head's time inputs", "the clip is static");
       config.field.heads.color_time_frequencies = 0;
     }
+  }
+  // The times the field is trained at (field_config.h: it holds its state outside them).
+  if (clip.frame_count() > 0) {
+    const auto [first, last] = TrainingTimes(clip, train_frames);
+    config.field.trained_times = {first, last};
   }
   FitExposure(clip, config, std::move(train_frames), leave_out);
   // Finest useful grid resolution: two cells per pixel footprint at the typical depth, over the box.

@@ -114,6 +114,7 @@ void VisitKeys(TrainConfig& c, Visit&& visit) {
   visit("field.heads.color_time_frequencies", c.field.heads.color_time_frequencies);
   visit("field.exposure_times", c.field.exposure_times);
   visit("field.learned_background", c.field.learned_background);
+  visit("field.trained_times", c.field.trained_times);
 }
 
 nlohmann::json::json_pointer Pointer(const std::string& dotted) {
@@ -175,6 +176,9 @@ void Validate(const TrainConfig& c) {
   require(c.exposure == "auto" || c.exposure == "on" || c.exposure == "off",
           "exposure must be auto, on or off, got " + c.exposure);
   require(c.exposure_threshold >= 0, "exposure_threshold must be >= 0");
+  const auto [first, last] = c.field.trained_times;
+  require(std::isfinite(first) && std::isfinite(last) && 0 <= first && first <= last && last <= 1,
+          "field.trained_times must be [first, last] with 0 <= first <= last <= 1");
   field::CheckExposureTimes(c.field.exposure_times);
   require(c.nll_beta >= 0 && c.nll_beta <= 1, "nll_beta must be in [0, 1]");
   require(c.eval_coarse_samples >= 1 && c.eval_fine_samples >= 1, "eval samples must be >= 1");
@@ -230,7 +234,13 @@ void ApplyJson(const nlohmann::json& json, TrainConfig& config) {
     if (!json.contains(pointer)) return;
     RequireFits<std::remove_cvref_t<decltype(value)>>(json.at(pointer), key);
     try {
-      json.at(pointer).get_to(value);
+      using T = std::remove_cvref_t<decltype(value)>;
+      if constexpr (requires { typename T::mapped_type; }) {
+        // A map merges: {"adam": {"lr": {"grid": 0.05}}} changes one rate and keeps the others.
+        for (auto& [name, entry] : json.at(pointer).template get<T>()) value[name] = entry;
+      } else {
+        json.at(pointer).get_to(value);
+      }
     } catch (const nlohmann::json::exception& e) {
       FailInvalid(std::string("config: bad value for ") + key + ": " + e.what());
     }
