@@ -34,6 +34,10 @@ const std::vector<std::uint8_t>& EvaluationMask(const scene::Clip& clip, int fra
 
 namespace {
 
+bool Contains(const std::vector<int>& frames, int f) {
+  return std::find(frames.begin(), frames.end(), f) != frames.end();
+}
+
 // Per frame, one map's calibration against the observed image (metrics.json's `key`) and against
 // the noise-free truth (`key`_noise_free); empty where not measured.
 struct MapCalibration {
@@ -213,10 +217,7 @@ class FramePacer {
   void Rendered(FrameRender how, double seconds) { pace_[int(how)] = seconds; }
 
  private:
-  bool heldout(int f) const {
-    return std::find(what_.heldout_frames.begin(), what_.heldout_frames.end(), f) !=
-           what_.heldout_frames.end();
-  }
+  bool heldout(int f) const { return Contains(what_.heldout_frames, f); }
 
   const ClipEvaluation& what_;
   double pace_[2];
@@ -280,8 +281,7 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
     render_seconds += rendered_in;
     (how == FrameRender::kFull ? full_frames : reduced_frames).push_back(f);
     const auto& mask = EvaluationMask(clip, f);
-    const bool heldout =
-        std::find(what.heldout_frames.begin(), what.heldout_frames.end(), f) != what.heldout_frames.end();
+    const bool heldout = Contains(what.heldout_frames, f);
     for (ImageGroup& group : images) {
       if (group.frames.empty() || (group.gain_fitted && !heldout)) continue;
       const auto& reference = group.noise_free ? clip.gt_rgb[f] : clip.rgb[f];
@@ -373,15 +373,14 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
   // cheaper render's, so the split's summary mixes two renders; the full frames' is the one to
   // compare across runs. Against the observed images, and against the noise-free truth where known.
   if (!reduced_frames.empty()) {
-    for (const auto& [key, metrics] : {std::pair{"train_psnr_tissue", &images[0].frames},  // as made above
-                                       std::pair{"train_psnr_tissue_noise_free", &images[2].frames}}) {
-      if (metrics->empty()) continue;
+    for (const ImageGroup& group : images) {
+      if (group.gain_fitted || group.frames.empty()) continue;
+      const std::string key = group.noise_free ? "train_psnr_tissue_noise_free" : "train_psnr_tissue";
       for (const auto& [name, frames] :
            {std::pair{"full", &full_frames}, std::pair{"reduced", &reduced_frames}}) {
         std::vector<double> psnr;
         for (int f : *frames) {
-          if (std::find(what.train_frames.begin(), what.train_frames.end(), f) != what.train_frames.end())
-            psnr.push_back((*metrics)[f].psnr_tissue);
+          if (Contains(what.train_frames, f)) psnr.push_back(group.frames[f].psnr_tissue);
         }
         const Summary summary = Summarise(psnr);
         if (summary.count > 0) how[key][name] = ToJson(summary);  // no NaN for none

@@ -81,9 +81,7 @@ struct FieldT<S>::Impl {
         first_time(config.trained_times[0]),
         last_time(config.trained_times[1]),
         clamps(first_time > S(0) || last_time < S(1)) {
-    if (!(first_time >= S(0) && first_time <= last_time && last_time <= S(1))) {
-      FailInvalid("field.trained_times must be [first, last] with 0 <= first <= last <= 1");
-    }
+    CheckTrainedTimes(config.trained_times);
     if (config.heads.density_hidden.size() > kMaxLayers || config.heads.color_hidden.size() > kMaxLayers) {
       FailInvalid("field heads may have at most " + std::to_string(kMaxLayers) + " hidden layers each");
     }

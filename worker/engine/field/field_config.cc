@@ -1,6 +1,15 @@
 #include "worker/engine/field/field_config.h"
 
+#include "common/error.h"
+
 namespace endorecon::field {
+
+void CheckTrainedTimes(const std::array<float, 2>& times) {
+  const auto [first, last] = times;
+  if (!(0 <= first && first <= last && last <= 1)) {  // NaN and infinities fail too
+    FailInvalid("field.trained_times must be [first, last] with 0 <= first <= last <= 1");
+  }
+}
 
 FieldConfig FieldConfig::Paper() {
   FieldConfig c;

@@ -42,4 +42,7 @@ struct FieldConfig {
   static FieldConfig Cpu();
 };
 
+// Throws InvalidArgument unless `times` is [first, last] with 0 <= first <= last <= 1 (finite).
+void CheckTrainedTimes(const std::array<float, 2>& times);
+
 }  // namespace endorecon::field

@@ -28,26 +28,13 @@ double TypicalDepth(const scene::Clip& clip) {
   return values[values.size() / 2];
 }
 
-// The first and last times among the training frames (all frames when none are named).
-std::pair<float, float> TrainingTimes(const scene::Clip& clip, const std::vector<int>& frames) {
-  std::pair<float, float> range{1.0f, 0.0f};
-  const auto add = [&](int f) {
-    const float t = clip.times[std::size_t(f)];
-    range = {std::min(range.first, t), std::max(range.second, t)};
-  };
-  if (frames.empty()) {
-    for (int f = 0; f < clip.frame_count(); ++f) add(f);
-  }
-  for (const int f : frames) add(f);
-  return range;
-}
+// The training frames (all frames when none are named) in time order, and their distinct times.
+struct TrainingTimes {
+  std::vector<int> frames;
+  std::vector<float> times;
+};
 
-// Resolves config.exposure and gives the field a knot at each training frame's time (distinct times
-// only: a static clip's frames share one).
-template <typename LeaveOut>
-void FitExposure(const scene::Clip& clip, TrainConfig& config, std::vector<int> frames,
-                 const LeaveOut& leave_out) {
-  if (!config.field.exposure_times.empty()) return;  // fitted already
+TrainingTimes InTimeOrder(const scene::Clip& clip, std::vector<int> frames) {
   if (frames.empty()) {
     for (int f = 0; f < clip.frame_count(); ++f) frames.push_back(f);
   }
@@ -58,6 +45,16 @@ void FitExposure(const scene::Clip& clip, TrainConfig& config, std::vector<int> 
     const float t = clip.times[std::size_t(f)];
     if (times.empty() || t > times.back()) times.push_back(t);
   }
+  return {std::move(frames), std::move(times)};
+}
+
+// Resolves config.exposure and gives the field a knot at each training frame's time (distinct times
+// only: a static clip's frames share one).
+template <typename LeaveOut>
+void FitExposure(const scene::Clip& clip, TrainConfig& config, TrainingTimes training,
+                 const LeaveOut& leave_out) {
+  if (!config.field.exposure_times.empty()) return;  // fitted already
+  const auto& [frames, times] = training;
   if (config.exposure == "auto") {
     const double change = scene::ExposureChange(clip, frames);
     config.exposure = change > config.exposure_threshold ? "on" : "off";
@@ -72,7 +69,7 @@ void FitExposure(const scene::Clip& clip, TrainConfig& config, std::vector<int> 
     config.exposure = "off";
     leave_out("per-frame exposure gains", "training sees fewer than two distinct times");
   }
-  if (config.exposure == "on") config.field.exposure_times = std::move(times);
+  if (config.exposure == "on") config.field.exposure_times = std::move(training.times);
 }
 
 }  // namespace
@@ -114,12 +111,10 @@ SceneFit FitToScene(const scene::Clip& clip, TrainConfig& config, std::vector<in
       config.field.heads.color_time_frequencies = 0;
     }
   }
+  TrainingTimes training = InTimeOrder(clip, std::move(train_frames));
   // The times the field is trained at (field_config.h: it holds its state outside them).
-  if (clip.frame_count() > 0) {
-    const auto [first, last] = TrainingTimes(clip, train_frames);
-    config.field.trained_times = {first, last};
-  }
-  FitExposure(clip, config, std::move(train_frames), leave_out);
+  if (!training.times.empty()) config.field.trained_times = {training.times.front(), training.times.back()};
+  FitExposure(clip, config, std::move(training), leave_out);
   // Finest useful grid resolution: two cells per pixel footprint at the typical depth, over the box.
   const scene::SceneBox box = scene::ClipBox(clip);
   double focal = 0;

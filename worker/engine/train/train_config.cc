@@ -178,9 +178,7 @@ void Validate(const TrainConfig& c) {
   require(c.exposure == "auto" || c.exposure == "on" || c.exposure == "off",
           "exposure must be auto, on or off, got " + c.exposure);
   require(c.exposure_threshold >= 0, "exposure_threshold must be >= 0");
-  const auto [first, last] = c.field.trained_times;
-  require(std::isfinite(first) && std::isfinite(last) && 0 <= first && first <= last && last <= 1,
-          "field.trained_times must be [first, last] with 0 <= first <= last <= 1");
+  field::CheckTrainedTimes(c.field.trained_times);
   field::CheckExposureTimes(c.field.exposure_times);
   require(c.nll_beta >= 0 && c.nll_beta <= 1, "nll_beta must be in [0, 1]");
   require(c.eval_coarse_samples >= 1 && c.eval_fine_samples >= 1, "eval samples must be >= 1");
