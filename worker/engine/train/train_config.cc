@@ -178,8 +178,13 @@ void Validate(const TrainConfig& c) {
   require(c.exposure == "auto" || c.exposure == "on" || c.exposure == "off",
           "exposure must be auto, on or off, got " + c.exposure);
   require(c.exposure_threshold >= 0, "exposure_threshold must be >= 0");
-  field::CheckTrainedTimes(c.field.trained_times);
-  field::CheckExposureTimes(c.field.exposure_times);
+  // The field's own checks name its key; a configuration's errors say they are the configuration's.
+  try {
+    field::CheckTrainedTimes(c.field.trained_times);
+    field::CheckExposureTimes(c.field.exposure_times);
+  } catch (const Error& e) {
+    FailInvalid(std::string("config: ") + e.what());
+  }
   require(c.nll_beta >= 0 && c.nll_beta <= 1, "nll_beta must be in [0, 1]");
   require(c.eval_coarse_samples >= 1 && c.eval_fine_samples >= 1, "eval samples must be >= 1");
   require(c.curve_interval_s > 0, "curve_interval_s must be > 0");
