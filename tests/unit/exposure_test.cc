@@ -74,6 +74,34 @@ TEST(ExposureTest, GainsInClosedForm) {
   EXPECT_NEAR(out[8], 1.0 * std::exp(-0.1 / 3), 1e-12);
 }
 
+// The module computes the gains once per run of equal times (a ray's samples, a frame's rays): its
+// output is, bit for bit, the per-sample function's (the CUDA kernels' form) on runs, on times that
+// alternate, across task boundaries and on NaN.
+TEST(ExposureTest, TheBatchEqualsThePerSampleMathBitForBit) {
+  const std::vector<float> times = {0.0f, 0.2f, 0.4f, 0.5f, 0.8f, 1.0f};
+  Exposure<float> exposure(times);
+  const auto params64 = RandomValues(exposure.param_count(), -0.2, 0.2, 5);
+  const std::vector<float> params(params64.begin(), params64.end());
+  const int n = 5000;  // three tasks
+  std::vector<float> time(n), rgb(3 * n), out(3 * n);
+  for (int i = 0; i < n; ++i) {
+    time[i] = i < 2100 ? float(i / 24) / 90.0f : (i % 2 ? 0.35f : 0.9f);  // runs of 24, then alternating
+    for (int c = 0; c < 3; ++c) rgb[3 * i + c] = 0.1f + 0.8f * float((7 * i + c) % 11) / 10.0f;
+  }
+  time[100] = time[4000] = NAN;
+  exposure.Forward(params.data(), {n, time.data(), rgb.data()}, {out.data()}, {});
+  float prior[kExposurePriorSize];
+  ExposurePrior(params.data(), exposure.knots(), prior);
+  int equal = 0;
+  for (int i = 0; i < n; ++i) {
+    float expected[3];
+    ExposureSample(params.data(), prior, times.data(), exposure.knots(), time[i], rgb.data() + 3 * i,
+                   expected);
+    for (int c = 0; c < 3; ++c) equal += out[3 * i + c] == expected[c];
+  }
+  EXPECT_EQ(equal, 3 * n);
+}
+
 TEST(ExposureTest, PriorOfAFlickerADriftAndASteadyExposure) {
   double prior[kExposurePriorSize];
   // A ramp over five knots: mean 0.2; centred -0.2 .. 0.2, lag sum 0.04 over a variance sum of 0.1.

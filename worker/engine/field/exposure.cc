@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 
 #include "common/error.h"
@@ -38,8 +39,18 @@ void Exposure<S>::Forward(const S* params, const Inputs& in, const Outputs& out,
   const int knots = this->knots();
   S prior[kExposurePriorSize];  // computed per call: calls on other rows may run at once
   ExposurePrior(params, knots, prior);
-  ParallelRows(in.n, [&](std::size_t i) {
-    ExposureSample(params, prior, times, knots, in.time[i], in.rgb + 3 * i, out.rgb + 3 * i);
+  // A ray's samples share its time (and a rendered frame's rays theirs): the gains are computed once
+  // per run of equal times, not per sample (three exp and a knot search each).
+  ParallelTasks(in.n, kTaskRows, [&](int, int row0, int rows) {
+    S gain[3];
+    S gain_time = std::numeric_limits<S>::quiet_NaN();  // no time equals it: the first row computes
+    for (std::size_t i = static_cast<std::size_t>(row0); i < static_cast<std::size_t>(row0 + rows); ++i) {
+      if (!(in.time[i] == gain_time)) {
+        gain_time = in.time[i];
+        ExposureGains(params, prior, times, knots, gain_time, gain);
+      }
+      for (int c = 0; c < 3; ++c) out.rgb[3 * i + c] = gain[c] * in.rgb[3 * i + c];
+    }
   });
 }
 

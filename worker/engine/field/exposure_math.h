@@ -76,17 +76,26 @@ ENDORECON_HD S ExposureLogGain(const S* params, const S* prior, const float* tim
   return *unseen ? prior[c] + prior[3] * (blend - prior[c]) : blend;
 }
 
-// rgb_out = gain(t) * rgb_in, per channel (rgb_out may be rgb_in); prior from ExposurePrior.
+// gain[c] = exp(a(t)) per channel; prior from ExposurePrior.
 template <typename S>
-ENDORECON_HD void ExposureSample(const S* params, const S* prior, const float* times, int knots, S t,
-                                 const S* rgb_in, S* rgb_out) {
+ENDORECON_HD void ExposureGains(const S* params, const S* prior, const float* times, int knots, S t,
+                                S* gain) {
   int k0, k1;
   S w;
   ExposureKnots(times, knots, t, &k0, &k1, &w);
   for (int c = 0; c < 3; ++c) {
     bool unseen;
-    rgb_out[c] = std::exp(ExposureLogGain(params, prior, times, t, k0, k1, w, c, &unseen)) * rgb_in[c];
+    gain[c] = std::exp(ExposureLogGain(params, prior, times, t, k0, k1, w, c, &unseen));
   }
+}
+
+// rgb_out = gain(t) * rgb_in, per channel (rgb_out may be rgb_in); prior from ExposurePrior.
+template <typename S>
+ENDORECON_HD void ExposureSample(const S* params, const S* prior, const float* times, int knots, S t,
+                                 const S* rgb_in, S* rgb_out) {
+  S gain[3];
+  ExposureGains(params, prior, times, knots, t, gain);
+  for (int c = 0; c < 3; ++c) rgb_out[c] = gain[c] * rgb_in[c];
 }
 
 // From drgb_out = dL/d(rgb_out): WRITES dL/d(rgb_in) to drgb_in (when not null), adds dL/d(log-gain)
