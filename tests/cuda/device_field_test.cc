@@ -77,7 +77,8 @@ TEST_P(DeviceFieldTest, OutputsAndEveryGradientMatchTheCpuField) {
   host.ZeroGrad();
   host.Backward(batch, {s.d_sigma.data(), nullptr, s.d_rgb.data(), s.d_rgb_lv.data()});
 
-  DeviceArray<float> pos(s.pos), time(s.time), dir(s.dir), d_sigma(s.d_sigma), d_rgb(s.d_rgb), d_rgb_lv(s.d_rgb_lv);
+  DeviceArray<float> pos(s.pos), time(s.time), dir(s.dir), d_sigma(s.d_sigma), d_rgb(s.d_rgb),
+      d_rgb_lv(s.d_rgb_lv);
   DeviceArray<float> g_sigma(s.n), g_sigma_lv(s.n), g_rgb(3 * s.n), g_rgb_lv(s.n);
   field::FieldOutput g_out{g_sigma.data(), g_sigma_lv.data(), g_rgb.data(), g_rgb_lv.data()};
   const field::SampleBatch g_batch{s.n, pos.data(), time.data(), dir.data()};
@@ -111,6 +112,12 @@ TEST_P(DeviceFieldTest, DecodeOfEncodeIsInferAndParametersMoveBothWays) {
   device.Encode(batch, enc.data());
   device.Decode(enc.data(), batch, ob, true, 5);
   EXPECT_EQ(a.Download(), b.Download());
+  // A null rgb: the density alone, the same as with the colour.
+  DeviceArray<float> x2(s.n), y2(s.n);
+  field::FieldOutput density_only{x2.data(), y2.data(), nullptr, nullptr};
+  device.Infer(batch, density_only, true, 5);
+  EXPECT_EQ(x2.Download(), x.Download());
+  EXPECT_EQ(y2.Download(), y.Download());
   // Download and Upload move the parameters between the host field and the device unchanged.
   const float before = host.Blocks()[0].value[7];
   host.Blocks()[0].value[7] = 123.0f;
@@ -137,13 +144,15 @@ TEST_P(DeviceFieldTest, AdamStepMatchesTheCpuOptimiser) {
   }
   const auto hb = host.Blocks();
   const auto db = device.Blocks();
-  for (std::size_t k = 0; k < hb.size(); ++k) CopyToDevice(db[k].grad, hb[k].grad, hb[k].size * sizeof(float));
+  for (std::size_t k = 0; k < hb.size(); ++k)
+    CopyToDevice(db[k].grad, hb[k].grad, hb[k].size * sizeof(float));
   EXPECT_TRUE(cpu.Step(0.3).finite);
   EXPECT_TRUE(gpu.Step(0.3).finite);
   for (std::size_t k = 0; k < hb.size(); ++k) {
     std::vector<float> v(db[k].size);
     CopyToHost(v.data(), db[k].value, v.size() * sizeof(float));
-    EXPECT_LT(RelativeError(v, std::vector<float>(hb[k].value, hb[k].value + hb[k].size)), 1e-5) << hb[k].name;
+    EXPECT_LT(RelativeError(v, std::vector<float>(hb[k].value, hb[k].value + hb[k].size)), 1e-5)
+        << hb[k].name;
   }
   // A non-finite gradient is refused before any update, naming its block.
   const float nan = std::nanf("");

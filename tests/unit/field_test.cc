@@ -332,6 +332,31 @@ TEST(FieldTest, DecodeOfEncodeMatchesInferForEveryDropoutPass) {
   }
 }
 
+// A null rgb asks for the density alone (a renderer's coarse pass, an occupancy grid): the same
+// density bit for bit, nothing written to the colour's log-variance; Forward, whose Backward needs the
+// colour, refuses it.
+TEST(FieldTest, InferWithoutRgbGivesTheDensityAlone) {
+  FieldConfig config = SmallConfig();
+  config.exposure_times = {0.0f, 0.5f, 1.0f};
+  FieldT<float> field(config, 3);
+  Randomise(field, 320);
+  Samples<float> a(5000, 4), b(5000, 4);
+  auto oa = a.out();
+  field.Infer(a.batch(), oa, false, 0);
+  std::fill(b.rgb_logvar.begin(), b.rgb_logvar.end(), -7.0f);
+  FieldOutputT<float> density_only{b.sigma.data(), b.sigma_logvar.data(), nullptr, b.rgb_logvar.data()};
+  field.Infer(b.batch(), density_only, false, 0);
+  EXPECT_EQ(a.sigma, b.sigma);
+  EXPECT_EQ(a.sigma_logvar, b.sigma_logvar);
+  EXPECT_EQ(std::count(b.rgb_logvar.begin(), b.rgb_logvar.end(), -7.0f), std::ptrdiff_t(b.rgb_logvar.size()));
+  std::vector<float> encoding(std::size_t(b.n) * field.encoding_dim());
+  field.Encode(b.batch(), encoding.data());
+  std::fill(b.sigma.begin(), b.sigma.end(), 0.0f);
+  field.Decode(encoding.data(), b.batch(), density_only, false, 0);
+  EXPECT_EQ(a.sigma, b.sigma);
+  EXPECT_THROW(field.Forward(b.batch(), density_only, false, 0), Error);
+}
+
 TEST(FieldTest, OutputsStayInRangeForWildInputs) {
   FieldT<float> field(SmallConfig(), 3);
   Randomise(field, 400);

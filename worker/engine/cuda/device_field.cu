@@ -180,6 +180,12 @@ struct DeviceField::Impl {
     float* draw = dens_raw.array.data();
     density_mlp.Forward(value("density"), in_feat, n, dens_hidden_ptr.data(), draw, pass);
     float *sigma = out.sigma, *sigma_lv = out.sigma_logvar, *rgb = out.rgb, *rgb_lv = out.rgb_logvar;
+    if (!rgb) {  // the density alone (field.h)
+      ForEach(
+          n, [=] __device__(std::size_t i) { field::DensityOutputs(draw + i * raw, sigma + i, sigma_lv + i); },
+          "density outputs kernel");
+      return;
+    }
     float* cin = col_in.array.data();
     const float *dir = batch.dir, *time = batch.time;
     ForEach(
@@ -352,6 +358,8 @@ void DeviceField::Forward(const field::SampleBatch& batch, field::FieldOutput& o
                           std::uint64_t dropout_seed) {
   if (batch.n < 0)
     FailInvalid("DeviceField::Forward: batch size must be >= 0, got " + std::to_string(batch.n));
+  if (batch.n > 0 && !out.rgb)
+    FailInvalid("DeviceField::Forward: the output needs its rgb array (Backward uses it)");
   impl_->Reserve(batch.n);
   impl_->last_n = batch.n;
   impl_->last_pass = {dropout, dropout_seed, 0};
@@ -361,8 +369,11 @@ void DeviceField::Forward(const field::SampleBatch& batch, field::FieldOutput& o
 
 void DeviceField::Infer(const field::SampleBatch& batch, field::FieldOutput& out, bool dropout,
                         std::uint64_t dropout_seed) {
-  Forward(batch, out, dropout, dropout_seed);
+  if (batch.n < 0) FailInvalid("DeviceField::Infer: batch size must be >= 0, got " + std::to_string(batch.n));
+  impl_->Reserve(batch.n);
   impl_->last_n = -1;  // nothing kept to differentiate
+  impl_->Encode(batch, impl_->feat.array.data());
+  impl_->Decode(impl_->feat.array.data(), batch, out, {dropout, dropout_seed, 0});
 }
 
 int DeviceField::encoding_dim() const { return impl_->d; }

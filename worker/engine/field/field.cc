@@ -198,6 +198,7 @@ struct FieldT<S>::Impl {
       S* dens_raw = v.dens_raw + t * raw;
       density.Forward(value[kDensity].data(), {n, feat + t * d},
                       {dens_hidden.data(), dens_raw, out.sigma + r, out.sigma_logvar + r}, pass);
+      if (!out.rgb) return;  // the density alone (Infer and Decode only)
       // With exposure the colour head writes the tissue's colour, which the camera's gains then scale.
       S* rgb = exposure ? v.rgb0 + 3 * t : out.rgb + 3 * r;
       color.Forward(
@@ -241,6 +242,8 @@ template <typename S>
 void FieldT<S>::Forward(const SampleBatchT<S>& batch, FieldOutputT<S>& out, bool dropout,
                         std::uint64_t dropout_seed) {
   CheckBatch(batch, "Field::Forward");
+  if (batch.n > 0 && !out.rgb)
+    FailInvalid("Field::Forward: the output needs its rgb array (Backward uses it)");
   Impl& m = *impl_;
   m.Size(m.acts, batch.n);
   m.last_n = batch.n;

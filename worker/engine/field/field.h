@@ -40,7 +40,8 @@ struct SampleBatchT {
   const S* dir = nullptr;   // n x 3, unit view directions
 };
 
-// Caller-owned output arrays.
+// Caller-owned output arrays. Infer and Decode take a null rgb as "the density alone": the colour
+// head is not run and rgb_logvar is not written (a renderer's coarse pass, an occupancy grid).
 template <typename S>
 struct FieldOutputT {
   S* sigma = nullptr;         // n, >= 0

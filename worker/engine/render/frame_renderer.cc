@@ -142,13 +142,15 @@ void FrameRenderer::RenderChunk(const scene::Camera& camera, float time, const i
       }
     });
     if (!evaluate) return;
+    // The coarse pass only places the fine samples: its weights need the density alone.
     const field::SampleBatch in{count * samples, pos_.data(), time_.data(), dir_.data()};
-    field::FieldOutput out{sigma_.data(), sigma_lv_.data(), color_.data(), color_lv_.data()};
+    field::FieldOutput out{sigma_.data(), sigma_lv_.data(), fine ? color_.data() : nullptr, color_lv_.data()};
     field_.Infer(in, out, /*dropout=*/false, 0);
   };
 
   place(settings_.coarse_samples, false, true);
   tbb::parallel_for(0, count, [&](int r) {
+    // Only the weights are used: the colour composited here (color_ as a previous chunk left it) is not.
     const std::size_t o = std::size_t(r) * settings_.coarse_samples;
     CompositeRay(&sigma_[o], &color_[3 * o], &s_[o], &delta_[o], settings_.coarse_samples, &weights_[o]);
   });

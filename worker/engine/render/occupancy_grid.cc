@@ -55,8 +55,7 @@ OccupancyGrid OccupancyGrid::Build(field::Field& field, const std::vector<float>
   // needs sigma >= -ln(1 - min_alpha) * res.
   const float min_sigma = -std::log1p(-min_alpha) * float(res);
   constexpr std::size_t kBatch = 1 << 16;
-  std::vector<float> pos(3 * kBatch), time(kBatch), dir(3 * kBatch), sigma(kBatch), sigma_lv(kBatch),
-      rgb(3 * kBatch), rgb_lv(kBatch);
+  std::vector<float> pos(3 * kBatch), time(kBatch), dir(3 * kBatch), sigma(kBatch), sigma_lv(kBatch);
   for (std::size_t i = 0; i < kBatch; ++i) {
     dir[3 * i] = dir[3 * i + 1] = 0.0f;
     dir[3 * i + 2] = 1.0f;  // density does not depend on the view direction
@@ -72,7 +71,7 @@ OccupancyGrid OccupancyGrid::Build(field::Field& field, const std::vector<float>
         pos[3 * i + 2] = (float(cell / (std::size_t(res) * res)) + 0.5f) / float(res);
       }
       const field::SampleBatch in{int(n), pos.data(), time.data(), dir.data()};
-      field::FieldOutput out{sigma.data(), sigma_lv.data(), rgb.data(), rgb_lv.data()};
+      field::FieldOutput out{sigma.data(), sigma_lv.data(), nullptr, nullptr};  // the density alone
       field.Infer(in, out, /*dropout=*/false, 0);
       for (std::size_t i = 0; i < n; ++i) {
         // NaN counts as occupied: never skip what cannot be judged.
