@@ -1,5 +1,6 @@
 // The results' evaluation plan: every frame full when that fits, else held-out frames full, training
-// frames reduced (stride 2, then 4) and as many promoted back to full as the time left allows.
+// frames reduced (stride 2, then 4, then 8 on large frames) and as many promoted back to full as the time
+// left allows.
 #include "worker/engine/eval/eval_plan.h"
 
 #include <gtest/gtest.h>
@@ -55,6 +56,19 @@ TEST(EvalPlan, StrideFourWhenTwoDoesNotFitAndHeldOutNeverReduced) {
   EXPECT_EQ(late.at(9), FrameRender::kFull);
   EXPECT_EQ(Count(late, FrameRender::kReduced), 8);
   EXPECT_GT(late.seconds, 0.5);
+}
+
+// Large frames may go to stride 8 (its grid still holds kMinStridedPoints); small ones stop at 4.
+TEST(EvalPlan, StrideEightOnlyOnFramesLargeEnoughForIt) {
+  constexpr int kLarge = 640 * 512;
+  const RenderCost cost{/*full=*/1e-3 / kLarge * kPixels, /*plain=*/2e-4 / kLarge * kPixels};  // as kCost
+  // Stride 4 gives the 4.1 s of the test above, stride 8: 0.2 + 1/64 = 0.215625 s, base 3.725 s.
+  const EvalPlan plan = PlanEvaluation(10, {4, 9}, kLarge, cost, 3.8);
+  EXPECT_EQ(plan.stride, 8);
+  EXPECT_NEAR(plan.seconds, 2 + 8 * 0.215625, 1e-9);
+  EXPECT_EQ(PlanEvaluation(10, {4, 9}, kLarge, cost, 4.2).stride, 4);       // 4 fits: not coarser
+  EXPECT_EQ(PlanEvaluation(10, {4, 9}, kLarge - 64, cost, 3.8).stride, 4);  // a grid too small for 8
+  EXPECT_EQ(PlanEvaluation(10, {4, 9}, kPixels, kCost, 3.8).stride, 4);
 }
 
 // Found by UndefinedBehaviorSanitizer (scripts/test --sanitize address): a run far behind its budget

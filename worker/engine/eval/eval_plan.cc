@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <vector>
 
 #include "worker/engine/eval/strided_map.h"
 
@@ -32,10 +33,12 @@ EvalPlan PlanEvaluation(int frame_count, const std::vector<int>& heldout, int pi
     if (std::find(heldout.begin(), heldout.end(), f) == heldout.end()) train.push_back(f);
   }
   const double full = FrameSeconds(FrameRender::kFull, 1, cost, pixels);
-  for (int stride : {2, 4}) {
+  std::vector<int> strides = {2, 4};
+  if (pixels / 64 >= kMinStridedPoints) strides.push_back(8);
+  for (int stride : strides) {
     const double reduced = FrameSeconds(FrameRender::kReduced, stride, cost, pixels);
     const double base = double(heldout.size()) * full + double(train.size()) * reduced;
-    if (base > seconds_available && stride != 4) continue;
+    if (base > seconds_available && stride != strides.back()) continue;
     // Training frames promoted to full with the time left, evenly spread over the training frames.
     // Clamped as a double: far behind time with a tiny gain the count is -1e12 (no int holds it).
     const double gain = std::max(full - reduced, 1e-12);
@@ -49,7 +52,7 @@ EvalPlan PlanEvaluation(int frame_count, const std::vector<int>& heldout, int pi
     plan.seconds = base + promoted * (full - reduced);
     return plan;
   }
-  return plan;  // not reached: stride 4 always returns
+  return plan;  // not reached: the last stride always returns
 }
 
 RenderCost MeasureRenderCost(render::FrameRenderer& full, render::FrameRenderer& plain,

@@ -38,10 +38,16 @@ struct EvalPlan {
 // Predicted seconds to render one frame of `pixels` pixels.
 double FrameSeconds(FrameRender how, int stride, const RenderCost& cost, int pixels);
 
+// Stride 8 only where its grid keeps at least this many points a frame: the demo clip's stride-2 grid
+// (160 x 128 / 4), on which the reduced maps were measured to rank as the full ones
+// (docs/benchmarks.md, "The budget is the job"); from 640 x 512 frames on.
+inline constexpr int kMinStridedPoints = 160 * 128 / 4;
+
 // The plan that fits `seconds_available`: every frame full when that fits, when the cost is not known,
 // or with seconds_available <= 0 (no limit); else every held-out frame full, the training frames
-// reduced with stride 2 (4 when 2 does not fit) and as many of them full as the rest of the time
-// allows, evenly spread. Held-out frames are never reduced, even when they alone overrun.
+// reduced with stride 2 (4 when 2 does not fit, 8 when 4 does not and the frame is large enough:
+// kMinStridedPoints) and as many of them full as the rest of the time allows, evenly spread.
+// Held-out frames are never reduced, even when they alone overrun.
 EvalPlan PlanEvaluation(int frame_count, const std::vector<int>& heldout, int pixels, const RenderCost& cost,
                         double seconds_available);
 
