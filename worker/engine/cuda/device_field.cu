@@ -182,7 +182,8 @@ struct DeviceField::Impl {
     float *sigma = out.sigma, *sigma_lv = out.sigma_logvar, *rgb = out.rgb, *rgb_lv = out.rgb_logvar;
     if (!rgb) {  // the density alone (field.h)
       ForEach(
-          n, [=] __device__(std::size_t i) { field::DensityOutputs(draw + i * raw, sigma + i, sigma_lv + i); },
+          n,
+          [=] __device__(std::size_t i) { field::DensityOutputs(draw + i * raw, sigma + i, sigma_lv + i); },
           "density outputs kernel");
       return;
     }
@@ -360,11 +361,9 @@ void DeviceField::Forward(const field::SampleBatch& batch, field::FieldOutput& o
     FailInvalid("DeviceField::Forward: batch size must be >= 0, got " + std::to_string(batch.n));
   if (batch.n > 0 && !out.rgb)
     FailInvalid("DeviceField::Forward: the output needs its rgb array (Backward uses it)");
-  impl_->Reserve(batch.n);
+  Infer(batch, out, dropout, dropout_seed);  // its activations stay in impl_ for Backward
   impl_->last_n = batch.n;
   impl_->last_pass = {dropout, dropout_seed, 0};
-  impl_->Encode(batch, impl_->feat.array.data());
-  impl_->Decode(impl_->feat.array.data(), batch, out, impl_->last_pass);
 }
 
 void DeviceField::Infer(const field::SampleBatch& batch, field::FieldOutput& out, bool dropout,

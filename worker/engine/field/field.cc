@@ -186,7 +186,7 @@ struct FieldT<S>::Impl {
                   const FieldOutputT<S>& out, DropoutPass pass) {
     const std::size_t d = static_cast<std::size_t>(feature_dim()),
                       raw = static_cast<std::size_t>(density.raw_dim());
-    const S* time = StructureTimes(batch, q, rows, v);  // row q on
+    const S* time = out.rgb ? StructureTimes(batch, q, rows, v) : nullptr;  // row q on; the colour's
     ForTiles(rows, [&](int t0, int n) {
       const std::size_t t = static_cast<std::size_t>(t0), r = q + t;
       std::array<S*, kMaxLayers> dens_hidden{}, col_hidden{};
