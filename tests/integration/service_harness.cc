@@ -196,21 +196,34 @@ void Cluster::UseCredentials(const ClientCredentials& credentials) {
 }
 
 void Cluster::StartServer() {
-  std::vector<std::string> argv{BuiltBinary("server/endorecon-server"),
-                                "--listen",
-                                address_,
-                                "--data-dir",
-                                data_dir().string(),
-                                "--metrics-port",
-                                std::to_string(metrics_port_),
-                                "--lease-ttl-ms",
-                                std::to_string(3000 * kSlowdown),
-                                "--heartbeat-ms",
-                                "300"};
-  argv.insert(argv.end(), server_flags_.begin(), server_flags_.end());
-  server_ = std::make_unique<Process>(argv, dir_ / ("server-" + std::to_string(server_starts_++) + ".log"));
-  // A channel that tried before the port was open backs off for seconds: wait for the port first.
-  WaitUntil([&] { return PortOpen(port_); }, std::chrono::seconds(20));
+  const bool first = server_starts_ == 0;
+  for (int attempt = 1;; ++attempt) {
+    std::vector<std::string> argv{BuiltBinary("server/endorecon-server"),
+                                  "--listen",
+                                  address_,
+                                  "--data-dir",
+                                  data_dir().string(),
+                                  "--metrics-port",
+                                  std::to_string(metrics_port_),
+                                  "--lease-ttl-ms",
+                                  std::to_string(3000 * kSlowdown),
+                                  "--heartbeat-ms",
+                                  "300"};
+    argv.insert(argv.end(), server_flags_.begin(), server_flags_.end());
+    const fs::path log = dir_ / ("server-" + std::to_string(server_starts_++) + ".log");
+    server_ = std::make_unique<Process>(argv, log);
+    // A channel that tried before the port was open backs off for seconds: wait for the port first.
+    const auto refused = [&] { return ReadBytes(log).find("cannot listen") != std::string::npos; };
+    WaitUntil([&] { return PortOpen(port_) || refused(); }, std::chrono::seconds(20));
+    // FreePort's port is free when asked, not when the server binds: another test's outgoing
+    // connection may take it meanwhile (ctest runs tests in parallel). On the first start no one
+    // holds the address yet, so the server gets fresh ports; a restart must keep its address.
+    if (!first || attempt == 3 || PortOpen(port_) || !refused()) break;
+    server_->Wait();
+    port_ = FreePort();
+    metrics_port_ = FreePort();
+    address_ = "127.0.0.1:" + std::to_string(port_);
+  }
   stub_ = v1::JobService::NewStub(OpenChannel(address_, ChannelSecurityOf(credentials_)));
   const bool up = WaitUntil(
       [&] {
