@@ -10,8 +10,11 @@
 // and threads at the peak of the round and after it; a second round must not grow what is held
 // after it (a leak of memory, descriptors or threads shows as growth).
 // With --pace-ms P each client makes a call every P ms (clients spread over the interval, latency
-// counted from when a call was due) instead of back to back: the latency at a stated offered load
-// rather than at saturation, where a closed loop of 100 clients measures the queue they make.
+// counted from when a call was due, each call issued when due whether or not the client's previous
+// one has returned) instead of back to back: the latency at a stated offered load rather than at
+// saturation, where a closed loop of 100 clients measures the queue they make. The job API's calls
+// and the watches are asynchronous (gRPC's callback API), so the load holds no thread per client;
+// the upload and the in-process workers use a thread each.
 // Usage: service_load [--clients N] [--jobs N] [--upload-mib N] [--watchers N] [--rounds N]
 //                     [--pace-ms P] [--dir D]
 #include <signal.h>
@@ -22,9 +25,11 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <condition_variable>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -171,7 +176,10 @@ class Calls {
   // its latency by slowing the load down).
   template <typename Call>
   bool Timed(const std::string& rpc, Call&& call, Clock::time_point start = Clock::now()) {
-    const grpc::Status status = call();
+    return Add(rpc, call(), start);
+  }
+  // Records a call of `rpc` that started (or was due) at `start` and has just returned `status`.
+  bool Add(const std::string& rpc, const grpc::Status& status, Clock::time_point start) {
     const double ms = MsSince(start);
     std::lock_guard lock(mutex_);
     auto& record = records_[rpc];
@@ -229,25 +237,63 @@ class Calls {
   std::map<std::string, Record> records_;
 };
 
-// When a client's next call is due: at once when unpaced; with a pace, every pace_ms from a start
-// spread over the first interval (so the clients' calls are not in step), sleeping until then.
-class Pacer {
- public:
-  Pacer(int pace_ms, int client) : pace_(pace_ms) {
-    if (pace_.count() > 0) next_ = Clock::now() + pace_ * ((client * 7919) % 1000) / 1000;
-  }
-  Clock::time_point Due() {
-    if (pace_.count() == 0) return Clock::now();
-    std::this_thread::sleep_until(next_);
-    const auto due = next_;
-    next_ += pace_;
-    return due;
-  }
+// The start offset of client `c`'s calls within the first interval, so that the clients' calls are
+// not in step.
+milliseconds Offset(int pace_ms, int c) { return milliseconds(pace_ms * ((c * 7919) % 1000) / 1000); }
 
- private:
-  milliseconds pace_;
-  Clock::time_point next_;
-};
+// One call of a client: starts an asynchronous RPC, records its latency from `due` and calls `done`
+// once the RPC has returned.
+using Done = std::function<void()>;
+using Call = std::function<void(Clock::time_point due, Done done)>;
+
+// Runs every client's calls and returns when all have returned. With a pace, one thread issues each
+// call when it is due, whether or not that client's previous call has returned (an open loop: a slow
+// server cannot slow the offered load down and hide its latency), and gRPC's own threads complete
+// them; without a pace, each client's next call starts as its previous one returns (a closed loop:
+// the server saturated). Either way the load generator holds no thread per client: on a small machine
+// running both, 100 client threads waking for each call compete with the server for its cores and
+// their scheduling shows up as the server's latency (real clients run on other machines).
+void Drive(std::vector<std::vector<Call>>& calls, int pace_ms) {
+  std::mutex mutex;
+  std::condition_variable returned;
+  std::size_t pending = 0;
+  for (const auto& client : calls) pending += client.size();
+  const auto one_returned = [&] {
+    std::lock_guard lock(mutex);
+    if (--pending == 0) returned.notify_all();
+  };
+  if (pace_ms > 0) {
+    struct Due {
+      Clock::time_point at;
+      std::size_t client, call;
+    };
+    std::vector<Due> schedule;
+    const auto start = Clock::now();
+    for (std::size_t c = 0; c < calls.size(); ++c) {
+      for (std::size_t i = 0; i < calls[c].size(); ++i) {
+        schedule.push_back({start + Offset(pace_ms, static_cast<int>(c)) + milliseconds(pace_ms) * i, c, i});
+      }
+    }
+    std::sort(schedule.begin(), schedule.end(), [](const Due& a, const Due& b) { return a.at < b.at; });
+    for (const auto& due : schedule) {
+      std::this_thread::sleep_until(due.at);
+      calls[due.client][due.call](due.at, one_returned);
+    }
+  }
+  // Without a pace, each client's chain: call i, and when it returns, call i + 1 (outlives the calls).
+  const std::function<void(std::size_t, std::size_t)> next = [&](std::size_t c, std::size_t i) {
+    if (i == calls[c].size()) return;
+    calls[c][i](Clock::now(), [&, c, i] {
+      next(c, i + 1);
+      one_returned();
+    });
+  };
+  if (pace_ms == 0) {
+    for (std::size_t c = 0; c < calls.size(); ++c) next(c, 0);
+  }
+  std::unique_lock lock(mutex);
+  returned.wait(lock, [&] { return pending == 0; });
+}
 
 std::unique_ptr<grpc::ClientContext> Context(int seconds = 30) {
   return CallContext(std::chrono::seconds(seconds));
@@ -297,6 +343,45 @@ void WriteRandom(const fs::path& path, std::int64_t bytes, std::uint64_t seed) {
     out.write(reinterpret_cast<const char*>(block.data()), static_cast<std::streamsize>(n));
   }
 }
+
+// A Watch stream on one job, read to its end on gRPC's threads.
+class Watch : public grpc::ClientReadReactor<v1::JobEvent> {
+ public:
+  Watch(v1::JobService::Stub& stub, const std::string& id, std::atomic<int>& events, Calls& calls)
+      : context_(CallContext(std::chrono::minutes(10))), events_(events), calls_(calls) {
+    request_.set_id(id);
+    stub.async()->Watch(context_.get(), &request_, this);
+    StartRead(&event_);
+    StartCall();
+  }
+  void OnReadDone(bool ok) override {
+    if (!ok) return;
+    ++events_;
+    StartRead(&event_);
+  }
+  void OnDone(const grpc::Status& status) override {
+    if (!status.ok() && status.error_code() != grpc::StatusCode::CANCELLED)
+      calls_.Error("Watch", status.error_message());
+    std::lock_guard lock(mutex_);
+    done_ = true;
+    ended_.notify_all();
+  }
+  // Returns once the stream has ended.
+  void Await() {
+    std::unique_lock lock(mutex_);
+    ended_.wait(lock, [&] { return done_; });
+  }
+
+ private:
+  std::unique_ptr<grpc::ClientContext> context_;
+  v1::WatchJobRequest request_;
+  v1::JobEvent event_;
+  std::atomic<int>& events_;
+  Calls& calls_;
+  std::mutex mutex_;
+  std::condition_variable ended_;
+  bool done_ = false;
+};
 
 class Load {
  public:
@@ -362,27 +447,32 @@ class Load {
     std::printf("  upload: %d MiB from %d clients at once in %.1f s (%.0f MiB/s)\n", flags_.upload_mib,
                 flags_.clients, upload_s, flags_.upload_mib / upload_s);
 
+    std::vector<std::unique_ptr<v1::JobService::Stub>> stubs;
+    for (const auto& channel : channels) stubs.push_back(v1::JobService::NewStub(channel));
+    const auto client = [&](int c) { return stubs[static_cast<std::size_t>(c)]->async(); };
+
     // 1,000 jobs, submitted by every client at once.
     std::mutex ids_mutex;
     std::vector<std::string> ids;
-    EachClient(
-        [&](int c, v1::JobService::Stub& stub) {
-          Pacer pacer(flags_.pace_ms, c);
-          for (int j = c; j < flags_.jobs; j += flags_.clients) {
-            const auto due = pacer.Due();
-            v1::SubmitRequest request;
-            *request.mutable_clip() = clips[static_cast<std::size_t>(c)];
-            request.mutable_options()->set_iterations(100);
-            request.set_name("load-" + std::to_string(round) + "-" + std::to_string(j));
-            v1::Job job;
-            if (calls_.Timed(
-                    "Submit", [&] { return stub.Submit(Context().get(), request, &job); }, due)) {
-              std::lock_guard lock(ids_mutex);
-              ids.push_back(job.id());
-            }
-          }
-        },
-        channels);
+    std::vector<std::vector<Call>> submits(static_cast<std::size_t>(flags_.clients));
+    for (int c = 0; c < flags_.clients; ++c) {
+      for (int j = c; j < flags_.jobs; j += flags_.clients) {
+        v1::SubmitRequest request;
+        *request.mutable_clip() = clips[static_cast<std::size_t>(c)];
+        request.mutable_options()->set_iterations(100);
+        request.set_name("load-" + std::to_string(round) + "-" + std::to_string(j));
+        submits[static_cast<std::size_t>(c)].push_back(Unary<v1::Job>(
+            "Submit", [=](auto... call) { client(c)->Submit(call...); }, request,
+            [&](const grpc::Status& status, const v1::Job& job) {
+              if (status.ok()) {
+                std::lock_guard lock(ids_mutex);
+                ids.push_back(job.id());
+              }
+              return status;
+            }));
+      }
+    }
+    Drive(submits, flags_.pace_ms);
 
     // The workers register and start leasing first, as a cluster's workers are up before its users.
     std::atomic<bool> leasing{true};
@@ -394,82 +484,62 @@ class Load {
       });
     }
     while (registered < flags_.workers) std::this_thread::sleep_for(milliseconds(1));
-    // Watchers on queued jobs, while clients call every unary RPC and the workers lease.
-    std::vector<std::unique_ptr<grpc::ClientContext>> watch_contexts;
-    std::vector<std::thread> watchers;
+    // Watchers on queued jobs, opened over the first interval (at once when unpaced), while clients
+    // call every unary RPC and the workers lease.
     std::atomic<int> watch_events{0};
-    for (int w = 0; w < flags_.watchers && !ids.empty(); ++w) {
-      watch_contexts.push_back(CallContext(std::chrono::minutes(10)));
-      auto* context = watch_contexts.back().get();
-      watchers.emplace_back([&, context, w] {
-        Pacer(flags_.pace_ms, w).Due();  // paced: the watchers open over the first interval, not at once
-        auto stub = v1::JobService::NewStub(channels[static_cast<std::size_t>(w) % channels.size()]);
-        v1::WatchJobRequest request;
-        request.set_id(ids[static_cast<std::size_t>(w) % ids.size()]);
-        auto stream = stub->Watch(context, request);
-        v1::JobEvent event;
-        while (stream->Read(&event)) ++watch_events;
-        const auto status = stream->Finish();
-        if (!status.ok() && status.error_code() != grpc::StatusCode::CANCELLED)
-          calls_.Error("Watch", status.error_message());
-      });
+    std::vector<std::unique_ptr<Watch>> watches;
+    if (!ids.empty()) {
+      std::vector<std::pair<milliseconds, int>> opening;
+      for (int w = 0; w < flags_.watchers; ++w) opening.emplace_back(Offset(flags_.pace_ms, w), w);
+      std::sort(opening.begin(), opening.end());
+      const auto start = Clock::now();
+      for (const auto& [offset, w] : opening) {
+        std::this_thread::sleep_until(start + offset);
+        watches.push_back(std::make_unique<Watch>(*stubs[static_cast<std::size_t>(w) % stubs.size()],
+                                                  ids[static_cast<std::size_t>(w) % ids.size()], watch_events,
+                                                  calls_));
+      }
     }
-    EachClient(
-        [&](int c, v1::JobService::Stub& stub) {
-          Pacer pacer(flags_.pace_ms, c);
-          for (int i = 0; i < flags_.calls_per_client; ++i) {
-            const auto& id = ids[static_cast<std::size_t>(c * flags_.calls_per_client + i) % ids.size()];
-            v1::GetJobRequest get;
-            get.set_id(id);
-            v1::Job job;
-            calls_.Timed(
-                "Get", [&] { return stub.Get(Context().get(), get, &job); }, pacer.Due());
-            v1::ListJobsRequest list;
-            list.set_page_size(50);
-            v1::ListJobsResponse page;
-            calls_.Timed(
-                "List", [&] { return stub.List(Context().get(), list, &page); }, pacer.Due());
-            v1::UploadStatus status;
-            calls_.Timed(
-                "QueryUpload",
-                [&] {
-                  return stub.QueryUpload(Context().get(), clips[static_cast<std::size_t>(c)], &status);
-                },
-                pacer.Due());
-            v1::ListWorkersResponse workers_list;
-            calls_.Timed(
-                "ListWorkers", [&] { return stub.ListWorkers(Context().get(), {}, &workers_list); },
-                pacer.Due());
-          }
-        },
-        channels);
+    std::vector<std::vector<Call>> queries(static_cast<std::size_t>(flags_.clients));
+    for (int c = 0; c < flags_.clients; ++c) {
+      auto& mine = queries[static_cast<std::size_t>(c)];
+      for (int i = 0; i < flags_.calls_per_client; ++i) {
+        v1::GetJobRequest get;
+        get.set_id(ids[static_cast<std::size_t>(c * flags_.calls_per_client + i) % ids.size()]);
+        mine.push_back(Unary<v1::Job>(
+            "Get", [=](auto... call) { client(c)->Get(call...); }, get));
+        v1::ListJobsRequest list;
+        list.set_page_size(50);
+        mine.push_back(Unary<v1::ListJobsResponse>(
+            "List", [=](auto... call) { client(c)->List(call...); }, list));
+        mine.push_back(Unary<v1::UploadStatus>(
+            "QueryUpload", [=](auto... call) { client(c)->QueryUpload(call...); },
+            clips[static_cast<std::size_t>(c)]));
+        mine.push_back(Unary<v1::ListWorkersResponse>(
+            "ListWorkers", [=](auto... call) { client(c)->ListWorkers(call...); }, v1::ListWorkersRequest()));
+      }
+    }
+    Drive(queries, flags_.pace_ms);
     leasing = false;
     for (auto& worker : workers) worker.join();
     const auto peak_under_load = sampler.peak();
 
     // Cancel what is still queued, which ends every watch.
-    EachClient(
-        [&](int c, v1::JobService::Stub& stub) {
-          Pacer pacer(flags_.pace_ms, c);
-          for (std::size_t j = static_cast<std::size_t>(c); j < ids.size();
-               j += static_cast<std::size_t>(flags_.clients)) {
-            const auto due = pacer.Due();
-            v1::CancelJobRequest cancel;
-            cancel.set_id(ids[j]);
-            v1::Job job;
-            calls_.Timed(
-                "Cancel",
-                [&] {
-                  const auto status = stub.Cancel(Context().get(), cancel, &job);
-                  // A job the workers finished first cannot be cancelled: not an error of the server.
-                  return status.error_code() == grpc::StatusCode::FAILED_PRECONDITION ? grpc::Status::OK
-                                                                                      : status;
-                },
-                due);
-          }
-        },
-        channels);
-    for (auto& watcher : watchers) watcher.join();
+    std::vector<std::vector<Call>> cancels(static_cast<std::size_t>(flags_.clients));
+    for (std::size_t j = 0; j < ids.size(); ++j) {
+      const int c = static_cast<int>(j % static_cast<std::size_t>(flags_.clients));
+      v1::CancelJobRequest cancel;
+      cancel.set_id(ids[j]);
+      cancels[static_cast<std::size_t>(c)].push_back(Unary<v1::Job>(
+          "Cancel", [=](auto... call) { client(c)->Cancel(call...); }, cancel,
+          [](const grpc::Status& status, const v1::Job&) {
+            // A job the workers finished first cannot be cancelled: not an error of the server.
+            return status.error_code() == grpc::StatusCode::FAILED_PRECONDITION ? grpc::Status::OK : status;
+          }));
+    }
+    Drive(cancels, flags_.pace_ms);
+    for (auto& watch : watches) watch->Await();
+    watches.clear();
     const auto peak = sampler.peak();
     channels.clear();
     std::this_thread::sleep_for(std::chrono::seconds(3));
@@ -502,6 +572,28 @@ class Load {
   ProcessUsage after() const { return after_; }
 
  private:
+  // One call of a unary RPC: `start(context, request, response, callback)` starts it asynchronously
+  // (a stub's async method); `judge`, when given, sees its status and response and returns the status
+  // to count. Its context, request and response live until it returns.
+  template <typename Response, typename Request, typename Start>
+  Call Unary(const char* rpc, Start start, const Request& request,
+             std::function<grpc::Status(const grpc::Status&, const Response&)> judge = nullptr) {
+    return [this, rpc, start, request, judge](Clock::time_point due, Done done) {
+      struct State {
+        std::unique_ptr<grpc::ClientContext> context = Context();
+        Request request;
+        Response response;
+      };
+      auto state = std::make_shared<State>();
+      state->request = request;
+      start(state->context.get(), &state->request, &state->response,
+            std::function<void(grpc::Status)>([this, rpc, due, done, judge, state](grpc::Status status) {
+              calls_.Add(rpc, judge ? judge(status, state->response) : status, due);
+              done();
+            }));
+    };
+  }
+
   // The server's warnings (a slow commit, a stalled stream, ...) logged since the last call.
   void PrintServerWarnings() {
     std::ifstream log(dir_ / "server.log");
