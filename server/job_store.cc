@@ -83,7 +83,9 @@ JobStore::JobStore(const std::filesystem::path& db_file)
     last.Step();
     next_seq_ = last.Int(0) + 1;
     reader_ = OpenDatabase(db_file, kStore);
+    checkpointer_ = std::make_unique<WalCheckpointer>(db_file, db_, kStore);
   } catch (...) {
+    sqlite3_close(reader_);
     sqlite3_close(db_);
     throw;
   }
@@ -95,6 +97,7 @@ JobStore::~JobStore() {
   } catch (const Error& e) {
     spdlog::error("{}", e.what());
   }
+  checkpointer_.reset();
   sqlite3_close(reader_);
   sqlite3_close(db_);
 }

@@ -9,6 +9,7 @@
 // acknowledged survives a kill -9 of the server and a power cut. Pages (List) and the queries
 // behind quotas, recovery and retention read what is committed (the last three flush first). Get
 // and List go through a second connection, so in WAL mode they never wait behind a write's fsync.
+// The log is checkpointed on a thread of its own (WalCheckpointer), not inside a commit.
 //
 // A commit the database refuses (an I/O error, a full disk) rolls its batch back and breaks the
 // store: what the server holds in memory may then be ahead of the disk, so every later write and
@@ -23,6 +24,7 @@
 #include <filesystem>
 #include <functional>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <optional>
 #include <string>
@@ -31,6 +33,7 @@
 #include <vector>
 
 #include "endorecon/v1/job.pb.h"
+#include "server/wal_checkpointer.h"
 
 namespace endorecon::server {
 
@@ -110,6 +113,7 @@ class JobStore {
   std::mutex mutex_;
   sqlite3* reader_ = nullptr;  // Get of committed jobs and List: sees every committed write
   std::mutex read_mutex_;
+  std::unique_ptr<WalCheckpointer> checkpointer_;  // db_'s checkpoints
 
   std::mutex staged_mutex_;  // guards everything below
   std::condition_variable committed_;
