@@ -6,6 +6,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <nlohmann/json.hpp>
 
 namespace endorecon::client {
 
@@ -48,8 +49,8 @@ std::string ProgressLine(const v1::Progress& p) {
                : fmt::format("preparing the recording: frame {}", p.iteration());
   }
   if (p.phase() == "evaluate") {
-    return fmt::format("evaluating the results: frame {}/{}  {:.0f} s  ETA {}", p.iteration(), p.total_iterations(),
-                       p.seconds(), HumanDuration(p.eta_s()));
+    return fmt::format("evaluating the results: frame {}/{}  {:.0f} s  ETA {}", p.iteration(),
+                       p.total_iterations(), p.seconds(), HumanDuration(p.eta_s()));
   }
   const double fraction =
       p.total_iterations() > 0
@@ -64,6 +65,24 @@ std::string ProgressLine(const v1::Progress& p) {
   if (p.heldout_psnr() >= 0) line += fmt::format(" (held-out {:.2f})", p.heldout_psnr());
   if (p.depth_rmse() >= 0) line += fmt::format("  depth RMSE {:.2f}% of range", 100 * p.depth_rmse());
   line += fmt::format("  {:.3g} samples/s  ETA {}", p.samples_per_second(), HumanDuration(p.eta_s()));
+  return line;
+}
+
+std::string OutcomeLine(const v1::Job& job) {
+  if (job.state() != v1::SUCCEEDED || job.summary_json().empty()) return "";
+  const auto summary = nlohmann::json::parse(job.summary_json(), nullptr, /*allow_exceptions=*/false);
+  if (!summary.is_object() || !summary.contains("iterations")) return "";
+  const auto number = [&](const char* key) {
+    const auto found = summary.find(key);
+    return found != summary.end() && found->is_number() ? found->get<double>() : -1.0;
+  };
+  std::string line = fmt::format("done: {:.0f} iterations in {:.0f} s of training", number("iterations"),
+                                 number("train_seconds"));
+  if (job.started_unix_ms() > 0 && job.finished_unix_ms() >= job.started_unix_ms())
+    line +=
+        fmt::format(", {} in all", HumanDuration((job.finished_unix_ms() - job.started_unix_ms()) / 1000.0));
+  if (number("train_psnr") > 0) line += fmt::format(", PSNR {:.2f} dB", number("train_psnr"));
+  if (number("heldout_psnr") >= 0) line += fmt::format(" (held-out {:.2f})", number("heldout_psnr"));
   return line;
 }
 
@@ -119,7 +138,13 @@ std::string DescribeJob(const v1::Job& job) {
         fmt::format("  {}  {} file(s){}\n", job.has_prepare() ? "recording" : "clip     ",
                     job.clip().files_size(), job.has_prepare() ? " (prepared into the results' clip/)" : "");
   }
-  if (job.has_progress()) text += "  progress  " + ProgressLine(job.progress()) + "\n";
+  if (const auto outcome = OutcomeLine(job); !outcome.empty()) {
+    text += "  outcome   " + outcome + "\n";
+  } else if (job.has_progress()) {
+    // A job that ended otherwise shows where it stopped; a live one where it is.
+    const bool ended = job.finished_unix_ms() > 0;
+    text += (ended ? "  stopped   " : "  progress  ") + ProgressLine(job.progress()) + "\n";
+  }
   if (!job.error().empty()) text += fmt::format("  reason    {}\n", job.error());
   text += DicomLines(job);
   if (job.expired_unix_ms() > 0) {

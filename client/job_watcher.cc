@@ -44,6 +44,7 @@ class EventPrinter {
     std::cout << "job " << job.id() << " " << v1::JobState_Name(job.state());
     if (job.state() == v1::RUNNING) std::cout << " on " << job.worker_id();
     if (!job.error().empty()) std::cout << ": " << job.error();
+    if (const auto outcome = OutcomeLine(job); !outcome.empty()) std::cout << ": " << outcome;
     std::cout << std::endl;
   }
   void Progress(const v1::Progress& progress) {

@@ -60,6 +60,48 @@ TEST(ProgressLine, ClampsTheBarAndHandlesAnUnknownTotal) {
   EXPECT_EQ(ProgressLine(p).rfind("[........................]   0%", 0), 0u) << ProgressLine(p);
 }
 
+v1::Job Finished(v1::JobState state) {
+  v1::Job job;
+  job.set_id("0123456789ab");
+  job.set_state(state);
+  job.set_started_unix_ms(1'000'000);
+  job.set_finished_unix_ms(1'062'000);
+  *job.mutable_progress() = MidRun();
+  job.mutable_progress()->set_phase("evaluate");
+  job.mutable_progress()->set_iteration(48);
+  job.mutable_progress()->set_total_iterations(48);
+  return job;
+}
+
+TEST(DescribeJob, ASucceededJobShowsItsOutcomeNotItsLastProgress) {
+  v1::Job job = Finished(v1::SUCCEEDED);
+  job.set_summary_json(
+      R"({"iterations":1858,"train_seconds":41.2,"train_psnr":31.1,"heldout_psnr":31.754,"metrics":"metrics.json"})");
+  EXPECT_EQ(OutcomeLine(job),
+            "done: 1858 iterations in 41 s of training, 1m02s in all, PSNR 31.10 dB (held-out 31.75)");
+  const std::string text = DescribeJob(job);
+  EXPECT_NE(text.find("  outcome   done: 1858 iterations"), std::string::npos) << text;
+  EXPECT_EQ(text.find("evaluating the results"), std::string::npos) << text;
+  // Without held-out frames the engine reports -1: not shown.
+  job.set_summary_json(R"({"iterations":10,"train_seconds":1,"train_psnr":20,"heldout_psnr":-1})");
+  EXPECT_EQ(OutcomeLine(job).find("held-out"), std::string::npos) << OutcomeLine(job);
+}
+
+TEST(DescribeJob, AJobThatEndedOtherwiseShowsWhereItStopped) {
+  v1::Job job = Finished(v1::FAILED);
+  job.set_summary_json(R"({"iterations":1858})");  // not a success: no outcome
+  EXPECT_EQ(OutcomeLine(job), "");
+  EXPECT_NE(DescribeJob(job).find("  stopped   evaluating the results: frame 48/48"), std::string::npos)
+      << DescribeJob(job);
+  job = Finished(v1::SUCCEEDED);
+  job.set_summary_json("not json");  // unreadable: the last progress, as a stopped job's
+  EXPECT_EQ(OutcomeLine(job), "");
+  EXPECT_NE(DescribeJob(job).find("  stopped   "), std::string::npos) << DescribeJob(job);
+  job = Finished(v1::RUNNING);
+  job.set_finished_unix_ms(0);
+  EXPECT_NE(DescribeJob(job).find("  progress  "), std::string::npos) << DescribeJob(job);
+}
+
 TEST(HumanUnits, DurationsAndBytes) {
   EXPECT_EQ(HumanDuration(42.4), "42s");
   EXPECT_EQ(HumanDuration(187), "3m07s");
