@@ -127,8 +127,10 @@ TEST(DeviceReconstruct, TheDemoClipOnTheGpuReachesTheCpuPresets120sPsnr) {
   options.time_budget_s = 60;
   const ReconstructSummary summary = Reconstruct(options, {});
   EXPECT_EQ(summary.device.rfind("cuda:0", 0), 0u);
-  // The CPU preset's held-out tissue PSNR after 120 s on 2 cores (docs/benchmarks.md, 2026-11-30): 36.2 dB.
-  EXPECT_GE(summary.heldout_psnr, 36.2);
+  // The CPU preset's held-out tissue PSNR after 120 s on 2 cores on today's demo clip, which carries
+  // camera noise (docs/benchmarks.md, 2026-12-02: 32.72-32.83 dB; the noise caps any render at
+  // 34.72 dB against its images). The 36.2 dB here before was the noise-free clip's.
+  EXPECT_GE(summary.heldout_psnr, 32.7);
 }
 
 }  // namespace
