@@ -9,10 +9,6 @@
 
 namespace endorecon::scene {
 
-std::uint8_t ToByte(float value) {
-  return static_cast<std::uint8_t>(std::clamp(value, 0.f, 1.f) * 255.f + 0.5f);
-}
-
 void PutRgb(cv::Mat& bgr, int u, int v, const std::array<float, 3>& rgb) {
   bgr.at<cv::Vec3b>(v, u) = {ToByte(rgb[2]), ToByte(rgb[1]), ToByte(rgb[0])};
 }

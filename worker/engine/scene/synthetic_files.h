@@ -1,15 +1,20 @@
 // Writing the files of synthetic clips and recordings: PNG frames from linear colours, text files.
 #pragma once
 
+#include <algorithm>
 #include <array>
+#include <cstdint>
 #include <filesystem>
 #include <opencv2/core.hpp>
 #include <string>
 
 namespace endorecon::scene {
 
-// Linear colour in [0, 1] (clamped) as an 8-bit value, rounded.
-std::uint8_t ToByte(float value);
+// Linear colour in [0, 1] (clamped) as an 8-bit value, rounded. Inline: the in-memory frames
+// (synthetic_frames.cc) use it without linking the file writers below.
+inline std::uint8_t ToByte(float value) {
+  return static_cast<std::uint8_t>(std::clamp(value, 0.f, 1.f) * 255.f + 0.5f);
+}
 // Sets pixel (u, v) of an 8-bit BGR image from an RGB colour in [0, 1].
 void PutRgb(cv::Mat& bgr, int u, int v, const std::array<float, 3>& rgb);
 
