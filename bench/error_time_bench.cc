@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "worker/engine/eval/clip_evaluator.h"
+#include "worker/engine/eval/evaluation_mask.h"
 #include "worker/engine/eval/gain_fit.h"
 #include "worker/engine/eval/psnr.h"
 #include "worker/engine/reconstruct.h"

@@ -12,6 +12,7 @@
 #include "worker/engine/base/seconds_since.h"
 #include "worker/engine/eval/calibration.h"
 #include "worker/engine/eval/depth_error.h"
+#include "worker/engine/eval/evaluation_mask.h"
 #include "worker/engine/eval/exports.h"
 #include "worker/engine/eval/gain_fit.h"
 #include "worker/engine/eval/image_metrics.h"
@@ -24,13 +25,6 @@
 #include "worker/engine/eval/video_writer.h"
 
 namespace endorecon::eval {
-
-const std::vector<std::uint8_t>& EvaluationMask(const scene::Clip& clip, int frame) {
-  static const std::vector<std::uint8_t> kNone;
-  if (!clip.eval_mask.empty()) return clip.eval_mask[frame];
-  if (!clip.tool_mask.empty()) return clip.tool_mask[frame];
-  return kNone;
-}
 
 namespace {
 

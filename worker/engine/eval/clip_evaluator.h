@@ -45,8 +45,4 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
 // formula and the error measure calibration uses.
 nlohmann::json UncertaintySettings(const render::FrameRenderSettings& settings);
 
-// Tool mask a frame is evaluated with: gt_masks/ when present (EndoNeRF's evaluation), else masks/,
-// else none (empty).
-const std::vector<std::uint8_t>& EvaluationMask(const scene::Clip& clip, int frame);
-
 }  // namespace endorecon::eval

@@ -2,8 +2,8 @@
 
 #include <algorithm>
 
-#include "worker/engine/eval/clip_evaluator.h"
 #include "worker/engine/eval/depth_error.h"
+#include "worker/engine/eval/evaluation_mask.h"
 #include "worker/engine/eval/image_metrics.h"
 #include "worker/engine/eval/strided_map.h"
 #include "worker/engine/eval/summary.h"
@@ -29,7 +29,8 @@ CurveProbe::Point CurveProbe::Measure(render::FrameRenderer& renderer) const {
     renderer.RenderPixels(clip_.cameras[f], clip_.times[f], picked.data(), n,
                           {rgb.data(), depth.data(), opacity.data()});
     const auto mask = Gather<std::uint8_t>(EvaluationMask(clip_, f), picked);
-    psnr.push_back(MeasureImage(rgb, Gather<std::uint8_t>(clip_.rgb[f], picked, 3), mask, gw, gh).psnr_tissue);
+    psnr.push_back(
+        MeasureImage(rgb, Gather<std::uint8_t>(clip_.rgb[f], picked, 3), mask, gw, gh).psnr_tissue);
     if (!clip_.gt_depth.empty()) {
       depth_rmse.push_back(
           MeasureDepth(depth, Gather<float>(clip_.gt_depth[f], picked), mask, gw, gh, clip_.near, clip_.far)

@@ -17,6 +17,7 @@
 #include "common/base64.h"
 #include "common/error.h"
 #include "worker/engine/eval/clip_evaluator.h"
+#include "worker/engine/eval/evaluation_mask.h"
 #include "worker/engine/eval/exports.h"
 #include "worker/engine/eval/report_page.h"
 #include "worker/engine/eval/run_environment.h"

@@ -1,0 +1,136 @@
+// gpu_train_bench: training on a GPU against the CPU, in the same run (issue 13 §6). The demo clip
+// (synth's defaults: 48 frames, 160 x 128, camera noise; every 8th frame held out) is made in memory
+// and trained with one preset on --device for --seconds and on the CPU for --cpu-seconds; every
+// --probe-s seconds of training the held-out tissue PSNR is measured with the run's curve probe
+// (eval/curve_probe.h: every s-th pixel of up to 6 held-out frames, one dropout-off render; the
+// probes' time is not counted as training). Prints both curves, each side's training samples per
+// second and their ratio, and how long the GPU took to reach the CPU's last PSNR. With
+// --big-seconds S it then trains a 640 x 512, 160-frame clip (synth --seed 3) on --device for S
+// seconds and prints its curve. Nothing is read from or written to files: the binary travels to
+// bare GPU machines with scripts/gpu-check, whose DIR/run calls it.
+//   gpu_train_bench [--device cuda:0] [--preset cpu] [--seconds 30] [--cpu-seconds 90]
+//                   [--probe-s 5] [--big-seconds 0]
+#include <chrono>
+#include <cstdio>
+#include <exception>
+#include <string>
+#include <vector>
+
+#include "worker/engine/eval/curve_probe.h"
+#include "worker/engine/render/frame_renderer.h"
+#include "worker/engine/run_config.h"
+#include "worker/engine/scene/synthetic_frames.h"
+#include "worker/engine/train/render_settings.h"
+#include "worker/engine/train/scene_fit.h"
+#include "worker/engine/train/train_config.h"
+#include "worker/engine/train/trainer.h"
+
+namespace {
+
+using namespace endorecon;
+using Clock = std::chrono::steady_clock;
+
+struct Point {
+  double seconds = 0;  // of training
+  int iteration = 0;
+  double psnr = 0;
+};
+
+struct Curve {
+  std::string device;
+  std::vector<Point> points;
+  double samples_per_second = 0;
+};
+
+// Trains `clip` on `device` for `seconds` of steps, probing the held-out PSNR every `probe_s`.
+Curve Train(const scene::Clip& clip, const std::string& preset, const std::string& device, double seconds,
+            double probe_s) {
+  train::TrainConfig config = train::TrainConfig::Preset(preset);
+  const FrameSplit split = SplitFrames(clip.frame_count(), 8);
+  train::FitToScene(clip, config, split.train);
+  train::Trainer trainer(clip, config, split.train, /*seed=*/1, BackendFor(device));
+  render::FrameRenderer renderer(trainer.field(), trainer.box(),
+                                 train::EvalRenderSettings(config, clip.near, clip.far));
+  renderer.SetOccupancy(&trainer.occupancy());
+  const eval::CurveProbe probe(clip, split.heldout, 6);
+  Curve curve;
+  curve.device = trainer.device();
+  double trained = 0, next_probe = probe_s;
+  long long samples = 0;
+  const auto measure = [&] {
+    trainer.SyncField();
+    curve.points.push_back({trained, trainer.iteration(), probe.Measure(renderer).psnr});
+    std::printf("  %-28s %8.1f s %8d it %8.2f dB\n", curve.device.c_str(), trained, trainer.iteration(),
+                curve.points.back().psnr);
+    std::fflush(stdout);
+  };
+  while (trained < seconds) {
+    const auto start = Clock::now();
+    samples += trainer.Step(trained / seconds).samples;
+    trained += std::chrono::duration<double>(Clock::now() - start).count();
+    if (trained >= next_probe) {
+      measure();
+      next_probe += probe_s;
+    }
+  }
+  if (curve.points.empty() || curve.points.back().iteration != trainer.iteration()) measure();
+  curve.samples_per_second = samples / trained;
+  std::printf("  %-28s %.3g training samples/s over %d iterations\n", curve.device.c_str(),
+              curve.samples_per_second, trainer.iteration());
+  return curve;
+}
+
+// The first training time at which `curve` reaches `psnr`; negative when it never does.
+double TimeToReach(const Curve& curve, double psnr) {
+  for (const Point& point : curve.points) {
+    if (point.psnr >= psnr) return point.seconds;
+  }
+  return -1;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string device = "cuda:0", preset = "cpu";
+  double seconds = 30, cpu_seconds = 90, probe_s = 5, big_seconds = 0;
+  for (int i = 1; i + 1 < argc; i += 2) {
+    const std::string flag = argv[i];
+    if (flag == "--device") device = argv[i + 1];
+    if (flag == "--preset") preset = argv[i + 1];
+    if (flag == "--seconds") seconds = std::stod(argv[i + 1]);
+    if (flag == "--cpu-seconds") cpu_seconds = std::stod(argv[i + 1]);
+    if (flag == "--probe-s") probe_s = std::stod(argv[i + 1]);
+    if (flag == "--big-seconds") big_seconds = std::stod(argv[i + 1]);
+  }
+  try {
+    BackendFor(device);  // refuses a device that is not there before any clip is made
+    const scene::Clip demo = scene::MakeSyntheticClip(scene::SynthOptions{});
+    std::printf("gpu_train_bench: demo clip (48 frames, 160 x 128, noisy), preset %s\n", preset.c_str());
+    const Curve gpu = Train(demo, preset, device, seconds, probe_s);
+    const Curve cpu = Train(demo, preset, "cpu", cpu_seconds, probe_s);
+    const double target = cpu.points.back().psnr;
+    const double reached = TimeToReach(gpu, target);
+    char when[32] = "(not reached)";
+    if (reached >= 0) std::snprintf(when, sizeof when, "%.1f s", reached);
+    std::printf(
+        "gpu_train_bench: %s %.3g samples/s, cpu %.3g samples/s: %.1fx; the cpu's %.2f dB after %.0f s "
+        "reached on %s after %s\n",
+        gpu.device.c_str(), gpu.samples_per_second, cpu.samples_per_second,
+        gpu.samples_per_second / cpu.samples_per_second, target, cpu_seconds, gpu.device.c_str(), when);
+    if (big_seconds > 0) {
+      scene::SynthOptions big;
+      big.frames = 160;
+      big.width = 640;
+      big.height = 512;
+      big.seed = 3;
+      std::printf("gpu_train_bench: 640 x 512, 160 frames, preset %s\n", preset.c_str());
+      const Curve large = Train(scene::MakeSyntheticClip(big), preset, device, big_seconds, probe_s * 4);
+      std::printf("gpu_train_bench: big clip %.3g samples/s, held-out %.2f dB after %.0f s\n",
+                  large.samples_per_second, large.points.back().psnr, big_seconds);
+    }
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "gpu_train_bench: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}
