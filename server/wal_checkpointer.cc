@@ -49,9 +49,7 @@ void WalCheckpointer::Loop() {
     if (stop_) return;
     due_ = false;
     lock.unlock();
-    int log_frames = 0, checkpointed = 0;
-    const int rc =
-        sqlite3_wal_checkpoint_v2(db_, nullptr, SQLITE_CHECKPOINT_PASSIVE, &log_frames, &checkpointed);
+    const int rc = sqlite3_wal_checkpoint_v2(db_, nullptr, SQLITE_CHECKPOINT_PASSIVE, nullptr, nullptr);
     // A failed checkpoint loses nothing (the log still holds every commit); the next commit past
     // the mark asks again.
     if (rc != SQLITE_OK) spdlog::warn("{}: checkpoint failed: {}", store_, sqlite3_errmsg(db_));

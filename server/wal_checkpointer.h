@@ -27,7 +27,7 @@ class WalCheckpointer {
   WalCheckpointer(const WalCheckpointer&) = delete;
   WalCheckpointer& operator=(const WalCheckpointer&) = delete;
 
-  // Checkpoints run so far (tests, and a log line when one fails).
+  // Checkpoints run so far, failed ones included (a failure is logged as a warning).
   std::uint64_t checkpoints();
 
  private:

@@ -1,9 +1,9 @@
 // A whole training step on the GPU against the CPU's with the same seed (the same rays, samples and
-// masks: the per-ray bodies and the field's per-sample math are the same functions), and a GPU run
+// masks: the per-ray bodies and the field's per-sample math are the same functions), a GPU run
 // resumed on the CPU from its checkpoint, and 300 GPU steps fitting held-out frames as well as 300
 // CPU steps (the GPU's float atomics add in another order: the runs drift apart, the fit must not).
-// The clip is made in memory (no image files: this binary
-// travels to bare GPU machines, scripts/gpu-check). Skipped without a GPU.
+// The clip is made in memory (no image files: this binary travels to bare GPU machines,
+// scripts/gpu-check). Skipped without a GPU.
 #include "worker/engine/cuda/device_step.h"
 
 #include <gtest/gtest.h>

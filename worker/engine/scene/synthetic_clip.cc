@@ -4,6 +4,7 @@
 
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "common/error.h"
 #include "worker/engine/scene/npy.h"
@@ -35,13 +36,8 @@ void PrepareFolder(const fs::path& out, const SynthOptions& options) {
 
 // An RGB frame (synthetic_frames.h) as the 8-bit BGR image PNG files are written from.
 cv::Mat Bgr(const std::vector<std::uint8_t>& rgb, int w, int h) {
-  cv::Mat bgr(h, w, CV_8UC3);
-  for (int v = 0; v < h; ++v) {
-    for (int u = 0; u < w; ++u) {
-      const std::uint8_t* pixel = &rgb[(static_cast<std::size_t>(v) * w + u) * 3];
-      bgr.at<cv::Vec3b>(v, u) = {pixel[2], pixel[1], pixel[0]};
-    }
-  }
+  cv::Mat bgr;
+  cv::cvtColor(cv::Mat(h, w, CV_8UC3, const_cast<std::uint8_t*>(rgb.data())), bgr, cv::COLOR_RGB2BGR);
   return bgr;
 }
 
