@@ -13,6 +13,7 @@
 #include <chrono>
 #include <cstdio>
 #include <exception>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -93,16 +94,23 @@ double TimeToReach(const Curve& curve, double psnr) {
 int main(int argc, char** argv) {
   std::string device = "cuda:0", preset = "cpu";
   double seconds = 30, cpu_seconds = 90, probe_s = 5, big_seconds = 0;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    const std::string flag = argv[i];
-    if (flag == "--device") device = argv[i + 1];
-    if (flag == "--preset") preset = argv[i + 1];
-    if (flag == "--seconds") seconds = std::stod(argv[i + 1]);
-    if (flag == "--cpu-seconds") cpu_seconds = std::stod(argv[i + 1]);
-    if (flag == "--probe-s") probe_s = std::stod(argv[i + 1]);
-    if (flag == "--big-seconds") big_seconds = std::stod(argv[i + 1]);
-  }
   try {
+    const auto number = [](const std::string& flag, const char* text) {
+      try {
+        return std::stod(text);
+      } catch (const std::exception&) {
+        throw std::invalid_argument(flag + ": not a number: '" + text + "'");
+      }
+    };
+    for (int i = 1; i + 1 < argc; i += 2) {
+      const std::string flag = argv[i];
+      if (flag == "--device") device = argv[i + 1];
+      if (flag == "--preset") preset = argv[i + 1];
+      if (flag == "--seconds") seconds = number(flag, argv[i + 1]);
+      if (flag == "--cpu-seconds") cpu_seconds = number(flag, argv[i + 1]);
+      if (flag == "--probe-s") probe_s = number(flag, argv[i + 1]);
+      if (flag == "--big-seconds") big_seconds = number(flag, argv[i + 1]);
+    }
     BackendFor(device);  // refuses a device that is not there before any clip is made
     const scene::Clip demo = scene::MakeSyntheticClip(scene::SynthOptions{});
     std::printf("gpu_train_bench: demo clip (48 frames, 160 x 128, noisy), preset %s\n", preset.c_str());
@@ -128,7 +136,7 @@ int main(int argc, char** argv) {
       std::printf("gpu_train_bench: big clip %.3g samples/s, held-out %.2f dB after %.0f s\n",
                   large.samples_per_second, large.points.back().psnr, big_seconds);
     }
-  } catch (const std::exception& e) {
+  } catch (const std::exception& e) {  // a flag that is not a number, a device that is not there
     std::fprintf(stderr, "gpu_train_bench: %s\n", e.what());
     return 1;
   }
