@@ -14,10 +14,10 @@
 #include <vector>
 
 #include "tests/cuda/field_difference.h"
+#include "tests/cuda/small_clip.h"
 #include "worker/engine/cuda/device.h"
 #include "worker/engine/eval/curve_probe.h"
 #include "worker/engine/render/frame_renderer.h"
-#include "worker/engine/scene/synthetic_frames.h"
 #include "worker/engine/train/render_settings.h"
 #include "worker/engine/train/scene_fit.h"
 #include "worker/engine/train/trainer.h"
@@ -29,11 +29,7 @@ class DeviceStepTest : public ::testing::Test {
  protected:
   void SetUp() override {
     if (DeviceCount() == 0) GTEST_SKIP() << "no CUDA device: " << ListDevices().problem;
-    scene::SynthOptions synth;
-    synth.frames = 8;
-    synth.width = 48;
-    synth.height = 40;
-    clip_ = scene::MakeSyntheticClip(synth);
+    clip_ = SmallClip();
     config_ = train::TrainConfig::Preset("cpu");
     config_.rays_per_batch = 256;
     config_.iterations = 100;

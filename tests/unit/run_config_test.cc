@@ -63,5 +63,21 @@ TEST(RunConfig, EveryKthFrameIsHeldOutButNeverTheFirst) {
   EXPECT_TRUE(SplitFrames(5, 1).heldout.empty());
 }
 
+// Steps and renders go to one device; one that cannot run is refused naming it (this machine has no
+// CUDA device 99, with or without a CUDA build), never replaced by the CPU.
+TEST(RunConfig, ADeviceThatCannotRunIsRefusedForStepsAndRendersNamingIt) {
+  const DeviceBackends cpu = BackendsFor("cpu");
+  EXPECT_TRUE(cpu.step && cpu.render);
+  for (const std::string bad : {"cuda:99", "gpu", "cuda:", "cpu:1"}) {
+    try {
+      BackendsFor(bad);
+      ADD_FAILURE() << "accepted device " << bad;
+    } catch (const Error& e) {
+      EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument) << bad;
+      EXPECT_NE(std::string(e.what()).find(bad), std::string::npos) << e.what();
+    }
+  }
+}
+
 }  // namespace
 }  // namespace endorecon

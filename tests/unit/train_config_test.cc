@@ -219,6 +219,22 @@ TEST(TrainConfigTest, ARateMapMergesIntoThePresets) {
   EXPECT_EQ(c.adam.lr.size(), before.size() + 1);
 }
 
+// The gpu preset is the cpu preset with a GPU's batch (over 2^18 samples a step), and nothing else.
+TEST(TrainConfigTest, TheGpuPresetIsTheCpuPresetWithAGpusBatch) {
+  const TrainConfig gpu = TrainConfig::Preset("gpu");
+  TrainConfig cpu = TrainConfig::Preset("cpu");
+  EXPECT_GE(gpu.rays_per_batch * (gpu.depth_samples + gpu.stratified_samples), 1 << 18);
+  cpu.preset = "gpu";
+  cpu.rays_per_batch = gpu.rays_per_batch;
+  EXPECT_EQ(ToJson(gpu), ToJson(cpu));
+  try {
+    TrainConfig::Preset("tpu");
+    FAIL() << "accepted preset tpu";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("cpu, gpu or paper"), std::string::npos) << e.what();
+  }
+}
+
 TEST(TrainConfigTest, EmptyObjectChangesNothing) {
   TrainConfig config = TrainConfig::Preset("cpu");
   ApplyJson(nlohmann::json::object(), config);

@@ -75,7 +75,8 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
   const fs::path out_dir = options.out_dir;
   WriteFile(out_dir / "config.json", RunConfigJson(config, options, threads).dump(2), "run configuration");
 
-  train::Trainer trainer(clip, config, split.train, options.seed, BackendFor(options.device));
+  const DeviceBackends backends = BackendsFor(options.device);
+  train::Trainer trainer(clip, config, split.train, options.seed, backends.step, backends.render);
   train::CheckpointExtras extras;
   if (!options.resume_from.empty()) {
     extras = train::ReadCheckpointState(options.resume_from, trainer);
@@ -84,18 +85,19 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
   spdlog::info("clip {}: {} frames {}x{}, {} train / {} held out, {} threads, steps on {}; {}", clip.source,
                clip.frame_count(), clip.width, clip.height, split.train.size(), split.heldout.size(), threads,
                trainer.device(), field::DescribeField(trainer.field()));
-  // Both renderers skip what the trainer's occupancy grid says is empty.
+  // The renderers run where the steps do and skip what the trainer's occupancy grid says is empty.
   render::FrameRenderer renderer(trainer.field(), trainer.box(),
-                                 train::EvalRenderSettings(config, clip.near, clip.far));
+                                 train::EvalRenderSettings(config, clip.near, clip.far), backends.render);
   render::FrameRenderer uncertainty_renderer(
       trainer.field(), trainer.box(),
-      train::UncertaintyRenderSettings(config, clip.near, clip.far, options.seed));
+      train::UncertaintyRenderSettings(config, clip.near, clip.far, options.seed), backends.render);
   renderer.SetOccupancy(&trainer.occupancy());
   uncertainty_renderer.SetOccupancy(&trainer.occupancy());
 
   // Reduced frames' colour and depth (eval/eval_plan.h): half the samples per ray.
   render::FrameRenderer reduced_renderer(trainer.field(), trainer.box(),
-                                         train::ReducedRenderSettings(config, clip.near, clip.far));
+                                         train::ReducedRenderSettings(config, clip.near, clip.far),
+                                         backends.render);
   reduced_renderer.SetOccupancy(&trainer.occupancy());
   const auto MeasureCost = [&] {
     const int f = split.heldout.empty() ? 0 : split.heldout.front();

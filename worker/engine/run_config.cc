@@ -3,6 +3,7 @@
 #include "common/error.h"
 #include "worker/engine/device_description.h"
 #ifdef ENDORECON_WITH_CUDA
+#include "worker/engine/cuda/device_render.h"
 #include "worker/engine/cuda/device_step.h"
 #endif
 #include "worker/engine/train/checkpoint.h"
@@ -37,11 +38,12 @@ FrameSplit SplitFrames(int frames, int holdout) {
   return split;
 }
 
-train::StepBackendFactory BackendFor(const std::string& device) {
-  if (device == "cpu") return train::MakeCpuStep;
+DeviceBackends BackendsFor(const std::string& device) {
+  if (device == "cpu") return {train::MakeCpuStep, render::MakeCpuRender};
     // DescribeDevice refuses, naming the reason, a device this build or machine cannot run.
 #ifdef ENDORECON_WITH_CUDA
-  return cuda::DeviceStepFactory(DescribeDevice(device).cuda_index);
+  const int index = DescribeDevice(device).cuda_index;
+  return {cuda::DeviceStepFactory(index), cuda::DeviceRenderFactory(index)};
 #else
   DescribeDevice(device);
   Fail(ErrorCode::kInternal, "DescribeDevice accepted " + device + " in a build without CUDA");

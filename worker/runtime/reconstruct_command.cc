@@ -18,9 +18,9 @@ namespace {
 void AddReconstructOptions(CLI::App& cmd, ReconstructOptions& options, std::string& config_file) {
   cmd.add_option("--config", config_file,
                  "JSON file of training keys overriding the preset (as config.json's \"train\")");
-  cmd.add_option("--preset", options.preset, "cpu or paper")
+  cmd.add_option("--preset", options.preset, "cpu, gpu or paper")
       ->capture_default_str()
-      ->check(CLI::IsMember({"cpu", "paper"}));
+      ->check(CLI::IsMember({"cpu", "gpu", "paper"}));
   cmd.add_option("--iterations", options.iterations,
                  "training iterations (default: the preset's; with --time-budget: no cap unless given)");
   cmd.add_option("--time-budget", options.time_budget_s,

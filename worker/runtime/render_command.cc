@@ -12,6 +12,7 @@
 #include "worker/engine/eval/model_uncertainty.h"
 #include "worker/engine/eval/report.h"
 #include "worker/engine/render/frame_renderer.h"
+#include "worker/engine/run_config.h"
 #include "worker/engine/scene/camera_list.h"
 #include "worker/engine/train/checkpoint.h"
 #include "worker/engine/train/render_settings.h"
@@ -23,7 +24,7 @@ namespace endorecon::worker {
 Command AddRenderCommand(CLI::App& app) {
   auto* cmd = app.add_subcommand("render", "render any cameras at any times from a results folder");
   struct Args {
-    std::string result, cameras, out;
+    std::string result, cameras, out, device = "cpu";
     int mc_passes = -1;
   };
   auto args = std::make_shared<Args>();
@@ -35,12 +36,16 @@ Command AddRenderCommand(CLI::App& app) {
   cmd->add_option("--mc-passes", args->mc_passes,
                   "dropout passes for the uncertainty maps (default: the model's, 0: no uncertainty)")
       ->check(CLI::Range(0, 1024));
+  cmd->add_option("--device", args->device, "where the views are rendered: cpu or cuda:N")
+      ->capture_default_str();
   return [args] {
+    // Refuses, naming the reason, a device this build or machine cannot use (before reading anything).
+    const render::RenderBackendFactory backend = BackendsFor(args->device).render;
     const train::Model model = train::ReadModel(std::filesystem::path(args->result) / "model" / "model.bin");
     const auto cameras = scene::ReadCameraList(args->cameras);
     auto settings = train::UncertaintyRenderSettings(model.config, model.near, model.far, 0);
     if (args->mc_passes >= 0) settings.mc_passes = args->mc_passes;
-    render::FrameRenderer renderer(*model.field, model.box, settings);
+    render::FrameRenderer renderer(*model.field, model.box, settings, backend);
     const render::OccupancyGrid occupancy = train::BuildOccupancy(*model.field, model.config);
     renderer.SetOccupancy(&occupancy);
     const std::filesystem::path out(args->out);
@@ -82,8 +87,8 @@ Command AddRenderCommand(CLI::App& app) {
                                  std::filesystem::copy_options::overwrite_existing);
     }
     eval::WriteReport(out);
-    spdlog::info("rendered {} views into {} (depth PNG scale {}, uncertainty heat-map scale [0, {}])",
-                 cameras.size(), args->out, scale, heat);
+    spdlog::info("rendered {} views on {} into {} (depth PNG scale {}, uncertainty heat-map scale [0, {}])",
+                 cameras.size(), renderer.device(), args->out, scale, heat);
     return 0;
   };
 }

@@ -1,6 +1,6 @@
 // Everything a training run needs, as one value that is written to config.json beside every
-// result and can be read back to reproduce it. Two presets: "paper" (the paper's settings) and
-// "cpu" (sized for a 2-core machine: a small clip in minutes).
+// result and can be read back to reproduce it. Three presets: "paper" (the paper's settings), "cpu"
+// (sized for a 2-core machine: a small clip in minutes) and "gpu" (the cpu preset with a GPU's batch).
 #pragma once
 
 #include <nlohmann/json_fwd.hpp>

@@ -7,6 +7,7 @@
 #include <istream>
 #include <ostream>
 #include <string>
+#include <utility>
 
 #include "common/error.h"
 #include "worker/engine/base/counter_rng.h"
@@ -19,14 +20,15 @@
 namespace endorecon::train {
 
 Trainer::Trainer(const scene::Clip& clip, const TrainConfig& config, std::vector<int> train_frames,
-                 std::uint64_t seed, const StepBackendFactory& backend)
+                 std::uint64_t seed, const StepBackendFactory& backend, render::RenderBackendFactory render)
     : clip_(clip),
       config_(config),
       seed_(seed),
       box_(scene::ClipBox(clip)),
       sampler_(clip, std::move(train_frames)),
       map_(sampler_, clip.width, clip.height, config.adaptive_map_stride),
-      refiner_(clip, sampler_.frames()) {
+      refiner_(clip, sampler_.frames()),
+      render_(std::move(render)) {
   for (int f = 0; f < clip.frame_count(); ++f) {
     rgb_frames_.push_back(clip.rgb[f].data());
     views_.push_back(clip.cameras[f].View());
@@ -109,7 +111,8 @@ void Trainer::RefreshMap() {
 
 DepthRefineStats Trainer::RefineDepth() {
   backend_->PullField();
-  render::FrameRenderer renderer(*field_, box_, DepthRefineRenderSettings(config_, clip_.near, clip_.far));
+  render::FrameRenderer renderer(*field_, box_, DepthRefineRenderSettings(config_, clip_.near, clip_.far),
+                                 render_);
   renderer.SetOccupancy(&occupancy_);
   const DepthRefineStats stats =
       refiner_.Refine(renderer, config_.depth_refine_fraction, config_.depth_refine_ema,

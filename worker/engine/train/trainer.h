@@ -12,6 +12,7 @@
 
 #include "worker/engine/field/field.h"
 #include "worker/engine/render/occupancy_grid.h"
+#include "worker/engine/render/render_backend.h"
 #include "worker/engine/scene/clip.h"
 #include "worker/engine/scene/scene_box.h"
 #include "worker/engine/train/depth_refiner.h"
@@ -39,9 +40,10 @@ render::OccupancyGrid BuildOccupancy(field::Field& field, const TrainConfig& con
 class Trainer {
  public:
   // Keeps references to clip (which must outlive the trainer). train_frames: the frames rays come from.
-  // `backend` makes the step backend (MakeCpuStep by default).
+  // `backend` makes the step backend (MakeCpuStep by default), `render` the depth refinement's renderer's.
   Trainer(const scene::Clip& clip, const TrainConfig& config, std::vector<int> train_frames,
-          std::uint64_t seed, const StepBackendFactory& backend = MakeCpuStep);
+          std::uint64_t seed, const StepBackendFactory& backend = MakeCpuStep,
+          render::RenderBackendFactory render = render::MakeCpuRender);
   ~Trainer();
 
   // One iteration at `progress` in [0, 1] of the run (drives the learning-rate decay and the periodic
@@ -102,6 +104,7 @@ class Trainer {
   std::vector<scene::PinholeView> views_;
   StepTables tables_;
   std::unique_ptr<StepBackend> backend_;
+  render::RenderBackendFactory render_;  // the depth refinement renderer's backend
   int iteration_ = 0;
 };
 
