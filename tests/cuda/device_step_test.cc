@@ -1,7 +1,8 @@
 // A whole training step on the GPU against the CPU's with the same seed (the same rays, samples and
-// masks: the per-ray bodies and the field's per-sample math are the same functions), a GPU run
-// resumed on the CPU from its checkpoint, and 300 GPU steps fitting held-out frames as well as 300
-// CPU steps (the GPU's float atomics add in another order: the runs drift apart, the fit must not).
+// masks: the per-ray bodies and the field's per-sample math are the same functions), the same with a
+// learned background, a GPU run resumed on the CPU from its checkpoint, and 300 GPU steps fitting
+// held-out frames as well as 300 CPU steps (the GPU's float atomics add in another order: the runs
+// drift apart, the fit must not).
 // The clip is made in memory (no image files: this binary travels to bare GPU machines,
 // scripts/gpu-check). Skipped without a GPU.
 #include "worker/engine/cuda/device_step.h"
@@ -58,6 +59,28 @@ TEST_F(DeviceStepTest, AStepOnTheGpuIsTheCpuStep) {
   }
   gpu.SyncField();
   // Three Adam updates from gradients that agree to float rounding.
+  EXPECT_LT(MaxRelative(gpu.field(), cpu.field()), 1e-3);
+}
+
+// A learned background (its gradients: atomic adds on the GPU, partials in task order on the CPU) on
+// the small tissue clip, whose rays see the background through what the young field leaves; the
+// object capture's own test reads files (device_clip_files_test.cc), this one travels in the bundle.
+TEST_F(DeviceStepTest, ALearnedBackgroundStepOnTheGpuIsTheCpuStep) {
+  train::TrainConfig config = train::TrainConfig::Preset("cpu");
+  config.rays_per_batch = 256;
+  config.iterations = 100;
+  config.background = "learned";
+  train::FitToScene(clip_, config);
+  ASSERT_TRUE(config.field.learned_background);
+  train::Trainer cpu(clip_, config, Frames(), 11);
+  train::Trainer gpu(clip_, config, Frames(), 11, DeviceStepFactory(0));
+  for (int i = 0; i < 3; ++i) {
+    const train::StepStats a = cpu.Step(0.01 * i);
+    const train::StepStats b = gpu.Step(0.01 * i);
+    EXPECT_NEAR(b.loss, a.loss, 1e-4 * std::fabs(a.loss)) << "step " << i;
+  }
+  gpu.SyncField();
+  ASSERT_EQ(cpu.field().Blocks().back().name, "background");
   EXPECT_LT(MaxRelative(gpu.field(), cpu.field()), 1e-3);
 }
 
