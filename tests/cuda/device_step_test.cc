@@ -1,8 +1,8 @@
 // A whole training step on the GPU against the CPU's with the same seed (the same rays, samples and
 // masks: the per-ray bodies and the field's per-sample math are the same functions), the same with a
-// learned background, a GPU run resumed on the CPU from its checkpoint, and 300 GPU steps fitting
-// held-out frames as well as 300 CPU steps (the GPU's float atomics add in another order: the runs
-// drift apart, the fit must not).
+// learned background, the occupancy grid from the GPU's densities, a GPU run resumed on the CPU from
+// its checkpoint, and 300 GPU steps fitting held-out frames as well as 300 CPU steps (the GPU's float
+// atomics add in another order: the runs drift apart, the fit must not).
 // The clip is made in memory (no image files: this binary travels to bare GPU machines,
 // scripts/gpu-check). Skipped without a GPU.
 #include "worker/engine/cuda/device_step.h"
@@ -82,6 +82,23 @@ TEST_F(DeviceStepTest, ALearnedBackgroundStepOnTheGpuIsTheCpuStep) {
   gpu.SyncField();
   ASSERT_EQ(cpu.field().Blocks().back().name, "background");
   EXPECT_LT(MaxRelative(gpu.field(), cpu.field()), 1e-3);
+}
+
+// The occupancy grid rebuilt from the GPU's densities (points up, densities down) is the grid the same
+// parameters give on the host.
+TEST_F(DeviceStepTest, TheOccupancyGridFromTheGpusDensitiesIsTheHosts) {
+  train::Trainer gpu(clip_, config_, Frames(), 9, DeviceStepFactory(0));
+  for (int i = 0; i < 40; ++i) gpu.Step(0.001 * i);  // before the first rebuild (every 0.2 of the run)
+  gpu.SyncField();
+  const render::OccupancyGrid host = train::BuildOccupancy(gpu.field(), config_);
+  gpu.Step(0.5);  // rebuilds from the device's densities before its step
+  const render::OccupancyGrid& device = gpu.occupancy();
+  ASSERT_FALSE(host.empty());
+  ASSERT_EQ(device.resolution(), host.resolution());
+  const std::size_t cells = std::size_t(host.resolution()) * host.resolution() * host.resolution();
+  std::size_t differ = 0;
+  for (std::size_t i = 0; i < cells; ++i) differ += device.cells()[i] != host.cells()[i];
+  EXPECT_LE(differ, cells / 1000) << "cells whose density sits at the threshold may differ by rounding";
 }
 
 TEST_F(DeviceStepTest, AGpuCheckpointResumesOnTheCpu) {

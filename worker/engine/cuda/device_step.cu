@@ -182,6 +182,27 @@ class DeviceStep final : public train::StepBackend {
     return scores;
   }
 
+  void Densities(const field::SampleBatch& batch, float* sigma) override {
+    SetDevice(index_);
+    const std::size_t n = static_cast<std::size_t>(batch.n);
+    if (n == 0) return;
+    if (density_sigma_.size() < n) {
+      density_pos_ = DeviceArray<float>(3 * n);
+      density_dir_ = DeviceArray<float>(3 * n);
+      density_time_ = DeviceArray<float>(n);
+      density_sigma_ = DeviceArray<float>(n);
+      density_log_var_ = DeviceArray<float>(n);
+    }
+    CopyToDevice(density_pos_.data(), batch.pos, 3 * n * sizeof(float));
+    CopyToDevice(density_dir_.data(), batch.dir, 3 * n * sizeof(float));
+    CopyToDevice(density_time_.data(), batch.time, n * sizeof(float));
+    const field::SampleBatch in{batch.n, density_pos_.data(), density_time_.data(), density_dir_.data()};
+    field::FieldOutput out{density_sigma_.data(), density_log_var_.data(), nullptr,
+                           nullptr};  // density alone
+    field_.Infer(in, out, /*dropout=*/false, 0);
+    CopyToHost(sigma, density_sigma_.data(), n * sizeof(float));
+  }
+
   void PullField() override {
     SetDevice(index_);
     field_.Download();
@@ -247,6 +268,8 @@ class DeviceStep final : public train::StepBackend {
   DeviceArray<double> cumulative_, sums_{2};
   DeviceArray<render::CameraRay> camera_rays_;
   std::vector<DeviceArray<float>> arrays_;
+  // The occupancy probes' points and densities (Densities), sized for the largest batch asked.
+  DeviceArray<float> density_pos_, density_dir_, density_time_, density_sigma_, density_log_var_;
   train::StepBatch batch_{};
   std::size_t pixels_ = 0;
   int frames_ = 0;

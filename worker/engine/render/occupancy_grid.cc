@@ -40,7 +40,15 @@ std::vector<float> OccupancyProbeTimes(bool dynamic) {
   return times;
 }
 
-OccupancyGrid OccupancyGrid::Build(field::Field& field, const std::vector<float>& times, int res,
+DensityProbe HostDensity(field::Field& field) {
+  return [&field, log_var = std::vector<float>()](const field::SampleBatch& batch, float* sigma) mutable {
+    log_var.resize(std::size_t(batch.n));
+    field::FieldOutput out{sigma, log_var.data(), nullptr, nullptr};  // the density alone
+    field.Infer(batch, out, /*dropout=*/false, 0);
+  };
+}
+
+OccupancyGrid OccupancyGrid::Build(const DensityProbe& density, const std::vector<float>& times, int res,
                                    float min_alpha) {
   if (res < 1 || times.empty() || !(min_alpha > 0.0f && min_alpha < 1.0f)) {
     FailInvalid("occupancy grid: need a resolution >= 1, at least one time and min_alpha in (0, 1); got " +
@@ -55,7 +63,7 @@ OccupancyGrid OccupancyGrid::Build(field::Field& field, const std::vector<float>
   // needs sigma >= -ln(1 - min_alpha) * res.
   const float min_sigma = -std::log1p(-min_alpha) * float(res);
   constexpr std::size_t kBatch = 1 << 16;
-  std::vector<float> pos(3 * kBatch), time(kBatch), dir(3 * kBatch), sigma(kBatch), sigma_lv(kBatch);
+  std::vector<float> pos(3 * kBatch), time(kBatch), dir(3 * kBatch), sigma(kBatch);
   for (std::size_t i = 0; i < kBatch; ++i) {
     dir[3 * i] = dir[3 * i + 1] = 0.0f;
     dir[3 * i + 2] = 1.0f;  // density does not depend on the view direction
@@ -70,9 +78,7 @@ OccupancyGrid OccupancyGrid::Build(field::Field& field, const std::vector<float>
         pos[3 * i + 1] = (float((cell / res) % res) + 0.5f) / float(res);
         pos[3 * i + 2] = (float(cell / (std::size_t(res) * res)) + 0.5f) / float(res);
       }
-      const field::SampleBatch in{int(n), pos.data(), time.data(), dir.data()};
-      field::FieldOutput out{sigma.data(), sigma_lv.data(), nullptr, nullptr};  // the density alone
-      field.Infer(in, out, /*dropout=*/false, 0);
+      density(field::SampleBatch{int(n), pos.data(), time.data(), dir.data()}, sigma.data());
       for (std::size_t i = 0; i < n; ++i) {
         // NaN counts as occupied: never skip what cannot be judged.
         if (!(sigma[i] < min_sigma)) grid.cells_[first + i] = 1;

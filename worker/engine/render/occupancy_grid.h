@@ -14,6 +14,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <functional>
 #include <iosfwd>
 #include <vector>
 
@@ -82,13 +83,24 @@ ENDORECON_HD void RaySpan(const std::uint8_t* occupied, int res, const scene::Bo
 // preset's deformation has 8 time knots; between probes the one-cell dilation covers the motion).
 std::vector<float> OccupancyProbeTimes(bool dynamic);
 
+// The field's density (sigma, n) at a batch of points in host memory, wherever the field's
+// parameters live (the host field, or a GPU's copy through the trainer's step backend).
+using DensityProbe = std::function<void(const field::SampleBatch& batch, float* sigma)>;
+
+// The host field's density (the field must outlive the probe).
+DensityProbe HostDensity(field::Field& field);
+
 class OccupancyGrid {
  public:
   OccupancyGrid() = default;  // empty: every span is the whole ray
 
-  // Probes `field` at every cell centre of a res^3 grid at each of `times` (a static field needs
+  // Probes the density at every cell centre of a res^3 grid at each of `times` (a static field needs
   // one). Throws Error(kInvalidArgument) for res < 1, an empty time list or min_alpha outside (0, 1).
-  static OccupancyGrid Build(field::Field& field, const std::vector<float>& times, int res, float min_alpha);
+  static OccupancyGrid Build(const DensityProbe& density, const std::vector<float>& times, int res,
+                             float min_alpha);
+  static OccupancyGrid Build(field::Field& field, const std::vector<float>& times, int res, float min_alpha) {
+    return Build(HostDensity(field), times, res, min_alpha);
+  }
 
   bool empty() const { return res_ == 0; }
   int resolution() const { return res_; }

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <vector>
 
 #include "common/error.h"
 #include "worker/engine/train/adam.h"
@@ -145,6 +146,12 @@ class CpuStep final : public StepBackend {
     return scores;
   }
 
+  void Densities(const field::SampleBatch& batch, float* sigma) override {
+    log_var_.resize(std::size_t(batch.n));
+    field::FieldOutput out{sigma, log_var_.data(), nullptr, nullptr};  // the density alone
+    field_.Infer(batch, out, /*dropout=*/false, 0);
+  }
+
   void PullField() override {}
   void PushField() override {}
   void SaveOptimizer(std::ostream& out) const override { adam_.Save(out); }
@@ -166,6 +173,7 @@ class CpuStep final : public StepBackend {
   const StepTables& tables_;
   Adam adam_;
   HostBatch batch_;
+  std::vector<float> log_var_;  // Densities' scratch
 };
 
 }  // namespace

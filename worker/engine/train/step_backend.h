@@ -48,6 +48,9 @@ class StepBackend {
   // The uncertainty map's probe rays placed from `probes` with `seed`, one dropout-on pass each:
   // their ray scores, in order.
   virtual std::vector<float> ProbeScores(const std::vector<RayPick>& probes, std::uint64_t seed) = 0;
+  // The field's density at a batch of points in host memory (the occupancy grid's probes), from the
+  // parameters where they live: no PullField needed.
+  virtual void Densities(const field::SampleBatch& batch, float* sigma) = 0;
   // Device parameters into the host field (before anything reads it: periodic rounds, checkpoints,
   // rendering), and back after the host field was loaded. No-ops on the CPU.
   virtual void PullField() = 0;

@@ -124,15 +124,20 @@ DepthRefineStats Trainer::RefineDepth() {
   return stats;
 }
 
-render::OccupancyGrid BuildOccupancy(field::Field& field, const TrainConfig& config) {
+render::OccupancyGrid BuildOccupancy(const render::DensityProbe& density, const TrainConfig& config) {
   if (config.occupancy_resolution <= 0) return {};
-  return render::OccupancyGrid::Build(field, render::OccupancyProbeTimes(config.field.deformation.enabled),
+  return render::OccupancyGrid::Build(density, render::OccupancyProbeTimes(config.field.deformation.enabled),
                                       config.occupancy_resolution, config.occupancy_min_alpha);
 }
 
+render::OccupancyGrid BuildOccupancy(field::Field& field, const TrainConfig& config) {
+  return BuildOccupancy(render::HostDensity(field), config);
+}
+
 void Trainer::RebuildOccupancy() {
-  backend_->PullField();
-  occupancy_ = BuildOccupancy(*field_, config_);
+  // The densities come from where the parameters are (a GPU's copy: only points and densities move).
+  occupancy_ = BuildOccupancy(
+      [&](const field::SampleBatch& batch, float* sigma) { backend_->Densities(batch, sigma); }, config_);
   UpdateTables();
   if (occupancy_.empty()) return;
   spdlog::info(

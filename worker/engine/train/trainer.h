@@ -35,6 +35,7 @@ struct StepStats {
 
 // The occupancy grid of a field as the configuration asks (empty when occupancy_resolution is 0),
 // probed at one time for a static field (no deformation), at several for a dynamic one.
+render::OccupancyGrid BuildOccupancy(const render::DensityProbe& density, const TrainConfig& config);
 render::OccupancyGrid BuildOccupancy(field::Field& field, const TrainConfig& config);
 
 class Trainer {
