@@ -1,10 +1,11 @@
 // Frames rendered on the GPU against the CPU's from the same field: colour, depth and opacity with
 // empty-space skipping, the uncertainty maps of K dropout passes (the same chunks, so the same masks),
-// and a learned background. The field is trained a little on the CPU first, so the renders have
-// structure (a field at its initial values renders nearly flat). The per-ray bodies (frame_math.h) and
-// the field's per-sample math are the same functions on both sides; what differs is float rounding
-// (fused multiply-adds, the order of the GPU's reductions), which the adaptive samples can move a
-// little. The clip is made in memory (scripts/gpu-check carries this binary). Skipped without a GPU.
+// a learned background, and a run's renders reading its GPU steps' copy of the field. The fields are
+// trained a little first, so the renders have structure (a field at its initial values renders nearly
+// flat). The per-ray bodies (frame_math.h) and the field's per-sample math are the same functions on
+// both sides; what differs is float rounding (fused multiply-adds, the order of the GPU's reductions),
+// which the adaptive samples can move a little. The clip is made in memory (scripts/gpu-check carries
+// this binary). Skipped without a GPU.
 #include "worker/engine/cuda/device_render.h"
 
 #include <gtest/gtest.h>
@@ -20,6 +21,7 @@
 #include "tests/cuda/small_clip.h"
 #include "worker/engine/cuda/device.h"
 #include "worker/engine/render/frame_renderer.h"
+#include "worker/engine/run_config.h"
 #include "worker/engine/train/render_settings.h"
 #include "worker/engine/train/scene_fit.h"
 #include "worker/engine/train/trainer.h"
@@ -108,6 +110,27 @@ TEST_F(DeviceRenderTest, UncertaintyMapsOnTheGpuAreTheCpus) {
   EXPECT_LT(MeanAbsDifference(gpu.uncertainty, cpu.uncertainty), 1e-2 * MeanAbs(cpu.uncertainty));
   EXPECT_LT(MeanAbsDifference(gpu.aleatoric, cpu.aleatoric), 1e-2 * MeanAbs(cpu.aleatoric));
   EXPECT_LT(MeanAbsDifference(gpu.epistemic, cpu.epistemic), 1e-2 * MeanAbs(cpu.epistemic));
+}
+
+// A run's renders share the GPU steps' copy of the field (run_config.h BackendsFor): they see the
+// parameters the steps wrote without a pull, as the CPU sees them after one.
+TEST_F(DeviceRenderTest, ARunsRendersSeeWhatItsGpuStepsWrote) {
+  config_ = train::TrainConfig::Preset("cpu");
+  config_.rays_per_batch = 256;
+  config_.iterations = 100;
+  std::vector<int> frames(clip_.frame_count());
+  std::iota(frames.begin(), frames.end(), 0);
+  train::FitToScene(clip_, config_, frames);
+  const DeviceBackends gpu = BackendsFor("cuda:0");
+  train::Trainer trainer(clip_, config_, frames, 3, gpu.step, gpu.render);
+  const auto settings = train::EvalRenderSettings(config_, clip_.near, clip_.far);
+  render::FrameRenderer shared(trainer.field(), trainer.box(), settings, gpu.render);
+  for (int i = 0; i < 100; ++i) trainer.Step(0.01 * i);
+  const render::RenderedFrame seen = shared.Render(clip_.cameras[4], clip_.times[4]);  // no pull before
+  trainer.SyncField();
+  render::FrameRenderer cpu(trainer.field(), trainer.box(), settings);
+  const render::RenderedFrame host = cpu.Render(clip_.cameras[4], clip_.times[4]);
+  EXPECT_LT(MeanAbsDifference(seen.rgb, host.rgb), 1e-3);
 }
 
 TEST_F(DeviceRenderTest, ALearnedBackgroundIsRenderedOnTheGpuAsOnTheCpu) {

@@ -5,6 +5,7 @@
 #ifdef ENDORECON_WITH_CUDA
 #include "worker/engine/cuda/device_render.h"
 #include "worker/engine/cuda/device_step.h"
+#include "worker/engine/cuda/shared_fields.h"
 #endif
 #include "worker/engine/train/checkpoint.h"
 
@@ -43,7 +44,9 @@ DeviceBackends BackendsFor(const std::string& device) {
     // DescribeDevice refuses, naming the reason, a device this build or machine cannot run.
 #ifdef ENDORECON_WITH_CUDA
   const int index = DescribeDevice(device).cuda_index;
-  return {cuda::DeviceStepFactory(index), cuda::DeviceRenderFactory(index)};
+  // The steps and the renders of a run share the device copy of its field (no copies between them).
+  const auto shared = std::make_shared<cuda::SharedFields>();
+  return {cuda::DeviceStepFactory(index, shared), cuda::DeviceRenderFactory(index, shared)};
 #else
   DescribeDevice(device);
   Fail(ErrorCode::kInternal, "DescribeDevice accepted " + device + " in a build without CUDA");

@@ -1,5 +1,7 @@
 #include <algorithm>
+#include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "worker/engine/base/counter_rng.h"
@@ -7,6 +9,7 @@
 #include "worker/engine/cuda/device_field.h"
 #include "worker/engine/cuda/device_render.h"
 #include "worker/engine/cuda/launch.cuh"
+#include "worker/engine/cuda/shared_fields.h"
 #include "worker/engine/render/frame_math.h"
 
 namespace endorecon::cuda {
@@ -14,9 +17,9 @@ namespace {
 
 class DeviceRender final : public render::RenderBackend {
  public:
-  DeviceRender(int index, field::Field& host, const scene::SceneBox& box,
+  DeviceRender(int index, std::shared_ptr<DeviceField> field, bool shared, const scene::SceneBox& box,
                const render::FrameRenderSettings& settings)
-      : index_(index), box_(box), settings_(settings), field_(host) {
+      : index_(index), box_(box), settings_(settings), field_(std::move(field)), shared_(shared) {
     name_ = "cuda:" + std::to_string(index) + " (" + ListDevices().devices.at(index).name + ")";
     const std::size_t rays = static_cast<std::size_t>(settings_.rays_per_chunk);
     const std::size_t n = rays * std::max(settings_.coarse_samples, settings_.fine_samples);
@@ -32,7 +35,7 @@ class DeviceRender final : public render::RenderBackend {
     out_.depth = floats(rays);
     out_.opacity = floats(rays);
     if (settings_.mc_passes > 0) {
-      encoding_ = DeviceArray<float>(n * static_cast<std::size_t>(field_.encoding_dim()));
+      encoding_ = DeviceArray<float>(n * static_cast<std::size_t>(field_->encoding_dim()));
       density_moments_ = DeviceArray<render::McMoments<float>>(n);
       color_moments_ = DeviceArray<render::McMoments<float>>(3 * n);
       dropout_.density = density_moments_.data();
@@ -44,7 +47,7 @@ class DeviceRender final : public render::RenderBackend {
       }
     }
     background_ = DeviceArray<float>(std::vector<float>(settings_.background, settings_.background + 3));
-    for (const auto& block : field_.Blocks()) {
+    for (const auto& block : field_->Blocks()) {
       if (block.name == "background") background_params_ = block.value;
     }
   }
@@ -53,7 +56,7 @@ class DeviceRender final : public render::RenderBackend {
 
   void Begin(const render::OccupancyGrid* occupancy) override {
     SetDevice(index_);
-    field_.Upload();
+    if (!shared_) field_->Upload();  // a shared copy is the steps' own: already the newest
     occupancy_view_ = {};
     if (occupancy == nullptr || occupancy->empty()) return;
     const int res = occupancy->resolution();
@@ -90,7 +93,7 @@ class DeviceRender final : public render::RenderBackend {
         },
         "coarse placement kernel");
     field::FieldOutput coarse{a.sigma, a.sigma_lv, nullptr, a.color_lv};
-    field_.Infer(batch(shape.coarse), coarse, /*dropout=*/false, 0);
+    field_->Infer(batch(shape.coarse), coarse, /*dropout=*/false, 0);
     ForEach(
         count, [=] __device__(std::size_t r) { render::CoarseWeights(shape, a, static_cast<int>(r)); },
         "coarse weights kernel");
@@ -106,11 +109,11 @@ class DeviceRender final : public render::RenderBackend {
       const std::size_t n = static_cast<std::size_t>(fine_batch.n);
       ZeroDevice(d.density, n * sizeof(render::McMoments<float>));
       ZeroDevice(d.color, 3 * n * sizeof(render::McMoments<float>));
-      field_.Encode(fine_batch, encoding_.data());
+      field_->Encode(fine_batch, encoding_.data());
       const float eps = settings_.variance_eps;
       for (int k = 1; k <= passes; ++k) {
-        field_.Decode(encoding_.data(), fine_batch, fine, /*dropout=*/true,
-                      base::HashCombine(chunk_seed, static_cast<std::uint64_t>(k)));
+        field_->Decode(encoding_.data(), fine_batch, fine, /*dropout=*/true,
+                       base::HashCombine(chunk_seed, static_cast<std::uint64_t>(k)));
         ForEach(
             n, [=] __device__(std::size_t i) { render::AddDropoutPass(a, d, k, eps, i); },
             "dropout pass kernel");
@@ -119,7 +122,7 @@ class DeviceRender final : public render::RenderBackend {
           n, [=] __device__(std::size_t i) { render::FinishDropoutPasses(a, d, passes, i); },
           "dropout moments kernel");
     } else {
-      field_.Infer(fine_batch, fine, /*dropout=*/false, 0);
+      field_->Infer(fine_batch, fine, /*dropout=*/false, 0);
     }
     const render::ChunkOutputs result = out_;
     const float lambda = settings_.color_weight;
@@ -145,7 +148,8 @@ class DeviceRender final : public render::RenderBackend {
   std::string name_;
   const scene::SceneBox box_;
   const render::FrameRenderSettings settings_;
-  DeviceField field_;
+  std::shared_ptr<DeviceField> field_;
+  bool shared_;  // field_ is the run's copy (shared_fields.h), which the steps keep current
   std::vector<DeviceArray<float>> arrays_;
   DeviceArray<render::CameraRay> rays_;
   DeviceArray<int> pixels_;
@@ -161,12 +165,14 @@ class DeviceRender final : public render::RenderBackend {
 
 }  // namespace
 
-render::RenderBackendFactory DeviceRenderFactory(int index) {
-  return
-      [index](field::Field& field, const scene::SceneBox& box, const render::FrameRenderSettings& settings) {
-        SetDevice(index);
-        return std::unique_ptr<render::RenderBackend>(new DeviceRender(index, field, box, settings));
-      };
+render::RenderBackendFactory DeviceRenderFactory(int index, std::shared_ptr<SharedFields> shared) {
+  return [index, shared](field::Field& field, const scene::SceneBox& box,
+                         const render::FrameRenderSettings& settings) {
+    SetDevice(index);
+    auto device_field = shared ? shared->For(field) : std::make_shared<DeviceField>(field);
+    return std::unique_ptr<render::RenderBackend>(
+        new DeviceRender(index, std::move(device_field), shared != nullptr, box, settings));
+  };
 }
 
 }  // namespace endorecon::cuda

@@ -1,6 +1,8 @@
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "common/error.h"
@@ -9,6 +11,7 @@
 #include "worker/engine/cuda/device_field.h"
 #include "worker/engine/cuda/device_step.h"
 #include "worker/engine/cuda/launch.cuh"
+#include "worker/engine/cuda/shared_fields.h"
 #include "worker/engine/train/step_math.h"
 
 namespace endorecon::cuda {
@@ -42,9 +45,9 @@ DeviceArray<T> Copy(const T* host, std::size_t n) {
 
 class DeviceStep final : public train::StepBackend {
  public:
-  DeviceStep(int index, field::Field& host_field, const train::TrainConfig& config,
+  DeviceStep(int index, std::shared_ptr<DeviceField> field, const train::TrainConfig& config,
              const train::StepTables& tables)
-      : index_(index), host_(tables), field_(host_field), adam_(field_.Blocks(), config.adam) {
+      : index_(index), host_(tables), field_(std::move(field)), adam_(field_->Blocks(), config.adam) {
     const auto list = ListDevices();
     name_ = "cuda:" + std::to_string(index) + " (" + list.devices.at(index).name + ")";
     const train::StepTables& t = host_;
@@ -78,7 +81,7 @@ class DeviceStep final : public train::StepBackend {
     device_.rays.rgb = rgb_.pointers.data();
     device_.rays.views = views_.data();
     device_.rays.times = times_.data();
-    for (const auto& block : field_.Blocks()) {
+    for (const auto& block : field_->Blocks()) {
       if (block.name == "background") device_.background_params = block.value;
     }
     if (t.rays.priors) {
@@ -115,7 +118,7 @@ class DeviceStep final : public train::StepBackend {
           "probe placement kernel");
       const field::SampleBatch probes{guided * train::ProbeCount(t), b.pos, b.time, b.dir};
       field::FieldOutput out{b.sigma, b.sigma_logvar, b.rgb, b.rgb_logvar};
-      field_.Infer(probes, out, /*dropout=*/true, base::HashCombine(seed, 0xc0a25eull));
+      field_->Infer(probes, out, /*dropout=*/true, base::HashCombine(seed, 0xc0a25eull));
       ForEach(
           guided, [=] __device__(std::size_t r) { train::ReallocateRay(t, b, static_cast<int>(r), seed); },
           "reallocation kernel");
@@ -123,7 +126,7 @@ class DeviceStep final : public train::StepBackend {
     const int n = b.rays * b.samples;
     const field::SampleBatch in{n, b.pos, b.time, b.dir};
     field::FieldOutput out{b.sigma, b.sigma_logvar, b.rgb, b.rgb_logvar};
-    field_.Forward(in, out, /*dropout=*/true, request.dropout_seed);
+    field_->Forward(in, out, /*dropout=*/true, request.dropout_seed);
     sums_.Zero();
     double* sums = sums_.data();
     ForEach(
@@ -139,9 +142,9 @@ class DeviceStep final : public train::StepBackend {
       Fail(ErrorCode::kInternal, "training diverged: the loss is not finite at iteration " +
                                      std::to_string(request.iteration) + " (stage: loss, " + name_ + ")");
     }
-    field_.ZeroGrad();
-    field_.Backward(in, {b.d_sigma, nullptr, b.d_rgb, b.d_rgb_logvar});
-    if (t.background_params) field_.BackgroundBackward(b.rays, b.ray_dir, b.background, b.d_background);
+    field_->ZeroGrad();
+    field_->Backward(in, {b.d_sigma, nullptr, b.d_rgb, b.d_rgb_logvar});
+    if (t.background_params) field_->BackgroundBackward(b.rays, b.ray_dir, b.background, b.d_background);
     const train::AdamStepReport report = adam_.Step(request.progress);
     if (!report.finite) {
       Fail(ErrorCode::kInternal,
@@ -172,7 +175,7 @@ class DeviceStep final : public train::StepBackend {
           "probe ray kernel");
       const field::SampleBatch in{rays * b.samples, b.pos, b.time, b.dir};
       field::FieldOutput out{b.sigma, b.sigma_logvar, b.rgb, b.rgb_logvar};
-      field_.Infer(in, out, /*dropout=*/true, base::HashCombine(seed, start));
+      field_->Infer(in, out, /*dropout=*/true, base::HashCombine(seed, start));
       ForEach(
           rays,
           [=] __device__(std::size_t r) { out_scores[r] = train::ProbeRayScore(t, b, static_cast<int>(r)); },
@@ -199,17 +202,17 @@ class DeviceStep final : public train::StepBackend {
     const field::SampleBatch in{batch.n, density_pos_.data(), density_time_.data(), density_dir_.data()};
     field::FieldOutput out{density_sigma_.data(), density_log_var_.data(), nullptr,
                            nullptr};  // density alone
-    field_.Infer(in, out, /*dropout=*/false, 0);
+    field_->Infer(in, out, /*dropout=*/false, 0);
     CopyToHost(sigma, density_sigma_.data(), n * sizeof(float));
   }
 
   void PullField() override {
     SetDevice(index_);
-    field_.Download();
+    field_->Download();
   }
   void PushField() override {
     SetDevice(index_);
-    field_.Upload();
+    field_->Upload();
   }
   void SaveOptimizer(std::ostream& out) const override { adam_.Save(out); }
   void LoadOptimizer(std::istream& in) override { adam_.Load(in); }
@@ -253,9 +256,9 @@ class DeviceStep final : public train::StepBackend {
 
   int index_;
   std::string name_;
-  const train::StepTables& host_;  // the Trainer's tables (host pointers)
-  train::StepTables device_;       // the same tables with device pointers
-  DeviceField field_;
+  const train::StepTables& host_;       // the Trainer's tables (host pointers)
+  train::StepTables device_;            // the same tables with device pointers
+  std::shared_ptr<DeviceField> field_;  // perhaps shared with the run's renderers (shared_fields.h)
   DeviceAdam adam_;
   DeviceFrames<std::uint8_t> rgb_, masks_;
   DeviceFrames<float> priors_;
@@ -277,10 +280,13 @@ class DeviceStep final : public train::StepBackend {
 
 }  // namespace
 
-train::StepBackendFactory DeviceStepFactory(int index) {
-  return [index](field::Field& field, const train::TrainConfig& config, const train::StepTables& tables) {
+train::StepBackendFactory DeviceStepFactory(int index, std::shared_ptr<SharedFields> shared) {
+  return [index, shared](field::Field& field, const train::TrainConfig& config,
+                         const train::StepTables& tables) {
     SetDevice(index);
-    return std::unique_ptr<train::StepBackend>(new DeviceStep(index, field, config, tables));
+    auto device_field = shared ? shared->For(field) : std::make_shared<DeviceField>(field);
+    return std::unique_ptr<train::StepBackend>(
+        new DeviceStep(index, std::move(device_field), config, tables));
   };
 }
 

@@ -8,12 +8,18 @@
 // A plain C++ header; defined in device_step.cu (builds with ENDORECON_WITH_CUDA only).
 #pragma once
 
+#include <memory>
+
 #include "worker/engine/train/step_backend.h"
 
 namespace endorecon::cuda {
 
+class SharedFields;
+
 // The factory for train::Trainer: steps on CUDA device `index` (as cudaSetDevice takes it), which the
-// calling thread makes current. Throws Error(kInvalidArgument) for a device that does not exist.
-train::StepBackendFactory DeviceStepFactory(int index);
+// calling thread makes current, on the device copy of the host field in `shared` (the run's renderers
+// read the same copy), or on a copy of its own when `shared` is null. Throws Error(kInvalidArgument)
+// for a device that does not exist.
+train::StepBackendFactory DeviceStepFactory(int index, std::shared_ptr<SharedFields> shared = nullptr);
 
 }  // namespace endorecon::cuda

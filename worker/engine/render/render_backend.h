@@ -50,8 +50,9 @@ class RenderBackend {
 
   // "cpu", or the GPU's name ("cuda:0 (NVIDIA H200)").
   virtual std::string device() const = 0;
-  // Before the chunks of one RenderPixels call: the host field's parameters and the occupancy grid
-  // (null or empty: none) as they are now; a backend that keeps copies refreshes them.
+  // Before the chunks of one RenderPixels call: the field's parameters and the occupancy grid (null or
+  // empty: none) as they are now; a backend that keeps copies refreshes them (a GPU backend sharing
+  // the training step's device copy has no parameters to refresh: the steps write there).
   virtual void Begin(const OccupancyGrid* occupancy) = 0;
   // Renders `count` (at most settings.rays_per_chunk) pixels of the camera at `time` into `out` (host
   // arrays, offset to the chunk's first pixel); the K dropout passes use masks
