@@ -1,7 +1,7 @@
 // train::Adam on the GPU: the same per-group rates, decay, clipping and refusal of non-finite or
 // overflowing gradients, over device parameter blocks, with the per-parameter update of
-// train/adam_math.h in one fused kernel per block. Only the gradient norms come back to the host each
-// step (a few scalars). A plain C++ header; defined in device_adam.cu (builds with ENDORECON_WITH_CUDA).
+// train/adam_math.h in one kernel over every group. Only the groups' gradient norms come back to the
+// host each step (two scalars a group, in one copy each). A plain C++ header; defined in device_adam.cu (builds with ENDORECON_WITH_CUDA).
 #pragma once
 
 #include <iosfwd>
