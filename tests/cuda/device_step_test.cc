@@ -1,6 +1,6 @@
 // A whole training step on the GPU against the CPU's with the same seed (the same rays, samples and
 // masks: the per-ray bodies and the field's per-sample math are the same functions), the same with a
-// learned background, the occupancy grid from the GPU's densities, a GPU run resumed on the CPU from
+// learned background on an object capture, the occupancy grid from the GPU's densities, a GPU run resumed on the CPU from
 // its checkpoint, and 300 GPU steps fitting held-out frames as well as 300 CPU steps (the GPU's float
 // atomics add in another order: the runs drift apart, the fit must not).
 // The clip is made in memory (no image files: this binary travels to bare GPU machines,
@@ -19,6 +19,7 @@
 #include "worker/engine/cuda/device.h"
 #include "worker/engine/eval/curve_probe.h"
 #include "worker/engine/render/frame_renderer.h"
+#include "worker/engine/scene/synthetic_object.h"
 #include "worker/engine/train/render_settings.h"
 #include "worker/engine/train/scene_fit.h"
 #include "worker/engine/train/trainer.h"
@@ -62,18 +63,23 @@ TEST_F(DeviceStepTest, AStepOnTheGpuIsTheCpuStep) {
   EXPECT_LT(MaxRelative(gpu.field(), cpu.field()), 1e-3);
 }
 
-// A learned background (its gradients: atomic adds on the GPU, partials in task order on the CPU) on
-// the small tissue clip, whose rays see the background through what the young field leaves; the
-// object capture's own test reads files (device_clip_files_test.cc), this one travels in the bundle.
+// An object in front of a backdrop with a learned background (the rays cut to the object's box; the
+// background's gradients: atomic adds on the GPU, partials in task order on the CPU), made in memory.
 TEST_F(DeviceStepTest, ALearnedBackgroundStepOnTheGpuIsTheCpuStep) {
+  scene::ObjectSynthOptions synth;
+  synth.views = 6;
+  synth.width = synth.height = 24;
+  synth.backdrop = true;
+  const scene::Clip clip = scene::MakeSyntheticObject(synth);
   train::TrainConfig config = train::TrainConfig::Preset("cpu");
   config.rays_per_batch = 256;
   config.iterations = 100;
   config.background = "learned";
-  train::FitToScene(clip_, config);
+  train::FitToScene(clip, config);
   ASSERT_TRUE(config.field.learned_background);
-  train::Trainer cpu(clip_, config, Frames(), 11);
-  train::Trainer gpu(clip_, config, Frames(), 11, DeviceStepFactory(0));
+  const std::vector<int> frames = {0, 1, 2, 3, 4, 5};
+  train::Trainer cpu(clip, config, frames, 11);
+  train::Trainer gpu(clip, config, frames, 11, DeviceStepFactory(0));
   for (int i = 0; i < 3; ++i) {
     const train::StepStats a = cpu.Step(0.01 * i);
     const train::StepStats b = gpu.Step(0.01 * i);

@@ -72,5 +72,39 @@ TEST(SyntheticObjectTest, ABackdropShowsItsColourAlongEachPixelsRay) {
   }
 }
 
+// The capture made in memory (for the GPU tests' bundle) is what its files load as, byte for byte:
+// on transparency (composited onto white) and in front of a backdrop (opaque RGB).
+TEST(SyntheticObjectTest, TheCaptureMadeInMemoryIsTheCaptureItsFilesLoadAs) {
+  for (const bool backdrop : {false, true}) {
+    testing::TempDir dir("object-memory");
+    ObjectSynthOptions options;
+    options.views = 5;
+    options.width = 24;
+    options.height = 20;
+    options.backdrop = backdrop;
+    WriteSyntheticObject(options, dir.path());
+    const Clip files = LoadClip(dir.path());
+    const Clip memory = MakeSyntheticObject(options);
+    ASSERT_EQ(memory.frame_count(), files.frame_count()) << backdrop;
+    EXPECT_EQ(memory.width, files.width);
+    EXPECT_EQ(memory.height, files.height);
+    EXPECT_EQ(memory.rgb, files.rgb) << backdrop;
+    EXPECT_EQ(memory.times, files.times);
+    EXPECT_EQ(memory.is_static, files.is_static);
+    EXPECT_EQ(memory.transparent, files.transparent);
+    EXPECT_EQ(memory.transparent, !backdrop);
+    EXPECT_EQ(memory.near, files.near);
+    EXPECT_EQ(memory.far, files.far);
+    EXPECT_EQ(memory.object_radius, files.object_radius);
+    for (int f = 0; f < files.frame_count(); ++f) {
+      EXPECT_EQ(memory.cameras[f].c2w, files.cameras[f].c2w) << f;
+      EXPECT_EQ(memory.cameras[f].fx, files.cameras[f].fx);
+      EXPECT_EQ(memory.cameras[f].fy, files.cameras[f].fy);
+      EXPECT_EQ(memory.cameras[f].cx, files.cameras[f].cx);
+      EXPECT_EQ(memory.cameras[f].cy, files.cameras[f].cy);
+    }
+  }
+}
+
 }  // namespace
 }  // namespace endorecon::scene

@@ -12,6 +12,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "common/error.h"
+#include "worker/engine/scene/alpha_composite.h"
 #include "worker/engine/scene/clip_checks.h"
 #include "worker/engine/scene/image_file.h"
 #include "worker/engine/scene/npy.h"
@@ -118,24 +119,6 @@ std::vector<std::uint8_t> ReadRgb(const fs::path& path, const FrameReadOptions& 
   return std::move(image.rgb);
 }
 
-// Straight-alpha RGBA (OpenCV's BGRA order) onto `background` (RGB), rounded; true when some pixel
-// was not opaque.
-bool CompositeOnto(const cv::Mat& bgra, const std::array<std::uint8_t, 3>& background, cv::Mat& rgb) {
-  rgb.create(bgra.rows, bgra.cols, CV_8UC3);
-  bool transparent = false;
-  for (int y = 0; y < bgra.rows; ++y) {
-    const std::uint8_t* in = bgra.ptr<std::uint8_t>(y);
-    std::uint8_t* out = rgb.ptr<std::uint8_t>(y);
-    for (int x = 0; x < bgra.cols; ++x, in += 4, out += 3) {
-      const int a = in[3];
-      transparent = transparent || a < 255;
-      for (int c = 0; c < 3; ++c)
-        out[c] = static_cast<std::uint8_t>((in[2 - c] * a + background[c] * (255 - a) + 127) / 255);
-    }
-  }
-  return transparent;
-}
-
 void CheckAllOrNone(const std::vector<FrameFiles>& frames, fs::path FrameFiles::*part, const char* what) {
   const bool first = !(frames.front().*part).empty();
   for (std::size_t i = 0; i < frames.size(); ++i) {
@@ -185,8 +168,9 @@ RgbImage ReadRgbImage(const fs::path& path, const std::array<std::uint8_t, 3>& b
       cv::cvtColor(image, image, cv::COLOR_BGR2RGB);
       break;
     case 4: {
-      cv::Mat rgb;
-      transparent = CompositeOnto(image, background, rgb);
+      cv::Mat rgba, rgb(image.rows, image.cols, CV_8UC3);
+      cv::cvtColor(image, rgba, cv::COLOR_BGRA2RGBA);  // continuous, as rgb is
+      transparent = CompositeRgbaOnto(rgba.data, rgba.total(), background, rgb.data);
       image = rgb;
       break;
     }

@@ -8,16 +8,20 @@
 #include <cmath>
 #include <nlohmann/json.hpp>
 #include <numbers>
-#include <opencv2/core.hpp>
 #include <optional>
+#include <string>
+#include <utility>
+#include <vector>
 
+#include "common/error.h"
+#include "worker/engine/scene/alpha_composite.h"
 #include "worker/engine/scene/portable_random.h"
 #include "worker/engine/scene/synthetic_files.h"
+#include "worker/engine/scene/transforms_clip.h"
 
 namespace endorecon::scene {
 namespace {
 
-namespace fs = std::filesystem;
 using Eigen::Vector3d;
 using Rgb = std::array<float, 3>;
 
@@ -140,13 +144,19 @@ void BackdropColor(const double* d, float* rgb) {
   rgb[2] = float(std::clamp(0.35 + 0.3 * d[2] + 0.15 * d[0] * d[1] + 0.8 * lobe, 0.0, 1.0));
 }
 
-void WriteSyntheticObject(const ObjectSynthOptions& options, const fs::path& dir) {
-  ClearSyntheticFolder(dir);
-  fs::create_directories(dir / "images");
+SyntheticObjectViews RenderSyntheticObject(const ObjectSynthOptions& options) {
+  if (options.views < 1 || options.width < 1 || options.height < 1) {
+    FailInvalid("synthetic object: need at least one view of at least 1 x 1 pixels, got " +
+                std::to_string(options.views) + " views of " + std::to_string(options.width) + " x " +
+                std::to_string(options.height));
+  }
+  SyntheticObjectViews views;
+  views.width = options.width;
+  views.height = options.height;
+  views.channels = options.backdrop ? 3 : 4;
   PortableRandom random(options.seed);
   const double focal = 0.5 * options.width / std::tan(0.5 * kCameraAngleX);
   const double cx = 0.5 * options.width, cy = 0.5 * options.height;
-  nlohmann::json frames = nlohmann::json::array();
   for (int view = 0; view < options.views; ++view) {
     const double azimuth = random.Uniform(0, 2 * std::numbers::pi);
     // Uniform over the band of the sphere between the two elevations.
@@ -158,7 +168,13 @@ void WriteSyntheticObject(const ObjectSynthOptions& options, const fs::path& dir
                                    std::cos(elevation) * std::sin(azimuth), std::sin(elevation));
     const Eigen::Matrix4d c2w = LookAtOrigin(position);
     const Eigen::Matrix3d rotation = c2w.block<3, 3>(0, 0);
-    cv::Mat image(options.height, options.width, options.backdrop ? CV_8UC3 : CV_8UC4);
+    std::array<double, 16> matrix;
+    for (int r = 0; r < 4; ++r) {
+      for (int c = 0; c < 4; ++c) matrix[4 * r + c] = c2w(r, c);
+    }
+    views.c2w.push_back(matrix);
+    const int channels = views.channels;
+    std::vector<std::uint8_t> image(std::size_t(options.width) * options.height * channels);
     tbb::parallel_for(0, options.height, [&](int v) {
       for (int u = 0; u < options.width; ++u) {
         Rgb sum{};
@@ -179,28 +195,53 @@ void WriteSyntheticObject(const ObjectSynthOptions& options, const fs::path& dir
             for (int c = 0; c < 3; ++c) sum[c] += rgb[c];
           }
         }
+        std::uint8_t* pixel = &image[(std::size_t(v) * options.width + u) * channels];
         if (options.backdrop) {
           constexpr float k = 1.0f / (kSubsamples * kSubsamples);
-          image.at<cv::Vec3b>(v, u) = {ToByte(sum[2] * k), ToByte(sum[1] * k), ToByte(sum[0] * k)};
+          for (int c = 0; c < 3; ++c) pixel[c] = ToByte(sum[c] * k);
           continue;
         }
         const float k = hits > 0 ? 1.0f / float(hits) : 0.0f;  // straight alpha: the hits' mean colour
-        image.at<cv::Vec4b>(v, u) = {ToByte(sum[2] * k), ToByte(sum[1] * k), ToByte(sum[0] * k),
-                                     ToByte(float(hits) / (kSubsamples * kSubsamples))};
+        for (int c = 0; c < 3; ++c) pixel[c] = ToByte(sum[c] * k);
+        pixel[3] = ToByte(float(hits) / (kSubsamples * kSubsamples));
       }
     });
-    const std::string name = "r_" + FrameName(view);
-    WritePng(dir / "images" / (name + ".png"), image);
-    nlohmann::json matrix = nlohmann::json::array();
-    for (int r = 0; r < 4; ++r) matrix.push_back({c2w(r, 0), c2w(r, 1), c2w(r, 2), c2w(r, 3)});
-    frames.push_back({{"file_path", "./images/" + name}, {"transform_matrix", matrix}});
+    views.images.push_back(std::move(image));
   }
-  WriteText(dir / "transforms.json",
-            nlohmann::json{{"camera_angle_x", kCameraAngleX}, {"frames", frames}}.dump(2));
-  const nlohmann::json written = {{"object", true},         {"views", options.views},
-                                  {"width", options.width}, {"height", options.height},
-                                  {"seed", options.seed},   {"backdrop", options.backdrop}};
-  WriteText(dir / "synth.json", written.dump(2) + "\n");
+  return views;
+}
+
+nlohmann::json SyntheticObjectTransforms(const SyntheticObjectViews& views) {
+  nlohmann::json frames = nlohmann::json::array();
+  for (const auto& c2w : views.c2w) {
+    nlohmann::json matrix = nlohmann::json::array();
+    for (int r = 0; r < 4; ++r)
+      matrix.push_back({c2w[4 * r], c2w[4 * r + 1], c2w[4 * r + 2], c2w[4 * r + 3]});
+    frames.push_back({{"transform_matrix", matrix}});
+  }
+  return {{"camera_angle_x", kCameraAngleX}, {"frames", frames}};
+}
+
+Clip MakeSyntheticObject(const ObjectSynthOptions& options,
+                         const std::array<std::uint8_t, 3>& alpha_background) {
+  const SyntheticObjectViews views = RenderSyntheticObject(options);
+  Clip clip;
+  clip.source = "synthetic object (in memory)";
+  clip.width = views.width;
+  clip.height = views.height;
+  const std::size_t pixels = std::size_t(views.width) * views.height;
+  for (const auto& image : views.images) {
+    if (views.channels == 3) {
+      clip.rgb.push_back(image);
+      continue;
+    }
+    std::vector<std::uint8_t> rgb(3 * pixels);
+    clip.transparent =
+        CompositeRgbaOnto(image.data(), pixels, alpha_background, rgb.data()) || clip.transparent;
+    clip.rgb.push_back(std::move(rgb));
+  }
+  FinishTransformsClip(SyntheticObjectTransforms(views), clip.source, clip);
+  return clip;
 }
 
 }  // namespace endorecon::scene

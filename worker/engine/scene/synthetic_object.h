@@ -9,8 +9,13 @@
 // capture in front of a real backdrop, whose background neither black nor white fits.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <filesystem>
+#include <nlohmann/json_fwd.hpp>
+#include <vector>
+
+#include "worker/engine/scene/clip.h"
 
 namespace endorecon::scene {
 
@@ -23,9 +28,28 @@ struct ObjectSynthOptions {
 // The backdrop's RGB in [0, 1] seen along the unit world direction d (x, y, z; z up).
 void BackdropColor(const double* d, float* rgb);
 
+// The capture's views rendered in memory (deterministic: the same options, the same bytes): each
+// view's camera-to-world (row-major 4 x 4, OpenGL axes) and image (row-major, top row first; RGB with
+// a backdrop, else RGBA with straight alpha). Throws FailInvalid for no views or an empty image.
+struct SyntheticObjectViews {
+  int width = 0, height = 0, channels = 0;  // channels: 3 or 4
+  std::vector<std::array<double, 16>> c2w;
+  std::vector<std::vector<std::uint8_t>> images;
+};
+SyntheticObjectViews RenderSyntheticObject(const ObjectSynthOptions& options);
+
+// The capture's transforms.json without file paths: camera_angle_x and each view's transform_matrix.
+nlohmann::json SyntheticObjectTransforms(const SyntheticObjectViews& views);
+
+// The capture as a Clip without files, exactly as scene::LoadClip reads what WriteSyntheticObject
+// writes (images composited onto `alpha_background`, LoadOptions' default white): for the GPU tests,
+// whose binary travels to bare GPU machines without image codecs (scripts/gpu-check).
+Clip MakeSyntheticObject(const ObjectSynthOptions& options,
+                         const std::array<std::uint8_t, 3>& alpha_background = {255, 255, 255});
+
 // Writes dir/transforms.json, dir/images/r_NNNNNN.png and dir/synth.json (the options), replacing an
 // earlier synthetic clip there (synthetic_files.h ClearSyntheticFolder). Throws Error(kUnavailable)
-// naming a file that cannot be written.
+// naming a file that cannot be written. Defined in synthetic_object_files.cc.
 void WriteSyntheticObject(const ObjectSynthOptions& options, const std::filesystem::path& dir);
 
 }  // namespace endorecon::scene
