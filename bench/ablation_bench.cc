@@ -10,6 +10,7 @@
 // Spearman, AUSE; all frames and held-out) and wall time, as a markdown table. --override JSON is
 // config keys applied to every row under the row's own (e.g. another dropout rate for all four).
 //   ablation_bench [--budget SECONDS] [--threads N] [--out DIR] [--rows abcd] [--override JSON]
+#include <CLI/CLI.hpp>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -40,26 +41,15 @@ int main(int argc, char** argv) {
   int threads = 0;
   std::string out = "/tmp/endorecon-ablation-bench";
   std::string row_letters = "abcd";
-  nlohmann::json overrides = nlohmann::json::object();
-  for (int i = 1; i + 1 < argc; i += 2) {
-    const std::string flag = argv[i];
-    if (flag == "--budget")
-      budget = std::stod(argv[i + 1]);
-    else if (flag == "--threads")
-      threads = std::stoi(argv[i + 1]);
-    else if (flag == "--out")
-      out = argv[i + 1];
-    else if (flag == "--rows")
-      row_letters = argv[i + 1];
-    else if (flag == "--override")
-      overrides = nlohmann::json::parse(argv[i + 1]);
-    else {
-      std::fprintf(stderr,
-                   "usage: ablation_bench [--budget SECONDS] [--threads N] [--out DIR] [--rows abcd] "
-                   "[--override JSON]\n");
-      return 2;
-    }
-  }
+  std::string override_text = "{}";
+  CLI::App app{"ablation_bench: the paper's ablation rows on the demo clip"};
+  app.add_option("--budget", budget, "each run's time budget, seconds")->capture_default_str();
+  app.add_option("--threads", threads, "threads per run (0: all)")->capture_default_str();
+  app.add_option("--out", out, "scratch folder")->capture_default_str();
+  app.add_option("--rows", row_letters, "which rows, by letter")->capture_default_str();
+  app.add_option("--override", override_text, "training keys over the preset, JSON")->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
+  const nlohmann::json overrides = nlohmann::json::parse(override_text);
   namespace fs = std::filesystem;
   const fs::path root(out);
   fs::create_directories(root);

@@ -3,6 +3,7 @@
 // times, beside the 2D baseline of averaging the two neighbouring frames (t-1, t+1) of each held-out
 // frame, and the training frames' PSNR at the end.
 //   error_time_bench [--budget SECONDS] [--preset cpu|paper] [--out DIR] [--override JSON] [--clip DIR]
+#include <CLI/CLI.hpp>
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
@@ -51,14 +52,13 @@ double NeighbourBaselinePsnr(const endorecon::scene::Clip& clip, const std::vect
 int main(int argc, char** argv) {
   double budget = 300;
   std::string preset = "cpu", out = "/tmp/endorecon-error-time-bench", overrides = "{}", clip_dir;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    const std::string flag = argv[i];
-    if (flag == "--budget") budget = std::stod(argv[i + 1]);
-    if (flag == "--preset") preset = argv[i + 1];
-    if (flag == "--out") out = argv[i + 1];
-    if (flag == "--override") overrides = argv[i + 1];
-    if (flag == "--clip") clip_dir = argv[i + 1];
-  }
+  CLI::App app{"error_time_bench: held-out error against run time, beside the neighbour-average stand-in"};
+  app.add_option("--budget", budget, "the run's time budget, seconds")->capture_default_str();
+  app.add_option("--preset", preset, "training preset")->capture_default_str();
+  app.add_option("--out", out, "scratch folder (emptied first)")->capture_default_str();
+  app.add_option("--override", overrides, "training keys over the preset, JSON")->capture_default_str();
+  app.add_option("--clip", clip_dir, "clip folder (default: the demo clip, written into --out)");
+  CLI11_PARSE(app, argc, argv);
   namespace fs = std::filesystem;
   fs::remove_all(out);
   if (clip_dir.empty()) {

@@ -16,11 +16,11 @@
 #include <tbb/info.h>
 #include <tbb/parallel_for.h>
 
+#include <CLI/CLI.hpp>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
 #include <ctime>
 #include <functional>
 #include <random>
@@ -227,18 +227,13 @@ int main(int argc, char** argv) {
   int threads = tbb::info::default_concurrency();
   double seconds = 2.0;
   std::string preset = "both";
-  for (int i = 1; i + 1 < argc; i += 2) {
-    if (!std::strcmp(argv[i], "--threads"))
-      threads = std::atoi(argv[i + 1]);
-    else if (!std::strcmp(argv[i], "--seconds"))
-      seconds = std::atof(argv[i + 1]);
-    else if (!std::strcmp(argv[i], "--preset"))
-      preset = argv[i + 1];
-    else {
-      std::fprintf(stderr, "usage: field_bench [--threads N] [--seconds S] [--preset cpu|paper|both]\n");
-      return 2;
-    }
-  }
+  CLI::App app{"field_bench: the field's forward and backward, samples per second"};
+  app.add_option("--threads", threads, "threads")->capture_default_str()->check(CLI::PositiveNumber);
+  app.add_option("--seconds", seconds, "seconds per measurement")->capture_default_str();
+  app.add_option("--preset", preset, "field preset")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"cpu", "paper", "both"}));
+  CLI11_PARSE(app, argc, argv);
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
   const double peak = PeakGflops(threads);
   std::printf("field_bench: %d threads, batch %d samples (%d rays x %d), fp32 FMA peak %.0f GFLOP/s\n\n",

@@ -8,14 +8,14 @@
 // device that trains; the probes' time is not counted as training). Prints the curves, each run's
 // training samples per second, its ratio to the CPU's, and how long each GPU run took to reach the
 // CPU's last PSNR. With --big-seconds S it then trains a 640 x 512, 160-frame clip (synth --seed 3)
-// with --preset on --device for S seconds and prints its curve. Nothing is read from or written to files: the binary travels to
-// bare GPU machines with scripts/gpu-check, whose DIR/run calls it.
+// with --preset on --device for S seconds and prints its curve. Nothing is read from or written to files: the
+// binary travels to bare GPU machines with scripts/gpu-check, whose DIR/run calls it.
 //   gpu_train_bench [--device cuda:0] [--preset gpu] [--seconds 30] [--cpu-seconds 90]
 //                   [--probe-s 5] [--big-seconds 0]
+#include <CLI/CLI.hpp>
 #include <chrono>
 #include <cstdio>
 #include <exception>
-#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -97,23 +97,21 @@ double TimeToReach(const Curve& curve, double psnr) {
 int main(int argc, char** argv) {
   std::string device = "cuda:0", preset = "gpu";
   double seconds = 30, cpu_seconds = 90, probe_s = 5, big_seconds = 0;
+  CLI::App app{"gpu_train_bench: training on a GPU against the CPU, in the same run"};
+  app.add_option("--device", device, "the GPU: cuda:N (cpu to try the bench without one)")
+      ->capture_default_str();
+  app.add_option("--preset", preset, "the second GPU run's preset")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"cpu", "gpu", "paper"}));
+  app.add_option("--seconds", seconds, "training seconds of each GPU run")->capture_default_str();
+  app.add_option("--cpu-seconds", cpu_seconds, "training seconds of the CPU run")->capture_default_str();
+  app.add_option("--probe-s", probe_s, "training seconds between curve points")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  app.add_option("--big-seconds", big_seconds, "training seconds on the 640 x 512 x 160 clip (0: none)")
+      ->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
   try {
-    const auto number = [](const std::string& flag, const char* text) {
-      try {
-        return std::stod(text);
-      } catch (const std::exception&) {
-        throw std::invalid_argument(flag + ": not a number: '" + text + "'");
-      }
-    };
-    for (int i = 1; i + 1 < argc; i += 2) {
-      const std::string flag = argv[i];
-      if (flag == "--device") device = argv[i + 1];
-      if (flag == "--preset") preset = argv[i + 1];
-      if (flag == "--seconds") seconds = number(flag, argv[i + 1]);
-      if (flag == "--cpu-seconds") cpu_seconds = number(flag, argv[i + 1]);
-      if (flag == "--probe-s") probe_s = number(flag, argv[i + 1]);
-      if (flag == "--big-seconds") big_seconds = number(flag, argv[i + 1]);
-    }
     BackendsFor(device);  // refuses a device that is not there before any clip is made
     const scene::Clip demo = scene::MakeSyntheticClip(scene::SynthOptions{});
     std::printf("gpu_train_bench: demo clip (48 frames, 160 x 128, noisy), preset cpu on both\n");
@@ -146,7 +144,7 @@ int main(int argc, char** argv) {
       std::printf("gpu_train_bench: big clip %.3g samples/s, held-out %.2f dB after %.0f s\n",
                   large.samples_per_second, large.points.back().psnr, big_seconds);
     }
-  } catch (const std::exception& e) {  // a flag that is not a number, a device that is not there
+  } catch (const std::exception& e) {  // a device that is not there
     std::fprintf(stderr, "gpu_train_bench: %s\n", e.what());
     return 1;
   }

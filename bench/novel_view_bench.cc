@@ -3,6 +3,7 @@
 // The clip has no tool (the right eye has no masks) and the columns the left eye cannot see (the
 // right eye's outer edge, within the largest disparity f * baseline / near) are left out.
 //   novel_view_bench [--budget SECONDS] [--out DIR]
+#include <CLI/CLI.hpp>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -20,11 +21,10 @@
 int main(int argc, char** argv) {
   double budget = 120;
   std::string out = "/tmp/endorecon-novel-view-bench";
-  for (int i = 1; i + 1 < argc; i += 2) {
-    const std::string flag = argv[i];
-    if (flag == "--budget") budget = std::stod(argv[i + 1]);
-    if (flag == "--out") out = argv[i + 1];
-  }
+  CLI::App app{"novel_view_bench: the other eye rendered from a model trained on one"};
+  app.add_option("--budget", budget, "the run's time budget, seconds")->capture_default_str();
+  app.add_option("--out", out, "scratch folder (emptied first)")->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
   namespace fs = std::filesystem;
   fs::remove_all(out);
   endorecon::scene::SynthOptions synth;

@@ -6,6 +6,7 @@
 // synthetic generator's own depth, each trained for the same time.
 //   prepare_bench [--out DIR] [--frames N] [--sizes 640x512,1280x1024] [--reconstruct SECONDS]
 //                 [--reconstruct-size WxH] [--reconstruct-frames N]
+#include <CLI/CLI.hpp>
 #include <Eigen/Geometry>
 #include <chrono>
 #include <cstdio>
@@ -192,15 +193,15 @@ int main(int argc, char** argv) {
   std::string out = "/tmp/endorecon-prepare-bench", sizes = "640x512,1280x1024", reconstruct_size = "320x256";
   int frames = 8, reconstruct_frames = 24;
   double reconstruct = 0;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    const std::string flag = argv[i];
-    if (flag == "--out") out = argv[i + 1];
-    if (flag == "--frames") frames = std::stoi(argv[i + 1]);
-    if (flag == "--sizes") sizes = argv[i + 1];
-    if (flag == "--reconstruct") reconstruct = std::stod(argv[i + 1]);
-    if (flag == "--reconstruct-size") reconstruct_size = argv[i + 1];
-    if (flag == "--reconstruct-frames") reconstruct_frames = std::stoi(argv[i + 1]);
-  }
+  CLI::App app{"prepare_bench: preparing raw stereo recordings, against the synthetic truth"};
+  app.add_option("--out", out, "scratch folder (emptied first)")->capture_default_str();
+  app.add_option("--frames", frames, "frames per recording")->capture_default_str();
+  app.add_option("--sizes", sizes, "recording sizes, WxH,...")->capture_default_str();
+  app.add_option("--reconstruct", reconstruct, "also reconstruct a prepared clip for S seconds (0: no)")
+      ->capture_default_str();
+  app.add_option("--reconstruct-size", reconstruct_size, "its size, WxH")->capture_default_str();
+  app.add_option("--reconstruct-frames", reconstruct_frames, "its frames")->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
   fs::remove_all(out);
   for (const auto& [width, height] : ParseSizes(sizes)) MeasureSize(out, width, height, frames);
   MeasureCalibration(out, 640, 512);

@@ -7,6 +7,7 @@
 #include <tbb/info.h>
 #include <tbb/parallel_for.h>
 
+#include <CLI/CLI.hpp>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -124,7 +125,10 @@ double Measure(Batch& b, const std::function<void(Batch&, int)>& per_ray, double
 }  // namespace
 
 int main(int argc, char** argv) {
-  const double seconds = argc > 1 ? std::atof(argv[1]) : 1.0;
+  double seconds = 1.0;
+  CLI::App app{"render_bench: compositing and sampling, rays per second"};
+  app.add_option("seconds", seconds, "seconds per case")->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
   Batch batch = MakeBatch();
   const int threads = tbb::info::default_concurrency();
   std::printf("render_bench: float32, %d samples/ray, batch of %d rays, %.1f s per case, %d threads\n",

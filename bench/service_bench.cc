@@ -9,10 +9,10 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
-#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -101,12 +101,12 @@ UploadCalls CallsOf(v1::JobService::Stub& stub) {
 int main(int argc, char** argv) {
   int upload_mib = 512, jobs = 1000, watchers = 100;
   fs::path scratch = fs::temp_directory_path() / ("endorecon-service-bench-" + std::to_string(getpid()));
-  for (int i = 1; i + 1 < argc; i += 2) {
-    if (!std::strcmp(argv[i], "--upload-mib")) upload_mib = std::atoi(argv[i + 1]);
-    if (!std::strcmp(argv[i], "--jobs")) jobs = std::atoi(argv[i + 1]);
-    if (!std::strcmp(argv[i], "--watchers")) watchers = std::atoi(argv[i + 1]);
-    if (!std::strcmp(argv[i], "--dir")) scratch = argv[i + 1];
-  }
+  CLI::App app{"service_bench: a large upload, many queued jobs and watchers against one server"};
+  app.add_option("--upload-mib", upload_mib, "the upload's size, MiB")->capture_default_str();
+  app.add_option("--jobs", jobs, "jobs queued")->capture_default_str();
+  app.add_option("--watchers", watchers, "watch streams")->capture_default_str();
+  app.add_option("--dir", scratch, "scratch folder")->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
   fs::create_directories(scratch / "clip");
   const int port = 20000 + getpid() % 20000;
   const std::string address = "127.0.0.1:" + std::to_string(port);

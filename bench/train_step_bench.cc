@@ -6,6 +6,7 @@
 //   train_step_bench [--steps N] [--out DIR]
 #include <tbb/global_control.h>
 
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -65,11 +66,10 @@ double Measure(const endorecon::scene::Clip& clip, TrainConfig config, const Cas
 int main(int argc, char** argv) {
   int steps = 200;
   std::string out = "/tmp/endorecon-train-step-bench";
-  for (int i = 1; i + 1 < argc; i += 2) {
-    const std::string flag = argv[i];
-    if (flag == "--steps") steps = std::stoi(argv[i + 1]);
-    if (flag == "--out") out = argv[i + 1];
-  }
+  CLI::App app{"train_step_bench: training samples per second of the step, by case and threads"};
+  app.add_option("--steps", steps, "steps per window")->capture_default_str();
+  app.add_option("--out", out, "scratch folder (emptied first)")->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
   namespace fs = std::filesystem;
   fs::remove_all(out);
   endorecon::scene::WriteSyntheticClip(endorecon::scene::SynthOptions{}, fs::path(out) / "clip");

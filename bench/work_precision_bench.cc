@@ -11,6 +11,7 @@
 // that time; curve points are measured on a subset of held-out frames, every --interval seconds) and
 // the final held-out depth RMSE over the depth range (all held-out frames).
 //   work_precision_bench [--budget SECONDS] [--interval SECONDS] [--out DIR] [--svg PATH]
+#include <CLI/CLI.hpp>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -49,13 +50,12 @@ double PsnrAt(const nlohmann::json& curve, double seconds) {
 int main(int argc, char** argv) {
   double budget = 120, interval = 5;
   std::string out = "/tmp/endorecon-work-precision-bench", svg;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    const std::string flag = argv[i];
-    if (flag == "--budget") budget = std::stod(argv[i + 1]);
-    if (flag == "--interval") interval = std::stod(argv[i + 1]);
-    if (flag == "--out") out = argv[i + 1];
-    if (flag == "--svg") svg = argv[i + 1];
-  }
+  CLI::App app{"work_precision_bench: held-out error against training time, per scene"};
+  app.add_option("--budget", budget, "each run's time budget, seconds")->capture_default_str();
+  app.add_option("--interval", interval, "seconds between curve points")->capture_default_str();
+  app.add_option("--out", out, "scratch folder (emptied first)")->capture_default_str();
+  app.add_option("--svg", svg, "the plot (default: OUT/work_precision.svg)");
+  CLI11_PARSE(app, argc, argv);
   if (svg.empty()) svg = (fs::path(out) / "work_precision.svg").string();
   fs::remove_all(out);
   endorecon::scene::WriteSyntheticClip(endorecon::scene::SynthOptions{}, fs::path(out) / "demo");
