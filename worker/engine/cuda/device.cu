@@ -72,6 +72,11 @@ DeviceList ListDevices() {
   return list;
 }
 
+std::string DeviceName(int index) {
+  return "cuda:" + std::to_string(index) + " (" +
+         ListDevices().devices.at(static_cast<std::size_t>(index)).name + ")";
+}
+
 int DeviceCount() {
   int count = 0;
   if (cudaGetDeviceCount(&count) != cudaSuccess) {

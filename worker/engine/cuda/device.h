@@ -36,6 +36,10 @@ struct DeviceList {
 
 DeviceList ListDevices();
 
+// How logs and metrics.json name device `index`: "cuda:0 (NVIDIA H200)". Throws std::out_of_range for
+// an index ListDevices does not list.
+std::string DeviceName(int index);
+
 // Number of usable devices; 0 when there is no driver or no device (never throws).
 int DeviceCount();
 

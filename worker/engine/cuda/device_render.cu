@@ -20,7 +20,7 @@ class DeviceRender final : public render::RenderBackend {
   DeviceRender(int index, std::shared_ptr<DeviceField> field, bool shared, const scene::SceneBox& box,
                const render::FrameRenderSettings& settings)
       : index_(index), box_(box), settings_(settings), field_(std::move(field)), shared_(shared) {
-    name_ = "cuda:" + std::to_string(index) + " (" + ListDevices().devices.at(index).name + ")";
+    name_ = DeviceName(index);
     const std::size_t rays = static_cast<std::size_t>(settings_.rays_per_chunk);
     const std::size_t n = rays * std::max(settings_.coarse_samples, settings_.fine_samples);
     auto floats = [&](std::size_t count) {
@@ -43,13 +43,13 @@ class DeviceRender final : public render::RenderBackend {
       for (int i = 0; i < 3; ++i) {
         dropout_.var_density[i] = floats(n);
         dropout_.var_color[i] = floats(n);
-        out_.scores[i] = floats(rays);
       }
+      out_.uncertainty = floats(rays);
+      out_.aleatoric = floats(rays);
+      out_.epistemic = floats(rays);
     }
     background_ = DeviceArray<float>(std::vector<float>(settings_.background, settings_.background + 3));
-    for (const auto& block : field_->Blocks()) {
-      if (block.name == "background") background_params_ = block.value;
-    }
+    background_params_ = field::BlockValues(field_->Blocks(), "background");
   }
 
   std::string device() const override { return name_; }
@@ -70,18 +70,8 @@ class DeviceRender final : public render::RenderBackend {
                    std::uint64_t chunk_seed, const render::PixelOutputs& out) override {
     SetDevice(index_);
     CopyToDevice(pixels_.data(), pixels, static_cast<std::size_t>(count) * sizeof(int));
-    render::ChunkShape shape;
-    shape.view = camera.View();
-    shape.box = box_.Frame();
-    shape.occupancy = occupancy_view_;
-    shape.near = static_cast<float>(settings_.near);
-    shape.far = static_cast<float>(settings_.far);
-    shape.time = time;
-    shape.coarse = settings_.coarse_samples;
-    shape.fine = settings_.fine_samples;
-    shape.floor = settings_.floor;
-    shape.background = background_.data();
-    shape.background_params = background_params_;
+    const render::ChunkShape shape = render::ChunkShapeOf(settings_, box_, camera, time, occupancy_view_,
+                                                          background_.data(), background_params_);
     const render::ChunkArrays a = chunk_;
     const int* device_pixels = pixels_.data();
     const auto batch = [&](int samples) { return field::SampleBatch{count * samples, a.pos, a.time, a.dir}; };
@@ -124,7 +114,7 @@ class DeviceRender final : public render::RenderBackend {
     } else {
       field_->Infer(fine_batch, fine, /*dropout=*/false, 0);
     }
-    const render::ChunkOutputs result = out_;
+    const render::PixelOutputs result = out_;
     const float lambda = settings_.color_weight;
     ForEach(
         count,
@@ -137,9 +127,11 @@ class DeviceRender final : public render::RenderBackend {
     CopyToHost(out.depth, result.depth, rays * sizeof(float));
     CopyToHost(out.opacity, result.opacity, rays * sizeof(float));
     if (passes == 0) return;
-    float* scores[3] = {out.uncertainty, out.aleatoric, out.epistemic};
-    for (int i = 0; i < 3; ++i) {
-      if (scores[i] != nullptr) CopyToHost(scores[i], result.scores[i], rays * sizeof(float));
+    const std::pair<float*, const float*> scores[3] = {{out.uncertainty, result.uncertainty},
+                                                       {out.aleatoric, result.aleatoric},
+                                                       {out.epistemic, result.epistemic}};
+    for (const auto& [host, device] : scores) {
+      if (host != nullptr) CopyToHost(host, device, rays * sizeof(float));
     }
   }
 
@@ -159,7 +151,7 @@ class DeviceRender final : public render::RenderBackend {
   render::OccupancyView occupancy_view_;
   render::ChunkArrays chunk_;
   render::DropoutArrays dropout_;
-  render::ChunkOutputs out_;
+  render::PixelOutputs out_;                  // the chunk's results on the device
   const float* background_params_ = nullptr;  // the device field's learned background, if it has one
 };
 
@@ -169,9 +161,8 @@ render::RenderBackendFactory DeviceRenderFactory(int index, std::shared_ptr<Shar
   return [index, shared](field::Field& field, const scene::SceneBox& box,
                          const render::FrameRenderSettings& settings) {
     SetDevice(index);
-    auto device_field = shared ? shared->For(field) : std::make_shared<DeviceField>(field);
     return std::unique_ptr<render::RenderBackend>(
-        new DeviceRender(index, std::move(device_field), shared != nullptr, box, settings));
+        new DeviceRender(index, DeviceFieldFor(shared.get(), field), shared != nullptr, box, settings));
   };
 }
 

@@ -48,8 +48,7 @@ class DeviceStep final : public train::StepBackend {
   DeviceStep(int index, std::shared_ptr<DeviceField> field, const train::TrainConfig& config,
              const train::StepTables& tables)
       : index_(index), host_(tables), field_(std::move(field)), adam_(field_->Blocks(), config.adam) {
-    const auto list = ListDevices();
-    name_ = "cuda:" + std::to_string(index) + " (" + list.devices.at(index).name + ")";
+    name_ = DeviceName(index);
     const train::StepTables& t = host_;
     const int frames = t.frames;
     const std::size_t pixels = static_cast<std::size_t>(t.picks.width) * t.picks.height;
@@ -81,9 +80,7 @@ class DeviceStep final : public train::StepBackend {
     device_.rays.rgb = rgb_.pointers.data();
     device_.rays.views = views_.data();
     device_.rays.times = times_.data();
-    for (const auto& block : field_->Blocks()) {
-      if (block.name == "background") device_.background_params = block.value;
-    }
+    device_.background_params = field::BlockValues(field_->Blocks(), "background");
     if (t.rays.priors) {
       priors_.Upload(std::vector<const float*>(t.rays.priors, t.rays.priors + frames_), pixels_);
       device_.rays.priors = priors_.pointers.data();
@@ -284,9 +281,8 @@ train::StepBackendFactory DeviceStepFactory(int index, std::shared_ptr<SharedFie
   return [index, shared](field::Field& field, const train::TrainConfig& config,
                          const train::StepTables& tables) {
     SetDevice(index);
-    auto device_field = shared ? shared->For(field) : std::make_shared<DeviceField>(field);
     return std::unique_ptr<train::StepBackend>(
-        new DeviceStep(index, std::move(device_field), config, tables));
+        new DeviceStep(index, DeviceFieldFor(shared.get(), field), config, tables));
   };
 }
 

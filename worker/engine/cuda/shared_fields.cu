@@ -13,4 +13,8 @@ std::shared_ptr<DeviceField> SharedFields::For(field::Field& host) {
   return field;
 }
 
+std::shared_ptr<DeviceField> DeviceFieldFor(SharedFields* shared, field::Field& host) {
+  return shared != nullptr ? shared->For(host) : std::make_shared<DeviceField>(host);
+}
+
 }  // namespace endorecon::cuda

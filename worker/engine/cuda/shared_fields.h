@@ -24,4 +24,7 @@ class SharedFields {
   std::map<const field::Field*, std::weak_ptr<DeviceField>> fields_;
 };
 
+// What a backend runs on: shared->For(host), or a device copy of its own when `shared` is null.
+std::shared_ptr<DeviceField> DeviceFieldFor(SharedFields* shared, field::Field& host);
+
 }  // namespace endorecon::cuda

@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <string>
+#include <vector>
 
 namespace endorecon::field {
 
@@ -15,5 +16,15 @@ struct ParamBlock {
   S* grad = nullptr;
   std::size_t size = 0;
 };
+
+// The values of the block named `name` among `blocks`, or null when there is none (an optional
+// module, as the learned background, that this field was built without).
+template <typename S>
+S* BlockValues(const std::vector<ParamBlock<S>>& blocks, const std::string& name) {
+  for (const auto& block : blocks) {
+    if (block.name == name) return block.value;
+  }
+  return nullptr;
+}
 
 }  // namespace endorecon::field

@@ -39,9 +39,7 @@ class CpuRender final : public RenderBackend {
         dropout_.var_color[i] = var_color_[i].data();
       }
     }
-    for (const auto& block : field_.Blocks()) {
-      if (block.name == "background") background_params_ = block.value;
-    }
+    background_params_ = field::BlockValues(field_.Blocks(), "background");
   }
 
   std::string device() const override { return "cpu"; }
@@ -54,25 +52,15 @@ class CpuRender final : public RenderBackend {
 
   void RenderChunk(const scene::Camera& camera, float time, const int* pixels, int count,
                    std::uint64_t chunk_seed, const PixelOutputs& out) override {
-    ChunkShape shape;
-    shape.view = camera.View();
-    shape.box = box_.Frame();
-    shape.occupancy = occupancy_;
-    shape.near = float(settings_.near);
-    shape.far = float(settings_.far);
-    shape.time = time;
-    shape.coarse = settings_.coarse_samples;
-    shape.fine = settings_.fine_samples;
-    shape.floor = settings_.floor;
-    shape.background = settings_.background;
-    shape.background_params = background_params_;
+    const ChunkShape shape =
+        ChunkShapeOf(settings_, box_, camera, time, occupancy_, settings_.background, background_params_);
     const ChunkArrays& a = arrays_;
     const auto rays = [&](const auto& body) { tbb::parallel_for(0, count, [&](int r) { body(r); }); };
     const auto batch = [&](int samples) { return field::SampleBatch{count * samples, a.pos, a.time, a.dir}; };
 
     rays([&](int r) { PlaceCoarseRay(shape, a, pixels[r], r); });
-    field::FieldOutput coarse{a.sigma, a.sigma_lv, nullptr,
-                              a.color_lv};  // the weights need the density alone
+    // The coarse weights need the density alone.
+    field::FieldOutput coarse{a.sigma, a.sigma_lv, nullptr, a.color_lv};
     field_.Infer(batch(shape.coarse), coarse, /*dropout=*/false, 0);
     rays([&](int r) { CoarseWeights(shape, a, r); });
     rays([&](int r) { PlaceFineRay(shape, a, r); });
@@ -83,11 +71,9 @@ class CpuRender final : public RenderBackend {
     } else {
       field_.Infer(batch(shape.fine), fine, /*dropout=*/false, 0);
     }
-    const ChunkOutputs result{
-        out.rgb, out.depth, out.opacity, {out.uncertainty, out.aleatoric, out.epistemic}};
     const DropoutArrays none{};
     const DropoutArrays& d = uncertain ? dropout_ : none;
-    rays([&](int r) { FinishRay(shape, a, d, settings_.color_weight, result, r); });
+    rays([&](int r) { FinishRay(shape, a, d, settings_.color_weight, out, r); });
   }
 
  private:

@@ -4,7 +4,8 @@
 // r * coarse, its fine samples at r * fine (arrays sized for the larger of the two).
 // The order of a chunk: PlaceCoarseRay, the field's density at the coarse samples, CoarseWeights,
 // PlaceFineRay, the field at the fine samples (once without dropout, or K dropout passes folded in
-// by AddDropoutPass and FinishDropoutPasses), FinishRay.
+// by AddDropoutPass and FinishDropoutPasses), FinishRay into the renderer's PixelOutputs (device
+// arrays on a GPU).
 #pragma once
 
 #include <cstddef>
@@ -16,6 +17,7 @@
 #include "worker/engine/render/adaptive_sampler.h"
 #include "worker/engine/render/camera_ray.h"
 #include "worker/engine/render/mc_dropout.h"
+#include "worker/engine/render/render_backend.h"
 #include "worker/engine/render/sample_score.h"
 #include "worker/engine/render/stratified_sampler.h"
 #include "worker/engine/render/volume_renderer.h"
@@ -60,6 +62,27 @@ struct DropoutArrays {
   float* var_density[3] = {nullptr, nullptr, nullptr};
   float* var_color[3] = {nullptr, nullptr, nullptr};
 };
+
+// The shape of a chunk of `camera` at `time` as a renderer's settings ask; `background` (the
+// settings' colour, in the backend's memory) and `background_params` (the field's learned
+// background, or null) in the memory the per-ray bodies run in.
+inline ChunkShape ChunkShapeOf(const FrameRenderSettings& settings, const scene::SceneBox& box,
+                               const scene::Camera& camera, float time, const OccupancyView& occupancy,
+                               const float* background, const float* background_params) {
+  ChunkShape shape;
+  shape.view = camera.View();
+  shape.box = box.Frame();
+  shape.occupancy = occupancy;
+  shape.near = static_cast<float>(settings.near);
+  shape.far = static_cast<float>(settings.far);
+  shape.time = time;
+  shape.coarse = settings.coarse_samples;
+  shape.fine = settings.fine_samples;
+  shape.floor = settings.floor;
+  shape.background = background;
+  shape.background_params = background_params;
+  return shape;
+}
 
 // Ray r of the chunk (pixel `pixel` of the view): its span, and its coarse samples as field inputs.
 ENDORECON_HD void PlaceCoarseRay(const ChunkShape& shape, const ChunkArrays& a, int pixel, int r) {
@@ -121,19 +144,10 @@ ENDORECON_HD void FinishDropoutPasses(const ChunkArrays& a, const DropoutArrays&
   d.var_color[0][i] = d.var_color[1][i] + d.var_color[2][i];
 }
 
-// Where a chunk's results go, one entry per ray (rgb three); the score arrays are written only when
-// the chunk has dropout passes and the array is not null.
-struct ChunkOutputs {
-  float* rgb = nullptr;
-  float* depth = nullptr;
-  float* opacity = nullptr;
-  float* scores[3] = {nullptr, nullptr, nullptr};  // total, aleatoric, epistemic ray scores
-};
-
 // Ray r's colour (over the background), depth (the far plane where it is transparent), opacity and,
 // with dropout passes (d.density not null), its ray scores with colour weight lambda.
 ENDORECON_HD void FinishRay(const ChunkShape& shape, const ChunkArrays& a, const DropoutArrays& d,
-                            float lambda, const ChunkOutputs& out, int r) {
+                            float lambda, const PixelOutputs& out, int r) {
   const int m = shape.fine;
   const std::size_t o = static_cast<std::size_t>(r) * m;
   RayComposite<float> ray =
@@ -151,9 +165,10 @@ ENDORECON_HD void FinishRay(const ChunkShape& shape, const ChunkArrays& a, const
   out.depth[r] = ray.depth + (1.0f - ray.opacity) * shape.far;
   out.opacity[r] = ray.opacity;
   if (d.density == nullptr) return;
+  float* scores[3] = {out.uncertainty, out.aleatoric, out.epistemic};
   for (int i = 0; i < 3; ++i) {
-    if (out.scores[i] != nullptr)
-      out.scores[i][r] = RayScore(a.weights + o, d.var_density[i] + o, d.var_color[i] + o, m, lambda);
+    if (scores[i] != nullptr)
+      scores[i][r] = RayScore(a.weights + o, d.var_density[i] + o, d.var_color[i] + o, m, lambda);
   }
 }
 

@@ -3,8 +3,6 @@
 #include <tbb/parallel_for.h>
 
 #include <nlohmann/json.hpp>
-#include <opencv2/core.hpp>
-#include <opencv2/imgproc.hpp>
 
 #include "common/error.h"
 #include "worker/engine/scene/npy.h"
@@ -34,24 +32,17 @@ void PrepareFolder(const fs::path& out, const SynthOptions& options) {
   if (options.stereo) fs::create_directories(out / "images_right");
 }
 
-// An RGB frame (synthetic_frames.h) as the 8-bit BGR image PNG files are written from.
-cv::Mat Bgr(const std::vector<std::uint8_t>& rgb, int w, int h) {
-  cv::Mat bgr;
-  cv::cvtColor(cv::Mat(h, w, CV_8UC3, const_cast<std::uint8_t*>(rgb.data())), bgr, cv::COLOR_RGB2BGR);
-  return bgr;
-}
-
 void WriteFrame(const SyntheticScene& scene, const SynthOptions& options, int index, const fs::path& out) {
   SyntheticFrame frame = RenderSyntheticFrame(scene, options, index);
   const int w = options.width, h = options.height;
   const std::string name = FrameName(index), png = name + ".png";
-  WritePng(out / "images" / png, Bgr(frame.rgb, w, h));
-  WritePng(out / "gt/images" / png, Bgr(frame.gt_rgb, w, h));
+  WriteRgbPng(out / "images" / png, frame.rgb.data(), w, h, 3);
+  WriteRgbPng(out / "gt/images" / png, frame.gt_rgb.data(), w, h, 3);
   WriteNpyFloat32(out / "gt/depth" / (name + ".npy"), frame.gt_depth.data(),
                   {static_cast<std::size_t>(h), static_cast<std::size_t>(w)});
-  if (options.depth) WritePng(out / "depth" / png, cv::Mat(h, w, CV_8UC1, frame.depth.data()));
-  if (options.tool) WritePng(out / "masks" / png, cv::Mat(h, w, CV_8UC1, frame.tool_mask.data()));
-  if (options.stereo) WritePng(out / "images_right" / png, Bgr(frame.right_rgb, w, h));
+  if (options.depth) WriteRgbPng(out / "depth" / png, frame.depth.data(), w, h, 1);
+  if (options.tool) WriteRgbPng(out / "masks" / png, frame.tool_mask.data(), w, h, 1);
+  if (options.stereo) WriteRgbPng(out / "images_right" / png, frame.right_rgb.data(), w, h, 3);
 }
 
 // EndoNeRF rows: the OpenGL pose [right, up, back | t] stored in LLFF's [down, right, back | t] order.

@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "common/error.h"
 
@@ -15,6 +16,14 @@ void PutRgb(cv::Mat& bgr, int u, int v, const std::array<float, 3>& rgb) {
 
 void WritePng(const std::filesystem::path& path, const cv::Mat& image) {
   if (!cv::imwrite(path.string(), image)) Fail(ErrorCode::kUnavailable, "cannot write " + path.string());
+}
+
+void WriteRgbPng(const std::filesystem::path& path, const std::uint8_t* pixels, int w, int h, int channels) {
+  const cv::Mat image(h, w, CV_MAKETYPE(CV_8U, channels), const_cast<std::uint8_t*>(pixels));
+  if (channels == 1) return WritePng(path, image);
+  cv::Mat bgr;
+  cv::cvtColor(image, bgr, channels == 3 ? cv::COLOR_RGB2BGR : cv::COLOR_RGBA2BGRA);
+  WritePng(path, bgr);
 }
 
 void WriteText(const std::filesystem::path& path, const std::string& text) {

@@ -20,6 +20,9 @@ void PutRgb(cv::Mat& bgr, int u, int v, const std::array<float, 3>& rgb);
 
 // Throw Error(kUnavailable) naming the file when it cannot be written.
 void WritePng(const std::filesystem::path& path, const cv::Mat& image);
+// A w x h image of `channels` 1, 3 (RGB) or 4 (RGBA) bytes a pixel, row-major, as a PNG (whose
+// colour OpenCV writes from BGR(A): the channels are reordered, not the bytes changed).
+void WriteRgbPng(const std::filesystem::path& path, const std::uint8_t* pixels, int w, int h, int channels);
 void WriteText(const std::filesystem::path& path, const std::string& text);
 
 // Makes `out` ready for a synthetic clip: an empty or missing folder is fine; one that holds an

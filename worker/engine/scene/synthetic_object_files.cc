@@ -1,8 +1,7 @@
 // WriteSyntheticObject (synthetic_object.h): the views RenderSyntheticObject makes, as PNG files and
 // transforms.json. Apart from the rendering so that a capture made in memory links no image codec.
 #include <nlohmann/json.hpp>
-#include <opencv2/core.hpp>
-#include <opencv2/imgproc.hpp>
+#include <string>
 
 #include "worker/engine/scene/synthetic_files.h"
 #include "worker/engine/scene/synthetic_object.h"
@@ -15,14 +14,9 @@ void WriteSyntheticObject(const ObjectSynthOptions& options, const std::filesyst
   std::filesystem::create_directories(dir / "images");
   nlohmann::json transforms = SyntheticObjectTransforms(views);
   for (int view = 0; view < options.views; ++view) {
-    const int type = views.channels == 3 ? CV_8UC3 : CV_8UC4;
-    // OpenCV writes BGR(A): the rendered RGB(A) bytes converted, not copied.
-    const cv::Mat rendered(views.height, views.width, type,
-                           const_cast<std::uint8_t*>(views.images[view].data()));
-    cv::Mat image;
-    cv::cvtColor(rendered, image, views.channels == 3 ? cv::COLOR_RGB2BGR : cv::COLOR_RGBA2BGRA);
     const std::string name = "r_" + FrameName(view);
-    WritePng(dir / "images" / (name + ".png"), image);
+    WriteRgbPng(dir / "images" / (name + ".png"), views.images[view].data(), views.width, views.height,
+                views.channels);
     transforms["frames"][view]["file_path"] = "./images/" + name;
   }
   WriteText(dir / "transforms.json", transforms.dump(2));

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "common/error.h"
+#include "worker/engine/render/occupancy_grid.h"
 #include "worker/engine/train/adam.h"
 #include "worker/engine/train/step_backend.h"
 
@@ -146,11 +147,7 @@ class CpuStep final : public StepBackend {
     return scores;
   }
 
-  void Densities(const field::SampleBatch& batch, float* sigma) override {
-    log_var_.resize(std::size_t(batch.n));
-    field::FieldOutput out{sigma, log_var_.data(), nullptr, nullptr};  // the density alone
-    field_.Infer(batch, out, /*dropout=*/false, 0);
-  }
+  void Densities(const field::SampleBatch& batch, float* sigma) override { density_(batch, sigma); }
 
   void PullField() override {}
   void PushField() override {}
@@ -173,7 +170,7 @@ class CpuStep final : public StepBackend {
   const StepTables& tables_;
   Adam adam_;
   HostBatch batch_;
-  std::vector<float> log_var_;  // Densities' scratch
+  render::DensityProbe density_ = render::HostDensity(field_);
 };
 
 }  // namespace

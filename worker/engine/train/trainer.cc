@@ -69,10 +69,9 @@ Trainer::Trainer(const scene::Clip& clip, const TrainConfig& config, std::vector
     FailInvalid("background '" + config_.background + "' with field.learned_background " +
                 (config_.field.learned_background ? "on" : "off") + ": FitToScene sets the two together");
   }
-  for (const auto& block : field_->Blocks()) {
-    if (block.name != "background") continue;
-    FitBackgroundToBorders(clip, sampler_.frames(), block.value);
-    t.background_params = block.value;
+  if (float* background = field::BlockValues(field_->Blocks(), "background")) {
+    FitBackgroundToBorders(clip, sampler_.frames(), background);
+    t.background_params = background;
   }
   backend_ = backend(*field_, config_, tables_);
   UpdateTables();
