@@ -8,6 +8,7 @@
 
 #include "tests/unit/temp_dir.h"
 #include "worker/engine/scene/clip_loader.h"
+#include "worker/engine/scene/npy.h"
 #include "worker/engine/scene/synthetic_clip.h"
 #include "worker/engine/train/render_settings.h"
 #include "worker/engine/train/scene_fit.h"
@@ -80,6 +81,61 @@ TEST(ClipEvaluatorTest, WithoutNoiseTheTruthScoresAsTheImages) {
           << split << " frame " << i;
     }
   }
+}
+
+// The model map of a held-out frame carries its neighbours' residuals (neighbour_evidence.h): the same
+// field evaluated on a clip whose training frames 1 and 3 are wrong in a block of pixels (the render
+// is unchanged; only their residual grows there) raises held-out frame 2's block above the rest.
+TEST(ClipEvaluatorTest, AHeldOutFramesModelMapSeesItsNeighboursResiduals) {
+  testing::TempDir dir("clip_evaluator_neighbours");
+  scene::SynthOptions synth;
+  synth.frames = 5;
+  synth.width = 32;
+  synth.height = 24;
+  synth.tool = false;
+  scene::WriteSyntheticClip(synth, dir / "clip");
+  const scene::Clip clip = scene::LoadClip(dir / "clip");
+  train::TrainConfig config = train::TrainConfig::Preset("cpu");
+  config.rays_per_batch = 128;
+  config.mc_passes = 4;
+  train::FitToScene(clip, config);
+  train::Trainer trainer(clip, config, {0, 1, 3, 4}, 1);
+  for (int i = 0; i < 60; ++i) trainer.Step();
+  render::FrameRenderer renderer(trainer.field(), trainer.box(),
+                                 train::UncertaintyRenderSettings(config, clip.near, clip.far, 5));
+  ClipEvaluation what;
+  what.train_frames = {0, 1, 3, 4};
+  what.heldout_frames = {2};
+  const auto model_map = [&](const scene::Clip& evaluated, const char* out) {
+    EvaluateClip(evaluated, renderer, what, dir / out);
+    return scene::ReadNpy(dir / out / "uncertainty" / "000002_model.npy").data;
+  };
+  const std::vector<double> plain = model_map(clip, "plain");
+  scene::Clip wrong = clip;
+  const auto in_block = [&](int p) {
+    return p % clip.width >= 10 && p % clip.width < 14 && p / clip.width >= 8 && p / clip.width < 12;
+  };
+  for (int f : {1, 3}) {
+    for (int p = 0; p < clip.width * clip.height; ++p) {
+      if (!in_block(p)) continue;
+      for (int c = 0; c < 3; ++c) wrong.rgb[f][3 * p + c] = wrong.rgb[f][3 * p + c] > 127 ? 0 : 255;
+    }
+  }
+  const std::vector<double> seen = model_map(wrong, "wrong");
+  ASSERT_EQ(seen.size(), plain.size());
+  // The block's values rise and every other pixel's falls (the evidence counts relative to its mean),
+  // so the block stands well above the rest though the render is the same.
+  double block = 0, rest = 0;
+  for (int p = 0; p < int(seen.size()); ++p) {
+    if (in_block(p)) {
+      EXPECT_GT(seen[p], plain[p]) << "pixel " << p;
+      block += seen[p] / 16;
+    } else {
+      EXPECT_LE(seen[p], plain[p]) << "pixel " << p;
+      rest += seen[p] / double(seen.size() - 16);
+    }
+  }
+  EXPECT_GT(block, 4 * rest);  // about 9x
 }
 
 }  // namespace

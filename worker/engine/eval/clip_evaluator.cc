@@ -17,6 +17,7 @@
 #include "worker/engine/eval/gain_fit.h"
 #include "worker/engine/eval/image_metrics.h"
 #include "worker/engine/eval/model_uncertainty.h"
+#include "worker/engine/eval/neighbour_evidence.h"
 #include "worker/engine/eval/pixel_error.h"
 #include "worker/engine/eval/point_cloud.h"
 #include "worker/engine/eval/strided_map.h"
@@ -151,39 +152,51 @@ EvaluatedFrame RenderFrame(const scene::Clip& clip, int f, FrameRender how, int 
   return out;
 }
 
-// A frame's maps to calibrate: the paper's total and the model map (model_uncertainty.h), over the
-// whole frame, or on a reduced frame's grid; `model` is the whole frame's model map (written).
-struct FrameMaps {
-  std::vector<float> model, grid_model;
+// A frame's model map (model_uncertainty.h) and what its calibration needs, kept until the
+// neighbouring frames are rendered and their evidence (neighbour_evidence.h) can be added: the map
+// over the whole frame (written) and on a reduced frame's grid, and per reference (the observed
+// image, the noise-free truth where known) the per-pixel error calibration measures it against.
+struct PendingModelMap {
+  std::vector<float> map, grid_map;
+  std::vector<int> grid;
+  std::vector<float> depth;  // the frame's rendered depth: where its pixels sit in the neighbours
+  std::vector<float> error_observed, error_noise_free;  // over the whole frame, or on the grid
 };
 
-FrameMaps ModelMaps(const EvaluatedFrame& evaluated, const std::vector<std::uint8_t>& mask) {
-  const auto& frame = evaluated.frame;
-  FrameMaps maps;
-  maps.model = ModelUncertainty(frame.rgb, frame.aleatoric, frame.epistemic, mask);
-  if (!evaluated.grid.empty()) {
-    maps.grid_model = ModelUncertainty(
-        evaluated.grid_rgb, evaluated.grid_aleatoric, evaluated.grid_epistemic,
-        mask.empty() ? std::vector<std::uint8_t>{} : Gather<std::uint8_t>(mask, evaluated.grid));
+// A frame's calibration errors against a reference image (the clip's, or its noise-free truth): a
+// full frame's per-pixel error (`error`, when given, already computed), or on a reduced frame's grid
+// the error of the dropout passes' mean colour there.
+std::vector<float> CalibrationError(const EvaluatedFrame& evaluated, std::span<const std::uint8_t> reference,
+                                    int w, int h, std::span<const float> error = {}) {
+  if (evaluated.grid.empty()) {
+    if (!error.empty()) return {error.begin(), error.end()};
+    return PixelRmse(evaluated.frame.rgb, reference, w, h);
   }
-  return maps;
+  const int n = int(evaluated.grid.size());
+  return PixelRmse(evaluated.grid_rgb, Gather(reference, evaluated.grid, 3), n, 1);
 }
 
 // A frame's calibration of a map (`map` over the whole frame, `grid_map` on a reduced frame's grid)
-// against a reference image (the clip's, or its noise-free truth); `error`, when given, is a full
-// frame's per-pixel error against that reference, already computed.
-Calibration FrameCalibration(const EvaluatedFrame& evaluated, std::span<const float> map,
-                             std::span<const float> grid_map, std::span<const std::uint8_t> reference,
-                             const std::vector<std::uint8_t>& mask, int w, int h,
-                             std::span<const float> error = {}) {
-  if (evaluated.grid.empty()) {
-    if (!error.empty()) return MeasureCalibration(map, error, mask);
-    return MeasureCalibration(map, PixelRmse(evaluated.frame.rgb, reference, w, h), mask);
+// against the errors CalibrationError gives.
+Calibration FrameCalibration(std::span<const float> map, std::span<const float> grid_map,
+                             const std::vector<int>& grid, std::span<const float> error,
+                             const std::vector<std::uint8_t>& mask) {
+  if (grid.empty()) return MeasureCalibration(map, error, mask);
+  return MeasureCalibration(grid_map, error, Gather<std::uint8_t>(mask, grid));
+}
+
+PendingModelMap ModelMap(const EvaluatedFrame& evaluated, const std::vector<std::uint8_t>& mask) {
+  const auto& frame = evaluated.frame;
+  PendingModelMap pending;
+  pending.map = ModelUncertainty(frame.rgb, frame.aleatoric, frame.epistemic, mask);
+  if (!evaluated.grid.empty()) {
+    pending.grid = evaluated.grid;
+    pending.grid_map = ModelUncertainty(
+        evaluated.grid_rgb, evaluated.grid_aleatoric, evaluated.grid_epistemic,
+        mask.empty() ? std::vector<std::uint8_t>{} : Gather<std::uint8_t>(mask, evaluated.grid));
   }
-  const int n = int(evaluated.grid.size());
-  return MeasureCalibration(grid_map,
-                            PixelRmse(evaluated.grid_rgb, Gather(reference, evaluated.grid, 3), n, 1),
-                            Gather<std::uint8_t>(mask, evaluated.grid));
+  pending.depth = frame.depth;
+  return pending;
 }
 
 // Keeps a run's evaluation to its deadline: a training frame planned full is rendered reduced when
@@ -228,7 +241,10 @@ nlohmann::json UncertaintySettings(const render::FrameRenderSettings& settings) 
       {"score", "S_ray = sum_j w_j (var_sigma,j + lambda var_c,j) / sum_j w_j, raw variances"},
       {"model_map",
        "aleatoric score / the frame's median aleatoric score at the pixel's rendered brightness, plus the "
-       "epistemic score, each relative to its mean over the frame's tissue (eval/model_uncertainty.h)"}};
+       "epistemic score, each relative to its mean over the frame's tissue (eval/model_uncertainty.h); in a "
+       "clip's evaluation plus the neighbouring training frames' (within 4 frames, weights 1/distance) "
+       "squared residuals relative to their median at their brightness, at the pixel the surface projects "
+       "to, relative to its tissue mean (eval/neighbour_evidence.h)"}};
 }
 
 nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& renderer,
@@ -261,9 +277,11 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
   }
   UncertaintyMaps maps;
   std::vector<render::RenderedFrame> components;  // aleatoric and epistemic maps only
+  std::vector<PendingModelMap> model_maps(calibrated);
+  std::vector<std::vector<float>> evidence(calibrated);  // the training frames' (neighbour_evidence.h)
   FramePacer pacer(what, w * h);
   std::future<double> writing;  // the previous frame's files; returns the seconds they took
-  double render_seconds = 0, write_seconds = 0;
+  double render_seconds = 0, write_seconds = 0, model_map_seconds = 0;
   std::vector<int> full_frames, reduced_frames;
   for (int f = 0; f < count; ++f) {
     const FrameRender how = pacer.Choose(f);
@@ -285,19 +303,21 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
     }
     if (uncertain) {
       std::vector<float> error = PixelRmse(frame.rgb, clip.rgb[f], w, h);
-      FrameMaps model = ModelMaps(evaluated, mask);
-      const auto calibrate = [&](MapCalibration& into, std::span<const float> map,
-                                 std::span<const float> grid_map) {
-        into.observed[f] = FrameCalibration(evaluated, map, grid_map, clip.rgb[f], mask, w, h, error);
-        if (!into.noise_free.empty())
-          into.noise_free[f] = FrameCalibration(evaluated, map, grid_map, clip.gt_rgb[f], mask, w, h);
-      };
-      calibrate(calibrations[0], frame.uncertainty, evaluated.grid_total);
-      calibrate(calibrations[1], model.model, model.grid_model);
+      // The paper's map now; the model map once its neighbours are rendered (below the loop).
+      PendingModelMap& model = model_maps[f] = ModelMap(evaluated, mask);
+      model.error_observed = CalibrationError(evaluated, clip.rgb[f], w, h, error);
+      calibrations[0].observed[f] = FrameCalibration(frame.uncertainty, evaluated.grid_total, evaluated.grid,
+                                                     model.error_observed, mask);
+      if (!clip.gt_rgb.empty()) {
+        model.error_noise_free = CalibrationError(evaluated, clip.gt_rgb[f], w, h);
+        calibrations[0].noise_free[f] = FrameCalibration(frame.uncertainty, evaluated.grid_total,
+                                                         evaluated.grid, model.error_noise_free, mask);
+      }
+      if (Contains(what.train_frames, f))
+        evidence[f] = ResidualEvidence(frame.rgb, error, clip.has_masks() ? clip.tool_mask[f] : mask);
       if (what.write_files) {
         maps.total.push_back(std::move(frame.uncertainty));
         maps.error.push_back(std::move(error));
-        maps.model.push_back(std::move(model.model));
         render::RenderedFrame parts;
         parts.aleatoric = std::move(frame.aleatoric);
         parts.epistemic = std::move(frame.epistemic);
@@ -327,6 +347,30 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
     if (what.on_frame) what.on_frame(f + 1, count);
   }
   if (writing.valid()) write_seconds += writing.get();
+  if (uncertain) {  // the model maps, with their neighbours' evidence
+    const auto start = Clock::now();
+    tbb::parallel_for(0, count, [&](int f) {
+      PendingModelMap& model = model_maps[f];
+      const auto& mask = EvaluationMask(clip, f);
+      const std::vector<float> neighbours = NeighbourEvidence(clip.cameras, f, model.depth, evidence);
+      AddNeighbourEvidence(model.map, neighbours, mask);
+      if (!model.grid.empty()) {
+        AddNeighbourEvidence(
+            model.grid_map, Gather<float>(neighbours, model.grid),
+            mask.empty() ? std::vector<std::uint8_t>{} : Gather<std::uint8_t>(mask, model.grid));
+      }
+      calibrations[1].observed[f] =
+          FrameCalibration(model.map, model.grid_map, model.grid, model.error_observed, mask);
+      if (!model.error_noise_free.empty()) {
+        calibrations[1].noise_free[f] =
+            FrameCalibration(model.map, model.grid_map, model.grid, model.error_noise_free, mask);
+      }
+    });
+    model_map_seconds = SecondsSince(start);
+    if (what.write_files) {
+      for (auto& model : model_maps) maps.model.push_back(std::move(model.map));
+    }
+  }
   nlohmann::json json;
   json["train"] = SplitMetrics(clip, what.train_frames, false, images, depths, calibrations);
   if (!what.heldout_frames.empty()) {
@@ -362,7 +406,10 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
         "calibration on that grid, against the error of the dropout passes' mean colour there",
         plain.coarse_samples, plain.fine_samples, what.plan.stride);
   }
-  how["seconds"] = {{"render", render_seconds}, {"write", write_seconds}, {"wall", SecondsSince(wall)}};
+  how["seconds"] = {{"render", render_seconds},
+                    {"model_maps", model_map_seconds},
+                    {"write", write_seconds},
+                    {"wall", SecondsSince(wall)}};
   // The training split's tissue PSNR by how its frames were rendered: a reduced frame's colour is a
   // cheaper render's, so the split's summary mixes two renders; the full frames' is the one to
   // compare across runs. Against the observed images, and against the noise-free truth where known.

@@ -6,8 +6,9 @@
 // noisy images"). The model map divides each pixel's aleatoric score by the frame's median at the
 // pixel's rendered brightness (the noise the camera adds there, as the model learned it), leaving
 // the excess, and adds the epistemic score; both terms are taken relative to their mean over the
-// frame's tissue, so neither swamps the other. It is for ranking pixels within a frame; its values
-// are not variances.
+// frame's tissue, so neither swamps the other. Where the clip's frames are known (the evaluation of a
+// clip, not `render` of new cameras), the neighbouring training frames' residuals add a third term
+// (neighbour_evidence.h). It is for ranking pixels within a frame; its values are not variances.
 #pragma once
 
 #include <cstdint>
@@ -26,5 +27,23 @@ inline constexpr int kNoiseCurveBins = 20;
 std::vector<float> ModelUncertainty(std::span<const float> rgb, std::span<const float> aleatoric,
                                     std::span<const float> epistemic,
                                     std::span<const std::uint8_t> tool_mask);
+
+// The weight of the neighbouring frames' evidence in the model map, relative to the aleatoric excess
+// and the epistemic terms (chosen on two clips, docs/benchmarks.md "The neighbours' residuals").
+inline constexpr double kNeighbourEvidenceWeight = 1.0;
+
+// Adds the neighbouring training frames' evidence (neighbour_evidence.h; one value per pixel of the
+// map) to a model map: kNeighbourEvidenceWeight times the evidence relative to its mean over the
+// tissue (tool_mask as ModelUncertainty's). Evidence that is 0 everywhere adds nothing. Throws
+// InvalidArgument when the lengths disagree.
+void AddNeighbourEvidence(std::span<float> map, std::span<const float> evidence,
+                          std::span<const std::uint8_t> tool_mask);
+
+// Each value divided by the median over the tissue of the values at pixels of the same rendered
+// brightness (the mean of R, G and B in kNoiseCurveBins bins; a bin with no tissue pixel takes the
+// nearest bin's median): what is left when the camera noise's level at that brightness is taken out.
+// A median of 0 gives 0. rgb holds 3 values per pixel, values and tool_mask (or empty) one.
+std::vector<float> RelativeToBrightnessMedian(std::span<const float> rgb, std::span<const float> values,
+                                              std::span<const std::uint8_t> tool_mask);
 
 }  // namespace endorecon::eval

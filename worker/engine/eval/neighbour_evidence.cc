@@ -1,0 +1,84 @@
+#include "worker/engine/eval/neighbour_evidence.h"
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <cstdlib>
+#include <string>
+
+#include "common/error.h"
+#include "worker/engine/eval/model_uncertainty.h"
+
+namespace endorecon::eval {
+
+std::vector<float> ResidualEvidence(std::span<const float> rgb, std::span<const float> pixel_rmse,
+                                    std::span<const std::uint8_t> tool_mask) {
+  std::vector<float> squared(pixel_rmse.size());
+  for (std::size_t i = 0; i < squared.size(); ++i) squared[i] = pixel_rmse[i] * pixel_rmse[i];
+  std::vector<float> evidence = RelativeToBrightnessMedian(rgb, squared, tool_mask);
+  for (std::size_t i = 0; i < evidence.size(); ++i) {
+    if (!tool_mask.empty() && tool_mask[i] != 0) evidence[i] = -1.0f;
+  }
+  return evidence;
+}
+
+std::vector<float> NeighbourEvidence(std::span<const scene::Camera> cameras, int f,
+                                     std::span<const float> depth,
+                                     const std::vector<std::vector<float>>& evidence) {
+  const int count = int(cameras.size());
+  if (f < 0 || f >= count || evidence.size() != cameras.size()) {
+    FailInvalid("NeighbourEvidence: frame " + std::to_string(f) + " of " + std::to_string(count) +
+                " cameras with evidence for " + std::to_string(evidence.size()) + " frames");
+  }
+  const scene::Camera& camera = cameras[f];
+  const int w = camera.width, h = camera.height;
+  const std::size_t n = std::size_t(w) * h;
+  if (depth.size() != n) {
+    FailInvalid("NeighbourEvidence: frame " + std::to_string(f) + " is " + std::to_string(w) + " x " +
+                std::to_string(h) + " but its depth has " + std::to_string(depth.size()) + " values");
+  }
+  std::vector<double> sum(n, 0.0), weights(n, 0.0);
+  Eigen::Vector3d origin, direction;
+  for (int g = std::max(0, f - kNeighbourFrames); g <= std::min(count - 1, f + kNeighbourFrames); ++g) {
+    if (g == f || evidence[g].empty()) continue;
+    const scene::Camera& other = cameras[g];
+    if (evidence[g].size() != std::size_t(other.width) * other.height) {
+      FailInvalid("NeighbourEvidence: frame " + std::to_string(g) + "'s evidence has " +
+                  std::to_string(evidence[g].size()) + " values for a " + std::to_string(other.width) +
+                  " x " + std::to_string(other.height) + " camera");
+    }
+    const double weight = 1.0 / std::abs(g - f);
+    // A still camera (an EndoNeRF clip's) sees a surface point at the same pixel in every frame.
+    const bool same_view = other.c2w == camera.c2w && other.fx == camera.fx && other.fy == camera.fy &&
+                           other.cx == camera.cx && other.cy == camera.cy && other.width == w &&
+                           other.height == h;
+    // World to g's camera: the inverse of its pose (OpenGL convention, looking down -z).
+    const Eigen::Matrix3d rotation_t = other.c2w.leftCols<3>().transpose();
+    const Eigen::Vector3d centre = other.c2w.col(3);
+    for (int v = 0; v < h; ++v) {
+      for (int u = 0; u < w; ++u) {
+        const std::size_t p = std::size_t(v) * w + u;
+        int gu = u, gv = v;
+        if (!same_view && std::isfinite(depth[p]) && depth[p] > 0) {
+          camera.Ray(u, v, origin, direction);
+          const Eigen::Vector3d local = rotation_t * (origin + double(depth[p]) * direction - centre);
+          const double z = -local.z();
+          if (!(z > 0)) continue;
+          gu = int(std::floor(other.fx * local.x() / z + other.cx));  // the pixel whose square holds it
+          gv = int(std::floor(-other.fy * local.y() / z + other.cy));
+        }
+        if (gu < 0 || gv < 0 || gu >= other.width || gv >= other.height) continue;
+        const float value = evidence[g][std::size_t(gv) * other.width + gu];
+        if (value < 0) continue;  // g's tool
+        sum[p] += weight * value;
+        weights[p] += weight;
+      }
+    }
+  }
+  std::vector<float> out(n, 0.0f);
+  for (std::size_t p = 0; p < n; ++p) {
+    if (weights[p] > 0) out[p] = static_cast<float>(sum[p] / weights[p]);
+  }
+  return out;
+}
+
+}  // namespace endorecon::eval
