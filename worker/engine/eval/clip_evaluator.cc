@@ -153,9 +153,9 @@ EvaluatedFrame RenderFrame(const scene::Clip& clip, int f, FrameRender how, int 
 }
 
 // A frame's model map (model_uncertainty.h) and what its calibration needs, kept until the
-// neighbouring frames are rendered and their evidence (neighbour_evidence.h) can be added: the map
-// over the whole frame (written) and on a reduced frame's grid, and per reference (the observed
-// image, the noise-free truth where known) the per-pixel error calibration measures it against.
+// kNeighbourFrames frames after it are rendered and their evidence (neighbour_evidence.h) can be added: the
+// map over the whole frame (written) and on a reduced frame's grid, and per reference (the observed image,
+// the noise-free truth where known) the per-pixel error calibration measures it against.
 struct PendingModelMap {
   std::vector<float> map, grid_map;
   std::vector<int> grid;
@@ -283,6 +283,30 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
   std::future<double> writing;  // the previous frame's files; returns the seconds they took
   double render_seconds = 0, write_seconds = 0, model_map_seconds = 0;
   std::vector<int> full_frames, reduced_frames;
+  // Finishes frame f's model map once the frames within kNeighbourFrames after it are rendered: adds
+  // their evidence, calibrates the map, keeps it to write, and lets go of what no later frame needs.
+  const auto finish_model_map = [&](int f) {
+    const auto start = Clock::now();
+    PendingModelMap& model = model_maps[f];
+    const auto& mask = EvaluationMask(clip, f);
+    const std::vector<float> neighbours = NeighbourEvidence(clip.cameras, f, model.depth, evidence);
+    AddNeighbourEvidence(model.map, neighbours, mask);
+    if (!model.grid.empty()) {
+      AddNeighbourEvidence(
+          model.grid_map, Gather<float>(neighbours, model.grid),
+          mask.empty() ? std::vector<std::uint8_t>{} : Gather<std::uint8_t>(mask, model.grid));
+    }
+    calibrations[1].observed[f] =
+        FrameCalibration(model.map, model.grid_map, model.grid, model.error_observed, mask);
+    if (!model.error_noise_free.empty()) {
+      calibrations[1].noise_free[f] =
+          FrameCalibration(model.map, model.grid_map, model.grid, model.error_noise_free, mask);
+    }
+    if (what.write_files) maps.model.push_back(std::move(model.map));
+    model = {};
+    if (f >= kNeighbourFrames) evidence[f - kNeighbourFrames] = {};  // the next frame looks no further back
+    model_map_seconds += SecondsSince(start);
+  };
   for (int f = 0; f < count; ++f) {
     const FrameRender how = pacer.Choose(f);
     const auto start = Clock::now();
@@ -303,7 +327,7 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
     }
     if (uncertain) {
       std::vector<float> error = PixelRmse(frame.rgb, clip.rgb[f], w, h);
-      // The paper's map now; the model map once its neighbours are rendered (below the loop).
+      // The paper's map now; the model map once its neighbours are rendered (finish_model_map).
       PendingModelMap& model = model_maps[f] = ModelMap(evaluated, mask);
       model.error_observed = CalibrationError(evaluated, clip.rgb[f], w, h, error);
       calibrations[0].observed[f] = FrameCalibration(frame.uncertainty, evaluated.grid_total, evaluated.grid,
@@ -315,6 +339,7 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
       }
       if (Contains(what.train_frames, f))
         evidence[f] = ResidualEvidence(frame.rgb, error, clip.has_masks() ? clip.tool_mask[f] : mask);
+      if (f >= kNeighbourFrames) finish_model_map(f - kNeighbourFrames);
       if (what.write_files) {
         maps.total.push_back(std::move(frame.uncertainty));
         maps.error.push_back(std::move(error));
@@ -347,29 +372,8 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
     if (what.on_frame) what.on_frame(f + 1, count);
   }
   if (writing.valid()) write_seconds += writing.get();
-  if (uncertain) {  // the model maps, with their neighbours' evidence
-    const auto start = Clock::now();
-    tbb::parallel_for(0, count, [&](int f) {
-      PendingModelMap& model = model_maps[f];
-      const auto& mask = EvaluationMask(clip, f);
-      const std::vector<float> neighbours = NeighbourEvidence(clip.cameras, f, model.depth, evidence);
-      AddNeighbourEvidence(model.map, neighbours, mask);
-      if (!model.grid.empty()) {
-        AddNeighbourEvidence(
-            model.grid_map, Gather<float>(neighbours, model.grid),
-            mask.empty() ? std::vector<std::uint8_t>{} : Gather<std::uint8_t>(mask, model.grid));
-      }
-      calibrations[1].observed[f] =
-          FrameCalibration(model.map, model.grid_map, model.grid, model.error_observed, mask);
-      if (!model.error_noise_free.empty()) {
-        calibrations[1].noise_free[f] =
-            FrameCalibration(model.map, model.grid_map, model.grid, model.error_noise_free, mask);
-      }
-    });
-    model_map_seconds = SecondsSince(start);
-    if (what.write_files) {
-      for (auto& model : model_maps) maps.model.push_back(std::move(model.map));
-    }
+  if (uncertain) {
+    for (int f = std::max(0, count - kNeighbourFrames); f < count; ++f) finish_model_map(f);
   }
   nlohmann::json json;
   json["train"] = SplitMetrics(clip, what.train_frames, false, images, depths, calibrations);
