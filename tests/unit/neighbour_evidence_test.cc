@@ -77,6 +77,13 @@ TEST(NeighbourEvidenceTest, AMovingCameraIsFollowedThroughTheRenderedDepth) {
   EXPECT_EQ(seen[Pixel(5, 3)], 0.0f);
   // Frame 0's first column projects left of frame 1's image: no neighbour sees it.
   EXPECT_EQ(seen[Pixel(0, 3)], 0.0f);
+  // A neighbour whose image plane the surface touches sees it nowhere (no overflow), one behind whom
+  // the surface lies sees it not at all.
+  for (const double z : {-2.0 + 1e-13, -3.0}) {
+    std::vector<scene::Camera> grazing = cameras;
+    grazing[1].c2w(2, 3) = z;
+    EXPECT_EQ(NeighbourEvidence(grazing, 0, depth, evidence), std::vector<float>(kW * kH, 0.0f)) << z;
+  }
   // Where the depth is unknown the same pixel stands in.
   depth[Pixel(5, 3)] = 0.0f;
   EXPECT_EQ(NeighbourEvidence(cameras, 0, depth, evidence)[Pixel(5, 3)], 1.0f);

@@ -63,10 +63,13 @@ std::vector<float> NeighbourEvidence(std::span<const scene::Camera> cameras, int
           const Eigen::Vector3d local = rotation_t * (origin + double(depth[p]) * direction - centre);
           const double z = -local.z();
           if (!(z > 0)) continue;
-          gu = int(std::floor(other.fx * local.x() / z + other.cx));  // the pixel whose square holds it
-          gv = int(std::floor(-other.fy * local.y() / z + other.cy));
+          const double x = other.fx * local.x() / z + other.cx, y = -other.fy * local.y() / z + other.cy;
+          if (!(x >= 0 && y >= 0 && x < other.width && y < other.height)) continue;  // NaN too
+          gu = int(x);  // the pixel whose square holds it
+          gv = int(y);
         }
-        if (gu < 0 || gv < 0 || gu >= other.width || gv >= other.height) continue;
+        if (gu >= other.width || gv >= other.height)
+          continue;  // no depth: the same pixel, in a smaller image
         const float value = evidence[g][std::size_t(gv) * other.width + gu];
         if (value < 0) continue;  // g's tool
         sum[p] += weight * value;
