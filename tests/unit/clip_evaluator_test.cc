@@ -17,29 +17,52 @@
 namespace endorecon::eval {
 namespace {
 
+// A tiny synthetic clip (32 x 24; `synth` says the rest) written to dir/clip and loaded, and a field
+// trained on it for a few steps (the cpu preset at 128 rays a step, with `mc_passes` dropout passes)
+// with a renderer of it.
+struct BrieflyTrained {
+  BrieflyTrained(scene::SynthOptions synth, const std::filesystem::path& dir, std::vector<int> train_frames,
+                 int mc_passes, int steps)
+      : clip(Load(synth, dir)),
+        config(Config(clip, mc_passes)),
+        trainer(clip, config, std::move(train_frames), 1) {
+    for (int i = 0; i < steps; ++i) trainer.Step();
+  }
+
+  static scene::Clip Load(scene::SynthOptions synth, const std::filesystem::path& dir) {
+    synth.width = 32;
+    synth.height = 24;
+    scene::WriteSyntheticClip(synth, dir / "clip");
+    return scene::LoadClip(dir / "clip");
+  }
+
+  static train::TrainConfig Config(const scene::Clip& clip, int mc_passes) {
+    train::TrainConfig config = train::TrainConfig::Preset("cpu");
+    config.rays_per_batch = 128;
+    config.mc_passes = mc_passes;
+    train::FitToScene(clip, config);
+    return config;
+  }
+
+  scene::Clip clip;
+  train::TrainConfig config;
+  train::Trainer trainer;
+  render::FrameRenderer renderer{trainer.field(), trainer.box(),
+                                 train::UncertaintyRenderSettings(config, clip.near, clip.far, 5)};
+};
+
 // A few steps on a tiny clip, evaluated without uncertainty (the image metrics only).
 nlohmann::json Evaluate(bool noise, const std::filesystem::path& dir, scene::Clip* loaded) {
   scene::SynthOptions synth;
   synth.frames = 3;
-  synth.width = 32;
-  synth.height = 24;
   synth.noise = noise;
-  scene::WriteSyntheticClip(synth, dir / "clip");
-  *loaded = scene::LoadClip(dir / "clip");
-  const scene::Clip& clip = *loaded;
-  train::TrainConfig config = train::TrainConfig::Preset("cpu");
-  config.rays_per_batch = 128;
-  config.mc_passes = 0;
-  train::FitToScene(clip, config);
-  train::Trainer trainer(clip, config, {0, 2}, 1);
-  for (int i = 0; i < 10; ++i) trainer.Step();
-  render::FrameRenderer renderer(trainer.field(), trainer.box(),
-                                 train::UncertaintyRenderSettings(config, clip.near, clip.far, 5));
+  BrieflyTrained run(synth, dir, {0, 2}, 0, 10);
+  *loaded = run.clip;
   ClipEvaluation what;
   what.train_frames = {0, 2};
   what.heldout_frames = {1};
   what.write_files = false;
-  return EvaluateClip(clip, renderer, what, dir / "out");
+  return EvaluateClip(run.clip, run.renderer, what, dir / "out");
 }
 
 TEST(ClipEvaluatorTest, ImagesAreMeasuredAgainstTheNoiseFreeTruthToo) {
@@ -90,24 +113,14 @@ TEST(ClipEvaluatorTest, AHeldOutFramesModelMapSeesItsNeighboursResiduals) {
   testing::TempDir dir("clip_evaluator_neighbours");
   scene::SynthOptions synth;
   synth.frames = 5;
-  synth.width = 32;
-  synth.height = 24;
   synth.tool = false;
-  scene::WriteSyntheticClip(synth, dir / "clip");
-  const scene::Clip clip = scene::LoadClip(dir / "clip");
-  train::TrainConfig config = train::TrainConfig::Preset("cpu");
-  config.rays_per_batch = 128;
-  config.mc_passes = 4;
-  train::FitToScene(clip, config);
-  train::Trainer trainer(clip, config, {0, 1, 3, 4}, 1);
-  for (int i = 0; i < 60; ++i) trainer.Step();
-  render::FrameRenderer renderer(trainer.field(), trainer.box(),
-                                 train::UncertaintyRenderSettings(config, clip.near, clip.far, 5));
+  BrieflyTrained run(synth, dir.path(), {0, 1, 3, 4}, 4, 60);
+  const scene::Clip& clip = run.clip;
   ClipEvaluation what;
   what.train_frames = {0, 1, 3, 4};
   what.heldout_frames = {2};
   const auto model_map = [&](const scene::Clip& evaluated, const char* out) {
-    EvaluateClip(evaluated, renderer, what, dir / out);
+    EvaluateClip(evaluated, run.renderer, what, dir / out);
     return scene::ReadNpy(dir / out / "uncertainty" / "000002_model.npy").data;
   };
   const std::vector<double> plain = model_map(clip, "plain");
