@@ -191,9 +191,8 @@ PendingModelMap ModelMap(const EvaluatedFrame& evaluated, const std::vector<std:
   pending.map = ModelUncertainty(frame.rgb, frame.aleatoric, frame.epistemic, mask);
   if (!evaluated.grid.empty()) {
     pending.grid = evaluated.grid;
-    pending.grid_map = ModelUncertainty(
-        evaluated.grid_rgb, evaluated.grid_aleatoric, evaluated.grid_epistemic,
-        mask.empty() ? std::vector<std::uint8_t>{} : Gather<std::uint8_t>(mask, evaluated.grid));
+    pending.grid_map = ModelUncertainty(evaluated.grid_rgb, evaluated.grid_aleatoric,
+                                        evaluated.grid_epistemic, Gather<std::uint8_t>(mask, evaluated.grid));
   }
   pending.depth = frame.depth;
   return pending;
@@ -292,9 +291,8 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
     const std::vector<float> neighbours = NeighbourEvidence(clip.cameras, f, model.depth, evidence);
     AddNeighbourEvidence(model.map, neighbours, mask);
     if (!model.grid.empty()) {
-      AddNeighbourEvidence(
-          model.grid_map, Gather<float>(neighbours, model.grid),
-          mask.empty() ? std::vector<std::uint8_t>{} : Gather<std::uint8_t>(mask, model.grid));
+      AddNeighbourEvidence(model.grid_map, Gather<float>(neighbours, model.grid),
+                           Gather<std::uint8_t>(mask, model.grid));
     }
     calibrations[1].observed[f] =
         FrameCalibration(model.map, model.grid_map, model.grid, model.error_observed, mask);

@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 #include <cmath>
 #include <cstdlib>
+#include <limits>
 #include <string>
 
 #include "common/error.h"
@@ -37,7 +38,22 @@ std::vector<float> NeighbourEvidence(std::span<const scene::Camera> cameras, int
                 std::to_string(h) + " but its depth has " + std::to_string(depth.size()) + " values");
   }
   std::vector<double> sum(n, 0.0), weights(n, 0.0);
-  Eigen::Vector3d origin, direction;
+  // The surface point f sees at each pixel, computed once for every moving neighbour (NaN: no depth).
+  std::vector<Eigen::Vector3d> surface;
+  const auto surface_points = [&]() -> const std::vector<Eigen::Vector3d>& {
+    if (!surface.empty()) return surface;
+    surface.assign(n, Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN()));
+    Eigen::Vector3d origin, direction;
+    for (int v = 0; v < h; ++v) {
+      for (int u = 0; u < w; ++u) {
+        const std::size_t p = std::size_t(v) * w + u;
+        if (!(std::isfinite(depth[p]) && depth[p] > 0)) continue;
+        camera.Ray(u, v, origin, direction);
+        surface[p] = origin + double(depth[p]) * direction;
+      }
+    }
+    return surface;
+  };
   for (int g = std::max(0, f - kNeighbourFrames); g <= std::min(count - 1, f + kNeighbourFrames); ++g) {
     if (g == f || evidence[g].empty()) continue;
     const scene::Camera& other = cameras[g];
@@ -54,13 +70,13 @@ std::vector<float> NeighbourEvidence(std::span<const scene::Camera> cameras, int
     // World to g's camera: the inverse of its pose (OpenGL convention, looking down -z).
     const Eigen::Matrix3d rotation_t = other.c2w.leftCols<3>().transpose();
     const Eigen::Vector3d centre = other.c2w.col(3);
+    const std::vector<Eigen::Vector3d>* points = same_view ? nullptr : &surface_points();
     for (int v = 0; v < h; ++v) {
       for (int u = 0; u < w; ++u) {
         const std::size_t p = std::size_t(v) * w + u;
         int gu = u, gv = v;
-        if (!same_view && std::isfinite(depth[p]) && depth[p] > 0) {
-          camera.Ray(u, v, origin, direction);
-          const Eigen::Vector3d local = rotation_t * (origin + double(depth[p]) * direction - centre);
+        if (points != nullptr && !std::isnan((*points)[p].x())) {
+          const Eigen::Vector3d local = rotation_t * ((*points)[p] - centre);
           const double z = -local.z();
           if (!(z > 0)) continue;
           const double x = other.fx * local.x() / z + other.cx, y = -other.fy * local.y() / z + other.cy;
