@@ -1,6 +1,6 @@
 #include "worker/engine/eval/neighbour_evidence.h"
 
-#include <Eigen/Dense>
+#include <Eigen/Core>
 #include <cmath>
 #include <cstdlib>
 #include <limits>
@@ -64,22 +64,14 @@ std::vector<float> NeighbourEvidence(std::span<const scene::Camera> cameras, int
     }
     const double weight = 1.0 / std::abs(g - f);
     // A still camera (an EndoNeRF clip's) sees a surface point at the same pixel in every frame.
-    const bool same_view = other.c2w == camera.c2w && other.fx == camera.fx && other.fy == camera.fy &&
-                           other.cx == camera.cx && other.cy == camera.cy && other.width == w &&
-                           other.height == h;
-    // World to g's camera: the inverse of its pose (OpenGL convention, looking down -z).
-    const Eigen::Matrix3d rotation_t = other.c2w.leftCols<3>().transpose();
-    const Eigen::Vector3d centre = other.c2w.col(3);
-    const std::vector<Eigen::Vector3d>* points = same_view ? nullptr : &surface_points();
+    const std::vector<Eigen::Vector3d>* points = other == camera ? nullptr : &surface_points();
     for (int v = 0; v < h; ++v) {
       for (int u = 0; u < w; ++u) {
         const std::size_t p = std::size_t(v) * w + u;
         int gu = u, gv = v;
         if (points != nullptr && !std::isnan((*points)[p].x())) {
-          const Eigen::Vector3d local = rotation_t * ((*points)[p] - centre);
-          const double z = -local.z();
-          if (!(z > 0)) continue;
-          const double x = other.fx * local.x() / z + other.cx, y = -other.fy * local.y() / z + other.cy;
+          double x = 0, y = 0;
+          if (!other.ToPixel((*points)[p], x, y)) continue;                          // behind g's camera
           if (!(x >= 0 && y >= 0 && x < other.width && y < other.height)) continue;  // NaN too
           gu = int(x);  // the pixel whose square holds it
           gv = int(y);
