@@ -132,19 +132,19 @@ void ReadAdamBlock(std::istream& in, const field::ParamBlock<float>& block, floa
 
 AdamStepReport Adam::Step(double progress) {
   std::vector<GradientNorms> norms(groups_.size());
+  const auto join = [](const GradientNorms& a, const GradientNorms& b) {
+    return GradientNorms{a.sq + b.sq, std::max(a.max, b.max)};
+  };
   for (std::size_t k = 0; k < groups_.size(); ++k) {
     const auto& g = groups_[k];
     // Over blocks in parallel (a serial pass over the ~10^6 grid gradients left the second core idle
     // for a few per cent of every step).
     norms[k] = tbb::parallel_reduce(
         tbb::blocked_range<std::size_t>(0, g.size, 1 << 14), GradientNorms{},
-        [&](const tbb::blocked_range<std::size_t>& r, GradientNorms acc) {
-          const GradientNorms part = RangeNorms(g.grad + r.begin(), r.size());
-          return GradientNorms{acc.sq + part.sq, std::max(acc.max, part.max)};
+        [&](const tbb::blocked_range<std::size_t>& r, const GradientNorms& acc) {
+          return join(acc, RangeNorms(g.grad + r.begin(), r.size()));
         },
-        [](GradientNorms a, const GradientNorms& b) {
-          return GradientNorms{a.sq + b.sq, std::max(a.max, b.max)};
-        });
+        join);
   }
   const StepPlan plan = PlanStep(norms, groups_, config_);
   if (!plan.report.finite) return plan.report;
