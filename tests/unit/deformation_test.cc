@@ -90,5 +90,28 @@ TEST(DeformationTest, GradientsMatchFiniteDifferences) {
       3 * n);
 }
 
+// The weights a linear fit reads (train/flow_start.h) are the ones the forward pass blends with.
+TEST(DeformationTest, WeightsBlendAsTheForwardPass) {
+  Deformation<double> deform(SmallConfig());
+  const DeformationLayout layout = deform.layout();
+  const std::vector<double> params = RandomValues(deform.param_count(), -0.2, 0.2, 3);
+  const std::vector<double> pos = RandomValues(60, -0.1, 1.1, 4), t = RandomValues(20, -0.05, 1.05, 5);
+  const std::vector<double> x0 = Canonical(deform, params, pos, t);
+  for (std::size_t i = 0; i < t.size(); ++i) {
+    std::size_t vertex[16];
+    double weight[16];
+    const int count = DeformWeights(layout, &pos[3 * i], t[i], vertex, weight);
+    ASSERT_TRUE(count == 8 || count == 16);
+    for (int a = 0; a < 3; ++a) {
+      double dx = 0;
+      for (int j = 0; j < count; ++j) {
+        ASSERT_LT(vertex[j] * 3 + std::size_t(a), params.size());
+        dx += weight[j] * params[vertex[j] * 3 + std::size_t(a)];
+      }
+      EXPECT_NEAR(pos[3 * i + a] + dx, x0[3 * i + a], 1e-12) << "sample " << i << " axis " << a;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace endorecon::field

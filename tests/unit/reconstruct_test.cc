@@ -149,6 +149,11 @@ TEST(Reconstruct, ProgressUnderABudgetEndsAtTheIterationsRun) {
     };
     EXPECT_EQ(count("full") + count("reduced"), 6);
   }
+  // The deformation started from the training frames' optical flow (the clip has depth, moves, and
+  // trains on its frame at time 0): 5 frames besides that one.
+  const auto& start = metrics.at("deformation_start");
+  EXPECT_EQ(start.at("from"), "optical flow") << start.dump();
+  EXPECT_GE(start.value("frames", 0), 4) << start.dump();
   for (int f : metrics.at("heldout").at("frames")) {
     EXPECT_NE(std::find(evaluation.at("full_frames").begin(), evaluation.at("full_frames").end(), f),
               evaluation.at("full_frames").end())

@@ -94,6 +94,7 @@ TEST(TrainConfigTest, JsonRoundTripKeepsEveryKey) {
                                               "background",
                                               "curve_frames",
                                               "curve_interval_s",
+                                              "deformation_start",
                                               "depth_loss",
                                               "depth_refine_ema",
                                               "depth_refine_every",
@@ -279,6 +280,7 @@ TEST(TrainConfigTest, BadValuesAreRejected) {
         nlohmann::json{{"field", {{"heads", {{"color_dropout", 1.5}}}}}},
         nlohmann::json{{"field", {{"heads", {{"color_time_frequencies", 9}}}}}},
         nlohmann::json{{"exposure", "sometimes"}}, nlohmann::json{{"exposure_threshold", -0.1}},
+        nlohmann::json{{"deformation_start", "optical"}},
         nlohmann::json{{"field", {{"learned_background", true}}}}}) {
     TrainConfig fresh;
     const std::string key = bad.flatten().begin().key();  // "/field/heads/dropout"

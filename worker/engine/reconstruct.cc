@@ -49,6 +49,17 @@ double TailSeconds(const scene::Clip& clip) {
   return kTailSecondsPerPixel * double(clip.frame_count()) * clip.width * clip.height;
 }
 
+// How the deformation started (train/flow_start.h), for metrics.json.
+nlohmann::json DeformationStartJson(const train::FlowStart& start) {
+  if (!start.skipped.empty()) return {{"from", "zero"}, {"why", start.skipped}};
+  return {{"from", "optical flow"},
+          {"frames", start.frames},
+          {"points", start.points},
+          {"mean_flow_px", start.flow_px},
+          {"fitted_fraction", start.fitted_fraction},
+          {"seconds", start.seconds}};
+}
+
 // Records what the occupancy grid leaves out of the final field's renders (rebuilt from it).
 void RebuildOccupancy(train::Trainer& trainer, nlohmann::json& left_out) {
   trainer.RebuildOccupancy();
@@ -59,7 +70,8 @@ void RebuildOccupancy(train::Trainer& trainer, nlohmann::json& left_out) {
                             "scene box empty)",
                             100.0 * (1.0 - trainer.occupancy_span_fraction()), config.occupancy_resolution,
                             100.0 * (1.0 - trainer.occupancy().occupied_fraction()))},
-       {"why", fmt::format("empty: alpha below {} per cell at every probed time", config.occupancy_min_alpha)}});
+       {"why",
+        fmt::format("empty: alpha below {} per cell at every probed time", config.occupancy_min_alpha)}});
 }
 
 ReconstructSummary RunPipeline(const ReconstructOptions& options, const ReconstructHooks& hooks) {
@@ -107,25 +119,18 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
   const double tail_s = TailSeconds(clip);
   const bool full_evaluation = options.full_evaluation;
   const double load_s = SecondsSince(run_start);
-  const TrainingRun run{trainer,
-                        clip,
-                        split,
-                        fit,
-                        renderer,
-                        uncertainty_renderer,
-                        options.time_budget_s,
-                        run_start,
-                        // Evaluation's reserve: its plan within its share, or the leanest plan up to
-                        // kEvaluationShareMax of the run.
-                        [&] {
-                          const double share = kEvaluationShare * options.time_budget_s;
-                          if (full_evaluation) return share + tail_s;
-                          const double plan = eval::PlanEvaluation(clip.frame_count(), split.heldout, pixels,
-                                                                   MeasureCost(), share)
-                                                  .seconds;
-                          return std::min(plan, kEvaluationShareMax * options.time_budget_s) + tail_s;
-                        },
-                        out_dir / "model" / "checkpoint.bin"};
+  const TrainingRun run{
+      trainer, clip, split, fit, renderer, uncertainty_renderer, options.time_budget_s, run_start,
+      // Evaluation's reserve: its plan within its share, or the leanest plan up to
+      // kEvaluationShareMax of the run.
+      [&] {
+        const double share = kEvaluationShare * options.time_budget_s;
+        if (full_evaluation) return share + tail_s;
+        const double plan =
+            eval::PlanEvaluation(clip.frame_count(), split.heldout, pixels, MeasureCost(), share).seconds;
+        return std::min(plan, kEvaluationShareMax * options.time_budget_s) + tail_s;
+      },
+      out_dir / "model" / "checkpoint.bin"};
   const TrainingResult trained = Train(run, hooks, extras);
   const auto after_training = Clock::now();
   trainer.SyncField();
@@ -178,6 +183,7 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
   metrics["curve"] = extras.curve;
   metrics["left_out"] = left_out;
   metrics["field"] = field::DescribeField(trainer.field());
+  metrics["deformation_start"] = DeformationStartJson(trainer.deformation_start());
   eval::WriteCurve(out_dir / "curve.svg", extras.curve);
   // Where this process's time went, up to this file; the report page, written last from it (and
   // showing it as it is), takes a few tenths of a second more, logged.

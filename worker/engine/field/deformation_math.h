@@ -53,6 +53,31 @@ ENDORECON_HD void DeformSample(const DeformationLayout& layout, const S* params,
   for (int a = 0; a < 3; ++a) x0[a] = pos[a] + dx[a];
 }
 
+// The (up to 16) parameters' vertices and weights DeformSample blends for one sample: dx =
+// sum_j weight[j] * params[vertex[j] * 3 + a], vertex[j] counted over the stored slices (slice k's
+// vertices from (k - 1) * slice / 3). Returns how many (the t = 0 slice is not stored). For fits
+// that need the grid as a linear map (train/flow_start.h), not for the hot path.
+template <typename S>
+ENDORECON_HD int DeformWeights(const DeformationLayout& layout, const S* pos, S t, std::size_t* vertex,
+                               S* weight) {
+  std::uint32_t slot[8];
+  S w[8], frac[3], ft;
+  CellCornersOf<true>(layout.Level(), pos, slot, w, frac);
+  const int interval = TimeInterval(t, layout.knots, &ft);
+  int n = 0;
+  for (int side = 0; side < 2; ++side) {
+    const int slice = interval + side;
+    if (slice == 0) continue;
+    const S wt = side ? ft : S(1) - ft;
+    const std::size_t first = static_cast<std::size_t>(slice - 1) * (layout.slice / 3);
+    for (int k = 0; k < 8; ++k) {
+      vertex[n] = first + slot[k];
+      weight[n++] = wt * w[k];
+    }
+  }
+  return n;
+}
+
 // Adds one sample's dL/dparams, given dx0 = dL/dx0 (3 values), to the slices it touches, through
 // add(pointer, value) (PlainAdd on the CPU, atomic in kernels). only_knot > 0 restricts it to that
 // slice (the CPU runs one slice per task, so tasks write disjoint parts).

@@ -40,6 +40,7 @@ TrainConfig TrainConfig::Preset(const std::string& name) {
     c.eval_coarse_samples = 64;
     c.eval_fine_samples = 64;
     c.curve_interval_s = 60;
+    c.deformation_start = "zero";  // the paper's deformation learns from the loss alone
     return c;
   }
   if (name == "gpu") {
@@ -105,6 +106,7 @@ void VisitKeys(TrainConfig& c, Visit&& visit) {
   visit("background", c.background);
   visit("exposure", c.exposure);
   visit("exposure_threshold", c.exposure_threshold);
+  visit("deformation_start", c.deformation_start);
   visit("curve_interval_s", c.curve_interval_s);
   visit("curve_frames", c.curve_frames);
   visit("field.encoding", c.field.encoding);
@@ -189,6 +191,8 @@ void Validate(const TrainConfig& c) {
   require(c.exposure == "auto" || c.exposure == "on" || c.exposure == "off",
           "exposure must be auto, on or off, got " + c.exposure);
   require(c.exposure_threshold >= 0, "exposure_threshold must be >= 0");
+  require(c.deformation_start == "flow" || c.deformation_start == "zero",
+          "deformation_start must be flow or zero, got " + c.deformation_start);
   // The field's own checks name its key; a configuration's errors say they are the configuration's.
   try {
     field::CheckTrainedTimes(c.field.trained_times);

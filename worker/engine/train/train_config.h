@@ -107,6 +107,11 @@ struct TrainConfig {
   std::string exposure = "auto";
   double exposure_threshold = 0.02;
 
+  // Where the deformation starts (train/flow_start.h): "flow" (fitted to the optical flow from each
+  // training frame back to the frame at time 0, where the clip has depth and such a frame) or "zero"
+  // (no motion until the photometric loss finds some).
+  std::string deformation_start = "flow";
+
   double curve_interval_s = 10.0;  // a point of the error-against-time curve every this many seconds
   int curve_frames = 4;            // held-out frames rendered for each curve point (evenly spread)
 

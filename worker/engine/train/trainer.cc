@@ -73,6 +73,23 @@ Trainer::Trainer(const scene::Clip& clip, const TrainConfig& config, std::vector
     FitBackgroundToBorders(clip, sampler_.frames(), background);
     t.background_params = background;
   }
+  if (const field::Deformation<float>* deformation = field_->deformation(); !deformation) {
+    deformation_start_.skipped = "no deformation (a static scene)";
+  } else if (config_.deformation_start == "zero") {
+    deformation_start_.skipped = "deformation_start is zero";
+  } else {
+    deformation_start_ = FitDeformationToFlow(clip, sampler_.frames(), box_, deformation->layout(),
+                                              field::BlockValues(field_->Blocks(), "deform"));
+    const FlowStart& s = deformation_start_;
+    if (s.skipped.empty()) {
+      spdlog::info(
+          "deformation started from optical flow: {} points on {} frames (mean flow {:.2f} px), "
+          "{:.0f}% of their displacement fitted, {:.2f} s",
+          s.points, s.frames, s.flow_px, 100 * s.fitted_fraction, s.seconds);
+    } else {
+      spdlog::info("deformation starts at zero: {}", s.skipped);
+    }
+  }
   backend_ = backend(*field_, config_, tables_);
   UpdateTables();
 }

@@ -16,6 +16,7 @@
 #include "worker/engine/scene/clip.h"
 #include "worker/engine/scene/scene_box.h"
 #include "worker/engine/train/depth_refiner.h"
+#include "worker/engine/train/flow_start.h"
 #include "worker/engine/train/ray_sampler.h"
 #include "worker/engine/train/step_backend.h"
 #include "worker/engine/train/train_config.h"
@@ -61,6 +62,9 @@ class Trainer {
   std::string device() const { return backend_->device(); }
   const scene::SceneBox& box() const { return box_; }
   const TrainConfig& config() const { return config_; }
+  // How the deformation started (train/flow_start.h): `skipped` says why not from the flow (config
+  // "zero", a static scene, no depth, ...).
+  const FlowStart& deformation_start() const { return deformation_start_; }
 
   const UncertaintyMap& uncertainty_map() const { return map_; }
   const DepthRefiner& depth_refiner() const { return refiner_; }
@@ -96,6 +100,7 @@ class Trainer {
   scene::SceneBox box_;
   RaySampler sampler_;
   std::unique_ptr<field::Field> field_;
+  FlowStart deformation_start_;
   UncertaintyMap map_;
   DepthRefiner refiner_;
   render::OccupancyGrid occupancy_;
