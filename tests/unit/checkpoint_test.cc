@@ -123,9 +123,9 @@ TEST_F(CheckpointTest, AFieldOfAnotherShapeIsNamed) {
 // does not know said "config: unknown key" without naming the file.
 TEST_F(CheckpointTest, AConfigurationThisBuildCannotUseIsNamed) {
   std::string body = bytes_.substr(0, bytes_.size() - 64);
-  const auto at = body.find("deformation");
+  const auto at = body.find("\"deformation\"");  // the field's, not deformation_start
   ASSERT_NE(at, std::string::npos);
-  body.replace(at, 11, "dJformation");  // same length: the body stays well formed
+  body.replace(at + 1, 11, "dJformation");  // same length: the body stays well formed
   WriteBytes(path_, body + Sha256Hex(body));
   try {
     ReadCheckpointConfig(path_);
