@@ -26,8 +26,11 @@ constexpr int kFlowWidth = 320;
 constexpr double kRoundTripPx = 0.5;
 // Grey levels at or above this are taken for specular highlights, which move with the light.
 constexpr int kSaturated = 250;
-// About this many points a frame: the grid has a few thousand vertices near the surface.
+// About this many points a frame (the grid has a few thousand vertices near the surface), and at
+// most about this many in all (the least squares' cost grows with them: 367k points on a
+// 160-frame clip took 11 s to start, docs/benchmarks.md).
 constexpr int kPointsPerFrame = 4096;
+constexpr int kPoints = 160000;
 // Weight of the smoothness rows (a vertex minus each neighbour in x, y, z and time; the first knot
 // minus the fixed zero at time 0), relative to the mean of the data's normal-matrix diagonal: a
 // vertex without points takes its neighbours' motion. 0.003-0.05 measured alike, 0.3 worse
@@ -219,7 +222,8 @@ FlowStart FitDeformationToFlow(const scene::Clip& clip, const std::vector<int>& 
   const double sx = double(clip.width) / size.width, sy = double(clip.height) / size.height;
   const FlowImage ref_image = FlowImageOf(clip, ref, size, 0);
   const double ref_mean = cv::mean(ref_image.grey)[0];
-  const int stride = std::max(1, int(std::ceil(std::sqrt(double(size.area()) / kPointsPerFrame))));
+  const int per_frame = std::min(kPointsPerFrame, kPoints / std::max(1, int(order.size()) - 1));
+  const int stride = std::max(1, int(std::ceil(std::sqrt(double(size.area()) / std::max(1, per_frame)))));
   // A flow pixel's centre in the clip's pixels, and the clip's pixel there.
   const auto clip_x = [&](double x) { return (x + 0.5) * sx - 0.5; };
   const auto clip_y = [&](double y) { return (y + 0.5) * sy - 0.5; };
