@@ -70,8 +70,7 @@ void RebuildOccupancy(train::Trainer& trainer, nlohmann::json& left_out) {
                             "scene box empty)",
                             100.0 * (1.0 - trainer.occupancy_span_fraction()), config.occupancy_resolution,
                             100.0 * (1.0 - trainer.occupancy().occupied_fraction()))},
-       {"why",
-        fmt::format("empty: alpha below {} per cell at every probed time", config.occupancy_min_alpha)}});
+       {"why", fmt::format("empty: alpha below {} per cell at every probed time", config.occupancy_min_alpha)}});
 }
 
 ReconstructSummary RunPipeline(const ReconstructOptions& options, const ReconstructHooks& hooks) {
@@ -119,18 +118,25 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
   const double tail_s = TailSeconds(clip);
   const bool full_evaluation = options.full_evaluation;
   const double load_s = SecondsSince(run_start);
-  const TrainingRun run{
-      trainer, clip, split, fit, renderer, uncertainty_renderer, options.time_budget_s, run_start,
-      // Evaluation's reserve: its plan within its share, or the leanest plan up to
-      // kEvaluationShareMax of the run.
-      [&] {
-        const double share = kEvaluationShare * options.time_budget_s;
-        if (full_evaluation) return share + tail_s;
-        const double plan =
-            eval::PlanEvaluation(clip.frame_count(), split.heldout, pixels, MeasureCost(), share).seconds;
-        return std::min(plan, kEvaluationShareMax * options.time_budget_s) + tail_s;
-      },
-      out_dir / "model" / "checkpoint.bin"};
+  const TrainingRun run{trainer,
+                        clip,
+                        split,
+                        fit,
+                        renderer,
+                        uncertainty_renderer,
+                        options.time_budget_s,
+                        run_start,
+                        // Evaluation's reserve: its plan within its share, or the leanest plan up to
+                        // kEvaluationShareMax of the run.
+                        [&] {
+                          const double share = kEvaluationShare * options.time_budget_s;
+                          if (full_evaluation) return share + tail_s;
+                          const double plan = eval::PlanEvaluation(clip.frame_count(), split.heldout, pixels,
+                                                                   MeasureCost(), share)
+                                                  .seconds;
+                          return std::min(plan, kEvaluationShareMax * options.time_budget_s) + tail_s;
+                        },
+                        out_dir / "model" / "checkpoint.bin"};
   const TrainingResult trained = Train(run, hooks, extras);
   const auto after_training = Clock::now();
   trainer.SyncField();

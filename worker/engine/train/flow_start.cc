@@ -163,8 +163,8 @@ Eigen::MatrixXd SolveGrid(const std::vector<FlowPoint>& points, const field::Def
         entries.emplace_back(row, Eigen::Index(v), smooth);
         entries.emplace_back(row++, Eigen::Index(v + step[a]), -smooth);
       }
-      entries.emplace_back(row, Eigen::Index(v),
-                           smooth);  // minus the previous knot's (the zero before the first)
+      // Minus the previous knot's (the fixed zero before the first).
+      entries.emplace_back(row, Eigen::Index(v), smooth);
       if (v >= per_slice) entries.emplace_back(row, Eigen::Index(v - per_slice), -smooth);
       ++row;
     }
