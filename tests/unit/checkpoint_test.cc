@@ -64,8 +64,10 @@ class CheckpointTest : public testing::SmallClipTest {
 
 TEST_F(CheckpointTest, AnIntactCheckpointResumesAtItsIteration) {
   Trainer fresh(*clip_, config_, AllFrames(), 3);
-  ReadCheckpointState(path_, fresh);
+  const CheckpointExtras extras = ReadCheckpointState(path_, fresh);
   EXPECT_EQ(fresh.iteration(), 3);
+  // How the first run's deformation started travels with it (the resumed trainer fits nothing).
+  EXPECT_EQ(extras.deformation_start.value("from", ""), "optical flow") << extras.deformation_start.dump();
   EXPECT_EQ(ToJson(ReadCheckpointConfig(path_)), ToJson(config_));
 }
 

@@ -7,6 +7,7 @@
 
 #include <cstdio>
 #include <sstream>
+#include <string>
 
 #include "common/error.h"
 #include "tests/unit/object_clip.h"
@@ -144,6 +145,11 @@ TEST_F(TrainerTest, CheckpointResumesTheSameCurve) {
   Trainer restored(*clip_, config, AllFrames(), 3);
   restored.Load(state);
   EXPECT_EQ(restored.iteration(), 10);
+  // The deformation's start was fitted once, in the first run; the resumed one takes the checkpoint's.
+  EXPECT_TRUE(original.deformation_start().skipped.empty()) << original.deformation_start().skipped;
+  EXPECT_GT(original.deformation_start().points, 0u);
+  EXPECT_NE(restored.deformation_start().skipped.find("checkpoint"), std::string::npos)
+      << restored.deformation_start().skipped;
   EXPECT_EQ(restored.depth_refiner().rounds(), 1);
   std::stringstream again;
   restored.Save(again);

@@ -49,17 +49,6 @@ double TailSeconds(const scene::Clip& clip) {
   return kTailSecondsPerPixel * double(clip.frame_count()) * clip.width * clip.height;
 }
 
-// How the deformation started (train/flow_start.h), for metrics.json.
-nlohmann::json DeformationStartJson(const train::FlowStart& start) {
-  if (!start.skipped.empty()) return {{"from", "zero"}, {"why", start.skipped}};
-  return {{"from", "optical flow"},
-          {"frames", start.frames},
-          {"points", start.points},
-          {"mean_flow_px", start.flow_px},
-          {"fitted_fraction", start.fitted_fraction},
-          {"seconds", start.seconds}};
-}
-
 // Records what the occupancy grid leaves out of the final field's renders (rebuilt from it).
 void RebuildOccupancy(train::Trainer& trainer, nlohmann::json& left_out) {
   trainer.RebuildOccupancy();
@@ -93,6 +82,7 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
     extras = train::ReadCheckpointState(options.resume_from, trainer);
     spdlog::info("resumed from {} at iteration {}", options.resume_from, trainer.iteration());
   }
+  trainer.StartDeformation();  // a resumed run's deformation is the checkpoint's: nothing to fit
   spdlog::info("clip {}: {} frames {}x{}, {} train / {} held out, {} threads, steps on {}; {}", clip.source,
                clip.frame_count(), clip.width, clip.height, split.train.size(), split.heldout.size(), threads,
                trainer.device(), field::DescribeField(trainer.field()));
@@ -189,7 +179,10 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
   metrics["curve"] = extras.curve;
   metrics["left_out"] = left_out;
   metrics["field"] = field::DescribeField(trainer.field());
-  metrics["deformation_start"] = DeformationStartJson(trainer.deformation_start());
+  // A resumed run reports the start of the run that began it (the checkpoint carries it).
+  metrics["deformation_start"] = extras.deformation_start.is_null()
+                                     ? train::FlowStartJson(trainer.deformation_start())
+                                     : extras.deformation_start;
   eval::WriteCurve(out_dir / "curve.svg", extras.curve);
   // Where this process's time went, up to this file; the report page, written last from it (and
   // showing it as it is), takes a few tenths of a second more, logged.

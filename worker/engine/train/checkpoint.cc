@@ -73,8 +73,13 @@ void WriteCheckpoint(const std::filesystem::path& path, const Trainer& trainer,
       path, kCheckpointMagic,
       [&](std::ostream& out) {
         WriteString(out, ToJson(trainer.config()).dump());
-        WriteString(out,
-                    nlohmann::json{{"train_seconds", extras.train_seconds}, {"curve", extras.curve}}.dump());
+        const nlohmann::json start = extras.deformation_start.is_null()
+                                         ? FlowStartJson(trainer.deformation_start())
+                                         : extras.deformation_start;
+        WriteString(out, nlohmann::json{{"train_seconds", extras.train_seconds},
+                                        {"curve", extras.curve},
+                                        {"deformation_start", start}}
+                             .dump());
         trainer.Save(out);
       },
       "checkpoint");
@@ -94,6 +99,7 @@ CheckpointExtras ReadCheckpointState(const std::filesystem::path& path, Trainer&
     CheckpointExtras extras;
     extras.train_seconds = extras_json.at("train_seconds").get<double>();
     extras.curve = extras_json.at("curve");
+    extras.deformation_start = extras_json.value("deformation_start", nlohmann::json());
     return extras;
   });
 }

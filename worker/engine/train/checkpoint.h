@@ -18,6 +18,9 @@ namespace endorecon::train {
 struct CheckpointExtras {
   double train_seconds = 0;
   nlohmann::json curve = nlohmann::json::array();
+  // How the run's deformation started (FlowStartJson), kept through resumes; null in a checkpoint
+  // written before it was recorded. Written from the trainer when null.
+  nlohmann::json deformation_start;
 };
 
 void WriteCheckpoint(const std::filesystem::path& path, const Trainer& trainer,

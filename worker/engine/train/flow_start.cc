@@ -13,6 +13,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <nlohmann/json.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
 
@@ -298,6 +299,16 @@ FlowStart FitDeformationToFlow(const scene::Clip& clip, const std::vector<int>& 
   result.flow_px = flow_sum / double(points.size());
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;
+}
+
+nlohmann::json FlowStartJson(const FlowStart& start) {
+  if (!start.skipped.empty()) return {{"from", "zero"}, {"why", start.skipped}};
+  return {{"from", "optical flow"},
+          {"frames", start.frames},
+          {"points", start.points},
+          {"mean_flow_px", start.flow_px},
+          {"fitted_fraction", start.fitted_fraction},
+          {"seconds", start.seconds}};
 }
 
 }  // namespace endorecon::train

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <cstddef>
+#include <nlohmann/json_fwd.hpp>
 #include <string>
 #include <vector>
 
@@ -31,5 +32,9 @@ struct FlowStart {
 FlowStart FitDeformationToFlow(const scene::Clip& clip, const std::vector<int>& frames,
                                const scene::SceneBox& box, const field::DeformationLayout& layout,
                                float* params);
+
+// As metrics.json and checkpoints record it: {"from": "optical flow", frames, points, mean_flow_px,
+// fitted_fraction, seconds} or {"from": "zero", "why"}.
+nlohmann::json FlowStartJson(const FlowStart& start);
 
 }  // namespace endorecon::train

@@ -73,28 +73,36 @@ Trainer::Trainer(const scene::Clip& clip, const TrainConfig& config, std::vector
     FitBackgroundToBorders(clip, sampler_.frames(), background);
     t.background_params = background;
   }
-  if (const field::Deformation<float>* deformation = field_->deformation(); !deformation) {
+  if (!field_->deformation()) {
     deformation_start_.skipped = "no deformation (a static scene)";
   } else if (config_.deformation_start == "zero") {
     deformation_start_.skipped = "deformation_start is zero";
   } else {
-    deformation_start_ = FitDeformationToFlow(clip, sampler_.frames(), box_, deformation->layout(),
-                                              field::BlockValues(field_->Blocks(), "deform"));
-    const FlowStart& s = deformation_start_;
-    if (s.skipped.empty()) {
-      spdlog::info(
-          "deformation started from optical flow: {} points on {} frames (mean flow {:.2f} px), "
-          "{:.0f}% of their displacement fitted, {:.2f} s",
-          s.points, s.frames, s.flow_px, 100 * s.fitted_fraction, s.seconds);
-    } else {
-      spdlog::info("deformation starts at zero: {}", s.skipped);
-    }
+    // Fitted by StartDeformation or the first Step; a trainer loaded from a checkpoint skips it.
+    start_pending_ = true;
   }
   backend_ = backend(*field_, config_, tables_);
   UpdateTables();
 }
 
 Trainer::~Trainer() = default;
+
+void Trainer::StartDeformation() {
+  if (!start_pending_) return;
+  start_pending_ = false;
+  deformation_start_ = FitDeformationToFlow(clip_, sampler_.frames(), box_, field_->deformation()->layout(),
+                                            field::BlockValues(field_->Blocks(), "deform"));
+  const FlowStart& s = deformation_start_;
+  if (!s.skipped.empty()) {
+    spdlog::info("deformation starts at zero: {}", s.skipped);
+    return;
+  }
+  spdlog::info(
+      "deformation started from optical flow: {} points on {} frames (mean flow {:.2f} px), "
+      "{:.0f}% of their displacement fitted, {:.2f} s",
+      s.points, s.frames, s.flow_px, 100 * s.fitted_fraction, s.seconds);
+  backend_->PushField();
+}
 
 void Trainer::UpdateTables() {
   if (clip_.has_depth()) {
@@ -178,6 +186,7 @@ double Trainer::occupancy_span_fraction() const {
 }
 
 StepStats Trainer::Step(double progress) {
+  StartDeformation();
   StepStats stats;
   if (progress < 0) progress = RunProgress(iteration_, config_.iterations, 0, 0);
   if (config_.occupancy_resolution > 0 && progress / config_.occupancy_every >= occupancy_builds_ + 1) {
@@ -229,6 +238,10 @@ int Trainer::ReadIteration(std::istream& in) {
 
 void Trainer::Load(std::istream& in) {
   iteration_ = ReadIteration(in);
+  if (start_pending_) {
+    start_pending_ = false;
+    deformation_start_.skipped = "resumed from a checkpoint, which holds the deformation";
+  }
   field::LoadFieldState(*field_, in);
   backend_->PushField();
   backend_->LoadOptimizer(in);
