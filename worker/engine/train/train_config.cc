@@ -25,11 +25,12 @@ TrainConfig TrainConfig::Preset(const std::string& name) {
   if (name == "cpu") {
     c.field = field::FieldConfig::Cpu();
     c.nll_weight = 0.0075f;  // train_config.h
-    // The deformation at 3e-4, not 1e-3: Adam moves every vertex by about its rate a step, and
-    // those the photometric loss barely constrains wander (1.4-1.7 px off the clip's true motion
-    // after 120 s at 1e-3, against 0.8 px at the flow start). On the real-texture clip at 120 s:
-    // +0.1 dB held out, +0.5 dB on the training frames; on the demo clip +0.3 dB held out (+1 dB
-    // against the truth); the zero start gains most (docs/benchmarks.md, "The deformation's rate").
+    // The deformation at 3e-4, not 1e-3: Adam moves every vertex by about its rate a step, and at
+    // 1e-3 those the photometric loss barely constrains wandered (1.4-1.6 px off the real-texture
+    // clip's true motion after 120 s, 0.9 px at 3e-4, 0.8 px at the flow start). At 120 s: +0.1 dB
+    // held out and +0.5 dB on the training frames there, +0.3 dB held out on the demo clip (+0.9 dB
+    // against the truth), +0.25 dB from a zero start; at 300 s the demo's model map ranks its smaller
+    // error less well (docs/benchmarks.md, "The deformation's rate").
     c.adam.lr["deform"] = 3e-4f;
     c.depth_refine_every = 0.25;
     c.depth_refine_samples = 16;
