@@ -143,6 +143,8 @@ TEST_F(TrainerTest, CheckpointResumesTheSameCurve) {
   for (int i = 0; i < 10; ++i) expected.push_back(original.Step().loss);
 
   Trainer restored(*clip_, config, AllFrames(), 3);
+  EXPECT_NE(restored.deformation_start().skipped.find("not fitted yet"), std::string::npos)
+      << "before a step or a load: " << restored.deformation_start().skipped;
   restored.Load(state);
   EXPECT_EQ(restored.iteration(), 10);
   // The deformation's start was fitted once, in the first run; the resumed one takes the checkpoint's.

@@ -79,7 +79,9 @@ Trainer::Trainer(const scene::Clip& clip, const TrainConfig& config, std::vector
     deformation_start_.skipped = "deformation_start is zero";
   } else {
     // Fitted by StartDeformation or the first Step; a trainer loaded from a checkpoint skips it.
+    // Until then the deformation is zero, and a checkpoint written now says so.
     start_pending_ = true;
+    deformation_start_.skipped = "not fitted yet: no step has run";
   }
   backend_ = backend(*field_, config_, tables_);
   UpdateTables();
