@@ -180,9 +180,7 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
   metrics["left_out"] = left_out;
   metrics["field"] = field::DescribeField(trainer.field());
   // A resumed run reports the start of the run that began it (the checkpoint carries it).
-  metrics["deformation_start"] = extras.deformation_start.is_null()
-                                     ? train::FlowStartJson(trainer.deformation_start())
-                                     : extras.deformation_start;
+  metrics["deformation_start"] = train::DeformationStartOf(trainer, extras);
   eval::WriteCurve(out_dir / "curve.svg", extras.curve);
   // Where this process's time went, up to this file; the report page, written last from it (and
   // showing it as it is), takes a few tenths of a second more, logged.

@@ -67,18 +67,20 @@ auto NamingTheFile(const std::filesystem::path& path, Read&& read) {
 
 }  // namespace
 
+nlohmann::json DeformationStartOf(const Trainer& trainer, const CheckpointExtras& extras) {
+  return extras.deformation_start.is_null() ? FlowStartJson(trainer.deformation_start())
+                                            : extras.deformation_start;
+}
+
 void WriteCheckpoint(const std::filesystem::path& path, const Trainer& trainer,
                      const CheckpointExtras& extras) {
   WriteSealedFile(
       path, kCheckpointMagic,
       [&](std::ostream& out) {
         WriteString(out, ToJson(trainer.config()).dump());
-        const nlohmann::json start = extras.deformation_start.is_null()
-                                         ? FlowStartJson(trainer.deformation_start())
-                                         : extras.deformation_start;
         WriteString(out, nlohmann::json{{"train_seconds", extras.train_seconds},
                                         {"curve", extras.curve},
-                                        {"deformation_start", start}}
+                                        {"deformation_start", DeformationStartOf(trainer, extras)}}
                              .dump());
         trainer.Save(out);
       },

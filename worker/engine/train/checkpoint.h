@@ -19,9 +19,13 @@ struct CheckpointExtras {
   double train_seconds = 0;
   nlohmann::json curve = nlohmann::json::array();
   // How the run's deformation started (FlowStartJson), kept through resumes; null in a checkpoint
-  // written before it was recorded. Written from the trainer when null.
+  // written before it was recorded (DeformationStartOf then asks the trainer).
   nlohmann::json deformation_start;
 };
+
+// How the run's deformation started, as its checkpoints and metrics.json record it: the account a
+// resumed run carries from the run that began it, else the trainer's own (FlowStartJson).
+nlohmann::json DeformationStartOf(const Trainer& trainer, const CheckpointExtras& extras);
 
 void WriteCheckpoint(const std::filesystem::path& path, const Trainer& trainer,
                      const CheckpointExtras& extras);

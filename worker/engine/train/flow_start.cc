@@ -131,20 +131,47 @@ Eigen::MatrixXd SolveGrid(const std::vector<FlowPoint>& points, const field::Def
   const std::size_t per_slice = layout.slice / 3, side = layout.res + 1;
   const std::size_t vertices = std::size_t(layout.knots) * per_slice;
   const std::size_t n = points.size();
-  std::vector<double> weight(n, 1.0);
+  // The rows, built once and scaled each round: a point's grid weights (times the square root of its
+  // Huber weight), then a vertex minus each neighbour (times the smoothness weight).
+  std::vector<Eigen::Triplet<double>> entries;
+  entries.reserve(n * 16 + 8 * vertices);
+  Eigen::MatrixXd shift(Eigen::Index(n), 3);
+  for (std::size_t i = 0; i < n; ++i) {
+    std::size_t vertex[16];
+    double w[16];
+    const int count = field::DeformWeights(layout, points[i].pos.data(), points[i].time, vertex, w);
+    for (int j = 0; j < count; ++j) entries.emplace_back(Eigen::Index(i), Eigen::Index(vertex[j]), w[j]);
+    for (int axis = 0; axis < 3; ++axis) shift(Eigen::Index(i), axis) = points[i].shift[axis];
+  }
+  Eigen::Index row = Eigen::Index(n);
+  for (std::size_t v = 0; v < vertices; ++v) {
+    const std::size_t slot = v % per_slice;
+    const std::size_t at[3] = {slot % side, slot / side % side, slot / (side * side)};
+    const std::size_t step[3] = {1, side, side * side};
+    for (int a = 0; a < 3; ++a) {
+      if (at[a] + 1 == side) continue;
+      entries.emplace_back(row, Eigen::Index(v), 1.0);
+      entries.emplace_back(row++, Eigen::Index(v + step[a]), -1.0);
+    }
+    // Minus the previous knot's (the fixed zero before the first).
+    entries.emplace_back(row, Eigen::Index(v), 1.0);
+    if (v >= per_slice) entries.emplace_back(row, Eigen::Index(v - per_slice), -1.0);
+    ++row;
+  }
+  using Rows = Eigen::SparseMatrix<double, Eigen::RowMajor>;
+  Rows unscaled(row, Eigen::Index(vertices));
+  unscaled.setFromTriplets(entries.begin(), entries.end());
+  entries = {};
+
+  Eigen::VectorXd root_weight = Eigen::VectorXd::Ones(Eigen::Index(n));  // sqrt of Huber's weights
   Eigen::MatrixXd solution = Eigen::MatrixXd::Zero(Eigen::Index(vertices), 3);
   for (int round = 0; round < 2; ++round) {
-    std::vector<Eigen::Triplet<double>> entries;
-    entries.reserve(n * 16 + 5 * vertices);
-    std::vector<double> diagonal(vertices, 0.0);
-    for (std::size_t i = 0; i < n; ++i) {
-      std::size_t vertex[16];
-      double w[16];
-      const int count = field::DeformWeights(layout, points[i].pos.data(), points[i].time, vertex, w);
-      const double s = std::sqrt(weight[i]);
-      for (int j = 0; j < count; ++j) {
-        entries.emplace_back(Eigen::Index(i), Eigen::Index(vertex[j]), s * w[j]);
-        diagonal[vertex[j]] += weight[i] * w[j] * w[j];
+    Rows a = unscaled;
+    std::vector<double> diagonal(vertices, 0.0);  // the data's normal matrix
+    for (Eigen::Index i = 0; i < Eigen::Index(n); ++i) {
+      for (Rows::InnerIterator it(a, i); it; ++it) {
+        it.valueRef() *= root_weight[i];
+        diagonal[std::size_t(it.col())] += it.value() * it.value();
       }
     }
     double sum = 0;
@@ -154,29 +181,12 @@ Eigen::MatrixXd SolveGrid(const std::vector<FlowPoint>& points, const field::Def
       touched += d > 0;
     }
     const double smooth = std::sqrt(kSmooth * sum / double(std::max<std::size_t>(touched, 1)));
-    Eigen::Index row = Eigen::Index(n);
-    for (std::size_t v = 0; v < vertices; ++v) {
-      const std::size_t slot = v % per_slice;
-      const std::size_t at[3] = {slot % side, slot / side % side, slot / (side * side)};
-      const std::size_t step[3] = {1, side, side * side};
-      for (int a = 0; a < 3; ++a) {
-        if (at[a] + 1 == side) continue;
-        entries.emplace_back(row, Eigen::Index(v), smooth);
-        entries.emplace_back(row++, Eigen::Index(v + step[a]), -smooth);
-      }
-      // Minus the previous knot's (the fixed zero before the first).
-      entries.emplace_back(row, Eigen::Index(v), smooth);
-      if (v >= per_slice) entries.emplace_back(row, Eigen::Index(v - per_slice), -smooth);
-      ++row;
+    for (Eigen::Index r = Eigen::Index(n); r < row; ++r) {
+      for (Rows::InnerIterator it(a, r); it; ++it) it.valueRef() *= smooth;
     }
-    Eigen::SparseMatrix<double> a(row, Eigen::Index(vertices));
-    a.setFromTriplets(entries.begin(), entries.end());
     Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(row, 3);
-    for (std::size_t i = 0; i < n; ++i) {
-      for (int axis = 0; axis < 3; ++axis)
-        rhs(Eigen::Index(i), axis) = std::sqrt(weight[i]) * points[i].shift[axis];
-    }
-    Eigen::LeastSquaresConjugateGradient<Eigen::SparseMatrix<double>> solver;
+    rhs.topRows(Eigen::Index(n)) = root_weight.asDiagonal() * shift;
+    Eigen::LeastSquaresConjugateGradient<Rows> solver;
     solver.setMaxIterations(200);
     solver.setTolerance(1e-6);
     solver.compute(a);
@@ -187,15 +197,17 @@ Eigen::MatrixXd SolveGrid(const std::vector<FlowPoint>& points, const field::Def
     std::vector<double> norms(n);
     double left = 0, total = 0;
     for (std::size_t i = 0; i < n; ++i) {
-      norms[i] = residual.row(Eigen::Index(i)).norm() / std::sqrt(weight[i]);
-      left += residual.row(Eigen::Index(i)).squaredNorm();
-      total += rhs.row(Eigen::Index(i)).squaredNorm();
+      const Eigen::Index r = Eigen::Index(i);
+      norms[i] = residual.row(r).norm() / root_weight[r];
+      left += residual.row(r).squaredNorm();
+      total += rhs.row(r).squaredNorm();
     }
     *fitted = total > 0 ? 1 - left / total : 1;
     std::vector<double> sorted = norms;
     std::nth_element(sorted.begin(), sorted.begin() + std::ptrdiff_t(n / 2), sorted.end());
     const double k = 2 * sorted[n / 2];
-    for (std::size_t i = 0; i < n; ++i) weight[i] = k > 0 && norms[i] > k ? k / norms[i] : 1.0;
+    for (std::size_t i = 0; i < n; ++i)
+      root_weight[Eigen::Index(i)] = k > 0 && norms[i] > k ? std::sqrt(k / norms[i]) : 1.0;
   }
   return solution;
 }
@@ -241,7 +253,7 @@ FlowStart FitDeformationToFlow(const scene::Clip& clip, const std::vector<int>& 
   // a chain alone drifts (on the real-texture clip 1.5 px from the true motion on average, the
   // direct flow where it holds 0.8 px: docs/benchmarks.md).
   const cv::Mat identity = IdentityMap(ref_image);
-  cv::Mat map = identity.clone();
+  cv::Mat map;  // where the previous frame's pixels were at time 0
   cv::Mat previous = ref_image.grey;
   std::vector<FlowPoint> points;
   double flow_sum = 0;
@@ -249,14 +261,19 @@ FlowStart FitDeformationToFlow(const scene::Clip& clip, const std::vector<int>& 
   for (int f : order) {
     if (f == ref) continue;
     const FlowImage image = FlowImageOf(clip, f, size, ref_mean);
-    cv::Mat back, forth, to_ref, from_ref;
-    dis->calc(image.grey, previous, back);
-    dis->calc(previous, image.grey, forth);
+    cv::Mat to_ref, from_ref;
     dis->calc(image.grey, ref_image.grey, to_ref);
     dis->calc(ref_image.grey, image.grey, from_ref);
     const cv::Mat direct = ChainStep(image, to_ref, from_ref, identity);
-    map = ChainStep(image, back, forth, map);
-    direct.copyTo(map, Followed(direct));  // the direct flow where it passed, the chain elsewhere
+    if (previous.data == ref_image.grey.data) {
+      map = direct;  // the frame before is the reference: the chain is the direct flow
+    } else {
+      cv::Mat back, forth;
+      dis->calc(image.grey, previous, back);
+      dis->calc(previous, image.grey, forth);
+      map = ChainStep(image, back, forth, map);
+      direct.copyTo(map, Followed(direct));  // the direct flow where it passed, the chain elsewhere
+    }
     previous = image.grey;
 
     const std::size_t before = points.size();
