@@ -55,7 +55,7 @@ struct BrieflyTrained {
 nlohmann::json Evaluate(bool noise, const std::filesystem::path& dir, scene::Clip* loaded) {
   scene::SynthOptions synth;
   synth.frames = 3;
-  synth.noise = noise;
+  synth.noise = noise ? 1 : 0;
   BrieflyTrained run(synth, dir, {0, 2}, 0, 10);
   *loaded = run.clip;
   ClipEvaluation what;

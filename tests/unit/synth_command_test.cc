@@ -1,5 +1,6 @@
 // `endorecon-worker synth` as a user calls it: --backdrop belongs to --object captures; alone it is
-// refused with a message naming both, before anything is written.
+// refused with a message naming both, before anything is written. --noise scales the camera noise and
+// cannot be given with --no-noise.
 #include <gtest/gtest.h>
 
 #include <CLI/CLI.hpp>
@@ -45,6 +46,23 @@ TEST(SynthCommandTest, ABackdropNeedsAnObjectAndWritesNothingWithoutOne) {
   const auto written = nlohmann::json::parse(std::ifstream(out / "synth.json"));
   EXPECT_TRUE(written.at("backdrop").get<bool>());
   EXPECT_TRUE(std::filesystem::exists(out / "transforms.json"));
+}
+
+TEST(SynthCommandTest, NoiseIsScaledAndRecordedAndRefusedOutOfRange) {
+  testing::TempDir dir("synth-command");
+  const auto out = dir.path() / "clip";
+  const std::vector<std::string> small = {"--frames", "2", "--width", "16", "--height", "12"};
+  const auto with = [&](std::vector<std::string> args) {
+    args.insert(args.begin(), {"synth", out.string()});
+    args.insert(args.end(), small.begin(), small.end());
+    return args;
+  };
+  EXPECT_EQ(RunSynth(with({"--noise", "0.25"})), "");
+  EXPECT_DOUBLE_EQ(nlohmann::json::parse(std::ifstream(out / "synth.json")).at("noise").get<double>(), 0.25);
+  EXPECT_EQ(RunSynth(with({"--no-noise"})), "");
+  EXPECT_DOUBLE_EQ(nlohmann::json::parse(std::ifstream(out / "synth.json")).at("noise").get<double>(), 0);
+  EXPECT_THROW(RunSynth(with({"--noise", "0.5", "--no-noise"})), CLI::ExcludesError);
+  EXPECT_THROW(RunSynth(with({"--noise", "-1"})), CLI::ValidationError);
 }
 
 }  // namespace

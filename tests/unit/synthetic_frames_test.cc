@@ -71,6 +71,9 @@ TEST(SyntheticFrames, LeavesOutWhatTheOptionsLeaveOutAndRefusesBadOptions) {
   EXPECT_FALSE(clip.has_depth());
   EXPECT_FALSE(clip.has_stereo());
   EXPECT_EQ(clip.rgb[0].size(), 16u * 12u * 3u);
+  options.noise = -1;
+  EXPECT_THROW(MakeSyntheticClip(options), Error);
+  options.noise = 1;
   options.frames = 0;
   EXPECT_THROW(MakeSyntheticClip(options), Error);
 }

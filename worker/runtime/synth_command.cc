@@ -37,10 +37,16 @@ Command AddSynthCommand(CLI::App& app) {
   cmd->add_flag("--static", options->static_scene, "nothing moves");
   cmd->add_flag("--no-tool", flags->first, "no tool, no masks/ folder");
   cmd->add_flag("--no-depth", flags->second, "no depth/ folder");
-  cmd->add_flag(
+  auto* no_noise_flag = cmd->add_flag(
       "--no-noise", *no_noise,
       "images without camera noise (default: shot and read noise per channel, as a camera; gt/images "
-      "stays noise-free)");
+      "stays noise-free); the same as --noise 0");
+  cmd->add_option("--noise", options->noise,
+                  "the camera noise's standard deviation times K (1: about 3 levels of 255 at mid grey; "
+                  "the real laparoscopic recording in shared/data shows under 0.3, docs/formats.md)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 10.0))
+      ->excludes(no_noise_flag);
   cmd->add_flag("--stiff", options->stiff,
                 "thin depth range, near-opaque surface, near-black tissue, saturated speculars");
   cmd->add_flag("--stereo", options->stereo, "also write the right eye (images_right/, stereo.json)");
@@ -86,7 +92,7 @@ Command AddSynthCommand(CLI::App& app) {
     }
     if (!texture->empty()) LoadSynthTexture(*texture, *texture_frame, *options);
     options->tool = !flags->first;
-    options->noise = !*no_noise;
+    if (*no_noise) options->noise = 0;
     options->depth = !flags->second;
     scene::WriteSyntheticClip(*options, *out);
     spdlog::info("wrote synthetic clip: {} ({} frames, {}x{})", *out, options->frames, options->width,

@@ -29,14 +29,15 @@ std::uint8_t NoisyDepth(double depth, PortableRandom& random) {
 // A camera's noise on a pixel's colour: in linear light (the stored value to the power 2.2) each
 // channel gets independent Gaussian noise of variance kShot * signal + kRead^2 (shot noise and read
 // noise), then goes back to stored values. Dark pixels are the noisiest in stored values (the
-// gamma curve is steepest there): σ about 3.3 levels of 255 at a stored 0.3, 2.5 at 0.7.
+// gamma curve is steepest there): σ about 3.3 levels of 255 at a stored 0.3, 2.5 at 0.7, times
+// `scale` (SynthOptions::noise).
 constexpr double kShot = 4e-4, kRead = 0.004;
 
-std::array<float, 3> CameraNoise(const std::array<float, 3>& rgb, PortableRandom& random) {
+std::array<float, 3> CameraNoise(const std::array<float, 3>& rgb, double scale, PortableRandom& random) {
   std::array<float, 3> out;
   for (int c = 0; c < 3; ++c) {
     const double linear = std::pow(std::clamp(double(rgb[c]), 0.0, 1.0), 2.2);
-    const double sigma = std::sqrt(kShot * linear + kRead * kRead);
+    const double sigma = scale * std::sqrt(kShot * linear + kRead * kRead);
     const double noisy = std::max(0.0, linear + sigma * random.Normal());
     out[c] = float(std::pow(noisy, 1.0 / 2.2));
   }
@@ -82,6 +83,9 @@ void CheckSynthOptions(const SynthOptions& options) {
   if (!(options.motion >= 1 && options.motion <= 10) || !(options.flicker >= 0 && options.flicker < 1)) {
     FailInvalid("synthetic clip: motion must be in [1, 10] and flicker in [0, 1)");
   }
+  if (!(options.noise >= 0 && options.noise <= 10)) {
+    FailInvalid("synthetic clip: noise must be in [0, 10] (got " + std::to_string(options.noise) + ")");
+  }
 }
 
 SyntheticFrame RenderSyntheticFrame(const SyntheticScene& scene, const SynthOptions& options, int index) {
@@ -111,7 +115,7 @@ SyntheticFrame RenderSyntheticFrame(const SyntheticScene& scene, const SynthOpti
     return rgb;
   };
   const auto seen = [&](const std::array<float, 3>& rgb) {
-    return options.noise ? CameraNoise(lit(rgb), noise) : lit(rgb);
+    return options.noise > 0 ? CameraNoise(lit(rgb), options.noise, noise) : lit(rgb);
   };
   const Eigen::Vector3d right_origin = camera.c2w.col(3) + scene.baseline() * camera.c2w.col(0);
 

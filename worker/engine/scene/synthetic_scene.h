@@ -30,9 +30,9 @@ struct SynthOptions {
   bool recording =
       false;  // also write recording/: the raw pair as a real rig records it (synthetic_recording.h)
   int checkerboard_views = 24;  // with `recording`: views of the calibration checkerboard (0: none)
-  // Camera noise in images/ and images_right/ (CameraNoise in synthetic_clip.cc); gt/images is
-  // always noise-free, and so is recording/.
-  bool noise = true;
+  // Camera noise in images/ and images_right/ (CameraNoise in synthetic_frames.cc), its standard
+  // deviation times this (0: none); gt/images is always noise-free, and so is recording/.
+  double noise = 1;
 
   // What real recordings have and the default clip does not (issue 19), all off by default:
   // the tissue's albedo taken from a picture (e.g. a frame of a real recording: row-major RGB bytes,
