@@ -167,7 +167,7 @@ Eigen::MatrixXd SolveGrid(const std::vector<FlowPoint>& points, const field::Def
   Eigen::MatrixXd solution = Eigen::MatrixXd::Zero(Eigen::Index(vertices), 3);
   for (int round = 0; round < 2; ++round) {
     Rows a = unscaled;
-    std::vector<double> diagonal(vertices, 0.0);  // the data's normal matrix
+    std::vector<double> diagonal(vertices, 0.0);  // of the data rows' normal matrix
     for (Eigen::Index i = 0; i < Eigen::Index(n); ++i) {
       for (Rows::InnerIterator it(a, i); it; ++it) {
         it.valueRef() *= root_weight[i];
