@@ -32,17 +32,6 @@ ENDORECON_HD int TimeInterval(S t, int knots, S* frac) {
   return static_cast<int>(CellOf(ClampUnit(t), static_cast<std::uint32_t>(knots), frac));
 }
 
-// Calls visit(slice, weight) for the stored slices (1..knots) that a sample in time interval
-// `interval` (TimeInterval, fraction ft) blends: slice `interval` at 1 - ft and `interval + 1` at
-// ft, less the fixed zero slice 0. The one walk over time that every pass below shares.
-template <typename S, typename Visit>
-ENDORECON_HD void ForEachTimeSlice(int interval, S ft, const Visit& visit) {
-  for (int side = 0; side < 2; ++side) {
-    const int slice = interval + side;
-    if (slice != 0) visit(slice, side ? ft : S(1) - ft);
-  }
-}
-
 // x0 = pos + dx(pos, t) for one sample (3 values each).
 template <typename S>
 ENDORECON_HD void DeformSample(const DeformationLayout& layout, const S* params, const S* pos, S t, S* x0) {
@@ -51,21 +40,23 @@ ENDORECON_HD void DeformSample(const DeformationLayout& layout, const S* params,
   CellCornersOf<true>(layout.Level(), pos, slot, w, frac);
   const int interval = TimeInterval(t, layout.knots, &ft);
   S dx[3] = {};
-  ForEachTimeSlice(interval, ft, [&](int slice, S wt) {
+  for (int side = 0; side < 2; ++side) {
+    const int slice = interval + side;
+    if (slice == 0) continue;
+    const S wt = side ? ft : S(1) - ft;
     const S* table = params + (slice - 1) * layout.slice;
     for (int k = 0; k < 8; ++k) {
       const S* v = table + static_cast<std::size_t>(slot[k]) * 3;
       for (int a = 0; a < 3; ++a) dx[a] += wt * w[k] * v[a];
     }
-  });
+  }
   for (int a = 0; a < 3; ++a) x0[a] = pos[a] + dx[a];
 }
 
 // The (up to 16) parameters' vertices and weights DeformSample blends for one sample: dx =
 // sum_j weight[j] * params[vertex[j] * 3 + a], vertex[j] counted over the stored slices (slice k's
 // vertices from (k - 1) * slice / 3). Returns how many (the t = 0 slice is not stored). For fits
-// that need the grid as a linear map (train/flow_start.h), not for the hot path (DeformSample reads
-// the parameters in the same walk without the 16 indices; DeformationTest holds the two equal).
+// that need the grid as a linear map (train/flow_start.h), not for the hot path.
 template <typename S>
 ENDORECON_HD int DeformWeights(const DeformationLayout& layout, const S* pos, S t, std::size_t* vertex,
                                S* weight) {
@@ -74,13 +65,16 @@ ENDORECON_HD int DeformWeights(const DeformationLayout& layout, const S* pos, S 
   CellCornersOf<true>(layout.Level(), pos, slot, w, frac);
   const int interval = TimeInterval(t, layout.knots, &ft);
   int n = 0;
-  ForEachTimeSlice(interval, ft, [&](int slice, S wt) {
+  for (int side = 0; side < 2; ++side) {
+    const int slice = interval + side;
+    if (slice == 0) continue;
+    const S wt = side ? ft : S(1) - ft;
     const std::size_t first = static_cast<std::size_t>(slice - 1) * (layout.slice / 3);
     for (int k = 0; k < 8; ++k) {
       vertex[n] = first + slot[k];
       weight[n++] = wt * w[k];
     }
-  });
+  }
   return n;
 }
 
@@ -96,14 +90,16 @@ ENDORECON_HD void DeformScatterSample(const DeformationLayout& layout, const S* 
   std::uint32_t slot[8];
   S w[8], frac[3];
   CellCornersOf<true>(layout.Level(), pos, slot, w, frac);
-  ForEachTimeSlice(interval, ft, [&](int slice, S wt) {
-    if (only_knot > 0 && slice != only_knot) return;
+  for (int side = 0; side < 2; ++side) {
+    const int slice = interval + side;
+    if (slice == 0 || (only_knot > 0 && slice != only_knot)) continue;
+    const S wt = side ? ft : S(1) - ft;
     S* table = grads + (slice - 1) * layout.slice;
     for (int k = 0; k < 8; ++k) {
       S* v = table + static_cast<std::size_t>(slot[k]) * 3;
       for (int a = 0; a < 3; ++a) add(v + a, wt * w[k] * dx0[a]);
     }
-  });
+  }
 }
 
 // dL/dpos (3 values, written) = dx0 + (d dx / d pos)^T dx0 for one sample.
@@ -115,13 +111,16 @@ ENDORECON_HD void DeformPositionGradient(const DeformationLayout& layout, const 
   CellCornersOf<true>(layout.Level(), pos, slot, w, frac);
   const int interval = TimeInterval(t, layout.knots, &ft);
   S dot[8] = {};  // (dx . dx0) at each corner, both time slices blended
-  ForEachTimeSlice(interval, ft, [&](int slice, S wt) {
+  for (int side = 0; side < 2; ++side) {
+    const int slice = interval + side;
+    if (slice == 0) continue;
+    const S wt = side ? ft : S(1) - ft;
     const S* table = params + (slice - 1) * layout.slice;
     for (int k = 0; k < 8; ++k) {
       const S* v = table + static_cast<std::size_t>(slot[k]) * 3;
       dot[k] += wt * (v[0] * dx0[0] + v[1] * dx0[1] + v[2] * dx0[2]);
     }
-  });
+  }
   S gradient[3];
   TrilinearGradient(dot, frac, gradient);
   const S res = static_cast<S>(layout.res);
