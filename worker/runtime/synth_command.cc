@@ -43,7 +43,8 @@ Command AddSynthCommand(CLI::App& app) {
       "stays noise-free); the same as --noise 0");
   cmd->add_option("--noise", options->noise,
                   "the camera noise's standard deviation times K (1: about 3 levels of 255 at mid grey; "
-                  "the real laparoscopic recording in shared/data shows under 0.3, docs/formats.md)")
+                  "the real laparoscopic recording in shared/data shows less than K = 0.1 gives, "
+                  "docs/formats.md)")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 10.0))
       ->excludes(no_noise_flag);

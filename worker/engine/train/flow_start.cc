@@ -253,7 +253,7 @@ FlowStart FitDeformationToFlow(const scene::Clip& clip, const std::vector<int>& 
   // a chain alone drifts (on the real-texture clip 1.5 px from the true motion on average, the
   // direct flow where it holds 0.8 px: docs/benchmarks.md).
   const cv::Mat identity = IdentityMap(ref_image);
-  cv::Mat map;  // where the previous frame's pixels were at time 0
+  cv::Mat map;  // where the previous frame's pixels were at time 0 (none before the first)
   cv::Mat previous = ref_image.grey;
   std::vector<FlowPoint> points;
   double flow_sum = 0;
@@ -265,7 +265,7 @@ FlowStart FitDeformationToFlow(const scene::Clip& clip, const std::vector<int>& 
     dis->calc(image.grey, ref_image.grey, to_ref);
     dis->calc(ref_image.grey, image.grey, from_ref);
     const cv::Mat direct = ChainStep(image, to_ref, from_ref, identity);
-    if (previous.data == ref_image.grey.data) {
+    if (map.empty()) {
       map = direct;  // the frame before is the reference: the chain is the direct flow
     } else {
       cv::Mat back, forth;
