@@ -1,10 +1,13 @@
 // The clip evaluator's image metrics: against the observed images, and against a synthetic clip's
-// noise-free truth (gt/images), which differ exactly by the camera's noise.
+// noise-free truth (gt/images), which differ exactly by the camera's noise; the model map's
+// neighbours; a plan kept to its deadline.
 #include "worker/engine/eval/clip_evaluator.h"
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <nlohmann/json.hpp>
+#include <vector>
 
 #include "tests/unit/temp_dir.h"
 #include "worker/engine/scene/clip_loader.h"
@@ -149,6 +152,48 @@ TEST(ClipEvaluatorTest, AHeldOutFramesModelMapSeesItsNeighboursResiduals) {
     }
   }
   EXPECT_GT(block, 4 * rest);  // about 9x
+}
+
+// A plan priced far too low meets its deadline anyway: with the deadline already past, the training
+// frames planned full are rendered reduced and every reduced frame's maps take the coarsest stride
+// (FramePacer); the held-out frame stays full, and metrics.json says which frames went coarser.
+TEST(ClipEvaluatorTest, APlanPricedTooLowIsKeptToItsDeadline) {
+  testing::TempDir dir("clip_evaluator_late");
+  scene::SynthOptions synth;
+  synth.frames = 5;
+  BrieflyTrained run(synth, dir.path(), {0, 1, 3, 4}, 2, 10);
+  render::FrameRenderer plain(run.trainer.field(), run.trainer.box(),
+                              train::ReducedRenderSettings(run.config, run.clip.near, run.clip.far));
+  ClipEvaluation what;
+  what.train_frames = {0, 1, 3, 4};
+  what.heldout_frames = {2};
+  what.write_files = false;
+  what.plain = &plain;
+  what.plan.frames = {FrameRender::kFull, FrameRender::kReduced, FrameRender::kFull, FrameRender::kReduced,
+                      FrameRender::kReduced};
+  what.plan.stride = 2;
+  what.plan.cost = {1e-9, 1e-10};  // a thousandth of a second a frame: far below what it takes
+  what.plan.seconds = 5e-6;
+  const auto evaluate = [&](std::chrono::steady_clock::time_point deadline) {
+    what.deadline = deadline;
+    return EvaluateClip(run.clip, run.renderer, what, dir / "out").at("evaluation");
+  };
+  const nlohmann::json late = evaluate(std::chrono::steady_clock::now());
+  EXPECT_EQ(late.at("full_frames"), nlohmann::json::array({2}));
+  EXPECT_EQ(late.at("reduced_frames"), nlohmann::json::array({0, 1, 3, 4}));
+  EXPECT_EQ(late.at("uncertainty_stride").get<int>(), 2);
+  ASSERT_TRUE(late.contains("uncertainty_stride_late"));
+  const auto& coarser = late.at("uncertainty_stride_late");
+  ASSERT_EQ(coarser.size(), 4u);
+  for (std::size_t i = 0; i < coarser.size(); ++i) {
+    EXPECT_EQ(coarser[i].at("frame").get<int>(), std::vector<int>({0, 1, 3, 4})[i]);
+    EXPECT_EQ(coarser[i].at("stride").get<int>(), 4);
+  }
+  EXPECT_DOUBLE_EQ(late.at("seconds").at("render_planned").get<double>(), 5e-6);
+  // With time to spare the plan is kept as it is.
+  const nlohmann::json on_time = evaluate(std::chrono::steady_clock::now() + std::chrono::hours(1));
+  EXPECT_EQ(on_time.at("full_frames"), nlohmann::json::array({0, 2}));
+  EXPECT_FALSE(on_time.contains("uncertainty_stride_late"));
 }
 
 }  // namespace

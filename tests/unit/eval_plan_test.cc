@@ -1,11 +1,13 @@
 // The results' evaluation plan: every frame full when that fits, else held-out frames full, training
 // frames reduced (stride 2, then 4, then 8 on large frames) and as many promoted back to full as the time
-// left allows.
+// left allows; and the pacer that keeps a run to its deadline when the plan's prices prove low.
 #include "worker/engine/eval/eval_plan.h"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <limits>
+#include <vector>
 
 namespace endorecon::eval {
 namespace {
@@ -86,6 +88,63 @@ TEST(EvalPlan, FarBehindTimeWithNothingToGainPromotesNone) {
 TEST(EvalPlan, FrameSecondsAddsThePlainPassAndTheStridedPasses) {
   EXPECT_DOUBLE_EQ(FrameSeconds(FrameRender::kFull, 2, kCost, kPixels), 1.0);
   EXPECT_DOUBLE_EQ(FrameSeconds(FrameRender::kReduced, 2, kCost, kPixels), 0.45);
+}
+
+// A training frame full, a reduced one, a held-out one: the pacer's plan below.
+EvalPlan ThreeFrames() {
+  EvalPlan plan;
+  plan.frames = {FrameRender::kFull, FrameRender::kReduced, FrameRender::kFull};
+  plan.stride = 2;
+  plan.cost = kCost;
+  return plan;
+}
+
+constexpr double kNoDeadline = std::numeric_limits<double>::infinity();
+
+bool Is(FrameChoice choice, FrameRender how, int stride) {
+  return choice.how == how && (how == FrameRender::kFull || choice.stride == stride);
+}
+
+TEST(FramePacer, KeepsThePlanWhileItFitsThenReducesThenCoarsens) {
+  const EvalPlan plan = ThreeFrames();
+  const FramePacer pacer(plan, {2}, kPixels, true);
+  // Frame 0 and what follows it as planned (0.45 s + 1 s): full 2.45 s, reduced at 2 1.9 s, at 4 1.7125 s.
+  EXPECT_TRUE(Is(pacer.Choose(0, kNoDeadline), FrameRender::kFull, 2));
+  EXPECT_TRUE(Is(pacer.Choose(0, 2.5), FrameRender::kFull, 2));
+  EXPECT_TRUE(Is(pacer.Choose(0, 2.0), FrameRender::kReduced, 2));
+  EXPECT_TRUE(Is(pacer.Choose(0, 1.8), FrameRender::kReduced, 4));
+  EXPECT_TRUE(Is(pacer.Choose(0, 0.1), FrameRender::kReduced, 4)) << "too late for any: the cheapest";
+  // A reduced frame goes coarser (then 1 s for the held-out frame): 1.45 s at 2, 1.2625 s at 4.
+  EXPECT_TRUE(Is(pacer.Choose(1, 1.5), FrameRender::kReduced, 2));
+  EXPECT_TRUE(Is(pacer.Choose(1, 1.3), FrameRender::kReduced, 4));
+  // Held-out frames are full however late.
+  EXPECT_TRUE(Is(pacer.Choose(2, 0.0), FrameRender::kFull, 2));
+  // Without a plain renderer nothing can be reduced.
+  const FramePacer full_only(plan, {2}, kPixels, false);
+  EXPECT_TRUE(Is(full_only.Choose(0, 0.1), FrameRender::kFull, 2));
+}
+
+TEST(FramePacer, FollowsThePaceOfTheFramesRendered) {
+  const EvalPlan plan = ThreeFrames();
+  FramePacer pacer(plan, {2}, kPixels, true);
+  EXPECT_TRUE(Is(pacer.Choose(1, 1.6), FrameRender::kReduced, 2));  // priced 0.45 + 1 s
+  // A reduced frame took twice its price: 0.9 + 1 s does not fit, 0.525 + 1 s does.
+  pacer.Rendered({FrameRender::kReduced, 2}, 0.9);
+  EXPECT_TRUE(Is(pacer.Choose(1, 1.6), FrameRender::kReduced, 4));
+  // A full frame took half its price: 0.9 + 0.5 s fits.
+  pacer.Rendered({FrameRender::kFull, 2}, 0.5);
+  EXPECT_TRUE(Is(pacer.Choose(1, 1.6), FrameRender::kReduced, 2));
+}
+
+TEST(FramePacer, StrideEightOnlyOnLargeFrames) {
+  constexpr int kLarge = 640 * 512;
+  EvalPlan plan = ThreeFrames();
+  plan.cost = RenderCost{1e-3 / kLarge * kPixels, 2e-4 / kLarge * kPixels};  // as kCost per frame
+  plan.stride = 4;
+  EXPECT_TRUE(Is(FramePacer(plan, {2}, kLarge, true).Choose(1, 1.22), FrameRender::kReduced, 8));
+  EXPECT_TRUE(Is(FramePacer(plan, {2}, kLarge - 64, true).Choose(1, 1.22), FrameRender::kReduced, 4));
+  EXPECT_EQ(UncertaintyStrides(kLarge), (std::vector<int>{2, 4, 8}));
+  EXPECT_EQ(UncertaintyStrides(kPixels), (std::vector<int>{2, 4}));
 }
 
 }  // namespace

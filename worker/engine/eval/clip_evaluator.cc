@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <future>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <span>
 #include <string>
@@ -198,37 +199,6 @@ PendingModelMap ModelMap(const EvaluatedFrame& evaluated, const std::vector<std:
   return pending;
 }
 
-// Keeps a run's evaluation to its deadline: a training frame planned full is rendered reduced when
-// it and the frames after it, at the pace measured so far (the plan's costs until a frame of the
-// kind is measured), would end past the deadline.
-class FramePacer {
- public:
-  FramePacer(const ClipEvaluation& what, int pixels) : what_(what) {
-    for (FrameRender how : {FrameRender::kFull, FrameRender::kReduced})
-      pace_[int(how)] = FrameSeconds(how, what.plan.stride, what.plan.cost, pixels);
-  }
-
-  FrameRender Choose(int f) const {
-    const FrameRender planned = what_.plan.at(f);
-    if (planned == FrameRender::kReduced || what_.plain == nullptr ||
-        what_.deadline == Clock::time_point::max() || !what_.plan.cost.known() || heldout(f)) {
-      return planned;
-    }
-    double left = pace_[int(FrameRender::kFull)];
-    for (int g = f + 1; g < int(what_.plan.frames.size()); ++g) left += pace_[int(what_.plan.at(g))];
-    return Clock::now() + std::chrono::duration<double>(left) > what_.deadline ? FrameRender::kReduced
-                                                                               : planned;
-  }
-
-  void Rendered(FrameRender how, double seconds) { pace_[int(how)] = seconds; }
-
- private:
-  bool heldout(int f) const { return Contains(what_.heldout_frames, f); }
-
-  const ClipEvaluation& what_;
-  double pace_[2];
-};
-
 }  // namespace
 
 nlohmann::json UncertaintySettings(const render::FrameRenderSettings& settings) {
@@ -278,10 +248,11 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
   std::vector<render::RenderedFrame> components;  // aleatoric and epistemic maps only
   std::vector<PendingModelMap> model_maps(calibrated);
   std::vector<std::vector<float>> evidence(calibrated);  // the training frames' (neighbour_evidence.h)
-  FramePacer pacer(what, w * h);
+  FramePacer pacer(what.plan, what.heldout_frames, w * h, what.plain != nullptr);
   std::future<double> writing;  // the previous frame's files; returns the seconds they took
   double render_seconds = 0, write_seconds = 0, model_map_seconds = 0;
   std::vector<int> full_frames, reduced_frames;
+  nlohmann::json coarser = nlohmann::json::array();  // reduced frames given a coarser stride than planned
   // Finishes frame f's model map once the frames within kNeighbourFrames after it are rendered: adds
   // their evidence, calibrates the map, keeps it to write, and lets go of what no later frame needs.
   const auto finish_model_map = [&](int f) {
@@ -306,14 +277,20 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
     model_map_seconds += SecondsSince(start);
   };
   for (int f = 0; f < count; ++f) {
-    const FrameRender how = pacer.Choose(f);
     const auto start = Clock::now();
-    EvaluatedFrame evaluated = RenderFrame(clip, f, how, what.plan.stride, renderer, what.plain);
+    const FrameChoice choice =
+        pacer.Choose(f, what.deadline == Clock::time_point::max()
+                            ? std::numeric_limits<double>::infinity()
+                            : std::chrono::duration<double>(what.deadline - start).count());
+    EvaluatedFrame evaluated = RenderFrame(clip, f, choice.how, choice.stride, renderer, what.plain);
     render::RenderedFrame& frame = evaluated.frame;
     const double rendered_in = SecondsSince(start);
-    pacer.Rendered(how, rendered_in);
+    pacer.Rendered(choice, rendered_in);
     render_seconds += rendered_in;
-    (how == FrameRender::kFull ? full_frames : reduced_frames).push_back(f);
+    (choice.how == FrameRender::kFull ? full_frames : reduced_frames).push_back(f);
+    if (choice.how == FrameRender::kReduced && choice.stride != what.plan.stride) {
+      coarser.push_back({{"frame", f}, {"stride", choice.stride}});
+    }
     const auto& mask = EvaluationMask(clip, f);
     const bool heldout = Contains(what.heldout_frames, f);
     for (ImageGroup& group : images) {
@@ -401,6 +378,8 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
   if (!reduced_frames.empty()) {
     how["reduced_frames"] = reduced_frames;
     how["uncertainty_stride"] = what.plan.stride;
+    // Frames whose maps took a coarser stride to keep the deadline (the plan's prices were low).
+    if (!coarser.empty()) how["uncertainty_stride_late"] = coarser;
     const auto& plain = what.plain->settings();
     how["reduced"] = fmt::format(
         "colour and depth from one dropout-off pass at every pixel ({0} + {1} samples per ray); uncertainty "
@@ -412,6 +391,8 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
                     {"model_maps", model_map_seconds},
                     {"write", write_seconds},
                     {"wall", SecondsSince(wall)}};
+  // What the plan predicted the rendering would take (absent when its costs were not measured).
+  if (what.plan.cost.known()) how["seconds"]["render_planned"] = what.plan.seconds;
   // The training split's tissue PSNR by how its frames were rendered: a reduced frame's colour is a
   // cheaper render's, so the split's summary mixes two renders; the full frames' is the one to
   // compare across runs. Against the observed images, and against the noise-free truth where known.

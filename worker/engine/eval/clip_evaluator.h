@@ -24,8 +24,9 @@ struct ClipEvaluation {
   // of the same field without dropout passes.
   EvalPlan plan;
   render::FrameRenderer* plain = nullptr;
-  // When set, a training frame planned full is rendered reduced once the frames left would not
-  // finish by then at the pace measured so far.
+  // When set, the frames are kept to it (FramePacer): a training frame planned full is rendered
+  // reduced, and a reduced one's uncertainty coarser, once the frames left would not finish by then
+  // at the pace measured so far.
   std::chrono::steady_clock::time_point deadline = std::chrono::steady_clock::time_point::max();
 };
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <utility>
 #include <vector>
 
 #include "worker/engine/eval/strided_map.h"
@@ -16,6 +17,12 @@ bool EvalPlan::all_full() const {
 double FrameSeconds(FrameRender how, int stride, const RenderCost& cost, int pixels) {
   if (how == FrameRender::kFull) return cost.full * pixels;
   return (cost.plain + cost.full / double(stride * stride)) * pixels;
+}
+
+std::vector<int> UncertaintyStrides(int pixels) {
+  std::vector<int> strides = {2, 4};
+  if (pixels / 64 >= kMinStridedPoints) strides.push_back(8);
+  return strides;
 }
 
 EvalPlan PlanEvaluation(int frame_count, const std::vector<int>& heldout, int pixels, const RenderCost& cost,
@@ -33,8 +40,7 @@ EvalPlan PlanEvaluation(int frame_count, const std::vector<int>& heldout, int pi
     if (std::find(heldout.begin(), heldout.end(), f) == heldout.end()) train.push_back(f);
   }
   const double full = FrameSeconds(FrameRender::kFull, 1, cost, pixels);
-  std::vector<int> strides = {2, 4};
-  if (pixels / 64 >= kMinStridedPoints) strides.push_back(8);
+  const std::vector<int> strides = UncertaintyStrides(pixels);
   for (int stride : strides) {
     const double reduced = FrameSeconds(FrameRender::kReduced, stride, cost, pixels);
     const double base = double(heldout.size()) * full + double(train.size()) * reduced;
@@ -53,6 +59,43 @@ EvalPlan PlanEvaluation(int frame_count, const std::vector<int>& heldout, int pi
     return plan;
   }
   return plan;  // not reached: the last stride always returns
+}
+
+FramePacer::FramePacer(const EvalPlan& plan, std::vector<int> heldout, int pixels, bool can_reduce)
+    : plan_(plan),
+      heldout_(std::move(heldout)),
+      pixels_(pixels),
+      can_reduce_(can_reduce),
+      strides_(UncertaintyStrides(pixels)) {}
+
+FrameChoice FramePacer::Planned(int f) const { return {plan_.at(f), plan_.stride}; }
+
+double FramePacer::Price(FrameChoice choice) const {
+  return pace_[int(choice.how)] * FrameSeconds(choice.how, choice.stride, plan_.cost, pixels_);
+}
+
+FrameChoice FramePacer::Choose(int f, double seconds_left) const {
+  const FrameChoice planned = Planned(f);
+  const bool heldout = std::find(heldout_.begin(), heldout_.end(), f) != heldout_.end();
+  if (!can_reduce_ || !std::isfinite(seconds_left) || !plan_.cost.known() || plan_.frames.empty() || heldout)
+    return planned;
+  double rest = 0;
+  for (int g = f + 1; g < int(plan_.frames.size()); ++g) rest += Price(Planned(g));
+  // The frame's renders, costliest first.
+  std::vector<FrameChoice> options;
+  if (planned.how == FrameRender::kFull) options.push_back(planned);
+  for (int stride : strides_) {
+    if (stride >= plan_.stride) options.push_back({FrameRender::kReduced, stride});
+  }
+  for (const FrameChoice& option : options) {
+    if (Price(option) + rest <= seconds_left) return option;
+  }
+  return options.back();
+}
+
+void FramePacer::Rendered(FrameChoice choice, double seconds) {
+  const double priced = FrameSeconds(choice.how, choice.stride, plan_.cost, pixels_);
+  if (priced > 0) pace_[int(choice.how)] = seconds / priced;
 }
 
 RenderCost MeasureRenderCost(render::FrameRenderer& full, render::FrameRenderer& plain,

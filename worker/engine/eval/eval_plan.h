@@ -43,6 +43,10 @@ double FrameSeconds(FrameRender how, int stride, const RenderCost& cost, int pix
 // (docs/benchmarks.md, "The budget is the job"); from 640 x 512 frames on.
 inline constexpr int kMinStridedPoints = 160 * 128 / 4;
 
+// The strides a reduced frame's uncertainty may take on frames of `pixels` pixels, finest first: 2 and
+// 4, and 8 where its grid keeps kMinStridedPoints.
+std::vector<int> UncertaintyStrides(int pixels);
+
 // The plan that fits `seconds_available`: every frame full when that fits, when the cost is not known,
 // or with seconds_available <= 0 (no limit); else every held-out frame full, the training frames
 // reduced with stride 2 (4 when 2 does not fit, 8 when 4 does not and the frame is large enough:
@@ -50,6 +54,38 @@ inline constexpr int kMinStridedPoints = 160 * 128 / 4;
 // Held-out frames are never reduced, even when they alone overrun.
 EvalPlan PlanEvaluation(int frame_count, const std::vector<int>& heldout, int pixels, const RenderCost& cost,
                         double seconds_available);
+
+// One frame's render: how, and a reduced frame's uncertainty stride.
+struct FrameChoice {
+  FrameRender how = FrameRender::kFull;
+  int stride = 2;
+};
+
+// Keeps an evaluation to its deadline when the plan's prices prove low (they come from a few
+// tenths of a second of rendering). Before each frame it picks the costliest render the frame may
+// take such that it and the frames after it, as planned, end within the seconds left: a training
+// frame planned full may be rendered reduced, and a reduced one at a coarser stride
+// (UncertaintyStrides); held-out frames are always full. Without a deadline or known prices, the plan.
+// The pace of each kind follows the frames rendered so far: the last one's seconds over its price.
+class FramePacer {
+ public:
+  FramePacer(const EvalPlan& plan, std::vector<int> heldout, int pixels, bool can_reduce);
+
+  // seconds_left: until the deadline (infinity: none).
+  FrameChoice Choose(int f, double seconds_left) const;
+  void Rendered(FrameChoice choice, double seconds);
+
+ private:
+  double Price(FrameChoice choice) const;
+  FrameChoice Planned(int f) const;
+
+  const EvalPlan& plan_;
+  std::vector<int> heldout_;
+  int pixels_;
+  bool can_reduce_;
+  std::vector<int> strides_;
+  double pace_[2] = {1, 1};  // seconds taken over seconds priced, per FrameRender
+};
 
 // Times both renderers on `samples` pixels of one view spread over the image (a few tenths of a second
 // on a 2-core machine at the default 2,048), to price a plan on the field as it is now.
