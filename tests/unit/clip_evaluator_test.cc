@@ -154,9 +154,9 @@ TEST(ClipEvaluatorTest, AHeldOutFramesModelMapSeesItsNeighboursResiduals) {
   EXPECT_GT(block, 4 * rest);  // about 9x
 }
 
-// A plan priced far too low meets its deadline anyway: with the deadline already past, the training
-// frames planned full are rendered reduced and every reduced frame's maps take the coarsest stride
-// (FramePacer); the held-out frame stays full, and metrics.json says which frames went coarser.
+// A plan priced far too low meets its deadline anyway: with the deadline already past, every frame,
+// the held-out one too, is rendered reduced at the coarsest stride (FramePacer), and metrics.json says
+// which frames went coarser and which held-out frames were reduced.
 TEST(ClipEvaluatorTest, APlanPricedTooLowIsKeptToItsDeadline) {
   testing::TempDir dir("clip_evaluator_late");
   scene::SynthOptions synth;
@@ -179,14 +179,15 @@ TEST(ClipEvaluatorTest, APlanPricedTooLowIsKeptToItsDeadline) {
     return EvaluateClip(run.clip, run.renderer, what, dir / "out").at("evaluation");
   };
   const nlohmann::json late = evaluate(std::chrono::steady_clock::now());
-  EXPECT_EQ(late.at("full_frames"), nlohmann::json::array({2}));
-  EXPECT_EQ(late.at("reduced_frames"), nlohmann::json::array({0, 1, 3, 4}));
+  EXPECT_EQ(late.at("full_frames"), nlohmann::json::array());
+  EXPECT_EQ(late.at("reduced_frames"), nlohmann::json::array({0, 1, 2, 3, 4}));
+  EXPECT_EQ(late.at("heldout_reduced"), nlohmann::json::array({2}));
   EXPECT_EQ(late.at("uncertainty_stride").get<int>(), 2);
   ASSERT_TRUE(late.contains("uncertainty_stride_late"));
   const auto& coarser = late.at("uncertainty_stride_late");
-  ASSERT_EQ(coarser.size(), 4u);
+  ASSERT_EQ(coarser.size(), 5u);
   for (std::size_t i = 0; i < coarser.size(); ++i) {
-    EXPECT_EQ(coarser[i].at("frame").get<int>(), std::vector<int>({0, 1, 3, 4})[i]);
+    EXPECT_EQ(coarser[i].at("frame").get<int>(), int(i));
     EXPECT_EQ(coarser[i].at("stride").get<int>(), 4);
   }
   EXPECT_DOUBLE_EQ(late.at("seconds").at("render_planned").get<double>(), 5e-6);
@@ -194,6 +195,15 @@ TEST(ClipEvaluatorTest, APlanPricedTooLowIsKeptToItsDeadline) {
   const nlohmann::json on_time = evaluate(std::chrono::steady_clock::now() + std::chrono::hours(1));
   EXPECT_EQ(on_time.at("full_frames"), nlohmann::json::array({0, 2}));
   EXPECT_FALSE(on_time.contains("uncertainty_stride_late"));
+  EXPECT_FALSE(on_time.contains("heldout_reduced"));
+  // A plan that reduces the held-out frame (a budget too small for full ones) says so; with the
+  // time to spare the pacer renders it full after all.
+  what.plan.frames[2] = FrameRender::kReduced;
+  const nlohmann::json lean = evaluate(std::chrono::steady_clock::time_point::max());
+  EXPECT_EQ(lean.at("heldout_reduced"), nlohmann::json::array({2}));
+  const nlohmann::json ahead = evaluate(std::chrono::steady_clock::now() + std::chrono::hours(1));
+  EXPECT_FALSE(ahead.contains("heldout_reduced"));
+  EXPECT_EQ(ahead.at("full_frames"), nlohmann::json::array({0, 2}));
 }
 
 }  // namespace

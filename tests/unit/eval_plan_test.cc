@@ -85,6 +85,29 @@ TEST(EvalPlan, FarBehindTimeWithNothingToGainPromotesNone) {
   EXPECT_TRUE(ahead.all_full());
 }
 
+// A budget too small for the clip's frames: held-out frames full would overrun, so with
+// HeldOut::kMayReduce they are reduced as well, and promoted back to full as the time allows.
+TEST(EvalPlan, HeldOutFramesReducedOnlyWhenAllowedAndTheyDoNotFitFull) {
+  // Stride 4: reduced 0.2625 s, all ten 2.625 s; a held-out frame full costs 0.7375 s more.
+  const EvalPlan none = PlanEvaluation(10, {4, 9}, kPixels, kCost, 0.5, HeldOut::kMayReduce);
+  EXPECT_EQ(none.stride, 4);
+  EXPECT_EQ(Count(none, FrameRender::kReduced), 10);
+  EXPECT_NEAR(none.seconds, 2.625, 1e-9);
+  const EvalPlan one = PlanEvaluation(10, {4, 9}, kPixels, kCost, 3.5, HeldOut::kMayReduce);
+  EXPECT_EQ(Count(one, FrameRender::kFull), 1);
+  EXPECT_EQ(one.at(4) == FrameRender::kFull || one.at(9) == FrameRender::kFull, true);
+  EXPECT_NEAR(one.seconds, 2.625 + 0.7375, 1e-9);
+  EXPECT_LE(one.seconds, 3.5);
+  // Where the held-out frames fit full beside the rest reduced (4.1 s), they are full either way.
+  for (HeldOut held_out : {HeldOut::kFull, HeldOut::kMayReduce}) {
+    const EvalPlan fits = PlanEvaluation(10, {4, 9}, kPixels, kCost, 4.2, held_out);
+    EXPECT_EQ(fits.at(4), FrameRender::kFull);
+    EXPECT_EQ(fits.at(9), FrameRender::kFull);
+  }
+  // Without leave the held-out frames stay full and the plan overruns (as in the test above).
+  EXPECT_EQ(PlanEvaluation(10, {4, 9}, kPixels, kCost, 0.5).at(4), FrameRender::kFull);
+}
+
 TEST(EvalPlan, FrameSecondsAddsThePlainPassAndTheStridedPasses) {
   EXPECT_DOUBLE_EQ(FrameSeconds(FrameRender::kFull, 2, kCost, kPixels), 1.0);
   EXPECT_DOUBLE_EQ(FrameSeconds(FrameRender::kReduced, 2, kCost, kPixels), 0.45);
@@ -117,8 +140,9 @@ TEST(FramePacer, KeepsThePlanWhileItFitsThenReducesThenCoarsens) {
   // A reduced frame goes coarser (then 1 s for the held-out frame): 1.45 s at 2, 1.2625 s at 4.
   EXPECT_TRUE(Is(pacer.Choose(1, 1.5), FrameRender::kReduced, 2));
   EXPECT_TRUE(Is(pacer.Choose(1, 1.3), FrameRender::kReduced, 4));
-  // Held-out frames are full however late.
-  EXPECT_TRUE(Is(pacer.Choose(2, 0.0), FrameRender::kFull, 2));
+  // The held-out frame, the last, is full while it fits (1 s), reduced only when it does not.
+  EXPECT_TRUE(Is(pacer.Choose(2, 1.0), FrameRender::kFull, 2));
+  EXPECT_TRUE(Is(pacer.Choose(2, 0.9), FrameRender::kReduced, 2));
   // Without a plain renderer nothing can be reduced.
   const FramePacer full_only(plan, {2}, kPixels, false);
   EXPECT_TRUE(Is(full_only.Choose(0, 0.1), FrameRender::kFull, 2));
@@ -134,6 +158,24 @@ TEST(FramePacer, FollowsThePaceOfTheFramesRendered) {
   // A full frame took half its price: 0.9 + 0.5 s fits.
   pacer.Rendered({FrameRender::kFull, 2}, 0.5);
   EXPECT_TRUE(Is(pacer.Choose(1, 1.6), FrameRender::kReduced, 2));
+}
+
+// Held-out frames come first: before one, the training frames after it count at their cheapest; a
+// held-out frame planned reduced is full again when the frames run ahead of their prices.
+TEST(FramePacer, HeldOutFramesGiveWayLastAndComeBackWhenTimeAllows) {
+  EvalPlan plan;
+  plan.frames = {FrameRender::kFull, FrameRender::kFull, FrameRender::kReduced};  // held out, two training
+  plan.stride = 2;
+  plan.cost = kCost;
+  const FramePacer pacer(plan, {0}, kPixels, true);
+  // 1 s for the held-out frame and 2 x 0.2625 s for the training frames at their cheapest: 1.525 s.
+  EXPECT_TRUE(Is(pacer.Choose(0, 1.53), FrameRender::kFull, 2));
+  EXPECT_TRUE(Is(pacer.Choose(0, 1.5), FrameRender::kReduced, 2));
+  // Planned reduced, but there is time: full.
+  plan.frames[0] = FrameRender::kReduced;
+  const FramePacer ahead(plan, {0}, kPixels, true);
+  EXPECT_TRUE(Is(ahead.Choose(0, 10.0), FrameRender::kFull, 2));
+  EXPECT_TRUE(Is(ahead.Choose(0, kNoDeadline), FrameRender::kReduced, 2)) << "no deadline: the plan";
 }
 
 TEST(FramePacer, StrideEightOnlyOnLargeFrames) {

@@ -119,6 +119,8 @@ TEST(TrainConfigTest, JsonRoundTripKeepsEveryKey) {
                                               "occupancy_every",
                                               "occupancy_min_alpha",
                                               "occupancy_resolution",
+                                              "outside_view",
+                                              "outside_view_level",
                                               "preset",
                                               "rays_per_batch",
                                               "rgb_l2_weight",
@@ -280,7 +282,8 @@ TEST(TrainConfigTest, BadValuesAreRejected) {
         nlohmann::json{{"field", {{"heads", {{"color_dropout", 1.5}}}}}},
         nlohmann::json{{"field", {{"heads", {{"color_time_frequencies", 9}}}}}},
         nlohmann::json{{"exposure", "sometimes"}}, nlohmann::json{{"exposure_threshold", -0.1}},
-        nlohmann::json{{"deformation_start", "optical"}},
+        nlohmann::json{{"deformation_start", "optical"}}, nlohmann::json{{"outside_view", "on"}},
+        nlohmann::json{{"outside_view_level", 255}},
         nlohmann::json{{"field", {{"learned_background", true}}}}}) {
     TrainConfig fresh;
     const std::string key = bad.flatten().begin().key();  // "/field/heads/dropout"

@@ -18,6 +18,7 @@
 #include "worker/engine/field/field_description.h"
 #include "worker/engine/run_config.h"
 #include "worker/engine/scene/clip_loader.h"
+#include "worker/engine/scene/outside_view.h"
 #include "worker/engine/train/checkpoint.h"
 #include "worker/engine/train/render_settings.h"
 #include "worker/engine/train/scene_fit.h"
@@ -69,7 +70,22 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
   scene::LoadOptions load;
   load.force_static = options.force_static;
   if (config.background == "black") load.alpha_background = {0, 0, 0};
-  const scene::Clip clip = scene::LoadClip(options.clip_dir, load);
+  nlohmann::json outside_view;  // what the scope's view leaves out, for left_out
+  const scene::Clip clip = [&] {
+    scene::Clip loaded = scene::LoadClip(options.clip_dir, load);
+    if (config.outside_view != "auto") return loaded;
+    const std::vector<std::uint8_t> outside = scene::OutsideViewMask(loaded, config.outside_view_level);
+    if (outside.empty()) return loaded;
+    scene::ExcludeFromFrames(loaded, outside);
+    const double share = double(std::count(outside.begin(), outside.end(), 1)) / double(outside.size());
+    outside_view = {
+        {"what", fmt::format("the {:.1f}% of each frame outside the scope's view", 100 * share)},
+        {"why", fmt::format("dark (brightest channel at most {} of 255) in every frame and reaching "
+                            "the frame's edge: not tissue, left out of training and evaluation",
+                            config.outside_view_level)}};
+    spdlog::info("{}: {}", outside_view["what"].get<std::string>(), outside_view["why"].get<std::string>());
+    return loaded;
+  }();
   const FrameSplit split = SplitFrames(clip.frame_count(), config.holdout);
   const train::SceneFit fit = train::FitToScene(clip, config, split.train);
   const fs::path out_dir = options.out_dir;
@@ -134,6 +150,7 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
                     trainer.field());
 
   nlohmann::json left_out = fit.left_out;
+  if (!outside_view.is_null()) left_out.push_back(outside_view);
   nlohmann::json metrics = nlohmann::json::object();
   double evaluation_s = 0;
   if (!trained.cancelled) {
@@ -150,8 +167,27 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
                                    ? options.time_budget_s - extras.train_seconds + trained.step_seconds -
                                          SecondsSince(run_start) - tail_s
                                    : trained.wall_seconds * kEvaluationShare / (1 - kEvaluationShare);
-      what.plan = eval::PlanEvaluation(clip.frame_count(), split.heldout, pixels, MeasureCost(),
-                                       std::max(available - SecondsSince(start), 1e-3));
+      // The deadline comes first: held-out frames are reduced too when the budget cannot afford
+      // them full (it was set too small for the clip's frames).
+      const double left = std::max(available - SecondsSince(start), 1e-3);
+      what.plan = eval::PlanEvaluation(clip.frame_count(), split.heldout, pixels, MeasureCost(), left,
+                                       eval::HeldOut::kMayReduce);
+      const auto reduced = std::count_if(split.heldout.begin(), split.heldout.end(), [&](int f) {
+        return what.plan.at(f) == eval::FrameRender::kReduced;
+      });
+      if (reduced > 0) {
+        spdlog::warn(
+            "the time budget cannot afford every held-out frame with all dropout passes: {} of {} are "
+            "planned "
+            "reduced (full again if the frames run ahead; metrics.json: evaluation.heldout_reduced)",
+            reduced, split.heldout.size());
+      }
+      if (options.time_budget_s > 0 && what.plan.seconds > left) {
+        spdlog::warn(
+            "rendering the results of {} frames of {}x{} needs about {:.0f} s at the least and the budget "
+            "leaves {:.0f} s: the run will end late (the budget is too small for the clip)",
+            clip.frame_count(), clip.width, clip.height, what.plan.seconds, left);
+      }
       what.deadline = start + std::chrono::duration_cast<Clock::duration>(
                                   std::chrono::duration<double>(std::max(available, 0.0)));
     }

@@ -378,6 +378,13 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
   if (!reduced_frames.empty()) {
     how["reduced_frames"] = reduced_frames;
     how["uncertainty_stride"] = what.plan.stride;
+    // Held-out frames reduced when the run's budget could not afford them full: their scores are the
+    // reduced render's.
+    nlohmann::json heldout_reduced = nlohmann::json::array();
+    for (int f : reduced_frames) {
+      if (Contains(what.heldout_frames, f)) heldout_reduced.push_back(f);
+    }
+    if (!heldout_reduced.empty()) how["heldout_reduced"] = heldout_reduced;
     // Frames whose maps took a coarser stride to keep the deadline (the plan's prices were low).
     if (!coarser.empty()) how["uncertainty_stride_late"] = coarser;
     const auto& plain = what.plain->settings();

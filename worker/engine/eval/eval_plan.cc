@@ -25,8 +25,25 @@ std::vector<int> UncertaintyStrides(int pixels) {
   return strides;
 }
 
+namespace {
+
+// Marks `count` of `frames` full (FrameRender::kFull), evenly spread over them.
+void PromoteEvenly(const std::vector<int>& frames, int count, EvalPlan& plan) {
+  for (int i = 0; i < count; ++i) {
+    plan.frames[frames[std::size_t((i + 0.5) * double(frames.size()) / count)]] = FrameRender::kFull;
+  }
+}
+
+// How many frames each `gain` seconds dearer fit into `seconds` (clamped to [0, most] as a double: far
+// behind time with a tiny gain the count is -1e12, which no int holds).
+int FitCount(double seconds, double gain, std::size_t most) {
+  return int(std::clamp(std::floor(seconds / std::max(gain, 1e-12)), 0.0, double(most)));
+}
+
+}  // namespace
+
 EvalPlan PlanEvaluation(int frame_count, const std::vector<int>& heldout, int pixels, const RenderCost& cost,
-                        double seconds_available) {
+                        double seconds_available, HeldOut held_out) {
   EvalPlan plan;
   plan.cost = cost;
   plan.frames.assign(frame_count, FrameRender::kFull);
@@ -44,17 +61,22 @@ EvalPlan PlanEvaluation(int frame_count, const std::vector<int>& heldout, int pi
   for (int stride : strides) {
     const double reduced = FrameSeconds(FrameRender::kReduced, stride, cost, pixels);
     const double base = double(heldout.size()) * full + double(train.size()) * reduced;
-    if (base > seconds_available && stride != strides.back()) continue;
-    // Training frames promoted to full with the time left, evenly spread over the training frames.
-    // Clamped as a double: far behind time with a tiny gain the count is -1e12 (no int holds it).
-    const double gain = std::max(full - reduced, 1e-12);
-    const int promoted =
-        int(std::clamp(std::floor((seconds_available - base) / gain), 0.0, double(train.size())));
-    for (int f : train) plan.frames[f] = FrameRender::kReduced;
-    for (int i = 0; i < promoted; ++i) {
-      plan.frames[train[std::size_t((i + 0.5) * double(train.size()) / promoted)]] = FrameRender::kFull;
-    }
+    const bool last = stride == strides.back();
+    if (base > seconds_available && !last) continue;
     plan.stride = stride;
+    for (int f : train) plan.frames[f] = FrameRender::kReduced;
+    if (base > seconds_available && held_out == HeldOut::kMayReduce && !heldout.empty()) {
+      // Every frame reduced, and held-out frames promoted back to full with the time left.
+      const double all_reduced = double(frame_count) * reduced;
+      const int promoted = FitCount(seconds_available - all_reduced, full - reduced, heldout.size());
+      for (int f : heldout) plan.frames[f] = FrameRender::kReduced;
+      PromoteEvenly(heldout, promoted, plan);
+      plan.seconds = all_reduced + promoted * (full - reduced);
+      return plan;
+    }
+    // Training frames promoted to full with the time left, evenly spread over the training frames.
+    const int promoted = FitCount(seconds_available - base, full - reduced, train.size());
+    PromoteEvenly(train, promoted, plan);
     plan.seconds = base + promoted * (full - reduced);
     return plan;
   }
@@ -74,16 +96,32 @@ double FramePacer::Price(FrameChoice choice) const {
   return pace_[int(choice.how)] * FrameSeconds(choice.how, choice.stride, plan_.cost, pixels_);
 }
 
+bool FramePacer::IsHeldOut(int f) const {
+  return std::find(heldout_.begin(), heldout_.end(), f) != heldout_.end();
+}
+
 FrameChoice FramePacer::Choose(int f, double seconds_left) const {
   const FrameChoice planned = Planned(f);
-  const bool heldout = std::find(heldout_.begin(), heldout_.end(), f) != heldout_.end();
-  if (!can_reduce_ || !std::isfinite(seconds_left) || !plan_.cost.known() || plan_.frames.empty() || heldout)
+  if (!can_reduce_ || !std::isfinite(seconds_left) || !plan_.cost.known() || plan_.frames.empty())
     return planned;
+  const bool heldout = IsHeldOut(f);
+  const FrameChoice cheapest{FrameRender::kReduced, strides_.back()};
+  // The frames after this one: as planned when choosing a training frame's render; when choosing a
+  // held-out frame's, the training frames at their cheapest (they give way first) and the held-out
+  // ones full.
   double rest = 0;
-  for (int g = f + 1; g < int(plan_.frames.size()); ++g) rest += Price(Planned(g));
-  // The frame's renders, costliest first.
+  for (int g = f + 1; g < int(plan_.frames.size()); ++g) {
+    if (!heldout) {
+      rest += Price(Planned(g));
+    } else {
+      rest += Price(IsHeldOut(g) ? FrameChoice{FrameRender::kFull, plan_.stride} : cheapest);
+    }
+  }
+  // The frame's renders, costliest first: full for a held-out frame (even one planned reduced, when
+  // the frames run ahead of their prices) or one planned full, then reduced at the plan's stride and
+  // coarser.
   std::vector<FrameChoice> options;
-  if (planned.how == FrameRender::kFull) options.push_back(planned);
+  if (heldout || planned.how == FrameRender::kFull) options.push_back({FrameRender::kFull, plan_.stride});
   for (int stride : strides_) {
     if (stride >= plan_.stride) options.push_back({FrameRender::kReduced, stride});
   }

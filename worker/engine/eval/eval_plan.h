@@ -2,8 +2,8 @@
 // of the run: the time budget names the whole job, and evaluation is not its main work). A frame is
 // rendered one of two ways:
 //  - full: K dropout passes at every pixel (the K-pass mean colour and depth, full-resolution
-//    uncertainty maps). Every held-out frame is, and as many training frames as the time allows,
-//    spread evenly over the clip;
+//    uncertainty maps). Every held-out frame is (unless the run's budget cannot afford it:
+//    HeldOut), and as many training frames as the time allows, spread evenly over the clip;
 //  - reduced: one dropout-off pass at every pixel for colour and depth, and the K passes at every
 //    s-th pixel of every s-th row for the uncertainty maps, upsampled (strided_map.h).
 // The costs come from the field being evaluated (MeasureRenderCost), not from constants.
@@ -47,13 +47,22 @@ inline constexpr int kMinStridedPoints = 160 * 128 / 4;
 // 4, and 8 where its grid keeps kMinStridedPoints.
 std::vector<int> UncertaintyStrides(int pixels);
 
+// What PlanEvaluation may do with held-out frames.
+enum class HeldOut {
+  kFull,       // always full, even when they alone overrun
+  kMayReduce,  // reduced too when full ones do not fit beside the rest reduced: the run's deadline
+               // comes first (a budget too small for the clip's frames)
+};
+
 // The plan that fits `seconds_available`: every frame full when that fits, when the cost is not known,
 // or with seconds_available <= 0 (no limit); else every held-out frame full, the training frames
 // reduced with stride 2 (4 when 2 does not fit, 8 when 4 does not and the frame is large enough:
 // kMinStridedPoints) and as many of them full as the rest of the time allows, evenly spread.
-// Held-out frames are never reduced, even when they alone overrun.
+// When even that does not fit, held-out frames stay full (HeldOut::kFull), or (kMayReduce) every
+// frame is reduced at the coarsest stride and as many held-out frames as the time allows, evenly
+// spread, are full.
 EvalPlan PlanEvaluation(int frame_count, const std::vector<int>& heldout, int pixels, const RenderCost& cost,
-                        double seconds_available);
+                        double seconds_available, HeldOut held_out = HeldOut::kFull);
 
 // One frame's render: how, and a reduced frame's uncertainty stride.
 struct FrameChoice {
@@ -61,11 +70,12 @@ struct FrameChoice {
   int stride = 2;
 };
 
-// Keeps an evaluation to its deadline when the plan's prices prove low (they come from a few
+// Keeps an evaluation to its deadline when the plan's prices prove wrong (they come from a few
 // tenths of a second of rendering). Before each frame it picks the costliest render the frame may
-// take such that it and the frames after it, as planned, end within the seconds left: a training
-// frame planned full may be rendered reduced, and a reduced one at a coarser stride
-// (UncertaintyStrides); held-out frames are always full. Without a deadline or known prices, the plan.
+// take such that it and the frames after it end within the seconds left: a training frame as planned,
+// or reduced when planned full, or coarser (UncertaintyStrides); a held-out frame full (even when
+// planned reduced, if the frames run ahead), else reduced, and only once the training frames after
+// it at their cheapest would not make up the time. Without a deadline or known prices, the plan.
 // The pace of each kind follows the frames rendered so far: the last one's seconds over its price.
 class FramePacer {
  public:
@@ -78,6 +88,7 @@ class FramePacer {
  private:
   double Price(FrameChoice choice) const;
   FrameChoice Planned(int f) const;
+  bool IsHeldOut(int f) const;
 
   const EvalPlan& plan_;
   std::vector<int> heldout_;

@@ -23,6 +23,9 @@ struct Clip {
   std::vector<std::vector<float>> depth;       // empty or one per frame, H*W, clip units; 0 = unknown
   std::vector<std::vector<std::uint8_t>> tool_mask;  // empty or one per frame, H*W, 1 = tool
   std::vector<std::vector<std::uint8_t>> eval_mask;  // empty or one per frame (gt_masks/), 1 = tool
+  // Empty or H*W, 1 = outside the scope's view (scene/outside_view.h): set in every frame's masks
+  // too, and kept apart so that it does not count as occlusion.
+  std::vector<std::uint8_t> outside_view;
 
   // Stereo: the other eye, when the clip has images_right/. Cameras are the left cameras
   // shifted by the baseline (a user-supplied or default value; see docs/formats.md).

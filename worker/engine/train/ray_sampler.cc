@@ -13,6 +13,11 @@ RaySampler::RaySampler(const scene::Clip& clip, std::vector<int> frames) {
     for (int f : frames) {
       for (std::size_t p = 0; p < pixels; ++p) tool_count[p] += clip.tool_mask[f][p];
     }
+    // Outside the scope's view is masked in every frame but never occluded: it neither draws nor
+    // scales the tissue's weights.
+    for (std::size_t p = 0; p < clip.outside_view.size(); ++p) {
+      if (clip.outside_view[p] != 0) tool_count[p] = 0;
+    }
     const int most = *std::max_element(tool_count.begin(), tool_count.end());
     occlusion_weight_.resize(pixels);
     for (std::size_t p = 0; p < pixels; ++p) {

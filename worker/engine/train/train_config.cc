@@ -111,6 +111,8 @@ void VisitKeys(TrainConfig& c, Visit&& visit) {
   visit("occupancy_every", c.occupancy_every);
   visit("occupancy_min_alpha", c.occupancy_min_alpha);
   visit("background", c.background);
+  visit("outside_view", c.outside_view);
+  visit("outside_view_level", c.outside_view_level);
   visit("exposure", c.exposure);
   visit("exposure_threshold", c.exposure_threshold);
   visit("deformation_start", c.deformation_start);
@@ -195,6 +197,10 @@ void Validate(const TrainConfig& c) {
   require(
       !c.field.learned_background || c.background == "learned",
       "field.learned_background is set by background \"learned\" only, but background is " + c.background);
+  require(c.outside_view == "auto" || c.outside_view == "off",
+          "outside_view must be auto or off, got " + c.outside_view);
+  require(c.outside_view_level >= 0 && c.outside_view_level <= 254,
+          "outside_view_level must be in [0, 254], got " + std::to_string(c.outside_view_level));
   require(c.exposure == "auto" || c.exposure == "on" || c.exposure == "off",
           "exposure must be auto, on or off, got " + c.exposure);
   require(c.exposure_threshold >= 0, "exposure_threshold must be >= 0");

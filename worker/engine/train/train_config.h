@@ -99,6 +99,12 @@ struct TrainConfig {
   // the background used, and sets field.learned_background for "learned".
   std::string background = "auto";
 
+  // The part of an endoscope's frames outside its round view (scene/outside_view.h): "auto" leaves
+  // it out of training and evaluation (as a tool is) where the frames have one, "off" keeps every
+  // pixel. outside_view_level: how dark (brightest channel, of 255) such a pixel stays in every frame.
+  std::string outside_view = "auto";
+  int outside_view_level = 8;
+
   // Per-frame camera exposure apart from the tissue's colour (field/exposure.h): "on" (a gain per
   // colour channel at each training frame's time, learned with the field), "off", or "auto": on
   // when the training frames' brightness changes by more than exposure_threshold (the median over
