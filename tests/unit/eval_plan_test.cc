@@ -176,6 +176,12 @@ TEST(FramePacer, HeldOutFramesGiveWayLastAndComeBackWhenTimeAllows) {
   const FramePacer ahead(plan, {0}, kPixels, true);
   EXPECT_TRUE(Is(ahead.Choose(0, 10.0), FrameRender::kFull, 2));
   EXPECT_TRUE(Is(ahead.Choose(0, kNoDeadline), FrameRender::kReduced, 2)) << "no deadline: the plan";
+  // With the budget's tolerance a held-out frame runs full past the deadline by up to the slack;
+  // training frames keep to the deadline itself.
+  const FramePacer tolerant(plan, {0}, kPixels, true, 0.1);
+  EXPECT_TRUE(Is(tolerant.Choose(0, 1.5), FrameRender::kFull, 2));
+  EXPECT_TRUE(Is(tolerant.Choose(0, 1.4), FrameRender::kReduced, 2));
+  EXPECT_TRUE(Is(tolerant.Choose(1, 0.2), FrameRender::kReduced, 4));
 }
 
 TEST(FramePacer, StrideEightOnlyOnLargeFrames) {

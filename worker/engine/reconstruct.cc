@@ -41,6 +41,10 @@ using base::SecondsSince;
 constexpr double kEvaluationShare = 0.25;
 constexpr double kEvaluationShareMax = 0.5;
 
+// How far past its budget a run may end (docs/operations.md: "within 10%"): held-out frames are
+// reduced only when rendering them full would overrun by more.
+constexpr double kBudgetTolerance = 0.1;
+
 // Seconds writing takes after the last frame renders (the uncertainty heat maps, video, model,
 // metrics and report page), per pixel of the clip: measured on the 2-core VM (docs/benchmarks.md,
 // "The budget is the job") and rounded up.
@@ -168,10 +172,17 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
                                          SecondsSince(run_start) - tail_s
                                    : trained.wall_seconds * kEvaluationShare / (1 - kEvaluationShare);
       // The deadline comes first: held-out frames are reduced too when the budget cannot afford
-      // them full (it was set too small for the clip's frames).
+      // them full within its tolerance (it was set too small for the clip's frames).
       const double left = std::max(available - SecondsSince(start), 1e-3);
-      what.plan = eval::PlanEvaluation(clip.frame_count(), split.heldout, pixels, MeasureCost(), left,
-                                       eval::HeldOut::kMayReduce);
+      const eval::RenderCost cost = MeasureCost();
+      // Held-out frames full where the overrun stays within the budget's tolerance.
+      const double slack = options.time_budget_s > 0 ? kBudgetTolerance * options.time_budget_s : 0;
+      what.plan = eval::PlanEvaluation(clip.frame_count(), split.heldout, pixels, cost, left);
+      if (what.plan.seconds > left + slack) {
+        what.plan = eval::PlanEvaluation(clip.frame_count(), split.heldout, pixels, cost, left,
+                                         eval::HeldOut::kMayReduce);
+      }
+      what.heldout_slack_s = slack;
       const auto reduced = std::count_if(split.heldout.begin(), split.heldout.end(), [&](int f) {
         return what.plan.at(f) == eval::FrameRender::kReduced;
       });
@@ -182,11 +193,11 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
             "reduced (full again if the frames run ahead; metrics.json: evaluation.heldout_reduced)",
             reduced, split.heldout.size());
       }
-      if (options.time_budget_s > 0 && what.plan.seconds > left) {
+      if (options.time_budget_s > 0 && what.plan.seconds > left + slack) {
         spdlog::warn(
             "rendering the results of {} frames of {}x{} needs about {:.0f} s at the least and the budget "
-            "leaves {:.0f} s: the run will end late (the budget is too small for the clip)",
-            clip.frame_count(), clip.width, clip.height, what.plan.seconds, left);
+            "leaves {:.0f} s: the run will end more than {:.0f}% late (the budget is too small for the clip)",
+            clip.frame_count(), clip.width, clip.height, what.plan.seconds, left, 100 * kBudgetTolerance);
       }
       what.deadline = start + std::chrono::duration_cast<Clock::duration>(
                                   std::chrono::duration<double>(std::max(available, 0.0)));

@@ -248,7 +248,7 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
   std::vector<render::RenderedFrame> components;  // aleatoric and epistemic maps only
   std::vector<PendingModelMap> model_maps(calibrated);
   std::vector<std::vector<float>> evidence(calibrated);  // the training frames' (neighbour_evidence.h)
-  FramePacer pacer(what.plan, what.heldout_frames, w * h, what.plain != nullptr);
+  FramePacer pacer(what.plan, what.heldout_frames, w * h, what.plain != nullptr, what.heldout_slack_s);
   std::future<double> writing;  // the previous frame's files; returns the seconds they took
   double render_seconds = 0, write_seconds = 0, model_map_seconds = 0;
   std::vector<int> full_frames, reduced_frames;

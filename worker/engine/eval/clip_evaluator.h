@@ -28,6 +28,7 @@ struct ClipEvaluation {
   // reduced, and a reduced one's uncertainty coarser, once the frames left would not finish by then
   // at the pace measured so far.
   std::chrono::steady_clock::time_point deadline = std::chrono::steady_clock::time_point::max();
+  double heldout_slack_s = 0;  // how far past it a held-out frame may run full (FramePacer)
 };
 
 // Metrics: "train" and "heldout" splits each with per-frame and summarised image metrics (tissue

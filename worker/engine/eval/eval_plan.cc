@@ -83,11 +83,13 @@ EvalPlan PlanEvaluation(int frame_count, const std::vector<int>& heldout, int pi
   return plan;  // not reached: the last stride always returns
 }
 
-FramePacer::FramePacer(const EvalPlan& plan, std::vector<int> heldout, int pixels, bool can_reduce)
+FramePacer::FramePacer(const EvalPlan& plan, std::vector<int> heldout, int pixels, bool can_reduce,
+                       double heldout_slack_s)
     : plan_(plan),
       heldout_(std::move(heldout)),
       pixels_(pixels),
       can_reduce_(can_reduce),
+      heldout_slack_s_(heldout_slack_s),
       strides_(UncertaintyStrides(pixels)) {}
 
 FrameChoice FramePacer::Planned(int f) const { return {plan_.at(f), plan_.stride}; }
@@ -125,8 +127,9 @@ FrameChoice FramePacer::Choose(int f, double seconds_left) const {
   for (int stride : strides_) {
     if (stride >= plan_.stride) options.push_back({FrameRender::kReduced, stride});
   }
+  const double left = heldout ? seconds_left + heldout_slack_s_ : seconds_left;
   for (const FrameChoice& option : options) {
-    if (Price(option) + rest <= seconds_left) return option;
+    if (Price(option) + rest <= left) return option;
   }
   return options.back();
 }

@@ -79,7 +79,10 @@ struct FrameChoice {
 // The pace of each kind follows the frames rendered so far: the last one's seconds over its price.
 class FramePacer {
  public:
-  FramePacer(const EvalPlan& plan, std::vector<int> heldout, int pixels, bool can_reduce);
+  // heldout_slack_s: how far past the deadline a held-out frame may run full (the overrun a budget
+  // tolerates) before it gives way.
+  FramePacer(const EvalPlan& plan, std::vector<int> heldout, int pixels, bool can_reduce,
+             double heldout_slack_s = 0);
 
   // seconds_left: until the deadline (infinity: none).
   FrameChoice Choose(int f, double seconds_left) const;
@@ -94,6 +97,7 @@ class FramePacer {
   std::vector<int> heldout_;
   int pixels_;
   bool can_reduce_;
+  double heldout_slack_s_;
   std::vector<int> strides_;
   double pace_[2] = {1, 1};  // seconds taken over seconds priced, per FrameRender
 };
