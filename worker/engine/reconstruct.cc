@@ -124,7 +124,7 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
     const int f = split.heldout.empty() ? 0 : split.heldout.front();
     return eval::MeasureRenderCost(uncertainty_renderer, reduced_renderer, clip.cameras[f], clip.times[f]);
   };
-  const int pixels = clip.width * clip.height;
+  const int pixels = scene::RenderedPixels(clip);  // what a frame's render covers: its price
   const double tail_s = TailSeconds(clip);
   const bool full_evaluation = options.full_evaluation;
   const double load_s = SecondsSince(run_start);

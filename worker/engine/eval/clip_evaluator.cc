@@ -25,6 +25,7 @@
 #include "worker/engine/eval/summary.h"
 #include "worker/engine/eval/surface_mesh.h"
 #include "worker/engine/eval/video_writer.h"
+#include "worker/engine/scene/outside_view.h"
 
 namespace endorecon::eval {
 
@@ -132,9 +133,10 @@ struct EvaluatedFrame {
 EvaluatedFrame RenderFrame(const scene::Clip& clip, int f, FrameRender how, int stride,
                            render::FrameRenderer& full, render::FrameRenderer* plain) {
   const scene::Camera& camera = clip.cameras[f];
+  // Outside the scope's view is neither trained nor scored: left black, unrendered.
   if (how == FrameRender::kFull || plain == nullptr)
-    return {full.Render(camera, clip.times[f]), {}, {}, {}, {}, {}};
-  EvaluatedFrame out{plain->Render(camera, clip.times[f]), {}, {}, {}, {}, {}};
+    return {full.Render(camera, clip.times[f], clip.outside_view), {}, {}, {}, {}, {}};
+  EvaluatedFrame out{plain->Render(camera, clip.times[f], clip.outside_view), {}, {}, {}, {}, {}};
   if (full.settings().mc_passes == 0) return out;
   out.grid = StridedPixels(camera.width, camera.height, stride);
   const int n = int(out.grid.size());
@@ -248,7 +250,8 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
   std::vector<render::RenderedFrame> components;  // aleatoric and epistemic maps only
   std::vector<PendingModelMap> model_maps(calibrated);
   std::vector<std::vector<float>> evidence(calibrated);  // the training frames' (neighbour_evidence.h)
-  FramePacer pacer(what.plan, what.heldout_frames, w * h, what.plain != nullptr, what.heldout_slack_s);
+  FramePacer pacer(what.plan, what.heldout_frames, RenderedPixels(clip), what.plain != nullptr,
+                   what.heldout_slack_s);
   std::future<double> writing;  // the previous frame's files; returns the seconds they took
   double render_seconds = 0, write_seconds = 0, model_map_seconds = 0;
   std::vector<int> full_frames, reduced_frames;

@@ -1,8 +1,9 @@
 #include "worker/engine/render/frame_renderer.h"
 
 #include <algorithm>
-#include <numeric>
+#include <string>
 
+#include "common/error.h"
 #include "worker/engine/base/counter_rng.h"
 
 namespace endorecon::render {
@@ -11,24 +12,61 @@ FrameRenderer::FrameRenderer(field::Field& field, const scene::SceneBox& box,
                              const FrameRenderSettings& settings, const RenderBackendFactory& backend)
     : settings_(settings), backend_(backend(field, box, settings_)) {}
 
-RenderedFrame FrameRenderer::Render(const scene::Camera& camera, float time) {
+RenderedFrame FrameRenderer::Render(const scene::Camera& camera, float time,
+                                    std::span<const std::uint8_t> skip) {
   RenderedFrame frame;
   frame.width = camera.width;
   frame.height = camera.height;
   const int pixels = camera.width * camera.height;
-  frame.rgb.resize(3 * std::size_t(pixels));
-  frame.depth.resize(pixels);
-  frame.opacity.resize(pixels);
-  std::vector<int> all(pixels);
-  std::iota(all.begin(), all.end(), 0);
-  PixelOutputs out{frame.rgb.data(), frame.depth.data(), frame.opacity.data()};
-  if (settings_.mc_passes > 0) {
-    for (auto* v : {&frame.uncertainty, &frame.aleatoric, &frame.epistemic}) v->resize(pixels);
-    out.uncertainty = frame.uncertainty.data();
-    out.aleatoric = frame.aleatoric.data();
-    out.epistemic = frame.epistemic.data();
+  if (!skip.empty() && int(skip.size()) != pixels) {
+    FailInvalid("render: a skip mask of " + std::to_string(skip.size()) + " values for " +
+                std::to_string(pixels) + " pixels");
   }
-  RenderPixels(camera, time, all.data(), pixels, out);
+  const bool uncertain = settings_.mc_passes > 0;
+  frame.rgb.assign(3 * std::size_t(pixels), 0.0f);
+  frame.depth.assign(pixels, 0.0f);
+  frame.opacity.assign(pixels, 0.0f);
+  if (uncertain) {
+    for (auto* v : {&frame.uncertainty, &frame.aleatoric, &frame.epistemic}) v->assign(pixels, 0.0f);
+  }
+  std::vector<int> rendered;
+  rendered.reserve(pixels);
+  for (int p = 0; p < pixels; ++p) {
+    if (skip.empty() || skip[p] == 0) rendered.push_back(p);
+  }
+  const auto outputs = [&](RenderedFrame& f) {
+    PixelOutputs out{f.rgb.data(), f.depth.data(), f.opacity.data()};
+    if (uncertain) {
+      out.uncertainty = f.uncertainty.data();
+      out.aleatoric = f.aleatoric.data();
+      out.epistemic = f.epistemic.data();
+    }
+    return out;
+  };
+  const int count = int(rendered.size());
+  if (count == pixels) {
+    RenderPixels(camera, time, rendered.data(), count, outputs(frame));
+    return frame;
+  }
+  // Rendered compactly, then placed at their pixels.
+  RenderedFrame part;
+  part.rgb.resize(3 * std::size_t(count));
+  for (auto* v : {&part.depth, &part.opacity}) v->resize(count);
+  if (uncertain) {
+    for (auto* v : {&part.uncertainty, &part.aleatoric, &part.epistemic}) v->resize(count);
+  }
+  RenderPixels(camera, time, rendered.data(), count, outputs(part));
+  for (int i = 0; i < count; ++i) {
+    const int p = rendered[i];
+    for (int c = 0; c < 3; ++c) frame.rgb[3 * std::size_t(p) + c] = part.rgb[3 * std::size_t(i) + c];
+    frame.depth[p] = part.depth[i];
+    frame.opacity[p] = part.opacity[i];
+    if (uncertain) {
+      frame.uncertainty[p] = part.uncertainty[i];
+      frame.aleatoric[p] = part.aleatoric[i];
+      frame.epistemic[p] = part.epistemic[i];
+    }
+  }
   return frame;
 }
 

@@ -10,7 +10,9 @@
 // The chunks run on a RenderBackend (render_backend.h): the CPU by default, or a GPU.
 #pragma once
 
+#include <cstdint>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -37,7 +39,9 @@ class FrameRenderer {
   // (occupancy_grid.h). The grid must outlive its use; null (the default) samples all of [near, far].
   void SetOccupancy(const OccupancyGrid* grid) { occupancy_ = grid; }
 
-  RenderedFrame Render(const scene::Camera& camera, float time);
+  // `skip` (empty, or one value per pixel): pixels left unrendered where it is nonzero (outside a
+  // scope's view), given black, depth 0 (unknown), opacity 0 and no uncertainty.
+  RenderedFrame Render(const scene::Camera& camera, float time, std::span<const std::uint8_t> skip = {});
 
   // Renders an explicit list of pixels (row-major indices) of a camera; out arrays sized by the caller.
   void RenderPixels(const scene::Camera& camera, float time, const int* pixels, int count,

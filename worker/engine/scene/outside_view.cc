@@ -42,6 +42,10 @@ std::vector<std::uint8_t> OutsideViewMask(const Clip& clip, int max_level) {
   return mask;
 }
 
+int RenderedPixels(const Clip& clip) {
+  return clip.width * clip.height - int(std::count(clip.outside_view.begin(), clip.outside_view.end(), 1));
+}
+
 void ExcludeFromFrames(Clip& clip, const std::vector<std::uint8_t>& mask) {
   const std::size_t pixels = std::size_t(clip.width) * clip.height;
   if (mask.size() != pixels) {

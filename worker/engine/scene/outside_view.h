@@ -21,6 +21,9 @@ namespace endorecon::scene {
 // be (a frame dark nearly everywhere has no view to keep), or when the clip has no frame.
 std::vector<std::uint8_t> OutsideViewMask(const Clip& clip, int max_level);
 
+// The pixels of a frame a render covers: all but those outside the view.
+int RenderedPixels(const Clip& clip);
+
 // Marks the mask's pixels as not tissue in every frame: in the tool masks (made, all tissue but
 // these, when the clip had none) and in the evaluation masks when the clip has them; and keeps it as
 // clip.outside_view.
