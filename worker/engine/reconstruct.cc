@@ -171,11 +171,10 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
                                    ? options.time_budget_s - extras.train_seconds + trained.step_seconds -
                                          SecondsSince(run_start) - tail_s
                                    : trained.wall_seconds * kEvaluationShare / (1 - kEvaluationShare);
-      // The deadline comes first: held-out frames are reduced too when the budget cannot afford
-      // them full within its tolerance (it was set too small for the clip's frames).
+      // Held-out frames stay full where the overrun stays within the budget's tolerance; past it
+      // the deadline comes first and they are reduced too (a budget too small for the clip's frames).
       const double left = std::max(available - SecondsSince(start), 1e-3);
       const eval::RenderCost cost = MeasureCost();
-      // Held-out frames full where the overrun stays within the budget's tolerance.
       const double slack = options.time_budget_s > 0 ? kBudgetTolerance * options.time_budget_s : 0;
       what.plan = eval::PlanEvaluation(clip.frame_count(), split.heldout, pixels, cost, left);
       if (what.plan.seconds > left + slack) {
@@ -188,9 +187,9 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
       });
       if (reduced > 0) {
         spdlog::warn(
-            "the time budget cannot afford every held-out frame with all dropout passes: {} of {} are "
-            "planned "
-            "reduced (full again if the frames run ahead; metrics.json: evaluation.heldout_reduced)",
+            "the time budget cannot afford every held-out frame with all dropout passes: {} of {} "
+            "are planned reduced (full again if the frames run ahead; metrics.json: "
+            "evaluation.heldout_reduced)",
             reduced, split.heldout.size());
       }
       if (options.time_budget_s > 0 && what.plan.seconds > left + slack) {

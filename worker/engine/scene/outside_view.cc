@@ -28,17 +28,16 @@ std::vector<std::uint8_t> OutsideViewMask(const Clip& clip, int max_level) {
   for (int x = 0; x < w; ++x) at_edge[labels.at<int>(0, x)] = at_edge[labels.at<int>(h - 1, x)] = 1;
   for (int y = 0; y < h; ++y) at_edge[labels.at<int>(y, 0)] = at_edge[labels.at<int>(y, w - 1)] = 1;
   std::vector<std::uint8_t> mask(pixels, 0);
-  bool any = false;
+  std::size_t outside = 0;
   const int* label = labels.ptr<int>();
   const std::uint8_t* d = dark.ptr<std::uint8_t>();
   for (std::size_t p = 0; p < pixels; ++p) {
     mask[p] = d[p] != 0 && at_edge[std::size_t(label[p])] ? 1 : 0;
-    any = any || mask[p] != 0;
+    outside += mask[p];
   }
   // A scope's view is most of the frame; a frame dark nearly everywhere (a lens cap, an unlit
   // scene) has no view to keep, and is left as it is.
-  const auto outside = std::size_t(std::count(mask.begin(), mask.end(), 1));
-  if (!any || outside > pixels * 3 / 4) return {};
+  if (outside == 0 || outside > pixels * 3 / 4) return {};
   return mask;
 }
 
