@@ -174,6 +174,11 @@ Command AddSubmitCommand(CLI::App& app) {
          "--fps", [flags](double v) { flags->recording.set_fps(v); },
          "DICOM recording: keep at most this many frames per second")
       ->check(CLI::NonNegativeNumber);
+  sub->add_option_function<std::string>(
+         "--mono-camera", [flags](const std::string& v) { flags->recording.set_mono_camera(v); },
+         "mono DICOM recording: turning (estimate the endoscope's rotation per frame, the default) or "
+         "fixed")
+      ->check(CLI::IsMember({"turning", "fixed"}));
   sub->add_flag_function(
       "--dicom", [flags](std::int64_t) { flags->dicom.set_enabled(true); },
       "DICOM results for a clip that is not DICOM (a DICOM recording always gets them)");

@@ -547,6 +547,14 @@ StereoLayout ParseStereoLayout(const std::string& text) {
   FailInvalid("stereo layout '" + text + "': expected mono, side-by-side, top-bottom or series");
 }
 
+MonoCamera ParseMonoCamera(const std::string& text) {
+  if (text.empty() || text == "turning") return MonoCamera::kTurning;
+  if (text == "fixed") return MonoCamera::kFixed;
+  FailInvalid("mono camera '" + text + "': expected turning or fixed");
+}
+
+std::string MonoCameraName(MonoCamera camera) { return camera == MonoCamera::kFixed ? "fixed" : "turning"; }
+
 std::string StereoLayoutName(StereoLayout layout) {
   switch (layout) {
     case StereoLayout::kSideBySide:

@@ -24,6 +24,14 @@ enum class StereoLayout { kMono, kSideBySide, kTopBottom, kTwoSeries };
 StereoLayout ParseStereoLayout(const std::string& text);
 std::string StereoLayoutName(StereoLayout layout);
 
+// How a mono recording's endoscope is placed in the clip made from it: turning (each frame's
+// rotation estimated from the frames: worker/prepare/camera_rotation.h) or fixed (one pose for all).
+enum class MonoCamera { kTurning, kFixed };
+
+// "" or "turning", "fixed". Throws InvalidArgument naming the value.
+MonoCamera ParseMonoCamera(const std::string& text);
+std::string MonoCameraName(MonoCamera camera);
+
 // Frames [start, end) every `step`-th, as Python's slice A:B:STEP (end < 0: to the last frame).
 struct FrameWindow {
   int start = 0;
@@ -37,6 +45,7 @@ struct RecordingOptions {
   StereoLayout stereo = StereoLayout::kMono;
   FrameWindow frames;  // applied first, on the recording's frame indices
   double fps = 0;      // > 0: then keep at most this many frames per second of recording time
+  MonoCamera mono_camera = MonoCamera::kTurning;  // not read here: for the clip made from it
 };
 
 struct Recording {

@@ -11,6 +11,7 @@ dicom::RecordingOptions RecordingOptionsOf(const v1::RecordingOptions& options) 
   out.stereo = dicom::ParseStereoLayout(options.stereo());
   out.frames = dicom::ParseFrameWindow(options.frames());
   out.fps = options.fps();
+  out.mono_camera = dicom::ParseMonoCamera(options.mono_camera());
   return out;
 }
 

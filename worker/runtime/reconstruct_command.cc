@@ -47,6 +47,11 @@ void AddDicomOptions(CLI::App& cmd, v1::RecordingOptions& recording, v1::DicomOu
          "--fps", [&](double v) { recording.set_fps(v); },
          "DICOM recording: keep at most this many frames per second")
       ->check(CLI::NonNegativeNumber);
+  cmd.add_option_function<std::string>(
+         "--mono-camera", [&](const std::string& v) { recording.set_mono_camera(v); },
+         "mono DICOM recording: turning (estimate the endoscope's rotation per frame, the default) or "
+         "fixed")
+      ->check(CLI::IsMember({"turning", "fixed"}));
   cmd.add_flag_function(
       "--dicom", [&](std::int64_t) { dicom.set_enabled(true); },
       "write dicom/ for a clip that is not DICOM (always written for a DICOM recording)");

@@ -11,6 +11,9 @@
 #include "worker/engine/eval/exports.h"
 #include "worker/engine/scene/endonerf_loader.h"
 #include "worker/engine/scene/npy.h"
+#include "worker/engine/scene/outside_view.h"
+#include "worker/engine/train/train_config.h"
+#include "worker/prepare/camera_rotation.h"
 #include "worker/prepare/prepare_clip.h"
 
 namespace endorecon::worker {
@@ -30,15 +33,67 @@ void WriteFrames(const std::vector<cv::Mat>& frames, const fs::path& folder) {
   }
 }
 
-void WriteTransforms(const dicom::Recording& recording, const fs::path& clip_dir) {
+cv::Matx33d NominalCamera(const cv::Mat& frame) {
+  const double focal = kFocalPerWidth * frame.cols;
+  return {focal, 0, frame.cols / 2.0, 0, focal, frame.rows / 2.0, 0, 0, 1};
+}
+
+// transforms.json's camera-to-world matrix (OpenGL axes: x right, y up, z back) of a camera turned
+// by `turn` (OpenCV axes) from the first frame's, whose OpenGL frame is the world.
+nlohmann::json TransformMatrix(const cv::Matx33d& turn) {
+  const cv::Matx33d flip = cv::Matx33d::diag(cv::Vec3d(1, -1, -1));
+  const cv::Matx33d r = flip * turn * flip;
+  return {{r(0, 0), r(0, 1), r(0, 2), 0},
+          {r(1, 0), r(1, 1), r(1, 2), 0},
+          {r(2, 0), r(2, 1), r(2, 2), 0},
+          {0, 0, 0, 1}};
+}
+
+// The mono endoscope's turn per frame (prepare/camera_rotation.h), corners kept off the black
+// outside the scope's view; what was estimated goes into recording.json.
+std::vector<cv::Matx33d> EstimateTurns(const dicom::Recording& recording, nlohmann::json& record) {
+  const cv::Mat& first = recording.left[0];
+  static const int level = train::TrainConfig().outside_view_level;  // the training's default
+  const std::vector<std::uint8_t> outside = scene::OutsideViewMask(recording.left, level);
+  cv::Mat not_tissue;
+  if (!outside.empty())
+    cv::Mat(first.rows, first.cols, CV_8U, const_cast<std::uint8_t*>(outside.data())).copyTo(not_tissue);
+  not_tissue *= 255;
+  const prepare::CameraTurns turns =
+      prepare::EstimateCameraTurns(recording.left, NominalCamera(first), not_tissue);
+  double widest = 0;
+  for (const cv::Matx33d& r : turns.rotations)
+    widest = std::max(widest, std::acos(std::clamp((cv::trace(r) - 1) / 2, -1.0, 1.0)));
+  std::vector<double> misses = turns.residual_px;
+  std::sort(misses.begin(), misses.end());
+  const double median_miss = misses.empty() ? 0.0 : misses[misses.size() / 2];
+  record["camera_turns"] = {{"widest_deg", widest * 180 / CV_PI},
+                            {"median_miss_px", median_miss},
+                            {"frames_unplaced", turns.unplaced},
+                            {"inliers", turns.inliers}};
+  spdlog::info(
+      "mono recording: the endoscope turns up to {:.1f} degrees from the first frame (tracks "
+      "missed by {:.2f} px at the median)",
+      widest * 180 / CV_PI, median_miss);
+  if (turns.unplaced > 0) {
+    spdlog::warn(
+        "mono recording: {} frame(s) could not be placed (too few tracks on tissue); each kept "
+        "the turn of the frame before it",
+        turns.unplaced);
+  }
+  return turns.rotations;
+}
+
+// `turns`: per frame, or empty for a fixed endoscope.
+void WriteTransforms(const dicom::Recording& recording, const std::vector<cv::Matx33d>& turns,
+                     const fs::path& clip_dir) {
   const int w = recording.left[0].cols, h = recording.left[0].rows;
   nlohmann::json frames = nlohmann::json::array();
-  const nlohmann::json identity = {{1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}, {0, 0, 0, 1}};
   // The engine's times are in [0, 1]: the recording's span maps onto it.
   const double span = recording.times_s.back() > 0 ? recording.times_s.back() : 1.0;
   for (std::size_t i = 0; i < recording.left.size(); ++i) {
     frames.push_back({{"file_path", "images/" + eval::FrameFileName(static_cast<int>(i), ".png")},
-                      {"transform_matrix", identity},
+                      {"transform_matrix", TransformMatrix(turns.empty() ? cv::Matx33d::eye() : turns[i])},
                       {"time", recording.times_s[i] / span}});
   }
   const nlohmann::json transforms = {{"fl_x", kFocalPerWidth * w},
@@ -125,11 +180,16 @@ std::optional<RecordingClip> ClipFromRecording(const fs::path& input, const dico
                                                const fs::path& clip_dir) {
   if (!dicom::HoldsDicom(input)) return std::nullopt;
   const dicom::Recording recording = dicom::ReadRecording(input, options);
+  nlohmann::json camera_record = nlohmann::json::object();
   if (recording.right.empty()) {
     fs::remove_all(clip_dir);
     fs::create_directories(clip_dir);
     WriteFrames(recording.left, clip_dir / "images");
-    WriteTransforms(recording, clip_dir);
+    camera_record["mono_camera"] = dicom::MonoCameraName(options.mono_camera);
+    const auto turns = options.mono_camera == dicom::MonoCamera::kTurning
+                           ? EstimateTurns(recording, camera_record)
+                           : std::vector<cv::Matx33d>{};
+    WriteTransforms(recording, turns, clip_dir);
   } else {
     WriteStereoClip(recording, clip_dir);
   }
@@ -141,7 +201,7 @@ std::optional<RecordingClip> ClipFromRecording(const fs::path& input, const dico
                  std::to_string(recording.recording_frames) + " frame(s) kept, times from " +
                  recording.times_from +
                  (recording.right.empty() ? "" : ", stereo " + dicom::StereoLayoutName(options.stereo));
-  const nlohmann::json record = {
+  nlohmann::json record = {
       {"source", recording.description},
       {"stereo", dicom::StereoLayoutName(options.stereo)},
       {"frames",
@@ -153,6 +213,7 @@ std::optional<RecordingClip> ClipFromRecording(const fs::path& input, const dico
       {"focal_per_width", kFocalPerWidth},
       {"near", kNear},
       {"far", kFar}};
+  record.update(camera_record);
   WriteFile(clip_dir / "recording.json", record.dump(1), "recording description");
   spdlog::info("DICOM recording: {}", clip.summary);
   return clip;

@@ -8,16 +8,18 @@
 
 namespace endorecon::scene {
 
-std::vector<std::uint8_t> OutsideViewMask(const Clip& clip, int max_level) {
-  if (clip.rgb.empty()) return {};
-  const int w = clip.width, h = clip.height;
+std::vector<std::uint8_t> OutsideViewMask(const std::vector<cv::Mat>& frames, int max_level) {
+  if (frames.empty()) return {};
+  const int w = frames[0].cols, h = frames[0].rows;
   const std::size_t pixels = std::size_t(w) * h;
   // Dark in every frame: the brightest channel's maximum over frames.
   cv::Mat dark(h, w, CV_8U, cv::Scalar(1));
-  for (const auto& frame : clip.rgb) {
+  for (const cv::Mat& frame : frames) {
+    if (frame.type() != CV_8UC3 || frame.size() != dark.size() || !frame.isContinuous())
+      FailInvalid("outside view: frames must be 8-bit, 3 channels, one size");
     std::uint8_t* d = dark.ptr<std::uint8_t>();
-    for (std::size_t p = 0; p < pixels; ++p) {
-      const std::uint8_t* c = &frame[3 * p];
+    const std::uint8_t* c = frame.ptr<std::uint8_t>();
+    for (std::size_t p = 0; p < pixels; ++p, c += 3) {
       if (c[0] > max_level || c[1] > max_level || c[2] > max_level) d[p] = 0;
     }
   }
@@ -39,6 +41,13 @@ std::vector<std::uint8_t> OutsideViewMask(const Clip& clip, int max_level) {
   // scene) has no view to keep, and is left as it is.
   if (outside == 0 || outside > pixels * 3 / 4) return {};
   return mask;
+}
+
+std::vector<std::uint8_t> OutsideViewMask(const Clip& clip, int max_level) {
+  std::vector<cv::Mat> frames;  // headers over the clip's pixels, not copies
+  for (const auto& frame : clip.rgb)
+    frames.emplace_back(clip.height, clip.width, CV_8UC3, const_cast<std::uint8_t*>(frame.data()));
+  return OutsideViewMask(frames, max_level);
 }
 
 int RenderedPixels(const Clip& clip) {

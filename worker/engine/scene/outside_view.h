@@ -11,6 +11,7 @@
 #pragma once
 
 #include <cstdint>
+#include <opencv2/core/mat.hpp>
 #include <vector>
 
 #include "worker/engine/scene/clip.h"
@@ -20,6 +21,9 @@ namespace endorecon::scene {
 // H*W, 1 outside the view; empty when no pixel is, when more than three quarters of the frame would
 // be (a frame dark nearly everywhere has no view to keep), or when the clip has no frame.
 std::vector<std::uint8_t> OutsideViewMask(const Clip& clip, int max_level);
+// The same over frames not yet a clip: 8-bit, 3 channels (either order), one size; throws
+// InvalidArgument otherwise.
+std::vector<std::uint8_t> OutsideViewMask(const std::vector<cv::Mat>& frames, int max_level);
 
 // The pixels of a frame a render covers: all but those outside the view.
 int RenderedPixels(const Clip& clip);
