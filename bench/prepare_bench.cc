@@ -83,9 +83,9 @@ void MeasurePoses(const fs::path& root, int width, int height, int frames) {
   }
   std::printf(
       "poses at %dx%d, %d frames: worst translation %.3f (%.2f%% of the %.2f-unit path), worst rotation "
-      "%.3f deg, reprojection RMS %.3f px, %d dropped\n",
+      "%.3f deg, reprojection RMS %.3f px, %zu dropped\n",
       width, height, frames, translation, 100 * translation / length, length, degrees,
-      summary.pose_reprojection.rms, summary.dropped);
+      summary.pose_reprojection.rms, summary.dropped.size());
 }
 
 // `calibrate` on the rig's 24 checkerboard views, and the true rig's rows rectified with the estimate.

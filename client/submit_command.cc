@@ -175,10 +175,10 @@ Command AddSubmitCommand(CLI::App& app) {
          "DICOM recording: keep at most this many frames per second")
       ->check(CLI::NonNegativeNumber);
   sub->add_option_function<std::string>(
-         "--mono-camera", [flags](const std::string& v) { flags->recording.set_mono_camera(v); },
-         "mono DICOM recording: turning (estimate the endoscope's rotation per frame, the default) or "
-         "fixed")
-      ->check(CLI::IsMember({"turning", "fixed"}));
+         "--endoscope", [flags](const std::string& v) { flags->recording.set_endoscope(v); },
+         "DICOM recording: moving (estimate the endoscope's motion from the frames: turns for mono, "
+         "poses for stereo; the default) or fixed")
+      ->check(CLI::IsMember({"moving", "fixed"}));
   sub->add_flag_function(
       "--dicom", [flags](std::int64_t) { flags->dicom.set_enabled(true); },
       "DICOM results for a clip that is not DICOM (a DICOM recording always gets them)");

@@ -35,7 +35,7 @@ void ValidateOptions(const v1::ReconstructionOptions& options) {
 void ValidateRecording(const v1::RecordingOptions& recording) {
   dicom::ParseStereoLayout(recording.stereo());
   dicom::ParseFrameWindow(recording.frames());
-  dicom::ParseMonoCamera(recording.mono_camera());
+  dicom::ParseEndoscope(recording.endoscope());
   if (!(recording.fps() >= 0))
     FailInvalid("recording.fps is " + std::to_string(recording.fps()) + "; expected >= 0");
 }

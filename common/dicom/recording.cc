@@ -547,13 +547,13 @@ StereoLayout ParseStereoLayout(const std::string& text) {
   FailInvalid("stereo layout '" + text + "': expected mono, side-by-side, top-bottom or series");
 }
 
-MonoCamera ParseMonoCamera(const std::string& text) {
-  if (text.empty() || text == "turning") return MonoCamera::kTurning;
-  if (text == "fixed") return MonoCamera::kFixed;
-  FailInvalid("mono camera '" + text + "': expected turning or fixed");
+Endoscope ParseEndoscope(const std::string& text) {
+  if (text.empty() || text == "moving") return Endoscope::kMoving;
+  if (text == "fixed") return Endoscope::kFixed;
+  FailInvalid("endoscope '" + text + "': expected moving or fixed");
 }
 
-std::string MonoCameraName(MonoCamera camera) { return camera == MonoCamera::kFixed ? "fixed" : "turning"; }
+std::string EndoscopeName(Endoscope endoscope) { return endoscope == Endoscope::kFixed ? "fixed" : "moving"; }
 
 std::string StereoLayoutName(StereoLayout layout) {
   switch (layout) {

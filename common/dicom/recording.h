@@ -24,13 +24,14 @@ enum class StereoLayout { kMono, kSideBySide, kTopBottom, kTwoSeries };
 StereoLayout ParseStereoLayout(const std::string& text);
 std::string StereoLayoutName(StereoLayout layout);
 
-// How a mono recording's endoscope is placed in the clip made from it: turning (each frame's
-// rotation estimated from the frames: worker/prepare/camera_rotation.h) or fixed (one pose for all).
-enum class MonoCamera { kTurning, kFixed };
+// How the endoscope is placed in the clip made from a recording: moving (its motion estimated from
+// the frames: a mono recording's turns, worker/prepare/camera_rotation.h; a stereo recording's
+// poses, worker/prepare/pose_estimator.h) or fixed (one pose for every frame).
+enum class Endoscope { kMoving, kFixed };
 
-// "" or "turning", "fixed". Throws InvalidArgument naming the value.
-MonoCamera ParseMonoCamera(const std::string& text);
-std::string MonoCameraName(MonoCamera camera);
+// "" or "moving", "fixed". Throws InvalidArgument naming the value.
+Endoscope ParseEndoscope(const std::string& text);
+std::string EndoscopeName(Endoscope endoscope);
 
 // Frames [start, end) every `step`-th, as Python's slice A:B:STEP (end < 0: to the last frame).
 struct FrameWindow {
@@ -45,7 +46,7 @@ struct RecordingOptions {
   StereoLayout stereo = StereoLayout::kMono;
   FrameWindow frames;  // applied first, on the recording's frame indices
   double fps = 0;      // > 0: then keep at most this many frames per second of recording time
-  MonoCamera mono_camera = MonoCamera::kTurning;  // not read here: for the clip made from it
+  Endoscope endoscope = Endoscope::kMoving;  // not read here: for the clip made from it
 };
 
 struct Recording {

@@ -253,9 +253,9 @@ TEST(DicomRecordingTest, BadInputsAreNamed) {
   EXPECT_THROW(ParseFrameWindow("1:2:0"), Error);
   EXPECT_THROW(ParseFrameWindow("a:b"), Error);
   EXPECT_THROW(ParseStereoLayout("diagonal"), Error);
-  EXPECT_THROW(ParseMonoCamera("wobbly"), Error);
-  EXPECT_EQ(ParseMonoCamera(""), MonoCamera::kTurning);
-  EXPECT_EQ(MonoCameraName(ParseMonoCamera("fixed")), "fixed");
+  EXPECT_THROW(ParseEndoscope("wobbly"), Error);
+  EXPECT_EQ(ParseEndoscope(""), Endoscope::kMoving);
+  EXPECT_EQ(EndoscopeName(ParseEndoscope("fixed")), "fixed");
   EXPECT_FALSE(HoldsDicom(dir / "missing"));
 }
 

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <fstream>
@@ -25,18 +26,11 @@
 namespace endorecon::worker {
 namespace {
 
-TEST(RecordingClipTest, SideBySideRecordingGetsADepthPriorFromStereo) {
-  testing::TempDir dir("recording-clip");
-  scene::SynthOptions synth;
-  synth.frames = 4;
-  synth.width = 160;
-  synth.height = 128;
-  synth.stereo = true;
-  scene::WriteSyntheticClip(synth, dir / "synth");
-
+// The synthetic stereo clip in `dir`/synth written as a side-by-side recording, `dir`/sbs.dcm.
+void WriteSideBySide(const std::filesystem::path& dir, int frame_count) {
   std::vector<cv::Mat> frames;
   std::vector<double> times;
-  for (int f = 0; f < synth.frames; ++f) {
+  for (int f = 0; f < frame_count; ++f) {
     const std::string name = eval::FrameFileName(f, ".png");
     const cv::Mat left = cv::imread((dir / "synth/images" / name).string());
     const cv::Mat right = cv::imread((dir / "synth/images_right" / name).string());
@@ -49,6 +43,17 @@ TEST(RecordingClipTest, SideBySideRecordingGetsADepthPriorFromStereo) {
   dicom::RecordingHeader header;
   header.study = dicom::NewStudyContext("P-1", "Doe^Jane", "", "");
   dicom::WriteEndoscopicFrames(frames, times, false, header, dir / "sbs.dcm");
+}
+
+TEST(RecordingClipTest, SideBySideRecordingGetsADepthPriorFromStereo) {
+  testing::TempDir dir("recording-clip");
+  scene::SynthOptions synth;
+  synth.frames = 4;
+  synth.width = 160;
+  synth.height = 128;
+  synth.stereo = true;
+  scene::WriteSyntheticClip(synth, dir / "synth");
+  WriteSideBySide(dir.path(), synth.frames);
 
   dicom::RecordingOptions options;
   options.stereo = dicom::StereoLayout::kSideBySide;
@@ -75,6 +80,56 @@ TEST(RecordingClipTest, SideBySideRecordingGetsADepthPriorFromStereo) {
   EXPECT_GT(static_cast<double>(errors.size()) / static_cast<double>(pixels), 0.7);
   std::nth_element(errors.begin(), errors.begin() + errors.size() / 2, errors.end());
   EXPECT_LT(errors[errors.size() / 2], 0.03) << "median relative depth error";
+}
+
+TEST(RecordingClipTest, SideBySideRecordingOfAMovingEndoscopeGetsItsPoses) {
+  testing::TempDir dir("recording-clip-moving");
+  scene::SynthOptions synth;
+  synth.frames = 6;
+  synth.width = 320;
+  synth.height = 256;
+  synth.stereo = true;
+  synth.moving = true;
+  synth.static_scene = true;
+  scene::WriteSyntheticClip(synth, dir / "synth");
+  WriteSideBySide(dir.path(), synth.frames);
+
+  dicom::RecordingOptions options;
+  options.stereo = dicom::StereoLayout::kSideBySide;
+  const auto recording = ClipFromRecording(dir / "sbs.dcm", options, dir / "clip");
+  ASSERT_TRUE(recording.has_value());
+  const scene::Clip clip = scene::LoadClip(dir / "clip");
+  const scene::Clip truth = scene::LoadClip(dir / "synth");
+  ASSERT_EQ(clip.frame_count(), synth.frames);
+  ASSERT_EQ(recording->times_s.size(), std::size_t(synth.frames));
+  const auto homogeneous = [](const Eigen::Matrix<double, 3, 4>& pose) {
+    Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
+    m.topRows<3>() = pose;
+    return m;
+  };
+  const Eigen::Matrix4d first = homogeneous(truth.cameras[0].c2w).inverse();
+  const Eigen::Matrix4d estimated_first = homogeneous(clip.cameras[0].c2w).inverse();
+  // As PoseEstimatorTest holds the estimator: 5% of the path's length, half a degree.
+  double length = 0, worst_miss = 0;
+  Eigen::Vector3d previous = Eigen::Vector3d::Zero();
+  for (int f = 1; f < synth.frames; ++f) {
+    const Eigen::Matrix4d exact = first * homogeneous(truth.cameras[f].c2w);
+    const Eigen::Matrix4d estimate = estimated_first * homogeneous(clip.cameras[f].c2w);
+    length += (exact.topRightCorner<3, 1>() - previous).norm();
+    previous = exact.topRightCorner<3, 1>();
+    worst_miss =
+        std::max(worst_miss, (estimate.topRightCorner<3, 1>() - exact.topRightCorner<3, 1>()).norm());
+    const Eigen::Matrix3d difference =
+        estimate.topLeftCorner<3, 3>().transpose() * exact.topLeftCorner<3, 3>();
+    EXPECT_LT(Eigen::AngleAxisd(difference).angle() * 180 / M_PI, 0.5) << "frame " << f;
+  }
+  EXPECT_GT(length, 3) << "the synthetic endoscope should move";
+  EXPECT_LT(worst_miss, 0.05 * length);
+
+  options.endoscope = dicom::Endoscope::kFixed;
+  ASSERT_TRUE(ClipFromRecording(dir / "sbs.dcm", options, dir / "fixed").has_value());
+  const scene::Clip fixed = scene::LoadClip(dir / "fixed");
+  for (int f = 1; f < synth.frames; ++f) EXPECT_EQ(fixed.cameras[f].c2w, fixed.cameras[0].c2w);
 }
 
 // Where the first frame's pixel (u, v) lands in frame f, on a surface far away (a turn moves every
@@ -110,12 +165,12 @@ TEST(RecordingClipTest, MonoRecordingOfATurningEndoscopeGetsTurningCameras) {
   }
   std::ifstream record_file(dir / "turning/recording.json");
   const auto record = nlohmann::json::parse(record_file);
-  EXPECT_EQ(record.at("mono_camera"), "turning");
+  EXPECT_EQ(record.at("endoscope"), "moving");
   EXPECT_NEAR(record.at("camera_turns").at("widest_deg").get<double>(), cv::norm(cv::Vec3d(2, 5, 4)), 0.1);
   EXPECT_EQ(record.at("camera_turns").at("frames_unplaced"), 0);
 
   dicom::RecordingOptions still;
-  still.mono_camera = dicom::MonoCamera::kFixed;
+  still.endoscope = dicom::Endoscope::kFixed;
   ASSERT_TRUE(ClipFromRecording(dir / "mono.dcm", still, dir / "fixed").has_value());
   const scene::Clip fixed = scene::LoadClip(dir / "fixed");
   for (int f = 1; f < 4; ++f) EXPECT_EQ(fixed.cameras[f].c2w, fixed.cameras[0].c2w);

@@ -449,7 +449,7 @@ class Preparation {
     s.clip = fs::absolute(options_.out).lexically_normal();
     s.layout = layout_ == ClipLayout::kEndoNerf ? "endonerf" : "transforms";
     s.frames = static_cast<int>(placements_.size());
-    s.dropped = static_cast<int>(dropped_.size());
+    s.dropped = dropped_;
     s.recording_frames = recording_frames_;
     s.seconds = seconds;
     s.epipolar_error = survey_.epipolar_error();
@@ -505,7 +505,8 @@ class Preparation {
                    {"dropped_frames", dropped_},
                    {"frames", frames_report_},
                    {"seconds", s.seconds},
-                   {"frames_per_second", (s.frames + s.dropped) / std::max(1e-9, s.seconds)}};
+                   {"frames_per_second",
+                    (s.frames + static_cast<double>(s.dropped.size())) / std::max(1e-9, s.seconds)}};
     std::ofstream file(staged_.path() / "prepare.json");
     file << report.dump(1) << "\n";
     file.close();

@@ -42,7 +42,7 @@ struct PrepareSummary {
   std::filesystem::path clip;
   std::string layout;  // "endonerf" or "transforms"
   int frames = 0;      // in the clip
-  int dropped = 0;     // selected but not placed (--estimate-poses)
+  std::vector<int> dropped;  // the recording's frames selected but not placed (--estimate-poses)
   int recording_frames = 0;
   double seconds = 0;
   ErrorStats epipolar_error;     // of the surveyed matches, pixels

@@ -11,7 +11,7 @@ dicom::RecordingOptions RecordingOptionsOf(const v1::RecordingOptions& options) 
   out.stereo = dicom::ParseStereoLayout(options.stereo());
   out.frames = dicom::ParseFrameWindow(options.frames());
   out.fps = options.fps();
-  out.mono_camera = dicom::ParseMonoCamera(options.mono_camera());
+  out.endoscope = dicom::ParseEndoscope(options.endoscope());
   return out;
 }
 

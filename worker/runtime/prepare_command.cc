@@ -36,8 +36,10 @@ Command AddPrepareCommand(CLI::App& app) {
     spdlog::info(
         "wrote {} ({} layout): {} frames of the recording's {}{}, {:.1f} s ({:.2f} frames/s)",
         summary.clip.string(), summary.layout, summary.frames, summary.recording_frames,
-        summary.dropped > 0 ? fmt::format(", {} dropped (could not be placed)", summary.dropped) : "",
-        summary.seconds, (summary.frames + summary.dropped) / std::max(1e-9, summary.seconds));
+        summary.dropped.empty() ? ""
+                                : fmt::format(", {} dropped (could not be placed)", summary.dropped.size()),
+        summary.seconds,
+        (summary.frames + static_cast<double>(summary.dropped.size())) / std::max(1e-9, summary.seconds));
     spdlog::info(
         "rectification: epipolar error median {:.3f} px, RMS {:.3f} px ({} matches); depth coverage {:.1f}%",
         summary.epipolar_error.median, summary.epipolar_error.rms, summary.epipolar_error.count,

@@ -48,10 +48,10 @@ void AddDicomOptions(CLI::App& cmd, v1::RecordingOptions& recording, v1::DicomOu
          "DICOM recording: keep at most this many frames per second")
       ->check(CLI::NonNegativeNumber);
   cmd.add_option_function<std::string>(
-         "--mono-camera", [&](const std::string& v) { recording.set_mono_camera(v); },
-         "mono DICOM recording: turning (estimate the endoscope's rotation per frame, the default) or "
-         "fixed")
-      ->check(CLI::IsMember({"turning", "fixed"}));
+         "--endoscope", [&](const std::string& v) { recording.set_endoscope(v); },
+         "DICOM recording: moving (estimate the endoscope's motion from the frames: turns for mono, "
+         "poses for stereo; the default) or fixed")
+      ->check(CLI::IsMember({"moving", "fixed"}));
   cmd.add_flag_function(
       "--dicom", [&](std::int64_t) { dicom.set_enabled(true); },
       "write dicom/ for a clip that is not DICOM (always written for a DICOM recording)");

@@ -2,6 +2,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <cmath>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -142,10 +143,13 @@ void WarnIfUneven(const std::vector<double>& times_s) {
 
 // Stereo: both eyes go through the recording preparation (worker/prepare, issue 16) as a rectified
 // pair with the nominal focal length and the loader's default baseline, which gives the clip a
-// depth prior by stereo matching (in nominal units, as the recording has no calibration). A pair
-// it cannot use (no matches to survey the disparities on) becomes a clip of both eyes without
+// depth prior by stereo matching (in nominal units, as the recording has no calibration) and, for a
+// moving endoscope, its poses (frames that cannot be placed are left out: returned, indices into
+// the recording's frames). Poses that cannot be estimated at all leave the endoscope fixed, and a
+// pair it cannot use (no matches to survey the disparities on) becomes a clip of both eyes without
 // depth, as the log says; any other failure fails the job.
-void WriteStereoClip(const dicom::Recording& recording, const fs::path& clip_dir) {
+std::vector<int> WriteStereoClip(const dicom::Recording& recording, dicom::Endoscope endoscope,
+                                 const fs::path& clip_dir) {
   WarnIfUneven(recording.times_s);
   const fs::path eyes = clip_dir.string() + ".eyes";
   fs::remove_all(eyes);
@@ -157,21 +161,43 @@ void WriteStereoClip(const dicom::Recording& recording, const fs::path& clip_dir
   options.rectified = true;
   options.focal = kFocalPerWidth * recording.left[0].cols;
   options.baseline = scene::kDefaultStereoBaseline;
+  options.estimate_poses = endoscope == dicom::Endoscope::kMoving;
+  options.depth.eight_paths = options.estimate_poses;  // as `prepare --estimate-poses` chooses
   options.out = clip_dir;
-  fs::remove_all(clip_dir);
-  try {
-    const prepare::PrepareSummary summary = prepare::PrepareClip(options);
-    spdlog::info("stereo recording: depth prior by stereo matching, {:.0f}% of the pixels",
-                 100 * summary.depth_coverage);
-  } catch (const Error& e) {
-    if (e.code() != ErrorCode::kInvalidArgument) throw;
-    spdlog::warn("stereo recording: no depth prior ({}); the clip has both eyes without depth", e.what());
-    fs::create_directories(clip_dir);
-    fs::rename(eyes / "left", clip_dir / "images");
-    fs::rename(eyes / "right", clip_dir / "images_right");
-    WritePosesBounds(recording, clip_dir);
+  std::vector<int> dropped;
+  for (;;) {
+    fs::remove_all(clip_dir);
+    try {
+      const prepare::PrepareSummary summary = prepare::PrepareClip(options);
+      spdlog::info("stereo recording: depth prior by stereo matching, {:.0f}% of the pixels; {}",
+                   100 * summary.depth_coverage,
+                   options.estimate_poses
+                       ? fmt::format("the endoscope's poses estimated, reprojection RMS {:.2f} px",
+                                     summary.pose_reprojection.rms)
+                       : std::string("a fixed endoscope"));
+      if (!summary.dropped.empty()) {
+        spdlog::warn("stereo recording: {} frame(s) could not be placed and are left out of the clip",
+                     summary.dropped.size());
+      }
+      dropped = summary.dropped;
+    } catch (const Error& e) {
+      if (e.code() != ErrorCode::kInvalidArgument) throw;
+      if (options.estimate_poses) {
+        spdlog::warn("stereo recording: the endoscope's poses cannot be estimated ({}); it is taken as fixed",
+                     e.what());
+        options.estimate_poses = false;
+        continue;
+      }
+      spdlog::warn("stereo recording: no depth prior ({}); the clip has both eyes without depth", e.what());
+      fs::create_directories(clip_dir);
+      fs::rename(eyes / "left", clip_dir / "images");
+      fs::rename(eyes / "right", clip_dir / "images_right");
+      WritePosesBounds(recording, clip_dir);
+    }
+    break;
   }
   fs::remove_all(eyes);
+  return dropped;
 }
 
 }  // namespace
@@ -181,23 +207,28 @@ std::optional<RecordingClip> ClipFromRecording(const fs::path& input, const dico
   if (!dicom::HoldsDicom(input)) return std::nullopt;
   const dicom::Recording recording = dicom::ReadRecording(input, options);
   nlohmann::json camera_record = nlohmann::json::object();
+  std::vector<int> dropped;  // recording frames the clip leaves out
   if (recording.right.empty()) {
     fs::remove_all(clip_dir);
     fs::create_directories(clip_dir);
     WriteFrames(recording.left, clip_dir / "images");
-    camera_record["mono_camera"] = dicom::MonoCameraName(options.mono_camera);
-    const auto turns = options.mono_camera == dicom::MonoCamera::kTurning
+    const auto turns = options.endoscope == dicom::Endoscope::kMoving
                            ? EstimateTurns(recording, camera_record)
                            : std::vector<cv::Matx33d>{};
     WriteTransforms(recording, turns, clip_dir);
   } else {
-    WriteStereoClip(recording, clip_dir);
+    dropped = WriteStereoClip(recording, options.endoscope, clip_dir);
+    if (!dropped.empty()) camera_record["frames_dropped"] = dropped;
   }
+  camera_record["endoscope"] = dicom::EndoscopeName(options.endoscope);
   RecordingClip clip;
   clip.clip_dir = clip_dir;
   clip.study = recording.study;
-  clip.times_s = recording.times_s;
-  clip.summary = recording.description + "; " + std::to_string(recording.left.size()) + " of " +
+  for (std::size_t i = 0; i < recording.times_s.size(); ++i) {
+    if (std::ranges::find(dropped, static_cast<int>(i)) == dropped.end())
+      clip.times_s.push_back(recording.times_s[i]);
+  }
+  clip.summary = recording.description + "; " + std::to_string(clip.times_s.size()) + " of " +
                  std::to_string(recording.recording_frames) + " frame(s) kept, times from " +
                  recording.times_from +
                  (recording.right.empty() ? "" : ", stereo " + dicom::StereoLayoutName(options.stereo));
@@ -209,7 +240,7 @@ std::optional<RecordingClip> ClipFromRecording(const fs::path& input, const dico
       {"fps", options.fps},
       {"recording_frames", recording.recording_frames},
       {"times_from", recording.times_from},
-      {"times_s", recording.times_s},
+      {"times_s", clip.times_s},
       {"focal_per_width", kFocalPerWidth},
       {"near", kNear},
       {"far", kFar}};

@@ -4,10 +4,11 @@
 // Mono recordings become the transforms.json layout (the recording's frame times per frame,
 // EndoNeRF's field of view f = 0.8898 W, near 40 and far 130 nominal millimetres: a recording
 // carries no calibration, so depth has no absolute scale), the endoscope turning about its tip
-// as estimated from the frames (prepare/camera_rotation.h) or, with MonoCamera::kFixed, still. Stereo
+// as estimated from the frames (prepare/camera_rotation.h) or, with Endoscope::kFixed, still. Stereo
 // recordings become the EndoNeRF layout with images_right/ (times evenly spaced, as that layout has them)
 // and, where the eyes can be matched, a depth prior from the recording preparation (worker/prepare) treating
-// them as a rectified pair with that focal length and the loader's default baseline.
+// them as a rectified pair with that focal length and the loader's default baseline, and the
+// endoscope's poses estimated there unless Endoscope::kFixed (frames it cannot place are left out).
 #pragma once
 
 #include <filesystem>
