@@ -34,8 +34,14 @@ TEST(CameraRotationTest, FitRotationRecoversAKnownRotationFromNoisyRays) {
 }
 
 TEST(CameraRotationTest, TurnsOfACameraBehindARoundScopeAreRecovered) {
-  const auto scope =
-      testing::MakeTurningCamera({320, 180}, {{0, 2, 0}, {0.5, 4, 1}, {1.5, 5, 3}, {1, 3.5, 6}, {-1, 2, 8}});
+  // Twelve frames turning away (past where the first frame's corners are still followed, so the
+  // keyframe changes) and back.
+  std::vector<cv::Vec3d> path;
+  for (int f = 1; f < 12; ++f) {
+    const double s = f < 7 ? f : 12 - f;
+    path.emplace_back(0.3 * s, 3.0 * s, 1.5 * s);
+  }
+  const auto scope = testing::MakeTurningCamera({320, 180}, path);
   cv::Mat outside;
   cv::inRange(scope.frames[0], cv::Scalar::all(0), cv::Scalar::all(0), outside);
   const CameraTurns turns = EstimateCameraTurns(scope.frames, scope.camera, outside);
@@ -46,7 +52,7 @@ TEST(CameraRotationTest, TurnsOfACameraBehindARoundScopeAreRecovered) {
   }
   for (std::size_t f = 0; f + 1 < scope.frames.size(); ++f) {
     EXPECT_LT(turns.residual_px[f], 0.5) << "frame " << f + 1;
-    EXPECT_GT(turns.inliers[f], 50) << "frame " << f + 1;
+    EXPECT_GT(turns.inliers[f], 30) << "frame " << f + 1;
   }
 }
 
