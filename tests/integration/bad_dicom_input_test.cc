@@ -1,5 +1,6 @@
 // Bad DICOM input is refused with what and where: at submit (an unknown PACS name, a malformed
-// Study UID) or when the worker prepares the clip (a file that is not DICOM); nothing else is lost.
+// Study UID, an endoscope that is neither moving nor fixed) or when the worker prepares the clip (a
+// file that is not DICOM); nothing else is lost.
 #include <gtest/gtest.h>
 
 #include "tests/integration/service_harness.h"
@@ -20,6 +21,24 @@ TEST(BadDicomInputTest, RefusedAtSubmitOrAtPreparation) {
   EXPECT_EQ(unknown.exit_code, 3) << unknown.err;
   EXPECT_NE(unknown.err.find("no PACS named 'nowhere' is configured on the server"), std::string::npos)
       << unknown.err;
+
+  const auto wobbly =
+      RunCli(cluster.address(), {"submit", cluster.path("recording.dcm").string(), "--endoscope", "wobbly"});
+  EXPECT_EQ(wobbly.exit_code, 2) << wobbly.err;
+  EXPECT_NE(wobbly.err.find("--endoscope"), std::string::npos) << wobbly.err;
+  // A client that skips the CLI's check meets the server's.
+  v1::SubmitRequest request;
+  auto* file = request.mutable_clip()->add_files();
+  file->set_path("recording.dcm");
+  file->set_size(1000);
+  file->set_sha256(std::string(64, 'a'));
+  request.mutable_recording()->set_endoscope("wobbly");
+  grpc::ClientContext context;
+  v1::Job job;
+  const grpc::Status status = cluster.stub().Submit(&context, request, &job);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(status.error_message().find("endoscope 'wobbly': expected moving or fixed"), std::string::npos)
+      << status.error_message();
 
   // The worker is still there for the next job.
   MakeClip(cluster.path("clip"));
