@@ -107,6 +107,7 @@ int Submit(const Globals& globals, const SubmitFlags& flags) {
         "or --top-bottom) or --pacs NAME --study UID: exactly one of them");
   }
   if (!flags.pacs.empty() && flags.study_uid.empty()) FailInvalid("--pacs needs --study UID");
+  if (flags.raw.empty() && !flags.raw.size.empty()) ParseFrameSize(flags.raw.size);  // before any upload
   // A raw recording is staged under canonical names (recording_upload.h); its folder is uploaded.
   std::optional<StagedRecording> staged;
   if (!flags.raw.empty()) staged.emplace(flags.raw);
@@ -124,6 +125,7 @@ int Submit(const Globals& globals, const SubmitFlags& flags) {
   } else {
     *request.mutable_recording() = flags.recording;
     request.mutable_recording()->set_frames(flags.raw.frames);
+    request.mutable_recording()->set_size(flags.raw.size);
   }
   *request.mutable_options() = options;
   *request.mutable_dicom() = flags.dicom;

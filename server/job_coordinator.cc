@@ -36,6 +36,7 @@ void ValidateRecording(const v1::RecordingOptions& recording) {
   dicom::ParseStereoLayout(recording.stereo());
   dicom::ParseFrameWindow(recording.frames());
   dicom::ParseEndoscope(recording.endoscope());
+  if (!recording.size().empty()) ParseFrameSize(recording.size());
   if (!(recording.fps() >= 0))
     FailInvalid("recording.fps is " + std::to_string(recording.fps()) + "; expected >= 0");
 }

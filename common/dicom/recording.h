@@ -47,6 +47,7 @@ struct RecordingOptions {
   FrameWindow frames;  // applied first, on the recording's frame indices
   double fps = 0;      // > 0: then keep at most this many frames per second of recording time
   Endoscope endoscope = Endoscope::kMoving;  // not read here: for the clip made from it
+  cv::Size size;                             // not read here: the clip's frame size (empty: as recorded)
 };
 
 struct Recording {

@@ -1,6 +1,6 @@
 // Bad DICOM input is refused with what and where: at submit (an unknown PACS name, a malformed
-// Study UID, an endoscope that is neither moving nor fixed) or when the worker prepares the clip (a
-// file that is not DICOM); nothing else is lost.
+// Study UID, an endoscope that is neither moving nor fixed, a frame size that is not WxH, even) or when the
+// worker prepares the clip (a file that is not DICOM); nothing else is lost.
 #include <gtest/gtest.h>
 
 #include "tests/integration/service_harness.h"
@@ -26,6 +26,10 @@ TEST(BadDicomInputTest, RefusedAtSubmitOrAtPreparation) {
       RunCli(cluster.address(), {"submit", cluster.path("recording.dcm").string(), "--endoscope", "wobbly"});
   EXPECT_EQ(wobbly.exit_code, 2) << wobbly.err;
   EXPECT_NE(wobbly.err.find("--endoscope"), std::string::npos) << wobbly.err;
+  const auto odd =
+      RunCli(cluster.address(), {"submit", cluster.path("recording.dcm").string(), "--size", "321x180"});
+  EXPECT_EQ(odd.exit_code, 2) << odd.err;
+  EXPECT_NE(odd.err.find("'321x180'"), std::string::npos) << odd.err;
   // A client that skips the CLI's check meets the server's.
   v1::SubmitRequest request;
   auto* file = request.mutable_clip()->add_files();
@@ -33,6 +37,7 @@ TEST(BadDicomInputTest, RefusedAtSubmitOrAtPreparation) {
   file->set_size(1000);
   file->set_sha256(std::string(64, 'a'));
   request.mutable_recording()->set_endoscope("wobbly");
+  request.mutable_recording()->set_size("320x180");
   grpc::ClientContext context;
   v1::Job job;
   const grpc::Status status = cluster.stub().Submit(&context, request, &job);

@@ -13,10 +13,12 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <vector>
 
 #include "common/dicom/recording_writer.h"
 #include "common/dicom/uid.h"
+#include "common/error.h"
 #include "tests/unit/temp_dir.h"
 #include "tests/unit/turning_camera_frames.h"
 #include "worker/engine/eval/exports.h"
@@ -174,6 +176,46 @@ TEST(RecordingClipTest, MonoRecordingOfATurningEndoscopeGetsTurningCameras) {
   ASSERT_TRUE(ClipFromRecording(dir / "mono.dcm", still, dir / "fixed").has_value());
   const scene::Clip fixed = scene::LoadClip(dir / "fixed");
   for (int f = 1; f < 4; ++f) EXPECT_EQ(fixed.cameras[f].c2w, fixed.cameras[0].c2w);
+}
+
+TEST(RecordingClipTest, ARecordingIsScaledToTheSizeAskedWhenItKeepsItsShape) {
+  testing::TempDir dir("recording-clip-size");
+  const auto scope = testing::MakeTurningCamera({320, 180}, {{0, 2, 0}, {1, 4, 1}});
+  dicom::RecordingHeader header;
+  header.study = dicom::NewStudyContext("P-1", "Doe^Jane", "", "");
+  dicom::WriteEndoscopicFrames(scope.frames, {0, 0.2, 0.4}, false, header, dir / "mono.dcm");
+
+  dicom::RecordingOptions options;
+  options.size = cv::Size(160, 90);
+  const auto recording = ClipFromRecording(dir / "mono.dcm", options, dir / "small");
+  ASSERT_TRUE(recording.has_value());
+  EXPECT_NE(recording->summary.find("scaled to 160x90"), std::string::npos) << recording->summary;
+  const scene::Clip clip = scene::LoadClip(dir / "small");
+  EXPECT_EQ(clip.width, 160);
+  EXPECT_EQ(clip.height, 90);
+  EXPECT_NEAR(clip.cameras[0].fx, 0.8898 * 160, 1e-9);
+  cv::Mat expected;
+  cv::resize(scope.frames[1], expected, {160, 90}, 0, 0, cv::INTER_AREA);
+  const cv::Mat written = cv::imread((dir / "small/images" / eval::FrameFileName(1, ".png")).string());
+  EXPECT_EQ(cv::norm(written, expected, cv::NORM_INF), 0);
+  // The turns are the same at either size, to a few hundredths of a degree.
+  const auto full = ClipFromRecording(dir / "mono.dcm", dicom::RecordingOptions{}, dir / "full");
+  const scene::Clip whole = scene::LoadClip(dir / "full");
+  const Eigen::Matrix3d difference =
+      clip.cameras[2].c2w.leftCols<3>().transpose() * whole.cameras[2].c2w.leftCols<3>();
+  EXPECT_LT(Eigen::AngleAxisd(difference).angle() * 180 / M_PI, 0.05);
+
+  options.size = cv::Size(160, 120);
+  try {
+    ClipFromRecording(dir / "mono.dcm", options, dir / "squashed");
+    ADD_FAILURE() << "a size of another shape was accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument);
+    EXPECT_NE(std::string(e.what()).find("size 160x120 changes the recording's 320x180 aspect ratio; give a "
+                                         "size of the same shape, e.g. 160x90"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 }  // namespace

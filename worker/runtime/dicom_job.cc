@@ -2,6 +2,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include "common/prepare_flags.h"
 #include "worker/runtime/dicom_results.h"
 
 namespace endorecon::worker {
@@ -12,6 +13,10 @@ dicom::RecordingOptions RecordingOptionsOf(const v1::RecordingOptions& options) 
   out.frames = dicom::ParseFrameWindow(options.frames());
   out.fps = options.fps();
   out.endoscope = dicom::ParseEndoscope(options.endoscope());
+  if (!options.size().empty()) {
+    const FrameSize size = ParseFrameSize(options.size());
+    out.size = cv::Size(size.width, size.height);
+  }
   return out;
 }
 

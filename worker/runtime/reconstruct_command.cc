@@ -52,6 +52,10 @@ void AddDicomOptions(CLI::App& cmd, v1::RecordingOptions& recording, v1::DicomOu
          "DICOM recording: moving (estimate the endoscope's motion from the frames: turns for mono, "
          "poses for stereo; the default) or fixed")
       ->check(CLI::IsMember({"moving", "fixed"}));
+  cmd.add_option_function<std::string>(
+      "--size", [&](const std::string& v) { recording.set_size(v); },
+      "DICOM recording: scale every frame (each eye) to WxH, even, the recording's aspect ratio (e.g. "
+      "320x180 for a 1280x720 recording); default: as recorded");
   cmd.add_flag_function(
       "--dicom", [&](std::int64_t) { dicom.set_enabled(true); },
       "write dicom/ for a clip that is not DICOM (always written for a DICOM recording)");

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "common/error.h"
 #include "common/file_write.h"
@@ -128,6 +129,26 @@ void WritePosesBounds(const dicom::Recording& recording, const fs::path& clip_di
   scene::WriteNpyFloat64(clip_dir / "poses_bounds.npy", rows.data(), {n, 17});
 }
 
+// Every frame (each eye) scaled to `size` (area-averaged when smaller); refused when that would
+// change the recording's aspect ratio by more than 1% (the nominal focal length is per width).
+void ScaleFrames(dicom::Recording& recording, cv::Size size) {
+  const cv::Size recorded = recording.left[0].size();
+  if (size.empty() || size == recorded) return;
+  const double change = (double(size.width) / size.height) / (double(recorded.width) / recorded.height);
+  if (std::abs(change - 1) > 0.01) {
+    const int height =
+        2 * static_cast<int>(std::lround(size.width * recorded.height / (2.0 * recorded.width)));
+    FailInvalid(
+        fmt::format("size {}x{} changes the recording's {}x{} aspect ratio; give a size of the same "
+                    "shape, e.g. {}x{}",
+                    size.width, size.height, recorded.width, recorded.height, size.width, height));
+  }
+  const int interpolation = size.width < recorded.width ? cv::INTER_AREA : cv::INTER_LINEAR;
+  for (auto* eye : {&recording.left, &recording.right}) {
+    for (cv::Mat& frame : *eye) cv::resize(frame, frame, size, 0, 0, interpolation);
+  }
+}
+
 // The EndoNeRF layout a stereo clip takes spaces its frames evenly in time.
 void WarnIfUneven(const std::vector<double>& times_s) {
   const std::size_t n = times_s.size();
@@ -205,7 +226,9 @@ std::vector<int> WriteStereoClip(const dicom::Recording& recording, dicom::Endos
 std::optional<RecordingClip> ClipFromRecording(const fs::path& input, const dicom::RecordingOptions& options,
                                                const fs::path& clip_dir) {
   if (!dicom::HoldsDicom(input)) return std::nullopt;
-  const dicom::Recording recording = dicom::ReadRecording(input, options);
+  dicom::Recording recording = dicom::ReadRecording(input, options);
+  const cv::Size recorded = recording.left[0].size();
+  ScaleFrames(recording, options.size);
   nlohmann::json camera_record = nlohmann::json::object();
   std::vector<int> dropped;  // recording frames the clip leaves out
   if (recording.right.empty()) {
@@ -231,7 +254,10 @@ std::optional<RecordingClip> ClipFromRecording(const fs::path& input, const dico
   clip.summary = recording.description + "; " + std::to_string(clip.times_s.size()) + " of " +
                  std::to_string(recording.recording_frames) + " frame(s) kept, times from " +
                  recording.times_from +
-                 (recording.right.empty() ? "" : ", stereo " + dicom::StereoLayoutName(options.stereo));
+                 (recording.right.empty() ? "" : ", stereo " + dicom::StereoLayoutName(options.stereo)) +
+                 (recording.left[0].size() == recorded
+                      ? ""
+                      : fmt::format(", scaled to {}x{}", recording.left[0].cols, recording.left[0].rows));
   nlohmann::json record = {
       {"source", recording.description},
       {"stereo", dicom::StereoLayoutName(options.stereo)},
@@ -239,6 +265,8 @@ std::optional<RecordingClip> ClipFromRecording(const fs::path& input, const dico
        {{"start", options.frames.start}, {"end", options.frames.end}, {"step", options.frames.step}}},
       {"fps", options.fps},
       {"recording_frames", recording.recording_frames},
+      {"recorded_size", {recorded.width, recorded.height}},
+      {"size", {recording.left[0].cols, recording.left[0].rows}},
       {"times_from", recording.times_from},
       {"times_s", clip.times_s},
       {"focal_per_width", kFocalPerWidth},
