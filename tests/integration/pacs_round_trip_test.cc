@@ -1,9 +1,11 @@
 // A real PACS at both ends (Orthanc on loopback): an endoscopic H.264 recording made here is
-// stored in it, a job is submitted by its Study UID (the server retrieves it by C-GET), runs, and
-// its DICOM results go back into the same patient and study. Then: the PACS down during a send
+// stored in it, a job is submitted by its Study UID (the server retrieves it by C-GET; the job
+// scales its frames), runs, and its DICOM results go back into the same patient and study. Then: the PACS down during a send
 // (the send fails, the job stays SUCCEEDED, a resend after it is back succeeds), an association
 // refused by AE title, an unknown study, and a retrieval by C-MOVE to the server's storage SCP.
 #include <gtest/gtest.h>
+
+#include <opencv2/imgcodecs.hpp>
 
 #include "common/dicom/uid.h"
 #include "tests/integration/audit_reader.h"
@@ -74,8 +76,9 @@ TEST_F(PacsRoundTripTest, RecordingFromThePacsResultsBackIntoItsStudy) {
                    "127.0.0.1:" + std::to_string(scp_port_), "--send-attempts", "2", "--send-backoff-ms",
                    "200", "--dicom-timeout", "5"});
   cluster.StartWorker("w1");
-  const auto submitted = RunCli(cluster.address(), {"submit", "--pacs", "orthanc", "--study", study,
-                                                    "--send-to", "orthanc", "--iterations", "30", "--wait"});
+  const auto submitted =
+      RunCli(cluster.address(), {"submit", "--pacs", "orthanc", "--study", study, "--send-to", "orthanc",
+                                 "--iterations", "30", "--size", "64x48", "--wait"});
   ASSERT_EQ(submitted.exit_code, 0) << submitted.out << submitted.err << cluster.ServerLog();
   EXPECT_NE(submitted.out.find("retrieval from PACS orthanc by C-GET"), std::string::npos) << submitted.out;
   EXPECT_NE(submitted.out.find("send to orthanc: sent 4 of 4"), std::string::npos) << submitted.out;
@@ -125,6 +128,8 @@ TEST_F(PacsRoundTripTest, RecordingFromThePacsResultsBackIntoItsStudy) {
   }
   EXPECT_TRUE(fs::exists(dir_ / "results" / "mesh.ply"));
   EXPECT_TRUE(fs::exists(dir_ / "results" / "mesh.obj"));
+  // The recording's 32 x 24 frames were scaled to the size the job asked for.
+  EXPECT_EQ(cv::imread((dir_ / "results" / "rgb" / "000000.png").string()).size(), cv::Size(64, 48));
 
   const auto metrics =
       Capture("curl -s http://127.0.0.1:" + std::to_string(cluster.metrics_port()) + "/metrics");
