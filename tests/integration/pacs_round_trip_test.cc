@@ -1,8 +1,9 @@
 // A real PACS at both ends (Orthanc on loopback): an endoscopic H.264 recording made here is
 // stored in it, a job is submitted by its Study UID (the server retrieves it by C-GET; the job
-// scales its frames), runs, and its DICOM results go back into the same patient and study. Then: the PACS down during a send
-// (the send fails, the job stays SUCCEEDED, a resend after it is back succeeds), an association
-// refused by AE title, an unknown study, and a retrieval by C-MOVE to the server's storage SCP.
+// scales its frames), runs, and its DICOM results go back into the same patient and study. Then:
+// the PACS down during a send (the send fails, the job stays SUCCEEDED, a resend after it is back
+// succeeds), an association refused by AE title, an unknown study, and a retrieval by C-MOVE to the
+// server's storage SCP.
 #include <gtest/gtest.h>
 
 #include <opencv2/imgcodecs.hpp>
