@@ -28,15 +28,25 @@
 namespace endorecon::worker {
 namespace {
 
-// The synthetic stereo clip in `dir`/synth written as a side-by-side recording, `dir`/sbs.dcm.
-void WriteSideBySide(const std::filesystem::path& dir, int frame_count) {
+// A synthetic stereo clip of `frames` frames of `size` in `dir`/synth, written as a side-by-side
+// recording, `dir`/sbs.dcm; `moving`: the endoscope moves over a still scene.
+scene::SynthOptions WriteSideBySide(const std::filesystem::path& dir, int frame_count, cv::Size size,
+                                    bool moving) {
+  scene::SynthOptions synth;
+  synth.frames = frame_count;
+  synth.width = size.width;
+  synth.height = size.height;
+  synth.stereo = true;
+  synth.moving = moving;
+  synth.static_scene = moving;
+  scene::WriteSyntheticClip(synth, dir / "synth");
   std::vector<cv::Mat> frames;
   std::vector<double> times;
   for (int f = 0; f < frame_count; ++f) {
     const std::string name = eval::FrameFileName(f, ".png");
     const cv::Mat left = cv::imread((dir / "synth/images" / name).string());
     const cv::Mat right = cv::imread((dir / "synth/images_right" / name).string());
-    ASSERT_FALSE(left.empty() || right.empty()) << name;
+    EXPECT_FALSE(left.empty() || right.empty()) << name;
     cv::Mat both;
     cv::hconcat(left, right, both);
     frames.push_back(both);
@@ -45,17 +55,12 @@ void WriteSideBySide(const std::filesystem::path& dir, int frame_count) {
   dicom::RecordingHeader header;
   header.study = dicom::NewStudyContext("P-1", "Doe^Jane", "", "");
   dicom::WriteEndoscopicFrames(frames, times, false, header, dir / "sbs.dcm");
+  return synth;
 }
 
 TEST(RecordingClipTest, SideBySideRecordingGetsADepthPriorFromStereo) {
   testing::TempDir dir("recording-clip");
-  scene::SynthOptions synth;
-  synth.frames = 4;
-  synth.width = 160;
-  synth.height = 128;
-  synth.stereo = true;
-  scene::WriteSyntheticClip(synth, dir / "synth");
-  WriteSideBySide(dir.path(), synth.frames);
+  const scene::SynthOptions synth = WriteSideBySide(dir.path(), 4, {160, 128}, false);
 
   dicom::RecordingOptions options;
   options.stereo = dicom::StereoLayout::kSideBySide;
@@ -86,15 +91,7 @@ TEST(RecordingClipTest, SideBySideRecordingGetsADepthPriorFromStereo) {
 
 TEST(RecordingClipTest, SideBySideRecordingOfAMovingEndoscopeGetsItsPoses) {
   testing::TempDir dir("recording-clip-moving");
-  scene::SynthOptions synth;
-  synth.frames = 6;
-  synth.width = 320;
-  synth.height = 256;
-  synth.stereo = true;
-  synth.moving = true;
-  synth.static_scene = true;
-  scene::WriteSyntheticClip(synth, dir / "synth");
-  WriteSideBySide(dir.path(), synth.frames);
+  const scene::SynthOptions synth = WriteSideBySide(dir.path(), 6, {320, 256}, true);
 
   dicom::RecordingOptions options;
   options.stereo = dicom::StereoLayout::kSideBySide;
