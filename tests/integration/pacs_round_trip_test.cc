@@ -6,6 +6,8 @@
 // server's storage SCP.
 #include <gtest/gtest.h>
 
+#include <fstream>
+#include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
 #include "common/dicom/uid.h"
@@ -129,8 +131,13 @@ TEST_F(PacsRoundTripTest, RecordingFromThePacsResultsBackIntoItsStudy) {
   }
   EXPECT_TRUE(fs::exists(dir_ / "results" / "mesh.ply"));
   EXPECT_TRUE(fs::exists(dir_ / "results" / "mesh.obj"));
-  // The recording's 32 x 24 frames were scaled to the size the job asked for.
+  // The recording's 32 x 24 frames were scaled to the size the job asked for, as its record says.
   EXPECT_EQ(cv::imread((dir_ / "results" / "rgb" / "000000.png").string()).size(), cv::Size(64, 48));
+  std::ifstream record_file(dir_ / "results" / "recording.json");
+  const auto record = nlohmann::json::parse(record_file, nullptr, false);
+  EXPECT_EQ(record.value("size", nlohmann::json()), nlohmann::json({64, 48})) << record.dump();
+  EXPECT_EQ(record.value("recorded_size", nlohmann::json()), nlohmann::json({32, 24}));
+  EXPECT_EQ(record.value("endoscope", ""), "moving");
 
   const auto metrics =
       Capture("curl -s http://127.0.0.1:" + std::to_string(cluster.metrics_port()) + "/metrics");

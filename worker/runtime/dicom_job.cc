@@ -28,6 +28,12 @@ std::optional<RecordingClip> PrepareRecording(const std::filesystem::path& input
 
 void WriteJobDicom(const std::filesystem::path& out_dir, const std::optional<RecordingClip>& recording,
                    const v1::DicomOutputOptions& dicom) {
+  if (recording) {
+    // How the recording was read and made into the clip (its window, size, times, the endoscope's
+    // turns or poses), beside the results: the clip itself stays with the worker.
+    std::filesystem::copy_file(recording->clip_dir / "recording.json", out_dir / "recording.json",
+                               std::filesystem::copy_options::overwrite_existing);
+  }
   if (!recording && !dicom.enabled()) return;
   DicomResultSettings settings;
   settings.uid_root = dicom.uid_root();

@@ -20,7 +20,8 @@ std::optional<RecordingClip> PrepareRecording(const std::filesystem::path& input
                                               const std::filesystem::path& clip_dir);
 
 // Writes out_dir/dicom/ when the input was a recording (into its study) or `dicom.enabled()` (into
-// `dicom.study_uid()`, or a new study, with the given patient). Does nothing otherwise.
+// `dicom.study_uid()`, or a new study, with the given patient), and for a recording copies the
+// clip's recording.json beside the results. Does nothing otherwise.
 void WriteJobDicom(const std::filesystem::path& out_dir, const std::optional<RecordingClip>& recording,
                    const v1::DicomOutputOptions& dicom);
 
