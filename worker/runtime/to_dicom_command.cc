@@ -1,6 +1,7 @@
-// endorecon-worker to-dicom: a folder of frames as a DICOM endoscopic recording, the way a
-// hospital's recorder stores one: H.264 Video Endoscopic (OpenCV's FFmpeg encodes, DCMTK wraps),
-// or multi-frame VL Endoscopic, uncompressed or JPEG. For demos and tests of the DICOM path.
+// endorecon-worker to-dicom: a video or a folder of frames as a DICOM endoscopic recording, the way
+// a hospital's recorder stores one: H.264 Video Endoscopic (OpenCV's FFmpeg encodes, DCMTK wraps),
+// or multi-frame VL Endoscopic, uncompressed or JPEG. For a recording a user has as a video (the
+// real one in ../shared/data/real/ is an MP4), and for demos and tests of the DICOM path.
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
@@ -10,7 +11,7 @@
 
 #include "common/dicom/recording_writer.h"
 #include "common/error.h"
-#include "worker/engine/scene/image_file.h"
+#include "worker/prepare/frame_source.h"
 #include "worker/runtime/commands.h"
 
 namespace endorecon::worker {
@@ -19,71 +20,93 @@ namespace {
 
 struct ToDicomFlags {
   std::string frames, out, format = "h264", patient_id = "ANONYMOUS", patient_name, study_uid, uid_root;
-  double fps = 25;
+  double fps = 0;  // 0: a video's own rate, 25 for a folder of images
 };
 
-std::vector<cv::Mat> ReadFrames(const fs::path& folder) {
-  if (!fs::is_directory(folder)) Fail(ErrorCode::kNotFound, folder.string() + ": not a folder of frames");
-  std::vector<fs::path> files;
-  for (const auto& entry : fs::directory_iterator(folder)) {
-    if (entry.is_regular_file() && entry.path().filename().string().front() != '.')
-      files.push_back(entry.path());
-  }
-  std::sort(files.begin(), files.end());
-  std::vector<cv::Mat> frames;
-  for (const auto& file : files) {
-    frames.push_back(scene::DecodeImageFileAsBgr8(file));
-    if (frames.back().size() != frames.front().size())
-      FailInvalid(file.string() + ": differs in size from the first frame");
-  }
-  if (frames.empty()) FailInvalid(folder.string() + ": no frames");
-  return frames;
+// The recording's frame rate: asked for, or the source's (a video's from its first two frames'
+// times; a folder's is kImageFolderFramePeriod's).
+double FrameRate(double asked, const prepare::SourceFrame& first, const prepare::SourceFrame& second) {
+  if (asked > 0) return asked;
+  const double period = second.time_s - first.time_s;
+  return period > 0 ? 1 / period : 1 / prepare::kImageFolderFramePeriod;
 }
 
-void WriteH264(const std::vector<cv::Mat>& frames, double fps, const dicom::RecordingHeader& header,
-               const fs::path& out) {
+// H.264: the frames re-encoded one at a time into an MP4 beside `out` (OpenCV's FFmpeg), which
+// DCMTK then wraps; nothing but the current frame is held, so a long video fits in memory.
+void WriteH264(prepare::FrameSource& source, double asked_fps, const dicom::RecordingHeader& header,
+               const fs::path& out, int& frames, double& fps) {
   const fs::path video = out.string() + ".mp4";
-  cv::VideoWriter writer(video.string(), cv::VideoWriter::fourcc('a', 'v', 'c', '1'), fps, frames[0].size());
+  prepare::SourceFrame first, frame;
+  if (!source.Next(first)) FailInvalid(source.name() + ": no frames");
+  const bool more = source.Next(frame);
+  fps = FrameRate(asked_fps, first, more ? frame : first);
+  cv::VideoWriter writer(video.string(), cv::VideoWriter::fourcc('a', 'v', 'c', '1'), fps,
+                         first.image.size());
   if (!writer.isOpened()) Fail(ErrorCode::kUnavailable, "the installed FFmpeg cannot encode H.264");
-  for (const auto& frame : frames) writer.write(frame);
+  writer.write(first.image);
+  frames = 1;
+  for (bool next = more; next; next = source.Next(frame)) {
+    writer.write(frame.image);
+    ++frames;
+  }
   writer.release();
-  dicom::WriteVideoEndoscopic(video, static_cast<int>(frames.size()), frames[0].cols, frames[0].rows, fps,
-                              header, out);
+  dicom::WriteVideoEndoscopic(video, frames, first.image.cols, first.image.rows, fps, header, out);
   fs::remove(video);
 }
 
+// Multi-frame VL Endoscopic: every frame in one instance (uncompressed or JPEG), so all are held.
+void WriteVl(prepare::FrameSource& source, double asked_fps, bool jpeg, const dicom::RecordingHeader& header,
+             const fs::path& out, int& frames, double& fps) {
+  std::vector<prepare::SourceFrame> read(1);
+  if (!source.Next(read[0])) FailInvalid(source.name() + ": no frames");
+  for (prepare::SourceFrame frame; source.Next(frame);) read.push_back(std::move(frame));
+  fps = FrameRate(asked_fps, read[0], read[std::min<std::size_t>(1, read.size() - 1)]);
+  std::vector<cv::Mat> images;
+  std::vector<double> times;
+  for (std::size_t i = 0; i < read.size(); ++i) {
+    images.push_back(read[i].image);
+    times.push_back(static_cast<double>(i) / fps);
+  }
+  dicom::WriteEndoscopicFrames(images, times, jpeg, header, out);
+  frames = static_cast<int>(images.size());
+}
+
 int Run(const ToDicomFlags& flags) {
-  const auto frames = ReadFrames(flags.frames);
+  const auto source = prepare::OpenFrameSource(flags.frames);
   dicom::RecordingHeader header;
   header.study =
       dicom::NewStudyContext(flags.patient_id, flags.patient_name, flags.study_uid, flags.uid_root);
   header.uid_root = flags.uid_root;
+  int frames = 0;
+  double fps = 0;
   if (flags.format == "h264") {
-    WriteH264(frames, flags.fps, header, flags.out);
+    WriteH264(*source, flags.fps, header, flags.out, frames, fps);
   } else {
-    std::vector<double> times;
-    for (std::size_t i = 0; i < frames.size(); ++i) times.push_back(static_cast<double>(i) / flags.fps);
-    dicom::WriteEndoscopicFrames(frames, times, flags.format == "vl-jpeg", header, flags.out);
+    WriteVl(*source, flags.fps, flags.format == "vl-jpeg", header, flags.out, frames, fps);
   }
-  spdlog::info("wrote {} ({} frames of {}x{}, {}); study {}", flags.out, frames.size(), frames[0].cols,
-               frames[0].rows, flags.format, header.study.study_instance_uid);
+  spdlog::info("wrote {} ({} frames of {}x{} at {:.4g} frames/s, {}); study {}", flags.out, frames,
+               source->frame_size().width, source->frame_size().height, fps, flags.format,
+               header.study.study_instance_uid);
   return 0;
 }
 
 }  // namespace
 
 Command AddToDicomCommand(CLI::App& app) {
-  auto* cmd = app.add_subcommand("to-dicom", "write a folder of frames as a DICOM endoscopic recording");
+  auto* cmd =
+      app.add_subcommand("to-dicom", "write a video or a folder of frames as a DICOM endoscopic recording");
   auto flags = std::make_shared<ToDicomFlags>();
-  cmd->add_option("frames", flags->frames, "folder of frames (sorted by name), e.g. a clip's images/")
+  cmd->add_option("frames", flags->frames,
+                  "a video file (anything FFmpeg decodes), or a folder of frames (sorted by name), e.g. a "
+                  "clip's images/")
       ->required();
   cmd->add_option("-o,--out", flags->out, "the DICOM file to write")->required();
   cmd->add_option("--format", flags->format,
                   "h264 (Video Endoscopic, MPEG-4 AVC/H.264), vl (multi-frame VL Endoscopic) or vl-jpeg")
       ->capture_default_str()
       ->check(CLI::IsMember({"h264", "vl", "vl-jpeg"}));
-  cmd->add_option("--fps", flags->fps, "frames per second")
-      ->capture_default_str()
+  cmd->add_option("--fps", flags->fps,
+                  "frames per second (default: a video's own, 25 for a folder of frames)")
       ->check(CLI::PositiveNumber);
   cmd->add_option("--patient-id", flags->patient_id, "Patient ID")->capture_default_str();
   cmd->add_option("--patient-name", flags->patient_name, "Patient's Name (DICOM PN, e.g. Doe^Jane)");

@@ -1,0 +1,68 @@
+// A recording a user has as a video becomes a DICOM recording (`endorecon-worker to-dicom VIDEO`):
+// every frame, at the video's own rate unless --fps says otherwise, as H.264 Video Endoscopic or
+// multi-frame VL Endoscopic; the reader gets the same frames and times back.
+#include <gtest/gtest.h>
+
+#include <opencv2/core.hpp>
+#include <opencv2/videoio.hpp>
+
+#include "common/dicom/recording.h"
+#include "tests/integration/service_harness.h"
+
+namespace endorecon::testing {
+namespace {
+
+// 12 frames of 64 x 48 at 10 frames/s, each a different grey ramp, as an MJPEG AVI.
+std::filesystem::path WriteVideo(const TempDir& dir) {
+  const std::filesystem::path video = dir / "clip.avi";
+  cv::VideoWriter writer(video.string(), cv::CAP_OPENCV_MJPEG, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'),
+                         10, cv::Size(64, 48));
+  for (int f = 0; f < 12; ++f) {
+    cv::Mat frame(48, 64, CV_8UC3);
+    for (int y = 0; y < 48; ++y)
+      for (int x = 0; x < 64; ++x)
+        frame.at<cv::Vec3b>(y, x) = cv::Vec3b::all(cv::saturate_cast<uchar>(2 * x + 8 * f));
+    writer.write(frame);
+  }
+  return video;
+}
+
+int ToDicom(const TempDir& dir, std::vector<std::string> args) {
+  args.insert(args.begin(), {BuiltBinary("worker/runtime/endorecon-worker"), "to-dicom"});
+  Process process(args, dir / "to-dicom.log");
+  const int code = process.Wait();
+  EXPECT_EQ(code, 0) << process.Log();
+  return code;
+}
+
+TEST(VideoToDicomTest, EveryFrameOfAVideoAtItsOwnRate) {
+  TempDir dir("video-to-dicom");
+  const auto video = WriteVideo(dir);
+  ASSERT_EQ(ToDicom(dir, {video.string(), "-o", (dir / "h264.dcm").string()}), 0);
+  const dicom::Recording h264 = dicom::ReadRecording(dir / "h264.dcm", {});
+  ASSERT_EQ(h264.left.size(), 12u);
+  EXPECT_EQ(h264.left[0].size(), cv::Size(64, 48));
+  EXPECT_NEAR(h264.times_s.back(), 1.1, 1e-6);
+  // Lossy, but the ramps are where they were: frame 11 is 88 levels brighter than frame 0.
+  EXPECT_NEAR(cv::mean(h264.left[11])[0] - cv::mean(h264.left[0])[0], 88, 4);
+
+  ASSERT_EQ(ToDicom(dir, {video.string(), "-o", (dir / "vl.dcm").string(), "--format", "vl", "--fps", "4"}),
+            0);
+  const dicom::Recording vl = dicom::ReadRecording(dir / "vl.dcm", {});
+  ASSERT_EQ(vl.left.size(), 12u);
+  EXPECT_NEAR(vl.times_s.back(), 11 / 4.0, 1e-6);
+}
+
+TEST(VideoToDicomTest, WhatCannotBeReadIsNamed) {
+  TempDir dir("video-to-dicom-bad");
+  WriteBytes(dir / "broken.mp4", std::string(5000, 'x'));
+  Process process({BuiltBinary("worker/runtime/endorecon-worker"), "to-dicom", (dir / "broken.mp4").string(),
+                   "-o", (dir / "out.dcm").string()},
+                  dir / "to-dicom.log");
+  EXPECT_NE(process.Wait(), 0);
+  EXPECT_NE(process.Log().find("broken.mp4"), std::string::npos) << process.Log();
+  EXPECT_FALSE(std::filesystem::exists(dir / "out.dcm"));
+}
+
+}  // namespace
+}  // namespace endorecon::testing
