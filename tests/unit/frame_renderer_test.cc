@@ -5,31 +5,16 @@
 #include <gtest/gtest.h>
 
 #include "common/error.h"
-#include "worker/engine/field/field.h"
+#include "tests/unit/small_render_scene.h"
 #include "worker/engine/scene/scene_box.h"
 
 namespace endorecon::render {
 namespace {
 
 TEST(FrameRendererTest, SkippedPixelsAreLeftUnrenderedAndTheRestAsInTheWholeFrame) {
-  scene::Camera camera;
-  camera.width = 12;
-  camera.height = 10;
-  camera.fx = camera.fy = 10;
-  camera.cx = 6;
-  camera.cy = 5;
-  field::FieldConfig config = field::FieldConfig::Cpu();
-  config.grids.levels = 4;
-  config.heads.dropout = 0.0;
-  field::Field field(config, 4);
-  FrameRenderSettings settings;
-  settings.near = 0.5;
-  settings.far = 2.0;
-  settings.coarse_samples = 16;
-  settings.fine_samples = 16;
-  settings.rays_per_chunk = 50;
-  settings.mc_passes = 3;
-  FrameRenderer renderer(field, scene::FrustumBox({camera}, 0.5, 2.0), settings);
+  const scene::Camera camera = testing::SmallCamera();
+  field::Field field(testing::SmallField(0.0), 4);
+  FrameRenderer renderer(field, scene::FrustumBox({camera}, 0.5, 2.0), testing::SmallRenderSettings(3));
   const RenderedFrame whole = renderer.Render(camera, 0.3f);
   std::vector<std::uint8_t> skip(120, 0);
   for (int p = 0; p < 120; ++p) skip[p] = (p % 12 < 3 || p / 12 >= 8) ? 1 : 0;  // a left band, the bottom

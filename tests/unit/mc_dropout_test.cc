@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "tests/unit/small_render_scene.h"
 #include "worker/engine/field/variance.h"
 #include "worker/engine/render/frame_renderer.h"
 #include "worker/engine/scene/scene_box.h"
@@ -28,35 +29,11 @@ TEST(McDropout, MomentsOfKnownPasses) {
   EXPECT_EQ(Epistemic(constant, 8), 0.0f);
 }
 
-scene::Camera SmallCamera() {
-  scene::Camera camera;
-  camera.width = 12;
-  camera.height = 10;
-  camera.fx = camera.fy = 10;
-  camera.cx = 6;
-  camera.cy = 5;
-  return camera;
-}
-
-field::FieldConfig SmallField(double dropout) {
-  field::FieldConfig config = field::FieldConfig::Cpu();
-  config.grids.levels = 4;
-  config.heads.dropout = dropout;
-  return config;
-}
+using testing::SmallField;
 
 RenderedFrame RenderWith(field::Field& field, int passes) {
-  const scene::Camera camera = SmallCamera();
-  const std::vector<scene::Camera> cameras{camera};
-  FrameRenderSettings settings;
-  settings.near = 0.5;
-  settings.far = 2.0;
-  settings.coarse_samples = 16;
-  settings.fine_samples = 16;
-  settings.rays_per_chunk = 50;  // several chunks per frame
-  settings.mc_passes = passes;
-  settings.mc_seed = 9;
-  FrameRenderer renderer(field, scene::FrustumBox(cameras, 0.5, 2.0), settings);
+  const scene::Camera camera = testing::SmallCamera();
+  FrameRenderer renderer(field, scene::FrustumBox({camera}, 0.5, 2.0), testing::SmallRenderSettings(passes));
   return renderer.Render(camera, 0.3f);
 }
 

@@ -59,8 +59,7 @@ std::vector<cv::Matx33d> EstimateTurns(const dicom::Recording& recording, nlohma
   const std::vector<std::uint8_t> outside = scene::OutsideViewMask(recording.left, level);
   cv::Mat not_tissue;
   if (!outside.empty())
-    cv::Mat(first.rows, first.cols, CV_8U, const_cast<std::uint8_t*>(outside.data())).copyTo(not_tissue);
-  not_tissue *= 255;
+    not_tissue = cv::Mat(first.rows, first.cols, CV_8U, const_cast<std::uint8_t*>(outside.data())) * 255;
   const prepare::CameraTurns turns =
       prepare::EstimateCameraTurns(recording.left, NominalCamera(first), not_tissue);
   double widest = 0;
@@ -185,37 +184,44 @@ std::vector<int> WriteStereoClip(const dicom::Recording& recording, dicom::Endos
   options.estimate_poses = endoscope == dicom::Endoscope::kMoving;
   options.depth.eight_paths = options.estimate_poses;  // as `prepare --estimate-poses` chooses
   options.out = clip_dir;
-  std::vector<int> dropped;
-  for (;;) {
+  // The preparation, or why it could not (a recording it cannot use: InvalidArgument).
+  std::string refusal;
+  const auto prepared = [&]() -> std::optional<prepare::PrepareSummary> {
     fs::remove_all(clip_dir);
     try {
-      const prepare::PrepareSummary summary = prepare::PrepareClip(options);
-      spdlog::info("stereo recording: depth prior by stereo matching, {:.0f}% of the pixels; {}",
-                   100 * summary.depth_coverage,
-                   options.estimate_poses
-                       ? fmt::format("the endoscope's poses estimated, reprojection RMS {:.2f} px",
-                                     summary.pose_reprojection.rms)
-                       : std::string("a fixed endoscope"));
-      if (!summary.dropped.empty()) {
-        spdlog::warn("stereo recording: {} frame(s) could not be placed and are left out of the clip",
-                     summary.dropped.size());
-      }
-      dropped = summary.dropped;
+      return prepare::PrepareClip(options);
     } catch (const Error& e) {
       if (e.code() != ErrorCode::kInvalidArgument) throw;
-      if (options.estimate_poses) {
-        spdlog::warn("stereo recording: the endoscope's poses cannot be estimated ({}); it is taken as fixed",
-                     e.what());
-        options.estimate_poses = false;
-        continue;
-      }
-      spdlog::warn("stereo recording: no depth prior ({}); the clip has both eyes without depth", e.what());
-      fs::create_directories(clip_dir);
-      fs::rename(eyes / "left", clip_dir / "images");
-      fs::rename(eyes / "right", clip_dir / "images_right");
-      WritePosesBounds(recording, clip_dir);
+      refusal = e.what();
+      return std::nullopt;
     }
-    break;
+  };
+  std::optional<prepare::PrepareSummary> summary = prepared();
+  if (!summary && options.estimate_poses) {
+    spdlog::warn("stereo recording: the endoscope's poses cannot be estimated ({}); it is taken as fixed",
+                 refusal);
+    options.estimate_poses = false;
+    summary = prepared();
+  }
+  std::vector<int> dropped;
+  if (summary) {
+    spdlog::info("stereo recording: depth prior by stereo matching, {:.0f}% of the pixels; {}",
+                 100 * summary->depth_coverage,
+                 options.estimate_poses
+                     ? fmt::format("the endoscope's poses estimated, reprojection RMS {:.2f} px",
+                                   summary->pose_reprojection.rms)
+                     : std::string("a fixed endoscope"));
+    if (!summary->dropped.empty()) {
+      spdlog::warn("stereo recording: {} frame(s) could not be placed and are left out of the clip",
+                   summary->dropped.size());
+    }
+    dropped = summary->dropped;
+  } else {
+    spdlog::warn("stereo recording: no depth prior ({}); the clip has both eyes without depth", refusal);
+    fs::create_directories(clip_dir);
+    fs::rename(eyes / "left", clip_dir / "images");
+    fs::rename(eyes / "right", clip_dir / "images_right");
+    WritePosesBounds(recording, clip_dir);
   }
   fs::remove_all(eyes);
   return dropped;
