@@ -211,7 +211,8 @@ TEST(ReportPageTest, APageWorksInHeadlessChromium) {
   const int checked = CheckNumbers(*browser, metrics, config);
   EXPECT_GE(checked, kFrames * 9) << "the per-frame table shows nine metrics of every frame";
   for (const char* pointer : {"/heldout/image/psnr_tissue/mean", "/heldout/calibration/spearman/mean",
-                              "/heldout/calibration/ause/mean", "/heldout/depth/rmse/mean", "/iterations"}) {
+                              "/heldout/calibration/ause/mean", "/heldout/depth/rmse/mean", "/iterations",
+                              "/time/total_s", "/time/evaluation_s"}) {
     EXPECT_EQ(browser->Evaluate(
                   fmt::format("document.querySelectorAll('[data-metric=\"{}\"]').length", pointer)) > 0,
               true)

@@ -73,6 +73,27 @@ TEST(EvalPlan, StrideEightOnlyOnFramesLargeEnoughForIt) {
   EXPECT_EQ(PlanEvaluation(10, {4, 9}, kPixels, kCost, 3.8).stride, 4);
 }
 
+// The leanest plan keeping held-out frames full: the price of PlanEvaluation's plan when no time is
+// left, held-out frames full (4.1 s above: 2 full, 8 reduced at stride 4); on large frames stride 8.
+TEST(EvalPlan, LeastSecondsAreTheLeanestPlansWithHeldOutFramesFull) {
+  EXPECT_NEAR(LeastEvaluationSeconds(10, {4, 9}, kPixels, kCost), 2 + 8 * (0.2 + 1.0 / 16), 1e-9);
+  EXPECT_NEAR(LeastEvaluationSeconds(10, {4, 9}, kPixels, kCost),
+              PlanEvaluation(10, {4, 9}, kPixels, kCost, 1e-9).seconds, 1e-9);
+  constexpr int kLarge = 640 * 512;
+  const RenderCost cost{1e-3 / kLarge * kPixels, 2e-4 / kLarge * kPixels};  // as kCost per frame
+  EXPECT_NEAR(LeastEvaluationSeconds(10, {4, 9}, kLarge, cost), 2 + 8 * 0.215625, 1e-9);
+  EXPECT_EQ(LeastEvaluationSeconds(10, {4, 9}, kPixels, RenderCost{}), 0) << "cost unknown";
+  EXPECT_NEAR(LeastEvaluationSeconds(10, {4, 9, 12}, kPixels, kCost), 2 + 8 * 0.2625, 1e-9)
+      << "a held-out frame past the clip counts for nothing";
+}
+
+// The budget that leaves evaluation (and writing) its share, rounded up to 10 s.
+TEST(EvalPlan, BudgetForAShareRoundsUpToTenSeconds) {
+  EXPECT_EQ(BudgetForEvaluationShare(50, 1, 0.25), 210);
+  EXPECT_EQ(BudgetForEvaluationShare(49, 1, 0.25), 200);
+  EXPECT_EQ(BudgetForEvaluationShare(0.5, 0, 0.25), 10);
+}
+
 // Found by UndefinedBehaviorSanitizer (scripts/test --sanitize address): a run far behind its budget
 // with a plain pass costing as much as a full one divided -4 s by a 1e-12 gain and cast -4e12 to int.
 TEST(EvalPlan, FarBehindTimeWithNothingToGainPromotesNone) {

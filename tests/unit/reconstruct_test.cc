@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <fstream>
 #include <thread>
 #include <vector>
@@ -163,6 +164,44 @@ TEST(Reconstruct, ProgressUnderABudgetEndsAtTheIterationsRun) {
     const bool reduced = listed(evaluation.value("heldout_reduced", nlohmann::json::array()), f);
     EXPECT_NE(full, reduced) << "held-out frame " << f;
   }
+  // The leanest plan's price, and (only when it is more than a quarter of the budget) the budget that
+  // would have left training three quarters: above this one.
+  const double least = evaluation.at("seconds").at("render_least");
+  EXPECT_GT(least, 0);
+  if (least > 0.25 * options.time_budget_s) {
+    ASSERT_TRUE(time.contains("budget_advised_s")) << time.dump();
+    EXPECT_GE(time.at("budget_advised_s").get<double>(), 4 * least);
+    EXPECT_GT(time.at("budget_advised_s").get<double>(), options.time_budget_s);
+  } else {
+    EXPECT_FALSE(time.contains("budget_advised_s")) << time.dump();
+  }
+}
+
+// Results that cost more than evaluation's quarter of the budget (many dropout passes on a short
+// budget): the run says, in metrics.json and the log, which budget would have left training its three
+// quarters.
+TEST(Reconstruct, ABudgetTooSmallForItsResultsSaysWhichWouldDo) {
+  testing::TempDir dir("reconstruct-advice");
+  WriteSmallClip(dir / "clip");
+  ReconstructOptions options;
+  options.clip_dir = (dir / "clip").string();
+  options.out_dir = (dir / "out").string();
+  options.time_budget_s = 1.0 * testing::kSlowdown;
+  options.holdout = 4;
+  options.config = SmallRunConfig();
+  options.config["mc_passes"] = 64;
+  options.config["eval_coarse_samples"] = options.config["eval_fine_samples"] = 32;
+  Reconstruct(options, {});
+  const nlohmann::json metrics = scene::ReadJsonFile(dir / "out" / "metrics.json");
+  const double least = metrics.at("evaluation").at("seconds").at("render_least");
+  EXPECT_GT(least, 0.25 * options.time_budget_s)
+      << "the test's premise: the results cost more than a quarter";
+  const auto& time = metrics.at("time");
+  ASSERT_TRUE(time.contains("budget_advised_s")) << time.dump();
+  const double advised = time.at("budget_advised_s");
+  EXPECT_GE(advised, 4 * least);
+  EXPECT_LT(advised, 4 * least + 20) << "within rounding and the writing";
+  EXPECT_EQ(std::fmod(advised, 10.0), 0.0);
 }
 
 }  // namespace

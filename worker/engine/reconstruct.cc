@@ -157,6 +157,7 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
   if (!outside_view.is_null()) left_out.push_back(outside_view);
   nlohmann::json metrics = nlohmann::json::object();
   double evaluation_s = 0;
+  double least_s = -1;  // the leanest plan's price (held-out frames full), when evaluation was planned
   if (!trained.cancelled) {
     const auto start = Clock::now();
     RebuildOccupancy(trainer, left_out);
@@ -175,6 +176,7 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
       // the deadline comes first and they are reduced too (a budget too small for the clip's frames).
       const double left = std::max(available - SecondsSince(start), 1e-3);
       const eval::RenderCost cost = MeasureCost();
+      least_s = eval::LeastEvaluationSeconds(clip.frame_count(), split.heldout, pixels, cost);
       const double slack = options.time_budget_s > 0 ? kBudgetTolerance * options.time_budget_s : 0;
       what.plan = eval::PlanEvaluation(clip.frame_count(), split.heldout, pixels, cost, left);
       if (what.plan.seconds > left + slack) {
@@ -215,6 +217,7 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
     }
     metrics = eval::EvaluateClip(clip, uncertainty_renderer, what, out_dir);
     evaluation_s = SecondsSince(start);
+    if (least_s >= 0) metrics["evaluation"]["seconds"]["render_least"] = least_s;
   }
   metrics["iterations"] = trainer.iteration();
   metrics["train_seconds"] = extras.train_seconds;
@@ -237,6 +240,19 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
                      {"training_steps_s", trained.step_seconds},
                      {"evaluation_s", evaluation_s},
                      {"writing_s", SecondsSince(after_training) - evaluation_s}};
+  // A clip whose results cost more than evaluation's share of the budget took training time: say
+  // which budget would have left training its three quarters.
+  if (options.time_budget_s > 0 && least_s >= 0 &&
+      least_s + tail_s > kEvaluationShare * options.time_budget_s) {
+    const double advised = eval::BudgetForEvaluationShare(least_s, tail_s, kEvaluationShare);
+    metrics["time"]["budget_advised_s"] = advised;
+    spdlog::warn(
+        "rendering the results of {} frames of {}x{} takes about {:.0f} s at the least here, more than a "
+        "quarter of the {:.0f} s budget, so training had {:.0f} s of it; a budget of {:.0f} s or more "
+        "would leave training three quarters of the run (metrics.json: time.budget_advised_s)",
+        clip.frame_count(), clip.width, clip.height, least_s, options.time_budget_s, trained.wall_seconds,
+        advised);
+  }
   eval::WriteMetrics(out_dir / "metrics.json", metrics);
   eval::WriteReport(out_dir);
   spdlog::info("run took {:.1f} s ({:.1f} s training, {:.1f} s evaluation{})", SecondsSince(run_start),

@@ -83,6 +83,20 @@ EvalPlan PlanEvaluation(int frame_count, const std::vector<int>& heldout, int pi
   return plan;  // not reached: the last stride always returns
 }
 
+double LeastEvaluationSeconds(int frame_count, const std::vector<int>& heldout, int pixels,
+                              const RenderCost& cost) {
+  if (!cost.known()) return 0;
+  const double held =
+      double(std::count_if(heldout.begin(), heldout.end(), [&](int f) { return f >= 0 && f < frame_count; }));
+  return held * FrameSeconds(FrameRender::kFull, 1, cost, pixels) +
+         (frame_count - held) *
+             FrameSeconds(FrameRender::kReduced, UncertaintyStrides(pixels).back(), cost, pixels);
+}
+
+double BudgetForEvaluationShare(double least_s, double tail_s, double share) {
+  return 10 * std::ceil((least_s + tail_s) / share / 10);
+}
+
 FramePacer::FramePacer(const EvalPlan& plan, std::vector<int> heldout, int pixels, bool can_reduce,
                        double heldout_slack_s)
     : plan_(plan),

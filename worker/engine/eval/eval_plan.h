@@ -64,6 +64,16 @@ enum class HeldOut {
 EvalPlan PlanEvaluation(int frame_count, const std::vector<int>& heldout, int pixels, const RenderCost& cost,
                         double seconds_available, HeldOut held_out = HeldOut::kFull);
 
+// Seconds of the leanest plan that keeps every held-out frame full: those full, the training frames
+// reduced at the coarsest stride (UncertaintyStrides). 0 when the cost is not known.
+double LeastEvaluationSeconds(int frame_count, const std::vector<int>& heldout, int pixels,
+                              const RenderCost& cost);
+
+// The time budget, rounded up to the next 10 s, of which evaluating in `least_s` and writing in
+// `tail_s` would be `share`: what to ask for when a clip's results cost more than their share of a
+// budget (training then gives way; reconstruct.cc).
+double BudgetForEvaluationShare(double least_s, double tail_s, double share);
+
 // One frame's render: how, and a reduced frame's uncertainty stride.
 struct FrameChoice {
   FrameRender how = FrameRender::kFull;

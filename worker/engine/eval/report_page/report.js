@@ -357,6 +357,21 @@
                            `${run.machine.memory_gib.toFixed(1)} GiB memory, ${run.machine.os}`]);
   runRows.push(["device", run.device], ["written", run.written], ["version", `endorecon ${run.version}`]);
   if (data.clip) runRows.push(["clip", data.clip]);
+  if (metrics.time) {
+    // Where the run's time went, against its budget; and, when the clip's results cost more than
+    // evaluation's quarter of it, the budget that would have left training its three quarters.
+    const seconds = (key) => metricSpan(`/time/${key}`, { digits: 1 });
+    const time = [seconds("total_s"), " s"];
+    if (metrics.time.budget_s > 0) time.push(" of a ", seconds("budget_s"), " s budget");
+    time.push(": training ", seconds("training_s"), " s, evaluation ", seconds("evaluation_s"), " s, writing ",
+              seconds("writing_s"), " s");
+    if (metrics.time.budget_advised_s) {
+      time.push("; rendering the results takes about ", metricSpan("/evaluation/seconds/render_least", { digits: 0 }),
+                " s at the least, so training gave way: a budget of ",
+                metricSpan("/time/budget_advised_s", { digits: 0 }), " s or more leaves it three quarters of the run");
+    }
+    runRows.push(["time", time]);
+  }
   if (metrics.field) runRows.push(["field", [node("span", { class: "lines", text: metrics.field })]]);
   if (metrics.evaluation_mask) runRows.push(["evaluation mask", metrics.evaluation_mask]);
   if (metrics.video) {
