@@ -83,6 +83,12 @@ std::string OutcomeLine(const v1::Job& job) {
         fmt::format(", {} in all", HumanDuration((job.finished_unix_ms() - job.started_unix_ms()) / 1000.0));
   if (number("train_psnr") > 0) line += fmt::format(", PSNR {:.2f} dB", number("train_psnr"));
   if (number("heldout_psnr") >= 0) line += fmt::format(" (held-out {:.2f})", number("heldout_psnr"));
+  if (number("budget_advised_s") > 0) {
+    line += fmt::format(
+        "; its results took more than a quarter of the time budget: {:.0f} s or more leaves training three "
+        "quarters",
+        number("budget_advised_s"));
+  }
   return line;
 }
 

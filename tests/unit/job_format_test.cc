@@ -85,6 +85,13 @@ TEST(DescribeJob, ASucceededJobShowsItsOutcomeNotItsLastProgress) {
   // Without held-out frames the engine reports -1: not shown.
   job.set_summary_json(R"({"iterations":10,"train_seconds":1,"train_psnr":20,"heldout_psnr":-1})");
   EXPECT_EQ(OutcomeLine(job).find("held-out"), std::string::npos) << OutcomeLine(job);
+  // A budget too small for the clip's results: which one would have left training three quarters.
+  job.set_summary_json(
+      R"({"iterations":2211,"train_seconds":74.1,"train_psnr":24.05,"heldout_psnr":23.13,"budget_advised_s":190})");
+  EXPECT_EQ(
+      OutcomeLine(job),
+      "done: 2211 iterations in 74 s of training, 1m02s in all, PSNR 24.05 dB (held-out 23.13); its "
+      "results took more than a quarter of the time budget: 190 s or more leaves training three quarters");
 }
 
 TEST(DescribeJob, AJobThatEndedOtherwiseShowsWhereItStopped) {

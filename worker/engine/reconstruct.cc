@@ -158,6 +158,7 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
   nlohmann::json metrics = nlohmann::json::object();
   double evaluation_s = 0;
   double least_s = -1;  // the leanest plan's price (held-out frames full), when evaluation was planned
+  double advised_s = 0;
   if (!trained.cancelled) {
     const auto start = Clock::now();
     RebuildOccupancy(trainer, left_out);
@@ -244,14 +245,14 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
   // which budget would have left training its three quarters.
   if (options.time_budget_s > 0 && least_s >= 0 &&
       least_s + tail_s > kEvaluationShare * options.time_budget_s) {
-    const double advised = eval::BudgetForEvaluationShare(least_s, tail_s, kEvaluationShare);
-    metrics["time"]["budget_advised_s"] = advised;
+    advised_s = eval::BudgetForEvaluationShare(least_s, tail_s, kEvaluationShare);
+    metrics["time"]["budget_advised_s"] = advised_s;
     spdlog::warn(
         "rendering the results of {} frames of {}x{} takes about {:.0f} s at the least here, more than a "
         "quarter of the {:.0f} s budget, so training had {:.0f} s of it; a budget of {:.0f} s or more "
         "would leave training three quarters of the run (metrics.json: time.budget_advised_s)",
         clip.frame_count(), clip.width, clip.height, least_s, options.time_budget_s, trained.wall_seconds,
-        advised);
+        advised_s);
   }
   eval::WriteMetrics(out_dir / "metrics.json", metrics);
   eval::WriteReport(out_dir);
@@ -267,6 +268,7 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
   summary.threads = threads;
   summary.device = trainer.device();
   summary.metrics_path = (out_dir / "metrics.json").string();
+  summary.budget_advised_s = advised_s;
   const auto heldout = "/heldout/image/psnr_tissue/mean"_json_pointer;
   if (metrics.contains(heldout) && metrics.at(heldout).is_number())
     summary.heldout_psnr = metrics.at(heldout);

@@ -74,6 +74,9 @@ struct ReconstructSummary {
   int threads = 0;           // the run's arena's concurrency
   std::string device;        // where the steps ran
   std::string metrics_path;  // out_dir/metrics.json
+  // > 0 when the clip's results cost more than evaluation's quarter of the time budget: the budget
+  // that would have left training three quarters (metrics.json time.budget_advised_s).
+  double budget_advised_s = 0;
 };
 
 // Throws endorecon::Error: kInvalidArgument for a bad clip or option (message names the file),

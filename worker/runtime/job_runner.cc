@@ -49,12 +49,13 @@ v1::FileEntry UploadCheckpoint(WorkerClient& client, const fs::path& path) {
 }
 
 std::string SummaryJson(const ReconstructSummary& summary) {
-  return nlohmann::json{{"iterations", summary.iterations},
-                        {"train_seconds", summary.train_seconds},
-                        {"train_psnr", summary.train_psnr},
-                        {"heldout_psnr", summary.heldout_psnr},
-                        {"metrics", fs::path(summary.metrics_path).filename().string()}}
-      .dump();
+  nlohmann::json json{{"iterations", summary.iterations},
+                      {"train_seconds", summary.train_seconds},
+                      {"train_psnr", summary.train_psnr},
+                      {"heldout_psnr", summary.heldout_psnr},
+                      {"metrics", fs::path(summary.metrics_path).filename().string()}};
+  if (summary.budget_advised_s > 0) json["budget_advised_s"] = summary.budget_advised_s;
+  return json.dump();
 }
 
 // Retries `call` while the server is unreachable (a restart), for about `patience`.
