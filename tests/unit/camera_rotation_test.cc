@@ -34,8 +34,7 @@ TEST(CameraRotationTest, FitRotationRecoversAKnownRotationFromNoisyRays) {
 }
 
 TEST(CameraRotationTest, TurnsOfACameraBehindARoundScopeAreRecovered) {
-  // Twelve frames turning away (past where the first frame's corners are still followed, so the
-  // keyframe changes) and back.
+  // Twelve frames turning away (past where the first frame's corners are still followed) and back.
   std::vector<cv::Vec3d> path;
   for (int f = 1; f < 12; ++f) {
     const double s = f < 7 ? f : 12 - f;
