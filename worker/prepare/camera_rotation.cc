@@ -1,5 +1,7 @@
 #include "worker/prepare/camera_rotation.h"
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <opencv2/imgproc.hpp>
 
@@ -106,11 +108,17 @@ CameraTurns EstimateCameraTurns(const std::vector<cv::Mat>& frames, const cv::Ma
   const double max_miss = kMissPx * scale / focal;
   const int rim = static_cast<int>(std::lround(std::max(3.0, kRimPx * scale)));
   const cv::Matx33d inverse_camera = camera.inv();
-  turns.rotations.push_back(cv::Matx33d::eye());
-  cv::Mat previous;
-  cv::cvtColor(frames[0], previous, cv::COLOR_BGR2GRAY);
-  for (std::size_t f = 1; f < frames.size(); ++f) {
-    cv::Mat grey;
+  // Each frame's turn from the one before it, the frames in parallel (each fit is seeded: the same
+  // frames give the same turns), then chained from the first.
+  const int n = static_cast<int>(frames.size());
+  struct Step {
+    Turn turn;
+    double residual_px = 0;
+  };
+  std::vector<Step> steps(n);
+  tbb::parallel_for(1, n, [&](int f) {
+    cv::Mat previous, grey;
+    cv::cvtColor(frames[f - 1], previous, cv::COLOR_BGR2GRAY);
     cv::cvtColor(frames[f], grey, cv::COLOR_BGR2GRAY);
     const auto matches =
         TrackCorners(previous, grey, AllowedCorners(frames[f - 1], not_tissue, rim), kMaxCorners);
@@ -119,13 +127,17 @@ CameraTurns EstimateCameraTurns(const std::vector<cv::Mat>& frames, const cv::Ma
       here.push_back(Ray(inverse_camera, m.to));
       there.push_back(Ray(inverse_camera, m.from));
     }
-    const Turn turn = FitTurn(here, there, max_miss);
-    const bool placed = static_cast<int>(turn.inliers.size()) >= kMinInliers;
+    steps[f].turn = FitTurn(here, there, max_miss);
+    steps[f].residual_px = MedianMiss(here, there, steps[f].turn, focal);
+  });
+  turns.rotations.push_back(cv::Matx33d::eye());
+  for (int f = 1; f < n; ++f) {
+    const Step& step = steps[f];
+    const bool placed = static_cast<int>(step.turn.inliers.size()) >= kMinInliers;
     if (!placed) ++turns.unplaced;
-    turns.rotations.push_back(placed ? turns.rotations.back() * turn.rotation : turns.rotations.back());
-    turns.residual_px.push_back(placed ? MedianMiss(here, there, turn, focal) : 0.0);
-    turns.inliers.push_back(placed ? static_cast<int>(turn.inliers.size()) : 0);
-    previous = grey;
+    turns.rotations.push_back(placed ? turns.rotations.back() * step.turn.rotation : turns.rotations.back());
+    turns.residual_px.push_back(placed ? step.residual_px : 0.0);
+    turns.inliers.push_back(placed ? static_cast<int>(step.turn.inliers.size()) : 0);
   }
   return turns;
 }
