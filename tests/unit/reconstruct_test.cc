@@ -44,14 +44,20 @@ nlohmann::json SmallRunConfig() {
   return {{"rays_per_batch", 256}, {"mc_passes", 1}, {"eval_coarse_samples", 8}, {"eval_fine_samples", 8}};
 }
 
-Observed RunReconstruct(const fs::path& clip, const fs::path& out, int threads) {
+// A run of that configuration on `clip` into `out`, every 4th frame held out.
+ReconstructOptions SmallRunOptions(const fs::path& clip, const fs::path& out) {
   ReconstructOptions options;
   options.clip_dir = clip.string();
   options.out_dir = out.string();
-  options.threads = threads;
-  options.iterations = 60;
   options.holdout = 4;
   options.config = SmallRunConfig();
+  return options;
+}
+
+Observed RunReconstruct(const fs::path& clip, const fs::path& out, int threads) {
+  ReconstructOptions options = SmallRunOptions(clip, out);
+  options.threads = threads;
+  options.iterations = 60;
   Observed observed;
   ReconstructHooks hooks;
   hooks.progress_interval_s = 0;
@@ -91,14 +97,10 @@ TEST(Reconstruct, TwoRunsInOneProcessEachKeepTheirThreadCount) {
 TEST(Reconstruct, ProgressUnderABudgetEndsAtTheIterationsRun) {
   testing::TempDir dir("reconstruct-budget");
   WriteSmallClip(dir / "clip");
-  ReconstructOptions options;
-  options.clip_dir = (dir / "clip").string();
-  options.out_dir = (dir / "out").string();
+  ReconstructOptions options = SmallRunOptions(dir / "clip", dir / "out");
   options.iterations = 1'000'000;
   // Instrumented builds step ~5x slower: the budget scales so that it still holds many reports.
   options.time_budget_s = 1.5 * testing::kSlowdown;
-  options.holdout = 4;
-  options.config = SmallRunConfig();
   std::vector<Progress> reports;
   ReconstructHooks hooks;
   hooks.progress_interval_s = 0.2;
@@ -183,12 +185,8 @@ TEST(Reconstruct, ProgressUnderABudgetEndsAtTheIterationsRun) {
 TEST(Reconstruct, ABudgetTooSmallForItsResultsSaysWhichWouldDo) {
   testing::TempDir dir("reconstruct-advice");
   WriteSmallClip(dir / "clip");
-  ReconstructOptions options;
-  options.clip_dir = (dir / "clip").string();
-  options.out_dir = (dir / "out").string();
+  ReconstructOptions options = SmallRunOptions(dir / "clip", dir / "out");
   options.time_budget_s = 1.0 * testing::kSlowdown;
-  options.holdout = 4;
-  options.config = SmallRunConfig();
   options.config["mc_passes"] = 64;
   options.config["eval_coarse_samples"] = options.config["eval_fine_samples"] = 32;
   Reconstruct(options, {});
