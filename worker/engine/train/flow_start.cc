@@ -259,8 +259,9 @@ FlowStart FitDeformationToFlow(const scene::Clip& clip, const std::vector<int>& 
   double flow_sum = 0;
   // The medium preset stops at half the flow image's resolution (finest scale 1). Going on to full
   // resolution halves the start's error against a synthetic clip's true motion and gains the
-  // real-texture clip 0.15 dB, but loses the demo clip's held-out depth at 300 s by a third, so it
-  // stays (docs/benchmarks.md, "DIS down to the finest scale").
+  // real-texture clip 0.17 dB, but costs the demo clip's held-out depth at 300 s (a floater at a
+  // highlight; 10-45% more RMSE, with or without leaving the pixels near the tool or the highlights
+  // out of the fit), so it stays (docs/benchmarks.md, "DIS down to the finest scale").
   cv::Ptr<cv::DISOpticalFlow> dis = cv::DISOpticalFlow::create(cv::DISOpticalFlow::PRESET_MEDIUM);
   for (int f : order) {
     if (f == ref) continue;
