@@ -1,9 +1,12 @@
-// The model map's third term: the neighbouring training frames' residuals, relative to the camera
-// noise's level at their brightness, seen where the frame's surface projects in each neighbour.
+// The model map's third term: the neighbouring training frames' signed residuals, averaged where the
+// frame's surface projects in each neighbour, squared, relative to the camera noise's level at the
+// frame's brightness.
 #include "worker/engine/eval/neighbour_evidence.h"
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <limits>
 #include <vector>
 
 #include "common/error.h"
@@ -26,41 +29,54 @@ scene::Camera CameraAt(double x) {
 
 int Pixel(int u, int v) { return v * kW + u; }
 
-TEST(ResidualEvidenceTest, TheNoiseOfABrightnessIsTakenOutAndTheToolMarked) {
-  // Two brightness levels; the residual follows the noise (twice the RMSE where bright) except at
-  // one dark pixel with three times its level's.
-  std::vector<float> rgb, rmse;
-  std::vector<std::uint8_t> tool(kW * kH, 0);
-  for (int p = 0; p < kW * kH; ++p) {
-    const bool bright = p % 2 == 0;
-    rgb.insert(rgb.end(), 3, bright ? 0.8f : 0.2f);
-    rmse.push_back((bright ? 0.02f : 0.01f) * (p == 7 ? 3.0f : 1.0f));
-  }
-  tool[10] = 1;
-  const std::vector<float> evidence = ResidualEvidence(rgb, rmse, tool);
-  EXPECT_NEAR(evidence[0], 1.0, 1e-5);  // a bright pixel at its level's median
-  EXPECT_NEAR(evidence[1], 1.0, 1e-5);  // a dark one: alike, though its residual is a quarter
-  EXPECT_NEAR(evidence[7], 9.0, 1e-4);  // the dark pixel with excess: 3^2 its level's
-  EXPECT_EQ(evidence[10], -1.0f);       // the tool: no evidence
-  EXPECT_THROW(ResidualEvidence(rgb, std::vector<float>(3), {}), Error);
+// Evidence of n pixels whose residual is (r, 0, 0), the same in every pixel.
+std::vector<float> Residuals(float r) {
+  std::vector<float> residual(3 * kW * kH, 0.0f);
+  for (int p = 0; p < kW * kH; ++p) residual[3 * p] = r;
+  return residual;
 }
 
-TEST(NeighbourEvidenceTest, AStillCameraAveragesTheSamePixelWeightedByDistance) {
+void SetResidual(std::vector<float>& evidence, int pixel, float r) { evidence[3 * pixel] = r; }
+
+// A frame's render: one grey everywhere (one brightness bin), and no tool.
+const std::vector<float> kGrey(3 * kW * kH, 0.5f);
+const std::vector<std::uint8_t> kNoTool;
+
+TEST(ResidualEvidenceTest, TheSignedResidualPerChannelWithTheToolMarked) {
+  const std::vector<float> rgb = {0.5f, 1.2f, -0.1f, 0.2f, 0.2f, 0.2f};
+  const std::vector<std::uint8_t> image = {102, 255, 0, 0, 0, 0}, tool = {0, 1};
+  const std::vector<float> evidence = ResidualEvidence(rgb, image, tool);
+  ASSERT_EQ(evidence.size(), 6u);
+  EXPECT_NEAR(evidence[0], 0.5 - 0.4, 1e-6);  // rendered minus observed
+  EXPECT_EQ(evidence[1], 0.0f);               // the render clamped to [0, 1] first
+  EXPECT_EQ(evidence[2], 0.0f);
+  for (int c = 3; c < 6; ++c) EXPECT_TRUE(std::isnan(evidence[c]));  // the tool: no evidence
+  EXPECT_THROW(ResidualEvidence(rgb, std::vector<std::uint8_t>(3), {}), Error);
+  EXPECT_THROW(ResidualEvidence(rgb, image, std::vector<std::uint8_t>(3)), Error);
+}
+
+TEST(NeighbourEvidenceTest, AStillCameraAveragesTheResidualsBeforeSquaringThem) {
   const std::vector<scene::Camera> cameras(5, CameraAt(0));
   const std::vector<float> depth(kW * kH, 2.0f);
+  // Frame 2's neighbours in training: 1 (distance 1) and 4 (distance 2); both 0.01 too bright.
   std::vector<std::vector<float>> evidence(5);
-  evidence[1].assign(kW * kH, 1.0f);  // frame 2's neighbours in training: 1 (distance 1) and 4 (distance 2)
-  evidence[4].assign(kW * kH, 4.0f);
-  evidence[1][Pixel(3, 2)] = -1.0f;  // frame 1's tool there: frame 4 alone speaks
-  const std::vector<float> seen = NeighbourEvidence(cameras, 2, depth, evidence);
-  EXPECT_NEAR(seen[Pixel(0, 0)], (1.0 * 1 + 0.5 * 4) / 1.5, 1e-6);
-  EXPECT_NEAR(seen[Pixel(3, 2)], 4.0, 1e-6);
+  evidence[1] = Residuals(0.01f);
+  evidence[4] = Residuals(0.01f);
+  SetResidual(evidence[4], Pixel(1, 1), -0.02f);  // noise: (1 * 0.01 + 0.5 * -0.02) / 1.5 = 0
+  SetResidual(evidence[1], Pixel(2, 1), 0.03f);   // the model's own error, in both: 3 times the rest
+  SetResidual(evidence[4], Pixel(2, 1), 0.03f);
+  evidence[1][3 * Pixel(3, 2)] = std::numeric_limits<float>::quiet_NaN();  // frame 1's tool: frame 4 alone
+  SetResidual(evidence[4], Pixel(3, 2), 0.02f);
+  const std::vector<float> seen = NeighbourEvidence(cameras, 2, kGrey, depth, kNoTool, evidence);
+  // Relative to the frame's median at its brightness, 0.01^2.
+  EXPECT_NEAR(seen[Pixel(0, 0)], 1.0, 1e-5);
+  EXPECT_NEAR(seen[Pixel(1, 1)], 0.0, 1e-5);
+  EXPECT_NEAR(seen[Pixel(2, 1)], 9.0, 1e-4);
+  EXPECT_NEAR(seen[Pixel(3, 2)], 4.0, 1e-4);
   // A frame past kNeighbourFrames is not a neighbour; a frame without evidence (held out) is none.
-  evidence.assign(5, {});
-  evidence[0].assign(kW * kH, 1.0f);
   const std::vector<float> none =
-      NeighbourEvidence(std::vector<scene::Camera>(6, CameraAt(0)), 5, std::vector<float>(kW * kH, 2.0f),
-                        {evidence[0], {}, {}, {}, {}, {}});
+      NeighbourEvidence(std::vector<scene::Camera>(6, CameraAt(0)), 5, kGrey,
+                        std::vector<float>(kW * kH, 2.0f), kNoTool, {Residuals(0.01f), {}, {}, {}, {}, {}});
   EXPECT_EQ(none, std::vector<float>(kW * kH, 0.0f));
 }
 
@@ -69,12 +85,12 @@ TEST(NeighbourEvidenceTest, AMovingCameraIsFollowedThroughTheRenderedDepth) {
   // frame 0 sees at pixel u, frame 1 sees at u - 1.
   const std::vector<scene::Camera> cameras = {CameraAt(0), CameraAt(0.2)};
   std::vector<std::vector<float>> evidence(2);
-  evidence[1].assign(kW * kH, 0.0f);
-  evidence[1][Pixel(5, 3)] = 1.0f;
+  evidence[1] = Residuals(0.01f);
+  SetResidual(evidence[1], Pixel(5, 3), 0.03f);
   std::vector<float> depth(kW * kH, 2.0f);
-  const std::vector<float> seen = NeighbourEvidence(cameras, 0, depth, evidence);
-  EXPECT_EQ(seen[Pixel(6, 3)], 1.0f);
-  EXPECT_EQ(seen[Pixel(5, 3)], 0.0f);
+  const std::vector<float> seen = NeighbourEvidence(cameras, 0, kGrey, depth, kNoTool, evidence);
+  EXPECT_NEAR(seen[Pixel(6, 3)], 9.0, 1e-4);
+  EXPECT_NEAR(seen[Pixel(5, 3)], 1.0, 1e-5);
   // Frame 0's first column projects left of frame 1's image: no neighbour sees it.
   EXPECT_EQ(seen[Pixel(0, 3)], 0.0f);
   // A neighbour whose image plane the surface touches sees it nowhere (no overflow), one behind whom
@@ -82,23 +98,28 @@ TEST(NeighbourEvidenceTest, AMovingCameraIsFollowedThroughTheRenderedDepth) {
   for (const double z : {-2.0 + 1e-13, -3.0}) {
     std::vector<scene::Camera> grazing = cameras;
     grazing[1].c2w(2, 3) = z;
-    EXPECT_EQ(NeighbourEvidence(grazing, 0, depth, evidence), std::vector<float>(kW * kH, 0.0f)) << z;
+    EXPECT_EQ(NeighbourEvidence(grazing, 0, kGrey, depth, kNoTool, evidence),
+              std::vector<float>(kW * kH, 0.0f))
+        << z;
   }
   // Where the depth is unknown the same pixel stands in.
   depth[Pixel(5, 3)] = 0.0f;
-  EXPECT_EQ(NeighbourEvidence(cameras, 0, depth, evidence)[Pixel(5, 3)], 1.0f);
+  EXPECT_NEAR(NeighbourEvidence(cameras, 0, kGrey, depth, kNoTool, evidence)[Pixel(5, 3)], 9.0, 1e-4);
 }
 
 TEST(NeighbourEvidenceTest, SizesThatDisagreeAreRefused) {
   const std::vector<scene::Camera> cameras(3, CameraAt(0));
   const std::vector<float> depth(kW * kH, 1.0f);
-  EXPECT_THROW(NeighbourEvidence(cameras, 3, depth, std::vector<std::vector<float>>(3)), Error);
-  EXPECT_THROW(NeighbourEvidence(cameras, 0, depth, std::vector<std::vector<float>>(2)), Error);
-  EXPECT_THROW(NeighbourEvidence(cameras, 0, std::vector<float>(5), std::vector<std::vector<float>>(3)),
+  const std::vector<std::vector<float>> none(3);
+  EXPECT_THROW(NeighbourEvidence(cameras, 3, kGrey, depth, kNoTool, none), Error);
+  EXPECT_THROW(NeighbourEvidence(cameras, 0, kGrey, depth, kNoTool, std::vector<std::vector<float>>(2)),
                Error);
+  EXPECT_THROW(NeighbourEvidence(cameras, 0, kGrey, std::vector<float>(5), kNoTool, none), Error);
+  EXPECT_THROW(NeighbourEvidence(cameras, 0, std::vector<float>(5), depth, kNoTool, none), Error);
+  EXPECT_THROW(NeighbourEvidence(cameras, 0, kGrey, depth, std::vector<std::uint8_t>(5), none), Error);
   std::vector<std::vector<float>> evidence(3);
-  evidence[1].assign(7, 1.0f);
-  EXPECT_THROW(NeighbourEvidence(cameras, 0, depth, evidence), Error);
+  evidence[1].assign(kW * kH, 1.0f);  // one value a pixel where three are due
+  EXPECT_THROW(NeighbourEvidence(cameras, 0, kGrey, depth, kNoTool, evidence), Error);
 }
 
 }  // namespace

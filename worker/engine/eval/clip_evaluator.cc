@@ -162,7 +162,8 @@ EvaluatedFrame RenderFrame(const scene::Clip& clip, int f, FrameRender how, int 
 struct PendingModelMap {
   std::vector<float> map, grid_map;
   std::vector<int> grid;
-  std::vector<float> depth;  // the frame's rendered depth: where its pixels sit in the neighbours
+  std::vector<float> rgb,
+      depth;  // the frame's render: its brightness, where its pixels sit in the neighbours
   std::vector<float> error_observed, error_noise_free;  // over the whole frame, or on the grid
 };
 
@@ -197,6 +198,7 @@ PendingModelMap ModelMap(const EvaluatedFrame& evaluated, const std::vector<std:
     pending.grid_map = ModelUncertainty(evaluated.grid_rgb, evaluated.grid_aleatoric,
                                         evaluated.grid_epistemic, Gather<std::uint8_t>(mask, evaluated.grid));
   }
+  pending.rgb = frame.rgb;
   pending.depth = frame.depth;
   return pending;
 }
@@ -262,7 +264,8 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
     const auto start = Clock::now();
     PendingModelMap& model = model_maps[f];
     const auto& mask = EvaluationMask(clip, f);
-    const std::vector<float> neighbours = NeighbourEvidence(clip.cameras, f, model.depth, evidence);
+    const std::vector<float> neighbours =
+        NeighbourEvidence(clip.cameras, f, model.rgb, model.depth, mask, evidence);
     AddNeighbourEvidence(model.map, neighbours, mask);
     if (!model.grid.empty()) {
       AddNeighbourEvidence(model.grid_map, Gather<float>(neighbours, model.grid),
@@ -316,7 +319,7 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
                                                          evaluated.grid, model.error_noise_free, mask);
       }
       if (Contains(what.train_frames, f))
-        evidence[f] = ResidualEvidence(frame.rgb, error, clip.has_masks() ? clip.tool_mask[f] : mask);
+        evidence[f] = ResidualEvidence(frame.rgb, clip.rgb[f], clip.has_masks() ? clip.tool_mask[f] : mask);
       if (f >= kNeighbourFrames) finish_model_map(f - kNeighbourFrames);
       if (what.write_files) {
         maps.total.push_back(std::move(frame.uncertainty));

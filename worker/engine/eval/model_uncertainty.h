@@ -29,8 +29,9 @@ std::vector<float> ModelUncertainty(std::span<const float> rgb, std::span<const 
                                     std::span<const std::uint8_t> tool_mask);
 
 // The weight of the neighbouring frames' evidence in the model map, relative to the aleatoric excess
-// and the epistemic terms (chosen on two clips, docs/benchmarks.md "The neighbours' residuals").
-inline constexpr double kNeighbourEvidenceWeight = 1.0;
+// and the epistemic terms (chosen on two clips, docs/benchmarks.md "The neighbours' residuals,
+// averaged with their signs": 0.4-0.6 ranked best on the demo clip, 0.2-0.3 on the real-texture one).
+inline constexpr double kNeighbourEvidenceWeight = 0.4;
 
 // Adds the neighbouring training frames' evidence (neighbour_evidence.h; one value per pixel of the
 // map) to a model map: kNeighbourEvidenceWeight times the evidence relative to its mean over the

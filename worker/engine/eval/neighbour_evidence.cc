@@ -1,6 +1,7 @@
 #include "worker/engine/eval/neighbour_evidence.h"
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <limits>
@@ -11,19 +12,26 @@
 
 namespace endorecon::eval {
 
-std::vector<float> ResidualEvidence(std::span<const float> rgb, std::span<const float> pixel_rmse,
+std::vector<float> ResidualEvidence(std::span<const float> rgb, std::span<const std::uint8_t> image,
                                     std::span<const std::uint8_t> tool_mask) {
-  std::vector<float> squared(pixel_rmse.size());
-  for (std::size_t i = 0; i < squared.size(); ++i) squared[i] = pixel_rmse[i] * pixel_rmse[i];
-  std::vector<float> evidence = RelativeToBrightnessMedian(rgb, squared, tool_mask);
-  for (std::size_t i = 0; i < evidence.size(); ++i) {
-    if (!tool_mask.empty() && tool_mask[i] != 0) evidence[i] = -1.0f;
+  const std::size_t n = rgb.size() / 3;
+  if (rgb.size() != 3 * n || image.size() != rgb.size() || (!tool_mask.empty() && tool_mask.size() != n)) {
+    FailInvalid("ResidualEvidence: " + std::to_string(rgb.size()) + " colour values, " +
+                std::to_string(image.size()) + " image values and " + std::to_string(tool_mask.size()) +
+                " mask values do not describe one set of pixels");
   }
-  return evidence;
+  std::vector<float> residual(rgb.size());
+  for (std::size_t i = 0; i < rgb.size(); ++i) {
+    residual[i] = !tool_mask.empty() && tool_mask[i / 3] != 0
+                      ? std::numeric_limits<float>::quiet_NaN()
+                      : std::clamp(rgb[i], 0.0f, 1.0f) - float(image[i]) / 255.0f;
+  }
+  return residual;
 }
 
 std::vector<float> NeighbourEvidence(std::span<const scene::Camera> cameras, int f,
-                                     std::span<const float> depth,
+                                     std::span<const float> rgb, std::span<const float> depth,
+                                     std::span<const std::uint8_t> tool_mask,
                                      const std::vector<std::vector<float>>& evidence) {
   const int count = int(cameras.size());
   if (f < 0 || f >= count || evidence.size() != cameras.size()) {
@@ -33,11 +41,13 @@ std::vector<float> NeighbourEvidence(std::span<const scene::Camera> cameras, int
   const scene::Camera& camera = cameras[f];
   const int w = camera.width, h = camera.height;
   const std::size_t n = std::size_t(w) * h;
-  if (depth.size() != n) {
+  if (depth.size() != n || rgb.size() != 3 * n || (!tool_mask.empty() && tool_mask.size() != n)) {
     FailInvalid("NeighbourEvidence: frame " + std::to_string(f) + " is " + std::to_string(w) + " x " +
-                std::to_string(h) + " but its depth has " + std::to_string(depth.size()) + " values");
+                std::to_string(h) + " but its depth has " + std::to_string(depth.size()) +
+                " values, its colours " + std::to_string(rgb.size()) + " and its mask " +
+                std::to_string(tool_mask.size()));
   }
-  std::vector<double> sum(n, 0.0), weights(n, 0.0);
+  std::vector<double> sum(3 * n, 0.0), weights(n, 0.0);
   // The surface point f sees at each pixel, computed once for every moving neighbour (NaN: no depth).
   std::vector<Eigen::Vector3d> surface;
   const auto surface_points = [&]() -> const std::vector<Eigen::Vector3d>& {
@@ -57,7 +67,7 @@ std::vector<float> NeighbourEvidence(std::span<const scene::Camera> cameras, int
   for (int g = std::max(0, f - kNeighbourFrames); g <= std::min(count - 1, f + kNeighbourFrames); ++g) {
     if (g == f || evidence[g].empty()) continue;
     const scene::Camera& other = cameras[g];
-    if (evidence[g].size() != std::size_t(other.width) * other.height) {
+    if (evidence[g].size() != 3 * std::size_t(other.width) * other.height) {
       FailInvalid("NeighbourEvidence: frame " + std::to_string(g) + "'s evidence has " +
                   std::to_string(evidence[g].size()) + " values for a " + std::to_string(other.width) +
                   " x " + std::to_string(other.height) + " camera");
@@ -78,18 +88,21 @@ std::vector<float> NeighbourEvidence(std::span<const scene::Camera> cameras, int
         }
         if (gu >= other.width || gv >= other.height)
           continue;  // no depth: the same pixel, in a smaller image
-        const float value = evidence[g][std::size_t(gv) * other.width + gu];
-        if (value < 0) continue;  // g's tool
-        sum[p] += weight * value;
+        const float* residual = &evidence[g][3 * (std::size_t(gv) * other.width + gu)];
+        if (std::isnan(residual[0])) continue;  // g's tool
+        for (int c = 0; c < 3; ++c) sum[3 * p + c] += weight * residual[c];
         weights[p] += weight;
       }
     }
   }
-  std::vector<float> out(n, 0.0f);
+  std::vector<float> squared(n, 0.0f);
   for (std::size_t p = 0; p < n; ++p) {
-    if (weights[p] > 0) out[p] = static_cast<float>(sum[p] / weights[p]);
+    if (!(weights[p] > 0)) continue;
+    double length = 0;
+    for (int c = 0; c < 3; ++c) length += (sum[3 * p + c] / weights[p]) * (sum[3 * p + c] / weights[p]);
+    squared[p] = static_cast<float>(length);
   }
-  return out;
+  return RelativeToBrightnessMedian(rgb, squared, tool_mask);
 }
 
 }  // namespace endorecon::eval

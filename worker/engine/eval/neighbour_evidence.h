@@ -1,13 +1,12 @@
 // The third term of the model map (model_uncertainty.h) where the clip's frames are known: where the
 // model does not fit the training frames near a time, it is likely wrong at that time too. The
 // model's own errors persist from frame to frame at a surface point (a hash collision, a fold the
-// deformation misses), while the camera's noise does not; a neighbouring frame's residual against
-// its image carries both, so each is taken relative to the noise's level at its brightness and
-// several neighbours are averaged. It lifts the model map's ranking of the noise-free error (Spearman)
-// from 0.49 to 0.54 on the demo clip's held-out frames and from 0.52 to 0.59 on the real-texture
-// clip's training frames; that clip's held-out frames, whose exposure flickers unpredictably, rank
-// lower (0.44 to 0.39) unless their exposure is fitted first (0.49 to 0.59; docs/benchmarks.md,
-// "The neighbours' residuals").
+// deformation misses) and keep their sign, while the camera's noise does not; so the neighbours'
+// signed residuals are averaged before they are squared, which cancels the noise where the squares
+// would add it up, and the square is taken relative to the noise's level at the pixel's brightness.
+// With the squares averaged instead, the model map ranked the demo clip's held-out noise-free error
+// at Spearman 0.50-0.53; with the residuals averaged 0.55-0.58, and the real-texture clip's 0.36
+// against 0.43 (docs/benchmarks.md, "The neighbours' residuals, averaged with their signs").
 #pragma once
 
 #include <cstdint>
@@ -21,22 +20,24 @@ namespace endorecon::eval {
 // How far, in frames, the neighbours reach on either side.
 inline constexpr int kNeighbourFrames = 4;
 
-// One training frame's evidence: its per-pixel squared RMSE against its image (eval::PixelRmse)
-// divided by the frame's median at the pixel's rendered brightness (RelativeToBrightnessMedian);
-// tool pixels, where training does not look, are marked -1 (no evidence). rgb holds 3 values per
-// pixel, pixel_rmse and tool_mask (or empty) one. Throws InvalidArgument when the lengths disagree.
-std::vector<float> ResidualEvidence(std::span<const float> rgb, std::span<const float> pixel_rmse,
+// One training frame's evidence: its signed residual against its image per channel (rendered colour
+// clamped to [0, 1] minus the image's / 255; 3 values a pixel), NaN on its tool, where training does
+// not look. rgb holds 3 values per pixel, image 3 (uint8) and tool_mask (or empty) one. Throws
+// InvalidArgument when the lengths disagree.
+std::vector<float> ResidualEvidence(std::span<const float> rgb, std::span<const std::uint8_t> image,
                                     std::span<const std::uint8_t> tool_mask);
 
-// Frame f's view of its neighbours' evidence: per pixel, the mean weighted by 1 / |g - f| over the
-// frames g != f within kNeighbourFrames of f whose evidence is given (evidence[g] not empty) of
-// their evidence at the pixel where the surface f sees there (f's rendered depth) projects in g's
-// camera (the same pixel where the depth is not finite and positive); a neighbour that sees it
-// outside its image or on its tool adds nothing; 0 where none sees it. Tissue that moves between
-// frames is not followed: the neighbours are a few frames away. Throws InvalidArgument when the
-// cameras, the depth and the evidence disagree in size.
+// Frame f's view of its neighbours' evidence: per pixel, the squared length of the mean weighted by
+// 1 / |g - f| over the frames g != f within kNeighbourFrames of f whose evidence is given (evidence[g]
+// not empty) of their residuals at the pixel where the surface f sees there (f's rendered depth)
+// projects in g's camera (the same pixel where the depth is not finite and positive), relative to
+// its median at f's rendered brightness (RelativeToBrightnessMedian, rgb and tool_mask f's); a
+// neighbour that sees it outside its image or on its tool adds nothing; 0 where none sees it. Tissue
+// that moves between frames is not followed: the neighbours are a few frames away. Throws
+// InvalidArgument when the cameras, the colours, the depth and the evidence disagree in size.
 std::vector<float> NeighbourEvidence(std::span<const scene::Camera> cameras, int f,
-                                     std::span<const float> depth,
+                                     std::span<const float> rgb, std::span<const float> depth,
+                                     std::span<const std::uint8_t> tool_mask,
                                      const std::vector<std::vector<float>>& evidence);
 
 }  // namespace endorecon::eval
