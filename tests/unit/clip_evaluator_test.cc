@@ -151,7 +151,7 @@ TEST(ClipEvaluatorTest, AHeldOutFramesModelMapSeesItsNeighboursResiduals) {
       rest += seen[p] / double(seen.size() - 16);
     }
   }
-  EXPECT_GT(block, 4 * rest);  // about 9x
+  EXPECT_GT(block, 2.5 * rest);  // about 4x at kNeighbourEvidenceWeight 0.4
 }
 
 // A plan priced far too low meets its deadline anyway: with the deadline already past, every frame,

@@ -215,9 +215,9 @@ nlohmann::json UncertaintySettings(const render::FrameRenderSettings& settings) 
       {"model_map",
        "aleatoric score / the frame's median aleatoric score at the pixel's rendered brightness, plus the "
        "epistemic score, each relative to its mean over the frame's tissue (eval/model_uncertainty.h); in a "
-       "clip's evaluation plus the neighbouring training frames' (within 4 frames, weights 1/distance) "
-       "squared residuals relative to their median at their brightness, at the pixel the surface projects "
-       "to, relative to its tissue mean (eval/neighbour_evidence.h)"}};
+       "clip's evaluation plus 0.4 times the neighbouring training frames' (within 4 frames, weights "
+       "1/distance) signed residuals at the pixel the surface projects to, averaged, squared, relative to "
+       "its median at the frame's brightness and to its tissue mean (eval/neighbour_evidence.h)"}};
 }
 
 nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& renderer,
