@@ -95,6 +95,7 @@ TEST(TrainConfigTest, JsonRoundTripKeepsEveryKey) {
                                               "curve_frames",
                                               "curve_interval_s",
                                               "deformation_start",
+                                              "depth_fill_sigma",
                                               "depth_loss",
                                               "depth_refine_ema",
                                               "depth_refine_every",

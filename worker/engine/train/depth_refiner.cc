@@ -6,12 +6,25 @@
 #include <ostream>
 
 #include "common/error.h"
+#include "worker/engine/train/depth_fill.h"
 #include "worker/engine/train/losses.h"
 
 namespace endorecon::train {
 
-DepthRefiner::DepthRefiner(const scene::Clip& clip, std::vector<int> frames)
-    : clip_(clip), frames_(std::move(frames)), refined_(std::size_t(clip.frame_count())) {}
+DepthRefiner::DepthRefiner(const scene::Clip& clip, std::vector<int> frames, double fill_sigma)
+    : clip_(clip), frames_(std::move(frames)), refined_(std::size_t(clip.frame_count())) {
+  if (!(fill_sigma > 0) || !clip.has_depth()) return;
+  for (int f : frames_) {
+    FilledDepth filled =
+        FillDepthHoles(clip.depth[std::size_t(f)],
+                       clip.has_masks() ? std::span<const std::uint8_t>(clip.tool_mask[std::size_t(f)])
+                                        : std::span<const std::uint8_t>(),
+                       clip.width, clip.height, fill_sigma);
+    filled_ += filled.filled;
+    left_ += filled.left;
+    if (filled.filled > 0) refined_[std::size_t(f)] = std::move(filled.depth);
+  }
+}
 
 DepthRefineStats DepthRefiner::Refine(render::FrameRenderer& renderer, float fraction, float ema,
                                       std::size_t max_pixels) {

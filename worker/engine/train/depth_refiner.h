@@ -4,8 +4,9 @@
 // its measured tissue pixels by the frame renderer (which never reads priors, so a wrong prior cannot
 // steer its own correction), and in each frame the `fraction` of pixels whose prior disagrees most
 // with the rendering move towards it: prior <- (1 - ema) prior + ema rendered (ema = 1 is EndoNeRF's
-// outright replacement). Pixels without a measurement (0: holes) and tool pixels are never touched,
-// so the depth loss still only supervises where the clip measured something.
+// outright replacement). Pixels without a prior (0: holes) and tool pixels are never touched, so the
+// depth loss still only supervises where the clip measured something, or where a hole was filled from
+// the measurements around it when the refiner was made (depth_fill.h).
 #pragma once
 
 #include <cstddef>
@@ -27,7 +28,12 @@ struct DepthRefineStats {
 class DepthRefiner {
  public:
   // clip must outlive the refiner; frames: the training frames (only they are rendered and refined).
-  DepthRefiner(const scene::Clip& clip, std::vector<int> frames);
+  // fill_sigma > 0: the training frames' holes are filled first (FillDepthHoles with that sigma).
+  DepthRefiner(const scene::Clip& clip, std::vector<int> frames, double fill_sigma = 0);
+
+  // Hole pixels the fill gave a prior, and those it left, over the training frames.
+  std::size_t filled() const { return filled_; }
+  std::size_t left() const { return left_; }
 
   // The current prior of a pixel: the clip's until its frame is first refined. 0 = unknown.
   float Prior(int frame, int pixel) const {
@@ -60,6 +66,7 @@ class DepthRefiner {
   std::vector<int> frames_;
   std::vector<std::vector<float>> refined_;  // per frame of the clip; empty until that frame is refined
   int rounds_ = 0;
+  std::size_t filled_ = 0, left_ = 0;
   std::size_t next_ = 0;  // index into frames_ of the frame the next round starts with
 };
 

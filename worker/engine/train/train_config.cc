@@ -107,6 +107,7 @@ void VisitKeys(TrainConfig& c, Visit&& visit) {
   visit("depth_refine_ema", c.depth_refine_ema);
   visit("depth_refine_samples", c.depth_refine_samples);
   visit("depth_refine_pixels", c.depth_refine_pixels);
+  visit("depth_fill_sigma", c.depth_fill_sigma);
   visit("occupancy_resolution", c.occupancy_resolution);
   visit("occupancy_every", c.occupancy_every);
   visit("occupancy_min_alpha", c.occupancy_min_alpha);
@@ -230,6 +231,7 @@ void Validate(const TrainConfig& c) {
   require(c.depth_refine_ema > 0 && c.depth_refine_ema <= 1, "depth_refine_ema must be in (0, 1]");
   require(c.depth_refine_samples >= 1, "depth_refine_samples must be >= 1");
   require(c.depth_refine_pixels >= 0, "depth_refine_pixels must be >= 0");
+  require(c.depth_fill_sigma >= 0 && c.depth_fill_sigma <= 50, "depth_fill_sigma must be in [0, 50]");
   require(c.occupancy_resolution >= 0 && c.occupancy_resolution <= 512,
           "occupancy_resolution must be in [0, 512]");
   require(c.occupancy_every > 0 && c.occupancy_every <= 1, "occupancy_every must be in (0, 1]");

@@ -81,6 +81,10 @@ struct TrainConfig {
   float depth_refine_ema = 0.1f;
   int depth_refine_samples = 24;
   int depth_refine_pixels = 0;  // measured pixels rendered per round (frames in turn); 0: every frame
+  // Holes in the training frames' depth priors (where stereo failed: highlights mostly) filled from
+  // the measured depths around them before training, a Gaussian of depth_fill_sigma pixels
+  // (train/depth_fill.h); 0: off. Holes next to the tool stay.
+  double depth_fill_sigma = 2;
 
   // Empty-space skipping (render/occupancy_grid.h): a grid of occupancy_resolution^3 cells rebuilt
   // from the field every occupancy_every of the run; stratified samples cover only each ray's occupied

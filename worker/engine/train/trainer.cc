@@ -27,7 +27,7 @@ Trainer::Trainer(const scene::Clip& clip, const TrainConfig& config, std::vector
       box_(scene::ClipBox(clip)),
       sampler_(clip, std::move(train_frames)),
       map_(sampler_, clip.width, clip.height, config.adaptive_map_stride),
-      refiner_(clip, sampler_.frames()),
+      refiner_(clip, sampler_.frames(), config.depth_fill_sigma),
       render_(std::move(render)) {
   for (int f = 0; f < clip.frame_count(); ++f) {
     rgb_frames_.push_back(clip.rgb[f].data());
@@ -85,6 +85,11 @@ Trainer::Trainer(const scene::Clip& clip, const TrainConfig& config, std::vector
   }
   backend_ = backend(*field_, config_, tables_);
   UpdateTables();
+  if (refiner_.filled() > 0) {
+    spdlog::info(
+        "depth priors: {} hole pixels filled from the depths measured around them (sigma {} px), {} left",
+        refiner_.filled(), config_.depth_fill_sigma, refiner_.left());
+  }
 }
 
 Trainer::~Trainer() = default;
