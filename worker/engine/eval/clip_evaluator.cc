@@ -162,8 +162,8 @@ EvaluatedFrame RenderFrame(const scene::Clip& clip, int f, FrameRender how, int 
 struct PendingModelMap {
   std::vector<float> map, grid_map;
   std::vector<int> grid;
-  std::vector<float> rgb,
-      depth;  // the frame's render: its brightness, where its pixels sit in the neighbours
+  std::vector<float> rgb;    // the frame's rendered colours: their brightness bins the evidence
+  std::vector<float> depth;  // the frame's rendered depth: where its pixels sit in the neighbours
   std::vector<float> error_observed, error_noise_free;  // over the whole frame, or on the grid
 };
 

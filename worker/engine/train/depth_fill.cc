@@ -1,10 +1,11 @@
 #include "worker/engine/train/depth_fill.h"
 
-#include <cmath>
+#include <algorithm>
 #include <opencv2/imgproc.hpp>
 #include <string>
 
 #include "common/error.h"
+#include "worker/engine/train/losses.h"
 
 namespace endorecon::train {
 
@@ -21,7 +22,7 @@ FilledDepth FillDepthHoles(std::span<const float> depth, std::span<const std::ui
   out.depth.assign(depth.begin(), depth.end());
   cv::Mat measured(height, width, CV_32F), weighted(height, width, CV_32F);
   for (std::size_t p = 0; p < n; ++p) {
-    const bool known = std::isfinite(depth[p]) && depth[p] > 0;
+    const bool known = HasDepthPrior(depth[p]);
     measured.at<float>(int(p)) = known ? 1.0f : 0.0f;
     weighted.at<float>(int(p)) = known ? depth[p] : 0.0f;
     if (!known) out.depth[p] = 0.0f;

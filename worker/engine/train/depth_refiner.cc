@@ -12,7 +12,10 @@
 namespace endorecon::train {
 
 DepthRefiner::DepthRefiner(const scene::Clip& clip, std::vector<int> frames, double fill_sigma)
-    : clip_(clip), frames_(std::move(frames)), refined_(std::size_t(clip.frame_count())) {
+    : clip_(clip),
+      frames_(std::move(frames)),
+      refined_(std::size_t(clip.frame_count())),
+      filled_frames_(std::size_t(clip.frame_count())) {
   if (!(fill_sigma > 0) || !clip.has_depth()) return;
   for (int f : frames_) {
     FilledDepth filled =
@@ -22,7 +25,7 @@ DepthRefiner::DepthRefiner(const scene::Clip& clip, std::vector<int> frames, dou
                        clip.width, clip.height, fill_sigma);
     filled_ += filled.filled;
     left_ += filled.left;
-    if (filled.filled > 0) refined_[std::size_t(f)] = std::move(filled.depth);
+    if (filled.filled > 0) filled_frames_[std::size_t(f)] = std::move(filled.depth);
   }
 }
 
@@ -39,7 +42,7 @@ DepthRefineStats DepthRefiner::Refine(render::FrameRenderer& renderer, float fra
     const int f = frames_[next_];
     next_ = (next_ + 1) % frames_.size();
     auto& prior = refined_[std::size_t(f)];
-    if (prior.empty()) prior = clip_.depth[std::size_t(f)];
+    if (prior.empty()) prior = Unrefined(f);
     measured.clear();
     for (std::size_t p = 0; p < pixels; ++p) {
       const bool tool = clip_.has_masks() && clip_.tool_mask[std::size_t(f)][p] != 0;

@@ -35,17 +35,14 @@ class DepthRefiner {
   std::size_t filled() const { return filled_; }
   std::size_t left() const { return left_; }
 
-  // The current prior of a pixel: the clip's until its frame is first refined. 0 = unknown.
-  float Prior(int frame, int pixel) const {
-    const auto& refined = refined_[std::size_t(frame)];
-    return refined.empty() ? clip_.depth[std::size_t(frame)][std::size_t(pixel)]
-                           : refined[std::size_t(pixel)];
-  }
+  // The current prior of a pixel: the clip's (its holes filled) until its frame is first refined.
+  // 0 = unknown.
+  float Prior(int frame, int pixel) const { return PriorFrame(frame)[std::size_t(pixel)]; }
 
   // The current priors of a whole frame (H x W), as Prior reads them; valid until the next round or Load.
   const float* PriorFrame(int frame) const {
     const auto& refined = refined_[std::size_t(frame)];
-    return refined.empty() ? clip_.depth[std::size_t(frame)].data() : refined.data();
+    return refined.empty() ? Unrefined(frame).data() : refined.data();
   }
 
   // One round; fraction in (0, 1], ema in (0, 1]. No-op without depth. A round refines the training
@@ -64,7 +61,17 @@ class DepthRefiner {
  private:
   const scene::Clip& clip_;
   std::vector<int> frames_;
+  // The prior a frame starts from: the clip's, or its filled copy.
+  const std::vector<float>& Unrefined(int frame) const {
+    const auto& filled = filled_frames_[std::size_t(frame)];
+    return filled.empty() ? clip_.depth[std::size_t(frame)] : filled;
+  }
+
   std::vector<std::vector<float>> refined_;  // per frame of the clip; empty until that frame is refined
+  // Per frame of the clip, the prior with its holes filled; empty where nothing was filled. Derived
+  // from the clip and fill_sigma when the refiner is made, so not in the checkpoint (every training
+  // frame's prior in every checkpoint would be 1.3 MB a frame at 640 x 512).
+  std::vector<std::vector<float>> filled_frames_;
   int rounds_ = 0;
   std::size_t filled_ = 0, left_ = 0;
   std::size_t next_ = 0;  // index into frames_ of the frame the next round starts with

@@ -260,9 +260,9 @@ FlowStart FitDeformationToFlow(const scene::Clip& clip, const std::vector<int>& 
   // The medium preset stops at half the flow image's resolution (finest scale 1). Going on to full
   // resolution halves the start's error against a synthetic clip's true motion and gains the
   // real-texture clip 0.17-0.36 dB; it cost the demo clip's held-out depth at 300 s (a floater at a
-  // highlight) until the depth prior's holes were filled (depth_fill.h), and with the fill its demo
-  // runs ranked the model map lower (0.49, 0.53 against 0.56-0.57): not switched until more runs tell
-  // (docs/benchmarks.md, "DIS down to the finest scale", "Holes in the depth prior filled").
+  // highlight) until the depth prior's holes were filled (depth_fill.h); with the fill, four demo runs
+  // at 300 s scored 0.03-0.09 dB lower held out with depth 0.0053-0.0061 against 0.0051-0.0054, so it
+  // stays (docs/benchmarks.md, "DIS down to the finest scale", "Holes in the depth prior filled").
   cv::Ptr<cv::DISOpticalFlow> dis = cv::DISOpticalFlow::create(cv::DISOpticalFlow::PRESET_MEDIUM);
   for (int f : order) {
     if (f == ref) continue;
