@@ -261,6 +261,10 @@ TEST(TrainConfigTest, BadValuesAreRejected) {
   EXPECT_THROW(ApplyJson(nlohmann::json{{"depth_loss", "l3"}}, config), Error);
   EXPECT_THROW(ApplyJson(nlohmann::json{{"background", "grey"}}, config), Error);
   EXPECT_THROW(ApplyJson(nlohmann::json{{"rays_per_batch", 0}}, config), Error);
+  for (const auto& bad : {nlohmann::json(-1), nlohmann::json(51), nlohmann::json("wide")}) {
+    TrainConfig fresh;
+    EXPECT_THROW(ApplyJson(nlohmann::json{{"depth_fill_sigma", bad}}, fresh), Error) << bad.dump();
+  }
   // The field's checks of its times, through a configuration, name the key and the configuration
   // (train_config_fuzz's contract; found by its replay).
   for (const auto& [key, bad] : {std::pair{"trained_times", nlohmann::json{0.8, 0.2}},
