@@ -3,6 +3,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <array>
@@ -212,12 +213,18 @@ struct FieldT<S>::Impl {
 
   // fn(q, rows, view) over the segments of kTaskRows rows of a batch of n, in parallel, each with its
   // thread's activations (the split depends on n only: results do not depend on the thread count).
+  // A segment runs nested parallel loops (the blend's tiles); a thread waiting for them may be handed
+  // other work, and were that another segment it would take the same thread's activations and
+  // overwrite the waiting segment's (whole segments came out wrong on a 16-core machine). Isolation
+  // keeps the waiting thread to its own segment's nested work.
   template <typename Fn>
   void ForSegments(int n, Fn&& fn) {
     ParallelTasks(n, kTaskRows, [&](int, int row0, int rows) {
-      Acts& a = segments.local();
-      Size(a, kTaskRows);
-      fn(static_cast<std::size_t>(row0), rows, ViewAt(a, 0));
+      tbb::this_task_arena::isolate([&] {
+        Acts& a = segments.local();
+        Size(a, kTaskRows);
+        fn(static_cast<std::size_t>(row0), rows, ViewAt(a, 0));
+      });
     });
   }
 };
