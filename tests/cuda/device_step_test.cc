@@ -1,22 +1,25 @@
 // A whole training step on the GPU against the CPU's with the same seed (the same rays, samples and
-// masks: the per-ray bodies and the field's per-sample math are the same functions), the same with a
-// learned background on an object capture, the occupancy grid from the GPU's densities, a GPU run resumed on the CPU from
-// its checkpoint, and 300 GPU steps fitting held-out frames as well as 300 CPU steps (the GPU's float
-// atomics add in another order: the runs drift apart, the fit must not).
-// The clip is made in memory (no image files: this binary travels to bare GPU machines,
-// scripts/gpu-check). Skipped without a GPU.
+// masks: the per-ray bodies and the field's per-sample math are the same functions): the same loss and
+// every block's gradient, and the same parameters after three Adam updates; the same with a
+// learned background on an object capture, the occupancy grid from the GPU's densities, a GPU run resumed on
+// the CPU from its checkpoint, and 300 GPU steps fitting held-out frames as well as 300 CPU steps (the GPU's
+// float atomics add in another order: the runs drift apart, the fit must not). The clip is made in memory (no
+// image files: this binary travels to bare GPU machines, scripts/gpu-check). Skipped without a GPU.
 #include "worker/engine/cuda/device_step.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdio>
+#include <memory>
 #include <sstream>
 #include <vector>
 
 #include "tests/cuda/field_difference.h"
 #include "tests/cuda/small_clip.h"
 #include "worker/engine/cuda/device.h"
+#include "worker/engine/cuda/device_field.h"
+#include "worker/engine/cuda/shared_fields.h"
 #include "worker/engine/eval/curve_probe.h"
 #include "worker/engine/render/frame_renderer.h"
 #include "worker/engine/scene/synthetic_object.h"
@@ -47,20 +50,48 @@ class DeviceStepTest : public ::testing::Test {
   train::TrainConfig config_;
 };
 
+// Every block's gradient after one step from the same parameters agrees to 1e-3 of the block's
+// largest gradient (float rounding: the GPU's atomics add in another order).
+void ExpectSameGradients(const field::Field& cpu, DeviceField& gpu) {
+  const auto host = cpu.Blocks();
+  const auto device = gpu.Blocks();
+  ASSERT_EQ(host.size(), device.size());
+  for (std::size_t k = 0; k < host.size(); ++k) {
+    std::vector<float> g(device[k].size);
+    CopyToHost(g.data(), device[k].grad, g.size() * sizeof(float));
+    const BlockDifference d = Difference(host[k].name, g.data(), host[k].grad, host[k].size, 1e-3);
+    EXPECT_LT(d.relative, 1e-3) << "gradient of " << d.name;
+  }
+}
+
+// The parameters after a few steps agree to 1e-3 of each block's largest value, but for at most one
+// value in a thousand: Adam's first updates are lr * sign(gradient) for any gradient above its eps
+// (1e-10), so a value whose gradient is at rounding level (a table slot whose samples' contributions
+// cancel) moves by lr one way on the CPU and may move the other way on the GPU. Measured on an H200:
+// 44 of 491,488 grid values, 1 of 294,880 with a learned background; every other block within 3e-5.
+void ExpectSameParameters(const field::Field& gpu, const field::Field& cpu) {
+  for (const BlockDifference& d : Differences(gpu, cpu, 1e-3)) {
+    EXPECT_LE(d.off, d.size / 1000) << d.name << ": " << d.off << " of " << d.size
+                                    << " values differ by more than 1e-3 of the block's largest";
+  }
+}
+
 TEST_F(DeviceStepTest, AStepOnTheGpuIsTheCpuStep) {
+  const auto shared = std::make_shared<SharedFields>();
   train::Trainer cpu(clip_, config_, Frames(), 11);
-  train::Trainer gpu(clip_, config_, Frames(), 11, DeviceStepFactory(0));
+  train::Trainer gpu(clip_, config_, Frames(), 11, DeviceStepFactory(0, shared));
   EXPECT_EQ(cpu.device(), "cpu");
   EXPECT_EQ(gpu.device().rfind("cuda:0", 0), 0u);
+  const std::shared_ptr<DeviceField> device = shared->For(gpu.field());  // the steps' copy
   for (int i = 0; i < 3; ++i) {
     const train::StepStats a = cpu.Step(0.01 * i);
     const train::StepStats b = gpu.Step(0.01 * i);
     EXPECT_NEAR(b.loss, a.loss, 1e-4 * std::fabs(a.loss)) << "step " << i;
     EXPECT_EQ(b.samples, a.samples);
+    if (i == 0) ExpectSameGradients(cpu.field(), *device);
   }
   gpu.SyncField();
-  // Three Adam updates from gradients that agree to float rounding.
-  EXPECT_LT(MaxRelative(gpu.field(), cpu.field()), 1e-3);
+  ExpectSameParameters(gpu.field(), cpu.field());
 }
 
 // An object in front of a backdrop with a learned background (the rays cut to the object's box; the
@@ -78,16 +109,19 @@ TEST_F(DeviceStepTest, ALearnedBackgroundStepOnTheGpuIsTheCpuStep) {
   train::FitToScene(clip, config);
   ASSERT_TRUE(config.field.learned_background);
   const std::vector<int> frames = {0, 1, 2, 3, 4, 5};
+  const auto shared = std::make_shared<SharedFields>();
   train::Trainer cpu(clip, config, frames, 11);
-  train::Trainer gpu(clip, config, frames, 11, DeviceStepFactory(0));
+  train::Trainer gpu(clip, config, frames, 11, DeviceStepFactory(0, shared));
+  const std::shared_ptr<DeviceField> device = shared->For(gpu.field());
   for (int i = 0; i < 3; ++i) {
     const train::StepStats a = cpu.Step(0.01 * i);
     const train::StepStats b = gpu.Step(0.01 * i);
     EXPECT_NEAR(b.loss, a.loss, 1e-4 * std::fabs(a.loss)) << "step " << i;
+    if (i == 0) ExpectSameGradients(cpu.field(), *device);
   }
   gpu.SyncField();
   ASSERT_EQ(cpu.field().Blocks().back().name, "background");
-  EXPECT_LT(MaxRelative(gpu.field(), cpu.field()), 1e-3);
+  ExpectSameParameters(gpu.field(), cpu.field());
 }
 
 // The occupancy grid rebuilt from the GPU's densities (points up, densities down) is the grid the same
@@ -104,6 +138,8 @@ TEST_F(DeviceStepTest, TheOccupancyGridFromTheGpusDensitiesIsTheHosts) {
   const std::size_t cells = std::size_t(host.resolution()) * host.resolution() * host.resolution();
   std::size_t differ = 0;
   for (std::size_t i = 0; i < cells; ++i) differ += device.cells()[i] != host.cells()[i];
+  std::printf("gpu-check: occupancy grid: host %.4f, device %.4f of the cells occupied, %zu of %zu differ\n",
+              host.occupied_fraction(), device.occupied_fraction(), differ, cells);
   EXPECT_LE(differ, cells / 1000) << "cells whose density sits at the threshold may differ by rounding";
 }
 

@@ -1,27 +1,46 @@
-// How far two fields' parameters are apart, for the GPU tests that compare a GPU run with the CPU's.
+// How far two fields' parameters (or gradients) are apart, for the GPU tests that compare a GPU run
+// with the CPU's.
 #pragma once
 
 #include <cmath>
+#include <string>
+#include <vector>
 
 #include "worker/engine/field/field.h"
 
 namespace endorecon::cuda {
 
-// The largest difference of a parameter block's values, relative to that block's largest magnitude
-// (at least 1e-3), over all blocks.
-inline double MaxRelative(const field::Field& a, const field::Field& b) {
-  double worst = 0;
+// The largest difference of a block's values, relative to the block's largest magnitude (at least
+// 1e-3), and how many values differ by more than `tolerance` of that scale.
+struct BlockDifference {
+  std::string name;
+  double relative = 0;
+  std::size_t off = 0, size = 0;
+};
+
+inline BlockDifference Difference(const std::string& name, const float* a, const float* b, std::size_t n,
+                                  double tolerance) {
+  double diff = 0, scale = 1e-3;
+  for (std::size_t i = 0; i < n; ++i) scale = std::fmax(scale, std::fabs(double(b[i])));
+  BlockDifference d{name, 0, 0, n};
+  for (std::size_t i = 0; i < n; ++i) {
+    const double e = std::fabs(double(a[i]) - b[i]);
+    diff = std::fmax(diff, e);
+    d.off += e > tolerance * scale;
+  }
+  d.relative = diff / scale;
+  return d;
+}
+
+// Block by block, the values of two host fields.
+inline std::vector<BlockDifference> Differences(const field::Field& a, const field::Field& b,
+                                                double tolerance) {
+  std::vector<BlockDifference> out;
   const auto ab = a.Blocks();
   const auto bb = b.Blocks();
-  for (std::size_t k = 0; k < ab.size(); ++k) {
-    double diff = 0, scale = 1e-3;
-    for (std::size_t i = 0; i < ab[k].size; ++i) {
-      diff = std::fmax(diff, std::fabs(double(ab[k].value[i]) - bb[k].value[i]));
-      scale = std::fmax(scale, std::fabs(double(bb[k].value[i])));
-    }
-    worst = std::fmax(worst, diff / scale);
-  }
-  return worst;
+  for (std::size_t k = 0; k < ab.size(); ++k)
+    out.push_back(Difference(ab[k].name, ab[k].value, bb[k].value, ab[k].size, tolerance));
+  return out;
 }
 
 }  // namespace endorecon::cuda

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <random>
 #include <vector>
 
@@ -182,7 +183,8 @@ std::vector<float> Flatten(const std::vector<Composite>& rays) {
 
 TEST_F(CudaKernelsTest, CompositeForwardAndBackwardMatchTheCpu) {
   const int rays = 400, samples = 48;
-  const float min_transmittance = 1e-3f;  // some rays stop early
+  // Most rays stop early (their optical depth over [1, 3] is about 5.5 +- 0.5), a few do not.
+  const float min_transmittance = 1e-2f;
   const RayBatch b = RandomRays(rays, samples);
   const std::size_t n = b.sigma.size();
   std::vector<CompositeGrad> grad(rays);
@@ -207,7 +209,9 @@ TEST_F(CudaKernelsTest, CompositeForwardAndBackwardMatchTheCpu) {
   }
   int stopped = 0;
   for (const Composite& c : out) stopped += c.samples_used < samples;
+  std::printf("gpu-check: composite: %d of %d rays stopped early\n", stopped, rays);
   ASSERT_GT(stopped, 0) << "no ray terminated early; the test would not cover it";
+  ASSERT_LT(stopped, rays) << "every ray terminated early; the test would not cover the others";
 
   DeviceArray<float> dev_sigma(b.sigma), dev_rgb(b.rgb), dev_s(b.s), dev_delta(b.delta), dev_weights(n),
       dev_d_weights(d_weights), dev_d_sigma(n), dev_d_rgb(3 * n);
