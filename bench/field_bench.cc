@@ -157,7 +157,7 @@ double HeadsGflops(const field::FieldConfig& config, int feature_dim, double sec
   const std::size_t n = kBatch;
   std::mt19937 gen(3);
   std::uniform_real_distribution<float> u(-1.0f, 1.0f);
-  std::vector<float> feat(n * feature_dim), dir(3 * n, 0.57735f), d(3 * n);
+  std::vector<float> feat(n * feature_dim), dir(3 * n, 0.57735f), time(n, 0.5f), d(3 * n);
   for (float& x : feat) x = u(gen);
   for (float& x : d) x = u(gen);
   std::vector<std::vector<float>> dh(density.mlp().hidden_layers()), ch(color.mlp().hidden_layers());
@@ -177,9 +177,9 @@ double HeadsGflops(const field::FieldConfig& config, int feature_dim, double sec
   auto run = [&] {
     density.Forward(pd.data(), {kBatch, feat.data()}, {dhp.data(), draw.data(), sigma.data(), slv.data()},
                     drop);
-    color.Forward(pc.data(), {kBatch, draw.data() + 2, density.raw_dim(), dir.data()},
+    color.Forward(pc.data(), {kBatch, draw.data() + 2, density.raw_dim(), dir.data(), time.data()},
                   {in.data(), chp.data(), craw.data(), rgb.data(), clv.data()}, drop);
-    color.Backward(pc.data(), {kBatch, draw.data() + 2, density.raw_dim(), dir.data()},
+    color.Backward(pc.data(), {kBatch, draw.data() + 2, density.raw_dim(), dir.data(), time.data()},
                    {in.data(), chp.data(), craw.data(), rgb.data(), clv.data()}, {d.data(), d.data()},
                    gc.data(), {dgeo.data()}, drop);
     density.Backward(pd.data(), {kBatch, feat.data()}, {dhp.data(), draw.data(), sigma.data(), slv.data()},
