@@ -9,6 +9,7 @@
 #include <random>
 #include <vector>
 
+#include "tests/cuda/field_difference.h"
 #include "worker/engine/cuda/device.h"
 #include "worker/engine/cuda/device_adam.h"
 #include "worker/engine/train/adam.h"
@@ -29,16 +30,6 @@ field::FieldConfig Config(bool deformation) {
   c.deformation.enabled = deformation;
   c.exposure_times = {0.1f, 0.3f, 0.5f, 0.7f, 0.9f};  // the exposure's kernels too
   return c;
-}
-
-// The relative difference of two arrays: max |a - b| / max(1e-3, max |b|).
-double RelativeError(const std::vector<float>& gpu, const std::vector<float>& cpu) {
-  double diff = 0, scale = 1e-3;
-  for (std::size_t i = 0; i < cpu.size(); ++i) {
-    diff = std::fmax(diff, std::fabs(double(gpu[i]) - cpu[i]));
-    scale = std::fmax(scale, std::fabs(double(cpu[i])));
-  }
-  return diff / scale;
 }
 
 struct Samples {
@@ -86,18 +77,10 @@ TEST_P(DeviceFieldTest, OutputsAndEveryGradientMatchTheCpuField) {
   device.ZeroGrad();
   device.Backward(g_batch, {d_sigma.data(), nullptr, d_rgb.data(), d_rgb_lv.data()});
   Synchronize();
-  EXPECT_LT(RelativeError(g_sigma.Download(), sigma), 1e-4) << "densities";
-  EXPECT_LT(RelativeError(g_rgb.Download(), rgb), 1e-4) << "colours";
-  EXPECT_LT(RelativeError(g_rgb_lv.Download(), rgb_lv), 1e-4) << "colour log-variances";
-  const auto host_blocks = host.Blocks();
-  const auto device_blocks = device.Blocks();
-  ASSERT_EQ(host_blocks.size(), device_blocks.size());
-  for (std::size_t k = 0; k < host_blocks.size(); ++k) {
-    std::vector<float> g(device_blocks[k].size);
-    CopyToHost(g.data(), device_blocks[k].grad, g.size() * sizeof(float));
-    const std::vector<float> cpu(host_blocks[k].grad, host_blocks[k].grad + host_blocks[k].size);
-    EXPECT_LT(RelativeError(g, cpu), 1e-3) << "gradient of " << host_blocks[k].name;
-  }
+  EXPECT_LT(RelativeDifference(g_sigma.Download(), sigma), 1e-4) << "densities";
+  EXPECT_LT(RelativeDifference(g_rgb.Download(), rgb), 1e-4) << "colours";
+  EXPECT_LT(RelativeDifference(g_rgb_lv.Download(), rgb_lv), 1e-4) << "colour log-variances";
+  ExpectSameGradients(host, device);
 }
 
 TEST_P(DeviceFieldTest, DecodeOfEncodeIsInferAndParametersMoveBothWays) {
@@ -151,7 +134,7 @@ TEST_P(DeviceFieldTest, AdamStepMatchesTheCpuOptimiser) {
   for (std::size_t k = 0; k < hb.size(); ++k) {
     std::vector<float> v(db[k].size);
     CopyToHost(v.data(), db[k].value, v.size() * sizeof(float));
-    EXPECT_LT(RelativeError(v, std::vector<float>(hb[k].value, hb[k].value + hb[k].size)), 1e-5)
+    EXPECT_LT(RelativeDifference(v, std::vector<float>(hb[k].value, hb[k].value + hb[k].size)), 1e-5)
         << hb[k].name;
   }
   // A non-finite gradient is refused before any update, naming its block.

@@ -18,7 +18,6 @@
 #include "tests/cuda/field_difference.h"
 #include "tests/cuda/small_clip.h"
 #include "worker/engine/cuda/device.h"
-#include "worker/engine/cuda/device_field.h"
 #include "worker/engine/cuda/shared_fields.h"
 #include "worker/engine/eval/curve_probe.h"
 #include "worker/engine/render/frame_renderer.h"
@@ -49,20 +48,6 @@ class DeviceStepTest : public ::testing::Test {
   scene::Clip clip_;
   train::TrainConfig config_;
 };
-
-// Every block's gradient after one step from the same parameters agrees to 1e-3 of the block's
-// largest gradient (float rounding: the GPU's atomics add in another order).
-void ExpectSameGradients(const field::Field& cpu, DeviceField& gpu) {
-  const auto host = cpu.Blocks();
-  const auto device = gpu.Blocks();
-  ASSERT_EQ(host.size(), device.size());
-  for (std::size_t k = 0; k < host.size(); ++k) {
-    std::vector<float> g(device[k].size);
-    CopyToHost(g.data(), device[k].grad, g.size() * sizeof(float));
-    const BlockDifference d = Difference(host[k].name, g.data(), host[k].grad, host[k].size, 1e-3);
-    EXPECT_LT(d.relative, 1e-3) << "gradient of " << d.name;
-  }
-}
 
 // The parameters after a few steps agree to 1e-3 of each block's largest value, but for at most one
 // value in a thousand: Adam's first updates are lr * sign(gradient) for any gradient above its eps

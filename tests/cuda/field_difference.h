@@ -2,10 +2,14 @@
 // with the CPU's.
 #pragma once
 
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <string>
 #include <vector>
 
+#include "worker/engine/cuda/device.h"
+#include "worker/engine/cuda/device_field.h"
 #include "worker/engine/field/field.h"
 
 namespace endorecon::cuda {
@@ -32,6 +36,11 @@ inline BlockDifference Difference(const std::string& name, const float* a, const
   return d;
 }
 
+// The largest difference of two arrays relative to b's largest magnitude (at least 1e-3).
+inline double RelativeDifference(const std::vector<float>& a, const std::vector<float>& b) {
+  return Difference("", a.data(), b.data(), b.size(), 0).relative;
+}
+
 // Block by block, the values of two host fields.
 inline std::vector<BlockDifference> Differences(const field::Field& a, const field::Field& b,
                                                 double tolerance) {
@@ -41,6 +50,20 @@ inline std::vector<BlockDifference> Differences(const field::Field& a, const fie
   for (std::size_t k = 0; k < ab.size(); ++k)
     out.push_back(Difference(ab[k].name, ab[k].value, bb[k].value, ab[k].size, tolerance));
   return out;
+}
+
+// Every block's gradient on the device agrees with the host field's to 1e-3 of the block's largest
+// gradient (float rounding: the GPU's atomics add in another order).
+inline void ExpectSameGradients(const field::Field& cpu, DeviceField& gpu) {
+  const auto host = cpu.Blocks();
+  const auto device = gpu.Blocks();
+  ASSERT_EQ(host.size(), device.size());
+  for (std::size_t k = 0; k < host.size(); ++k) {
+    std::vector<float> g(device[k].size);
+    CopyToHost(g.data(), device[k].grad, g.size() * sizeof(float));
+    const BlockDifference d = Difference(host[k].name, g.data(), host[k].grad, host[k].size, 1e-3);
+    EXPECT_LT(d.relative, 1e-3) << "gradient of " << d.name;
+  }
 }
 
 }  // namespace endorecon::cuda
