@@ -1,7 +1,8 @@
 // gpu_train_bench: training on a GPU against the CPU, in the same run (issue 13 §6). The demo clip
 // (synth's defaults: 48 frames, 160 x 128, camera noise; every 8th frame held out) is made in memory
 // and trained with the cpu preset on --device for --seconds and on the CPU for --cpu-seconds (the
-// same work on both: their samples/s ratio), then with --preset (gpu by default, skipped when cpu) on
+// same work on both: their samples/s ratio), then with --preset (gpu by default; skipped when its
+// settings are the cpu preset's, as the gpu preset's are since 2026-12-04) on
 // --device for --seconds again (its time to the CPU's last PSNR is the issue's target); every
 // --probe-s seconds of training the held-out tissue PSNR is measured with the run's curve probe
 // (eval/curve_probe.h: every s-th pixel of up to 6 held-out frames, one dropout-off render on the
@@ -10,12 +11,21 @@
 // CPU's last PSNR. With --big-seconds S it then trains a 640 x 512, 160-frame clip (synth --seed 3)
 // with --preset on --device for S seconds and prints its curve. Nothing is read from or written to files: the
 // binary travels to bare GPU machines with scripts/gpu-check, whose DIR/run calls it.
+// Two sweeps for sizing, both optional: --override JSON (repeatable) trains --preset once per JSON
+// (train_config.h's ApplyJson keys, e.g. '{"rays_per_batch":4096}') instead of once as it is, and
+// --cpu-threads N (repeatable) runs the CPU curve once per thread count (0: every core; the last
+// one's PSNR is the target). --seconds 0 skips the demo clip's runs, --cpu-seconds 0 the CPU's; the
+// big clip is trained once per --override too.
 //   gpu_train_bench [--device cuda:0] [--preset gpu] [--seconds 30] [--cpu-seconds 90]
-//                   [--probe-s 5] [--big-seconds 0]
+//                   [--probe-s 5] [--big-seconds 0] [--override JSON]... [--cpu-threads N]...
+#include <tbb/global_control.h>
+
 #include <CLI/CLI.hpp>
 #include <chrono>
 #include <cstdio>
 #include <exception>
+#include <memory>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -46,9 +56,8 @@ struct Curve {
 };
 
 // Trains `clip` on `device` for `seconds` of steps, probing the held-out PSNR every `probe_s`.
-Curve Train(const scene::Clip& clip, const std::string& preset, const std::string& device, double seconds,
+Curve Train(const scene::Clip& clip, train::TrainConfig config, const std::string& device, double seconds,
             double probe_s) {
-  train::TrainConfig config = train::TrainConfig::Preset(preset);
   const FrameSplit split = SplitFrames(clip.frame_count(), 8);
   train::FitToScene(clip, config, split.train);
   const DeviceBackends backends = BackendsFor(device);
@@ -97,6 +106,8 @@ double TimeToReach(const Curve& curve, double psnr) {
 int main(int argc, char** argv) {
   std::string device = "cuda:0", preset = "gpu";
   double seconds = 30, cpu_seconds = 90, probe_s = 5, big_seconds = 0;
+  std::vector<std::string> overrides;
+  std::vector<int> cpu_threads = {0};
   CLI::App app{"gpu_train_bench: training on a GPU against the CPU, in the same run"};
   app.add_option("--device", device, "the GPU: cuda:N (cpu to try the bench without one)")
       ->capture_default_str();
@@ -110,28 +121,57 @@ int main(int argc, char** argv) {
       ->check(CLI::PositiveNumber);
   app.add_option("--big-seconds", big_seconds, "training seconds on the 640 x 512 x 160 clip (0: none)")
       ->capture_default_str();
+  app.add_option("--override", overrides, "train --preset once per JSON override (repeatable)");
+  app.add_option("--cpu-threads", cpu_threads, "run the CPU curve once per thread count (0: every core)")
+      ->check(CLI::NonNegativeNumber);
   CLI11_PARSE(app, argc, argv);
   try {
     BackendsFor(device);  // refuses a device that is not there before any clip is made
-    const scene::Clip demo = scene::MakeSyntheticClip(scene::SynthOptions{});
-    std::printf("gpu_train_bench: demo clip (48 frames, 160 x 128, noisy), preset cpu on both\n");
-    const Curve same = Train(demo, "cpu", device, seconds, probe_s);
-    const Curve cpu = Train(demo, "cpu", "cpu", cpu_seconds, probe_s);
-    const double target = cpu.points.back().psnr;
-    const auto report = [&](const Curve& gpu, const std::string& gpu_preset) {
-      const double reached = TimeToReach(gpu, target);
-      char when[32] = "(not reached)";
-      if (reached >= 0) std::snprintf(when, sizeof when, "%.1f s", reached);
-      std::printf(
-          "gpu_train_bench: %s preset %s %.3g samples/s, cpu preset cpu %.3g samples/s: %.1fx; the cpu's "
-          "%.2f dB after %.0f s reached on the gpu after %s\n",
-          gpu.device.c_str(), gpu_preset.c_str(), gpu.samples_per_second, cpu.samples_per_second,
-          gpu.samples_per_second / cpu.samples_per_second, target, cpu_seconds, when);
+    if (overrides.empty()) overrides.push_back("{}");
+    const auto variant = [&](const std::string& json) {
+      train::TrainConfig config = train::TrainConfig::Preset(preset);
+      train::ApplyJson(nlohmann::json::parse(json), config);
+      return config;
     };
-    report(same, "cpu");
-    if (preset != "cpu") {
-      std::printf("gpu_train_bench: demo clip, preset %s on %s\n", preset.c_str(), device.c_str());
-      report(Train(demo, preset, device, seconds, probe_s), preset);
+    if (seconds > 0) {
+      const scene::Clip demo = scene::MakeSyntheticClip(scene::SynthOptions{});
+      std::printf("gpu_train_bench: demo clip (48 frames, 160 x 128, noisy), preset cpu on both\n");
+      const train::TrainConfig cpu_preset = train::TrainConfig::Preset("cpu");
+      const Curve same = Train(demo, cpu_preset, device, seconds, probe_s);
+      Curve cpu;
+      for (const int threads : cpu_seconds > 0 ? cpu_threads : std::vector<int>{}) {
+        std::unique_ptr<tbb::global_control> limit;
+        if (threads > 0) {
+          limit =
+              std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, threads);
+        }
+        std::printf("gpu_train_bench: demo clip, preset cpu on the cpu, %s threads\n",
+                    threads > 0 ? std::to_string(threads).c_str() : "all");
+        cpu = Train(demo, cpu_preset, "cpu", cpu_seconds, probe_s);
+      }
+      const auto report = [&](const Curve& gpu, const std::string& gpu_preset) {
+        if (cpu.points.empty()) return;  // --cpu-seconds 0: nothing to compare with
+        const double target = cpu.points.back().psnr, reached = TimeToReach(gpu, target);
+        char when[32] = "(not reached)";
+        if (reached >= 0) std::snprintf(when, sizeof when, "%.1f s", reached);
+        std::printf(
+            "gpu_train_bench: %s preset %s %.3g samples/s, cpu preset cpu %.3g samples/s: %.1fx; the "
+            "cpu's %.2f dB after %.0f s reached on the gpu after %s\n",
+            gpu.device.c_str(), gpu_preset.c_str(), gpu.samples_per_second, cpu.samples_per_second,
+            gpu.samples_per_second / cpu.samples_per_second, target, cpu_seconds, when);
+      };
+      report(same, "cpu");
+      // A variant that is the cpu preset under another name (today's gpu preset) was trained above.
+      const auto settings = [](train::TrainConfig config) {
+        config.preset.clear();
+        return train::ToJson(config);
+      };
+      for (const std::string& json : overrides) {
+        if (settings(variant(json)) == settings(cpu_preset)) continue;
+        std::printf("gpu_train_bench: demo clip, preset %s %s on %s\n", preset.c_str(), json.c_str(),
+                    device.c_str());
+        report(Train(demo, variant(json), device, seconds, probe_s), preset + " " + json);
+      }
     }
     if (big_seconds > 0) {
       scene::SynthOptions big;
@@ -139,12 +179,16 @@ int main(int argc, char** argv) {
       big.width = 640;
       big.height = 512;
       big.seed = 3;
-      std::printf("gpu_train_bench: 640 x 512, 160 frames, preset %s\n", preset.c_str());
-      const Curve large = Train(scene::MakeSyntheticClip(big), preset, device, big_seconds, probe_s * 4);
-      std::printf("gpu_train_bench: big clip %.3g samples/s, held-out %.2f dB after %.0f s\n",
-                  large.samples_per_second, large.points.back().psnr, big_seconds);
+      const scene::Clip clip = scene::MakeSyntheticClip(big);
+      for (const std::string& json : overrides) {
+        std::printf("gpu_train_bench: 640 x 512, 160 frames, preset %s %s\n", preset.c_str(), json.c_str());
+        const Curve large = Train(clip, variant(json), device, big_seconds, probe_s * 4);
+        std::printf(
+            "gpu_train_bench: big clip, preset %s %s: %.3g samples/s, held-out %.2f dB after %.0f s\n",
+            preset.c_str(), json.c_str(), large.samples_per_second, large.points.back().psnr, big_seconds);
+      }
     }
-  } catch (const std::exception& e) {  // a device that is not there
+  } catch (const std::exception& e) {  // a device that is not there, an override that is not JSON
     std::fprintf(stderr, "gpu_train_bench: %s\n", e.what());
     return 1;
   }
