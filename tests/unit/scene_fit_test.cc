@@ -65,6 +65,42 @@ TEST(SceneFitTest, ExposureGainsOnlyWhereTheBrightnessChanges) {
   EXPECT_TRUE(config.field.exposure_times.empty());
 }
 
+TEST(SceneFitTest, TheUncertaintyMapIsCoarserWhereItsRefreshWouldCostTooMuch) {
+  const TrainConfig cpu = TrainConfig::Preset("cpu");
+  ASSERT_EQ(cpu.adaptive_map_stride, 4);
+  ASSERT_EQ(cpu.adaptive_refresh * cpu.rays_per_batch, 512000);
+  // The demo clip's 42 training frames of 160 x 128 keep the preset's stride: 53,760 cells.
+  EXPECT_EQ(UncertaintyMapStride(160, 128, 42, cpu), 4);
+  // 140 frames of 640 x 512: stride 26 would give 25 x 20 x 140 = 70,000 cells, over the 64,000
+  // a refresh may score; 27 gives 24 x 19 x 140 = 63,840.
+  EXPECT_EQ(UncertaintyMapStride(640, 512, 140, cpu), 27);
+  // A batch four times the size may score four times the cells (13 would give 280,000).
+  TrainConfig big_batch = cpu;
+  big_batch.rays_per_batch = 4096;
+  EXPECT_EQ(UncertaintyMapStride(640, 512, 140, big_batch), 14);
+  // A stride asked for above the fitted one is kept.
+  TrainConfig coarse = cpu;
+  coarse.adaptive_map_stride = 8;
+  EXPECT_EQ(UncertaintyMapStride(160, 128, 42, coarse), 8);
+  // A map of one cell per frame is as coarse as it gets.
+  EXPECT_EQ(UncertaintyMapStride(160, 128, 1000000, cpu), 160);
+
+  // FitToScene applies it to the training frames it is given, and only with guided rays on.
+  testing::TempDir dir("scene-fit");
+  const scene::Clip clip = FlickeringClip(dir, 0);  // 12 frames of 48 x 40
+  TrainConfig small = TrainConfig::Preset("cpu");
+  small.rays_per_batch = 64;
+  small.adaptive_refresh = 20;  // 160 cells: 6 frames of 48 x 40 take 5 x 4 x 6 = 120 at stride 10
+  FitToScene(clip, small, {0, 2, 4, 6, 8, 10});
+  EXPECT_EQ(small.adaptive_map_stride, 10);
+  TrainConfig unguided = TrainConfig::Preset("cpu");
+  unguided.rays_per_batch = 64;
+  unguided.adaptive_refresh = 20;
+  unguided.adaptive_sampling = false;
+  FitToScene(clip, unguided, {0, 2, 4, 6, 8, 10});
+  EXPECT_EQ(unguided.adaptive_map_stride, 4);
+}
+
 TEST(SceneFitTest, AStaticClipGetsNeitherADeformationNorTimeInTheColour) {
   testing::TempDir dir("scene-fit-static");
   scene::Clip clip = FlickeringClip(dir, 0);

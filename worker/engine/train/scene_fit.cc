@@ -74,6 +74,14 @@ void FitExposure(const scene::Clip& clip, TrainConfig& config, TrainingTimes tra
 
 }  // namespace
 
+int UncertaintyMapStride(int width, int height, int frames, const TrainConfig& config) {
+  const double probes = kMapProbeShare * config.adaptive_refresh * config.rays_per_batch;
+  int stride = std::max(1, config.adaptive_map_stride);
+  const auto cells = [&](int s) { return double((width + s - 1) / s) * ((height + s - 1) / s) * frames; };
+  while (cells(stride) > probes && stride < std::max(width, height)) ++stride;
+  return stride;
+}
+
 scene::Camera SceneFit::preview_camera(const scene::Camera& camera) const {
   const double k = std::min(1.0, double(preview_width) / camera.width);
   scene::Camera small = camera;
@@ -112,6 +120,10 @@ SceneFit FitToScene(const scene::Clip& clip, TrainConfig& config, std::vector<in
     }
   }
   TrainingTimes training = InTimeOrder(clip, std::move(train_frames));
+  if (config.adaptive_sampling && config.adaptive_ray_fraction > 0) {
+    config.adaptive_map_stride =
+        UncertaintyMapStride(clip.width, clip.height, int(training.frames.size()), config);
+  }
   // The times the field is trained at (field_config.h: it holds its state outside them).
   if (!training.times.empty()) config.field.trained_times = {training.times.front(), training.times.back()};
   FitExposure(clip, config, std::move(training), leave_out);
