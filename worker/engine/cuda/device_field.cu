@@ -9,6 +9,7 @@
 #include "worker/engine/cuda/device_mlp.h"
 #include "worker/engine/cuda/kernels.h"
 #include "worker/engine/cuda/launch.cuh"
+#include "worker/engine/cuda/step_phases.h"
 #include "worker/engine/field/background_math.h"
 #include "worker/engine/field/blend_math.h"
 #include "worker/engine/field/deformation_math.h"
@@ -50,7 +51,11 @@ struct DeviceField::Impl {
   DeviceArray<float> exposure_dprior;  // dL/d(prior) of a backward pass
   std::optional<DeviceMlp> blend_mlp;
   DeviceMlp density_mlp, color_mlp;
-  int geo, d;  // geometry features; encoder width D
+  int geo, d;                    // geometry features; encoder width D
+  StepPhases* phases = nullptr;  // SetPhases
+  void Mark(const char* phase) {
+    if (phases) phases->Mark(phase);
+  }
 
   // Activations of the last pass (Forward keeps them for Backward).
   Buffer x0, gfeat, blend_hidden, beta, feat, dens_raw, col_in, col_raw, rgb0, scratch;
@@ -128,6 +133,7 @@ struct DeviceField::Impl {
           },
           "deformation kernel");
       x = out;
+      Mark("deformation");
     }
     if (frequency) {
       const int frequencies = frequency->frequencies(), width = d;
@@ -144,6 +150,7 @@ struct DeviceField::Impl {
     blend_mlp->Forward(value("blend"), batch.time, n, blend_hidden_ptr.data(), b, field::DropoutPass{});
     ForEach(
         n, [=] __device__(std::size_t i) { field::SoftmaxInPlace(b + i * g, g); }, "softmax kernel");
+    Mark("blend mlp");
     const float* tables = value("grid");
     float* feats = gfeat.array.data();
     for (int k = 0; k < g; ++k) {
@@ -164,12 +171,14 @@ struct DeviceField::Impl {
             "padding kernel");
       }
     }
+    Mark("grids");
     ForEach(
         n,
         [=] __device__(std::size_t i) {
           field::BlendFeatures(b + i * g, feats + i * stride, g, width, out_feat + i * width);
         },
         "blend kernel");
+    Mark("blend");
   }
 
   // The heads from `in_feat` (n x D) into out.
@@ -179,6 +188,7 @@ struct DeviceField::Impl {
     const int time_frequencies = color.time_frequencies();
     float* draw = dens_raw.array.data();
     density_mlp.Forward(value("density"), in_feat, n, dens_hidden_ptr.data(), draw, pass);
+    Mark("density mlp");
     float *sigma = out.sigma, *sigma_lv = out.sigma_logvar, *rgb = out.rgb, *rgb_lv = out.rgb_logvar;
     if (!rgb) {  // the density alone (field.h)
       ForEach(
@@ -199,6 +209,7 @@ struct DeviceField::Impl {
         "density outputs kernel");
     float* craw = col_raw.array.data();
     color_mlp.Forward(value("color"), cin, n, col_hidden_ptr.data(), craw, pass);
+    Mark("colour mlp");
     if (!exposure) {
       ForEach(
           n, [=] __device__(std::size_t i) { field::ColorOutputs(craw + 4 * i, rgb + 3 * i, rgb_lv + i); },
@@ -266,6 +277,7 @@ struct DeviceField::Impl {
     float* dci = d_col_in.Reserve(rows * in_dim);
     color_mlp.Backward(value("color"), col_in.array.data(), n, col_hidden_ptr.data(), dcr, dci, grad("color"),
                        s, last_pass);
+    Mark("colour backward");
     // Density head, its geometry features' gradient taken from the colour head's input gradient.
     float* ddr = d_dens_raw.Reserve(rows * raw);
     const float* draw = dens_raw.array.data();
@@ -281,6 +293,7 @@ struct DeviceField::Impl {
     float* df = dfeat.Reserve(rows * width);
     density_mlp.Backward(value("density"), feat.array.data(), n, dens_hidden_ptr.data(), ddr, df,
                          grad("density"), s, last_pass);
+    Mark("density backward");
     // Encoder, then the deformation.
     float* dx = deform ? dx0.Reserve(rows * 3) : nullptr;
     const float* x = deform ? x0.array.data() : batch.pos;
@@ -317,6 +330,7 @@ struct DeviceField::Impl {
                             table_grads + offset, dx ? tables + offset : nullptr, dx, gc);
         }
       }
+      Mark("grids backward");
       float* dl = dlogits.Reserve(rows * gc);
       ForEach(
           n,
@@ -324,6 +338,7 @@ struct DeviceField::Impl {
           "softmax backward kernel");
       blend_mlp->Backward(value("blend"), batch.time, n, blend_hidden_ptr.data(), dl, nullptr, grad("blend"),
                           s, field::DropoutPass{});
+      Mark("blend backward");
     }
     if (deform) {
       const field::DeformationLayout layout = deform->layout();
@@ -335,6 +350,7 @@ struct DeviceField::Impl {
             field::DeformScatterSample(layout, pos + 3 * i, time[i], dx + 3 * i, grads, 0, AtomicAdd{});
           },
           "deformation backward kernel");
+      Mark("deformation backward");
     }
   }
 };
@@ -398,6 +414,8 @@ void DeviceField::Backward(const field::SampleBatch& batch, const field::FieldOu
   }
   impl_->Backward(batch, grad);
 }
+
+void DeviceField::SetPhases(StepPhases* phases) { impl_->phases = phases; }
 
 void DeviceField::BackgroundBackward(int n, const float* dir, const float* rgb, const float* drgb) {
   if (!host_.background())

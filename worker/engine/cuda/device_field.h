@@ -16,6 +16,8 @@
 
 namespace endorecon::cuda {
 
+class StepPhases;
+
 class DeviceField {
  public:
   // Allocates the device parameters and gradients and uploads the host field's values; `host` must
@@ -41,6 +43,8 @@ class DeviceField {
   // As field::Field's BackgroundBackward (the field must have a learned background).
   void BackgroundBackward(int n, const float* dir, const float* rgb, const float* drgb);
   void ZeroGrad();
+  // Marks the modules' phases of the passes that follow in `phases` (step_phases.h; nullptr: none).
+  void SetPhases(StepPhases* phases);
 
   // The device blocks (values and gradients), in the host field's order and names.
   std::vector<field::ParamBlock<float>> Blocks();

@@ -12,6 +12,7 @@
 #include "worker/engine/cuda/device_step.h"
 #include "worker/engine/cuda/launch.cuh"
 #include "worker/engine/cuda/shared_fields.h"
+#include "worker/engine/cuda/step_phases.h"
 #include "worker/engine/train/step_math.h"
 
 namespace endorecon::cuda {
@@ -105,10 +106,12 @@ class DeviceStep final : public train::StepBackend {
     const train::StepBatch b = batch_;
     const int guided = request.guided;
     const std::uint64_t seed = request.step_seed;
+    phases_.Start();
     ForEach(
         b.rays,
         [=] __device__(std::size_t r) { train::PlaceStepRay(t, b, static_cast<int>(r), guided, seed); },
         "ray placement kernel");
+    phases_.Mark("place");
     if (guided > 0) {
       ForEach(
           guided, [=] __device__(std::size_t r) { train::PlaceProbes(t, b, static_cast<int>(r), seed); },
@@ -119,11 +122,14 @@ class DeviceStep final : public train::StepBackend {
       ForEach(
           guided, [=] __device__(std::size_t r) { train::ReallocateRay(t, b, static_cast<int>(r), seed); },
           "reallocation kernel");
+      phases_.Mark("guided");
     }
     const int n = b.rays * b.samples;
     const field::SampleBatch in{n, b.pos, b.time, b.dir};
     field::FieldOutput out{b.sigma, b.sigma_logvar, b.rgb, b.rgb_logvar};
+    field_->SetPhases(&phases_);  // the modules' phases of this forward and backward
     field_->Forward(in, out, /*dropout=*/true, request.dropout_seed);
+    phases_.Mark("outputs");
     sums_.Zero();
     double* sums = sums_.data();
     ForEach(
@@ -134,15 +140,22 @@ class DeviceStep final : public train::StepBackend {
           atomicAdd(sums + 1, ray.rgb_mse);
         },
         "ray loss kernel");
+    phases_.Mark("loss");
     const std::vector<double> host_sums = sums_.Download();
+    phases_.Mark("loss readback");
     if (!std::isfinite(host_sums[0])) {
       Fail(ErrorCode::kInternal, "training diverged: the loss is not finite at iteration " +
                                      std::to_string(request.iteration) + " (stage: loss, " + name_ + ")");
     }
     field_->ZeroGrad();
+    phases_.Mark("zero grad");
     field_->Backward(in, {b.d_sigma, nullptr, b.d_rgb, b.d_rgb_logvar});
+    field_->SetPhases(nullptr);
     if (t.background_params) field_->BackgroundBackward(b.rays, b.ray_dir, b.background, b.d_background);
+    phases_.Mark("background backward");
     const train::AdamStepReport report = adam_.Step(request.progress);
+    phases_.Mark("adam");
+    phases_.End();
     if (!report.finite) {
       Fail(ErrorCode::kInternal,
            "training diverged: a gradient is not finite (or its square overflows float) at iteration " +
@@ -257,6 +270,7 @@ class DeviceStep final : public train::StepBackend {
   train::StepTables device_;            // the same tables with device pointers
   std::shared_ptr<DeviceField> field_;  // perhaps shared with the run's renderers (shared_fields.h)
   DeviceAdam adam_;
+  StepPhases phases_;  // off unless ENDORECON_CUDA_STEP_PHASES=1
   DeviceFrames<std::uint8_t> rgb_, masks_;
   DeviceFrames<float> priors_;
   DeviceArray<float> occlusion_;
