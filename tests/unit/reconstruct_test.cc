@@ -202,5 +202,37 @@ TEST(Reconstruct, ABudgetTooSmallForItsResultsSaysWhichWouldDo) {
   EXPECT_EQ(std::fmod(advised, 10.0), 0.0);
 }
 
+// A resume may change settings the uncertainty map's stride is fitted from (here the refresh
+// interval, which would make it 8); the map comes back from the checkpoint at the stride it was laid
+// out with (4), so the run resumes instead of failing on the map's cell count.
+TEST(Reconstruct, AResumeKeepsItsCheckpointsUncertaintyMapStride) {
+  testing::TempDir dir("reconstruct-resume-stride");
+  WriteSmallClip(dir / "clip");
+  ReconstructOptions first = SmallRunOptions(dir / "clip", dir / "first");
+  first.iterations = 20;
+  Reconstruct(first, {});
+  EXPECT_EQ(scene::ReadJsonFile(dir / "first" / "config.json").at("train").at("adaptive_map_stride"), 4);
+
+  ReconstructOptions resumed = SmallRunOptions(dir / "clip", dir / "resumed");
+  resumed.resume_from = (dir / "first" / "model" / "checkpoint.bin").string();
+  resumed.iterations = 30;
+  resumed.config = {{"adaptive_refresh", 5}};
+  ReconstructOptions fresh = resumed;
+  fresh.resume_from.clear();
+  fresh.out_dir = (dir / "fresh").string();
+  fresh.config = SmallRunConfig();
+  fresh.config["adaptive_refresh"] = 5;
+  fresh.iterations = 10;
+  Reconstruct(fresh, {});
+  EXPECT_EQ(scene::ReadJsonFile(dir / "fresh" / "config.json").at("train").at("adaptive_map_stride"), 8)
+      << "the test's premise: these settings fit another stride";
+
+  const ReconstructSummary summary = Reconstruct(resumed, {});
+  EXPECT_EQ(summary.iterations, 30);
+  const nlohmann::json config = scene::ReadJsonFile(dir / "resumed" / "config.json").at("train");
+  EXPECT_EQ(config.at("adaptive_map_stride"), 4);
+  EXPECT_EQ(config.at("adaptive_refresh"), 5);
+}
+
 }  // namespace
 }  // namespace endorecon

@@ -91,7 +91,12 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
     return loaded;
   }();
   const FrameSplit split = SplitFrames(clip.frame_count(), config.holdout);
+  // A resumed run keeps its checkpoint's uncertainty-map stride: the map's cells come back from the
+  // checkpoint, laid out by the stride its run fitted (or, before 2026-12-04, by none), and a refit
+  // with other settings (a resume may change them) would lay them out otherwise.
+  const int checkpoint_stride = config.adaptive_map_stride;
   const train::SceneFit fit = train::FitToScene(clip, config, split.train);
+  if (!options.resume_from.empty()) config.adaptive_map_stride = checkpoint_stride;
   const fs::path out_dir = options.out_dir;
   WriteFile(out_dir / "config.json", RunConfigJson(config, options, threads).dump(2), "run configuration");
 
