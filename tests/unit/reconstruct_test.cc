@@ -202,6 +202,21 @@ TEST(Reconstruct, ABudgetTooSmallForItsResultsSaysWhichWouldDo) {
   EXPECT_EQ(std::fmod(advised, 10.0), 0.0);
 }
 
+// Without a time budget evaluation still keeps to about a quarter of the run, but nothing is late:
+// the held-out frames are rendered in full however short the training was.
+TEST(Reconstruct, WithoutABudgetHeldOutFramesAreNeverReduced) {
+  testing::TempDir dir("reconstruct-no-budget");
+  WriteSmallClip(dir / "clip");
+  ReconstructOptions options = SmallRunOptions(dir / "clip", dir / "out");
+  options.iterations = 5;
+  options.config["mc_passes"] = 16;
+  Reconstruct(options, {});
+  const nlohmann::json evaluation = scene::ReadJsonFile(dir / "out" / "metrics.json").at("evaluation");
+  ASSERT_TRUE(evaluation.contains("reduced_frames")) << "the test's premise: evaluation was cut to its share";
+  EXPECT_FALSE(evaluation.contains("heldout_reduced")) << evaluation.dump();
+  EXPECT_EQ(evaluation.at("full_frames"), nlohmann::json({3, 7}));
+}
+
 // A resume may change settings the uncertainty map's stride is fitted from (here the refresh
 // interval, which would make it 8); the map comes back from the checkpoint at the stride it was laid
 // out with (4), so the run resumes instead of failing on the map's cell count.

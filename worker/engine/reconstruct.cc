@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <chrono>
 #include <filesystem>
+#include <limits>
 #include <thread>
 
 #include "common/file_write.h"
@@ -185,11 +186,14 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
       least_s = eval::LeastEvaluationSeconds(clip.frame_count(), split.heldout, pixels, cost);
       const double slack = options.time_budget_s > 0 ? kBudgetTolerance * options.time_budget_s : 0;
       what.plan = eval::PlanEvaluation(clip.frame_count(), split.heldout, pixels, cost, left);
-      if (what.plan.seconds > left + slack) {
+      // Only a deadline reduces held-out frames: without a budget nothing is late.
+      if (options.time_budget_s > 0 && what.plan.seconds > left + slack) {
         what.plan = eval::PlanEvaluation(clip.frame_count(), split.heldout, pixels, cost, left,
                                          eval::HeldOut::kMayReduce);
       }
-      what.heldout_slack_s = slack;
+      // Without a budget a held-out frame may always run over (FramePacer): the deadline above only
+      // keeps the training frames' renders to evaluation's share.
+      what.heldout_slack_s = options.time_budget_s > 0 ? slack : std::numeric_limits<double>::infinity();
       const auto reduced = std::count_if(split.heldout.begin(), split.heldout.end(), [&](int f) {
         return what.plan.at(f) == eval::FrameRender::kReduced;
       });
