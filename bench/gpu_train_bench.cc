@@ -62,6 +62,7 @@ Curve Train(const scene::Clip& clip, train::TrainConfig config, const std::strin
   train::FitToScene(clip, config, split.train);
   const DeviceBackends backends = BackendsFor(device);
   train::Trainer trainer(clip, config, split.train, /*seed=*/1, backends.step, backends.render);
+  trainer.StartDeformation();  // the flow start (host work, once a run) is not a training step
   render::FrameRenderer renderer(trainer.field(), trainer.box(),
                                  train::EvalRenderSettings(config, clip.near, clip.far), backends.render);
   renderer.SetOccupancy(&trainer.occupancy());
