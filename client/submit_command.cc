@@ -13,6 +13,7 @@
 #include "client/job_format.h"
 #include "client/job_watcher.h"
 #include "client/recording_upload.h"
+#include "common/dicom_file.h"
 #include "common/error.h"
 #include "common/file_upload.h"
 #include "common/grpc_status.h"
@@ -107,6 +108,16 @@ int Submit(const Globals& globals, const SubmitFlags& flags) {
         "or --top-bottom) or --pacs NAME --study UID: exactly one of them");
   }
   if (!flags.pacs.empty() && flags.study_uid.empty()) FailInvalid("--pacs needs --study UID");
+  // A single file goes up as a DICOM recording: one that is not (a video, say) is refused before its
+  // upload, not by the worker after it.
+  if (!flags.clip.empty() && std::filesystem::is_regular_file(flags.clip) && !dicom::HoldsDicom(flags.clip)) {
+    FailInvalid(
+        flags.clip +
+        ": a file that is not a DICOM recording (no \"DICM\" at byte 128, not named *.dcm): CLIP is a "
+        "clip folder (EndoNeRF or transforms.json layout) or a DICOM recording; a video becomes one "
+        "with `endorecon-worker to-dicom VIDEO -o recording.dcm`, and a stereo video can go as a raw "
+        "recording (--side-by-side VIDEO --calibration FILE)");
+  }
   if (flags.raw.empty() && !flags.raw.size.empty()) ParseFrameSize(flags.raw.size);  // before any upload
   // A raw recording is staged under canonical names (recording_upload.h); its folder is uploaded.
   std::optional<StagedRecording> staged;
@@ -195,7 +206,7 @@ Command AddSubmitCommand(CLI::App& app) {
       "with --dicom: the study the results join (default: a new study)");
   sub->add_option("--config", flags->config,
                   "JSON file overriding the preset (as endorecon-worker reconstruct)");
-  sub->add_option("--preset", flags->preset, "cpu or paper (default: the worker's, cpu)");
+  sub->add_option("--preset", flags->preset, "cpu, gpu or paper (default: the worker's, cpu)");
   sub->add_option("--iterations", flags->iterations, "training iterations (default: the preset's)");
   sub->add_option("--time-budget", flags->time_budget_s,
                   "seconds for the whole run on the worker: training, evaluation, writing (0: none)");

@@ -22,6 +22,7 @@
 #include <set>
 
 #include "common/dicom/dataset_access.h"
+#include "common/dicom_file.h"
 #include "common/error.h"
 
 namespace endorecon::dicom {
@@ -486,13 +487,6 @@ std::vector<cv::Mat> Split(std::vector<cv::Mat>& frames, StereoLayout layout, co
   return right;
 }
 
-bool HasDicomExtension(const fs::path& path) {
-  std::string extension = path.extension().string();
-  std::transform(extension.begin(), extension.end(), extension.begin(),
-                 [](unsigned char c) { return std::tolower(c); });
-  return extension == ".dcm";
-}
-
 // The DICOM files of `path` grouped by series, each series' instances in Instance Number order and
 // the series in Series Number order.
 std::vector<std::vector<Instance>> LoadSeries(const fs::path& path) {
@@ -602,24 +596,6 @@ FrameWindow ParseFrameWindow(const std::string& text) {
   if (window.step == 0) bad("STEP must be at least 1");
   if (window.end >= 0 && window.end <= window.start) bad("END must be greater than START");
   return window;
-}
-
-bool IsDicomFile(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  char magic[4] = {};
-  in.seekg(128);
-  return in.read(magic, 4) && std::string(magic, 4) == "DICM";
-}
-
-bool HoldsDicom(const fs::path& path) {
-  std::error_code error;
-  if (fs::is_regular_file(path, error)) return IsDicomFile(path) || HasDicomExtension(path);
-  if (!fs::is_directory(path, error)) return false;
-  for (const auto& entry : fs::directory_iterator(path, error)) {
-    if (entry.is_regular_file() && (IsDicomFile(entry.path()) || HasDicomExtension(entry.path())))
-      return true;
-  }
-  return false;
 }
 
 Recording ReadRecording(const fs::path& path, const RecordingOptions& options) {

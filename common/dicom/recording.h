@@ -66,10 +66,4 @@ struct Recording {
 // window too), a stereo layout the frames do not fit; kNotFound when `path` does not exist.
 Recording ReadRecording(const std::filesystem::path& path, const RecordingOptions& options);
 
-// True when `path` is a file that starts with a DICOM preamble ("DICM" at byte 128).
-bool IsDicomFile(const std::filesystem::path& path);
-// True when `path` is meant as a recording: a DICOM file or a file named *.dcm, or a folder with
-// one of those directly inside it (ReadRecording then says what is wrong with a file that is not DICOM).
-bool HoldsDicom(const std::filesystem::path& path);
-
 }  // namespace endorecon::dicom

@@ -1,6 +1,7 @@
-// Bad DICOM input is refused with what and where: at submit (an unknown PACS name, a malformed
-// Study UID, an endoscope that is neither moving nor fixed, a frame size that is not WxH, even) or when the
-// worker prepares the clip (a file that is not DICOM); nothing else is lost.
+// Bad DICOM input is refused with what and where: at submit (a file that is not a recording, an
+// unknown PACS name, a malformed Study UID, an endoscope that is neither moving nor fixed, a frame
+// size that is not WxH, even) or when the worker prepares the clip (a file named *.dcm that is not
+// DICOM); nothing else is lost.
 #include <gtest/gtest.h>
 
 #include "tests/integration/service_harness.h"
@@ -16,6 +17,14 @@ TEST(BadDicomInputTest, RefusedAtSubmitOrAtPreparation) {
   EXPECT_EQ(bad.exit_code, 5) << bad.out << bad.err;
   EXPECT_NE(bad.out.find("recording.dcm: not a DICOM file (no \"DICM\" at byte 128)"), std::string::npos)
       << bad.out;
+
+  // A file that is not a recording at all (a video) is refused by the CLI before anything is uploaded.
+  WriteBytes(cluster.path("endo.mp4"), std::string(1000, 'x'));
+  const auto video = RunCli(cluster.address(), {"submit", cluster.path("endo.mp4").string()});
+  EXPECT_EQ(video.exit_code, 2) << video.err;
+  EXPECT_NE(video.err.find("endo.mp4: a file that is not a DICOM recording"), std::string::npos) << video.err;
+  EXPECT_NE(video.err.find("endorecon-worker to-dicom VIDEO"), std::string::npos) << video.err;
+  EXPECT_EQ(video.err.find("uploaded"), std::string::npos) << video.err;
 
   const auto unknown = RunCli(cluster.address(), {"submit", "--pacs", "nowhere", "--study", "1.2.3"});
   EXPECT_EQ(unknown.exit_code, 3) << unknown.err;

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <fstream>
+
 #include "tests/unit/clip_fixture.h"
 #include "tests/unit/temp_dir.h"
 
@@ -26,6 +28,15 @@ TEST(ClipLoaderTest, MissingFolderIsNotFound) {
   TempDir dir("clip");
   const std::string message = ErrorFrom([&] { LoadClip(dir / "absent"); }, ErrorCode::kNotFound);
   EXPECT_NE(message.find("absent: clip folder does not exist"), std::string::npos) << message;
+}
+
+// A video given where a clip is expected (reconstruct reads DICOM recordings, not video files).
+TEST(ClipLoaderTest, AFileSaysWhatAClipIsAndHowAVideoBecomesOne) {
+  TempDir dir("clip");
+  std::ofstream(dir / "endo.mp4") << "not a clip";
+  const std::string message = ErrorFrom([&] { LoadClip(dir / "endo.mp4"); });
+  EXPECT_NE(message.find("endo.mp4: a file, not a clip"), std::string::npos) << message;
+  EXPECT_NE(message.find("to-dicom"), std::string::npos) << message;
 }
 
 TEST(ClipLoaderTest, FolderWithoutLayoutSaysWhatWasLookedFor) {

@@ -8,6 +8,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "common/dicom_file.h"
 #include "common/error.h"
 #include "common/file_write.h"
 #include "worker/engine/eval/exports.h"

@@ -47,7 +47,12 @@ void LoadGroundTruth(const fs::path& dir, const LoadOptions& options, Clip& clip
 
 Clip LoadClip(const fs::path& dir, const LoadOptions& options) {
   if (!fs::exists(dir)) Fail(ErrorCode::kNotFound, dir.string() + ": clip folder does not exist");
-  if (!fs::is_directory(dir)) FailInvalid(dir.string() + ": not a folder");
+  if (!fs::is_directory(dir)) {
+    FailInvalid(dir.string() +
+                ": a file, not a clip: a clip is a folder in the EndoNeRF or transforms.json layout, or a "
+                "DICOM recording (docs/formats.md); a video becomes a DICOM recording with `endorecon-worker "
+                "to-dicom VIDEO -o recording.dcm`");
+  }
   Clip clip;
   if (fs::exists(dir / "transforms.json")) {
     clip = LoadTransformsClip(dir, options);
