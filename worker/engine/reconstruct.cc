@@ -106,7 +106,10 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
   train::CheckpointExtras extras;
   if (!options.resume_from.empty()) {
     extras = train::ReadCheckpointState(options.resume_from, trainer);
-    spdlog::info("resumed from {} at iteration {}", options.resume_from, trainer.iteration());
+    // The budget is the job's: a job handed back and resumed keeps what it had left.
+    spdlog::info("resumed from {} at iteration {} after {:.1f} s of training{}", options.resume_from,
+                 trainer.iteration(), extras.train_seconds,
+                 options.time_budget_s > 0 ? ", which the time budget counts" : "");
   }
   trainer.StartDeformation();  // a resumed run's deformation is the checkpoint's: nothing to fit
   spdlog::info("clip {}: {} frames {}x{}, {} train / {} held out, {} threads, steps on {}; {}", clip.source,
