@@ -111,9 +111,10 @@ Command AddReconstructCommand(CLI::App& app) {
     };
     const ReconstructSummary summary = Reconstruct(*options, hooks);
     std::fprintf(stderr, "\n");
-    spdlog::info("{} {} iterations in {:.1f} s; training PSNR {:.2f} dB; held-out tissue PSNR {}",
+    // No training PSNR when this process ran no step (a resume whose budget was spent), as the CLI.
+    spdlog::info("{} {} iterations in {:.1f} s; training PSNR {}; held-out tissue PSNR {}",
                  summary.cancelled ? "stopped after" : "done:", summary.iterations, summary.train_seconds,
-                 summary.train_psnr,
+                 summary.train_psnr > 0 ? fmt::format("{:.2f} dB", summary.train_psnr) : "n/a",
                  summary.heldout_psnr >= 0 ? fmt::format("{:.2f} dB", summary.heldout_psnr) : "n/a");
     if (!summary.cancelled) WriteJobDicom(options->out_dir, from_dicom, *dicom);
     spdlog::info("results: {}  (metrics: {})", options->out_dir, summary.metrics_path);
