@@ -128,12 +128,14 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   try {
     BackendsFor(device);  // refuses a device that is not there before any clip is made
+    // The configs to sweep, each --preset with one override, made before anything trains: an override
+    // that is not JSON, or names no key, is refused at once.
     if (overrides.empty()) overrides.push_back("{}");
-    const auto variant = [&](const std::string& json) {
-      train::TrainConfig config = train::TrainConfig::Preset(preset);
-      train::ApplyJson(nlohmann::json::parse(json), config);
-      return config;
-    };
+    std::vector<train::TrainConfig> variants;
+    for (const std::string& json : overrides) {
+      variants.push_back(train::TrainConfig::Preset(preset));
+      train::ApplyJson(nlohmann::json::parse(json), variants.back());
+    }
     if (seconds > 0) {
       const scene::Clip demo = scene::MakeSyntheticClip(scene::SynthOptions{});
       std::printf("gpu_train_bench: demo clip (48 frames, 160 x 128, noisy), preset cpu on both\n");
@@ -167,11 +169,11 @@ int main(int argc, char** argv) {
         config.preset.clear();
         return train::ToJson(config);
       };
-      for (const std::string& json : overrides) {
-        if (settings(variant(json)) == settings(cpu_preset)) continue;
-        std::printf("gpu_train_bench: demo clip, preset %s %s on %s\n", preset.c_str(), json.c_str(),
+      for (std::size_t v = 0; v < variants.size(); ++v) {
+        if (settings(variants[v]) == settings(cpu_preset)) continue;
+        std::printf("gpu_train_bench: demo clip, preset %s %s on %s\n", preset.c_str(), overrides[v].c_str(),
                     device.c_str());
-        report(Train(demo, variant(json), device, seconds, probe_s), preset + " " + json);
+        report(Train(demo, variants[v], device, seconds, probe_s), preset + " " + overrides[v]);
       }
     }
     if (big_seconds > 0) {
@@ -181,12 +183,13 @@ int main(int argc, char** argv) {
       big.height = 512;
       big.seed = 3;
       const scene::Clip clip = scene::MakeSyntheticClip(big);
-      for (const std::string& json : overrides) {
-        std::printf("gpu_train_bench: 640 x 512, 160 frames, preset %s %s\n", preset.c_str(), json.c_str());
-        const Curve large = Train(clip, variant(json), device, big_seconds, probe_s * 4);
+      for (std::size_t v = 0; v < variants.size(); ++v) {
+        const char* json = overrides[v].c_str();
+        std::printf("gpu_train_bench: 640 x 512, 160 frames, preset %s %s\n", preset.c_str(), json);
+        const Curve large = Train(clip, variants[v], device, big_seconds, probe_s * 4);
         std::printf(
             "gpu_train_bench: big clip, preset %s %s: %.3g samples/s, held-out %.2f dB after %.0f s\n",
-            preset.c_str(), json.c_str(), large.samples_per_second, large.points.back().psnr, big_seconds);
+            preset.c_str(), json, large.samples_per_second, large.points.back().psnr, big_seconds);
       }
     }
   } catch (const std::exception& e) {  // a device that is not there, an override that is not JSON

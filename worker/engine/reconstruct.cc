@@ -187,16 +187,16 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
       const double left = std::max(available - SecondsSince(start), 1e-3);
       const eval::RenderCost cost = MeasureCost();
       least_s = eval::LeastEvaluationSeconds(clip.frame_count(), split.heldout, pixels, cost);
-      const double slack = options.time_budget_s > 0 ? kBudgetTolerance * options.time_budget_s : 0;
+      // How far past `left` held-out frames may still run full: the budget's tolerance, or without a
+      // budget without limit (nothing is late; `left` only keeps the training frames to their share).
+      const double slack = options.time_budget_s > 0 ? kBudgetTolerance * options.time_budget_s
+                                                     : std::numeric_limits<double>::infinity();
       what.plan = eval::PlanEvaluation(clip.frame_count(), split.heldout, pixels, cost, left);
-      // Only a deadline reduces held-out frames: without a budget nothing is late.
-      if (options.time_budget_s > 0 && what.plan.seconds > left + slack) {
+      if (what.plan.seconds > left + slack) {
         what.plan = eval::PlanEvaluation(clip.frame_count(), split.heldout, pixels, cost, left,
                                          eval::HeldOut::kMayReduce);
       }
-      // Without a budget a held-out frame may always run over (FramePacer): the deadline above only
-      // keeps the training frames' renders to evaluation's share.
-      what.heldout_slack_s = options.time_budget_s > 0 ? slack : std::numeric_limits<double>::infinity();
+      what.heldout_slack_s = slack;
       const auto reduced = std::count_if(split.heldout.begin(), split.heldout.end(), [&](int f) {
         return what.plan.at(f) == eval::FrameRender::kReduced;
       });

@@ -37,6 +37,19 @@ struct DeviceFrames {
   }
 };
 
+// Marks the field's module phases in `phases` while it lives: the field may outlive the step (it can
+// be shared with the run's renderers), so it never keeps the pointer past a step, thrown or not.
+class FieldPhases {
+ public:
+  FieldPhases(DeviceField& field, StepPhases& phases) : field_(field) { field_.SetPhases(&phases); }
+  ~FieldPhases() { field_.SetPhases(nullptr); }
+  FieldPhases(const FieldPhases&) = delete;
+  FieldPhases& operator=(const FieldPhases&) = delete;
+
+ private:
+  DeviceField& field_;
+};
+
 template <typename T>
 DeviceArray<T> Copy(const T* host, std::size_t n) {
   DeviceArray<T> array(n);
@@ -127,7 +140,7 @@ class DeviceStep final : public train::StepBackend {
     const int n = b.rays * b.samples;
     const field::SampleBatch in{n, b.pos, b.time, b.dir};
     field::FieldOutput out{b.sigma, b.sigma_logvar, b.rgb, b.rgb_logvar};
-    field_->SetPhases(&phases_);  // the modules' phases of this forward and backward
+    const FieldPhases field_phases(*field_, phases_);  // the field's modules in this step's passes
     field_->Forward(in, out, /*dropout=*/true, request.dropout_seed);
     phases_.Mark("outputs");
     sums_.Zero();
@@ -150,7 +163,6 @@ class DeviceStep final : public train::StepBackend {
     field_->ZeroGrad();
     phases_.Mark("zero grad");
     field_->Backward(in, {b.d_sigma, nullptr, b.d_rgb, b.d_rgb_logvar});
-    field_->SetPhases(nullptr);
     if (t.background_params) field_->BackgroundBackward(b.rays, b.ray_dir, b.background, b.d_background);
     phases_.Mark("background backward");
     const train::AdamStepReport report = adam_.Step(request.progress);
