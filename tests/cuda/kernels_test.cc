@@ -24,6 +24,19 @@ namespace {
 using Composite = render::RayComposite<float>;
 using CompositeGrad = render::RayCompositeGrad<float>;
 
+// |a - b| <= tol * max(1, |b|), element by element, naming the first few that differ.
+void ExpectClose(const std::vector<float>& gpu, const std::vector<float>& cpu, float tol, const char* what) {
+  ASSERT_EQ(gpu.size(), cpu.size()) << what;
+  int bad = 0;
+  for (std::size_t i = 0; i < cpu.size() && bad < 5; ++i) {
+    const float bound = tol * std::fmax(1.0f, std::fabs(cpu[i]));
+    if (!(std::fabs(gpu[i] - cpu[i]) <= bound)) {
+      ADD_FAILURE() << what << "[" << i << "]: gpu " << gpu[i] << ", cpu " << cpu[i];
+      ++bad;
+    }
+  }
+}
+
 class CudaKernelsTest : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -54,21 +67,33 @@ class CudaKernelsTest : public ::testing::Test {
     return b;
   }
 
+  // The GPU's table and position gradients against the CPU grid's per-level scatter, for positions in
+  // `pos` (n x 3).
+  void ExpectGridBackwardMatchesTheCpu(const field::HashGrid<float>& grid, const std::vector<float>& pos,
+                                       bool position) {
+    const int n = static_cast<int>(pos.size() / 3), dim = grid.output_dim(), features = grid.features();
+    const std::vector<float> params = Uniform(grid.param_count(), -1.0f, 1.0f);
+    const std::vector<float> dfeat = Uniform(std::size_t(n) * dim, -1.0f, 1.0f);
+    const std::vector<float> scale = Uniform(n, 0.5f, 2.0f);
+    std::vector<float> grads(grid.param_count(), 0.0f), dpos(3 * std::size_t(n), 0.0f);
+    for (int l = 0; l < grid.levels(); ++l) {
+      grid.BackwardLevel(l, pos.data(), n, dfeat.data() + l * features, dim, scale.data(), grads.data(),
+                         position ? params.data() : nullptr, position ? dpos.data() : nullptr);
+    }
+    DeviceArray<float> d_params(params), d_pos(pos), d_dfeat(dfeat), d_scale(scale), d_grads(grads.size()),
+        d_dpos(dpos.size());
+    d_grads.Zero();
+    d_dpos.Zero();
+    HashGridBackward(grid, d_pos.data(), n, d_dfeat.data(), dim, d_scale.data(), 1, d_grads.data(),
+                     position ? d_params.data() : nullptr, position ? d_dpos.data() : nullptr);
+    Synchronize();
+    // Sums of many atomics: rounding grows with the number of samples per slot.
+    ExpectClose(d_grads.Download(), grads, 1e-4f, "table gradient");
+    if (position) ExpectClose(d_dpos.Download(), dpos, 1e-4f, "position gradient");
+  }
+
   std::mt19937 rng_{20240611};
 };
-
-// |a - b| <= tol * max(1, |b|), element by element, naming the first few that differ.
-void ExpectClose(const std::vector<float>& gpu, const std::vector<float>& cpu, float tol, const char* what) {
-  ASSERT_EQ(gpu.size(), cpu.size()) << what;
-  int bad = 0;
-  for (std::size_t i = 0; i < cpu.size() && bad < 5; ++i) {
-    const float bound = tol * std::fmax(1.0f, std::fabs(cpu[i]));
-    if (!(std::fabs(gpu[i] - cpu[i]) <= bound)) {
-      ADD_FAILURE() << what << "[" << i << "]: gpu " << gpu[i] << ", cpu " << cpu[i];
-      ++bad;
-    }
-  }
-}
 
 // Grids with dense and hashed levels, positions partly outside [0, 1]^3 (clamped).
 field::HashGridConfig GridConfig(int features) {
@@ -81,7 +106,7 @@ field::HashGridConfig GridConfig(int features) {
   return c;
 }
 
-TEST_F(CudaKernelsTest, HashLevelForwardMatchesTheCpuGrid) {
+TEST_F(CudaKernelsTest, HashGridForwardMatchesTheCpuGrid) {
   for (int features : {1, 2, 4, 8}) {
     const field::HashGrid<float> grid(GridConfig(features));
     ASSERT_TRUE(grid.level(0).dense && !grid.level(grid.levels() - 1).dense);
@@ -92,42 +117,39 @@ TEST_F(CudaKernelsTest, HashLevelForwardMatchesTheCpuGrid) {
     grid.ForwardRows(params.data(), pos.data(), n, cpu.data(), dim);
 
     DeviceArray<float> d_params(params), d_pos(pos), d_feat(cpu.size());
-    for (int l = 0; l < grid.levels(); ++l) {
-      HashLevelForward(grid.level(l), features, d_params.data() + grid.level(l).offset * features,
-                       d_pos.data(), n, d_feat.data() + l * features, dim);
-    }
+    HashGridForward(grid, d_params.data(), d_pos.data(), n, d_feat.data(), dim);
     Synchronize();
     ExpectClose(d_feat.Download(), cpu, 1e-5f, "features");
   }
 }
 
-TEST_F(CudaKernelsTest, HashLevelBackwardMatchesTheCpuGrid) {
+TEST_F(CudaKernelsTest, HashGridBackwardMatchesTheCpuGrid) {
   for (int features : {2, 8}) {
     for (bool position : {false, true}) {
       const field::HashGrid<float> grid(GridConfig(features));
-      const int n = 5000, dim = grid.output_dim();
-      const std::vector<float> params = Uniform(grid.param_count(), -1.0f, 1.0f);
-      const std::vector<float> pos = Uniform(3 * std::size_t(n), -0.1f, 1.1f);
-      const std::vector<float> dfeat = Uniform(std::size_t(n) * dim, -1.0f, 1.0f);
-      const std::vector<float> scale = Uniform(n, 0.5f, 2.0f);
-      std::vector<float> grads(grid.param_count(), 0.0f), dpos(3 * std::size_t(n), 0.0f);
+      ExpectGridBackwardMatchesTheCpu(grid, Uniform(3 * std::size_t(5000), -0.1f, 1.1f), position);
+    }
+  }
+}
 
-      DeviceArray<float> d_params(params), d_pos(pos), d_dfeat(dfeat), d_scale(scale), d_grads(grads.size()),
-          d_dpos(dpos.size());
-      d_grads.Zero();
-      d_dpos.Zero();
-      for (int l = 0; l < grid.levels(); ++l) {
-        const std::size_t offset = grid.level(l).offset * features;
-        grid.BackwardLevel(l, pos.data(), n, dfeat.data() + l * features, dim, scale.data(), grads.data(),
-                           position ? params.data() : nullptr, position ? dpos.data() : nullptr);
-        HashLevelBackward(grid.level(l), features, d_pos.data(), n, d_dfeat.data() + l * features, dim,
-                          d_scale.data(), d_grads.data() + offset,
-                          position ? d_params.data() + offset : nullptr, position ? d_dpos.data() : nullptr);
-      }
-      Synchronize();
-      // Sums of many atomics: rounding grows with the number of samples per slot.
-      ExpectClose(d_grads.Download(), grads, 1e-4f, "table gradient");
-      if (position) ExpectClose(d_dpos.Download(), dpos, 1e-4f, "position gradient");
+// Samples along rays, as the trainer's: neighbouring threads fall in the same cells, in runs that
+// start and end anywhere in a warp (rays of 37 samples, a batch that ends inside a warp), which the
+// warp's sums before the atomics must add up exactly as the CPU's serial scatter.
+TEST_F(CudaKernelsTest, HashGridBackwardSumsSamplesThatShareCells) {
+  const int rays = 150, samples = 37;
+  const std::vector<float> ends = Uniform(6 * std::size_t(rays), 0.0f, 1.0f);
+  std::vector<float> pos;
+  for (int r = 0; r < rays; ++r) {
+    for (int j = 0; j < samples; ++j) {
+      const float t = 0.2f * static_cast<float>(j) / samples;  // a short segment: long runs per cell
+      for (int a = 0; a < 3; ++a)
+        pos.push_back(ends[6 * r + a] + t * (ends[6 * r + 3 + a] - ends[6 * r + a]));
+    }
+  }
+  for (int features : {1, 2, 4}) {
+    for (bool position : {false, true}) {
+      const field::HashGrid<float> grid(GridConfig(features));
+      ExpectGridBackwardMatchesTheCpu(grid, pos, position);
     }
   }
 }

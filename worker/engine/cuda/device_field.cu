@@ -155,12 +155,7 @@ struct DeviceField::Impl {
     float* feats = gfeat.array.data();
     for (int k = 0; k < g; ++k) {
       const auto& grid = grids->grid(k);
-      for (int l = 0; l < grid.levels(); ++l) {
-        const auto& level = grid.level(l);
-        HashLevelForward(level, grid.features(),
-                         tables + grids->grid_offset(k) + level.offset * grid.features(), x, n,
-                         feats + k * width + l * grid.features(), stride);
-      }
+      HashGridForward(grid, tables + grids->grid_offset(k), x, n, feats + k * width, stride);
       const int used = grid.output_dim();
       if (used < width) {
         float* base = feats + k * width;
@@ -323,12 +318,9 @@ struct DeviceField::Impl {
       float* table_grads = grad("grid");
       for (int k = 0; k < gc; ++k) {
         const auto& grid = grids->grid(k);
-        for (int l = 0; l < grid.levels(); ++l) {
-          const auto& level = grid.level(l);
-          const std::size_t offset = grids->grid_offset(k) + level.offset * grid.features();
-          HashLevelBackward(level, grid.features(), x, n, df + l * grid.features(), width, b + k,
-                            table_grads + offset, dx ? tables + offset : nullptr, dx, gc);
-        }
+        const std::size_t offset = grids->grid_offset(k);
+        HashGridBackward(grid, x, n, df, width, b + k, gc, table_grads + offset,
+                         dx ? tables + offset : nullptr, dx);
       }
       Mark("grids backward");
       float* dl = dlogits.Reserve(rows * gc);

@@ -1,6 +1,8 @@
 #include <cuda_runtime.h>
 
+#include <algorithm>
 #include <cstddef>
+#include <cub/warp/warp_reduce.cuh>
 #include <string>
 
 #include "common/error.h"
@@ -16,25 +18,100 @@ namespace {
 
 // --- hash grid ---
 
-template <int F, bool kDense>
-__global__ void HashLevelForwardKernel(field::GridLevel level, const float* table, const float* pos, int n,
-                                       float* feat, int feat_stride) {
-  const int i = static_cast<int>(ThreadIndex());
-  if (i >= n) return;
-  field::GatherLevel<F, kDense>(level, table, pos + 3 * static_cast<std::size_t>(i),
-                                feat + static_cast<std::size_t>(i) * feat_stride);
+// The scatter's accumulation where neighbouring threads often add into the same place (consecutive
+// samples of a ray share their grid cells at all but the finest levels): the lanes of a warp in a run
+// of equal targets sum their values (CUB's head-segmented warp sum) and the run's first lane adds the
+// sum atomically, one atomic a run instead of one a lane. Atomics on one address serialise in the
+// cache, which is what the coarse levels' gradients cost. Every lane of the warp must make the same
+// calls (a kernel's lanes past its batch add zeros somewhere valid); `storage` is the warp's
+// WarpRunAdd::Storage (shared memory, one per warp of the block). The host branch exists only so the
+// functor is callable from the __host__ __device__ per-sample functions.
+struct WarpRunAdd {
+  using Reduce = cub::WarpReduce<float>;
+  using Storage = Reduce::TempStorage;
+  Storage* storage = nullptr;
+
+  __host__ __device__ void operator()(float* target, float value) const {
+#ifdef __CUDA_ARCH__
+    constexpr unsigned kAll = 0xffffffffu;
+    const auto address = reinterpret_cast<unsigned long long>(target);
+    // Every lane shuffles (a shuffle that lane 0 skipped, as `lane == 0 || shuffle` would, is undefined).
+    const unsigned long long before = __shfl_up_sync(kAll, address, 1);
+    const bool head = (threadIdx.x & 31u) == 0 || before != address;
+    if (__all_sync(kAll, head)) {  // no two neighbours share a target: no sums to make
+      atomicAdd(target, value);
+      return;
+    }
+    const float sum = Reduce(*storage).HeadSegmentedSum(value, head);
+    if (head) atomicAdd(target, sum);
+#else
+    *target += value;
+#endif
+  }
+};
+
+// A grid's levels as a kernel argument: a launch covers up to kLevelsPerLaunch levels, one per
+// blockIdx.y, so the levels' blocks fill the device together.
+constexpr int kLevelsPerLaunch = 32;
+struct LevelSet {
+  field::GridLevel level[kLevelsPerLaunch];
+};
+
+template <int F>
+__global__ void HashGridForwardKernel(LevelSet levels, const float* table, const float* pos, int n,
+                                      float* feat, int feat_stride) {
+  const std::size_t i = ThreadIndex();
+  if (i >= static_cast<std::size_t>(n)) return;
+  const field::GridLevel level = levels.level[blockIdx.y];
+  const float* p = pos + 3 * i;
+  float* out = feat + i * feat_stride + blockIdx.y * F;
+  const float* level_table = table + level.offset * F;
+  if (level.dense) {
+    field::GatherLevel<F, true>(level, level_table, p, out);
+  } else {
+    field::GatherLevel<F, false>(level, level_table, p, out);
+  }
 }
 
-template <int F, bool kDense, bool kPosition>
-__global__ void HashLevelBackwardKernel(field::GridLevel level, const float* pos, int n, const float* dfeat,
-                                        int dfeat_stride, const float* scale, int scale_stride, float* grads,
-                                        const float* table, float* dpos) {
-  const int i = static_cast<int>(ThreadIndex());
-  if (i >= n) return;
-  const std::size_t r = static_cast<std::size_t>(i);
-  field::ScatterLevel<F, kDense, kPosition>(level, pos + 3 * r, dfeat + r * dfeat_stride,
-                                            scale ? scale[r * scale_stride] : 1.0f, grads, table,
-                                            kPosition ? dpos + 3 * r : nullptr, AtomicAdd{});
+template <int F, bool kPosition>
+__global__ void HashGridBackwardKernel(LevelSet levels, const float* pos, int n, const float* dfeat,
+                                       int dfeat_stride, const float* scale, int scale_stride, float* grads,
+                                       const float* table, float* dpos) {
+  __shared__ WarpRunAdd::Storage storage[kThreads / 32];
+  const WarpRunAdd add{&storage[threadIdx.x / 32]};
+  const field::GridLevel level = levels.level[blockIdx.y];
+  const std::size_t i = ThreadIndex();
+  // Lanes past the batch scatter a zero gradient at the origin: every lane takes part in the sums.
+  const bool live = i < static_cast<std::size_t>(n);
+  const float origin[3] = {0.0f, 0.0f, 0.0f}, none[F] = {};
+  const float* p = live ? pos + 3 * i : origin;
+  const float* df = live ? dfeat + i * dfeat_stride + blockIdx.y * F : none;
+  const float s = !live ? 0.0f : scale ? scale[i * scale_stride] : 1.0f;
+  const std::size_t offset = level.offset * F;
+  float d[3] = {0.0f, 0.0f, 0.0f};
+  if (level.dense) {
+    field::ScatterLevel<F, true, kPosition>(level, p, df, s, grads + offset,
+                                            kPosition ? table + offset : nullptr, d, add);
+  } else {
+    field::ScatterLevel<F, false, kPosition>(level, p, df, s, grads + offset,
+                                             kPosition ? table + offset : nullptr, d, add);
+  }
+  // Levels run side by side, so their parts of one sample's position gradient meet atomically.
+  if (kPosition && live) {
+    for (int a = 0; a < 3; ++a) atomicAdd(dpos + 3 * i + a, d[a]);
+  }
+}
+
+// Calls launch(set, first, count) for each run of up to kLevelsPerLaunch of the grid's levels (set
+// holds levels first .. first + count - 1).
+template <typename Launch>
+void ForLevelSets(const field::HashGrid<float>& grid, const Launch& launch) {
+  for (int first = 0; first < grid.levels(); first += kLevelsPerLaunch) {
+    LevelSet set{};
+    const int count = std::min(kLevelsPerLaunch, grid.levels() - first);
+    for (int l = 0; l < count; ++l) set.level[l] = grid.level(first + l);
+    launch(set, first, count);
+  }
 }
 
 // --- samplers ---
@@ -102,34 +179,39 @@ __global__ void RayLossKernel(const render::RayComposite<float>* rays, const flo
 
 }  // namespace
 
-void HashLevelForward(const field::GridLevel& level, int features, const float* table, const float* pos,
-                      int n, float* feat, int feat_stride) {
-  field::DispatchLevel(features, level, [&](auto fc, auto dense) {
+void HashGridForward(const field::HashGrid<float>& grid, const float* table, const float* pos, int n,
+                     float* feat, int feat_stride) {
+  if (n <= 0) return;
+  field::DispatchFeatures(grid.features(), [&](auto fc) {
     constexpr int F = decltype(fc)::value;
-    constexpr bool kDense = decltype(dense)::value;
-    if (n <= 0) return;
-    HashLevelForwardKernel<F, kDense><<<Blocks(n), kThreads>>>(level, table, pos, n, feat, feat_stride);
-    CheckLaunch("hash level forward kernel");
+    ForLevelSets(grid, [&](const LevelSet& set, int first, int count) {
+      const dim3 blocks(Blocks(n), static_cast<unsigned>(count));
+      HashGridForwardKernel<F><<<blocks, kThreads>>>(set, table, pos, n, feat + first * F, feat_stride);
+      CheckLaunch("hash grid forward kernel");
+    });
   });
 }
 
-void HashLevelBackward(const field::GridLevel& level, int features, const float* pos, int n,
-                       const float* dfeat, int dfeat_stride, const float* scale, float* grads,
-                       const float* table, float* dpos_add, int scale_stride) {
+void HashGridBackward(const field::HashGrid<float>& grid, const float* pos, int n, const float* dfeat,
+                      int dfeat_stride, const float* scale, int scale_stride, float* grads,
+                      const float* table, float* dpos_add) {
   if (dpos_add != nullptr && table == nullptr)
-    FailInvalid("hash level backward: a position gradient needs the level's table");
-  field::DispatchLevel(features, level, [&](auto fc, auto dense) {
+    FailInvalid("hash grid backward: a position gradient needs the grid's table");
+  if (n <= 0) return;
+  field::DispatchFeatures(grid.features(), [&](auto fc) {
     constexpr int F = decltype(fc)::value;
-    constexpr bool kDense = decltype(dense)::value;
-    if (n <= 0) return;
-    if (dpos_add) {
-      HashLevelBackwardKernel<F, kDense, true><<<Blocks(n), kThreads>>>(
-          level, pos, n, dfeat, dfeat_stride, scale, scale_stride, grads, table, dpos_add);
-    } else {
-      HashLevelBackwardKernel<F, kDense, false><<<Blocks(n), kThreads>>>(
-          level, pos, n, dfeat, dfeat_stride, scale, scale_stride, grads, table, dpos_add);
-    }
-    CheckLaunch("hash level backward kernel");
+    ForLevelSets(grid, [&](const LevelSet& set, int first, int count) {
+      const dim3 blocks(Blocks(n), static_cast<unsigned>(count));
+      const float* df = dfeat + first * F;
+      if (dpos_add) {
+        HashGridBackwardKernel<F, true><<<blocks, kThreads>>>(set, pos, n, df, dfeat_stride, scale,
+                                                              scale_stride, grads, table, dpos_add);
+      } else {
+        HashGridBackwardKernel<F, false><<<blocks, kThreads>>>(set, pos, n, df, dfeat_stride, scale,
+                                                               scale_stride, grads, table, dpos_add);
+      }
+      CheckLaunch("hash grid backward kernel");
+    });
   });
 }
 

@@ -12,29 +12,31 @@
 
 #include <cstdint>
 
-#include "worker/engine/field/hash_math.h"
+#include "worker/engine/field/hash_grid.h"
 #include "worker/engine/render/depth_guided_sampler.h"
 #include "worker/engine/render/volume_renderer.h"
 #include "worker/engine/train/ray_loss.h"
 
 namespace endorecon::cuda {
 
-// --- hash grid, one level over a batch (field::HashGrid's layout) ---
+// --- hash grid: every level of one grid in one launch (field::HashGrid's layout) ---
 
-// feat[i * feat_stride + f] = trilinear blend of the level's table at pos[3i..3i+2], f < features.
-// `table` is the level's own table (the grid's params + level.offset * features); features is 1, 2,
-// 4 or 8 (else Error(kInvalidArgument)).
-void HashLevelForward(const field::GridLevel& level, int features, const float* table, const float* pos,
-                      int n, float* feat, int feat_stride);
+// feat[i * feat_stride + l * features + f] = trilinear blend of level l's table at pos[3i..3i+2], for
+// every level l of `grid` and f < features; `table` is the grid's whole table (level l from
+// level(l).offset * features on).
+void HashGridForward(const field::HashGrid<float>& grid, const float* table, const float* pos, int n,
+                     float* feat, int feat_stride);
 
-// grads[level slots] += scale[i * scale_stride] * trilinear weights * dfeat[i * dfeat_stride + f] (scale
-// null: 1), scattered with atomicAdd (field::ScatterLevel, the CPU's per-sample function); `grads` is the
-// level's part of the gradient array. When dpos_add is not null (table must be given then), also adds the
-// level's part of dL/dpos (n x 3) to it. Features as HashLevelForward. Float atomics make the sum order (and
-// so the last bits) vary from run to run.
-void HashLevelBackward(const field::GridLevel& level, int features, const float* pos, int n,
-                       const float* dfeat, int dfeat_stride, const float* scale, float* grads,
-                       const float* table, float* dpos_add, int scale_stride = 1);
+// grads[level l's slots] += scale[i * scale_stride] * trilinear weights * dfeat[i * dfeat_stride +
+// l * features + f] for every level (scale null: 1), through field::ScatterLevel, the CPU's per-sample
+// function; `grads` is the grid's whole gradient array. Threads of a warp whose samples add into the
+// same slot one after another (consecutive samples of a ray share their cells at all but the finest
+// levels) sum in the warp first, so a run of them costs one atomic add (WarpRunAdd, launch.cuh). When
+// dpos_add is not null (table must be given then), also adds dL/dpos (n x 3) to it. Float atomics make
+// the sum order (and so the last bits) vary from run to run.
+void HashGridBackward(const field::HashGrid<float>& grid, const float* pos, int n, const float* dfeat,
+                      int dfeat_stride, const float* scale, int scale_stride, float* grads,
+                      const float* table, float* dpos_add);
 
 // --- samplers (one thread per ray) ---
 
