@@ -7,7 +7,17 @@
 namespace endorecon::cuda {
 namespace {
 
-constexpr int kRowsPerChunk = 256;  // rows one thread sums for the weight gradient
+// The weight gradient's threads: each sums one entry over a chunk of rows, with enough chunks that
+// a layer's entries make at least kWeightGradThreads threads (a small layer summed over long chunks
+// left most of the device idle: the blend MLP's 39 blocks took 34 us of an H200's step), each chunk
+// of at least kMinRowsPerChunk rows (the chunks' sums meet in one atomic add each).
+constexpr std::size_t kWeightGradThreads = std::size_t{1} << 17;
+constexpr std::size_t kMinRowsPerChunk = 16;
+
+// A layer's weights fit the input gradient's shared memory when n_in x n_out floats take at most
+// this many (32 KB; larger layers read them from global memory).
+constexpr int kMaxSharedWeights = 8192;
+constexpr unsigned kInputGradBlocks = 2048;  // more than a V100's or an H200's SMs hold at once
 
 __global__ void LayerForwardKernel(const float* x, int n, int n_in, const float* w, const float* b, float* y,
                                    int n_out, bool hidden, field::HiddenDropout<float> drop,
@@ -24,30 +34,48 @@ __global__ void LayerForwardKernel(const float* x, int n, int n_in, const float*
 }
 
 // dx = (dy W^T), times the hidden activation's gradient when x_prev (the layer's input, a hidden
-// activation) is given.
+// activation) is given. A warp's threads are consecutive inputs k of one or two rows, so W's row k
+// (w[k * n_out + j] for j < n_out) differs from lane to lane: with kShared the block first copies W
+// transposed into shared memory (wt[j * n_in + k], neighbouring lanes in neighbouring banks), where
+// from global memory each of the n_out loads of a warp touched 32 cache lines (the colour MLP's input
+// gradient took 130 us of an H200's 0.8 ms step). Its threads loop over the rows (at most
+// kInputGradBlocks blocks), so a block copies W once for many rows.
+template <bool kShared>
 __global__ void LayerInputGradKernel(const float* dy, int n, int n_out, const float* w, int n_in,
                                      const float* x_prev, float keep_scale, float* dx) {
-  const std::size_t i = ThreadIndex();
-  if (i >= static_cast<std::size_t>(n) * n_in) return;
-  const std::size_t row = i / n_in;
-  const int k = static_cast<int>(i % n_in);
-  float acc = 0.0f;
-  const float* g = dy + row * n_out;
-  const float* wk = w + static_cast<std::size_t>(k) * n_out;
-  for (int j = 0; j < n_out; ++j) acc += g[j] * wk[j];
-  dx[i] = x_prev ? field::HiddenActivationGrad(x_prev[i], acc, keep_scale) : acc;
+  extern __shared__ float wt[];
+  if constexpr (kShared) {
+    for (int e = static_cast<int>(threadIdx.x); e < n_in * n_out; e += static_cast<int>(blockDim.x)) {
+      wt[(e % n_out) * n_in + e / n_out] = w[e];
+    }
+    __syncthreads();
+  }
+  const std::size_t total = static_cast<std::size_t>(n) * n_in;
+  for (std::size_t i = ThreadIndex(); i < total; i += static_cast<std::size_t>(gridDim.x) * blockDim.x) {
+    const std::size_t row = i / n_in;
+    const int k = static_cast<int>(i % n_in);
+    float acc = 0.0f;
+    const float* g = dy + row * n_out;
+    if constexpr (kShared) {
+      for (int j = 0; j < n_out; ++j) acc += g[j] * wt[j * n_in + k];
+    } else {
+      const float* wk = w + static_cast<std::size_t>(k) * n_out;
+      for (int j = 0; j < n_out; ++j) acc += g[j] * wk[j];
+    }
+    dx[i] = x_prev ? field::HiddenActivationGrad(x_prev[i], acc, keep_scale) : acc;
+  }
 }
 
-// dW += x^T dy and db += column sums of dy, each thread over one chunk of rows.
-__global__ void LayerWeightGradKernel(const float* x, const float* dy, int n, int n_in, int n_out, float* dw,
-                                      float* db) {
+// dW += x^T dy and db += column sums of dy, each thread over one chunk of `rows_per_chunk` rows.
+__global__ void LayerWeightGradKernel(const float* x, const float* dy, int n, int n_in, int n_out,
+                                      std::size_t rows_per_chunk, float* dw, float* db) {
   const std::size_t per_chunk = static_cast<std::size_t>(n_in) * n_out + n_out;
   const std::size_t i = ThreadIndex();
-  const std::size_t chunks = (static_cast<std::size_t>(n) + kRowsPerChunk - 1) / kRowsPerChunk;
+  const std::size_t chunks = (static_cast<std::size_t>(n) + rows_per_chunk - 1) / rows_per_chunk;
   if (i >= chunks * per_chunk) return;
   const std::size_t chunk = i / per_chunk, e = i % per_chunk;
-  const std::size_t row0 = chunk * kRowsPerChunk;
-  const std::size_t row1 = row0 + kRowsPerChunk < static_cast<std::size_t>(n) ? row0 + kRowsPerChunk : n;
+  const std::size_t row0 = chunk * rows_per_chunk;
+  const std::size_t row1 = row0 + rows_per_chunk < static_cast<std::size_t>(n) ? row0 + rows_per_chunk : n;
   float sum = 0.0f;
   if (e < static_cast<std::size_t>(n_in) * n_out) {
     const std::size_t k = e / n_out, j = e % n_out;
@@ -111,14 +139,25 @@ void DeviceMlp::Backward(const float* params, const float* x, int n, float* cons
   for (int k = layers - 1; k >= 0; --k) {
     const int n_in = dims_[k], n_out = dims_[k + 1];
     const float* in = k == 0 ? x : hidden[k - 1];
-    const std::size_t chunks = (static_cast<std::size_t>(n) + kRowsPerChunk - 1) / kRowsPerChunk;
-    LayerWeightGradKernel<<<Blocks(chunks * (static_cast<std::size_t>(n_in) * n_out + n_out)), kThreads>>>(
-        in, g, n, n_in, n_out, dparams + w_offset_[k], dparams + b_offset_[k]);
+    const std::size_t entries = static_cast<std::size_t>(n_in) * n_out + n_out;
+    const std::size_t chunks = std::max<std::size_t>(1, (kWeightGradThreads + entries - 1) / entries);
+    const std::size_t rows_per_chunk =
+        std::max(kMinRowsPerChunk, (static_cast<std::size_t>(n) + chunks - 1) / chunks);
+    const std::size_t used = (static_cast<std::size_t>(n) + rows_per_chunk - 1) / rows_per_chunk;
+    LayerWeightGradKernel<<<Blocks(used * entries), kThreads>>>(
+        in, g, n, n_in, n_out, rows_per_chunk, dparams + w_offset_[k], dparams + b_offset_[k]);
     CheckLaunch("MLP weight gradient kernel");
     if (k == 0 && dx == nullptr) break;
     float* d = k == 0 ? dx : scratch + (k % 2) * stride;
-    LayerInputGradKernel<<<Blocks(static_cast<std::size_t>(n) * n_in), kThreads>>>(
-        g, n, n_out, params + w_offset_[k], n_in, k > 0 ? hidden[k - 1] : nullptr, keep_scale, d);
+    const unsigned blocks = std::min(kInputGradBlocks, Blocks(static_cast<std::size_t>(n) * n_in));
+    const float* x_prev = k > 0 ? hidden[k - 1] : nullptr;
+    if (n_in * n_out <= kMaxSharedWeights) {
+      LayerInputGradKernel<true><<<blocks, kThreads, sizeof(float) * n_in * n_out>>>(
+          g, n, n_out, params + w_offset_[k], n_in, x_prev, keep_scale, d);
+    } else {
+      LayerInputGradKernel<false>
+          <<<blocks, kThreads>>>(g, n, n_out, params + w_offset_[k], n_in, x_prev, keep_scale, d);
+    }
     CheckLaunch("MLP input gradient kernel");
     g = d;
   }

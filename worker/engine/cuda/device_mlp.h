@@ -1,7 +1,9 @@
 // A field::Mlp run by CUDA kernels on device arrays, with the Mlp's own layout of parameters and
 // activations and the same dropout masks (field/mlp_math.h): one thread per (row, unit) for the layer
-// products, the weight gradient summed over chunks of rows with atomics. A plain C++ header; defined in
-// device_mlp.cu (builds with ENDORECON_WITH_CUDA only). All pointers are device memory.
+// products (the input gradient reads a layer's weights transposed in shared memory when they fit), the
+// weight gradient summed over chunks of rows sized to fill the device, with atomics. A plain C++
+// header; defined in device_mlp.cu (builds with ENDORECON_WITH_CUDA only). All pointers are device
+// memory.
 #pragma once
 
 #include <cstddef>

@@ -39,10 +39,15 @@ __global__ void ForEachKernel(std::size_t n, Fn fn) {
   if (i < n) fn(i);
 }
 
+// Launches of at most this many threads (the per-ray kernels: a step's 1,024 rays, whose threads each
+// walk a ray's samples) go in blocks of one warp, so they spread over 32 SMs rather than 8.
+inline constexpr std::size_t kSmallLaunch = 16384;
+
 template <typename Fn>
 void ForEach(std::size_t n, const Fn& fn, const char* what) {
   if (n == 0) return;
-  ForEachKernel<<<Blocks(n), kThreads>>>(n, fn);
+  const unsigned threads = n <= kSmallLaunch ? 32u : static_cast<unsigned>(kThreads);
+  ForEachKernel<<<static_cast<unsigned>((n + threads - 1) / threads), threads>>>(n, fn);
   CheckLaunch(what);
 }
 
