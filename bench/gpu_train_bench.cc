@@ -15,13 +15,16 @@
 // (train_config.h's ApplyJson keys, e.g. '{"rays_per_batch":4096}') instead of once as it is, and
 // --cpu-threads N (repeatable) runs the CPU curve once per thread count (0: every core; the last
 // one's PSNR is the target). --seconds 0 skips the demo clip's runs, --cpu-seconds 0 the CPU's; the
-// big clip is trained once per --override too.
+// big clip is trained once per --override too. --render-chunks N (repeatable) times, after the demo
+// clip's first run on --device, full held-out renders with the results' uncertainty at N rays a chunk.
 //   gpu_train_bench [--device cuda:0] [--preset gpu] [--seconds 30] [--cpu-seconds 90]
 //                   [--probe-s 5] [--big-seconds 0] [--override JSON]... [--cpu-threads N]...
+//                   [--render-chunks N]...
 #include <tbb/global_control.h>
 
 #include <CLI/CLI.hpp>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <exception>
 #include <memory>
@@ -55,9 +58,50 @@ struct Curve {
   double samples_per_second = 0;
 };
 
-// Trains `clip` on `device` for `seconds` of steps, probing the held-out PSNR every `probe_s`.
+// Renders the held-out frames in full with the results' Monte Carlo uncertainty once per chunk size
+// (rays a RenderChunk call), after one warm-up frame, and prints the time a frame and how far each
+// size's images and maps are from the first size's (other chunks draw other dropout masks).
+void TimeRenders(train::Trainer& trainer, const scene::Clip& clip, const train::TrainConfig& config,
+                 const render::RenderBackendFactory& backend, const std::vector<int>& heldout,
+                 const std::vector<int>& chunks) {
+  trainer.SyncField();
+  std::vector<render::RenderedFrame> first;
+  for (const int chunk : chunks) {
+    render::FrameRenderSettings settings = train::UncertaintyRenderSettings(config, clip.near, clip.far, 1);
+    settings.rays_per_chunk = chunk;
+    render::FrameRenderer renderer(trainer.field(), trainer.box(), settings, backend);
+    renderer.SetOccupancy(&trainer.occupancy());
+    renderer.Render(clip.cameras[heldout[0]], clip.times[heldout[0]]);
+    std::vector<render::RenderedFrame> frames;
+    const auto start = Clock::now();
+    for (const int f : heldout) frames.push_back(renderer.Render(clip.cameras[f], clip.times[f]));
+    const double ms = 1e3 * std::chrono::duration<double>(Clock::now() - start).count() / heldout.size();
+    if (first.empty()) first = frames;
+    double rgb_off = 0, uncertainty = 0, first_uncertainty = 0;
+    std::size_t values = 0, pixels = 0;
+    for (std::size_t i = 0; i < frames.size(); ++i) {
+      for (std::size_t v = 0; v < frames[i].rgb.size(); ++v)
+        rgb_off += std::fabs(frames[i].rgb[v] - first[i].rgb[v]);
+      for (std::size_t p = 0; p < frames[i].uncertainty.size(); ++p) {
+        uncertainty += frames[i].uncertainty[p];
+        first_uncertainty += first[i].uncertainty[p];
+      }
+      values += frames[i].rgb.size();
+      pixels += frames[i].uncertainty.size();
+    }
+    std::printf(
+        "  render, %5d rays a chunk: %7.1f ms a frame (%zu frames, %d x %d, %d dropout passes); colour off "
+        "the first size's by %.2e on average, mean uncertainty %.4g (first size %.4g)\n",
+        chunk, ms, heldout.size(), clip.width, clip.height, settings.mc_passes, rgb_off / values,
+        uncertainty / pixels, first_uncertainty / pixels);
+    std::fflush(stdout);
+  }
+}
+
+// Trains `clip` on `device` for `seconds` of steps, probing the held-out PSNR every `probe_s`; then
+// times renders at each of `render_chunks` (none: no renders).
 Curve Train(const scene::Clip& clip, train::TrainConfig config, const std::string& device, double seconds,
-            double probe_s) {
+            double probe_s, const std::vector<int>& render_chunks = {}) {
   const FrameSplit split = SplitFrames(clip.frame_count(), 8);
   train::FitToScene(clip, config, split.train);
   const DeviceBackends backends = BackendsFor(device);
@@ -91,6 +135,8 @@ Curve Train(const scene::Clip& clip, train::TrainConfig config, const std::strin
   curve.samples_per_second = samples / trained;
   std::printf("  %-28s %.3g training samples/s over %d iterations\n", curve.device.c_str(),
               curve.samples_per_second, trainer.iteration());
+  if (!render_chunks.empty())
+    TimeRenders(trainer, clip, config, backends.render, split.heldout, render_chunks);
   return curve;
 }
 
@@ -108,7 +154,7 @@ int main(int argc, char** argv) {
   std::string device = "cuda:0", preset = "gpu";
   double seconds = 30, cpu_seconds = 90, probe_s = 5, big_seconds = 0;
   std::vector<std::string> overrides;
-  std::vector<int> cpu_threads = {0};
+  std::vector<int> cpu_threads = {0}, render_chunks;
   CLI::App app{"gpu_train_bench: training on a GPU against the CPU, in the same run"};
   app.add_option("--device", device, "the GPU: cuda:N (cpu to try the bench without one)")
       ->capture_default_str();
@@ -125,6 +171,10 @@ int main(int argc, char** argv) {
   app.add_option("--override", overrides, "train --preset once per JSON override (repeatable)");
   app.add_option("--cpu-threads", cpu_threads, "run the CPU curve once per thread count (0: every core)")
       ->check(CLI::NonNegativeNumber);
+  app.add_option("--render-chunks", render_chunks,
+                 "after the demo clip's first GPU run, time held-out renders with uncertainty at each of "
+                 "these rays a chunk (repeatable)")
+      ->check(CLI::PositiveNumber);
   CLI11_PARSE(app, argc, argv);
   try {
     BackendsFor(device);  // refuses a device that is not there before any clip is made
@@ -140,7 +190,7 @@ int main(int argc, char** argv) {
       const scene::Clip demo = scene::MakeSyntheticClip(scene::SynthOptions{});
       std::printf("gpu_train_bench: demo clip (48 frames, 160 x 128, noisy), preset cpu on both\n");
       const train::TrainConfig cpu_preset = train::TrainConfig::Preset("cpu");
-      const Curve same = Train(demo, cpu_preset, device, seconds, probe_s);
+      const Curve same = Train(demo, cpu_preset, device, seconds, probe_s, render_chunks);
       Curve cpu;
       for (const int threads : cpu_seconds > 0 ? cpu_threads : std::vector<int>{}) {
         std::unique_ptr<tbb::global_control> limit;
