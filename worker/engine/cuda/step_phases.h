@@ -1,5 +1,5 @@
-// Where a GPU training step's time goes, phase by phase, for profiling on machines without a profiler
-// (the lent GPU machines are bare): with ENDORECON_CUDA_STEP_PHASES=1 in the environment, CUDA events
+// Where a GPU training step's time goes, phase by phase, without a profiler (kernel by kernel, where
+// Nsight Compute is installed: `gpu-bundle/run kernels`): with ENDORECON_CUDA_STEP_PHASES=1, CUDA events
 // are recorded between a step's phases and read back at its end (one extra synchronisation a step),
 // and the mean milliseconds per step of each phase go to stderr when the step backend closes.
 // Without it, every call returns at once. Included by .cu files only.
