@@ -174,7 +174,7 @@ int main(int argc, char** argv) {
   app.add_option("--render-chunks", render_chunks,
                  "after the demo clip's first GPU run, time held-out renders with uncertainty at each of "
                  "these rays a chunk (repeatable)")
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::Range(1, 1 << 20));
   CLI11_PARSE(app, argc, argv);
   try {
     BackendsFor(device);  // refuses a device that is not there before any clip is made
