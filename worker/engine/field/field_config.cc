@@ -42,9 +42,10 @@ FieldConfig FieldConfig::Cpu() {
   // 27.68 dB against 27.39 and 27.40 (the demo clip 32.98 against 32.94 dB; docs/benchmarks.md,
   // "A coarser deformation grid"); 24^3 had lost 0.6 dB.
   // 12 time knots rather than 8 (one every 4 frames of a 48-frame clip): on the real-texture clip at
-  // 120 s +0.6 dB on the training frames against the truth and +0.12 dB held out, on the demo clip at
-  // 300 s +0.08 dB held out at the same depth (docs/benchmarks.md, "Twelve time knots"). The knots
-  // cost next to nothing (a sample reads two slices whatever their number).
+  // 120 s +0.12 dB held out and +0.25 dB on the training frames against the truth (three pairs of
+  // runs); the demo clip the same at 120 s, +0.03-0.08 dB at 300 s at the same depth
+  // (docs/benchmarks.md, "Twelve time knots"). More knots cost nothing measurable: a sample reads two
+  // time slices whatever their number.
   c.deformation.resolution = 12;
   c.deformation.time_knots = 12;
   c.heads.density_hidden = {32};
