@@ -42,8 +42,8 @@ FieldConfig FieldConfig::Cpu() {
   // 27.68 dB against 27.39 and 27.40 (the demo clip 32.98 against 32.94 dB; docs/benchmarks.md,
   // "A coarser deformation grid"); 24^3 had lost 0.6 dB.
   // 12 time knots rather than 8 (one every 4 frames of a 48-frame clip): on the real-texture clip at
-  // 120 s +0.12 dB held out and +0.25 dB on the training frames against the truth (three pairs of
-  // runs); the demo clip the same at 120 s, +0.03-0.08 dB at 300 s at the same depth
+  // 120 s +0.12 dB held out (three pairs of runs) and +0.3 dB on the training frames against the
+  // truth; the demo clip the same at 120 s, +0.03-0.08 dB at 300 s at the same depth
   // (docs/benchmarks.md, "Twelve time knots"). More knots cost nothing measurable: a sample reads two
   // time slices whatever their number.
   c.deformation.resolution = 12;
