@@ -79,8 +79,9 @@ ENDORECON_HD void RaySpan(const std::uint8_t* occupied, int res, const scene::Bo
   OccupiedSpan(occupied, res, start, step, near, far, lo, hi);
 }
 
-// The times a grid is probed at: one for a static field, else 8 evenly spaced over [0, 1] (the CPU
-// preset's deformation has 8 time knots; between probes the one-cell dilation covers the motion).
+// The times a grid is probed at: one for a static field, else 8 evenly spaced over [0, 1]. They need
+// not land on the deformation's time knots (12 in the cpu preset): between probes the one-cell
+// dilation covers the motion (measured with 8 and 12 knots, docs/benchmarks.md "Twelve time knots").
 std::vector<float> OccupancyProbeTimes(bool dynamic);
 
 // The field's density (sigma, n) at a batch of points in host memory, wherever the field's
