@@ -71,7 +71,7 @@ TEST(ModelUncertaintyTest, ToolPixelsAreLeftOutOfTheCurveAndTheMeans) {
   EXPECT_THROW(ModelUncertainty(std::vector<float>(5), f.aleatoric, f.epistemic, {}), Error);
 }
 
-TEST(ModelUncertaintyTest, TheNeighboursEvidenceAddsRelativeToItsMean) {
+TEST(ModelUncertaintyTest, ANeighbourTermAddsRelativeToItsMeanAtItsWeight) {
   Frame f = TwoLevels();
   f.mask.assign(200, 0);
   f.mask[9] = 1;
@@ -80,17 +80,17 @@ TEST(ModelUncertaintyTest, TheNeighboursEvidenceAddsRelativeToItsMean) {
   evidence[3] = 1e-2f;  // far above the mean, in the evidence's own units
   evidence[9] = 1e3f;   // the tool: out of the mean
   auto map = plain;
-  AddNeighbourEvidence(map, evidence, f.mask);
+  AddNeighbourTerm(map, evidence, 0.7, f.mask);
   double mean = 0;
   for (int i = 0; i < 200; ++i) mean += i == 9 ? 0.0 : evidence[i] / 199.0;
-  EXPECT_NEAR(map[0] - plain[0], kNeighbourEvidenceWeight * 1e-4 / mean, 1e-4);
-  EXPECT_NEAR(map[3] - plain[3], kNeighbourEvidenceWeight * 1e-2 / mean, 1e-2);
+  EXPECT_NEAR(map[0] - plain[0], 0.7 * 1e-4 / mean, 1e-4);
+  EXPECT_NEAR(map[3] - plain[3], 0.7 * 1e-2 / mean, 1e-2);
   EXPECT_EQ(std::max_element(map.begin(), map.end()) - map.begin(), 9);  // the tool's value is its own
-  // Evidence that is 0 everywhere adds nothing; sizes that disagree are refused.
+  // A term that is 0 everywhere adds nothing; sizes that disagree are refused.
   auto unchanged = plain;
-  AddNeighbourEvidence(unchanged, std::vector<float>(200, 0.0f), f.mask);
+  AddNeighbourTerm(unchanged, std::vector<float>(200, 0.0f), 0.7, f.mask);
   EXPECT_EQ(unchanged, plain);
-  EXPECT_THROW(AddNeighbourEvidence(map, std::vector<float>(3), {}), Error);
+  EXPECT_THROW(AddNeighbourTerm(map, std::vector<float>(3), 0.7, {}), Error);
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 // The model map's third term: the neighbouring training frames' signed residuals, averaged where the
 // frame's surface projects in each neighbour, squared, relative to the camera noise's level at the
-// frame's brightness.
+// frame's brightness. And its fourth: the frame's render against the nearest training frames' images,
+// averaged over the neighbours and a Gaussian, squared.
 #include "worker/engine/eval/neighbour_evidence.h"
 
 #include <gtest/gtest.h>
@@ -120,6 +121,79 @@ TEST(NeighbourEvidenceTest, SizesThatDisagreeAreRefused) {
   std::vector<std::vector<float>> evidence(3);
   evidence[1].assign(kW * kH, 1.0f);  // one value a pixel where three are due
   EXPECT_THROW(NeighbourEvidence(cameras, 0, kGrey, depth, kNoTool, evidence), Error);
+}
+
+// An image of one grey level (0-255) everywhere.
+std::vector<std::uint8_t> GreyImage(std::uint8_t level) {
+  return std::vector<std::uint8_t>(3 * kW * kH, level);
+}
+
+// The weight of the centre pixel in the 2-D Gaussian of kDisagreementBlurPixels = 1 that OpenCV builds
+// for doubles (9 taps): 1 / (sum over |x| <= 4 of exp(-x^2 / 2)), squared.
+constexpr double kCentre = 0.398942 * 0.398942;
+
+TEST(NeighbourDisagreementTest, TheNeighboursDifferencesAreAveragedThenBlurredThenSquared) {
+  const std::vector<scene::Camera> cameras(7, CameraAt(0));
+  const std::vector<float> depth(kW * kH, 2.0f);
+  // Frame 3's render is 0.5 grey. Its training neighbours: 2 (weight 1) sees 0.4 everywhere, 5 (weight
+  // 1/2) 0.6; 1 and 4 are held out (no image), 0 and 6 too far to count.
+  const std::vector<std::uint8_t> grey = GreyImage(102), bright = GreyImage(153);  // 0.4 and 0.6
+  std::vector<NeighbourImage> images(7);
+  images[0] = {bright};
+  images[6] = {bright};
+  images[2] = {grey};
+  images[5] = {bright};
+  const std::vector<float> seen = NeighbourDisagreement(cameras, 3, kGrey, depth, images);
+  const double mean = (1.0 * 0.1 + 0.5 * -0.1) / 1.5;
+  for (int p = 0; p < kW * kH; ++p) ASSERT_NEAR(seen[p], 3 * mean * mean, 1e-6) << p;
+  // One pixel of frame 2 brighter in red by 0.2, frame 5 as frame 2 elsewhere: the blur keeps kCentre
+  // of the spot at its pixel.
+  std::vector<std::uint8_t> spot = grey;
+  spot[3 * Pixel(6, 4)] = 153;
+  images[2] = {spot};
+  images[5] = {grey};
+  const std::vector<float> spotted = NeighbourDisagreement(cameras, 3, kGrey, depth, images);
+  const double red = 0.1 - kCentre * 0.2 / 1.5;
+  EXPECT_NEAR(spotted[Pixel(6, 4)], red * red + 2 * 0.1 * 0.1, 1e-5);
+  EXPECT_NEAR(spotted[Pixel(0, 0)], 3 * 0.1 * 0.1, 1e-5);  // beyond the blur's reach: unchanged
+}
+
+TEST(NeighbourDisagreementTest, ANeighboursToolIsLeftOutWithoutPullingItsSurroundingsToZero) {
+  const std::vector<scene::Camera> cameras(2, CameraAt(0));
+  const std::vector<float> depth(kW * kH, 2.0f);
+  const std::vector<std::uint8_t> grey = GreyImage(102);
+  std::vector<std::uint8_t> tool(kW * kH, 0);
+  for (int v = 0; v < kH; ++v) {
+    for (int u = 0; u < kW / 2; ++u) tool[Pixel(u, v)] = 1;
+  }
+  std::vector<NeighbourImage> images(2);
+  images[1] = {grey, tool};
+  const std::vector<float> seen = NeighbourDisagreement(cameras, 0, kGrey, depth, images);
+  // The right half and the tool's pixels within the blur's reach read the right half's 0.1 per
+  // channel; the tool's pixels beyond it (more than 4 columns in) have no neighbour: 0.
+  EXPECT_NEAR(seen[Pixel(kW - 1, 3)], 0.03, 1e-6);
+  EXPECT_NEAR(seen[Pixel(kW / 2 - 1, 3)], 0.03, 1e-6);
+  EXPECT_EQ(seen[Pixel(0, 3)], 0.0f);
+}
+
+TEST(NeighbourDisagreementTest, AMovingCameraIsFollowedAndSizesThatDisagreeAreRefused) {
+  // As NeighbourEvidence's: frame 0's pixel u is frame 1's u - 1.
+  const std::vector<scene::Camera> cameras = {CameraAt(0), CameraAt(0.2)};
+  const std::vector<float> depth(kW * kH, 2.0f);
+  std::vector<std::uint8_t> column = GreyImage(128);           // 0.502: about the render
+  for (int v = 0; v < kH; ++v) column[3 * Pixel(5, v)] = 255;  // red in frame 1's column 5
+  std::vector<NeighbourImage> images(2);
+  images[1] = {column};
+  const std::vector<float> seen = NeighbourDisagreement(cameras, 0, kGrey, depth, images);
+  EXPECT_GT(seen[Pixel(6, 3)], 10 * seen[Pixel(4, 3)]);  // frame 0's column 6 is frame 1's 5
+  EXPECT_THROW(NeighbourDisagreement(cameras, 0, kGrey, depth, std::vector<NeighbourImage>(1)), Error);
+  EXPECT_THROW(NeighbourDisagreement(cameras, 2, kGrey, depth, images), Error);
+  EXPECT_THROW(NeighbourDisagreement(cameras, 0, kGrey, std::vector<float>(5), images), Error);
+  const std::vector<std::uint8_t> small(5);
+  images[1] = {small};
+  EXPECT_THROW(NeighbourDisagreement(cameras, 0, kGrey, depth, images), Error);
+  images[1] = {column, small};
+  EXPECT_THROW(NeighbourDisagreement(cameras, 0, kGrey, depth, images), Error);
 }
 
 }  // namespace

@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 #include <span>
 #include <string>
+#include <utility>
 
 #include "worker/engine/base/seconds_since.h"
 #include "worker/engine/eval/calibration.h"
@@ -217,7 +218,11 @@ nlohmann::json UncertaintySettings(const render::FrameRenderSettings& settings) 
        "epistemic score, each relative to its mean over the frame's tissue (eval/model_uncertainty.h); in a "
        "clip's evaluation plus 0.4 times the neighbouring training frames' (within 4 frames, weights "
        "1/distance) signed residuals at the pixel the surface projects to, averaged, squared, relative to "
-       "its median at the frame's brightness and to its tissue mean (eval/neighbour_evidence.h)"}};
+       "its median at the frame's brightness and to its tissue mean, plus 0.4 times the render's "
+       "disagreement "
+       "with the training frames' images within 2 frames (weights 1/distance, their tools left out), "
+       "averaged, blurred (Gaussian, sigma 1 pixel), squared, relative to its tissue mean "
+       "(eval/neighbour_evidence.h)"}};
 }
 
 nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& renderer,
@@ -252,6 +257,11 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
   std::vector<render::RenderedFrame> components;  // aleatoric and epistemic maps only
   std::vector<PendingModelMap> model_maps(calibrated);
   std::vector<std::vector<float>> evidence(calibrated);  // the training frames' (neighbour_evidence.h)
+  std::vector<NeighbourImage> neighbour_images(calibrated);  // the training frames' images, with their tools
+  for (int f : what.train_frames) {
+    if (f < 0 || std::size_t(f) >= neighbour_images.size()) continue;
+    neighbour_images[f] = {clip.rgb[f], clip.has_masks() ? clip.tool_mask[f] : EvaluationMask(clip, f)};
+  }
   FramePacer pacer(what.plan, what.heldout_frames, RenderedPixels(clip), what.plain != nullptr,
                    what.heldout_slack_s);
   std::future<double> writing;  // the previous frame's files; returns the seconds they took
@@ -264,12 +274,17 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
     const auto start = Clock::now();
     PendingModelMap& model = model_maps[f];
     const auto& mask = EvaluationMask(clip, f);
-    const std::vector<float> neighbours =
+    const std::vector<float> residuals =
         NeighbourEvidence(clip.cameras, f, model.rgb, model.depth, mask, evidence);
-    AddNeighbourEvidence(model.map, neighbours, mask);
-    if (!model.grid.empty()) {
-      AddNeighbourEvidence(model.grid_map, Gather<float>(neighbours, model.grid),
-                           Gather<std::uint8_t>(mask, model.grid));
+    const std::vector<float> disagreement =
+        NeighbourDisagreement(clip.cameras, f, model.rgb, model.depth, neighbour_images);
+    for (const auto& [term, weight] : {std::pair{&residuals, kNeighbourEvidenceWeight},
+                                       std::pair{&disagreement, kNeighbourDisagreementWeight}}) {
+      AddNeighbourTerm(model.map, *term, weight, mask);
+      if (!model.grid.empty()) {
+        AddNeighbourTerm(model.grid_map, Gather<float>(*term, model.grid), weight,
+                         Gather<std::uint8_t>(mask, model.grid));
+      }
     }
     calibrations[1].observed[f] =
         FrameCalibration(model.map, model.grid_map, model.grid, model.error_observed, mask);

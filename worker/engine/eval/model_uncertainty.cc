@@ -91,15 +91,15 @@ std::vector<float> ModelUncertainty(std::span<const float> rgb, std::span<const 
   return map;
 }
 
-void AddNeighbourEvidence(std::span<float> map, std::span<const float> evidence,
-                          std::span<const std::uint8_t> tool_mask) {
-  if (evidence.size() != map.size() || (!tool_mask.empty() && tool_mask.size() != map.size())) {
-    FailInvalid("AddNeighbourEvidence: a map of " + std::to_string(map.size()) + " pixels, " +
-                std::to_string(evidence.size()) + " evidence and " + std::to_string(tool_mask.size()) +
+void AddNeighbourTerm(std::span<float> map, std::span<const float> term, double weight,
+                      std::span<const std::uint8_t> tool_mask) {
+  if (term.size() != map.size() || (!tool_mask.empty() && tool_mask.size() != map.size())) {
+    FailInvalid("AddNeighbourTerm: a map of " + std::to_string(map.size()) + " pixels, " +
+                std::to_string(term.size()) + " term and " + std::to_string(tool_mask.size()) +
                 " mask values");
   }
-  const double scale = kNeighbourEvidenceWeight * TissueMeanScale(evidence, tool_mask);
-  for (std::size_t i = 0; i < map.size(); ++i) map[i] += static_cast<float>(evidence[i] * scale);
+  const double scale = weight * TissueMeanScale(term, tool_mask);
+  for (std::size_t i = 0; i < map.size(); ++i) map[i] += static_cast<float>(term[i] * scale);
 }
 
 }  // namespace endorecon::eval

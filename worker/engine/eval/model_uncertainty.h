@@ -7,8 +7,9 @@
 // pixel's rendered brightness (the noise the camera adds there, as the model learned it), leaving
 // the excess, and adds the epistemic score; both terms are taken relative to their mean over the
 // frame's tissue, so neither swamps the other. Where the clip's frames are known (the evaluation of a
-// clip, not `render` of new cameras), the neighbouring training frames' residuals add a third term
-// (neighbour_evidence.h). It is for ranking pixels within a frame; its values are not variances.
+// clip, not `render` of new cameras), the neighbouring training frames add a third and a fourth term:
+// their residuals, and the render's disagreement with their images (neighbour_evidence.h). It is for ranking
+// pixels within a frame; its values are not variances.
 #pragma once
 
 #include <cstdint>
@@ -28,17 +29,19 @@ std::vector<float> ModelUncertainty(std::span<const float> rgb, std::span<const 
                                     std::span<const float> epistemic,
                                     std::span<const std::uint8_t> tool_mask);
 
-// The weight of the neighbouring frames' evidence in the model map, relative to the aleatoric excess
-// and the epistemic terms (chosen on two clips, docs/benchmarks.md "The neighbours' residuals,
-// averaged with their signs": 0.4-0.6 ranked best on the demo clip, 0.2-0.3 on the real-texture one).
+// The weights of the neighbouring frames' terms in the model map, relative to the aleatoric excess and
+// the epistemic terms: their residuals (chosen on two clips, docs/benchmarks.md "The neighbours'
+// residuals, averaged with their signs": 0.4-0.6 ranked best on the demo clip, 0.2-0.3 on the
+// real-texture one) and the render's disagreement with their images ("The render against its
+// neighbours' images": 0.4-0.6 best on the demo clip, neutral held out on the real-texture clips).
 inline constexpr double kNeighbourEvidenceWeight = 0.4;
+inline constexpr double kNeighbourDisagreementWeight = 0.4;
 
-// Adds the neighbouring training frames' evidence (neighbour_evidence.h; one value per pixel of the
-// map) to a model map: kNeighbourEvidenceWeight times the evidence relative to its mean over the
-// tissue (tool_mask as ModelUncertainty's). Evidence that is 0 everywhere adds nothing. Throws
-// InvalidArgument when the lengths disagree.
-void AddNeighbourEvidence(std::span<float> map, std::span<const float> evidence,
-                          std::span<const std::uint8_t> tool_mask);
+// Adds a neighbouring frames' term (neighbour_evidence.h; one value per pixel of the map) to a model
+// map: weight times the term relative to its mean over the tissue (tool_mask as ModelUncertainty's). A
+// term that is 0 everywhere adds nothing. Throws InvalidArgument when the lengths disagree.
+void AddNeighbourTerm(std::span<float> map, std::span<const float> term, double weight,
+                      std::span<const std::uint8_t> tool_mask);
 
 // Each value divided by the median over the tissue of the values at pixels of the same rendered
 // brightness (the mean of R, G and B in kNoiseCurveBins bins; a bin with no tissue pixel takes the
