@@ -1,17 +1,18 @@
-// The third and fourth terms of the model map (model_uncertainty.h) where the clip's frames are known: where
-// the model does not fit the training frames near a time, it is likely wrong at that time too. The model's
-// own errors persist from frame to frame at a surface point (a hash collision, a fold the deformation misses)
-// and keep their sign, while the camera's noise does not; so the neighbours' signed residuals are averaged
-// before they are squared, which cancels the noise where the squares would add it up, and the square is taken
-// relative to the noise's level at the pixel's brightness. With the squares averaged instead, the model map
-// ranked the demo clip's held-out noise-free error at Spearman 0.50-0.53; with the residuals averaged
-// 0.55-0.58, and the real-texture clip's 0.36 against 0.43 (docs/benchmarks.md, "The neighbours' residuals,
-// averaged with their signs"). The fourth term compares the frame's own render with the nearest training
-// frames' images: where the render disagrees with what the camera saw a frame or two away, beyond what the
-// noise explains after averaging the neighbours and a pixel's surroundings, the model is likely wrong (moving
-// tissue it follows poorly, an edge it misplaces); it ranked the demo clip's held-out noise-free error at
-// 0.61-0.64 with it against 0.56-0.60 without (docs/benchmarks.md, "The render against its neighbours'
-// images").
+// The third and fourth terms of the model map (model_uncertainty.h) where the clip's frames are known.
+// The third: where the model does not fit the training frames near a time, it is likely wrong at that
+// time too. The model's own errors persist from frame to frame at a surface point (a hash collision, a
+// fold the deformation misses) and keep their sign, while the camera's noise does not; so the
+// neighbours' signed residuals are averaged before they are squared, which cancels the noise where the
+// squares would add it up, and the square is taken relative to the noise's level at the pixel's
+// brightness. With the squares averaged instead, the model map ranked the demo clip's held-out
+// noise-free error at Spearman 0.50-0.53; with the residuals averaged 0.55-0.58, and the real-texture
+// clip's 0.36 against 0.43 (docs/benchmarks.md, "The neighbours' residuals, averaged with their
+// signs"). The fourth compares the frame's own render with the nearest training frames' images: the
+// render minus a neighbour's image is the render's own error, plus how the scene changes between the
+// frames, plus the neighbour's noise; averaged over the neighbours and a pixel's surroundings the noise
+// shrinks, and the render's error and the motion, where the model is most often wrong, are left. It
+// ranked the demo clip's held-out noise-free error at 0.61-0.64 with it against 0.56-0.60 without
+// (docs/benchmarks.md, "The render against its neighbours' images").
 #pragma once
 
 #include <cstdint>
