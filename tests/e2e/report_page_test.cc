@@ -161,6 +161,10 @@ TEST(ReportPageTest, APageWorksInHeadlessChromium) {
   };
   const auto first = shown();
   EXPECT_EQ(first[0], "0");
+  // Every layer a reconstruction has is a panel: the model map's heat map beside the paper's map.
+  EXPECT_EQ(browser->Evaluate("Array.from(document.querySelectorAll('#panels img[data-layer]'), i => "
+                              "i.dataset.layer).filter(l => l !== 'tool').join()"),
+            "input,rendered,depth,uncertainty,model,error");
   browser->Evaluate("document.getElementById('frame-slider').focus()");
   browser->PressKey("ArrowRight", 39);
   const auto next = shown();

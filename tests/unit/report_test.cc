@@ -64,13 +64,14 @@ TEST_F(ReportTest, AReconstructionsPageHoldsEveryFrameItsMetricsAndItsRun) {
   EXPECT_EQ(frames["count"], 8);
   EXPECT_EQ(frames["times"].size(), 8u);
   EXPECT_EQ(frames["source_width"], 48);
-  for (const char* layer : {"input", "rendered", "depth", "uncertainty", "error", "tool"}) {
+  for (const char* layer : {"input", "rendered", "depth", "uncertainty", "model", "error", "tool"}) {
     ASSERT_EQ(frames[layer].size(), 8u) << layer;
     EXPECT_EQ(frames[layer][3].get<std::string>().rfind("data:image/", 0), 0u) << layer;
   }
   EXPECT_EQ(data["scales"]["uncertainty"]["range"],
             data["metrics"]["uncertainty_maps"]["heatmap_scale"]["uncertainty"]);
   EXPECT_EQ(data["scales"]["error"]["range"], data["metrics"]["uncertainty_maps"]["heatmap_scale"]["error"]);
+  EXPECT_EQ(data["scales"]["model"]["range"], data["metrics"]["uncertainty_maps"]["heatmap_scale"]["model"]);
   const auto depth_range = data["scales"]["depth"]["range"];
   EXPECT_GT(depth_range[1].get<double>(), depth_range[0].get<double>());
   EXPECT_GT(depth_range[0].get<double>(), 0.0);

@@ -8,6 +8,7 @@
 #include "worker/engine/eval/clip_evaluator.h"
 #include "worker/engine/eval/exports.h"
 #include "worker/engine/scene/clip_loader.h"
+#include "worker/engine/scene/npy.h"
 #include "worker/engine/scene/synthetic_clip.h"
 #include "worker/engine/train/render_settings.h"
 #include "worker/engine/train/scene_fit.h"
@@ -40,7 +41,8 @@ TEST(UncertaintyResults, FilesAndOneHeatmapScalePerClip) {
 
   std::vector<std::vector<float>> totals;
   for (int f = 0; f < 4; ++f) {
-    for (const char* name : {".npy", "_aleatoric.npy", "_epistemic.npy", "_model.npy", ".png"}) {
+    for (const char* name :
+         {".npy", "_aleatoric.npy", "_epistemic.npy", "_model.npy", ".png", "_model.png"}) {
       EXPECT_TRUE(std::filesystem::exists(dir.path() / "out" / "uncertainty" / FrameFileName(f, name)))
           << f << name;
     }
@@ -50,6 +52,12 @@ TEST(UncertaintyResults, FilesAndOneHeatmapScalePerClip) {
   const auto& maps = metrics.at("uncertainty_maps");
   EXPECT_EQ(maps.at("mc_passes"), 3);
   EXPECT_DOUBLE_EQ(maps.at("heatmap_scale").at("uncertainty").at(1).get<double>(), HeatmapUpperBound(totals));
+  std::vector<std::vector<float>> models;  // the model maps' heat maps have a scale of their own
+  for (int f = 0; f < 4; ++f) {
+    const auto map = scene::ReadNpy(dir.path() / "out" / "uncertainty" / FrameFileName(f, "_model.npy")).data;
+    models.emplace_back(map.begin(), map.end());
+  }
+  EXPECT_DOUBLE_EQ(maps.at("heatmap_scale").at("model").at(1).get<double>(), HeatmapUpperBound(models));
   for (const char* split : {"train", "heldout"}) {
     const auto& calibration = metrics.at(split).at("calibration");
     EXPECT_TRUE(calibration.contains("spearman")) << split;

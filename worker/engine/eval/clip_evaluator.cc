@@ -99,6 +99,7 @@ struct UncertaintyMaps {
              nlohmann::json& json) const {
     const double scale = HeatmapUpperBound(total);
     const double error_scale = HeatmapUpperBound(error);
+    const double model_scale = HeatmapUpperBound(model);
     for (const char* sub : {"uncertainty", "error"}) std::filesystem::create_directories(out_dir / sub);
     // Frames are independent files: written on every core.
     tbb::parallel_for(std::size_t(0), total.size(), [&](std::size_t f) {
@@ -109,9 +110,12 @@ struct UncertaintyMaps {
       WriteDepthNpy(out_dir / "uncertainty" / FrameFileName(i, "_epistemic.npy"), frame.epistemic, w, h);
       WriteDepthNpy(out_dir / "uncertainty" / FrameFileName(i, "_model.npy"), model[f], w, h);
       WriteHeatmapPng(out_dir / "uncertainty" / FrameFileName(i, ".png"), total[f], w, h, 0.0, scale);
+      WriteHeatmapPng(out_dir / "uncertainty" / FrameFileName(i, "_model.png"), model[f], w, h, 0.0,
+                      model_scale);
       WriteHeatmapPng(out_dir / "error" / FrameFileName(i, ".png"), error[f], w, h, 0.0, error_scale);
     });
-    json["heatmap_scale"] = {{"uncertainty", {0.0, scale}}, {"error", {0.0, error_scale}}};
+    json["heatmap_scale"] = {
+        {"uncertainty", {0.0, scale}}, {"error", {0.0, error_scale}}, {"model", {0.0, model_scale}}};
   }
 };
 

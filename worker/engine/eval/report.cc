@@ -215,11 +215,14 @@ void AddFrames(const fs::path& results_dir, const Views& views, const json& reco
   scales["depth"] = {{"colormap", "viridis"}, {"range", depth_range}, {"unit", "clip units"}};
   const auto uncertainty_scale = HeatScale(record, heat + "/uncertainty", "score");
   const auto error_scale = HeatScale(record, heat + "/error", "RMSE, RGB in [0, 1]");
+  const auto model_scale = HeatScale(record, heat + "/model", "unitless");
   const bool uncertainty =
       uncertainty_scale && fs::exists(results_dir / "uncertainty" / FrameFileName(0, ".png"));
   const bool error = error_scale && fs::exists(results_dir / "error" / FrameFileName(0, ".png"));
+  const bool model = model_scale && fs::exists(results_dir / "uncertainty" / FrameFileName(0, "_model.png"));
   if (uncertainty) scales["uncertainty"] = *uncertainty_scale;
   if (error) scales["error"] = *error_scale;
+  if (model) scales["model"] = *model_scale;
   const double bound = uncertainty ? (*uncertainty_scale)["range"][1].get<double>() : 1.0;
   const bool tool = views.clip && (views.clip->has_masks() || !views.clip->eval_mask.empty());
   const int stride = SurfaceStride(first.width, first.height, count, kSurfacePoints);
@@ -233,7 +236,7 @@ void AddFrames(const fs::path& results_dir, const Views& views, const json& reco
                                 ? int(std::lround(double(first.height) * kDisplayWidth / first.width))
                                 : first.height}};
   json surfaces = json::array();
-  for (const char* layer : {"input", "rendered", "depth", "uncertainty", "error", "tool"})
+  for (const char* layer : {"input", "rendered", "depth", "uncertainty", "model", "error", "tool"})
     frames[layer] = json::array();
   static const std::vector<std::uint8_t> kNoMask;
   for (int f = 0; f < count; ++f) {
@@ -253,13 +256,14 @@ void AddFrames(const fs::path& results_dir, const Views& views, const json& reco
       frames["uncertainty"].push_back(JpegUri(ReadFrameImage(file("uncertainty", ".png"), camera)));
       total = ReadMap(file("uncertainty", ".npy"), w, h);
     }
+    if (model) frames["model"].push_back(JpegUri(ReadFrameImage(file("uncertainty", "_model.png"), camera)));
     if (error) frames["error"].push_back(JpegUri(ReadFrameImage(file("error", ".png"), camera)));
     const auto& mask = views.clip ? EvaluationMask(*views.clip, f) : kNoMask;
     if (tool) frames["tool"].push_back(ToolOverlayUri(mask, w, h));
     surfaces.push_back(
         SurfaceJson(SampleSurface(camera, depth, colour.rgb, total, bound, mask, stride), camera));
   }
-  for (const char* layer : {"input", "uncertainty", "error", "tool"}) {
+  for (const char* layer : {"input", "uncertainty", "model", "error", "tool"}) {
     if (frames[layer].empty()) frames[layer] = nullptr;
   }
   const Eigen::Vector3d eye = first.c2w.col(3), up = first.c2w.col(1);

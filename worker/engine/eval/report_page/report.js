@@ -137,6 +137,7 @@
     { key: "rendered", label: "rendered" },
     { key: "depth", label: "rendered depth", scale: "depth" },
     { key: "uncertainty", label: "total uncertainty", scale: "uncertainty" },
+    { key: "model", label: "model map: where the model is likely wrong", scale: "model" },
     { key: "error", label: "error against the input (RMSE over RGB)", scale: "error" },
   ];
   const panels = [];
