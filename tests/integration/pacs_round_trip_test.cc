@@ -84,7 +84,7 @@ TEST_F(PacsRoundTripTest, RecordingFromThePacsResultsBackIntoItsStudy) {
                                  "--iterations", "30", "--size", "64x48", "--wait"});
   ASSERT_EQ(submitted.exit_code, 0) << submitted.out << submitted.err << cluster.ServerLog();
   EXPECT_NE(submitted.out.find("retrieval from PACS orthanc by C-GET"), std::string::npos) << submitted.out;
-  EXPECT_NE(submitted.out.find("send to orthanc: sent 4 of 4"), std::string::npos) << submitted.out;
+  EXPECT_NE(submitted.out.find("send to orthanc: sent 5 of 5"), std::string::npos) << submitted.out;
   const std::string id = JobIdIn(submitted.out);
   v1::Job job = cluster.Job(id);
   EXPECT_EQ(job.state(), v1::SUCCEEDED);
@@ -99,7 +99,7 @@ TEST_F(PacsRoundTripTest, RecordingFromThePacsResultsBackIntoItsStudy) {
       "/tools/find",
       nlohmann::json{{"Level", "Series"}, {"Query", {{"StudyInstanceUID", study}}}, {"Expand", true}}.dump());
   ASSERT_TRUE(series.is_array()) << series.dump();
-  EXPECT_EQ(series.size(), 5u) << series.dump();
+  EXPECT_EQ(series.size(), 6u) << series.dump();
   std::map<std::string, nlohmann::json> by_class;
   for (const auto& one : series) {
     EXPECT_EQ(Text(one, "ParentStudy"), orthanc_study);
@@ -126,7 +126,7 @@ TEST_F(PacsRoundTripTest, RecordingFromThePacsResultsBackIntoItsStudy) {
 
   // What the worker wrote conforms, and the mesh is there in the open formats too.
   ASSERT_EQ(RunCli(cluster.address(), {"fetch", id, "-o", (dir_ / "results").string()}).exit_code, 0);
-  for (const char* name : {"rendered.dcm", "depth.dcm", "uncertainty.dcm", "mesh.dcm"}) {
+  for (const char* name : {"rendered.dcm", "depth.dcm", "uncertainty.dcm", "model_map.dcm", "mesh.dcm"}) {
     EXPECT_EQ(DciodvfyErrors(dir_ / "results" / "dicom" / name), "") << name;
   }
   EXPECT_TRUE(fs::exists(dir_ / "results" / "mesh.ply"));
@@ -141,7 +141,7 @@ TEST_F(PacsRoundTripTest, RecordingFromThePacsResultsBackIntoItsStudy) {
 
   const auto metrics =
       Capture("curl -s http://127.0.0.1:" + std::to_string(cluster.metrics_port()) + "/metrics");
-  EXPECT_NE(metrics.find("endorecon_dicom_instances_sent_total{destination=\"orthanc\"} 4"),
+  EXPECT_NE(metrics.find("endorecon_dicom_instances_sent_total{destination=\"orthanc\"} 5"),
             std::string::npos)
       << metrics;
   EXPECT_EQ(metrics.find("endorecon_dicom_retrieval_bytes_total 0\n"), std::string::npos);
@@ -168,7 +168,7 @@ TEST_F(PacsRoundTripTest, RecordingFromThePacsResultsBackIntoItsStudy) {
   const auto resent = RunCli(cluster.address(), {"send", id, "--to", "orthanc", "--wait"});
   EXPECT_EQ(resent.exit_code, 0) << resent.out << resent.err;
   EXPECT_EQ(SendTo(cluster.Job(id), "orthanc")->state(), v1::DicomSend::SENT);
-  EXPECT_EQ(SendTo(cluster.Job(id), "orthanc")->sent(), 4);
+  EXPECT_EQ(SendTo(cluster.Job(id), "orthanc")->sent(), 5);
 
   // A study the PACS does not hold: the job fails with the reason, before any worker sees it.
   const auto missing =

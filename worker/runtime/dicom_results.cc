@@ -49,7 +49,7 @@ std::vector<fs::path> WriteDicomResults(const fs::path& results_dir, const Dicom
     if (rgb.back().empty()) FailInvalid(path.string() + ": not a readable image");
   }
   const int width = rgb[0].cols, height = rgb[0].rows;
-  std::vector<std::vector<float>> depth, uncertainty;
+  std::vector<std::vector<float>> depth, uncertainty, model_map;
   for (int f = 0; f < count; ++f) {
     depth.push_back(ReadFloats(results_dir / "depth" / eval::FrameFileName(f, ".npy"), width, height));
   }
@@ -57,6 +57,13 @@ std::vector<fs::path> WriteDicomResults(const fs::path& results_dir, const Dicom
   for (int f = 0; uncertain && f < count; ++f) {
     uncertainty.push_back(
         ReadFloats(results_dir / "uncertainty" / eval::FrameFileName(f, ".npy"), width, height));
+  }
+  // The model map (a reconstruction's; `render` of new views writes none).
+  const bool mapped =
+      uncertain && fs::exists(results_dir / "uncertainty" / eval::FrameFileName(0, "_model.npy"));
+  for (int f = 0; mapped && f < count; ++f) {
+    model_map.push_back(
+        ReadFloats(results_dir / "uncertainty" / eval::FrameFileName(f, "_model.npy"), width, height));
   }
 
   dicom::SeriesHeader header;
@@ -89,6 +96,15 @@ std::vector<fs::path> WriteDicomResults(const fs::path& results_dir, const Dicom
                       {"US",
                        "Total uncertainty: the ray score of the aleatoric plus epistemic variances "
                        "(docs/formats.md, Uncertainty values); unitless, larger is less certain."});
+  }
+  if (mapped) {
+    next(905, "endorecon model map", "Where the reconstruction is likely wrong at every input time");
+    WriteScalarFrames(
+        written.emplace_back(out / "model_map.dcm"), header, model_map, width, height,
+        {"US",
+         "Model map: where the reconstruction itself is likely wrong, apart from the camera's "
+         "noise (docs/formats.md, results layout); unitless, relative within a frame, larger is "
+         "more likely wrong."});
   }
   next(904, "endorecon tissue surface",
        "Tissue surface of the canonical frame (t = 0) triangulated on the pixel grid");

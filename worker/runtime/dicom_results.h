@@ -1,7 +1,7 @@
 // A results folder's DICOM: dicom/rendered.dcm (the rendered frames, Multi-frame True Color
-// Secondary Capture), dicom/depth.dcm and dicom/uncertainty.dcm (Multi-frame Grayscale Word
-// Secondary Capture with Rescale Slope/Intercept), dicom/mesh.dcm (Encapsulated STL of mesh.stl),
-// each a new series of the source's study (or of a new study when the input was not DICOM).
+// Secondary Capture), dicom/depth.dcm, dicom/uncertainty.dcm and dicom/model_map.dcm (Multi-frame
+// Grayscale Word Secondary Capture with Rescale Slope/Intercept), dicom/mesh.dcm (Encapsulated STL of
+// mesh.stl), each a new series of the source's study (or of a new study when the input was not DICOM).
 #pragma once
 
 #include <filesystem>
