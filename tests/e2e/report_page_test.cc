@@ -252,6 +252,7 @@ TEST(ReportPageTest, RenderWritesAPageOfItsViews) {
   EXPECT_EQ(data["frames"]["times"], nlohmann::json::array({0.0, 1.0}));
   EXPECT_TRUE(data["frames"]["input"].is_null()) << "rendered views have no input images";
   EXPECT_EQ(data["frames"]["uncertainty"].size(), 2u);
+  EXPECT_EQ(data["frames"]["model"].size(), 2u);
   EXPECT_EQ(data["surface"]["frames"].size(), 2u);
 
   std::string why;
@@ -260,8 +261,8 @@ TEST(ReportPageTest, RenderWritesAPageOfItsViews) {
     GTEST_SKIP() << "Chromium cannot start here, so the views' page is not opened in a browser: " << why;
   browser->Navigate("file://" + (dir / "views" / "report.html").string());
   ASSERT_TRUE(browser->WaitFor("document.body.dataset.ready === 'true'", std::chrono::seconds(20)));
-  EXPECT_EQ(browser->Evaluate("document.querySelectorAll('#panels img[data-layer]').length"), 3)
-      << "rendered, depth and uncertainty";
+  EXPECT_EQ(browser->Evaluate("document.querySelectorAll('#panels img[data-layer]').length"), 4)
+      << "rendered, depth, uncertainty and the model map";
   EXPECT_TRUE(browser->problems().empty()) << fmt::format("{}", fmt::join(browser->problems(), "\n"));
 }
 

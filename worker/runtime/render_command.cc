@@ -52,7 +52,7 @@ Command AddRenderCommand(CLI::App& app) {
     for (const char* sub : {"rgb", "depth", "uncertainty"}) std::filesystem::create_directories(out / sub);
     const double scale = eval::DepthPngScale(model.far);
     // The heat maps share one scale over all views, so they are written once every view is rendered.
-    std::vector<std::vector<float>> totals;
+    std::vector<std::vector<float>> totals, models;
     for (std::size_t i = 0; i < cameras.size(); ++i) {
       const auto& view = cameras[i];
       auto frame = renderer.Render(view.camera, view.time);
@@ -67,17 +67,20 @@ Command AddRenderCommand(CLI::App& app) {
       eval::WriteDepthNpy(path(".npy"), frame.uncertainty, w, h);
       eval::WriteDepthNpy(path("_aleatoric.npy"), frame.aleatoric, w, h);
       eval::WriteDepthNpy(path("_epistemic.npy"), frame.epistemic, w, h);
-      eval::WriteDepthNpy(path("_model.npy"),
-                          eval::ModelUncertainty(frame.rgb, frame.aleatoric, frame.epistemic, {}), w, h);
+      models.push_back(eval::ModelUncertainty(frame.rgb, frame.aleatoric, frame.epistemic, {}));
+      eval::WriteDepthNpy(path("_model.npy"), models.back(), w, h);
       totals.push_back(std::move(frame.uncertainty));
     }
-    const double heat = eval::HeatmapUpperBound(totals);
+    const double heat = eval::HeatmapUpperBound(totals), model_heat = eval::HeatmapUpperBound(models);
     for (std::size_t i = 0; i < totals.size(); ++i) {
-      eval::WriteHeatmapPng(out / "uncertainty" / eval::FrameFileName(int(i), ".png"), totals[i],
-                            cameras[i].camera.width, cameras[i].camera.height, 0.0, heat);
+      const int w = cameras[i].camera.width, h = cameras[i].camera.height;
+      eval::WriteHeatmapPng(out / "uncertainty" / eval::FrameFileName(int(i), ".png"), totals[i], w, h, 0.0,
+                            heat);
+      eval::WriteHeatmapPng(out / "uncertainty" / eval::FrameFileName(int(i), "_model.png"), models[i], w, h,
+                            0.0, model_heat);
     }
     nlohmann::json info = eval::UncertaintySettings(settings);
-    info["heatmap_scale"] = {{"uncertainty", {0.0, heat}}};
+    info["heatmap_scale"] = {{"uncertainty", {0.0, heat}}, {"model", {0.0, model_heat}}};
     info["depth_png_scale"] = scale;
     WriteFile(out / "render.json", info.dump(2), "render description");
     // The views' cameras and times travel with them (the report back-projects the depth through them).
