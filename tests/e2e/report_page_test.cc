@@ -210,7 +210,15 @@ TEST(ReportPageTest, APageWorksInHeadlessChromium) {
   browser->Evaluate(
       "(() => { const s = document.getElementById('surface-colour'); s.value = 'uncertainty';"
       " s.dispatchEvent(new Event('change')); })()");
-  EXPECT_GT(FractionChanged(turned, canvas()), 0.02) << "the uncertainty colouring looks like the colour";
+  const cv::Mat uncertain = canvas();
+  EXPECT_GT(FractionChanged(turned, uncertain), 0.02) << "the uncertainty colouring looks like the colour";
+  browser->Evaluate(
+      "(() => { const s = document.getElementById('surface-colour'); s.value = 'model';"
+      " s.dispatchEvent(new Event('change')); })()");
+  EXPECT_GT(FractionChanged(uncertain, canvas()), 0.02)
+      << "the model map's colouring looks like the uncertainty's";
+  EXPECT_EQ(browser->Evaluate("document.querySelector('#surface-scale .hint').textContent"),
+            "model map colouring");
 
   const int checked = CheckNumbers(*browser, metrics, config);
   EXPECT_GE(checked, kFrames * 9) << "the per-frame table shows nine metrics of every frame";

@@ -84,6 +84,7 @@ TEST_F(ReportTest, AReconstructionsPageHoldsEveryFrameItsMetricsAndItsRun) {
   EXPECT_EQ(surface["frames"][0]["depth"].get<std::string>().size(), 4 * ((2 * points + 2) / 3));
   EXPECT_EQ(surface["frames"][0]["camera"]["width"], 48);
   EXPECT_EQ(surface["frames"][0]["uncertainty"].get<std::string>().size(), 4 * ((points + 2) / 3));
+  EXPECT_EQ(surface["frames"][0]["model"].get<std::string>().size(), 4 * ((points + 2) / 3));
   EXPECT_EQ(surface["view"]["eye"].size(), 3u);
 }
 

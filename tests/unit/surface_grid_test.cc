@@ -103,6 +103,21 @@ TEST(SurfaceGridTest, UncertaintyIsScaledByTheBoundAndClamped) {
   EXPECT_EQ(grid.uncertainty, (std::vector<std::uint8_t>{0, 128, 255, 0}));
 }
 
+TEST(SurfaceGridTest, AHeatMapIsSampledAtTheGridsPixels) {
+  const scene::Camera camera = Camera(4, 3);
+  // Stride 2: grid columns sample pixels 1 and 3, rows 1 and 2 (the last row, clamped).
+  std::vector<float> values(12, 0.0f);
+  values[1 * 4 + 1] = 0.25f;
+  values[1 * 4 + 3] = 4.0f;
+  values[2 * 4 + 1] = std::numeric_limits<float>::quiet_NaN();
+  values[2 * 4 + 3] = 1.0f;
+  EXPECT_EQ(SampleHeat(camera, values, 2.0, 2), (std::vector<std::uint8_t>{32, 255, 0, 128}));
+  EXPECT_EQ(SampleHeat(camera, {}, 2.0, 2), std::vector<std::uint8_t>(4, 0));
+  EXPECT_THROW(SampleHeat(camera, std::vector<float>(5), 1.0, 1), Error);
+  EXPECT_THROW(SampleHeat(camera, values, 0.0, 1), Error);
+  EXPECT_THROW(SampleHeat(camera, values, 1.0, 0), Error);
+}
+
 TEST(SurfaceGridTest, BadSizesAreRefused) {
   const scene::Camera camera = Camera(4, 2);
   const std::vector<float> depth(8, 1.0f);

@@ -164,7 +164,8 @@ std::string ToolOverlayUri(const std::vector<std::uint8_t>& mask, int width, int
 }
 
 // A frame's surface grid and the camera the page back-projects it through (formats.md, "report.html").
-json SurfaceJson(const SurfaceGrid& grid, const scene::Camera& camera) {
+json SurfaceJson(const SurfaceGrid& grid, const std::vector<std::uint8_t>& model,
+                 const scene::Camera& camera) {
   // Little-endian, as the page's Uint16Array reads it on the (little-endian) machines browsers run on.
   std::string depth(grid.depth.size() * 2, '\0');
   for (std::size_t i = 0; i < grid.depth.size(); ++i) {
@@ -180,6 +181,7 @@ json SurfaceJson(const SurfaceGrid& grid, const scene::Camera& camera) {
           {"depth", Base64(depth)},
           {"rgb", BytesBase64(grid.rgb.data(), grid.rgb.size())},
           {"uncertainty", BytesBase64(grid.uncertainty.data(), grid.uncertainty.size())},
+          {"model", model.empty() ? json(nullptr) : json(BytesBase64(model.data(), model.size()))},
           {"camera",
            {{"c2w", c2w},
             {"fx", camera.fx},
@@ -252,16 +254,21 @@ void AddFrames(const fs::path& results_dir, const Views& views, const json& reco
     const auto depth = ReadMap(file("depth", ".npy"), w, h);
     frames["depth"].push_back(DataUri(DepthImage(depth, w, h, depth_range), ".jpg", cv::INTER_AREA));
     std::vector<float> total;
+    std::vector<std::uint8_t> model_levels;  // the model map on the surface's grid
     if (uncertainty) {
       frames["uncertainty"].push_back(JpegUri(ReadFrameImage(file("uncertainty", ".png"), camera)));
       total = ReadMap(file("uncertainty", ".npy"), w, h);
     }
-    if (model) frames["model"].push_back(JpegUri(ReadFrameImage(file("uncertainty", "_model.png"), camera)));
+    if (model) {
+      frames["model"].push_back(JpegUri(ReadFrameImage(file("uncertainty", "_model.png"), camera)));
+      model_levels = SampleHeat(camera, ReadMap(file("uncertainty", "_model.npy"), w, h),
+                                (*model_scale)["range"][1].get<double>(), stride);
+    }
     if (error) frames["error"].push_back(JpegUri(ReadFrameImage(file("error", ".png"), camera)));
     const auto& mask = views.clip ? EvaluationMask(*views.clip, f) : kNoMask;
     if (tool) frames["tool"].push_back(ToolOverlayUri(mask, w, h));
-    surfaces.push_back(
-        SurfaceJson(SampleSurface(camera, depth, colour.rgb, total, bound, mask, stride), camera));
+    surfaces.push_back(SurfaceJson(SampleSurface(camera, depth, colour.rgb, total, bound, mask, stride),
+                                   model_levels, camera));
   }
   for (const char* layer : {"input", "uncertainty", "model", "error", "tool"}) {
     if (frames[layer].empty()) frames[layer] = nullptr;

@@ -17,24 +17,42 @@ int SurfaceStride(int width, int height, int frames, std::size_t budget) {
   }
 }
 
+std::vector<std::uint8_t> SampleHeat(const scene::Camera& camera, std::span<const float> values, double bound,
+                                     int stride) {
+  const int w = camera.width, h = camera.height;
+  CheckMaskSize(values.size(), w, h, "surface: heat map");
+  if (stride < 1) FailInvalid("surface: stride " + std::to_string(stride) + " is below 1");
+  if (!(bound > 0)) FailInvalid("surface: a heat map's bound must be > 0");
+  const int gw = (w + stride - 1) / stride, gh = (h + stride - 1) / stride;
+  std::vector<std::uint8_t> levels(static_cast<std::size_t>(gw) * gh, 0);
+  if (values.empty()) return levels;
+  for (int j = 0; j < gh; ++j) {
+    for (int i = 0; i < gw; ++i) {
+      const float value =
+          values[static_cast<std::size_t>(SurfacePixel(j, stride, h)) * w + SurfacePixel(i, stride, w)];
+      if (!std::isfinite(value)) continue;
+      levels[static_cast<std::size_t>(j) * gw + i] =
+          static_cast<std::uint8_t>(std::lround(255.0 * std::clamp(value / bound, 0.0, 1.0)));
+    }
+  }
+  return levels;
+}
+
 SurfaceGrid SampleSurface(const scene::Camera& camera, std::span<const float> depth,
                           std::span<const std::uint8_t> rgb, std::span<const float> uncertainty,
                           double uncertainty_bound, std::span<const std::uint8_t> tool_mask, int stride) {
   const int w = camera.width, h = camera.height;
   CheckImageSize(depth.size(), w, h, 1, "surface: depth");
   CheckImageSize(rgb.size(), w, h, 3, "surface: colour");
-  CheckMaskSize(uncertainty.size(), w, h, "surface: uncertainty");
   CheckMaskSize(tool_mask.size(), w, h, "surface: tool mask");
-  if (stride < 1) FailInvalid("surface: stride " + std::to_string(stride) + " is below 1");
-  if (!(uncertainty_bound > 0)) FailInvalid("surface: the uncertainty bound must be > 0");
   SurfaceGrid grid;
+  grid.uncertainty = SampleHeat(camera, uncertainty, uncertainty_bound, stride);
   grid.stride = stride;
   grid.width = (w + stride - 1) / stride;
   grid.height = (h + stride - 1) / stride;
   const std::size_t points = static_cast<std::size_t>(grid.width) * grid.height;
   std::vector<double> z(points, std::numeric_limits<double>::quiet_NaN());
   grid.rgb.assign(points * 3, 0);
-  grid.uncertainty.assign(points, 0);
   double lo = std::numeric_limits<double>::infinity(), hi = -lo;
   for (int j = 0; j < grid.height; ++j) {
     for (int i = 0; i < grid.width; ++i) {
@@ -42,10 +60,6 @@ SurfaceGrid SampleSurface(const scene::Camera& camera, std::span<const float> de
       const std::size_t p = static_cast<std::size_t>(v) * w + u,
                         g = static_cast<std::size_t>(j) * grid.width + i;
       for (int c = 0; c < 3; ++c) grid.rgb[3 * g + c] = rgb[3 * p + c];
-      if (!uncertainty.empty() && std::isfinite(uncertainty[p])) {
-        const double level = std::clamp(uncertainty[p] / uncertainty_bound, 0.0, 1.0);
-        grid.uncertainty[g] = static_cast<std::uint8_t>(std::lround(255.0 * level));
-      }
       if ((!tool_mask.empty() && tool_mask[p] != 0) || !std::isfinite(depth[p]) || depth[p] <= 0) continue;
       z[g] = depth[p];
       lo = std::min(lo, z[g]);

@@ -32,10 +32,17 @@ inline int SurfacePixel(int i, int stride, int size) {
 // points (WebGL 1 indexes vertices with 16 bits) and at most `budget` points over `frames` frames.
 int SurfaceStride(int width, int height, int frames, std::size_t budget);
 
+// A heat map's value at every grid point of a camera's image sampled with `stride` (as SampleSurface's
+// points): round(255 * value / bound) clamped to [0, 255], a non-finite value 0; all 0 when `values` is
+// empty. Throws InvalidArgument when values has neither 0 nor width x height entries, a stride < 1 or a
+// bound that is not > 0.
+std::vector<std::uint8_t> SampleHeat(const scene::Camera& camera, std::span<const float> values, double bound,
+                                     int stride);
+
 // Grid point (i, j) samples pixel (SurfacePixel(i), SurfacePixel(j)) of the camera's image. A point has
 // no depth where the pixel is a tool pixel (tool_mask 1; an empty mask: none) or its depth is not
-// finite and > 0. `rgb` is 8-bit RGB (W*H*3); `uncertainty` (W*H, or empty: all 0) is scaled by
-// `uncertainty_bound` (> 0), a non-finite value to 0. Throws InvalidArgument on sizes that disagree
+// finite and > 0. `rgb` is 8-bit RGB (W*H*3); `uncertainty` (W*H, or empty: all 0) is sampled by
+// SampleHeat with `uncertainty_bound`. Throws InvalidArgument on sizes that disagree
 // with the camera's or a stride < 1.
 SurfaceGrid SampleSurface(const scene::Camera& camera, std::span<const float> depth,
                           std::span<const std::uint8_t> rgb, std::span<const float> uncertainty,

@@ -223,16 +223,23 @@
       viewer = new SurfaceViewer($("surface"), data.surface, colormaps.inferno);
       viewer.showFrame(current);
       const select = $("surface-colour");
+      // A heat-map colouring shows its scale bar; one the results have no scale (or grid) for is disabled.
+      const heats = { uncertainty: "uncertainty colouring", model: "model map colouring" };
+      const surfaceScale = () => {
+        const heat = heats[select.value];
+        $("surface-scale").replaceChildren(...(heat ? [node("div", { class: "hint", text: heat }),
+                                                       scaleBar(data.scales[select.value])] : []));
+        $("surface-scale").style.visibility = heat ? "visible" : "hidden";
+      };
+      for (const key of Object.keys(heats)) {
+        const present = data.scales[key] && (key !== "model" || data.surface.frames.every((f) => f.model));
+        if (!present) select.querySelector(`option[value="${key}"]`).disabled = true;
+      }
       select.addEventListener("change", () => {
         viewer.setColouring(select.value);
-        $("surface-scale").style.visibility = select.value === "uncertainty" ? "visible" : "hidden";
+        surfaceScale();
       });
-      if (data.scales.uncertainty) {
-        $("surface-scale").append(node("div", { class: "hint", text: "uncertainty colouring" }), scaleBar(data.scales.uncertainty));
-      } else {
-        select.querySelector('option[value="uncertainty"]').disabled = true;
-      }
-      $("surface-scale").style.visibility = "hidden";
+      surfaceScale();
       $("surface-note").textContent =
         `The frame's rendered depth back-projected through its camera, one point per ` +
         `${data.surface.stride} \u00d7 ${data.surface.stride} pixels (clip units); tool pixels are left out.`;

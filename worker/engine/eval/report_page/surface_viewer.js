@@ -65,7 +65,7 @@ class SurfaceViewer {
     return { right: r, up: cross(b, r), back: b };
   }
 
-  // Vertices, normals, both colourings and triangles of frame `index`, built once and kept.
+  // Vertices, normals, the colourings and triangles of frame `index`, built once and kept.
   mesh(index) {
     if (this.meshes.has(index)) return this.meshes.get(index);
     const data = this.surface.frames[index];
@@ -74,6 +74,7 @@ class SurfaceViewer {
     const depth = new Uint16Array(decodeBase64(data.depth).buffer);
     const rgb = decodeBase64(data.rgb);
     const uncertainty = decodeBase64(data.uncertainty);
+    const model = data.model ? decodeBase64(data.model) : null;
     const position = new Float32Array(count * 3), valid = new Uint8Array(count);
     const lo = [Infinity, Infinity, Infinity], hi = [-Infinity, -Infinity, -Infinity];
     // Back-projection as eval::BackProject: the ray through the centre of the grid point's pixel, with
@@ -119,13 +120,13 @@ class SurfaceViewer {
       addTriangle(i, i + gw, i + 1);
       addTriangle(i + 1, i + gw, i + gw + 1);
     }
-    const rgbColour = new Float32Array(count * 3), uncertaintyColour = new Float32Array(count * 3);
-    for (let i = 0; i < count; ++i) {
-      for (let k = 0; k < 3; ++k) {
-        rgbColour[3 * i + k] = rgb[3 * i + k] / 255;
-        uncertaintyColour[3 * i + k] = this.inferno[3 * uncertainty[i] + k] / 255;
-      }
-    }
+    const rgbColour = new Float32Array(count * 3);
+    for (let i = 0; i < 3 * count; ++i) rgbColour[i] = rgb[i] / 255;
+    const heatColour = (levels) => {
+      const colour = new Float32Array(count * 3);
+      for (let i = 0; i < count; ++i) for (let k = 0; k < 3; ++k) colour[3 * i + k] = this.inferno[3 * levels[i] + k] / 255;
+      return colour;
+    };
     const gl = this.gl;
     const buffer = (array, target) => {
       const b = gl.createBuffer();
@@ -136,7 +137,8 @@ class SurfaceViewer {
     const centre = lo.map((v, a) => (v + hi[a]) / 2);
     const mesh = {
       position: buffer(position), normal: buffer(normal),
-      colour: { rgb: buffer(rgbColour), uncertainty: buffer(uncertaintyColour) },
+      colour: { rgb: buffer(rgbColour), uncertainty: buffer(heatColour(uncertainty)),
+                model: model ? buffer(heatColour(model)) : null },
       indices: buffer(new Uint16Array(indices), gl.ELEMENT_ARRAY_BUFFER), count: indices.length,
       centre: Number.isFinite(centre[0]) ? centre : [0, 0, 0],
       radius: Number.isFinite(centre[0]) ? Math.hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]) / 2 : 1,
@@ -230,7 +232,7 @@ class SurfaceViewer {
     };
     attribute("position", mesh.position);
     attribute("normal", mesh.normal);
-    attribute("colour", mesh.colour[this.colouring]);
+    attribute("colour", mesh.colour[this.colouring] || mesh.colour.rgb);
     gl.bindBuffer(gl.ELEMENT_ARRAY_BUFFER, mesh.indices);
     gl.drawElements(gl.TRIANGLES, mesh.count, gl.UNSIGNED_SHORT, 0);
   }
