@@ -161,6 +161,13 @@ TEST(ReportPageTest, APageWorksInHeadlessChromium) {
   };
   const auto first = shown();
   EXPECT_EQ(first[0], "0");
+  // Sparsification plots: the paper's map against the observed error, and both maps against the
+  // synthetic clip's noise-free truth, for the held-out and the training frames.
+  EXPECT_EQ(browser->Evaluate("Array.from(document.querySelectorAll('#calibration figure svg'), s => "
+                              "s.querySelector('text').textContent).join('|')"),
+            "Sparsification, held-out frames|Sparsification, training frames|"
+            "Sparsification of the noise-free error, held-out frames|"
+            "Sparsification of the noise-free error, training frames");
   // Every layer a reconstruction has is a panel: the model map's heat map beside the paper's map.
   EXPECT_EQ(browser->Evaluate("Array.from(document.querySelectorAll('#panels img[data-layer]'), i => "
                               "i.dataset.layer).filter(l => l !== 'tool').join()"),

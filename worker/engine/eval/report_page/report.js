@@ -346,6 +346,27 @@
       "Pixels removed in order of uncertainty against in order of their true error; AUSE is the area between." }));
     $("calibration").appendChild(plot);
   }
+  // Where the clip has its noise-free truth: how well each map finds where the model itself is wrong.
+  for (const split of calibrated) {
+    const model = lookup(metrics, `/${split}/calibration_model_map_noise_free/curves`);
+    const paper = lookup(metrics, `/${split}/calibration_noise_free/curves`);
+    if (!model || !paper) continue;
+    const name = split === "heldout" ? "held-out" : "training";
+    const plot = EndoPlots.linePlot({
+      title: `Sparsification of the noise-free error, ${name} frames`, xLabel: "fraction of pixels removed",
+      yLabel: "mean error / mean error at 0",
+      series: [{ label: "model map", x: model.fractions, y: model.by_uncertainty, colour: "#7c3aed" },
+               { label: "uncertainty", x: paper.fractions, y: paper.by_uncertainty, colour: "#1f6feb" },
+               { label: "oracle", x: model.fractions, y: model.oracle, dashed: true, colour: "#c2410c" }],
+    });
+    const base = `/${split}/calibration_model_map_noise_free`;
+    plot.appendChild(node("figcaption", { class: "numbers" }, [
+      "model map: Spearman ", ...meanStd(`${base}/spearman`, { digits: 3 }),
+      " \u00b7 AUSE ", ...meanStd(`${base}/ause`, { digits: 3 })]));
+    plot.appendChild(node("figcaption", { text:
+      "Against the clip's noise-free truth: where the reconstruction is wrong, apart from the camera's noise." }));
+    $("calibration").appendChild(plot);
+  }
   if (calibrated.length === 0) {
     $("calibration-section").appendChild(node("p", { class: "missing", text: "No uncertainty calibration was measured." }));
   }
