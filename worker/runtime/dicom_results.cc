@@ -58,7 +58,7 @@ std::vector<fs::path> WriteDicomResults(const fs::path& results_dir, const Dicom
     uncertainty.push_back(
         ReadFloats(results_dir / "uncertainty" / eval::FrameFileName(f, ".npy"), width, height));
   }
-  // The model map (a reconstruction's; `render` of new views writes none).
+  // The model map, written beside the uncertainty (results from before it have none).
   const bool mapped =
       uncertain && fs::exists(results_dir / "uncertainty" / eval::FrameFileName(0, "_model.npy"));
   for (int f = 0; mapped && f < count; ++f) {

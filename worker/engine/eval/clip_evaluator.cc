@@ -223,9 +223,8 @@ nlohmann::json UncertaintySettings(const render::FrameRenderSettings& settings) 
        "clip's evaluation plus 0.4 times the neighbouring training frames' (within 4 frames, weights "
        "1/distance) signed residuals at the pixel the surface projects to, averaged, squared, relative to "
        "its median at the frame's brightness and to its tissue mean, plus 0.4 times the render's "
-       "disagreement "
-       "with the training frames' images within 2 frames (weights 1/distance, their tools left out), "
-       "averaged, blurred (Gaussian, sigma 1 pixel), squared, relative to its tissue mean "
+       "disagreement with the training frames' images within 2 frames (weights 1/distance, their tools "
+       "left out), averaged, blurred (Gaussian, sigma 1 pixel), squared, relative to its tissue mean "
        "(eval/neighbour_evidence.h)"}};
 }
 
@@ -338,7 +337,7 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
                                                          evaluated.grid, model.error_noise_free, mask);
       }
       if (Contains(what.train_frames, f))
-        evidence[f] = ResidualEvidence(frame.rgb, clip.rgb[f], clip.has_masks() ? clip.tool_mask[f] : mask);
+        evidence[f] = ResidualEvidence(frame.rgb, clip.rgb[f], neighbour_images[f].tool_mask);
       if (f >= kNeighbourFrames) finish_model_map(f - kNeighbourFrames);
       if (what.write_files) {
         maps.total.push_back(std::move(frame.uncertainty));
