@@ -157,6 +157,7 @@ TEST(Reconstruct, ProgressUnderABudgetEndsAtTheIterationsRun) {
   const auto& start = metrics.at("deformation_start");
   EXPECT_EQ(start.at("from"), "optical flow") << start.dump();
   EXPECT_GE(start.value("frames", 0), 4) << start.dump();
+  EXPECT_EQ(start.value("depth", ""), "priors") << start.dump();
   // A held-out frame is full, or (a budget too small to afford it) listed as reduced.
   const auto listed = [](const nlohmann::json& frames, int f) {
     return std::find(frames.begin(), frames.end(), f) != frames.end();

@@ -1,5 +1,6 @@
 #include "worker/engine/scene/scene_box.h"
 
+#include <algorithm>
 #include <limits>
 
 namespace endorecon::scene {
@@ -44,6 +45,18 @@ SceneBox ObjectBox(double radius, double padding) {
 
 SceneBox ClipBox(const Clip& clip) {
   return clip.object_radius > 0 ? ObjectBox(clip.object_radius) : FrustumBox(clip.cameras, clip.near, clip.far);
+}
+
+double TypicalDepth(const Clip& clip) {
+  std::vector<float> values;
+  for (const auto& frame : clip.depth) {
+    for (std::size_t i = 0; i < frame.size(); i += 97) {
+      if (frame[i] > 0) values.push_back(frame[i]);
+    }
+  }
+  if (values.empty()) return 0.5 * (clip.near + clip.far);
+  std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
+  return values[values.size() / 2];
 }
 
 }  // namespace endorecon::scene

@@ -42,4 +42,8 @@ SceneBox ObjectBox(double radius, double padding = 0.05);
 // outside the object).
 SceneBox ClipBox(const Clip& clip);
 
+// How far from the camera a clip's surface typically lies (z-depth, clip units): the median of its
+// depth priors (a sparse subsample), or the middle of [near, far] for a clip without depth.
+double TypicalDepth(const Clip& clip);
+
 }  // namespace endorecon::scene

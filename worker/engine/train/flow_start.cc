@@ -219,10 +219,7 @@ FlowStart FitDeformationToFlow(const scene::Clip& clip, const std::vector<int>& 
                                float* params) {
   const auto start = std::chrono::steady_clock::now();
   FlowStart result;
-  if (!clip.has_depth()) {
-    result.skipped = "the clip has no depth";
-    return result;
-  }
+  if (!clip.has_depth()) result.assumed_depth = scene::TypicalDepth(clip);
   std::vector<int> order(frames);
   std::sort(order.begin(), order.end(), [&](int a, int b) { return clip.times[a] < clip.times[b]; });
   if (order.empty() || clip.times[order.front()] != 0.0f) {
@@ -241,6 +238,7 @@ FlowStart FitDeformationToFlow(const scene::Clip& clip, const std::vector<int>& 
   const auto clip_x = [&](double x) { return (x + 0.5) * sx - 0.5; };
   const auto clip_y = [&](double y) { return (y + 0.5) * sy - 0.5; };
   const auto depth_at = [&](int f, double u, double v) {
+    if (result.assumed_depth > 0) return float(result.assumed_depth);
     const int i = std::clamp(int(std::lround(u)), 0, clip.width - 1),
               j = std::clamp(int(std::lround(v)), 0, clip.height - 1);
     return clip.depth[f][std::size_t(j) * clip.width + i];
@@ -326,12 +324,15 @@ FlowStart FitDeformationToFlow(const scene::Clip& clip, const std::vector<int>& 
 
 nlohmann::json FlowStartJson(const FlowStart& start) {
   if (!start.skipped.empty()) return {{"from", "zero"}, {"why", start.skipped}};
-  return {{"from", "optical flow"},
-          {"frames", start.frames},
-          {"points", start.points},
-          {"mean_flow_px", start.flow_px},
-          {"fitted_fraction", start.fitted_fraction},
-          {"seconds", start.seconds}};
+  nlohmann::json json = {{"from", "optical flow"},
+                         {"frames", start.frames},
+                         {"points", start.points},
+                         {"mean_flow_px", start.flow_px},
+                         {"fitted_fraction", start.fitted_fraction},
+                         {"seconds", start.seconds},
+                         {"depth", start.assumed_depth > 0 ? "assumed" : "priors"}};
+  if (start.assumed_depth > 0) json["assumed_depth"] = start.assumed_depth;
+  return json;
 }
 
 }  // namespace endorecon::train

@@ -15,19 +15,6 @@
 namespace endorecon::train {
 namespace {
 
-// Median of the known prior depths (a sparse subsample), or the middle of [near, far] without depth.
-double TypicalDepth(const scene::Clip& clip) {
-  std::vector<float> values;
-  for (const auto& frame : clip.depth) {
-    for (std::size_t i = 0; i < frame.size(); i += 97) {
-      if (frame[i] > 0) values.push_back(frame[i]);
-    }
-  }
-  if (values.empty()) return 0.5 * (clip.near + clip.far);
-  std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
-  return values[values.size() / 2];
-}
-
 // The training frames (all frames when none are named) in time order, and their distinct times.
 struct TrainingTimes {
   std::vector<int> frames;
@@ -131,7 +118,7 @@ SceneFit FitToScene(const scene::Clip& clip, TrainConfig& config, std::vector<in
   const scene::SceneBox box = scene::ClipBox(clip);
   double focal = 0;
   for (const auto& camera : clip.cameras) focal = std::max({focal, camera.fx, camera.fy});
-  const double footprint = TypicalDepth(clip) / std::max(focal, 1e-9);
+  const double footprint = scene::TypicalDepth(clip) / std::max(focal, 1e-9);
   const int useful = int(std::ceil(2.0 * box.scale() / std::max(footprint, 1e-12)));
   if (config.field.grids.max_resolution <= 0 || useful < config.field.grids.max_resolution) {
     config.field.grids.max_resolution = useful;

@@ -106,8 +106,11 @@ void Trainer::StartDeformation() {
   }
   spdlog::info(
       "deformation started from optical flow: {} points on {} frames (mean flow {:.2f} px), "
-      "{:.0f}% of their displacement fitted, {:.2f} s",
-      s.points, s.frames, s.flow_px, 100 * s.fitted_fraction, s.seconds);
+      "{:.0f}% of their displacement fitted, {:.2f} s{}",
+      s.points, s.frames, s.flow_px, 100 * s.fitted_fraction, s.seconds,
+      s.assumed_depth > 0
+          ? fmt::format("; the clip has no depth, its pixels lifted to {:.4g}", s.assumed_depth)
+          : std::string());
   backend_->PushField();
 }
 

@@ -63,8 +63,8 @@ class Trainer {
   const scene::SceneBox& box() const { return box_; }
   const TrainConfig& config() const { return config_; }
   // How the deformation started (train/flow_start.h): `skipped` says why not from the flow (config
-  // "zero", a static scene, no depth, ...). The fit runs in StartDeformation (or the first Step), so a
-  // trainer loaded from a checkpoint never runs it (`skipped` then says so; the checkpoint carries the
+  // "zero", a static scene, no frame at time 0, ...). The fit runs in StartDeformation (or the first Step),
+  // so a trainer loaded from a checkpoint never runs it (`skipped` then says so; the checkpoint carries the
   // first run's account).
   const FlowStart& deformation_start() const { return deformation_start_; }
   // Fits that start now, if it is still to be fitted (the first Step does otherwise; a run calls it
