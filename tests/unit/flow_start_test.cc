@@ -107,19 +107,29 @@ StartError MeasureStart(const scene::Clip& clip, const scene::SceneBox& box,
   return e;
 }
 
-TEST(FlowStartTest, CarriesEachFramesSurfaceBackToWhereTimeZeroSawIt) {
-  const scene::Clip clip = SlidingPlane(true);
+// The start fitted to every frame of `clip` on a zero grid, and how close it came.
+struct Fitted {
+  FlowStart start;
+  StartError e;
+};
+
+Fitted FitAndMeasure(const scene::Clip& clip) {
   const scene::SceneBox box = scene::ClipBox(clip);
   const field::Deformation<float> deformation(Grid());
   std::vector<float> params(deformation.param_count(), 0.0f);
-  const FlowStart start = FitDeformationToFlow(clip, AllFrames(), box, deformation.layout(), params.data());
+  Fitted fitted;
+  fitted.start = FitDeformationToFlow(clip, AllFrames(), box, deformation.layout(), params.data());
+  fitted.e = MeasureStart(clip, box, deformation, params);
+  return fitted;
+}
+
+TEST(FlowStartTest, CarriesEachFramesSurfaceBackToWhereTimeZeroSawIt) {
+  const auto [start, e] = FitAndMeasure(SlidingPlane(true));
   ASSERT_TRUE(start.skipped.empty()) << start.skipped;
   EXPECT_EQ(start.frames, kFrames - 1);
   EXPECT_GT(start.points, std::size_t(kFrames - 1) * 500);
   EXPECT_EQ(start.assumed_depth, 0);
   EXPECT_EQ(FlowStartJson(start).at("depth"), "priors");
-
-  const StartError e = MeasureStart(clip, box, deformation, params);
   std::printf("flow start: mean error %.5f box units against mean motion %.5f\n", e.error, e.motion);
   EXPECT_LT(e.error, 0.05 * e.motion);
 }
@@ -130,19 +140,13 @@ TEST(FlowStartTest, CarriesEachFramesSurfaceBackToWhereTimeZeroSawIt) {
 // only through its smoothness: 0.47 of the motion off, still half the zero start's error.
 TEST(FlowStartTest, WithoutDepthItLiftsThePixelsToTheTypicalDepth) {
   for (const double typical : {kDepth, kDepth * 4 / 3}) {
-    const scene::Clip clip = SlidingPlane(false, typical);
-    const scene::SceneBox box = scene::ClipBox(clip);
-    const field::Deformation<float> deformation(Grid());
-    std::vector<float> params(deformation.param_count(), 0.0f);
-    const FlowStart start = FitDeformationToFlow(clip, AllFrames(), box, deformation.layout(), params.data());
+    const auto [start, e] = FitAndMeasure(SlidingPlane(false, typical));
     ASSERT_TRUE(start.skipped.empty()) << start.skipped;
     EXPECT_EQ(start.frames, kFrames - 1);
     EXPECT_DOUBLE_EQ(start.assumed_depth, typical);
     const nlohmann::json json = FlowStartJson(start);
     EXPECT_EQ(json.at("depth"), "assumed");
     EXPECT_DOUBLE_EQ(json.at("assumed_depth").get<double>(), typical);
-
-    const StartError e = MeasureStart(clip, box, deformation, params);
     std::printf("typical depth %.2f (surface at %.2f): mean error %.5f box units against mean motion %.5f\n",
                 typical, kDepth, e.error, e.motion);
     EXPECT_LT(e.error, (typical == kDepth ? 0.05 : 0.6) * e.motion);
