@@ -6,7 +6,7 @@
 // through those displacements is the deformation's start; training refines it. A clip without depth
 // (a mono recording) lifts its pixels to the clip's typical depth (scene::TypicalDepth): a surface
 // at another depth then starts with its sideways motion scaled by the ratio of the two depths, which
-// is still closer than no motion (on the real laparoscopic video +0.16 dB held out; docs/benchmarks.md,
+// is still closer than no motion (on the real laparoscopic video +0.17 dB held out; docs/benchmarks.md,
 // "A mono recording's deformation started from its flow").
 #pragma once
 
