@@ -33,31 +33,31 @@ double ShiftY(int f) { return -0.3 * f; }
 // A fixed camera over a plane at depth kDepth whose texture slides: frame f shows at pixel p what
 // frame 0 showed at p - shift(f).
 // Without depth, near and far put the clip's typical depth (their middle) at `typical_depth`.
-scene::Clip SlidingPlane(bool with_depth, double typical_depth = kDepth) {
+scene::Clip SlidingPlane(bool with_depth, double typical_depth = kDepth, int width = kW) {
   scene::Clip clip;
   clip.source = "sliding plane";
-  clip.width = kW;
+  clip.width = width;
   clip.height = kH;
   clip.near = typical_depth - 5;
   clip.far = typical_depth + 5;
   for (int f = 0; f < kFrames; ++f) {
     scene::Camera camera;
     camera.fx = camera.fy = kFocal;
-    camera.cx = kW / 2.0;
+    camera.cx = width / 2.0;
     camera.cy = kH / 2.0;
-    camera.width = kW;
+    camera.width = width;
     camera.height = kH;
     clip.cameras.push_back(camera);
     clip.times.push_back(float(f) / (kFrames - 1));
-    std::vector<std::uint8_t> rgb(std::size_t(kW) * kH * 3);
+    std::vector<std::uint8_t> rgb(std::size_t(width) * kH * 3);
     for (int y = 0; y < kH; ++y) {
-      for (int x = 0; x < kW; ++x) {
+      for (int x = 0; x < width; ++x) {
         const double v = Texture(x - ShiftX(f), y - ShiftY(f));
-        for (int c = 0; c < 3; ++c) rgb[(std::size_t(y) * kW + x) * 3 + c] = std::uint8_t(std::lround(v));
+        for (int c = 0; c < 3; ++c) rgb[(std::size_t(y) * width + x) * 3 + c] = std::uint8_t(std::lround(v));
       }
     }
     clip.rgb.push_back(rgb);
-    if (with_depth) clip.depth.emplace_back(std::size_t(kW) * kH, float(kDepth));
+    if (with_depth) clip.depth.emplace_back(std::size_t(width) * kH, float(kDepth));
   }
   return clip;
 }
@@ -150,6 +150,35 @@ TEST(FlowStartTest, WithoutDepthItLiftsThePixelsToTheTypicalDepth) {
     std::printf("typical depth %.2f (surface at %.2f): mean error %.5f box units against mean motion %.5f\n",
                 typical, kDepth, e.error, e.motion);
     EXPECT_LT(e.error, (typical == kDepth ? 0.05 : 0.6) * e.motion);
+  }
+}
+
+// A clip wider than the flow's images (here three times): a block of pixels the flow sees as one is
+// left out when any pixel of it is tool, since the edge of a tool moves with the tool. A tool that
+// covers one pixel of every 3 x 3 block leaves nothing to follow; a tool that covers none leaves
+// the whole plane.
+TEST(FlowStartTest, AFlowPixelWithAnyToolInItIsNotFollowed) {
+  constexpr int kWide = 3 * 320;
+  for (const bool sparse_tool : {false, true}) {
+    scene::Clip clip = SlidingPlane(true, kDepth, kWide);
+    for (int f = 0; f < kFrames; ++f) {
+      std::vector<std::uint8_t> tool(std::size_t(kWide) * kH, 0);
+      for (int y = 1; sparse_tool && y < kH; y += 3) {
+        for (int x = 1; x < kWide; x += 3) tool[std::size_t(y) * kWide + x] = 1;
+      }
+      clip.tool_mask.push_back(tool);
+    }
+    const field::Deformation<float> deformation(Grid());
+    std::vector<float> params(deformation.param_count(), 0.0f);
+    const FlowStart start =
+        FitDeformationToFlow(clip, AllFrames(), scene::ClipBox(clip), deformation.layout(), params.data());
+    if (sparse_tool) {
+      EXPECT_EQ(start.points, 0u);
+      EXPECT_NE(start.skipped.find("no surface point"), std::string::npos) << start.skipped;
+    } else {
+      EXPECT_TRUE(start.skipped.empty()) << start.skipped;
+      EXPECT_GT(start.points, std::size_t(kFrames - 1) * 500);
+    }
   }
 }
 

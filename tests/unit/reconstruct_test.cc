@@ -203,6 +203,21 @@ TEST(Reconstruct, ABudgetTooSmallForItsResultsSaysWhichWouldDo) {
   EXPECT_EQ(std::fmod(advised, 10.0), 0.0);
 }
 
+// A budget spent before training starts (loading the clip and pricing its results take longer):
+// training takes one step and the run goes on to its results, instead of reading the spent budget
+// as none and training until the next progress update.
+TEST(Reconstruct, ABudgetSpentBeforeTrainingTrainsOneStep) {
+  testing::TempDir dir("reconstruct-spent");
+  WriteSmallClip(dir / "clip");
+  ReconstructOptions options = SmallRunOptions(dir / "clip", dir / "out");
+  options.time_budget_s = 1e-3;
+  ReconstructHooks hooks;
+  hooks.progress_interval_s = 3;  // the budget's next update; until it, a budget read as none trains on
+  const ReconstructSummary summary = Reconstruct(options, hooks);
+  EXPECT_EQ(summary.iterations, 1);
+  EXPECT_TRUE(fs::exists(dir / "out" / "metrics.json"));
+}
+
 // Without a time budget evaluation still keeps to about a quarter of the run, but nothing is late:
 // the held-out frames are rendered in full however short the training was.
 TEST(Reconstruct, WithoutABudgetHeldOutFramesAreNeverReduced) {

@@ -38,7 +38,9 @@ using base::SecondsSince;
 
 // Evaluation's share of a run by default: the budget is the job's, and training is its main work.
 // When even the leanest plan (held-out frames full, the rest reduced) costs more, training gives
-// way up to half the run so the budget holds; past that the run overruns rather than not train.
+// way up to half the run so the budget holds; past that the held-out frames are reduced too once
+// rendering them full would overrun by more than the tolerance below, and the run overruns only when
+// even the frames all reduced cannot keep to it.
 constexpr double kEvaluationShare = 0.25;
 constexpr double kEvaluationShareMax = 0.5;
 
@@ -178,13 +180,16 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
     if (!full_evaluation) {
       // The time evaluation may take: what the budget has left (less the writing after it), or
       // without a budget a third of the training phase (a quarter of the run).
-      const double available = options.time_budget_s > 0
-                                   ? options.time_budget_s - extras.train_seconds + trained.step_seconds -
-                                         SecondsSince(run_start) - tail_s
-                                   : trained.wall_seconds * kEvaluationShare / (1 - kEvaluationShare);
+      // From now: the occupancy rebuild above is spent (and without a budget counts in the share).
+      const auto now = Clock::now();
+      const double available =
+          options.time_budget_s > 0
+              ? options.time_budget_s - extras.train_seconds + trained.step_seconds -
+                    SecondsSince(run_start) - tail_s
+              : trained.wall_seconds * kEvaluationShare / (1 - kEvaluationShare) - SecondsSince(start);
       // Held-out frames stay full where the overrun stays within the budget's tolerance; past it
       // the deadline comes first and they are reduced too (a budget too small for the clip's frames).
-      const double left = std::max(available - SecondsSince(start), 1e-3);
+      const double left = std::max(available, 1e-3);
       const eval::RenderCost cost = MeasureCost();
       least_s = eval::LeastEvaluationSeconds(clip.frame_count(), split.heldout, pixels, cost);
       // How far past `left` held-out frames may still run full: the budget's tolerance, or without a
@@ -213,8 +218,8 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
             "leaves {:.0f} s: the run will end more than {:.0f}% late (the budget is too small for the clip)",
             clip.frame_count(), clip.width, clip.height, what.plan.seconds, left, 100 * kBudgetTolerance);
       }
-      what.deadline = start + std::chrono::duration_cast<Clock::duration>(
-                                  std::chrono::duration<double>(std::max(available, 0.0)));
+      what.deadline = now + std::chrono::duration_cast<Clock::duration>(
+                                std::chrono::duration<double>(std::max(available, 0.0)));
     }
     if (hooks.on_progress) {
       // The job's progress goes on through evaluation: frames done of all, and the time left at

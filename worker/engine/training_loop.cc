@@ -15,6 +15,9 @@ using Clock = std::chrono::steady_clock;
 
 using base::SecondsSince;
 
+// The training budget of a run whose time is spent before its first step: one step's worth or less.
+constexpr double kLeastBudgetS = 1e-9;
+
 class TrainingLoop {
  public:
   TrainingLoop(const TrainingRun& run, const ReconstructHooks& hooks, train::CheckpointExtras& extras)
@@ -76,14 +79,16 @@ class TrainingLoop {
  private:
   // With a time budget: the training budget (in step seconds) is what the run has left once the
   // work after training is set aside, scaled by the share of this phase's wall time spent in steps
-  // (the rest is periodic work).
+  // (the rest is periodic work). A budget already spent still trains one step (a budget of 0 would
+  // read as none, and the run would train until the next update).
   void UpdateBudget() {
     if (run_.time_budget_s <= 0) return;
     const double elapsed = spent_before_ + SecondsSince(run_.run_start);
     const double wall = SecondsSince(wall_);
     const double steps = clock_.seconds() - spent_before_;
     const double share = wall > 1.0 ? std::clamp(steps / wall, 0.2, 1.0) : 1.0;
-    clock_.SetBudget(clock_.seconds() + std::max(0.0, run_.time_budget_s - elapsed - reserve_s_) * share);
+    clock_.SetBudget(std::max(
+        clock_.seconds() + std::max(0.0, run_.time_budget_s - elapsed - reserve_s_) * share, kLeastBudgetS));
   }
 
   // Re-prices what comes after training on the host field (synced by the caller).

@@ -139,7 +139,7 @@ EvaluatedFrame RenderFrame(const scene::Clip& clip, int f, FrameRender how, int 
                            render::FrameRenderer& full, render::FrameRenderer* plain) {
   const scene::Camera& camera = clip.cameras[f];
   // Outside the scope's view is neither trained nor scored: left black, unrendered.
-  if (how == FrameRender::kFull || plain == nullptr)
+  if (how == FrameRender::kFull)
     return {full.Render(camera, clip.times[f], clip.outside_view), {}, {}, {}, {}, {}};
   EvaluatedFrame out{plain->Render(camera, clip.times[f], clip.outside_view), {}, {}, {}, {}, {}};
   if (full.settings().mc_passes == 0) return out;
@@ -306,13 +306,15 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
         pacer.Choose(f, what.deadline == Clock::time_point::max()
                             ? std::numeric_limits<double>::infinity()
                             : std::chrono::duration<double>(what.deadline - start).count());
-    EvaluatedFrame evaluated = RenderFrame(clip, f, choice.how, choice.stride, renderer, what.plain);
+    const FrameRender how =
+        what.plain != nullptr ? choice.how : FrameRender::kFull;  // (nothing to reduce with)
+    EvaluatedFrame evaluated = RenderFrame(clip, f, how, choice.stride, renderer, what.plain);
     render::RenderedFrame& frame = evaluated.frame;
     const double rendered_in = SecondsSince(start);
     pacer.Rendered(choice, rendered_in);
     render_seconds += rendered_in;
-    (choice.how == FrameRender::kFull ? full_frames : reduced_frames).push_back(f);
-    if (choice.how == FrameRender::kReduced && choice.stride != what.plan.stride) {
+    (how == FrameRender::kFull ? full_frames : reduced_frames).push_back(f);
+    if (how == FrameRender::kReduced && choice.stride != what.plan.stride) {
       coarser.push_back({{"frame", f}, {"stride", choice.stride}});
     }
     const auto& mask = EvaluationMask(clip, f);

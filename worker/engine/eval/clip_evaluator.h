@@ -21,7 +21,7 @@ struct ClipEvaluation {
   bool write_files = true;
   std::function<void(int done, int total)> on_frame;  // progress while rendering
   // How each frame is rendered (empty: every frame full). Reduced frames need `plain`, a renderer
-  // of the same field without dropout passes.
+  // of the same field without dropout passes; without it every frame is rendered full.
   EvalPlan plan;
   render::FrameRenderer* plain = nullptr;
   // When set, the frames are kept to it (FramePacer): a training frame planned full is rendered

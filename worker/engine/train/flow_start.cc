@@ -57,10 +57,13 @@ FlowImage FlowImageOf(const scene::Clip& clip, int f, cv::Size size, double mean
   image.grey = grey;
   image.usable = grey < kSaturated;
   if (clip.has_masks()) {
-    cv::Mat tool(clip.height, clip.width, CV_8U, const_cast<std::uint8_t*>(clip.tool_mask[f].data()));
-    cv::Mat any;
-    cv::resize(tool, any, size, 0, 0, cv::INTER_AREA);  // nonzero where the block holds any tool
-    image.usable &= any == 0;
+    const cv::Mat tool(clip.height, clip.width, CV_8U, const_cast<std::uint8_t*>(clip.tool_mask[f].data()));
+    // The block's share of tool pixels, in floats: any tool pixel makes it nonzero (the mask's 0/1
+    // bytes averaged would round a block less than half tool to 0, and its edge's motion is the tool's).
+    cv::Mat share;
+    cv::Mat(tool != 0).convertTo(share, CV_32F);
+    if (size != share.size()) cv::resize(share, share, size, 0, 0, cv::INTER_AREA);
+    image.usable &= share == 0;
   }
   image.usable /= 255;
   return image;
