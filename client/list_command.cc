@@ -8,6 +8,7 @@
 #include "client/commands.h"
 #include "client/exit_codes.h"
 #include "client/job_format.h"
+#include "common/cli_checks.h"
 #include "common/error.h"
 #include "common/grpc_status.h"
 #include "common/transport_security.h"
@@ -70,7 +71,7 @@ Command AddListCommand(CLI::App& app) {
   sub->add_option("--state", flags->states, "only jobs in these states (repeatable)");
   sub->add_option("--limit", flags->limit, "at most this many jobs")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(AboveZero());
   return [flags](const Globals& globals) { return List(globals, *flags); };
 }
 

@@ -13,6 +13,7 @@
 #include "client/job_format.h"
 #include "client/job_watcher.h"
 #include "client/recording_upload.h"
+#include "common/cli_checks.h"
 #include "common/dicom_file.h"
 #include "common/error.h"
 #include "common/file_upload.h"
@@ -186,7 +187,7 @@ Command AddSubmitCommand(CLI::App& app) {
   sub->add_option_function<double>(
          "--fps", [flags](double v) { flags->recording.set_fps(v); },
          "DICOM recording: keep at most this many frames per second")
-      ->check(CLI::NonNegativeNumber);
+      ->check(AtLeastZero());
   sub->add_option_function<std::string>(
          "--endoscope", [flags](const std::string& v) { flags->recording.set_endoscope(v); },
          "DICOM recording: moving (estimate the endoscope's motion from the frames: turns for mono, "
@@ -207,10 +208,13 @@ Command AddSubmitCommand(CLI::App& app) {
   sub->add_option("--config", flags->config,
                   "JSON file overriding the preset (as endorecon-worker reconstruct)");
   sub->add_option("--preset", flags->preset, "cpu, gpu or paper (default: the worker's, cpu)");
-  sub->add_option("--iterations", flags->iterations, "training iterations (default: the preset's)");
+  sub->add_option("--iterations", flags->iterations, "training iterations (default: the preset's)")
+      ->check(AboveZero());
   sub->add_option("--time-budget", flags->time_budget_s,
                   "seconds for the whole run on the worker: training, evaluation, writing (0: none)");
-  sub->add_option("--holdout", flags->holdout, "hold out every K-th frame (0: none; default: the preset's)");
+  sub->add_option("--holdout", flags->holdout,
+                  "hold out every K-th frame (0: none, else K >= 2; default: the preset's)")
+      ->check(HoldoutSpacing());
   sub->add_option("--seed", flags->seed, "random seed");
   sub->add_flag("--static", flags->force_static, "treat the clip as static (no deformation)");
   sub->add_option("--priority", flags->priority, "higher runs first (default 0)");

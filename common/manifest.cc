@@ -14,8 +14,23 @@ namespace fs = std::filesystem;
 v1::Manifest ManifestOfDirectory(const fs::path& dir) {
   if (!fs::is_directory(dir)) Fail(ErrorCode::kNotFound, "not a directory: " + dir.string());
   std::vector<fs::path> files;
-  for (const auto& entry : fs::recursive_directory_iterator(dir)) {
-    if (entry.is_regular_file()) files.push_back(entry.path());
+  // Linked folders are followed (their files are the clip's); an entry that is neither a folder nor a
+  // regular file (a broken or looping link, a pipe, a socket) is named: skipped, the clip would
+  // arrive without it.
+  try {
+    for (const auto& entry :
+         fs::recursive_directory_iterator(dir, fs::directory_options::follow_directory_symlink)) {
+      std::error_code error;
+      if (entry.is_directory(error)) continue;
+      if (!entry.is_regular_file(error)) {
+        FailInvalid(entry.path().string() + ": not a regular file (" +
+                    (error ? error.message() : std::string("a broken link, a pipe, a socket or a device")) +
+                    "); remove it or replace it by the file");
+      }
+      files.push_back(entry.path());
+    }
+  } catch (const fs::filesystem_error& e) {
+    FailInvalid(e.path1().string() + ": cannot read it (" + e.code().message() + ")");
   }
   if (files.empty()) FailInvalid("no files under " + dir.string());
   std::sort(files.begin(), files.end());

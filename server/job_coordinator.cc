@@ -16,14 +16,16 @@ namespace endorecon::server {
 namespace {
 
 void ValidateOptions(const v1::ReconstructionOptions& options) {
-  if (!options.preset().empty() && options.preset() != "cpu" && options.preset() != "paper") {
-    FailInvalid("options.preset is '" + options.preset() + "'; expected 'cpu' or 'paper'");
+  if (!options.preset().empty() && options.preset() != "cpu" && options.preset() != "gpu" &&
+      options.preset() != "paper") {
+    FailInvalid("options.preset is '" + options.preset() + "'; expected 'cpu', 'gpu' or 'paper'");
   }
   if (options.has_iterations() && options.iterations() <= 0) {
     FailInvalid("options.iterations is " + std::to_string(options.iterations()) + "; expected > 0");
   }
-  if (options.has_holdout() && options.holdout() < 0) {
-    FailInvalid("options.holdout is " + std::to_string(options.holdout()) + "; expected >= 0");
+  if (options.has_holdout() && (options.holdout() < 0 || options.holdout() == 1)) {
+    FailInvalid("options.holdout is " + std::to_string(options.holdout()) +
+                "; expected 0 (none held out) or K >= 2 (every K-th frame)");
   }
   if (options.time_budget_s() < 0) FailInvalid("options.time_budget_s is negative");
   if (!options.config_json().empty()) {

@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <thread>
 
+#include "common/cli_checks.h"
 #include "common/dicom/peer.h"
 #include "common/dicom/storage_scp.h"
 #include "common/dicom/uid.h"
@@ -316,19 +317,19 @@ void AddSecurityFlags(CLI::App& app, ServerFlags& flags) {
   app.add_option("--tenant-max-jobs", flags.tenant_quota.max_jobs,
                  "queued + running jobs each tenant may have (0: no limit)")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(AtLeastZero());
   app.add_option("--tenant-max-bytes", flags.tenant_quota.max_bytes,
                  "bytes each tenant's jobs may keep stored (0: no limit)")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(AtLeastZero());
   app.add_option("--quotas", flags.quotas_file, "JSON file of per-tenant quotas (overrides the two above)");
   app.add_option("--retention-days", flags.retention_days,
                  "delete clips and results of jobs finished longer ago than this (0: keep forever)")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(AtLeastZero());
   app.add_option("--retention-check-s", flags.retention_check_s, "how often retention runs, in seconds")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(AboveZero());
 }
 
 void AddDicomFlags(CLI::App& app, ServerFlags& flags) {
@@ -345,15 +346,15 @@ void AddDicomFlags(CLI::App& app, ServerFlags& flags) {
   app.add_option("--send-attempts", flags.dicom.send_attempts,
                  "attempts to send a job's DICOM results to one PACS before the send FAILS")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(AboveZero());
   app.add_option("--send-backoff-ms", flags.dicom.send_backoff_ms,
                  "wait before the second send attempt, doubled for each further one (at most 60 s)")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(AboveZero());
   app.add_option("--dicom-timeout", flags.dicom.timeout_s,
                  "seconds for a PACS to connect, associate and answer")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(AboveZero());
 }
 
 }  // namespace
@@ -375,12 +376,12 @@ int main(int argc, char** argv) {
   app.add_option("--min-free-bytes", flags.min_free_bytes,
                  "free space uploads leave on the data disk, for the job store and accepted jobs' results")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(AtLeastZero());
   app.add_option("--stall-timeout", flags.stall_timeout_s,
                  "seconds a download or watch stream may wait on a peer that takes no data before it is "
                  "cancelled")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(AboveZero());
   app.add_option("--max-threads", flags.max_threads,
                  "calls the server serves at once (a thread each); more are refused with RESOURCE_EXHAUSTED")
       ->capture_default_str()
@@ -393,15 +394,15 @@ int main(int argc, char** argv) {
   app.add_option("--max-attempts", flags.max_attempts,
                  "attempts before a job whose workers keep vanishing fails")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(AboveZero());
   app.add_option("--lease-ttl-ms", flags.lease_ttl_ms,
                  "a running job whose worker is silent this long is requeued")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(AboveZero());
   app.add_option("--heartbeat-ms", flags.heartbeat_ms,
                  "how often workers report (told to them at registration)")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(AboveZero());
   AddSecurityFlags(app, flags);
   AddDicomFlags(app, flags);
   app.require_subcommand(0, 1);

@@ -8,6 +8,7 @@
 #include <iostream>
 #include <memory>
 
+#include "common/cli_checks.h"
 #include "common/error.h"
 #include "server/blob_store.h"
 #include "server/commands.h"
@@ -58,7 +59,7 @@ Command AddRetentionCommand(CLI::App& app) {
   command->add_option("--data-dir", flags->data_dir, "the server's data folder")->capture_default_str();
   command->add_option("--retention-days", flags->days, "files of jobs finished longer ago than this go")
       ->required()
-      ->check(CLI::NonNegativeNumber);
+      ->check(AtLeastZero());
   command->add_flag("--dry-run", flags->dry_run, "list what would go; change nothing");
   return [flags] { return DryRun(*flags); };
 }

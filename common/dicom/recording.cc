@@ -7,6 +7,7 @@
 #include <dcmtk/dcmimage/diregist.h>
 #include <dcmtk/dcmimgle/dcmimage.h>
 #include <dcmtk/dcmjpeg/djdecode.h>
+#include <spdlog/spdlog.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -295,9 +296,10 @@ int DeclaredFrames(const Instance& instance) {
   const std::optional<double> declared = FindNumber(data, DCM_NumberOfFrames);
   const double frames = declared.value_or(1);
   const std::string where = Where(instance);
-  if (!(frames == std::floor(frames)) || frames > 2147483647.0) {
-    FailInvalid(where + ": Number of Frames (0028,0008) is not a whole number of frames (" +
-                FindString(data, DCM_NumberOfFrames).value_or("") + ")");
+  const std::string text = FindString(data, DCM_NumberOfFrames).value_or("");
+  if (!(frames == std::floor(frames)) || frames > 2147483647.0 ||
+      (!declared && text.find_first_not_of(' ') != std::string::npos)) {  // present, but no number
+    FailInvalid(where + ": Number of Frames (0028,0008) is not a whole number of frames (\"" + text + "\")");
   }
   if (frames <= 0) FailInvalid(where + ": zero frames (Number of Frames is " + std::to_string(long(frames)) + ")");
   const std::size_t bytes = PixelDataBytes(instance);
@@ -458,6 +460,12 @@ std::vector<cv::Mat> Decode(const std::vector<Instance>& series, const std::vect
       FailInvalid(Where(instance) + ": truncated pixel stream: Number of Frames is " +
                   std::to_string(instance.frames) + " but the stream decodes to " + std::to_string(decoded) +
                   " frame(s)");
+    }
+    if (capture.read(image)) {
+      spdlog::warn(
+          "{}: the pixel stream holds more frames than Number of Frames (0028,0008) declares ({}); "
+          "only those are read",
+          Where(instance), instance.frames);
     }
   }
   return frames;

@@ -244,6 +244,13 @@ TEST(DicomRecordingTest, BadInputsAreNamed) {
   ASSERT_TRUE(file.saveFile((dir / "huge.dcm").c_str(), EXS_LittleEndianExplicit).good());
   const std::string huge = ErrorOf(dir / "huge.dcm");
   EXPECT_NE(huge.find("huge.dcm: Number of Frames (0028,0008) is not a whole number"), std::string::npos) << huge;
+  // Present but not a number: refused, where it once read as absent (one frame of four, silently).
+  file.getDataset()->putAndInsertString(DCM_NumberOfFrames, "xx");
+  ASSERT_TRUE(file.saveFile((dir / "junk.dcm").c_str(), EXS_LittleEndianExplicit).good());
+  const std::string junk = ErrorOf(dir / "junk.dcm");
+  EXPECT_NE(junk.find("junk.dcm: Number of Frames (0028,0008) is not a whole number of frames (\"xx\")"),
+            std::string::npos)
+      << junk;
 
   RecordingOptions past_the_end;
   past_the_end.frames = ParseFrameWindow("10:");

@@ -55,5 +55,26 @@ TEST(CameraListTest, BadFormsNameTheFrameAndField) {
   EXPECT_NE(ErrorOf("{not json"), "");
 }
 
+// A view larger than a clip's frames may be is refused before anything is allocated for it.
+TEST(CameraListTest, AViewLargerThanAFrameMayBeIsRefused) {
+  for (const char* size : {R"("w": 100000, "h": 100000)", R"("w": 1e300, "h": 8)"}) {
+    testing::TempDir dir("cameras");
+    testing::WriteBytes(
+        dir / "cameras.json",
+        std::string(R"({"fl_x": 1, )") + size +
+            R"(, "frames": [{"transform_matrix": [[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]}]})");
+    try {
+      ReadCameraList(dir / "cameras.json");
+      ADD_FAILURE() << size << ": accepted";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.code(), ErrorCode::kResourceExhausted) << e.what();
+      EXPECT_NE(std::string(e.what()).find("frame 0: \"w\" x \"h\""), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("exceed the limit of 16777216 pixels per frame"),
+                std::string::npos)
+          << e.what();
+    }
+  }
+}
+
 }  // namespace
 }  // namespace endorecon::scene

@@ -207,6 +207,21 @@ TEST_F(EndoNerfLoaderTest, RejectsNonImageFile) {
   ExpectError(Name(0), "not a PNG, JPEG, BMP or TIFF image");
 }
 
+// A frame's name that is no file (a broken link, a link to itself, a folder) is named, where it
+// used to be skipped and show only as counts that disagree (or, for the loop, as a bare error).
+TEST_F(EndoNerfLoaderTest, RejectsAFrameThatIsNoRegularFile) {
+  const fs::path path = dir_ / "images" / Name(1);
+  fs::remove(path);
+  fs::create_symlink(dir_ / "nowhere.png", path);
+  ExpectError(Name(1), "not a regular file");
+  fs::remove(path);
+  fs::create_symlink(path, path);
+  ExpectError(Name(1), "not a regular file");
+  fs::remove(path);
+  fs::create_directory(path);
+  ExpectError(Name(1), "not a regular file");
+}
+
 TEST_F(EndoNerfLoaderTest, RejectsNonFinitePose) {
   rows_[1].t[2] = NAN;
   WritePoses(dir_ / "poses_bounds.npy", rows_);

@@ -8,10 +8,12 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <thread>
 #include <vector>
 
+#include "common/error.h"
 #include "tests/integration/sanitizer_build.h"
 #include "tests/unit/temp_dir.h"
 #include "worker/engine/scene/json_file.h"
@@ -216,6 +218,28 @@ TEST(Reconstruct, ABudgetSpentBeforeTrainingTrainsOneStep) {
   const ReconstructSummary summary = Reconstruct(options, hooks);
   EXPECT_EQ(summary.iterations, 1);
   EXPECT_TRUE(fs::exists(dir / "out" / "metrics.json"));
+}
+
+// Results asked into the clip's own folder would overwrite its depth/ with the rendered depth: the
+// run is refused before anything is written there.
+TEST(Reconstruct, ResultsAreNotWrittenOverTheClip) {
+  testing::TempDir dir("reconstruct-over-clip");
+  WriteSmallClip(dir / "clip");
+  const auto files = [&] {
+    std::size_t n = 0;
+    for (const auto& entry : fs::recursive_directory_iterator(dir / "clip")) n += entry.is_regular_file();
+    return n;
+  };
+  const std::size_t before = files();
+  ReconstructOptions options = SmallRunOptions(dir / "clip", dir / "clip" / ".");
+  try {
+    Reconstruct(options, {});
+    ADD_FAILURE() << "a run into its clip's folder was accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument);
+    EXPECT_NE(std::string(e.what()).find("is the clip's folder"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(files(), before);
 }
 
 // Without a time budget evaluation still keeps to about a quarter of the run, but nothing is late:

@@ -130,6 +130,25 @@ TEST_F(TransformsLoaderTest, RejectsMissingImage) {
   ExpectError("transforms.json frame 1", "also tried adding .png");
 }
 
+// A clip is its folder: a frame's file that lies outside it (an absolute path, or up through "..",
+// even to a real image) is refused, so an uploaded clip cannot make a worker read files of its own.
+TEST_F(TransformsLoaderTest, RejectsFilesOutsideTheClipsFolder) {
+  const std::string inside = (dir_ / "train" / "r_0.png").string();
+  ASSERT_TRUE(std::filesystem::is_regular_file(inside));
+  std::filesystem::create_directories(dir_ / "sub");
+  for (const std::string& path : {inside, std::string("../") + dir_.path().filename().string() + "/train/r_0",
+                                  std::string("train/../../x/r_0.png"), std::string("/etc/passwd")}) {
+    Frame(1)["file_path"] = path;
+    ExpectError("transforms.json frame 1: file_path \"" + path + "\" leaves the clip's folder", "relative");
+  }
+  Frame(1)["file_path"] = "sub/../train/r_1";  // up and down again, inside: fine
+  EXPECT_EQ(Load({}).frame_count(), 3);
+  Frame(1)["file_path"] = "sub";
+  ExpectError("transforms.json frame 1: file_path", "is not a regular file");
+  Frame(1)["file_path"] = "";
+  ExpectError("transforms.json frame 1: \"file_path\" is empty", "");
+}
+
 TEST_F(TransformsLoaderTest, RejectsMissingTransformsFile) {
   const std::string message = ErrorFrom([&] { LoadTransformsClip(dir_.path(), {}); });
   EXPECT_NE(message.find("transforms.json: cannot open"), std::string::npos) << message;

@@ -11,6 +11,7 @@
 #include <thread>
 
 #include "common/file_write.h"
+#include "common/output_folder.h"
 #include "worker/engine/base/seconds_since.h"
 #include "worker/engine/eval/clip_evaluator.h"
 #include "worker/engine/eval/eval_plan.h"
@@ -295,6 +296,7 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
 }  // namespace
 
 ReconstructSummary Reconstruct(const ReconstructOptions& options, const ReconstructHooks& hooks) {
+  CheckOutputFolder(options.out_dir, options.clip_dir, "the clip's folder");
   const int threads = options.threads > 0 ? options.threads : int(std::thread::hardware_concurrency());
   // The run's own arena: two runs in one process (two devices of a worker) each keep their thread count,
   // where tbb::global_control would set one limit for the whole process.

@@ -28,6 +28,10 @@ train::TrainConfig ResolveConfig(const ReconstructOptions& options) {
     config.iterations = train::TrainConfig::Preset(options.preset).iterations;
   }
   if (options.holdout >= 0) config.holdout = options.holdout;
+  if (config.holdout == 1) {
+    FailInvalid(
+        "holdout 1 would hold every frame out of training: 0 holds none out, K >= 2 every K-th frame");
+  }
   return config;
 }
 

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <memory>
 
+#include "common/cli_checks.h"
 #include "worker/engine/reconstruct.h"
 #include "worker/engine/scene/json_file.h"
 #include "worker/runtime/commands.h"
@@ -22,15 +23,17 @@ void AddReconstructOptions(CLI::App& cmd, ReconstructOptions& options, std::stri
       ->capture_default_str()
       ->check(CLI::IsMember({"cpu", "gpu", "paper"}));
   cmd.add_option("--iterations", options.iterations,
-                 "training iterations (default: the preset's; with --time-budget: no cap unless given)");
+                 "training iterations (default: the preset's; with --time-budget: no cap unless given)")
+      ->check(AboveZero());
   cmd.add_option("--time-budget", options.time_budget_s,
                  "seconds for the whole run: training, evaluation and writing (0: none)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(AtLeastZero());
   cmd.add_flag("--full-eval", options.full_evaluation,
                "render every frame with all dropout passes at every pixel (default: evaluation keeps to a "
                "quarter of the run)");
   cmd.add_option("--holdout", options.holdout,
-                 "hold every K-th frame out of training (0: none; default: the preset's)");
+                 "hold every K-th frame out of training (0: none, else K >= 2; default: the preset's)")
+      ->check(HoldoutSpacing());
   cmd.add_option("--seed", options.seed, "random seed")->capture_default_str();
   cmd.add_flag("--static", options.force_static, "treat the clip as static (no deformation network)");
 }
@@ -46,7 +49,7 @@ void AddDicomOptions(CLI::App& cmd, v1::RecordingOptions& recording, v1::DicomOu
   cmd.add_option_function<double>(
          "--fps", [&](double v) { recording.set_fps(v); },
          "DICOM recording: keep at most this many frames per second")
-      ->check(CLI::NonNegativeNumber);
+      ->check(AtLeastZero());
   cmd.add_option_function<std::string>(
          "--endoscope", [&](const std::string& v) { recording.set_endoscope(v); },
          "DICOM recording: moving (estimate the endoscope's motion from the frames: turns for mono, "
@@ -86,7 +89,9 @@ Command AddReconstructCommand(CLI::App& app) {
       ->required();
   cmd->add_option("-o,--out", options->out_dir, "results folder")->required();
   AddReconstructOptions(*cmd, *options, *config_file);
-  cmd->add_option("--threads", options->threads, "worker threads (0: all cores)")->capture_default_str();
+  cmd->add_option("--threads", options->threads, "worker threads (0: all cores)")
+      ->capture_default_str()
+      ->check(AtLeastZero());
   cmd->add_option("--device", options->device, "where the training steps run: cpu or cuda:N")->capture_default_str();
   cmd->add_option("--resume", options->resume_from, "checkpoint file to resume from");
   AddDicomOptions(*cmd, *recording, *dicom);

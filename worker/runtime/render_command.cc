@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "common/file_write.h"
+#include "common/output_folder.h"
 #include "worker/engine/eval/clip_evaluator.h"
 #include "worker/engine/eval/exports.h"
 #include "worker/engine/eval/model_uncertainty.h"
@@ -49,6 +50,7 @@ Command AddRenderCommand(CLI::App& app) {
     const render::OccupancyGrid occupancy = train::BuildOccupancy(*model.field, model.config);
     renderer.SetOccupancy(&occupancy);
     const std::filesystem::path out(args->out);
+    CheckOutputFolder(out, args->result, "the results folder it renders from");
     for (const char* sub : {"rgb", "depth", "uncertainty"}) std::filesystem::create_directories(out / sub);
     const double scale = eval::DepthPngScale(model.far);
     // The heat maps share one scale over all views, so they are written once every view is rendered.

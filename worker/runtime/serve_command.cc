@@ -10,6 +10,7 @@
 #include <memory>
 #include <thread>
 
+#include "common/cli_checks.h"
 #include "common/error.h"
 #include "common/transport_security.h"
 #include "worker/runtime/commands.h"
@@ -189,7 +190,7 @@ Command AddServeCommand(CLI::App& app) {
                   "free space the scratch folder needs to take a job; a job failing below it is handed back "
                   "uncounted")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(AtLeastZero());
   cmd->add_option("--id", flags->id, "worker id (default: hostname-pid)");
   cmd->add_option("--threads", flags->threads, "engine threads per device (0: cores / devices)")
       ->capture_default_str();

@@ -2,7 +2,9 @@
 
 #include "common/error.h"
 #include "worker/engine/scene/camera_json.h"
+#include "worker/engine/scene/clip_checks.h"
 #include "worker/engine/scene/json_file.h"
+#include "worker/engine/scene/load_options.h"
 
 namespace endorecon::scene {
 
@@ -19,6 +21,13 @@ std::vector<CameraAtTime> ReadCameraList(const std::filesystem::path& path) {
     const auto w = FrameOrTopNumber(frame, top, "w", where, file);
     const auto h = FrameOrTopNumber(frame, top, "h", where, file);
     if (!w || !h || *w < 1 || *h < 1) FailInvalid(where + ": needs the image size \"w\" and \"h\" (>= 1)");
+    // The clips' limit holds for views too (a larger view would not fit in memory to render).
+    const std::size_t limit = LoadOptions{}.max_pixels_per_frame;
+    if (*w > double(limit) || *h > double(limit)) {
+      Fail(ErrorCode::kResourceExhausted,
+           where + ": \"w\" x \"h\" exceed the limit of " + std::to_string(limit) + " pixels per frame");
+    }
+    CheckFrameLimit(int(*w), int(*h), limit, where + ": \"w\" x \"h\"");
     CameraAtTime view;
     view.camera = CameraFromJson(frame, top, int(*w), int(*h), where, file);
     const double time = OptionalNumber(frame, "time", where).value_or(0.0);

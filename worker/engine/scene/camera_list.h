@@ -16,7 +16,8 @@ struct CameraAtTime {
 };
 
 // Throws Error(kInvalidArgument) naming the file, the frame and the field that is wrong
-// (missing w/h or focal length, a non-finite or non-rigid matrix, a time outside [0, 1]).
+// (missing w/h or focal length, a non-finite or non-rigid matrix, a time outside [0, 1]), and
+// Error(kResourceExhausted) for a view larger than a clip's frames may be (LoadOptions).
 std::vector<CameraAtTime> ReadCameraList(const std::filesystem::path& path);
 
 }  // namespace endorecon::scene

@@ -145,11 +145,18 @@ bool HasExtension(const fs::path& path, const std::vector<std::string>& extensio
 std::vector<fs::path> ListFiles(const fs::path& dir, const std::vector<std::string>& extensions) {
   if (!fs::is_directory(dir)) FailInvalid(dir.string() + ": folder does not exist");
   std::vector<fs::path> files;
+  std::error_code error;
   for (const fs::directory_entry& entry : fs::directory_iterator(dir)) {
-    if (entry.is_regular_file() && !entry.path().filename().string().starts_with(".") &&
-        HasExtension(entry.path(), extensions)) {
-      files.push_back(entry.path());
+    if (entry.path().filename().string().starts_with(".") || !HasExtension(entry.path(), extensions))
+      continue;
+    // A frame's name that is no readable file (a broken or looping link, a folder, a pipe) is named,
+    // not skipped: skipped, it would show only as a frame count that disagrees.
+    if (!entry.is_regular_file(error)) {
+      FailInvalid(entry.path().string() + ": not a regular file (" +
+                  (error ? error.message() : std::string("a folder, a broken link, a pipe or a device")) +
+                  ")");
     }
+    files.push_back(entry.path());
   }
   std::sort(files.begin(), files.end());
   return files;

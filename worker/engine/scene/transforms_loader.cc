@@ -23,12 +23,23 @@ using nlohmann::json;
 fs::path ResolveFile(const fs::path& dir, const json& frame, const char* key, const std::string& where) {
   const json& value = frame[key];
   if (!value.is_string()) FailInvalid(where + ": \"" + key + "\" must be a string, found " + value.dump());
-  const fs::path path = dir / value.get<std::string>();
-  if (fs::is_regular_file(path)) return path;
+  // A clip is its folder: a path that leaves it (absolute, or up through "..") is refused, so a clip
+  // uploaded to the service cannot make a worker read its own files (or another job's).
+  if (value.get<std::string>().empty()) FailInvalid(where + ": \"" + key + "\" is empty");
+  const fs::path relative = fs::path(value.get<std::string>()).lexically_normal();
+  if (relative.is_absolute() || relative.has_root_name() || *relative.begin() == "..") {
+    FailInvalid(where + ": " + key + " \"" + value.get<std::string>() +
+                "\" leaves the clip's folder; paths must be relative and stay inside it");
+  }
+  const fs::path path = dir / relative;
+  std::error_code error;
+  if (fs::is_regular_file(path, error)) return path;
+  if (fs::exists(path, error))
+    FailInvalid(where + ": " + key + " " + path.string() + " is not a regular file");
   for (const char* extension : {".png", ".jpg", ".jpeg", ".npy"}) {
     fs::path candidate = path;
     candidate += extension;
-    if (fs::is_regular_file(candidate)) return candidate;
+    if (fs::is_regular_file(candidate, error)) return candidate;
   }
   FailInvalid(where + ": " + key + " " + path.string() +
               " does not exist (also tried adding .png, .jpg, .jpeg, .npy)");

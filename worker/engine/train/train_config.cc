@@ -187,7 +187,8 @@ void Validate(const TrainConfig& c) {
   require(c.depth_samples >= 0 && c.stratified_samples >= 1,
           "need stratified_samples >= 1 and depth_samples >= 0");
   require(c.depth_xi > 0, "depth_xi must be > 0");
-  require(c.holdout >= 0, "holdout must be >= 0");
+  require(c.holdout == 0 || c.holdout >= 2,
+          "holdout must be 0 (none held out) or K >= 2 (every K-th frame), got " + std::to_string(c.holdout));
   require(c.depth_loss == "huber" || c.depth_loss == "l1",
           "depth_loss must be huber or l1, got " + c.depth_loss);
   require(c.variance_eps > 0, "variance_eps must be > 0");

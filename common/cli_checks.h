@@ -1,0 +1,20 @@
+// Checks of numeric command-line values for every command of the product, with messages that say
+// the bound in words (CLI11's own NonNegativeNumber and PositiveNumber print the largest double,
+// three hundred digits, as their upper bound).
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+namespace endorecon {
+
+// A finite number >= 0: "--fps: -1 is negative; expected a number >= 0".
+CLI::Validator AtLeastZero();
+
+// A finite number > 0: "--limit: 0 is not above 0".
+CLI::Validator AboveZero();
+
+// The held-out frames' spacing: 0 (none held out) or K >= 2 (every K-th frame); 1 would hold every
+// frame out of training.
+CLI::Validator HoldoutSpacing();
+
+}  // namespace endorecon

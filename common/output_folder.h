@@ -1,0 +1,15 @@
+// Where a command writes its results: never over what it reads.
+#pragma once
+
+#include <filesystem>
+#include <string_view>
+
+namespace endorecon {
+
+// Throws Error(kInvalidArgument) naming both when `out` is the folder `input` itself (after symbolic
+// links and "." / ".." are resolved): results written there would overwrite its files (a clip's
+// depth/ by the rendered depth, a results folder's frames by other views). `what` names the input
+// ("the clip", "the results folder"). Nothing is checked when either does not exist yet.
+void CheckOutputFolder(const std::filesystem::path& out, const std::filesystem::path& input, std::string_view what);
+
+}  // namespace endorecon

@@ -1,0 +1,60 @@
+// What an upload lists: every regular file under the clip's folder, through linked folders; an entry
+// that is no file (a broken link, a pipe) is named instead of left out of the upload.
+#include "common/manifest.h"
+
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+
+#include <filesystem>
+#include <string>
+
+#include "common/error.h"
+#include "tests/unit/temp_dir.h"
+
+namespace endorecon {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string ErrorOf(const fs::path& dir) {
+  try {
+    ManifestOfDirectory(dir);
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument);
+    return e.what();
+  }
+  return "";
+}
+
+TEST(ManifestTest, ListsFilesThroughLinkedFolders) {
+  testing::TempDir dir("manifest");
+  fs::create_directories(dir / "clip");
+  fs::create_directories(dir / "elsewhere");
+  testing::WriteBytes(dir / "clip" / "poses_bounds.npy", "p");
+  testing::WriteBytes(dir / "elsewhere" / "000000.png", "i");
+  fs::create_directory_symlink(dir / "elsewhere", dir / "clip" / "images");
+  const v1::Manifest manifest = ManifestOfDirectory(dir / "clip");
+  ASSERT_EQ(manifest.files_size(), 2);
+  EXPECT_EQ(manifest.files(0).path(), "images/000000.png");
+  EXPECT_EQ(manifest.files(1).path(), "poses_bounds.npy");
+}
+
+TEST(ManifestTest, AnEntryThatIsNoFileIsNamed) {
+  testing::TempDir dir("manifest");
+  fs::create_directories(dir / "clip");
+  testing::WriteBytes(dir / "clip" / "poses_bounds.npy", "p");
+  fs::create_symlink(dir / "nowhere.png", dir / "clip" / "000001.png");
+  std::string message = ErrorOf(dir / "clip");
+  EXPECT_NE(message.find("000001.png: not a regular file"), std::string::npos) << message;
+  fs::remove(dir / "clip" / "000001.png");
+  ASSERT_EQ(::mkfifo((dir / "clip" / "000002.png").c_str(), 0600), 0);
+  message = ErrorOf(dir / "clip");
+  EXPECT_NE(message.find("000002.png: not a regular file"), std::string::npos) << message;
+  fs::remove(dir / "clip" / "000002.png");
+  fs::create_directory_symlink(dir / "clip", dir / "clip" / "loop");  // a folder linked into itself
+  message = ErrorOf(dir / "clip");
+  EXPECT_NE(message.find("loop"), std::string::npos) << message;
+}
+
+}  // namespace
+}  // namespace endorecon
