@@ -120,6 +120,14 @@ int Submit(const Globals& globals, const SubmitFlags& flags) {
         "recording (--side-by-side VIDEO --calibration FILE)");
   }
   if (flags.raw.empty() && !flags.raw.size.empty()) ParseFrameSize(flags.raw.size);  // before any upload
+  // A clip folder is used as it is: the recording's options are refused before its upload (as the
+  // worker would after it).
+  if (!flags.clip.empty() && std::filesystem::is_directory(flags.clip) && !dicom::HoldsDicom(flags.clip) &&
+      (!flags.raw.frames.empty() || !flags.raw.size.empty() || flags.recording.fps() > 0 ||
+       !flags.recording.stereo().empty() || !flags.recording.endoscope().empty())) {
+    FailInvalid("--frames, --size, --fps, --stereo and --endoscope apply to a DICOM recording, and " +
+                flags.clip + " is a clip folder, whose frames are used as they are");
+  }
   // A raw recording is staged under canonical names (recording_upload.h); its folder is uploaded.
   std::optional<StagedRecording> staged;
   if (!flags.raw.empty()) staged.emplace(flags.raw);

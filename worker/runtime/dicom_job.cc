@@ -2,6 +2,11 @@
 
 #include <spdlog/spdlog.h>
 
+#include <filesystem>
+#include <string>
+#include <utility>
+
+#include "common/error.h"
 #include "common/prepare_flags.h"
 #include "worker/runtime/dicom_results.h"
 
@@ -23,7 +28,25 @@ dicom::RecordingOptions RecordingOptionsOf(const v1::RecordingOptions& options) 
 std::optional<RecordingClip> PrepareRecording(const std::filesystem::path& input,
                                               const v1::RecordingOptions& options,
                                               const std::filesystem::path& clip_dir) {
-  return ClipFromRecording(input, RecordingOptionsOf(options), clip_dir);
+  auto clip = ClipFromRecording(input, RecordingOptionsOf(options), clip_dir);
+  std::error_code error;
+  if (!clip && std::filesystem::is_directory(input, error)) {
+    // A clip folder is used as it is: options that would pick or scale a recording's frames are
+    // refused rather than ignored.
+    std::string given;
+    for (const auto& [name, set] :
+         {std::pair{"--stereo", !options.stereo().empty()}, std::pair{"--frames", !options.frames().empty()},
+          std::pair{"--fps", options.fps() > 0}, std::pair{"--size", !options.size().empty()},
+          std::pair{"--endoscope", !options.endoscope().empty()}}) {
+      if (set) given += (given.empty() ? "" : ", ") + std::string(name);
+    }
+    if (!given.empty()) {
+      FailInvalid(given + (given.find(',') == std::string::npos ? " applies" : " apply") +
+                  " to a DICOM recording, and " + input.string() +
+                  " is a clip folder, whose frames are used as they are");
+    }
+  }
+  return clip;
 }
 
 void WriteJobDicom(const std::filesystem::path& out_dir, const std::optional<RecordingClip>& recording,

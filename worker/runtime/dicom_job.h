@@ -14,7 +14,8 @@ namespace endorecon::worker {
 dicom::RecordingOptions RecordingOptionsOf(const v1::RecordingOptions& options);
 
 // When `input` is a DICOM recording, converts it into `clip_dir` and returns what the results need;
-// nullopt for any other clip.
+// nullopt for any other clip. Throws InvalidArgument naming them when `input` is a clip folder and
+// `options` ask for a recording's frames (--frames, --fps, --size, --stereo, --endoscope).
 std::optional<RecordingClip> PrepareRecording(const std::filesystem::path& input,
                                               const v1::RecordingOptions& options,
                                               const std::filesystem::path& clip_dir);

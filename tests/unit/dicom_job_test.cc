@@ -1,0 +1,34 @@
+// A clip folder is used as it is: the options that pick or scale a recording's frames are refused
+// for it, naming them, where they were once ignored without a word.
+#include "worker/runtime/dicom_job.h"
+
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "common/error.h"
+#include "tests/unit/temp_dir.h"
+
+namespace endorecon::worker {
+namespace {
+
+TEST(DicomJobTest, RecordingOptionsOnAClipFolderAreRefused) {
+  testing::TempDir dir("dicom-job");
+  testing::WriteBytes(dir / "poses_bounds.npy", "not DICOM");
+  EXPECT_FALSE(PrepareRecording(dir.path(), {}, dir / "clip").has_value()) << "no options: the folder as it is";
+  v1::RecordingOptions options;
+  options.set_fps(5);
+  options.set_size("320x180");
+  try {
+    PrepareRecording(dir.path(), options, dir / "clip");
+    ADD_FAILURE() << "accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument);
+    const std::string message = e.what();
+    EXPECT_NE(message.find("--fps, --size apply to a DICOM recording"), std::string::npos) << message;
+    EXPECT_NE(message.find("is a clip folder"), std::string::npos) << message;
+  }
+}
+
+}  // namespace
+}  // namespace endorecon::worker
