@@ -269,6 +269,28 @@ TEST_F(EndoNerfLoaderTest, RejectsNearNotBelowFar) {
   ExpectError("poses_bounds.npy row 1", "0 <= near < far (near = 40, far = 29)");
 }
 
+// A range so thin no sample fits between its bounds (near 29, far 29.000001) rendered black once.
+TEST_F(EndoNerfLoaderTest, RejectsADepthRangeTooThinToSample) {
+  rows_[1].near = 29;
+  rows_[1].far = 29.000001;
+  WritePoses(dir_ / "poses_bounds.npy", rows_);
+  ExpectError("poses_bounds.npy row 1", "the depth range is too thin to sample");
+}
+
+// A translation in other units than the bounds (here 1e308) put every ray outside the scene's box,
+// and the run rendered black with exit 0; the clip is refused, naming the spread and the bound.
+TEST_F(EndoNerfLoaderTest, RejectsCamerasFartherApartThanTheDepthBoundsAllow) {
+  rows_[2].t[0] = 1e308;
+  WritePoses(dir_ / "poses_bounds.npy", rows_);
+  const std::string message = ErrorFrom([&] { LoadClip(dir_.path(), {}); });
+  EXPECT_NE(message.find("the cameras' centres lie 1e+308 apart, more than 10000 times the far bound (30)"),
+            std::string::npos)
+      << message;
+  rows_[2].t[0] = 5;  // an endoscope's few units of travel: fine
+  WritePoses(dir_ / "poses_bounds.npy", rows_);
+  EXPECT_EQ(LoadClip(dir_.path(), {}).frame_count(), kFrames);
+}
+
 TEST_F(EndoNerfLoaderTest, RejectsFramesOverTheSizeLimit) {
   LoadOptions options;
   options.max_pixels_per_frame = 47;

@@ -1,10 +1,14 @@
 #include "worker/engine/scene/clip_checks.h"
 
+#include <spdlog/spdlog.h>
+
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
 #include "common/error.h"
+#include "worker/engine/scene/clip.h"
 
 namespace endorecon::scene {
 namespace {
@@ -52,6 +56,38 @@ void CheckNearFar(double near, double far, const std::string& where) {
   if (!std::isfinite(near) || !std::isfinite(far) || near < 0 || near >= far) {
     FailInvalid(where + ": depth bounds must be finite with 0 <= near < far (near = " + Number(near) +
                 ", far = " + Number(far) + ")");
+  }
+  if (far - near < kLeastDepthRange * far) {
+    FailInvalid(where + ": the depth range is too thin to sample (near = " + Number(near) +
+                ", far = " + Number(far) + ": far - near under " + Number(kLeastDepthRange) + " of far)");
+  }
+}
+
+void CheckClipGeometry(const Clip& clip, const std::string& where) {
+  double spread = 0;
+  for (const Camera& a : clip.cameras) {
+    for (const Camera& b : clip.cameras) {
+      spread = std::max(spread, (a.c2w.col(3) - b.c2w.col(3)).stableNorm());
+      if (spread > kMostCameraSpread * clip.far) {
+        FailInvalid(where + ": the cameras' centres lie " + Number(spread) + " apart, more than " +
+                    Number(kMostCameraSpread) + " times the far bound (" + Number(clip.far) +
+                    "): a pose's translation is likely in other units than the depth bounds");
+      }
+    }
+  }
+  std::size_t outside = 0, seen = 0;
+  for (const auto& frame : clip.depth) {
+    for (std::size_t i = 0; i < frame.size(); i += 61) {
+      if (!(frame[i] > 0)) continue;
+      ++seen;
+      outside += frame[i] < 0.5 * clip.near || frame[i] > 2 * clip.far;
+    }
+  }
+  if (seen > 0 && 2 * outside > seen) {
+    spdlog::warn(
+        "{}: {:.0f}% of the depth priors lie outside [near / 2, 2 far] = [{}, {}]: are the depth "
+        "maps in the poses' units? The depth loss and depth-guided sampling follow them as they are",
+        where, 100.0 * double(outside) / double(seen), Number(0.5 * clip.near), Number(2 * clip.far));
   }
 }
 

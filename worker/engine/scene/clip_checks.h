@@ -16,8 +16,19 @@ void CheckPose(const Eigen::Matrix<double, 3, 4>& c2w, const std::string& where)
 // Intrinsics: finite fx, fy > 0, finite cx, cy, width and height > 0; and the pose (CheckPose).
 void CheckCamera(const Camera& camera, const std::string& where);
 
-// Depth bounds: finite, 0 ≤ near < far.
+// Depth bounds: finite, 0 ≤ near < far, and far − near at least kLeastDepthRange of far (a thinner
+// range leaves the samplers nothing to place samples in).
+constexpr double kLeastDepthRange = 1e-4;
 void CheckNearFar(double near, double far, const std::string& where);
+
+// What the clip's files say together, checked once they are loaded (`where`: the clip's folder):
+// the cameras' centres lie within kMostCameraSpread times `far` of each other (farther, a pose's
+// translation is in other units, and the scene box would hold nothing a ray samples), else
+// Error(kInvalidArgument); and depth priors mostly outside [near / 2, 2 far] are warned of (depth in
+// other units than the poses), naming the share.
+constexpr double kMostCameraSpread = 1e4;
+struct Clip;
+void CheckClipGeometry(const Clip& clip, const std::string& where);
 
 // width x height must not exceed max_pixels; otherwise Error(kResourceExhausted).
 void CheckFrameLimit(int width, int height, std::size_t max_pixels, const std::string& where);

@@ -1,6 +1,7 @@
 #include "worker/engine/scene/clip_loader.h"
 
 #include "common/error.h"
+#include "worker/engine/scene/clip_checks.h"
 #include "worker/engine/scene/endonerf_loader.h"
 #include "worker/engine/scene/frame_reader.h"
 #include "worker/engine/scene/transforms_loader.h"
@@ -64,6 +65,7 @@ Clip LoadClip(const fs::path& dir, const LoadOptions& options) {
                 "poses_bounds.npy (EndoNeRF layout)");
   }
   if (fs::is_directory(dir / "gt")) LoadGroundTruth(dir / "gt", options, clip);
+  CheckClipGeometry(clip, dir.string());
   return clip;
 }
 
