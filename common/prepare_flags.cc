@@ -58,9 +58,13 @@ FrameSize ParseFrameSize(std::string_view text) {
   const auto parts = Split(text, 'x');
   FrameSize size;
   if (parts.size() != 2 || !ParseCount(parts[0], size.width) || !ParseCount(parts[1], size.height) ||
-      size.width < 2 || size.height < 2 || size.width % 2 != 0 || size.height % 2 != 0 ||
-      size.width > 16384 || size.height > 16384) {
+      size.width < 2 || size.height < 2 || size.width % 2 != 0 || size.height % 2 != 0) {
     Bad(text, expected);
+  }
+  // The largest frame a clip may have (the loaders' limit): a larger one would be made, then refused.
+  constexpr double kMostPixels = 4096.0 * 4096.0;
+  if (double(size.width) * double(size.height) > kMostPixels) {
+    Bad(text, "at most 16777216 pixels a frame (4096 x 4096), the largest a clip may have");
   }
   return size;
 }

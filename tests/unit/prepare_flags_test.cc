@@ -28,6 +28,12 @@ TEST(PrepareFlagsTest, SizesAndRegions) {
   EXPECT_EQ(ParseFrameSize("640x512").width, 640);
   for (const char* bad : {"641x512", "640", "0x0", "640x512x3", "x512"})
     ErrorFrom([&] { ParseFrameSize(bad); });
+  // Larger than a clip's frames may be: said so, not blamed on the width's parity.
+  EXPECT_EQ(ParseFrameSize("4096x4096").height, 4096);
+  for (const char* big : {"6400x4800", "64000x48000"}) {
+    const std::string message = ErrorFrom([&] { ParseFrameSize(big); });
+    EXPECT_NE(message.find("at most 16777216 pixels a frame"), std::string::npos) << message;
+  }
   const PixelRect rect = ParsePixelRect("0,700,1280,20");
   EXPECT_EQ(rect.y, 700);
   EXPECT_EQ(rect.width, 1280);

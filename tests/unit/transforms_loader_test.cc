@@ -149,6 +149,15 @@ TEST_F(TransformsLoaderTest, RejectsFilesOutsideTheClipsFolder) {
   ExpectError("transforms.json frame 1: \"file_path\" is empty", "");
 }
 
+// A declared size over the limit is blamed on transforms.json's "w" and "h", not on the images.
+TEST_F(TransformsLoaderTest, ADeclaredSizeOverTheLimitNamesItsKeys) {
+  transforms_["w"] = 64000;
+  transforms_["h"] = 48000;
+  const std::string message = ErrorFrom([&] { Load(); }, ErrorCode::kResourceExhausted);
+  EXPECT_NE(message.find("transforms.json frame 0: \"w\" x \"h\": frames of 64000x48000"), std::string::npos)
+      << message;
+}
+
 TEST_F(TransformsLoaderTest, RejectsMissingTransformsFile) {
   const std::string message = ErrorFrom([&] { LoadTransformsClip(dir_.path(), {}); });
   EXPECT_NE(message.find("transforms.json: cannot open"), std::string::npos) << message;

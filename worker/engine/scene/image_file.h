@@ -11,7 +11,8 @@ namespace endorecon::scene {
 // BGR order). Only PNG, JPEG, BMP and TIFF files, told by their first bytes, reach OpenCV: it picks
 // a decoder by content, and some of the decoders it carries abort the process on a broken file
 // (tests/fuzz/image_decode_fuzz.cc: GDCM's DICOM reader asserts on a broken DICOM named .png).
-// Throws FailInvalid naming the file when it is missing, of another format, unreadable or truncated.
+// Throws FailInvalid naming the file when it is missing, of another format, unreadable or truncated,
+// and Error(kResourceExhausted) when its header declares more pixels than OpenCV decodes (2^30).
 cv::Mat DecodeImageFile(const std::filesystem::path& path);
 
 // An 8- or 16-bit grey, BGR or BGRA image as 8-bit BGR (16-bit scaled by 1/257).

@@ -63,7 +63,7 @@ void WarnAboutDistortion(const json& top, const std::string& file) {
 }
 
 // The size named by "w"/"h" (top level or per frame), which every frame must agree on; 0x0 if none.
-void DeclaredSize(const json& top, const std::string& file, Clip& clip) {
+void DeclaredSize(const json& top, const std::string& file, std::size_t max_pixels, Clip& clip) {
   const json& frames = top["frames"];
   for (std::size_t i = 0; i < frames.size(); ++i) {
     const std::string where = file + " frame " + std::to_string(i);
@@ -77,6 +77,7 @@ void DeclaredSize(const json& top, const std::string& file, Clip& clip) {
     if (clip.width == 0) {
       clip.width = static_cast<int>(*w);
       clip.height = static_cast<int>(*h);
+      CheckFrameLimit(clip.width, clip.height, max_pixels, where + ": \"w\" x \"h\"");
     } else if (clip.width != static_cast<int>(*w) || clip.height != static_cast<int>(*h)) {
       FailInvalid(where + ": size " + SizeText(static_cast<int>(*w), static_cast<int>(*h)) +
                   " differs from the clip's " + SizeText(clip.width, clip.height) +
@@ -110,7 +111,7 @@ Clip LoadTransformsClip(const fs::path& dir, const LoadOptions& options) {
 
   Clip clip;
   clip.source = dir.string();
-  DeclaredSize(top, file, clip);
+  DeclaredSize(top, file, options.max_pixels_per_frame, clip);
   FrameReadOptions read_options;
   read_options.tool_value = 0;
   read_options.max_pixels_per_frame = options.max_pixels_per_frame;
