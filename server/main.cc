@@ -207,11 +207,12 @@ int Run(const ServerFlags& flags) {
   }
 
   const std::string address = HostOf(flags.listen) + ":" + std::to_string(port);
-  spdlog::info("endorecon-server listening on {} ({}; data in {}, metrics on {}:{})", address,
+  spdlog::info("endorecon-server listening on {} ({}; data in {}, metrics {})", address,
                flags.tls.tls()
                    ? (flags.tls.client_ca_file.empty() ? "TLS" : "TLS, workers need a client certificate")
                    : "plaintext",
-               data_dir.string(), flags.metrics_host, metrics.port());
+               data_dir.string(),
+               flags.metrics_port >= 0 ? fmt::format("on {}:{}", flags.metrics_host, metrics.port()) : "off");
   if (guard.Refresh()) {
     spdlog::info("tokens required: {}", TokenStore::PathIn(data_dir).string());
   } else if (IsLoopbackAddress(flags.listen)) {

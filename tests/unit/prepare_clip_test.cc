@@ -3,6 +3,7 @@
 #include "worker/prepare/prepare_clip.h"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <fstream>
 #include <opencv2/calib3d.hpp>
@@ -223,7 +224,15 @@ TEST_F(PrepareClipTest, PoseFilesMoveTheCamera) {
 
 TEST_F(PrepareClipTest, ReplacesAnEarlierPreparedClipButNothingElse) {
   prepare::PrepareOptions options = Options("again");
+  // A run killed before it finished left its staging folder; the next run of the same output
+  // removes it (its process, pid 999999999 here, is gone), and leaves a live process's alone.
+  const fs::path abandoned = dir_->path() / ".again.preparing-999999999";
+  const fs::path live = dir_->path() / (".again.preparing-" + std::to_string(::getppid()));
+  fs::create_directories(abandoned / "images");
+  fs::create_directories(live);
   prepare::PrepareClip(options);
+  EXPECT_FALSE(fs::exists(abandoned));
+  EXPECT_TRUE(fs::exists(live));
   options.frames = ParseFrameRange("0:2");
   EXPECT_EQ(prepare::PrepareClip(options).frames, 2);
   EXPECT_FALSE(fs::exists(dir_->path() / "again/images/000003.png"));

@@ -1,9 +1,11 @@
 #include "worker/prepare/prepare_clip.h"
 
+#include <signal.h>
 #include <spdlog/spdlog.h>
 #include <tbb/parallel_for.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <fstream>
@@ -52,8 +54,9 @@ class StagedFolder {
         (!fs::is_directory(out_) || (!fs::is_empty(out_) && !fs::exists(out_ / "prepare.json")))) {
       FailInvalid(out_.string() + ": exists and is not empty (and holds no prepared clip to replace)");
     }
-    staging_ =
-        out_.parent_path() / ("." + out_.filename().string() + ".preparing-" + std::to_string(::getpid()));
+    const std::string prefix = "." + out_.filename().string() + ".preparing-";
+    staging_ = out_.parent_path() / (prefix + std::to_string(::getpid()));
+    RemoveAbandoned(prefix);
     std::error_code error;
     fs::remove_all(staging_, error);
     fs::create_directories(staging_, error);
@@ -67,6 +70,24 @@ class StagedFolder {
   StagedFolder& operator=(const StagedFolder&) = delete;
 
   const fs::path& path() const { return staging_; }
+
+  // A staging folder of the same output whose process is gone (killed before its destructor ran):
+  // removed, so killed runs leave no frames behind for good.
+  void RemoveAbandoned(const std::string& prefix) const {
+    std::error_code error;
+    for (const auto& entry : fs::directory_iterator(out_.parent_path(), error)) {
+      const std::string name = entry.path().filename().string();
+      if (!name.starts_with(prefix)) continue;
+      const std::string pid = name.substr(prefix.size());
+      if (pid.empty() || pid.find_first_not_of("0123456789") != std::string::npos || pid.size() > 9) continue;
+      if (::kill(static_cast<pid_t>(std::stol(pid)), 0) != 0 && errno == ESRCH) {
+        std::error_code ignored;
+        fs::remove_all(entry.path(), ignored);
+        spdlog::info("removed {}: the staging folder of a run that ended before finishing",
+                     entry.path().string());
+      }
+    }
+  }
 
   void Commit() {
     std::error_code error;

@@ -157,8 +157,9 @@ int Serve(const ServeFlags& flags) {
       std::this_thread::sleep_for(std::chrono::seconds(1));
     }
   }
-  spdlog::info("worker {} serving {} with {} device(s) [{}], metrics on port {}", worker_id, flags.server,
-               devices.size(), fmt::join(names, ","), metrics.port());
+  spdlog::info("worker {} serving {} with {} device(s) [{}], metrics {}", worker_id, flags.server,
+               devices.size(), fmt::join(names, ","),
+               flags.metrics_port >= 0 ? fmt::format("on port {}", metrics.port()) : std::string("off"));
   std::vector<std::thread> loops;
   const auto wait = std::chrono::milliseconds(static_cast<long>(flags.lease_wait_s * 1000));
   for (const auto& device : devices) {
