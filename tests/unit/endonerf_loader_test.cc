@@ -269,6 +269,13 @@ TEST_F(EndoNerfLoaderTest, RejectsNearNotBelowFar) {
   ExpectError("poses_bounds.npy row 1", "0 <= near < far (near = 40, far = 29)");
 }
 
+// Bounds of 1e-300 and 1e300 overflowed the scene box and training "diverged" at its first step.
+TEST_F(EndoNerfLoaderTest, RejectsAFarBoundInImplausibleUnits) {
+  rows_[0].far = 1e300;
+  WritePoses(dir_ / "poses_bounds.npy", rows_);
+  ExpectError("poses_bounds.npy row 0", "the far bound 1e+300 is beyond 1e+12");
+}
+
 // A range so thin no sample fits between its bounds (near 29, far 29.000001) rendered black once.
 TEST_F(EndoNerfLoaderTest, RejectsADepthRangeTooThinToSample) {
   rows_[1].near = 29;

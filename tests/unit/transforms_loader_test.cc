@@ -158,6 +158,12 @@ TEST_F(TransformsLoaderTest, ADeclaredSizeOverTheLimitNamesItsKeys) {
       << message;
 }
 
+// Times too far apart to rescale once became NaN, and training "diverged" at its first step.
+TEST_F(TransformsLoaderTest, RejectsTimesTooFarApartToRescale) {
+  for (int i = 0; i < 3; ++i) Frame(i)["time"] = (i - 1) * 1e308;
+  ExpectError("transforms.json: the frames' times span", "too wide to rescale to [0, 1]");
+}
+
 TEST_F(TransformsLoaderTest, RejectsMissingTransformsFile) {
   const std::string message = ErrorFrom([&] { LoadTransformsClip(dir_.path(), {}); });
   EXPECT_NE(message.find("transforms.json: cannot open"), std::string::npos) << message;

@@ -57,6 +57,10 @@ void CheckNearFar(double near, double far, const std::string& where) {
     FailInvalid(where + ": depth bounds must be finite with 0 <= near < far (near = " + Number(near) +
                 ", far = " + Number(far) + ")");
   }
+  if (far > kMostDepth) {
+    FailInvalid(where + ": the far bound " + Number(far) + " is beyond " + Number(kMostDepth) +
+                ": the depth bounds are in implausible units");
+  }
   if (far - near < kLeastDepthRange * far) {
     FailInvalid(where + ": the depth range is too thin to sample (near = " + Number(near) +
                 ", far = " + Number(far) + ": far - near under " + Number(kLeastDepthRange) + " of far)");

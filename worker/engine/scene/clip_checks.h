@@ -16,9 +16,11 @@ void CheckPose(const Eigen::Matrix<double, 3, 4>& c2w, const std::string& where)
 // Intrinsics: finite fx, fy > 0, finite cx, cy, width and height > 0; and the pose (CheckPose).
 void CheckCamera(const Camera& camera, const std::string& where);
 
-// Depth bounds: finite, 0 ≤ near < far, and far − near at least kLeastDepthRange of far (a thinner
-// range leaves the samplers nothing to place samples in).
+// Depth bounds: finite, 0 ≤ near < far ≤ kMostDepth, and far − near at least kLeastDepthRange of
+// far (a thinner range leaves the samplers nothing to place samples in; a farther bound overflows the
+// scene box's arithmetic in single precision).
 constexpr double kLeastDepthRange = 1e-4;
+constexpr double kMostDepth = 1e12;
 void CheckNearFar(double near, double far, const std::string& where);
 
 // What the clip's files say together, checked once they are loaded (`where`: the clip's folder):

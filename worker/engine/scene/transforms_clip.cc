@@ -48,6 +48,10 @@ void SetTimes(const json& frames, const std::string& file, Clip& clip) {
     hi = std::max(hi, *t);
   }
   const bool rescale = lo < 0 || hi > 1;
+  if (!std::isfinite(hi - lo)) {
+    FailInvalid(file + ": the frames' times span [" + std::to_string(lo) + ", " + std::to_string(hi) +
+                "], too wide to rescale to [0, 1]");
+  }
   if (rescale) spdlog::info("{}: times span [{}, {}]; rescaling them to [0, 1]", file, lo, hi);
   for (std::size_t i = 0; i < n; ++i) {
     const double t = !rescale ? *times[i] : hi > lo ? (*times[i] - lo) / (hi - lo) : 0.0;
