@@ -131,5 +131,29 @@ TEST(Exports, HeatmapUpperBoundIsAClipQuantile) {
   EXPECT_EQ(HeatmapUpperBound(zeros), 1.0);
 }
 
+// Gathered frame by frame: every value up to its cap (the same bound as the whole clip's), and past
+// it every k-th value, its stride running on across frames, within a percent of the whole's.
+TEST(Exports, AHeatmapScaleGatheredFrameByFrameKeepsToTheClipsBound) {
+  std::vector<std::vector<float>> frames(30, std::vector<float>(997));
+  std::uint64_t state = 7;
+  for (auto& frame : frames) {
+    for (float& v : frame) {
+      state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+      v = float(std::exp(double(state >> 11) / double(1ULL << 53) * 4));  // 1 to e^4, skewed
+    }
+  }
+  HeatmapScale every(30 * 997);
+  HeatmapScale sampled(30 * 997, 2000);
+  for (const auto& frame : frames) {
+    every.Add(frame);
+    sampled.Add(frame);
+  }
+  EXPECT_EQ(every.stride(), 1u);
+  EXPECT_EQ(every.UpperBound(), HeatmapUpperBound(frames));
+  EXPECT_EQ(sampled.stride(), 15u);  // 29,910 values, at most 2,000 kept
+  EXPECT_NEAR(sampled.UpperBound(), HeatmapUpperBound(frames), 0.01 * HeatmapUpperBound(frames));
+  EXPECT_NE(sampled.UpperBound(), HeatmapUpperBound(frames)) << "a sample, not every value";
+}
+
 }  // namespace
 }  // namespace endorecon::eval

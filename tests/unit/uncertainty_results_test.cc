@@ -47,6 +47,7 @@ TEST(UncertaintyResults, FilesAndOneHeatmapScalePerClip) {
           << f << name;
     }
     EXPECT_TRUE(std::filesystem::exists(dir.path() / "out" / "error" / FrameFileName(f, ".png"))) << f;
+    EXPECT_FALSE(std::filesystem::exists(dir.path() / "out" / ".error-maps")) << "the scratch folder is gone";
     totals.push_back(renderer.Render(clip.cameras[f], clip.times[f]).uncertainty);  // deterministic
   }
   const auto& maps = metrics.at("uncertainty_maps");

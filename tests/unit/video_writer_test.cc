@@ -27,13 +27,15 @@ TEST(VideoWriter, Mp4ReadsBackWithEveryFrame) {
       frames[f][3 * p + 2] = 0.1f + 0.05f * f;
     }
   }
-  const VideoInfo info = WriteVideo(dir / "video.mp4", frames, kW, kH, 10.0);
-  EXPECT_EQ(info.path, dir / "video.mp4") << "fell back to " << info.codec;
-  EXPECT_EQ(info.frames, kFrames);
-  ASSERT_TRUE(std::filesystem::exists(info.path));
-  EXPECT_GT(std::filesystem::file_size(info.path), 0u);
+  VideoWriter writer(dir / "video.mp4", kW, kH, 10.0);
+  for (const auto& frame : frames) writer.Write(frame);
+  writer.Close();
+  EXPECT_EQ(writer.path(), dir / "video.mp4") << "fell back to " << writer.codec();
+  EXPECT_EQ(writer.frames_written(), kFrames);
+  ASSERT_TRUE(std::filesystem::exists(writer.path()));
+  EXPECT_GT(std::filesystem::file_size(writer.path()), 0u);
 
-  cv::VideoCapture capture(info.path.string());
+  cv::VideoCapture capture(writer.path().string());
   ASSERT_TRUE(capture.isOpened());
   int read = 0;
   cv::Mat frame;

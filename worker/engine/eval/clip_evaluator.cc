@@ -6,7 +6,9 @@
 #include <algorithm>
 #include <future>
 #include <limits>
+#include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <span>
 #include <string>
 #include <utility>
@@ -26,6 +28,7 @@
 #include "worker/engine/eval/summary.h"
 #include "worker/engine/eval/surface_mesh.h"
 #include "worker/engine/eval/video_writer.h"
+#include "worker/engine/scene/npy.h"
 #include "worker/engine/scene/outside_view.h"
 
 namespace endorecon::eval {
@@ -89,33 +92,55 @@ nlohmann::json SplitMetrics(const scene::Clip& clip, const std::vector<int>& fra
   return json;
 }
 
-// The uncertainty maps of every frame are kept until all are rendered, so one heat-map scale
-// serves the whole clip.
+// The uncertainty maps go to disk frame by frame (their .npy files; the error maps into a scratch
+// folder), and only a sample of their values stays for the heat maps' scale, one per clip: the
+// heat-map PNGs are drawn from the files once the last frame is rendered. Keeping every frame's maps
+// in memory instead cost 20 bytes a pixel of the clip (40 GB for 600 frames of 1920 x 1080).
 struct UncertaintyMaps {
-  std::vector<std::vector<float>> total, error, model;
+  std::filesystem::path dir, error_dir, scratch;
+  HeatmapScale total, error, model;
 
-  void Write(const std::filesystem::path& out_dir,
-             const std::vector<render::RenderedFrame>& aleatoric_epistemic, int w, int h,
-             nlohmann::json& json) const {
-    const double scale = HeatmapUpperBound(total);
-    const double error_scale = HeatmapUpperBound(error);
-    const double model_scale = HeatmapUpperBound(model);
-    for (const char* sub : {"uncertainty", "error"}) std::filesystem::create_directories(out_dir / sub);
-    // Frames are independent files: written on every core.
-    tbb::parallel_for(std::size_t(0), total.size(), [&](std::size_t f) {
-      const int i = int(f);
-      const auto& frame = aleatoric_epistemic[f];
-      WriteDepthNpy(out_dir / "uncertainty" / FrameFileName(i, ".npy"), total[f], w, h);
-      WriteDepthNpy(out_dir / "uncertainty" / FrameFileName(i, "_aleatoric.npy"), frame.aleatoric, w, h);
-      WriteDepthNpy(out_dir / "uncertainty" / FrameFileName(i, "_epistemic.npy"), frame.epistemic, w, h);
-      WriteDepthNpy(out_dir / "uncertainty" / FrameFileName(i, "_model.npy"), model[f], w, h);
-      WriteHeatmapPng(out_dir / "uncertainty" / FrameFileName(i, ".png"), total[f], w, h, 0.0, scale);
-      WriteHeatmapPng(out_dir / "uncertainty" / FrameFileName(i, "_model.png"), model[f], w, h, 0.0,
-                      model_scale);
-      WriteHeatmapPng(out_dir / "error" / FrameFileName(i, ".png"), error[f], w, h, 0.0, error_scale);
+  UncertaintyMaps(const std::filesystem::path& out_dir, std::size_t values_in_all)
+      : dir(out_dir / "uncertainty"),
+        error_dir(out_dir / "error"),
+        scratch(out_dir / ".error-maps"),
+        total(values_in_all),
+        error(values_in_all),
+        model(values_in_all) {
+    for (const auto& sub : {dir, error_dir, scratch}) std::filesystem::create_directories(sub);
+  }
+
+  // Frame f's paper's map, its components and its error map (on the writer thread).
+  void WriteFrame(int f, const render::RenderedFrame& maps, const std::vector<float>& error_map, int w,
+                  int h) const {
+    WriteDepthNpy(dir / FrameFileName(f, ".npy"), maps.uncertainty, w, h);
+    WriteDepthNpy(dir / FrameFileName(f, "_aleatoric.npy"), maps.aleatoric, w, h);
+    WriteDepthNpy(dir / FrameFileName(f, "_epistemic.npy"), maps.epistemic, w, h);
+    WriteDepthNpy(scratch / FrameFileName(f, ".npy"), error_map, w, h);
+  }
+
+  // The heat maps of `count` frames from their files, on every core, then the scratch folder goes.
+  void WriteHeatmaps(int count, int w, int h, nlohmann::json& json) const {
+    const double total_bound = total.UpperBound(), error_bound = error.UpperBound(),
+                 model_bound = model.UpperBound();
+    const auto read = [](const std::filesystem::path& path) {
+      const scene::NpyArray array = scene::ReadNpy(path);
+      return std::vector<float>(array.data.begin(), array.data.end());
+    };
+    tbb::parallel_for(0, count, [&](int f) {
+      WriteHeatmapPng(dir / FrameFileName(f, ".png"), read(dir / FrameFileName(f, ".npy")), w, h, 0.0,
+                      total_bound);
+      WriteHeatmapPng(dir / FrameFileName(f, "_model.png"), read(dir / FrameFileName(f, "_model.npy")), w, h,
+                      0.0, model_bound);
+      WriteHeatmapPng(error_dir / FrameFileName(f, ".png"), read(scratch / FrameFileName(f, ".npy")), w, h,
+                      0.0, error_bound);
     });
+    std::error_code ignored;
+    std::filesystem::remove_all(scratch, ignored);
     json["heatmap_scale"] = {
-        {"uncertainty", {0.0, scale}}, {"error", {0.0, error_scale}}, {"model", {0.0, model_scale}}};
+        {"uncertainty", {0.0, total_bound}}, {"error", {0.0, error_bound}}, {"model", {0.0, model_bound}}};
+    // Where the bound came from: every value, or every k-th of a large clip's.
+    if (total.stride() > 1) json["heatmap_scale"]["sampled_every"] = total.stride();
   }
 };
 
@@ -247,7 +272,9 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
     }
   }
   std::vector<DepthError> depths(clip.gt_depth.empty() ? 0 : count);
-  std::vector<std::vector<float>> video;
+  // The video is written as the frames are (one frame's files in flight at a time, in order).
+  std::unique_ptr<VideoWriter> video;
+  if (what.write_files) video = std::make_unique<VideoWriter>(out_dir / "video.mp4", w, h, 15.0);
   const bool uncertain = renderer.settings().mc_passes > 0;
   const std::size_t calibrated = uncertain ? count : 0,
                     with_truth = uncertain && !clip.gt_rgb.empty() ? count : 0;
@@ -256,8 +283,9 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
   for (const char* key : {"calibration", "calibration_model_map"}) {
     calibrations.push_back({key, std::vector<Calibration>(calibrated), std::vector<Calibration>(with_truth)});
   }
-  UncertaintyMaps maps;
-  std::vector<render::RenderedFrame> components;  // aleatoric and epistemic maps only
+  std::optional<UncertaintyMaps> maps;
+  if (uncertain && what.write_files)
+    maps.emplace(out_dir, std::size_t(count) * std::size_t(w) * std::size_t(h));
   std::vector<PendingModelMap> model_maps(calibrated);
   std::vector<std::vector<float>> evidence(calibrated);  // the training frames' (neighbour_evidence.h)
   std::vector<NeighbourImage> neighbour_images(calibrated);  // the training frames' images, with their tools
@@ -295,7 +323,10 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
       calibrations[1].noise_free[f] =
           FrameCalibration(model.map, model.grid_map, model.grid, model.error_noise_free, mask);
     }
-    if (what.write_files) maps.model.push_back(std::move(model.map));
+    if (maps) {
+      maps->model.Add(model.map);
+      WriteDepthNpy(maps->dir / FrameFileName(f, "_model.npy"), model.map, w, h);
+    }
     model = {};
     if (f >= kNeighbourFrames) evidence[f - kNeighbourFrames] = {};  // the next frame looks no further back
     model_map_seconds += SecondsSince(start);
@@ -310,9 +341,7 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
         what.plain != nullptr ? choice.how : FrameRender::kFull;  // (nothing to reduce with)
     EvaluatedFrame evaluated = RenderFrame(clip, f, how, choice.stride, renderer, what.plain);
     render::RenderedFrame& frame = evaluated.frame;
-    const double rendered_in = SecondsSince(start);
-    pacer.Rendered(choice, rendered_in);
-    render_seconds += rendered_in;
+    render_seconds += SecondsSince(start);
     (how == FrameRender::kFull ? full_frames : reduced_frames).push_back(f);
     if (how == FrameRender::kReduced && choice.stride != what.plan.stride) {
       coarser.push_back({{"frame", f}, {"stride", choice.stride}});
@@ -326,6 +355,8 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
           MeasureImage(group.gain_fitted ? FitGain(frame.rgb, reference, mask, w, h).rgb : frame.rgb,
                        reference, mask, w, h);
     }
+    render::RenderedFrame frame_maps;  // the paper's map and its components, to write
+    std::vector<float> error_map;
     if (uncertain) {
       std::vector<float> error = PixelRmse(frame.rgb, clip.rgb[f], w, h);
       // The paper's map now; the model map once its neighbours are rendered (finish_model_map).
@@ -341,35 +372,41 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
       if (Contains(what.train_frames, f))
         evidence[f] = ResidualEvidence(frame.rgb, clip.rgb[f], neighbour_images[f].tool_mask);
       if (f >= kNeighbourFrames) finish_model_map(f - kNeighbourFrames);
-      if (what.write_files) {
-        maps.total.push_back(std::move(frame.uncertainty));
-        maps.error.push_back(std::move(error));
-        render::RenderedFrame parts;
-        parts.aleatoric = std::move(frame.aleatoric);
-        parts.epistemic = std::move(frame.epistemic);
-        components.push_back(std::move(parts));
+      if (maps) {
+        maps->total.Add(frame.uncertainty);
+        maps->error.Add(error);
+        frame_maps.uncertainty = std::move(frame.uncertainty);
+        frame_maps.aleatoric = std::move(frame.aleatoric);
+        frame_maps.epistemic = std::move(frame.epistemic);
+        error_map = std::move(error);
       }
     }
     if (!depths.empty())
       depths[f] = MeasureDepth(frame.depth, clip.gt_depth[f], mask, w, h, clip.near, clip.far);
     if (what.write_files) {
-      video.push_back(frame.rgb);
       if (writing.valid()) write_seconds += writing.get();  // one frame's files in flight at a time
       const auto& cloud_mask = clip.has_masks() ? clip.tool_mask[f] : mask;
-      writing = std::async(std::launch::async, [&clip, &out_dir, &cloud_mask, f, w, h, depth_scale,
-                                                rgb = std::move(frame.rgb), depth = std::move(frame.depth)] {
-        const auto start = Clock::now();
-        WritePng8(out_dir / "rgb" / FrameFileName(f, ".png"), rgb, w, h);
-        WriteDepthNpy(out_dir / "depth" / FrameFileName(f, ".npy"), depth, w, h);
-        WriteDepthPng16(out_dir / "depth" / FrameFileName(f, ".png"), depth, w, h, depth_scale);
-        WritePly(out_dir / "pointcloud" / FrameFileName(f, ".ply"),
-                 BackProject(clip.cameras[f], depth, rgb, cloud_mask));
-        if (f == 0) {  // the canonical frame's surface (t = 0)
-          WriteSurfaceMesh(out_dir, TriangulateDepth(clip.cameras[f], depth, rgb, cloud_mask, clip.far));
-        }
-        return SecondsSince(start);
-      });
+      writing = std::async(
+          std::launch::async, [&clip, &out_dir, &cloud_mask, &maps, video = video.get(), f, w, h, depth_scale,
+                               rgb = std::move(frame.rgb), depth = std::move(frame.depth),
+                               frame_maps = std::move(frame_maps), error_map = std::move(error_map)] {
+            const auto start = Clock::now();
+            video->Write(rgb);
+            if (maps) maps->WriteFrame(f, frame_maps, error_map, w, h);
+            WritePng8(out_dir / "rgb" / FrameFileName(f, ".png"), rgb, w, h);
+            WriteDepthNpy(out_dir / "depth" / FrameFileName(f, ".npy"), depth, w, h);
+            WriteDepthPng16(out_dir / "depth" / FrameFileName(f, ".png"), depth, w, h, depth_scale);
+            WritePly(out_dir / "pointcloud" / FrameFileName(f, ".ply"),
+                     BackProject(clip.cameras[f], depth, rgb, cloud_mask));
+            if (f == 0) {  // the canonical frame's surface (t = 0)
+              WriteSurfaceMesh(out_dir, TriangulateDepth(clip.cameras[f], depth, rgb, cloud_mask, clip.far));
+            }
+            return SecondsSince(start);
+          });
     }
+    // The pace counts the frame's whole time: on large frames its measures (SSIM, calibration), model
+    // map and the wait for the previous frame's files cost a good part of its render's.
+    pacer.Rendered(choice, SecondsSince(start));
     if (what.on_frame) what.on_frame(f + 1, count);
   }
   if (writing.valid()) write_seconds += writing.get();
@@ -384,13 +421,15 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
   const auto tail = Clock::now();
   if (uncertain) {
     json["uncertainty_maps"] = UncertaintySettings(renderer.settings());
-    if (what.write_files) maps.Write(out_dir, components, w, h, json["uncertainty_maps"]);
+    if (maps) maps->WriteHeatmaps(count, w, h, json["uncertainty_maps"]);
   }
   json["depth_png_scale"] = depth_scale;
   json["evaluation_mask"] = !clip.eval_mask.empty() ? "gt_masks" : (clip.has_masks() ? "masks" : "none");
   if (what.write_files) {
-    const VideoInfo info = WriteVideo(out_dir / "video.mp4", video, w, h, 15.0);
-    json["video"] = {{"path", info.path.filename().string()}, {"codec", info.codec}, {"frames", info.frames}};
+    video->Close();
+    json["video"] = {{"path", video->path().filename().string()},
+                     {"codec", video->codec()},
+                     {"frames", video->frames_written()}};
   }
   write_seconds += SecondsSince(tail);
   nlohmann::json& how = json["evaluation"];

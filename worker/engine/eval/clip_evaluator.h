@@ -36,8 +36,9 @@ struct ClipEvaluation {
 // the clip's ground-truth depth when present; "depth_png_scale". With uncertainty (renderer settings
 // mc_passes > 0): each split gets "calibration" (MeasureCalibration of the total uncertainty against
 // PixelRmse on tissue pixels, summarised over frames, with the mean sparsification curves), and
-// "uncertainty_maps" records the heat-map scales (one per clip: HeatmapUpperBound of every frame's
-// total uncertainty, and of every frame's error) and the estimator's settings. "evaluation" says
+// "uncertainty_maps" records the heat-map scales (one per clip: the HeatmapScale bound of every
+// frame's total uncertainty, error and model map; the maps go to disk frame by frame, none is kept
+// until the end) and the estimator's settings. "evaluation" says
 // which frames were rendered how and where the seconds went (render, write: the writing thread's
 // busy time, wall).
 nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& renderer,

@@ -86,7 +86,8 @@ struct FrameChoice {
 // or reduced when planned full, or coarser (UncertaintyStrides); a held-out frame full (even when
 // planned reduced, if the frames run ahead), else reduced, and only once the training frames after
 // it at their cheapest would not make up the time. Without a deadline or known prices, the plan.
-// The pace of each kind follows the frames rendered so far: the last one's seconds over its price.
+// The pace of each kind follows the frames done so far: the last one's whole seconds (its render, its
+// measures and maps, the wait for the previous frame's files) over its render's price.
 class FramePacer {
  public:
   // heldout_slack_s: how far past the deadline a held-out frame may run full (the overrun a budget

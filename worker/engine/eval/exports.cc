@@ -116,14 +116,32 @@ void WriteHeatmapPng(const std::filesystem::path& path, std::span<const float> v
 }
 
 double HeatmapUpperBound(std::span<const std::vector<float>> frames, double quantile) {
+  std::size_t values = 0;
+  for (const auto& frame : frames) values += frame.size();
+  HeatmapScale scale(values, std::max<std::size_t>(values, 1));
+  for (const auto& frame : frames) scale.Add(frame);
+  return scale.UpperBound(quantile);
+}
+
+HeatmapScale::HeatmapScale(std::size_t values_in_all, std::size_t most_kept)
+    : stride_(
+          std::max<std::size_t>(1, (values_in_all + most_kept - 1) / std::max<std::size_t>(most_kept, 1))) {
+  kept_.reserve(std::min(values_in_all, most_kept));
+}
+
+void HeatmapScale::Add(std::span<const float> frame) {
+  std::size_t i = next_;
+  for (; i < frame.size(); i += stride_) {
+    if (std::isfinite(frame[i])) kept_.push_back(frame[i]);
+  }
+  next_ = i - frame.size();  // the stride runs on across frames
+}
+
+double HeatmapScale::UpperBound(double quantile) const {
   if (!(quantile > 0 && quantile <= 1))
     FailInvalid("heat map quantile " + std::to_string(quantile) + " not in (0, 1]");
-  std::vector<float> all;
-  for (const auto& frame : frames) {
-    std::copy_if(frame.begin(), frame.end(), std::back_inserter(all),
-                 [](float v) { return std::isfinite(v); });
-  }
-  if (all.empty()) return 1.0;
+  if (kept_.empty()) return 1.0;
+  std::vector<float> all(kept_);
   const std::size_t k =
       std::min(all.size() - 1, static_cast<std::size_t>(std::ceil(quantile * all.size())) - 1);
   std::nth_element(all.begin(), all.begin() + static_cast<std::ptrdiff_t>(k), all.end());

@@ -51,4 +51,21 @@ void WriteHeatmapPng(const std::filesystem::path& path, std::span<const float> v
 // finite value or that quantile is not positive (an all-zero error map), so [0, bound] is never empty.
 double HeatmapUpperBound(std::span<const std::vector<float>> frames, double quantile = 0.99);
 
+// The same bound gathered frame by frame, so a clip's maps need not stay in memory until the last
+// frame: of `values_in_all` values (the clip's frames times their pixels) every k-th is kept, k the
+// least that keeps at most `most_kept` (every value, and the same bound as HeatmapUpperBound, up to
+// that; 4 M values, 16 MB, by default: a clip of 48 frames of 640 x 512 still keeps every value).
+class HeatmapScale {
+ public:
+  explicit HeatmapScale(std::size_t values_in_all, std::size_t most_kept = std::size_t{1} << 22);
+  void Add(std::span<const float> frame);
+  double UpperBound(double quantile = 0.99) const;
+  std::size_t stride() const { return stride_; }
+
+ private:
+  std::size_t stride_;
+  std::size_t next_ = 0;  // the index in the next frame of the next value kept
+  std::vector<float> kept_;
+};
+
 }  // namespace endorecon::eval

@@ -86,12 +86,4 @@ const std::filesystem::path& VideoWriter::path() const { return state_->path; }
 const std::string& VideoWriter::codec() const { return state_->codec; }
 int VideoWriter::frames_written() const { return state_->frames; }
 
-VideoInfo WriteVideo(const std::filesystem::path& path, std::span<const std::vector<float>> frames, int width,
-                     int height, double fps) {
-  VideoWriter writer(path, width, height, fps);
-  for (const auto& frame : frames) writer.Write(frame);
-  writer.Close();
-  return {writer.path(), writer.codec(), writer.frames_written()};
-}
-
 }  // namespace endorecon::eval

@@ -39,14 +39,4 @@ class VideoWriter {
   std::unique_ptr<State> state_;
 };
 
-struct VideoInfo {
-  std::filesystem::path path;  // the file written (an .avi when the fallback was taken)
-  std::string codec;
-  int frames = 0;
-};
-
-// Writes all `frames` (each float RGB width*height*3) through a VideoWriter and closes it.
-VideoInfo WriteVideo(const std::filesystem::path& path, std::span<const std::vector<float>> frames, int width,
-                     int height, double fps);
-
 }  // namespace endorecon::eval
