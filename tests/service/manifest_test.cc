@@ -8,7 +8,7 @@
 #include <filesystem>
 #include <string>
 
-#include "common/error.h"
+#include "tests/unit/clip_fixture.h"
 #include "tests/unit/temp_dir.h"
 
 namespace endorecon {
@@ -17,13 +17,7 @@ namespace {
 namespace fs = std::filesystem;
 
 std::string ErrorOf(const fs::path& dir) {
-  try {
-    ManifestOfDirectory(dir);
-  } catch (const Error& e) {
-    EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument);
-    return e.what();
-  }
-  return "";
+  return testing::ErrorFrom([&] { ManifestOfDirectory(dir); });
 }
 
 TEST(ManifestTest, ListsFilesThroughLinkedFolders) {

@@ -6,7 +6,7 @@
 
 #include <string>
 
-#include "common/error.h"
+#include "tests/unit/clip_fixture.h"
 #include "tests/unit/temp_dir.h"
 
 namespace endorecon::worker {
@@ -19,15 +19,10 @@ TEST(DicomJobTest, RecordingOptionsOnAClipFolderAreRefused) {
   v1::RecordingOptions options;
   options.set_fps(5);
   options.set_size("320x180");
-  try {
-    PrepareRecording(dir.path(), options, dir / "clip");
-    ADD_FAILURE() << "accepted";
-  } catch (const Error& e) {
-    EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument);
-    const std::string message = e.what();
-    EXPECT_NE(message.find("--fps, --size apply to a DICOM recording"), std::string::npos) << message;
-    EXPECT_NE(message.find("is a clip folder"), std::string::npos) << message;
-  }
+  const std::string message =
+      testing::ErrorFrom([&] { PrepareRecording(dir.path(), options, dir / "clip"); });
+  EXPECT_NE(message.find("--fps, --size apply to a DICOM recording"), std::string::npos) << message;
+  EXPECT_NE(message.find("is a clip folder"), std::string::npos) << message;
 }
 
 }  // namespace

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "common/error.h"
+#include "tests/unit/clip_fixture.h"
 #include "tests/unit/temp_dir.h"
 
 namespace endorecon::scene {
@@ -41,16 +41,11 @@ TEST(ImageFileTest, AHeaderDeclaringTooManyPixelsIsSaidToBeTooLarge) {
   PutBigEndian(bytes, 20, 100000);
   PutBigEndian(bytes, 29, Crc32(bytes.substr(12, 17)));
   testing::WriteBytes(dir / "big.png", bytes);
-  try {
-    DecodeImageFile(dir / "big.png");
-    ADD_FAILURE() << "decoded";
-  } catch (const Error& e) {
-    EXPECT_EQ(e.code(), ErrorCode::kResourceExhausted) << e.what();
-    const std::string message = e.what();
-    EXPECT_NE(message.find("big.png: the image's header declares more pixels than can be decoded"),
-              std::string::npos)
-        << message;
-  }
+  const std::string message =
+      testing::ErrorFrom([&] { DecodeImageFile(dir / "big.png"); }, ErrorCode::kResourceExhausted);
+  EXPECT_NE(message.find("big.png: the image's header declares more pixels than can be decoded"),
+            std::string::npos)
+      << message;
   // The same bytes with the true size decode.
   PutBigEndian(bytes, 16, 4);
   PutBigEndian(bytes, 20, 4);
