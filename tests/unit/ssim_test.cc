@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <random>
@@ -67,6 +68,63 @@ TEST(Ssim, ToolPixelsAreLeftOut) {
 TEST(Ssim, AllToolFrameIsUndefined) {
   const auto reference = Texture(4);
   EXPECT_TRUE(std::isnan(Ssim(AsFloat(reference), reference, std::vector<std::uint8_t>(kW * kH, 1), kW, kH)));
+}
+
+// SSIM by its definition, window by window: an 11x11 Gaussian (sigma 1.5) over every window wholly
+// inside the frame, tool pixels set to 0 first and left out of the mean.
+double SsimByDefinition(const std::vector<float>& rendered, const std::vector<std::uint8_t>& reference,
+                        const std::vector<std::uint8_t>& mask, int w, int h) {
+  double g[11], total = 0;
+  for (int i = 0; i < 11; ++i) total += g[i] = std::exp(-(i - 5) * (i - 5) / (2 * 1.5 * 1.5));
+  for (double& v : g) v /= total;
+  const auto value = [&](const auto& image, int v, int u, int c, double scale) {
+    return !mask.empty() && mask[v * w + u] ? 0.0 : std::clamp(image[3 * (v * w + u) + c] * scale, 0.0, 1.0);
+  };
+  double sum = 0;
+  long kept = 0;
+  for (int v = 5; v < h - 5; ++v) {
+    for (int u = 5; u < w - 5; ++u) {
+      if (!mask.empty() && mask[v * w + u]) continue;
+      double pixel = 0;
+      for (int c = 0; c < 3; ++c) {
+        double mx = 0, my = 0, xx = 0, yy = 0, xy = 0;
+        for (int i = -5; i <= 5; ++i) {
+          for (int j = -5; j <= 5; ++j) {
+            const double k = g[i + 5] * g[j + 5];
+            const double x = value(rendered, v + i, u + j, c, 1.0);
+            const double y = value(reference, v + i, u + j, c, 1 / 255.0);
+            mx += k * x, my += k * y, xx += k * x * x, yy += k * y * y, xy += k * x * y;
+          }
+        }
+        const double c1 = 1e-4, c2 = 9e-4;
+        pixel += (2 * mx * my + c1) * (2 * (xy - mx * my) + c2) /
+                 ((mx * mx + my * my + c1) * (xx - mx * mx + yy - my * my + c2));
+      }
+      sum += pixel / 3;
+      ++kept;
+    }
+  }
+  return sum / kept;
+}
+
+TEST(Ssim, AFrameOfManyStripsScoresAsTheDefinition) {
+  // Taller than several of the strips Ssim scores at a time, the last one short.
+  constexpr int w = 37, h = 83;
+  std::mt19937 rng(5);
+  std::uniform_int_distribution<int> value(0, 255);
+  std::normal_distribution<float> noise(0.0f, 0.08f);
+  std::vector<std::uint8_t> reference(w * h * 3), mask(w * h, 0);
+  std::vector<float> rendered(reference.size());
+  for (std::size_t i = 0; i < reference.size(); ++i) {
+    reference[i] = static_cast<std::uint8_t>(value(rng));
+    rendered[i] = reference[i] / 255.0f + noise(rng);  // some values outside [0, 1], to be clamped
+  }
+  for (int v = 30; v < 50; ++v) {
+    for (int u = 3; u < 20; ++u) mask[v * w + u] = 1;
+  }
+  EXPECT_NEAR(Ssim(rendered, reference, {}, w, h), SsimByDefinition(rendered, reference, {}, w, h), 1e-12);
+  EXPECT_NEAR(Ssim(rendered, reference, mask, w, h), SsimByDefinition(rendered, reference, mask, w, h),
+              1e-12);
 }
 
 TEST(Ssim, FrameSmallerThanWindowThrows) {
