@@ -37,7 +37,8 @@ grpc::Status JobServiceImpl::Upload(grpc::ServerContext* context,
     *status = uploads_.Receive(
         *reader, Uploader::kClient,
         [&](const v1::Manifest& manifest) { coordinator_.CheckUploadQuota(manifest, call.caller); },
-        [&](const std::function<bool()>& read) { return stalls_.Guard(context, read); });
+        [&](const std::function<bool()>& read) { return stalls_.Guard(context, read); },
+        [context] { return context->IsCancelled(); });
     return grpc::Status::OK;
   });
 }

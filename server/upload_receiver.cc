@@ -1,5 +1,6 @@
 #include "server/upload_receiver.h"
 
+#include <chrono>
 #include <filesystem>
 #include <map>
 #include <memory>
@@ -69,9 +70,12 @@ v1::UploadStatus UploadReceiver::Query(const v1::Manifest& manifest, Uploader up
 v1::UploadStatus UploadReceiver::Receive(grpc::ServerReaderInterface<v1::UploadRequest>& reader,
                                          Uploader uploader,
                                          const std::function<void(const v1::Manifest&)>& admit,
-                                         const ReadGuard& guard) {
+                                         const ReadGuard& guard, const std::function<bool()>& cancelled) {
   v1::UploadRequest request;
-  if (!reader.Read(&request)) FailInvalid("empty upload stream: the first message must be the manifest");
+  const auto read = [&] {
+    return guard ? guard([&] { return reader.Read(&request); }) : reader.Read(&request);
+  };
+  if (!read()) FailInvalid("empty upload stream: the first message must be the manifest");
   if (!request.has_manifest()) {
     FailInvalid("the first message of an upload must be its manifest, got a chunk of '" +
                 request.chunk().path() + "'");
@@ -82,12 +86,15 @@ v1::UploadStatus UploadReceiver::Receive(grpc::ServerReaderInterface<v1::UploadR
   std::map<std::string, const v1::FileEntry*> entries;
   for (const auto& entry : manifest.files()) entries[entry.path()] = &entry;
 
-  slots_.acquire();
+  while (!slots_.try_acquire_for(std::chrono::milliseconds(200))) {
+    if (cancelled && cancelled()) {
+      Fail(ErrorCode::kCancelled,
+           "upload cancelled (or past its deadline) while it waited for one of the "
+           "server's upload slots (--max-uploads)");
+    }
+  }
   const std::unique_ptr<std::counting_semaphore<>, void (*)(std::counting_semaphore<>*)> slot(
       &slots_, [](std::counting_semaphore<>* slots) { slots->release(); });
-  const auto read = [&] {
-    return guard ? guard([&] { return reader.Read(&request); }) : reader.Read(&request);
-  };
   std::unique_ptr<BlobStore::Writer> writer;
   std::string writer_path;
   std::set<std::string> busy;

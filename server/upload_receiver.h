@@ -46,10 +46,12 @@ class UploadReceiver {
   using ReadGuard = std::function<bool(const std::function<bool()>& read)>;
   // Consumes one upload stream. Throws Error as described above. `admit`, when given, sees the
   // manifest before any byte is written and throws to refuse it (a tenant's quota). `guard`, when
-  // given, runs each Read of a chunk, so a sender that stops cannot keep its slot.
+  // given, runs each Read (the manifest's and every chunk's), so a sender that stops cannot keep its
+  // thread or its slot. `cancelled`, when given, is asked while the stream waits for an upload slot:
+  // a call cancelled or past its deadline stops waiting (CANCELLED), so it holds no thread.
   v1::UploadStatus Receive(grpc::ServerReaderInterface<v1::UploadRequest>& reader, Uploader uploader,
                            const std::function<void(const v1::Manifest&)>& admit = {},
-                           const ReadGuard& guard = {});
+                           const ReadGuard& guard = {}, const std::function<bool()>& cancelled = {});
 
  private:
   // Refuses `bytes` more that would leave less than the reserve free.

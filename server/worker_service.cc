@@ -104,9 +104,10 @@ grpc::Status WorkerServiceImpl::PutBlobs(grpc::ServerContext* context,
                                          grpc::ServerReader<v1::UploadRequest>* reader,
                                          v1::UploadStatus* status) {
   return guard_.Run(context, {"PutBlobs", Access::kWorker, kWrites, ""}, [&](Call&) {
-    *status = uploads_.Receive(*reader, Uploader::kWorker, {}, [&](const std::function<bool()>& read) {
-      return stalls_.Guard(context, read);
-    });
+    *status = uploads_.Receive(
+        *reader, Uploader::kWorker, {},
+        [&](const std::function<bool()>& read) { return stalls_.Guard(context, read); },
+        [context] { return context->IsCancelled(); });
     return grpc::Status::OK;
   });
 }

@@ -73,6 +73,25 @@ auto WhileUnavailable(Call&& call, std::chrono::seconds patience = std::chrono::
   }
 }
 
+// Retries `call` while it fails UNAVAILABLE (a server restarting, or one whose upload slots are all
+// taken by clients' uploads until the call's deadline) as long as the lease is held: the server
+// answered the job's heartbeats within the last `patience` and asked for no stop.
+template <typename Call>
+auto WhileLeaseHeld(const ProgressReporter& reporter, Call&& call,
+                    std::chrono::seconds patience = std::chrono::seconds(30)) {
+  while (true) {
+    try {
+      return call();
+    } catch (const Error& e) {
+      const bool held =
+          !reporter.stop_requested() && std::chrono::steady_clock::now() - reporter.last_answer() < patience;
+      if (e.code() != ErrorCode::kUnavailable || !held) throw;
+      spdlog::warn("{}; retrying while the server holds the lease", e.what());
+      std::this_thread::sleep_for(std::chrono::seconds(1));
+    }
+  }
+}
+
 void Tell(WorkerClient& client, const std::string& lease_id, const std::string& reason, bool retry,
           bool release) {
   v1::FailRequest request;
@@ -184,23 +203,39 @@ bool RunLeasedJob(WorkerClient& client, const v1::LeaseResponse& lease, const De
       reporter.AddPreview(EncodePreview(preview, last_iteration));
     };
     hooks.on_checkpoint = [&](const std::string& path) {
-      reporter.SetCheckpoint(WhileUnavailable([&] { return UploadCheckpoint(client, path); }));
+      // A checkpoint only spares a job handed out again its training so far: one the server cannot
+      // take now (unreachable, or its upload slots all taken) is skipped, and the job goes on.
+      try {
+        reporter.SetCheckpoint(WhileLeaseHeld(reporter, [&] { return UploadCheckpoint(client, path); }));
+      } catch (const Error& e) {
+        if (e.code() != ErrorCode::kUnavailable) throw;
+        spdlog::warn("[{}] job {}: checkpoint not uploaded ({}); the job goes on", device.name, job.id(),
+                     e.what());
+      }
     };
     hooks.should_stop = [&] { return shutting_down.load() || reporter.stop_requested().has_value(); };
 
     const auto summary = Reconstruct(options, hooks);
-    reporter.Stop();
-    gauges.busy.Set(0);
     if (const auto stop = reporter.stop_requested()) {
+      reporter.Stop();
+      gauges.busy.Set(0);
       spdlog::info("[{}] job {} stopped: {}", device.name, job.id(), v1::ProgressReply::Action_Name(*stop));
     } else if (summary.cancelled) {
+      reporter.Stop();
+      gauges.busy.Set(0);
       Tell(client, lease.lease_id(), "worker " + client.worker_id() + " is shutting down", true, true);
     } else {
+      // The heartbeats go on while the results are written and uploaded, so the lease holds however
+      // long that takes (a slow link, or the server's upload slots all taken by clients' uploads).
+      // They ended with the reconstruction once: a wait longer than the lease's time handed the job
+      // out again and the finished results were refused.
       WriteJobDicom(options.out_dir, recording, job.dicom());
       v1::CompleteRequest complete;
       complete.set_lease_id(lease.lease_id());
       *complete.mutable_result() = ManifestOfDirectory(options.out_dir);
-      WhileUnavailable([&] { client.PutFiles(options.out_dir, complete.result()); });
+      WhileLeaseHeld(reporter, [&] { client.PutFiles(options.out_dir, complete.result()); });
+      reporter.Stop();
+      gauges.busy.Set(0);
       complete.set_summary_json(SummaryJson(summary));
       WhileUnavailable([&] { return client.Complete(complete); });
       spdlog::info("[{}] job {} done: {} iterations, {} result file(s)", device.name, job.id(),

@@ -35,6 +35,11 @@ std::optional<v1::ProgressReply::Action> ProgressReporter::stop_requested() cons
   return stop_;
 }
 
+std::chrono::steady_clock::time_point ProgressReporter::last_answer() const {
+  std::lock_guard lock(mutex_);
+  return last_answer_;
+}
+
 void ProgressReporter::Stop() {
   {
     std::lock_guard lock(mutex_);
@@ -77,11 +82,12 @@ bool ProgressReporter::SendPending() {
       if (update.has_checkpoint() && !checkpoint_) checkpoint_ = update.checkpoint();
       return false;
     }
+    std::lock_guard lock(mutex_);
     if (reply.action() != v1::ProgressReply::CONTINUE) {
-      std::lock_guard lock(mutex_);
       stop_ = reply.action();
       return true;
     }
+    last_answer_ = std::chrono::steady_clock::now();
   }
   return true;
 }

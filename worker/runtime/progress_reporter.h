@@ -33,6 +33,8 @@ class ProgressReporter {
 
   // The server's reason to stop, once it gave one.
   std::optional<v1::ProgressReply::Action> stop_requested() const;
+  // When the server last answered an update (the lease then held); the reporter's start before.
+  std::chrono::steady_clock::time_point last_answer() const;
 
  private:
   void Loop();
@@ -48,6 +50,7 @@ class ProgressReporter {
   std::vector<v1::Preview> previews_;
   std::optional<v1::FileEntry> checkpoint_;
   std::optional<v1::ProgressReply::Action> stop_;
+  std::chrono::steady_clock::time_point last_answer_ = std::chrono::steady_clock::now();
   bool stopping_ = false;
   std::unique_ptr<grpc::ClientContext> context_;
   std::unique_ptr<grpc::ClientReaderWriter<v1::ProgressUpdate, v1::ProgressReply>> stream_;

@@ -1,0 +1,80 @@
+#include "server/upload_receiver.h"
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <chrono>
+#include <thread>
+
+#include "common/error.h"
+#include "common/sha256.h"
+#include "tests/fuzz/message_stream.h"
+#include "tests/unit/temp_dir.h"
+
+namespace endorecon::server {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using Stream = fuzz::ServerStreamOf<v1::UploadRequest>;
+
+v1::UploadRequest ManifestOf(const std::string& path, const std::string& bytes) {
+  v1::UploadRequest request;
+  auto* entry = request.mutable_manifest()->add_files();
+  entry->set_path(path);
+  entry->set_size(static_cast<std::int64_t>(bytes.size()));
+  entry->set_sha256(Sha256Hex(bytes));
+  return request;
+}
+
+v1::UploadRequest ChunkOf(const std::string& path, const std::string& bytes) {
+  v1::UploadRequest request;
+  request.mutable_chunk()->set_path(path);
+  request.mutable_chunk()->set_data(bytes);
+  return request;
+}
+
+// An upload waiting for a slot held no thread of its own until the slot came free: a client that
+// gave up (its deadline, or cancelled) still kept the server's thread, which then took the slot.
+TEST(UploadReceiverTest, AnUploadCancelledWhileItWaitsForASlotStopsWaiting) {
+  testing::TempDir dir("uploads");
+  BlobStore blobs(dir.path());
+  UploadReceiver receiver(blobs, 1 << 20, 0, /*max_streams=*/1, {});
+
+  // The only slot is taken by an upload whose sender stops after its manifest.
+  std::atomic<bool> holding{false}, release{false};
+  std::thread holder([&] {
+    Stream stream({ManifestOf("held.bin", "bytes that come late")});
+    int reads = 0;
+    receiver.Receive(stream, Uploader::kClient, {}, [&](const std::function<bool()>& read) {
+      if (reads++ > 0) {  // past the manifest: the slot is held
+        holding = true;
+        while (!release) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+      }
+      return read();
+    });
+  });
+  while (!holding) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+
+  const auto start = Clock::now();
+  Stream waiting({ManifestOf("a.bin", "abc"), ChunkOf("a.bin", "abc")});
+  try {
+    receiver.Receive(waiting, Uploader::kClient, {}, {},
+                     [&] { return Clock::now() - start > std::chrono::milliseconds(300); });
+    ADD_FAILURE() << "the upload waited for the slot to the end";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kCancelled);
+    EXPECT_NE(std::string(e.what()).find("--max-uploads"), std::string::npos) << e.what();
+  }
+  EXPECT_LT(Clock::now() - start, std::chrono::seconds(5));
+  EXPECT_FALSE(blobs.Has(Sha256Hex("abc")));
+
+  release = true;
+  holder.join();
+  // The slot is free again: the next upload goes through.
+  Stream next({ManifestOf("a.bin", "abc"), ChunkOf("a.bin", "abc")});
+  EXPECT_TRUE(receiver.Receive(next, Uploader::kClient).complete());
+  EXPECT_TRUE(blobs.Has(Sha256Hex("abc")));
+}
+
+}  // namespace
+}  // namespace endorecon::server
