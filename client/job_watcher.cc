@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <iostream>
@@ -20,8 +21,15 @@ bool Terminal(v1::JobState state) {
 }
 
 void SavePreview(const std::string& dir, const v1::Preview& preview) {
+  // The kind comes from a worker through the server: one that is not a plain word (`../x`, `/x`)
+  // would name a file outside `dir`.
+  const std::string& kind = preview.kind();
+  const bool word = !kind.empty() && kind.size() <= 32 && std::all_of(kind.begin(), kind.end(), [](char c) {
+    return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_';
+  });
+  if (!word) return;
   const auto path =
-      std::filesystem::path(dir) / (preview.kind() + "-it" + std::to_string(preview.iteration()) + ".png");
+      std::filesystem::path(dir) / (kind + "-it" + std::to_string(preview.iteration()) + ".png");
   WriteFile(path, preview.png(), "preview");
 }
 

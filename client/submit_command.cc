@@ -225,7 +225,8 @@ Command AddSubmitCommand(CLI::App& app) {
       ->check(HoldoutSpacing());
   sub->add_option("--seed", flags->seed, "random seed");
   sub->add_flag("--static", flags->force_static, "treat the clip as static (no deformation)");
-  sub->add_option("--priority", flags->priority, "higher runs first (default 0)");
+  sub->add_option("--priority", flags->priority, "higher runs first, -100 to 100 (default 0)")
+      ->check(CLI::Range(-100, 100));
   sub->add_option("--name", flags->name, "a name to recognise the job by (default: the folder's)");
   sub->add_flag("--wait", flags->wait, "watch the job until it finishes; exit code tells how it ended");
   sub->add_option("--previews", flags->previews, "with --wait: save previews into this folder");

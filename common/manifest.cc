@@ -1,6 +1,7 @@
 #include "common/manifest.h"
 
 #include <algorithm>
+#include <limits>
 #include <set>
 #include <string>
 
@@ -53,6 +54,10 @@ void ValidateManifest(const v1::Manifest& manifest) {
     if (!seen.insert(file.path()).second) FailInvalid("file '" + file.path() + "' is listed twice");
     if (file.size() < 0)
       FailInvalid("file '" + file.path() + "' has negative size " + std::to_string(file.size()));
+    if (file.size() > kMaxFileBytes) {
+      FailInvalid("file '" + file.path() + "' has size " + std::to_string(file.size()) + ", over the " +
+                  std::to_string(kMaxFileBytes) + " bytes (1 PiB) any file may have");
+    }
     const auto& digest = file.sha256();
     const bool hex = digest.size() == 64 && std::all_of(digest.begin(), digest.end(), [](char c) {
                        return (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f');
@@ -64,7 +69,12 @@ void ValidateManifest(const v1::Manifest& manifest) {
 
 std::int64_t TotalBytes(const v1::Manifest& manifest) {
   std::int64_t total = 0;
-  for (const auto& file : manifest.files()) total += file.size();
+  for (const auto& file : manifest.files()) {
+    // Saturates: a sum past the largest number is over every limit (it once wrapped to a negative
+    // total that passed the size limit, the free-space check and the quota).
+    if (__builtin_add_overflow(total, std::max<std::int64_t>(file.size(), 0), &total))
+      return std::numeric_limits<std::int64_t>::max();
+  }
   return total;
 }
 

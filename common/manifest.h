@@ -13,10 +13,14 @@ namespace endorecon {
 // Throws Error(kNotFound) if `dir` is not a directory, kInvalidArgument if it holds no file.
 v1::Manifest ManifestOfDirectory(const std::filesystem::path& dir);
 
+// No file of a clip or a result is larger (1 PiB); a manifest naming one is refused.
+inline constexpr std::int64_t kMaxFileBytes = std::int64_t{1} << 50;
+
 // Throws Error(kInvalidArgument) naming the entry unless every path passes CheckRelativePath,
-// paths are unique, sizes are non-negative and digests are 64 lowercase hex characters.
+// paths are unique, sizes are in [0, kMaxFileBytes] and digests are 64 lowercase hex characters.
 void ValidateManifest(const v1::Manifest& manifest);
 
+// The sum of the sizes, saturated at the largest int64 (so it is over every limit, never negative).
 std::int64_t TotalBytes(const v1::Manifest& manifest);
 
 }  // namespace endorecon

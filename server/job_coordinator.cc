@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <filesystem>
 #include <nlohmann/json.hpp>
 
 #include "common/dicom/recording.h"
@@ -14,6 +15,33 @@
 
 namespace endorecon::server {
 namespace {
+
+// Bounds on what a client names: a job's name is shown in every listing and terminal, its config is
+// stored with the job; a priority orders the one queue every tenant shares.
+constexpr std::size_t kMaxNameBytes = 256;
+constexpr std::size_t kMaxConfigBytes = 64 * 1024;
+constexpr int kMaxPriority = 100;
+
+void ValidateJobName(const std::string& name) {
+  if (name.size() > kMaxNameBytes) {
+    FailInvalid("name has " + std::to_string(name.size()) + " bytes; at most " +
+                std::to_string(kMaxNameBytes));
+  }
+  for (const char c : name) {
+    const auto byte = static_cast<unsigned char>(c);
+    if (byte < 0x20 || byte == 0x7f) {
+      FailInvalid("name holds a control character (byte " + std::to_string(byte) +
+                  "); a job's name is printed in listings and terminals");
+    }
+  }
+}
+
+void ValidatePriority(int priority) {
+  if (priority < -kMaxPriority || priority > kMaxPriority) {
+    FailInvalid("priority is " + std::to_string(priority) + "; expected " + std::to_string(-kMaxPriority) +
+                " to " + std::to_string(kMaxPriority));
+  }
+}
 
 void ValidateOptions(const v1::ReconstructionOptions& options) {
   if (!options.preset().empty() && options.preset() != "cpu" && options.preset() != "gpu" &&
@@ -28,6 +56,10 @@ void ValidateOptions(const v1::ReconstructionOptions& options) {
                 "; expected 0 (none held out) or K >= 2 (every K-th frame)");
   }
   if (options.time_budget_s() < 0) FailInvalid("options.time_budget_s is negative");
+  if (options.config_json().size() > kMaxConfigBytes) {
+    FailInvalid("options.config_json has " + std::to_string(options.config_json().size()) +
+                " bytes; at most " + std::to_string(kMaxConfigBytes));
+  }
   if (!options.config_json().empty()) {
     const auto config = nlohmann::json::parse(options.config_json(), nullptr, false);
     if (config.is_discarded() || !config.is_object()) FailInvalid("options.config_json is not a JSON object");
@@ -54,6 +86,16 @@ void RequireBlobs(const BlobStore& blobs, const v1::Manifest& manifest, const st
   for (const auto& file : manifest.files()) {
     if (!blobs.Has(file.sha256())) {
       if (missing++ == 0) first = file.path();
+      continue;
+    }
+    // The stored content's size is the file's: a size declared smaller would be counted so against
+    // the tenant's quota while the worker gets every byte.
+    std::error_code error;
+    const auto stored = std::filesystem::file_size(blobs.PathOf(file.sha256()), error);
+    if (!error && static_cast<std::int64_t>(stored) != file.size()) {
+      FailInvalid("file '" + file.path() + "' of the " + what + " is declared " +
+                  std::to_string(file.size()) + " bytes, but its content (sha256 " + file.sha256() +
+                  ") has " + std::to_string(stored));
     }
   }
   if (missing > 0) {
@@ -208,6 +250,8 @@ v1::Job JobCoordinator::Submit(const v1::SubmitRequest& request, const Principal
   } else {
     ValidateManifest(request.clip());
   }
+  ValidateJobName(request.name());
+  ValidatePriority(request.priority());
   ValidateOptions(request.options());
   if (request.has_prepare()) CheckPrepareOptions(request.prepare(), request.clip());
   ValidateRecording(request.recording());
@@ -356,7 +400,16 @@ v1::ProgressReply::Action JobCoordinator::ReportLocked(const v1::ProgressUpdate&
   } else if (changed) {
     parts_.store.Update(job);
   }
-  if (update.has_preview()) parts_.hub.PublishPreview(job.id(), update.preview());
+  if (update.has_preview()) {
+    // The kind names the client's file of it (job_watcher.cc): only the kinds a worker makes pass.
+    const std::string& kind = update.preview().kind();
+    if (kind == "rgb" || kind == "depth" || kind == "uncertainty" || kind == "prepare") {
+      parts_.hub.PublishPreview(job.id(), update.preview());
+    } else {
+      spdlog::warn("job {}: a preview of unknown kind '{}' from worker {} dropped", job.id(),
+                   kind.substr(0, 64), job.worker_id());
+    }
+  }
   return v1::ProgressReply::CONTINUE;
 }
 

@@ -6,10 +6,12 @@
 #include <gtest/gtest.h>
 
 #include <functional>
+#include <limits>
 #include <optional>
 #include <string>
 
 #include "common/error.h"
+#include "tests/unit/clip_fixture.h"
 #include "tests/unit/temp_dir.h"
 
 namespace endorecon::server {
@@ -124,6 +126,55 @@ TEST_F(JobCoordinatorTest, AJobIsQueuedLeasedAndCompleted) {
   EXPECT_EQ(CodeOf([&] { coordinator_.CheckLease(granted->lease_id); }), ErrorCode::kFailedPrecondition);
   EXPECT_EQ(Report(granted->lease_id), v1::ProgressReply::STOP_LEASE_LOST);
   EXPECT_EQ(CodeOf([&] { coordinator_.Cancel(id, AnonymousPrincipal()); }), ErrorCode::kFailedPrecondition);
+}
+
+// Found by reading the code (2026-12-05): a clip's file declared smaller than its content was
+// counted so against the tenant's quota; a name or priority of any size was taken as given.
+TEST_F(JobCoordinatorTest, WhatAClientNamesIsBoundedAndSizesAreTheContents) {
+  v1::SubmitRequest request;
+  *request.mutable_clip() = Uploaded("images/000000.png", std::string(5000, 'x'));
+  request.mutable_clip()->mutable_files(0)->set_size(1);
+  std::string message = testing::ErrorFrom([&] { coordinator_.Submit(request, AnonymousPrincipal()); });
+  EXPECT_NE(message.find("'images/000000.png' of the clip is declared 1 bytes, but its content"),
+            std::string::npos)
+      << message;
+  request.mutable_clip()->mutable_files(0)->set_size(5000);
+  request.set_priority(std::numeric_limits<std::int32_t>::min());
+  message = testing::ErrorFrom([&] { coordinator_.Submit(request, AnonymousPrincipal()); });
+  EXPECT_NE(message.find("priority is -2147483648; expected -100 to 100"), std::string::npos) << message;
+  request.set_priority(100);
+  request.set_name(std::string(257, 'n'));
+  message = testing::ErrorFrom([&] { coordinator_.Submit(request, AnonymousPrincipal()); });
+  EXPECT_NE(message.find("name has 257 bytes; at most 256"), std::string::npos) << message;
+  request.set_name("clip\x1b[2J");
+  message = testing::ErrorFrom([&] { coordinator_.Submit(request, AnonymousPrincipal()); });
+  EXPECT_NE(message.find("control character (byte 27)"), std::string::npos) << message;
+  request.set_name("clip");
+  request.mutable_options()->set_config_json("{\"x\":\"" + std::string(70000, 'y') + "\"}");
+  message = testing::ErrorFrom([&] { coordinator_.Submit(request, AnonymousPrincipal()); });
+  EXPECT_NE(message.find("options.config_json has 70008 bytes; at most 65536"), std::string::npos) << message;
+  std::int64_t stored = 0;
+  for (const auto& [state, count] : store_.CountByState()) stored += count;
+  EXPECT_EQ(stored, 0) << "nothing refused was stored";
+  request.mutable_options()->clear_config_json();
+  EXPECT_EQ(coordinator_.Submit(request, AnonymousPrincipal()).priority(), 100);
+}
+
+// A preview's kind names the client's file of it: a worker's `../x` was passed on as given.
+TEST_F(JobCoordinatorTest, APreviewOfAnUnknownKindIsDropped) {
+  const std::string id = Submit();
+  const auto granted = LeaseNext();
+  ASSERT_TRUE(granted.has_value());
+  for (const char* kind : {"../../home/u/.bashrc", "rgb"}) {
+    v1::ProgressUpdate update;
+    update.set_lease_id(granted->lease_id);
+    update.mutable_preview()->set_kind(kind);
+    update.mutable_preview()->set_png("png");
+    EXPECT_EQ(coordinator_.Report(update), v1::ProgressReply::CONTINUE);
+  }
+  const auto changes = hub_.Wait(id, 0, Clock::now() + seconds(1));
+  ASSERT_EQ(changes.previews.size(), 1u);
+  EXPECT_EQ(changes.previews[0].kind(), "rgb");
 }
 
 TEST_F(JobCoordinatorTest, AResultFileNotUploadedKeepsTheJobRunning) {

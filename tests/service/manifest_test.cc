@@ -6,6 +6,7 @@
 #include <sys/stat.h>
 
 #include <filesystem>
+#include <limits>
 #include <string>
 
 #include "tests/unit/clip_fixture.h"
@@ -48,6 +49,25 @@ TEST(ManifestTest, AnEntryThatIsNoFileIsNamed) {
   fs::create_directory_symlink(dir / "clip", dir / "clip" / "loop");  // a folder linked into itself
   message = ErrorOf(dir / "clip");
   EXPECT_NE(message.find("loop"), std::string::npos) << message;
+}
+
+// Sizes whose sum passed the largest int64 wrapped to a negative total, under the upload limit,
+// the free-space check and the tenant's quota.
+TEST(ManifestTest, SizesTooLargeAreRefusedAndTheirSumDoesNotWrap) {
+  v1::Manifest manifest;
+  for (const char* path : {"a.bin", "b.bin"}) {
+    auto* file = manifest.add_files();
+    file->set_path(path);
+    file->set_size(std::numeric_limits<std::int64_t>::max());
+    file->set_sha256(std::string(64, 'a'));
+  }
+  EXPECT_EQ(TotalBytes(manifest), std::numeric_limits<std::int64_t>::max());
+  const std::string message = testing::ErrorFrom([&] { ValidateManifest(manifest); });
+  EXPECT_NE(message.find("'a.bin' has size 9223372036854775807, over the"), std::string::npos) << message;
+  manifest.mutable_files(0)->set_size(kMaxFileBytes);
+  manifest.mutable_files(1)->set_size(2);
+  EXPECT_NO_THROW(ValidateManifest(manifest));
+  EXPECT_EQ(TotalBytes(manifest), kMaxFileBytes + 2);
 }
 
 }  // namespace
