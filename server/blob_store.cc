@@ -71,6 +71,41 @@ void BlobStore::Remove(const std::string& sha256) {
   if (error) Fail(ErrorCode::kUnavailable, "cannot delete blob " + sha256 + ": " + error.message());
 }
 
+std::vector<BlobStore::StoredFile> BlobStore::Files() const {
+  std::vector<StoredFile> files;
+  const auto add = [&](const fs::directory_entry& entry, std::string sha256, bool partial) {
+    std::error_code error;
+    if (!entry.is_regular_file(error)) return;
+    const auto bytes = entry.file_size(error);
+    const auto written = error ? fs::file_time_type{} : entry.last_write_time(error);
+    if (!error)
+      files.push_back({std::move(sha256), entry.path(), partial, static_cast<std::int64_t>(bytes), written});
+  };
+  std::error_code error;
+  for (const auto& shard : fs::directory_iterator(root_ / "blobs", error)) {
+    std::error_code inner;
+    for (const auto& entry : fs::directory_iterator(shard.path(), inner))
+      add(entry, entry.path().filename().string(), false);
+  }
+  std::lock_guard lock(mutex_);
+  for (const auto& entry : fs::directory_iterator(root_ / "partial", error)) {
+    std::string name = entry.path().filename().string();
+    if (name.size() != 64 + 5 || !name.ends_with(".part")) continue;
+    name.resize(64);
+    if (!writing_.count(name)) add(entry, std::move(name), true);
+  }
+  return files;
+}
+
+void BlobStore::Remove(const StoredFile& file) {
+  if (!file.partial) return Remove(file.sha256);
+  std::lock_guard lock(mutex_);             // held while removing: no writer opens the partial meanwhile
+  if (writing_.count(file.sha256)) return;  // an upload of it began since it was listed
+  std::error_code error;
+  fs::remove(PartialPath(file.sha256), error);
+  if (error) Fail(ErrorCode::kUnavailable, "cannot delete " + file.path.string() + ": " + error.message());
+}
+
 fs::path BlobStore::PartialPath(const std::string& sha256) const {
   return root_ / "partial" / (sha256 + ".part");
 }

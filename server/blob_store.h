@@ -13,6 +13,7 @@
 #include <set>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "common/sha256.h"
 #include "endorecon/v1/files.pb.h"
@@ -74,6 +75,19 @@ class BlobStore {
 
   // Stores `bytes` as a blob at once; returns its digest.
   std::string Put(std::string_view bytes);
+
+  // A file the store holds: a blob, or the partial of an upload (none being written right now).
+  struct StoredFile {
+    std::string sha256;
+    std::filesystem::path path;
+    bool partial = false;
+    std::int64_t bytes = 0;
+    std::filesystem::file_time_type written;  // last modified
+  };
+  std::vector<StoredFile> Files() const;
+  // Deletes what Files() listed, unless a writer opened its partial since; missing is not an error.
+  // Throws Error(kUnavailable) when the file exists but cannot be removed.
+  void Remove(const StoredFile& file);
 
   const std::filesystem::path& root() const { return root_; }
 

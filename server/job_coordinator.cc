@@ -448,12 +448,14 @@ v1::Job JobCoordinator::CheckLease(const std::string& lease_id) {
   return LoadLeased(lease_id).job;
 }
 
-RetentionPlan JobCoordinator::ExpireFinishedBefore(std::int64_t cutoff_unix_ms) {
+RetentionPlan JobCoordinator::ExpireFinishedBefore(std::int64_t cutoff_unix_ms,
+                                                   std::filesystem::file_time_type orphan_cutoff) {
   auto plan = Locked([&] {
-    auto plan = PlanRetention(parts_.store, parts_.blobs, cutoff_unix_ms);
+    auto plan = PlanRetention(parts_.store, parts_.blobs, cutoff_unix_ms, orphan_cutoff);
     // Files first: a crash in between leaves jobs that the next run expires (their blobs already
     // gone), never a job marked expired whose files are still kept.
     for (const auto& digest : plan.blobs) parts_.blobs.Remove(digest);
+    for (const auto& file : plan.orphans) parts_.blobs.Remove(file);
     const auto now = NowUnixMs();
     for (auto& job : plan.jobs) {
       job.set_expired_unix_ms(now);
@@ -466,6 +468,12 @@ RetentionPlan JobCoordinator::ExpireFinishedBefore(std::int64_t cutoff_unix_ms) 
     spdlog::info(
         "retention: expired {} job(s), deleted {} blob(s) ({} bytes), kept {} shared with other jobs",
         plan.jobs.size(), plan.blobs.size(), plan.bytes, plan.kept_shared);
+  }
+  if (!plan.orphans.empty()) {
+    spdlog::info(
+        "retention: deleted {} file(s) ({} bytes) no job references (earlier checkpoints, uploads "
+        "never submitted, partial uploads)",
+        plan.orphans.size(), plan.orphan_bytes);
   }
   return plan;
 }

@@ -116,8 +116,11 @@ class JobCoordinator {
   // Takes back every lease expired at `now`: requeues the job or fails it after max attempts.
   void ExpireLeases(Clock::time_point now);
   // Retention: deletes the files of jobs finished before `cutoff_unix_ms` that no other job shares
-  // and marks those jobs expired (PlanRetention). Returns what it did.
-  RetentionPlan ExpireFinishedBefore(std::int64_t cutoff_unix_ms);
+  // and marks those jobs expired, and deletes the files no job references last written before
+  // `orphan_cutoff` (PlanRetention). Returns what it did.
+  RetentionPlan ExpireFinishedBefore(
+      std::int64_t cutoff_unix_ms,
+      std::filesystem::file_time_type orphan_cutoff = std::filesystem::file_time_type::min());
 
   // Asks for the DICOM results of a SUCCEEDED job of the caller's tenant to go (again) to the PACS
   // `destination`. Throws kNotFound (job, also another tenant's, or PACS), kFailedPrecondition (not

@@ -58,6 +58,7 @@ struct ServerFlags {
   std::string quotas_file;
   double retention_days = 0;
   double retention_check_s = 3600;
+  double orphan_hours = 24;
 };
 
 std::string HostOf(const std::string& address) {
@@ -230,6 +231,11 @@ int Run(const ServerFlags& flags) {
     spdlog::info("retention: files of jobs finished more than {} day(s) ago are deleted (checked every {} s)",
                  flags.retention_days, flags.retention_check_s);
   }
+  if (flags.orphan_hours > 0) {
+    spdlog::info(
+        "files no job references are deleted {} hour(s) after they were last written (checked every {} s)",
+        flags.orphan_hours, flags.retention_check_s);
+  }
 
   std::atomic<bool> stopping{false};
   std::atomic<int> exit_code{0};
@@ -274,12 +280,19 @@ int Run(const ServerFlags& flags) {
                   .count());
         }
       }
-      if (flags.retention_days > 0 && std::chrono::steady_clock::now() >= next_retention) {
+      if ((flags.retention_days > 0 || flags.orphan_hours > 0) &&
+          std::chrono::steady_clock::now() >= next_retention) {
         next_retention +=
             std::chrono::milliseconds(static_cast<std::int64_t>(flags.retention_check_s * 1000));
         try {
           const auto plan = coordinator.ExpireFinishedBefore(
-              NowUnixMs() - static_cast<std::int64_t>(flags.retention_days * 86'400'000.0));
+              flags.retention_days > 0
+                  ? NowUnixMs() - static_cast<std::int64_t>(flags.retention_days * 86'400'000.0)
+                  : kKeepJobs,
+              flags.orphan_hours > 0
+                  ? std::filesystem::file_time_type::clock::now() -
+                        std::chrono::milliseconds(static_cast<std::int64_t>(flags.orphan_hours * 3'600'000.0))
+                  : std::filesystem::file_time_type::min());
           for (const auto& job : plan.jobs) guard.RecordServerAction("Retention", job.id(), "EXPIRED");
         } catch (const Error& e) {
           spdlog::error("retention: {}: {}", ErrorCodeName(e.code()), e.what());
@@ -331,6 +344,11 @@ void AddSecurityFlags(CLI::App& app, ServerFlags& flags) {
   app.add_option("--retention-check-s", flags.retention_check_s, "how often retention runs, in seconds")
       ->capture_default_str()
       ->check(AboveZero());
+  app.add_option("--orphan-hours", flags.orphan_hours,
+                 "delete stored files no job references (a running job's earlier checkpoints, uploads never "
+                 "submitted, partial uploads) this long after they were last written (0: keep them)")
+      ->capture_default_str()
+      ->check(AtLeastZero());
 }
 
 void AddDicomFlags(CLI::App& app, ServerFlags& flags) {

@@ -21,6 +21,7 @@ namespace {
 struct RetentionFlags {
   std::string data_dir = "endorecon-data";
   double days = 0;
+  double orphan_hours = 24;
   bool dry_run = false;
 };
 
@@ -35,8 +36,15 @@ int DryRun(const RetentionFlags& flags) {
     Fail(ErrorCode::kNotFound, "no job store in " + dir.string());
   JobStore store(dir / "jobs.sqlite");
   BlobStore blobs(dir);
-  const auto cutoff = NowUnixMs() - static_cast<std::int64_t>(flags.days * 86'400'000.0);
-  const auto plan = PlanRetention(store, blobs, cutoff);
+  // 0 days is the server's "keep forever", as --retention-days 0 there.
+  const auto cutoff =
+      flags.days > 0 ? NowUnixMs() - static_cast<std::int64_t>(flags.days * 86'400'000.0) : kKeepJobs;
+  const auto plan = PlanRetention(
+      store, blobs, cutoff,
+      flags.orphan_hours > 0
+          ? std::filesystem::file_time_type::clock::now() -
+                std::chrono::milliseconds(static_cast<std::int64_t>(flags.orphan_hours * 3'600'000.0))
+          : std::filesystem::file_time_type::min());
   for (const auto& job : plan.jobs) {
     std::cout << fmt::format("would expire job {} (tenant {}, {}, finished {:%Y-%m-%d %H:%M} UTC)\n",
                              job.id(), job.tenant().empty() ? "-" : job.tenant(),
@@ -44,10 +52,14 @@ int DryRun(const RetentionFlags& flags) {
                              fmt::gmtime(static_cast<std::time_t>(job.finished_unix_ms() / 1000)));
   }
   std::cout << fmt::format(
-      "dry run: {} job(s) finished more than {} day(s) ago would expire; {} blob(s), {} bytes, would be "
+      "dry run: {} job(s) finished more than {} day(s) ago would expire (0: none); {} blob(s), {} bytes, "
+      "would be "
       "deleted; "
       "{} blob(s) stay because other jobs share them\n",
       plan.jobs.size(), flags.days, plan.blobs.size(), plan.bytes, plan.kept_shared);
+  std::cout << fmt::format(
+      "{} file(s), {} bytes, that no job references would be deleted (--orphan-hours {})\n",
+      plan.orphans.size(), plan.orphan_bytes, flags.orphan_hours);
   return 0;
 }
 
@@ -59,6 +71,11 @@ Command AddRetentionCommand(CLI::App& app) {
   command->add_option("--data-dir", flags->data_dir, "the server's data folder")->capture_default_str();
   command->add_option("--retention-days", flags->days, "files of jobs finished longer ago than this go")
       ->required()
+      ->check(AtLeastZero());
+  command
+      ->add_option("--orphan-hours", flags->orphan_hours,
+                   "files no job references go this long after they were last written (0: kept)")
+      ->capture_default_str()
       ->check(AtLeastZero());
   command->add_flag("--dry-run", flags->dry_run, "list what would go; change nothing");
   return [flags] { return DryRun(*flags); };

@@ -3,6 +3,10 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <chrono>
+#include <filesystem>
+#include <set>
+
 #include "tests/unit/temp_dir.h"
 
 namespace endorecon::server {
@@ -67,6 +71,38 @@ TEST(RetentionTest, KeepsAJobWhoseDicomResultsAreStillBeingSent) {
   ASSERT_EQ(plan.jobs.size(), 1u);
   EXPECT_EQ(plan.jobs[0].id(), "failed");  // a failed send waits for a person, not for retention
   EXPECT_EQ(plan.blobs, std::vector<std::string>{c});
+}
+
+// A running job's earlier checkpoints, an upload never submitted and a partial upload given up were
+// kept for good: retention looked only at the files of expiring jobs (found 2026-12-05).
+TEST(RetentionTest, FilesNoJobReferencesGoOnceOldEnough) {
+  testing::TempDir dir("retention");
+  JobStore store(dir / "jobs.sqlite");
+  BlobStore blobs(dir.path());
+  const auto clip = blobs.Put("clip"), checkpoint = blobs.Put("checkpoint 2"),
+             earlier = blobs.Put("checkpoint 1"), fresh = blobs.Put("uploaded a minute ago");
+  store.Insert(JobWith("live", v1::RUNNING, 0, {clip}, checkpoint));
+  const std::string partial_sha(64, 'e');
+  testing::WriteBytes(dir / "partial" / (partial_sha + ".part"), "half an upl");
+  const auto two_days_ago = std::filesystem::file_time_type::clock::now() - std::chrono::hours(48);
+  for (const auto& sha : {clip, checkpoint, earlier})
+    std::filesystem::last_write_time(blobs.PathOf(sha), two_days_ago);
+  std::filesystem::last_write_time(dir / "partial" / (partial_sha + ".part"), two_days_ago);
+
+  const auto plan = PlanRetention(store, blobs, kKeepJobs,
+                                  std::filesystem::file_time_type::clock::now() - std::chrono::hours(24));
+  EXPECT_TRUE(plan.jobs.empty());
+  ASSERT_EQ(plan.orphans.size(), 2u);
+  std::set<std::string> orphans;
+  for (const auto& file : plan.orphans) orphans.insert(file.sha256 + (file.partial ? ".part" : ""));
+  EXPECT_EQ(orphans, (std::set<std::string>{earlier, partial_sha + ".part"}));
+  EXPECT_EQ(plan.orphan_bytes, 12 + 11);
+  EXPECT_TRUE(PlanRetention(store, blobs, kKeepJobs).orphans.empty()) << "no cutoff, no orphans";
+
+  for (const auto& file : plan.orphans) blobs.Remove(file);
+  EXPECT_FALSE(blobs.Has(earlier));
+  EXPECT_FALSE(std::filesystem::exists(dir / "partial" / (partial_sha + ".part")));
+  for (const auto& sha : {clip, checkpoint, fresh}) EXPECT_TRUE(blobs.Has(sha));
 }
 
 }  // namespace
