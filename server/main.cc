@@ -18,9 +18,11 @@
 #include "common/dicom/storage_scp.h"
 #include "common/dicom/uid.h"
 #include "common/error.h"
+#include "common/private_folder.h"
 #include "common/transport_security.h"
 #include "server/call_guard.h"
 #include "server/commands.h"
+#include "server/data_dir_lock.h"
 #include "server/dicom_retriever.h"
 #include "server/dicom_sender.h"
 #include "server/health_port.h"
@@ -123,7 +125,11 @@ int Run(const ServerFlags& flags) {
   if (!flags.dicom.uid_root.empty()) dicom::NewUid(flags.dicom.uid_root);  // refuses a malformed root now
   const auto credentials = ServerCredentials(flags.tls);
   const std::filesystem::path data_dir = flags.data_dir;
-  std::filesystem::create_directories(data_dir);
+  if (MakePrivateFolder(data_dir)) {
+    spdlog::warn("{} was open to its group or others: now its owner's alone (it holds patient data)",
+                 data_dir.string());
+  }
+  const DataDirLock lock(data_dir);
   JobStore store(data_dir / "jobs.sqlite");
   BlobStore blobs(data_dir);
   Scheduler scheduler;

@@ -12,6 +12,7 @@
 
 #include "common/cli_checks.h"
 #include "common/error.h"
+#include "common/private_folder.h"
 #include "common/transport_security.h"
 #include "worker/runtime/commands.h"
 #include "worker/runtime/device_list.h"
@@ -131,6 +132,10 @@ int Serve(const ServeFlags& flags) {
   settings.min_free_bytes = flags.min_free_bytes;
   settings.preview_interval_s = flags.preview_interval_s;
   settings.checkpoint_interval_s = flags.checkpoint_interval_s;
+  if (MakePrivateFolder(settings.work_dir)) {
+    spdlog::warn("{} was open to its group or others: now its owner's alone (it holds patient data)",
+                 settings.work_dir.string());
+  }
   if (const int removed = RemoveLeftoverJobs(settings.work_dir))
     spdlog::info("removed {} job folder(s) an earlier run left in {}", removed, settings.work_dir.string());
   std::atomic<bool> shutting_down{false};
