@@ -5,6 +5,7 @@
 #include <CLI/CLI.hpp>
 #include <fstream>
 #include <iostream>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <sstream>
 
@@ -57,7 +58,12 @@ std::string ReadFile(const std::string& path) {
 
 v1::ReconstructionOptions OptionsOf(const SubmitFlags& flags) {
   v1::ReconstructionOptions options;
-  if (!flags.config.empty()) options.set_config_json(ReadFile(flags.config));
+  if (!flags.config.empty()) {
+    options.set_config_json(ReadFile(flags.config));
+    const auto config = nlohmann::json::parse(options.config_json(), nullptr, false);
+    if (config.is_discarded() || !config.is_object())
+      FailInvalid("--config " + flags.config + ": not a JSON object (as config.json's \"train\")");
+  }
   options.set_preset(flags.preset);
   if (flags.iterations >= 0) options.set_iterations(flags.iterations);
   options.set_time_budget_s(flags.time_budget_s);
@@ -215,11 +221,13 @@ Command AddSubmitCommand(CLI::App& app) {
       "with --dicom: the study the results join (default: a new study)");
   sub->add_option("--config", flags->config,
                   "JSON file overriding the preset (as endorecon-worker reconstruct)");
-  sub->add_option("--preset", flags->preset, "cpu, gpu or paper (default: the worker's, cpu)");
+  sub->add_option("--preset", flags->preset, "cpu, gpu or paper (default: the worker's, cpu)")
+      ->check(CLI::IsMember({"cpu", "gpu", "paper"}));
   sub->add_option("--iterations", flags->iterations, "training iterations (default: the preset's)")
       ->check(AboveZero());
   sub->add_option("--time-budget", flags->time_budget_s,
-                  "seconds for the whole run on the worker: training, evaluation, writing (0: none)");
+                  "seconds for the whole run on the worker: training, evaluation, writing (0: none)")
+      ->check(AtLeastZero());
   sub->add_option("--holdout", flags->holdout,
                   "hold out every K-th frame (0: none, else K >= 2; default: the preset's)")
       ->check(HoldoutSpacing());

@@ -223,15 +223,31 @@ void JobCoordinator::CheckBytesQuota(const std::string& tenant, std::int64_t add
   if (quota.max_bytes == 0) return;
   const auto usage = parts_.store.UsageOf(tenant);
   if (usage.bytes + adding > quota.max_bytes) {
-    endorecon::Fail(ErrorCode::kResourceExhausted,
-                    "tenant '" + tenant + "' keeps " + std::to_string(usage.bytes) +
-                        " bytes in its jobs and this adds " + std::to_string(adding) +
-                        ": over its quota max_bytes of " + std::to_string(quota.max_bytes) +
-                        " bytes; cancel or wait for retention to free some");
+    endorecon::Fail(
+        ErrorCode::kResourceExhausted,
+        "tenant '" + tenant + "' keeps " + std::to_string(usage.bytes) + " bytes in its jobs and this adds " +
+            std::to_string(adding) + ": over its quota max_bytes of " + std::to_string(quota.max_bytes) +
+            " bytes; cancel a job of it, or wait for retention (the server's --retention-days) to "
+            "delete finished jobs' files");
+  }
+}
+
+void JobCoordinator::CheckJobsQuota(const std::string& tenant) {
+  // A tenant's usage is a scan of its jobs: counted only when a quota needs it.
+  if (const auto quota = quotas_.For(tenant); quota.max_jobs > 0) {
+    const auto usage = parts_.store.UsageOf(tenant);
+    if (usage.active_jobs >= quota.max_jobs) {
+      endorecon::Fail(ErrorCode::kResourceExhausted,
+                      "tenant '" + tenant + "' has " + std::to_string(usage.active_jobs) +
+                          " job(s) queued or running, its quota max_jobs is " +
+                          std::to_string(quota.max_jobs) + "; submit again when one has finished");
+    }
   }
 }
 
 void JobCoordinator::CheckUploadQuota(const v1::Manifest& manifest, const Principal& caller) {
+  // Both quotas before any byte: an upload the submit would refuse is not sent.
+  CheckJobsQuota(caller.tenant);
   CheckBytesQuota(caller.tenant, TotalBytes(manifest));
 }
 
@@ -289,16 +305,6 @@ v1::Job JobCoordinator::Submit(const v1::SubmitRequest& request, const Principal
   // submits cannot both take a tenant's last job slot.
   Locked([&] {
     if (!from_pacs) RequireBlobs(parts_.blobs, request.clip(), request.has_prepare() ? "recording" : "clip");
-    // A tenant's usage is a scan of its jobs: counted only when a quota needs it.
-    if (const auto quota = quotas_.For(caller.tenant); quota.max_jobs > 0) {
-      const auto usage = parts_.store.UsageOf(caller.tenant);
-      if (usage.active_jobs >= quota.max_jobs) {
-        endorecon::Fail(ErrorCode::kResourceExhausted,
-                        "tenant '" + caller.tenant + "' has " + std::to_string(usage.active_jobs) +
-                            " job(s) queued or running, its quota max_jobs is " +
-                            std::to_string(quota.max_jobs) + "; submit again when one has finished");
-      }
-    }
     CheckUploadQuota(request.clip(), caller);
     const auto seq = parts_.store.Insert(job);
     parts_.hub.PublishJob(job);

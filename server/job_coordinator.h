@@ -163,6 +163,8 @@ class JobCoordinator {
   StoredJob LoadLeased(const std::string& lease_id);
   // Throws kResourceExhausted when `tenant` keeping `adding` more bytes would pass its max_bytes.
   void CheckBytesQuota(const std::string& tenant, std::int64_t adding);
+  // Throws kResourceExhausted when `tenant` has max_jobs jobs queued or running.
+  void CheckJobsQuota(const std::string& tenant);
   // Writes `job` to the store, then tells the watchers.
   void Save(const v1::Job& job);
   void Finish(v1::Job& job, v1::JobState state, const std::string& error);

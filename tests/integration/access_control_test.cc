@@ -166,11 +166,22 @@ TEST_F(AccessControlTest, OverQuotaSubmitsAreRefusedAndNothingIsLost) {
   EXPECT_EQ(third.exit_code, 8) << third.err;
   EXPECT_NE(third.err.find("max_jobs"), std::string::npos) << third.err;
   EXPECT_NE(third.err.find("radiology"), std::string::npos) << third.err;
+  // A new clip over the quota is refused before its upload, not after it (found 2026-12-05).
+  MakeClip(cluster_.path("clip2"), 2);
+  const auto fourth = Cli(alice_, {"submit", cluster_.path("clip2").string(), "--name", "four"});
+  EXPECT_EQ(fourth.exit_code, 8) << fourth.err;
+  EXPECT_NE(fourth.err.find("max_jobs"), std::string::npos) << fourth.err;
+  EXPECT_EQ(fourth.err.find("uploaded"), std::string::npos) << fourth.err;
+  // Options the server would refuse are refused before the upload too.
+  const auto negative = Cli(alice_, {"submit", cluster_.path("clip2").string(), "--time-budget", "-5"});
+  EXPECT_EQ(negative.exit_code, 2) << negative.err;
+  EXPECT_NE(negative.err.find("--time-budget: -5 is negative"), std::string::npos) << negative.err;
   // Another tenant has its own quota.
   SubmitAs(bob_, "bobs");
   EXPECT_EQ(cluster_.Job(first).state(), v1::QUEUED);
   EXPECT_EQ(cluster_.Job(second).state(), v1::QUEUED);
-  EXPECT_EQ(AuditFind(Audit(), "Submit", "RESOURCE_EXHAUSTED", "alice").size(), 1u);
+  // Both refused when the client asked what the server lacks of the clip, before any byte.
+  EXPECT_EQ(AuditFind(Audit(), "QueryUpload", "RESOURCE_EXHAUSTED", "alice").size(), 2u);
 }
 
 TEST(TenantQuotaTest, AnUploadOverTheByteQuotaIsRefusedBeforeAByteIsWritten) {
