@@ -172,6 +172,11 @@ int Submit(const Globals& globals, const SubmitFlags& flags) {
   }
   if (!flags.wait) return kExitOk;
   const auto done = WatchJob(globals, job.id(), {flags.previews});
+  // A send the job was submitted with that failed fails the command, as `send --wait` does: the
+  // results did not reach the PACS.
+  for (const auto& send : done.sends()) {
+    if (done.state() == v1::SUCCEEDED && send.state() == v1::DicomSend::SEND_FAILED) return kExitJobFailed;
+  }
   return ExitCodeFor(done.state());
 }
 
@@ -236,7 +241,9 @@ Command AddSubmitCommand(CLI::App& app) {
   sub->add_option("--priority", flags->priority, "higher runs first, -100 to 100 (default 0)")
       ->check(CLI::Range(-100, 100));
   sub->add_option("--name", flags->name, "a name to recognise the job by (default: the folder's)");
-  sub->add_flag("--wait", flags->wait, "watch the job until it finishes; exit code tells how it ended");
+  sub->add_flag("--wait", flags->wait,
+                "watch the job until it finishes; exit code tells how it ended (5 also when a --send-to send "
+                "failed)");
   sub->add_option("--previews", flags->previews, "with --wait: save previews into this folder");
   return [flags](const Globals& globals) { return Submit(globals, *flags); };
 }

@@ -155,6 +155,13 @@ TEST_F(PacsRoundTripTest, RecordingFromThePacsResultsBackIntoItsStudy) {
   EXPECT_NE(SendTo(job, "wrongae")->error().find("rejected"), std::string::npos)
       << SendTo(job, "wrongae")->error();
 
+  // A job submitted with a send that fails: `submit --wait` says so in its exit code, as `send --wait`
+  // does (it exited 0; found 2026-12-05).
+  MakeClip(dir_ / "clip");
+  const auto sent_badly = RunCli(cluster.address(), {"submit", (dir_ / "clip").string(), "--dicom",
+                                                     "--send-to", "wrongae", "--iterations", "5", "--wait"});
+  EXPECT_EQ(sent_badly.exit_code, 5) << sent_badly.out << sent_badly.err;
+
   // The PACS down: the send fails and the job keeps its results; back up, a resend goes through.
   orthanc_->Stop();
   const auto down = RunCli(cluster.address(), {"send", id, "--to", "orthanc", "--wait"});
