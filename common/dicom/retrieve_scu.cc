@@ -29,6 +29,10 @@ class RetrievingScu : public DcmSCU {
 
   OFCondition handleSTORERequest(const T_ASC_PresentationContextID id, DcmDataset* incoming, OFBool& go_on,
                                  Uint16& status) override {
+    if (incoming != nullptr && IsEndoreconResult(*incoming)) {  // taken, not kept (storage_classes.h)
+      status = STATUS_Success;
+      return EC_Normal;
+    }
     last_file_.clear();
     const OFCondition result = DcmSCU::handleSTORERequest(id, incoming, go_on, status);
     std::error_code error;

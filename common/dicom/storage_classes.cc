@@ -1,6 +1,9 @@
 #include "common/dicom/storage_classes.h"
 
+#include <dcmtk/dcmdata/dctk.h>
 #include <dcmtk/dcmdata/dcuid.h>
+
+#include "common/dicom/dataset_access.h"
 
 namespace endorecon::dicom {
 
@@ -30,9 +33,24 @@ const std::vector<StorageClass>& RecordingStorageClasses() {
           UID_MultiframeGrayscaleByteSecondaryCaptureImageStorage}) {
       all.push_back({sop, image});
     }
+    // endorecon's own results (UID_MultiframeTrueColorSecondaryCaptureImageStorage is above).
+    const std::vector<std::string> plain = {UID_LittleEndianExplicitTransferSyntax,
+                                            UID_LittleEndianImplicitTransferSyntax};
+    for (const char* sop :
+         {UID_MultiframeGrayscaleWordSecondaryCaptureImageStorage, UID_EncapsulatedSTLStorage}) {
+      all.push_back({sop, plain});
+    }
     return all;
   }();
   return classes;
+}
+
+bool IsEndoreconResult(DcmItem& data) {
+  const std::string sop = FindString(data, DCM_SOPClassUID).value_or("");
+  const bool result_class = sop == UID_MultiframeTrueColorSecondaryCaptureImageStorage ||
+                            sop == UID_MultiframeGrayscaleWordSecondaryCaptureImageStorage ||
+                            sop == UID_EncapsulatedSTLStorage;
+  return result_class && FindString(data, DCM_Manufacturer).value_or("") == "endorecon";
 }
 
 }  // namespace endorecon::dicom

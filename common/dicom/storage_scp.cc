@@ -39,6 +39,7 @@ class StorageScp::Scp : public DcmStorageSCP {
 
   Uint16 checkAndProcessSTORERequest(const T_DIMSE_C_StoreRQ& request, DcmFileFormat& file) override {
     DcmDataset& data = *file.getDataset();
+    if (IsEndoreconResult(data)) return STATUS_Success;  // taken, not kept (storage_classes.h)
     const std::string study = FindString(data, DCM_StudyInstanceUID).value_or("");
     const std::string series = FindString(data, DCM_SeriesInstanceUID).value_or("");
     const std::string sop = request.AffectedSOPInstanceUID;

@@ -124,6 +124,14 @@ TEST_F(PacsRoundTripTest, RecordingFromThePacsResultsBackIntoItsStudy) {
   EXPECT_EQ(Text(orthanc_->Get("/studies/" + orthanc_study), "ParentPatient"),
             patients[0].get<std::string>());
 
+  // The study, now holding the results too, is run again: the retrieval takes the results the PACS
+  // sends with the recording and keeps the recording alone (the PACS refused the whole C-GET, as the
+  // server offered no context for the results' classes; found 2026-12-05).
+  const auto again = RunCli(cluster.address(), {"submit", "--pacs", "orthanc", "--study", study,
+                                                "--iterations", "5", "--size", "64x48", "--wait"});
+  EXPECT_EQ(again.exit_code, 0) << again.out << again.err;
+  EXPECT_EQ(cluster.Job(JobIdIn(again.out)).retrieval().instances(), 1);
+
   // What the worker wrote conforms, and the mesh is there in the open formats too.
   ASSERT_EQ(RunCli(cluster.address(), {"fetch", id, "-o", (dir_ / "results").string()}).exit_code, 0);
   for (const char* name : {"rendered.dcm", "depth.dcm", "uncertainty.dcm", "model_map.dcm", "mesh.dcm"}) {
