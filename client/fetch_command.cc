@@ -51,6 +51,8 @@ int Fetch(const Globals& globals, const FetchFlags& flags) {
                                 1000.0 * static_cast<double>(to_receive) / flags.min_bytes_per_second)));
     auto reader = stub->Fetch(stream_context.get(), request);
     received = ReceiveFiles(*reader, flags.out);
+    // On disk before "verified" is said: the results may be the only copy once retention runs.
+    SyncFolder(flags.out);
   }
   if (globals.json) {
     std::cout << ToJson(job.result()) << std::endl;

@@ -1,5 +1,8 @@
 #include "common/file_download.h"
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <cerrno>
 #include <cstring>
 #include <fstream>
@@ -27,7 +30,10 @@ class PartialFile {
     fs::create_directories(target_.parent_path(), error);
     // A path under another file's name (a/b after a file a) cannot be made
     // (tests/fuzz/download_stream_fuzz.cc).
-    if (error) FailInvalid("download of '" + entry.path() + "': cannot make its folder: " + error.message());
+    if (error) {
+      FailInvalid("download of '" + entry.path() + "': cannot make its folder " +
+                  target_.parent_path().string() + ": " + error.message());
+    }
     const auto part = PartPath(target_);
     const std::int64_t have = fs::exists(part) ? static_cast<std::int64_t>(fs::file_size(part)) : 0;
     if (offset > have) FailInvalid("download of '" + entry.path() + "' starts past its partial file");
@@ -125,6 +131,16 @@ std::int64_t ReceiveFiles(grpc::ClientReaderInterface<v1::FileChunk>& reader, co
   ThrowIfFailed(reader.Finish(), "download");
   if (current) Fail(ErrorCode::kUnavailable, "the download stream ended inside a file; run again to resume");
   return received;
+}
+
+void SyncFolder(const fs::path& dir) {
+  const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd < 0 || ::syncfs(fd) != 0) {
+    const int error = errno;
+    if (fd >= 0) ::close(fd);
+    Fail(ErrorCode::kUnavailable, "cannot write " + dir.string() + " to its disk: " + std::strerror(error));
+  }
+  ::close(fd);
 }
 
 }  // namespace endorecon

@@ -23,4 +23,8 @@ std::vector<v1::FileRange> PendingDownloads(const std::filesystem::path& dir, co
 std::int64_t ReceiveFiles(grpc::ClientReaderInterface<v1::FileChunk>& reader,
                           const std::filesystem::path& dir);
 
+// Writes what the filesystem holding `dir` has in memory to its disk (syncfs): the files received
+// are there after a power cut. Throws Error(kUnavailable) naming `dir` when it cannot.
+void SyncFolder(const std::filesystem::path& dir);
+
 }  // namespace endorecon

@@ -33,9 +33,14 @@ constexpr std::int64_t kWriteBehindBytes = 4 << 20;
 }
 
 void FsyncDirectory(const fs::path& dir) {
-  const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY);
+  const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
   if (fd < 0) FailErrno("cannot open directory", dir);
-  ::fsync(fd);
+  if (::fsync(fd) != 0) {
+    const int error = errno;
+    ::close(fd);
+    errno = error;
+    FailErrno("cannot sync directory", dir);
+  }
   ::close(fd);
 }
 
@@ -165,22 +170,27 @@ std::string BlobStore::Put(std::string_view bytes) {
 
 BlobStore::Writer::Writer(BlobStore& store, const v1::FileEntry& entry)
     : store_(store), entry_(entry), partial_(store.PartialPath(entry.sha256())) {
-  fd_ = ::open(partial_.c_str(), O_RDWR | O_CREAT, 0644);
+  fd_ = ::open(partial_.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
   if (fd_ < 0) FailErrno("cannot open", partial_);
-  const off_t size = ::lseek(fd_, 0, SEEK_END);
-  if (size > entry_.size() && ::ftruncate(fd_, 0) != 0) FailErrno("cannot truncate", partial_);
-  committed_ = size > entry_.size() ? 0 : static_cast<std::int64_t>(size);
-  written_back_ = committed_;
-  // The digest covers the whole file, so the bytes committed by earlier streams are read once.
-  std::array<char, 1 << 16> buffer{};
-  std::int64_t done = 0;
-  while (done < committed_) {
-    const ssize_t n = ::pread(fd_, buffer.data(), buffer.size(), done);
-    if (n <= 0) FailErrno("cannot read", partial_);
-    digest_.Update(buffer.data(), static_cast<std::size_t>(n));
-    done += n;
+  try {  // a constructor that throws runs no destructor: the descriptor is closed here
+    const off_t size = ::lseek(fd_, 0, SEEK_END);
+    if (size > entry_.size() && ::ftruncate(fd_, 0) != 0) FailErrno("cannot truncate", partial_);
+    committed_ = size > entry_.size() ? 0 : static_cast<std::int64_t>(size);
+    written_back_ = committed_;
+    // The digest covers the whole file, so the bytes committed by earlier streams are read once.
+    std::array<char, 1 << 16> buffer{};
+    std::int64_t done = 0;
+    while (done < committed_) {
+      const ssize_t n = ::pread(fd_, buffer.data(), buffer.size(), done);
+      if (n <= 0) FailErrno("cannot read", partial_);
+      digest_.Update(buffer.data(), static_cast<std::size_t>(n));
+      done += n;
+    }
+    ::lseek(fd_, committed_, SEEK_SET);
+  } catch (...) {
+    ::close(fd_);
+    throw;
   }
-  ::lseek(fd_, committed_, SEEK_SET);
 }
 
 BlobStore::Writer::~Writer() {
@@ -236,7 +246,7 @@ void BlobStore::Writer::Promote() {
                                    entry_.sha256() + "; its bytes were discarded");
   }
   const fs::path dir = store_.root_ / "blobs" / entry_.sha256().substr(0, 2);
-  fs::create_directories(dir);
+  if (fs::create_directories(dir)) FsyncDirectory(dir.parent_path());  // the new shard's entry too
   fs::rename(partial_, dir / entry_.sha256());
   FsyncDirectory(dir);
 }
