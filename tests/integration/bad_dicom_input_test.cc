@@ -17,6 +17,8 @@ TEST(BadDicomInputTest, RefusedAtSubmitOrAtPreparation) {
   EXPECT_EQ(bad.exit_code, 5) << bad.out << bad.err;
   EXPECT_NE(bad.out.find("recording.dcm: not a DICOM file (no \"DICM\" at byte 128)"), std::string::npos)
       << bad.out;
+  // Named as in the clip, not by its path in the worker's scratch folder.
+  EXPECT_NE(bad.out.find("INVALID_ARGUMENT: recording.dcm: not a DICOM file"), std::string::npos) << bad.out;
 
   // A file that is not a recording at all (a video) is refused by the CLI before anything is uploaded.
   WriteBytes(cluster.path("endo.mp4"), std::string(1000, 'x'));

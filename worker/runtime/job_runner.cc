@@ -92,6 +92,21 @@ auto WhileLeaseHeld(const ProgressReporter& reporter, Call&& call,
   }
 }
 
+// `message` with the job's folder on this worker taken out of its paths: the user who reads it
+// knows the clip, not the worker's scratch folder ("images/000005.png: cannot decode", not
+// "/var/cache/endorecon-worker-0/3b714f29e295/clip/images/000005.png: cannot decode").
+std::string InTheClip(std::string message, const fs::path& job_dir) {
+  const auto replace = [&](const std::string& from, const std::string& to) {
+    for (std::size_t at = message.find(from); at != std::string::npos;
+         at = message.find(from, at + to.size()))
+      message.replace(at, from.size(), to);
+  };
+  replace((job_dir / "clip").string() + "/", "");
+  replace((job_dir / "clip").string(), "the clip");
+  replace(job_dir.string() + "/", "");
+  return message;
+}
+
 void Tell(WorkerClient& client, const std::string& lease_id, const std::string& reason, bool retry,
           bool release) {
   v1::FailRequest request;
@@ -259,7 +274,7 @@ bool RunLeasedJob(WorkerClient& client, const v1::LeaseResponse& lease, const De
           disk_full ? "worker " + client.worker_id() + ": its scratch folder " + settings.work_dir.string() +
                           " ran out of space (" + std::to_string(free_bytes) + " bytes free now, needs " +
                           std::to_string(settings.min_free_bytes) + " to take a job): " + e.what()
-                    : std::string(ErrorCodeName(e.code())) + ": " + e.what();
+                    : std::string(ErrorCodeName(e.code())) + ": " + InTheClip(e.what(), job_dir);
       // Issue 16: stopped by a shutdown while preparing: handed back without counting an attempt.
       Tell(client, lease.lease_id(), reason, !bad_input, e.code() == ErrorCode::kCancelled || disk_full);
     }
