@@ -8,6 +8,7 @@
 
 #include "client/commands.h"
 #include "client/exit_codes.h"
+#include "common/cli_checks.h"
 #include "common/error.h"
 #include "common/transport_security.h"
 
@@ -57,7 +58,9 @@ int main(int argc, char** argv) {
   app.add_option("--server", globals.server,
                  "server address host:port (default: $ENDORECON_SERVER or 127.0.0.1:50051)");
   app.add_flag("--json", globals.json, "machine-readable JSON on stdout (JSON Lines for streams)");
-  app.add_option("--timeout", globals.timeout_s, "deadline of each call in seconds")->capture_default_str();
+  app.add_option("--timeout", globals.timeout_s, "deadline of each call in seconds")
+      ->capture_default_str()
+      ->check(endorecon::AboveZero());
   const char* env_ca = std::getenv("ENDORECON_CA");
   globals.ca_file = env_ca ? env_ca : "";
   app.add_option("--ca", globals.ca_file,

@@ -130,9 +130,9 @@ void CallGuard::Admit(const grpc::ServerContext& context, const Rpc& rpc, Call& 
       break;
     case Access::kWorker:
       if (role != Role::kWorker) {
-        Fail(ErrorCode::kPermissionDenied, std::string(rpc.method) +
-                                               ": the worker API needs a worker token, not a " +
-                                               RoleName(role) + " token");
+        Fail(ErrorCode::kPermissionDenied,
+             std::string(rpc.method) + ": the worker API needs a worker token, not " +
+                 (role == Role::kAdmin ? "an " : "a ") + RoleName(role) + " token");
       }
       break;
   }

@@ -205,7 +205,14 @@ int Run(const ServerFlags& flags) {
   builder.RegisterService(&job_service);
   builder.RegisterService(&worker_service);
   const auto server = builder.BuildAndStart();
-  if (!server || port == 0) Fail(ErrorCode::kUnavailable, "cannot listen on " + flags.listen);
+  if (!server || port == 0) {
+    Fail(ErrorCode::kUnavailable,
+         "cannot listen on " + flags.listen +
+             (flags.tls.tls()
+                  ? ": the port is taken, or --tls-cert and --tls-key are no certificate and its key "
+                    "(a key of another certificate; gRPC's log above says which)"
+                  : ": the port is taken or the address is not this machine's"));
+  }
   std::unique_ptr<HealthPort> health_port;
   if (!flags.health_listen.empty()) {
     health_port = std::make_unique<HealthPort>(flags.health_listen);
