@@ -27,6 +27,12 @@ void WorkerRegistry::Register(const v1::RegisterRequest& request) {
   *entry.info.mutable_device_info() = request.device_info();
 }
 
+bool WorkerRegistry::Registered(const std::string& worker_id) const {
+  std::lock_guard lock(mutex_);
+  const auto found = workers_.find(worker_id);
+  return found != workers_.end() && found->second.info.devices_size() > 0;
+}
+
 void WorkerRegistry::Touch(const std::string& worker_id) {
   std::lock_guard lock(mutex_);
   At(worker_id);

@@ -21,6 +21,8 @@ class WorkerRegistry {
 
   // Records the worker's host and devices (names and what they are) from its registration.
   void Register(const v1::RegisterRequest& request);
+  // Whether `worker_id` registered with this server (a worker only seen leasing did not).
+  bool Registered(const std::string& worker_id) const;
   void Touch(const std::string& worker_id);
   void AddJob(const std::string& worker_id, const std::string& job_id);
   void RemoveJob(const std::string& worker_id, const std::string& job_id);

@@ -42,6 +42,7 @@ grpc::Status WorkerServiceImpl::Lease(grpc::ServerContext* context, const v1::Le
         context->deadline() - std::chrono::system_clock::now() - std::chrono::milliseconds(500));
     const auto deadline = Clock::now() + std::max(std::chrono::milliseconds(0), std::min(wait, caller_left));
     auto granted = coordinator_.Lease(request->worker_id(), deadline);
+    response->set_register_again(!workers_.Registered(request->worker_id()));
     if (!granted) return grpc::Status::OK;
     call.wrote = true;
     call.job_id = granted->job.id();

@@ -92,6 +92,18 @@ TEST(ServerRestartTest, KillDuringAJobLosesNothing) {
   const auto fetched = RunCli(cluster.address(), {"fetch", finished, "-o", cluster.path("out").string()});
   EXPECT_EQ(fetched.exit_code, 0) << fetched.err;
   EXPECT_TRUE(std::filesystem::exists(cluster.path("out") / "metrics.json"));
+  // The restarted server knows the worker's devices again: the worker registered anew when its
+  // next lease said so (`workers` listed it without devices; found 2026-12-05).
+  EXPECT_TRUE(WaitUntil([&] {
+    grpc::ClientContext context;
+    v1::ListWorkersResponse workers;
+    if (!cluster.stub().ListWorkers(&context, {}, &workers).ok()) return false;
+    for (const auto& one : workers.workers()) {
+      if (one.device_info_size() > 0) return true;
+    }
+    return false;
+  })) << cluster.ServerLog()
+      << worker.Log();
 }
 
 }  // namespace

@@ -1,5 +1,7 @@
 #include "worker/runtime/worker_client.h"
 
+#include <spdlog/spdlog.h>
+
 #include "common/file_download.h"
 #include "common/file_upload.h"
 #include "common/grpc_status.h"
@@ -29,7 +31,27 @@ v1::RegisterResponse WorkerClient::Register(const std::string& hostname, const s
   v1::RegisterResponse response;
   auto context = CallContext(timeout_);
   ThrowIfFailed(stub_->Register(context.get(), request, &response), "register");
+  std::lock_guard lock(mutex_);
+  registration_ = request;
   return response;
+}
+
+void WorkerClient::Reregister() {
+  v1::RegisterRequest request;
+  {
+    std::lock_guard lock(mutex_);
+    if (!registration_) return;
+    request = *registration_;
+  }
+  v1::RegisterResponse response;
+  auto context = CallContext(timeout_);
+  const auto status = stub_->Register(context.get(), request, &response);
+  if (status.ok()) {
+    spdlog::info("registered again with the server (it restarted since)");
+  } else {
+    spdlog::warn("registering again with the server failed ({}); next lease tries again",
+                 status.error_message());
+  }
 }
 
 std::optional<v1::LeaseResponse> WorkerClient::Lease(const std::string& device,
@@ -52,6 +74,7 @@ std::optional<v1::LeaseResponse> WorkerClient::Lease(const std::string& device,
     if (cancelled_) return std::nullopt;
   }
   ThrowIfFailed(status, "lease");
+  if (response.register_again()) Reregister();
   if (!response.has_job()) return std::nullopt;
   return response;
 }

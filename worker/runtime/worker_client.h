@@ -46,6 +46,9 @@ class WorkerClient {
   std::mutex mutex_;
   std::set<grpc::ClientContext*> leasing_;
   bool cancelled_ = false;
+  std::optional<v1::RegisterRequest> registration_;  // the last Register's, for Reregister()
+  // Registers again as last time: a server that restarted lost the worker's devices.
+  void Reregister();
 };
 
 }  // namespace endorecon::worker
