@@ -693,8 +693,9 @@ class Campaign {
           ++corrupt;
           std::printf("  CORRUPT: blob %s\n", relative.c_str());
         }
-      } else if (top == "partial" ? entry.path().extension() != ".part"
-                                  : !(top.starts_with("jobs.sqlite") || top == "audit.jsonl")) {
+      } else if (top == "partial"
+                     ? entry.path().extension() != ".part"
+                     : !(top.starts_with("jobs.sqlite") || top == "audit.jsonl" || top == "server.lock")) {
         ++stray;
         std::printf("  STRAY: %s\n", relative.c_str());
       }

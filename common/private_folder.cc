@@ -14,10 +14,7 @@ bool MakePrivateFolder(const fs::path& dir) {
   if (error) FailInvalid("cannot create the folder " + dir.string() + ": " + error.message());
   const auto shared = fs::status(dir, error).permissions() & (fs::perms::group_all | fs::perms::others_all);
   if (error) FailInvalid("cannot read the permissions of " + dir.string() + ": " + error.message());
-  if (shared == fs::perms::none) return false;
-  fs::permissions(dir, fs::perms::group_all | fs::perms::others_all, fs::perm_options::remove, error);
-  if (error) FailInvalid("cannot make " + dir.string() + " its owner's alone: " + error.message());
-  return true;
+  return shared != fs::perms::none;
 }
 
 }  // namespace endorecon

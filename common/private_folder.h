@@ -1,16 +1,16 @@
 // A folder that holds patient data (the server's data folder, a worker's scratch folder) is its
-// owner's alone: what the process creates from then on is owner-only (umask 077), and the folder
-// itself loses any access for its group and others, so the files already in it cannot be reached
-// either. The job store held patients' names in a file every local user could read.
+// owner's alone: what the process creates from then on is owner-only (umask 077), so a folder it
+// creates is too. The job store held patients' names in a file every local user could read.
 #pragma once
 
 #include <filesystem>
 
 namespace endorecon {
 
-// Creates `dir` (and its parents) if missing, sets the process's umask to 077 and removes the
-// group's and others' permissions from `dir`. Returns whether `dir` had any to remove.
-// Throws Error(kInvalidArgument) naming `dir` when it cannot be created or changed.
+// Sets the process's umask to 077 and creates `dir` (and its parents) if missing. Returns whether
+// `dir` is open to its group or others: an existing folder is left as it is (it may be a shared
+// one, such as /tmp, named by mistake), for the caller to warn of.
+// Throws Error(kInvalidArgument) naming `dir` when it cannot be created or read.
 bool MakePrivateFolder(const std::filesystem::path& dir);
 
 }  // namespace endorecon

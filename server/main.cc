@@ -126,8 +126,10 @@ int Run(const ServerFlags& flags) {
   const auto credentials = ServerCredentials(flags.tls);
   const std::filesystem::path data_dir = flags.data_dir;
   if (MakePrivateFolder(data_dir)) {
-    spdlog::warn("{} was open to its group or others: now its owner's alone (it holds patient data)",
-                 data_dir.string());
+    spdlog::warn(
+        "{} is open to its group or others, and holds patient data: make it its owner's alone "
+        "(chmod 700)",
+        data_dir.string());
   }
   const DataDirLock lock(data_dir);
   JobStore store(data_dir / "jobs.sqlite");

@@ -133,8 +133,10 @@ int Serve(const ServeFlags& flags) {
   settings.preview_interval_s = flags.preview_interval_s;
   settings.checkpoint_interval_s = flags.checkpoint_interval_s;
   if (MakePrivateFolder(settings.work_dir)) {
-    spdlog::warn("{} was open to its group or others: now its owner's alone (it holds patient data)",
-                 settings.work_dir.string());
+    spdlog::warn(
+        "{} is open to its group or others, and holds patient data while jobs run: make it its "
+        "owner's alone (chmod 700)",
+        settings.work_dir.string());
   }
   if (const int removed = RemoveLeftoverJobs(settings.work_dir))
     spdlog::info("removed {} job folder(s) an earlier run left in {}", removed, settings.work_dir.string());
