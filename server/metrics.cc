@@ -1,6 +1,6 @@
 #include "server/metrics.h"
 
-#include "common/error.h"
+#include "common/metrics_exposer.h"
 
 namespace endorecon::server {
 namespace {
@@ -75,14 +75,7 @@ Metrics::Metrics(const std::string& bind_address)
     jobs_.Add({{"state", v1::JobState_Name(state)}}).Set(0);
   }
   if (!bind_address.empty()) {
-    try {
-      exposer_ = std::make_unique<prometheus::Exposer>(bind_address);
-    } catch (const std::exception& e) {  // CivetServer's own words name neither the port nor the flag
-      FailInvalid(
-          "cannot serve metrics on " + bind_address +
-          " (--metrics-host, --metrics-port): the port is taken or the address is not this machine's (" +
-          e.what() + ")");
-    }
+    exposer_ = OpenMetricsExposer(bind_address);
     exposer_->RegisterCollectable(registry_);
   }
 }

@@ -7,6 +7,7 @@
 #include <fstream>
 
 #include "common/error.h"
+#include "common/metrics_exposer.h"
 
 namespace endorecon::worker {
 
@@ -45,14 +46,7 @@ WorkerMetrics::WorkerMetrics(const std::string& bind_address, const std::vector<
   AddGpuGauges(devices);
   UpdateMemory();
   if (!bind_address.empty()) {
-    try {
-      exposer_ = std::make_unique<prometheus::Exposer>(bind_address);
-    } catch (const std::exception& e) {  // CivetServer's own words name neither the port nor the flag
-      FailInvalid(
-          "cannot serve metrics on " + bind_address +
-          " (--metrics-host, --metrics-port): the port is taken or the address is not this machine's (" +
-          e.what() + ")");
-    }
+    exposer_ = OpenMetricsExposer(bind_address);
     exposer_->RegisterCollectable(registry_);
   }
 }
