@@ -125,6 +125,15 @@ int Submit(const Globals& globals, const SubmitFlags& flags) {
         "with `endorecon-worker to-dicom VIDEO -o recording.dcm`, and a stereo video can go as a raw "
         "recording (--side-by-side VIDEO --calibration FILE)");
   }
+  // A folder that is no clip is refused before its upload, by the rule the worker's loader applies
+  // first (scene/clip_loader.cc): it was uploaded and queued, then failed on the worker.
+  if (!flags.clip.empty() && std::filesystem::is_directory(flags.clip) && !dicom::HoldsDicom(flags.clip) &&
+      !std::filesystem::exists(std::filesystem::path(flags.clip) / "transforms.json") &&
+      !std::filesystem::exists(std::filesystem::path(flags.clip) / "poses_bounds.npy")) {
+    FailInvalid(flags.clip +
+                ": not a clip: found neither transforms.json (transforms.json layout) nor poses_bounds.npy "
+                "(EndoNeRF layout), and no DICOM recording (docs/formats.md)");
+  }
   if (flags.raw.empty() && !flags.raw.size.empty()) ParseFrameSize(flags.raw.size);  // before any upload
   // A clip folder is used as it is: the recording's options are refused before its upload (as the
   // worker would after it).

@@ -4,6 +4,8 @@
 // DICOM); nothing else is lost.
 #include <gtest/gtest.h>
 
+#include <filesystem>
+
 #include "tests/integration/service_harness.h"
 
 namespace endorecon::testing {
@@ -27,6 +29,14 @@ TEST(BadDicomInputTest, RefusedAtSubmitOrAtPreparation) {
   EXPECT_NE(video.err.find("endo.mp4: a file that is not a DICOM recording"), std::string::npos) << video.err;
   EXPECT_NE(video.err.find("endorecon-worker to-dicom VIDEO"), std::string::npos) << video.err;
   EXPECT_EQ(video.err.find("uploaded"), std::string::npos) << video.err;
+  // So is a folder that is no clip (it was uploaded and queued, then failed on the worker).
+  std::filesystem::create_directories(cluster.path("notaclip"));
+  WriteBytes(cluster.path("notaclip") / "notes.txt", "not a frame");
+  const auto folder = RunCli(cluster.address(), {"submit", cluster.path("notaclip").string()});
+  EXPECT_EQ(folder.exit_code, 2) << folder.err;
+  EXPECT_NE(folder.err.find("notaclip: not a clip: found neither transforms.json"), std::string::npos)
+      << folder.err;
+  EXPECT_EQ(folder.err.find("uploaded"), std::string::npos) << folder.err;
 
   const auto unknown = RunCli(cluster.address(), {"submit", "--pacs", "nowhere", "--study", "1.2.3"});
   EXPECT_EQ(unknown.exit_code, 3) << unknown.err;
