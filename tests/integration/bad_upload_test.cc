@@ -171,7 +171,8 @@ TEST_F(BadUploadTest, SubmittingAnIncompleteUploadIsAFailedPrecondition) {
 
 TEST_F(BadUploadTest, CliReportsTheSizeLimitWithExitCodeEight) {
   std::filesystem::create_directories(cluster_.path("big"));
-  WriteBytes(cluster_.path("big") / "frames.bin", std::string(2000000, 'x'));
+  // Named so the CLI takes the folder for a clip and sends it to the server, which refuses its size.
+  WriteBytes(cluster_.path("big") / "poses_bounds.npy", std::string(2000000, 'x'));
   const auto result = RunCli(cluster_.address(), {"submit", cluster_.path("big").string()});
   EXPECT_EQ(result.exit_code, 8) << result.err;
   EXPECT_NE(result.err.find("RESOURCE_EXHAUSTED"), std::string::npos) << result.err;

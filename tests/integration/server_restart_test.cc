@@ -19,9 +19,9 @@ TEST(ServerRestartTest, KillDuringUploadThenTheUploadResumes) {
   std::string bytes(24 << 20, '\0');
   std::mt19937_64 random(7);
   for (auto& byte : bytes) byte = static_cast<char>(random());
-  WriteBytes(clip / "video.bin", bytes);
+  WriteBytes(clip / "poses_bounds.npy", bytes);  // named so the CLI takes the folder for a clip
   v1::FileEntry entry;
-  entry.set_path("video.bin");
+  entry.set_path("poses_bounds.npy");
   entry.set_size(static_cast<std::int64_t>(bytes.size()));
   entry.set_sha256(Sha256Hex(bytes));
 
@@ -35,7 +35,7 @@ TEST(ServerRestartTest, KillDuringUploadThenTheUploadResumes) {
   const int chunk = 3 << 20;
   for (int offset = 0; offset < (12 << 20); offset += chunk) {
     v1::UploadRequest request;
-    request.mutable_chunk()->set_path("video.bin");
+    request.mutable_chunk()->set_path("poses_bounds.npy");
     request.mutable_chunk()->set_offset(offset);
     request.mutable_chunk()->set_data(bytes.substr(static_cast<std::size_t>(offset), chunk));
     ASSERT_TRUE(writer->Write(request));

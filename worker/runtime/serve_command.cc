@@ -8,6 +8,7 @@
 #include <CLI/CLI.hpp>
 #include <atomic>
 #include <memory>
+#include <string_view>
 #include <thread>
 
 #include "common/cli_checks.h"
@@ -144,8 +145,8 @@ int Serve(const ServeFlags& flags) {
   std::thread signal_waiter([&] {
     int signal = 0;
     sigwait(&stop_signals, &signal);
+    if (shutting_down.exchange(true)) return;  // woken by the refused registration below, not a signal
     spdlog::info("signal {}: handing running jobs back and stopping", signal);
-    shutting_down = true;
     client.CancelLeases();
   });
   while (!shutting_down) {
@@ -160,7 +161,21 @@ int Serve(const ServeFlags& flags) {
         signal_waiter.join();
         throw;
       }
-      spdlog::warn("cannot register with {}: {}; retrying", flags.server, e.what());
+      // A server that refuses this worker's client certificate closes the connection in the TLS
+      // handshake; gRPC says only "Socket closed", so the likely reasons are named (TLS over plain
+      // TCP says "wrong version number" or the like, a refused server certificate "certificate").
+      const std::string_view message = e.what();
+      const bool handshake =
+          !flags.ca_file.empty() && (message.find("Socket closed") != std::string_view::npos ||
+                                     message.find("handshake") != std::string_view::npos);
+      spdlog::warn(
+          "cannot register with {}: {}; retrying{}", flags.server, e.what(),
+          handshake && !flags.tls_cert.empty()
+              ? " (the server closed the connection in the TLS handshake: is --tls-cert signed by the "
+                "server's --tls-client-ca, valid now and made for client authentication?)"
+          : handshake ? " (the server closed the connection in the TLS handshake: does it require a "
+                        "client certificate, --tls-cert and --tls-key?)"
+                      : "");
       std::this_thread::sleep_for(std::chrono::seconds(1));
     }
   }
