@@ -287,6 +287,7 @@ int Run(const ServerFlags& flags) {
                               static_cast<std::int64_t>(space.capacity));
         guard.Refresh();
         hub.Prune(std::chrono::steady_clock::now(), std::chrono::seconds(60));
+        workers.Forget(std::chrono::steady_clock::now() - std::chrono::hours(24));  // `workers` lists a day
         const auto trim_start = IdleTrim::Clock::now();
         if (idle_trim.Tick(trim_start)) {
           spdlog::info(

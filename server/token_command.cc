@@ -44,6 +44,11 @@ void Audit(const TokenFlags& flags, const std::string& method, const TokenRecord
 int Create(const TokenFlags& flags) {
   const auto role = ParseRole(flags.role);
   if (!role) FailInvalid("--role " + flags.role + ": expected client, worker or admin");
+  if (*role != Role::kClient && !flags.tenant.empty()) {
+    FailInvalid(
+        "--tenant applies to client tokens: a worker token serves every tenant's jobs and an admin "
+        "token sees them all");
+  }
   const auto token = OpenStore(flags)->Create(flags.name, *role, flags.tenant);
   Audit(flags, "TokenCreate", {flags.name, *role, flags.tenant, 0, 0});
   std::cout << fmt::format(

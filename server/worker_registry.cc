@@ -61,6 +61,12 @@ std::vector<v1::WorkerInfo> WorkerRegistry::List() const {
   return list;
 }
 
+std::size_t WorkerRegistry::Forget(std::chrono::steady_clock::time_point cutoff) {
+  std::lock_guard lock(mutex_);
+  return std::erase_if(
+      workers_, [&](const auto& item) { return item.second.last_seen < cutoff && item.second.jobs.empty(); });
+}
+
 int WorkerRegistry::CountAlive() const {
   std::lock_guard lock(mutex_);
   const auto now = std::chrono::steady_clock::now();

@@ -28,6 +28,9 @@ class WorkerRegistry {
   void RemoveJob(const std::string& worker_id, const std::string& job_id);
   std::vector<v1::WorkerInfo> List() const;
   int CountAlive() const;
+  // Forgets the workers last seen before `cutoff` that hold no job (a worker's default id is
+  // host-pid, so every restart added one for good). Returns how many.
+  std::size_t Forget(std::chrono::steady_clock::time_point cutoff);
 
  private:
   struct Entry {

@@ -159,6 +159,14 @@ TEST_F(AccessControlTest, AnotherTenantsJobIsNotFoundLikeAMissingOne) {
   EXPECT_EQ(cluster_.Job(id).state(), v1::CANCELLED);
 }
 
+// A tenant on a worker or admin token meant nothing and was taken without a word (found 2026-12-05).
+TEST_F(AccessControlTest, OnlyClientTokensHaveATenant) {
+  const auto refused =
+      Capture(BuiltBinary("server/endorecon-server") + " token create --data-dir " +
+              cluster_.data_dir().string() + " --role worker --tenant radiology --name w 2>&1");
+  EXPECT_NE(refused.find("--tenant applies to client tokens"), std::string::npos) << refused;
+}
+
 TEST_F(AccessControlTest, OverQuotaSubmitsAreRefusedAndNothingIsLost) {
   const auto first = SubmitAs(alice_, "one");
   const auto second = SubmitAs(alice_, "two");

@@ -1,0 +1,30 @@
+#include "server/worker_registry.h"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+
+namespace endorecon::server {
+namespace {
+
+// A worker's default id is host-pid: every restart added one to the registry for good, and
+// `endorecon workers` listed them all (found by reading the code, 2026-12-05).
+TEST(WorkerRegistryTest, WorkersGoneLongAndHoldingNoJobAreForgotten) {
+  WorkerRegistry registry(std::chrono::seconds(30));
+  for (const char* id : {"host-101", "host-102"}) {
+    v1::RegisterRequest request;
+    request.set_worker_id(id);
+    request.add_devices("cpu0");
+    registry.Register(request);
+  }
+  registry.AddJob("host-102", "job-1");
+  const auto later = std::chrono::steady_clock::now() + std::chrono::hours(1);
+  EXPECT_EQ(registry.Forget(std::chrono::steady_clock::now() - std::chrono::hours(1)), 0u);
+  EXPECT_EQ(registry.Forget(later), 1u) << "the one holding a job stays";
+  ASSERT_EQ(registry.List().size(), 1u);
+  EXPECT_EQ(registry.List()[0].id(), "host-102");
+  EXPECT_FALSE(registry.Registered("host-101"));
+}
+
+}  // namespace
+}  // namespace endorecon::server
