@@ -53,9 +53,12 @@ int List(const Globals& globals, const ListFlags& flags) {
                            tenants ? "TENANT           " : "", "STATE", "PRIO", "CREATED", "ITERATION",
                            "NAME");
   for (const auto& job : all.jobs()) {
-    const std::string iteration = job.has_progress() ? fmt::format("{}/{}", job.progress().iteration(),
-                                                                   job.progress().total_iterations())
-                                                     : "-";
+    // Training's iterations; frames, said so, while the results are evaluated or a recording is
+    // prepared (a finished job showed "12/12" for its evaluation's frames as if iterations).
+    const auto& p = job.progress();
+    const std::string phase = p.phase() == "evaluate" ? "eval " : p.phase() == "prepare" ? "prep " : "";
+    const std::string iteration =
+        job.has_progress() ? fmt::format("{}{}/{}", phase, p.iteration(), p.total_iterations()) : "-";
     std::cout << fmt::format("{:<14} {}{:<10} {:>4} {:<19} {:>12} {}\n", job.id(), tenant_of(job),
                              v1::JobState_Name(job.state()), job.priority(), HumanTime(job.created_unix_ms()),
                              iteration, job.name());

@@ -25,6 +25,9 @@ TEST(SubmitToCompletionTest, ClipInResultsOut) {
   EXPECT_EQ(job.worker_id(), "w1");
   EXPECT_EQ(job.options().iterations(), 30);
   ASSERT_GT(job.result().files_size(), 0);
+  // The table says what its last progress counted: the evaluation's frames, not iterations.
+  const auto table = RunCli(cluster.address(), {"list"});
+  EXPECT_NE(table.out.find(" eval 8/8 "), std::string::npos) << table.out;
 
   const auto fetched = RunCli(cluster.address(), {"fetch", id, "-o", cluster.path("results").string()});
   ASSERT_EQ(fetched.exit_code, 0) << fetched.err;
