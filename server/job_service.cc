@@ -139,12 +139,13 @@ grpc::Status JobServiceImpl::Fetch(grpc::ServerContext* context, const v1::Fetch
                                    grpc::ServerWriter<v1::FileChunk>* writer) {
   return guard_.Run(context, {"Fetch", Access::kJobs, kReads, request->id()}, [&](Call& call) {
     const auto job = coordinator_.Get(request->id(), call.caller);
-    if (job.expired_unix_ms() > 0) {
+    const auto refuse_expired = [](const v1::Job& expired) {
       Fail(ErrorCode::kFailedPrecondition,
            fmt::format(
                "job {} expired: the retention policy deleted its clip and results on {:%Y-%m-%d %H:%M} UTC",
-               job.id(), fmt::gmtime(static_cast<std::time_t>(job.expired_unix_ms() / 1000))));
-    }
+               expired.id(), fmt::gmtime(static_cast<std::time_t>(expired.expired_unix_ms() / 1000))));
+    };
+    if (job.expired_unix_ms() > 0) refuse_expired(job);
     if (job.state() != v1::SUCCEEDED) {
       Fail(ErrorCode::kFailedPrecondition, "job " + job.id() + " is " + v1::JobState_Name(job.state()) +
                                                "; results exist once it has SUCCEEDED");
@@ -161,7 +162,16 @@ grpc::Status JobServiceImpl::Fetch(grpc::ServerContext* context, const v1::Fetch
         Fail(ErrorCode::kNotFound, "job " + job.id() + " has no result '" + range.path() + "'");
       files.emplace_back(found->second, range.offset());
     }
-    metrics_.DownloadBytes(SendFiles(blobs_, files, *writer, stalls_, context));
+    try {
+      metrics_.DownloadBytes(SendFiles(blobs_, files, *writer, stalls_, context));
+    } catch (const Error& e) {
+      // Retention may delete the results while they are sent: say so, not "no blob with sha256 ...".
+      if (e.code() != ErrorCode::kNotFound) throw;
+      const auto now = coordinator_.Get(request->id(), call.caller);
+      if (now.expired_unix_ms() > 0) refuse_expired(now);
+      Fail(ErrorCode::kNotFound,
+           "job " + job.id() + ": a result file is missing from the server's store (" + e.what() + ")");
+    }
     return grpc::Status::OK;
   });
 }

@@ -48,6 +48,16 @@ TEST(SubmitToCompletionTest, ClipInResultsOut) {
   EXPECT_EQ(again.exit_code, 0);
   EXPECT_NE(again.out.find("fetched 0 of"), std::string::npos) << again.out;
 
+  // A result file gone from the server's store (deleted under it) is named with its job, not by a
+  // bare digest.
+  const auto& lost = job.result().files(0).sha256();
+  std::filesystem::remove(cluster.data_dir() / "blobs" / lost.substr(0, 2) / lost);
+  const auto missing = RunCli(cluster.address(), {"fetch", id, "-o", cluster.path("elsewhere").string()});
+  EXPECT_EQ(missing.exit_code, 3) << missing.err;
+  EXPECT_NE(missing.err.find("job " + id + ": a result file is missing from the server's store"),
+            std::string::npos)
+      << missing.err;
+
   // The same clip again: nothing is uploaded twice.
   const auto resubmitted =
       RunCli(cluster.address(), {"submit", cluster.path("clip").string(), "--iterations", "30"});
