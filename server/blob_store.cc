@@ -60,6 +60,14 @@ fs::path BlobStore::PathOf(const std::string& sha256) const {
   return root_ / "blobs" / sha256.substr(0, 2) / sha256;
 }
 
+std::optional<std::int64_t> BlobStore::SizeOf(const std::string& sha256) const {
+  if (sha256.size() != 64) return std::nullopt;
+  std::error_code error;
+  const auto size = fs::file_size(root_ / "blobs" / sha256.substr(0, 2) / sha256, error);
+  if (error) return std::nullopt;
+  return static_cast<std::int64_t>(size);
+}
+
 bool BlobStore::PromoteIfFull(const v1::FileEntry& entry) {
   if (Has(entry.sha256())) return true;
   if (Committed(entry) != entry.size()) return false;

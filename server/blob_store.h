@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <set>
 #include <string>
 #include <string_view>
@@ -28,6 +29,8 @@ class BlobStore {
   bool Has(const std::string& sha256) const;
   // The blob's file. Throws Error(kNotFound) naming the digest when it is absent.
   std::filesystem::path PathOf(const std::string& sha256) const;
+  // The blob's size; nullopt when it is absent (one stat, where Has and PathOf take one each).
+  std::optional<std::int64_t> SizeOf(const std::string& sha256) const;
   // Bytes held for `entry`: its size when the blob exists, otherwise the partial's length.
   std::int64_t Committed(const v1::FileEntry& entry) const;
 

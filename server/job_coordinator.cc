@@ -84,18 +84,17 @@ void RequireBlobs(const BlobStore& blobs, const v1::Manifest& manifest, const st
   int missing = 0;
   std::string first;
   for (const auto& file : manifest.files()) {
-    if (!blobs.Has(file.sha256())) {
+    const auto stored = blobs.SizeOf(file.sha256());
+    if (!stored) {
       if (missing++ == 0) first = file.path();
       continue;
     }
     // The stored content's size is the file's: a size declared smaller would be counted so against
     // the tenant's quota while the worker gets every byte.
-    std::error_code error;
-    const auto stored = std::filesystem::file_size(blobs.PathOf(file.sha256()), error);
-    if (!error && static_cast<std::int64_t>(stored) != file.size()) {
+    if (*stored != file.size()) {
       FailInvalid("file '" + file.path() + "' of the " + what + " is declared " +
                   std::to_string(file.size()) + " bytes, but its content (sha256 " + file.sha256() +
-                  ") has " + std::to_string(stored));
+                  ") has " + std::to_string(*stored));
     }
   }
   if (missing > 0) {
@@ -218,11 +217,19 @@ void JobCoordinator::Requeue(StoredJob& stored, bool count_attempt, const std::s
   spdlog::info("job {} requeued (attempts {}/{}): {}", job.id(), job.attempts(), job.max_attempts(), reason);
 }
 
-void JobCoordinator::CheckBytesQuota(const std::string& tenant, std::int64_t adding) {
+void JobCoordinator::CheckQuotas(const std::string& tenant, std::int64_t adding, bool adds_job) {
   const auto quota = quotas_.For(tenant);
-  if (quota.max_bytes == 0) return;
+  const bool counts_jobs = adds_job && quota.max_jobs > 0;
+  if (!counts_jobs && quota.max_bytes == 0) return;
+  // A tenant's usage is a scan of its jobs: counted only when a quota needs it, and once.
   const auto usage = parts_.store.UsageOf(tenant);
-  if (usage.bytes + adding > quota.max_bytes) {
+  if (counts_jobs && usage.active_jobs >= quota.max_jobs) {
+    endorecon::Fail(ErrorCode::kResourceExhausted,
+                    "tenant '" + tenant + "' has " + std::to_string(usage.active_jobs) +
+                        " job(s) queued or running, its quota max_jobs is " + std::to_string(quota.max_jobs) +
+                        "; submit again when one has finished");
+  }
+  if (quota.max_bytes > 0 && usage.bytes + adding > quota.max_bytes) {
     endorecon::Fail(
         ErrorCode::kResourceExhausted,
         "tenant '" + tenant + "' keeps " + std::to_string(usage.bytes) + " bytes in its jobs and this adds " +
@@ -232,27 +239,13 @@ void JobCoordinator::CheckBytesQuota(const std::string& tenant, std::int64_t add
   }
 }
 
-void JobCoordinator::CheckJobsQuota(const std::string& tenant) {
-  // A tenant's usage is a scan of its jobs: counted only when a quota needs it.
-  if (const auto quota = quotas_.For(tenant); quota.max_jobs > 0) {
-    const auto usage = parts_.store.UsageOf(tenant);
-    if (usage.active_jobs >= quota.max_jobs) {
-      endorecon::Fail(ErrorCode::kResourceExhausted,
-                      "tenant '" + tenant + "' has " + std::to_string(usage.active_jobs) +
-                          " job(s) queued or running, its quota max_jobs is " +
-                          std::to_string(quota.max_jobs) + "; submit again when one has finished");
-    }
-  }
-}
-
 void JobCoordinator::CheckUploadQuota(const v1::Manifest& manifest, const Principal& caller) {
   // Both quotas before any byte: an upload the submit would refuse is not sent.
-  CheckJobsQuota(caller.tenant);
-  CheckBytesQuota(caller.tenant, TotalBytes(manifest));
+  CheckQuotas(caller.tenant, TotalBytes(manifest), true);
 }
 
 void JobCoordinator::CheckRetrievalQuota(const std::string& id, const v1::Manifest& recording) {
-  CheckBytesQuota(Load(id).job.tenant(), TotalBytes(recording));
+  CheckQuotas(Load(id).job.tenant(), TotalBytes(recording), false);
 }
 
 v1::Job JobCoordinator::Submit(const v1::SubmitRequest& request, const Principal& caller) {
@@ -456,8 +449,9 @@ v1::Job JobCoordinator::CheckLease(const std::string& lease_id) {
 
 RetentionPlan JobCoordinator::ExpireFinishedBefore(std::int64_t cutoff_unix_ms,
                                                    std::filesystem::file_time_type orphan_cutoff) {
+  const auto old_files = FilesWrittenBefore(parts_.blobs, orphan_cutoff);  // a folder walk: outside the lock
   auto plan = Locked([&] {
-    auto plan = PlanRetention(parts_.store, parts_.blobs, cutoff_unix_ms, orphan_cutoff);
+    auto plan = PlanRetention(parts_.store, parts_.blobs, cutoff_unix_ms, old_files);
     // Files first: a crash in between leaves jobs that the next run expires (their blobs already
     // gone), never a job marked expired whose files are still kept.
     for (const auto& digest : plan.blobs) parts_.blobs.Remove(digest);
@@ -565,7 +559,7 @@ void JobCoordinator::RetrievalDone(const std::string& id, const v1::Manifest& cl
     auto stored = Load(id);
     auto& job = stored.job;
     if (job.state() != v1::QUEUED) return;  // cancelled meanwhile
-    CheckBytesQuota(job.tenant(), TotalBytes(clip));
+    CheckQuotas(job.tenant(), TotalBytes(clip), false);
     RequireBlobs(parts_.blobs, clip, "retrieved recording");  // retention may share and delete blobs
     *job.mutable_clip() = clip;
     job.mutable_retrieval()->set_state(v1::Retrieval::RETRIEVED);

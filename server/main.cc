@@ -301,14 +301,8 @@ int Run(const ServerFlags& flags) {
         next_retention +=
             std::chrono::milliseconds(static_cast<std::int64_t>(flags.retention_check_s * 1000));
         try {
-          const auto plan = coordinator.ExpireFinishedBefore(
-              flags.retention_days > 0
-                  ? NowUnixMs() - static_cast<std::int64_t>(flags.retention_days * 86'400'000.0)
-                  : kKeepJobs,
-              flags.orphan_hours > 0
-                  ? std::filesystem::file_time_type::clock::now() -
-                        std::chrono::milliseconds(static_cast<std::int64_t>(flags.orphan_hours * 3'600'000.0))
-                  : std::filesystem::file_time_type::min());
+          const auto plan = coordinator.ExpireFinishedBefore(JobCutoff(flags.retention_days),
+                                                             OrphanCutoff(flags.orphan_hours));
           for (const auto& job : plan.jobs) guard.RecordServerAction("Retention", job.id(), "EXPIRED");
         } catch (const Error& e) {
           spdlog::error("retention: {}: {}", ErrorCodeName(e.code()), e.what());

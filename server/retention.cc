@@ -1,5 +1,6 @@
 #include "server/retention.h"
 
+#include <chrono>
 #include <filesystem>
 #include <set>
 
@@ -16,15 +17,32 @@ void AddBlobs(const v1::Job& job, std::set<std::string>& digests) {
 
 }  // namespace
 
+std::int64_t JobCutoff(double retention_days) {
+  if (retention_days <= 0) return kKeepJobs;
+  const auto now_ms = std::chrono::duration_cast<std::chrono::milliseconds>(
+                          std::chrono::system_clock::now().time_since_epoch())
+                          .count();
+  return now_ms - static_cast<std::int64_t>(retention_days * 86'400'000.0);
+}
+
+std::filesystem::file_time_type OrphanCutoff(double orphan_hours) {
+  if (orphan_hours <= 0) return std::filesystem::file_time_type::min();
+  return std::filesystem::file_time_type::clock::now() -
+         std::chrono::milliseconds(static_cast<std::int64_t>(orphan_hours * 3'600'000.0));
+}
+
+std::vector<BlobStore::StoredFile> FilesWrittenBefore(const BlobStore& blobs,
+                                                      std::filesystem::file_time_type cutoff) {
+  if (cutoff == std::filesystem::file_time_type::min()) return {};
+  auto files = blobs.Files();
+  std::erase_if(files, [&](const BlobStore::StoredFile& file) { return file.written >= cutoff; });
+  return files;
+}
+
 RetentionPlan PlanRetention(JobStore& store, const BlobStore& blobs, std::int64_t cutoff_unix_ms,
-                            std::filesystem::file_time_type orphan_cutoff) {
+                            const std::vector<BlobStore::StoredFile>& old_files) {
   RetentionPlan plan;
   std::set<std::string> expiring, kept;
-  // Listed before the jobs are read: a file stored after the scan is not listed, so it cannot be
-  // taken for an orphan that a job the scan missed references.
-  const auto files = orphan_cutoff > std::filesystem::file_time_type::min()
-                         ? blobs.Files()
-                         : std::vector<BlobStore::StoredFile>{};
   store.Scan([&](const StoredJob& stored) {
     const auto& job = stored.job;
     if (job.expired_unix_ms() > 0) return;
@@ -38,13 +56,13 @@ RetentionPlan PlanRetention(JobStore& store, const BlobStore& blobs, std::int64_
   for (const auto& digest : expiring) {
     if (kept.count(digest)) {
       ++plan.kept_shared;
-    } else if (blobs.Has(digest)) {
+    } else if (const auto bytes = blobs.SizeOf(digest)) {
       plan.blobs.push_back(digest);
-      plan.bytes += static_cast<std::int64_t>(std::filesystem::file_size(blobs.PathOf(digest)));
+      plan.bytes += *bytes;
     }
   }
-  for (const auto& file : files) {
-    if (file.written >= orphan_cutoff || expiring.count(file.sha256) || kept.count(file.sha256)) continue;
+  for (const auto& file : old_files) {
+    if (expiring.count(file.sha256) || kept.count(file.sha256)) continue;
     plan.orphans.push_back(file);
     plan.orphan_bytes += file.bytes;
   }

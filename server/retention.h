@@ -28,12 +28,22 @@ struct RetentionPlan {
   std::int64_t orphan_bytes = 0;
 };
 
-// Jobs finished before `cutoff_unix_ms` expire (none for kKeepJobs); files no job references that
-// were last written before `orphan_cutoff` go too (none for file_time_type::min()). Reads only, so
-// it also serves the dry run.
 inline constexpr std::int64_t kKeepJobs = std::numeric_limits<std::int64_t>::min();
-RetentionPlan PlanRetention(
-    JobStore& store, const BlobStore& blobs, std::int64_t cutoff_unix_ms,
-    std::filesystem::file_time_type orphan_cutoff = std::filesystem::file_time_type::min());
+
+// The cutoffs of the flags: jobs finished more than `retention_days` ago (kKeepJobs for 0), files
+// last written more than `orphan_hours` ago (file_time_type::min(), none, for 0).
+std::int64_t JobCutoff(double retention_days);
+std::filesystem::file_time_type OrphanCutoff(double orphan_hours);
+
+// The store's files last written before `cutoff`. They are listed before the plan reads the jobs,
+// so a file stored after the listing cannot be taken for an orphan that a job the scan missed
+// references; the listing walks the store's folders, so it belongs outside the coordinator's lock.
+std::vector<BlobStore::StoredFile> FilesWrittenBefore(const BlobStore& blobs,
+                                                      std::filesystem::file_time_type cutoff);
+
+// Jobs finished before `cutoff_unix_ms` expire (none for kKeepJobs); of `old_files`
+// (FilesWrittenBefore), those no job references go too. Reads only, so it also serves the dry run.
+RetentionPlan PlanRetention(JobStore& store, const BlobStore& blobs, std::int64_t cutoff_unix_ms,
+                            const std::vector<BlobStore::StoredFile>& old_files = {});
 
 }  // namespace endorecon::server

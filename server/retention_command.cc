@@ -36,15 +36,9 @@ int DryRun(const RetentionFlags& flags) {
     Fail(ErrorCode::kNotFound, "no job store in " + dir.string());
   JobStore store(dir / "jobs.sqlite");
   BlobStore blobs(dir);
-  // 0 days is the server's "keep forever", as --retention-days 0 there.
-  const auto cutoff =
-      flags.days > 0 ? NowUnixMs() - static_cast<std::int64_t>(flags.days * 86'400'000.0) : kKeepJobs;
-  const auto plan = PlanRetention(
-      store, blobs, cutoff,
-      flags.orphan_hours > 0
-          ? std::filesystem::file_time_type::clock::now() -
-                std::chrono::milliseconds(static_cast<std::int64_t>(flags.orphan_hours * 3'600'000.0))
-          : std::filesystem::file_time_type::min());
+  // The server's cutoffs: 0 days keeps every job, as --retention-days 0 there.
+  const auto plan = PlanRetention(store, blobs, JobCutoff(flags.days),
+                                  FilesWrittenBefore(blobs, OrphanCutoff(flags.orphan_hours)));
   for (const auto& job : plan.jobs) {
     std::cout << fmt::format("would expire job {} (tenant {}, {}, finished {:%Y-%m-%d %H:%M} UTC)\n",
                              job.id(), job.tenant().empty() ? "-" : job.tenant(),

@@ -8,6 +8,7 @@
 #include <atomic>
 #include <filesystem>
 
+#include "tests/integration/leased_worker.h"
 #include "tests/integration/service_harness.h"
 #include "worker/runtime/job_runner.h"
 
@@ -19,13 +20,7 @@ TEST(LostLeaseTest, ARunWhoseLeaseIsGoneEndsQuietlyAndLeavesNoFolder) {
   MakeClip(cluster.path("clip"));
   const auto id = cluster.Submit(cluster.path("clip"), {"--iterations", "5"});
 
-  worker::Device device;
-  device.name = "cpu0";
-  device.kind = "cpu";
-  device.threads = 1;
-  worker::WorkerClient client(cluster.address(), {}, "stalled", std::chrono::seconds(10));
-  client.Register("localhost", {device});
-  const auto lease = client.Lease(device.name, std::chrono::seconds(10));
+  auto [device, client, lease] = LeaseAsWorker(cluster, "stalled");
   ASSERT_TRUE(lease.has_value()) << cluster.ServerLog();
   ASSERT_EQ(lease->job().id(), id);
   // Nothing reports for the lease: it runs out and the job's only attempt is spent.
@@ -36,7 +31,7 @@ TEST(LostLeaseTest, ARunWhoseLeaseIsGoneEndsQuietlyAndLeavesNoFolder) {
   settings.min_free_bytes = 0;
   worker::WorkerMetrics metrics("", {device});
   const std::atomic<bool> shutting_down{false};
-  EXPECT_NO_THROW(worker::RunLeasedJob(client, *lease, device, settings, metrics, shutting_down));
+  EXPECT_NO_THROW(worker::RunLeasedJob(*client, *lease, device, settings, metrics, shutting_down));
   EXPECT_FALSE(std::filesystem::exists(settings.work_dir / id));
   EXPECT_EQ(cluster.Job(id).state(), v1::FAILED);
 }

@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <thread>
 
+#include "tests/integration/leased_worker.h"
 #include "tests/integration/sanitizer_build.h"
 #include "tests/integration/service_harness.h"
 #include "tests/integration/upload_requests.h"
@@ -23,13 +24,7 @@ TEST(ResultUploadLeaseTest, ResultsThatWaitLongerThanTheLeaseForAnUploadSlotAreK
   MakeClip(cluster.path("clip"));
   const auto id = cluster.Submit(cluster.path("clip"), {"--iterations", "5"});
 
-  worker::Device device;
-  device.name = "cpu0";
-  device.kind = "cpu";
-  device.threads = 1;
-  worker::WorkerClient client(cluster.address(), {}, "waiting-uploader", std::chrono::seconds(10));
-  client.Register("localhost", {device});
-  const auto lease = client.Lease(device.name, std::chrono::seconds(10));
+  auto [device, client, lease] = LeaseAsWorker(cluster, "waiting-uploader");
   ASSERT_TRUE(lease.has_value()) << cluster.ServerLog();
   ASSERT_EQ(lease->job().id(), id);
 
@@ -56,7 +51,7 @@ TEST(ResultUploadLeaseTest, ResultsThatWaitLongerThanTheLeaseForAnUploadSlotAreK
   });
   worker::WorkerMetrics metrics("", {device});
   const std::atomic<bool> shutting_down{false};
-  EXPECT_NO_THROW(worker::RunLeasedJob(client, *lease, device, settings, metrics, shutting_down));
+  EXPECT_NO_THROW(worker::RunLeasedJob(*client, *lease, device, settings, metrics, shutting_down));
   holder.join();
 
   EXPECT_TRUE(waited) << "the results did not wait for the upload slot: the test tested nothing";

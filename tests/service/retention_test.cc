@@ -89,8 +89,9 @@ TEST(RetentionTest, FilesNoJobReferencesGoOnceOldEnough) {
     std::filesystem::last_write_time(blobs.PathOf(sha), two_days_ago);
   std::filesystem::last_write_time(dir / "partial" / (partial_sha + ".part"), two_days_ago);
 
-  const auto plan = PlanRetention(store, blobs, kKeepJobs,
-                                  std::filesystem::file_time_type::clock::now() - std::chrono::hours(24));
+  const auto plan = PlanRetention(
+      store, blobs, kKeepJobs,
+      FilesWrittenBefore(blobs, std::filesystem::file_time_type::clock::now() - std::chrono::hours(24)));
   EXPECT_TRUE(plan.jobs.empty());
   ASSERT_EQ(plan.orphans.size(), 2u);
   std::set<std::string> orphans;

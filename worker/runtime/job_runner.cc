@@ -58,19 +58,27 @@ std::string SummaryJson(const ReconstructSummary& summary) {
   return json.dump();
 }
 
-// Retries `call` while the server is unreachable (a restart), for about `patience`.
-template <typename Call>
-auto WhileUnavailable(Call&& call, std::chrono::seconds patience = std::chrono::seconds(30)) {
-  const auto give_up = std::chrono::steady_clock::now() + patience;
+// Retries `call`, a second apart, while it fails UNAVAILABLE and `go_on()` holds; the warning of
+// each retry ends with `while_what`.
+template <typename Call, typename GoOn>
+auto RetryUnavailable(Call&& call, GoOn&& go_on, const char* while_what) {
   while (true) {
     try {
       return call();
     } catch (const Error& e) {
-      if (e.code() != ErrorCode::kUnavailable || std::chrono::steady_clock::now() > give_up) throw;
-      spdlog::warn("{}; retrying", e.what());
+      if (e.code() != ErrorCode::kUnavailable || !go_on()) throw;
+      spdlog::warn("{}; retrying{}", e.what(), while_what);
       std::this_thread::sleep_for(std::chrono::seconds(1));
     }
   }
+}
+
+// Retries `call` while the server is unreachable (a restart), for about `patience`.
+template <typename Call>
+auto WhileUnavailable(Call&& call, std::chrono::seconds patience = std::chrono::seconds(30)) {
+  const auto give_up = std::chrono::steady_clock::now() + patience;
+  return RetryUnavailable(
+      std::forward<Call>(call), [&] { return std::chrono::steady_clock::now() <= give_up; }, "");
 }
 
 // Retries `call` while it fails UNAVAILABLE (a server restarting, or one whose upload slots are all
@@ -79,17 +87,13 @@ auto WhileUnavailable(Call&& call, std::chrono::seconds patience = std::chrono::
 template <typename Call>
 auto WhileLeaseHeld(const ProgressReporter& reporter, Call&& call,
                     std::chrono::seconds patience = std::chrono::seconds(30)) {
-  while (true) {
-    try {
-      return call();
-    } catch (const Error& e) {
-      const bool held =
-          !reporter.stop_requested() && std::chrono::steady_clock::now() - reporter.last_answer() < patience;
-      if (e.code() != ErrorCode::kUnavailable || !held) throw;
-      spdlog::warn("{}; retrying while the server holds the lease", e.what());
-      std::this_thread::sleep_for(std::chrono::seconds(1));
-    }
-  }
+  return RetryUnavailable(
+      std::forward<Call>(call),
+      [&] {
+        return !reporter.stop_requested() &&
+               std::chrono::steady_clock::now() - reporter.last_answer() < patience;
+      },
+      " while the server holds the lease");
 }
 
 // `message` with the job's folder on this worker taken out of its paths: the user who reads it
@@ -178,6 +182,11 @@ bool RunLeasedJob(WorkerClient& client, const v1::LeaseResponse& lease, const De
   auto& gauges = metrics.For(device.name);
   gauges.busy.Set(1);
   ProgressReporter reporter(client, lease.lease_id(), settings.heartbeat);
+  // The job's reporting ends: heartbeats stop (the lease is then the server's to keep or expire).
+  const auto stop_reporting = [&] {
+    reporter.Stop();
+    gauges.busy.Set(0);
+  };
   int last_iteration = 0;
   bool disk_full = false;
   try {
@@ -232,12 +241,10 @@ bool RunLeasedJob(WorkerClient& client, const v1::LeaseResponse& lease, const De
 
     const auto summary = Reconstruct(options, hooks);
     if (const auto stop = reporter.stop_requested()) {
-      reporter.Stop();
-      gauges.busy.Set(0);
+      stop_reporting();
       spdlog::info("[{}] job {} stopped: {}", device.name, job.id(), v1::ProgressReply::Action_Name(*stop));
     } else if (summary.cancelled) {
-      reporter.Stop();
-      gauges.busy.Set(0);
+      stop_reporting();
       Tell(client, lease.lease_id(), "worker " + client.worker_id() + " is shutting down", true, true);
     } else {
       // The heartbeats go on while the results are written and uploaded, so the lease holds however
@@ -249,16 +256,14 @@ bool RunLeasedJob(WorkerClient& client, const v1::LeaseResponse& lease, const De
       complete.set_lease_id(lease.lease_id());
       *complete.mutable_result() = ManifestOfDirectory(options.out_dir);
       WhileLeaseHeld(reporter, [&] { client.PutFiles(options.out_dir, complete.result()); });
-      reporter.Stop();
-      gauges.busy.Set(0);
+      stop_reporting();
       complete.set_summary_json(SummaryJson(summary));
       WhileUnavailable([&] { return client.Complete(complete); });
       spdlog::info("[{}] job {} done: {} iterations, {} result file(s)", device.name, job.id(),
                    summary.iterations, complete.result().files_size());
     }
   } catch (const Error& e) {
-    reporter.Stop();
-    gauges.busy.Set(0);
+    stop_reporting();
     spdlog::error("[{}] job {}: {}: {}", device.name, job.id(), ErrorCodeName(e.code()), e.what());
     // A write the disk refused (its message carries the system's words for ENOSPC or EDQUOT; the
     // file written in part may already be gone), or any failure while the scratch folder is full (an
@@ -279,8 +284,7 @@ bool RunLeasedJob(WorkerClient& client, const v1::LeaseResponse& lease, const De
       Tell(client, lease.lease_id(), reason, !bad_input, e.code() == ErrorCode::kCancelled || disk_full);
     }
   } catch (const std::exception& e) {
-    reporter.Stop();
-    gauges.busy.Set(0);
+    stop_reporting();
     spdlog::error("[{}] job {}: {}", device.name, job.id(), e.what());
     if (!reporter.stop_requested()) Tell(client, lease.lease_id(), e.what(), true, false);
   }

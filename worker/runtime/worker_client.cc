@@ -2,6 +2,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include "common/error.h"
 #include "common/file_download.h"
 #include "common/file_upload.h"
 #include "common/grpc_status.h"
@@ -28,6 +29,10 @@ v1::RegisterResponse WorkerClient::Register(const std::string& hostname, const s
     info->set_threads(device.threads);
   }
   request.set_version("0.1.0");
+  return Send(request);
+}
+
+v1::RegisterResponse WorkerClient::Send(const v1::RegisterRequest& request) {
   v1::RegisterResponse response;
   auto context = CallContext(timeout_);
   ThrowIfFailed(stub_->Register(context.get(), request, &response), "register");
@@ -43,14 +48,11 @@ void WorkerClient::Reregister() {
     if (!registration_) return;
     request = *registration_;
   }
-  v1::RegisterResponse response;
-  auto context = CallContext(timeout_);
-  const auto status = stub_->Register(context.get(), request, &response);
-  if (status.ok()) {
+  try {
+    Send(request);
     spdlog::info("registered again with the server (it restarted since)");
-  } else {
-    spdlog::warn("registering again with the server failed ({}); next lease tries again",
-                 status.error_message());
+  } catch (const Error& e) {
+    spdlog::warn("registering again with the server failed ({}); next lease tries again", e.what());
   }
 }
 

@@ -47,6 +47,8 @@ class WorkerClient {
   std::set<grpc::ClientContext*> leasing_;
   bool cancelled_ = false;
   std::optional<v1::RegisterRequest> registration_;  // the last Register's, for Reregister()
+  // The Register call; keeps `request` for Reregister().
+  v1::RegisterResponse Send(const v1::RegisterRequest& request);
   // Registers again as last time: a server that restarted lost the worker's devices.
   void Reregister();
 };
