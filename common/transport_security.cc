@@ -4,6 +4,10 @@
 #include <grpcpp/security/credentials.h>
 #include <grpcpp/support/channel_arguments.h>
 #include <grpcpp/support/client_interceptor.h>
+#include <spdlog/spdlog.h>
+
+#include <mutex>
+#include <utility>
 
 #include "common/error.h"
 #include "common/secret_file.h"
@@ -21,7 +25,7 @@ void RequirePair(const std::string& cert_file, const std::string& key_file) {
 // plaintext loopback server too.
 class BearerTokenInterceptor final : public grpc::experimental::Interceptor {
  public:
-  explicit BearerTokenInterceptor(const std::string& header) : header_(header) {}
+  explicit BearerTokenInterceptor(std::string header) : header_(std::move(header)) {}
   void Intercept(grpc::experimental::InterceptorBatchMethods* methods) override {
     if (methods->QueryInterceptionHookPoint(
             grpc::experimental::InterceptionHookPoints::PRE_SEND_INITIAL_METADATA)) {
@@ -31,18 +35,55 @@ class BearerTokenInterceptor final : public grpc::experimental::Interceptor {
   }
 
  private:
-  const std::string& header_;
+  const std::string header_;
 };
 
+// The header every call gets: a fixed token, or the token file's, read again when its modification
+// time or size changes.
 class BearerTokenFactory final : public grpc::experimental::ClientInterceptorFactoryInterface {
  public:
-  explicit BearerTokenFactory(const std::string& token) : header_("Bearer " + token) {}
+  explicit BearerTokenFactory(const ChannelSecurity& security) : file_(security.token_file) {
+    if (file_.empty()) {
+      header_ = "Bearer " + security.token;
+    } else {
+      stamp_ = StampOf();
+      header_ = "Bearer " + ReadTokenFile(file_, "--token-file");
+      checked_ = std::chrono::steady_clock::now();
+    }
+  }
   grpc::experimental::Interceptor* CreateClientInterceptor(grpc::experimental::ClientRpcInfo*) override {
+    std::lock_guard lock(mutex_);
+    if (!file_.empty() && std::chrono::steady_clock::now() - checked_ >= std::chrono::seconds(1)) Reread();
     return new BearerTokenInterceptor(header_);
   }
 
  private:
+  using Stamp = std::pair<std::filesystem::file_time_type, std::uintmax_t>;
+  Stamp StampOf() const {
+    std::error_code error;
+    const auto time = std::filesystem::last_write_time(file_, error);
+    const auto size = std::filesystem::file_size(file_, error);
+    return error ? Stamp{} : Stamp{time, size};
+  }
+  void Reread() {
+    checked_ = std::chrono::steady_clock::now();
+    const Stamp stamp = StampOf();
+    if (stamp == stamp_) return;
+    stamp_ = stamp;
+    try {
+      header_ = "Bearer " + ReadTokenFile(file_, "--token-file");
+      spdlog::info("--token-file {} changed: calls carry its new token", file_.string());
+    } catch (const Error& e) {
+      spdlog::warn("--token-file {} changed but holds no usable token ({}); calls keep the last one",
+                   file_.string(), e.what());
+    }
+  }
+
+  const std::filesystem::path file_;
+  std::mutex mutex_;
   std::string header_;
+  Stamp stamp_;
+  std::chrono::steady_clock::time_point checked_;
 };
 
 }  // namespace
@@ -70,9 +111,10 @@ std::shared_ptr<grpc::Channel> OpenChannel(const std::string& address, const Cha
   // (20 s), and a short one fails every call over a link slower than it (SlowLinkTest).
   args.SetInt(GRPC_ARG_MAX_RECONNECT_BACKOFF_MS, 2000);
   args.SetInt(GRPC_ARG_INITIAL_RECONNECT_BACKOFF_MS, 200);
-  if (security.token.empty()) return grpc::CreateCustomChannel(address, credentials, args);
+  if (security.token.empty() && security.token_file.empty())
+    return grpc::CreateCustomChannel(address, credentials, args);
   std::vector<std::unique_ptr<grpc::experimental::ClientInterceptorFactoryInterface>> interceptors;
-  interceptors.push_back(std::make_unique<BearerTokenFactory>(security.token));
+  interceptors.push_back(std::make_unique<BearerTokenFactory>(security));
   return grpc::experimental::CreateCustomChannelWithInterceptors(address, credentials, args,
                                                                  std::move(interceptors));
 }

@@ -25,6 +25,10 @@ struct ChannelSecurity {
   std::string cert_file;  // mTLS: present this certificate chain (--tls-cert), with key_file
   std::string key_file;   // its private key (--tls-key); refused when others may read it
   std::string token;      // sent as "authorization: Bearer <token>" with every call
+  // Instead of `token`: the token file (--token-file), read when the channel opens and read again
+  // when it changes (checked at most once a second), so a long-running worker takes a rotated token
+  // without a restart. A changed file that holds no valid token is warned of and the last token kept.
+  std::string token_file;
 };
 
 // A channel to `address` ("host:port") with `security` and the service's message limits. Throws

@@ -7,11 +7,13 @@
 
 #include <CLI/CLI.hpp>
 #include <iostream>
+#include <map>
 #include <memory>
 
 #include "common/error.h"
 #include "server/audit_log.h"
 #include "server/commands.h"
+#include "server/job_coordinator.h"
 #include "server/token_store.h"
 
 namespace endorecon::server {
@@ -23,7 +25,13 @@ struct TokenFlags {
   std::string role;
   std::string tenant;
   std::string name;
+  std::int64_t expires_in_s = 0;
+  CLI::Option* expires_in = nullptr;  // not given: the token never expires
 };
+
+std::string When(std::int64_t unix_ms) {
+  return fmt::format("{:%Y-%m-%d %H:%M:%S}", fmt::gmtime(static_cast<std::time_t>(unix_ms / 1000)));
+}
 
 std::string LocalUser() {
   const passwd* user = getpwuid(geteuid());
@@ -49,27 +57,31 @@ int Create(const TokenFlags& flags) {
         "--tenant applies to client tokens: a worker token serves every tenant's jobs and an admin "
         "token sees them all");
   }
-  const auto token = OpenStore(flags)->Create(flags.name, *role, flags.tenant);
-  Audit(flags, "TokenCreate", {flags.name, *role, flags.tenant, 0, 0});
+  const bool expires_given = flags.expires_in != nullptr && flags.expires_in->count() > 0;
+  if (expires_given && (flags.expires_in_s <= 0 || flags.expires_in_s > 100LL * 366 * 86400))
+    FailInvalid("--expires-in must be positive and at most 100 years, as 90d, 12h or 30m");
+  const std::int64_t expires = expires_given ? NowUnixMs() + flags.expires_in_s * 1000 : 0;
+  const auto token = OpenStore(flags)->Create(flags.name, *role, flags.tenant, expires);
+  Audit(flags, "TokenCreate", {flags.name, *role, flags.tenant, 0, 0, expires});
   std::cout << fmt::format(
-      "created {} token '{}'{}; it is shown only now, keep it in a file only its user can "
+      "created {} token '{}'{}{}; it is shown only now, keep it in a file only its user can "
       "read (chmod 600):\n{}\n",
       RoleName(*role), flags.name, flags.tenant.empty() ? "" : fmt::format(" for tenant '{}'", flags.tenant),
-      token);
+      expires ? fmt::format(" valid until {} UTC", When(expires)) : "", token);
   return 0;
 }
 
 int List(const TokenFlags& flags) {
   const auto records = OpenStore(flags)->List();
-  std::cout << fmt::format("{:<24} {:<7} {:<16} {:<20} {}\n", "NAME", "ROLE", "TENANT", "CREATED (UTC)",
-                           "STATE");
+  const std::int64_t now = NowUnixMs();
+  std::cout << fmt::format("{:<24} {:<7} {:<16} {:<20} {:<20} {}\n", "NAME", "ROLE", "TENANT",
+                           "CREATED (UTC)", "EXPIRES (UTC)", "STATE");
   for (const auto& record : records) {
-    const auto when = [](std::int64_t ms) {
-      return fmt::format("{:%Y-%m-%d %H:%M:%S}", fmt::gmtime(static_cast<std::time_t>(ms / 1000)));
-    };
-    std::cout << fmt::format("{:<24} {:<7} {:<16} {:<20} {}\n", record.name, RoleName(record.role),
-                             record.tenant.empty() ? "-" : record.tenant, when(record.created_unix_ms),
-                             record.revoked_unix_ms ? "revoked " + when(record.revoked_unix_ms) : "active");
+    const auto state = record.StateAt(now);
+    std::cout << fmt::format("{:<24} {:<7} {:<16} {:<20} {:<20} {}{}\n", record.name, RoleName(record.role),
+                             record.tenant.empty() ? "-" : record.tenant, When(record.created_unix_ms),
+                             record.expires_unix_ms ? When(record.expires_unix_ms) : "never", state,
+                             state == "revoked" ? " " + When(record.revoked_unix_ms) : "");
   }
   return 0;
 }
@@ -99,7 +111,16 @@ Command AddTokenCommand(CLI::App& app) {
       ->required();
   create->add_option("--tenant", flags->tenant, "the tenant whose jobs a client token works on");
   create->add_option("--name", flags->name, "a label for the token (audit log, list, revoke)")->required();
-  auto* list = token->add_subcommand("list", "list tokens: name, role, tenant, created, active or revoked");
+  flags->expires_in =
+      create
+          ->add_option(
+              "--expires-in", flags->expires_in_s,
+              "refuse the token after this long: a number with a unit, as 90d, 12h or 30m (default: never)")
+          ->transform(CLI::AsNumberWithUnit(
+              std::map<std::string, std::int64_t>{{"s", 1}, {"m", 60}, {"h", 3600}, {"d", 86400}},
+              CLI::AsNumberWithUnit::UNIT_REQUIRED, "DURATION"));
+  auto* list = token->add_subcommand(
+      "list", "list tokens: name, role, tenant, created, expiry, and whether active, revoked or expired");
   AddCommonFlags(*list, *flags);
   auto* revoke = token->add_subcommand("revoke", "revoke the active token with this label");
   AddCommonFlags(*revoke, *flags);

@@ -1,5 +1,7 @@
 #include "server/token_store.h"
 
+#include <fmt/chrono.h>
+#include <fmt/format.h>
 #include <openssl/crypto.h>
 
 #include "common/error.h"
@@ -35,7 +37,32 @@ void ValidateName(const std::string& name) {
   }
 }
 
+std::string UtcText(std::int64_t unix_ms) {
+  return fmt::format("{:%Y-%m-%d %H:%M:%S} UTC", fmt::gmtime(static_cast<std::time_t>(unix_ms / 1000)));
+}
+
+// Stores made before tokens could expire lack the column; it is added once, in a write transaction
+// so that the server and `token ...` opening the same old store at once add it only once.
+void AddExpiryColumn(sqlite3* db) {
+  Exec(db, "BEGIN IMMEDIATE", kStore);
+  try {
+    Statement has(db, "SELECT COUNT(*) FROM pragma_table_info('tokens') WHERE name = 'expires'", kStore);
+    has.Step();
+    if (has.Int(0) == 0) Exec(db, "ALTER TABLE tokens ADD COLUMN expires INTEGER NOT NULL DEFAULT 0", kStore);
+    Exec(db, "COMMIT", kStore);
+  } catch (...) {
+    sqlite3_exec(db, "ROLLBACK", nullptr, nullptr, nullptr);
+    throw;
+  }
+}
+
 }  // namespace
+
+std::string_view TokenRecord::StateAt(std::int64_t now_unix_ms) const {
+  const bool expired = expires_unix_ms != 0 && expires_unix_ms <= now_unix_ms;
+  if (revoked_unix_ms != 0 && !(expired && revoked_unix_ms >= expires_unix_ms)) return "revoked";
+  return expired ? "expired" : "active";
+}
 
 void ValidateTenant(const std::string& tenant) {
   if (tenant.empty() || tenant.size() > 63 ||
@@ -72,6 +99,7 @@ TokenStore::TokenStore(const std::filesystem::path& db_file) {
          kStore);
     Exec(db_, "CREATE UNIQUE INDEX IF NOT EXISTS tokens_active_name ON tokens(name) WHERE revoked = 0",
          kStore);
+    AddExpiryColumn(db_);
   } catch (...) {
     sqlite3_close(db_);
     throw;
@@ -80,8 +108,12 @@ TokenStore::TokenStore(const std::filesystem::path& db_file) {
 
 TokenStore::~TokenStore() { sqlite3_close(db_); }
 
-std::string TokenStore::Create(const std::string& name, Role role, const std::string& tenant) {
+std::string TokenStore::Create(const std::string& name, Role role, const std::string& tenant,
+                               std::int64_t expires_unix_ms) {
   ValidateName(name);
+  const std::int64_t now = NowUnixMs();
+  if (expires_unix_ms != 0 && expires_unix_ms <= now)
+    FailInvalid("token '" + name + "': its expiry " + UtcText(expires_unix_ms) + " is not in the future");
   if (!tenant.empty() || role == Role::kClient) {
     if (tenant.empty()) FailInvalid("a client token needs --tenant: its jobs belong to that tenant");
     ValidateTenant(tenant);
@@ -91,34 +123,45 @@ std::string TokenStore::Create(const std::string& name, Role role, const std::st
   const std::string salt = RandomId(16);
   std::lock_guard lock(mutex_);
   {
+    // An expired token gives up its name: it is marked revoked at the moment it expired.
+    Statement retire(db_,
+                     "UPDATE tokens SET revoked = expires WHERE name = ? AND revoked = 0 AND expires != 0 "
+                     "AND expires <= ?",
+                     kStore);
+    retire.BindText(1, name);
+    retire.Bind(2, now);
+    retire.Step();
     Statement active(db_, "SELECT COUNT(*) FROM tokens WHERE name = ? AND revoked = 0", kStore);
     active.BindText(1, name);
     active.Step();
     if (active.Int(0) > 0)
       FailInvalid("an active token is named '" + name + "'; revoke it first or pick another name");
   }
-  Statement insert(
-      db_, "INSERT INTO tokens(id, name, role, tenant, salt, hash, created) VALUES(?, ?, ?, ?, ?, ?, ?)",
-      kStore);
+  Statement insert(db_,
+                   "INSERT INTO tokens(id, name, role, tenant, salt, hash, created, expires) "
+                   "VALUES(?, ?, ?, ?, ?, ?, ?, ?)",
+                   kStore);
   insert.BindText(1, id);
   insert.BindText(2, name);
   insert.BindText(3, RoleName(role));
   insert.BindText(4, tenant);
   insert.BindText(5, salt);
   insert.BindText(6, HashOf(salt, secret));
-  insert.Bind(7, NowUnixMs());
+  insert.Bind(7, now);
+  insert.Bind(8, expires_unix_ms);
   insert.Step();
   return std::string(kPrefix) + id + "." + secret;
 }
 
 std::vector<TokenRecord> TokenStore::List() {
   std::lock_guard lock(mutex_);
-  Statement select(db_, "SELECT name, role, tenant, created, revoked FROM tokens ORDER BY created, rowid",
+  Statement select(db_,
+                   "SELECT name, role, tenant, created, revoked, expires FROM tokens ORDER BY created, rowid",
                    kStore);
   std::vector<TokenRecord> records;
   while (select.Step()) {
     records.push_back({select.Text(0), ParseRole(select.Text(1)).value_or(Role::kClient), select.Text(2),
-                       select.Int(3), select.Int(4)});
+                       select.Int(3), select.Int(4), select.Int(5)});
   }
   return records;
 }
@@ -127,11 +170,13 @@ TokenRecord TokenStore::Revoke(const std::string& name) {
   std::lock_guard lock(mutex_);
   TokenRecord record;
   {
-    Statement select(db_, "SELECT role, tenant, created FROM tokens WHERE name = ? AND revoked = 0", kStore);
+    Statement select(db_, "SELECT role, tenant, created, expires FROM tokens WHERE name = ? AND revoked = 0",
+                     kStore);
     select.BindText(1, name);
     if (!select.Step()) Fail(ErrorCode::kNotFound, "no active token named '" + name + "'");
-    record = {name, ParseRole(select.Text(0)).value_or(Role::kClient), select.Text(1), select.Int(2),
-              NowUnixMs()};
+    record = {name,           ParseRole(select.Text(0)).value_or(Role::kClient),
+              select.Text(1), select.Int(2),
+              NowUnixMs(),    select.Int(3)};
   }
   Statement update(db_, "UPDATE tokens SET revoked = ? WHERE name = ? AND revoked = 0", kStore);
   update.Bind(1, record.revoked_unix_ms);
@@ -151,17 +196,25 @@ TokenRecord TokenStore::Verify(std::string_view token) {
   }
   const std::string id(token.substr(kPrefix.size(), dot - kPrefix.size()));
   std::lock_guard lock(mutex_);
-  Statement select(db_, "SELECT name, role, tenant, salt, hash, created, revoked FROM tokens WHERE id = ?",
-                   kStore);
+  Statement select(
+      db_, "SELECT name, role, tenant, salt, hash, created, revoked, expires FROM tokens WHERE id = ?",
+      kStore);
   select.BindText(1, id);
   if (!select.Step()) Fail(ErrorCode::kUnauthenticated, "unknown token");
   const std::string expected = select.Text(4);
   const std::string actual = HashOf(select.Text(3), token.substr(dot + 1));
   if (actual.size() != expected.size() || CRYPTO_memcmp(actual.data(), expected.data(), actual.size()) != 0)
     Fail(ErrorCode::kUnauthenticated, "unknown token");
-  if (select.Int(6) != 0) Fail(ErrorCode::kUnauthenticated, "the token '" + select.Text(0) + "' was revoked");
-  return {select.Text(0), ParseRole(select.Text(1)).value_or(Role::kClient), select.Text(2), select.Int(5),
-          0};
+  const TokenRecord record{select.Text(0), ParseRole(select.Text(1)).value_or(Role::kClient),
+                           select.Text(2), select.Int(5),
+                           select.Int(6),  select.Int(7)};
+  const auto state = record.StateAt(NowUnixMs());
+  if (state == "revoked") Fail(ErrorCode::kUnauthenticated, "the token '" + record.name + "' was revoked");
+  if (state == "expired") {
+    Fail(ErrorCode::kUnauthenticated, "the token '" + record.name + "' expired at " +
+                                          UtcText(record.expires_unix_ms) + "; ask its issuer for a new one");
+  }
+  return record;
 }
 
 }  // namespace endorecon::server

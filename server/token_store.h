@@ -25,7 +25,11 @@ struct TokenRecord {
   Role role = Role::kClient;
   std::string tenant;
   std::int64_t created_unix_ms = 0;
-  std::int64_t revoked_unix_ms = 0;  // 0 while active
+  std::int64_t revoked_unix_ms = 0;  // 0 unless revoked
+  std::int64_t expires_unix_ms = 0;  // 0: never expires
+
+  // "active", "revoked" or "expired" at `now_unix_ms`: a token revoked before its expiry is revoked.
+  std::string_view StateAt(std::int64_t now_unix_ms) const;
 };
 
 class TokenStore {
@@ -39,16 +43,18 @@ class TokenStore {
   TokenStore(const TokenStore&) = delete;
   TokenStore& operator=(const TokenStore&) = delete;
 
-  // Creates a token and returns it (the only copy). Throws Error(kInvalidArgument) for a bad name or
-  // tenant (saying which characters are allowed), a client token without a tenant, or a name an
-  // active token already has.
-  std::string Create(const std::string& name, Role role, const std::string& tenant);
+  // Creates a token and returns it (the only copy); it is refused from `expires_unix_ms` on (0: never).
+  // Throws Error(kInvalidArgument) for a bad name or tenant (saying which characters are allowed), a
+  // client token without a tenant, an expiry not in the future, or a name an active token already has.
+  // The name of an expired token is free: that token is marked revoked at its expiry.
+  std::string Create(const std::string& name, Role role, const std::string& tenant,
+                     std::int64_t expires_unix_ms = 0);
   // Every token ever created (active and revoked), oldest first. Never a secret or a hash.
   std::vector<TokenRecord> List();
   // Revokes the active token named `name`; returns its record. Throws Error(kNotFound).
   TokenRecord Revoke(const std::string& name);
   // The active token's record. Throws Error(kUnauthenticated) saying whether the token is malformed,
-  // unknown or revoked (never echoing it).
+  // unknown, revoked or expired (never echoing it).
   TokenRecord Verify(std::string_view token);
 
  private:

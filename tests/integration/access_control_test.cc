@@ -2,7 +2,11 @@
 // with its status, its CLI exit code and its audit line, and nothing accepted lost on the way.
 #include <gtest/gtest.h>
 
+#include <chrono>
+#include <thread>
+
 #include "tests/integration/audit_reader.h"
+#include "tests/integration/sanitizer_build.h"
 #include "tests/integration/service_harness.h"
 
 namespace endorecon::testing {
@@ -97,6 +101,61 @@ TEST_F(AccessControlTest, RevokingATokenTakesEffectWithoutARestart) {
   const auto audit = Audit();
   EXPECT_EQ(AuditFind(audit, "TokenRevoke", "OK").size(), 1u);
   EXPECT_EQ(AuditFind(audit, "Get", "UNAUTHENTICATED", "-", id).size(), 1u);
+}
+
+// Tokens that expire (`token create --expires-in`): refused from their expiry on, by the running
+// server, saying so; what the token submitted is kept.
+TEST_F(AccessControlTest, AnExpiredTokenIsRefusedAndSaysWhen) {
+  const auto expiring =
+      Capture(BuiltBinary("server/endorecon-server") + " token create --data-dir " +
+              cluster_.data_dir().string() + " --role client --tenant radiology --name carol --expires-in " +
+              std::to_string(4 * kSlowdown) + "s 2>&1");
+  ASSERT_NE(expiring.find("valid until"), std::string::npos) << expiring;
+  const auto token = expiring.substr(expiring.rfind("endorecon."), 16 + 64 + 11);
+  const ClientCredentials carol{"", WriteTokenFile(cluster_.path("carol.token"), token).string()};
+  const auto started = std::chrono::steady_clock::now();
+  const auto id = SubmitAs(carol, "before-expiry");
+  std::this_thread::sleep_until(started + std::chrono::milliseconds(4'500 * kSlowdown));
+  const auto refused = Cli(carol, {"status", id});
+  EXPECT_EQ(refused.exit_code, 10) << refused.err;
+  EXPECT_NE(refused.err.find("'carol' expired at"), std::string::npos) << refused.err;
+  EXPECT_EQ(Cli(alice_, {"status", id}).exit_code, 0);  // the job is its tenant's, and kept
+  const auto listed = Capture(BuiltBinary("server/endorecon-server") + " token list --data-dir " +
+                              cluster_.data_dir().string());
+  EXPECT_NE(listed.find("expired"), std::string::npos) << listed;
+  const auto no_unit = Capture(BuiltBinary("server/endorecon-server") + " token create --data-dir " +
+                               cluster_.data_dir().string() + " --role admin --name d --expires-in 30 2>&1");
+  EXPECT_NE(no_unit.find("Missing mandatory unit"), std::string::npos) << no_unit;
+}
+
+// An operator replaces a worker's token (revoked or expired) by writing the new one into its
+// --token-file: the running worker takes it, with no restart, and leases again.
+TEST_F(AccessControlTest, AWorkerTakesARotatedTokenWithoutARestart) {
+  const auto file = WriteTokenFile(cluster_.path("rotating.token"),
+                                   CreateToken(cluster_.data_dir(), "worker", "", "node-old"));
+  auto& worker = cluster_.StartWorker("w-rotating", {"--token-file", file.string()});
+  ASSERT_TRUE(WaitUntil([&] { return Cli(admin_, {"workers"}).out.find("w-rotating") != std::string::npos; }))
+      << worker.Log();
+  TempDir scratch("rotate");
+  ASSERT_EQ(Process({BuiltBinary("server/endorecon-server"), "token", "revoke", "--data-dir",
+                     cluster_.data_dir().string(), "node-old"},
+                    scratch / "out")
+                .Wait(),
+            0);
+  // A lease call already waiting when the token was revoked was let in at its start; the next is refused.
+  ASSERT_TRUE(WaitUntil([&] { return worker.Log().find("'node-old' was revoked") != std::string::npos; }))
+      << worker.Log();
+  const auto submitted =
+      Cli(alice_, {"--json", "submit", cluster_.path("clip").string(), "--iterations", "30"});
+  ASSERT_EQ(submitted.exit_code, 0) << submitted.err;
+  const auto id = submitted.out.substr(submitted.out.find("\"id\":\"") + 6, 12);
+  std::this_thread::sleep_for(std::chrono::seconds(2));
+  EXPECT_EQ(cluster_.Job(id).state(), v1::QUEUED);
+
+  WriteTokenFile(file, CreateToken(cluster_.data_dir(), "worker", "", "node-new"));
+  const auto job = cluster_.WaitForState(id, v1::SUCCEEDED);
+  EXPECT_EQ(job.worker_id(), "w-rotating");
+  EXPECT_NE(worker.Log().find("changed: calls carry its new token"), std::string::npos) << worker.Log();
 }
 
 TEST_F(AccessControlTest, RolesKeepToTheirApi) {

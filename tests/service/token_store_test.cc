@@ -1,9 +1,14 @@
 #include "server/token_store.h"
 
 #include <gtest/gtest.h>
+#include <sqlite3.h>
 #include <sys/stat.h>
 
+#include <chrono>
+#include <thread>
+
 #include "common/error.h"
+#include "server/job_coordinator.h"
 #include "tests/unit/temp_dir.h"
 
 namespace endorecon::server {
@@ -87,6 +92,63 @@ TEST(TokenStoreTest, RefusesBadNamesTenantsAndDuplicates) {
   EXPECT_EQ(CodeOf([&] { store.Create("bob smith", Role::kClient, "x"); }), ErrorCode::kInvalidArgument);
   EXPECT_EQ(CodeOf([&] { store.Create("", Role::kAdmin, ""); }), ErrorCode::kInvalidArgument);
   EXPECT_EQ(store.List().size(), 1u);
+}
+
+TEST(TokenStoreTest, AnExpiredTokenIsRefusedAndGivesUpItsName) {
+  testing::TempDir dir("tokens");
+  TokenStore store(TokenStore::PathIn(dir.path()));
+  EXPECT_EQ(CodeOf([&] { store.Create("past", Role::kClient, "x", NowUnixMs() - 1000); }),
+            ErrorCode::kInvalidArgument);
+  const auto expires = NowUnixMs() + 400;
+  const auto token = store.Create("temp", Role::kClient, "radiology", expires);
+  const auto lasting = store.Create("lasting", Role::kAdmin, "", NowUnixMs() + 3'600'000);
+  EXPECT_EQ(store.Verify(token).expires_unix_ms, expires);
+  EXPECT_EQ(store.Verify(token).StateAt(NowUnixMs()), "active");
+  std::this_thread::sleep_until(
+      std::chrono::system_clock::time_point(std::chrono::milliseconds(expires + 50)));
+  try {
+    store.Verify(token);
+    ADD_FAILURE() << "an expired token verified";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kUnauthenticated);
+    EXPECT_NE(std::string(e.what()).find("'temp' expired at"), std::string::npos) << e.what();
+    EXPECT_EQ(std::string(e.what()).find(token), std::string::npos);
+  }
+  EXPECT_EQ(store.Verify(lasting).name, "lasting");
+  // The expired token's name is free again; the token itself stays expired, not revoked.
+  const auto renewed = store.Create("temp", Role::kClient, "radiology");
+  EXPECT_EQ(store.Verify(renewed).expires_unix_ms, 0);
+  EXPECT_EQ(CodeOf([&] { store.Verify(token); }), ErrorCode::kUnauthenticated);
+  const auto listed = store.List();
+  ASSERT_EQ(listed.size(), 3u);
+  EXPECT_EQ(listed[0].StateAt(NowUnixMs()), "expired");
+  EXPECT_EQ(listed[0].revoked_unix_ms, expires);
+  EXPECT_EQ(listed[1].StateAt(NowUnixMs()), "active");
+  EXPECT_EQ(listed[2].StateAt(NowUnixMs()), "active");
+  // Revoked before it expired: revoked.
+  store.Revoke("lasting");
+  EXPECT_EQ(store.List()[1].StateAt(NowUnixMs() + 7'200'000), "revoked");
+}
+
+// A store written before tokens could expire gains the column, and its tokens never expire.
+TEST(TokenStoreTest, AStoreFromBeforeExpiryKeepsItsTokens) {
+  testing::TempDir dir("tokens");
+  const auto path = TokenStore::PathIn(dir.path());
+  std::string token;
+  {
+    TokenStore store(path);
+    token = store.Create("old", Role::kWorker, "");
+  }
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
+  ASSERT_EQ(sqlite3_exec(db, "ALTER TABLE tokens DROP COLUMN expires", nullptr, nullptr, nullptr), SQLITE_OK)
+      << sqlite3_errmsg(db);
+  sqlite3_close(db);
+  TokenStore store(path);
+  EXPECT_EQ(store.Verify(token).expires_unix_ms, 0);
+  TokenStore second(path);  // opening it again adds nothing twice
+  EXPECT_EQ(second.List().size(), 1u);
+  EXPECT_NE(store.Create("new", Role::kAdmin, "", NowUnixMs() + 60'000), "");
 }
 
 }  // namespace

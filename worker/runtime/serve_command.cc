@@ -48,7 +48,7 @@ ChannelSecurity SecurityOf(const ServeFlags& flags) {
   security.ca_file = flags.ca_file;
   security.cert_file = flags.tls_cert;
   security.key_file = flags.tls_key;
-  if (!flags.token_file.empty()) security.token = ReadTokenFile(flags.token_file, "--token-file");
+  security.token_file = flags.token_file;  // read again when rotated (transport_security.h)
   return security;
 }
 
