@@ -40,9 +40,14 @@ grpc::Status WorkerServiceImpl::Lease(grpc::ServerContext* context, const v1::Le
     // Answer a little before the caller's deadline, so an empty poll is not an error.
     const auto caller_left = std::chrono::duration_cast<std::chrono::milliseconds>(
         context->deadline() - std::chrono::system_clock::now() - std::chrono::milliseconds(500));
-    const auto deadline = Clock::now() + std::max(std::chrono::milliseconds(0), std::min(wait, caller_left));
+    // A worker this server does not know (it restarted since the worker registered) is told at once,
+    // not after a long poll, so its devices are listed again within a second of its first call.
+    const bool unknown = !workers_.Registered(request->worker_id());
+    const auto deadline =
+        Clock::now() + (unknown ? std::chrono::milliseconds(0)
+                                : std::max(std::chrono::milliseconds(0), std::min(wait, caller_left)));
     auto granted = coordinator_.Lease(request->worker_id(), deadline);
-    response->set_register_again(!workers_.Registered(request->worker_id()));
+    response->set_register_again(unknown);
     if (!granted) return grpc::Status::OK;
     call.wrote = true;
     call.job_id = granted->job.id();

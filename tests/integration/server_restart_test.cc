@@ -5,6 +5,7 @@
 #include <signal.h>
 
 #include <random>
+#include <thread>
 
 #include "common/sha256.h"
 #include "tests/integration/service_harness.h"
@@ -104,6 +105,31 @@ TEST(ServerRestartTest, KillDuringAJobLosesNothing) {
     return false;
   })) << cluster.ServerLog()
       << worker.Log();
+}
+
+// An idle worker, long-polling as deployed (10 s), is back on a restarted server within seconds:
+// it took 17-20 s (retries 5 s apart, then a whole long poll before the server said "register
+// again"; found 2026-12-05).
+TEST(ServerRestartTest, AnIdleWorkerIsListedAgainSoonAfterARestart) {
+  Cluster cluster;
+  auto& worker = cluster.StartWorker("w1", {"--lease-wait", "10"});
+  const auto listed = [&] {
+    grpc::ClientContext context;
+    v1::ListWorkersResponse workers;
+    if (!cluster.stub().ListWorkers(&context, {}, &workers).ok()) return false;
+    for (const auto& one : workers.workers()) {
+      if (one.id() == "w1" && one.device_info_size() > 0) return true;
+    }
+    return false;
+  };
+  ASSERT_TRUE(WaitUntil(listed)) << worker.Log();
+  std::this_thread::sleep_for(std::chrono::seconds(1));  // the worker's long poll is under way
+  cluster.KillServer(SIGKILL);
+  std::this_thread::sleep_for(std::chrono::seconds(3));  // its retries meet a closed port
+  cluster.StartServer();
+  // Retries 2 s apart at most, and an answer at once to a worker the server does not know.
+  EXPECT_TRUE(WaitUntil(listed, std::chrono::seconds(8))) << cluster.ServerLog() << worker.Log();
+  EXPECT_NE(worker.Log().find("the server answers again"), std::string::npos) << worker.Log();
 }
 
 }  // namespace

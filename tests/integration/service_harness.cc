@@ -255,10 +255,10 @@ Process& Cluster::StartWorker(const std::string& id, std::vector<std::string> fl
                                 std::to_string(metrics_port),
                                 "--work-dir",
                                 (dir_ / ("work-" + id)).string(),
-                                "--lease-wait",
-                                "2",
                                 "--threads",
                                 "1"};
+  if (std::find(flags.begin(), flags.end(), "--lease-wait") == flags.end())
+    argv.insert(argv.end(), {"--lease-wait", "2"});
   argv.insert(argv.end(), flags.begin(), flags.end());
   workers_.emplace_back(id, std::make_unique<Process>(argv, dir_ / ("worker-" + id + ".log")));
   worker_metrics_ports_.emplace_back(id, metrics_port);

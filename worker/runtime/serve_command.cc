@@ -8,6 +8,7 @@
 #include <CLI/CLI.hpp>
 #include <atomic>
 #include <memory>
+#include <optional>
 #include <string_view>
 #include <thread>
 
@@ -66,7 +67,11 @@ std::string Hostname() {
 void LeaseLoop(WorkerClient& client, const Device& device, const RunnerSettings& settings,
                WorkerMetrics& metrics, const std::atomic<bool>& shutting_down,
                std::chrono::milliseconds wait) {
+  using Clock = std::chrono::steady_clock;
   auto backoff = std::chrono::milliseconds(500);
+  std::optional<Clock::time_point> failing_since;  // since when calls fail, while they do
+  Clock::time_point last_warning;
+  std::string last_error;
   bool waiting_for_space = false;
   auto disk_backoff = std::chrono::seconds(30);
   while (!shutting_down) {
@@ -86,6 +91,11 @@ void LeaseLoop(WorkerClient& client, const Device& device, const RunnerSettings&
     waiting_for_space = false;
     try {
       const auto lease = client.Lease(device.name, wait);
+      if (failing_since) {
+        spdlog::info("[{}] the server answers again ({} s after the first failure)", device.name,
+                     std::chrono::duration_cast<std::chrono::seconds>(Clock::now() - *failing_since).count());
+      }
+      failing_since.reset();
       backoff = std::chrono::milliseconds(500);
       if (lease && RunLeasedJob(client, *lease, device, settings, metrics, shutting_down)) {
         // The job needed more scratch than this worker has: leave it to others for a while
@@ -100,10 +110,25 @@ void LeaseLoop(WorkerClient& client, const Device& device, const RunnerSettings&
         disk_backoff = std::chrono::seconds(30);
       }
     } catch (const Error& e) {
-      spdlog::warn("[{}] {}: {}; retrying in {} ms", device.name, ErrorCodeName(e.code()), e.what(),
-                   backoff.count());
-      std::this_thread::sleep_for(backoff);
-      backoff = std::min(backoff * 2, std::chrono::milliseconds(5000));
+      // Retried at most 2 s apart (the channel's own reconnect backoff), so a restarted server has
+      // its workers back within a second; while it stays away, a warning every 30 s, not every retry.
+      const auto now = Clock::now();
+      if (!failing_since || now - last_warning >= std::chrono::seconds(30) || e.what() != last_error) {
+        spdlog::warn("[{}] {}: {}; retrying every 2 s{}", device.name, ErrorCodeName(e.code()), e.what(),
+                     failing_since ? " (still failing; warned every 30 s)" : "");
+        last_warning = now;
+        last_error = e.what();
+      }
+      if (!failing_since) failing_since = now;
+      // A server away is retried as soon as the connection is back (a short pause keeps a server
+      // that answers UNAVAILABLE while connected from being called in a loop); a refusal after the
+      // backoff.
+      if (e.code() == ErrorCode::kUnavailable && client.WaitUntilConnected(backoff)) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(200));
+      } else if (e.code() != ErrorCode::kUnavailable) {
+        std::this_thread::sleep_for(backoff);
+      }
+      backoff = std::min(backoff * 2, std::chrono::milliseconds(2000));
     }
   }
 }
@@ -176,7 +201,12 @@ int Serve(const ServeFlags& flags) {
           : handshake ? " (the server closed the connection in the TLS handshake: does it require a "
                         "client certificate, --tls-cert and --tls-key?)"
                       : "");
-      std::this_thread::sleep_for(std::chrono::seconds(1));
+      // As in LeaseLoop: a server not up yet is called again as soon as it is.
+      if (e.code() == ErrorCode::kUnavailable && client.WaitUntilConnected(std::chrono::seconds(1))) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(200));
+      } else if (e.code() != ErrorCode::kUnavailable) {
+        std::this_thread::sleep_for(std::chrono::seconds(1));
+      }
     }
   }
   spdlog::info("worker {} serving {} with {} device(s) [{}], metrics {}", worker_id, flags.server,

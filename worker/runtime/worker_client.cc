@@ -11,9 +11,14 @@ namespace endorecon::worker {
 
 WorkerClient::WorkerClient(const std::string& server, const ChannelSecurity& security, std::string worker_id,
                            std::chrono::milliseconds timeout)
-    : stub_(v1::WorkerService::NewStub(OpenChannel(server, security))),
+    : channel_(OpenChannel(server, security)),
+      stub_(v1::WorkerService::NewStub(channel_)),
       worker_id_(std::move(worker_id)),
       timeout_(timeout) {}
+
+bool WorkerClient::WaitUntilConnected(std::chrono::milliseconds limit) {
+  return channel_->WaitForConnected(std::chrono::system_clock::now() + limit);
+}
 
 v1::RegisterResponse WorkerClient::Register(const std::string& hostname, const std::vector<Device>& devices) {
   v1::RegisterRequest request;

@@ -29,6 +29,11 @@ class WorkerClient {
   std::optional<v1::LeaseResponse> Lease(const std::string& device, std::chrono::milliseconds wait);
   // Ends every Lease call in flight (at shutdown).
   void CancelLeases();
+  // Waits up to `limit` for the connection to the server, trying to connect; true once connected.
+  // Calls that fail fast while the server is away leave nothing watching the connection attempts
+  // but gRPC's backup poller, every 5 s; waiting here watches them, so a restarted server is seen at
+  // once.
+  bool WaitUntilConnected(std::chrono::milliseconds limit);
   v1::Job Complete(const v1::CompleteRequest& request);
   v1::Job Fail(const v1::FailRequest& request);
   // Uploads the files of `manifest` from `dir` (only what the server lacks).
@@ -40,6 +45,7 @@ class WorkerClient {
       grpc::ClientContext* context);
 
  private:
+  std::shared_ptr<grpc::Channel> channel_;
   std::unique_ptr<v1::WorkerService::Stub> stub_;
   std::string worker_id_;
   std::chrono::milliseconds timeout_;
