@@ -58,37 +58,38 @@ std::string SummaryJson(const ReconstructSummary& summary) {
   return json.dump();
 }
 
-// Retries `call`, a second apart, while it fails UNAVAILABLE and `go_on()` holds; the warning of
-// each retry ends with `while_what`.
+// Retries `call` (a call through `client`), a second apart or as soon as the server is back, while it
+// fails UNAVAILABLE and `go_on()` holds; the warning of each retry ends with `while_what`.
 template <typename Call, typename GoOn>
-auto RetryUnavailable(Call&& call, GoOn&& go_on, const char* while_what) {
+auto RetryUnavailable(WorkerClient& client, Call&& call, GoOn&& go_on, const char* while_what) {
   while (true) {
     try {
       return call();
     } catch (const Error& e) {
       if (e.code() != ErrorCode::kUnavailable || !go_on()) throw;
       spdlog::warn("{}; retrying{}", e.what(), while_what);
-      std::this_thread::sleep_for(std::chrono::seconds(1));
+      client.PauseBeforeRetry(std::chrono::seconds(1));
     }
   }
 }
 
 // Retries `call` while the server is unreachable (a restart), for about `patience`.
 template <typename Call>
-auto WhileUnavailable(Call&& call, std::chrono::seconds patience = std::chrono::seconds(30)) {
+auto WhileUnavailable(WorkerClient& client, Call&& call,
+                      std::chrono::seconds patience = std::chrono::seconds(30)) {
   const auto give_up = std::chrono::steady_clock::now() + patience;
   return RetryUnavailable(
-      std::forward<Call>(call), [&] { return std::chrono::steady_clock::now() <= give_up; }, "");
+      client, std::forward<Call>(call), [&] { return std::chrono::steady_clock::now() <= give_up; }, "");
 }
 
 // Retries `call` while it fails UNAVAILABLE (a server restarting, or one whose upload slots are all
 // taken by clients' uploads until the call's deadline) as long as the lease is held: the server
 // answered the job's heartbeats within the last `patience` and asked for no stop.
 template <typename Call>
-auto WhileLeaseHeld(const ProgressReporter& reporter, Call&& call,
+auto WhileLeaseHeld(WorkerClient& client, const ProgressReporter& reporter, Call&& call,
                     std::chrono::seconds patience = std::chrono::seconds(30)) {
   return RetryUnavailable(
-      std::forward<Call>(call),
+      client, std::forward<Call>(call),
       [&] {
         return !reporter.stop_requested() &&
                std::chrono::steady_clock::now() - reporter.last_answer() < patience;
@@ -119,7 +120,7 @@ void Tell(WorkerClient& client, const std::string& lease_id, const std::string& 
   request.set_retry(retry);
   request.set_release(release);
   try {
-    const auto job = WhileUnavailable([&] { return client.Fail(request); });
+    const auto job = WhileUnavailable(client, [&] { return client.Fail(request); });
     spdlog::info("job {} handed back: {} -> {}", job.id(), reason, v1::JobState_Name(job.state()));
   } catch (const Error& e) {
     // Refused (the lease expired, or the job went to another worker) or not delivered: either way
@@ -230,7 +231,8 @@ bool RunLeasedJob(WorkerClient& client, const v1::LeaseResponse& lease, const De
       // A checkpoint only spares a job handed out again its training so far: one the server cannot
       // take now (unreachable, or its upload slots all taken) is skipped, and the job goes on.
       try {
-        reporter.SetCheckpoint(WhileLeaseHeld(reporter, [&] { return UploadCheckpoint(client, path); }));
+        reporter.SetCheckpoint(
+            WhileLeaseHeld(client, reporter, [&] { return UploadCheckpoint(client, path); }));
       } catch (const Error& e) {
         if (e.code() != ErrorCode::kUnavailable) throw;
         spdlog::warn("[{}] job {}: checkpoint not uploaded ({}); the job goes on", device.name, job.id(),
@@ -255,10 +257,10 @@ bool RunLeasedJob(WorkerClient& client, const v1::LeaseResponse& lease, const De
       v1::CompleteRequest complete;
       complete.set_lease_id(lease.lease_id());
       *complete.mutable_result() = ManifestOfDirectory(options.out_dir);
-      WhileLeaseHeld(reporter, [&] { client.PutFiles(options.out_dir, complete.result()); });
+      WhileLeaseHeld(client, reporter, [&] { client.PutFiles(options.out_dir, complete.result()); });
       stop_reporting();
       complete.set_summary_json(SummaryJson(summary));
-      WhileUnavailable([&] { return client.Complete(complete); });
+      WhileUnavailable(client, [&] { return client.Complete(complete); });
       spdlog::info("[{}] job {} done: {} iterations, {} result file(s)", device.name, job.id(),
                    summary.iterations, complete.result().files_size());
     }

@@ -103,7 +103,7 @@ void ProgressReporter::Loop() {
     }
     const bool sent = SendPending();
     if (stopping || stop_requested()) break;
-    if (!sent) std::this_thread::sleep_for(std::chrono::milliseconds(500));
+    if (!sent) client_.PauseBeforeRetry(std::chrono::milliseconds(500));
   }
   if (stream_) {
     stream_->WritesDone();

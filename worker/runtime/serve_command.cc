@@ -120,14 +120,7 @@ void LeaseLoop(WorkerClient& client, const Device& device, const RunnerSettings&
         last_error = e.what();
       }
       if (!failing_since) failing_since = now;
-      // A server away is retried as soon as the connection is back (a short pause keeps a server
-      // that answers UNAVAILABLE while connected from being called in a loop); a refusal after the
-      // backoff.
-      if (e.code() == ErrorCode::kUnavailable && client.WaitUntilConnected(backoff)) {
-        std::this_thread::sleep_for(std::chrono::milliseconds(200));
-      } else if (e.code() != ErrorCode::kUnavailable) {
-        std::this_thread::sleep_for(backoff);
-      }
+      client.PauseBeforeRetry(backoff);
       backoff = std::min(backoff * 2, std::chrono::milliseconds(2000));
     }
   }
@@ -201,12 +194,7 @@ int Serve(const ServeFlags& flags) {
           : handshake ? " (the server closed the connection in the TLS handshake: does it require a "
                         "client certificate, --tls-cert and --tls-key?)"
                       : "");
-      // As in LeaseLoop: a server not up yet is called again as soon as it is.
-      if (e.code() == ErrorCode::kUnavailable && client.WaitUntilConnected(std::chrono::seconds(1))) {
-        std::this_thread::sleep_for(std::chrono::milliseconds(200));
-      } else if (e.code() != ErrorCode::kUnavailable) {
-        std::this_thread::sleep_for(std::chrono::seconds(1));
-      }
+      client.PauseBeforeRetry(std::chrono::seconds(1));  // a server not up yet: as soon as it is
     }
   }
   spdlog::info("worker {} serving {} with {} device(s) [{}], metrics {}", worker_id, flags.server,

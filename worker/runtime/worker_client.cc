@@ -2,6 +2,8 @@
 
 #include <spdlog/spdlog.h>
 
+#include <thread>
+
 #include "common/error.h"
 #include "common/file_download.h"
 #include "common/file_upload.h"
@@ -16,8 +18,12 @@ WorkerClient::WorkerClient(const std::string& server, const ChannelSecurity& sec
       worker_id_(std::move(worker_id)),
       timeout_(timeout) {}
 
-bool WorkerClient::WaitUntilConnected(std::chrono::milliseconds limit) {
-  return channel_->WaitForConnected(std::chrono::system_clock::now() + limit);
+void WorkerClient::PauseBeforeRetry(std::chrono::milliseconds pause) {
+  if (channel_->GetState(false) == GRPC_CHANNEL_READY) {
+    std::this_thread::sleep_for(pause);
+  } else {
+    channel_->WaitForConnected(std::chrono::system_clock::now() + pause);
+  }
 }
 
 v1::RegisterResponse WorkerClient::Register(const std::string& hostname, const std::vector<Device>& devices) {

@@ -29,11 +29,12 @@ class WorkerClient {
   std::optional<v1::LeaseResponse> Lease(const std::string& device, std::chrono::milliseconds wait);
   // Ends every Lease call in flight (at shutdown).
   void CancelLeases();
-  // Waits up to `limit` for the connection to the server, trying to connect; true once connected.
+  // The wait before a failed call is tried again: `pause` while the connection to the server is up
+  // (the server answered; a refusal or a broken stream), else until it is back, `pause` at most.
   // Calls that fail fast while the server is away leave nothing watching the connection attempts
-  // but gRPC's backup poller, every 5 s; waiting here watches them, so a restarted server is seen at
-  // once.
-  bool WaitUntilConnected(std::chrono::milliseconds limit);
+  // but gRPC's backup poller, every 5 s; waiting here watches them, so a restarted server is called
+  // again within moments of its return.
+  void PauseBeforeRetry(std::chrono::milliseconds pause);
   v1::Job Complete(const v1::CompleteRequest& request);
   v1::Job Fail(const v1::FailRequest& request);
   // Uploads the files of `manifest` from `dir` (only what the server lacks).
