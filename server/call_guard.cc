@@ -97,11 +97,16 @@ bool CallGuard::Refresh() { return Tokens() != nullptr; }
 
 TokenStore* CallGuard::Tokens() {
   std::lock_guard lock(mutex_);
-  if (!tokens_ && std::filesystem::exists(token_store_path_)) {
+  if (enforcing_) return tokens_.get();
+  if (!tokens_ && std::filesystem::exists(token_store_path_))
     tokens_ = std::make_unique<TokenStore>(token_store_path_);
-    spdlog::info("token store {} found: every call needs a token from now on", token_store_path_.string());
+  // A store requires tokens once it holds one (revoked or not), never before: an empty one (made by
+  // a failed `token create` of an older version, say) would lock every caller out.
+  if (tokens_ && !tokens_->Empty()) {
+    enforcing_ = true;
+    spdlog::info("token store {} holds tokens: every call needs one from now on", token_store_path_.string());
   }
-  return tokens_.get();
+  return enforcing_ ? tokens_.get() : nullptr;
 }
 
 void CallGuard::Admit(const grpc::ServerContext& context, const Rpc& rpc, Call& call) {

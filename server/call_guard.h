@@ -98,6 +98,7 @@ class CallGuard {
   Metrics& metrics_;
   std::mutex mutex_;
   std::unique_ptr<TokenStore> tokens_;
+  bool enforcing_ = false;  // the store holds a token: from then on every call needs one
 };
 
 }  // namespace endorecon::server

@@ -3,6 +3,7 @@
 #include <fmt/chrono.h>
 #include <fmt/format.h>
 #include <pwd.h>
+#include <spdlog/spdlog.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
@@ -11,6 +12,7 @@
 #include <memory>
 
 #include "common/error.h"
+#include "common/private_folder.h"
 #include "server/audit_log.h"
 #include "server/commands.h"
 #include "server/job_coordinator.h"
@@ -38,9 +40,15 @@ std::string LocalUser() {
   return "local:" + std::string(user ? user->pw_name : std::to_string(geteuid()));
 }
 
-std::unique_ptr<TokenStore> OpenStore(const TokenFlags& flags) {
-  std::filesystem::create_directories(flags.data_dir);
-  return std::make_unique<TokenStore>(TokenStore::PathIn(flags.data_dir));
+// The store, created (in a data folder made private) only for `create`: reading or revoking never
+// makes one, since a running server requires tokens once its store holds one.
+std::unique_ptr<TokenStore> OpenStore(const TokenFlags& flags, bool create) {
+  const auto path = TokenStore::PathIn(flags.data_dir);
+  if (!create && !std::filesystem::exists(path)) return nullptr;
+  if (create && MakePrivateFolder(flags.data_dir)) {
+    spdlog::warn("{} is open to its group or others: make it its owner's alone (chmod 700)", flags.data_dir);
+  }
+  return std::make_unique<TokenStore>(path);
 }
 
 void Audit(const TokenFlags& flags, const std::string& method, const TokenRecord& record) {
@@ -60,8 +68,10 @@ int Create(const TokenFlags& flags) {
   const bool expires_given = flags.expires_in != nullptr && flags.expires_in->count() > 0;
   if (expires_given && (flags.expires_in_s <= 0 || flags.expires_in_s > 100LL * 366 * 86400))
     FailInvalid("--expires-in must be positive and at most 100 years, as 90d, 12h or 30m");
-  const std::int64_t expires = expires_given ? NowUnixMs() + flags.expires_in_s * 1000 : 0;
-  const auto token = OpenStore(flags)->Create(flags.name, *role, flags.tenant, expires);
+  const std::int64_t now = NowUnixMs();
+  const std::int64_t expires = expires_given ? now + flags.expires_in_s * 1000 : 0;
+  ValidateTokenRequest(flags.name, *role, flags.tenant, expires, now);  // before a store is made
+  const auto token = OpenStore(flags, true)->Create(flags.name, *role, flags.tenant, expires);
   Audit(flags, "TokenCreate", {flags.name, *role, flags.tenant, 0, 0, expires});
   std::cout << fmt::format(
       "created {} token '{}'{}{}; it is shown only now, keep it in a file only its user can "
@@ -72,7 +82,13 @@ int Create(const TokenFlags& flags) {
 }
 
 int List(const TokenFlags& flags) {
-  const auto records = OpenStore(flags)->List();
+  const auto store = OpenStore(flags, false);
+  if (!store) {
+    std::cout << "no token store in " << flags.data_dir
+              << ": no token was created, and a server on this folder requires none\n";
+    return 0;
+  }
+  const auto records = store->List();
   const std::int64_t now = NowUnixMs();
   std::cout << fmt::format("{:<24} {:<7} {:<16} {:<20} {:<20} {}\n", "NAME", "ROLE", "TENANT",
                            "CREATED (UTC)", "EXPIRES (UTC)", "STATE");
@@ -87,7 +103,11 @@ int List(const TokenFlags& flags) {
 }
 
 int Revoke(const TokenFlags& flags) {
-  const auto record = OpenStore(flags)->Revoke(flags.name);
+  const auto store = OpenStore(flags, false);
+  if (!store)
+    Fail(ErrorCode::kNotFound,
+         "no token store in " + flags.data_dir + ": no token named '" + flags.name + "'");
+  const auto record = store->Revoke(flags.name);
   Audit(flags, "TokenRevoke", record);
   std::cout << "revoked token '" << record.name << "'; calls with it are refused from now on\n";
   return 0;

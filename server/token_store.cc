@@ -108,16 +108,21 @@ TokenStore::TokenStore(const std::filesystem::path& db_file) {
 
 TokenStore::~TokenStore() { sqlite3_close(db_); }
 
-std::string TokenStore::Create(const std::string& name, Role role, const std::string& tenant,
-                               std::int64_t expires_unix_ms) {
+void ValidateTokenRequest(const std::string& name, Role role, const std::string& tenant,
+                          std::int64_t expires_unix_ms, std::int64_t now_unix_ms) {
   ValidateName(name);
-  const std::int64_t now = NowUnixMs();
-  if (expires_unix_ms != 0 && expires_unix_ms <= now)
+  if (expires_unix_ms != 0 && expires_unix_ms <= now_unix_ms)
     FailInvalid("token '" + name + "': its expiry " + UtcText(expires_unix_ms) + " is not in the future");
   if (!tenant.empty() || role == Role::kClient) {
     if (tenant.empty()) FailInvalid("a client token needs --tenant: its jobs belong to that tenant");
     ValidateTenant(tenant);
   }
+}
+
+std::string TokenStore::Create(const std::string& name, Role role, const std::string& tenant,
+                               std::int64_t expires_unix_ms) {
+  const std::int64_t now = NowUnixMs();
+  ValidateTokenRequest(name, role, tenant, expires_unix_ms, now);
   const std::string id = RandomId(kIdBytes);
   const std::string secret = RandomId(kSecretBytes);
   const std::string salt = RandomId(16);
@@ -166,6 +171,13 @@ std::vector<TokenRecord> TokenStore::List() {
   return records;
 }
 
+bool TokenStore::Empty() {
+  std::lock_guard lock(mutex_);
+  Statement any(db_, "SELECT EXISTS(SELECT 1 FROM tokens)", kStore);
+  any.Step();
+  return any.Int(0) == 0;
+}
+
 TokenRecord TokenStore::Revoke(const std::string& name) {
   std::lock_guard lock(mutex_);
   TokenRecord record;
@@ -174,6 +186,10 @@ TokenRecord TokenStore::Revoke(const std::string& name) {
                      kStore);
     select.BindText(1, name);
     if (!select.Step()) Fail(ErrorCode::kNotFound, "no active token named '" + name + "'");
+    if (const auto expires = select.Int(3); expires != 0 && expires <= NowUnixMs()) {
+      Fail(ErrorCode::kNotFound, "the token '" + name + "' expired at " + UtcText(expires) +
+                                     ": it is refused already, and its name is free for a new token");
+    }
     record = {name,           ParseRole(select.Text(0)).value_or(Role::kClient),
               select.Text(1), select.Int(2),
               NowUnixMs(),    select.Int(3)};

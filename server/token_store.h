@@ -51,6 +51,8 @@ class TokenStore {
                      std::int64_t expires_unix_ms = 0);
   // Every token ever created (active and revoked), oldest first. Never a secret or a hash.
   std::vector<TokenRecord> List();
+  // Whether no token was ever created in the store (a store left empty requires nothing).
+  bool Empty();
   // Revokes the active token named `name`; returns its record. Throws Error(kNotFound).
   TokenRecord Revoke(const std::string& name);
   // The active token's record. Throws Error(kUnauthenticated) saying whether the token is malformed,
@@ -61,6 +63,11 @@ class TokenStore {
   sqlite3* db_ = nullptr;
   std::mutex mutex_;
 };
+
+// What Create refuses before it touches the store: a bad name or tenant, a client token without a
+// tenant, an expiry not after `now_unix_ms`. Throws Error(kInvalidArgument) saying which.
+void ValidateTokenRequest(const std::string& name, Role role, const std::string& tenant,
+                          std::int64_t expires_unix_ms, std::int64_t now_unix_ms);
 
 // Throws Error(kInvalidArgument) unless `tenant` is 1-63 characters of a-z, 0-9, '.', '_', '-'
 // starting with a letter or digit (it appears in paths, logs and metrics).

@@ -362,5 +362,26 @@ TEST_F(AccessControlTest, DicomJobsKeepToTheirTenantAndOutOfTheLogs) {
   }
 }
 
+// `token list`, `token revoke` and a refused `token create` on the data folder of a server without
+// tokens made an empty store, and the server then refused every call, with no token to use (found
+// 2026-12-05).
+TEST(TokenCommandsTest, ReadingOrARefusedCreateLocksNobodyOut) {
+  Cluster cluster;
+  const auto server = BuiltBinary("server/endorecon-server");
+  const auto dir = cluster.data_dir().string();
+  const auto listed = Capture(server + " token list --data-dir " + dir + " 2>&1");
+  EXPECT_NE(listed.find("no token store"), std::string::npos) << listed;
+  const auto revoked = Capture(server + " token revoke --data-dir " + dir + " nobody 2>&1");
+  EXPECT_NE(revoked.find("no token store"), std::string::npos) << revoked;
+  const auto refused = Capture(server + " token create --data-dir " + dir + " --role client --name x 2>&1");
+  EXPECT_NE(refused.find("needs --tenant"), std::string::npos) << refused;
+  EXPECT_FALSE(std::filesystem::exists(cluster.data_dir() / "tokens.sqlite"));
+  const auto open = RunCli(cluster.address(), {"list"});
+  EXPECT_EQ(open.exit_code, 0) << open.err << cluster.ServerLog();
+  // The first token switches the server to requiring one.
+  Capture(server + " token create --data-dir " + dir + " --role admin --name first >/dev/null 2>&1");
+  EXPECT_TRUE(WaitUntil([&] { return RunCli(cluster.address(), {"list"}).exit_code == 10; }));
+}
+
 }  // namespace
 }  // namespace endorecon::testing

@@ -37,6 +37,7 @@ TEST(TokenStoreTest, CreatedTokensVerifyAndOnlyTheirHashIsStored) {
   EXPECT_EQ(info.st_mode & 0777, 0600u);
   // A second process (the running server) sees the token.
   TokenStore reader(path);
+  EXPECT_FALSE(reader.Empty());
   const auto record = reader.Verify(token);
   EXPECT_EQ(record.name, "alice");
   EXPECT_EQ(record.role, Role::kClient);
@@ -84,6 +85,7 @@ TEST(TokenStoreTest, RefusesMalformedUnknownForgedAndRevokedTokens) {
 TEST(TokenStoreTest, RefusesBadNamesTenantsAndDuplicates) {
   testing::TempDir dir("tokens");
   TokenStore store(TokenStore::PathIn(dir.path()));
+  EXPECT_TRUE(store.Empty());  // a server requires tokens only once its store holds one
   store.Create("alice", Role::kClient, "radiology");
   EXPECT_EQ(CodeOf([&] { store.Create("alice", Role::kClient, "radiology"); }), ErrorCode::kInvalidArgument);
   EXPECT_EQ(CodeOf([&] { store.Create("bob", Role::kClient, ""); }), ErrorCode::kInvalidArgument);
@@ -115,6 +117,8 @@ TEST(TokenStoreTest, AnExpiredTokenIsRefusedAndGivesUpItsName) {
     EXPECT_EQ(std::string(e.what()).find(token), std::string::npos);
   }
   EXPECT_EQ(store.Verify(lasting).name, "lasting");
+  // Revoking it changes nothing and says so.
+  EXPECT_EQ(CodeOf([&] { store.Revoke("temp"); }), ErrorCode::kNotFound);
   // The expired token's name is free again; the token itself stays expired, not revoked.
   const auto renewed = store.Create("temp", Role::kClient, "radiology");
   EXPECT_EQ(store.Verify(renewed).expires_unix_ms, 0);
