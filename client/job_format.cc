@@ -118,8 +118,9 @@ std::string DicomLines(const v1::Job& job) {
         state = fmt::format("sent {} of {}", send.sent(), send.total());
         break;
       default:
-        state = fmt::format("failed after {} attempt(s), {} of {} sent: {}", send.attempts(), send.sent(),
-                            send.total(), send.error());
+        state = send.attempts() == 0 ? send.error()  // never tried: the job ended without results
+                                     : fmt::format("failed after {} attempt(s), {} of {} sent: {}",
+                                                   send.attempts(), send.sent(), send.total(), send.error());
     }
     text += fmt::format("  send to {}: {}\n", send.destination(), state);
   }

@@ -104,6 +104,17 @@ void RequireBlobs(const BlobStore& blobs, const v1::Manifest& manifest, const st
   }
 }
 
+// A job that did not succeed has nothing to send: its sends end SEND_FAILED saying why, so the job
+// is settled (a watch ends, retention may expire it). They were left PENDING for good.
+void SettleSends(v1::Job& job) {
+  for (auto& send : *job.mutable_sends()) {
+    if (!SendWaiting(send)) continue;
+    send.set_state(v1::DicomSend::SEND_FAILED);
+    send.set_next_attempt_unix_ms(0);
+    send.set_error("not sent: the job ended " + v1::JobState_Name(job.state()) + " without results");
+  }
+}
+
 }  // namespace
 
 std::int64_t NowUnixMs() {
@@ -138,6 +149,17 @@ void JobCoordinator::Recover() {
     const auto page = parts_.store.List({v1::SUCCEEDED}, 500, before);
     for (const auto& job : page.jobs) {
       if (SendsWaiting(job)) sending.push_back(job.id());
+    }
+    if (page.next_before_seq == 0) break;
+    before = page.next_before_seq;
+  }
+  // Jobs that failed or were cancelled with sends still waiting, by a server of before SettleSends.
+  for (std::int64_t before = 0;;) {
+    auto page = parts_.store.List({v1::FAILED, v1::CANCELLED}, 500, before);
+    for (auto& job : page.jobs) {
+      if (!SendsWaiting(job)) continue;
+      SettleSends(job);
+      Save(job);
     }
     if (page.next_before_seq == 0) break;
     before = page.next_before_seq;
@@ -190,6 +212,7 @@ void JobCoordinator::Finish(v1::Job& job, v1::JobState state, const std::string&
   job.set_error(error);
   job.set_finished_unix_ms(NowUnixMs());
   job.clear_lease_id();
+  if (state != v1::SUCCEEDED) SettleSends(job);
   Save(job);
   const double run_seconds =
       job.started_unix_ms() > 0 ? static_cast<double>(job.finished_unix_ms() - job.started_unix_ms()) / 1000.0

@@ -362,6 +362,32 @@ TEST_F(AccessControlTest, DicomJobsKeepToTheirTenantAndOutOfTheLogs) {
   }
 }
 
+// A job that fails or is cancelled has nothing to send: its sends end SEND_FAILED, so `watch` and
+// `submit --wait` return and retention may expire it. They stayed PENDING for good (found 2026-12-05).
+TEST_F(AccessControlTest, AJobThatEndsWithoutResultsSettlesItsSends) {
+  const auto failing =
+      Cli(alice_, {"--json", "submit", "--pacs", "pacs1", "--study", "1.2.3.4", "--send-to", "pacs1"});
+  ASSERT_EQ(failing.exit_code, 0) << failing.err;
+  const std::string failed_id = failing.out.substr(failing.out.find("\"id\":\"") + 6, 12);
+  const auto failed = cluster_.WaitForState(failed_id, v1::FAILED, std::chrono::seconds(30));
+  ASSERT_EQ(failed.sends_size(), 1);
+  EXPECT_EQ(failed.sends(0).state(), v1::DicomSend::SEND_FAILED);
+  EXPECT_NE(failed.sends(0).error().find("the job ended FAILED"), std::string::npos)
+      << failed.sends(0).error();
+  EXPECT_EQ(Cli(alice_, {"watch", failed_id}).exit_code, 5);
+
+  const auto queued =
+      Cli(alice_, {"--json", "submit", cluster_.path("clip").string(), "--dicom", "--send-to", "pacs1"});
+  ASSERT_EQ(queued.exit_code, 0) << queued.err;
+  const std::string cancelled_id = queued.out.substr(queued.out.find("\"id\":\"") + 6, 12);
+  EXPECT_EQ(Cli(alice_, {"cancel", cancelled_id}).exit_code, 0);
+  const auto cancelled = cluster_.Job(cancelled_id);
+  ASSERT_EQ(cancelled.state(), v1::CANCELLED);
+  EXPECT_EQ(cancelled.sends(0).state(), v1::DicomSend::SEND_FAILED);
+  const auto watched = Cli(alice_, {"watch", cancelled_id});
+  EXPECT_EQ(watched.exit_code, 6) << watched.err;
+}
+
 // `token list`, `token revoke` and a refused `token create` on the data folder of a server without
 // tokens made an empty store, and the server then refused every call, with no token to use (found
 // 2026-12-05).
