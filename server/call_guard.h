@@ -85,9 +85,12 @@ class CallGuard {
   void RecordServerAction(const std::string& method, const std::string& job_id, const std::string& outcome,
                           const std::string& subject = "");
 
- private:
   // Fills call.caller, then throws Error(kUnauthenticated / kPermissionDenied) unless it may call `rpc`.
+  // Run admits every call at its start; a long stream calls it again now and then, so a token
+  // revoked or expired meanwhile ends the stream (its caller reopens it with its current token).
   void Admit(const grpc::ServerContext& context, const Rpc& rpc, Call& call);
+
+ private:
   TokenStore* Tokens();
   void Record(const grpc::ServerContext& context, const Rpc& rpc, const Call& call,
               const grpc::Status& status);

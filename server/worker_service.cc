@@ -69,9 +69,17 @@ grpc::Status WorkerServiceImpl::Lease(grpc::ServerContext* context, const v1::Le
 
 grpc::Status WorkerServiceImpl::Report(
     grpc::ServerContext* context, grpc::ServerReaderWriter<v1::ProgressReply, v1::ProgressUpdate>* stream) {
-  return guard_.Run(context, {"Report", Access::kWorker, kWrites, ""}, [&](Call& call) {
+  const Rpc rpc{"Report", Access::kWorker, kWrites, ""};
+  return guard_.Run(context, rpc, [&](Call& call) {
     v1::ProgressUpdate update;
+    auto admitted = std::chrono::steady_clock::now();
     while (stream->Read(&update)) {
+      // A stream lives up to an hour: the worker's token is checked again every 10 s, so one revoked
+      // or expired meanwhile stops renewing the lease (the worker reopens with its current token).
+      if (std::chrono::steady_clock::now() - admitted > std::chrono::seconds(10)) {
+        guard_.Admit(*context, rpc, call);
+        admitted = std::chrono::steady_clock::now();
+      }
       v1::ProgressReply reply;
       reply.set_action(coordinator_.Report(update, &call.job_id));
       if (!stream->Write(reply) || reply.action() != v1::ProgressReply::CONTINUE) break;

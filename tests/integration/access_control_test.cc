@@ -158,6 +158,33 @@ TEST_F(AccessControlTest, AWorkerTakesARotatedTokenWithoutARestart) {
   EXPECT_NE(worker.Log().find("changed: calls carry its new token"), std::string::npos) << worker.Log();
 }
 
+// A worker token revoked mid-job stops renewing the lease at the next check of its progress stream
+// (it renewed it for the stream's hour); a new token written into --token-file in time carries the
+// job to its end, results kept.
+TEST_F(AccessControlTest, ATokenRevokedMidJobIsRefusedOnTheOpenStreamAndARotatedOneFinishesTheJob) {
+  const auto file =
+      WriteTokenFile(cluster_.path("mid.token"), CreateToken(cluster_.data_dir(), "worker", "", "node-mid"));
+  auto& worker = cluster_.StartWorker("w-mid", {"--token-file", file.string()});
+  const auto submitted =
+      Cli(alice_, {"--json", "submit", cluster_.path("clip").string(), "--time-budget", "25"});
+  ASSERT_EQ(submitted.exit_code, 0) << submitted.err;
+  const auto id = submitted.out.substr(submitted.out.find("\"id\":\"") + 6, 12);
+  ASSERT_TRUE(WaitUntil([&] { return cluster_.Job(id).progress().iteration() > 0; })) << worker.Log();
+  TempDir scratch("mid");
+  ASSERT_EQ(Process({BuiltBinary("server/endorecon-server"), "token", "revoke", "--data-dir",
+                     cluster_.data_dir().string(), "node-mid"},
+                    scratch / "out")
+                .Wait(),
+            0);
+  ASSERT_TRUE(WaitUntil(
+      [&] { return worker.Log().find("broke (the token 'node-mid' was revoked)") != std::string::npos; },
+      std::chrono::seconds(20)))
+      << worker.Log();
+  WriteTokenFile(file, CreateToken(cluster_.data_dir(), "worker", "", "node-mid-2"));
+  const auto done = cluster_.WaitForState(id, v1::SUCCEEDED, std::chrono::seconds(120));
+  EXPECT_EQ(done.state(), v1::SUCCEEDED) << worker.Log() << cluster_.ServerLog();
+}
+
 TEST_F(AccessControlTest, RolesKeepToTheirApi) {
   const auto worker_on_jobs = Cli(worker_, {"list"});
   EXPECT_EQ(worker_on_jobs.exit_code, 11) << worker_on_jobs.err;

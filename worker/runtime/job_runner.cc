@@ -59,15 +59,19 @@ std::string SummaryJson(const ReconstructSummary& summary) {
 }
 
 // Retries `call` (a call through `client`), a second apart or as soon as the server is back, while it
-// fails UNAVAILABLE and `go_on()` holds; the warning of each retry ends with `while_what`.
+// fails UNAVAILABLE (or, with `token_may_change`, UNAUTHENTICATED: --token-file is read again when
+// it changes) and `go_on()` holds; the warning of each retry ends with `while_what`.
 template <typename Call, typename GoOn>
-auto RetryUnavailable(WorkerClient& client, Call&& call, GoOn&& go_on, const char* while_what) {
+auto RetryUnavailable(WorkerClient& client, Call&& call, GoOn&& go_on, const char* while_what,
+                      bool token_may_change = false) {
   while (true) {
     try {
       return call();
     } catch (const Error& e) {
-      if (e.code() != ErrorCode::kUnavailable || !go_on()) throw;
-      spdlog::warn("{}; retrying{}", e.what(), while_what);
+      const bool refused = e.code() == ErrorCode::kUnauthenticated && token_may_change;
+      if ((e.code() != ErrorCode::kUnavailable && !refused) || !go_on()) throw;
+      spdlog::warn("{}; retrying{}{}", e.what(), while_what,
+                   refused ? " (write a valid worker token into --token-file)" : "");
       client.PauseBeforeRetry(std::chrono::seconds(1));
     }
   }
@@ -83,8 +87,9 @@ auto WhileUnavailable(WorkerClient& client, Call&& call,
 }
 
 // Retries `call` while it fails UNAVAILABLE (a server restarting, or one whose upload slots are all
-// taken by clients' uploads until the call's deadline) as long as the lease is held: the server
-// answered the job's heartbeats within the last `patience` and asked for no stop.
+// taken by clients' uploads until the call's deadline) or UNAUTHENTICATED (the worker's token
+// expired or was revoked, and a new one may be written into --token-file) as long as the lease is
+// held: the server answered the job's heartbeats within the last `patience` and asked for no stop.
 template <typename Call>
 auto WhileLeaseHeld(WorkerClient& client, const ProgressReporter& reporter, Call&& call,
                     std::chrono::seconds patience = std::chrono::seconds(30)) {
@@ -94,7 +99,7 @@ auto WhileLeaseHeld(WorkerClient& client, const ProgressReporter& reporter, Call
         return !reporter.stop_requested() &&
                std::chrono::steady_clock::now() - reporter.last_answer() < patience;
       },
-      " while the server holds the lease");
+      " while the server holds the lease", true);
 }
 
 // `message` with the job's folder on this worker taken out of its paths: the user who reads it
