@@ -36,6 +36,21 @@ TEST(ImageMetrics, TissueNumbersIgnoreTheTool) {
   EXPECT_EQ(unmasked.tissue_pixels, kW * kH);
 }
 
+// A 12x9 frame (a 24x18 clip rendered at stride 2) has no SSIM: NaN, not a failed job (found
+// 2026-12-05: "SSIM: image 12x9 is smaller than the 11x11 window" failed the job after training).
+TEST(ImageMetrics, AFrameSmallerThanTheSsimWindowHasPsnrAndNoSsim) {
+  constexpr int w = 12, h = 9;
+  std::vector<std::uint8_t> reference(w * h * 3, 100);
+  std::vector<float> rendered(reference.size(), 100 / 255.0f);
+  rendered[0] = 0;
+  const ImageMetrics m = MeasureImage(rendered, reference, std::vector<std::uint8_t>(w * h, 0), w, h);
+  EXPECT_TRUE(std::isfinite(m.psnr));
+  EXPECT_LT(m.psnr, kPsnrCapDb);
+  EXPECT_TRUE(std::isnan(m.ssim));
+  EXPECT_TRUE(std::isnan(m.ssim_tissue));
+  EXPECT_NE(ToJson(m).dump().find("\"ssim\":null"), std::string::npos) << ToJson(m).dump();
+}
+
 TEST(ImageMetrics, FramesSerialiseWithSummaryAndNulls) {
   const std::vector<ImageMetrics> frames = {{30, 0.9, 32, 0.92, 100},
                                             {34, 0.8, std::nan(""), std::nan(""), 0}};

@@ -1,6 +1,7 @@
 #include "worker/engine/eval/image_metrics.h"
 
 #include <algorithm>
+#include <cmath>
 #include <nlohmann/json.hpp>
 
 #include "worker/engine/eval/image_size.h"
@@ -14,8 +15,14 @@ ImageMetrics MeasureImage(std::span<const float> rendered, std::span<const std::
                           std::span<const std::uint8_t> tool_mask, int width, int height) {
   CheckMaskSize(tool_mask.size(), width, height, "image metrics: tool mask");
   ImageMetrics m;
+  // SSIM is not defined on a frame smaller than its window (a tiny clip, or a tiny clip's frame
+  // rendered at a stride): NaN, written as null, rather than a failed job.
+  const bool ssim_defined = width >= kSsimLeastSide && height >= kSsimLeastSide;
+  const auto ssim = [&](std::span<const std::uint8_t> mask) {
+    return ssim_defined ? Ssim(rendered, reference, mask, width, height) : std::nan("");
+  };
   m.psnr = Psnr(rendered, reference, {}, width, height);
-  m.ssim = Ssim(rendered, reference, {}, width, height);
+  m.ssim = ssim({});
   if (tool_mask.empty()) {
     m.psnr_tissue = m.psnr;
     m.ssim_tissue = m.ssim;
@@ -23,7 +30,7 @@ ImageMetrics MeasureImage(std::span<const float> rendered, std::span<const std::
     return m;
   }
   m.psnr_tissue = Psnr(rendered, reference, tool_mask, width, height);
-  m.ssim_tissue = Ssim(rendered, reference, tool_mask, width, height);
+  m.ssim_tissue = ssim(tool_mask);
   m.tissue_pixels = static_cast<long>(std::count(tool_mask.begin(), tool_mask.end(), 0));
   return m;
 }

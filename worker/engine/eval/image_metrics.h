@@ -15,7 +15,8 @@ struct ImageMetrics {
 
 // Psnr and Ssim of `rendered` (float RGB in [0, 1]) against `reference` (uint8 RGB), once over the
 // whole frame and once with `tool_mask` (empty, or 1 = tool). Tissue numbers are NaN on an
-// all-tool frame. Throws InvalidArgument on bad sizes (see Psnr, Ssim).
+// all-tool frame, SSIMs on a frame under kSsimLeastSide pixels wide or high. Throws InvalidArgument on bad
+// sizes (see Psnr, Ssim).
 ImageMetrics MeasureImage(std::span<const float> rendered, std::span<const std::uint8_t> reference,
                           std::span<const std::uint8_t> tool_mask, int width, int height);
 

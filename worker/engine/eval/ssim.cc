@@ -16,7 +16,7 @@
 namespace endorecon::eval {
 namespace {
 
-constexpr int kWindow = 11;
+constexpr int kWindow = kSsimLeastSide;
 constexpr int kBorder = kWindow / 2;
 constexpr double kSigma = 1.5;
 constexpr double kC1 = 0.01 * 0.01;

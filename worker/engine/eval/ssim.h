@@ -17,4 +17,7 @@ namespace endorecon::eval {
 double Ssim(std::span<const float> rendered, std::span<const std::uint8_t> reference,
             std::span<const std::uint8_t> tool_mask, int width, int height);
 
+// The smallest width and height Ssim takes (its window's).
+inline constexpr int kSsimLeastSide = 11;
+
 }  // namespace endorecon::eval
