@@ -61,6 +61,16 @@ ErrorCode FromGrpcCode(grpc::StatusCode code) {
 
 void ThrowIfFailed(const grpc::Status& status, std::string_view what) {
   if (status.ok()) return;
+  // gRPC answers a method the peer does not serve with UNIMPLEMENTED and no message: most often the
+  // address of the server's health port, or of another service.
+  if (status.error_code() == grpc::StatusCode::UNIMPLEMENTED) {
+    throw Error(
+        ErrorCode::kInternal,
+        std::string(what) + ": the server at this address does not serve this call (UNIMPLEMENTED" +
+            (status.error_message().empty() ? "" : ": " + status.error_message()) +
+            "); is it endorecon-server's main port (--listen), not its --health-listen port or another "
+            "service?");
+  }
   throw Error(FromGrpcCode(status.error_code()), std::string(what) + ": " + status.error_message());
 }
 

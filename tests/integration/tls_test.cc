@@ -109,6 +109,8 @@ TEST_F(TlsTest, TheHealthPortAnswersInPlaintextBesideTheTlsPort) {
   // The API is not there: only the health service answers on that port.
   const auto api = RunCli("127.0.0.1:" + std::to_string(health), {"--timeout", "2", "list"});
   EXPECT_EQ(api.exit_code, 1) << api.err;  // UNIMPLEMENTED
+  // ... and the CLI says which port it reached (it said "INTERNAL: list: " and nothing more).
+  EXPECT_NE(api.err.find("--health-listen"), std::string::npos) << api.err;
 }
 
 TEST_F(TlsTest, AnExpiredServerCertificateIsRefusedByClients) {
