@@ -19,6 +19,7 @@
 #include "common/error.h"
 #include "common/file_upload.h"
 #include "common/grpc_status.h"
+#include "common/job_bounds.h"
 #include "common/manifest.h"
 #include "common/prepare_flags_cli.h"
 #include "common/prepare_flags_proto.h"
@@ -60,6 +61,10 @@ v1::ReconstructionOptions OptionsOf(const SubmitFlags& flags) {
   v1::ReconstructionOptions options;
   if (!flags.config.empty()) {
     options.set_config_json(ReadFile(flags.config));
+    if (options.config_json().size() > kMaxConfigBytes) {
+      FailInvalid("--config " + flags.config + ": " + std::to_string(options.config_json().size()) +
+                  " bytes; at most " + std::to_string(kMaxConfigBytes));
+    }
     const auto config = nlohmann::json::parse(options.config_json(), nullptr, false);
     if (config.is_discarded() || !config.is_object())
       FailInvalid("--config " + flags.config + ": not a JSON object (as config.json's \"train\")");
@@ -135,6 +140,7 @@ int Submit(const Globals& globals, const SubmitFlags& flags) {
                 "(EndoNeRF layout), and no DICOM recording (docs/formats.md)");
   }
   if (flags.raw.empty() && !flags.raw.size.empty()) ParseFrameSize(flags.raw.size);  // before any upload
+  if (!flags.name.empty()) ValidateJobName(flags.name);  // as the server would, after the upload
   // A clip folder is used as it is: the recording's options are refused before its upload (as the
   // worker would after it).
   if (!flags.clip.empty() && std::filesystem::is_directory(flags.clip) && !dicom::HoldsDicom(flags.clip) &&
@@ -248,7 +254,7 @@ Command AddSubmitCommand(CLI::App& app) {
   sub->add_option("--seed", flags->seed, "random seed");
   sub->add_flag("--static", flags->force_static, "treat the clip as static (no deformation)");
   sub->add_option("--priority", flags->priority, "higher runs first, -100 to 100 (default 0)")
-      ->check(CLI::Range(-100, 100));
+      ->check(CLI::Range(-kMaxPriority, kMaxPriority));
   sub->add_option("--name", flags->name, "a name to recognise the job by (default: the folder's)");
   sub->add_flag("--wait", flags->wait,
                 "watch the job until it finishes; exit code tells how it ended (5 also when a --send-to send "

@@ -9,39 +9,13 @@
 #include "common/dicom/recording.h"
 #include "common/dicom/uid.h"
 #include "common/error.h"
+#include "common/job_bounds.h"
 #include "common/manifest.h"
 #include "common/prepare_flags_proto.h"
 #include "server/job_states.h"
 
 namespace endorecon::server {
 namespace {
-
-// Bounds on what a client names: a job's name is shown in every listing and terminal, its config is
-// stored with the job; a priority orders the one queue every tenant shares.
-constexpr std::size_t kMaxNameBytes = 256;
-constexpr std::size_t kMaxConfigBytes = 64 * 1024;
-constexpr int kMaxPriority = 100;
-
-void ValidateJobName(const std::string& name) {
-  if (name.size() > kMaxNameBytes) {
-    FailInvalid("name has " + std::to_string(name.size()) + " bytes; at most " +
-                std::to_string(kMaxNameBytes));
-  }
-  for (const char c : name) {
-    const auto byte = static_cast<unsigned char>(c);
-    if (byte < 0x20 || byte == 0x7f) {
-      FailInvalid("name holds a control character (byte " + std::to_string(byte) +
-                  "); a job's name is printed in listings and terminals");
-    }
-  }
-}
-
-void ValidatePriority(int priority) {
-  if (priority < -kMaxPriority || priority > kMaxPriority) {
-    FailInvalid("priority is " + std::to_string(priority) + "; expected " + std::to_string(-kMaxPriority) +
-                " to " + std::to_string(kMaxPriority));
-  }
-}
 
 void ValidateOptions(const v1::ReconstructionOptions& options) {
   if (!options.preset().empty() && options.preset() != "cpu" && options.preset() != "gpu" &&

@@ -270,6 +270,11 @@ TEST_F(AccessControlTest, OverQuotaSubmitsAreRefusedAndNothingIsLost) {
   const auto negative = Cli(alice_, {"submit", cluster_.path("clip2").string(), "--time-budget", "-5"});
   EXPECT_EQ(negative.exit_code, 2) << negative.err;
   EXPECT_NE(negative.err.find("--time-budget: -5 is negative"), std::string::npos) << negative.err;
+  const auto long_name =
+      Cli(alice_, {"submit", cluster_.path("clip2").string(), "--name", std::string(300, 'n')});
+  EXPECT_EQ(long_name.exit_code, 2) << long_name.err;
+  EXPECT_NE(long_name.err.find("name has 300 bytes; at most 256"), std::string::npos) << long_name.err;
+  EXPECT_EQ(long_name.err.find("uploaded"), std::string::npos) << long_name.err;
   // Another tenant has its own quota.
   SubmitAs(bob_, "bobs");
   EXPECT_EQ(cluster_.Job(first).state(), v1::QUEUED);

@@ -1,0 +1,20 @@
+// Bounds on what a client names in a submit, checked by the server on every Submit and by the CLI
+// before it uploads a byte: a job's name is shown in every listing and terminal, its config is
+// stored with the job, and a priority orders the one queue every tenant shares.
+#pragma once
+
+#include <cstddef>
+#include <string>
+
+namespace endorecon {
+
+inline constexpr std::size_t kMaxJobNameBytes = 256;
+inline constexpr std::size_t kMaxConfigBytes = 64 * 1024;
+inline constexpr int kMaxPriority = 100;
+
+// Throws Error(kInvalidArgument) for a name over kMaxJobNameBytes or holding a control character.
+void ValidateJobName(const std::string& name);
+// Throws Error(kInvalidArgument) unless -kMaxPriority <= priority <= kMaxPriority.
+void ValidatePriority(int priority);
+
+}  // namespace endorecon
