@@ -256,10 +256,10 @@ Command AddSubmitCommand(CLI::App& app) {
   sub->add_option("--priority", flags->priority, "higher runs first, -100 to 100 (default 0)")
       ->check(CLI::Range(-kMaxPriority, kMaxPriority));
   sub->add_option("--name", flags->name, "a name to recognise the job by (default: the folder's)");
-  sub->add_flag("--wait", flags->wait,
-                "watch the job until it finishes; exit code tells how it ended (5 also when a --send-to send "
-                "failed)");
-  sub->add_option("--previews", flags->previews, "with --wait: save previews into this folder");
+  auto* wait = sub->add_flag("--wait", flags->wait,
+                             "watch the job until it finishes; exit code tells how it ended (5 also when a "
+                             "--send-to send failed)");
+  sub->add_option("--previews", flags->previews, "with --wait: save previews into this folder")->needs(wait);
   return [flags](const Globals& globals) { return Submit(globals, *flags); };
 }
 

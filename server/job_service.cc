@@ -103,6 +103,9 @@ grpc::Status JobServiceImpl::Watch(grpc::ServerContext* context, const v1::Watch
       return stalls_.Guard(context, [&] { return writer->Write(event); });
     };
     if (!write(first) || Settled(first.job())) return grpc::Status::OK;
+    // The hub's first answer holds the job as last published, mostly what `first` already said: a
+    // snapshot equal to the one sent last is not sent again.
+    std::string last_sent = first.job().SerializeAsString();
     std::uint64_t seen = 0;
     while (!context->IsCancelled()) {
       auto changes =
@@ -113,7 +116,14 @@ grpc::Status JobServiceImpl::Watch(grpc::ServerContext* context, const v1::Watch
       if (request->previews()) {
         for (auto& preview : changes.previews) *events.emplace_back().mutable_preview() = std::move(preview);
       }
-      if (changes.job) *events.emplace_back().mutable_job() = *changes.job;
+      if (changes.job) {
+        v1::Job job = *changes.job;
+        job.clear_clip();
+        if (std::string bytes = job.SerializeAsString(); bytes != last_sent) {
+          last_sent = std::move(bytes);
+          *events.emplace_back().mutable_job() = std::move(job);
+        }
+      }
       if (events.empty()) {
         // A quiet second: the hub drops a settled job's entry a minute after it settled, so ask the
         // store whether this one settled meanwhile.
