@@ -42,15 +42,16 @@ std::string HumanTime(std::int64_t unix_ms) {
   return fmt::format("{:%Y-%m-%d %H:%M:%S}", fmt::localtime(t));
 }
 
-std::string ProgressLine(const v1::Progress& p) {
+std::string ProgressLine(const v1::Progress& p, bool stopped) {
+  const std::string eta = stopped ? "" : "  ETA " + HumanDuration(p.eta_s());
   if (p.phase() == "prepare") {
     return p.total_iterations() > 0
                ? fmt::format("preparing the recording: frame {}/{}", p.iteration(), p.total_iterations())
                : fmt::format("preparing the recording: frame {}", p.iteration());
   }
   if (p.phase() == "evaluate") {
-    return fmt::format("evaluating the results: frame {}/{}  {:.0f} s  ETA {}", p.iteration(),
-                       p.total_iterations(), p.seconds(), HumanDuration(p.eta_s()));
+    return fmt::format("evaluating the results: frame {}/{}  {:.0f} s{}", p.iteration(), p.total_iterations(),
+                       p.seconds(), eta);
   }
   const double fraction =
       p.total_iterations() > 0
@@ -64,7 +65,7 @@ std::string ProgressLine(const v1::Progress& p) {
                       p.iteration(), p.total_iterations(), p.seconds(), p.loss(), p.train_psnr());
   if (p.heldout_psnr() >= 0) line += fmt::format(" (held-out {:.2f})", p.heldout_psnr());
   if (p.depth_rmse() >= 0) line += fmt::format("  depth RMSE {:.2f}% of range", 100 * p.depth_rmse());
-  line += fmt::format("  {:.3g} samples/s  ETA {}", p.samples_per_second(), HumanDuration(p.eta_s()));
+  line += fmt::format("  {:.3g} samples/s{}", p.samples_per_second(), eta);
   return line;
 }
 
@@ -150,7 +151,7 @@ std::string DescribeJob(const v1::Job& job) {
   } else if (job.has_progress()) {
     // A job that ended otherwise shows where it stopped; a live one where it is.
     const bool ended = job.finished_unix_ms() > 0;
-    text += (ended ? "  stopped   " : "  progress  ") + ProgressLine(job.progress()) + "\n";
+    text += (ended ? "  stopped   " : "  progress  ") + ProgressLine(job.progress(), ended) + "\n";
   }
   if (!job.error().empty()) text += fmt::format("  reason    {}\n", job.error());
   text += DicomLines(job);

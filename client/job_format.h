@@ -22,8 +22,8 @@ std::string DicomLines(const v1::Job& job);
 // 1m02s in all, PSNR 31.10 dB (held-out 31.75)". Empty for any other job or an unreadable summary.
 std::string OutcomeLine(const v1::Job& job);
 // One line: bar, iteration, training seconds, loss, PSNR (training, held-out), held-out depth error,
-// samples/s, ETA.
-std::string ProgressLine(const v1::Progress& progress);
+// samples/s, and the ETA while the job runs (`stopped`: it ended, so no ETA).
+std::string ProgressLine(const v1::Progress& progress, bool stopped = false);
 // "1.2 MB", "3.4 GB".
 std::string HumanBytes(std::int64_t bytes);
 // "42s", "3m07s", "2h05m".

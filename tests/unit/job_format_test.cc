@@ -100,6 +100,7 @@ TEST(DescribeJob, AJobThatEndedOtherwiseShowsWhereItStopped) {
   EXPECT_EQ(OutcomeLine(job), "");
   EXPECT_NE(DescribeJob(job).find("  stopped   evaluating the results: frame 48/48"), std::string::npos)
       << DescribeJob(job);
+  EXPECT_EQ(DescribeJob(job).find("ETA"), std::string::npos) << DescribeJob(job);  // it ended
   job = Finished(v1::SUCCEEDED);
   job.set_summary_json("not json");  // unreadable: the last progress, as a stopped job's
   EXPECT_EQ(OutcomeLine(job), "");
