@@ -5,6 +5,7 @@
 #include <iostream>
 #include <map>
 #include <string>
+#include <string_view>
 
 #include "client/commands.h"
 #include "client/exit_codes.h"
@@ -29,6 +30,11 @@ namespace {
 
 // What the user can do about a refusal the server's answer alone does not explain.
 std::string HintFor(const endorecon::Error& error, const Globals& globals) {
+  // Nothing listens there: TLS has nothing to do with it.
+  const bool refused = std::string_view(error.what()).find("Connection refused") != std::string_view::npos;
+  if (error.code() == endorecon::ErrorCode::kUnavailable && refused)
+    return "\nendorecon: nothing listens at " + globals.server +
+           ": is the server running, and is --server (or ENDORECON_SERVER) its --listen address?";
   if (error.code() == endorecon::ErrorCode::kUnavailable && globals.ca_file.empty())
     return "\nendorecon: if the server uses TLS, pass --ca FILE or set ENDORECON_CA";
   if (error.code() == endorecon::ErrorCode::kUnauthenticated && globals.token_file.empty() &&

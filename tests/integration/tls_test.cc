@@ -88,6 +88,11 @@ TEST_F(TlsTest, ClientsThatCannotTrustTheServerOrSpeakPlaintextGetNothing) {
   const auto plaintext = Cli({"--token-file", admin_.token_file, "--timeout", "2"}, {"list"});
   EXPECT_EQ(plaintext.exit_code, 4) << plaintext.err;
   EXPECT_NE(plaintext.err.find("--ca"), std::string::npos) << plaintext.err;
+  // Where nothing listens, TLS is not the question.
+  const auto nobody = RunCli("127.0.0.1:" + std::to_string(FreePort()), {"--timeout", "2", "list"});
+  EXPECT_EQ(nobody.exit_code, 4) << nobody.err;
+  EXPECT_NE(nobody.err.find("nothing listens at"), std::string::npos) << nobody.err;
+  EXPECT_EQ(nobody.err.find("--ca"), std::string::npos) << nobody.err;
 
   const auto untrusted = Cli(
       {"--ca", pki_->rogue_ca_cert.string(), "--token-file", admin_.token_file, "--timeout", "2"}, {"list"});
