@@ -27,7 +27,7 @@ struct TokenFlags {
   std::string role;
   std::string tenant;
   std::string name;
-  std::int64_t expires_in_s = 0;
+  double expires_in_s = 0;
   CLI::Option* expires_in = nullptr;  // not given: the token never expires
 };
 
@@ -66,10 +66,10 @@ int Create(const TokenFlags& flags) {
         "token sees them all");
   }
   const bool expires_given = flags.expires_in != nullptr && flags.expires_in->count() > 0;
-  if (expires_given && (flags.expires_in_s <= 0 || flags.expires_in_s > 100LL * 366 * 86400))
+  if (expires_given && (flags.expires_in_s <= 0 || !(flags.expires_in_s <= 100.0 * 366 * 86400)))
     FailInvalid("--expires-in must be positive and at most 100 years, as 90d, 12h or 30m");
   const std::int64_t now = NowUnixMs();
-  const std::int64_t expires = expires_given ? now + flags.expires_in_s * 1000 : 0;
+  const std::int64_t expires = expires_given ? now + static_cast<std::int64_t>(flags.expires_in_s * 1000) : 0;
   ValidateTokenRequest(flags.name, *role, flags.tenant, expires, now);  // before a store is made
   const auto token = OpenStore(flags, true)->Create(flags.name, *role, flags.tenant, expires);
   Audit(flags, "TokenCreate", {flags.name, *role, flags.tenant, 0, 0, expires});
@@ -135,9 +135,9 @@ Command AddTokenCommand(CLI::App& app) {
       create
           ->add_option(
               "--expires-in", flags->expires_in_s,
-              "refuse the token after this long: a number with a unit, as 90d, 12h or 30m (default: never)")
+              "refuse the token after this long: a number with a unit (s, m, h, d or w), as 90d, 1.5h or 30m (default: never)")
           ->transform(CLI::AsNumberWithUnit(
-              std::map<std::string, std::int64_t>{{"s", 1}, {"m", 60}, {"h", 3600}, {"d", 86400}},
+              std::map<std::string, double>{{"s", 1}, {"m", 60}, {"h", 3600}, {"d", 86400}, {"w", 604800}},
               CLI::AsNumberWithUnit::UNIT_REQUIRED, "DURATION"));
   auto* list = token->add_subcommand(
       "list", "list tokens: name, role, tenant, created, expiry, and whether active, revoked or expired");
