@@ -368,15 +368,17 @@ std::optional<JobCoordinator::Granted> JobCoordinator::Lease(const std::string& 
   }
 }
 
-v1::ProgressReply::Action JobCoordinator::Report(const v1::ProgressUpdate& update, std::string* job_id) {
-  return Locked([&] { return ReportLocked(update, job_id); });
+v1::ProgressReply::Action JobCoordinator::Report(const v1::ProgressUpdate& update, std::string* job_id,
+                                                 bool* register_again) {
+  return Locked([&] { return ReportLocked(update, job_id, register_again); });
 }
 
-v1::ProgressReply::Action JobCoordinator::ReportLocked(const v1::ProgressUpdate& update,
-                                                       std::string* job_id) {
+v1::ProgressReply::Action JobCoordinator::ReportLocked(const v1::ProgressUpdate& update, std::string* job_id,
+                                                       bool* register_again) {
   const auto lease = parts_.leases.Renew(update.lease_id(), clock_());
   if (!lease) return v1::ProgressReply::STOP_LEASE_LOST;
   if (job_id) *job_id = lease->job_id;
+  if (register_again) *register_again = !parts_.workers.Registered(lease->worker_id);
   parts_.workers.Touch(lease->worker_id);
   auto stored = Load(lease->job_id);
   auto& job = stored.job;

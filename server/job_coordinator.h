@@ -104,8 +104,10 @@ class JobCoordinator {
   // Leases the next job to `worker_id`, waiting until `deadline`; nullopt when there is none.
   std::optional<Granted> Lease(const std::string& worker_id, Clock::time_point deadline);
   // Renews the lease and records progress, preview or checkpoint; says whether to go on. Sets
-  // `job_id` to the lease's job when the lease is held.
-  v1::ProgressReply::Action Report(const v1::ProgressUpdate& update, std::string* job_id = nullptr);
+  // `job_id` to the lease's job when the lease is held, and `register_again` to whether the lease's
+  // worker is unknown to the registry (the server restarted since it registered).
+  v1::ProgressReply::Action Report(const v1::ProgressUpdate& update, std::string* job_id = nullptr,
+                                   bool* register_again = nullptr);
   // Throws kFailedPrecondition when the lease is not held or a result file is not uploaded.
   v1::Job Complete(const v1::CompleteRequest& request);
   // Throws kFailedPrecondition when the lease is not held.
@@ -156,7 +158,8 @@ class JobCoordinator {
       return result;
     }
   }
-  v1::ProgressReply::Action ReportLocked(const v1::ProgressUpdate& update, std::string* job_id);
+  v1::ProgressReply::Action ReportLocked(const v1::ProgressUpdate& update, std::string* job_id,
+                                         bool* register_again);
   StoredJob Load(const std::string& id);
   // Load, but another tenant's job is kNotFound exactly as a missing one.
   StoredJob LoadVisible(const std::string& id, const Principal& caller);

@@ -81,7 +81,9 @@ grpc::Status WorkerServiceImpl::Report(
         admitted = std::chrono::steady_clock::now();
       }
       v1::ProgressReply reply;
-      reply.set_action(coordinator_.Report(update, &call.job_id));
+      bool register_again = false;
+      reply.set_action(coordinator_.Report(update, &call.job_id, &register_again));
+      reply.set_register_again(register_again);
       if (!stream->Write(reply) || reply.action() != v1::ProgressReply::CONTINUE) break;
     }
     return grpc::Status::OK;

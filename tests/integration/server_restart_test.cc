@@ -132,5 +132,32 @@ TEST(ServerRestartTest, AnIdleWorkerIsListedAgainSoonAfterARestart) {
   EXPECT_NE(worker.Log().find("the server answers again"), std::string::npos) << worker.Log();
 }
 
+// A worker busy with a long job when the server restarts is listed with its devices again while the
+// job runs: its progress stream's answer says "register again" (only a lease did, after the job).
+TEST(ServerRestartTest, ABusyWorkerIsListedAgainWhileItsJobRuns) {
+  Cluster cluster;
+  MakeClip(cluster.path("clip"));
+  auto& worker = cluster.StartWorker("w1");
+  const auto id = cluster.Submit(cluster.path("clip"), {"--time-budget", "25"});
+  ASSERT_TRUE(WaitUntil([&] { return cluster.Job(id).progress().iteration() > 0; })) << worker.Log();
+  cluster.KillServer(SIGKILL);
+  cluster.StartServer();
+  EXPECT_TRUE(WaitUntil(
+      [&] {
+        grpc::ClientContext context;
+        v1::ListWorkersResponse workers;
+        if (!cluster.stub().ListWorkers(&context, {}, &workers).ok()) return false;
+        for (const auto& one : workers.workers()) {
+          if (one.id() == "w1" && one.device_info_size() > 0) return true;
+        }
+        return false;
+      },
+      std::chrono::seconds(10)))
+      << cluster.ServerLog() << worker.Log();
+  EXPECT_EQ(cluster.Job(id).state(), v1::RUNNING);
+  EXPECT_EQ(cluster.WaitForState(id, v1::SUCCEEDED, std::chrono::seconds(120)).state(), v1::SUCCEEDED)
+      << worker.Log();
+}
+
 }  // namespace
 }  // namespace endorecon::testing

@@ -82,6 +82,7 @@ bool ProgressReporter::SendPending() {
       if (update.has_checkpoint() && !checkpoint_) checkpoint_ = update.checkpoint();
       return false;
     }
+    if (reply.register_again()) client_.RegisterAgain();
     std::lock_guard lock(mutex_);
     if (reply.action() != v1::ProgressReply::CONTINUE) {
       stop_ = reply.action();

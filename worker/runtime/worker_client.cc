@@ -52,7 +52,7 @@ v1::RegisterResponse WorkerClient::Send(const v1::RegisterRequest& request) {
   return response;
 }
 
-void WorkerClient::Reregister() {
+void WorkerClient::RegisterAgain() {
   v1::RegisterRequest request;
   {
     std::lock_guard lock(mutex_);
@@ -63,7 +63,7 @@ void WorkerClient::Reregister() {
     Send(request);
     spdlog::info("registered again with the server (it restarted since)");
   } catch (const Error& e) {
-    spdlog::warn("registering again with the server failed ({}); next lease tries again", e.what());
+    spdlog::warn("registering again with the server failed ({}); its next answer asks again", e.what());
   }
 }
 
@@ -87,7 +87,7 @@ std::optional<v1::LeaseResponse> WorkerClient::Lease(const std::string& device,
     if (cancelled_) return std::nullopt;
   }
   ThrowIfFailed(status, "lease");
-  if (response.register_again()) Reregister();
+  if (response.register_again()) RegisterAgain();
   if (!response.has_job()) return std::nullopt;
   return response;
 }

@@ -35,6 +35,9 @@ class WorkerClient {
   // but gRPC's backup poller, every 5 s; waiting here watches them, so a restarted server is called
   // again within moments of its return.
   void PauseBeforeRetry(std::chrono::milliseconds pause);
+  // Registers again as last time, when a lease or report says the server does not know the worker
+  // (it restarted and lost the worker's devices). A failure is logged; the next answer asks again.
+  void RegisterAgain();
   v1::Job Complete(const v1::CompleteRequest& request);
   v1::Job Fail(const v1::FailRequest& request);
   // Uploads the files of `manifest` from `dir` (only what the server lacks).
@@ -53,11 +56,9 @@ class WorkerClient {
   std::mutex mutex_;
   std::set<grpc::ClientContext*> leasing_;
   bool cancelled_ = false;
-  std::optional<v1::RegisterRequest> registration_;  // the last Register's, for Reregister()
-  // The Register call; keeps `request` for Reregister().
+  std::optional<v1::RegisterRequest> registration_;  // the last Register's, for RegisterAgain()
+  // The Register call; keeps `request` for RegisterAgain().
   v1::RegisterResponse Send(const v1::RegisterRequest& request);
-  // Registers again as last time: a server that restarted lost the worker's devices.
-  void Reregister();
 };
 
 }  // namespace endorecon::worker
