@@ -25,8 +25,10 @@ struct Globals {
   std::chrono::milliseconds timeout() const {
     return std::chrono::milliseconds(static_cast<long>(timeout_s * 1000));
   }
-  // A stub over a channel with the TLS and token settings above. Throws Error(kInvalidArgument)
-  // for an unreadable or world-readable token file.
+  // A channel with the TLS and token settings above. Throws Error(kInvalidArgument) for an
+  // unreadable or world-readable token file.
+  std::shared_ptr<grpc::Channel> Channel() const;
+  // A stub over Channel().
   std::unique_ptr<v1::JobService::Stub> Connect() const;
 };
 

@@ -6,7 +6,6 @@
 #include <chrono>
 #include <filesystem>
 #include <iostream>
-#include <thread>
 
 #include "client/job_format.h"
 #include "common/file_write.h"
@@ -93,7 +92,8 @@ class EventPrinter {
 }  // namespace
 
 v1::Job WatchJob(const Globals& globals, const std::string& id, const WatchOptions& options) {
-  const auto stub = globals.Connect();
+  const auto channel = globals.Channel();
+  const auto stub = v1::JobService::NewStub(channel);
   EventPrinter printer(globals.json);
   v1::WatchJobRequest request;
   request.set_id(id);
@@ -124,7 +124,7 @@ v1::Job WatchJob(const Globals& globals, const std::string& id, const WatchOptio
       printer.EndLine();
       ThrowIfFailed(status, "watch " + id);
     }
-    std::this_thread::sleep_for(std::chrono::milliseconds(500));
+    PauseBeforeRetry(*channel, std::chrono::milliseconds(500));  // a restarted server: as soon as it is back
   }
   printer.EndLine();
   return job;

@@ -15,7 +15,7 @@
 
 namespace endorecon::client {
 
-std::unique_ptr<v1::JobService::Stub> Globals::Connect() const {
+std::shared_ptr<grpc::Channel> Globals::Channel() const {
   ChannelSecurity security;
   security.ca_file = ca_file;
   if (!token_file.empty()) {
@@ -23,8 +23,10 @@ std::unique_ptr<v1::JobService::Stub> Globals::Connect() const {
   } else if (const char* token = std::getenv("ENDORECON_TOKEN"); token && *token) {
     security.token = token;
   }
-  return v1::JobService::NewStub(OpenChannel(server, security));
+  return OpenChannel(server, security);
 }
+
+std::unique_ptr<v1::JobService::Stub> Globals::Connect() const { return v1::JobService::NewStub(Channel()); }
 
 namespace {
 

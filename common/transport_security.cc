@@ -7,6 +7,7 @@
 #include <spdlog/spdlog.h>
 
 #include <mutex>
+#include <thread>
 #include <utility>
 
 #include "common/error.h"
@@ -154,6 +155,14 @@ bool IsLoopbackAddress(const std::string& address) {
     host = host.substr(0, colon);
   }
   return host == "localhost" || host == "::1" || host.rfind("127.", 0) == 0;
+}
+
+void PauseBeforeRetry(grpc::Channel& channel, std::chrono::milliseconds pause) {
+  if (channel.GetState(false) == GRPC_CHANNEL_READY) {
+    std::this_thread::sleep_for(pause);
+  } else {
+    channel.WaitForConnected(std::chrono::system_clock::now() + pause);
+  }
 }
 
 std::unique_ptr<grpc::ClientContext> CallContext(std::chrono::milliseconds timeout) {

@@ -56,6 +56,13 @@ std::string ReadTokenFile(const std::filesystem::path& path, const std::string& 
 // True when `address` ("host:port", "[v6]:port") names a loopback interface only.
 bool IsLoopbackAddress(const std::string& address);
 
+// The wait before a failed call over `channel` is tried again: `pause` while the connection is up
+// (the server answered; a refusal or a broken stream), else until it is back, `pause` at most.
+// Calls that fail fast while the server is away leave nothing watching the connection attempts but
+// gRPC's backup poller, every 5 s; waiting on the channel watches them, so a restarted server is
+// called again within moments of its return.
+void PauseBeforeRetry(grpc::Channel& channel, std::chrono::milliseconds pause);
+
 // A context whose call must finish within `timeout` (every client call has a deadline).
 std::unique_ptr<grpc::ClientContext> CallContext(std::chrono::milliseconds timeout);
 

@@ -2,8 +2,6 @@
 
 #include <spdlog/spdlog.h>
 
-#include <thread>
-
 #include "common/error.h"
 #include "common/file_download.h"
 #include "common/file_upload.h"
@@ -17,14 +15,6 @@ WorkerClient::WorkerClient(const std::string& server, const ChannelSecurity& sec
       stub_(v1::WorkerService::NewStub(channel_)),
       worker_id_(std::move(worker_id)),
       timeout_(timeout) {}
-
-void WorkerClient::PauseBeforeRetry(std::chrono::milliseconds pause) {
-  if (channel_->GetState(false) == GRPC_CHANNEL_READY) {
-    std::this_thread::sleep_for(pause);
-  } else {
-    channel_->WaitForConnected(std::chrono::system_clock::now() + pause);
-  }
-}
 
 v1::RegisterResponse WorkerClient::Register(const std::string& hostname, const std::vector<Device>& devices) {
   v1::RegisterRequest request;

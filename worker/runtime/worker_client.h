@@ -29,12 +29,8 @@ class WorkerClient {
   std::optional<v1::LeaseResponse> Lease(const std::string& device, std::chrono::milliseconds wait);
   // Ends every Lease call in flight (at shutdown).
   void CancelLeases();
-  // The wait before a failed call is tried again: `pause` while the connection to the server is up
-  // (the server answered; a refusal or a broken stream), else until it is back, `pause` at most.
-  // Calls that fail fast while the server is away leave nothing watching the connection attempts
-  // but gRPC's backup poller, every 5 s; waiting here watches them, so a restarted server is called
-  // again within moments of its return.
-  void PauseBeforeRetry(std::chrono::milliseconds pause);
+  // The wait before a failed call is tried again (endorecon::PauseBeforeRetry on its channel).
+  void PauseBeforeRetry(std::chrono::milliseconds pause) { endorecon::PauseBeforeRetry(*channel_, pause); }
   // Registers again as last time, when a lease or report says the server does not know the worker
   // (it restarted and lost the worker's devices). A failure is logged; the next answer asks again.
   void RegisterAgain();
