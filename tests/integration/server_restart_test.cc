@@ -13,6 +13,17 @@
 namespace endorecon::testing {
 namespace {
 
+// Whether the server lists worker `id` with its devices (it registered with this server process).
+bool ListedWithDevices(Cluster& cluster, const std::string& id) {
+  grpc::ClientContext context;
+  v1::ListWorkersResponse workers;
+  if (!cluster.stub().ListWorkers(&context, {}, &workers).ok()) return false;
+  for (const auto& one : workers.workers()) {
+    if (one.id() == id && one.device_info_size() > 0) return true;
+  }
+  return false;
+}
+
 TEST(ServerRestartTest, KillDuringUploadThenTheUploadResumes) {
   Cluster cluster;
   const auto clip = cluster.path("bigclip");
@@ -95,16 +106,8 @@ TEST(ServerRestartTest, KillDuringAJobLosesNothing) {
   EXPECT_TRUE(std::filesystem::exists(cluster.path("out") / "metrics.json"));
   // The restarted server knows the worker's devices again: the worker registered anew when its
   // next lease said so (`workers` listed it without devices; found 2026-12-05).
-  EXPECT_TRUE(WaitUntil([&] {
-    grpc::ClientContext context;
-    v1::ListWorkersResponse workers;
-    if (!cluster.stub().ListWorkers(&context, {}, &workers).ok()) return false;
-    for (const auto& one : workers.workers()) {
-      if (one.device_info_size() > 0) return true;
-    }
-    return false;
-  })) << cluster.ServerLog()
-      << worker.Log();
+  EXPECT_TRUE(WaitUntil([&] { return ListedWithDevices(cluster, "w1"); }))
+      << cluster.ServerLog() << worker.Log();
 }
 
 // An idle worker, long-polling as deployed (10 s), is back on a restarted server within seconds:
@@ -113,15 +116,7 @@ TEST(ServerRestartTest, KillDuringAJobLosesNothing) {
 TEST(ServerRestartTest, AnIdleWorkerIsListedAgainSoonAfterARestart) {
   Cluster cluster;
   auto& worker = cluster.StartWorker("w1", {"--lease-wait", "10"});
-  const auto listed = [&] {
-    grpc::ClientContext context;
-    v1::ListWorkersResponse workers;
-    if (!cluster.stub().ListWorkers(&context, {}, &workers).ok()) return false;
-    for (const auto& one : workers.workers()) {
-      if (one.id() == "w1" && one.device_info_size() > 0) return true;
-    }
-    return false;
-  };
+  const auto listed = [&] { return ListedWithDevices(cluster, "w1"); };
   ASSERT_TRUE(WaitUntil(listed)) << worker.Log();
   std::this_thread::sleep_for(std::chrono::seconds(1));  // the worker's long poll is under way
   cluster.KillServer(SIGKILL);
@@ -142,17 +137,7 @@ TEST(ServerRestartTest, ABusyWorkerIsListedAgainWhileItsJobRuns) {
   ASSERT_TRUE(WaitUntil([&] { return cluster.Job(id).progress().iteration() > 0; })) << worker.Log();
   cluster.KillServer(SIGKILL);
   cluster.StartServer();
-  EXPECT_TRUE(WaitUntil(
-      [&] {
-        grpc::ClientContext context;
-        v1::ListWorkersResponse workers;
-        if (!cluster.stub().ListWorkers(&context, {}, &workers).ok()) return false;
-        for (const auto& one : workers.workers()) {
-          if (one.id() == "w1" && one.device_info_size() > 0) return true;
-        }
-        return false;
-      },
-      std::chrono::seconds(10)))
+  EXPECT_TRUE(WaitUntil([&] { return ListedWithDevices(cluster, "w1"); }, std::chrono::seconds(10)))
       << cluster.ServerLog() << worker.Log();
   EXPECT_EQ(cluster.Job(id).state(), v1::RUNNING);
   EXPECT_EQ(cluster.WaitForState(id, v1::SUCCEEDED, std::chrono::seconds(120)).state(), v1::SUCCEEDED)
