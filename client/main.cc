@@ -1,5 +1,8 @@
 // endorecon: the thin client of endorecon-server (no engine linked). Uploads clips, submits,
 // watches, lists, cancels and fetches reconstruction jobs.
+#include <spdlog/sinks/stdout_sinks.h>
+#include <spdlog/spdlog.h>
+
 #include <CLI/CLI.hpp>
 #include <cstdlib>
 #include <iostream>
@@ -51,6 +54,10 @@ std::string HintFor(const endorecon::Error& error, const Globals& globals) {
 
 int main(int argc, char** argv) {
   using namespace endorecon::client;
+  // What the shared code logs (a token about to expire) goes to stderr, as every message of the CLI:
+  // stdout carries results, JSON with --json.
+  spdlog::set_default_logger(spdlog::stderr_logger_mt("endorecon"));
+  spdlog::set_pattern("endorecon: %l: %v");
   CLI::App app{
       "endorecon: submit endoscopic clips to endorecon-server, watch the reconstruction, fetch results"};
   app.footer(std::string(kExitCodeHelp) +

@@ -1,11 +1,14 @@
 #include "common/transport_security.h"
 
+#include <fmt/chrono.h>
 #include <grpcpp/create_channel.h>
 #include <grpcpp/security/credentials.h>
 #include <grpcpp/support/channel_arguments.h>
 #include <grpcpp/support/client_interceptor.h>
 #include <spdlog/spdlog.h>
 
+#include <atomic>
+#include <charconv>
 #include <mutex>
 #include <thread>
 #include <utility>
@@ -24,6 +27,22 @@ void RequirePair(const std::string& cert_file, const std::string& key_file) {
 // Adds the bearer token to every call's initial metadata. An interceptor rather than call
 // credentials, because gRPC sends call credentials only over TLS and a token store may guard a
 // plaintext loopback server too.
+// Warns once a process when the server says the token expires within kTokenExpiryWarning.
+void WarnOfExpiry(std::string_view unix_ms_text) {
+  static std::atomic<bool> warned{false};
+  std::int64_t unix_ms = 0;
+  if (std::from_chars(unix_ms_text.data(), unix_ms_text.data() + unix_ms_text.size(), unix_ms).ec !=
+      std::errc{})
+    return;
+  const auto left = std::chrono::system_clock::time_point(std::chrono::milliseconds(unix_ms)) -
+                    std::chrono::system_clock::now();
+  if (left > kTokenExpiryWarning || warned.exchange(true)) return;
+  spdlog::warn(
+      "the token in use expires at {:%Y-%m-%d %H:%M} UTC, in {} hour(s): ask its issuer for a new one",
+      fmt::gmtime(static_cast<std::time_t>(unix_ms / 1000)),
+      std::max<long>(0, std::chrono::duration_cast<std::chrono::hours>(left).count()));
+}
+
 class BearerTokenInterceptor final : public grpc::experimental::Interceptor {
  public:
   explicit BearerTokenInterceptor(std::string header) : header_(std::move(header)) {}
@@ -31,6 +50,13 @@ class BearerTokenInterceptor final : public grpc::experimental::Interceptor {
     if (methods->QueryInterceptionHookPoint(
             grpc::experimental::InterceptionHookPoints::PRE_SEND_INITIAL_METADATA)) {
       methods->GetSendInitialMetadata()->emplace("authorization", header_);
+    }
+    if (methods->QueryInterceptionHookPoint(
+            grpc::experimental::InterceptionHookPoints::POST_RECV_INITIAL_METADATA)) {
+      if (const auto* received = methods->GetRecvInitialMetadata()) {
+        if (const auto found = received->find(kTokenExpiresHeader); found != received->end())
+          WarnOfExpiry(std::string_view(found->second.data(), found->second.size()));
+      }
     }
     methods->Proceed();
   }

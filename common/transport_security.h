@@ -14,6 +14,11 @@
 
 namespace endorecon {
 
+// The initial metadata in which the server tells a caller whose token expires when (Unix ms).
+inline constexpr const char* kTokenExpiresHeader = "endorecon-token-expires";
+// A channel warns (once) when its token expires within this long.
+inline constexpr std::chrono::hours kTokenExpiryWarning{24 * 7};
+
 // Largest gRPC message either side accepts: a 4 MiB chunk plus its envelope.
 inline constexpr int kMaxMessageBytes = 4 * 1024 * 1024 + 64 * 1024;
 // Upload and download chunks carry at most this many bytes (strictly below 4 MiB).

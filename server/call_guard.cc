@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 
 #include "common/error.h"
+#include "common/transport_security.h"
 
 namespace endorecon::server {
 namespace {
@@ -109,6 +110,11 @@ TokenStore* CallGuard::Tokens() {
   return enforcing_ ? tokens_.get() : nullptr;
 }
 
+void CallGuard::AnnounceExpiry(grpc::ServerContext& context, const Call& call) {
+  if (call.caller.token_expires_unix_ms == 0) return;
+  context.AddInitialMetadata(kTokenExpiresHeader, std::to_string(call.caller.token_expires_unix_ms));
+}
+
 void CallGuard::Admit(const grpc::ServerContext& context, const Rpc& rpc, Call& call) {
   if (rpc.access == Access::kWorker && require_worker_certificate_ && CertificateName(context).empty()) {
     Fail(ErrorCode::kUnauthenticated,
@@ -121,7 +127,7 @@ void CallGuard::Admit(const grpc::ServerContext& context, const Rpc& rpc, Call& 
     return;
   }
   const auto record = tokens->Verify(BearerToken(context));
-  call.caller = Principal{record.name, record.role, record.tenant, false};
+  call.caller = Principal{record.name, record.role, record.tenant, false, record.expires_unix_ms};
   const Role role = record.role;
   switch (rpc.access) {
     case Access::kJobs:

@@ -69,6 +69,7 @@ class CallGuard {
     call.job_id = rpc.job_id;
     const grpc::Status status = GuardStatus([&] {
       Admit(*context, rpc, call);
+      AnnounceExpiry(*context, call);
       return body(call);
     });
     Record(*context, rpc, call, status);
@@ -91,6 +92,9 @@ class CallGuard {
   void Admit(const grpc::ServerContext& context, const Rpc& rpc, Call& call);
 
  private:
+  // Tells a caller whose token expires when: initial metadata kTokenExpiresHeader (Unix ms), read by
+  // every client's channel (common/transport_security.h), which warns a week ahead.
+  static void AnnounceExpiry(grpc::ServerContext& context, const Call& call);
   TokenStore* Tokens();
   void Record(const grpc::ServerContext& context, const Rpc& rpc, const Call& call,
               const grpc::Status& status);

@@ -2,6 +2,7 @@
 // every caller is the anonymous principal, which may do everything (loopback use, the demo).
 #pragma once
 
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -23,6 +24,7 @@ struct Principal {
   Role role = Role::kAdmin;
   std::string tenant;  // "" for anonymous callers and for tokens without a tenant
   bool anonymous = true;
+  std::int64_t token_expires_unix_ms = 0;  // when the caller's token expires; 0: never (or no token)
 
   // True when the caller's view of jobs is not limited to one tenant.
   bool SeesAllTenants() const { return anonymous || role == Role::kAdmin; }

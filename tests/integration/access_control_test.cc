@@ -114,6 +114,12 @@ TEST_F(AccessControlTest, AnExpiredTokenIsRefusedAndSaysWhen) {
   const auto token = expiring.substr(expiring.rfind("endorecon."), 16 + 64 + 11);
   const ClientCredentials carol{"", WriteTokenFile(cluster_.path("carol.token"), token).string()};
   const auto started = std::chrono::steady_clock::now();
+  // Within a week of its expiry, every command warns on stderr; --json's stdout stays JSON.
+  const auto warned = Cli(carol, {"--json", "list"});
+  EXPECT_EQ(warned.exit_code, 0) << warned.err;
+  EXPECT_NE(warned.err.find("the token in use expires at"), std::string::npos) << warned.err;
+  EXPECT_EQ(warned.out.find("expires"), std::string::npos) << warned.out;
+  EXPECT_EQ(Cli(alice_, {"list"}).err.find("expires"), std::string::npos);  // alice's never expires
   const auto id = SubmitAs(carol, "before-expiry");
   std::this_thread::sleep_until(started + std::chrono::milliseconds(4'500 * kSlowdown));
   const auto refused = Cli(carol, {"status", id});
