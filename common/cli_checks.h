@@ -17,4 +17,8 @@ CLI::Validator AboveZero();
 // frame out of training.
 CLI::Validator HoldoutSpacing();
 
+// An address to listen on: HOST:PORT or [IPv6]:PORT with a port of 0-65535 (0 picks one), or
+// unix:PATH. gRPC took 127.0.0.1:99999 and listened on a port of its choosing.
+CLI::Validator ListenAddress();
+
 }  // namespace endorecon

@@ -11,6 +11,7 @@ HealthPort::HealthPort(const std::string& address) {
   grpc::EnableDefaultHealthCheckService(true);
   grpc::ServerBuilder builder;
   builder.AddListeningPort(address, grpc::InsecureServerCredentials(), &port_);
+  builder.AddChannelArgument(GRPC_ARG_ALLOW_REUSEPORT, 0);  // as the main port (main.cc)
   // gRPC 1.51 builds no server without a synchronous method or a frequently polled queue; the
   // default health service needs neither, so this queue only satisfies the builder and is drained.
   queue_ = builder.AddCompletionQueue(true);

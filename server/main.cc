@@ -204,6 +204,10 @@ int Run(const ServerFlags& flags) {
   // for its slot (UploadReceiver) would hold that much of its sender's bytes here. Without it a
   // stream that is read still gets a window as large as the message it waits for.
   builder.AddChannelArgument(GRPC_ARG_HTTP2_BDP_PROBE, 0);
+  // gRPC sets SO_REUSEPORT on Linux: a second server started on the same port (a typo, a double
+  // start) then listened beside this one and the kernel split new connections between them, jobs
+  // included. Without it the second one fails with "the port is taken".
+  builder.AddChannelArgument(GRPC_ARG_ALLOW_REUSEPORT, 0);
   builder.RegisterService(&job_service);
   builder.RegisterService(&worker_service);
   const auto server = builder.BuildAndStart();
@@ -335,8 +339,9 @@ void AddSecurityFlags(CLI::App& app, ServerFlags& flags) {
                  "the worker API requires a client certificate signed by this CA (mTLS)");
   app.add_flag("--insecure", flags.insecure, "allow a non-loopback --listen without TLS (logged loudly)");
   app.add_option(
-      "--health-listen", flags.health_listen,
-      "also answer grpc.health.v1 (only) in plaintext on this address, for probes that cannot use TLS");
+         "--health-listen", flags.health_listen,
+         "also answer grpc.health.v1 (only) in plaintext on this address, for probes that cannot use TLS")
+      ->check(ListenAddress());
   app.add_option("--audit-log", flags.audit_log, "JSON Lines audit log (default: DATA_DIR/audit.jsonl)");
   app.add_option("--tenant-max-jobs", flags.tenant_quota.max_jobs,
                  "queued + running jobs each tenant may have (0: no limit)")
@@ -392,7 +397,8 @@ int main(int argc, char** argv) {
   ServerFlags flags;
   CLI::App app{"endorecon-server: queues reconstruction jobs durably and hands them to pulling workers"};
   app.add_option("--listen", flags.listen, "gRPC address host:port (loopback by default; port 0 picks one)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(ListenAddress());
   app.add_option("--data-dir", flags.data_dir, "where jobs (SQLite) and blobs are kept")
       ->capture_default_str();
   app.add_option("--metrics-port", flags.metrics_port, "Prometheus /metrics port (0 picks one, -1 disables)")
@@ -401,7 +407,8 @@ int main(int argc, char** argv) {
                  "interface for /metrics (plaintext; loopback by default)")
       ->capture_default_str();
   app.add_option("--max-upload-bytes", flags.max_upload_bytes, "largest upload accepted (sum of its files)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(AtLeastZero());
   app.add_option("--min-free-bytes", flags.min_free_bytes,
                  "free space uploads leave on the data disk, for the job store and accepted jobs' results")
       ->capture_default_str()
@@ -437,7 +444,11 @@ int main(int argc, char** argv) {
   app.require_subcommand(0, 1);
   const auto token_command = AddTokenCommand(app);
   const auto retention_command = AddRetentionCommand(app);
-  CLI11_PARSE(app, argc, argv);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;  // a usage error is 2, as every other invalid input
+  }
   try {
     if (app.got_subcommand("token")) return token_command();
     if (app.got_subcommand("retention")) return retention_command();

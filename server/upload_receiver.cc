@@ -44,7 +44,9 @@ void UploadReceiver::CheckSpace(std::int64_t bytes, Uploader uploader) const {
 v1::UploadStatus UploadReceiver::Query(const v1::Manifest& manifest, Uploader uploader) const {
   ValidateManifest(manifest);
   const std::int64_t total = TotalBytes(manifest);
-  if (total > max_upload_bytes_) {
+  // The limit is on what clients send. A worker's results and checkpoints belong to a job the server
+  // accepted: refusing them failed the job after its training, once per attempt.
+  if (uploader == Uploader::kClient && total > max_upload_bytes_) {
     Fail(ErrorCode::kResourceExhausted,
          "upload of " + std::to_string(total) + " bytes exceeds the server's limit of " +
              std::to_string(max_upload_bytes_) + " bytes (--max-upload-bytes)");

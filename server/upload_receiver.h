@@ -40,7 +40,8 @@ class UploadReceiver {
   UploadReceiver(BlobStore& blobs, std::int64_t max_upload_bytes, std::int64_t min_free_bytes,
                  int max_streams, std::function<void(std::int64_t)> on_bytes);
 
-  // Validates `manifest` (and the size limit) and says how much of each file is committed.
+  // Validates `manifest` (and, for a client, the size limit) and says how much of each file is
+  // committed.
   v1::UploadStatus Query(const v1::Manifest& manifest, Uploader uploader) const;
   // Runs one blocking Read of the stream (a StallWatch's Guard); returns what the Read returned.
   using ReadGuard = std::function<bool(const std::function<bool()>& read)>;

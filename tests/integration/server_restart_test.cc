@@ -144,5 +144,19 @@ TEST(ServerRestartTest, ABusyWorkerIsListedAgainWhileItsJobRuns) {
       << worker.Log();
 }
 
+// A second server started on a port in use (a typo, a double start) is refused. gRPC's default
+// SO_REUSEPORT let it listen beside the first, and the kernel split new connections, submits
+// included, between the two (found 2026-12-05).
+TEST(ServerStartTest, ASecondServerOnATakenPortIsRefused) {
+  Cluster cluster;
+  TempDir other("second");
+  Process second({BuiltBinary("server/endorecon-server"), "--listen", cluster.address(), "--data-dir",
+                  (other / "data").string(), "--metrics-port", "-1"},
+                 other / "server.log");
+  EXPECT_NE(second.Wait(), 0);
+  EXPECT_NE(second.Log().find("the port is taken"), std::string::npos) << second.Log();
+  EXPECT_EQ(RunCli(cluster.address(), {"list"}).exit_code, 0);
+}
+
 }  // namespace
 }  // namespace endorecon::testing

@@ -33,6 +33,25 @@ v1::UploadRequest ChunkOf(const std::string& path, const std::string& bytes) {
   return request;
 }
 
+// --max-upload-bytes limits what clients send. A worker's results (of a job already accepted) were
+// refused by it too, and the job failed after training, once per attempt (found 2026-12-05).
+TEST(UploadReceiverTest, TheUploadLimitIsOnClientsNotOnAWorkersResults) {
+  testing::TempDir dir("uploads");
+  BlobStore blobs(dir.path());
+  UploadReceiver receiver(blobs, /*max_upload_bytes=*/10, 0, /*max_streams=*/1, {});
+  const auto manifest = ManifestOf("results.bin", std::string(64, 'r')).manifest();
+  try {
+    receiver.Query(manifest, Uploader::kClient);
+    ADD_FAILURE() << "a client's upload over the limit was taken";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kResourceExhausted);
+  }
+  EXPECT_EQ(receiver.Query(manifest, Uploader::kWorker).total_bytes(), 64);
+  Stream stream(
+      {ManifestOf("results.bin", std::string(64, 'r')), ChunkOf("results.bin", std::string(64, 'r'))});
+  EXPECT_TRUE(receiver.Receive(stream, Uploader::kWorker).complete());
+}
+
 // An upload waiting for a slot held no thread of its own until the slot came free: a client that
 // gave up (its deadline, or cancelled) still kept the server's thread, which then took the slot.
 TEST(UploadReceiverTest, AnUploadCancelledWhileItWaitsForASlotStopsWaiting) {

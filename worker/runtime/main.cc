@@ -20,7 +20,11 @@ int main(int argc, char** argv) {
   commands["prepare"] = endorecon::worker::AddPrepareCommand(app);
   commands["calibrate"] = endorecon::worker::AddCalibrateCommand(app);
   commands["to-dicom"] = endorecon::worker::AddToDicomCommand(app);
-  CLI11_PARSE(app, argc, argv);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;  // a usage error is 2, as every other invalid input
+  }
   try {
     for (auto* sub : app.get_subcommands()) return commands.at(sub->get_name())();
   } catch (const endorecon::Error& e) {

@@ -9,7 +9,6 @@
 #include <memory>
 #include <opencv2/videoio.hpp>
 
-#include "common/cli_checks.h"
 #include "common/dicom/recording_writer.h"
 #include "common/error.h"
 #include "worker/prepare/frame_source.h"
@@ -43,7 +42,11 @@ void WriteH264(prepare::FrameSource& source, double asked_fps, const dicom::Reco
   fps = FrameRate(asked_fps, first, more ? frame : first);
   cv::VideoWriter writer(video.string(), cv::VideoWriter::fourcc('a', 'v', 'c', '1'), fps,
                          first.image.size());
-  if (!writer.isOpened()) Fail(ErrorCode::kUnavailable, "the installed FFmpeg cannot encode H.264");
+  if (!writer.isOpened()) {
+    Fail(ErrorCode::kUnavailable, "cannot write the H.264 video " + video.string() +
+                                      ": the installed FFmpeg cannot encode H.264 at " + std::to_string(fps) +
+                                      " frames/s, or the folder is not writable");
+  }
   writer.write(first.image);
   frames = 1;
   for (bool next = more; next; next = source.Next(frame)) {
@@ -73,6 +76,14 @@ void WriteVl(prepare::FrameSource& source, double asked_fps, bool jpeg, const di
 }
 
 int Run(const ToDicomFlags& flags) {
+  // The output's folder is made, as for every format (an H.264 recording's missing folder was
+  // reported as FFmpeg unable to encode H.264).
+  const fs::path out_dir = fs::path(flags.out).parent_path();
+  std::error_code error;
+  if (!out_dir.empty()) fs::create_directories(out_dir, error);
+  if (error)
+    FailInvalid("-o " + flags.out + ": cannot create its folder " + out_dir.string() + ": " +
+                error.message());
   const auto source = prepare::OpenFrameSource(flags.frames);
   dicom::RecordingHeader header;
   header.study =
@@ -107,8 +118,8 @@ Command AddToDicomCommand(CLI::App& app) {
       ->capture_default_str()
       ->check(CLI::IsMember({"h264", "vl", "vl-jpeg"}));
   cmd->add_option("--fps", flags->fps,
-                  "frames per second (default: a video's own, 25 for a folder of frames)")
-      ->check(AboveZero());
+                  "frames per second, 0.01 to 1000 (default: a video's own, 25 for a folder of frames)")
+      ->check(CLI::Range(0.01, 1000.0));
   cmd->add_option("--patient-id", flags->patient_id, "Patient ID")->capture_default_str();
   cmd->add_option("--patient-name", flags->patient_name, "Patient's Name (DICOM PN, e.g. Doe^Jane)");
   cmd->add_option("--study-uid", flags->study_uid, "Study Instance UID (default: a new one)");
