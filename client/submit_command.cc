@@ -3,6 +3,7 @@
 // instead of CLIP (--left L --right R --calibration C ..., prepare's flags), the recording's files
 // are uploaded and the worker prepares the clip before reconstructing it, in the same job.
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <fstream>
 #include <iostream>
 #include <nlohmann/json.hpp>
@@ -23,7 +24,6 @@
 #include "common/manifest.h"
 #include "common/prepare_flags_cli.h"
 #include "common/prepare_flags_proto.h"
-#include "common/sha256.h"
 #include "common/transport_security.h"
 
 namespace endorecon::client {
@@ -79,20 +79,39 @@ v1::ReconstructionOptions OptionsOf(const SubmitFlags& flags) {
 }
 
 // A folder is uploaded whole; a single file (a DICOM recording) as itself, named by its file name.
-v1::Manifest ManifestOfClip(const std::filesystem::path& clip) {
-  if (!std::filesystem::is_regular_file(clip)) return ManifestOfDirectory(clip);
+// Paths and sizes only: the digests come after the server has seen the sizes.
+v1::Manifest ListingOfClip(const std::filesystem::path& clip) {
+  if (!std::filesystem::is_regular_file(clip)) return ListingOfDirectory(clip);
   v1::Manifest manifest;
   auto* entry = manifest.add_files();
   entry->set_path(clip.filename().string());
   entry->set_size(static_cast<std::int64_t>(std::filesystem::file_size(clip)));
-  entry->set_sha256(Sha256File(clip));
   return manifest;
+}
+
+// Asks the server whether a clip of these sizes may come (its upload limit, the tenant's quotas)
+// before the files are read for their digests: a 50 GB file was hashed for minutes, then refused.
+// A refusal names the largest file.
+void CheckSizes(const Globals& globals, v1::JobService::Stub& stub, const v1::Manifest& listing) {
+  v1::UploadStatus status;
+  auto context = CallContext(globals.timeout());
+  const auto answer = stub.QueryUpload(context.get(), listing, &status);
+  if (answer.error_code() != grpc::StatusCode::RESOURCE_EXHAUSTED) {
+    ThrowIfFailed(answer, "upload query");
+    return;
+  }
+  const auto largest = std::max_element(listing.files().begin(), listing.files().end(),
+                                        [](const auto& a, const auto& b) { return a.size() < b.size(); });
+  Fail(ErrorCode::kResourceExhausted, "upload query: " + answer.error_message() + " (its largest file: " +
+                                          largest->path() + ", " + HumanBytes(largest->size()) + ")");
 }
 
 // Uploads the clip (what the server lacks of it) and returns its manifest.
 v1::Manifest Upload(const Globals& globals, v1::JobService::Stub& stub, const std::filesystem::path& clip) {
-  const auto manifest = ManifestOfClip(clip);
+  auto manifest = ListingOfClip(clip);
   const auto root = std::filesystem::is_regular_file(clip) ? clip.parent_path() : clip;
+  CheckSizes(globals, stub, manifest);
+  AddDigests(root.empty() ? "." : root, manifest);
   UploadCalls calls;
   calls.query = [&](grpc::ClientContext* context, const v1::Manifest& m, v1::UploadStatus* status) {
     return stub.QueryUpload(context, m, status);

@@ -12,7 +12,7 @@
 namespace endorecon {
 namespace fs = std::filesystem;
 
-v1::Manifest ManifestOfDirectory(const fs::path& dir) {
+v1::Manifest ListingOfDirectory(const fs::path& dir) {
   if (!fs::is_directory(dir)) Fail(ErrorCode::kNotFound, "not a directory: " + dir.string());
   std::vector<fs::path> files;
   // Linked folders are followed (their files are the clip's); an entry that is neither a folder nor a
@@ -41,12 +41,26 @@ v1::Manifest ManifestOfDirectory(const fs::path& dir) {
     // Lexically: a symbolic link under `dir` (a staged recording) keeps its own name.
     entry->set_path(file.lexically_relative(dir).generic_string());
     entry->set_size(static_cast<std::int64_t>(fs::file_size(file)));
-    entry->set_sha256(Sha256File(file));
   }
   return manifest;
 }
 
-void ValidateManifest(const v1::Manifest& manifest) {
+void AddDigests(const fs::path& root, v1::Manifest& manifest) {
+  for (auto& entry : *manifest.mutable_files()) entry.set_sha256(Sha256File(root / entry.path()));
+}
+
+v1::Manifest ManifestOfDirectory(const fs::path& dir) {
+  v1::Manifest manifest = ListingOfDirectory(dir);
+  AddDigests(dir, manifest);
+  return manifest;
+}
+
+bool IsSizesOnly(const v1::Manifest& manifest) {
+  return manifest.files_size() > 0 && std::all_of(manifest.files().begin(), manifest.files().end(),
+                                                  [](const v1::FileEntry& f) { return f.sha256().empty(); });
+}
+
+void ValidateManifest(const v1::Manifest& manifest, bool sizes_only) {
   if (manifest.files_size() == 0) FailInvalid("the manifest lists no files");
   std::set<std::string> seen;
   for (const auto& file : manifest.files()) {
@@ -59,6 +73,7 @@ void ValidateManifest(const v1::Manifest& manifest) {
                   std::to_string(kMaxFileBytes) + " bytes (1 PiB) any file may have");
     }
     const auto& digest = file.sha256();
+    if (sizes_only && digest.empty()) continue;
     const bool hex = digest.size() == 64 && std::all_of(digest.begin(), digest.end(), [](char c) {
                        return (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f');
                      });

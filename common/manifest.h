@@ -12,13 +12,21 @@ namespace endorecon {
 // Every regular file under `dir` (recursively), sorted by path, with its size and SHA-256.
 // Throws Error(kNotFound) if `dir` is not a directory, kInvalidArgument if it holds no file.
 v1::Manifest ManifestOfDirectory(const std::filesystem::path& dir);
+// The same without the digests (sha256 empty): what a sizes-only QueryUpload sends before the
+// files are read, so a clip over a limit is refused before its hours of hashing.
+v1::Manifest ListingOfDirectory(const std::filesystem::path& dir);
+// Fills in the SHA-256 of every entry, reading `root`/path.
+void AddDigests(const std::filesystem::path& root, v1::Manifest& manifest);
 
 // No file of a clip or a result is larger (1 PiB); a manifest naming one is refused.
 inline constexpr std::int64_t kMaxFileBytes = std::int64_t{1} << 50;
 
 // Throws Error(kInvalidArgument) naming the entry unless every path passes CheckRelativePath,
-// paths are unique, sizes are in [0, kMaxFileBytes] and digests are 64 lowercase hex characters.
-void ValidateManifest(const v1::Manifest& manifest);
+// paths are unique, sizes are in [0, kMaxFileBytes] and digests are 64 lowercase hex characters
+// (or, with `sizes_only`, every digest is empty).
+void ValidateManifest(const v1::Manifest& manifest, bool sizes_only = false);
+// Whether `manifest` is a sizes-only listing (some files, and no digest in any of them).
+bool IsSizesOnly(const v1::Manifest& manifest);
 
 // The sum of the sizes, saturated at the largest int64 (so it is over every limit, never negative).
 std::int64_t TotalBytes(const v1::Manifest& manifest);

@@ -42,7 +42,8 @@ void UploadReceiver::CheckSpace(std::int64_t bytes, Uploader uploader) const {
 }
 
 v1::UploadStatus UploadReceiver::Query(const v1::Manifest& manifest, Uploader uploader) const {
-  ValidateManifest(manifest);
+  const bool sizes_only = IsSizesOnly(manifest);
+  ValidateManifest(manifest, sizes_only);
   const std::int64_t total = TotalBytes(manifest);
   // The limit is on what clients send. A worker's results and checkpoints belong to a job the server
   // accepted: refusing them failed the job after its training, once per attempt.
@@ -52,6 +53,12 @@ v1::UploadStatus UploadReceiver::Query(const v1::Manifest& manifest, Uploader up
              std::to_string(max_upload_bytes_) + " bytes (--max-upload-bytes)");
   }
   v1::UploadStatus status;
+  if (sizes_only) {
+    // Before the client hashes its files: only the limit (above) and the caller's quotas are told.
+    // The free space is checked by the query with digests, which knows what is stored already.
+    status.set_total_bytes(total);
+    return status;
+  }
   std::int64_t committed = 0;
   for (const auto& entry : manifest.files()) {
     auto* file = status.add_files();
@@ -83,6 +90,7 @@ v1::UploadStatus UploadReceiver::Receive(grpc::ServerReaderInterface<v1::UploadR
                 request.chunk().path() + "'");
   }
   const v1::Manifest manifest = request.manifest();
+  ValidateManifest(manifest);  // with its digests: a sizes-only manifest is for a query
   Query(manifest, uploader);
   if (admit) admit(manifest);
   std::map<std::string, const v1::FileEntry*> entries;

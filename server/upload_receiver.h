@@ -41,7 +41,8 @@ class UploadReceiver {
                  int max_streams, std::function<void(std::int64_t)> on_bytes);
 
   // Validates `manifest` (and, for a client, the size limit) and says how much of each file is
-  // committed.
+  // committed. A sizes-only manifest (no digests: IsSizesOnly) is checked against the limit only and
+  // answered with its total.
   v1::UploadStatus Query(const v1::Manifest& manifest, Uploader uploader) const;
   // Runs one blocking Read of the stream (a StallWatch's Guard); returns what the Read returned.
   using ReadGuard = std::function<bool(const std::function<bool()>& read)>;

@@ -179,5 +179,24 @@ TEST_F(BadUploadTest, CliReportsTheSizeLimitWithExitCodeEight) {
   EXPECT_EQ(Partials(), 0);
 }
 
+// A clip with a huge file is refused from its sizes, before its files are read: a 50 GB file was
+// hashed for a minute and more, then refused without a name (found 2026-12-05). A sparse 50 GB file
+// here: reading it whole would take this test minutes.
+TEST_F(BadUploadTest, AHugeClipIsRefusedFromItsSizesNamingItsLargestFile) {
+  MakeClip(cluster_.path("huge"));
+  std::filesystem::resize_file(
+      [&] {
+        WriteBytes(cluster_.path("huge") / "images" / "zz_huge.png", "");
+        return cluster_.path("huge") / "images" / "zz_huge.png";
+      }(),
+      std::uintmax_t{50} << 30);
+  const auto started = std::chrono::steady_clock::now();
+  const auto result = RunCli(cluster_.address(), {"submit", cluster_.path("huge").string()});
+  EXPECT_EQ(result.exit_code, 8) << result.err;
+  EXPECT_NE(result.err.find("its largest file: images/zz_huge.png"), std::string::npos) << result.err;
+  EXPECT_LT(std::chrono::steady_clock::now() - started, std::chrono::seconds(30));
+  EXPECT_EQ(Partials(), 0);
+}
+
 }  // namespace
 }  // namespace endorecon::testing

@@ -52,6 +52,28 @@ TEST(UploadReceiverTest, TheUploadLimitIsOnClientsNotOnAWorkersResults) {
   EXPECT_TRUE(receiver.Receive(stream, Uploader::kWorker).complete());
 }
 
+// A manifest without digests asks only whether its sizes may come; an upload must name them.
+TEST(UploadReceiverTest, ASizesOnlyQueryIsCheckedAgainstTheLimitAndAnUploadNeedsDigests) {
+  testing::TempDir dir("uploads");
+  BlobStore blobs(dir.path());
+  UploadReceiver receiver(blobs, /*max_upload_bytes=*/100, 0, /*max_streams=*/1, {});
+  auto request = ManifestOf("a.bin", std::string(64, 'a'));
+  request.mutable_manifest()->mutable_files(0)->clear_sha256();
+  const auto status = receiver.Query(request.manifest(), Uploader::kClient);
+  EXPECT_EQ(status.total_bytes(), 64);
+  EXPECT_FALSE(status.complete());
+  request.mutable_manifest()->mutable_files(0)->set_size(101);
+  EXPECT_THROW(receiver.Query(request.manifest(), Uploader::kClient), Error);
+  request.mutable_manifest()->mutable_files(0)->set_size(64);
+  Stream stream({request, ChunkOf("a.bin", std::string(64, 'a'))});
+  try {
+    receiver.Receive(stream, Uploader::kClient);
+    ADD_FAILURE() << "an upload without digests was taken";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument);
+  }
+}
+
 // An upload waiting for a slot held no thread of its own until the slot came free: a client that
 // gave up (its deadline, or cancelled) still kept the server's thread, which then took the slot.
 TEST(UploadReceiverTest, AnUploadCancelledWhileItWaitsForASlotStopsWaiting) {
