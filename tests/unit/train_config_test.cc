@@ -288,7 +288,13 @@ TEST(TrainConfigTest, BadValuesAreRejected) {
         nlohmann::json{{"exposure", "sometimes"}}, nlohmann::json{{"exposure_threshold", -0.1}},
         nlohmann::json{{"deformation_start", "optical"}}, nlohmann::json{{"outside_view", "on"}},
         nlohmann::json{{"outside_view_level", 255}},
-        nlohmann::json{{"field", {{"learned_background", true}}}}}) {
+        nlohmann::json{{"field", {{"learned_background", true}}}},
+        // Values that sized memory or made training meaningless, taken until 2026-12-05: a batch of
+        // 1e9 rays held 7 GB before its first step; a negative rate or weight trained to 8 dB.
+        nlohmann::json{{"rays_per_batch", 1000000000}}, nlohmann::json{{"depth_samples", 100000}},
+        nlohmann::json{{"mc_passes", 1000}}, nlohmann::json{{"adam", {{"lr", {{"grid", -1}}}}}},
+        nlohmann::json{{"adam", {{"default_lr", 1e30}}}}, nlohmann::json{{"adam", {{"beta2", 1.0}}}},
+        nlohmann::json{{"depth_weight", -100}}, nlohmann::json{{"huber_delta", 0}}}) {
     TrainConfig fresh;
     const std::string key = bad.flatten().begin().key();  // "/field/heads/dropout"
     const std::string leaf = key.substr(key.rfind('/') + 1);

@@ -7,7 +7,9 @@
 #include <memory>
 
 #include "common/cli_checks.h"
+#include "common/error.h"
 #include "worker/engine/reconstruct.h"
+#include "worker/engine/run_config.h"
 #include "worker/engine/scene/json_file.h"
 #include "worker/runtime/commands.h"
 #include "worker/runtime/dicom_job.h"
@@ -96,7 +98,15 @@ Command AddReconstructCommand(CLI::App& app) {
   cmd->add_option("--resume", options->resume_from, "checkpoint file to resume from");
   AddDicomOptions(*cmd, *recording, *dicom);
   return [options, config_file, recording, dicom] {
-    if (!config_file->empty()) options->config = scene::ReadJsonFile(*config_file);
+    if (!config_file->empty()) {
+      options->config = scene::ReadJsonFile(*config_file);
+      try {  // checked now, naming the file, not after the clip is loaded
+        ResolveConfig(*options);
+      } catch (const Error& e) {
+        if (e.code() != ErrorCode::kInvalidArgument) throw;
+        FailInvalid("--config " + *config_file + ": " + e.what());
+      }
+    }
     const auto from_dicom = PrepareRecording(options->clip_dir, *recording, options->out_dir + ".clip");
     if (from_dicom) options->clip_dir = from_dicom->clip_dir.string();
     ReconstructHooks hooks;

@@ -183,9 +183,30 @@ void Validate(const TrainConfig& c) {
     if (!ok) FailInvalid("config: " + what);
   };
   require(c.iterations >= 0, "iterations must be >= 0");
-  require(c.rays_per_batch >= 1, "rays_per_batch must be >= 1");
-  require(c.depth_samples >= 0 && c.stratified_samples >= 1,
-          "need stratified_samples >= 1 and depth_samples >= 0");
+  // Upper bounds where a value sizes memory (a batch of 1e9 rays took 7 GB and more before its first
+  // step) or makes training meaningless (a negative rate or weight, a rate that diverges at once).
+  require(c.rays_per_batch >= 1 && c.rays_per_batch <= kMostRaysPerBatch,
+          "rays_per_batch must be in [1, " + std::to_string(kMostRaysPerBatch) + "], got " +
+              std::to_string(c.rays_per_batch));
+  require(c.depth_samples >= 0 && c.stratified_samples >= 1 && c.depth_samples <= kMostSamplesPerRay &&
+              c.stratified_samples <= kMostSamplesPerRay,
+          "need stratified_samples in [1, " + std::to_string(kMostSamplesPerRay) +
+              "] and depth_samples in [0, " + std::to_string(kMostSamplesPerRay) + "]");
+  require(c.eval_coarse_samples <= kMostSamplesPerRay && c.eval_fine_samples <= kMostSamplesPerRay,
+          "eval samples must be at most " + std::to_string(kMostSamplesPerRay));
+  require(c.mc_passes <= kMostDropoutPasses,
+          "mc_passes must be at most " + std::to_string(kMostDropoutPasses));
+  const auto rate_ok = [](float lr) { return lr >= 0 && lr <= 1; };
+  require(rate_ok(c.adam.default_lr), "adam.default_lr must be in [0, 1]");
+  for (const auto& [name, lr] : c.adam.lr) require(rate_ok(lr), "adam.lr." + name + " must be in [0, 1]");
+  require(c.adam.beta1 >= 0 && c.adam.beta1 < 1 && c.adam.beta2 >= 0 && c.adam.beta2 < 1,
+          "adam.beta1 and adam.beta2 must be in [0, 1)");
+  require(c.adam.eps > 0, "adam.eps must be > 0");
+  require(c.adam.final_lr_factor >= 0 && c.adam.clip_norm >= 0,
+          "adam.final_lr_factor and adam.clip_norm must be >= 0");
+  require(c.nll_weight >= 0 && c.rgb_l2_weight >= 0 && c.depth_weight >= 0 && c.variance_reg >= 0,
+          "nll_weight, rgb_l2_weight, depth_weight and variance_reg must be >= 0");
+  require(c.huber_delta > 0, "huber_delta must be > 0");
   require(c.depth_xi > 0, "depth_xi must be > 0");
   require(c.holdout == 0 || c.holdout >= 2,
           "holdout must be 0 (none held out) or K >= 2 (every K-th frame), got " + std::to_string(c.holdout));

@@ -12,6 +12,13 @@
 
 namespace endorecon::train {
 
+// Bounds a configuration is held to beyond its types (ApplyJson refuses more). The largest batch a
+// preset uses is 2,048 rays and the largest measured useful on an H200 12,288 (docs/benchmarks.md);
+// the paper's sampler takes 64 + 32 samples a ray and its evaluation 8 dropout passes.
+inline constexpr int kMostRaysPerBatch = 65536;
+inline constexpr int kMostSamplesPerRay = 1024;
+inline constexpr int kMostDropoutPasses = 64;
+
 struct TrainConfig {
   std::string preset = "cpu";
   int iterations = 4000;
