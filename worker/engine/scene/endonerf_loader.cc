@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <set>
 
 #include "common/error.h"
 #include "worker/engine/scene/clip_checks.h"
@@ -78,15 +79,44 @@ PoseRows ReadPoseRows(const fs::path& path) {
   return poses;
 }
 
-// The files of an optional folder: none when absent, otherwise exactly `count`.
+// Where a per-frame folder and images/ part ways, by file name (stem): the first image without a
+// file here, or the first file here without an image; empty when the names match.
+std::string FirstUnpaired(const std::vector<fs::path>& files, const std::vector<fs::path>& images) {
+  std::set<std::string> stems, image_stems;
+  for (const auto& f : files) stems.insert(f.stem().string());
+  for (const auto& f : images) image_stems.insert(f.stem().string());
+  for (const auto& image : images) {
+    if (!stems.count(image.stem().string()))
+      return "no file named " + image.stem().string() + ".* for " + image.filename().string();
+  }
+  for (const auto& f : files) {
+    if (!image_stems.count(f.stem().string())) return f.filename().string() + " names no image";
+  }
+  return "";
+}
+
+// The files of an optional folder: none when absent, otherwise exactly `count`, paired with
+// `images` (when given) by their sorted order.
 std::vector<fs::path> ListFolder(const fs::path& dir, const std::vector<std::string>& extensions,
-                                 std::size_t count, bool required) {
+                                 std::size_t count, bool required, const std::vector<fs::path>& images = {}) {
   if (!required && !fs::exists(dir)) return {};
   std::vector<fs::path> files = ListFiles(dir, extensions);
   if (files.size() != count) {
+    const std::string unpaired = images.empty() ? "" : FirstUnpaired(files, images);
     FailInvalid(dir.string() + ": holds " + std::to_string(files.size()) +
                 " files but poses_bounds.npy has " + std::to_string(count) +
-                " rows (the counts of images, depth maps, masks and poses must be equal)");
+                " rows (the counts of images, depth maps, masks and poses must be equal)" +
+                (unpaired.empty() ? "" : "; " + unpaired));
+  }
+  // Files are paired with images by their sorted order: names that part ways (000004 beside image
+  // 000003) usually mean a file is missing and another is extra.
+  for (std::size_t i = 0; i < images.size() && i < files.size(); ++i) {
+    if (files[i].stem() != images[i].stem()) {
+      spdlog::warn("{}: {} is paired with images/{} by their sorted order, though their names differ ({})",
+                   dir.string(), files[i].filename().string(), images[i].filename().string(),
+                   FirstUnpaired(files, images));
+      break;
+    }
   }
   return files;
 }
@@ -138,10 +168,10 @@ Clip LoadEndoNerfClip(const fs::path& dir, const LoadOptions& options) {
   std::vector<std::string> depth_extensions = ImageExtensions();
   depth_extensions.push_back(".npy");
   const std::vector<fs::path> images = ListFolder(dir / "images", ImageExtensions(), n, true);
-  const std::vector<fs::path> depths = ListFolder(dir / "depth", depth_extensions, n, false);
-  const std::vector<fs::path> masks = ListFolder(dir / "masks", ImageExtensions(), n, false);
-  const std::vector<fs::path> eval_masks = ListFolder(dir / "gt_masks", ImageExtensions(), n, false);
-  const std::vector<fs::path> rights = ListFolder(dir / "images_right", ImageExtensions(), n, false);
+  const std::vector<fs::path> depths = ListFolder(dir / "depth", depth_extensions, n, false, images);
+  const std::vector<fs::path> masks = ListFolder(dir / "masks", ImageExtensions(), n, false, images);
+  const std::vector<fs::path> eval_masks = ListFolder(dir / "gt_masks", ImageExtensions(), n, false, images);
+  const std::vector<fs::path> rights = ListFolder(dir / "images_right", ImageExtensions(), n, false, images);
 
   std::vector<FrameFiles> frames(n);
   for (std::size_t i = 0; i < n; ++i) {
