@@ -53,11 +53,13 @@ std::string StagedRecording::Stage(const std::string& path, const std::string& n
       ++files;
     }
     if (files == 0) FailInvalid(path + ": the folder holds no file");
+    sources_[name + "/"] = fs::path(path).lexically_normal().string() + (path.back() == '/' ? "" : "/");
     return name;
   }
   if (!fs::is_regular_file(source)) Fail(ErrorCode::kNotFound, path + ": no such file or folder");
   const std::string staged = name + source.extension().string();
   fs::create_symlink(source, dir_ / staged);
+  sources_[staged] = path;
   return staged;
 }
 

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <filesystem>
+#include <map>
 #include <string>
 
 #include "common/prepare_flags.h"
@@ -25,6 +26,8 @@ class StagedRecording {
   const PrepareFlags& flags() const { return flags_; }
   // A name for the job: the file name of the recording (left eye, or the combined one).
   const std::string& name() const { return name_; }
+  // Each staged name ("side_by_side.mp4", a folder's "left/") and the path as the user gave it.
+  const std::map<std::string, std::string>& sources() const { return sources_; }
 
  private:
   // Links `path` (a file, or a folder's visible files) as `name` (+ the file's extension); returns
@@ -34,6 +37,7 @@ class StagedRecording {
   std::filesystem::path dir_;
   PrepareFlags flags_;
   std::string name_;
+  std::map<std::string, std::string> sources_;
 };
 
 }  // namespace endorecon::client

@@ -182,6 +182,8 @@ int Submit(const Globals& globals, const SubmitFlags& flags) {
   }
   if (staged) {
     *request.mutable_prepare() = PrepareFlagsToProto(staged->flags());
+    for (const auto& [name, path] : staged->sources())
+      (*request.mutable_prepare()->mutable_sources())[name] = path;
   } else {
     *request.mutable_recording() = flags.recording;
     request.mutable_recording()->set_frames(flags.raw.frames);

@@ -76,6 +76,24 @@ TEST(PrepareJobTest, RecordingInPreparedClipAndResultsOut) {
   EXPECT_NE(again.err.find(": 0 B sent"), std::string::npos) << again.err;
 }
 
+// A raw recording is staged under fixed names (left.avi); a job's error names the file as the user
+// gave it (it said "left.avi: ...", a file the user never had; found 2026-12-05).
+TEST(PrepareJobTest, AFailedRecordingNamesTheUsersFile) {
+  Cluster cluster;
+  cluster.StartWorker("w1");
+  MakeRecording(cluster.path("rec"));
+  const fs::path rec = cluster.path("rec");
+  WriteBytes(rec / "mine.avi", "not a video at all");
+  const auto submitted = RunCli(
+      cluster.address(),
+      {"submit", "--left", (rec / "mine.avi").string(), "--right", (rec / "right.avi").string(),
+       "--calibration", (rec / "synth/recording/calibration.yaml").string(), "--iterations", "20", "--wait"});
+  EXPECT_EQ(submitted.exit_code, 5) << submitted.err << submitted.out;
+  const std::string said = submitted.out + submitted.err;
+  EXPECT_NE(said.find((rec / "mine.avi").string()), std::string::npos) << said;
+  EXPECT_EQ(said.find("left.avi"), std::string::npos) << said;
+}
+
 TEST(PrepareJobTest, BadRecordingOptionsAreRefusedBeforeAnyUpload) {
   Cluster cluster;
   const auto result = RunCli(cluster.address(), {"submit", "--left", "L.mp4", "--right", "R.mp4",

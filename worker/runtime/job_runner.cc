@@ -2,6 +2,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <cctype>
 #include <cerrno>
 #include <cstring>
 #include <nlohmann/json.hpp>
@@ -114,6 +115,29 @@ std::string InTheClip(std::string message, const fs::path& job_dir) {
   replace((job_dir / "clip").string() + "/", "");
   replace((job_dir / "clip").string(), "the clip");
   replace(job_dir.string() + "/", "");
+  return message;
+}
+
+// `message` (InTheClip's) with a raw recording's staged names (side_by_side.mp4, left/) replaced by
+// the files and folders as the submitter named them (PrepareOptions.sources): a name is replaced
+// where it starts a path, not inside another word.
+std::string InTheUsersNames(std::string message, const v1::Job& job) {
+  const auto starts_path = [&](std::size_t at) {
+    if (at == 0) return true;
+    const char before = message[at - 1];
+    return !(std::isalnum(static_cast<unsigned char>(before)) || before == '_' || before == '/' ||
+             before == '.');
+  };
+  for (const auto& [staged, given] : job.prepare().sources()) {
+    for (std::size_t at = message.find(staged); at != std::string::npos; at = message.find(staged, at)) {
+      if (!starts_path(at)) {
+        at += staged.size();
+        continue;
+      }
+      message.replace(at, staged.size(), given);
+      at += given.size();
+    }
+  }
   return message;
 }
 
@@ -286,7 +310,8 @@ bool RunLeasedJob(WorkerClient& client, const v1::LeaseResponse& lease, const De
           disk_full ? "worker " + client.worker_id() + ": its scratch folder " + settings.work_dir.string() +
                           " ran out of space (" + std::to_string(free_bytes) + " bytes free now, needs " +
                           std::to_string(settings.min_free_bytes) + " to take a job): " + e.what()
-                    : std::string(ErrorCodeName(e.code())) + ": " + InTheClip(e.what(), job_dir);
+                    : std::string(ErrorCodeName(e.code())) + ": " +
+                          InTheUsersNames(InTheClip(e.what(), job_dir), job);
       // Issue 16: stopped by a shutdown while preparing: handed back without counting an attempt.
       Tell(client, lease.lease_id(), reason, !bad_input, e.code() == ErrorCode::kCancelled || disk_full);
     }
