@@ -286,15 +286,20 @@ TEST_F(EndoNerfLoaderTest, RejectsADepthRangeTooThinToSample) {
   ExpectError("poses_bounds.npy row 1", "the depth range is too thin to sample");
 }
 
-// A translation in other units than the bounds (here 1e308) put every ray outside the scene's box,
+// A translation in other units than the bounds (here 1e9) put every ray outside the scene's box,
 // and the run rendered black with exit 0; the clip is refused, naming the spread and the bound.
 TEST_F(EndoNerfLoaderTest, RejectsCamerasFartherApartThanTheDepthBoundsAllow) {
-  rows_[2].t[0] = 1e308;
+  rows_[2].t[0] = 1e9;
   WritePoses(dir_ / "poses_bounds.npy", rows_);
   const std::string message = ErrorFrom([&] { LoadClip(dir_.path(), {}); });
-  EXPECT_NE(message.find("the cameras' centres lie 1e+308 apart, more than 10000 times the far bound (30)"),
+  EXPECT_NE(message.find("the cameras' centres lie 1e+09 apart, more than 10000 times the far bound (30)"),
             std::string::npos)
       << message;
+  // A centre past 1e12 from the origin is refused by its row (it was a spread, or "far = inf", with no
+  // row; found 2026-12-05).
+  rows_[2].t[0] = 1e300;
+  WritePoses(dir_ / "poses_bounds.npy", rows_);
+  ExpectError("poses_bounds.npy row 2", "the camera's centre lies 1e+300 from the origin");
   rows_[2].t[0] = 5;  // an endoscope's few units of travel: fine
   WritePoses(dir_ / "poses_bounds.npy", rows_);
   EXPECT_EQ(LoadClip(dir_.path(), {}).frame_count(), kFrames);

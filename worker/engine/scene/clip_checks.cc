@@ -35,12 +35,20 @@ void CheckPose(const Eigen::Matrix<double, 3, 4>& c2w, const std::string& where)
   const double det = r.determinant();
   if (det < 0)
     FailInvalid(where + ": the pose's rotation has determinant " + Number(det) + " (a reflection)");
+  // A centre past kMostDepth overflows the scene's single-precision arithmetic; it was reported
+  // later as bounds the user never gave ("far = inf") or as cameras far apart, without a row.
+  const double centre = c2w.col(3).stableNorm();  // without overflow on its way
+  if (centre > kMostDepth) {
+    FailInvalid(where + ": the camera's centre lies " + Number(centre) + " from the origin, past " +
+                Number(kMostDepth) + " (a translation in other units, or a broken value)");
+  }
 }
 
 void CheckCamera(const Camera& camera, const std::string& where) {
-  if (!std::isfinite(camera.fx) || !std::isfinite(camera.fy) || camera.fx <= 0 || camera.fy <= 0) {
+  if (!std::isfinite(camera.fx) || !std::isfinite(camera.fy) || camera.fx <= 0 || camera.fy <= 0 ||
+      camera.fx > kMostFocalPixels || camera.fy > kMostFocalPixels) {
     FailInvalid(where + ": focal length must be finite and positive (fx = " + Number(camera.fx) +
-                ", fy = " + Number(camera.fy) + ")");
+                ", fy = " + Number(camera.fy) + "), and at most " + Number(kMostFocalPixels) + " pixels");
   }
   if (!std::isfinite(camera.cx) || !std::isfinite(camera.cy)) {
     FailInvalid(where + ": principal point is not finite (cx = " + Number(camera.cx) +

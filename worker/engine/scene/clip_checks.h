@@ -10,10 +10,13 @@
 
 namespace endorecon::scene {
 
-// A camera-to-world [R | t]: every entry finite, R orthonormal (max |RᵀR − I| ≤ 1e-3) with det +1.
+// A camera-to-world [R | t]: every entry finite, R orthonormal (max |RᵀR − I| ≤ 1e-3) with det +1,
+// and the centre t within kMostDepth of the origin.
 void CheckPose(const Eigen::Matrix<double, 3, 4>& c2w, const std::string& where);
 
-// Intrinsics: finite fx, fy > 0, finite cx, cy, width and height > 0; and the pose (CheckPose).
+// Intrinsics: 0 < fx, fy ≤ kMostFocalPixels (a 1e300 focal length trained without a word), finite
+// cx, cy, width and height > 0; and the pose (CheckPose).
+constexpr double kMostFocalPixels = 1e9;
 void CheckCamera(const Camera& camera, const std::string& where);
 
 // Depth bounds: finite, 0 ≤ near < far ≤ kMostDepth, and far − near at least kLeastDepthRange of
