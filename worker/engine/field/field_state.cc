@@ -59,7 +59,11 @@ void LoadFieldState(FieldT<S>& field, std::istream& in) {
     Fail(ErrorCode::kDataLoss, "field state: format " + std::to_string(version) + ", " +
                                    std::to_string(scalar) + "-byte scalars, " + std::to_string(count) +
                                    " blocks; this field reads format " + std::to_string(kFormatVersion) +
-                                   ", " + std::to_string(sizeof(S)) + ", " + std::to_string(blocks.size()));
+                                   ", " + std::to_string(sizeof(S)) + ", " + std::to_string(blocks.size()) +
+                                   (version == kFormatVersion && scalar == sizeof(S)
+                                        ? " (a field of another shape: a checkpoint of another clip, or of "
+                                          "other field keys, is resumed only on its own)"
+                                        : ""));
   }
   for (auto& b : blocks) {
     const auto length = Get<std::uint32_t>(in, "before block '" + b.name + "'");
