@@ -293,7 +293,7 @@ TEST(TrainConfigTest, BadValuesAreRejected) {
         // 1e9 rays held 7 GB before its first step; a negative rate or weight trained to 8 dB.
         nlohmann::json{{"rays_per_batch", 1000000000}}, nlohmann::json{{"depth_samples", 100000}},
         nlohmann::json{{"mc_passes", 1000}}, nlohmann::json{{"adam", {{"lr", {{"grid", -1}}}}}},
-        nlohmann::json{{"adam", {{"default_lr", 1e30}}}}, nlohmann::json{{"adam", {{"beta2", 1.0}}}},
+        nlohmann::json{{"adam", {{"default_lr", -0.1}}}}, nlohmann::json{{"adam", {{"beta2", 1.0}}}},
         nlohmann::json{{"depth_weight", -100}}, nlohmann::json{{"huber_delta", 0}}}) {
     TrainConfig fresh;
     const std::string key = bad.flatten().begin().key();  // "/field/heads/dropout"

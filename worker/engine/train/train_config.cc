@@ -196,9 +196,10 @@ void Validate(const TrainConfig& c) {
           "eval samples must be at most " + std::to_string(kMostSamplesPerRay));
   require(c.mc_passes <= kMostDropoutPasses,
           "mc_passes must be at most " + std::to_string(kMostDropoutPasses));
-  const auto rate_ok = [](float lr) { return lr >= 0 && lr <= 1; };
-  require(rate_ok(c.adam.default_lr), "adam.default_lr must be in [0, 1]");
-  for (const auto& [name, lr] : c.adam.lr) require(rate_ok(lr), "adam.lr." + name + " must be in [0, 1]");
+  // No upper bound on a rate: one too large diverges, and the run says where (the divergence guard).
+  const auto rate_ok = [](float lr) { return lr >= 0 && std::isfinite(lr); };
+  require(rate_ok(c.adam.default_lr), "adam.default_lr must be >= 0");
+  for (const auto& [name, lr] : c.adam.lr) require(rate_ok(lr), "adam.lr." + name + " must be >= 0");
   require(c.adam.beta1 >= 0 && c.adam.beta1 < 1 && c.adam.beta2 >= 0 && c.adam.beta2 < 1,
           "adam.beta1 and adam.beta2 must be in [0, 1)");
   require(c.adam.eps > 0, "adam.eps must be > 0");
