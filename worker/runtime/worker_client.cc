@@ -54,6 +54,9 @@ void WorkerClient::RegisterAgain() {
     spdlog::info("registered again with the server (it restarted since)");
   } catch (const Error& e) {
     spdlog::warn("registering again with the server failed ({}); its next answer asks again", e.what());
+    // A server that does not know the worker answers its lease at once: without a pause, a
+    // registration that keeps failing would make lease and register a tight loop.
+    PauseBeforeRetry(std::chrono::seconds(1));
   }
 }
 

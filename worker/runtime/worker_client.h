@@ -32,7 +32,8 @@ class WorkerClient {
   // The wait before a failed call is tried again (endorecon::PauseBeforeRetry on its channel).
   void PauseBeforeRetry(std::chrono::milliseconds pause) { endorecon::PauseBeforeRetry(*channel_, pause); }
   // Registers again as last time, when a lease or report says the server does not know the worker
-  // (it restarted and lost the worker's devices). A failure is logged; the next answer asks again.
+  // (it restarted and lost the worker's devices). A failure is logged and paused on (a second at
+  // most, PauseBeforeRetry); the next answer asks again.
   void RegisterAgain();
   v1::Job Complete(const v1::CompleteRequest& request);
   v1::Job Fail(const v1::FailRequest& request);
