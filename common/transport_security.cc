@@ -24,9 +24,6 @@ void RequirePair(const std::string& cert_file, const std::string& key_file) {
     FailInvalid("--tls-cert and --tls-key go together: give both or neither");
 }
 
-// Adds the bearer token to every call's initial metadata. An interceptor rather than call
-// credentials, because gRPC sends call credentials only over TLS and a token store may guard a
-// plaintext loopback server too.
 // Warns once a process when the server says the token expires within kTokenExpiryWarning.
 void WarnOfExpiry(std::string_view unix_ms_text) {
   static std::atomic<bool> warned{false};
@@ -43,6 +40,9 @@ void WarnOfExpiry(std::string_view unix_ms_text) {
       std::max<long>(0, std::chrono::duration_cast<std::chrono::hours>(left).count()));
 }
 
+// Adds the bearer token to every call's initial metadata. An interceptor rather than call
+// credentials, because gRPC sends call credentials only over TLS and a token store may guard a
+// plaintext loopback server too.
 class BearerTokenInterceptor final : public grpc::experimental::Interceptor {
  public:
   explicit BearerTokenInterceptor(std::string header) : header_(std::move(header)) {}

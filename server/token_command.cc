@@ -1,6 +1,5 @@
 // endorecon-server token create|list|revoke --data-dir DIR: the token store of a data folder.
 // Run it as the server's user, so the store's files stay readable by the server.
-#include <fmt/chrono.h>
 #include <fmt/format.h>
 #include <pwd.h>
 #include <spdlog/spdlog.h>
@@ -30,10 +29,6 @@ struct TokenFlags {
   double expires_in_s = 0;
   CLI::Option* expires_in = nullptr;  // not given: the token never expires
 };
-
-std::string When(std::int64_t unix_ms) {
-  return fmt::format("{:%Y-%m-%d %H:%M:%S}", fmt::gmtime(static_cast<std::time_t>(unix_ms / 1000)));
-}
 
 std::string LocalUser() {
   const passwd* user = getpwuid(geteuid());
@@ -77,7 +72,7 @@ int Create(const TokenFlags& flags) {
       "created {} token '{}'{}{}; it is shown only now, keep it in a file only its user can "
       "read (chmod 600):\n{}\n",
       RoleName(*role), flags.name, flags.tenant.empty() ? "" : fmt::format(" for tenant '{}'", flags.tenant),
-      expires ? fmt::format(" valid until {} UTC", When(expires)) : "", token);
+      expires ? fmt::format(" valid until {} UTC", UtcTime(expires)) : "", token);
   return 0;
 }
 
@@ -95,9 +90,9 @@ int List(const TokenFlags& flags) {
   for (const auto& record : records) {
     const auto state = record.StateAt(now);
     std::cout << fmt::format("{:<24} {:<7} {:<16} {:<20} {:<20} {}{}\n", record.name, RoleName(record.role),
-                             record.tenant.empty() ? "-" : record.tenant, When(record.created_unix_ms),
-                             record.expires_unix_ms ? When(record.expires_unix_ms) : "never", state,
-                             state == "revoked" ? " " + When(record.revoked_unix_ms) : "");
+                             record.tenant.empty() ? "-" : record.tenant, UtcTime(record.created_unix_ms),
+                             record.expires_unix_ms ? UtcTime(record.expires_unix_ms) : "never", state,
+                             state == "revoked" ? " " + UtcTime(record.revoked_unix_ms) : "");
   }
   return 0;
 }

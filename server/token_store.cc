@@ -37,10 +37,6 @@ void ValidateName(const std::string& name) {
   }
 }
 
-std::string UtcText(std::int64_t unix_ms) {
-  return fmt::format("{:%Y-%m-%d %H:%M:%S} UTC", fmt::gmtime(static_cast<std::time_t>(unix_ms / 1000)));
-}
-
 // Stores made before tokens could expire lack the column; it is added once, in a write transaction
 // so that the server and `token ...` opening the same old store at once add it only once.
 void AddExpiryColumn(sqlite3* db) {
@@ -56,7 +52,13 @@ void AddExpiryColumn(sqlite3* db) {
   }
 }
 
+std::string UtcText(std::int64_t unix_ms) { return UtcTime(unix_ms) + " UTC"; }
+
 }  // namespace
+
+std::string UtcTime(std::int64_t unix_ms) {
+  return fmt::format("{:%Y-%m-%d %H:%M:%S}", fmt::gmtime(static_cast<std::time_t>(unix_ms / 1000)));
+}
 
 std::string_view TokenRecord::StateAt(std::int64_t now_unix_ms) const {
   const bool expired = expires_unix_ms != 0 && expires_unix_ms <= now_unix_ms;

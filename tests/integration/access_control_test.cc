@@ -45,6 +45,15 @@ class AccessControlTest : public ::testing::Test {
 
   std::vector<nlohmann::json> Audit() { return AuditLines(cluster_.data_dir() / "audit.jsonl"); }
 
+  // Runs `endorecon-server token revoke NAME` on the cluster's data folder; its exit status.
+  int RevokeToken(const std::string& name) {
+    TempDir scratch("revoke");
+    return Process({BuiltBinary("server/endorecon-server"), "token", "revoke", "--data-dir",
+                    cluster_.data_dir().string(), name},
+                   scratch / "out")
+        .Wait();
+  }
+
   // A PACS the server knows by name; nothing listens there, so a retrieval from it fails at once.
   Cluster cluster_{{"--tenant-max-jobs", "2", "--pacs", "pacs1=PACS1@127.0.0.1:" + std::to_string(FreePort()),
                     "--dicom-timeout", "5"},
@@ -142,12 +151,7 @@ TEST_F(AccessControlTest, AWorkerTakesARotatedTokenWithoutARestart) {
   auto& worker = cluster_.StartWorker("w-rotating", {"--token-file", file.string()});
   ASSERT_TRUE(WaitUntil([&] { return Cli(admin_, {"workers"}).out.find("w-rotating") != std::string::npos; }))
       << worker.Log();
-  TempDir scratch("rotate");
-  ASSERT_EQ(Process({BuiltBinary("server/endorecon-server"), "token", "revoke", "--data-dir",
-                     cluster_.data_dir().string(), "node-old"},
-                    scratch / "out")
-                .Wait(),
-            0);
+  ASSERT_EQ(RevokeToken("node-old"), 0);
   // A lease call already waiting when the token was revoked was let in at its start; the next is refused.
   ASSERT_TRUE(WaitUntil([&] { return worker.Log().find("'node-old' was revoked") != std::string::npos; }))
       << worker.Log();
@@ -176,12 +180,7 @@ TEST_F(AccessControlTest, ATokenRevokedMidJobIsRefusedOnTheOpenStreamAndARotated
   ASSERT_EQ(submitted.exit_code, 0) << submitted.err;
   const auto id = submitted.out.substr(submitted.out.find("\"id\":\"") + 6, 12);
   ASSERT_TRUE(WaitUntil([&] { return cluster_.Job(id).progress().iteration() > 0; })) << worker.Log();
-  TempDir scratch("mid");
-  ASSERT_EQ(Process({BuiltBinary("server/endorecon-server"), "token", "revoke", "--data-dir",
-                     cluster_.data_dir().string(), "node-mid"},
-                    scratch / "out")
-                .Wait(),
-            0);
+  ASSERT_EQ(RevokeToken("node-mid"), 0);
   ASSERT_TRUE(WaitUntil(
       [&] { return worker.Log().find("broke (the token 'node-mid' was revoked)") != std::string::npos; },
       std::chrono::seconds(20)))
