@@ -141,6 +141,13 @@ TEST_F(AccessControlTest, AnExpiredTokenIsRefusedAndSaysWhen) {
   const auto no_unit = Capture(BuiltBinary("server/endorecon-server") + " token create --data-dir " +
                                cluster_.data_dir().string() + " --role admin --name d --expires-in 30 2>&1");
   EXPECT_NE(no_unit.find("Missing mandatory unit"), std::string::npos) << no_unit;
+  for (const std::string bad : {"0s", "-3d", "200000w"}) {
+    const auto refused =
+        Capture(BuiltBinary("server/endorecon-server") + " token create --data-dir " +
+                cluster_.data_dir().string() + " --role admin --name d --expires-in=" + bad + " 2>&1");
+    EXPECT_NE(refused.find("--expires-in must be positive and at most 100 years"), std::string::npos)
+        << refused;
+  }
 }
 
 // An operator replaces a worker's token (revoked or expired) by writing the new one into its
@@ -162,6 +169,10 @@ TEST_F(AccessControlTest, AWorkerTakesARotatedTokenWithoutARestart) {
   std::this_thread::sleep_for(std::chrono::seconds(2));
   EXPECT_EQ(cluster_.Job(id).state(), v1::QUEUED);
 
+  // A file that holds no token yet (half written, say) is warned of and the last token kept.
+  WriteTokenFile(file, "not a token");
+  ASSERT_TRUE(WaitUntil([&] { return worker.Log().find("holds no usable token") != std::string::npos; }))
+      << worker.Log();
   WriteTokenFile(file, CreateToken(cluster_.data_dir(), "worker", "", "node-new"));
   const auto job = cluster_.WaitForState(id, v1::SUCCEEDED);
   EXPECT_EQ(job.worker_id(), "w-rotating");
