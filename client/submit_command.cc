@@ -10,12 +10,14 @@
 #include <optional>
 #include <sstream>
 
+#include "client/clip_check.h"
 #include "client/commands.h"
 #include "client/exit_codes.h"
 #include "client/job_format.h"
 #include "client/job_watcher.h"
 #include "client/recording_upload.h"
 #include "common/cli_checks.h"
+#include "common/clip_files.h"
 #include "common/dicom_file.h"
 #include "common/error.h"
 #include "common/file_upload.h"
@@ -106,11 +108,14 @@ void CheckSizes(const Globals& globals, v1::JobService::Stub& stub, const v1::Ma
                                           largest->path() + ", " + HumanBytes(largest->size()) + ")");
 }
 
-// Uploads the clip (what the server lacks of it) and returns its manifest.
-v1::Manifest Upload(const Globals& globals, v1::JobService::Stub& stub, const std::filesystem::path& clip) {
+// Uploads the clip (what the server lacks of it) and returns its manifest. A clip folder (not a
+// DICOM recording nor a raw one) is checked first, after its sizes (clip_check.h).
+v1::Manifest Upload(const Globals& globals, v1::JobService::Stub& stub, const std::filesystem::path& clip,
+                    bool clip_folder) {
   auto manifest = ListingOfClip(clip);
   const auto root = std::filesystem::is_regular_file(clip) ? clip.parent_path() : clip;
   CheckSizes(globals, stub, manifest);
+  if (clip_folder) CheckClipBeforeUpload(clip);
   AddDigests(root.empty() ? "." : root, manifest);
   UploadCalls calls;
   calls.query = [&](grpc::ClientContext* context, const v1::Manifest& m, v1::UploadStatus* status) {
@@ -150,10 +155,10 @@ int Submit(const Globals& globals, const SubmitFlags& flags) {
         "recording (--side-by-side VIDEO --calibration FILE)");
   }
   // A folder that is no clip is refused before its upload, by the rule the worker's loader applies
-  // first (scene/clip_loader.cc): it was uploaded and queued, then failed on the worker.
-  if (!flags.clip.empty() && std::filesystem::is_directory(flags.clip) && !dicom::HoldsDicom(flags.clip) &&
-      !std::filesystem::exists(std::filesystem::path(flags.clip) / "transforms.json") &&
-      !std::filesystem::exists(std::filesystem::path(flags.clip) / "poses_bounds.npy")) {
+  // first (common/clip_files.h): it was uploaded and queued, then failed on the worker.
+  const bool clip_folder =
+      !flags.clip.empty() && std::filesystem::is_directory(flags.clip) && !dicom::HoldsDicom(flags.clip);
+  if (clip_folder && !FindClipLayout(flags.clip)) {
     FailInvalid(flags.clip +
                 ": not a clip: found neither transforms.json (transforms.json layout) nor poses_bounds.npy "
                 "(EndoNeRF layout), and no DICOM recording (docs/formats.md)");
@@ -162,9 +167,8 @@ int Submit(const Globals& globals, const SubmitFlags& flags) {
   if (!flags.name.empty()) ValidateJobName(flags.name);  // as the server would, after the upload
   // A clip folder is used as it is: the recording's options are refused before its upload (as the
   // worker would after it).
-  if (!flags.clip.empty() && std::filesystem::is_directory(flags.clip) && !dicom::HoldsDicom(flags.clip) &&
-      (!flags.raw.frames.empty() || !flags.raw.size.empty() || flags.recording.fps() > 0 ||
-       !flags.recording.stereo().empty() || !flags.recording.endoscope().empty())) {
+  if (clip_folder && (!flags.raw.frames.empty() || !flags.raw.size.empty() || flags.recording.fps() > 0 ||
+                      !flags.recording.stereo().empty() || !flags.recording.endoscope().empty())) {
     FailInvalid("--frames, --size, --fps, --stereo and --endoscope apply to a DICOM recording, and " +
                 flags.clip + " is a clip folder, whose frames are used as they are");
   }
@@ -178,7 +182,8 @@ int Submit(const Globals& globals, const SubmitFlags& flags) {
     request.mutable_pacs()->set_study_uid(flags.study_uid);
     request.mutable_pacs()->set_series_uid(flags.series_uid);
   } else {
-    *request.mutable_clip() = Upload(globals, *stub, staged ? staged->dir() : std::filesystem::path(flags.clip));
+    *request.mutable_clip() =
+        Upload(globals, *stub, staged ? staged->dir() : std::filesystem::path(flags.clip), clip_folder);
   }
   if (staged) {
     *request.mutable_prepare() = PrepareFlagsToProto(staged->flags());

@@ -14,12 +14,12 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "common/json_file.h"
 #include "tests/e2e/headless_chromium.h"
 #include "tests/unit/report_data.h"
 #include "tests/unit/temp_dir.h"
 #include "worker/engine/eval/exports.h"
 #include "worker/engine/reconstruct.h"
-#include "worker/engine/scene/json_file.h"
 #include "worker/engine/scene/synthetic_clip.h"
 
 namespace endorecon {
@@ -142,8 +142,8 @@ TEST(ReportPageTest, APageWorksInHeadlessChromium) {
   const fs::path report = out / "report.html";
   ASSERT_TRUE(fs::exists(report));
   const double megabytes = double(fs::file_size(report)) / 1e6;
-  const auto metrics = scene::ReadJsonFile(out / "metrics.json");
-  const auto config = scene::ReadJsonFile(out / "config.json");
+  const auto metrics = ReadJsonFile(out / "metrics.json");
+  const auto config = ReadJsonFile(out / "config.json");
 
   const auto start = Clock::now();
   browser->Navigate("file://" + report.string());
@@ -262,7 +262,7 @@ TEST(ReportPageTest, RenderWritesAPageOfItsViews) {
   const auto data = testing::ReportData(dir / "views" / "report.html");
   ASSERT_TRUE(data.is_object());
   EXPECT_EQ(data["kind"], "render");
-  EXPECT_EQ(data["render"], scene::ReadJsonFile(dir / "views" / "render.json"));
+  EXPECT_EQ(data["render"], ReadJsonFile(dir / "views" / "render.json"));
   EXPECT_EQ(data["frames"]["count"], 2);
   EXPECT_EQ(data["frames"]["times"], nlohmann::json::array({0.0, 1.0}));
   EXPECT_TRUE(data["frames"]["input"].is_null()) << "rendered views have no input images";

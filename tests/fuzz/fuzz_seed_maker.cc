@@ -10,11 +10,11 @@
 #include <vector>
 
 #include "common/dicom/recording_writer.h"
+#include "common/npy.h"
 #include "common/sha256.h"
 #include "endorecon/v1/files.pb.h"
 #include "tests/fuzz/fuzz_input.h"
 #include "tests/fuzz/tiny_run.h"
-#include "worker/engine/scene/npy.h"
 #include "worker/engine/train/checkpoint.h"
 #include "worker/engine/train/trainer.h"
 #include "worker/prepare/stereo_calibration.h"
@@ -49,10 +49,10 @@ class Seeds {
 std::string Npy(const std::vector<double>& values, const std::vector<std::size_t>& shape, bool float64) {
   const fs::path path = fuzz::ScratchDir() / "seed.npy";
   if (float64) {
-    scene::WriteNpyFloat64(path, values.data(), shape);
+    WriteNpyFloat64(path, values.data(), shape);
   } else {
     const std::vector<float> floats(values.begin(), values.end());
-    scene::WriteNpyFloat32(path, floats.data(), shape);
+    WriteNpyFloat32(path, floats.data(), shape);
   }
   return ReadAll(path);
 }

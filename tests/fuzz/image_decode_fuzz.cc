@@ -20,7 +20,7 @@ const std::filesystem::path& ValidImage() {
   return path;
 }
 
-void Read(const scene::FrameFiles& files, const std::filesystem::path& input) {
+void Read(const FrameFiles& files, const std::filesystem::path& input) {
   scene::Clip clip;
   clip.source = "fuzz clip";
   if (!fuzz::Accepts([&] { scene::ReadFrames({files}, {}, clip); },

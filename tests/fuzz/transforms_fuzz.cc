@@ -4,8 +4,8 @@
 #include <cmath>
 #include <opencv2/imgcodecs.hpp>
 
+#include "common/npy.h"
 #include "tests/fuzz/fuzz_input.h"
-#include "worker/engine/scene/npy.h"
 #include "worker/engine/scene/transforms_loader.h"
 
 namespace {
@@ -20,7 +20,7 @@ std::filesystem::path ClipDir() {
     cv::imwrite((root / "mask.png").string(), cv::Mat(3, 4, CV_8UC1, cv::Scalar(255)));
     cv::imwrite((root / "depth.png").string(), cv::Mat(3, 4, CV_16UC1, cv::Scalar(1200)));
     const float depth[12] = {1, 1, 1, 1, 2, 2, 2, 2, 3, 3, 3, 0};
-    endorecon::scene::WriteNpyFloat32(root / "depth.npy", depth, {3, 4});
+    endorecon::WriteNpyFloat32(root / "depth.npy", depth, {3, 4});
     return root;
   }();
   return dir;

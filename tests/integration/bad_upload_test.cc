@@ -198,5 +198,33 @@ TEST_F(BadUploadTest, AHugeClipIsRefusedFromItsSizesNamingItsLargestFile) {
   EXPECT_EQ(Partials(), 0);
 }
 
+// A clip the worker's loader would refuse is refused by the CLI before its upload, by the same rules
+// (common/clip_files.h, common/image_bytes.h): a clip missing a mask was uploaded, queued and failed
+// only on a worker (found 2026-12-05).
+TEST_F(BadUploadTest, AClipMissingAMaskOrHoldingATruncatedPngIsRefusedBeforeItsUpload) {
+  MakeClip(cluster_.path("nomask"));
+  std::filesystem::remove(cluster_.path("nomask") / "masks" / "000003.png");
+  auto result = RunCli(cluster_.address(), {"submit", cluster_.path("nomask").string()});
+  EXPECT_EQ(result.exit_code, 2) << result.err;
+  EXPECT_NE(result.err.find("nomask/masks: holds 7 files but poses_bounds.npy has 8 rows"), std::string::npos)
+      << result.err;
+  EXPECT_NE(result.err.find("no file named 000003.* for 000003.png"), std::string::npos) << result.err;
+  EXPECT_NE(result.err.find("found before the upload: nothing was sent"), std::string::npos) << result.err;
+
+  MakeClip(cluster_.path("cut"));
+  const auto frame = cluster_.path("cut") / "images" / "000005.png";
+  WriteBytes(frame, ReadBytes(frame).substr(0, 300));
+  result = RunCli(cluster_.address(), {"submit", cluster_.path("cut").string()});
+  EXPECT_EQ(result.exit_code, 2) << result.err;
+  EXPECT_NE(result.err.find("cut/images/000005.png: a truncated PNG"), std::string::npos) << result.err;
+  EXPECT_EQ(Blobs(), 0);
+  EXPECT_EQ(Partials(), 0);
+  // The same clip whole goes up and is queued.
+  MakeClip(cluster_.path("whole"));
+  result = RunCli(cluster_.address(), {"submit", cluster_.path("whole").string()});
+  EXPECT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_GT(Blobs(), 0);
+}
+
 }  // namespace
 }  // namespace endorecon::testing

@@ -18,11 +18,11 @@
 #include <vector>
 
 #include "common/error.h"
+#include "common/npy.h"
 #include "tests/numerics/finite_json.h"
 #include "tests/unit/temp_dir.h"
 #include "worker/engine/reconstruct.h"
 #include "worker/engine/scene/clip_loader.h"
-#include "worker/engine/scene/npy.h"
 #include "worker/engine/scene/synthetic_clip.h"
 #include "worker/engine/train/ray_sampler.h"
 
@@ -75,7 +75,7 @@ nlohmann::json ReconstructSmall(const testing::TempDir& dir, const fs::path& cli
   for (int f = 0; f < kFrames; ++f) {
     char name[16];
     std::snprintf(name, sizeof(name), "%06d.npy", f);
-    const scene::NpyArray depth = scene::ReadNpy(dir / "out" / "depth" / name);
+    const NpyArray depth = ReadNpy(dir / "out" / "depth" / name);
     EXPECT_EQ(depth.size(), std::size_t(kWidth * kHeight));
     EXPECT_EQ(std::count_if(depth.data.begin(), depth.data.end(), [](double d) { return !std::isfinite(d); }),
               0)

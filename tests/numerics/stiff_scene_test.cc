@@ -10,11 +10,11 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "common/npy.h"
 #include "tests/numerics/finite_json.h"
 #include "tests/unit/temp_dir.h"
 #include "worker/engine/reconstruct.h"
 #include "worker/engine/scene/clip_loader.h"
-#include "worker/engine/scene/npy.h"
 #include "worker/engine/scene/synthetic_clip.h"
 #include "worker/engine/train/checkpoint.h"
 
@@ -61,7 +61,7 @@ TEST(StiffScene, ShortReconstructionHasNoNanOrInf) {
   for (int f = 0; f < clip.frame_count(); ++f) {
     char name[16];
     std::snprintf(name, sizeof(name), "%06d.npy", f);
-    const scene::NpyArray depth = scene::ReadNpy(dir / "out" / "depth" / name);
+    const NpyArray depth = ReadNpy(dir / "out" / "depth" / name);
     ASSERT_EQ(depth.size(), std::size_t(clip.width * clip.height));
     for (double d : depth.data) {
       ASSERT_TRUE(std::isfinite(d)) << "depth/" << name;

@@ -9,9 +9,9 @@
 #include <nlohmann/json.hpp>
 #include <vector>
 
+#include "common/npy.h"
 #include "tests/unit/temp_dir.h"
 #include "worker/engine/scene/clip_loader.h"
-#include "worker/engine/scene/npy.h"
 #include "worker/engine/scene/synthetic_clip.h"
 #include "worker/engine/train/render_settings.h"
 #include "worker/engine/train/scene_fit.h"
@@ -125,7 +125,7 @@ TEST(ClipEvaluatorTest, AHeldOutFramesModelMapSeesItsNeighboursResiduals) {
   what.heldout_frames = {2};
   const auto model_map = [&](const scene::Clip& evaluated, const char* out) {
     EvaluateClip(evaluated, run.renderer, what, dir / out);
-    return scene::ReadNpy(dir / out / "uncertainty" / "000002_model.npy").data;
+    return ReadNpy(dir / out / "uncertainty" / "000002_model.npy").data;
   };
   const std::vector<double> plain = model_map(clip, "plain");
   scene::Clip wrong = clip;

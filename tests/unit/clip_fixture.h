@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "common/error.h"
-#include "worker/engine/scene/npy.h"
+#include "common/npy.h"
 
 namespace endorecon::testing {
 
@@ -57,7 +57,7 @@ inline void WritePoses(const std::filesystem::path& path, const std::vector<Pose
                             p.w,    p.r[6], p.r[7], p.r[8], p.t[2], p.f,    p.near, p.far};
     data.insert(data.end(), row, row + 17);
   }
-  scene::WriteNpyFloat64(path, data.data(), {rows.size(), 17});
+  WriteNpyFloat64(path, data.data(), {rows.size(), 17});
 }
 
 // The error a call throws (fails the test if none), checking its code.

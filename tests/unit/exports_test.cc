@@ -12,8 +12,8 @@
 #include <vector>
 
 #include "common/error.h"
+#include "common/npy.h"
 #include "tests/unit/temp_dir.h"
-#include "worker/engine/scene/npy.h"
 
 namespace endorecon::eval {
 namespace {
@@ -73,7 +73,7 @@ TEST(Exports, DepthNpyHasHeightByWidthShape) {
   TempDir dir("exports");
   const std::vector<float> depth = {1, 2, 3, 4, 5, 6};
   WriteDepthNpy(dir / "d.npy", depth, 3, 2);
-  const scene::NpyArray back = scene::ReadNpy(dir / "d.npy");
+  const NpyArray back = ReadNpy(dir / "d.npy");
   EXPECT_EQ(back.dtype, "<f4");
   EXPECT_EQ(back.shape, (std::vector<std::size_t>{2, 3}));
   EXPECT_EQ(back.data[5], 6.0);

@@ -10,10 +10,10 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
 
+#include "common/npy.h"
 #include "tests/unit/clip_fixture.h"
 #include "tests/unit/synthetic_recording_fixture.h"
 #include "worker/engine/scene/clip_loader.h"
-#include "worker/engine/scene/npy.h"
 #include "worker/prepare/frame_source.h"
 
 namespace endorecon::testing {

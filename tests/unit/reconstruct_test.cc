@@ -13,10 +13,10 @@
 #include <thread>
 #include <vector>
 
+#include "common/json_file.h"
 #include "tests/integration/sanitizer_build.h"
 #include "tests/unit/clip_fixture.h"
 #include "tests/unit/temp_dir.h"
-#include "worker/engine/scene/json_file.h"
 #include "worker/engine/scene/synthetic_clip.h"
 
 namespace endorecon {
@@ -127,7 +127,7 @@ TEST(Reconstruct, ProgressUnderABudgetEndsAtTheIterationsRun) {
   EXPECT_EQ(last.eta_s, 0);
   EXPECT_LT(summary.iterations, 1'000'000);
   // ... and its rate is the run's average, not the last interval's (which may hold no step).
-  const double average = scene::ReadJsonFile(dir / "out" / "metrics.json").at("samples_per_second");
+  const double average = ReadJsonFile(dir / "out" / "metrics.json").at("samples_per_second");
   EXPECT_GT(average, 0);
   EXPECT_NEAR(last.samples_per_second, average, 1e-6 * average);
   const Progress& middle = reports[reports.size() / 2];
@@ -138,7 +138,7 @@ TEST(Reconstruct, ProgressUnderABudgetEndsAtTheIterationsRun) {
   EXPECT_GT(share, middle.seconds / options.time_budget_s - 0.05);
 
   // metrics.json says where the run's time went and how each frame was rendered.
-  const nlohmann::json metrics = scene::ReadJsonFile(dir / "out" / "metrics.json");
+  const nlohmann::json metrics = ReadJsonFile(dir / "out" / "metrics.json");
   const auto& time = metrics.at("time");
   EXPECT_EQ(time.at("budget_s").get<double>(), options.time_budget_s);
   EXPECT_LT(time.at("training_steps_s").get<double>(), time.at("training_s").get<double>() + 1e-9);
@@ -194,7 +194,7 @@ TEST(Reconstruct, ABudgetTooSmallForItsResultsSaysWhichWouldDo) {
   options.config["mc_passes"] = 64;
   options.config["eval_coarse_samples"] = options.config["eval_fine_samples"] = 32;
   Reconstruct(options, {});
-  const nlohmann::json metrics = scene::ReadJsonFile(dir / "out" / "metrics.json");
+  const nlohmann::json metrics = ReadJsonFile(dir / "out" / "metrics.json");
   const double least = metrics.at("evaluation").at("seconds").at("render_least");
   EXPECT_GT(least, 0.25 * options.time_budget_s)
       << "the test's premise: the results cost more than a quarter";
@@ -247,7 +247,7 @@ TEST(Reconstruct, WithoutABudgetHeldOutFramesAreNeverReduced) {
   options.iterations = 5;
   options.config["mc_passes"] = 16;
   Reconstruct(options, {});
-  const nlohmann::json evaluation = scene::ReadJsonFile(dir / "out" / "metrics.json").at("evaluation");
+  const nlohmann::json evaluation = ReadJsonFile(dir / "out" / "metrics.json").at("evaluation");
   ASSERT_TRUE(evaluation.contains("reduced_frames")) << "the test's premise: evaluation was cut to its share";
   EXPECT_FALSE(evaluation.contains("heldout_reduced")) << evaluation.dump();
   EXPECT_EQ(evaluation.at("full_frames"), nlohmann::json({3, 7}));
@@ -262,7 +262,7 @@ TEST(Reconstruct, AResumeKeepsItsCheckpointsUncertaintyMapStride) {
   ReconstructOptions first = SmallRunOptions(dir / "clip", dir / "first");
   first.iterations = 20;
   Reconstruct(first, {});
-  EXPECT_EQ(scene::ReadJsonFile(dir / "first" / "config.json").at("train").at("adaptive_map_stride"), 4);
+  EXPECT_EQ(ReadJsonFile(dir / "first" / "config.json").at("train").at("adaptive_map_stride"), 4);
 
   ReconstructOptions resumed = SmallRunOptions(dir / "clip", dir / "resumed");
   resumed.resume_from = (dir / "first" / "model" / "checkpoint.bin").string();
@@ -275,12 +275,12 @@ TEST(Reconstruct, AResumeKeepsItsCheckpointsUncertaintyMapStride) {
   fresh.config["adaptive_refresh"] = 5;
   fresh.iterations = 10;
   Reconstruct(fresh, {});
-  EXPECT_EQ(scene::ReadJsonFile(dir / "fresh" / "config.json").at("train").at("adaptive_map_stride"), 8)
+  EXPECT_EQ(ReadJsonFile(dir / "fresh" / "config.json").at("train").at("adaptive_map_stride"), 8)
       << "the test's premise: these settings fit another stride";
 
   const ReconstructSummary summary = Reconstruct(resumed, {});
   EXPECT_EQ(summary.iterations, 30);
-  const nlohmann::json config = scene::ReadJsonFile(dir / "resumed" / "config.json").at("train");
+  const nlohmann::json config = ReadJsonFile(dir / "resumed" / "config.json").at("train");
   EXPECT_EQ(config.at("adaptive_map_stride"), 4);
   EXPECT_EQ(config.at("adaptive_refresh"), 5);
 }

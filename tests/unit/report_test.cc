@@ -6,11 +6,11 @@
 #include <gtest/gtest.h>
 
 #include "common/error.h"
+#include "common/json_file.h"
 #include "tests/unit/report_data.h"
 #include "tests/unit/temp_dir.h"
 #include "worker/engine/eval/surface_grid.h"
 #include "worker/engine/reconstruct.h"
-#include "worker/engine/scene/json_file.h"
 #include "worker/engine/scene/synthetic_clip.h"
 
 namespace endorecon::eval {
@@ -54,8 +54,8 @@ TEST_F(ReportTest, AReconstructionsPageHoldsEveryFrameItsMetricsAndItsRun) {
   ASSERT_TRUE(data.is_object()) << "no data block in report.html";
   EXPECT_EQ(data["kind"], "reconstruction");
   EXPECT_EQ(data["title"], "clip");
-  EXPECT_EQ(data["metrics"], scene::ReadJsonFile(out / "metrics.json"));
-  EXPECT_EQ(data["config"], scene::ReadJsonFile(out / "config.json"));
+  EXPECT_EQ(data["metrics"], ReadJsonFile(out / "metrics.json"));
+  EXPECT_EQ(data["config"], ReadJsonFile(out / "config.json"));
   EXPECT_EQ(data["run"]["device"], "CPU, 2 threads");
   EXPECT_EQ(data["run"]["version"].get<std::string>().rfind("0.1.0", 0), 0u) << data["run"]["version"];
   EXPECT_GT(data["run"]["machine"]["logical_cores"].get<int>(), 0);

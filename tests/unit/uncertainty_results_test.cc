@@ -4,11 +4,11 @@
 
 #include <nlohmann/json.hpp>
 
+#include "common/npy.h"
 #include "tests/unit/temp_dir.h"
 #include "worker/engine/eval/clip_evaluator.h"
 #include "worker/engine/eval/exports.h"
 #include "worker/engine/scene/clip_loader.h"
-#include "worker/engine/scene/npy.h"
 #include "worker/engine/scene/synthetic_clip.h"
 #include "worker/engine/train/render_settings.h"
 #include "worker/engine/train/scene_fit.h"
@@ -55,7 +55,7 @@ TEST(UncertaintyResults, FilesAndOneHeatmapScalePerClip) {
   EXPECT_DOUBLE_EQ(maps.at("heatmap_scale").at("uncertainty").at(1).get<double>(), HeatmapUpperBound(totals));
   std::vector<std::vector<float>> models;  // the model maps' heat maps have a scale of their own
   for (int f = 0; f < 4; ++f) {
-    const auto map = scene::ReadNpy(dir.path() / "out" / "uncertainty" / FrameFileName(f, "_model.npy")).data;
+    const auto map = ReadNpy(dir.path() / "out" / "uncertainty" / FrameFileName(f, "_model.npy")).data;
     models.emplace_back(map.begin(), map.end());
   }
   EXPECT_DOUBLE_EQ(maps.at("heatmap_scale").at("model").at(1).get<double>(), HeatmapUpperBound(models));

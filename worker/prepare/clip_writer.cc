@@ -6,7 +6,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "common/error.h"
-#include "worker/engine/scene/npy.h"
+#include "common/npy.h"
 
 namespace endorecon::prepare {
 namespace {
@@ -53,9 +53,8 @@ void ClipWriter::Write(int index, const PreparedFrame& frame) const {
   WriteImage(dir_ / "images" / (name + ".png"), frame.left);
   WriteImage(dir_ / "images_right" / (name + ".png"), frame.right);
   CV_Assert(frame.depth.type() == CV_32F && frame.depth.isContinuous());
-  scene::WriteNpyFloat32(
-      dir_ / "depth" / (name + ".npy"), frame.depth.ptr<float>(),
-      {static_cast<std::size_t>(frame.depth.rows), static_cast<std::size_t>(frame.depth.cols)});
+  WriteNpyFloat32(dir_ / "depth" / (name + ".npy"), frame.depth.ptr<float>(),
+                  {static_cast<std::size_t>(frame.depth.rows), static_cast<std::size_t>(frame.depth.cols)});
   if (masks_) {
     // transforms.json follows nerfstudio: 0 = excluded.
     WriteImage(dir_ / "masks" / (name + ".png"),
@@ -76,7 +75,7 @@ void ClipWriter::Finish(const std::vector<FramePlacement>& placements, double ne
         rows.insert(rows.end(), {0.0 - gl(r, 1), gl(r, 0), gl(r, 2), gl(r, 3), hwf[r]});
       rows.insert(rows.end(), {near, far});
     }
-    scene::WriteNpyFloat64(dir_ / "poses_bounds.npy", rows.data(), {placements.size(), 17});
+    WriteNpyFloat64(dir_ / "poses_bounds.npy", rows.data(), {placements.size(), 17});
     return;
   }
   const double t0 = placements.front().time_s, span = placements.back().time_s - t0;

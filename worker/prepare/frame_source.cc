@@ -7,8 +7,8 @@
 #include <opencv2/videoio.hpp>
 #include <vector>
 
+#include "common/clip_files.h"
 #include "common/error.h"
-#include "worker/engine/scene/frame_reader.h"
 #include "worker/engine/scene/image_file.h"
 
 namespace endorecon::prepare {
@@ -29,7 +29,7 @@ void CheckFrameSize(const std::string& where, cv::Size found, cv::Size expected)
 class ImageFolderSource final : public FrameSource {
  public:
   explicit ImageFolderSource(const fs::path& dir)
-      : name_(dir.string()), files_(scene::ListFiles(dir, scene::ImageExtensions())) {
+      : name_(dir.string()), files_(ListFiles(dir, ImageExtensions())) {
     if (files_.empty()) FailInvalid(name_ + ": the folder holds no image (png, jpg, jpeg, bmp, tif, tiff)");
     size_ = Decode(0).size();
   }

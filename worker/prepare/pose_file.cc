@@ -7,7 +7,7 @@
 #include <string>
 
 #include "common/error.h"
-#include "worker/engine/scene/json_file.h"
+#include "common/json_file.h"
 
 namespace endorecon::prepare {
 namespace {
@@ -44,7 +44,7 @@ cv::Matx44d RigidPose(const std::vector<double>& values, const std::string& wher
 
 std::vector<cv::Matx44d> ReadJson(const fs::path& path) {
   const std::string file = path.string();
-  const nlohmann::json top = scene::ReadJsonFile(path);
+  const nlohmann::json top = ReadJsonFile(path);
   if (!top.is_object() || !top.contains("poses") || !top["poses"].is_array()) {
     FailInvalid(file + ": expected {\"convention\": \"opencv\"|\"opengl\", \"poses\": [4x4 matrices]}");
   }

@@ -17,7 +17,7 @@
 #include <thread>
 
 #include "common/error.h"
-#include "worker/engine/scene/npy.h"
+#include "common/npy.h"
 #include "worker/prepare/clip_writer.h"
 #include "worker/prepare/pose_estimator.h"
 #include "worker/prepare/pose_file.h"
@@ -452,7 +452,7 @@ class Preparation {
     const std::string name = ClipFrameName(static_cast<int>(placements_.size() / 2));
     const fs::path dir = staged_.path();
     const cv::Mat frame = cv::imread((dir / "images" / (name + ".png")).string());
-    scene::NpyArray array = scene::ReadNpy(dir / "depth" / (name + ".npy"));
+    NpyArray array = ReadNpy(dir / "depth" / (name + ".npy"));
     cv::Mat depth;
     cv::Mat(frame.rows, frame.cols, CV_64F, array.data.data()).convertTo(depth, CV_32F);
     cv::Mat excluded;

@@ -6,8 +6,8 @@
 #include "common/dicom/result_instances.h"
 #include "common/dicom/uid.h"
 #include "common/error.h"
+#include "common/npy.h"
 #include "worker/engine/eval/exports.h"
-#include "worker/engine/scene/npy.h"
 
 namespace endorecon::worker {
 namespace fs = std::filesystem;
@@ -23,7 +23,7 @@ int CountFrames(const fs::path& folder, const std::string& extension) {
 
 std::vector<float> ReadFloats(const fs::path& path, int width, int height) {
   if (!fs::exists(path)) FailInvalid(path.string() + ": missing");
-  const scene::NpyArray array = scene::ReadNpy(path);
+  const NpyArray array = ReadNpy(path);
   if (array.shape.size() != 2 || array.shape[0] != static_cast<std::size_t>(height) ||
       array.shape[1] != static_cast<std::size_t>(width)) {
     FailInvalid(path.string() + ": expected shape (" + std::to_string(height) + ", " + std::to_string(width) +

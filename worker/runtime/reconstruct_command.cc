@@ -8,9 +8,9 @@
 
 #include "common/cli_checks.h"
 #include "common/error.h"
+#include "common/json_file.h"
 #include "worker/engine/reconstruct.h"
 #include "worker/engine/run_config.h"
-#include "worker/engine/scene/json_file.h"
 #include "worker/runtime/commands.h"
 #include "worker/runtime/dicom_job.h"
 
@@ -99,7 +99,7 @@ Command AddReconstructCommand(CLI::App& app) {
   AddDicomOptions(*cmd, *recording, *dicom);
   return [options, config_file, recording, dicom] {
     if (!config_file->empty()) {
-      options->config = scene::ReadJsonFile(*config_file);
+      options->config = ReadJsonFile(*config_file);
       try {  // checked now, naming the file, not after the clip is loaded
         ResolveConfig(*options);
       } catch (const Error& e) {

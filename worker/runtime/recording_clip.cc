@@ -11,9 +11,9 @@
 #include "common/dicom_file.h"
 #include "common/error.h"
 #include "common/file_write.h"
+#include "common/npy.h"
 #include "worker/engine/eval/exports.h"
 #include "worker/engine/scene/endonerf_loader.h"
-#include "worker/engine/scene/npy.h"
 #include "worker/engine/scene/outside_view.h"
 #include "worker/engine/train/train_config.h"
 #include "worker/prepare/camera_rotation.h"
@@ -126,7 +126,7 @@ void WritePosesBounds(const dicom::Recording& recording, const fs::path& clip_di
     row[15] = kNear;
     row[16] = kFar;
   }
-  scene::WriteNpyFloat64(clip_dir / "poses_bounds.npy", rows.data(), {n, 17});
+  WriteNpyFloat64(clip_dir / "poses_bounds.npy", rows.data(), {n, 17});
 }
 
 // Every frame (each eye) scaled to `size` (area-averaged when smaller); refused when that would

@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <opencv2/imgproc.hpp>
 
+#include "common/clip_files.h"
 #include "common/error.h"
 #include "worker/engine/scene/frame_reader.h"
 #include "worker/prepare/frame_source.h"
@@ -18,7 +19,7 @@ constexpr double kTextureCrop = 0.7;
 }  // namespace
 
 void LoadSynthTexture(const std::string& path, int index, scene::SynthOptions& options) {
-  if (std::filesystem::is_regular_file(path) && scene::HasExtension(path, scene::ImageExtensions())) {
+  if (std::filesystem::is_regular_file(path) && HasExtension(path, ImageExtensions())) {
     scene::RgbImage image = scene::ReadRgbImage(path);
     options.texture = std::move(image.rgb);
     options.texture_width = image.width;

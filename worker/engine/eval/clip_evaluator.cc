@@ -13,6 +13,7 @@
 #include <string>
 #include <utility>
 
+#include "common/npy.h"
 #include "worker/engine/base/seconds_since.h"
 #include "worker/engine/eval/calibration.h"
 #include "worker/engine/eval/depth_error.h"
@@ -28,7 +29,6 @@
 #include "worker/engine/eval/summary.h"
 #include "worker/engine/eval/surface_mesh.h"
 #include "worker/engine/eval/video_writer.h"
-#include "worker/engine/scene/npy.h"
 #include "worker/engine/scene/outside_view.h"
 
 namespace endorecon::eval {
@@ -124,7 +124,7 @@ struct UncertaintyMaps {
     const double total_bound = total.UpperBound(), error_bound = error.UpperBound(),
                  model_bound = model.UpperBound();
     const auto read = [](const std::filesystem::path& path) {
-      const scene::NpyArray array = scene::ReadNpy(path);
+      const NpyArray array = ReadNpy(path);
       return std::vector<float>(array.data.begin(), array.data.end());
     };
     tbb::parallel_for(0, count, [&](int f) {

@@ -10,9 +10,9 @@
 #include <opencv2/imgproc.hpp>
 
 #include "common/error.h"
+#include "common/npy.h"
 #include "worker/engine/eval/image_size.h"
 #include "worker/engine/eval/quantize.h"
-#include "worker/engine/scene/npy.h"
 
 namespace endorecon::eval {
 namespace {
@@ -71,8 +71,7 @@ void WriteDepthPng16(const std::filesystem::path& path, std::span<const float> d
 
 void WriteDepthNpy(const std::filesystem::path& path, std::span<const float> depth, int width, int height) {
   CheckImageSize(depth.size(), width, height, 1, "depth .npy " + path.string());
-  scene::WriteNpyFloat32(path, depth.data(),
-                         {static_cast<std::size_t>(height), static_cast<std::size_t>(width)});
+  WriteNpyFloat32(path, depth.data(), {static_cast<std::size_t>(height), static_cast<std::size_t>(width)});
 }
 
 void WritePly(const std::filesystem::path& path, const PointCloud& cloud) {

@@ -16,6 +16,8 @@
 
 #include "common/base64.h"
 #include "common/error.h"
+#include "common/json_file.h"
+#include "common/npy.h"
 #include "worker/engine/eval/clip_evaluator.h"
 #include "worker/engine/eval/evaluation_mask.h"
 #include "worker/engine/eval/exports.h"
@@ -25,8 +27,6 @@
 #include "worker/engine/scene/camera_list.h"
 #include "worker/engine/scene/clip_loader.h"
 #include "worker/engine/scene/frame_reader.h"
-#include "worker/engine/scene/json_file.h"
-#include "worker/engine/scene/npy.h"
 
 namespace endorecon::eval {
 namespace {
@@ -89,7 +89,7 @@ std::string JpegUri(const scene::RgbImage& image) {
 
 // A float32 .npy map of the results (depth, uncertainty) of shape (height, width).
 std::vector<float> ReadMap(const fs::path& path, int width, int height) {
-  const scene::NpyArray array = scene::ReadNpy(path);
+  const NpyArray array = ReadNpy(path);
   if (array.shape != std::vector<std::size_t>{std::size_t(height), std::size_t(width)}) {
     FailInvalid(fmt::format("{}: expected an array of shape ({}, {})", path.string(), height, width));
   }
@@ -291,8 +291,8 @@ fs::path WriteReport(const fs::path& results_dir) {
   json record;  // metrics.json or render.json: the file that holds the heat-map scales
   std::string heat;
   if (fs::exists(results_dir / "metrics.json")) {
-    record = scene::ReadJsonFile(results_dir / "metrics.json");
-    const json config = scene::ReadJsonFile(results_dir / "config.json");
+    record = ReadJsonFile(results_dir / "metrics.json");
+    const json config = ReadJsonFile(results_dir / "config.json");
     if (!config.contains("clip") || !config["clip"].is_string()) {
       FailInvalid((results_dir / "config.json").string() +
                   ": no \"clip\" (the clip folder) to show the input of");
@@ -315,7 +315,7 @@ fs::path WriteReport(const fs::path& results_dir) {
     data["config"] = config;
     heat = "/uncertainty_maps/heatmap_scale";
   } else if (fs::exists(results_dir / "render.json")) {
-    record = scene::ReadJsonFile(results_dir / "render.json");
+    record = ReadJsonFile(results_dir / "render.json");
     for (const auto& view : scene::ReadCameraList(results_dir / "cameras.json")) {
       views.cameras.push_back(view.camera);
       views.times.push_back(view.time);

@@ -1,9 +1,9 @@
 #include "worker/engine/scene/camera_list.h"
 
 #include "common/error.h"
+#include "common/json_file.h"
 #include "worker/engine/scene/camera_json.h"
 #include "worker/engine/scene/clip_checks.h"
-#include "worker/engine/scene/json_file.h"
 #include "worker/engine/scene/load_options.h"
 
 namespace endorecon::scene {

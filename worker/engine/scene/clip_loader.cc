@@ -1,5 +1,8 @@
 #include "worker/engine/scene/clip_loader.h"
 
+#include <optional>
+
+#include "common/clip_files.h"
 #include "common/error.h"
 #include "worker/engine/scene/clip_checks.h"
 #include "worker/engine/scene/endonerf_loader.h"
@@ -55,9 +58,10 @@ Clip LoadClip(const fs::path& dir, const LoadOptions& options) {
                 "to-dicom VIDEO -o recording.dcm`");
   }
   Clip clip;
-  if (fs::exists(dir / "transforms.json")) {
+  const std::optional<ClipLayout> layout = FindClipLayout(dir);
+  if (layout == ClipLayout::kTransforms) {
     clip = LoadTransformsClip(dir, options);
-  } else if (fs::exists(dir / "poses_bounds.npy")) {
+  } else if (layout == ClipLayout::kEndoNerf) {
     clip = LoadEndoNerfClip(dir, options);
   } else {
     FailInvalid(dir.string() +

@@ -4,20 +4,18 @@
 
 #include <algorithm>
 #include <cmath>
-#include <set>
 
+#include "common/clip_files.h"
 #include "common/error.h"
+#include "common/json_file.h"
+#include "common/npy.h"
 #include "worker/engine/scene/clip_checks.h"
 #include "worker/engine/scene/frame_reader.h"
-#include "worker/engine/scene/json_file.h"
-#include "worker/engine/scene/npy.h"
 
 namespace endorecon::scene {
 namespace {
 
 namespace fs = std::filesystem;
-
-constexpr std::size_t kPoseColumns = 17;
 
 struct PoseRows {
   std::vector<Camera> cameras;  // width/height/f from the file; cx, cy set later
@@ -33,13 +31,7 @@ std::string Number(double value) {
 PoseRows ReadPoseRows(const fs::path& path) {
   if (!fs::is_regular_file(path)) FailInvalid(path.string() + ": file does not exist");
   const NpyArray array = ReadNpy(path);
-  if (array.shape.size() != 2 || array.shape[1] != kPoseColumns) {
-    std::string shape;
-    for (std::size_t dim : array.shape) shape += (shape.empty() ? "" : ", ") + std::to_string(dim);
-    FailInvalid(path.string() + ": expected an array of shape (N, 17), found (" + shape + ")");
-  }
-  const std::size_t rows = array.shape[0];
-  if (rows == 0) FailInvalid(path.string() + ": zero frames (the array has no rows)");
+  const std::size_t rows = PoseRowCount(array, path);
 
   PoseRows poses;
   poses.near = INFINITY;
@@ -77,48 +69,6 @@ PoseRows ReadPoseRows(const fs::path& path) {
     poses.cameras.push_back(camera);
   }
   return poses;
-}
-
-// Where a per-frame folder and images/ part ways, by file name (stem): the first image without a
-// file here, or the first file here without an image; empty when the names match.
-std::string FirstUnpaired(const std::vector<fs::path>& files, const std::vector<fs::path>& images) {
-  std::set<std::string> stems, image_stems;
-  for (const auto& f : files) stems.insert(f.stem().string());
-  for (const auto& f : images) image_stems.insert(f.stem().string());
-  for (const auto& image : images) {
-    if (!stems.count(image.stem().string()))
-      return "no file named " + image.stem().string() + ".* for " + image.filename().string();
-  }
-  for (const auto& f : files) {
-    if (!image_stems.count(f.stem().string())) return f.filename().string() + " names no image";
-  }
-  return "";
-}
-
-// The files of an optional folder: none when absent, otherwise exactly `count`, paired with
-// `images` (when given) by their sorted order.
-std::vector<fs::path> ListFolder(const fs::path& dir, const std::vector<std::string>& extensions,
-                                 std::size_t count, bool required, const std::vector<fs::path>& images = {}) {
-  if (!required && !fs::exists(dir)) return {};
-  std::vector<fs::path> files = ListFiles(dir, extensions);
-  if (files.size() != count) {
-    const std::string unpaired = images.empty() ? "" : FirstUnpaired(files, images);
-    FailInvalid(dir.string() + ": holds " + std::to_string(files.size()) +
-                " files but poses_bounds.npy has " + std::to_string(count) +
-                " rows (the counts of images, depth maps, masks and poses must be equal)" +
-                (unpaired.empty() ? "" : "; " + unpaired));
-  }
-  // Files are paired with images by their sorted order: names that part ways (000004 beside image
-  // 000003) usually mean a file is missing and another is extra.
-  for (std::size_t i = 0; i < images.size() && i < files.size(); ++i) {
-    if (files[i].stem() != images[i].stem()) {
-      spdlog::warn("{}: {} is paired with images/{} by their sorted order, though their names differ ({})",
-                   dir.string(), files[i].filename().string(), images[i].filename().string(),
-                   FirstUnpaired(files, images));
-      break;
-    }
-  }
-  return files;
 }
 
 double ReadBaseline(const fs::path& dir) {
@@ -165,22 +115,7 @@ Clip LoadEndoNerfClip(const fs::path& dir, const LoadOptions& options) {
   PoseRows poses = ReadPoseRows(dir / "poses_bounds.npy");
   const std::size_t n = poses.cameras.size();
 
-  std::vector<std::string> depth_extensions = ImageExtensions();
-  depth_extensions.push_back(".npy");
-  const std::vector<fs::path> images = ListFolder(dir / "images", ImageExtensions(), n, true);
-  const std::vector<fs::path> depths = ListFolder(dir / "depth", depth_extensions, n, false, images);
-  const std::vector<fs::path> masks = ListFolder(dir / "masks", ImageExtensions(), n, false, images);
-  const std::vector<fs::path> eval_masks = ListFolder(dir / "gt_masks", ImageExtensions(), n, false, images);
-  const std::vector<fs::path> rights = ListFolder(dir / "images_right", ImageExtensions(), n, false, images);
-
-  std::vector<FrameFiles> frames(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    frames[i].image = images[i];
-    if (!depths.empty()) frames[i].depth = depths[i];
-    if (!masks.empty()) frames[i].tool_mask = masks[i];
-    if (!eval_masks.empty()) frames[i].eval_mask = eval_masks[i];
-    if (!rights.empty()) frames[i].right_image = rights[i];
-  }
+  const std::vector<FrameFiles> frames = ListEndoNerfFrames(dir, n);
 
   Clip clip;
   clip.source = dir.string();
@@ -188,7 +123,7 @@ Clip LoadEndoNerfClip(const fs::path& dir, const LoadOptions& options) {
   read_options.max_pixels_per_frame = options.max_pixels_per_frame;
   read_options.alpha_background = options.alpha_background;
   ReadFrames(frames, read_options, clip);
-  MatchImageSize(images[0], clip.width, clip.height, poses.cameras);
+  MatchImageSize(frames[0].image, clip.width, clip.height, poses.cameras);
 
   clip.cameras = std::move(poses.cameras);
   clip.near = poses.near;

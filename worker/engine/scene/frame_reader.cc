@@ -5,27 +5,21 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
-#include <cctype>
 #include <cmath>
 #include <exception>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "common/error.h"
+#include "common/npy.h"
 #include "worker/engine/scene/alpha_composite.h"
 #include "worker/engine/scene/clip_checks.h"
 #include "worker/engine/scene/image_file.h"
-#include "worker/engine/scene/npy.h"
 
 namespace endorecon::scene {
 namespace {
 
 namespace fs = std::filesystem;
-
-std::string Lower(std::string text) {
-  std::transform(text.begin(), text.end(), text.begin(), [](unsigned char c) { return std::tolower(c); });
-  return text;
-}
 
 void CheckSize(const fs::path& path, int found_width, int found_height, int width, int height) {
   if (found_width != width || found_height != height) {
@@ -79,7 +73,7 @@ std::vector<std::uint8_t> ReadMask(const fs::path& path, const FrameReadOptions&
 
 std::vector<float> ReadDepth(const fs::path& path, const FrameReadOptions& options, int width, int height) {
   std::vector<double> raw;
-  if (Lower(path.extension().string()) == ".npy") {
+  if (HasExtension(path, {".npy"})) {
     const NpyArray array = ReadNpy(path);
     const bool matches = array.shape.size() == 2 || (array.shape.size() == 3 && array.shape[2] == 1);
     if (!matches || array.shape[0] != static_cast<std::size_t>(height) ||
@@ -131,36 +125,6 @@ void CheckAllOrNone(const std::vector<FrameFiles>& frames, fs::path FrameFiles::
 }
 
 }  // namespace
-
-const std::vector<std::string>& ImageExtensions() {
-  static const std::vector<std::string> extensions = {".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff"};
-  return extensions;
-}
-
-bool HasExtension(const fs::path& path, const std::vector<std::string>& extensions) {
-  const std::string extension = Lower(path.extension().string());
-  return std::find(extensions.begin(), extensions.end(), extension) != extensions.end();
-}
-
-std::vector<fs::path> ListFiles(const fs::path& dir, const std::vector<std::string>& extensions) {
-  if (!fs::is_directory(dir)) FailInvalid(dir.string() + ": folder does not exist");
-  std::vector<fs::path> files;
-  std::error_code error;
-  for (const fs::directory_entry& entry : fs::directory_iterator(dir)) {
-    if (entry.path().filename().string().starts_with(".") || !HasExtension(entry.path(), extensions))
-      continue;
-    // A frame's name that is no readable file (a broken or looping link, a folder, a pipe) is named,
-    // not skipped: skipped, it would show only as a frame count that disagrees.
-    if (!entry.is_regular_file(error)) {
-      FailInvalid(entry.path().string() + ": not a regular file (" +
-                  (error ? error.message() : std::string("a folder, a broken link, a pipe or a device")) +
-                  ")");
-    }
-    files.push_back(entry.path());
-  }
-  std::sort(files.begin(), files.end());
-  return files;
-}
 
 RgbImage ReadRgbImage(const fs::path& path, const std::array<std::uint8_t, 3>& background) {
   cv::Mat image = DecodeImageFile(path);

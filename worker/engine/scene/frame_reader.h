@@ -9,15 +9,10 @@
 #include <string>
 #include <vector>
 
+#include "common/clip_files.h"
 #include "worker/engine/scene/clip.h"
 
 namespace endorecon::scene {
-
-// The files of one frame; an empty path means the clip has no such file (for every frame).
-struct FrameFiles {
-  std::filesystem::path image;
-  std::filesystem::path depth, tool_mask, eval_mask, right_image;
-};
 
 struct FrameReadOptions {
   double depth_scale = 1.0;       // clip units per raw depth value (integer or float files)
@@ -32,17 +27,6 @@ struct RgbImage {
   std::vector<std::uint8_t> rgb;  // width * height * 3
   bool transparent = false;       // the file had an alpha channel and some pixel was not opaque
 };
-
-// The image file extensions the loaders read (lower case): .png .jpg .jpeg .bmp .tif .tiff.
-const std::vector<std::string>& ImageExtensions();
-
-// Whether the extension of `path` (any case) is one of `extensions` (lower case, with the dot).
-bool HasExtension(const std::filesystem::path& path, const std::vector<std::string>& extensions);
-
-// Sorted regular files in `dir` whose extension (any case) is one of `extensions`; hidden files
-// are skipped. Throws FailInvalid when `dir` is not a folder.
-std::vector<std::filesystem::path> ListFiles(const std::filesystem::path& dir,
-                                             const std::vector<std::string>& extensions);
 
 // Decodes an 8- or 16-bit grey, RGB or RGBA image; RGBA is composited onto `background` (straight
 // alpha, as NeRF-synthetic captures store objects on transparency). Throws FailInvalid naming the

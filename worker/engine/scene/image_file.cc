@@ -1,35 +1,17 @@
 #include "worker/engine/scene/image_file.h"
 
-#include <fstream>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
-#include <string_view>
 
 #include "common/error.h"
+#include "common/image_bytes.h"
 
 namespace endorecon::scene {
-namespace {
 
 namespace fs = std::filesystem;
 
-bool HasImageSignature(const fs::path& path) {
-  char head[8] = {};
-  std::ifstream in(path, std::ios::binary);
-  in.read(head, sizeof(head));
-  const std::string_view bytes(head, static_cast<std::size_t>(in.gcount()));
-  for (const std::string_view magic :
-       {std::string_view("\x89PNG\r\n\x1a\n", 8), std::string_view("\xff\xd8\xff", 3),
-        std::string_view("BM", 2), std::string_view("II*\0", 4), std::string_view("MM\0*", 4)}) {
-    if (bytes.substr(0, magic.size()) == magic) return true;
-  }
-  return false;
-}
-
-}  // namespace
-
 cv::Mat DecodeImageFile(const fs::path& path) {
-  if (!fs::is_regular_file(path)) FailInvalid(path.string() + ": file does not exist");
-  if (!HasImageSignature(path)) FailInvalid(path.string() + ": not a PNG, JPEG, BMP or TIFF image");
+  CheckImageBytes(path);
   cv::Mat image;
   try {
     image = cv::imread(path.string(), cv::IMREAD_UNCHANGED);

@@ -5,7 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include "common/error.h"
-#include "worker/engine/scene/npy.h"
+#include "common/npy.h"
 #include "worker/engine/scene/synthetic_files.h"
 #include "worker/engine/scene/synthetic_frames.h"
 #include "worker/engine/scene/synthetic_recording.h"

@@ -7,11 +7,12 @@
 #include <optional>
 #include <vector>
 
+#include "common/clip_files.h"
 #include "common/error.h"
+#include "common/json_file.h"
 #include "worker/engine/scene/camera_json.h"
 #include "worker/engine/scene/clip_checks.h"
 #include "worker/engine/scene/frame_reader.h"
-#include "worker/engine/scene/json_file.h"
 #include "worker/engine/scene/transforms_clip.h"
 
 namespace endorecon::scene {
@@ -19,31 +20,6 @@ namespace {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
-
-fs::path ResolveFile(const fs::path& dir, const json& frame, const char* key, const std::string& where) {
-  const json& value = frame[key];
-  if (!value.is_string()) FailInvalid(where + ": \"" + key + "\" must be a string, found " + value.dump());
-  // A clip is its folder: a path that leaves it (absolute, or up through "..") is refused, so a clip
-  // uploaded to the service cannot make a worker read its own files (or another job's).
-  if (value.get<std::string>().empty()) FailInvalid(where + ": \"" + key + "\" is empty");
-  const fs::path relative = fs::path(value.get<std::string>()).lexically_normal();
-  if (relative.is_absolute() || relative.has_root_name() || *relative.begin() == "..") {
-    FailInvalid(where + ": " + key + " \"" + value.get<std::string>() +
-                "\" leaves the clip's folder; paths must be relative and stay inside it");
-  }
-  const fs::path path = dir / relative;
-  std::error_code error;
-  if (fs::is_regular_file(path, error)) return path;
-  if (fs::exists(path, error))
-    FailInvalid(where + ": " + key + " " + path.string() + " is not a regular file");
-  for (const char* extension : {".png", ".jpg", ".jpeg", ".npy"}) {
-    fs::path candidate = path;
-    candidate += extension;
-    if (fs::is_regular_file(candidate, error)) return candidate;
-  }
-  FailInvalid(where + ": " + key + " " + path.string() +
-              " does not exist (also tried adding .png, .jpg, .jpeg, .npy)");
-}
 
 void WarnAboutDistortion(const json& top, const std::string& file) {
   std::string found;
@@ -92,22 +68,8 @@ Clip LoadTransformsClip(const fs::path& dir, const LoadOptions& options) {
   const fs::path path = dir / "transforms.json";
   const std::string file = path.string();
   const json top = ReadJsonFile(path);
-  if (!top.is_object() || !top.contains("frames") || !top["frames"].is_array()) {
-    FailInvalid(file + ": expected an object with a \"frames\" array");
-  }
-  const json& frames = top["frames"];
-  if (frames.empty()) FailInvalid(file + ": zero frames (\"frames\" is empty)");
+  const std::vector<FrameFiles> files = ListTransformsFrames(dir, top);
   WarnAboutDistortion(top, file);
-
-  std::vector<FrameFiles> files(frames.size());
-  for (std::size_t i = 0; i < frames.size(); ++i) {
-    const std::string where = file + " frame " + std::to_string(i);
-    const json& frame = frames[i];
-    if (!frame.is_object() || !frame.contains("file_path")) FailInvalid(where + ": no \"file_path\"");
-    files[i].image = ResolveFile(dir, frame, "file_path", where);
-    if (frame.contains("depth_file_path")) files[i].depth = ResolveFile(dir, frame, "depth_file_path", where);
-    if (frame.contains("mask_path")) files[i].tool_mask = ResolveFile(dir, frame, "mask_path", where);
-  }
 
   Clip clip;
   clip.source = dir.string();

@@ -1,4 +1,4 @@
-#include "worker/engine/scene/npy.h"
+#include "common/npy.h"
 
 #include <bit>
 #include <cctype>
@@ -10,7 +10,7 @@
 
 #include "common/error.h"
 
-namespace endorecon::scene {
+namespace endorecon {
 namespace {
 
 static_assert(std::endian::native == std::endian::little, "the .npy reader assumes a little-endian host");
@@ -239,4 +239,4 @@ void WriteNpyFloat64(const std::filesystem::path& path, const double* data,
   WriteNpy(path, "<f8", data, sizeof(double), shape);
 }
 
-}  // namespace endorecon::scene
+}  // namespace endorecon

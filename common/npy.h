@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-namespace endorecon::scene {
+namespace endorecon {
 
 struct NpyArray {
   std::vector<std::size_t> shape;  // C order; empty for a 0-d array
@@ -31,4 +31,4 @@ void WriteNpyFloat32(const std::filesystem::path& path, const float* data,
 void WriteNpyFloat64(const std::filesystem::path& path, const double* data,
                      const std::vector<std::size_t>& shape);
 
-}  // namespace endorecon::scene
+}  // namespace endorecon

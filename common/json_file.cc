@@ -1,10 +1,10 @@
-#include "worker/engine/scene/json_file.h"
+#include "common/json_file.h"
 
 #include <fstream>
 
 #include "common/error.h"
 
-namespace endorecon::scene {
+namespace endorecon {
 
 nlohmann::json ReadJsonFile(const std::filesystem::path& path) {
   std::ifstream in(path);
@@ -16,4 +16,4 @@ nlohmann::json ReadJsonFile(const std::filesystem::path& path) {
   }
 }
 
-}  // namespace endorecon::scene
+}  // namespace endorecon

@@ -4,9 +4,9 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 
-namespace endorecon::scene {
+namespace endorecon {
 
 // Parses the file; throws FailInvalid naming it when it cannot be read or is not valid JSON.
 nlohmann::json ReadJsonFile(const std::filesystem::path& path);
 
-}  // namespace endorecon::scene
+}  // namespace endorecon

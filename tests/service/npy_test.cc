@@ -1,4 +1,4 @@
-#include "worker/engine/scene/npy.h"
+#include "common/npy.h"
 
 #include <gtest/gtest.h>
 
@@ -7,7 +7,7 @@
 #include "common/error.h"
 #include "tests/unit/temp_dir.h"
 
-namespace endorecon::scene {
+namespace endorecon {
 namespace {
 
 using testing::ReadBytes;
@@ -154,4 +154,4 @@ INSTANTIATE_TEST_SUITE_P(EndoNerf, NpyFixtureTest,
                                            PoseFixture{"cutting_tissues_twice", 156}));
 
 }  // namespace
-}  // namespace endorecon::scene
+}  // namespace endorecon

@@ -1,0 +1,28 @@
+#include "client/clip_check.h"
+
+#include "common/clip_files.h"
+#include "common/error.h"
+#include "common/image_bytes.h"
+#include "common/npy.h"
+
+namespace endorecon::client {
+
+void CheckClipBeforeUpload(const std::filesystem::path& dir) {
+  try {
+    for (const FrameFiles& frame : ListClipFrames(dir)) {
+      for (const auto* image : {&frame.image, &frame.tool_mask, &frame.eval_mask, &frame.right_image}) {
+        if (!image->empty()) CheckImageBytes(*image);
+      }
+      if (frame.depth.empty()) continue;
+      if (HasExtension(frame.depth, {".npy"})) {
+        ReadNpy(frame.depth);
+      } else {
+        CheckImageBytes(frame.depth);
+      }
+    }
+  } catch (const Error& e) {
+    Fail(e.code(), std::string(e.what()) + " (found before the upload: nothing was sent)");
+  }
+}
+
+}  // namespace endorecon::client

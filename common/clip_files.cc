@@ -1,0 +1,195 @@
+#include "common/clip_files.h"
+
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <cctype>
+#include <nlohmann/json.hpp>
+#include <set>
+
+#include "common/error.h"
+#include "common/json_file.h"
+#include "common/npy.h"
+
+namespace endorecon {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+std::string Lower(std::string text) {
+  std::transform(text.begin(), text.end(), text.begin(), [](unsigned char c) { return std::tolower(c); });
+  return text;
+}
+
+// Where a per-frame folder and images/ part ways, by file name (stem): the first image without a
+// file here, or the first file here without an image; empty when the names match.
+std::string FirstUnpaired(const std::vector<fs::path>& files, const std::vector<fs::path>& images) {
+  std::set<std::string> stems, image_stems;
+  for (const auto& f : files) stems.insert(f.stem().string());
+  for (const auto& f : images) image_stems.insert(f.stem().string());
+  for (const auto& image : images) {
+    if (!stems.count(image.stem().string()))
+      return "no file named " + image.stem().string() + ".* for " + image.filename().string();
+  }
+  for (const auto& f : files) {
+    if (!image_stems.count(f.stem().string())) return f.filename().string() + " names no image";
+  }
+  return "";
+}
+
+// The files of an optional folder: none when absent, otherwise exactly `count`, paired with
+// `images` (when given) by their sorted order.
+std::vector<fs::path> ListFolder(const fs::path& dir, const std::vector<std::string>& extensions,
+                                 std::size_t count, bool required, const std::vector<fs::path>& images = {}) {
+  if (!required && !fs::exists(dir)) return {};
+  std::vector<fs::path> files = ListFiles(dir, extensions);
+  if (files.size() != count) {
+    const std::string unpaired = images.empty() ? "" : FirstUnpaired(files, images);
+    FailInvalid(dir.string() + ": holds " + std::to_string(files.size()) +
+                " files but poses_bounds.npy has " + std::to_string(count) +
+                " rows (the counts of images, depth maps, masks and poses must be equal)" +
+                (unpaired.empty() ? "" : "; " + unpaired));
+  }
+  // Files are paired with images by their sorted order: names that part ways (000004 beside image
+  // 000003) usually mean a file is missing and another is extra.
+  for (std::size_t i = 0; i < images.size() && i < files.size(); ++i) {
+    if (files[i].stem() != images[i].stem()) {
+      spdlog::warn("{}: {} is paired with images/{} by their sorted order, though their names differ ({})",
+                   dir.string(), files[i].filename().string(), images[i].filename().string(),
+                   FirstUnpaired(files, images));
+      break;
+    }
+  }
+  return files;
+}
+
+fs::path ResolveFile(const fs::path& dir, const json& frame, const char* key, const std::string& where) {
+  const json& value = frame[key];
+  if (!value.is_string()) FailInvalid(where + ": \"" + key + "\" must be a string, found " + value.dump());
+  // A clip is its folder: a path that leaves it (absolute, or up through "..") is refused, so a clip
+  // uploaded to the service cannot make a worker read its own files (or another job's).
+  if (value.get<std::string>().empty()) FailInvalid(where + ": \"" + key + "\" is empty");
+  const fs::path relative = fs::path(value.get<std::string>()).lexically_normal();
+  if (relative.is_absolute() || relative.has_root_name() || *relative.begin() == "..") {
+    FailInvalid(where + ": " + key + " \"" + value.get<std::string>() +
+                "\" leaves the clip's folder; paths must be relative and stay inside it");
+  }
+  const fs::path path = dir / relative;
+  std::error_code error;
+  if (fs::is_regular_file(path, error)) return path;
+  if (fs::exists(path, error))
+    FailInvalid(where + ": " + key + " " + path.string() + " is not a regular file");
+  for (const char* extension : {".png", ".jpg", ".jpeg", ".npy"}) {
+    fs::path candidate = path;
+    candidate += extension;
+    if (fs::is_regular_file(candidate, error)) return candidate;
+  }
+  FailInvalid(where + ": " + key + " " + path.string() +
+              " does not exist (also tried adding .png, .jpg, .jpeg, .npy)");
+}
+
+}  // namespace
+
+const std::vector<std::string>& ImageExtensions() {
+  static const std::vector<std::string> extensions = {".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff"};
+  return extensions;
+}
+
+bool HasExtension(const fs::path& path, const std::vector<std::string>& extensions) {
+  const std::string extension = Lower(path.extension().string());
+  return std::find(extensions.begin(), extensions.end(), extension) != extensions.end();
+}
+
+std::vector<fs::path> ListFiles(const fs::path& dir, const std::vector<std::string>& extensions) {
+  if (!fs::is_directory(dir)) FailInvalid(dir.string() + ": folder does not exist");
+  std::vector<fs::path> files;
+  std::error_code error;
+  for (const fs::directory_entry& entry : fs::directory_iterator(dir)) {
+    if (entry.path().filename().string().starts_with(".") || !HasExtension(entry.path(), extensions))
+      continue;
+    // A frame's name that is no readable file (a broken or looping link, a folder, a pipe) is named,
+    // not skipped: skipped, it would show only as a frame count that disagrees.
+    if (!entry.is_regular_file(error)) {
+      FailInvalid(entry.path().string() + ": not a regular file (" +
+                  (error ? error.message() : std::string("a folder, a broken link, a pipe or a device")) +
+                  ")");
+    }
+    files.push_back(entry.path());
+  }
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
+std::optional<ClipLayout> FindClipLayout(const fs::path& dir) {
+  if (fs::exists(dir / "transforms.json")) return ClipLayout::kTransforms;
+  if (fs::exists(dir / "poses_bounds.npy")) return ClipLayout::kEndoNerf;
+  return std::nullopt;
+}
+
+std::size_t PoseRowCount(const NpyArray& poses, const fs::path& path) {
+  if (poses.shape.size() != 2 || poses.shape[1] != kPoseColumns) {
+    std::string shape;
+    for (std::size_t dim : poses.shape) shape += (shape.empty() ? "" : ", ") + std::to_string(dim);
+    FailInvalid(path.string() + ": expected an array of shape (N, 17), found (" + shape + ")");
+  }
+  if (poses.shape[0] == 0) FailInvalid(path.string() + ": zero frames (the array has no rows)");
+  return poses.shape[0];
+}
+
+std::vector<FrameFiles> ListEndoNerfFrames(const fs::path& dir, std::size_t rows) {
+  std::vector<std::string> depth_extensions = ImageExtensions();
+  depth_extensions.push_back(".npy");
+  const std::vector<fs::path> images = ListFolder(dir / "images", ImageExtensions(), rows, true);
+  const std::vector<fs::path> depths = ListFolder(dir / "depth", depth_extensions, rows, false, images);
+  const std::vector<fs::path> masks = ListFolder(dir / "masks", ImageExtensions(), rows, false, images);
+  const std::vector<fs::path> eval_masks =
+      ListFolder(dir / "gt_masks", ImageExtensions(), rows, false, images);
+  const std::vector<fs::path> rights =
+      ListFolder(dir / "images_right", ImageExtensions(), rows, false, images);
+
+  std::vector<FrameFiles> frames(rows);
+  for (std::size_t i = 0; i < rows; ++i) {
+    frames[i].image = images[i];
+    if (!depths.empty()) frames[i].depth = depths[i];
+    if (!masks.empty()) frames[i].tool_mask = masks[i];
+    if (!eval_masks.empty()) frames[i].eval_mask = eval_masks[i];
+    if (!rights.empty()) frames[i].right_image = rights[i];
+  }
+  return frames;
+}
+
+std::vector<FrameFiles> ListTransformsFrames(const fs::path& dir, const json& top) {
+  const std::string file = (dir / "transforms.json").string();
+  if (!top.is_object() || !top.contains("frames") || !top["frames"].is_array()) {
+    FailInvalid(file + ": expected an object with a \"frames\" array");
+  }
+  const json& frames = top["frames"];
+  if (frames.empty()) FailInvalid(file + ": zero frames (\"frames\" is empty)");
+  std::vector<FrameFiles> files(frames.size());
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    const std::string where = file + " frame " + std::to_string(i);
+    const json& frame = frames[i];
+    if (!frame.is_object() || !frame.contains("file_path")) FailInvalid(where + ": no \"file_path\"");
+    files[i].image = ResolveFile(dir, frame, "file_path", where);
+    if (frame.contains("depth_file_path")) files[i].depth = ResolveFile(dir, frame, "depth_file_path", where);
+    if (frame.contains("mask_path")) files[i].tool_mask = ResolveFile(dir, frame, "mask_path", where);
+  }
+  return files;
+}
+
+std::vector<FrameFiles> ListClipFrames(const fs::path& dir) {
+  const std::optional<ClipLayout> layout = FindClipLayout(dir);
+  if (!layout) {
+    FailInvalid(dir.string() +
+                ": not a clip: found neither transforms.json (transforms.json layout) nor poses_bounds.npy "
+                "(EndoNeRF layout)");
+  }
+  if (*layout == ClipLayout::kTransforms)
+    return ListTransformsFrames(dir, ReadJsonFile(dir / "transforms.json"));
+  const fs::path poses = dir / "poses_bounds.npy";
+  if (!fs::is_regular_file(poses)) FailInvalid(poses.string() + ": file does not exist");
+  return ListEndoNerfFrames(dir, PoseRowCount(ReadNpy(poses), poses));
+}
+
+}  // namespace endorecon

@@ -1,0 +1,16 @@
+// What an image file's bytes say before any decoder sees them: shared by the worker, which decodes
+// (worker/engine/scene/image_file.h), and the CLI, which checks a clip's files before its upload.
+#pragma once
+
+#include <filesystem>
+
+namespace endorecon {
+
+// Throws FailInvalid naming the file when it is missing, when its first bytes are not those of a
+// PNG, JPEG, BMP or TIFF file (whatever its name says), or when it is a PNG whose chunks end before
+// its IEND chunk (a truncated file: an interrupted copy or upload) or declare an impossible length.
+// A PNG's chunks are walked by their lengths only (no decoding, no CRC), so this reads a few bytes per
+// chunk; bytes after IEND are allowed, as decoders allow them.
+void CheckImageBytes(const std::filesystem::path& path);
+
+}  // namespace endorecon

@@ -1,0 +1,108 @@
+#include "common/clip_files.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "common/error.h"
+#include "common/npy.h"
+#include "tests/unit/temp_dir.h"
+
+namespace endorecon {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::TempDir;
+using testing::WriteBytes;
+
+std::string ErrorOf(const std::function<void()>& call) {
+  try {
+    call();
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument);
+    return e.what();
+  }
+  ADD_FAILURE() << "no error";
+  return "";
+}
+
+// An EndoNeRF-layout folder of `rows` frames: poses, images/ and masks/ (files named 000000.png ...;
+// their bytes are not looked at here).
+void MakeEndoNerfFolder(const fs::path& dir, std::size_t rows, std::size_t columns = kPoseColumns) {
+  const std::vector<double> poses(rows * columns, 1.0);
+  WriteNpyFloat64(dir / "poses_bounds.npy", poses.data(), {rows, columns});
+  for (const char* folder : {"images", "masks"}) {
+    fs::create_directories(dir / folder);
+    for (std::size_t i = 0; i < rows; ++i) {
+      char name[16];
+      std::snprintf(name, sizeof(name), "%06zu.png", i);
+      WriteBytes(dir / folder / name, "bytes");
+    }
+  }
+}
+
+TEST(ClipFilesTest, AnEndoNerfFolderPairsItsFilesByTheirSortedOrder) {
+  TempDir dir;
+  MakeEndoNerfFolder(dir.path(), 3);
+  WriteBytes(dir / "images" / ".hidden.png", "skipped");
+  WriteBytes(dir / "images" / "notes.txt", "skipped");
+  EXPECT_EQ(FindClipLayout(dir.path()), ClipLayout::kEndoNerf);
+  const std::vector<FrameFiles> frames = ListClipFrames(dir.path());
+  ASSERT_EQ(frames.size(), 3u);
+  EXPECT_EQ(frames[2].image, dir / "images" / "000002.png");
+  EXPECT_EQ(frames[2].tool_mask, dir / "masks" / "000002.png");
+  EXPECT_TRUE(frames[2].depth.empty());
+  EXPECT_TRUE(frames[2].right_image.empty());
+}
+
+TEST(ClipFilesTest, AMissingMaskNamesTheFrameThatLacksIt) {
+  TempDir dir;
+  MakeEndoNerfFolder(dir.path(), 3);
+  fs::remove(dir / "masks" / "000001.png");
+  const std::string message = ErrorOf([&] { ListClipFrames(dir.path()); });
+  EXPECT_NE(message.find("masks: holds 2 files but poses_bounds.npy has 3 rows"), std::string::npos)
+      << message;
+  EXPECT_NE(message.find("no file named 000001.* for 000001.png"), std::string::npos) << message;
+}
+
+TEST(ClipFilesTest, APoseFileOfAnotherShapeOrNoFolderIsRefused) {
+  TempDir dir;
+  MakeEndoNerfFolder(dir.path(), 3, 15);
+  std::string message = ErrorOf([&] { ListClipFrames(dir.path()); });
+  EXPECT_NE(message.find("poses_bounds.npy: expected an array of shape (N, 17), found (3, 15)"),
+            std::string::npos)
+      << message;
+  TempDir empty;
+  message = ErrorOf([&] { ListClipFrames(empty.path()); });
+  EXPECT_NE(message.find(": not a clip: found neither transforms.json"), std::string::npos) << message;
+  EXPECT_FALSE(FindClipLayout(empty.path()));
+}
+
+TEST(ClipFilesTest, ATransformsFileResolvesItsPathsInsideTheClipOnly) {
+  TempDir dir;
+  fs::create_directories(dir / "images");
+  WriteBytes(dir / "images" / "a.png", "bytes");
+  WriteBytes(dir / "transforms.json", R"({"frames": [{"file_path": "images/a"}]})");
+  EXPECT_EQ(FindClipLayout(dir.path()), ClipLayout::kTransforms);
+  const std::vector<FrameFiles> frames = ListClipFrames(dir.path());
+  ASSERT_EQ(frames.size(), 1u);
+  EXPECT_EQ(frames[0].image, dir / "images" / "a.png");
+
+  WriteBytes(dir / "transforms.json",
+             R"({"frames": [{"file_path": "images/a"}, {"file_path": "../../etc/passwd"}]})");
+  std::string message = ErrorOf([&] { ListClipFrames(dir.path()); });
+  EXPECT_NE(message.find("transforms.json frame 1: file_path \"../../etc/passwd\" leaves the clip's folder"),
+            std::string::npos)
+      << message;
+  WriteBytes(dir / "transforms.json", R"({"frames": [{"file_path": "images/b"}]})");
+  message = ErrorOf([&] { ListClipFrames(dir.path()); });
+  EXPECT_NE(message.find("images/b does not exist (also tried adding .png, .jpg, .jpeg, .npy)"),
+            std::string::npos)
+      << message;
+}
+
+}  // namespace
+}  // namespace endorecon

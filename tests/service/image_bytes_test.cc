@@ -1,0 +1,99 @@
+#include "common/image_bytes.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <string>
+
+#include "common/error.h"
+#include "tests/unit/temp_dir.h"
+
+namespace endorecon {
+namespace {
+
+using testing::TempDir;
+using testing::WriteBytes;
+
+// A chunk: length (big-endian), type, data, CRC (not checked by CheckImageBytes: zeros here).
+std::string Chunk(const std::string& type, const std::string& data) {
+  const auto n = static_cast<std::uint32_t>(data.size());
+  std::string bytes = {static_cast<char>(n >> 24), static_cast<char>(n >> 16), static_cast<char>(n >> 8),
+                       static_cast<char>(n)};
+  return bytes + type + data + std::string(4, '\0');
+}
+
+const std::string kSignature("\x89PNG\r\n\x1a\n", 8);
+
+std::string WholePng() {
+  return kSignature + Chunk("IHDR", std::string(13, '\1')) + Chunk("IDAT", std::string(300, 'x')) +
+         Chunk("IDAT", std::string(200, 'y')) + Chunk("IEND", "");
+}
+
+// The message of the error CheckImageBytes throws for `bytes` (empty when it throws none).
+std::string Refusal(const TempDir& dir, const std::string& bytes) {
+  WriteBytes(dir / "frame.png", bytes);
+  try {
+    CheckImageBytes(dir / "frame.png");
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument);
+    EXPECT_NE(std::string(e.what()).find((dir / "frame.png").string()), std::string::npos) << e.what();
+    return e.what();
+  }
+  return "";
+}
+
+TEST(ImageBytesTest, AWholePngPassesAndBytesAfterItsEndAreAllowed) {
+  TempDir dir;
+  EXPECT_EQ(Refusal(dir, WholePng()), "");
+  EXPECT_EQ(Refusal(dir, WholePng() + "trailing bytes some tools append"), "");
+}
+
+TEST(ImageBytesTest, APngCutAnywhereIsTruncatedAndSaysWhere) {
+  TempDir dir;
+  const std::string png = WholePng();
+  // Inside the second IDAT: its chunk starts at 8 + 25 + 312 = 345 and needs 212 bytes.
+  std::string message = Refusal(dir, png.substr(0, 400));
+  EXPECT_NE(message.find("a truncated PNG: its chunk IDAT at byte 345 needs 557 bytes, the file has 400"),
+            std::string::npos)
+      << message;
+  // Between chunks, before IEND (every chunk whole).
+  message = Refusal(dir, png.substr(0, png.size() - 12));
+  EXPECT_NE(message.find("a truncated PNG: it ends at byte 557 before its IEND chunk"), std::string::npos)
+      << message;
+  // The signature alone; one byte short of the end.
+  EXPECT_NE(Refusal(dir, kSignature).find("a truncated PNG"), std::string::npos);
+  EXPECT_NE(Refusal(dir, png.substr(0, png.size() - 1)).find("a truncated PNG: its chunk IEND"),
+            std::string::npos);
+}
+
+TEST(ImageBytesTest, AChunkLongerThanPngAllowsIsDamaged) {
+  TempDir dir;
+  const std::string message = Refusal(dir, kSignature + std::string("\xff\xff\xff\xff", 4) + "IDAT");
+  EXPECT_NE(message.find("a damaged PNG: its chunk IDAT at byte 8 declares 4294967295 bytes"),
+            std::string::npos)
+      << message;
+}
+
+TEST(ImageBytesTest, OtherFormatsAreToldByTheirFirstBytes) {
+  TempDir dir;
+  for (const std::string& magic : {std::string("\xff\xd8\xff\xe0", 4), std::string("BM"),
+                                   std::string("II*\0", 4), std::string("MM\0*", 4)}) {
+    EXPECT_EQ(Refusal(dir, magic + "rest of the file"), "") << magic;
+  }
+  EXPECT_NE(Refusal(dir, "not an image at all").find("not a PNG, JPEG, BMP or TIFF image"),
+            std::string::npos);
+  EXPECT_NE(Refusal(dir, "").find("not a PNG, JPEG, BMP or TIFF image"), std::string::npos);
+}
+
+TEST(ImageBytesTest, AMissingFileIsNamed) {
+  TempDir dir;
+  try {
+    CheckImageBytes(dir / "absent.png");
+    ADD_FAILURE() << "accepted a missing file";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("absent.png: file does not exist"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace endorecon
