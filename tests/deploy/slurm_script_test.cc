@@ -9,6 +9,8 @@
 namespace endorecon::testing {
 namespace {
 
+namespace fs = std::filesystem;
+
 TEST(SlurmScriptTest, TheWorkerGetsOnlyFlagsItHas) {
   const std::string script = ReadBytes(SourcePath("deploy/slurm/endorecon-worker.sbatch"));
   // The worker's command line: the `"$WORKER" serve` line and its continuations, and the security flags.
@@ -31,6 +33,28 @@ TEST(SlurmScriptTest, TheWorkerGetsOnlyFlagsItHas) {
   for (const std::string expected : {"--server", "--devices", "--ca", "--tls-cert", "--tls-key",
                                      "--token-file", "--metrics-port", "--work-dir", "--id"})
     EXPECT_TRUE(used.count(expected)) << "the script does not pass " << expected;
+}
+
+// The batch job's exit status is its workers': a worker that exits at once (refused credentials, a
+// taken port) failed the batch job, which still ended 0. Run outside Slurm, with an `srun` that drops
+// its options and runs the command.
+int BatchStatusWithWorker(const std::string& worker, std::string& log) {
+  TempDir dir("sbatch");
+  WriteBytes(dir / "srun", "#!/bin/bash\nwhile [ $# -gt 0 ] && [ \"${1#--}\" != \"$1\" ]; do shift; done\nexec \"$@\"\n");
+  fs::permissions(dir / "srun", fs::perms::owner_all);
+  const std::string command = "PATH='" + dir.path().string() + "':$PATH ENDORECON_SERVER=127.0.0.1:1 ENDORECON_WORKER=" +
+                              worker + " SLURM_JOB_ID=7 SLURM_CPUS_PER_TASK=1 TMPDIR='" + dir.path().string() +
+                              "' bash '" + SourcePath("deploy/slurm/endorecon-worker.sbatch").string() + "' 2>&1";
+  log = Capture(command + "; echo rc=$?");
+  const auto at = log.rfind("rc=");
+  return std::stoi(log.substr(at + 3));
+}
+
+TEST(SlurmScriptTest, TheBatchJobFailsWhenAWorkerFails) {
+  std::string log;
+  EXPECT_EQ(BatchStatusWithWorker("/bin/false", log), 1) << log;
+  EXPECT_NE(log.find("endorecon-worker for cpu exited with status 1"), std::string::npos) << log;
+  EXPECT_EQ(BatchStatusWithWorker("/bin/true", log), 0) << log;
 }
 
 }  // namespace

@@ -43,5 +43,39 @@ TEST(SystemdUnitsTest, UnitsVerifyAndUseExistingFlags) {
   }
 }
 
+// The worker unit's command line as systemd runs it for an instance (its specifiers replaced, $$ a
+// dollar for the shell, continuation lines joined), with `echo` for the worker: each instance gets
+// its own metrics port, and METRICS_PORT set with `systemctl edit` wins.
+std::string WorkerCommandLine(const std::string& instance, const std::string& environment) {
+  std::string exec = ReadBytes(SourcePath("deploy/systemd/endorecon-worker@.service"));
+  exec = exec.substr(exec.find("ExecStart=") + 10);
+  std::string line;
+  for (std::size_t i = 0; i < exec.size() && exec[i] != '\n'; ++i) {
+    if (exec[i] == '\\' && i + 1 < exec.size() && exec[i + 1] == '\n') {
+      ++i;
+      continue;
+    }
+    line += exec[i];
+  }
+  const std::vector<std::pair<std::string, std::string>> specifiers{
+      {"%i", instance}, {"%d", "/run/credentials/x"}, {"%H", "node7"}, {"$$", "$"},
+      {"/usr/local/bin/endorecon-worker", "echo"}};
+  for (const auto& [from, to] : specifiers) {
+    for (auto at = line.find(from); at != std::string::npos; at = line.find(from, at + to.size()))
+      line.replace(at, from.size(), to);
+  }
+  return Capture("ENDORECON_SERVER=head:50051 CACHE_DIRECTORY=/var/cache/w " + environment + " " + line);
+}
+
+TEST(SystemdUnitsTest, EachWorkerInstanceServesMetricsOnItsOwnPort) {
+  EXPECT_NE(WorkerCommandLine("cpu", "").find("--devices cpu "), std::string::npos);
+  EXPECT_NE(WorkerCommandLine("cpu", "").find("--metrics-port 9465 "), std::string::npos);
+  EXPECT_NE(WorkerCommandLine("0", "").find("--metrics-port 9465 "), std::string::npos);
+  const std::string second = WorkerCommandLine("1", "");
+  EXPECT_NE(second.find("--metrics-port 9466 --work-dir /var/cache/w --id node7-1"), std::string::npos) << second;
+  EXPECT_NE(second.find("--server head:50051 --devices 1 "), std::string::npos) << second;
+  EXPECT_NE(WorkerCommandLine("1", "METRICS_PORT=9500").find("--metrics-port 9500 "), std::string::npos);
+}
+
 }  // namespace
 }  // namespace endorecon::testing
