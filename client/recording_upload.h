@@ -1,6 +1,6 @@
 // A raw stereo recording's files gathered under fixed names in a temporary folder (symbolic links,
 // no copies), so `submit` uploads one folder (resumably, as a clip) and the job names its files
-// the same way wherever it runs: left.<ext> or left/ (a folder's files), right, side_by_side,
+// the same way wherever it runs: left.<ext> or left/ (a folder's image files), right, side_by_side,
 // top_bottom likewise, calibration.<ext> or calibration_left.<ext> and calibration_right.<ext>,
 // masks.<ext> or masks/, poses.<ext>. The folder goes with the object.
 #pragma once
@@ -30,9 +30,10 @@ class StagedRecording {
   const std::map<std::string, std::string>& sources() const { return sources_; }
 
  private:
-  // Links `path` (a file, or a folder's visible files) as `name` (+ the file's extension); returns
-  // the staged name.
-  std::string Stage(const std::string& path, const std::string& name);
+  // Links `path` (a file, or a folder's visible image files) as `name` (+ the file's extension);
+  // returns the staged name. With `file_flag` (the flag's name) a folder is refused: the flag takes
+  // a file. A folder without images is refused naming the path as given.
+  std::string Stage(const std::string& path, const std::string& name, const char* file_flag = nullptr);
 
   std::filesystem::path dir_;
   PrepareFlags flags_;

@@ -19,6 +19,7 @@
 #include "common/cli_checks.h"
 #include "common/clip_files.h"
 #include "common/dicom_file.h"
+#include "common/dicom_values.h"
 #include "common/error.h"
 #include "common/file_upload.h"
 #include "common/grpc_status.h"
@@ -165,6 +166,11 @@ int Submit(const Globals& globals, const SubmitFlags& flags) {
   }
   if (flags.raw.empty() && !flags.raw.size.empty()) ParseFrameSize(flags.raw.size);  // before any upload
   if (!flags.name.empty()) ValidateJobName(flags.name);  // as the server would, after the upload
+  dicom::CheckDicomResultFlags(flags.dicom.enabled(),
+                               !flags.pacs.empty() || (!flags.clip.empty() && dicom::HoldsDicom(flags.clip)),
+                               flags.dicom.patient_id(), flags.dicom.patient_name(), flags.dicom.study_uid());
+  if (flags.pacs.empty() && (!flags.study_uid.empty() || !flags.series_uid.empty()))
+    FailInvalid("--study and --series name a recording in a PACS: they go with --pacs NAME");
   // A clip folder is used as it is: the recording's options are refused before its upload (as the
   // worker would after it).
   if (clip_folder && (!flags.raw.frames.empty() || !flags.raw.size.empty() || flags.recording.fps() > 0 ||

@@ -6,6 +6,8 @@
 #include <string>
 #include <system_error>
 
+#include "common/clip_files.h"
+
 namespace endorecon::dicom {
 
 namespace fs = std::filesystem;
@@ -28,6 +30,8 @@ bool HoldsDicom(const fs::path& path) {
   std::error_code error;
   if (fs::is_regular_file(path, error)) return IsDicomFile(path) || HasDicomExtension(path);
   if (!fs::is_directory(path, error)) return false;
+  // A clip folder is a clip, whatever else lies in it (a recording kept beside its frames).
+  if (FindClipLayout(path)) return false;
   for (const auto& entry : fs::directory_iterator(path, error)) {
     if (entry.is_regular_file() && (IsDicomFile(entry.path()) || HasDicomExtension(entry.path())))
       return true;

@@ -11,7 +11,8 @@ bool IsDicomFile(const std::filesystem::path& path);
 // True when `path` is named *.dcm (any case).
 bool HasDicomExtension(const std::filesystem::path& path);
 // True when `path` is meant as a recording: a DICOM file or a file named *.dcm, or a folder with
-// one of those directly inside it (ReadRecording then says what is wrong with a file that is not DICOM).
+// one of those directly inside it (ReadRecording then says what is wrong with a file that is not DICOM)
+// that is no clip folder (transforms.json or poses_bounds.npy: common/clip_files.h).
 bool HoldsDicom(const std::filesystem::path& path);
 
 }  // namespace endorecon::dicom

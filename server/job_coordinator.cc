@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 
+#include "common/dicom_values.h"
 #include "common/dicom/recording.h"
 #include "common/dicom/uid.h"
 #include "common/error.h"
@@ -262,6 +263,8 @@ v1::Job JobCoordinator::Submit(const v1::SubmitRequest& request, const Principal
   if (request.has_prepare()) CheckPrepareOptions(request.prepare(), request.clip());
   ValidateRecording(request.recording());
   if (!request.dicom().study_uid().empty()) dicom::CheckUid(request.dicom().study_uid(), "dicom.study_uid");
+  dicom::CheckPatientId(request.dicom().patient_id(), "dicom.patient_id");
+  dicom::CheckPatientName(request.dicom().patient_name(), "dicom.patient_name");
   for (const auto& name : request.send_to()) {
     if (dicom_.pacs == nullptr) FailInvalid("send_to: this server has no PACS configured (--pacs)");
     dicom_.pacs->Find(name);

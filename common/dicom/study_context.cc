@@ -4,6 +4,7 @@
 
 #include "common/dicom/dataset_access.h"
 #include "common/dicom/uid.h"
+#include "common/dicom_values.h"
 #include "common/error.h"
 
 namespace endorecon::dicom {
@@ -40,6 +41,8 @@ StudyContext NewStudyContext(const std::string& patient_id, const std::string& p
                              const std::string& study_uid, const std::string& uid_root) {
   StudyContext study;
   if (!study_uid.empty()) CheckUid(study_uid, "--study-uid");
+  CheckPatientId(patient_id, "--patient-id");
+  CheckPatientName(patient_name, "--patient-name");
   study.study_instance_uid = study_uid.empty() ? NewUid(uid_root) : study_uid;
   study.specific_character_set = "ISO_IR 192";  // UTF-8: names typed on a command line
   study.patient_id = patient_id.empty()

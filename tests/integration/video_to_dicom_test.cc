@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
 
 #include "common/dicom/recording.h"
@@ -62,6 +63,40 @@ TEST(VideoToDicomTest, WhatCannotBeReadIsNamed) {
   EXPECT_NE(process.Wait(), 0);
   EXPECT_NE(process.Log().find("broken.mp4"), std::string::npos) << process.Log();
   EXPECT_FALSE(std::filesystem::exists(dir / "out.dcm"));
+}
+
+// A video that ends early leaves no half-made MP4 beside the output (found 2026-12-05), and -o naming
+// a folder is a usage error that says so.
+TEST(VideoToDicomTest, AFailedWriteLeavesNothingAndAFolderIsNoOutput) {
+  TempDir dir("video-to-dicom-left");
+  std::filesystem::create_directories(dir / "frames");
+  cv::imwrite((dir / "frames" / "a.png").string(), cv::Mat(48, 64, CV_8UC3, cv::Scalar::all(90)));
+  cv::imwrite((dir / "frames" / "b.png").string(), cv::Mat(40, 64, CV_8UC3, cv::Scalar::all(90)));
+  Process mixed({BuiltBinary("worker/runtime/endorecon-worker"), "to-dicom", (dir / "frames").string(), "-o",
+                 (dir / "out.dcm").string()},
+                dir / "mixed.log");
+  EXPECT_NE(mixed.Wait(), 0) << mixed.Log();
+  EXPECT_FALSE(std::filesystem::exists(dir / "out.dcm.mp4"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "out.dcm"));
+  Process folder({BuiltBinary("worker/runtime/endorecon-worker"), "to-dicom", (dir / "frames").string(), "-o",
+                  dir.path().string()},
+                 dir / "folder.log");
+  EXPECT_EQ(folder.Wait(), 2) << folder.Log();
+  EXPECT_NE(folder.Log().find(": a folder; -o names the DICOM file to write"), std::string::npos) << folder.Log();
+}
+
+// Frames of odd size become H.264 of the even size above, padded, and read back whole: FFmpeg cut
+// them to the size below while the header kept the odd one, a file endorecon could not read.
+TEST(VideoToDicomTest, OddSizedFramesArePaddedToEvenOnes) {
+  TempDir dir("video-to-dicom-odd");
+  std::filesystem::create_directories(dir / "odd");
+  for (const char* name : {"a.png", "b.png", "c.png"})
+    cv::imwrite((dir / "odd" / name).string(), cv::Mat(47, 63, CV_8UC3, cv::Scalar(40, 120, 200)));
+  ASSERT_EQ(ToDicom(dir, {(dir / "odd").string(), "-o", (dir / "odd.dcm").string()}), 0);
+  const dicom::Recording odd = dicom::ReadRecording(dir / "odd.dcm", {});
+  ASSERT_EQ(odd.left.size(), 3u);
+  EXPECT_EQ(odd.left[0].size(), cv::Size(64, 48));
+  EXPECT_NEAR(cv::mean(odd.left[2])[2], 200, 4);  // the padding repeats the edge: no dark border
 }
 
 }  // namespace

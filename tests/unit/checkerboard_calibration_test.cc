@@ -61,5 +61,21 @@ TEST(CheckerboardCalibrationTest, TooFewViewsOfTheBoardIsAClearError) {
       << message;
 }
 
+// One eye's views given for both eyes calibrate to eyes 1e-16 apart: refused, not written for
+// `prepare` to fail on later with a message about rectification (found 2026-12-05).
+TEST(CheckerboardCalibrationTest, OneEyesViewsGivenTwiceAreRefused) {
+  TempDir dir("checkerboard");
+  scene::WriteSyntheticClip(RecordingOptions(320, 256, 1, 8), dir / "synth");
+  prepare::CheckerboardOptions board;
+  board.inner_corners = {scene::kCheckerboardColumns, scene::kCheckerboardRows};
+  board.square = scene::kCheckerboardSquare;
+  const prepare::RecordingInput recording{prepare::StereoLayout::kTwoSources,
+                                          dir / "synth/recording/checkerboard/left",
+                                          dir / "synth/recording/checkerboard/left",
+                                          {}};
+  const std::string message = ErrorFrom([&] { prepare::CalibrateFromCheckerboard(recording, board); });
+  EXPECT_NE(message.find("are the left and right images the same eye's?"), std::string::npos) << message;
+}
+
 }  // namespace
 }  // namespace endorecon::testing

@@ -36,6 +36,10 @@ TEST(DicomFileTest, TheMarkAtByte128OrTheNameMakesARecording) {
   EXPECT_FALSE(HoldsDicom(dir / "series"));
   fs::copy_file(dir / "marked", dir / "series" / "1");
   EXPECT_TRUE(HoldsDicom(dir / "series"));
+  // A clip folder stays a clip with a recording kept beside its frames (it was reconstructed from
+  // the recording, its poses, depth and masks ignored).
+  Write(dir / "series" / "transforms.json", "{}");
+  EXPECT_FALSE(HoldsDicom(dir / "series"));
 }
 
 }  // namespace

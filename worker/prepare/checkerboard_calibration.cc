@@ -100,6 +100,13 @@ CheckerboardCalibration CalibrateFromCheckerboard(const RecordingInput& recordin
   c.d2 = d2.reshape(1, 1);
   c.r = cv::Matx33d(r);
   c.t = cv::Vec3d(t);
+  // The same views for both eyes (one eye's folder given twice) calibrate to eyes in one place, a
+  // file `prepare` then refuses with a message about rectification: refused here, saying why.
+  if (cv::norm(c.t) < kLeastBaselineSquares * options.square) {
+    FailInvalid(source.name() + ": the two eyes calibrate to " + fmt::format("{:.3g}", cv::norm(c.t)) +
+                " apart, under " + fmt::format("{:g}", kLeastBaselineSquares) +
+                " of a square: are the left and right images the same eye's?");
+  }
   c.kind = "opencv";
   c.source = source.name();
   return result;

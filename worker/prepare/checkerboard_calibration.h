@@ -29,8 +29,12 @@ struct CheckerboardCalibration {
   int frames_read = 0, views_found = 0, views_used = 0;
 };
 
+// Eyes calibrated closer than this many squares apart are one eye given twice (a stereo endoscope's
+// eyes lie about a millimetre or more apart, boards' squares a few millimetres).
+constexpr double kLeastBaselineSquares = 1e-3;
+
 // Throws the source's errors, and FailInvalid naming the recording when fewer than 4 frames show
-// the whole board to both eyes.
+// the whole board to both eyes, or when the eyes calibrate to less than kLeastBaselineSquares apart.
 CheckerboardCalibration CalibrateFromCheckerboard(const RecordingInput& recording,
                                                   const CheckerboardOptions& options);
 

@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "common/error.h"
+#include "worker/prepare/required_file.h"
 
 namespace endorecon::prepare {
 namespace {
@@ -37,9 +38,8 @@ bool ParseNumber(const std::string& text, T& value) {
 
 OpenCvStorage OpenCvStorage::Load(const fs::path& path) {
   const std::string name = path.string();
+  RequireRegularFile(path, "calibration file");
   std::error_code error;
-  if (!fs::is_regular_file(path, error))
-    Fail(ErrorCode::kNotFound, name + ": calibration file does not exist");
   const std::uintmax_t size = fs::file_size(path, error);
   if (error || size > kMaxBytes) {
     FailInvalid(name + ": " + std::to_string(size) + " bytes is too large for a calibration file (at most " +

@@ -8,6 +8,7 @@
 
 #include "common/error.h"
 #include "common/json_file.h"
+#include "worker/prepare/required_file.h"
 
 namespace endorecon::prepare {
 namespace {
@@ -107,7 +108,7 @@ std::vector<cv::Matx44d> ReadCsv(const fs::path& path) {
 }  // namespace
 
 std::vector<cv::Matx44d> ReadPoseFile(const fs::path& path) {
-  if (!fs::is_regular_file(path)) Fail(ErrorCode::kNotFound, path.string() + ": pose file does not exist");
+  RequireRegularFile(path, "pose file");
   std::vector<cv::Matx44d> poses = path.extension() == ".json" ? ReadJson(path) : ReadCsv(path);
   if (poses.empty()) FailInvalid(path.string() + ": holds no pose");
   return poses;

@@ -7,6 +7,7 @@
 
 #include "common/error.h"
 #include "worker/prepare/opencv_storage.h"
+#include "worker/prepare/required_file.h"
 
 namespace endorecon::prepare {
 namespace {
@@ -60,8 +61,7 @@ cv::Vec3d Translation(const cv::Mat& m, const std::string& where) {
 }
 
 void RequireFile(const fs::path& path) {
-  if (!fs::is_regular_file(path))
-    Fail(ErrorCode::kNotFound, path.string() + ": calibration file does not exist");
+  RequireRegularFile(path, "calibration file");
 }
 
 cv::Mat ReadMatrix(const OpenCvStorage& file, const std::string& name,

@@ -7,6 +7,9 @@
 #include <memory>
 
 #include "common/cli_checks.h"
+#include "common/clip_files.h"
+#include "common/dicom_file.h"
+#include "common/dicom_values.h"
 #include "common/error.h"
 #include "common/json_file.h"
 #include "worker/engine/reconstruct.h"
@@ -17,6 +20,19 @@
 namespace endorecon::worker {
 
 namespace {
+
+namespace fs = std::filesystem;
+
+// The clip made from a DICOM recording goes to OUT.clip, replacing an earlier run's clip there; any
+// other folder by that name (the user's files) is refused, not deleted.
+void RefuseToReplaceAForeignFolder(const fs::path& clip_out) {
+  std::error_code error;
+  if (!fs::exists(clip_out, error)) return;
+  if (fs::is_directory(clip_out, error) && (fs::is_empty(clip_out, error) || FindClipLayout(clip_out))) return;
+  FailInvalid(clip_out.string() +
+              ": exists and is not a clip an earlier run made; the clip of this recording goes there (-o OUT "
+              "makes OUT.clip): move it away or choose another -o");
+}
 
 void AddReconstructOptions(CLI::App& cmd, ReconstructOptions& options, std::string& config_file) {
   cmd.add_option("--config", config_file,
@@ -107,6 +123,10 @@ Command AddReconstructCommand(CLI::App& app) {
         FailInvalid("--config " + *config_file + ": " + e.what());
       }
     }
+    const bool recording_input = dicom::HoldsDicom(options->clip_dir);
+    dicom::CheckDicomResultFlags(dicom->enabled(), recording_input, dicom->patient_id(), dicom->patient_name(),
+                                 dicom->study_uid());
+    if (recording_input) RefuseToReplaceAForeignFolder(options->out_dir + ".clip");
     const auto from_dicom = PrepareRecording(options->clip_dir, *recording, options->out_dir + ".clip");
     if (from_dicom) options->clip_dir = from_dicom->clip_dir.string();
     ReconstructHooks hooks;

@@ -7,6 +7,7 @@
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <memory>
+#include <opencv2/core.hpp>
 #include <opencv2/videoio.hpp>
 
 #include "common/dicom/recording_writer.h"
@@ -31,31 +32,53 @@ double FrameRate(double asked, const prepare::SourceFrame& first, const prepare:
   return period > 0 ? 1 / period : 1 / prepare::kImageFolderFramePeriod;
 }
 
+// H.264 (4:2:0) codes whole 2 x 2 blocks: FFmpeg cut an odd-sized frame to the even size below it
+// while the DICOM header kept the odd one, a file endorecon then refused to read. Odd frames are
+// padded by one row or column, repeating the edge.
+cv::Mat EvenSized(const cv::Mat& image) {
+  if (image.cols % 2 == 0 && image.rows % 2 == 0) return image;
+  cv::Mat even;
+  cv::copyMakeBorder(image, even, 0, image.rows % 2, 0, image.cols % 2, cv::BORDER_REPLICATE);
+  return even;
+}
+
+// The MP4 the frames go through on their way into the DICOM file: removed however the writing ends.
+struct TemporaryFile {
+  fs::path path;
+  ~TemporaryFile() {
+    std::error_code ignored;
+    fs::remove(path, ignored);
+  }
+};
+
 // H.264: the frames re-encoded one at a time into an MP4 beside `out` (OpenCV's FFmpeg), which
 // DCMTK then wraps; nothing but the current frame is held, so a long video fits in memory.
 void WriteH264(prepare::FrameSource& source, double asked_fps, const dicom::RecordingHeader& header,
                const fs::path& out, int& frames, double& fps) {
-  const fs::path video = out.string() + ".mp4";
+  const TemporaryFile video{out.string() + ".mp4"};
   prepare::SourceFrame first, frame;
   if (!source.Next(first)) FailInvalid(source.name() + ": no frames");
   const bool more = source.Next(frame);
   fps = FrameRate(asked_fps, first, more ? frame : first);
-  cv::VideoWriter writer(video.string(), cv::VideoWriter::fourcc('a', 'v', 'c', '1'), fps,
-                         first.image.size());
+  const cv::Size size = EvenSized(first.image).size();
+  if (size != first.image.size()) {
+    spdlog::warn("{}: frames of {}x{} are padded to {}x{} (H.264 codes even sizes), repeating the edge",
+                 source.name(), first.image.cols, first.image.rows, size.width, size.height);
+  }
+  cv::VideoWriter writer(video.path.string(), cv::VideoWriter::fourcc('a', 'v', 'c', '1'), fps, size);
   if (!writer.isOpened()) {
-    Fail(ErrorCode::kUnavailable, "cannot write the H.264 video " + video.string() +
+    Fail(ErrorCode::kUnavailable, "cannot write the H.264 video " + video.path.string() +
                                       ": the installed FFmpeg cannot encode H.264 at " + std::to_string(fps) +
                                       " frames/s, or the folder is not writable");
   }
-  writer.write(first.image);
+  writer.write(EvenSized(first.image));
   frames = 1;
   for (bool next = more; next; next = source.Next(frame)) {
-    writer.write(frame.image);
+    writer.write(EvenSized(frame.image));
     ++frames;
   }
   writer.release();
-  dicom::WriteVideoEndoscopic(video, frames, first.image.cols, first.image.rows, fps, header, out);
-  fs::remove(video);
+  dicom::WriteVideoEndoscopic(video.path, frames, size.width, size.height, fps, header, out);
 }
 
 // Multi-frame VL Endoscopic: every frame in one instance (uncompressed or JPEG), so all are held.
@@ -76,6 +99,10 @@ void WriteVl(prepare::FrameSource& source, double asked_fps, bool jpeg, const di
 }
 
 int Run(const ToDicomFlags& flags) {
+  if (fs::is_directory(flags.out)) {
+    FailInvalid("-o " + flags.out + ": a folder; -o names the DICOM file to write (e.g. " +
+                (fs::path(flags.out) / "recording.dcm").string() + ")");
+  }
   // The output's folder is made, as for every format (an H.264 recording's missing folder was
   // reported as FFmpeg unable to encode H.264).
   const fs::path out_dir = fs::path(flags.out).parent_path();
