@@ -94,6 +94,42 @@ TEST(PrepareJobTest, AFailedRecordingNamesTheUsersFile) {
   EXPECT_EQ(said.find("left.avi"), std::string::npos) << said;
 }
 
+// A folder named as an eye sends only its frames: `--left ../../etc` uploaded every file of /etc
+// (found 2026-12-05). A folder without frames, or a folder as --calibration, is refused before any
+// upload, naming the path as the user gave it.
+TEST(PrepareJobTest, AnEyesFolderSendsOnlyItsFramesAndAFolderIsNoCalibration) {
+  Cluster cluster;
+  MakeRecording(cluster.path("rec"));
+  const fs::path rec = cluster.path("rec");
+  fs::create_directories(rec / "notes");
+  WriteBytes(rec / "notes" / "secret.txt", "not a frame");
+  const auto calibration = (rec / "synth/recording/calibration.yaml").string();
+  auto result = RunCli(cluster.address(), {"submit", "--left", (rec / "notes").string(), "--right",
+                                           (rec / "right.avi").string(), "--calibration", calibration});
+  EXPECT_EQ(result.exit_code, 2) << result.err;
+  EXPECT_NE(result.err.find((rec / "notes").string() + ": the folder holds no image"), std::string::npos)
+      << result.err;
+  result = RunCli(cluster.address(), {"submit", "--left", (rec / "left.avi").string(), "--right",
+                                      (rec / "right.avi").string(), "--calibration", (rec / "synth").string()});
+  EXPECT_EQ(result.exit_code, 2) << result.err;
+  EXPECT_NE(result.err.find("synth: a folder, and --calibration takes a file"), std::string::npos) << result.err;
+  int uploaded = 0;
+  for (const char* folder : {"blobs", "partial"}) {
+    if (!fs::exists(cluster.data_dir() / folder)) continue;
+    for (const auto& entry : fs::recursive_directory_iterator(cluster.data_dir() / folder))
+      uploaded += entry.is_regular_file() ? 1 : 0;
+  }
+  EXPECT_EQ(uploaded, 0);
+
+  // The eyes' frames as folders, a stray file among them: the frames go, the stray file does not.
+  WriteBytes(rec / "synth/recording/left/notes.txt", "not a frame");
+  result = RunCli(cluster.address(),
+                  {"submit", "--left", (rec / "synth/recording/left").string(), "--right",
+                   (rec / "synth/recording/right").string(), "--calibration", calibration});
+  EXPECT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_NE(result.err.find("uploaded 13 file(s)"), std::string::npos) << result.err;
+}
+
 TEST(PrepareJobTest, BadRecordingOptionsAreRefusedBeforeAnyUpload) {
   Cluster cluster;
   const auto result = RunCli(cluster.address(), {"submit", "--left", "L.mp4", "--right", "R.mp4",

@@ -99,5 +99,21 @@ TEST(VideoToDicomTest, OddSizedFramesArePaddedToEvenOnes) {
   EXPECT_NEAR(cv::mean(odd.left[2])[2], 200, 4);  // the padding repeats the edge: no dark border
 }
 
+// `reconstruct REC.dcm -o OUT` makes its clip in OUT.clip: a folder of the user's there is refused,
+// not deleted (found 2026-12-05: it was removed without a word).
+TEST(VideoToDicomTest, AReconstructionKeepsAForeignFolderWhereItsClipWouldGo) {
+  TempDir dir("video-to-dicom-clip");
+  ASSERT_EQ(ToDicom(dir, {WriteVideo(dir).string(), "-o", (dir / "rec.dcm").string()}), 0);
+  std::filesystem::create_directories(dir / "out.clip");
+  WriteBytes(dir / "out.clip" / "mine.txt", "keep");
+  Process reconstruct({BuiltBinary("worker/runtime/endorecon-worker"), "reconstruct", (dir / "rec.dcm").string(),
+                       "-o", (dir / "out").string(), "--iterations", "5"},
+                      dir / "reconstruct.log");
+  EXPECT_EQ(reconstruct.Wait(), 2) << reconstruct.Log();
+  EXPECT_NE(reconstruct.Log().find("out.clip: exists and is not a clip an earlier run made"), std::string::npos)
+      << reconstruct.Log();
+  EXPECT_EQ(ReadBytes(dir / "out.clip" / "mine.txt"), "keep");
+}
+
 }  // namespace
 }  // namespace endorecon::testing

@@ -111,6 +111,9 @@ TEST(StereoCalibrationTest, FaultsNameTheFileAndField) {
   message = ErrorFrom([&] { prepare::LoadStereoCalibration({dir / "bad_ros.yaml", dir / "bad_ros.yaml"}); });
   EXPECT_NE(message.find("bad_ros.yaml: not a ROS camera_info YAML"), std::string::npos) << message;
   ErrorFrom([&] { prepare::LoadStereoCalibration({dir / "absent.yaml"}); }, ErrorCode::kNotFound);
+  // A folder is no calibration file (it was "calibration file does not exist", NOT_FOUND).
+  message = ErrorFrom([&] { prepare::LoadStereoCalibration({dir.path()}); });
+  EXPECT_NE(message.find(": a folder, not a calibration file"), std::string::npos) << message;
 
   // Found by tests/fuzz/stereo_calibration_fuzz.cc: OpenCV 4.6's parser threw std::length_error on
   // this file, which escaped as no endorecon error.
