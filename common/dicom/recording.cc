@@ -614,6 +614,14 @@ Recording ReadRecording(const fs::path& path, const RecordingOptions& options) {
                 (two ? "stereo as two series needs exactly two (left, then right, by Series Number)"
                      : "a recording is one series (or two with --stereo series)"));
   }
+  // The eyes are told apart by Series Number alone: equal numbers left them in the order of their
+  // UIDs, which swapped the eyes without a word (found 2026-12-05).
+  if (two && series[0].front().series_number == series[1].front().series_number) {
+    FailInvalid(path.string() + ": both series have Series Number " +
+                std::to_string(series[0].front().series_number) +
+                "; stereo as two series takes the lower number as the left eye (give the eyes' series "
+                "different numbers, e.g. to-dicom --series-number)");
+  }
   Recording recording;
   const auto timeline = Timeline(series[0]);
   recording.recording_frames = static_cast<int>(timeline.size());
@@ -634,7 +642,10 @@ Recording ReadRecording(const fs::path& path, const RecordingOptions& options) {
   } else if (options.stereo != StereoLayout::kMono) {
     recording.right = Split(recording.left, options.stereo, path.string());
   }
-  for (const auto& ref : picked) recording.times_s.push_back(ref.time - picked.front().time);
+  for (const auto& ref : picked) {
+    recording.times_s.push_back(ref.time - picked.front().time);
+    recording.frame_numbers.push_back(static_cast<int>(ref.index));
+  }
   recording.times_from = series[0].front().times_from;
   recording.study = ReadStudyContext(*series[0].front().dataset, series[0].front().path.string());
   for (std::size_t i = 1; i < series[0].size(); ++i) {

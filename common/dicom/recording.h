@@ -54,6 +54,7 @@ struct Recording {
   std::vector<cv::Mat> left;    // 8-bit BGR (OpenCV's order), one per kept frame
   std::vector<cv::Mat> right;   // the right eye, same count, when stereo; else empty
   std::vector<double> times_s;  // per kept frame, seconds from the recording's first frame
+  std::vector<int> frame_numbers;  // per kept frame, its number in the recording (0-based)
   std::string times_from;       // which attribute gave the times (for the clip's record)
   int recording_frames = 0;     // frames in the recording before the window
   StudyContext study;           // the left (or only) series' patient, study and instances

@@ -90,6 +90,7 @@ TEST(DicomRecordingTest, WindowAndFrameRatePickFrames) {
   EXPECT_EQ(MeanAbsDifference(window.left[1], frames[3]), 0.0);
   EXPECT_NEAR(window.times_s[2], 0.2, 1e-9);  // frame 5, from the window's first frame
   EXPECT_EQ(window.recording_frames, 8);
+  EXPECT_EQ(window.frame_numbers, (std::vector<int>{1, 3, 5}));  // numbers in the recording
 
   RecordingOptions slower;
   slower.fps = 10;  // every other frame of a 20 frames/s recording
@@ -177,6 +178,14 @@ TEST(DicomRecordingTest, TwoSeriesAreTheLeftAndRightEyes) {
 
   const std::string mono = ErrorOf(dir / "pair");
   EXPECT_NE(mono.find("holds 2 series"), std::string::npos) << mono;
+
+  // Two series of one number cannot say which eye is which: refused (they were taken in the order
+  // of their UIDs, which swapped the eyes without a word).
+  std::filesystem::create_directories(dir / "tied");
+  WriteEndoscopicFrames(right, {0, 0.1, 0.2}, false, header, dir / "tied" / "b.dcm");
+  WriteEndoscopicFrames(flipped, {0, 0.1, 0.2}, false, header, dir / "tied" / "a.dcm");
+  const std::string tied = ErrorOf(dir / "tied", options);
+  EXPECT_NE(tied.find("both series have Series Number 1"), std::string::npos) << tied;
 }
 
 // Found by tests/fuzz/dicom_recording_fuzz.cc: a TEM marker (FF 01) in place of a frame's first

@@ -237,7 +237,7 @@ std::optional<RecordingClip> ClipFromRecording(const fs::path& input, const dico
   const cv::Size recorded = recording.left[0].size();
   ScaleFrames(recording, options.size);
   nlohmann::json camera_record = nlohmann::json::object();
-  std::vector<int> dropped;  // recording frames the clip leaves out
+  std::vector<int> dropped;  // kept frames (positions in `recording`) the clip leaves out
   if (recording.right.empty()) {
     fs::remove_all(clip_dir);
     fs::create_directories(clip_dir);
@@ -248,7 +248,10 @@ std::optional<RecordingClip> ClipFromRecording(const fs::path& input, const dico
     WriteTransforms(recording, turns, clip_dir);
   } else {
     dropped = WriteStereoClip(recording, options.endoscope, clip_dir);
-    if (!dropped.empty()) camera_record["frames_dropped"] = dropped;
+    // Named by their numbers in the recording, as --frames counts (they were positions in the window).
+    std::vector<int> numbers;
+    for (const int position : dropped) numbers.push_back(recording.frame_numbers[position]);
+    if (!numbers.empty()) camera_record["frames_dropped"] = numbers;
   }
   camera_record["endoscope"] = dicom::EndoscopeName(options.endoscope);
   RecordingClip clip;

@@ -22,6 +22,7 @@ namespace {
 struct ToDicomFlags {
   std::string frames, out, format = "h264", patient_id = "ANONYMOUS", patient_name, study_uid, uid_root;
   double fps = 0;  // 0: a video's own rate, 25 for a folder of images
+  int series_number = 1;
 };
 
 // The recording's frame rate: asked for, or the source's (a video's from its first two frames'
@@ -116,6 +117,7 @@ int Run(const ToDicomFlags& flags) {
   header.study =
       dicom::NewStudyContext(flags.patient_id, flags.patient_name, flags.study_uid, flags.uid_root);
   header.uid_root = flags.uid_root;
+  header.series_number = flags.series_number;
   int frames = 0;
   double fps = 0;
   if (flags.format == "h264") {
@@ -151,6 +153,10 @@ Command AddToDicomCommand(CLI::App& app) {
   cmd->add_option("--patient-name", flags->patient_name, "Patient's Name (DICOM PN, e.g. Doe^Jane)");
   cmd->add_option("--study-uid", flags->study_uid, "Study Instance UID (default: a new one)");
   cmd->add_option("--uid-root", flags->uid_root, "root of new UIDs (default: 2.25 UUID-derived UIDs)");
+  cmd->add_option("--series-number", flags->series_number,
+                  "Series Number (a stereo pair as two series: the left eye's lower)")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 99999));
   return [flags] { return Run(*flags); };
 }
 
