@@ -89,8 +89,22 @@ int Finish(const OFList<RetrieveResponse*>& responses, const RetrieveRequest& re
   std::snprintf(hex, sizeof(hex), "0x%04X", last->m_status);
   const std::string status = std::string(hex);
   if (last->m_status != STATUS_Success && (last->m_status & 0xf000) != 0xb000) {
+    // The PACS's own words, when it sent any; and what a failure usually means here: a PACS fails a
+    // whole retrieval when the study is not there, or when one of its objects (a CT, a report) is of
+    // a class endorecon does not take (only the recording's series can come then).
+    const std::string comment =
+        last->m_statusDetail == nullptr ? "" : FindString(*last->m_statusDetail, DCM_ErrorComment).value_or("");
+    const std::string uid = request.series_uid.empty() ? request.study_uid : request.series_uid;
     Fail(ErrorCode::kUnavailable,
-         verb + " of " + What(request) + " refused by " + PeerText(request.peer) + " with status " + status);
+         verb + " of " + What(request) + " " + uid + " refused by " + PeerText(request.peer) + " with status " +
+             status + (comment.empty() ? "" : " (\"" + comment + "\")") +
+             ((last->m_status & 0xf000) == 0xc000 || last->m_status == 0xa701 || last->m_status == 0xa702
+                  ? std::string(": the PACS may not hold it") +
+                        (request.series_uid.empty()
+                             ? ", or the study holds objects other than a recording (a CT, a report), "
+                               "which endorecon does not take: name the recording's series with --series UID"
+                             : "")
+                  : ""));
   }
   if (last->m_numberOfFailedSubops > 0) {
     Fail(ErrorCode::kDataLoss, verb + " of " + What(request) + ": " +
@@ -166,7 +180,7 @@ int GetStudy(const RetrieveRequest& request, const fs::path& out_dir, const Retr
              return scu.sendCGETRequest(id, query, responses);
            });
   if (scu.instances == 0) {
-    Fail(ErrorCode::kNotFound, PeerText(request.peer) + " holds no instance of " + What(request));
+    Fail(ErrorCode::kNotFound, PeerText(request.peer) + " holds no recording in " + What(request) + " " + (request.series_uid.empty() ? request.study_uid : request.series_uid) + " (endorecon's own results there are not one)");
   }
   return scu.instances;
 }
@@ -182,7 +196,7 @@ int MoveStudy(const RetrieveRequest& request, const std::string& destination_ae)
                  return scu.sendMOVERequest(id, destination_ae.c_str(), query, responses);
                });
   if (moved == 0)
-    Fail(ErrorCode::kNotFound, PeerText(request.peer) + " holds no instance of " + What(request));
+    Fail(ErrorCode::kNotFound, PeerText(request.peer) + " holds no recording in " + What(request) + " " + (request.series_uid.empty() ? request.study_uid : request.series_uid) + " (endorecon's own results there are not one)");
   return moved;
 }
 
