@@ -495,18 +495,33 @@ std::vector<cv::Mat> Split(std::vector<cv::Mat>& frames, StereoLayout layout, co
   return right;
 }
 
+// The SOP class a DICOM file's meta information names (Media Storage SOP Class UID), read without
+// its dataset; empty when the file has none.
+std::string MetaSopClass(const fs::path& path) {
+  DcmFileFormat file;
+  if (file.loadFile(path.c_str(), EXS_Unknown, EGL_noChange, DCM_MaxReadLength, ERM_metaOnly).bad()) return "";
+  OFString sop;
+  file.getMetaInfo()->findAndGetOFString(DCM_MediaStorageSOPClassUID, sop);
+  return sop.c_str();
+}
+
 // The DICOM files of `path` grouped by series, each series' instances in Instance Number order and
-// the series in Series Number order.
+// the series in Series Number order. In a folder, DICOM files of other classes (a DICOMDIR, a CT, a
+// report: what a CD export or a study holds beside a recording) are skipped with a warning.
 std::vector<std::vector<Instance>> LoadSeries(const fs::path& path) {
   std::vector<fs::path> files;
   if (fs::is_directory(path)) {
     for (const auto& entry : fs::directory_iterator(path)) {
-      if (entry.is_regular_file() && (IsDicomFile(entry.path()) || HasDicomExtension(entry.path()))) {
-        files.push_back(entry.path());
+      if (!entry.is_regular_file() || !(IsDicomFile(entry.path()) || HasDicomExtension(entry.path()))) continue;
+      const std::string sop = IsDicomFile(entry.path()) ? MetaSopClass(entry.path()) : "";
+      if (!sop.empty() && !kVideoClasses.count(sop) && !kImageClasses.count(sop)) {
+        spdlog::warn("{}: skipped, SOP class {} is not a recording", entry.path().string(), UidName(sop));
+        continue;
       }
+      files.push_back(entry.path());
     }
     std::sort(files.begin(), files.end());
-    if (files.empty()) FailInvalid(path.string() + ": no DICOM file in the folder");
+    if (files.empty()) FailInvalid(path.string() + ": no DICOM recording in the folder (other DICOM files, if any, are skipped: see the warnings)");
   } else if (fs::exists(path)) {
     files.push_back(path);
   } else {

@@ -218,6 +218,13 @@ TEST(DicomRecordingTest, BadInputsAreNamed) {
   EXPECT_NE(sop.find("depth.dcm: SOP class MultiframeGrayscaleWordSecondaryCaptureImageStorage"),
             std::string::npos)
       << sop;
+  // In a folder, a file of another class (a DICOMDIR, a CT, here a depth map) is skipped, not fatal:
+  // a CD export was refused for its DICOMDIR (found 2026-12-05).
+  std::filesystem::create_directories(dir / "export");
+  std::filesystem::copy_file(dir / "depth.dcm", dir / "export" / "DEPTH");
+  EXPECT_NE(ErrorOf(dir / "export").find("export: no DICOM recording in the folder"), std::string::npos);
+  WriteEndoscopicFrames(Frames(2, 32, 24), {0, 0.1}, false, Header(), dir / "export" / "IM0001");
+  EXPECT_EQ(ReadRecording(dir / "export", {}).left.size(), 2u);
 
   WriteEndoscopicFrames(Frames(4, 32, 24), {0, 0.1, 0.2, 0.3}, false, Header(), dir / "full.dcm");
   const auto size = std::filesystem::file_size(dir / "full.dcm");
