@@ -165,6 +165,18 @@ int Submit(const Globals& globals, const SubmitFlags& flags) {
                 "(EndoNeRF layout), and no DICOM recording (docs/formats.md)");
   }
   if (flags.raw.empty() && !flags.raw.size.empty()) ParseFrameSize(flags.raw.size);  // before any upload
+  if (flags.raw.empty() && !flags.raw.frames.empty()) ParseFrameRange(flags.raw.frames);
+  // prepare's options shape a raw recording only: with a clip, a DICOM recording or a PACS study they
+  // were ignored without a word.
+  const PrepareFlags& raw = flags.raw;
+  if (raw.empty() && (!raw.calibration.empty() || raw.rectified || raw.focal != 0 || raw.baseline != 0 ||
+                      !raw.masks.empty() || raw.mask_tool != "white" || !raw.exclude.empty() ||
+                      !raw.poses.empty() || raw.estimate_poses || raw.depth_refine || raw.depth_paths != 0)) {
+    FailInvalid(
+        "--calibration, --rectified, --focal, --baseline, --masks, --mask-tool, --exclude, --poses, "
+        "--estimate-poses, --depth-refine and --depth-paths prepare a raw recording (--left/--right, "
+        "--side-by-side or --top-bottom); a clip folder, a DICOM recording or a PACS study takes none");
+  }
   if (!flags.name.empty()) ValidateJobName(flags.name);  // as the server would, after the upload
   dicom::CheckDicomResultFlags(flags.dicom.enabled(),
                                !flags.pacs.empty() || (!flags.clip.empty() && dicom::HoldsDicom(flags.clip)),

@@ -38,6 +38,23 @@ TEST(BadDicomInputTest, RefusedAtSubmitOrAtPreparation) {
       << folder.err;
   EXPECT_EQ(folder.err.find("uploaded"), std::string::npos) << folder.err;
 
+  // Options that do not apply to the input are refused before the upload, naming them: they were
+  // ignored without a word (found 2026-12-05).
+  const std::vector<std::pair<std::vector<std::string>, std::string>> misplaced = {
+      {{"--calibration", "c.yaml"}, "prepare a raw recording"},
+      {{"--exclude", "0,0,10,10"}, "prepare a raw recording"},
+      {{"--patient-id", "P1"}, "a DICOM recording's results keep its own patient and study"},
+      {{"--study", "1.2.3"}, "--study and --series name a recording in a PACS"},
+      {{"--frames", "1:x"}, "'1:x'"}};
+  for (const auto& [args, said] : misplaced) {
+    std::vector<std::string> command = {"submit", cluster.path("recording.dcm").string()};
+    command.insert(command.end(), args.begin(), args.end());
+    const auto refused = RunCli(cluster.address(), command);
+    EXPECT_EQ(refused.exit_code, 2) << args[0] << ": " << refused.err;
+    EXPECT_NE(refused.err.find(said), std::string::npos) << args[0] << ": " << refused.err;
+    EXPECT_EQ(refused.err.find("uploaded"), std::string::npos) << args[0] << ": " << refused.err;
+  }
+
   const auto unknown = RunCli(cluster.address(), {"submit", "--pacs", "nowhere", "--study", "1.2.3"});
   EXPECT_EQ(unknown.exit_code, 3) << unknown.err;
   EXPECT_NE(unknown.err.find("no PACS named 'nowhere' is configured on the server"), std::string::npos)
