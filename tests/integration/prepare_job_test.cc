@@ -65,6 +65,11 @@ TEST(PrepareJobTest, RecordingInPreparedClipAndResultsOut) {
                            "clip/images/000005.png", "clip/depth/000005.npy", "clip/masks/000005.png"}) {
     EXPECT_TRUE(fs::exists(cluster.path("results") / file)) << file;
   }
+  // The prepared clip says where it came from in the submitter's names, not the worker's scratch.
+  const std::string report = ReadBytes(cluster.path("results/clip/prepare.json"));
+  EXPECT_NE(report.find((rec / "left.avi").string()), std::string::npos) << report;
+  EXPECT_NE(report.find((rec / "synth/recording/calibration.yaml").string()), std::string::npos) << report;
+  EXPECT_NE(report.find("\"masks\": \"" + (rec / "synth/recording/masks").string()), std::string::npos) << report;
 
   // The same recording again: nothing is uploaded twice.
   const auto again =

@@ -3,12 +3,47 @@
 #include <spdlog/spdlog.h>
 
 #include <fstream>
+#include <functional>
+#include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "common/prepare_flags_proto.h"
 #include "worker/prepare/options_from_flags.h"
 
 namespace endorecon::worker {
+namespace {
+
+namespace fs = std::filesystem;
+
+// prepare.json names the recording's files where the worker staged them (its scratch folder): each
+// is replaced by the file or folder as the submitter named it (PrepareOptions.sources), so the
+// clip that comes back with the results says where it came from.
+void NameTheSubmittersFiles(const fs::path& report, const fs::path& recording_dir, const v1::Job& job) {
+  std::ifstream in(report);
+  nlohmann::json json = nlohmann::json::parse(in, nullptr, false);
+  in.close();
+  if (json.is_discarded()) return;
+  const std::function<void(nlohmann::json&)> rename = [&](nlohmann::json& value) {
+    if (value.is_structured()) {
+      for (auto& child : value) rename(child);
+      return;
+    }
+    if (!value.is_string()) return;
+    std::string text = value.get<std::string>();
+    for (const auto& [staged, given] : job.prepare().sources()) {
+      const bool folder = !staged.empty() && staged.back() == '/';
+      const std::string from = (recording_dir / (folder ? staged.substr(0, staged.size() - 1) : staged)).string();
+      const std::string to = folder && !given.empty() && given.back() == '/' ? given.substr(0, given.size() - 1) : given;
+      for (auto at = text.find(from); at != std::string::npos; at = text.find(from, at + to.size()))
+        text.replace(at, from.size(), to);
+    }
+    value = text;
+  };
+  rename(json);
+  std::ofstream(report) << json.dump(1) << "\n";
+}
+
+}  // namespace
 
 std::filesystem::path PrepareJobRecording(const v1::Job& job, const std::filesystem::path& recording_dir,
                                           const std::filesystem::path& out_dir, ProgressReporter& reporter,
@@ -26,6 +61,7 @@ std::filesystem::path PrepareJobRecording(const v1::Job& job, const std::filesys
     reporter.SetProgress(progress);
   };
   const prepare::PrepareSummary summary = prepare::PrepareClip(options, hooks);
+  NameTheSubmittersFiles(options.out / "prepare.json", recording_dir, job);
   spdlog::info("job {}: prepared {} frames of the recording in {:.1f} s ({} layout)", job.id(),
                summary.frames, summary.seconds, summary.layout);
   std::ifstream png(options.out / "preview.png", std::ios::binary);
