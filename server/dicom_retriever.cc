@@ -56,6 +56,11 @@ void DicomRetriever::Received(const std::string& study_uid, std::int64_t bytes) 
   Progress(job, instances, total);
 }
 
+bool DicomRetriever::Awaits(const std::string& study_uid) const {
+  std::lock_guard lock(mutex_);
+  return !moving_job_.empty() && study_uid == moving_study_;
+}
+
 void DicomRetriever::Loop() {
   while (true) {
     std::string job_id;

@@ -36,6 +36,8 @@ class DicomRetriever {
   void Retrieve(const std::string& job_id);
   // The storage SCP received an instance (for the progress of a C-MOVE).
   void Received(const std::string& study_uid, std::int64_t bytes);
+  // Whether a C-MOVE of this study is in progress (the storage SCP stores nothing else).
+  bool Awaits(const std::string& study_uid) const;
 
  private:
   void Loop();
@@ -56,7 +58,7 @@ class DicomRetriever {
   const dicom::StorageScp* scp_;
   PacsAudit audit_;
 
-  std::mutex mutex_;
+  mutable std::mutex mutex_;
   std::condition_variable wake_;
   std::deque<std::string> queue_;
   bool stopping_ = false;

@@ -82,10 +82,15 @@ std::unique_ptr<dicom::StorageScp> StartStorageScp(const ServerFlags& flags,
   settings.port = std::stoi(flags.dicom.listen.substr(colon + 1));
   settings.folder = folder;
   settings.calling_ae_titles = calling_ae_titles;
+  // What an earlier run left (a C-MOVE cut short by a stop) is no study any retrieval awaits now.
+  std::error_code ignored;
+  std::filesystem::remove_all(folder, ignored);
   auto scp = std::make_unique<dicom::StorageScp>(
-      settings, [&retriever](const std::string& study, const std::filesystem::path&, std::int64_t bytes) {
+      settings,
+      [&retriever](const std::string& study, const std::filesystem::path&, std::int64_t bytes) {
         if (retriever != nullptr) retriever->Received(study, bytes);
-      });
+      },
+      [&retriever](const std::string& study) { return retriever != nullptr && retriever->Awaits(study); });
   spdlog::info(
       "DICOM storage SCP {} listening on port {} (every interface; admits the configured PACS' AE titles)",
       settings.ae_title, settings.port);

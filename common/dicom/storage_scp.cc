@@ -18,8 +18,8 @@ namespace fs = std::filesystem;
 
 class StorageScp::Scp : public DcmStorageSCP {
  public:
-  Scp(const StorageScpSettings& settings, OnStored on_stored)
-      : settings_(settings), on_stored_(std::move(on_stored)) {}
+  Scp(const StorageScpSettings& settings, OnStored on_stored, Awaits awaits)
+      : settings_(settings), on_stored_(std::move(on_stored)), awaits_(std::move(awaits)) {}
   std::atomic<bool> stop{false};
 
  protected:
@@ -37,12 +37,26 @@ class StorageScp::Scp : public DcmStorageSCP {
     return accepted;
   }
 
+  // Only this SCP's own AE title is answered (any title was).
+  OFBool checkCalledAETitleAccepted(const OFString& called) override {
+    std::string title = called.c_str();
+    while (!title.empty() && title.back() == ' ') title.pop_back();
+    const bool accepted = title == settings_.ae_title;
+    if (!accepted) spdlog::warn("storage SCP: refused an association called '{}' (this SCP is '{}')", title,
+                                settings_.ae_title);
+    return accepted;
+  }
+
   Uint16 checkAndProcessSTORERequest(const T_DIMSE_C_StoreRQ& request, DcmFileFormat& file) override {
     DcmDataset& data = *file.getDataset();
     if (IsEndoreconResult(data)) return STATUS_Success;  // taken, not kept (storage_classes.h)
     const std::string study = FindString(data, DCM_StudyInstanceUID).value_or("");
     const std::string series = FindString(data, DCM_SeriesInstanceUID).value_or("");
     const std::string sop = request.AffectedSOPInstanceUID;
+    if (!awaits_ || !awaits_(study)) {
+      spdlog::warn("storage SCP: refused an instance of a study no retrieval awaits");
+      return kRefusedNotAuthorized;
+    }
     try {
       CheckUid(study, "Study Instance UID");
       CheckUid(series, "Series Instance UID");
@@ -66,12 +80,16 @@ class StorageScp::Scp : public DcmStorageSCP {
   }
 
  private:
+  // C-STORE status "Refused: Not Authorized" (PS3.4 GG.4-1; DCMTK 3.6.7 names no constant for it).
+  static constexpr Uint16 kRefusedNotAuthorized = 0x0124;
+
   StorageScpSettings settings_;
   OnStored on_stored_;
+  Awaits awaits_;
 };
 
-StorageScp::StorageScp(const StorageScpSettings& settings, OnStored on_stored)
-    : settings_(settings), scp_(std::make_unique<Scp>(settings, std::move(on_stored))) {
+StorageScp::StorageScp(const StorageScpSettings& settings, OnStored on_stored, Awaits awaits)
+    : settings_(settings), scp_(std::make_unique<Scp>(settings, std::move(on_stored), std::move(awaits))) {
   QuietDcmtkLogs();
   CheckAeTitle(settings.ae_title, "the storage SCP's AE title");
   fs::create_directories(settings.folder);

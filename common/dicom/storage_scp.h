@@ -28,10 +28,15 @@ class StorageScp {
   using OnStored = std::function<void(const std::string& study_uid, const std::filesystem::path& file,
                                       std::int64_t bytes)>;
 
+  // Whether an instance of this study is awaited (a C-MOVE in progress): others are refused, so a
+  // PACS (or anyone calling as one) cannot leave unasked-for patient data on the server.
+  using Awaits = std::function<bool(const std::string& study_uid)>;
+
   // Opens the port and starts serving associations in a thread. DCMTK 3.6.7 binds the port on
-  // every interface and cannot tell which host calls: associations are admitted by calling AE title.
+  // every interface and cannot tell which host calls: associations are admitted by calling AE title
+  // (the configured PACS) and called AE title (this SCP's), instances by `awaits`.
   // Throws Error(kUnavailable) when the port cannot be opened.
-  StorageScp(const StorageScpSettings& settings, OnStored on_stored);
+  StorageScp(const StorageScpSettings& settings, OnStored on_stored, Awaits awaits);
   // Stops after the association in progress (within a second when idle) and joins the thread.
   ~StorageScp();
   StorageScp(const StorageScp&) = delete;

@@ -10,7 +10,9 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "common/dicom/store_scu.h"
 #include "common/dicom/uid.h"
+#include "common/error.h"
 #include "tests/integration/audit_reader.h"
 #include "tests/integration/orthanc_harness.h"
 #include "tests/unit/dciodvfy.h"
@@ -211,6 +213,23 @@ TEST_F(PacsRoundTripTest, CMoveToTheServersStorageScpWhenCGetIsRefused) {
   EXPECT_EQ(job.state(), v1::QUEUED);
   ASSERT_EQ(job.clip().files_size(), 1);
   EXPECT_EQ(job.clip().files(0).size(), job.retrieval().bytes());
+
+  // With no retrieval in progress, the storage SCP takes nothing, even from the PACS's AE title
+  // (an unasked-for instance was kept under dicom-incoming/ for good), and answers only its own
+  // called AE title (any was answered; found 2026-12-05).
+  const dicom::Peer scp{"MOVER", "127.0.0.1", mover_port_};
+  dicom::StoreSettings as_pacs;
+  as_pacs.calling_ae_title = "ORTHANC";
+  const dicom::StoreResult unasked = dicom::StoreFiles(scp, {dir_ / "recording.dcm"}, as_pacs);
+  ASSERT_EQ(unasked.stored.size(), 1u);
+  EXPECT_FALSE(unasked.stored[0]);
+  EXPECT_NE(unasked.first_error.find("0x0124"), std::string::npos) << unasked.first_error;
+  int kept = 0;
+  for (const auto& entry : std::filesystem::recursive_directory_iterator(cluster.data_dir() / "dicom-incoming"))
+    kept += entry.is_regular_file() ? 1 : 0;
+  EXPECT_EQ(kept, 0);
+  const dicom::Peer wrong_called{"NOTMOVER", "127.0.0.1", mover_port_};
+  EXPECT_THROW(dicom::StoreFiles(wrong_called, {dir_ / "recording.dcm"}, as_pacs), Error);
 }
 
 // With tokens: a recording retrieved for a job is the submitting tenant's, and its bytes count
