@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
+#include <filesystem>
 #include <memory>
 
 #include "common/error.h"
@@ -58,6 +59,9 @@ Command AddCalibrateCommand(CLI::App& app) {
   cmd->add_option("--max-views", f->max_views, "views used at most, spread over those found")
       ->capture_default_str();
   return [f] {
+    // Before the boards are searched for (seconds), not after: -o names a file.
+    if (std::filesystem::is_directory(f->out))
+      FailInvalid("-o " + f->out + ": a folder; -o names the calibration file to write (.yaml or .xml)");
     prepare::CheckerboardOptions options;
     options.inner_corners = Board(f->board);
     options.square = f->square;
