@@ -43,7 +43,10 @@ void PutHeader(DcmDataset& data, const RecordingHeader& header, const std::strin
   Put(data, DCM_PatientOrientation, "");
   Put(data, DCM_ImageType, "ORIGINAL\\PRIMARY");
   Put(data, DCM_LossyImageCompression, "00");
-  PutEmpty(data, DCM_AnatomicRegionSequence);
+  // Type 2C Laterality and Type 2 Acquisition Context present and empty (unknown); Anatomic Region
+  // (Type 1C, "if known") left out: present, it must hold a coded region (dciodvfy).
+  Put(data, DCM_Laterality, "");
+  PutEmpty(data, DCM_AcquisitionContextSequence);
   Put(data, DCM_BurnedInAnnotation, "NO");
   PutUint16(data, DCM_SamplesPerPixel, 3);
   PutUint16(data, DCM_BitsAllocated, 8);

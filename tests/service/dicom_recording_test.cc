@@ -12,6 +12,7 @@
 #include "common/dicom/result_instances.h"
 #include "common/dicom/uid.h"
 #include "common/error.h"
+#include "tests/unit/dciodvfy.h"
 #include "tests/unit/temp_dir.h"
 
 namespace endorecon::dicom {
@@ -204,6 +205,14 @@ TEST(DicomRecordingTest, AJpegFrameWhoseHeaderLeadsNowhereIsRefusedBeforeDecodin
   WriteBytes(dir / "tem.dcm", bytes);
   const std::string message = ErrorOf(dir / "tem.dcm");
   EXPECT_NE(message.find("tem.dcm frame 1: not a well-formed JPEG stream"), std::string::npos) << message;
+}
+
+// What to-dicom writes passes dciodvfy: it reported a missing Laterality and Acquisition Context
+// and an empty Anatomic Region (found 2026-12-05).
+TEST(DicomRecordingTest, AWrittenRecordingPassesDciodvfy) {
+  TempDir dir;
+  WriteEndoscopicFrames(Frames(2, 32, 24), {0, 0.1}, false, Header(), dir / "vl.dcm");
+  EXPECT_EQ(testing::DciodvfyErrors(dir / "vl.dcm"), "");
 }
 
 TEST(DicomRecordingTest, BadInputsAreNamed) {
