@@ -6,6 +6,9 @@
 #include <chrono>
 #include <filesystem>
 #include <iostream>
+#include <sstream>
+#include <string>
+#include <vector>
 
 #include "client/job_format.h"
 #include "common/file_write.h"
@@ -39,12 +42,17 @@ class EventPrinter {
 
   void Job(const v1::Job& job) {
     if (json_) return Json(job);
-    const std::string dicom = DicomLines(job);
-    if (dicom != last_dicom_) {
+    // The retrieval's and the sends' lines: only those that changed (the whole block was printed
+    // again on every send's update).
+    std::vector<std::string> dicom;
+    std::istringstream lines(DicomLines(job));
+    for (std::string line; std::getline(lines, line);) dicom.push_back(line);
+    for (std::size_t i = 0; i < dicom.size(); ++i) {
+      if (i < last_dicom_.size() && dicom[i] == last_dicom_[i]) continue;
       EndLine();
-      std::cout << dicom << std::flush;
-      last_dicom_ = dicom;
+      std::cout << dicom[i] << "\n" << std::flush;
     }
+    last_dicom_ = std::move(dicom);
     if (job.state() == last_state_) return;
     EndLine();
     last_state_ = job.state();
@@ -86,7 +94,7 @@ class EventPrinter {
   bool tty_;
   bool open_line_ = false;
   v1::JobState last_state_ = v1::JOB_STATE_UNSPECIFIED;
-  std::string last_dicom_;
+  std::vector<std::string> last_dicom_;
 };
 
 }  // namespace

@@ -87,6 +87,15 @@ TEST_F(PacsRoundTripTest, RecordingFromThePacsResultsBackIntoItsStudy) {
   ASSERT_EQ(submitted.exit_code, 0) << submitted.out << submitted.err << cluster.ServerLog();
   EXPECT_NE(submitted.out.find("retrieval from PACS orthanc by C-GET"), std::string::npos) << submitted.out;
   EXPECT_NE(submitted.out.find("send to orthanc: sent 5 of 5"), std::string::npos) << submitted.out;
+  // Each line once: the retrieval's was printed again with every update of the send (found
+  // 2026-12-05).
+  const auto count = [&](const std::string& what) {
+    int n = 0;
+    for (auto at = submitted.out.find(what); at != std::string::npos; at = submitted.out.find(what, at + 1)) ++n;
+    return n;
+  };
+  EXPECT_EQ(count(", done\n"), 1) << submitted.out;
+  EXPECT_EQ(count("send to orthanc: sent 5 of 5\n"), 1) << submitted.out;
   const std::string id = JobIdIn(submitted.out);
   v1::Job job = cluster.Job(id);
   EXPECT_EQ(job.state(), v1::SUCCEEDED);
