@@ -285,6 +285,12 @@ std::size_t PixelDataBytes(const Instance& instance) {
   if (instance.dataset->findAndGetElement(DCM_PixelData, element).bad() || element == nullptr) {
     FailInvalid(Where(instance) + ": no Pixel Data (7FE0,0010)");
   }
+  // Fragments of a compressed stream under a native transfer syntax (a file whose syntax was
+  // rewritten): said as such, not as "0 bytes".
+  if (element->getLengthField() == DCM_UndefinedLength) {
+    FailInvalid(Where(instance) + ": the pixel data is encapsulated (compressed fragments) but the transfer "
+                                  "syntax " + std::string(DcmXfer(instance.xfer).getXferName()) + " says native pixels");
+  }
   return element->getLength();
 }
 
@@ -457,7 +463,7 @@ std::vector<cv::Mat> Decode(const std::vector<Instance>& series, const std::vect
       ++decoded;
     }
     if (decoded < instance.frames) {
-      FailInvalid(Where(instance) + ": truncated pixel stream: Number of Frames is " +
+      FailInvalid(Where(instance) + ": truncated or damaged pixel stream: Number of Frames is " +
                   std::to_string(instance.frames) + " but the stream decodes to " + std::to_string(decoded) +
                   " frame(s)");
     }
