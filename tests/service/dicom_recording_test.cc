@@ -134,6 +134,21 @@ TEST(DicomRecordingTest, H264VideoDecodesEveryFrameAtItsFrameTime) {
   const std::string error = ErrorOf(dir / "short.dcm");
   EXPECT_NE(error.find("short.dcm: truncated or damaged pixel stream"), std::string::npos) << error;
   EXPECT_NE(error.find("decodes to 12"), std::string::npos) << error;
+
+  // The stream's fragments under a native transfer syntax (the file's syntax rewritten): said as
+  // such; it read as "the pixel data holds 0 bytes" (found 2026-12-05).
+  std::ifstream in(dir / "short.dcm", std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string h264 = UID_MPEG4HighProfileLevel4_1TransferSyntax;
+  const std::size_t at = bytes.find(h264);
+  ASSERT_NE(at, std::string::npos);
+  const std::string native = UID_LittleEndianExplicitTransferSyntax;
+  bytes.replace(at, h264.size(), native + std::string(h264.size() - native.size(), '\0'));
+  WriteBytes(dir / "native.dcm", bytes);
+  const std::string native_error = ErrorOf(dir / "native.dcm");
+  EXPECT_NE(native_error.find("native.dcm: the pixel data is encapsulated (compressed fragments)"),
+            std::string::npos)
+      << native_error;
 }
 
 TEST(DicomRecordingTest, SideBySideAndTopBottomSplitTheEyes) {
