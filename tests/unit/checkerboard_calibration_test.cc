@@ -11,13 +11,19 @@
 namespace endorecon::testing {
 namespace {
 
+// The synthetic recording's board.
+prepare::CheckerboardOptions SyntheticBoard() {
+  prepare::CheckerboardOptions board;
+  board.inner_corners = {scene::kCheckerboardColumns, scene::kCheckerboardRows};
+  board.square = scene::kCheckerboardSquare;
+  return board;
+}
+
 TEST(CheckerboardCalibrationTest, RecoversTheSyntheticRig) {
   TempDir dir("checkerboard");
   scene::SynthOptions options = RecordingOptions(320, 256, 1, 24);
   scene::WriteSyntheticClip(options, dir / "synth");
-  prepare::CheckerboardOptions board;
-  board.inner_corners = {scene::kCheckerboardColumns, scene::kCheckerboardRows};
-  board.square = scene::kCheckerboardSquare;
+  const prepare::CheckerboardOptions board = SyntheticBoard();
   const prepare::RecordingInput recording{prepare::StereoLayout::kTwoSources,
                                           dir / "synth/recording/checkerboard/left",
                                           dir / "synth/recording/checkerboard/right",
@@ -66,9 +72,7 @@ TEST(CheckerboardCalibrationTest, TooFewViewsOfTheBoardIsAClearError) {
 TEST(CheckerboardCalibrationTest, OneEyesViewsGivenTwiceAreRefused) {
   TempDir dir("checkerboard");
   scene::WriteSyntheticClip(RecordingOptions(320, 256, 1, 8), dir / "synth");
-  prepare::CheckerboardOptions board;
-  board.inner_corners = {scene::kCheckerboardColumns, scene::kCheckerboardRows};
-  board.square = scene::kCheckerboardSquare;
+  const prepare::CheckerboardOptions board = SyntheticBoard();
   const prepare::RecordingInput recording{prepare::StereoLayout::kTwoSources,
                                           dir / "synth/recording/checkerboard/left",
                                           dir / "synth/recording/checkerboard/left",
