@@ -94,9 +94,8 @@ int Finish(const OFList<RetrieveResponse*>& responses, const RetrieveRequest& re
     // a class endorecon does not take (only the recording's series can come then).
     const std::string comment =
         last->m_statusDetail == nullptr ? "" : FindString(*last->m_statusDetail, DCM_ErrorComment).value_or("");
-    const std::string uid = request.series_uid.empty() ? request.study_uid : request.series_uid;
     Fail(ErrorCode::kUnavailable,
-         verb + " of " + What(request) + " " + uid + " refused by " + PeerText(request.peer) + " with status " +
+         verb + " of " + What(request) + " refused by " + PeerText(request.peer) + " with status " +
              status + (comment.empty() ? "" : " (\"" + comment + "\")") +
              ((last->m_status & 0xf000) == 0xc000 || last->m_status == 0xa701 || last->m_status == 0xa702
                   ? std::string(": the PACS may not hold it") +
@@ -180,7 +179,7 @@ int GetStudy(const RetrieveRequest& request, const fs::path& out_dir, const Retr
              return scu.sendCGETRequest(id, query, responses);
            });
   if (scu.instances == 0) {
-    Fail(ErrorCode::kNotFound, PeerText(request.peer) + " holds no recording in " + What(request) + " " + (request.series_uid.empty() ? request.study_uid : request.series_uid) + " (endorecon's own results there are not one)");
+    Fail(ErrorCode::kNotFound, PeerText(request.peer) + " holds no recording in " + What(request) + " (endorecon's own results there are not one)");
   }
   return scu.instances;
 }
@@ -196,7 +195,7 @@ int MoveStudy(const RetrieveRequest& request, const std::string& destination_ae)
                  return scu.sendMOVERequest(id, destination_ae.c_str(), query, responses);
                });
   if (moved == 0)
-    Fail(ErrorCode::kNotFound, PeerText(request.peer) + " holds no recording in " + What(request) + " " + (request.series_uid.empty() ? request.study_uid : request.series_uid) + " (endorecon's own results there are not one)");
+    Fail(ErrorCode::kNotFound, PeerText(request.peer) + " holds no recording in " + What(request) + " (endorecon's own results there are not one)");
   return moved;
 }
 
