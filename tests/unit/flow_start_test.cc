@@ -33,31 +33,31 @@ double ShiftY(int f) { return -0.3 * f; }
 // A fixed camera over a plane at depth kDepth whose texture slides: frame f shows at pixel p what
 // frame 0 showed at p - shift(f).
 // Without depth, near and far put the clip's typical depth (their middle) at `typical_depth`.
-scene::Clip SlidingPlane(bool with_depth, double typical_depth = kDepth, int width = kW) {
+scene::Clip SlidingPlane(bool with_depth, double typical_depth = kDepth, int width = kW, int height = kH) {
   scene::Clip clip;
   clip.source = "sliding plane";
   clip.width = width;
-  clip.height = kH;
+  clip.height = height;
   clip.near = typical_depth - 5;
   clip.far = typical_depth + 5;
   for (int f = 0; f < kFrames; ++f) {
     scene::Camera camera;
     camera.fx = camera.fy = kFocal;
     camera.cx = width / 2.0;
-    camera.cy = kH / 2.0;
+    camera.cy = height / 2.0;
     camera.width = width;
-    camera.height = kH;
+    camera.height = height;
     clip.cameras.push_back(camera);
     clip.times.push_back(float(f) / (kFrames - 1));
-    std::vector<std::uint8_t> rgb(std::size_t(width) * kH * 3);
-    for (int y = 0; y < kH; ++y) {
+    std::vector<std::uint8_t> rgb(std::size_t(width) * height * 3);
+    for (int y = 0; y < height; ++y) {
       for (int x = 0; x < width; ++x) {
         const double v = Texture(x - ShiftX(f), y - ShiftY(f));
         for (int c = 0; c < 3; ++c) rgb[(std::size_t(y) * width + x) * 3 + c] = std::uint8_t(std::lround(v));
       }
     }
     clip.rgb.push_back(rgb);
-    if (with_depth) clip.depth.emplace_back(std::size_t(width) * kH, float(kDepth));
+    if (with_depth) clip.depth.emplace_back(std::size_t(width) * height, float(kDepth));
   }
   return clip;
 }
@@ -189,6 +189,19 @@ TEST(FlowStartTest, WithoutATrainingFrameAtTimeZeroItLeavesTheParametersAlone) {
   const FlowStart start =
       FitDeformationToFlow(clip, {2, 3, 4, 5}, scene::ClipBox(clip), deformation.layout(), params.data());
   EXPECT_NE(start.skipped.find("time 0"), std::string::npos) << start.skipped;
+  for (float v : params) ASSERT_EQ(v, 0.25f);
+}
+
+// Frames under 12 pixels a side (a clip `synth` makes at 8 x 8) start from zero: OpenCV's DIS flow
+// asserted on them and ended the run (found 2026-12-05).
+TEST(FlowStartTest, FramesTooSmallForTheFlowStartFromZero) {
+  const scene::Clip clip = SlidingPlane(true, kDepth, 8, 8);
+  const field::Deformation<float> deformation(Grid());
+  std::vector<float> params(deformation.param_count(), 0.25f);
+  const FlowStart start =
+      FitDeformationToFlow(clip, AllFrames(), scene::ClipBox(clip), deformation.layout(), params.data());
+  EXPECT_NE(start.skipped.find("frames of 8x8 are too small for optical flow"), std::string::npos)
+      << start.skipped;
   for (float v : params) ASSERT_EQ(v, 0.25f);
 }
 
