@@ -37,5 +37,20 @@ TEST(OutputFolderTest, AnotherFolderOrOneNotYetMadeIsFine) {
       << "a recording file is no folder to overwrite";
 }
 
+// Another clip, or a file, is no output folder either: `render -o CLIP` wrote its depth maps over the
+// clip's and the clip no longer loaded; `-o FILE` failed with a bare filesystem error (found
+// 2026-12-05).
+TEST(OutputFolderTest, AnotherClipOrAFileIsRefused) {
+  testing::TempDir dir("output-folder");
+  fs::create_directories(dir / "results");
+  fs::create_directories(dir / "other");
+  testing::WriteBytes(dir / "other" / "poses_bounds.npy", "rows");
+  std::string message = testing::ErrorFrom([&] { Check(dir / "other", dir / "results"); });
+  EXPECT_NE(message.find("other holds a clip"), std::string::npos) << message;
+  testing::WriteBytes(dir / "afile", "x");
+  message = testing::ErrorFrom([&] { Check(dir / "afile", dir / "results"); });
+  EXPECT_NE(message.find("afile is a file"), std::string::npos) << message;
+}
+
 }  // namespace
 }  // namespace endorecon
