@@ -188,7 +188,7 @@ std::vector<FrameFiles> ListClipFrames(const fs::path& dir) {
   if (*layout == ClipLayout::kTransforms)
     return ListTransformsFrames(dir, ReadJsonFile(dir / "transforms.json"));
   const fs::path poses = dir / "poses_bounds.npy";
-  if (!fs::is_regular_file(poses)) FailInvalid(poses.string() + ": file does not exist");
+  if (!fs::exists(poses)) FailInvalid(poses.string() + ": file does not exist");
   return ListEndoNerfFrames(dir, PoseRowCount(ReadNpy(poses), poses));
 }
 

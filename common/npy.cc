@@ -138,6 +138,10 @@ std::size_t ItemSize(const std::string& descr, const std::filesystem::path& path
 }  // namespace
 
 NpyArray ReadNpy(const std::filesystem::path& path) {
+  // A pipe would block the read for ever (found 2026-12-05 with a FIFO as poses_bounds.npy).
+  std::error_code error;
+  if (std::filesystem::exists(path, error) && !std::filesystem::is_regular_file(path, error))
+    FailInvalid(path.string() + ": not a regular file (a folder, a pipe or a device)");
   std::ifstream in(path, std::ios::binary);
   if (!in) FailInvalid(path.string() + ": cannot open .npy file");
   const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());

@@ -1,10 +1,12 @@
 #include "common/npy.h"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <cstring>
 
 #include "common/error.h"
+#include "common/json_file.h"
 #include "tests/unit/temp_dir.h"
 
 namespace endorecon {
@@ -85,6 +87,21 @@ TEST(NpyTest, ReadsVersions2And3AndUint8) {
   const NpyArray v3 = ReadNpy(dir / "v3.npy");
   EXPECT_EQ(v3.shape, (std::vector<std::size_t>{1, 3}));
   EXPECT_EQ(v3.data, (std::vector<double>{0, 17, 255}));
+}
+
+// A pipe named like a pose file is refused, not read for ever (found 2026-12-05); so is it as a
+// JSON side file.
+TEST(NpyTest, APipeIsRefusedNotWaitedOn) {
+  testing::TempDir dir;
+  ASSERT_EQ(::mkfifo((dir / "poses_bounds.npy").c_str(), 0600), 0);
+  try {
+    ReadNpy(dir / "poses_bounds.npy");
+    ADD_FAILURE() << "a pipe was read";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("poses_bounds.npy: not a regular file"), std::string::npos) << e.what();
+  }
+  ASSERT_EQ(::mkfifo((dir / "transforms.json").c_str(), 0600), 0);
+  EXPECT_THROW(ReadJsonFile(dir / "transforms.json"), Error);
 }
 
 TEST(NpyTest, RejectsBadForms) {

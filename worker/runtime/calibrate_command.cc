@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <memory>
 
+#include "common/cli_checks.h"
 #include "common/error.h"
 #include "common/prepare_flags.h"
 #include "worker/prepare/checkerboard_calibration.h"
@@ -57,7 +58,8 @@ Command AddCalibrateCommand(CLI::App& app) {
       ->required();
   cmd->add_option("--frames", f->frames, "START:END:STEP: the frames to search for the board");
   cmd->add_option("--max-views", f->max_views, "views used at most, spread over those found")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(AboveZero());
   return [f] {
     // Before the boards are searched for (seconds), not after: -o names a file.
     if (std::filesystem::is_directory(f->out))

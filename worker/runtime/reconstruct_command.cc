@@ -9,6 +9,7 @@
 #include "common/cli_checks.h"
 #include "common/clip_files.h"
 #include "common/dicom_file.h"
+#include "common/dicom/uid.h"
 #include "common/dicom_values.h"
 #include "common/error.h"
 #include "common/json_file.h"
@@ -126,6 +127,10 @@ Command AddReconstructCommand(CLI::App& app) {
     const bool recording_input = dicom::HoldsDicom(options->clip_dir);
     dicom::CheckDicomResultFlags(dicom->enabled(), recording_input, dicom->patient_id(), dicom->patient_name(),
                                  dicom->study_uid());
+    // The results' UIDs before the run, not after it (they failed the command once everything else
+    // was written; found 2026-12-05). NewUid refuses a root that is no UID prefix.
+    if (!dicom->study_uid().empty()) dicom::CheckUid(dicom->study_uid(), "--study-uid");
+    if (!dicom->uid_root().empty()) dicom::NewUid(dicom->uid_root());
     if (recording_input) RefuseToReplaceAForeignFolder(options->out_dir + ".clip");
     const auto from_dicom = PrepareRecording(options->clip_dir, *recording, options->out_dir + ".clip");
     if (from_dicom) options->clip_dir = from_dicom->clip_dir.string();

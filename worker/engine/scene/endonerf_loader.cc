@@ -29,7 +29,7 @@ std::string Number(double value) {
 }
 
 PoseRows ReadPoseRows(const fs::path& path) {
-  if (!fs::is_regular_file(path)) FailInvalid(path.string() + ": file does not exist");
+  if (!fs::exists(path)) FailInvalid(path.string() + ": file does not exist");
   const NpyArray array = ReadNpy(path);
   const std::size_t rows = PoseRowCount(array, path);
 
