@@ -118,6 +118,22 @@ TEST(SceneFitTest, AStaticClipGetsNeitherADeformationNorTimeInTheColour) {
   EXPECT_NE(LeftOut(fit).find("time inputs"), std::string::npos) << LeftOut(fit);
 }
 
+// Depth bounds far wider than the footprint of a pixel (near 0, far 1e11) keep every level, said as
+// nothing left out: the finest useful resolution overflowed an int and read "levels above
+// -2147483648 cells" (found 2026-12-05).
+TEST(SceneFitTest, AHugeBoxKeepsItsLevelsWithoutOverflow) {
+  testing::TempDir dir("scene-fit-huge");
+  scene::Clip clip = FlickeringClip(dir, 0);
+  clip.near = 0;
+  clip.far = 1e11;
+  TrainConfig config = TrainConfig::Preset("cpu");
+  const int levels = config.field.grids.levels;
+  const SceneFit fit = FitToScene(clip, config);
+  EXPECT_GT(config.field.grids.max_resolution, 0);
+  EXPECT_EQ(LeftOut(fit).find("hash-grid levels"), std::string::npos) << LeftOut(fit);
+  EXPECT_EQ(config.field.grids.levels, levels);
+}
+
 // "auto" is white for an object on transparency, learned for an object in front of a backdrop
 // (opaque images around a centred rig), black for an endoscope; a background the user names stays.
 TEST(SceneFitTest, TheBackgroundFollowsTheCapture) {
