@@ -226,7 +226,8 @@
       // A heat-map colouring shows its scale bar; one the results have no scale (or grid) for is disabled.
       const heats = { uncertainty: "uncertainty colouring", model: "model map colouring" };
       const surfaceScale = () => {
-        const heat = heats[select.value];
+        // Only a colouring with a scale shows one (a script may pick a disabled option).
+        const heat = data.scales[select.value] ? heats[select.value] : undefined;
         $("surface-scale").replaceChildren(...(heat ? [node("div", { class: "hint", text: heat }),
                                                        scaleBar(data.scales[select.value])] : []));
         $("surface-scale").style.visibility = heat ? "visible" : "hidden";
