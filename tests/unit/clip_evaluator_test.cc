@@ -6,11 +6,13 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <cstdio>
 #include <nlohmann/json.hpp>
 #include <vector>
 
 #include "common/npy.h"
 #include "tests/unit/temp_dir.h"
+#include "worker/engine/scene/outside_view.h"
 #include "worker/engine/scene/clip_loader.h"
 #include "worker/engine/scene/synthetic_clip.h"
 #include "worker/engine/train/render_settings.h"
@@ -209,6 +211,47 @@ TEST(ClipEvaluatorTest, APlanPricedTooLowIsKeptToItsDeadline) {
   const nlohmann::json ahead = evaluate(std::chrono::steady_clock::now() + std::chrono::hours(1));
   EXPECT_FALSE(ahead.contains("heldout_reduced"));
   EXPECT_EQ(ahead.at("full_frames"), nlohmann::json::array({0, 2}));
+}
+
+// Outside the scope's view every uncertainty map written holds 0, on full and reduced frames alike:
+// the reduced frames' upsampled maps and the model maps held values there (found 2026-12-05).
+TEST(ClipEvaluatorTest, OutsideTheViewEveryMapIsZero) {
+  testing::TempDir dir("clip_evaluator_outside");
+  scene::SynthOptions synth;
+  synth.frames = 4;
+  BrieflyTrained run(synth, dir.path(), {0, 1, 3}, 2, 10);
+  const int w = run.clip.width, h = run.clip.height;
+  std::vector<std::uint8_t> outside(std::size_t(w) * h, 0);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < 5; ++x) outside[std::size_t(y) * w + x] = 1;  // the left five columns
+  }
+  scene::ExcludeFromFrames(run.clip, outside);
+  render::FrameRenderer plain(run.trainer.field(), run.trainer.box(),
+                              train::ReducedRenderSettings(run.config, run.clip.near, run.clip.far));
+  ClipEvaluation what;
+  what.train_frames = {0, 1, 3};
+  what.heldout_frames = {2};
+  what.plain = &plain;
+  what.plan.frames = {FrameRender::kFull, FrameRender::kReduced, FrameRender::kFull, FrameRender::kReduced};
+  what.plan.stride = 2;
+  EvaluateClip(run.clip, run.renderer, what, dir / "out");
+  for (int f = 0; f < 4; ++f) {
+    for (const char* suffix : {".npy", "_aleatoric.npy", "_epistemic.npy", "_model.npy"}) {
+      char name[32];
+      std::snprintf(name, sizeof(name), "%06d%s", f, suffix);
+      const NpyArray map = ReadNpy(dir / "out" / "uncertainty" / name);
+      ASSERT_EQ(map.data.size(), outside.size()) << name;
+      int inside_nonzero = 0;
+      for (std::size_t i = 0; i < outside.size(); ++i) {
+        if (outside[i]) {
+          ASSERT_EQ(map.data[i], 0.0) << name << " pixel " << i;
+        } else {
+          inside_nonzero += map.data[i] != 0;
+        }
+      }
+      EXPECT_GT(inside_nonzero, 0) << name;
+    }
+  }
 }
 
 }  // namespace

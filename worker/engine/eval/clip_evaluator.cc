@@ -160,6 +160,16 @@ struct EvaluatedFrame {
   std::vector<float> grid_rgb, grid_total, grid_aleatoric, grid_epistemic;
 };
 
+// Outside the scope's view every map holds 0, as the rendered colour and depth do
+// (docs/formats.md): a reduced frame's maps, upsampled from a grid rendered everywhere, and the model
+// map's neighbour terms reached into it (found 2026-12-05).
+void ZeroOutsideView(const scene::Clip& clip, std::vector<float>& map) {
+  if (clip.outside_view.size() != map.size()) return;
+  for (std::size_t i = 0; i < map.size(); ++i) {
+    if (clip.outside_view[i]) map[i] = 0;
+  }
+}
+
 EvaluatedFrame RenderFrame(const scene::Clip& clip, int f, FrameRender how, int stride,
                            render::FrameRenderer& full, render::FrameRenderer* plain) {
   const scene::Camera& camera = clip.cameras[f];
@@ -182,6 +192,7 @@ EvaluatedFrame RenderFrame(const scene::Clip& clip, int f, FrameRender how, int 
   frame.uncertainty = UpsampleStrided(out.grid_total, camera.width, camera.height, stride);
   frame.aleatoric = UpsampleStrided(out.grid_aleatoric, camera.width, camera.height, stride);
   frame.epistemic = UpsampleStrided(out.grid_epistemic, camera.width, camera.height, stride);
+  for (auto* map : {&frame.uncertainty, &frame.aleatoric, &frame.epistemic}) ZeroOutsideView(clip, *map);
   return out;
 }
 
@@ -323,6 +334,7 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
       calibrations[1].noise_free[f] =
           FrameCalibration(model.map, model.grid_map, model.grid, model.error_noise_free, mask);
     }
+    ZeroOutsideView(clip, model.map);
     if (maps) {
       maps->model.Add(model.map);
       WriteDepthNpy(maps->dir / FrameFileName(f, "_model.npy"), model.map, w, h);
