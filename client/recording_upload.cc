@@ -57,7 +57,8 @@ std::string StagedRecording::Stage(const std::string& path, const std::string& n
       fs::create_symlink(entry.path(), dir_ / name / file);
       ++files;
     }
-    if (files == 0) FailInvalid(path + ": the folder holds no image (frames as PNG, JPEG, BMP or TIFF files)");
+    if (files == 0)
+      FailInvalid(path + ": the folder holds no image (frames as PNG, JPEG, BMP or TIFF files)");
     sources_[name + "/"] = fs::path(path).lexically_normal().string() + (path.back() == '/' ? "" : "/");
     return name;
   }

@@ -145,9 +145,11 @@ int Submit(const Globals& globals, const SubmitFlags& flags) {
         "or --top-bottom) or --pacs NAME --study UID: exactly one of them");
   }
   if (!flags.pacs.empty() && flags.study_uid.empty()) FailInvalid("--pacs needs --study UID");
+  // A DICOM file, or a folder holding one (read once: a folder's files are opened to tell).
+  const bool recording = !flags.clip.empty() && dicom::HoldsDicom(flags.clip);
   // A single file goes up as a DICOM recording: one that is not (a video, say) is refused before its
   // upload, not by the worker after it.
-  if (!flags.clip.empty() && std::filesystem::is_regular_file(flags.clip) && !dicom::HoldsDicom(flags.clip)) {
+  if (!flags.clip.empty() && std::filesystem::is_regular_file(flags.clip) && !recording) {
     FailInvalid(
         flags.clip +
         ": a file that is not a DICOM recording (no \"DICM\" at byte 128, not named *.dcm): CLIP is a "
@@ -157,8 +159,7 @@ int Submit(const Globals& globals, const SubmitFlags& flags) {
   }
   // A folder that is no clip is refused before its upload, by the rule the worker's loader applies
   // first (common/clip_files.h): it was uploaded and queued, then failed on the worker.
-  const bool clip_folder =
-      !flags.clip.empty() && std::filesystem::is_directory(flags.clip) && !dicom::HoldsDicom(flags.clip);
+  const bool clip_folder = !flags.clip.empty() && std::filesystem::is_directory(flags.clip) && !recording;
   if (clip_folder && !FindClipLayout(flags.clip)) {
     FailInvalid(flags.clip +
                 ": not a clip: found neither transforms.json (transforms.json layout) nor poses_bounds.npy "
@@ -178,8 +179,7 @@ int Submit(const Globals& globals, const SubmitFlags& flags) {
         "--side-by-side or --top-bottom); a clip folder, a DICOM recording or a PACS study takes none");
   }
   if (!flags.name.empty()) ValidateJobName(flags.name);  // as the server would, after the upload
-  dicom::CheckDicomResultFlags(flags.dicom.enabled(),
-                               !flags.pacs.empty() || (!flags.clip.empty() && dicom::HoldsDicom(flags.clip)),
+  dicom::CheckDicomResultFlags(flags.dicom.enabled(), !flags.pacs.empty() || recording,
                                flags.dicom.patient_id(), flags.dicom.patient_name(), flags.dicom.study_uid());
   if (flags.pacs.empty() && (!flags.study_uid.empty() || !flags.series_uid.empty()))
     FailInvalid("--study and --series name a recording in a PACS: they go with --pacs NAME");

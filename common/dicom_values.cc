@@ -14,8 +14,8 @@ constexpr std::size_t kMostCharacters = 64;
 
 // Characters, not bytes: UTF-8 continuation bytes do not count (the values are written as UTF-8).
 std::size_t Characters(std::string_view text) {
-  return static_cast<std::size_t>(
-      std::count_if(text.begin(), text.end(), [](char c) { return (static_cast<unsigned char>(c) & 0xC0) != 0x80; }));
+  return static_cast<std::size_t>(std::count_if(
+      text.begin(), text.end(), [](char c) { return (static_cast<unsigned char>(c) & 0xC0) != 0x80; }));
 }
 
 void CheckCharacters(std::string_view text, const std::string& what) {
@@ -51,8 +51,9 @@ void CheckPatientName(const std::string& name, const std::string& what) {
   CheckCharacters(name, what);
   const auto groups = Split(name, '=');
   if (groups.size() > 3) {
-    FailInvalid(what + " has " + std::to_string(groups.size()) +
-                " component groups ('='); a DICOM name (PN) has at most 3: alphabetic, ideographic, phonetic");
+    FailInvalid(
+        what + " has " + std::to_string(groups.size()) +
+        " component groups ('='); a DICOM name (PN) has at most 3: alphabetic, ideographic, phonetic");
   }
   for (const std::string_view group : groups) {
     if (Characters(group) > kMostCharacters) {
@@ -60,8 +61,9 @@ void CheckPatientName(const std::string& name, const std::string& what) {
                   " characters; a DICOM name (PN) allows 64 per group");
     }
     if (Split(group, '^').size() > 5) {
-      FailInvalid(what + " has more than 5 components ('^'); a DICOM name (PN) is "
-                         "family^given^middle^prefix^suffix");
+      FailInvalid(what +
+                  " has more than 5 components ('^'); a DICOM name (PN) is "
+                  "family^given^middle^prefix^suffix");
     }
   }
 }
@@ -72,8 +74,9 @@ void CheckDicomResultFlags(bool dicom, bool recording, const std::string& patien
   CheckPatientName(patient_name, "--patient-name");
   if (patient_id.empty() && patient_name.empty() && study_uid.empty()) return;
   if (recording) {
-    FailInvalid("--patient-id, --patient-name and --study-uid name the patient and study of results made "
-                "from a clip; a DICOM recording's results keep its own patient and study");
+    FailInvalid(
+        "--patient-id, --patient-name and --study-uid name the patient and study of results made "
+        "from a clip; a DICOM recording's results keep its own patient and study");
   }
   if (!dicom) FailInvalid("--patient-id, --patient-name and --study-uid go with --dicom (DICOM results)");
 }

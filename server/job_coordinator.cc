@@ -6,9 +6,9 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 
-#include "common/dicom_values.h"
 #include "common/dicom/recording.h"
 #include "common/dicom/uid.h"
+#include "common/dicom_values.h"
 #include "common/error.h"
 #include "common/job_bounds.h"
 #include "common/manifest.h"

@@ -288,8 +288,10 @@ std::size_t PixelDataBytes(const Instance& instance) {
   // Fragments of a compressed stream under a native transfer syntax (a file whose syntax was
   // rewritten): said as such, not as "0 bytes".
   if (element->getLengthField() == DCM_UndefinedLength) {
-    FailInvalid(Where(instance) + ": the pixel data is encapsulated (compressed fragments) but the transfer "
-                                  "syntax " + std::string(DcmXfer(instance.xfer).getXferName()) + " says native pixels");
+    FailInvalid(Where(instance) +
+                ": the pixel data is encapsulated (compressed fragments) but the transfer "
+                "syntax " +
+                std::string(DcmXfer(instance.xfer).getXferName()) + " says native pixels");
   }
   return element->getLength();
 }
@@ -505,7 +507,8 @@ std::vector<cv::Mat> Split(std::vector<cv::Mat>& frames, StereoLayout layout, co
 // its dataset; empty when the file has none.
 std::string MetaSopClass(const fs::path& path) {
   DcmFileFormat file;
-  if (file.loadFile(path.c_str(), EXS_Unknown, EGL_noChange, DCM_MaxReadLength, ERM_metaOnly).bad()) return "";
+  if (file.loadFile(path.c_str(), EXS_Unknown, EGL_noChange, DCM_MaxReadLength, ERM_metaOnly).bad())
+    return "";
   OFString sop;
   file.getMetaInfo()->findAndGetOFString(DCM_MediaStorageSOPClassUID, sop);
   return sop.c_str();
@@ -518,8 +521,10 @@ std::vector<std::vector<Instance>> LoadSeries(const fs::path& path) {
   std::vector<fs::path> files;
   if (fs::is_directory(path)) {
     for (const auto& entry : fs::directory_iterator(path)) {
-      if (!entry.is_regular_file() || !(IsDicomFile(entry.path()) || HasDicomExtension(entry.path()))) continue;
-      const std::string sop = IsDicomFile(entry.path()) ? MetaSopClass(entry.path()) : "";
+      if (!entry.is_regular_file()) continue;
+      const bool marked = IsDicomFile(entry.path());  // opened once for its mark, once more for its class
+      if (!marked && !HasDicomExtension(entry.path())) continue;
+      const std::string sop = marked ? MetaSopClass(entry.path()) : "";
       if (!sop.empty() && !kVideoClasses.count(sop) && !kImageClasses.count(sop)) {
         spdlog::warn("{}: skipped, SOP class {} is not a recording", entry.path().string(), UidName(sop));
         continue;
@@ -527,7 +532,10 @@ std::vector<std::vector<Instance>> LoadSeries(const fs::path& path) {
       files.push_back(entry.path());
     }
     std::sort(files.begin(), files.end());
-    if (files.empty()) FailInvalid(path.string() + ": no DICOM recording in the folder (other DICOM files, if any, are skipped: see the warnings)");
+    if (files.empty())
+      FailInvalid(
+          path.string() +
+          ": no DICOM recording in the folder (other DICOM files, if any, are skipped: see the warnings)");
   } else if (fs::exists(path)) {
     files.push_back(path);
   } else {

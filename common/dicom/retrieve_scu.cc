@@ -92,11 +92,12 @@ int Finish(const OFList<RetrieveResponse*>& responses, const RetrieveRequest& re
     // The PACS's own words, when it sent any; and what a failure usually means here: a PACS fails a
     // whole retrieval when the study is not there, or when one of its objects (a CT, a report) is of
     // a class endorecon does not take (only the recording's series can come then).
-    const std::string comment =
-        last->m_statusDetail == nullptr ? "" : FindString(*last->m_statusDetail, DCM_ErrorComment).value_or("");
+    const std::string comment = last->m_statusDetail == nullptr
+                                    ? ""
+                                    : FindString(*last->m_statusDetail, DCM_ErrorComment).value_or("");
     Fail(ErrorCode::kUnavailable,
-         verb + " of " + What(request) + " refused by " + PeerText(request.peer) + " with status " +
-             status + (comment.empty() ? "" : " (\"" + comment + "\")") +
+         verb + " of " + What(request) + " refused by " + PeerText(request.peer) + " with status " + status +
+             (comment.empty() ? "" : " (\"" + comment + "\")") +
              ((last->m_status & 0xf000) == 0xc000 || last->m_status == 0xa701 || last->m_status == 0xa702
                   ? std::string(": the PACS may not hold it") +
                         (request.series_uid.empty()
@@ -179,7 +180,8 @@ int GetStudy(const RetrieveRequest& request, const fs::path& out_dir, const Retr
              return scu.sendCGETRequest(id, query, responses);
            });
   if (scu.instances == 0) {
-    Fail(ErrorCode::kNotFound, PeerText(request.peer) + " holds no recording in " + What(request) + " (endorecon's own results there are not one)");
+    Fail(ErrorCode::kNotFound, PeerText(request.peer) + " holds no recording in " + What(request) +
+                                   " (endorecon's own results there are not one)");
   }
   return scu.instances;
 }
@@ -195,7 +197,8 @@ int MoveStudy(const RetrieveRequest& request, const std::string& destination_ae)
                  return scu.sendMOVERequest(id, destination_ae.c_str(), query, responses);
                });
   if (moved == 0)
-    Fail(ErrorCode::kNotFound, PeerText(request.peer) + " holds no recording in " + What(request) + " (endorecon's own results there are not one)");
+    Fail(ErrorCode::kNotFound, PeerText(request.peer) + " holds no recording in " + What(request) +
+                                   " (endorecon's own results there are not one)");
   return moved;
 }
 

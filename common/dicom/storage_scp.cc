@@ -42,8 +42,9 @@ class StorageScp::Scp : public DcmStorageSCP {
     std::string title = called.c_str();
     while (!title.empty() && title.back() == ' ') title.pop_back();
     const bool accepted = title == settings_.ae_title;
-    if (!accepted) spdlog::warn("storage SCP: refused an association called '{}' (this SCP is '{}')", title,
-                                settings_.ae_title);
+    if (!accepted)
+      spdlog::warn("storage SCP: refused an association called '{}' (this SCP is '{}')", title,
+                   settings_.ae_title);
     return accepted;
   }
 

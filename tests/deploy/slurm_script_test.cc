@@ -40,11 +40,13 @@ TEST(SlurmScriptTest, TheWorkerGetsOnlyFlagsItHas) {
 // its options and runs the command.
 int BatchStatusWithWorker(const std::string& worker, std::string& log) {
   TempDir dir("sbatch");
-  WriteBytes(dir / "srun", "#!/bin/bash\nwhile [ $# -gt 0 ] && [ \"${1#--}\" != \"$1\" ]; do shift; done\nexec \"$@\"\n");
+  WriteBytes(dir / "srun",
+             "#!/bin/bash\nwhile [ $# -gt 0 ] && [ \"${1#--}\" != \"$1\" ]; do shift; done\nexec \"$@\"\n");
   fs::permissions(dir / "srun", fs::perms::owner_all);
-  const std::string command = "PATH='" + dir.path().string() + "':$PATH ENDORECON_SERVER=127.0.0.1:1 ENDORECON_WORKER=" +
-                              worker + " SLURM_JOB_ID=7 SLURM_CPUS_PER_TASK=1 TMPDIR='" + dir.path().string() +
-                              "' bash '" + SourcePath("deploy/slurm/endorecon-worker.sbatch").string() + "' 2>&1";
+  const std::string command =
+      "PATH='" + dir.path().string() + "':$PATH ENDORECON_SERVER=127.0.0.1:1 ENDORECON_WORKER=" + worker +
+      " SLURM_JOB_ID=7 SLURM_CPUS_PER_TASK=1 TMPDIR='" + dir.path().string() + "' bash '" +
+      SourcePath("deploy/slurm/endorecon-worker.sbatch").string() + "' 2>&1";
   log = Capture(command + "; echo rc=$?");
   const auto at = log.rfind("rc=");
   return std::stoi(log.substr(at + 3));

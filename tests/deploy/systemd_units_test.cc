@@ -58,7 +58,10 @@ std::string WorkerCommandLine(const std::string& instance, const std::string& en
     line += exec[i];
   }
   const std::vector<std::pair<std::string, std::string>> specifiers{
-      {"%i", instance}, {"%d", "/run/credentials/x"}, {"%H", "node7"}, {"$$", "$"},
+      {"%i", instance},
+      {"%d", "/run/credentials/x"},
+      {"%H", "node7"},
+      {"$$", "$"},
       {"/usr/local/bin/endorecon-worker", "echo"}};
   for (const auto& [from, to] : specifiers) {
     for (auto at = line.find(from); at != std::string::npos; at = line.find(from, at + to.size()))
@@ -72,7 +75,8 @@ TEST(SystemdUnitsTest, EachWorkerInstanceServesMetricsOnItsOwnPort) {
   EXPECT_NE(WorkerCommandLine("cpu", "").find("--metrics-port 9465 "), std::string::npos);
   EXPECT_NE(WorkerCommandLine("0", "").find("--metrics-port 9465 "), std::string::npos);
   const std::string second = WorkerCommandLine("1", "");
-  EXPECT_NE(second.find("--metrics-port 9466 --work-dir /var/cache/w --id node7-1"), std::string::npos) << second;
+  EXPECT_NE(second.find("--metrics-port 9466 --work-dir /var/cache/w --id node7-1"), std::string::npos)
+      << second;
   EXPECT_NE(second.find("--server head:50051 --devices 1 "), std::string::npos) << second;
   EXPECT_NE(WorkerCommandLine("1", "METRICS_PORT=9500").find("--metrics-port 9500 "), std::string::npos);
 }

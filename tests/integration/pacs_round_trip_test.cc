@@ -91,7 +91,8 @@ TEST_F(PacsRoundTripTest, RecordingFromThePacsResultsBackIntoItsStudy) {
   // 2026-12-05).
   const auto count = [&](const std::string& what) {
     int n = 0;
-    for (auto at = submitted.out.find(what); at != std::string::npos; at = submitted.out.find(what, at + 1)) ++n;
+    for (auto at = submitted.out.find(what); at != std::string::npos; at = submitted.out.find(what, at + 1))
+      ++n;
     return n;
   };
   EXPECT_EQ(count(", done\n"), 1) << submitted.out;
@@ -234,7 +235,8 @@ TEST_F(PacsRoundTripTest, CMoveToTheServersStorageScpWhenCGetIsRefused) {
   EXPECT_FALSE(unasked.stored[0]);
   EXPECT_NE(unasked.first_error.find("0x0124"), std::string::npos) << unasked.first_error;
   int kept = 0;
-  for (const auto& entry : std::filesystem::recursive_directory_iterator(cluster.data_dir() / "dicom-incoming"))
+  for (const auto& entry :
+       std::filesystem::recursive_directory_iterator(cluster.data_dir() / "dicom-incoming"))
     kept += entry.is_regular_file() ? 1 : 0;
   EXPECT_EQ(kept, 0);
   const dicom::Peer wrong_called{"NOTMOVER", "127.0.0.1", mover_port_};

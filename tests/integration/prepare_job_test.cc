@@ -69,7 +69,8 @@ TEST(PrepareJobTest, RecordingInPreparedClipAndResultsOut) {
   const std::string report = ReadBytes(cluster.path("results/clip/prepare.json"));
   EXPECT_NE(report.find((rec / "left.avi").string()), std::string::npos) << report;
   EXPECT_NE(report.find((rec / "synth/recording/calibration.yaml").string()), std::string::npos) << report;
-  EXPECT_NE(report.find("\"masks\": \"" + (rec / "synth/recording/masks").string()), std::string::npos) << report;
+  EXPECT_NE(report.find("\"masks\": \"" + (rec / "synth/recording/masks").string()), std::string::npos)
+      << report;
 
   // The same recording again: nothing is uploaded twice.
   const auto again =
@@ -114,10 +115,12 @@ TEST(PrepareJobTest, AnEyesFolderSendsOnlyItsFramesAndAFolderIsNoCalibration) {
   EXPECT_EQ(result.exit_code, 2) << result.err;
   EXPECT_NE(result.err.find((rec / "notes").string() + ": the folder holds no image"), std::string::npos)
       << result.err;
-  result = RunCli(cluster.address(), {"submit", "--left", (rec / "left.avi").string(), "--right",
-                                      (rec / "right.avi").string(), "--calibration", (rec / "synth").string()});
+  result =
+      RunCli(cluster.address(), {"submit", "--left", (rec / "left.avi").string(), "--right",
+                                 (rec / "right.avi").string(), "--calibration", (rec / "synth").string()});
   EXPECT_EQ(result.exit_code, 2) << result.err;
-  EXPECT_NE(result.err.find("synth: a folder, and --calibration takes a file"), std::string::npos) << result.err;
+  EXPECT_NE(result.err.find("synth: a folder, and --calibration takes a file"), std::string::npos)
+      << result.err;
   int uploaded = 0;
   for (const char* folder : {"blobs", "partial"}) {
     if (!fs::exists(cluster.data_dir() / folder)) continue;
@@ -128,9 +131,9 @@ TEST(PrepareJobTest, AnEyesFolderSendsOnlyItsFramesAndAFolderIsNoCalibration) {
 
   // The eyes' frames as folders, a stray file among them: the frames go, the stray file does not.
   WriteBytes(rec / "synth/recording/left/notes.txt", "not a frame");
-  result = RunCli(cluster.address(),
-                  {"submit", "--left", (rec / "synth/recording/left").string(), "--right",
-                   (rec / "synth/recording/right").string(), "--calibration", calibration});
+  result =
+      RunCli(cluster.address(), {"submit", "--left", (rec / "synth/recording/left").string(), "--right",
+                                 (rec / "synth/recording/right").string(), "--calibration", calibration});
   EXPECT_EQ(result.exit_code, 0) << result.err;
   EXPECT_NE(result.err.find("uploaded 13 file(s)"), std::string::npos) << result.err;
 }

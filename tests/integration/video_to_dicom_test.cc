@@ -82,7 +82,8 @@ TEST(VideoToDicomTest, AFailedWriteLeavesNothingAndAFolderIsNoOutput) {
                   dir.path().string()},
                  dir / "folder.log");
   EXPECT_EQ(folder.Wait(), 2) << folder.Log();
-  EXPECT_NE(folder.Log().find(": a folder; -o names the DICOM file to write"), std::string::npos) << folder.Log();
+  EXPECT_NE(folder.Log().find(": a folder; -o names the DICOM file to write"), std::string::npos)
+      << folder.Log();
 }
 
 // Frames of odd size become H.264 of the even size above, padded, and read back whole: FFmpeg cut
@@ -106,11 +107,12 @@ TEST(VideoToDicomTest, AReconstructionKeepsAForeignFolderWhereItsClipWouldGo) {
   ASSERT_EQ(ToDicom(dir, {WriteVideo(dir).string(), "-o", (dir / "rec.dcm").string()}), 0);
   std::filesystem::create_directories(dir / "out.clip");
   WriteBytes(dir / "out.clip" / "mine.txt", "keep");
-  Process reconstruct({BuiltBinary("worker/runtime/endorecon-worker"), "reconstruct", (dir / "rec.dcm").string(),
-                       "-o", (dir / "out").string(), "--iterations", "5"},
+  Process reconstruct({BuiltBinary("worker/runtime/endorecon-worker"), "reconstruct",
+                       (dir / "rec.dcm").string(), "-o", (dir / "out").string(), "--iterations", "5"},
                       dir / "reconstruct.log");
   EXPECT_EQ(reconstruct.Wait(), 2) << reconstruct.Log();
-  EXPECT_NE(reconstruct.Log().find("out.clip: exists and is not a clip an earlier run made"), std::string::npos)
+  EXPECT_NE(reconstruct.Log().find("out.clip: exists and is not a clip an earlier run made"),
+            std::string::npos)
       << reconstruct.Log();
   EXPECT_EQ(ReadBytes(dir / "out.clip" / "mine.txt"), "keep");
 }

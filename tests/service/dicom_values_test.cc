@@ -33,13 +33,15 @@ TEST(DicomValuesTest, APatientIdIsOneValueOfAtMost64Characters) {
       << message;
   EXPECT_EQ(message.find("YYYY"), std::string::npos) << "the value identifies a patient: " << message;
   EXPECT_NE(Refusal([] { CheckPatientId("A\\B", "--patient-id"); }).find("backslash"), std::string::npos);
-  EXPECT_NE(Refusal([] { CheckPatientId("A\nB", "--patient-id"); }).find("control character"), std::string::npos);
+  EXPECT_NE(Refusal([] { CheckPatientId("A\nB", "--patient-id"); }).find("control character"),
+            std::string::npos);
 }
 
 TEST(DicomValuesTest, APatientNameIsOnePersonName) {
   for (const std::string good : {"", "Doe^Jane", "Doe^Jane^Q^Dr^III", "Yamada^Tarou=山田^太郎=やまだ^たろう"})
     EXPECT_EQ(Refusal([&] { CheckPatientName(good, "--patient-name"); }), "") << good;
-  EXPECT_NE(Refusal([] { CheckPatientName("A^B\\C^D", "--patient-name"); }).find("backslash"), std::string::npos);
+  EXPECT_NE(Refusal([] { CheckPatientName("A^B\\C^D", "--patient-name"); }).find("backslash"),
+            std::string::npos);
   EXPECT_NE(Refusal([] { CheckPatientName("a=b=c=d", "--patient-name"); }).find("4 component groups"),
             std::string::npos);
   EXPECT_NE(Refusal([] { CheckPatientName("a^b^c^d^e^f", "--patient-name"); }).find("more than 5 components"),
@@ -53,8 +55,9 @@ TEST(DicomValuesTest, PatientFlagsGoWithDicomResultsOfAClip) {
   EXPECT_EQ(Refusal([] { CheckDicomResultFlags(false, true, "", "", ""); }), "");
   EXPECT_NE(Refusal([] { CheckDicomResultFlags(false, false, "P1", "", ""); }).find("go with --dicom"),
             std::string::npos);
-  EXPECT_NE(Refusal([] { CheckDicomResultFlags(true, true, "", "Doe^Jane", ""); })
-                .find("a DICOM recording's results keep its own patient and study"),
+  EXPECT_NE(Refusal([] {
+              CheckDicomResultFlags(true, true, "", "Doe^Jane", "");
+            }).find("a DICOM recording's results keep its own patient and study"),
             std::string::npos);
 }
 

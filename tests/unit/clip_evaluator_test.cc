@@ -12,8 +12,8 @@
 
 #include "common/npy.h"
 #include "tests/unit/temp_dir.h"
-#include "worker/engine/scene/outside_view.h"
 #include "worker/engine/scene/clip_loader.h"
+#include "worker/engine/scene/outside_view.h"
 #include "worker/engine/scene/synthetic_clip.h"
 #include "worker/engine/train/render_settings.h"
 #include "worker/engine/train/scene_fit.h"

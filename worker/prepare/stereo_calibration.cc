@@ -60,9 +60,7 @@ cv::Vec3d Translation(const cv::Mat& m, const std::string& where) {
   return v;
 }
 
-void RequireFile(const fs::path& path) {
-  RequireRegularFile(path, "calibration file");
-}
+void RequireFile(const fs::path& path) { RequireRegularFile(path, "calibration file"); }
 
 cv::Mat ReadMatrix(const OpenCvStorage& file, const std::string& name,
                    std::initializer_list<const char*> keys) {

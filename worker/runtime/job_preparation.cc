@@ -32,8 +32,10 @@ void NameTheSubmittersFiles(const fs::path& report, const fs::path& recording_di
     std::string text = value.get<std::string>();
     for (const auto& [staged, given] : job.prepare().sources()) {
       const bool folder = !staged.empty() && staged.back() == '/';
-      const std::string from = (recording_dir / (folder ? staged.substr(0, staged.size() - 1) : staged)).string();
-      const std::string to = folder && !given.empty() && given.back() == '/' ? given.substr(0, given.size() - 1) : given;
+      const std::string from =
+          (recording_dir / (folder ? staged.substr(0, staged.size() - 1) : staged)).string();
+      const std::string to =
+          folder && !given.empty() && given.back() == '/' ? given.substr(0, given.size() - 1) : given;
       for (auto at = text.find(from); at != std::string::npos; at = text.find(from, at + to.size()))
         text.replace(at, from.size(), to);
     }

@@ -8,8 +8,8 @@
 
 #include "common/cli_checks.h"
 #include "common/clip_files.h"
-#include "common/dicom_file.h"
 #include "common/dicom/uid.h"
+#include "common/dicom_file.h"
 #include "common/dicom_values.h"
 #include "common/error.h"
 #include "common/json_file.h"
@@ -29,7 +29,8 @@ namespace fs = std::filesystem;
 void RefuseToReplaceAForeignFolder(const fs::path& clip_out) {
   std::error_code error;
   if (!fs::exists(clip_out, error)) return;
-  if (fs::is_directory(clip_out, error) && (fs::is_empty(clip_out, error) || FindClipLayout(clip_out))) return;
+  if (fs::is_directory(clip_out, error) && (fs::is_empty(clip_out, error) || FindClipLayout(clip_out)))
+    return;
   FailInvalid(clip_out.string() +
               ": exists and is not a clip an earlier run made; the clip of this recording goes there (-o OUT "
               "makes OUT.clip): move it away or choose another -o");
@@ -125,8 +126,8 @@ Command AddReconstructCommand(CLI::App& app) {
       }
     }
     const bool recording_input = dicom::HoldsDicom(options->clip_dir);
-    dicom::CheckDicomResultFlags(dicom->enabled(), recording_input, dicom->patient_id(), dicom->patient_name(),
-                                 dicom->study_uid());
+    dicom::CheckDicomResultFlags(dicom->enabled(), recording_input, dicom->patient_id(),
+                                 dicom->patient_name(), dicom->study_uid());
     // The results' UIDs before the run, not after it (they failed the command once everything else
     // was written; found 2026-12-05). NewUid refuses a root that is no UID prefix.
     if (!dicom->study_uid().empty()) dicom::CheckUid(dicom->study_uid(), "--study-uid");

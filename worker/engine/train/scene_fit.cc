@@ -3,8 +3,8 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <limits>
 #include <cmath>
+#include <limits>
 #include <string>
 #include <utility>
 #include <vector>
@@ -123,7 +123,8 @@ SceneFit FitToScene(const scene::Clip& clip, TrainConfig& config, std::vector<in
   // In double first: a box far larger than the footprint (near 0, far 1e11) overflowed the int and
   // read "levels above -2147483648 cells" (found 2026-12-05).
   const double cells = std::ceil(2.0 * box.scale() / std::max(footprint, 1e-12));
-  const int useful = cells >= double(std::numeric_limits<int>::max()) ? std::numeric_limits<int>::max() : int(cells);
+  const int useful =
+      cells >= double(std::numeric_limits<int>::max()) ? std::numeric_limits<int>::max() : int(cells);
   if (config.field.grids.max_resolution <= 0 || useful < config.field.grids.max_resolution) {
     config.field.grids.max_resolution = useful;
   }
