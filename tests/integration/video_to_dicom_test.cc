@@ -100,6 +100,24 @@ TEST(VideoToDicomTest, OddSizedFramesArePaddedToEvenOnes) {
   EXPECT_NEAR(cv::mean(odd.left[2])[2], 200, 4);  // the padding repeats the edge: no dark border
 }
 
+// The flags added on 2026-12-05 refuse their bad forms before any work: a Series Number out of DICOM's
+// range for to-dicom, no views for calibrate (an OpenCV assertion before).
+TEST(VideoToDicomTest, NewFlagsRefuseTheirBadForms) {
+  TempDir dir("video-to-dicom-flags");
+  const std::string worker = BuiltBinary("worker/runtime/endorecon-worker");
+  Process series(
+      {worker, "to-dicom", WriteVideo(dir).string(), "-o", (dir / "x.dcm").string(), "--series-number", "-1"},
+      dir / "series.log");
+  EXPECT_EQ(series.Wait(), 2) << series.Log();
+  EXPECT_NE(series.Log().find("--series-number"), std::string::npos) << series.Log();
+  EXPECT_FALSE(std::filesystem::exists(dir / "x.dcm"));
+  Process views({worker, "calibrate", "-o", (dir / "c.yaml").string(), "--left", dir.path().string(),
+                 "--right", dir.path().string(), "--square", "4", "--max-views", "0"},
+                dir / "views.log");
+  EXPECT_EQ(views.Wait(), 2) << views.Log();
+  EXPECT_NE(views.Log().find("--max-views"), std::string::npos) << views.Log();
+}
+
 // `reconstruct REC.dcm -o OUT` makes its clip in OUT.clip: a folder of the user's there is refused,
 // not deleted (found 2026-12-05: it was removed without a word).
 TEST(VideoToDicomTest, AReconstructionKeepsAForeignFolderWhereItsClipWouldGo) {
