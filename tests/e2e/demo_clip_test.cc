@@ -5,7 +5,6 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
-#include "tests/integration/sanitizer_build.h"
 #include "tests/unit/temp_dir.h"
 #include "worker/engine/reconstruct.h"
 #include "worker/engine/scene/synthetic_clip.h"
@@ -14,7 +13,9 @@ namespace endorecon {
 namespace {
 
 // About what the Release build's 30 s run reaches on the 2-core VM (2026-12-01: 514 iterations in
-// 13 s of training, held-out PSNR 28.9 dB; evaluation took the rest).
+// 13 s of training, held-out PSNR 28.9 dB; evaluation took the rest). The test runs that many steps,
+// not a 30 s budget: on a slower or busier machine a budget buys fewer steps (CI, 2026-12-05: 10.5 s
+// of training, 18.8 dB), and what a budget buys is a benchmark's question (bench/), not a test's.
 constexpr int kReleaseStepsIn30s = 600;
 
 TEST(DemoClipTest, CpuPresetReconstructsTheDemoClip) {
@@ -23,15 +24,7 @@ TEST(DemoClipTest, CpuPresetReconstructsTheDemoClip) {
   ReconstructOptions options;
   options.clip_dir = (dir / "clip").string();
   options.out_dir = (dir / "out").string();
-  if constexpr (testing::kSlowdown == 1) {
-    options.time_budget_s = 30.0;  // the whole run's
-  } else {
-    // An instrumented build steps ~5x slower and evaluates slower still: a budget scaled to 150 s
-    // left it too few steps (held-out PSNR 16.4 dB under ASan, 2026-12-01). It runs about the steps
-    // the Release build's 30 s reach instead, with no budget: what it checks there is memory, not the
-    // clock.
-    options.iterations = kReleaseStepsIn30s;
-  }
+  options.iterations = kReleaseStepsIn30s;
   int progress_calls = 0;
   ReconstructHooks hooks;
   hooks.progress_interval_s = 1;
@@ -40,7 +33,7 @@ TEST(DemoClipTest, CpuPresetReconstructsTheDemoClip) {
 
   EXPECT_FALSE(summary.cancelled);
   EXPECT_GT(progress_calls, 3);
-  EXPECT_GT(summary.heldout_psnr, 20.0) << "held-out tissue PSNR after a 30 s run";
+  EXPECT_GT(summary.heldout_psnr, 20.0) << "held-out tissue PSNR after " << kReleaseStepsIn30s << " steps";
   for (const char* file : {"metrics.json", "config.json", "curve.svg", "video.mp4", "model/model.bin",
                            "model/checkpoint.bin", "rgb/000000.png", "depth/000047.npy", "depth/000047.png",
                            "pointcloud/000010.ply", "report.html", "mesh.ply", "mesh.obj", "mesh.stl"}) {
