@@ -307,6 +307,43 @@ TEST(TrainConfigTest, BadValuesAreRejected) {
   }
 }
 
+// The field's keys are checked with the rest of the configuration, before a clip is loaded (until
+// 2026-12-05 a bad table size failed after the clip had loaded, as "hash grid log2 table size must be
+// in [4, 26]", naming neither the key nor the configuration), each naming its whole key.
+TEST(TrainConfigTest, TheFieldsKeysAreCheckedNamingTheirWholeKey) {
+  const std::vector<std::pair<std::string, nlohmann::json>> cases = {
+      {"field.grids.log2_table", {{"field", {{"grids", {{"log2_table", 30}}}}}}},
+      {"field.grids.features", {{"field", {{"grids", {{"features", 3}}}}}}},
+      {"field.grids.levels", {{"field", {{"grids", {{"levels", 0}}}}}}},
+      {"field.grids.scales[1]", {{"field", {{"grids", {{"scales", {1.5, 0.5, 1.4}}}}}}}},
+      {"field.grids.base_resolutions and field.grids.scales",
+       {{"field", {{"grids", {{"base_resolutions", {8, 16}}}}}}}},
+      {"field.blend_hidden", {{"field", {{"blend_hidden", 0}}}}},
+      {"field.deformation.resolution", {{"field", {{"deformation", {{"time_knots", 0}}}}}}},
+      {"field.deformation:", {{"field", {{"deformation", {{"resolution", 1000}}}}}}},
+      {"field.heads.density_hidden", {{"field", {{"heads", {{"density_hidden", std::vector<int>(9, 8)}}}}}}},
+      {"field.heads.color_hidden[1]", {{"field", {{"heads", {{"color_hidden", {32, 0}}}}}}}},
+      {"field.heads.geo_features", {{"field", {{"heads", {{"geo_features", -1}}}}}}},
+      {"field.encoding", {{"field", {{"encoding", "fourier"}}}}},
+      {"field.frequencies", {{"field", {{"encoding", "frequency"}, {"frequencies", 40}}}}},
+  };
+  for (const auto& [key, bad] : cases) {
+    TrainConfig config;
+    try {
+      ApplyJson(bad, config);
+      ADD_FAILURE() << bad.dump() << " was accepted";
+    } catch (const Error& e) {
+      const std::string message = e.what();
+      EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument) << message;
+      EXPECT_EQ(message.rfind("config: " + key, 0), 0u) << message;
+    }
+  }
+  // A frequency encoding has no grids to check; a static scene's deformation is not built.
+  TrainConfig config;
+  ApplyJson(nlohmann::json{{"field", {{"encoding", "frequency"}, {"grids", {{"log2_table", 30}}}}}}, config);
+  ApplyJson(nlohmann::json{{"field", {{"deformation", {{"enabled", false}, {"resolution", 0}}}}}}, config);
+}
+
 // The exposure's knot times (config.json of a run that models exposure): descending, repeated or
 // not finite, refused naming the key and the knot.
 TEST(TrainConfigTest, ExposureKnotTimesMustAscend) {

@@ -29,14 +29,11 @@ void CheckBatch(const SampleBatchT<S>& batch, const char* what) {
   }
 }
 
+// Checks the whole configuration, naming its keys, before any module is built.
 bool UsesFrequencyEncoding(const FieldConfig& config) {
-  if (config.encoding != "hash" && config.encoding != "frequency") {
-    FailInvalid("field.encoding must be hash or frequency, got '" + config.encoding + "'");
-  }
+  CheckFieldConfig(config);
   return config.encoding == "frequency";
 }
-
-constexpr int kMaxLayers = 8;  // hidden layers per head
 
 }  // namespace
 
@@ -46,13 +43,13 @@ struct FieldT<S>::Impl {
   // Backward; Infer, Encode and Decode use one segment's per thread.
   struct Acts {
     AlignedVector<S> time, x0, gfeat, blend_hidden, beta, feat, dens_raw, col_in, col_raw, rgb0;
-    std::array<AlignedVector<S>, kMaxLayers> dens_hidden, col_hidden;
+    std::array<AlignedVector<S>, kMaxHiddenLayers> dens_hidden, col_hidden;
     int rows = 0;
   };
   // Acts from one row on.
   struct View {
     S *time, *x0, *gfeat, *blend_hidden, *beta, *feat, *dens_raw, *col_in, *col_raw, *rgb0;
-    std::array<S*, kMaxLayers> dens_hidden, col_hidden;
+    std::array<S*, kMaxHiddenLayers> dens_hidden, col_hidden;
   };
 
   std::optional<GridEnsemble<S>> grids;
@@ -82,10 +79,6 @@ struct FieldT<S>::Impl {
         first_time(config.trained_times[0]),
         last_time(config.trained_times[1]),
         clamps(first_time > S(0) || last_time < S(1)) {
-    CheckTrainedTimes(config.trained_times);
-    if (config.heads.density_hidden.size() > kMaxLayers || config.heads.color_hidden.size() > kMaxLayers) {
-      FailInvalid("field heads may have at most " + std::to_string(kMaxLayers) + " hidden layers each");
-    }
     if (frequency_encoding) {
       frequency.emplace(config.frequencies);
     } else {
@@ -190,7 +183,7 @@ struct FieldT<S>::Impl {
     const S* time = out.rgb ? StructureTimes(batch, q, rows, v) : nullptr;  // row q on; the colour's
     ForTiles(rows, [&](int t0, int n) {
       const std::size_t t = static_cast<std::size_t>(t0), r = q + t;
-      std::array<S*, kMaxLayers> dens_hidden{}, col_hidden{};
+      std::array<S*, kMaxHiddenLayers> dens_hidden{}, col_hidden{};
       for (int k = 0; k < density.mlp().hidden_layers(); ++k)
         dens_hidden[k] = v.dens_hidden[k] + t * density.mlp().hidden_dim(k);
       for (int k = 0; k < color.mlp().hidden_layers(); ++k)

@@ -1,6 +1,10 @@
 #include "worker/engine/field/field_config.h"
 
+#include <cmath>
+#include <string>
+
 #include "common/error.h"
+#include "worker/engine/field/exposure.h"
 
 namespace endorecon::field {
 
@@ -9,6 +13,111 @@ void CheckTrainedTimes(const std::array<float, 2>& times) {
   if (!(0 <= first && first <= last && last <= 1)) {  // NaN and infinities fail too
     FailInvalid("field.trained_times must be [first, last] with 0 <= first <= last <= 1");
   }
+}
+
+namespace {
+
+void CheckLayers(const std::vector<int>& hidden, const std::string& key) {
+  if (hidden.size() > std::size_t{kMaxHiddenLayers}) {
+    FailInvalid(key + " may have at most " + std::to_string(kMaxHiddenLayers) + " hidden layers, got " +
+                std::to_string(hidden.size()));
+  }
+  for (std::size_t i = 0; i < hidden.size(); ++i) {
+    if (hidden[i] < 1 || hidden[i] > kMostLayerWidth) {
+      FailInvalid(key + "[" + std::to_string(i) + "] must be in [1, " + std::to_string(kMostLayerWidth) +
+                  "] units, got " + std::to_string(hidden[i]));
+    }
+  }
+}
+
+void CheckGrids(const GridEnsembleConfig& grids) {
+  if (grids.base_resolutions.empty() || grids.base_resolutions.size() != grids.scales.size()) {
+    FailInvalid("field.grids.base_resolutions and field.grids.scales need one entry per grid (at least one), "
+                "got " + std::to_string(grids.base_resolutions.size()) + " and " +
+                std::to_string(grids.scales.size()));
+  }
+  for (std::size_t i = 0; i < grids.scales.size(); ++i) {
+    if (grids.base_resolutions[i] < 1) {
+      FailInvalid("field.grids.base_resolutions[" + std::to_string(i) + "] must be >= 1, got " +
+                  std::to_string(grids.base_resolutions[i]));
+    }
+    if (!(grids.scales[i] >= 1) || !std::isfinite(grids.scales[i])) {
+      FailInvalid("field.grids.scales[" + std::to_string(i) + "] must be finite and >= 1, got " +
+                  std::to_string(grids.scales[i]));
+    }
+  }
+  const int f = grids.features;
+  if (f != 1 && f != 2 && f != 4 && f != 8) {
+    FailInvalid("field.grids.features must be 1, 2, 4 or 8, got " + std::to_string(f));
+  }
+  if (grids.log2_table < kLeastLog2Table || grids.log2_table > kMostLog2Table) {
+    FailInvalid("field.grids.log2_table must be in [" + std::to_string(kLeastLog2Table) + ", " +
+                std::to_string(kMostLog2Table) + "], got " + std::to_string(grids.log2_table));
+  }
+  if (grids.levels < 1) FailInvalid("field.grids.levels must be >= 1, got " + std::to_string(grids.levels));
+  if (grids.max_resolution < 0) {
+    FailInvalid("field.grids.max_resolution must be >= 0 (0: no cap), got " +
+                std::to_string(grids.max_resolution));
+  }
+}
+
+void CheckDeformation(const DeformationConfig& deformation) {
+  if (!deformation.enabled) return;
+  if (deformation.resolution < 1 || deformation.time_knots < 1) {
+    FailInvalid("field.deformation.resolution and field.deformation.time_knots must be >= 1, got " +
+                std::to_string(deformation.resolution) + " and " + std::to_string(deformation.time_knots));
+  }
+  // In doubles: (resolution + 1)^3 overflows an integer for resolutions the keys allow.
+  const double side = double(deformation.resolution) + 1;
+  const double params = side * side * side * 3 * double(deformation.time_knots);
+  if (params > double(kMostDeformationParams)) {
+    FailInvalid("field.deformation: a " + std::to_string(deformation.resolution) + "^3 grid with " +
+                std::to_string(deformation.time_knots) + " time knots holds " + std::to_string(params) +
+                " parameters, more than " + std::to_string(kMostDeformationParams));
+  }
+}
+
+void CheckHeads(const HeadsConfig& heads) {
+  CheckLayers(heads.density_hidden, "field.heads.density_hidden");
+  CheckLayers(heads.color_hidden, "field.heads.color_hidden");
+  if (heads.geo_features < 0 || heads.geo_features > kMostLayerWidth) {
+    FailInvalid("field.heads.geo_features must be in [0, " + std::to_string(kMostLayerWidth) + "], got " +
+                std::to_string(heads.geo_features));
+  }
+  if (!(heads.dropout >= 0 && heads.dropout < 1)) {
+    FailInvalid("field.heads.dropout must be in [0, 1), got " + std::to_string(heads.dropout));
+  }
+  if (!(heads.color_dropout < 1)) {
+    FailInvalid("field.heads.color_dropout must be below 1 (negative: field.heads.dropout), got " +
+                std::to_string(heads.color_dropout));
+  }
+  if (heads.color_time_frequencies < 0 || heads.color_time_frequencies > kMaxTimeFrequencies) {
+    FailInvalid("field.heads.color_time_frequencies must be in [0, " + std::to_string(kMaxTimeFrequencies) +
+                "], got " + std::to_string(heads.color_time_frequencies));
+  }
+}
+
+}  // namespace
+
+void CheckFieldConfig(const FieldConfig& config) {
+  if (config.encoding == "frequency") {
+    if (config.frequencies < 1 || config.frequencies > kMostFrequencies) {
+      FailInvalid("field.frequencies must be in [1, " + std::to_string(kMostFrequencies) + "], got " +
+                  std::to_string(config.frequencies));
+    }
+  } else if (config.encoding == "hash") {
+    CheckGrids(config.grids);
+    if (config.blend_hidden < 1 || config.blend_hidden > kMostLayerWidth) {
+      FailInvalid("field.blend_hidden must be in [1, " + std::to_string(kMostLayerWidth) + "], got " +
+                  std::to_string(config.blend_hidden));
+    }
+  } else {
+    FailInvalid("field.encoding must be hash or frequency, got '" + config.encoding + "'");
+  }
+  CheckDeformation(config.deformation);
+  CheckHeads(config.heads);
+  CheckTrainedTimes(config.trained_times);
+  CheckExposureTimes(config.exposure_times);
 }
 
 FieldConfig FieldConfig::Paper() {

@@ -3,10 +3,12 @@
 #pragma once
 
 #include <array>
+#include <cstddef>
 #include <string>
 #include <vector>
 
 #include "worker/engine/field/deformation.h"
+#include "worker/engine/field/frequency_encoder.h"
 #include "worker/engine/field/grid_ensemble.h"
 #include "worker/engine/field/heads.h"
 
@@ -43,6 +45,17 @@ struct FieldConfig {
 };
 
 // Throws InvalidArgument unless `times` is [first, last] with 0 <= first <= last <= 1 (finite).
+// Hidden layers per head at most (the field keeps each layer's activations in a fixed array).
+inline constexpr int kMaxHiddenLayers = 8;
+// Units per hidden layer or feature width at most: wider layers size every sample's activations.
+inline constexpr int kMostLayerWidth = 1024;
+// The deformation grid's parameters at most (2^28 floats: 1 GiB, 4 GiB with its gradient and Adam's
+// moments).
+inline constexpr std::size_t kMostDeformationParams = std::size_t{1} << 28;
+
 void CheckTrainedTimes(const std::array<float, 2>& times);
+// Refuses a configuration the field cannot be built from, naming the key (field.grids.log2_table, ...),
+// before a clip is loaded: the modules' own constructors check again for their direct users.
+void CheckFieldConfig(const FieldConfig& config);
 
 }  // namespace endorecon::field

@@ -12,8 +12,9 @@ static_assert(TrainableModule<FrequencyEncoder<float>, float>);
 
 template <typename S>
 FrequencyEncoder<S>::FrequencyEncoder(int frequencies) : frequencies_(frequencies) {
-  if (frequencies < 1 || frequencies > 16) {
-    FailInvalid("field.frequencies must be in [1, 16], got " + std::to_string(frequencies));
+  if (frequencies < 1 || frequencies > kMostFrequencies) {
+    FailInvalid("frequency encoding: frequencies must be in [1, " + std::to_string(kMostFrequencies) +
+                "], got " + std::to_string(frequencies));
   }
 }
 

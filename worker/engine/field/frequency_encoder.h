@@ -9,6 +9,8 @@
 
 namespace endorecon::field {
 
+inline constexpr int kMostFrequencies = 16;  // octaves of the encoding at most
+
 template <typename S>
 class FrequencyEncoder {
  public:

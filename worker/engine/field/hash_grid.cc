@@ -45,8 +45,9 @@ HashGrid<S>::HashGrid(const HashGridConfig& config) : config_(config) {
   const int f = config.features;
   if (f != 1 && f != 2 && f != 4 && f != 8)
     FailInvalid("hash grid features per level must be 1, 2, 4 or 8, got " + std::to_string(f));
-  if (config.log2_table < 4 || config.log2_table > 26) {
-    FailInvalid("hash grid log2 table size must be in [4, 26], got " + std::to_string(config.log2_table));
+  if (config.log2_table < kLeastLog2Table || config.log2_table > kMostLog2Table) {
+    FailInvalid("hash grid log2 table size must be in [" + std::to_string(kLeastLog2Table) + ", " +
+                std::to_string(kMostLog2Table) + "], got " + std::to_string(config.log2_table));
   }
   if (config.levels < 1)
     FailInvalid("hash grid needs at least 1 level, got " + std::to_string(config.levels));

@@ -14,6 +14,10 @@
 
 namespace endorecon::field {
 
+// A level's table holds 2^log2_table slots, log2_table in this range.
+inline constexpr int kLeastLog2Table = 4;
+inline constexpr int kMostLog2Table = 26;
+
 struct HashGridConfig {
   int levels = 16;
   int features = 2;  // per level: 1, 2, 4 or 8

@@ -7,7 +7,6 @@
 #include <type_traits>
 
 #include "common/error.h"
-#include "worker/engine/field/exposure.h"
 
 namespace endorecon::train {
 
@@ -229,10 +228,10 @@ void Validate(const TrainConfig& c) {
   require(c.exposure_threshold >= 0, "exposure_threshold must be >= 0");
   require(c.deformation_start == "flow" || c.deformation_start == "zero",
           "deformation_start must be flow or zero, got " + c.deformation_start);
-  // The field's own checks name its key; a configuration's errors say they are the configuration's.
+  // The field's keys (field.*), checked here, before a clip is loaded; the field's own checks name the
+  // key, and a configuration's errors say they are the configuration's.
   try {
-    field::CheckTrainedTimes(c.field.trained_times);
-    field::CheckExposureTimes(c.field.exposure_times);
+    field::CheckFieldConfig(c.field);
   } catch (const Error& e) {
     FailInvalid(std::string("config: ") + e.what());
   }
@@ -258,13 +257,6 @@ void Validate(const TrainConfig& c) {
           "occupancy_resolution must be in [0, 512]");
   require(c.occupancy_every > 0 && c.occupancy_every <= 1, "occupancy_every must be in (0, 1]");
   require(c.occupancy_min_alpha > 0 && c.occupancy_min_alpha < 1, "occupancy_min_alpha must be in (0, 1)");
-  require(c.field.heads.dropout >= 0 && c.field.heads.dropout < 1, "field.heads.dropout must be in [0, 1)");
-  require(c.field.heads.color_time_frequencies >= 0 &&
-              c.field.heads.color_time_frequencies <= field::kMaxTimeFrequencies,
-          "field.heads.color_time_frequencies must be in [0, " + std::to_string(field::kMaxTimeFrequencies) +
-              "]");
-  require(c.field.heads.color_dropout < 1,
-          "field.heads.color_dropout must be below 1 (negative: field.heads.dropout)");
 }
 
 }  // namespace
