@@ -95,6 +95,19 @@ TEST_F(EndoNerfLoaderTest, DepthAndMasksAreOptional) {
   EXPECT_FALSE(clip.has_masks());
 }
 
+// Zero is "not measured": depth maps that are all zero everywhere (an exporter's placeholder) are no
+// depth, and the clip loads as one without depth files; one all-zero frame among measured ones stays.
+TEST_F(EndoNerfLoaderTest, DepthMapsAllZeroAreNoDepth) {
+  for (int i = 0; i < kFrames; ++i)
+    WriteImage(dir_ / "depth" / Name(i), Pattern(kW, kH, CV_8UC1, [](int, int) { return 0; }));
+  EXPECT_FALSE(Load().has_depth());
+  WriteImage(dir_ / "depth" / Name(2), Pattern(kW, kH, CV_8UC1, [](int x, int) { return x == 3 ? 20 : 0; }));
+  const Clip clip = Load();
+  ASSERT_TRUE(clip.has_depth());
+  EXPECT_EQ(clip.depth[0][3], 0.f);
+  EXPECT_EQ(clip.depth[2][3], 20.f);
+}
+
 TEST_F(EndoNerfLoaderTest, ReadsSixteenBitAndNpyDepth) {
   WriteImage(dir_ / "depth" / Name(0), Pattern(kW, kH, CV_16UC1, [](int x, int) { return 1000 + x; }));
   fs::remove(dir_ / "depth" / Name(1));

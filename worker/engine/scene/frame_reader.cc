@@ -1,5 +1,6 @@
 #include "worker/engine/scene/frame_reader.h"
 
+#include <spdlog/spdlog.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -197,6 +198,19 @@ void ReadFrames(const std::vector<FrameFiles>& frames, const FrameReadOptions& o
     if (error) std::rethrow_exception(error);
   }
   clip.transparent = transparent;
+  // Zero is "not measured" pixel by pixel; a clip whose every depth map is all zero (an exporter's
+  // placeholder) has no depth at all, and is reconstructed as a clip without depth files is: no depth
+  // loss or depth-guided sampling, no depth refinement, no depth metrics against zeros.
+  const bool no_depth_measured = std::all_of(clip.depth.begin(), clip.depth.end(), [](const auto& frame) {
+    return std::all_of(frame.begin(), frame.end(), [](float d) { return d == 0.0f; });
+  });
+  if (!clip.depth.empty() && no_depth_measured) {
+    spdlog::warn(
+        "{}: every depth map is zero (nothing measured): the clip is reconstructed without depth, "
+        "as one without depth files",
+        clip.source);
+    clip.depth.clear();
+  }
 }
 
 }  // namespace endorecon::scene
