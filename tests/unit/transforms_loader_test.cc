@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <nlohmann/json.hpp>
+#include <numbers>
 
 #include "tests/unit/clip_fixture.h"
 #include "tests/unit/temp_dir.h"
@@ -228,6 +229,22 @@ TEST_F(TransformsLoaderTest, RejectsMissingOrNonPositiveFocalLength) {
   ExpectError("transforms.json frame 0", "focal length must be finite and positive (fx = -3");
   transforms_["fl_x"] = "ten";
   ExpectError("transforms.json", "\"fl_x\" must be a finite number, found \"ten\"");
+}
+
+// A field of view of pi or more is no pinhole camera's (pi gave fx = 1e-14, accepted until
+// 2026-12-05), one in degrees is named as such, and a focal length can be too short for the frame.
+TEST_F(TransformsLoaderTest, RejectsAFieldOfViewNoPinholeCameraHas) {
+  transforms_["camera_angle_x"] = std::numbers::pi;
+  ExpectError("transforms.json frame 0", "\"camera_angle_x\" must be an angle in radians between 0 and pi");
+  transforms_["camera_angle_x"] = 60;
+  ExpectError("transforms.json frame 0", "found 60.000000 (degrees?)");
+  transforms_["camera_angle_x"] = 3.1;
+  ExpectError("transforms.json frame 0", "field of view of 177.6");
+  transforms_.erase("camera_angle_x");
+  transforms_["fl_x"] = 0.01;  // 8 px across
+  ExpectError("transforms.json frame 0", "more than 170 (a pinhole camera's");
+  transforms_["fl_x"] = 1.0;  // 152 degrees across 8 px: wide, and a pinhole's
+  EXPECT_EQ(Load().frame_count(), 3);
 }
 
 TEST_F(TransformsLoaderTest, RejectsNearNotBelowFar) {

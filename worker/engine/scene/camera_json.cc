@@ -1,6 +1,9 @@
 #include "worker/engine/scene/camera_json.h"
 
 #include <cmath>
+#include <numbers>
+#include <string>
+#include <utility>
 
 #include "common/error.h"
 #include "worker/engine/scene/clip_checks.h"
@@ -52,6 +55,15 @@ Camera CameraFromJson(const json& frame, const json& top, int width, int height,
   const std::optional<double> angle_x = FrameOrTopNumber(frame, top, "camera_angle_x", where, file);
   const std::optional<double> fl_y = FrameOrTopNumber(frame, top, "fl_y", where, file);
   const std::optional<double> angle_y = FrameOrTopNumber(frame, top, "camera_angle_y", where, file);
+  // A field of view is an angle in radians between 0 and pi (one in degrees, 60, gave a negative or
+  // meaningless focal length); CheckCamera then bounds the view a pinhole camera can have.
+  for (const auto& [key, angle] :
+       {std::pair{"camera_angle_x", angle_x}, std::pair{"camera_angle_y", angle_y}}) {
+    if (angle && !(*angle > 0 && *angle < std::numbers::pi)) {
+      FailInvalid(where + ": \"" + key + "\" must be an angle in radians between 0 and pi, found " +
+                  std::to_string(*angle) + (*angle >= std::numbers::pi && *angle < 360 ? " (degrees?)" : ""));
+    }
+  }
   if (fl_x) {
     camera.fx = *fl_x;
   } else if (angle_x) {

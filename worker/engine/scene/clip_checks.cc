@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <numbers>
 
 #include "common/error.h"
 #include "worker/engine/scene/clip.h"
@@ -49,6 +50,17 @@ void CheckCamera(const Camera& camera, const std::string& where) {
       camera.fx > kMostFocalPixels || camera.fy > kMostFocalPixels) {
     FailInvalid(where + ": focal length must be finite and positive (fx = " + Number(camera.fx) +
                 ", fy = " + Number(camera.fy) + "), and at most " + Number(kMostFocalPixels) + " pixels");
+  }
+  if (camera.width > 0 && camera.height > 0) {
+    const double degrees_per_radian = 180 / std::numbers::pi;
+    const double across_x = 2 * std::atan(0.5 * camera.width / camera.fx) * degrees_per_radian;
+    const double across_y = 2 * std::atan(0.5 * camera.height / camera.fy) * degrees_per_radian;
+    if (std::max(across_x, across_y) > kMostFieldOfViewDegrees) {
+      FailInvalid(where + ": the focal length (fx = " + Number(camera.fx) + ", fy = " + Number(camera.fy) +
+                  ") gives a field of view of " + Number(across_x) + " x " + Number(across_y) +
+                  " degrees across the " + SizeText(camera.width, camera.height) + " frame, more than " +
+                  Number(kMostFieldOfViewDegrees) + " (a pinhole camera's; a focal length in other units?)");
+    }
   }
   if (!std::isfinite(camera.cx) || !std::isfinite(camera.cy)) {
     FailInvalid(where + ": principal point is not finite (cx = " + Number(camera.cx) +
