@@ -11,7 +11,7 @@ namespace {
 
 const char* kGood = R"({"fl_x": 100, "w": 64, "h": 48, "frames": [
   {"transform_matrix": [[1,0,0,5],[0,1,0,0],[0,0,1,0],[0,0,0,1]], "time": 0.25},
-  {"transform_matrix": [[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]], "fl_x": 50, "cx": 10}]})";
+  {"transform_matrix": [[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]], "fl_x": 50, "cx": 10, "time": 0}]})";
 
 std::string ErrorOf(const std::string& text) {
   testing::TempDir dir("cameras");
@@ -54,6 +54,23 @@ TEST(CameraListTest, BadFormsNameTheFrameAndField) {
   EXPECT_NE(ErrorOf(R"({"fl_x": 1, "w": 8, "h": 8, "frames": [{"transform_matrix": [[2,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]}]})"),
             "");
   EXPECT_NE(ErrorOf("{not json"), "");
+}
+
+// Every view has a time or none has (a static scene's, at t = 0); a top-level "time" is every view's.
+// A list timing only some rendered the others at t = 0 without a word until 2026-12-05.
+TEST(CameraListTest, EveryViewHasItsTimeOrNoneHas) {
+  const std::string mixed = ErrorOf(
+      R"({"fl_x": 10, "w": 8, "h": 8, "frames": [{"transform_matrix": [[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]},
+      {"transform_matrix": [[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]], "time": 0.5}]})");
+  EXPECT_NE(mixed.find("frame 1 has a \"time\" and frame 0 has none"), std::string::npos) << mixed;
+  testing::TempDir dir("cameras");
+  testing::WriteBytes(dir / "cameras.json",
+                      R"({"fl_x": 10, "w": 8, "h": 8, "time": 0.75, "frames": [
+      {"transform_matrix": [[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]},
+      {"transform_matrix": [[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]], "time": 0.5}]})");
+  const auto cameras = ReadCameraList(dir / "cameras.json");
+  EXPECT_FLOAT_EQ(cameras[0].time, 0.75f);
+  EXPECT_FLOAT_EQ(cameras[1].time, 0.5f);
 }
 
 // A view larger than a clip's frames may be is refused before anything is allocated for it.

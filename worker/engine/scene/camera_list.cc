@@ -1,5 +1,8 @@
 #include "worker/engine/scene/camera_list.h"
 
+#include <optional>
+#include <string>
+
 #include "common/error.h"
 #include "common/json_file.h"
 #include "worker/engine/scene/camera_json.h"
@@ -15,6 +18,9 @@ std::vector<CameraAtTime> ReadCameraList(const std::filesystem::path& path) {
     FailInvalid(file + ": expected an object with a non-empty \"frames\" list");
   }
   std::vector<CameraAtTime> cameras;
+  // Every view has a time (its own, or the list's top-level "time") or none does (a static scene's
+  // views, all at t = 0): a list timing only some put the rest at t = 0 without a word.
+  std::optional<std::size_t> timed, untimed;
   for (std::size_t i = 0; i < top["frames"].size(); ++i) {
     const nlohmann::json& frame = top["frames"][i];
     const std::string where = file + " frame " + std::to_string(i);
@@ -30,7 +36,15 @@ std::vector<CameraAtTime> ReadCameraList(const std::filesystem::path& path) {
     CheckFrameLimit(int(*w), int(*h), limit, where + ": \"w\" x \"h\"");
     CameraAtTime view;
     view.camera = CameraFromJson(frame, top, int(*w), int(*h), where, file);
-    const double time = OptionalNumber(frame, "time", where).value_or(0.0);
+    const std::optional<double> given = FrameOrTopNumber(frame, top, "time", where, file);
+    (given ? timed : untimed) = (given ? timed : untimed).value_or(i);
+    if (timed && untimed) {
+      FailInvalid(file + ": frame " + std::to_string(*timed) + " has a \"time\" and frame " +
+                  std::to_string(*untimed) +
+                  " has none: give every view its time (or one top-level "
+                  "\"time\" for all), or none for a static scene");
+    }
+    const double time = given.value_or(0.0);
     if (time < 0 || time > 1) FailInvalid(where + ": \"time\" must lie in [0, 1], found " + std::to_string(time));
     view.time = float(time);
     cameras.push_back(view);
