@@ -25,6 +25,22 @@ void CheckOutputFolder(const std::filesystem::path& out, const std::filesystem::
                 " holds a clip (transforms.json or poses_bounds.npy): writing there would overwrite its "
                 "files; choose another output folder");
   }
+  // An earlier run's results (a run's config.json comes first, a render's render.json or cameras.json)
+  // are written over, as a rerun or a resume means to; any other non-empty folder is someone's files,
+  // which results would be mixed into and partly overwritten (`-o ~/Documents` was taken until
+  // 2026-12-05). Dot files (a desktop's .DS_Store, a .gitignore) do not count, nor the input itself (a
+  // worker prepares a recording's clip into its results folder, which ships it).
+  for (const char* earlier : {"config.json", "metrics.json", "render.json", "cameras.json"}) {
+    if (fs::exists(out / earlier, error)) return;
+  }
+  for (fs::directory_iterator it(out, error), end; !error && it != end; it.increment(error)) {
+    const std::string name = it->path().filename().string();
+    std::error_code not_comparable;  // an input that is no file: then no entry is it
+    if (name.starts_with(".") || fs::equivalent(it->path(), input, not_comparable)) continue;
+    FailInvalid("the output folder " + out.string() + " holds other files (" + name +
+                ", ...) and no earlier results: the results would be mixed in with them; choose an empty "
+                "or new folder");
+  }
 }
 
 }  // namespace endorecon

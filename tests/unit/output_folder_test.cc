@@ -52,5 +52,31 @@ TEST(OutputFolderTest, AnotherClipOrAFileIsRefused) {
   EXPECT_NE(message.find("afile is a file"), std::string::npos) << message;
 }
 
+// A non-empty folder holding no earlier results is someone's files: refused (`-o ~/Documents` mixed
+// the results into them until 2026-12-05). An earlier run's results, or only dot files, are written
+// over.
+TEST(OutputFolderTest, SomeonesFilesAreRefusedAndEarlierResultsAreNot) {
+  testing::TempDir dir("output-folder");
+  fs::create_directories(dir / "clip");
+  fs::create_directories(dir / "documents");
+  testing::WriteBytes(dir / "documents" / ".DS_Store", "x");
+  EXPECT_NO_THROW(Check(dir / "documents", dir / "clip")) << "dot files do not count";
+  testing::WriteBytes(dir / "documents" / "letter.txt", "x");
+  const std::string message = testing::ErrorFrom([&] { Check(dir / "documents", dir / "clip"); });
+  EXPECT_NE(message.find("documents holds other files (letter.txt, ...) and no earlier results"),
+            std::string::npos)
+      << message;
+  fs::create_directories(dir / "results" / "clip");
+  EXPECT_NO_THROW(Check(dir / "results", dir / "results" / "clip"))
+      << "the input inside the output folder (a worker's prepared clip) is no one else's file";
+  for (const char* earlier : {"config.json", "metrics.json", "render.json", "cameras.json"}) {
+    testing::TempDir run("output-folder");
+    fs::create_directories(run / "clip");
+    fs::create_directories(run / "out" / "rgb");
+    testing::WriteBytes(run / "out" / earlier, "{}");
+    EXPECT_NO_THROW(Check(run / "out", run / "clip")) << earlier;
+  }
+}
+
 }  // namespace
 }  // namespace endorecon
