@@ -291,7 +291,7 @@ Command AddSubmitCommand(CLI::App& app) {
       ->check(AboveZero());
   sub->add_option("--time-budget", flags->time_budget_s,
                   "seconds for the whole run on the worker: training, evaluation, writing (0: none)")
-      ->check(AtLeastZero());
+      ->check(TimeBudget());
   sub->add_option("--holdout", flags->holdout,
                   "hold out every K-th frame (0: none, else K >= 2; default: the preset's)")
       ->check(HoldoutSpacing());

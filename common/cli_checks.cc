@@ -3,6 +3,8 @@
 #include <cmath>
 #include <string>
 
+#include "common/job_bounds.h"
+
 namespace endorecon {
 namespace {
 
@@ -37,6 +39,18 @@ CLI::Validator AboveZero() {
         return value <= 0 ? text + " is not above 0" : "";
       },
       "> 0", "AboveZero");
+}
+
+CLI::Validator TimeBudget() {
+  return CLI::Validator(
+      [](const std::string& text) -> std::string {
+        const double value = Number(text);
+        if (std::isnan(value)) return text + " is not a number";
+        if (value == 0 || value >= kLeastTimeBudgetS) return "";
+        return text + ": expected 0 (no budget) or at least " + std::to_string(int(kLeastTimeBudgetS)) +
+               " seconds (the budget is in seconds, and covers loading, training, evaluation and writing)";
+      },
+      "0 or >= " + std::to_string(int(kLeastTimeBudgetS)) + " s", "TimeBudget");
 }
 
 CLI::Validator HoldoutSpacing() {

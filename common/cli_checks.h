@@ -17,6 +17,9 @@ CLI::Validator AboveZero();
 // frame out of training.
 CLI::Validator HoldoutSpacing();
 
+// A time budget in seconds: 0 (none) or at least kLeastTimeBudgetS (common/job_bounds.h).
+CLI::Validator TimeBudget();
+
 // An address to listen on: HOST:PORT or [IPv6]:PORT with a port of 0-65535 (0 picks one), or
 // unix:PATH. gRPC took 127.0.0.1:99999 and listened on a port of its choosing.
 CLI::Validator ListenAddress();

@@ -11,6 +11,9 @@ namespace endorecon {
 inline constexpr std::size_t kMaxJobNameBytes = 256;
 inline constexpr std::size_t kMaxConfigBytes = 64 * 1024;
 inline constexpr int kMaxPriority = 100;
+// A time budget is 0 (none) or at least this many seconds: loading a clip and writing its results take
+// seconds, and a budget of 0.001 or 5 is a unit slip (milliseconds, minutes), not a plan.
+inline constexpr double kLeastTimeBudgetS = 10;
 
 // Throws Error(kInvalidArgument) for a name over kMaxJobNameBytes or holding a control character.
 void ValidateJobName(const std::string& name);

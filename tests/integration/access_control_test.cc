@@ -283,9 +283,15 @@ TEST_F(AccessControlTest, OverQuotaSubmitsAreRefusedAndNothingIsLost) {
   EXPECT_NE(fourth.err.find("max_jobs"), std::string::npos) << fourth.err;
   EXPECT_EQ(fourth.err.find("uploaded"), std::string::npos) << fourth.err;
   // Options the server would refuse are refused before the upload too.
-  const auto negative = Cli(alice_, {"submit", cluster_.path("clip2").string(), "--time-budget", "-5"});
-  EXPECT_EQ(negative.exit_code, 2) << negative.err;
-  EXPECT_NE(negative.err.find("--time-budget: -5 is negative"), std::string::npos) << negative.err;
+  // A budget is 0 (none) or at least 10 s: -5 and 0.001 (a unit slip) are refused.
+  for (const std::string budget : {"-5", "0.001"}) {
+    const auto refused = Cli(alice_, {"submit", cluster_.path("clip2").string(), "--time-budget", budget});
+    EXPECT_EQ(refused.exit_code, 2) << refused.err;
+    EXPECT_NE(
+        refused.err.find("--time-budget: " + budget + ": expected 0 (no budget) or at least 10 seconds"),
+        std::string::npos)
+        << refused.err;
+  }
   const auto long_name =
       Cli(alice_, {"submit", cluster_.path("clip2").string(), "--name", std::string(300, 'n')});
   EXPECT_EQ(long_name.exit_code, 2) << long_name.err;

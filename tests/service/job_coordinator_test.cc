@@ -153,6 +153,13 @@ TEST_F(JobCoordinatorTest, WhatAClientNamesIsBoundedAndSizesAreTheContents) {
   request.mutable_options()->set_config_json("{\"x\":\"" + std::string(70000, 'y') + "\"}");
   message = testing::ErrorFrom([&] { coordinator_.Submit(request, AnonymousPrincipal()); });
   EXPECT_NE(message.find("options.config_json has 70008 bytes; at most 65536"), std::string::npos) << message;
+  request.mutable_options()->clear_config_json();
+  request.mutable_options()->set_time_budget_s(0.001);  // a unit slip: 0 (none) or >= 10 s
+  message = testing::ErrorFrom([&] { coordinator_.Submit(request, AnonymousPrincipal()); });
+  EXPECT_NE(message.find("options.time_budget_s is 0.001000; expected 0 (no budget) or at least 10 seconds"),
+            std::string::npos)
+      << message;
+  request.mutable_options()->set_time_budget_s(0);
   std::int64_t stored = 0;
   for (const auto& [state, count] : store_.CountByState()) stored += count;
   EXPECT_EQ(stored, 0) << "nothing refused was stored";

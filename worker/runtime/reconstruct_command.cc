@@ -47,7 +47,7 @@ void AddReconstructOptions(CLI::App& cmd, ReconstructOptions& options, std::stri
       ->check(AboveZero());
   cmd.add_option("--time-budget", options.time_budget_s,
                  "seconds for the whole run: training, evaluation and writing (0: none)")
-      ->check(AtLeastZero());
+      ->check(TimeBudget());
   cmd.add_flag("--full-eval", options.full_evaluation,
                "render every frame with all dropout passes at every pixel (default: evaluation keeps to a "
                "quarter of the run)");
