@@ -212,9 +212,9 @@ TEST(TrainConfigTest, JsonRoundTripKeepsEveryKey) {
 TEST(TrainConfigTest, ARateMapMergesIntoThePresets) {
   TrainConfig c = TrainConfig::Preset("cpu");
   const auto before = c.adam.lr;
-  ApplyJson(nlohmann::json::parse(R"({"adam": {"lr": {"grid": 0.05, "mine": 0.5}}})"), c);
+  ApplyJson(nlohmann::json::parse(R"({"adam": {"lr": {"grid": 0.05, "exposure": 0.5}}})"), c);
   EXPECT_EQ(c.adam.lr.at("grid"), 0.05f);
-  EXPECT_EQ(c.adam.lr.at("mine"), 0.5f);
+  EXPECT_EQ(c.adam.lr.at("exposure"), 0.5f) << "a group the preset leaves at the default rate";
   for (const auto& [group, rate] : before) {
     if (group != "grid") {
       EXPECT_EQ(c.adam.lr.at(group), rate) << group << " kept";
@@ -294,7 +294,11 @@ TEST(TrainConfigTest, BadValuesAreRejected) {
         nlohmann::json{{"rays_per_batch", 1000000000}}, nlohmann::json{{"depth_samples", 100000}},
         nlohmann::json{{"mc_passes", 1000}}, nlohmann::json{{"adam", {{"lr", {{"grid", -1}}}}}},
         nlohmann::json{{"adam", {{"default_lr", -0.1}}}}, nlohmann::json{{"adam", {{"beta2", 1.0}}}},
-        nlohmann::json{{"depth_weight", -100}}, nlohmann::json{{"huber_delta", 0}}}) {
+        nlohmann::json{{"depth_weight", -100}}, nlohmann::json{{"huber_delta", 0}},
+        // A rate that threw the grid about (1e30 trained to garbage with a finite loss), a group the
+        // field has not (a typo left the grid at the default rate), until 2026-12-05.
+        nlohmann::json{{"adam", {{"lr", {{"grid", 1e30}}}}}}, nlohmann::json{{"adam", {{"default_lr", 2}}}},
+        nlohmann::json{{"adam", {{"lr", {{"gird", 0.01}}}}}}}) {
     TrainConfig fresh;
     const std::string key = bad.flatten().begin().key();  // "/field/heads/dropout"
     const std::string leaf = key.substr(key.rfind('/') + 1);

@@ -17,8 +17,8 @@ namespace endorecon::field {
 namespace {
 
 enum Group { kGrid, kBlend, kDeform, kDensity, kColor, kExposure, kBackground, kGroups };
-constexpr std::array<const char*, kGroups> kGroupNames = {"grid",  "blend",    "deform",    "density",
-                                                          "color", "exposure", "background"};
+constexpr const auto& kGroupNames = kParameterGroups;
+static_assert(kGroupNames.size() == kGroups);
 
 template <typename S>
 void CheckBatch(const SampleBatchT<S>& batch, const char* what) {

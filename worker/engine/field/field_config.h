@@ -45,6 +45,11 @@ struct FieldConfig {
 };
 
 // Throws InvalidArgument unless `times` is [first, last] with 0 <= first <= last <= 1 (finite).
+// The field's parameter groups, in the order of its parameter blocks: each has its own learning rate
+// (train_config.h, adam.lr).
+inline constexpr std::array<const char*, 7> kParameterGroups = {"grid",  "blend",    "deform",    "density",
+                                                                "color", "exposure", "background"};
+
 // Hidden layers per head at most (the field keeps each layer's activations in a fixed array).
 inline constexpr int kMaxHiddenLayers = 8;
 // Units per hidden layer or feature width at most: wider layers size every sample's activations.

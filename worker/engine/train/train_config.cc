@@ -195,10 +195,23 @@ void Validate(const TrainConfig& c) {
           "eval samples must be at most " + std::to_string(kMostSamplesPerRay));
   require(c.mc_passes <= kMostDropoutPasses,
           "mc_passes must be at most " + std::to_string(kMostDropoutPasses));
-  // No upper bound on a rate: one too large diverges, and the run says where (the divergence guard).
-  const auto rate_ok = [](float lr) { return lr >= 0 && std::isfinite(lr); };
-  require(rate_ok(c.adam.default_lr), "adam.default_lr must be >= 0");
-  for (const auto& [name, lr] : c.adam.lr) require(rate_ok(lr), "adam.lr." + name + " must be >= 0");
+  // Adam moves each parameter by about its rate every step: a rate past kMostLearningRate throws the
+  // parameters about (the grid's at 1e30 trained to garbage while the loss stayed finite, so the
+  // divergence guard never fired). A rate for a group the field has not is a typo ("gird"), which
+  // left the group at the default rate without a word.
+  const auto rate_ok = [](float lr) { return lr >= 0 && lr <= kMostLearningRate; };  // false for NaN
+  const std::string range = "[0, " + std::to_string(int(kMostLearningRate)) + "]";
+  require(rate_ok(c.adam.default_lr), "adam.default_lr must be in " + range);
+  for (const auto& [name, lr] : c.adam.lr) {
+    std::string groups;
+    bool known = false;
+    for (const char* group : field::kParameterGroups) {
+      groups += (groups.empty() ? "" : ", ") + std::string(group);
+      known = known || name == group;
+    }
+    require(known, "adam.lr has no group '" + name + "' (the field's groups: " + groups + ")");
+    require(rate_ok(lr), "adam.lr." + name + " must be in " + range + ", got " + std::to_string(lr));
+  }
   require(c.adam.beta1 >= 0 && c.adam.beta1 < 1 && c.adam.beta2 >= 0 && c.adam.beta2 < 1,
           "adam.beta1 and adam.beta2 must be in [0, 1)");
   require(c.adam.eps > 0, "adam.eps must be > 0");

@@ -18,6 +18,8 @@ namespace endorecon::train {
 inline constexpr int kMostRaysPerBatch = 65536;
 inline constexpr int kMostSamplesPerRay = 1024;
 inline constexpr int kMostDropoutPasses = 64;
+// Adam's rates at most (the presets' largest is the grid's 3e-2).
+inline constexpr float kMostLearningRate = 1.0f;
 
 struct TrainConfig {
   std::string preset = "cpu";
