@@ -2,7 +2,10 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <fstream>
+#include <functional>
+#include <optional>
 
 #include "common/dicom/retrieve_scu.h"
 #include "common/error.h"
@@ -87,21 +90,86 @@ void DicomRetriever::Progress(const std::string& job_id, int instances, std::int
   });
 }
 
+std::vector<std::string> DicomRetriever::RecordingSeries(const std::string& job_id,
+                                                         const dicom::RetrieveRequest& request) {
+  dicom::StudyContents contents;
+  try {
+    contents = dicom::FindStudyContents(request);
+  } catch (const Error& e) {
+    spdlog::warn("job {}: cannot list the study's instances ({}); retrieving the whole study", job_id,
+                 e.what());
+    return {};
+  }
+  if (contents.other_classes.empty()) return {};  // nothing endorecon does not take: the whole study
+  std::string others;
+  for (const auto& [name, count] : contents.other_classes) {
+    others += (others.empty() ? "" : ", ") + name + " x " + std::to_string(count);
+  }
+  if (contents.recording_series.empty()) {
+    Fail(ErrorCode::kNotFound,
+         "the study holds no recording, only objects of classes endorecon does not take (" + others + ")");
+  }
+  spdlog::info(
+      "job {}: the study holds {} series of other objects ({}): retrieving its {} recording series "
+      "one by one",
+      job_id, contents.other_series, others, contents.recording_series.size());
+  return contents.recording_series;
+}
+
 std::pair<fs::path, std::string> DicomRetriever::Fetch(const std::string& job_id,
                                                        const v1::PacsSource& source) {
   dicom::RetrieveRequest request;
   request.peer = pacs_.Find(source.pacs());
   request.calling_ae_title = settings_.ae_title;
   request.study_uid = source.study_uid();
-  request.series_uid = source.series_uid();
   request.timeout_s = settings_.timeout_s;
+  // The series named, or the whole study; a study that also holds objects of classes endorecon does
+  // not take (a CT, a report), which a PACS fails a whole-study retrieval for, series by series.
+  const std::vector<std::string> series = source.series_uid().empty()
+                                              ? RecordingSeries(job_id, request)
+                                              : std::vector<std::string>{source.series_uid()};
+  const std::vector<std::string> requests = series.empty() ? std::vector<std::string>{""} : series;
+  // Each request in turn; one that finds only endorecon's own results (taken, not kept) brings nothing
+  // and the others may still bring the recording.
+  const auto each = [&](const std::function<void(const dicom::RetrieveRequest&)>& retrieve) {
+    int found = 0;
+    std::optional<Error> not_found;
+    for (const std::string& one : requests) {
+      request.series_uid = one;
+      try {
+        retrieve(request);
+        ++found;
+      } catch (const Error& e) {
+        if (e.code() != ErrorCode::kNotFound || requests.size() == 1) throw;
+        not_found = e;
+      }
+    }
+    if (found == 0) throw *not_found;
+  };
   const fs::path folder = work_dir_ / job_id;
   fs::remove_all(folder);
   coordinator_.Update(job_id, [](v1::Job& job) { job.mutable_retrieval()->set_method("C-GET"); });
   std::string get_error;
   try {
-    dicom::GetStudy(request, folder,
-                    [&](int instances, std::int64_t bytes) { Progress(job_id, instances, bytes); });
+    int instances_before = 0;
+    std::int64_t bytes_before = 0;
+    each([&](const dicom::RetrieveRequest& one) {
+      int instances = 0;
+      std::int64_t bytes = 0;
+      try {
+        dicom::GetStudy(one, folder, [&](int n, std::int64_t b) {
+          instances = n;
+          bytes = b;
+          Progress(job_id, instances_before + n, bytes_before + b);
+        });
+      } catch (...) {
+        instances_before += instances;
+        bytes_before += bytes;
+        throw;
+      }
+      instances_before += instances;
+      bytes_before += bytes;
+    });
     return {folder, "C-GET"};
   } catch (const Error& e) {
     if (scp_ == nullptr || e.code() == ErrorCode::kNotFound) throw;
@@ -109,6 +177,7 @@ std::pair<fs::path, std::string> DicomRetriever::Fetch(const std::string& job_id
     spdlog::warn("job {}: C-GET from {} failed ({}); trying C-MOVE to this server's storage SCP", job_id,
                  source.pacs(), get_error);
   }
+  fs::remove_all(folder);
   coordinator_.Update(job_id, [](v1::Job& job) { job.mutable_retrieval()->set_method("C-MOVE"); });
   const fs::path study_folder = scp_->settings().folder / source.study_uid();
   fs::remove_all(study_folder);
@@ -120,7 +189,7 @@ std::pair<fs::path, std::string> DicomRetriever::Fetch(const std::string& job_id
     moved_bytes_ = 0;
   }
   try {
-    dicom::MoveStudy(request, settings_.ae_title);
+    each([&](const dicom::RetrieveRequest& one) { dicom::MoveStudy(one, settings_.ae_title); });
   } catch (const Error& e) {
     {
       std::lock_guard lock(mutex_);
@@ -139,8 +208,8 @@ std::pair<fs::path, std::string> DicomRetriever::Fetch(const std::string& job_id
   }
   fs::create_directories(folder);
   for (const auto& entry : fs::recursive_directory_iterator(study_folder)) {
-    const bool wanted =
-        source.series_uid().empty() || entry.path().parent_path().filename() == source.series_uid();
+    const std::string in_series = entry.path().parent_path().filename().string();
+    const bool wanted = series.empty() || std::find(series.begin(), series.end(), in_series) != series.end();
     if (entry.is_regular_file() && entry.path().extension() == ".dcm" && wanted) {
       fs::rename(entry.path(), folder / entry.path().filename());
     }

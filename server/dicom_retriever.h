@@ -12,7 +12,9 @@
 #include <mutex>
 #include <string>
 #include <thread>
+#include <vector>
 
+#include "common/dicom/retrieve_scu.h"
 #include "common/dicom/storage_scp.h"
 #include "server/blob_store.h"
 #include "server/job_coordinator.h"
@@ -42,6 +44,9 @@ class DicomRetriever {
  private:
   void Loop();
   void Run(const std::string& job_id);
+  // The series of a study to retrieve one by one, when it also holds objects endorecon does not take;
+  // empty: the whole study at once. Throws Error(kNotFound) when it holds no recording at all.
+  std::vector<std::string> RecordingSeries(const std::string& job_id, const dicom::RetrieveRequest& request);
   // Returns the folder holding the retrieved files and the method used.
   std::pair<std::filesystem::path, std::string> Fetch(const std::string& job_id,
                                                       const v1::PacsSource& source);

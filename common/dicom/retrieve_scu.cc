@@ -4,6 +4,8 @@
 #include <dcmtk/dcmnet/diutil.h>
 #include <dcmtk/dcmnet/scu.h>
 
+#include <set>
+
 #include "common/dicom/dataset_access.h"
 #include "common/dicom/dcmtk_logging.h"
 #include "common/dicom/storage_classes.h"
@@ -184,6 +186,70 @@ int GetStudy(const RetrieveRequest& request, const fs::path& out_dir, const Retr
                                    " (endorecon's own results there are not one)");
   }
   return scu.instances;
+}
+
+StudyContents FindStudyContents(const RetrieveRequest& request) {
+  QuietDcmtkLogs();
+  DcmSCU scu;
+  Configure(scu, request);
+  scu.addPresentationContext(UID_FINDStudyRootQueryRetrieveInformationModel, Uncompressed());
+  Connect(scu, request);
+  const T_ASC_PresentationContextID id =
+      scu.findPresentationContextID(UID_FINDStudyRootQueryRetrieveInformationModel, "");
+  if (id == 0) {
+    scu.releaseAssociation();
+    Fail(ErrorCode::kUnavailable, PeerText(request.peer) + " does not offer C-FIND (Study Root)");
+  }
+  DcmDataset query;
+  Put(query, DCM_QueryRetrieveLevel, "IMAGE");
+  Put(query, DCM_StudyInstanceUID, request.study_uid);
+  Put(query, DCM_SeriesInstanceUID, "");
+  Put(query, DCM_SOPClassUID, "");
+  Put(query, DCM_SOPInstanceUID, "");
+  OFList<QRResponse*> responses;
+  const OFCondition status = scu.sendFINDRequest(id, &query, &responses);
+  scu.releaseAssociation();
+  std::set<std::string> accepted;
+  for (const auto& storage : RecordingStorageClasses()) accepted.insert(storage.sop_class);
+  std::vector<std::string> order;
+  std::map<std::string, bool> all_accepted;  // series -> every instance of a class endorecon takes
+  StudyContents contents;
+  std::string failure;
+  for (QRResponse* response : responses) {
+    if (response->m_dataset != nullptr) {
+      const std::string series = FindString(*response->m_dataset, DCM_SeriesInstanceUID).value_or("");
+      const std::string sop_class = FindString(*response->m_dataset, DCM_SOPClassUID).value_or("");
+      if (!all_accepted.contains(series)) {
+        order.push_back(series);
+        all_accepted[series] = true;
+      }
+      if (!accepted.contains(sop_class)) {
+        all_accepted[series] = false;
+        ++contents.other_classes[sop_class.empty() ? "an unnamed class"
+                                                   : dcmFindNameOfUID(sop_class.c_str(), sop_class.c_str())];
+      }
+    }
+    if (response == responses.back() && response->m_status != STATUS_Success) {
+      char hex[8];
+      std::snprintf(hex, sizeof(hex), "0x%04X", response->m_status);
+      failure = std::string("status ") + hex;
+    }
+    delete response;
+  }
+  if (status.bad()) failure = status.text();
+  if (!failure.empty()) {
+    Fail(ErrorCode::kUnavailable,
+         "C-FIND of the study's instances at " + PeerText(request.peer) + " failed: " + failure);
+  }
+  for (const std::string& series : order) {
+    if (series.empty()) continue;
+    if (all_accepted[series]) {
+      contents.recording_series.push_back(series);
+    } else {
+      ++contents.other_series;
+    }
+  }
+  return contents;
 }
 
 int MoveStudy(const RetrieveRequest& request, const std::string& destination_ae) {

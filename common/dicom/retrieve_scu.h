@@ -5,7 +5,9 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <map>
 #include <string>
+#include <vector>
 
 #include "common/dicom/peer.h"
 
@@ -28,6 +30,18 @@ using RetrieveProgress = std::function<void(int instances, std::int64_t bytes)>;
 // nothing that matches, kDataLoss when some sub-operations failed.
 int GetStudy(const RetrieveRequest& request, const std::filesystem::path& out_dir,
              const RetrieveProgress& progress);
+
+// What a study holds, by series, from a C-FIND at IMAGE level (Study Root): the series whose every
+// instance is of a class endorecon takes (storage_classes.h), and the instances of other classes
+// (a CT, a report), counted by class name. A PACS fails a whole-study retrieval when one object has
+// no context, so a study holding others is retrieved series by series. Throws Error(kUnavailable)
+// when the PACS cannot be reached or refuses the query.
+struct StudyContents {
+  std::vector<std::string> recording_series;  // in the order the PACS listed them
+  std::map<std::string, int> other_classes;   // class name -> instances
+  int other_series = 0;                       // series left out (holding any other class)
+};
+StudyContents FindStudyContents(const RetrieveRequest& request);
 
 // C-MOVE of the study (or series) to `destination_ae` (the PACS must know that AE's address).
 // Returns the number of instances the PACS reports moved. Errors as GetStudy.

@@ -4,12 +4,14 @@
 // the PACS down during a send (the send fails, the job stays SUCCEEDED, a resend after it is back
 // succeeds), an association refused by AE title, an unknown study, and a retrieval by C-MOVE to the
 // server's storage SCP.
+#include <dcmtk/dcmdata/dctk.h>
 #include <gtest/gtest.h>
 
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "common/dicom/dataset_access.h"
 #include "common/dicom/store_scu.h"
 #include "common/dicom/uid.h"
 #include "common/error.h"
@@ -34,6 +36,34 @@ std::string MakeRecording(const fs::path& dir, const fs::path& out) {
                  dir / "to-dicom.log");
   EXPECT_EQ(writer.Wait(), 0) << writer.Log();
   return study;
+}
+
+// A CT image of the same patient in `study` (a series of its own): an object of a class endorecon does
+// not take, as real studies hold beside a recording.
+fs::path MakeCtImage(const fs::path& out, const std::string& study) {
+  DcmFileFormat file;
+  DcmDataset& data = *file.getDataset();
+  dicom::Put(data, DCM_SOPClassUID, UID_CTImageStorage);
+  dicom::Put(data, DCM_SOPInstanceUID, dicom::NewUid(""));
+  dicom::Put(data, DCM_StudyInstanceUID, study);
+  dicom::Put(data, DCM_SeriesInstanceUID, dicom::NewUid(""));
+  dicom::Put(data, DCM_PatientID, kPatient);
+  dicom::Put(data, DCM_PatientName, "Test^Patient");
+  dicom::Put(data, DCM_Modality, "CT");
+  dicom::Put(data, DCM_SeriesNumber, "7");
+  dicom::Put(data, DCM_InstanceNumber, "1");
+  dicom::Put(data, DCM_PhotometricInterpretation, "MONOCHROME2");
+  data.putAndInsertUint16(DCM_SamplesPerPixel, 1);
+  data.putAndInsertUint16(DCM_Rows, 4);
+  data.putAndInsertUint16(DCM_Columns, 4);
+  data.putAndInsertUint16(DCM_BitsAllocated, 16);
+  data.putAndInsertUint16(DCM_BitsStored, 12);
+  data.putAndInsertUint16(DCM_HighBit, 11);
+  data.putAndInsertUint16(DCM_PixelRepresentation, 0);
+  const Uint16 pixels[16] = {};
+  data.putAndInsertUint16Array(DCM_PixelData, pixels, 16);
+  EXPECT_TRUE(file.saveFile(out.c_str(), EXS_LittleEndianExplicit).good());
+  return out;
 }
 
 std::string JobIdIn(const std::string& out) {
@@ -207,6 +237,8 @@ TEST_F(PacsRoundTripTest, RecordingFromThePacsResultsBackIntoItsStudy) {
 TEST_F(PacsRoundTripTest, CMoveToTheServersStorageScpWhenCGetIsRefused) {
   const std::string study = MakeRecording(dir_.path(), dir_ / "recording.dcm");
   ASSERT_EQ(Text(orthanc_->Store(dir_ / "recording.dcm"), "Status"), "Success");
+  // A CT beside it: the recording's series is moved alone (the whole study failed for the CT).
+  ASSERT_EQ(Text(orthanc_->Store(MakeCtImage(dir_ / "ct.dcm", study)), "Status"), "Success");
   // Orthanc lets the AE MOVER move but not get; without a worker the job waits in the queue.
   Cluster cluster({"--ae-title", "MOVER", "--pacs", "orthanc=" + orthanc_->Address(), "--dicom-listen",
                    "127.0.0.1:" + std::to_string(mover_port_), "--dicom-timeout", "5"});
@@ -241,6 +273,41 @@ TEST_F(PacsRoundTripTest, CMoveToTheServersStorageScpWhenCGetIsRefused) {
   EXPECT_EQ(kept, 0);
   const dicom::Peer wrong_called{"NOTMOVER", "127.0.0.1", mover_port_};
   EXPECT_THROW(dicom::StoreFiles(wrong_called, {dir_ / "recording.dcm"}, as_pacs), Error);
+}
+
+// A study holding a CT beside the recording: the PACS failed the whole-study C-GET (no context for
+// the CT's class) and the job failed until 2026-12-05. The server lists the study's instances
+// (C-FIND) and retrieves the recording's series alone; a study holding no recording fails naming
+// what it holds instead.
+TEST_F(PacsRoundTripTest, AStudyHoldingOtherObjectsGivesItsRecordingSeries) {
+  const std::string study = MakeRecording(dir_.path(), dir_ / "recording.dcm");
+  ASSERT_EQ(Text(orthanc_->Store(dir_ / "recording.dcm"), "Status"), "Success");
+  ASSERT_EQ(Text(orthanc_->Store(MakeCtImage(dir_ / "ct.dcm", study)), "Status"), "Success");
+  const std::string ct_only = dicom::NewUid("");
+  ASSERT_EQ(Text(orthanc_->Store(MakeCtImage(dir_ / "ct2.dcm", ct_only)), "Status"), "Success");
+  Cluster cluster({"--ae-title", "ENDORECON", "--pacs", "orthanc=" + orthanc_->Address(), "--dicom-listen",
+                   "127.0.0.1:" + std::to_string(scp_port_), "--dicom-timeout", "5"});
+  const auto submitted = RunCli(cluster.address(), {"submit", "--pacs", "orthanc", "--study", study});
+  ASSERT_EQ(submitted.exit_code, 0) << submitted.err;
+  const std::string id = JobIdIn(submitted.out);
+  ASSERT_TRUE(WaitUntil([&] { return cluster.Job(id).retrieval().state() != v1::Retrieval::RETRIEVING; },
+                        std::chrono::seconds(60)));
+  const v1::Job job = cluster.Job(id);
+  EXPECT_EQ(job.retrieval().state(), v1::Retrieval::RETRIEVED)
+      << job.retrieval().error() << cluster.ServerLog();
+  EXPECT_EQ(job.retrieval().method(), "C-GET");
+  EXPECT_EQ(job.retrieval().instances(), 1);
+  EXPECT_EQ(job.clip().files_size(), 1);
+  EXPECT_NE(cluster.ServerLog().find("the study holds 1 series of other objects (CTImageStorage x 1)"),
+            std::string::npos)
+      << cluster.ServerLog();
+
+  const auto none = RunCli(cluster.address(), {"submit", "--pacs", "orthanc", "--study", ct_only, "--wait"});
+  EXPECT_EQ(none.exit_code, 5) << none.out << none.err;
+  EXPECT_NE(none.out.find("the study holds no recording, only objects of classes endorecon does not take "
+                          "(CTImageStorage x 1)"),
+            std::string::npos)
+      << none.out;
 }
 
 // With tokens: a recording retrieved for a job is the submitting tenant's, and its bytes count
