@@ -48,6 +48,18 @@ TEST(SynthCommandTest, ABackdropNeedsAnObjectAndWritesNothingWithoutOne) {
   EXPECT_TRUE(std::filesystem::exists(out / "transforms.json"));
 }
 
+// A recording too small for its checkerboard to be found by calibrate is refused before anything is
+// written (64 x 48 was written, and calibrate found the board in 0 of 24 views).
+TEST(SynthCommandTest, ARecordingTooSmallForItsCheckerboardIsRefused) {
+  testing::TempDir dir("synth-command");
+  const auto out = dir.path() / "clip";
+  const std::string message =
+      RunSynth({"synth", out.string(), "--recording", "--width", "64", "--height", "48"});
+  EXPECT_NE(message.find("frames of 64x48 are too small for the recording's checkerboard"), std::string::npos)
+      << message;
+  EXPECT_FALSE(std::filesystem::exists(out));
+}
+
 TEST(SynthCommandTest, NoiseIsScaledAndRecordedAndRefusedOutOfRange) {
   testing::TempDir dir("synth-command");
   const auto out = dir.path() / "clip";

@@ -91,6 +91,14 @@ Command AddSynthCommand(CLI::App& app) {
                    object_options.width, object_options.height);
       return 0;
     }
+    // The recording's checkerboard views are for `calibrate`: at 64 x 48 its squares are ~4 px and no
+    // view was found (96 x 72 calibrates at 0.13 px RMS; measured 2026-12-05).
+    if (options->recording && (options->width < 96 || options->height < 72)) {
+      FailInvalid("synth --recording: frames of " + std::to_string(options->width) + "x" +
+                  std::to_string(options->height) +
+                  " are too small for the recording's checkerboard to be found by calibrate; give at least "
+                  "--width 96 --height 72");
+    }
     if (!texture->empty()) LoadSynthTexture(*texture, *texture_frame, *options);
     options->tool = !flags->first;
     if (*no_noise) options->noise = 0;
