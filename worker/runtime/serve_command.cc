@@ -7,6 +7,7 @@
 
 #include <CLI/CLI.hpp>
 #include <atomic>
+#include <chrono>
 #include <memory>
 #include <optional>
 #include <string_view>
@@ -167,8 +168,14 @@ int Serve(const ServeFlags& flags) {
     spdlog::info("signal {}: handing running jobs back and stopping", signal);
     client.CancelLeases();
   });
+  // Retried every second (a server not up yet: as soon as it is); said at the first failure and then
+  // every 30 s, not every retry (a refused certificate wrote a line a second for as long as it ran).
+  const auto register_start = std::chrono::steady_clock::now();
+  auto next_warning = register_start;
+  int attempts = 0;
   while (!shutting_down) {
     try {
+      ++attempts;
       const auto registered = client.Register(Hostname(), devices);
       settings.heartbeat = std::chrono::milliseconds(registered.heartbeat_interval_ms());
       break;
@@ -186,15 +193,23 @@ int Serve(const ServeFlags& flags) {
       const bool handshake =
           !flags.ca_file.empty() && (message.find("Socket closed") != std::string_view::npos ||
                                      message.find("handshake") != std::string_view::npos);
+      const auto now = std::chrono::steady_clock::now();
+      if (now < next_warning) {
+        client.PauseBeforeRetry(std::chrono::seconds(1));
+        continue;
+      }
+      next_warning = now + std::chrono::seconds(30);
+      const auto waited = std::chrono::duration_cast<std::chrono::seconds>(now - register_start).count();
       spdlog::warn(
-          "cannot register with {}: {}; retrying{}", flags.server, e.what(),
+          "cannot register with {}{}: {}; retrying every second{}", flags.server,
+          attempts > 1 ? fmt::format(" ({} attempts in {} s)", attempts, waited) : "", e.what(),
           handshake && !flags.tls_cert.empty()
               ? " (the server closed the connection in the TLS handshake: is --tls-cert signed by the "
                 "server's --tls-client-ca, valid now and made for client authentication?)"
           : handshake ? " (the server closed the connection in the TLS handshake: does it require a "
                         "client certificate, --tls-cert and --tls-key?)"
                       : "");
-      client.PauseBeforeRetry(std::chrono::seconds(1));  // a server not up yet: as soon as it is
+      client.PauseBeforeRetry(std::chrono::seconds(1));
     }
   }
   spdlog::info("worker {} serving {} with {} device(s) [{}], metrics {}", worker_id, flags.server,
