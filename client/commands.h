@@ -39,6 +39,7 @@ Command AddStatusCommand(CLI::App& app);
 Command AddWatchCommand(CLI::App& app);
 Command AddListCommand(CLI::App& app);
 Command AddCancelCommand(CLI::App& app);
+Command AddDeleteCommand(CLI::App& app);
 Command AddFetchCommand(CLI::App& app);
 Command AddWorkersCommand(CLI::App& app);
 Command AddSendCommand(CLI::App& app);

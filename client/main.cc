@@ -88,6 +88,7 @@ int main(int argc, char** argv) {
   commands["watch"] = AddWatchCommand(app);
   commands["list"] = AddListCommand(app);
   commands["cancel"] = AddCancelCommand(app);
+  commands["delete"] = AddDeleteCommand(app);
   commands["fetch"] = AddFetchCommand(app);
   commands["workers"] = AddWorkersCommand(app);
   commands["send"] = AddSendCommand(app);

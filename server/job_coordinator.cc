@@ -236,8 +236,8 @@ void JobCoordinator::CheckQuotas(const std::string& tenant, std::int64_t adding,
         ErrorCode::kResourceExhausted,
         "tenant '" + tenant + "' keeps " + std::to_string(usage.bytes) + " bytes in its jobs and this adds " +
             std::to_string(adding) + ": over its quota max_bytes of " + std::to_string(quota.max_bytes) +
-            " bytes; cancel a job of it, or wait for retention (the server's --retention-days) to "
-            "delete finished jobs' files");
+            " bytes; delete the files of a finished job of it (`endorecon delete JOB`; a queued or "
+            "running one: cancel it first)");
   }
 }
 
@@ -346,6 +346,32 @@ v1::Job JobCoordinator::Cancel(const std::string& id, const Principal& caller) {
     }
     return job;
   });
+}
+
+v1::Job JobCoordinator::Delete(const std::string& id, const Principal& caller) {
+  RetentionPlan plan;
+  const v1::Job job = Locked([&] {
+    auto job = LoadVisible(id, caller).job;
+    if (job.expired_unix_ms() > 0) {
+      endorecon::Fail(ErrorCode::kFailedPrecondition, "job " + id + "'s files are already deleted");
+    }
+    if (!Settled(job)) {
+      endorecon::Fail(ErrorCode::kFailedPrecondition,
+                      "job " + id + " is " + v1::JobState_Name(job.state()) +
+                          (Terminal(job.state()) ? " with DICOM sends to go: delete it once they are done"
+                                                 : ": cancel it first, or delete it once it has finished"));
+    }
+    plan = PlanExpiry(parts_.store, parts_.blobs, [&](const v1::Job& one) { return one.id() == id; });
+    for (const auto& digest : plan.blobs) parts_.blobs.Remove(digest);  // files first, as retention
+    job.set_expired_unix_ms(NowUnixMs());
+    Save(job);
+    return job;
+  });
+  parts_.metrics.JobsExpired(1);
+  spdlog::info(
+      "job {}: files deleted by request of {} ({} blob(s), {} bytes; {} shared with other jobs kept)", id,
+      caller.name, plan.blobs.size(), plan.bytes, plan.kept_shared);
+  return job;
 }
 
 std::optional<JobCoordinator::Granted> JobCoordinator::Lease(const std::string& worker_id,

@@ -95,6 +95,10 @@ class JobCoordinator {
                       const Principal& caller);
   // Throws kNotFound (also for another tenant's job), kFailedPrecondition when the job is already finished.
   v1::Job Cancel(const std::string& id, const Principal& caller);
+  // Deletes a settled job's files now, as retention would (PlanExpiry): the record stays, marked
+  // expired, and its bytes stop counting against its tenant's byte quota. FAILED_PRECONDITION for a
+  // job not settled (queued, running, or with DICOM sends to go) or already expired.
+  v1::Job Delete(const std::string& id, const Principal& caller);
 
   struct Granted {
     v1::Job job;

@@ -93,6 +93,14 @@ grpc::Status JobServiceImpl::Cancel(grpc::ServerContext* context, const v1::Canc
   });
 }
 
+grpc::Status JobServiceImpl::Delete(grpc::ServerContext* context, const v1::DeleteJobRequest* request,
+                                    v1::Job* job) {
+  return guard_.Run(context, {"Delete", Access::kJobs, kWrites, request->id()}, [&](Call& call) {
+    *job = coordinator_.Delete(request->id(), call.caller);
+    return grpc::Status::OK;
+  });
+}
+
 grpc::Status JobServiceImpl::Watch(grpc::ServerContext* context, const v1::WatchJobRequest* request,
                                    grpc::ServerWriter<v1::JobEvent>* writer) {
   return guard_.Run(context, {"Watch", Access::kJobs, kReads, request->id()}, [&](Call& call) {

@@ -25,6 +25,7 @@ class JobServiceImpl final : public v1::JobService::Service {
   grpc::Status Get(grpc::ServerContext*, const v1::GetJobRequest*, v1::Job*) override;
   grpc::Status List(grpc::ServerContext*, const v1::ListJobsRequest*, v1::ListJobsResponse*) override;
   grpc::Status Cancel(grpc::ServerContext*, const v1::CancelJobRequest*, v1::Job*) override;
+  grpc::Status Delete(grpc::ServerContext*, const v1::DeleteJobRequest*, v1::Job*) override;
   grpc::Status Watch(grpc::ServerContext*, const v1::WatchJobRequest*,
                      grpc::ServerWriter<v1::JobEvent>*) override;
   grpc::Status Fetch(grpc::ServerContext*, const v1::FetchRequest*,

@@ -41,12 +41,20 @@ std::vector<BlobStore::StoredFile> FilesWrittenBefore(const BlobStore& blobs,
 
 RetentionPlan PlanRetention(JobStore& store, const BlobStore& blobs, std::int64_t cutoff_unix_ms,
                             const std::vector<BlobStore::StoredFile>& old_files) {
+  return PlanExpiry(
+      store, blobs,
+      [&](const v1::Job& job) { return Settled(job) && job.finished_unix_ms() < cutoff_unix_ms; }, old_files);
+}
+
+RetentionPlan PlanExpiry(JobStore& store, const BlobStore& blobs,
+                         const std::function<bool(const v1::Job&)>& expires,
+                         const std::vector<BlobStore::StoredFile>& old_files) {
   RetentionPlan plan;
   std::set<std::string> expiring, kept;
   store.Scan([&](const StoredJob& stored) {
     const auto& job = stored.job;
     if (job.expired_unix_ms() > 0) return;
-    if (Settled(job) && job.finished_unix_ms() < cutoff_unix_ms) {
+    if (expires(job)) {
       plan.jobs.push_back(job);
       AddBlobs(job, expiring);
     } else {

@@ -8,6 +8,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <limits>
 #include <string>
 #include <vector>
@@ -41,8 +42,14 @@ std::filesystem::file_time_type OrphanCutoff(double orphan_hours);
 std::vector<BlobStore::StoredFile> FilesWrittenBefore(const BlobStore& blobs,
                                                       std::filesystem::file_time_type cutoff);
 
-// Jobs finished before `cutoff_unix_ms` expire (none for kKeepJobs); of `old_files`
-// (FilesWrittenBefore), those no job references go too. Reads only, so it also serves the dry run.
+// The jobs not expired yet that `expires` picks expire, with the blobs only they reference; of
+// `old_files` (FilesWrittenBefore), those no job references go too. Reads only.
+RetentionPlan PlanExpiry(JobStore& store, const BlobStore& blobs,
+                         const std::function<bool(const v1::Job&)>& expires,
+                         const std::vector<BlobStore::StoredFile>& old_files = {});
+
+// Jobs settled (Settled: finished, their sends too) before `cutoff_unix_ms` expire (none for
+// kKeepJobs); PlanExpiry. Reads only, so it also serves the dry run.
 RetentionPlan PlanRetention(JobStore& store, const BlobStore& blobs, std::int64_t cutoff_unix_ms,
                             const std::vector<BlobStore::StoredFile>& old_files = {});
 

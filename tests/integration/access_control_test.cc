@@ -326,6 +326,49 @@ TEST(TenantQuotaTest, AnUploadOverTheByteQuotaIsRefusedBeforeAByteIsWritten) {
       1u);
 }
 
+// A tenant at its byte quota gets back under it by deleting a finished job's files (`endorecon
+// delete`): cancelled and finished jobs kept their bytes until retention, off by default, and the
+// refusal pointed there (found 2026-12-05). Another tenant's job is no job to delete.
+TEST(TenantQuotaTest, DeletingAFinishedJobsFilesMakesRoomUnderTheByteQuota) {
+  TempDir config("quotas");
+  MakeClip(config / "clip");
+  MakeClip(config / "clip2", 2);
+  std::uintmax_t clip_bytes = 0;
+  for (const auto& entry : std::filesystem::recursive_directory_iterator(config / "clip")) {
+    if (entry.is_regular_file()) clip_bytes += entry.file_size();
+  }
+  WriteBytes(config / "quotas.json",
+             nlohmann::json{{"research", {{"max_bytes", clip_bytes * 3 / 2}}}}.dump());
+  Cluster cluster({"--quotas", (config / "quotas.json").string()}, false);
+  const auto carol = MakeCredentials(cluster, "", "client", "research", "carol");
+  const auto dave = MakeCredentials(cluster, "", "client", "radiology", "dave");
+  cluster.StartServer();
+  const auto as = [&](const ClientCredentials& who, std::vector<std::string> args) {
+    auto flags = who.CliFlags();
+    flags.insert(flags.end(), args.begin(), args.end());
+    return RunCli(cluster.address(), flags);
+  };
+  const auto first = as(carol, {"submit", (config / "clip").string()});
+  ASSERT_EQ(first.exit_code, 0) << first.err;
+  const std::string id = first.out.substr(first.out.find("job ") + 4, 12);
+  const auto refused = as(carol, {"submit", (config / "clip2").string()});
+  EXPECT_EQ(refused.exit_code, 8) << refused.err;
+  EXPECT_NE(refused.err.find("delete the files of a finished job of it (`endorecon delete JOB`"),
+            std::string::npos)
+      << refused.err;
+  const auto queued = as(carol, {"delete", id});
+  EXPECT_EQ(queued.exit_code, 7) << queued.err;
+  EXPECT_NE(queued.err.find("is QUEUED: cancel it first"), std::string::npos) << queued.err;
+  ASSERT_EQ(as(carol, {"cancel", id}).exit_code, 0);
+  EXPECT_EQ(as(dave, {"delete", id}).exit_code, 3) << "another tenant's job is no job";
+  const auto deleted = as(carol, {"delete", id});
+  EXPECT_EQ(deleted.exit_code, 0) << deleted.err;
+  EXPECT_NE(deleted.out.find("its files are deleted from the server"), std::string::npos) << deleted.out;
+  const auto second = as(carol, {"submit", (config / "clip2").string()});
+  EXPECT_EQ(second.exit_code, 0) << second.err;
+  EXPECT_EQ(AuditFind(AuditLines(cluster.data_dir() / "audit.jsonl"), "Delete", "OK", "carol").size(), 1u);
+}
+
 TEST_F(AccessControlTest, NoLogHoldsATokenOrAJobName) {
   SubmitAs(alice_, "patient-jane-doe-1957");
   Cli(bob_, {"list"});

@@ -296,6 +296,40 @@ TEST_F(JobCoordinatorTest, ACancelRacingTheWorkerEndsTheJobOnceAndNeverRequeuesI
             ErrorCode::kFailedPrecondition);
 }
 
+// A tenant at its byte quota had no way back under it: cancelled and finished jobs kept their bytes
+// until retention, which is off by default (found 2026-12-05). Delete removes a settled job's files
+// now (not a blob another job shares), marks it expired and its bytes leave the quota; a queued or
+// running job, another tenant's, or one already deleted is refused.
+TEST_F(JobCoordinatorTest, DeletingAFinishedJobsFilesFreesItsTenantsBytes) {
+  const Principal a{"a-client", Role::kClient, "a", false};
+  const Principal b{"b-client", Role::kClient, "b", false};
+  v1::SubmitRequest request;
+  *request.mutable_clip() = Uploaded("images/000000.png", "a's frame");
+  const std::string first = coordinator_.Submit(request, a).id();
+  *request.mutable_clip()->add_files() = Uploaded("images/000001.png", "a's other frame").files(0);
+  const std::string second = coordinator_.Submit(request, a).id();  // shares the first frame
+  EXPECT_EQ(CodeOf([&] { coordinator_.Delete(first, a); }), ErrorCode::kFailedPrecondition) << "queued";
+  const auto granted = LeaseNext();
+  ASSERT_TRUE(granted.has_value());
+  ASSERT_EQ(granted->job.id(), first);
+  EXPECT_EQ(CodeOf([&] { coordinator_.Delete(first, a); }), ErrorCode::kFailedPrecondition) << "running";
+  const v1::Manifest result = Uploaded("metrics.json", "{\"psnr\": 31}");
+  Complete(granted->lease_id, result);
+  const std::int64_t before = store_.UsageOf("a").bytes;
+  EXPECT_EQ(CodeOf([&] { coordinator_.Delete(first, b); }), ErrorCode::kNotFound);
+
+  const v1::Job deleted = coordinator_.Delete(first, a);
+  EXPECT_GT(deleted.expired_unix_ms(), 0);
+  EXPECT_EQ(store_.UsageOf("a").bytes, before - 9 - 12) << "the clip's frame and the result's file";
+  EXPECT_FALSE(blobs_.Has(result.files(0).sha256()));
+  EXPECT_TRUE(blobs_.Has(request.clip().files(0).sha256())) << "the second job still needs the shared frame";
+  EXPECT_EQ(CodeOf([&] { coordinator_.Delete(first, a); }), ErrorCode::kFailedPrecondition) << "twice";
+  coordinator_.Cancel(second, a);
+  coordinator_.Delete(second, a);
+  EXPECT_EQ(store_.UsageOf("a").bytes, 0);
+  EXPECT_FALSE(blobs_.Has(request.clip().files(0).sha256()));
+}
+
 TEST_F(JobCoordinatorTest, AnotherTenantsJobIsNotFoundLikeAMissingOne) {
   v1::SubmitRequest request;
   *request.mutable_clip() = Uploaded("images/000000.png", "tenant a's frame");
