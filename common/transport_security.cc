@@ -5,10 +5,16 @@
 #include <grpcpp/security/credentials.h>
 #include <grpcpp/support/channel_arguments.h>
 #include <grpcpp/support/client_interceptor.h>
+#include <openssl/bio.h>
+#include <openssl/err.h>
+#include <openssl/evp.h>
+#include <openssl/pem.h>
+#include <openssl/x509.h>
 #include <spdlog/spdlog.h>
 
 #include <atomic>
 #include <charconv>
+#include <memory>
 #include <mutex>
 #include <thread>
 #include <utility>
@@ -22,6 +28,35 @@ namespace {
 void RequirePair(const std::string& cert_file, const std::string& key_file) {
   if (cert_file.empty() != key_file.empty())
     FailInvalid("--tls-cert and --tls-key go together: give both or neither");
+}
+
+// Refuses a certificate and key that are not a pair, or not PEM at all, naming both files. gRPC
+// found this only at the first connection ("Invalid private key", "Handshaker factory creation
+// failed"), so a worker retried "empty address list" forever (found 2026-12-05) and the server
+// failed to listen saying the port might be taken. OpenSSL, which endorecon links for SHA-256,
+// reads and compares them.
+void CheckCertificateAndKey(const std::string& cert_pem, const std::string& key_pem,
+                            const std::string& cert_file, const std::string& key_file) {
+  const auto read = [](const std::string& pem) {
+    return std::unique_ptr<BIO, decltype(&BIO_free)>(
+        BIO_new_mem_buf(pem.data(), static_cast<int>(pem.size())), &BIO_free);
+  };
+  const auto cert_bio = read(cert_pem);
+  // No password callback: OpenSSL's own would ask on the terminal for an encrypted key.
+  pem_password_cb* const no_password = [](char*, int, int, void*) { return 0; };
+  const std::unique_ptr<X509, decltype(&X509_free)> cert(
+      PEM_read_bio_X509(cert_bio.get(), nullptr, no_password, nullptr), &X509_free);
+  if (!cert) FailInvalid("--tls-cert " + cert_file + ": no PEM certificate in the file");
+  const auto key_bio = read(key_pem);
+  const std::unique_ptr<EVP_PKEY, decltype(&EVP_PKEY_free)> key(
+      PEM_read_bio_PrivateKey(key_bio.get(), nullptr, no_password, nullptr), &EVP_PKEY_free);
+  ERR_clear_error();  // what the failed reads left, so it is not reported by a later call
+  if (!key) FailInvalid("--tls-key " + key_file + ": no PEM private key (unencrypted) in the file");
+  if (X509_check_private_key(cert.get(), key.get()) != 1) {
+    ERR_clear_error();
+    FailInvalid("--tls-cert " + cert_file + " and --tls-key " + key_file +
+                " are not a pair: the key belongs to another certificate");
+  }
 }
 
 // Warns once a process when the server says the token expires within kTokenExpiryWarning.
@@ -126,6 +161,7 @@ std::shared_ptr<grpc::Channel> OpenChannel(const std::string& address, const Cha
     if (!security.cert_file.empty()) {
       tls.pem_cert_chain = ReadPublicFile(security.cert_file, "--tls-cert");
       tls.pem_private_key = ReadSecretFile(security.key_file, "--tls-key");
+      CheckCertificateAndKey(tls.pem_cert_chain, tls.pem_private_key, security.cert_file, security.key_file);
     }
     credentials = grpc::SslCredentials(tls);
   }
@@ -157,6 +193,8 @@ std::shared_ptr<grpc::ServerCredentials> ServerCredentials(const ServerSecurity&
                                             : GRPC_SSL_REQUEST_CLIENT_CERTIFICATE_AND_VERIFY);
   tls.pem_key_cert_pairs.push_back(
       {ReadSecretFile(security.key_file, "--tls-key"), ReadPublicFile(security.cert_file, "--tls-cert")});
+  CheckCertificateAndKey(tls.pem_key_cert_pairs[0].cert_chain, tls.pem_key_cert_pairs[0].private_key,
+                         security.cert_file, security.key_file);
   if (!security.client_ca_file.empty())
     tls.pem_root_certs = ReadPublicFile(security.client_ca_file, "--tls-client-ca");
   return grpc::SslServerCredentials(tls);

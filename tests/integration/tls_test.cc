@@ -209,6 +209,26 @@ TEST_F(TlsTest, TheServerRefusesPlaintextBeyondLoopbackAndReadableKeys) {
   const auto cli = RunCli("127.0.0.1:1", {"--token-file", readable_token.string(), "list"});
   EXPECT_EQ(cli.exit_code, 2) << cli.err;
   EXPECT_NE(cli.err.find("others may access it"), std::string::npos) << cli.err;
+
+  // A certificate with another certificate's key is refused at start, naming both files: a worker
+  // retried "empty address list" once a second for good, and the server said the port might be
+  // taken (found 2026-12-05).
+  Process mismatched({server, "--listen", "127.0.0.1:" + std::to_string(FreePort()), "--data-dir",
+                      (dir / "d").string(), "--metrics-port", "-1", "--tls-cert", pki_->server_cert.string(),
+                      "--tls-key", pki_->worker_key.string()},
+                     dir / "mismatched.log");
+  EXPECT_EQ(mismatched.Wait(), 2);
+  EXPECT_NE(mismatched.Log().find("are not a pair: the key belongs to another certificate"),
+            std::string::npos)
+      << mismatched.Log();
+  Process worker({BuiltBinary("worker/runtime/endorecon-worker"), "serve", "--server", "127.0.0.1:1", "--ca",
+                  pki_->ca_cert.string(), "--tls-cert", pki_->worker_cert.string(), "--tls-key",
+                  pki_->server_key.string(), "--metrics-port", "-1", "--work-dir", (dir / "w").string()},
+                 dir / "worker.log");
+  EXPECT_EQ(worker.Wait(), 2);
+  EXPECT_NE(worker.Log().find("--tls-cert " + pki_->worker_cert.string() + " and --tls-key"),
+            std::string::npos)
+      << worker.Log();
 }
 
 }  // namespace
