@@ -212,6 +212,11 @@ int Serve(const ServeFlags& flags) {
       client.PauseBeforeRetry(std::chrono::seconds(1));
     }
   }
+  if (shutting_down) {  // a signal before the server took the worker: it never served
+    signal_waiter.join();
+    spdlog::info("worker {} stopped before it could register with {}", worker_id, flags.server);
+    return 0;
+  }
   spdlog::info("worker {} serving {} with {} device(s) [{}], metrics {}", worker_id, flags.server,
                devices.size(), fmt::join(names, ","),
                flags.metrics_port >= 0 ? fmt::format("on port {}", metrics.port()) : std::string("off"));
