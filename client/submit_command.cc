@@ -94,7 +94,7 @@ v1::Manifest ListingOfClip(const std::filesystem::path& clip) {
 
 // Asks the server whether a clip of these sizes may come (its upload limit, the tenant's quotas)
 // before the files are read for their digests: a 50 GB file was hashed for minutes, then refused.
-// A refusal names the largest file.
+// A refusal for size names the largest file (not one for the tenant's job count).
 void CheckSizes(const Globals& globals, v1::JobService::Stub& stub, const v1::Manifest& listing) {
   v1::UploadStatus status;
   auto context = CallContext(globals.timeout());
@@ -105,8 +105,12 @@ void CheckSizes(const Globals& globals, v1::JobService::Stub& stub, const v1::Ma
   }
   const auto largest = std::max_element(listing.files().begin(), listing.files().end(),
                                         [](const auto& a, const auto& b) { return a.size() < b.size(); });
-  Fail(ErrorCode::kResourceExhausted, "upload query: " + answer.error_message() + " (its largest file: " +
-                                          largest->path() + ", " + HumanBytes(largest->size()) + ")");
+  const bool for_size = answer.error_message().find("max_jobs") == std::string::npos;
+  Fail(ErrorCode::kResourceExhausted,
+       "upload query: " + answer.error_message() +
+           (for_size && largest != listing.files().end()
+                ? " (its largest file: " + largest->path() + ", " + HumanBytes(largest->size()) + ")"
+                : ""));
 }
 
 // Uploads the clip (what the server lacks of it) and returns its manifest. A clip folder (not a

@@ -69,10 +69,15 @@ void WarnOfExpiry(std::string_view unix_ms_text) {
   const auto left = std::chrono::system_clock::time_point(std::chrono::milliseconds(unix_ms)) -
                     std::chrono::system_clock::now();
   if (left > kTokenExpiryWarning || warned.exchange(true)) return;
-  spdlog::warn(
-      "the token in use expires at {:%Y-%m-%d %H:%M} UTC, in {} hour(s): ask its issuer for a new one",
-      fmt::gmtime(static_cast<std::time_t>(unix_ms / 1000)),
-      std::max<long>(0, std::chrono::duration_cast<std::chrono::hours>(left).count()));
+  // In the unit that says it: "in 0 hour(s)" was 33 s before a worker's token expired.
+  const long seconds = std::max<long>(0, std::chrono::duration_cast<std::chrono::seconds>(left).count());
+  const long minutes = seconds / 60;
+  const std::string in = seconds < 120    ? fmt::format("{} s", seconds)
+                         : minutes < 120  ? fmt::format("{} minutes", minutes)
+                         : minutes < 2880 ? fmt::format("{} hours", minutes / 60)
+                                          : fmt::format("{} days", minutes / 1440);
+  spdlog::warn("the token in use expires at {:%Y-%m-%d %H:%M:%S} UTC, in {}: ask its issuer for a new one",
+               fmt::gmtime(static_cast<std::time_t>(unix_ms / 1000)), in);
 }
 
 // Adds the bearer token to every call's initial metadata. An interceptor rather than call

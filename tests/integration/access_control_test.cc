@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <regex>
 #include <thread>
 
 #include "tests/integration/audit_reader.h"
@@ -127,6 +128,8 @@ TEST_F(AccessControlTest, AnExpiredTokenIsRefusedAndSaysWhen) {
   const auto warned = Cli(carol, {"--json", "list"});
   EXPECT_EQ(warned.exit_code, 0) << warned.err;
   EXPECT_NE(warned.err.find("the token in use expires at"), std::string::npos) << warned.err;
+  EXPECT_TRUE(std::regex_search(warned.err, std::regex("UTC, in [0-9]+ s: ask its issuer")))
+      << "seconds away, said in seconds: " << warned.err;
   EXPECT_EQ(warned.out.find("expires"), std::string::npos) << warned.out;
   EXPECT_EQ(Cli(alice_, {"list"}).err.find("expires"), std::string::npos);  // alice's never expires
   const auto id = SubmitAs(carol, "before-expiry");
@@ -281,6 +284,8 @@ TEST_F(AccessControlTest, OverQuotaSubmitsAreRefusedAndNothingIsLost) {
   const auto fourth = Cli(alice_, {"submit", cluster_.path("clip2").string(), "--name", "four"});
   EXPECT_EQ(fourth.exit_code, 8) << fourth.err;
   EXPECT_NE(fourth.err.find("max_jobs"), std::string::npos) << fourth.err;
+  EXPECT_EQ(fourth.err.find("largest file"), std::string::npos)
+      << "a job count is no file's size: " << fourth.err;
   EXPECT_EQ(fourth.err.find("uploaded"), std::string::npos) << fourth.err;
   // Options the server would refuse are refused before the upload too.
   // A budget is 0 (none) or at least 10 s: -5 and 0.001 (a unit slip) are refused.
