@@ -16,7 +16,8 @@ std::string ReadWhole(const std::filesystem::path& path, const std::string& flag
   if (!in) Fail(ErrorCode::kNotFound, flag + " " + path.string() + ": cannot be read");
   std::ostringstream bytes;
   bytes << in.rdbuf();
-  if (bytes.str().empty()) Fail(ErrorCode::kNotFound, flag + " " + path.string() + ": the file is empty");
+  // There, but of no use: a bad argument (exit 2), not a missing one (exit 3).
+  if (bytes.str().empty()) FailInvalid(flag + " " + path.string() + ": the file is empty");
   return bytes.str();
 }
 

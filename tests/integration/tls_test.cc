@@ -162,6 +162,14 @@ TEST_F(TlsTest, WorkersWithoutAClientCertificateOrWithAClientTokenLeaseNothing) 
   EXPECT_EQ(rogue_log.find("serving"), std::string::npos) << rogue_log;
   EXPECT_NE(rogue_log.find("stopped before it could register"), std::string::npos) << rogue_log;
 
+  // Plaintext to the TLS port: the log says to give --ca, as the CLI does (it said nothing).
+  auto& plaintext = cluster_->StartWorker("w-plaintext", {"--token-file", worker_token_, "--timeout", "2"});
+  ASSERT_TRUE(WaitUntil([&] { return plaintext.Log().find("cannot register") != std::string::npos; },
+                        std::chrono::seconds(20)));
+  plaintext.Signal(SIGTERM);
+  plaintext.Wait();
+  EXPECT_NE(plaintext.Log().find("if it serves TLS, give --ca FILE"), std::string::npos) << plaintext.Log();
+
   auto& client_token = cluster_->StartWorker("w-client-token", WorkerTlsFlags(*pki_, admin_.token_file));
   EXPECT_NE(client_token.Wait(), 0);
   EXPECT_NE(client_token.Log().find("PERMISSION_DENIED"), std::string::npos) << client_token.Log();

@@ -40,6 +40,15 @@ TEST(SecretFileTest, TokenFilesHoldOneWord) {
   EXPECT_THROW(ReadTokenFile(token, "--token-file"), Error);
   testing::WriteBytes(token, "\n");
   EXPECT_THROW(ReadTokenFile(token, "--token-file"), Error);
+  // An empty file is there but of no use: a bad argument, not a missing file (it said NOT_FOUND).
+  testing::WriteBytes(token, "");
+  try {
+    ReadTokenFile(token, "--token-file");
+    ADD_FAILURE() << "an empty token file was accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument) << e.what();
+    EXPECT_NE(std::string(e.what()).find("the file is empty"), std::string::npos) << e.what();
+  }
 }
 
 TEST(SecretFileTest, ChannelsAndPortsRefuseHalfAConfiguration) {

@@ -190,9 +190,11 @@ int Serve(const ServeFlags& flags) {
       // handshake; gRPC says only "Socket closed", so the likely reasons are named (TLS over plain
       // TCP says "wrong version number" or the like, a refused server certificate "certificate").
       const std::string_view message = e.what();
-      const bool handshake =
-          !flags.ca_file.empty() && (message.find("Socket closed") != std::string_view::npos ||
-                                     message.find("handshake") != std::string_view::npos);
+      const bool closed = message.find("Socket closed") != std::string_view::npos ||
+                          message.find("handshake") != std::string_view::npos;
+      const bool handshake = !flags.ca_file.empty() && closed;
+      // Plaintext to a TLS port: the server drops the connection too (the CLI hints at --ca alike).
+      const bool plaintext_to_tls = flags.ca_file.empty() && closed;
       const auto now = std::chrono::steady_clock::now();
       if (now < next_warning) {
         client.PauseBeforeRetry(std::chrono::seconds(1));
@@ -206,9 +208,10 @@ int Serve(const ServeFlags& flags) {
           handshake && !flags.tls_cert.empty()
               ? " (the server closed the connection in the TLS handshake: is --tls-cert signed by the "
                 "server's --tls-client-ca, valid now and made for client authentication?)"
-          : handshake ? " (the server closed the connection in the TLS handshake: does it require a "
-                        "client certificate, --tls-cert and --tls-key?)"
-                      : "");
+          : handshake        ? " (the server closed the connection in the TLS handshake: does it require a "
+                               "client certificate, --tls-cert and --tls-key?)"
+          : plaintext_to_tls ? " (the server closed the connection: if it serves TLS, give --ca FILE)"
+                             : "");
       client.PauseBeforeRetry(std::chrono::seconds(1));
     }
   }
