@@ -43,10 +43,21 @@ grpc::Status JobServiceImpl::Upload(grpc::ServerContext* context,
   });
 }
 
+namespace {
+
+// What a client is shown of a job: not its lease id, a running worker's handle on it (the worker API
+// needs a worker token and, with --tls-client-ca, a certificate, but a client has no use for it).
+v1::Job ForClient(v1::Job job) {
+  job.clear_lease_id();
+  return job;
+}
+
+}  // namespace
+
 grpc::Status JobServiceImpl::Submit(grpc::ServerContext* context, const v1::SubmitRequest* request,
                                     v1::Job* job) {
   return guard_.Run(context, {"Submit", Access::kJobs, kWrites, ""}, [&](Call& call) {
-    *job = coordinator_.Submit(*request, call.caller);
+    *job = ForClient(coordinator_.Submit(*request, call.caller));
     call.job_id = job->id();
     return grpc::Status::OK;
   });
@@ -55,7 +66,7 @@ grpc::Status JobServiceImpl::Submit(grpc::ServerContext* context, const v1::Subm
 grpc::Status JobServiceImpl::Get(grpc::ServerContext* context, const v1::GetJobRequest* request,
                                  v1::Job* job) {
   return guard_.Run(context, {"Get", Access::kJobs, kReads, request->id()}, [&](Call& call) {
-    *job = coordinator_.Get(request->id(), call.caller);
+    *job = ForClient(coordinator_.Get(request->id(), call.caller));
     return grpc::Status::OK;
   });
 }
@@ -78,7 +89,7 @@ grpc::Status JobServiceImpl::List(grpc::ServerContext* context, const v1::ListJo
     for (auto job : page.jobs) {
       job.clear_clip();
       job.clear_result();
-      *response->add_jobs() = std::move(job);
+      *response->add_jobs() = ForClient(std::move(job));
     }
     if (page.next_before_seq > 0) response->set_next_page_token(std::to_string(page.next_before_seq));
     return grpc::Status::OK;
@@ -88,7 +99,7 @@ grpc::Status JobServiceImpl::List(grpc::ServerContext* context, const v1::ListJo
 grpc::Status JobServiceImpl::Cancel(grpc::ServerContext* context, const v1::CancelJobRequest* request,
                                     v1::Job* job) {
   return guard_.Run(context, {"Cancel", Access::kJobs, kWrites, request->id()}, [&](Call& call) {
-    *job = coordinator_.Cancel(request->id(), call.caller);
+    *job = ForClient(coordinator_.Cancel(request->id(), call.caller));
     return grpc::Status::OK;
   });
 }
@@ -96,7 +107,7 @@ grpc::Status JobServiceImpl::Cancel(grpc::ServerContext* context, const v1::Canc
 grpc::Status JobServiceImpl::Delete(grpc::ServerContext* context, const v1::DeleteJobRequest* request,
                                     v1::Job* job) {
   return guard_.Run(context, {"Delete", Access::kJobs, kWrites, request->id()}, [&](Call& call) {
-    *job = coordinator_.Delete(request->id(), call.caller);
+    *job = ForClient(coordinator_.Delete(request->id(), call.caller));
     return grpc::Status::OK;
   });
 }
@@ -105,7 +116,7 @@ grpc::Status JobServiceImpl::Watch(grpc::ServerContext* context, const v1::Watch
                                    grpc::ServerWriter<v1::JobEvent>* writer) {
   return guard_.Run(context, {"Watch", Access::kJobs, kReads, request->id()}, [&](Call& call) {
     v1::JobEvent first;
-    *first.mutable_job() = coordinator_.Get(request->id(), call.caller);
+    *first.mutable_job() = ForClient(coordinator_.Get(request->id(), call.caller));
     first.mutable_job()->clear_clip();
     const auto write = [&](const v1::JobEvent& event) {
       return stalls_.Guard(context, [&] { return writer->Write(event); });
@@ -125,7 +136,7 @@ grpc::Status JobServiceImpl::Watch(grpc::ServerContext* context, const v1::Watch
         for (auto& preview : changes.previews) *events.emplace_back().mutable_preview() = std::move(preview);
       }
       if (changes.job) {
-        v1::Job job = *changes.job;
+        v1::Job job = ForClient(*changes.job);
         job.clear_clip();
         if (std::string bytes = job.SerializeAsString(); bytes != last_sent) {
           last_sent = std::move(bytes);
@@ -136,7 +147,7 @@ grpc::Status JobServiceImpl::Watch(grpc::ServerContext* context, const v1::Watch
         // A quiet second: the hub drops a settled job's entry a minute after it settled, so ask the
         // store whether this one settled meanwhile.
         v1::JobEvent last;
-        *last.mutable_job() = coordinator_.Get(request->id(), call.caller);
+        *last.mutable_job() = ForClient(coordinator_.Get(request->id(), call.caller));
         if (Settled(last.job())) {
           last.mutable_job()->clear_clip();
           last.mutable_job()->clear_result();
@@ -205,7 +216,7 @@ grpc::Status JobServiceImpl::ListWorkers(grpc::ServerContext* context, const v1:
 grpc::Status JobServiceImpl::Send(grpc::ServerContext* context, const v1::SendRequest* request,
                                   v1::Job* job) {
   return guard_.Run(context, {"Send", Access::kJobs, kWrites, request->id()}, [&](Call& call) {
-    *job = coordinator_.RequestSend(request->id(), request->destination(), call.caller);
+    *job = ForClient(coordinator_.RequestSend(request->id(), request->destination(), call.caller));
     job->clear_clip();
     return grpc::Status::OK;
   });

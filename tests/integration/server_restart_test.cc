@@ -141,6 +141,7 @@ TEST(ServerRestartTest, ABusyWorkerIsListedAgainWhileItsJobRuns) {
   EXPECT_TRUE(WaitUntil([&] { return ListedWithDevices(cluster, "w1"); }, std::chrono::seconds(10)))
       << cluster.ServerLog() << worker.Log();
   EXPECT_EQ(cluster.Job(id).state(), v1::RUNNING);
+  EXPECT_TRUE(cluster.Job(id).lease_id().empty()) << "a client is not shown the worker's lease id";
   EXPECT_EQ(cluster.WaitForState(id, v1::SUCCEEDED, std::chrono::seconds(120)).state(), v1::SUCCEEDED)
       << worker.Log();
 }
