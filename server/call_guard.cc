@@ -126,9 +126,19 @@ void CallGuard::Admit(const grpc::ServerContext& context, const Rpc& rpc, Call& 
     call.caller = AnonymousPrincipal();
     return;
   }
-  const auto record = tokens->Verify(BearerToken(context));
-  call.caller = Principal{record.name, record.role, record.tenant, false, record.expires_unix_ms};
-  const Role role = record.role;
+  // A revoked or expired token that proved its secret is named in the refusal's audit line (it was
+  // "-", and a leaked token's use could not be traced; found 2026-12-05).
+  TokenRecord refused;
+  try {
+    const auto record = tokens->Verify(BearerToken(context), &refused);
+    call.caller = Principal{record.name, record.role, record.tenant, false, record.expires_unix_ms};
+  } catch (const Error&) {
+    if (!refused.name.empty()) {
+      call.caller = Principal{refused.name, refused.role, refused.tenant, false, refused.expires_unix_ms};
+    }
+    throw;
+  }
+  const Role role = call.caller.role;
   // The messages do not name the method: the caller knows it, and the CLI says which call it made
   // ("workers: ListWorkers: needs an admin token" said it twice).
   switch (rpc.access) {

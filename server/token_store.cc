@@ -203,7 +203,7 @@ TokenRecord TokenStore::Revoke(const std::string& name) {
   return record;
 }
 
-TokenRecord TokenStore::Verify(std::string_view token) {
+TokenRecord TokenStore::Verify(std::string_view token, TokenRecord* refused) {
   const auto dot = token.find('.', kPrefix.size());
   if (token.substr(0, kPrefix.size()) != kPrefix || dot == std::string_view::npos ||
       !IsHex(token.substr(kPrefix.size(), dot - kPrefix.size()), 2 * kIdBytes) ||
@@ -227,6 +227,7 @@ TokenRecord TokenStore::Verify(std::string_view token) {
                            select.Text(2), select.Int(5),
                            select.Int(6),  select.Int(7)};
   const auto state = record.StateAt(NowUnixMs());
+  if (refused != nullptr && state != "active") *refused = record;
   if (state == "revoked") Fail(ErrorCode::kUnauthenticated, "the token '" + record.name + "' was revoked");
   if (state == "expired") {
     Fail(ErrorCode::kUnauthenticated, "the token '" + record.name + "' expired at " +

@@ -57,7 +57,9 @@ class TokenStore {
   TokenRecord Revoke(const std::string& name);
   // The active token's record. Throws Error(kUnauthenticated) saying whether the token is malformed,
   // unknown, revoked or expired (never echoing it).
-  TokenRecord Verify(std::string_view token);
+  // `refused` (optional) receives the record of a token whose secret matched but that is revoked or
+  // expired, so the refusal can be traced to it (the audit log's principal).
+  TokenRecord Verify(std::string_view token, TokenRecord* refused = nullptr);
 
  private:
   sqlite3* db_ = nullptr;

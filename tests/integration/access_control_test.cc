@@ -110,7 +110,9 @@ TEST_F(AccessControlTest, RevokingATokenTakesEffectWithoutARestart) {
   EXPECT_EQ(cluster_.Job(id).state(), v1::QUEUED);
   const auto audit = Audit();
   EXPECT_EQ(AuditFind(audit, "TokenRevoke", "OK").size(), 1u);
-  EXPECT_EQ(AuditFind(audit, "Get", "UNAUTHENTICATED", "-", id).size(), 1u);
+  // The refusal names the revoked token that proved its secret, so its use can be traced (it was
+  // "-"; found 2026-12-05).
+  EXPECT_EQ(AuditFind(audit, "Get", "UNAUTHENTICATED", "alice", id).size(), 1u);
 }
 
 // Tokens that expire (`token create --expires-in`): refused from their expiry on, by the running
