@@ -3,6 +3,8 @@
 #include <CLI/CLI.hpp>
 #include <filesystem>
 #include <iostream>
+#include <set>
+#include <string>
 
 #include "client/commands.h"
 #include "client/exit_codes.h"
@@ -22,6 +24,29 @@ struct FetchFlags {
   double min_bytes_per_second = 1 << 20;
 };
 
+// A non-empty folder is taken when everything in it (dot files aside) is one of the results' names
+// or a download of one in progress (NAME.part): a fetch again, or one resumed. Anything else is
+// someone's files, which results would be mixed into (`fetch -o ~/Documents` was taken; found
+// 2026-12-05).
+void CheckFetchFolder(const std::filesystem::path& out, const v1::Manifest& result) {
+  namespace fs = std::filesystem;
+  std::error_code error;
+  if (!fs::exists(out, error)) return;
+  if (!fs::is_directory(out, error)) FailInvalid("-o " + out.string() + " is a file; give a folder");
+  std::set<std::string> names;
+  for (const auto& file : result.files()) {
+    const std::string top = fs::path(file.path()).begin()->string();
+    names.insert(top);
+    names.insert(top + ".part");
+  }
+  for (fs::directory_iterator it(out, error), end; !error && it != end; it.increment(error)) {
+    const std::string name = it->path().filename().string();
+    if (name.starts_with(".") || names.contains(name)) continue;
+    FailInvalid("-o " + out.string() + " holds other files (" + name +
+                ", ...) than this job's results: they would be mixed in; give an empty or new folder");
+  }
+}
+
 int Fetch(const Globals& globals, const FetchFlags& flags) {
   const auto stub = globals.Connect();
   v1::GetJobRequest get;
@@ -38,6 +63,7 @@ int Fetch(const Globals& globals, const FetchFlags& flags) {
     Fail(ErrorCode::kFailedPrecondition, "job " + job.id() + " is " + v1::JobState_Name(job.state()) +
                                              "; results exist once it has SUCCEEDED");
   }
+  CheckFetchFolder(flags.out, job.result());
   const auto pending = PendingDownloads(flags.out, job.result());
   std::int64_t received = 0;
   if (!pending.empty()) {

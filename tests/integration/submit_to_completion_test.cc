@@ -47,6 +47,20 @@ TEST(SubmitToCompletionTest, ClipInResultsOut) {
   const auto again = RunCli(cluster.address(), {"fetch", id, "-o", cluster.path("results").string()});
   EXPECT_EQ(again.exit_code, 0);
   EXPECT_NE(again.out.find("fetched 0 of"), std::string::npos) << again.out;
+  // A folder of someone's files is refused, nothing written into it (found 2026-12-05); one holding
+  // a download in progress (a .part) is a resume.
+  std::filesystem::create_directories(cluster.path("documents"));
+  std::filesystem::create_directories(cluster.path("resumed"));
+  WriteBytes(cluster.path("documents") / "letter.txt", "dear");
+  const auto mixed = RunCli(cluster.address(), {"fetch", id, "-o", cluster.path("documents").string()});
+  EXPECT_EQ(mixed.exit_code, 2) << mixed.err;
+  EXPECT_NE(mixed.err.find("holds other files (letter.txt, ...) than this job's results"), std::string::npos)
+      << mixed.err;
+  EXPECT_EQ(std::distance(std::filesystem::directory_iterator(cluster.path("documents")),
+                          std::filesystem::directory_iterator()),
+            1);
+  WriteBytes(cluster.path("resumed") / "metrics.json.part", "{");
+  EXPECT_EQ(RunCli(cluster.address(), {"fetch", id, "-o", cluster.path("resumed").string()}).exit_code, 0);
 
   // A result file gone from the server's store (deleted under it) is named with its job, not by a
   // bare digest.
