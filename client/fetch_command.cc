@@ -55,9 +55,9 @@ int Fetch(const Globals& globals, const FetchFlags& flags) {
   auto context = CallContext(globals.timeout());
   ThrowIfFailed(stub->Get(context.get(), get, &job), "fetch " + flags.id);
   if (job.expired_unix_ms() > 0) {
-    Fail(ErrorCode::kFailedPrecondition, "job " + job.id() + " expired on " +
-                                             HumanTime(job.expired_unix_ms()) +
-                                             ": the server's retention policy deleted its clip and results");
+    Fail(ErrorCode::kFailedPrecondition,
+         "job " + job.id() + " expired on " + HumanTime(job.expired_unix_ms()) +
+             ": its clip and results were deleted from the server (retention, or `endorecon delete`)");
   }
   if (job.state() != v1::SUCCEEDED) {
     Fail(ErrorCode::kFailedPrecondition, "job " + job.id() + " is " + v1::JobState_Name(job.state()) +

@@ -156,8 +156,9 @@ std::string DescribeJob(const v1::Job& job) {
   if (!job.error().empty()) text += fmt::format("  reason    {}\n", job.error());
   text += DicomLines(job);
   if (job.expired_unix_ms() > 0) {
-    text += fmt::format("  expired   {} (the retention policy deleted its clip and results)\n",
-                        HumanTime(job.expired_unix_ms()));
+    text +=
+        fmt::format("  expired   {} (its clip and results were deleted: retention, or `endorecon delete`)\n",
+                    HumanTime(job.expired_unix_ms()));
   }
   if (job.result().files_size() > 0) {
     std::int64_t bytes = 0;

@@ -61,7 +61,7 @@ int List(const Globals& globals, const ListFlags& flags) {
         job.has_progress() ? fmt::format("{}{}/{}", phase, p.iteration(), p.total_iterations()) : "-";
     std::cout << fmt::format("{:<14} {}{:<10} {:>4} {:<19} {:>12} {}\n", job.id(), tenant_of(job),
                              v1::JobState_Name(job.state()), job.priority(), HumanTime(job.created_unix_ms()),
-                             iteration, job.name());
+                             iteration, job.name() + (job.expired_unix_ms() > 0 ? " [files deleted]" : ""));
   }
   return kExitOk;
 }

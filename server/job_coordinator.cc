@@ -542,8 +542,9 @@ v1::Job JobCoordinator::RequestSend(const std::string& id, const std::string& de
                                                           "; results are sent once it has SUCCEEDED");
     }
     if (job.expired_unix_ms() > 0) {
-      endorecon::Fail(ErrorCode::kFailedPrecondition,
-                      "job " + id + " expired: the retention policy deleted its results, DICOM included");
+      endorecon::Fail(
+          ErrorCode::kFailedPrecondition,
+          "job " + id + " expired: its results were deleted (retention, or a delete), DICOM included");
     }
     const bool has_dicom =
         std::any_of(job.result().files().begin(), job.result().files().end(),

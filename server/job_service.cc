@@ -169,10 +169,11 @@ grpc::Status JobServiceImpl::Fetch(grpc::ServerContext* context, const v1::Fetch
   return guard_.Run(context, {"Fetch", Access::kJobs, kReads, request->id()}, [&](Call& call) {
     const auto job = coordinator_.Get(request->id(), call.caller);
     const auto refuse_expired = [](const v1::Job& expired) {
-      Fail(ErrorCode::kFailedPrecondition,
-           fmt::format(
-               "job {} expired: the retention policy deleted its clip and results on {:%Y-%m-%d %H:%M} UTC",
-               expired.id(), fmt::gmtime(static_cast<std::time_t>(expired.expired_unix_ms() / 1000))));
+      Fail(
+          ErrorCode::kFailedPrecondition,
+          fmt::format("job {} expired: its clip and results were deleted (retention, or a delete) on "
+                      "{:%Y-%m-%d %H:%M} UTC",
+                      expired.id(), fmt::gmtime(static_cast<std::time_t>(expired.expired_unix_ms() / 1000))));
     };
     if (job.expired_unix_ms() > 0) refuse_expired(job);
     if (job.state() != v1::SUCCEEDED) {

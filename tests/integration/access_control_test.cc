@@ -371,6 +371,9 @@ TEST(TenantQuotaTest, DeletingAFinishedJobsFilesMakesRoomUnderTheByteQuota) {
   const auto deleted = as(carol, {"delete", id});
   EXPECT_EQ(deleted.exit_code, 0) << deleted.err;
   EXPECT_NE(deleted.out.find("its files are deleted from the server"), std::string::npos) << deleted.out;
+  EXPECT_NE(as(carol, {"list"}).out.find("[files deleted]"), std::string::npos);
+  EXPECT_NE(as(carol, {"status", id}).out.find("its clip and results were deleted"), std::string::npos);
+  EXPECT_EQ(as(carol, {"fetch", id, "-o", (config / "out").string()}).exit_code, 7);
   const auto second = as(carol, {"submit", (config / "clip2").string()});
   EXPECT_EQ(second.exit_code, 0) << second.err;
   EXPECT_EQ(AuditFind(AuditLines(cluster.data_dir() / "audit.jsonl"), "Delete", "OK", "carol").size(), 1u);
