@@ -76,6 +76,17 @@ std::string Text(const nlohmann::json& json, const std::string& key) {
   return json.is_object() && json.contains(key) && json[key].is_string() ? json[key].get<std::string>() : "";
 }
 
+// Submits the study without a worker and returns the job once its retrieval ended (the job then
+// waits in the queue).
+v1::Job SubmitAndAwaitRetrieval(Cluster& cluster, const std::string& study) {
+  const auto submitted = RunCli(cluster.address(), {"submit", "--pacs", "orthanc", "--study", study});
+  EXPECT_EQ(submitted.exit_code, 0) << submitted.err;
+  const std::string id = JobIdIn(submitted.out);
+  EXPECT_TRUE(WaitUntil([&] { return cluster.Job(id).retrieval().state() != v1::Retrieval::RETRIEVING; },
+                        std::chrono::seconds(60)));
+  return cluster.Job(id);
+}
+
 const v1::DicomSend* SendTo(const v1::Job& job, const std::string& destination) {
   for (const auto& send : job.sends()) {
     if (send.destination() == destination) return &send;
@@ -242,12 +253,7 @@ TEST_F(PacsRoundTripTest, CMoveToTheServersStorageScpWhenCGetIsRefused) {
   // Orthanc lets the AE MOVER move but not get; without a worker the job waits in the queue.
   Cluster cluster({"--ae-title", "MOVER", "--pacs", "orthanc=" + orthanc_->Address(), "--dicom-listen",
                    "127.0.0.1:" + std::to_string(mover_port_), "--dicom-timeout", "5"});
-  const auto submitted = RunCli(cluster.address(), {"submit", "--pacs", "orthanc", "--study", study});
-  ASSERT_EQ(submitted.exit_code, 0) << submitted.err;
-  const std::string id = JobIdIn(submitted.out);
-  ASSERT_TRUE(WaitUntil([&] { return cluster.Job(id).retrieval().state() != v1::Retrieval::RETRIEVING; },
-                        std::chrono::seconds(60)));
-  const v1::Job job = cluster.Job(id);
+  const v1::Job job = SubmitAndAwaitRetrieval(cluster, study);
   EXPECT_EQ(job.retrieval().state(), v1::Retrieval::RETRIEVED)
       << job.retrieval().error() << cluster.ServerLog();
   EXPECT_EQ(job.retrieval().method(), "C-MOVE");
@@ -287,12 +293,7 @@ TEST_F(PacsRoundTripTest, AStudyHoldingOtherObjectsGivesItsRecordingSeries) {
   ASSERT_EQ(Text(orthanc_->Store(MakeCtImage(dir_ / "ct2.dcm", ct_only)), "Status"), "Success");
   Cluster cluster({"--ae-title", "ENDORECON", "--pacs", "orthanc=" + orthanc_->Address(), "--dicom-listen",
                    "127.0.0.1:" + std::to_string(scp_port_), "--dicom-timeout", "5"});
-  const auto submitted = RunCli(cluster.address(), {"submit", "--pacs", "orthanc", "--study", study});
-  ASSERT_EQ(submitted.exit_code, 0) << submitted.err;
-  const std::string id = JobIdIn(submitted.out);
-  ASSERT_TRUE(WaitUntil([&] { return cluster.Job(id).retrieval().state() != v1::Retrieval::RETRIEVING; },
-                        std::chrono::seconds(60)));
-  const v1::Job job = cluster.Job(id);
+  const v1::Job job = SubmitAndAwaitRetrieval(cluster, study);
   EXPECT_EQ(job.retrieval().state(), v1::Retrieval::RETRIEVED)
       << job.retrieval().error() << cluster.ServerLog();
   EXPECT_EQ(job.retrieval().method(), "C-GET");
