@@ -1,8 +1,11 @@
 #include "worker/engine/scene/endonerf_loader.h"
 
 #include <gtest/gtest.h>
+#include <spdlog/sinks/ostream_sink.h>
+#include <spdlog/spdlog.h>
 
 #include <cmath>
+#include <sstream>
 
 #include "tests/unit/clip_fixture.h"
 #include "tests/unit/temp_dir.h"
@@ -106,6 +109,20 @@ TEST_F(EndoNerfLoaderTest, DepthMapsAllZeroAreNoDepth) {
   ASSERT_TRUE(clip.has_depth());
   EXPECT_EQ(clip.depth[0][3], 0.f);
   EXPECT_EQ(clip.depth[2][3], 20.f);
+}
+
+// Poses far from the origin load, with a warning that the results' float coordinates are coarse
+// there (1e9 from the origin: steps of ~119 units against a depth range of 28).
+TEST_F(EndoNerfLoaderTest, PosesFarFromTheOriginLoadWithAWarningOfCoarseResults) {
+  for (auto& row : rows_) row.t[0] = 1e9;
+  WritePoses(dir_ / "poses_bounds.npy", rows_);
+  std::ostringstream log;
+  const auto sink = std::make_shared<spdlog::sinks::ostream_sink_mt>(log);
+  spdlog::default_logger()->sinks().push_back(sink);
+  const Clip clip = LoadClip(dir_.path());  // the clip's geometry is checked on every layout's load
+  spdlog::default_logger()->sinks().pop_back();
+  EXPECT_EQ(clip.frame_count(), kFrames);
+  EXPECT_NE(log.str().find("single-precision coordinates step by about 119"), std::string::npos) << log.str();
 }
 
 TEST_F(EndoNerfLoaderTest, ReadsSixteenBitAndNpyDepth) {

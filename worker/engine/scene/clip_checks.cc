@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <numbers>
 
 #include "common/error.h"
@@ -98,6 +99,19 @@ void CheckClipGeometry(const Clip& clip, const std::string& where) {
                     "): a pose's translation is likely in other units than the depth bounds");
       }
     }
+  }
+  // The results (point clouds, meshes) hold single-precision coordinates, in the clip's frame: far
+  // from its origin they step by more than a thousandth of the depth range (poses translated by 1e9
+  // came back as points on a grid of 64 units; found 2026-12-05).
+  double farthest = 0;
+  for (const Camera& camera : clip.cameras) farthest = std::max(farthest, camera.c2w.col(3).stableNorm());
+  const double step = farthest * std::numeric_limits<float>::epsilon();
+  if (step > 1e-3 * (clip.far - clip.near)) {
+    spdlog::warn(
+        "{}: the cameras lie up to {} from the origin, where the results' single-precision coordinates "
+        "step by about {}, more than a thousandth of the depth range ({} to {}): move the poses' origin "
+        "into the scene for exact point clouds and meshes",
+        where, Number(farthest), Number(step), Number(clip.near), Number(clip.far));
   }
   std::size_t outside = 0, seen = 0;
   for (const auto& frame : clip.depth) {
