@@ -40,6 +40,11 @@ std::string HintFor(const endorecon::Error& error, const Globals& globals) {
   if (error.code() == endorecon::ErrorCode::kUnavailable && refused)
     return "\nendorecon: nothing listens at " + globals.server +
            ": is the server running, and is --server (or ENDORECON_SERVER) its --listen address?";
+  // An HTTP port (the metrics') answers, but not in HTTP/2: TLS has nothing to do with it either.
+  if (error.code() == endorecon::ErrorCode::kUnavailable &&
+      std::string_view(error.what()).find("Failed parsing HTTP/2") != std::string_view::npos)
+    return "\nendorecon: " + globals.server +
+           " answers, but not as endorecon-server's job API: is it the metrics or health port?";
   if (error.code() == endorecon::ErrorCode::kUnavailable && globals.ca_file.empty())
     return "\nendorecon: if the server uses TLS, pass --ca FILE or set ENDORECON_CA";
   if (error.code() == endorecon::ErrorCode::kUnauthenticated && globals.token_file.empty() &&
@@ -71,7 +76,8 @@ int main(int argc, char** argv) {
   const char* env_server = std::getenv("ENDORECON_SERVER");
   globals.server = env_server && *env_server ? env_server : "127.0.0.1:50051";
   app.add_option("--server", globals.server,
-                 "server address host:port (default: $ENDORECON_SERVER or 127.0.0.1:50051)");
+                 "server address host:port (default: $ENDORECON_SERVER or 127.0.0.1:50051)")
+      ->check(endorecon::ServerAddress());
   app.add_flag("--json", globals.json, "machine-readable JSON on stdout (JSON Lines for streams)");
   app.add_option("--timeout", globals.timeout_s, "deadline of each call in seconds")
       ->capture_default_str()
@@ -96,6 +102,13 @@ int main(int argc, char** argv) {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? kExitOk : kExitInvalid;
+  }
+  if (app.count("--server") == 0) {  // $ENDORECON_SERVER, checked as --server is
+    std::string server = globals.server;
+    if (const std::string problem = endorecon::ServerAddress()(server); !problem.empty()) {
+      std::cerr << "endorecon: ENDORECON_SERVER: " << problem << "\n";
+      return kExitInvalid;
+    }
   }
   try {
     for (auto* sub : app.get_subcommands()) return commands.at(sub->get_name())(globals);

@@ -67,25 +67,39 @@ CLI::Validator HoldoutSpacing() {
       "0 or K >= 2", "HoldoutSpacing");
 }
 
+namespace {
+
+// What is wrong with `text` as an address to listen on or to call; "" when nothing.
+std::string AddressProblem(const std::string& text, bool listening) {
+  if (text.rfind("unix:", 0) == 0) return text.size() > 5 ? "" : text + ": unix: needs a path";
+  const auto colon = text.rfind(':');
+  const std::string host = colon == std::string::npos ? "" : text.substr(0, colon);
+  const std::string port = colon == std::string::npos ? "" : text.substr(colon + 1);
+  const bool bracketed = host.size() >= 2 && host.front() == '[' && host.back() == ']';
+  if (host.empty() || (!bracketed && host.find(':') != std::string::npos) ||
+      host.find_first_of(" /") != std::string::npos) {
+    return text + " is no address " + (listening ? "to listen on" : "of a server") +
+           "; expected HOST:PORT, [IPv6]:PORT or unix:PATH";
+  }
+  const int least = listening ? 0 : 1;
+  if (port.empty() || port.size() > 5 || port.find_first_not_of("0123456789") != std::string::npos ||
+      std::stoi(port) > 65535 || std::stoi(port) < least) {
+    return text + (listening ? ": the port must be a number from 0 (any free port) to 65535"
+                             : ": the port must be a number from 1 to 65535");
+  }
+  return "";
+}
+
+}  // namespace
+
 CLI::Validator ListenAddress() {
-  return CLI::Validator(
-      [](const std::string& text) -> std::string {
-        if (text.rfind("unix:", 0) == 0) return text.size() > 5 ? "" : text + ": unix: needs a path";
-        const auto colon = text.rfind(':');
-        const std::string host = colon == std::string::npos ? "" : text.substr(0, colon);
-        const std::string port = colon == std::string::npos ? "" : text.substr(colon + 1);
-        const bool bracketed = host.size() >= 2 && host.front() == '[' && host.back() == ']';
-        if (host.empty() || (!bracketed && host.find(':') != std::string::npos) ||
-            host.find_first_of(" /") != std::string::npos) {
-          return text + " is no address to listen on; expected HOST:PORT, [IPv6]:PORT or unix:PATH";
-        }
-        if (port.empty() || port.size() > 5 || port.find_first_not_of("0123456789") != std::string::npos ||
-            std::stoi(port) > 65535) {
-          return text + ": the port must be a number from 0 (any free port) to 65535";
-        }
-        return "";
-      },
-      "HOST:PORT", "ListenAddress");
+  return CLI::Validator([](const std::string& text) { return AddressProblem(text, true); }, "HOST:PORT",
+                        "ListenAddress");
+}
+
+CLI::Validator ServerAddress() {
+  return CLI::Validator([](const std::string& text) { return AddressProblem(text, false); }, "HOST:PORT",
+                        "ServerAddress");
 }
 
 }  // namespace endorecon

@@ -24,4 +24,8 @@ CLI::Validator TimeBudget();
 // unix:PATH. gRPC took 127.0.0.1:99999 and listened on a port of its choosing.
 CLI::Validator ListenAddress();
 
+// A server's address to call: as ListenAddress, with a port of 1-65535. gRPC took 127.0.0.1:99999
+// modulo 65536 and "localhost" as port 443.
+CLI::Validator ServerAddress();
+
 }  // namespace endorecon

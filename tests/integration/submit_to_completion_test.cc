@@ -89,5 +89,23 @@ TEST(SubmitToCompletionTest, UnreachableServerExitsWithFour) {
   EXPECT_EQ(result.exit_code, 4) << result.err;
 }
 
+// A server address with no port, or one past 65535, is refused as the usage error it is, by the CLI
+// and by a worker: gRPC took 127.0.0.1:99999 as port 34463 and "localhost" as port 443, and the
+// worker retried there for good (found 2026-12-05).
+TEST(SubmitToCompletionTest, AServerAddressWithoutAPortOrPastTheLastIsRefused) {
+  for (const std::string address : {"127.0.0.1:99999", "localhost"}) {
+    const auto result = RunCli(address, {"list"});
+    EXPECT_EQ(result.exit_code, 2) << result.err;
+    EXPECT_NE(result.err.find(address), std::string::npos) << result.err;
+  }
+  TempDir dir("address");
+  Process worker({BuiltBinary("worker/runtime/endorecon-worker"), "serve", "--server", "127.0.0.1:99999",
+                  "--metrics-port", "-1"},
+                 dir / "worker.log");
+  EXPECT_EQ(worker.Wait(), 2) << worker.Log();
+  EXPECT_NE(worker.Log().find("the port must be a number from 1 to 65535"), std::string::npos)
+      << worker.Log();
+}
+
 }  // namespace
 }  // namespace endorecon::testing

@@ -241,7 +241,9 @@ Command AddServeCommand(CLI::App& app) {
   auto flags = std::make_shared<ServeFlags>();
   auto* cmd =
       app.add_subcommand("serve", "lease jobs from endorecon-server and run them, one engine per device");
-  cmd->add_option("--server", flags->server, "server address host:port")->capture_default_str();
+  cmd->add_option("--server", flags->server, "server address host:port")
+      ->capture_default_str()
+      ->check(ServerAddress());
   cmd->add_option("--devices", flags->devices,
                   "cpu, cpu:N (N slots) or CUDA device indices 0,1,... (one engine each)")
       ->capture_default_str();
