@@ -116,6 +116,12 @@ TEST(VideoToDicomTest, NewFlagsRefuseTheirBadForms) {
                 dir / "views.log");
   EXPECT_EQ(views.Wait(), 2) << views.Log();
   EXPECT_NE(views.Log().find("--max-views"), std::string::npos) << views.Log();
+  // A clip or results folder that is not there is the user's input too: exit 2, as documented (it
+  // was 1; found 2026-12-05).
+  Process missing({worker, "reconstruct", (dir / "nope").string(), "-o", (dir / "out").string()},
+                  dir / "missing.log");
+  EXPECT_EQ(missing.Wait(), 2) << missing.Log();
+  EXPECT_NE(missing.Log().find("nope"), std::string::npos) << missing.Log();
 }
 
 // `reconstruct REC.dcm -o OUT` makes its clip in OUT.clip: a folder of the user's there is refused,

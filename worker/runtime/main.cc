@@ -29,7 +29,10 @@ int main(int argc, char** argv) {
     for (auto* sub : app.get_subcommands()) return commands.at(sub->get_name())();
   } catch (const endorecon::Error& e) {
     spdlog::error("{}: {}", endorecon::ErrorCodeName(e.code()), e.what());
-    return e.code() == endorecon::ErrorCode::kInvalidArgument ? 2 : 1;
+    // A clip or file the command was given that is not there is the user's input, as a bad one is.
+    return e.code() == endorecon::ErrorCode::kInvalidArgument || e.code() == endorecon::ErrorCode::kNotFound
+               ? 2
+               : 1;
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());
     return 1;
