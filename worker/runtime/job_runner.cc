@@ -12,6 +12,7 @@
 #include "common/error.h"
 #include "common/manifest.h"
 #include "common/sha256.h"
+#include "common/warning_pacer.h"
 #include "worker/engine/reconstruct.h"
 #include "worker/runtime/dicom_job.h"
 #include "worker/runtime/job_options.h"
@@ -65,14 +66,19 @@ std::string SummaryJson(const ReconstructSummary& summary) {
 template <typename Call, typename GoOn>
 auto RetryUnavailable(WorkerClient& client, Call&& call, GoOn&& go_on, const char* while_what,
                       bool token_may_change = false) {
+  WarningPacer pacer;
   while (true) {
     try {
       return call();
     } catch (const Error& e) {
       const bool refused = e.code() == ErrorCode::kUnauthenticated && token_may_change;
       if ((e.code() != ErrorCode::kUnavailable && !refused) || !go_on()) throw;
-      spdlog::warn("{}; retrying{}{}", e.what(), while_what,
-                   refused ? " (write a valid worker token into --token-file)" : "");
+      int held = 0;
+      if (pacer.Due(held)) {
+        spdlog::warn("{}; retrying every second{}{}{}", e.what(), while_what,
+                     refused ? " (write a valid worker token into --token-file)" : "",
+                     held > 0 ? fmt::format(" ({} more failures since the last warning)", held) : "");
+      }
       client.PauseBeforeRetry(std::chrono::seconds(1));
     }
   }

@@ -76,7 +76,10 @@ bool ProgressReporter::SendPending() {
     v1::ProgressReply reply;
     if (!stream_->Write(update) || !stream_->Read(&reply)) {
       const auto status = stream_->Finish();
-      spdlog::warn("progress stream of lease {} broke ({}); reopening", lease_id_, status.error_message());
+      if (int held = 0; stream_warnings_.Due(held)) {
+        spdlog::warn("progress stream of lease {} broke ({}); reopening{}", lease_id_, status.error_message(),
+                     held > 0 ? fmt::format(" ({} more breaks since the last warning)", held) : "");
+      }
       stream_.reset();
       std::lock_guard lock(mutex_);  // keep what could not be sent for the next attempt
       if (update.has_checkpoint() && !checkpoint_) checkpoint_ = update.checkpoint();

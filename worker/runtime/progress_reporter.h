@@ -15,6 +15,7 @@
 #include <thread>
 #include <vector>
 
+#include "common/warning_pacer.h"
 #include "endorecon/v1/worker_service.pb.h"
 #include "worker/runtime/worker_client.h"
 
@@ -51,6 +52,7 @@ class ProgressReporter {
   std::optional<v1::FileEntry> checkpoint_;
   std::optional<v1::ProgressReply::Action> stop_;
   std::chrono::steady_clock::time_point last_answer_ = std::chrono::steady_clock::now();
+  WarningPacer stream_warnings_;  // a broken stream is said once, then every 30 s
   bool stopping_ = false;
   std::unique_ptr<grpc::ClientContext> context_;
   std::unique_ptr<grpc::ClientReaderWriter<v1::ProgressUpdate, v1::ProgressReply>> stream_;

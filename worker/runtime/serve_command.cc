@@ -17,6 +17,7 @@
 #include "common/error.h"
 #include "common/private_folder.h"
 #include "common/transport_security.h"
+#include "common/warning_pacer.h"
 #include "worker/runtime/commands.h"
 #include "worker/runtime/device_list.h"
 #include "worker/runtime/job_runner.h"
@@ -171,7 +172,7 @@ int Serve(const ServeFlags& flags) {
   // Retried every second (a server not up yet: as soon as it is); said at the first failure and then
   // every 30 s, not every retry (a refused certificate wrote a line a second for as long as it ran).
   const auto register_start = std::chrono::steady_clock::now();
-  auto next_warning = register_start;
+  WarningPacer pacer;
   int attempts = 0;
   while (!shutting_down) {
     try {
@@ -195,13 +196,13 @@ int Serve(const ServeFlags& flags) {
       const bool handshake = !flags.ca_file.empty() && closed;
       // Plaintext to a TLS port: the server drops the connection too (the CLI hints at --ca alike).
       const bool plaintext_to_tls = flags.ca_file.empty() && closed;
-      const auto now = std::chrono::steady_clock::now();
-      if (now < next_warning) {
+      if (int held = 0; !pacer.Due(held)) {
         client.PauseBeforeRetry(std::chrono::seconds(1));
         continue;
       }
-      next_warning = now + std::chrono::seconds(30);
-      const auto waited = std::chrono::duration_cast<std::chrono::seconds>(now - register_start).count();
+      const auto waited =
+          std::chrono::duration_cast<std::chrono::seconds>(std::chrono::steady_clock::now() - register_start)
+              .count();
       spdlog::warn(
           "cannot register with {}{}: {}; retrying every second{}", flags.server,
           attempts > 1 ? fmt::format(" ({} attempts in {} s)", attempts, waited) : "", e.what(),

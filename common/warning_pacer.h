@@ -1,0 +1,35 @@
+// When a warning that repeats (a call retried every second while a server is away) is due in the
+// log: the first time, then at most once every `every`, saying how many repeats were held back. A
+// line a second for a 14 s outage was noise that hid the one line that mattered.
+#pragma once
+
+#include <chrono>
+
+namespace endorecon {
+
+class WarningPacer {
+ public:
+  explicit WarningPacer(std::chrono::steady_clock::duration every = std::chrono::seconds(30)) : every_(every) {}
+
+  // Whether to log now; when so, `held` is set to the repeats not logged since the last line.
+  bool Due(int& held) {
+    const auto now = std::chrono::steady_clock::now();
+    if (logged_ && now < next_) {
+      ++held_;
+      return false;
+    }
+    logged_ = true;
+    next_ = now + every_;
+    held = held_;
+    held_ = 0;
+    return true;
+  }
+
+ private:
+  std::chrono::steady_clock::duration every_;
+  std::chrono::steady_clock::time_point next_{};
+  bool logged_ = false;
+  int held_ = 0;
+};
+
+}  // namespace endorecon
