@@ -167,7 +167,8 @@ int Submit(const Globals& globals, const SubmitFlags& flags) {
   if (clip_folder && !FindClipLayout(flags.clip)) {
     FailInvalid(flags.clip +
                 ": not a clip: found neither transforms.json (transforms.json layout) nor poses_bounds.npy "
-                "(EndoNeRF layout), and no DICOM recording (docs/formats.md)");
+                "(EndoNeRF layout), and no DICOM recording (docs/formats.md) (found before the upload: "
+                "nothing was sent)");
   }
   if (flags.raw.empty() && !flags.raw.size.empty()) ParseFrameSize(flags.raw.size);  // before any upload
   if (flags.raw.empty() && !flags.raw.frames.empty()) ParseFrameRange(flags.raw.frames);
