@@ -1,6 +1,9 @@
 #include "worker/runtime/job_runner.h"
 
+#include <signal.h>
 #include <spdlog/spdlog.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <cctype>
 #include <cerrno>
@@ -202,6 +205,29 @@ int RemoveLeftoverJobs(const std::filesystem::path& work_dir) {
        it.increment(error)) {
     std::error_code ignored;
     if (it->is_directory(ignored) && fs::remove_all(it->path(), ignored) > 0) ++removed;
+  }
+  return removed;
+}
+
+int RemoveDeadWorkersFolders(const fs::path& temp, const std::string& host) {
+  const std::string prefix = "endorecon-" + host + "-";
+  int removed = 0;
+  std::error_code error;
+  for (auto it = fs::directory_iterator(temp, error); !error && it != fs::directory_iterator();
+       it.increment(error)) {
+    const std::string name = it->path().filename().string();
+    if (!name.starts_with(prefix)) continue;
+    const std::string pid_text = name.substr(prefix.size());
+    if (pid_text.empty() || pid_text.size() > 9 ||
+        pid_text.find_first_not_of("0123456789") != std::string::npos)
+      continue;
+    struct stat info {};
+    if (::lstat(it->path().c_str(), &info) != 0 || !S_ISDIR(info.st_mode) || info.st_uid != ::getuid())
+      continue;
+    const pid_t pid = static_cast<pid_t>(std::stol(pid_text));
+    if (pid == ::getpid() || ::kill(pid, 0) == 0 || errno != ESRCH) continue;  // alive, or not ours to ask
+    std::error_code ignored;
+    if (fs::remove_all(it->path(), ignored) > 0) ++removed;
   }
   return removed;
 }

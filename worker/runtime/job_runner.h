@@ -36,6 +36,10 @@ std::int64_t ScratchFree(const std::filesystem::path& work_dir);
 // the removal after each job; the server gives such a job to a worker again, from its checkpoint).
 // Called at start, before any job runs; a scratch folder is one worker's own. Returns how many.
 int RemoveLeftoverJobs(const std::filesystem::path& work_dir);
+// The default scratch folders (`temp`/endorecon-HOST-PID) of earlier workers on this host whose
+// process is gone (a kill -9, a crash): no later worker has their PID, so RemoveLeftoverJobs never
+// saw them and their patient data stayed for good. Only this user's folders. Returns how many.
+int RemoveDeadWorkersFolders(const std::filesystem::path& temp, const std::string& host);
 
 // Never throws for the job's own failures (they are reported to the server) nor for a lease that
 // is gone (nothing is then handed back); removes the job's folder however the run ends. Returns

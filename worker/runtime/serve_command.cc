@@ -161,6 +161,12 @@ int Serve(const ServeFlags& flags) {
   }
   if (const int removed = RemoveLeftoverJobs(settings.work_dir))
     spdlog::info("removed {} job folder(s) an earlier run left in {}", removed, settings.work_dir.string());
+  if (flags.work_dir.empty()) {
+    const auto temp = std::filesystem::temp_directory_path();
+    if (const int removed = RemoveDeadWorkersFolders(temp, Hostname()))
+      spdlog::info("removed {} scratch folder(s) of workers on this host that are gone, in {}", removed,
+                   temp.string());
+  }
   std::atomic<bool> shutting_down{false};
   std::thread signal_waiter([&] {
     int signal = 0;
@@ -216,8 +222,10 @@ int Serve(const ServeFlags& flags) {
       client.PauseBeforeRetry(std::chrono::seconds(1));
     }
   }
+  std::error_code ignored;
   if (shutting_down) {  // a signal before the server took the worker: it never served
     signal_waiter.join();
+    if (flags.work_dir.empty()) std::filesystem::remove(settings.work_dir, ignored);
     spdlog::info("worker {} stopped before it could register with {}", worker_id, flags.server);
     return 0;
   }
@@ -232,6 +240,9 @@ int Serve(const ServeFlags& flags) {
   for (auto& loop : loops) loop.join();
   if (!shutting_down) pthread_kill(signal_waiter.native_handle(), SIGTERM);
   signal_waiter.join();
+  // The default scratch folder is this process's alone: gone with it (its job folders went with their
+  // jobs; a folder given by --work-dir stays for the next worker).
+  if (flags.work_dir.empty()) std::filesystem::remove(settings.work_dir, ignored);
   spdlog::info("worker {} stopped", worker_id);
   return 0;
 }
