@@ -308,7 +308,7 @@ bool RunLeasedJob(WorkerClient& client, const v1::LeaseResponse& lease, const De
       spdlog::info("[{}] job {} stopped: {}", device.name, job.id(), v1::ProgressReply::Action_Name(*stop));
     } else if (summary.cancelled) {
       stop_reporting();
-      Tell(client, lease.lease_id(), "worker " + client.worker_id() + " is shutting down", true, true);
+      Tell(client, lease.lease_id(), "shutting down (handed back)", true, true);
     } else {
       // The heartbeats go on while the results are written and uploaded, so the lease holds however
       // long that takes (a slow link, or the server's upload slots all taken by clients' uploads).
