@@ -96,6 +96,9 @@ TEST_F(ReportTest, ACancelledRunsPageHasNoFramesButTheRest) {
   const auto data = testing::ReportData(fs::path(options.out_dir) / "report.html");
   ASSERT_TRUE(data.is_object());
   EXPECT_TRUE(data["metrics"]["cancelled"].get<bool>());
+  // The optical flow that starts the deformation is skipped once a stop is asked for.
+  EXPECT_NE(data["metrics"]["deformation_start"].dump().find("not fitted yet"), std::string::npos)
+      << data["metrics"]["deformation_start"].dump();
   EXPECT_FALSE(data.contains("frames"));
   EXPECT_FALSE(data.contains("surface"));
 }

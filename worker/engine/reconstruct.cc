@@ -114,7 +114,10 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
                  trainer.iteration(), extras.train_seconds,
                  options.time_budget_s > 0 ? ", which the time budget counts" : "");
   }
-  trainer.StartDeformation();  // a resumed run's deformation is the checkpoint's: nothing to fit
+  // A resumed run's deformation is the checkpoint's: nothing to fit. A stop asked for while the clip
+  // loaded skips the fit (seconds of optical flow on a large clip: a cancel took 8 s to land); the
+  // training loop then stops at its first poll, and metrics.json says the start was not fitted.
+  if (!(hooks.should_stop && hooks.should_stop())) trainer.StartDeformation();
   spdlog::info("clip {}: {} frames {}x{}, {} train / {} held out, {} threads, steps on {}; {}", clip.source,
                clip.frame_count(), clip.width, clip.height, split.train.size(), split.heldout.size(), threads,
                trainer.device(), field::DescribeField(trainer.field()));
