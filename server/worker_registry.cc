@@ -38,6 +38,13 @@ void WorkerRegistry::Touch(const std::string& worker_id) {
   At(worker_id);
 }
 
+void WorkerRegistry::Leave(const std::string& worker_id) {
+  std::lock_guard lock(mutex_);
+  if (const auto found = workers_.find(worker_id); found != workers_.end()) {
+    found->second.last_seen = std::chrono::steady_clock::now() - alive_window_ - std::chrono::milliseconds(1);
+  }
+}
+
 void WorkerRegistry::AddJob(const std::string& worker_id, const std::string& job_id) {
   std::lock_guard lock(mutex_);
   At(worker_id).jobs.insert(job_id);

@@ -24,6 +24,8 @@ class WorkerRegistry {
   // Whether `worker_id` registered with this server (a worker only seen leasing did not).
   bool Registered(const std::string& worker_id) const;
   void Touch(const std::string& worker_id);
+  // The worker said it is stopping: not alive from now (listed until forgotten, as a silent one).
+  void Leave(const std::string& worker_id);
   void AddJob(const std::string& worker_id, const std::string& job_id);
   void RemoveJob(const std::string& worker_id, const std::string& job_id);
   std::vector<v1::WorkerInfo> List() const;

@@ -31,6 +31,15 @@ grpc::Status WorkerServiceImpl::Register(grpc::ServerContext* context, const v1:
   });
 }
 
+grpc::Status WorkerServiceImpl::Leave(grpc::ServerContext* context, const v1::LeaveRequest* request,
+                                      v1::LeaveResponse*) {
+  return guard_.Run(context, {"Leave", Access::kWorker, kWrites, ""}, [&](Call&) {
+    if (request->worker_id().empty()) FailInvalid("worker_id is empty");
+    workers_.Leave(request->worker_id());
+    return grpc::Status::OK;
+  });
+}
+
 grpc::Status WorkerServiceImpl::Lease(grpc::ServerContext* context, const v1::LeaseRequest* request,
                                       v1::LeaseResponse* response) {
   return guard_.Run(context, {"Lease", Access::kWorker, kReads, ""}, [&](Call& call) {

@@ -25,6 +25,7 @@ class WorkerServiceImpl final : public v1::WorkerService::Service {
                     WorkerRegistry& workers, Metrics& metrics, StallWatch& stalls, WorkerTiming timing);
 
   grpc::Status Register(grpc::ServerContext*, const v1::RegisterRequest*, v1::RegisterResponse*) override;
+  grpc::Status Leave(grpc::ServerContext*, const v1::LeaveRequest*, v1::LeaveResponse*) override;
   grpc::Status Lease(grpc::ServerContext*, const v1::LeaseRequest*, v1::LeaseResponse*) override;
   grpc::Status Report(grpc::ServerContext*,
                       grpc::ServerReaderWriter<v1::ProgressReply, v1::ProgressUpdate>* stream) override;

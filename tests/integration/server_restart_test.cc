@@ -128,6 +128,22 @@ TEST(ServerRestartTest, AnIdleWorkerIsListedAgainSoonAfterARestart) {
   EXPECT_NE(worker.Log().find("the server answers again"), std::string::npos) << worker.Log();
 }
 
+// A worker stopped by SIGTERM tells the server, and is listed as not alive at once: it was listed
+// alive, and counted in endorecon_workers_connected, until its heartbeats had been missed for the
+// alive window (found 2026-12-05).
+TEST(ServerRestartTest, AWorkerThatStopsIsListedAsGoneAtOnce) {
+  Cluster cluster;
+  auto& worker = cluster.StartWorker("w1");
+  ASSERT_TRUE(WaitUntil([&] { return ListedWithDevices(cluster, "w1"); })) << worker.Log();
+  worker.Signal(SIGTERM);
+  EXPECT_EQ(worker.Wait(), 0) << worker.Log();
+  grpc::ClientContext context;
+  v1::ListWorkersResponse workers;
+  ASSERT_TRUE(cluster.stub().ListWorkers(&context, {}, &workers).ok());
+  ASSERT_EQ(workers.workers_size(), 1);
+  EXPECT_FALSE(workers.workers(0).alive()) << worker.Log();
+}
+
 // A worker busy with a long job when the server restarts is listed with its devices again while the
 // job runs: its progress stream's answer says "register again" (only a lease did, after the job).
 TEST(ServerRestartTest, ABusyWorkerIsListedAgainWhileItsJobRuns) {

@@ -240,6 +240,7 @@ int Serve(const ServeFlags& flags) {
   for (auto& loop : loops) loop.join();
   if (!shutting_down) pthread_kill(signal_waiter.native_handle(), SIGTERM);
   signal_waiter.join();
+  client.Leave();  // its jobs are handed back by now
   // The default scratch folder is this process's alone: gone with it (its job folders went with their
   // jobs; a folder given by --work-dir stays for the next worker).
   if (flags.work_dir.empty()) std::filesystem::remove(settings.work_dir, ignored);

@@ -2,6 +2,8 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
+
 #include "common/error.h"
 #include "common/file_download.h"
 #include "common/file_upload.h"
@@ -31,6 +33,16 @@ v1::RegisterResponse WorkerClient::Register(const std::string& hostname, const s
   }
   request.set_version("0.1.0");
   return Send(request);
+}
+
+void WorkerClient::Leave() {
+  v1::LeaveRequest request;
+  request.set_worker_id(worker_id_);
+  v1::LeaveResponse response;
+  auto context = CallContext(std::min(timeout_, std::chrono::milliseconds(2000)));
+  const auto status = stub_->Leave(context.get(), request, &response);
+  if (!status.ok())
+    spdlog::info("could not tell the server this worker is stopping: {}", status.error_message());
 }
 
 v1::RegisterResponse WorkerClient::Send(const v1::RegisterRequest& request) {

@@ -25,6 +25,9 @@ class WorkerClient {
 
   const std::string& worker_id() const { return worker_id_; }
   v1::RegisterResponse Register(const std::string& hostname, const std::vector<Device>& devices);
+  // Tells the server this worker is stopping (it is then listed as not alive at once). Best effort:
+  // a server away or refusing is logged, not thrown; the worker stops either way.
+  void Leave();
   // Waits up to `wait` for a job; nullopt when none came (or CancelLeases() was called).
   std::optional<v1::LeaseResponse> Lease(const std::string& device, std::chrono::milliseconds wait);
   // Ends every Lease call in flight (at shutdown).
