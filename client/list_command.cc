@@ -4,6 +4,7 @@
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <iostream>
+#include <nlohmann/json.hpp>
 
 #include "client/commands.h"
 #include "client/exit_codes.h"
@@ -55,10 +56,15 @@ int List(const Globals& globals, const ListFlags& flags) {
   for (const auto& job : all.jobs()) {
     // Training's iterations; frames, said so, while the results are evaluated or a recording is
     // prepared (a finished job showed "12/12" for its evaluation's frames as if iterations).
+    // A finished job shows the iterations it trained (its summary), not its evaluation's last frame.
     const auto& p = job.progress();
     const std::string phase = p.phase() == "evaluate" ? "eval " : p.phase() == "prepare" ? "prep " : "";
+    const auto summary = nlohmann::json::parse(job.summary_json(), nullptr, false);
     const std::string iteration =
-        job.has_progress() ? fmt::format("{}{}/{}", phase, p.iteration(), p.total_iterations()) : "-";
+        summary.is_object() && summary.contains("iterations") && summary["iterations"].is_number_integer()
+            ? std::to_string(summary["iterations"].get<long long>())
+        : job.has_progress() ? fmt::format("{}{}/{}", phase, p.iteration(), p.total_iterations())
+                             : "-";
     std::cout << fmt::format("{:<14} {}{:<10} {:>4} {:<19} {:>12} {}\n", job.id(), tenant_of(job),
                              v1::JobState_Name(job.state()), job.priority(), HumanTime(job.created_unix_ms()),
                              iteration, job.name() + (job.expired_unix_ms() > 0 ? " [files deleted]" : ""));

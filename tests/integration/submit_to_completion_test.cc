@@ -1,4 +1,5 @@
 // A clip goes in through the CLI, a worker reconstructs it, the results come back verified.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include "common/sha256.h"
@@ -25,9 +26,11 @@ TEST(SubmitToCompletionTest, ClipInResultsOut) {
   EXPECT_EQ(job.worker_id(), "w1");
   EXPECT_EQ(job.options().iterations(), 30);
   ASSERT_GT(job.result().files_size(), 0);
-  // The table says what its last progress counted: the evaluation's frames, not iterations.
+  // A finished job's row shows the iterations it trained (30), not its evaluation's last frame
+  // ("eval 8/8" read as iterations; found 2026-12-05).
   const auto table = RunCli(cluster.address(), {"list"});
-  EXPECT_NE(table.out.find(" eval 8/8 "), std::string::npos) << table.out;
+  EXPECT_NE(table.out.find(fmt::format("{:>12} ", 30)), std::string::npos) << table.out;
+  EXPECT_EQ(table.out.find("eval "), std::string::npos) << table.out;
 
   const auto fetched = RunCli(cluster.address(), {"fetch", id, "-o", cluster.path("results").string()});
   ASSERT_EQ(fetched.exit_code, 0) << fetched.err;
