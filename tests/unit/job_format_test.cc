@@ -82,6 +82,7 @@ TEST(DescribeJob, ASucceededJobShowsItsOutcomeNotItsLastProgress) {
   const std::string text = DescribeJob(job);
   EXPECT_NE(text.find("  outcome   done: 1858 iterations"), std::string::npos) << text;
   EXPECT_EQ(text.find("evaluating the results"), std::string::npos) << text;
+  EXPECT_NE(text.find("(its latest lease)"), std::string::npos) << "a requeued job started again: " << text;
   // Without held-out frames the engine reports -1: not shown.
   job.set_summary_json(R"({"iterations":10,"train_seconds":1,"train_psnr":20,"heldout_psnr":-1})");
   EXPECT_EQ(OutcomeLine(job).find("held-out"), std::string::npos) << OutcomeLine(job);
