@@ -69,6 +69,13 @@ std::string ProgressLine(const v1::Progress& p, bool stopped) {
   return line;
 }
 
+std::optional<long long> TrainedIterations(const v1::Job& job) {
+  const auto summary = nlohmann::json::parse(job.summary_json(), nullptr, /*allow_exceptions=*/false);
+  if (!summary.is_object() || !summary.contains("iterations") || !summary["iterations"].is_number_integer())
+    return std::nullopt;
+  return summary["iterations"].get<long long>();
+}
+
 std::string OutcomeLine(const v1::Job& job) {
   if (job.state() != v1::SUCCEEDED || job.summary_json().empty()) return "";
   const auto summary = nlohmann::json::parse(job.summary_json(), nullptr, /*allow_exceptions=*/false);

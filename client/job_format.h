@@ -5,6 +5,7 @@
 #include <google/protobuf/message.h>
 
 #include <cstdint>
+#include <optional>
 #include <string>
 
 #include "endorecon/v1/job_service.pb.h"
@@ -21,6 +22,9 @@ std::string DicomLines(const v1::Job& job);
 // What a SUCCEEDED job's engine reported (its summary): "done: 1858 iterations in 41 s of training,
 // 1m02s in all, PSNR 31.10 dB (held-out 31.75)". Empty for any other job or an unreadable summary.
 std::string OutcomeLine(const v1::Job& job);
+// The iterations a job trained, from the engine's summary (summary_json, set when it SUCCEEDED); none
+// without one.
+std::optional<long long> TrainedIterations(const v1::Job& job);
 // One line: bar, iteration, training seconds, loss, PSNR (training, held-out), held-out depth error,
 // samples/s, and the ETA while the job runs (`stopped`: it ended, so no ETA).
 std::string ProgressLine(const v1::Progress& progress, bool stopped = false);

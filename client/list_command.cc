@@ -4,7 +4,6 @@
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <iostream>
-#include <nlohmann/json.hpp>
 
 #include "client/commands.h"
 #include "client/exit_codes.h"
@@ -59,12 +58,11 @@ int List(const Globals& globals, const ListFlags& flags) {
     // A finished job shows the iterations it trained (its summary), not its evaluation's last frame.
     const auto& p = job.progress();
     const std::string phase = p.phase() == "evaluate" ? "eval " : p.phase() == "prepare" ? "prep " : "";
-    const auto summary = nlohmann::json::parse(job.summary_json(), nullptr, false);
-    const std::string iteration =
-        summary.is_object() && summary.contains("iterations") && summary["iterations"].is_number_integer()
-            ? std::to_string(summary["iterations"].get<long long>())
-        : job.has_progress() ? fmt::format("{}{}/{}", phase, p.iteration(), p.total_iterations())
-                             : "-";
+    const auto trained = TrainedIterations(job);
+    const std::string iteration = trained ? std::to_string(*trained)
+                                  : job.has_progress()
+                                      ? fmt::format("{}{}/{}", phase, p.iteration(), p.total_iterations())
+                                      : "-";
     std::cout << fmt::format("{:<14} {}{:<10} {:>4} {:<19} {:>12} {}\n", job.id(), tenant_of(job),
                              v1::JobState_Name(job.state()), job.priority(), HumanTime(job.created_unix_ms()),
                              iteration, job.name() + (job.expired_unix_ms() > 0 ? " [files deleted]" : ""));

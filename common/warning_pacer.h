@@ -11,6 +11,12 @@ class WarningPacer {
  public:
   explicit WarningPacer(std::chrono::steady_clock::duration every = std::chrono::seconds(30)) : every_(every) {}
 
+  // The next warning is due at once (the trouble ended, or another began).
+  void Reset() {
+    logged_ = false;
+    held_ = 0;
+  }
+
   // Whether to log now; when so, `held` is set to the repeats not logged since the last line.
   bool Due(int& held) {
     const auto now = std::chrono::steady_clock::now();

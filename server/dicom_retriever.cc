@@ -151,22 +151,18 @@ std::pair<fs::path, std::string> DicomRetriever::Fetch(const std::string& job_id
   coordinator_.Update(job_id, [](v1::Job& job) { job.mutable_retrieval()->set_method("C-GET"); });
   std::string get_error;
   try {
+    // Each series' progress counts on from the series before it. A failed series brings nothing to
+    // count: NOT_FOUND received none, and any other failure turns to C-MOVE, which counts anew.
     int instances_before = 0;
     std::int64_t bytes_before = 0;
     each([&](const dicom::RetrieveRequest& one) {
       int instances = 0;
       std::int64_t bytes = 0;
-      try {
-        dicom::GetStudy(one, folder, [&](int n, std::int64_t b) {
-          instances = n;
-          bytes = b;
-          Progress(job_id, instances_before + n, bytes_before + b);
-        });
-      } catch (...) {
-        instances_before += instances;
-        bytes_before += bytes;
-        throw;
-      }
+      dicom::GetStudy(one, folder, [&](int n, std::int64_t b) {
+        instances = n;
+        bytes = b;
+        Progress(job_id, instances_before + n, bytes_before + b);
+      });
       instances_before += instances;
       bytes_before += bytes;
     });

@@ -82,14 +82,32 @@ std::string What(const RetrieveRequest& request) {
   return request.series_uid.empty() ? "the study" : "the series";
 }
 
+// A DIMSE status as DICOM writes it: 0xC000.
+std::string StatusText(Uint16 status) {
+  char hex[8];
+  std::snprintf(hex, sizeof(hex), "0x%04X", status);
+  return hex;
+}
+
+// Connects and returns the presentation context of `model` (a Study Root query/retrieve model),
+// releasing the association and failing, naming `verb`, when the peer does not offer it.
+T_ASC_PresentationContextID Associate(DcmSCU& scu, const RetrieveRequest& request, const char* model,
+                                      const std::string& verb) {
+  Connect(scu, request);
+  const T_ASC_PresentationContextID id = scu.findPresentationContextID(model, "");
+  if (id == 0) {
+    scu.releaseAssociation();
+    Fail(ErrorCode::kUnavailable, PeerText(request.peer) + " does not offer " + verb + " (Study Root)");
+  }
+  return id;
+}
+
 // Checks the final response; returns the completed sub-operations.
 int Finish(const OFList<RetrieveResponse*>& responses, const RetrieveRequest& request,
            const std::string& verb) {
   if (responses.empty()) Fail(ErrorCode::kUnavailable, verb + " of " + What(request) + ": no response");
   const RetrieveResponse* last = responses.back();
-  char hex[8];
-  std::snprintf(hex, sizeof(hex), "0x%04X", last->m_status);
-  const std::string status = std::string(hex);
+  const std::string status = StatusText(last->m_status);
   if (last->m_status != STATUS_Success && (last->m_status & 0xf000) != 0xb000) {
     // The PACS's own words, when it sent any; and what a failure usually means here: a PACS fails a
     // whole retrieval when the study is not there, or when one of its objects (a CT, a report) is of
@@ -128,12 +146,7 @@ using SendRequest =
     std::function<OFCondition(T_ASC_PresentationContextID, DcmDataset*, OFList<RetrieveResponse*>*)>;
 int Retrieve(DcmSCU& scu, const RetrieveRequest& request, const char* model, const std::string& verb,
              const SendRequest& send) {
-  Connect(scu, request);
-  const T_ASC_PresentationContextID id = scu.findPresentationContextID(model, "");
-  if (id == 0) {
-    scu.releaseAssociation();
-    Fail(ErrorCode::kUnavailable, PeerText(request.peer) + " does not offer " + verb + " (Study Root)");
-  }
+  const T_ASC_PresentationContextID id = Associate(scu, request, model, verb);
   DcmDataset query = Query(request);
   OFList<RetrieveResponse*> responses;
   const OFCondition status = send(id, &query, &responses);
@@ -193,13 +206,8 @@ StudyContents FindStudyContents(const RetrieveRequest& request) {
   DcmSCU scu;
   Configure(scu, request);
   scu.addPresentationContext(UID_FINDStudyRootQueryRetrieveInformationModel, Uncompressed());
-  Connect(scu, request);
   const T_ASC_PresentationContextID id =
-      scu.findPresentationContextID(UID_FINDStudyRootQueryRetrieveInformationModel, "");
-  if (id == 0) {
-    scu.releaseAssociation();
-    Fail(ErrorCode::kUnavailable, PeerText(request.peer) + " does not offer C-FIND (Study Root)");
-  }
+      Associate(scu, request, UID_FINDStudyRootQueryRetrieveInformationModel, "C-FIND");
   DcmDataset query;
   Put(query, DCM_QueryRetrieveLevel, "IMAGE");
   Put(query, DCM_StudyInstanceUID, request.study_uid);
@@ -230,9 +238,7 @@ StudyContents FindStudyContents(const RetrieveRequest& request) {
       }
     }
     if (response == responses.back() && response->m_status != STATUS_Success) {
-      char hex[8];
-      std::snprintf(hex, sizeof(hex), "0x%04X", response->m_status);
-      failure = std::string("status ") + hex;
+      failure = "status " + StatusText(response->m_status);
     }
     delete response;
   }

@@ -95,6 +95,15 @@ TEST(DescribeJob, ASucceededJobShowsItsOutcomeNotItsLastProgress) {
       "results took more than a quarter of the time budget: 190 s or more leaves training three quarters");
 }
 
+TEST(DescribeJob, TheIterationsTrainedComeFromTheSummary) {
+  v1::Job job = Finished(v1::SUCCEEDED);
+  EXPECT_FALSE(TrainedIterations(job).has_value());
+  job.set_summary_json(R"({"iterations":1858,"train_seconds":41.2})");
+  EXPECT_EQ(TrainedIterations(job), 1858);
+  job.set_summary_json("not json");
+  EXPECT_FALSE(TrainedIterations(job).has_value());
+}
+
 TEST(DescribeJob, AJobThatEndedOtherwiseShowsWhereItStopped) {
   v1::Job job = Finished(v1::FAILED);
   job.set_summary_json(R"({"iterations":1858})");  // not a success: no outcome

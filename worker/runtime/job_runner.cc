@@ -209,8 +209,12 @@ int RemoveLeftoverJobs(const std::filesystem::path& work_dir) {
   return removed;
 }
 
+fs::path DefaultWorkDir(const fs::path& temp, const std::string& worker_id) {
+  return temp / ("endorecon-" + worker_id);
+}
+
 int RemoveDeadWorkersFolders(const fs::path& temp, const std::string& host) {
-  const std::string prefix = "endorecon-" + host + "-";
+  const std::string prefix = DefaultWorkDir(temp, host + "-").filename().string();
   int removed = 0;
   std::error_code error;
   for (auto it = fs::directory_iterator(temp, error); !error && it != fs::directory_iterator();

@@ -11,6 +11,7 @@
 #include <chrono>
 #include <cstdint>
 #include <filesystem>
+#include <string>
 
 #include "endorecon/v1/worker_service.pb.h"
 #include "worker/runtime/worker_client.h"
@@ -36,6 +37,8 @@ std::int64_t ScratchFree(const std::filesystem::path& work_dir);
 // the removal after each job; the server gives such a job to a worker again, from its checkpoint).
 // Called at start, before any job runs; a scratch folder is one worker's own. Returns how many.
 int RemoveLeftoverJobs(const std::filesystem::path& work_dir);
+// A worker's default scratch folder: `temp`/endorecon-ID (the ID: HOST-PID unless --id is given).
+std::filesystem::path DefaultWorkDir(const std::filesystem::path& temp, const std::string& worker_id);
 // The default scratch folders (`temp`/endorecon-HOST-PID) of earlier workers on this host whose
 // process is gone (a kill -9, a crash): no later worker has their PID, so RemoveLeftoverJobs never
 // saw them and their patient data stayed for good. Only this user's folders. Returns how many.

@@ -72,7 +72,7 @@ void LeaseLoop(WorkerClient& client, const Device& device, const RunnerSettings&
   using Clock = std::chrono::steady_clock;
   auto backoff = std::chrono::milliseconds(500);
   std::optional<Clock::time_point> failing_since;  // since when calls fail, while they do
-  Clock::time_point last_warning;
+  WarningPacer warnings;
   std::string last_error;
   bool waiting_for_space = false;
   auto disk_backoff = std::chrono::seconds(30);
@@ -98,6 +98,7 @@ void LeaseLoop(WorkerClient& client, const Device& device, const RunnerSettings&
                      std::chrono::duration_cast<std::chrono::seconds>(Clock::now() - *failing_since).count());
       }
       failing_since.reset();
+      warnings.Reset();
       backoff = std::chrono::milliseconds(500);
       if (lease && RunLeasedJob(client, *lease, device, settings, metrics, shutting_down)) {
         // The job needed more scratch than this worker has: leave it to others for a while
@@ -114,14 +115,14 @@ void LeaseLoop(WorkerClient& client, const Device& device, const RunnerSettings&
     } catch (const Error& e) {
       // Retried at most 2 s apart (the channel's own reconnect backoff), so a restarted server has
       // its workers back within a second; while it stays away, a warning every 30 s, not every retry.
-      const auto now = Clock::now();
-      if (!failing_since || now - last_warning >= std::chrono::seconds(30) || e.what() != last_error) {
+      // Another error than the last is said at once.
+      if (e.what() != last_error) warnings.Reset();
+      last_error = e.what();
+      if (int held = 0; warnings.Due(held)) {
         spdlog::warn("[{}] {}: {}; retrying every 2 s{}", device.name, ErrorCodeName(e.code()), e.what(),
                      failing_since ? " (still failing; warned every 30 s)" : "");
-        last_warning = now;
-        last_error = e.what();
       }
-      if (!failing_since) failing_since = now;
+      if (!failing_since) failing_since = Clock::now();
       client.PauseBeforeRetry(backoff);
       backoff = std::min(backoff * 2, std::chrono::milliseconds(2000));
     }
@@ -148,7 +149,7 @@ int Serve(const ServeFlags& flags) {
 
   RunnerSettings settings;
   settings.work_dir = flags.work_dir.empty()
-                          ? std::filesystem::temp_directory_path() / ("endorecon-" + worker_id)
+                          ? DefaultWorkDir(std::filesystem::temp_directory_path(), worker_id)
                           : std::filesystem::path(flags.work_dir);
   settings.min_free_bytes = flags.min_free_bytes;
   settings.preview_interval_s = flags.preview_interval_s;
