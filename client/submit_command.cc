@@ -3,7 +3,6 @@
 // instead of CLIP (--left L --right R --calibration C ..., prepare's flags), the recording's files
 // are uploaded and the worker prepares the clip before reconstructing it, in the same job.
 #include <CLI/CLI.hpp>
-#include <algorithm>
 #include <fstream>
 #include <iostream>
 #include <nlohmann/json.hpp>
@@ -94,23 +93,11 @@ v1::Manifest ListingOfClip(const std::filesystem::path& clip) {
 
 // Asks the server whether a clip of these sizes may come (its upload limit, the tenant's quotas)
 // before the files are read for their digests: a 50 GB file was hashed for minutes, then refused.
-// A refusal for size names the largest file (not one for the tenant's job count).
+// A refusal for size names the largest file (the server's message).
 void CheckSizes(const Globals& globals, v1::JobService::Stub& stub, const v1::Manifest& listing) {
   v1::UploadStatus status;
   auto context = CallContext(globals.timeout());
-  const auto answer = stub.QueryUpload(context.get(), listing, &status);
-  if (answer.error_code() != grpc::StatusCode::RESOURCE_EXHAUSTED) {
-    ThrowIfFailed(answer, "upload query");
-    return;
-  }
-  const auto largest = std::max_element(listing.files().begin(), listing.files().end(),
-                                        [](const auto& a, const auto& b) { return a.size() < b.size(); });
-  const bool for_size = answer.error_message().find("max_jobs") == std::string::npos;
-  Fail(ErrorCode::kResourceExhausted,
-       "upload query: " + answer.error_message() +
-           (for_size && largest != listing.files().end()
-                ? " (its largest file: " + largest->path() + ", " + HumanBytes(largest->size()) + ")"
-                : ""));
+  ThrowIfFailed(stub.QueryUpload(context.get(), listing, &status), "upload query");
 }
 
 // Uploads the clip (what the server lacks of it) and returns its manifest. A clip folder (not a

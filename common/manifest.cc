@@ -93,4 +93,11 @@ std::int64_t TotalBytes(const v1::Manifest& manifest) {
   return total;
 }
 
+std::string LargestFileNote(const v1::Manifest& manifest) {
+  const auto largest = std::max_element(manifest.files().begin(), manifest.files().end(),
+                                        [](const auto& a, const auto& b) { return a.size() < b.size(); });
+  if (largest == manifest.files().end()) return "";
+  return " (its largest file: " + largest->path() + ", " + std::to_string(largest->size()) + " bytes)";
+}
+
 }  // namespace endorecon

@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <string>
 
 #include "endorecon/v1/files.pb.h"
 
@@ -30,5 +31,8 @@ bool IsSizesOnly(const v1::Manifest& manifest);
 
 // The sum of the sizes, saturated at the largest int64 (so it is over every limit, never negative).
 std::int64_t TotalBytes(const v1::Manifest& manifest);
+// " (its largest file: PATH, N bytes)", the end of a refusal by size, so the user knows where to look;
+// "" for a manifest without files.
+std::string LargestFileNote(const v1::Manifest& manifest);
 
 }  // namespace endorecon

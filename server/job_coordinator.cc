@@ -219,7 +219,7 @@ void JobCoordinator::Requeue(StoredJob& stored, bool count_attempt, const std::s
   spdlog::info("job {} requeued (attempts {}/{}): {}", job.id(), job.attempts(), job.max_attempts(), reason);
 }
 
-void JobCoordinator::CheckQuotas(const std::string& tenant, std::int64_t adding, bool adds_job) {
+void JobCoordinator::CheckQuotas(const std::string& tenant, const v1::Manifest& adding, bool adds_job) {
   const auto quota = quotas_.For(tenant);
   const bool counts_jobs = adds_job && quota.max_jobs > 0;
   if (!counts_jobs && quota.max_bytes == 0) return;
@@ -231,11 +231,13 @@ void JobCoordinator::CheckQuotas(const std::string& tenant, std::int64_t adding,
                         " job(s) queued or running, its quota max_jobs is " + std::to_string(quota.max_jobs) +
                         "; submit again when one has finished");
   }
-  if (quota.max_bytes > 0 && usage.bytes + adding > quota.max_bytes) {
+  const std::int64_t bytes = TotalBytes(adding);
+  if (quota.max_bytes > 0 && usage.bytes + bytes > quota.max_bytes) {
     endorecon::Fail(
         ErrorCode::kResourceExhausted,
         "tenant '" + tenant + "' keeps " + std::to_string(usage.bytes) + " bytes in its jobs and this adds " +
-            std::to_string(adding) + ": over its quota max_bytes of " + std::to_string(quota.max_bytes) +
+            std::to_string(bytes) + LargestFileNote(adding) + ": over its quota max_bytes of " +
+            std::to_string(quota.max_bytes) +
             " bytes; delete the files of a finished job of it (`endorecon delete JOB`; a queued or "
             "running one: cancel it first)");
   }
@@ -243,11 +245,11 @@ void JobCoordinator::CheckQuotas(const std::string& tenant, std::int64_t adding,
 
 void JobCoordinator::CheckUploadQuota(const v1::Manifest& manifest, const Principal& caller) {
   // Both quotas before any byte: an upload the submit would refuse is not sent.
-  CheckQuotas(caller.tenant, TotalBytes(manifest), true);
+  CheckQuotas(caller.tenant, manifest, true);
 }
 
 void JobCoordinator::CheckRetrievalQuota(const std::string& id, const v1::Manifest& recording) {
-  CheckQuotas(Load(id).job.tenant(), TotalBytes(recording), false);
+  CheckQuotas(Load(id).job.tenant(), recording, false);
 }
 
 v1::Job JobCoordinator::Submit(const v1::SubmitRequest& request, const Principal& caller) {
@@ -592,7 +594,7 @@ void JobCoordinator::RetrievalDone(const std::string& id, const v1::Manifest& cl
     auto stored = Load(id);
     auto& job = stored.job;
     if (job.state() != v1::QUEUED) return;  // cancelled meanwhile
-    CheckQuotas(job.tenant(), TotalBytes(clip), false);
+    CheckQuotas(job.tenant(), clip, false);
     RequireBlobs(parts_.blobs, clip, "retrieved recording");  // retention may share and delete blobs
     *job.mutable_clip() = clip;
     job.mutable_retrieval()->set_state(v1::Retrieval::RETRIEVED);

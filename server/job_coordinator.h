@@ -168,9 +168,9 @@ class JobCoordinator {
   // Load, but another tenant's job is kNotFound exactly as a missing one.
   StoredJob LoadVisible(const std::string& id, const Principal& caller);
   StoredJob LoadLeased(const std::string& lease_id);
-  // Throws kResourceExhausted when `tenant` keeping `adding` more bytes would pass its max_bytes,
-  // or, when the call `adds_job`, when it has max_jobs jobs queued or running.
-  void CheckQuotas(const std::string& tenant, std::int64_t adding, bool adds_job);
+  // Throws kResourceExhausted when `tenant` keeping the files of `adding` would pass its max_bytes
+  // (naming the largest), or, when the call `adds_job`, when it has max_jobs jobs queued or running.
+  void CheckQuotas(const std::string& tenant, const v1::Manifest& adding, bool adds_job);
   // Writes `job` to the store, then tells the watchers.
   void Save(const v1::Job& job);
   void Finish(v1::Job& job, v1::JobState state, const std::string& error);

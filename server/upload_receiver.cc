@@ -50,7 +50,7 @@ v1::UploadStatus UploadReceiver::Query(const v1::Manifest& manifest, Uploader up
   if (uploader == Uploader::kClient && total > max_upload_bytes_) {
     Fail(ErrorCode::kResourceExhausted,
          "upload of " + std::to_string(total) + " bytes exceeds the server's limit of " +
-             std::to_string(max_upload_bytes_) + " bytes (--max-upload-bytes)");
+             std::to_string(max_upload_bytes_) + " bytes (--max-upload-bytes)" + LargestFileNote(manifest));
   }
   v1::UploadStatus status;
   if (sizes_only) {

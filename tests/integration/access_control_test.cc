@@ -325,6 +325,7 @@ TEST(TenantQuotaTest, AnUploadOverTheByteQuotaIsRefusedBeforeAByteIsWritten) {
   const auto refused = RunCli(cluster.address(), args);
   EXPECT_EQ(refused.exit_code, 8) << refused.err;
   EXPECT_NE(refused.err.find("max_bytes of 1000 bytes"), std::string::npos) << refused.err;
+  EXPECT_NE(refused.err.find("(its largest file: "), std::string::npos) << refused.err;
   EXPECT_TRUE(std::filesystem::is_empty(cluster.data_dir() / "blobs"));
   EXPECT_TRUE(std::filesystem::is_empty(cluster.data_dir() / "partial"));
   EXPECT_EQ(
