@@ -144,9 +144,13 @@ std::string DescribeJob(const v1::Job& job) {
   if (!job.tenant().empty()) text += fmt::format("  tenant    {}\n", job.tenant());
   if (!job.submitted_by().empty()) text += fmt::format("  by        {}\n", job.submitted_by());
   text += fmt::format("  created   {}\n", HumanTime(job.created_unix_ms()));
-  // The latest lease's start: a job handed back or requeued starts again (it read as the first).
+  // A job handed back or requeued starts again: its first start and its latest lease's both.
+  const bool restarted =
+      job.first_started_unix_ms() > 0 && job.first_started_unix_ms() != job.started_unix_ms();
+  if (restarted) text += fmt::format("  started   {}\n", HumanTime(job.first_started_unix_ms()));
   if (job.started_unix_ms() > 0)
-    text += fmt::format("  started   {} (its latest lease)\n", HumanTime(job.started_unix_ms()));
+    text += fmt::format("  {} {} (its latest lease)\n", restarted ? "restarted" : "started  ",
+                        HumanTime(job.started_unix_ms()));
   if (job.finished_unix_ms() > 0) text += fmt::format("  finished  {}\n", HumanTime(job.finished_unix_ms()));
   text += fmt::format("  attempts  {} lost of {} allowed\n", job.attempts(), job.max_attempts());
   if (!job.worker_id().empty()) text += fmt::format("  worker    {}\n", job.worker_id());

@@ -391,6 +391,7 @@ std::optional<JobCoordinator::Granted> JobCoordinator::Lease(const std::string& 
       job.set_lease_id(lease.id);
       job.set_worker_id(worker_id);
       job.set_started_unix_ms(NowUnixMs());
+      if (job.first_started_unix_ms() == 0) job.set_first_started_unix_ms(job.started_unix_ms());
       Save(job);
       parts_.workers.AddJob(worker_id, job.id());
       parts_.metrics.LeaseGranted();

@@ -9,6 +9,7 @@
 #include <limits>
 #include <optional>
 #include <string>
+#include <thread>
 
 #include "common/error.h"
 #include "tests/unit/clip_fixture.h"
@@ -199,8 +200,12 @@ TEST_F(JobCoordinatorTest, AResultFileNotUploadedKeepsTheJobRunning) {
 
 TEST_F(JobCoordinatorTest, ReportsKeepTheLeaseAndSilenceExpiresIt) {
   const std::string id = Submit();
+  EXPECT_EQ(Get(id).first_started_unix_ms(), 0);
   const auto granted = LeaseNext();
   ASSERT_TRUE(granted.has_value());
+  const std::int64_t first_start = Get(id).first_started_unix_ms();
+  EXPECT_GT(first_start, 0);
+  EXPECT_EQ(Get(id).started_unix_ms(), first_start);
   Advance(kTtl - seconds(5));
   EXPECT_EQ(Report(granted->lease_id), v1::ProgressReply::CONTINUE);
   Advance(seconds(10));  // past the first expiry, not the renewed one
@@ -215,9 +220,12 @@ TEST_F(JobCoordinatorTest, ReportsKeepTheLeaseAndSilenceExpiresIt) {
   EXPECT_EQ(Report(granted->lease_id), v1::ProgressReply::STOP_LEASE_LOST);
   EXPECT_EQ(CodeOf([&] { Complete(granted->lease_id, Uploaded("metrics.json", "{}")); }),
             ErrorCode::kFailedPrecondition);
+  std::this_thread::sleep_for(std::chrono::milliseconds(2));  // the start times are the wall clock's
   const auto again = LeaseNext("worker-2");
   ASSERT_TRUE(again.has_value());
   EXPECT_EQ(again->attempt, 2);
+  EXPECT_EQ(Get(id).first_started_unix_ms(), first_start) << "the first lease's start is kept";
+  EXPECT_GT(Get(id).started_unix_ms(), first_start);
 }
 
 TEST_F(JobCoordinatorTest, TheJobFailsWhenItsAttemptsAreUsedUp) {

@@ -82,7 +82,14 @@ TEST(DescribeJob, ASucceededJobShowsItsOutcomeNotItsLastProgress) {
   const std::string text = DescribeJob(job);
   EXPECT_NE(text.find("  outcome   done: 1858 iterations"), std::string::npos) << text;
   EXPECT_EQ(text.find("evaluating the results"), std::string::npos) << text;
-  EXPECT_NE(text.find("(its latest lease)"), std::string::npos) << "a requeued job started again: " << text;
+  EXPECT_NE(text.find("  started   "), std::string::npos) << text;
+  EXPECT_EQ(text.find("restarted"), std::string::npos) << "one lease: " << text;
+  // A requeued job started again: its first start and its latest lease's.
+  job.set_first_started_unix_ms(400'000);
+  const std::string requeued = DescribeJob(job);
+  EXPECT_NE(requeued.find("  started   " + HumanTime(400'000) + "\n"), std::string::npos) << requeued;
+  EXPECT_NE(requeued.find("  restarted " + HumanTime(1'000'000) + " (its latest lease)"), std::string::npos)
+      << requeued;
   // Without held-out frames the engine reports -1: not shown.
   job.set_summary_json(R"({"iterations":10,"train_seconds":1,"train_psnr":20,"heldout_psnr":-1})");
   EXPECT_EQ(OutcomeLine(job).find("held-out"), std::string::npos) << OutcomeLine(job);
