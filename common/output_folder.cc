@@ -1,5 +1,8 @@
 #include "common/output_folder.h"
 
+#include <algorithm>
+#include <array>
+#include <span>
 #include <string>
 #include <system_error>
 
@@ -7,9 +10,57 @@
 #include "common/error.h"
 
 namespace endorecon {
+namespace {
 
-void CheckOutputFolder(const std::filesystem::path& out, const std::filesystem::path& input, std::string_view what) {
-  namespace fs = std::filesystem;
+namespace fs = std::filesystem;
+
+using Names = std::span<const char* const>;
+
+// The files that mark a folder as a run's results: written first, so an interrupted run is one too.
+Names MarkersOf(ResultsKind kind) {
+  static constexpr std::array<const char*, 2> kRun{"config.json", "metrics.json"};
+  static constexpr std::array<const char*, 1> kViews{"render.json"};
+  return kind == ResultsKind::kReconstruction ? Names(kRun) : Names(kViews);
+}
+
+// What a run writes (the results layout's names, docs/formats.md) but the files that mark the folder,
+// which are written again first, and model/.
+Names OutputsOf(ResultsKind kind) {
+  static constexpr std::array<const char*, 15> kRun{
+      "rgb",       "depth",     "uncertainty",  "error",       "pointcloud",
+      "dicom",     "mesh.ply",  "mesh.obj",     "mesh.stl",    "video.mp4",
+      "video.avi", "curve.svg", "metrics.json", "report.html", "recording.json"};
+  static constexpr std::array<const char*, 5> kViews{"rgb", "depth", "uncertainty", "report.html",
+                                                     "cameras.json"};
+  return kind == ResultsKind::kReconstruction ? Names(kRun) : Names(kViews);
+}
+
+const char* NameOf(ResultsKind kind) {
+  return kind == ResultsKind::kReconstruction ? "a reconstruction's results" : "a render's views";
+}
+
+bool HoldsResults(const fs::path& out, ResultsKind kind) {
+  std::error_code error;
+  for (const char* marker : MarkersOf(kind)) {
+    if (fs::exists(out / marker, error)) return true;
+  }
+  return false;
+}
+
+// Whether `inner` is `outer` or lies inside it (both resolved as far as they exist).
+bool IsOrInside(const fs::path& inner, const fs::path& outer) {
+  std::error_code error;
+  const fs::path a = fs::weakly_canonical(inner, error);
+  if (error) return false;
+  const fs::path b = fs::weakly_canonical(outer, error);
+  if (error) return false;
+  auto [end_b, end_a] = std::mismatch(b.begin(), b.end(), a.begin(), a.end());
+  return end_b == b.end();
+}
+
+}  // namespace
+
+void CheckOutputFolder(const fs::path& out, const fs::path& input, std::string_view what, ResultsKind kind) {
   std::error_code error;
   if (!fs::exists(out, error)) return;
   if (!fs::is_directory(out, error))
@@ -25,14 +76,20 @@ void CheckOutputFolder(const std::filesystem::path& out, const std::filesystem::
                 " holds a clip (transforms.json or poses_bounds.npy): writing there would overwrite its "
                 "files; choose another output folder");
   }
-  // An earlier run's results (a run's config.json comes first, a render's render.json or cameras.json)
-  // are written over, as a rerun or a resume means to; any other non-empty folder is someone's files,
-  // which results would be mixed into and partly overwritten (`-o ~/Documents` was taken until
-  // 2026-12-05). Dot files (a desktop's .DS_Store, a .gitignore) do not count, nor the input itself (a
-  // worker prepares a recording's clip into its results folder, which ships it).
-  for (const char* earlier : {"config.json", "metrics.json", "render.json", "cameras.json"}) {
-    if (fs::exists(out / earlier, error)) return;
+  // An earlier run's results of this kind are replaced, as a rerun or a resume means to. The other
+  // kind's are not: a render into a reconstruction's folder overwrote its report and first frames and
+  // left the rest (found 2026-12-05).
+  if (HoldsResults(out, kind)) return;
+  const ResultsKind other =
+      kind == ResultsKind::kRender ? ResultsKind::kReconstruction : ResultsKind::kRender;
+  if (HoldsResults(out, other)) {
+    FailInvalid("the output folder " + out.string() + " holds " + NameOf(other) + ", which " + NameOf(kind) +
+                " would be mixed into; choose another output folder");
   }
+  // Any other non-empty folder is someone's files, which results would be mixed into and partly
+  // overwritten (`-o ~/Documents` was taken until 2026-12-05). Dot files (a desktop's .DS_Store, a
+  // .gitignore) do not count, nor the input itself (a worker prepares a recording's clip into its
+  // results folder, which ships it).
   for (fs::directory_iterator it(out, error), end; !error && it != end; it.increment(error)) {
     const std::string name = it->path().filename().string();
     std::error_code not_comparable;  // an input that is no file: then no entry is it
@@ -40,6 +97,22 @@ void CheckOutputFolder(const std::filesystem::path& out, const std::filesystem::
     FailInvalid("the output folder " + out.string() + " holds other files (" + name +
                 ", ...) and no earlier results: the results would be mixed in with them; choose an empty "
                 "or new folder");
+  }
+}
+
+void ClearEarlierResults(const fs::path& out, ResultsKind kind, std::initializer_list<fs::path> keep) {
+  for (const char* name : OutputsOf(kind)) {
+    const fs::path entry = out / name;
+    std::error_code error;
+    if (!fs::exists(fs::symlink_status(entry, error))) continue;
+    if (std::any_of(keep.begin(), keep.end(),
+                    [&](const fs::path& kept) { return !kept.empty() && IsOrInside(kept, entry); }))
+      continue;
+    fs::remove_all(entry, error);
+    if (error) {
+      Fail(ErrorCode::kUnavailable,
+           "cannot remove the earlier run's " + entry.string() + ": " + error.message());
+    }
   }
 }
 

@@ -155,5 +155,23 @@ TEST(Exports, AHeatmapScaleGatheredFrameByFrameKeepsToTheClipsBound) {
   EXPECT_NE(sampled.UpperBound(), HeatmapUpperBound(frames)) << "a sample, not every value";
 }
 
+// A tool's pixels (5% of a frame, its error ten times the tissue's) set the error maps' bound and left
+// the tissue near black (found 2026-12-05): with the tool mask they are left out of the scale.
+TEST(Exports, AHeatmapScaleLeavesTheToolOut) {
+  std::vector<float> frame(100, 0.1f);
+  std::vector<std::uint8_t> tool(100, 0);
+  for (int i = 0; i < 5; ++i) {
+    frame[i] = 1.0f;
+    tool[i] = 255;
+  }
+  frame[50] = 0.2f;
+  HeatmapScale with_tool(100), tissue(100);
+  with_tool.Add(frame);
+  tissue.Add(frame, tool);
+  EXPECT_FLOAT_EQ(float(with_tool.UpperBound()), 1.0f);
+  EXPECT_FLOAT_EQ(float(tissue.UpperBound()), 0.2f) << "the 99th percentile of the 95 tissue pixels";
+  EXPECT_THROW(tissue.Add(frame, std::vector<std::uint8_t>(99, 0)), Error);
+}
+
 }  // namespace
 }  // namespace endorecon::eval

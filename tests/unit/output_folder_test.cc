@@ -13,7 +13,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
-void Check(const fs::path& out, const fs::path& input) { CheckOutputFolder(out, input, "the clip's folder"); }
+void Check(const fs::path& out, const fs::path& input) {
+  CheckOutputFolder(out, input, "the clip's folder", ResultsKind::kReconstruction);
+}
 
 TEST(OutputFolderTest, TheInputsOwnFolderIsRefusedUnderAnyName) {
   testing::TempDir dir("output-folder");
@@ -69,13 +71,71 @@ TEST(OutputFolderTest, SomeonesFilesAreRefusedAndEarlierResultsAreNot) {
   fs::create_directories(dir / "results" / "clip");
   EXPECT_NO_THROW(Check(dir / "results", dir / "results" / "clip"))
       << "the input inside the output folder (a worker's prepared clip) is no one else's file";
-  for (const char* earlier : {"config.json", "metrics.json", "render.json", "cameras.json"}) {
+  for (const char* earlier : {"config.json", "metrics.json"}) {
     testing::TempDir run("output-folder");
     fs::create_directories(run / "clip");
     fs::create_directories(run / "out" / "rgb");
     testing::WriteBytes(run / "out" / earlier, "{}");
     EXPECT_NO_THROW(Check(run / "out", run / "clip")) << earlier;
   }
+}
+
+// A render into a reconstruction's results overwrote its report and first frames and left the rest; a
+// folder of the user's own cameras.json was taken for a render's (found 2026-12-05).
+TEST(OutputFolderTest, TheOtherKindsResultsAreRefused) {
+  testing::TempDir dir("output-folder");
+  fs::create_directories(dir / "results");
+  testing::WriteBytes(dir / "results" / "config.json", "{}");
+  fs::create_directories(dir / "views");
+  testing::WriteBytes(dir / "views" / "render.json", "{}");
+  fs::create_directories(dir / "mine");
+  testing::WriteBytes(dir / "mine" / "cameras.json", "{}");
+  const auto render_into = [&](const fs::path& out) {
+    return testing::ErrorFrom(
+        [&] { CheckOutputFolder(out, dir / "model", "the results folder", ResultsKind::kRender); });
+  };
+  EXPECT_NE(
+      render_into(dir / "results").find("holds a reconstruction's results, which a render's views would"),
+      std::string::npos)
+      << render_into(dir / "results");
+  EXPECT_NE(render_into(dir / "mine").find("holds other files (cameras.json, ...)"), std::string::npos)
+      << render_into(dir / "mine");
+  EXPECT_NO_THROW(
+      CheckOutputFolder(dir / "views", dir / "model", "the results folder", ResultsKind::kRender));
+  const std::string message = testing::ErrorFrom([&] { Check(dir / "views", dir / "clip"); });
+  EXPECT_NE(message.find("holds a render's views"), std::string::npos) << message;
+}
+
+// A rerun without uncertainty kept the earlier run's maps, and a dicom/ that described another model;
+// a render of fewer views kept the earlier views' frames (found 2026-12-05).
+TEST(OutputFolderTest, AnEarlierRunsResultsAreClearedButWhatARunReads) {
+  testing::TempDir dir("output-folder");
+  const fs::path out = dir / "out";
+  for (const char* sub : {"rgb", "uncertainty", "dicom", "model", "clip"}) fs::create_directories(out / sub);
+  for (const char* file :
+       {"config.json", "metrics.json", "report.html", "rgb/000009.png", "uncertainty/000000.npy",
+        "dicom/rgb.dcm", "model/checkpoint.bin", "clip/poses_bounds.npy", "notes.txt"}) {
+    testing::WriteBytes(out / file, "x");
+  }
+  fs::create_directories(dir / "elsewhere");
+  testing::WriteBytes(dir / "elsewhere" / "frame.png", "x");
+  fs::create_directory_symlink(dir / "elsewhere", out / "error");
+  ClearEarlierResults(out, ResultsKind::kReconstruction, {out / "clip", out / "model" / "checkpoint.bin"});
+  for (const char* gone : {"metrics.json", "report.html", "rgb", "uncertainty", "dicom", "error"}) {
+    EXPECT_FALSE(fs::exists(fs::symlink_status(out / gone))) << gone;
+  }
+  for (const char* kept : {"config.json", "model/checkpoint.bin", "clip/poses_bounds.npy", "notes.txt"}) {
+    EXPECT_TRUE(fs::exists(out / kept)) << kept;
+  }
+  EXPECT_TRUE(fs::exists(dir / "elsewhere" / "frame.png")) << "a link is removed, not what it points to";
+  // What a run reads is kept even where a run writes: the cameras a render was given as OUT/cameras.json.
+  testing::WriteBytes(out / "cameras.json", "{}");
+  testing::WriteBytes(out / "render.json", "{}");
+  ClearEarlierResults(out, ResultsKind::kRender, {out / "cameras.json"});
+  EXPECT_TRUE(fs::exists(out / "cameras.json"));
+  EXPECT_TRUE(fs::exists(out / "render.json"));
+  ClearEarlierResults(out, ResultsKind::kRender, {});
+  EXPECT_FALSE(fs::exists(out / "cameras.json"));
 }
 
 }  // namespace

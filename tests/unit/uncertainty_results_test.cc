@@ -7,6 +7,7 @@
 #include "common/npy.h"
 #include "tests/unit/temp_dir.h"
 #include "worker/engine/eval/clip_evaluator.h"
+#include "worker/engine/eval/evaluation_mask.h"
 #include "worker/engine/eval/exports.h"
 #include "worker/engine/scene/clip_loader.h"
 #include "worker/engine/scene/synthetic_clip.h"
@@ -50,15 +51,30 @@ TEST(UncertaintyResults, FilesAndOneHeatmapScalePerClip) {
     EXPECT_FALSE(std::filesystem::exists(dir.path() / "out" / ".error-maps")) << "the scratch folder is gone";
     totals.push_back(renderer.Render(clip.cameras[f], clip.times[f]).uncertainty);  // deterministic
   }
+  // The scales are the tissue's: the tool's pixels left out.
+  const auto tissue = [&](std::vector<std::vector<float>> frames) {
+    for (int f = 0; f < 4; ++f) {
+      const auto& tool = EvaluationMask(clip, f);
+      std::vector<float> kept;
+      for (std::size_t i = 0; i < frames[f].size(); ++i) {
+        if (tool.empty() || tool[i] == 0) kept.push_back(frames[f][i]);
+      }
+      EXPECT_LT(kept.size(), frames[f].size()) << "the synthetic clip's tool is in frame " << f;
+      frames[f] = std::move(kept);
+    }
+    return frames;
+  };
   const auto& maps = metrics.at("uncertainty_maps");
   EXPECT_EQ(maps.at("mc_passes"), 3);
-  EXPECT_DOUBLE_EQ(maps.at("heatmap_scale").at("uncertainty").at(1).get<double>(), HeatmapUpperBound(totals));
+  EXPECT_DOUBLE_EQ(maps.at("heatmap_scale").at("uncertainty").at(1).get<double>(),
+                   HeatmapUpperBound(tissue(totals)));
   std::vector<std::vector<float>> models;  // the model maps' heat maps have a scale of their own
   for (int f = 0; f < 4; ++f) {
     const auto map = ReadNpy(dir.path() / "out" / "uncertainty" / FrameFileName(f, "_model.npy")).data;
     models.emplace_back(map.begin(), map.end());
   }
-  EXPECT_DOUBLE_EQ(maps.at("heatmap_scale").at("model").at(1).get<double>(), HeatmapUpperBound(models));
+  EXPECT_DOUBLE_EQ(maps.at("heatmap_scale").at("model").at(1).get<double>(),
+                   HeatmapUpperBound(tissue(models)));
   for (const char* split : {"train", "heldout"}) {
     const auto& calibration = metrics.at(split).at("calibration");
     EXPECT_TRUE(calibration.contains("spearman")) << split;

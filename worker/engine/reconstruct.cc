@@ -140,28 +140,27 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
     return eval::MeasureRenderCost(uncertainty_renderer, reduced_renderer, clip.cameras[f], clip.times[f]);
   };
   const int pixels = scene::RenderedPixels(clip);  // what a frame's render covers: its price
+  // --full-eval's price: every frame full (it took 44 s of a 20 s budget when only a quarter was kept for
+  // it).
+  const auto FullEvaluationSeconds = [&](const eval::RenderCost& cost) {
+    return clip.frame_count() * eval::FrameSeconds(eval::FrameRender::kFull, 2, cost, pixels);
+  };
   const double tail_s = TailSeconds(clip);
   const bool full_evaluation = options.full_evaluation;
   const double load_s = SecondsSince(run_start);
-  const TrainingRun run{trainer,
-                        clip,
-                        split,
-                        fit,
-                        renderer,
-                        uncertainty_renderer,
-                        options.time_budget_s,
-                        run_start,
-                        // Evaluation's reserve: its plan within its share, or the leanest plan up to
-                        // kEvaluationShareMax of the run.
-                        [&] {
-                          const double share = kEvaluationShare * options.time_budget_s;
-                          if (full_evaluation) return share + tail_s;
-                          const double plan = eval::PlanEvaluation(clip.frame_count(), split.heldout, pixels,
+  const TrainingRun run{
+      trainer, clip, split, fit, renderer, uncertainty_renderer, options.time_budget_s, run_start,
+      // Evaluation's reserve: its plan within its share, or the leanest plan (with
+      // --full-eval every frame full) up to kEvaluationShareMax of the run.
+      [&] {
+        const double share = kEvaluationShare * options.time_budget_s;
+        const double plan = full_evaluation ? FullEvaluationSeconds(MeasureCost())
+                                            : eval::PlanEvaluation(clip.frame_count(), split.heldout, pixels,
                                                                    MeasureCost(), share)
                                                   .seconds;
-                          return std::min(plan, kEvaluationShareMax * options.time_budget_s) + tail_s;
-                        },
-                        out_dir / "model" / "checkpoint.bin"};
+        return std::min(plan, kEvaluationShareMax * options.time_budget_s) + tail_s;
+      },
+      out_dir / "model" / "checkpoint.bin"};
   const TrainingResult trained = Train(run, hooks, extras);
   const auto after_training = Clock::now();
   trainer.SyncField();
@@ -172,7 +171,8 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
   if (!outside_view.is_null()) left_out.push_back(outside_view);
   nlohmann::json metrics = nlohmann::json::object();
   double evaluation_s = 0;
-  double least_s = -1;  // the leanest plan's price (held-out frames full), when evaluation was planned
+  double least_s =
+      -1;  // the leanest plan's price (held-out frames full; with --full-eval every frame), when planned
   double advised_s = 0;
   if (!trained.cancelled) {
     const auto start = Clock::now();
@@ -181,6 +181,18 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
     what.train_frames = split.train;
     what.heldout_frames = split.heldout;
     what.plain = &reduced_renderer;
+    if (full_evaluation && options.time_budget_s > 0) {
+      // Every frame full, whatever the budget has left: say so when that makes the run late.
+      const double available = options.time_budget_s - SecondsSince(run_start) - tail_s;
+      least_s = FullEvaluationSeconds(MeasureCost());
+      if (least_s > available + kBudgetTolerance * options.time_budget_s) {
+        spdlog::warn(
+            "--full-eval renders every one of the {} frames with all dropout passes, about {:.0f} s here, "
+            "and "
+            "the budget leaves {:.0f} s: the run will end more than {:.0f}% late",
+            clip.frame_count(), least_s, std::max(available, 0.0), 100 * kBudgetTolerance);
+      }
+    }
     if (!full_evaluation) {
       // The time evaluation may take: what the budget has left (less the writing after it), or
       // without a budget a third of the training phase (a quarter of the run).
@@ -299,7 +311,8 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
 }  // namespace
 
 ReconstructSummary Reconstruct(const ReconstructOptions& options, const ReconstructHooks& hooks) {
-  CheckOutputFolder(options.out_dir, options.clip_dir, "the clip's folder");
+  CheckOutputFolder(options.out_dir, options.clip_dir, "the clip's folder", ResultsKind::kReconstruction);
+  ClearEarlierResults(options.out_dir, ResultsKind::kReconstruction, {options.clip_dir, options.resume_from});
   const int threads = options.threads > 0 ? options.threads : int(std::thread::hardware_concurrency());
   // The run's own arena: two runs in one process (two devices of a worker) each keep their thread count,
   // where tbb::global_control would set one limit for the whole process.

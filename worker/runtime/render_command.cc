@@ -50,9 +50,19 @@ Command AddRenderCommand(CLI::App& app) {
     const render::OccupancyGrid occupancy = train::BuildOccupancy(*model.field, model.config);
     renderer.SetOccupancy(&occupancy);
     const std::filesystem::path out(args->out);
-    CheckOutputFolder(out, args->result, "the results folder it renders from");
-    for (const char* sub : {"rgb", "depth", "uncertainty"}) std::filesystem::create_directories(out / sub);
+    CheckOutputFolder(out, args->result, "the results folder it renders from", ResultsKind::kRender);
+    ClearEarlierResults(out, ResultsKind::kRender, {args->cameras});
+    const bool uncertainty = settings.mc_passes > 0;
+    for (const char* sub : {"rgb", "depth", "uncertainty"}) {
+      if (uncertainty || sub != std::string_view("uncertainty"))
+        std::filesystem::create_directories(out / sub);
+    }
     const double scale = eval::DepthPngScale(model.far);
+    // Written first, so the folder is known as a render's before its views are (output_folder.h), and
+    // again with the heat maps' scales once they are known.
+    nlohmann::json info = eval::UncertaintySettings(settings);
+    info["depth_png_scale"] = scale;
+    WriteFile(out / "render.json", info.dump(2), "render description");
     // The heat maps share one scale over all views, so they are written once every view is rendered.
     std::vector<std::vector<float>> totals, models;
     for (std::size_t i = 0; i < cameras.size(); ++i) {
@@ -81,10 +91,10 @@ Command AddRenderCommand(CLI::App& app) {
       eval::WriteHeatmapPng(out / "uncertainty" / eval::FrameFileName(int(i), "_model.png"), models[i], w, h,
                             0.0, model_heat);
     }
-    nlohmann::json info = eval::UncertaintySettings(settings);
-    info["heatmap_scale"] = {{"uncertainty", {0.0, heat}}, {"model", {0.0, model_heat}}};
-    info["depth_png_scale"] = scale;
-    WriteFile(out / "render.json", info.dump(2), "render description");
+    if (uncertainty) {
+      info["heatmap_scale"] = {{"uncertainty", {0.0, heat}}, {"model", {0.0, model_heat}}};
+      WriteFile(out / "render.json", info.dump(2), "render description");
+    }
     // The views' cameras and times travel with them (the report back-projects the depth through them).
     const auto cameras_copy = out / "cameras.json";
     if (!std::filesystem::exists(cameras_copy) || !std::filesystem::equivalent(args->cameras, cameras_copy)) {
@@ -92,8 +102,10 @@ Command AddRenderCommand(CLI::App& app) {
                                  std::filesystem::copy_options::overwrite_existing);
     }
     eval::WriteReport(out);
-    spdlog::info("rendered {} views on {} into {} (depth PNG scale {}, uncertainty heat-map scale [0, {}])",
-                 cameras.size(), renderer.device(), args->out, scale, heat);
+    spdlog::info(
+        "rendered {} view{} on {} into {} (depth PNG scale {}{})", cameras.size(),
+        cameras.size() == 1 ? "" : "s", renderer.device(), args->out, scale,
+        uncertainty ? fmt::format(", uncertainty heat-map scale [0, {}]", heat) : ", no uncertainty");
     return 0;
   };
 }

@@ -336,7 +336,7 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
     }
     ZeroOutsideView(clip, model.map);
     if (maps) {
-      maps->model.Add(model.map);
+      maps->model.Add(model.map, mask);
       WriteDepthNpy(maps->dir / FrameFileName(f, "_model.npy"), model.map, w, h);
     }
     model = {};
@@ -385,8 +385,8 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
         evidence[f] = ResidualEvidence(frame.rgb, clip.rgb[f], neighbour_images[f].tool_mask);
       if (f >= kNeighbourFrames) finish_model_map(f - kNeighbourFrames);
       if (maps) {
-        maps->total.Add(frame.uncertainty);
-        maps->error.Add(error);
+        maps->total.Add(frame.uncertainty, mask);
+        maps->error.Add(error, mask);
         frame_maps.uncertainty = std::move(frame.uncertainty);
         frame_maps.aleatoric = std::move(frame.aleatoric);
         frame_maps.epistemic = std::move(frame.epistemic);

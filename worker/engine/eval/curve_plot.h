@@ -1,5 +1,5 @@
 // The error-against-run-time plot (curve.svg in a results folder; the work-precision picture in
-// the benchmarks): PSNR against wall-clock seconds on a log time axis. Written as SVG by hand:
+// the benchmarks): PSNR against seconds of training on a log time axis. Written as SVG by hand:
 // Debian has no C++ plotting library, and the plot is a few lines, ticks and labels.
 #pragma once
 
@@ -12,16 +12,16 @@ namespace endorecon::eval {
 
 struct CurveSeries {
   std::string label;            // legend text, e.g. "held-out PSNR" or "cpu preset"
-  std::vector<double> seconds;  // x, wall time; points with seconds <= 0 are left out (log axis)
+  std::vector<double> seconds;  // x, seconds of training; points with seconds <= 0 are left out (log axis)
   std::vector<double> psnr;     // y, dB, same length; NaN where a point has no value
   bool dashed = false;          // e.g. training PSNR beside the solid held-out line of a run
   std::string colour;           // SVG colour; empty picks one by the series' position
 };
 
 struct CurvePlotOptions {
-  std::string title = "PSNR against wall time";
+  std::string title = "PSNR against training time";
   std::string y_label = "PSNR (dB)";
-  std::string x_label = "wall time (s, log scale)";
+  std::string x_label = "training time (s, log scale)";
   int width = 760, height = 480;  // pixels
 };
 

@@ -128,10 +128,13 @@ HeatmapScale::HeatmapScale(std::size_t values_in_all, std::size_t most_kept)
   kept_.reserve(std::min(values_in_all, most_kept));
 }
 
-void HeatmapScale::Add(std::span<const float> frame) {
+void HeatmapScale::Add(std::span<const float> frame, std::span<const std::uint8_t> left_out) {
+  if (!left_out.empty() && left_out.size() != frame.size())
+    FailInvalid("heat map scale: a mask of " + std::to_string(left_out.size()) + " pixels for a frame of " +
+                std::to_string(frame.size()));
   std::size_t i = next_;
   for (; i < frame.size(); i += stride_) {
-    if (std::isfinite(frame[i])) kept_.push_back(frame[i]);
+    if (std::isfinite(frame[i]) && (left_out.empty() || left_out[i] == 0)) kept_.push_back(frame[i]);
   }
   next_ = i - frame.size();  // the stride runs on across frames
 }

@@ -58,7 +58,9 @@ double HeatmapUpperBound(std::span<const std::vector<float>> frames, double quan
 class HeatmapScale {
  public:
   explicit HeatmapScale(std::size_t values_in_all, std::size_t most_kept = std::size_t{1} << 22);
-  void Add(std::span<const float> frame);
+  // `left_out` (a tool mask, nonzero where left out; empty: none) keeps its pixels out of the scale:
+  // a tool's error, 5% of a frame, set the error maps' bound and left the tissue near black.
+  void Add(std::span<const float> frame, std::span<const std::uint8_t> left_out = {});
   double UpperBound(double quantile = 0.99) const;
   std::size_t stride() const { return stride_; }
 
