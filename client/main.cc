@@ -24,7 +24,7 @@ std::shared_ptr<grpc::Channel> Globals::Channel() const {
   if (!token_file.empty()) {
     security.token = ReadTokenFile(token_file, "--token-file");
   } else if (const char* token = std::getenv("ENDORECON_TOKEN"); token && *token) {
-    security.token = token;
+    security.token = CleanToken(token, "$ENDORECON_TOKEN");
   }
   return OpenChannel(server, security);
 }

@@ -205,14 +205,26 @@ std::shared_ptr<grpc::ServerCredentials> ServerCredentials(const ServerSecurity&
   return grpc::SslServerCredentials(tls);
 }
 
-std::string ReadTokenFile(const std::filesystem::path& path, const std::string& flag) {
-  const std::string text = ReadSecretFile(path, flag);
+std::string CleanToken(std::string_view text, const std::string& source) {
+  if (text.starts_with("\xEF\xBB\xBF")) text.remove_prefix(3);
   const auto begin = text.find_first_not_of(" \t\r\n");
   const auto end = text.find_last_not_of(" \t\r\n");
-  const std::string token = begin == std::string::npos ? "" : text.substr(begin, end - begin + 1);
+  const std::string_view token = begin == std::string::npos ? "" : text.substr(begin, end - begin + 1);
   if (token.empty() || token.find_first_of(" \t\r\n") != std::string::npos)
-    FailInvalid(flag + " " + path.string() + ": expected one token (one word) in the file");
-  return token;
+    FailInvalid(source + ": expected one token (one word)");
+  for (std::size_t i = 0; i < token.size(); ++i) {
+    const auto byte = static_cast<unsigned char>(token[i]);
+    if (byte < 0x21 || byte > 0x7e) {
+      FailInvalid(source + ": the token holds byte 0x" + fmt::format("{:02x}", byte) + " at position " +
+                  std::to_string(i + 1) +
+                  "; a token is printable ASCII, as endorecon-server token create prints it");
+    }
+  }
+  return std::string(token);
+}
+
+std::string ReadTokenFile(const std::filesystem::path& path, const std::string& flag) {
+  return CleanToken(ReadSecretFile(path, flag), flag + " " + path.string());
 }
 
 bool IsLoopbackAddress(const std::string& address) {

@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <memory>
 #include <string>
+#include <string_view>
 
 namespace endorecon {
 
@@ -54,8 +55,14 @@ struct ServerSecurity {
 // Throws as OpenChannel.
 std::shared_ptr<grpc::ServerCredentials> ServerCredentials(const ServerSecurity& security = {});
 
-// The token in `path` (surrounding whitespace removed), checked as a secret file. Throws as
-// ReadSecretFile, and kInvalidArgument when the file holds more than one word.
+// The token in `text` (from `source`, named in errors): surrounding whitespace and a leading UTF-8
+// byte-order mark removed (an editor's), then one word of printable ASCII. A control or other byte
+// inside is refused with kInvalidArgument naming its position: gRPC aborted the process on one in a
+// header value (a token set with a trailing newline crashed the CLI; found 2026-12-05).
+std::string CleanToken(std::string_view text, const std::string& source);
+
+// The token in `path`, checked as a secret file and by CleanToken. Throws as ReadSecretFile and
+// CleanToken.
 std::string ReadTokenFile(const std::filesystem::path& path, const std::string& flag);
 
 // True when `address` ("host:port", "[v6]:port") names a loopback interface only.

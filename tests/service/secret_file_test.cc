@@ -4,6 +4,7 @@
 
 #include "common/error.h"
 #include "common/transport_security.h"
+#include "tests/unit/clip_fixture.h"
 #include "tests/unit/temp_dir.h"
 
 namespace endorecon {
@@ -28,6 +29,26 @@ TEST(SecretFileTest, RefusesFilesOthersMayAccessAndAcceptsGroupRead) {
     EXPECT_NE(message.find("chmod o-rwx"), std::string::npos) << message;
   }
   EXPECT_THROW(ReadSecretFile(dir / "missing.key", "--tls-key"), Error);
+}
+
+// A token with a trailing newline in $ENDORECON_TOKEN, or a BOM or control byte in its file, aborted the
+// CLI and the worker in gRPC's header check (found 2026-12-05): trimmed, or refused naming the byte.
+TEST(SecretFileTest, ATokenIsOneWordOfPrintableAscii) {
+  EXPECT_EQ(CleanToken("endorecon.abc.def\n", "$ENDORECON_TOKEN"), "endorecon.abc.def");
+  EXPECT_EQ(CleanToken("\xEF\xBB\xBF"
+                       "endorecon.abc.def\r\n",
+                       "$ENDORECON_TOKEN"),
+            "endorecon.abc.def");
+  EXPECT_EQ(CleanToken(" endorecon.abc.def\t", "$ENDORECON_TOKEN"), "endorecon.abc.def");
+  const std::string message = testing::ErrorFrom([] {
+    CleanToken(std::string("endorecon.a\x01"
+                           "c.def"),
+               "$ENDORECON_TOKEN");
+  });
+  EXPECT_NE(message.find("$ENDORECON_TOKEN: the token holds byte 0x01 at position 12"), std::string::npos)
+      << message;
+  EXPECT_THROW(CleanToken("endorecon.\xC3\xA9.def", "--token-file t"), Error);
+  EXPECT_THROW(CleanToken("  ", "--token-file t"), Error);
 }
 
 TEST(SecretFileTest, TokenFilesHoldOneWord) {

@@ -155,6 +155,21 @@ TEST(Exports, AHeatmapScaleGatheredFrameByFrameKeepsToTheClipsBound) {
   EXPECT_NE(sampled.UpperBound(), HeatmapUpperBound(frames)) << "a sample, not every value";
 }
 
+// A view past the scene rendered depth = far everywhere (the far plane composited into transparent
+// rays), which the depth files and the report's surface showed as a wall (found 2026-12-05).
+TEST(Exports, DepthWithoutASurfaceIsNoDepth) {
+  std::vector<float> depth = {2.0f, 130.0f, 90.0f, 50.0f};
+  const std::vector<float> opacity = {1.0f, 0.0f, 0.49f, 0.5f};
+  ClearDepthWithoutSurface(depth, opacity);
+  EXPECT_EQ(depth, (std::vector<float>{2.0f, 0.0f, 0.0f, 50.0f}));
+  std::vector<float> nan_opacity = {1.0f};
+  nan_opacity[0] = std::nanf("");
+  std::vector<float> one = {3.0f};
+  ClearDepthWithoutSurface(one, nan_opacity);
+  EXPECT_EQ(one[0], 0.0f) << "no opacity, no surface";
+  EXPECT_THROW(ClearDepthWithoutSurface(depth, nan_opacity), Error);
+}
+
 // A tool's pixels (5% of a frame, its error ten times the tissue's) set the error maps' bound and left
 // the tissue near black (found 2026-12-05): with the tool mask they are left out of the scale.
 TEST(Exports, AHeatmapScaleLeavesTheToolOut) {

@@ -69,6 +69,7 @@ Command AddRenderCommand(CLI::App& app) {
       const auto& view = cameras[i];
       auto frame = renderer.Render(view.camera, view.time);
       const int w = frame.width, h = frame.height;
+      eval::ClearDepthWithoutSurface(frame.depth, frame.opacity);
       eval::WritePng8(out / "rgb" / eval::FrameFileName(int(i), ".png"), frame.rgb, w, h);
       eval::WriteDepthNpy(out / "depth" / eval::FrameFileName(int(i), ".npy"), frame.depth, w, h);
       eval::WriteDepthPng16(out / "depth" / eval::FrameFileName(int(i), ".png"), frame.depth, w, h, scale);

@@ -396,6 +396,7 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
     if (!depths.empty())
       depths[f] = MeasureDepth(frame.depth, clip.gt_depth[f], mask, w, h, clip.near, clip.far);
     if (what.write_files) {
+      ClearDepthWithoutSurface(frame.depth, frame.opacity);  // after the depth metrics
       if (writing.valid()) write_seconds += writing.get();  // one frame's files in flight at a time
       const auto& cloud_mask = clip.has_masks() ? clip.tool_mask[f] : mask;
       writing = std::async(

@@ -122,6 +122,15 @@ double HeatmapUpperBound(std::span<const std::vector<float>> frames, double quan
   return scale.UpperBound(quantile);
 }
 
+void ClearDepthWithoutSurface(std::span<float> depth, std::span<const float> opacity) {
+  if (depth.size() != opacity.size())
+    FailInvalid("depth of " + std::to_string(depth.size()) + " pixels and opacity of " +
+                std::to_string(opacity.size()));
+  for (std::size_t i = 0; i < depth.size(); ++i) {
+    if (!(opacity[i] >= kSurfaceOpacity)) depth[i] = 0.0f;
+  }
+}
+
 HeatmapScale::HeatmapScale(std::size_t values_in_all, std::size_t most_kept)
     : stride_(
           std::max<std::size_t>(1, (values_in_all + most_kept - 1) / std::max<std::size_t>(most_kept, 1))) {

@@ -27,6 +27,14 @@ void WritePng8(const std::filesystem::path& path, std::span<const float> rgb, in
 // unless far is finite and > 0.
 double DepthPngScale(double far);
 
+// A ray whose opacity stays under this met no surface: the render composites the far plane into its
+// depth (render/frame_renderer.h), which the results files would show as a wall at far.
+inline constexpr float kSurfaceOpacity = 0.5f;
+
+// The depth the results files hold: 0 ("no depth") where the ray met no surface (its opacity under
+// kSurfaceOpacity: a view past the scene, an object capture's background), the rendered depth elsewhere.
+void ClearDepthWithoutSurface(std::span<float> depth, std::span<const float> opacity);
+
 // Depth (width*height, clip units) as a 16-bit grey PNG: value = round(depth * scale), clamped to
 // [0, 65535]; non-finite or negative depth is 0 (0 means "no depth", as in the clip layouts).
 // A reader recovers depth = value / scale; the caller records `scale` in metrics.json.
