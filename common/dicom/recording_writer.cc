@@ -14,6 +14,7 @@
 #include <mutex>
 
 #include "common/dicom/dataset_access.h"
+#include "common/dicom/file_save.h"
 #include "common/dicom/rgb_pixels.h"
 #include "common/dicom/uid.h"
 #include "common/error.h"
@@ -56,12 +57,6 @@ void PutHeader(DcmDataset& data, const RecordingHeader& header, const std::strin
   PutUint16(data, DCM_PlanarConfiguration, 0);
 }
 
-void Save(DcmFileFormat& file, const fs::path& out, E_TransferSyntax xfer) {
-  if (!out.parent_path().empty()) fs::create_directories(out.parent_path());
-  const OFCondition status = file.saveFile(out.c_str(), xfer);
-  if (status.bad()) Fail(ErrorCode::kUnavailable, "cannot write " + out.string() + ": " + status.text());
-}
-
 }  // namespace
 
 std::string WriteVideoEndoscopic(const fs::path& video, int frames, int width, int height, double fps,
@@ -98,7 +93,7 @@ std::string WriteVideoEndoscopic(const fs::path& video, int frames, int width, i
   sequence->insert(fragment);
   pixels->putOriginalRepresentation(EXS_MPEG4HighProfileLevel4_1, nullptr, sequence);
   data.insert(pixels, true);
-  Save(file, out, EXS_MPEG4HighProfileLevel4_1);
+  SaveFile(file, out, EXS_MPEG4HighProfileLevel4_1);
   return uid;
 }
 
@@ -120,7 +115,7 @@ std::string WriteEndoscopicFrames(const std::vector<cv::Mat>& frames, const std:
   const std::vector<Uint8> rgb = InterleavedRgb(frames, out.string());
   data.putAndInsertUint8Array(DCM_PixelData, rgb.data(), static_cast<unsigned long>(rgb.size()));
   if (!jpeg) {
-    Save(file, out, EXS_LittleEndianExplicit);
+    SaveFile(file, out, EXS_LittleEndianExplicit);
     return uid;
   }
   static std::once_flag once;
@@ -131,7 +126,7 @@ std::string WriteEndoscopicFrames(const std::vector<cv::Mat>& frames, const std:
   }
   Put(data, DCM_LossyImageCompression, "01");
   Put(data, DCM_LossyImageCompressionMethod, "ISO_10918_1");
-  Save(file, out, EXS_JPEGProcess1);
+  SaveFile(file, out, EXS_JPEGProcess1);
   return uid;
 }
 

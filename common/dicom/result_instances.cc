@@ -6,6 +6,7 @@
 #include <cstdio>
 
 #include "common/dicom/dataset_access.h"
+#include "common/dicom/file_save.h"
 #include "common/dicom/rgb_pixels.h"
 #include "common/dicom/uid.h"
 #include "common/error.h"
@@ -92,12 +93,6 @@ void PutImage(DcmDataset& data, const SeriesHeader& header, int frames, int widt
   PutTag(data, DCM_FrameIncrementPointer, DCM_FrameTimeVector);
 }
 
-void Save(DcmFileFormat& file, const std::filesystem::path& path) {
-  std::filesystem::create_directories(path.parent_path());
-  const OFCondition status = file.saveFile(path.c_str(), EXS_LittleEndianExplicit);
-  if (status.bad()) Fail(ErrorCode::kUnavailable, "cannot write " + path.string() + ": " + status.text());
-}
-
 // Sets Pixel Data (8- or 16-bit samples) and writes the file.
 template <typename Sample>
 void SaveWithPixels(DcmFileFormat& file, const std::filesystem::path& path,
@@ -111,7 +106,7 @@ void SaveWithPixels(DcmFileFormat& file, const std::filesystem::path& path,
     status = data.putAndInsertUint16Array(DCM_PixelData, pixels.data(), count);
   }
   if (status.bad()) Fail(ErrorCode::kInternal, "cannot set Pixel Data of " + path.string());
-  Save(file, path);
+  SaveFile(file, path, EXS_LittleEndianExplicit);
 }
 
 void CheckSize(int width, int height, const std::filesystem::path& path) {
@@ -222,7 +217,7 @@ std::string WriteStlMesh(const std::filesystem::path& path, const SeriesHeader& 
   if (data.putAndInsertUint32(DCM_EncapsulatedDocumentLength, static_cast<Uint32>(stl.size())).bad()) {
     Fail(ErrorCode::kInternal, "cannot set Encapsulated Document Length of " + path.string());
   }
-  Save(file, path);
+  SaveFile(file, path, EXS_LittleEndianExplicit);
   return uid;
 }
 
