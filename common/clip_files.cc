@@ -101,6 +101,32 @@ bool HasExtension(const fs::path& path, const std::vector<std::string>& extensio
   return std::find(extensions.begin(), extensions.end(), extension) != extensions.end();
 }
 
+bool NaturalLess(std::string_view a, std::string_view b) {
+  const auto digit = [](char c) { return c >= '0' && c <= '9'; };
+  std::size_t i = 0, j = 0;
+  while (i < a.size() && j < b.size()) {
+    if (digit(a[i]) && digit(b[j])) {
+      std::size_t ei = i, ej = j;
+      while (ei < a.size() && digit(a[ei])) ++ei;
+      while (ej < b.size() && digit(b[ej])) ++ej;
+      // Compared as numbers of any length: leading zeros aside, the longer run is the larger number.
+      std::string_view x = a.substr(i, ei - i), y = b.substr(j, ej - j);
+      x.remove_prefix(std::min(x.find_first_not_of('0'), x.size()));
+      y.remove_prefix(std::min(y.find_first_not_of('0'), y.size()));
+      if (x.size() != y.size()) return x.size() < y.size();
+      if (x != y) return x < y;
+      i = ei;
+      j = ej;
+    } else {
+      if (a[i] != b[j]) return a[i] < b[j];
+      ++i;
+      ++j;
+    }
+  }
+  if ((i < a.size()) != (j < b.size())) return j < b.size();
+  return a < b;  // equal as numbers ("01", "1"): by their characters, so the order is total
+}
+
 std::vector<fs::path> ListFiles(const fs::path& dir, const std::vector<std::string>& extensions) {
   if (!fs::is_directory(dir)) FailInvalid(dir.string() + ": folder does not exist");
   std::vector<fs::path> files;
@@ -117,7 +143,11 @@ std::vector<fs::path> ListFiles(const fs::path& dir, const std::vector<std::stri
     }
     files.push_back(entry.path());
   }
-  std::sort(files.begin(), files.end());
+  // Numbers in names as numbers: FFmpeg's `%d.png` names 0.png ... 15.png, whose string order put
+  // 10-15 before 2 and scrambled time without a word (found 2026-12-05).
+  std::sort(files.begin(), files.end(), [](const fs::path& a, const fs::path& b) {
+    return NaturalLess(a.filename().string(), b.filename().string());
+  });
   return files;
 }
 

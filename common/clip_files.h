@@ -9,6 +9,7 @@
 #include <nlohmann/json_fwd.hpp>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace endorecon {
@@ -21,7 +22,11 @@ const std::vector<std::string>& ImageExtensions();
 // Whether the extension of `path` (any case) is one of `extensions` (lower case, with the dot).
 bool HasExtension(const std::filesystem::path& path, const std::vector<std::string>& extensions);
 
-// Sorted regular files in `dir` whose extension (any case) is one of `extensions`; hidden files
+// Whether file name `a` comes before `b` with the digit runs compared as numbers ("2.png" before
+// "10.png"; zero-padded names keep their string order).
+bool NaturalLess(std::string_view a, std::string_view b);
+
+// Regular files in `dir`, in NaturalLess order of their names, whose extension (any case) is one of `extensions`; hidden files
 // are skipped. Throws FailInvalid when `dir` is not a folder, or names an entry with one of the
 // extensions that is no regular file (a broken link, a folder, a pipe).
 std::vector<std::filesystem::path> ListFiles(const std::filesystem::path& dir,

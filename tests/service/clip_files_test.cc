@@ -58,6 +58,26 @@ TEST(ClipFilesTest, AnEndoNerfFolderPairsItsFilesByTheirSortedOrder) {
   EXPECT_TRUE(frames[2].right_image.empty());
 }
 
+// FFmpeg's `%d.png` names frames 0.png ... 15.png: string order put 10-15 before 2 and scrambled
+// time without a word (found 2026-12-05). Numbers in names are compared as numbers.
+TEST(ClipFilesTest, FramesNamedWithoutPaddingKeepTheirNumbersOrder) {
+  testing::TempDir dir("clip-files");
+  std::filesystem::create_directories(dir / "images");
+  for (const char* name : {"10.png", "2.png", "0.png", "1.png", "frame9.png", "frame10.png", "01.png"})
+    testing::WriteBytes(dir / "images" / name, "x");
+  std::vector<std::string> names;
+  for (const auto& file : ListFiles(dir / "images", ImageExtensions())) names.push_back(file.filename().string());
+  EXPECT_EQ(names, (std::vector<std::string>{"0.png", "01.png", "1.png", "2.png", "10.png", "frame9.png",
+                                             "frame10.png"}));
+  EXPECT_TRUE(NaturalLess("000009.png", "000010.png"));
+  EXPECT_FALSE(NaturalLess("000010.png", "000009.png"));
+  EXPECT_TRUE(NaturalLess("a.png", "b.png"));
+  EXPECT_TRUE(NaturalLess("img", "img1"));
+  EXPECT_FALSE(NaturalLess("x.png", "x.png"));
+  EXPECT_TRUE(NaturalLess("99999999999999999999999.png", "100000000000000000000000.png"))
+      << "numbers longer than any integer";
+}
+
 TEST(ClipFilesTest, AMissingMaskNamesTheFrameThatLacksIt) {
   TempDir dir;
   MakeEndoNerfFolder(dir.path(), 3);
