@@ -82,7 +82,33 @@ TEST(ImageBytesTest, OtherFormatsAreToldByTheirFirstBytes) {
   }
   EXPECT_NE(Refusal(dir, "not an image at all").find("not a PNG, JPEG, BMP or TIFF image"),
             std::string::npos);
-  EXPECT_NE(Refusal(dir, "").find("not a PNG, JPEG, BMP or TIFF image"), std::string::npos);
+  EXPECT_NE(Refusal(dir, "").find("an empty file (0 bytes)"), std::string::npos);
+}
+
+// A PNG zero-padded after an interrupted, preallocated copy was walked in 12-byte steps to its end
+// (2 GB: minutes; found 2026-12-05): bytes that are no chunk type stop the walk.
+TEST(ImageBytesTest, ZerosWhereAChunkShouldBeginAreDamage) {
+  TempDir dir;
+  const std::string png = WholePng();
+  const std::string message = Refusal(dir, png.substr(0, 345) + std::string(4096, '\0'));
+  EXPECT_NE(message.find("a damaged PNG: at byte 345, where a chunk should begin, its type is 0x00000000"),
+            std::string::npos)
+      << message;
+}
+
+// A JPEG cut short decoded with a warning on stderr and grey below the cut (found 2026-12-05).
+TEST(ImageBytesTest, AJpegWithoutItsEndOfImageIsTruncated) {
+  TempDir dir;
+  // SOI; an APP1 holding a thumbnail's own EOI; SOS (length 8); entropy-coded data with a stuffed FF.
+  const std::string head = std::string("\xff\xd8", 2) + std::string("\xff\xe1\x00\x06\xff\xd9\x00\x00", 8) +
+                           std::string("\xff\xda\x00\x08", 4) + std::string(6, '\1') + "abc" +
+                           std::string("\xff\x00", 2) + "def";
+  EXPECT_EQ(Refusal(dir, head + std::string("\xff\xd9", 2)), "");
+  EXPECT_EQ(Refusal(dir, head + std::string("\xff\xd9", 2) + "trailing"), "");
+  const std::string message = Refusal(dir, head);
+  EXPECT_NE(message.find("a truncated JPEG: no end-of-image marker after its scan, which starts at byte 10"),
+            std::string::npos)
+      << message;
 }
 
 TEST(ImageBytesTest, AMissingFileIsNamed) {
