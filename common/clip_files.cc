@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <set>
 
@@ -197,11 +198,21 @@ std::vector<FrameFiles> ListTransformsFrames(const fs::path& dir, const json& to
   const json& frames = top["frames"];
   if (frames.empty()) FailInvalid(file + ": zero frames (\"frames\" is empty)");
   std::vector<FrameFiles> files(frames.size());
+  // One image for many frames trained them as one frame at many times, and let a few kB of upload
+  // decode into gigabytes (3,000 frames of one 1024 x 1024 PNG; found 2026-12-05).
+  std::map<fs::path, std::size_t> frame_of_image;
   for (std::size_t i = 0; i < frames.size(); ++i) {
     const std::string where = file + " frame " + std::to_string(i);
     const json& frame = frames[i];
-    if (!frame.is_object() || !frame.contains("file_path")) FailInvalid(where + ": no \"file_path\"");
+    if (!frame.is_object())
+      FailInvalid(where + ": not an object (a frame is {\"file_path\": ..., \"transform_matrix\": ...})");
+    if (!frame.contains("file_path")) FailInvalid(where + ": no \"file_path\"");
     files[i].image = ResolveFile(dir, frame, "file_path", where);
+    const auto [first, added] = frame_of_image.emplace(files[i].image.lexically_normal(), i);
+    if (!added) {
+      FailInvalid(where + ": its file_path " + files[i].image.string() + " is frame " +
+                  std::to_string(first->second) + "'s too; every frame needs an image of its own");
+    }
     if (frame.contains("depth_file_path")) files[i].depth = ResolveFile(dir, frame, "depth_file_path", where);
     if (frame.contains("mask_path")) files[i].tool_mask = ResolveFile(dir, frame, "mask_path", where);
   }

@@ -122,6 +122,17 @@ TEST(ClipFilesTest, ATransformsFileResolvesItsPathsInsideTheClipOnly) {
   EXPECT_NE(message.find("images/b does not exist (also tried adding .png, .jpg, .jpeg, .npy)"),
             std::string::npos)
       << message;
+  // One image for two frames (found 2026-12-05: 3,000 frames of one PNG decoded into gigabytes).
+  WriteBytes(dir / "transforms.json",
+             R"({"frames": [{"file_path": "images/a"}, {"file_path": "./images/a.png"}]})");
+  message = ErrorOf([&] { ListClipFrames(dir.path()); });
+  EXPECT_NE(message.find("transforms.json frame 1: its file_path " + (dir / "images" / "a.png").string() +
+                         " is frame 0's too"),
+            std::string::npos)
+      << message;
+  WriteBytes(dir / "transforms.json", R"({"frames": [1, 2]})");
+  message = ErrorOf([&] { ListClipFrames(dir.path()); });
+  EXPECT_NE(message.find("transforms.json frame 0: not an object"), std::string::npos) << message;
 }
 
 }  // namespace
