@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 #include <google/protobuf/util/json_util.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <nlohmann/json.hpp>
@@ -30,7 +31,10 @@ std::string HumanBytes(std::int64_t bytes) {
 }
 
 std::string HumanDuration(double seconds) {
-  const auto s = static_cast<std::int64_t>(std::llround(std::max(0.0, seconds)));
+  // Clamped to a thousand years: a huge or infinite estimate overflowed the integer (an ETA of
+  // -9223372036854775808s).
+  const auto s =
+      static_cast<std::int64_t>(std::llround(std::clamp(std::isnan(seconds) ? 0.0 : seconds, 0.0, 3.2e10)));
   if (s < 60) return fmt::format("{}s", s);
   if (s < 3600) return fmt::format("{}m{:02}s", s / 60, s % 60);
   return fmt::format("{}h{:02}m", s / 3600, (s % 3600) / 60);

@@ -46,11 +46,15 @@ CLI::Validator TimeBudget() {
       [](const std::string& text) -> std::string {
         const double value = Number(text);
         if (std::isnan(value)) return text + " is not a number";
-        if (value == 0 || value >= kLeastTimeBudgetS) return "";
-        return text + ": expected 0 (no budget) or at least " + std::to_string(int(kLeastTimeBudgetS)) +
-               " seconds (the budget is in seconds, and covers loading, training, evaluation and writing)";
+        if (value == 0 || (value >= kLeastTimeBudgetS && value <= kMostTimeBudgetS)) return "";
+        return text + ": expected 0 (no budget) or " + std::to_string(int(kLeastTimeBudgetS)) + " to " +
+               std::to_string(int(kMostTimeBudgetS)) +
+               " seconds (a week; the budget is in seconds, and covers loading, training, evaluation and "
+               "writing)";
       },
-      "0 or >= " + std::to_string(int(kLeastTimeBudgetS)) + " s", "TimeBudget");
+      "0 or " + std::to_string(int(kLeastTimeBudgetS)) + " to " + std::to_string(int(kMostTimeBudgetS)) +
+          " s",
+      "TimeBudget");
 }
 
 CLI::Validator HoldoutSpacing() {

@@ -14,6 +14,8 @@ inline constexpr int kMaxPriority = 100;
 // A time budget is 0 (none) or at least this many seconds: loading a clip and writing its results take
 // seconds, and a budget of 0.001 or 5 is a unit slip (milliseconds, minutes), not a plan.
 inline constexpr double kLeastTimeBudgetS = 10;
+// ... and at most a week: a larger one is a unit slip too (1e300 ran without end, its ETA overflowing).
+inline constexpr double kMostTimeBudgetS = 7 * 24 * 3600;
 
 // Throws Error(kInvalidArgument) for a name over kMaxJobNameBytes or holding a control character.
 void ValidateJobName(const std::string& name);

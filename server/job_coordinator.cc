@@ -30,10 +30,11 @@ void ValidateOptions(const v1::ReconstructionOptions& options) {
     FailInvalid("options.holdout is " + std::to_string(options.holdout()) +
                 "; expected 0 (none held out) or K >= 2 (every K-th frame)");
   }
-  if (!(options.time_budget_s() == 0 || options.time_budget_s() >= kLeastTimeBudgetS)) {
+  if (!(options.time_budget_s() == 0 ||
+        (options.time_budget_s() >= kLeastTimeBudgetS && options.time_budget_s() <= kMostTimeBudgetS))) {
     FailInvalid("options.time_budget_s is " + std::to_string(options.time_budget_s()) +
-                "; expected 0 (no budget) or at least " + std::to_string(int(kLeastTimeBudgetS)) +
-                " seconds");
+                "; expected 0 (no budget) or " + std::to_string(int(kLeastTimeBudgetS)) + " to " +
+                std::to_string(int(kMostTimeBudgetS)) + " seconds (a week)");
   }
   if (options.config_json().size() > kMaxConfigBytes) {
     FailInvalid("options.config_json has " + std::to_string(options.config_json().size()) +

@@ -290,12 +290,12 @@ TEST_F(AccessControlTest, OverQuotaSubmitsAreRefusedAndNothingIsLost) {
       << "a job count is no file's size: " << fourth.err;
   EXPECT_EQ(fourth.err.find("uploaded"), std::string::npos) << fourth.err;
   // Options the server would refuse are refused before the upload too.
-  // A budget is 0 (none) or at least 10 s: -5 and 0.001 (a unit slip) are refused.
-  for (const std::string budget : {"-5", "0.001"}) {
+  // A budget is 0 (none) or 10 s to a week: -5, 0.001 and 1e300 (unit slips) are refused.
+  for (const std::string budget : {"-5", "0.001", "1e300"}) {
     const auto refused = Cli(alice_, {"submit", cluster_.path("clip2").string(), "--time-budget", budget});
     EXPECT_EQ(refused.exit_code, 2) << refused.err;
     EXPECT_NE(
-        refused.err.find("--time-budget: " + budget + ": expected 0 (no budget) or at least 10 seconds"),
+        refused.err.find("--time-budget: " + budget + ": expected 0 (no budget) or 10 to 604800 seconds"),
         std::string::npos)
         << refused.err;
   }

@@ -157,8 +157,12 @@ TEST_F(JobCoordinatorTest, WhatAClientNamesIsBoundedAndSizesAreTheContents) {
   request.mutable_options()->clear_config_json();
   request.mutable_options()->set_time_budget_s(0.001);  // a unit slip: 0 (none) or >= 10 s
   message = testing::ErrorFrom([&] { coordinator_.Submit(request, AnonymousPrincipal()); });
-  EXPECT_NE(message.find("options.time_budget_s is 0.001000; expected 0 (no budget) or at least 10 seconds"),
+  EXPECT_NE(message.find("options.time_budget_s is 0.001000; expected 0 (no budget) or 10 to 604800 seconds"),
             std::string::npos)
+      << message;
+  request.mutable_options()->set_time_budget_s(1e300);  // without end
+  message = testing::ErrorFrom([&] { coordinator_.Submit(request, AnonymousPrincipal()); });
+  EXPECT_NE(message.find("expected 0 (no budget) or 10 to 604800 seconds (a week)"), std::string::npos)
       << message;
   request.mutable_options()->set_time_budget_s(0);
   std::int64_t stored = 0;

@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 namespace endorecon::client {
 namespace {
 
@@ -132,6 +134,8 @@ TEST(HumanUnits, DurationsAndBytes) {
   EXPECT_EQ(HumanDuration(187), "3m07s");
   EXPECT_EQ(HumanDuration(7500), "2h05m");
   EXPECT_EQ(HumanDuration(-5), "0s");
+  EXPECT_EQ(HumanDuration(1e300), "8888888h53m") << "clamped, not overflowed";
+  EXPECT_EQ(HumanDuration(std::nan("")), "0s");
   EXPECT_EQ(HumanBytes(999), "999 B");
   EXPECT_EQ(HumanBytes(1234567), "1.2 MB");
 }
