@@ -39,7 +39,13 @@ v1::Manifest ListingOfDirectory(const fs::path& dir) {
   for (const auto& file : files) {
     auto* entry = manifest.add_files();
     // Lexically: a symbolic link under `dir` (a staged recording) keeps its own name.
-    entry->set_path(file.lexically_relative(dir).generic_string());
+    const std::string relative = file.lexically_relative(dir).generic_string();
+    try {
+      CheckRelativePath(relative);  // what the server would refuse (a name that is not UTF-8), named here
+    } catch (const Error& e) {
+      FailInvalid(dir.string() + ": " + e.what());
+    }
+    entry->set_path(relative);
     entry->set_size(static_cast<std::int64_t>(fs::file_size(file)));
   }
   return manifest;
