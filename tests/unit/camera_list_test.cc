@@ -82,7 +82,7 @@ TEST(CameraListTest, AViewLargerThanAFrameMayBeIsRefused) {
         std::string(R"({"fl_x": 1, )") + size +
             R"(, "frames": [{"transform_matrix": [[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]}]})");
     const std::string message =
-        testing::ErrorFrom([&] { ReadCameraList(dir / "cameras.json"); }, ErrorCode::kResourceExhausted);
+        testing::ErrorFrom([&] { ReadCameraList(dir / "cameras.json"); }, ErrorCode::kInvalidArgument);
     EXPECT_NE(message.find("frame 0: \"w\" x \"h\""), std::string::npos) << message;
     EXPECT_NE(message.find("exceed the limit of 16777216 pixels per frame"), std::string::npos) << message;
   }

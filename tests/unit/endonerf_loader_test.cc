@@ -338,7 +338,7 @@ TEST_F(EndoNerfLoaderTest, RejectsCamerasFartherApartThanTheDepthBoundsAllow) {
 TEST_F(EndoNerfLoaderTest, RejectsFramesOverTheSizeLimit) {
   LoadOptions options;
   options.max_pixels_per_frame = 47;
-  const std::string message = ErrorFrom([&] { Load(options); }, ErrorCode::kResourceExhausted);
+  const std::string message = ErrorFrom([&] { Load(options); }, ErrorCode::kInvalidArgument);
   EXPECT_NE(message.find("frames of 8x6 (48 pixels) exceed the limit of 47 pixels"), std::string::npos)
       << message;
 }

@@ -42,7 +42,7 @@ TEST(ImageFileTest, AHeaderDeclaringTooManyPixelsIsSaidToBeTooLarge) {
   PutBigEndian(bytes, 29, Crc32(bytes.substr(12, 17)));
   testing::WriteBytes(dir / "big.png", bytes);
   const std::string message =
-      testing::ErrorFrom([&] { DecodeImageFile(dir / "big.png"); }, ErrorCode::kResourceExhausted);
+      testing::ErrorFrom([&] { DecodeImageFile(dir / "big.png"); }, ErrorCode::kInvalidArgument);
   EXPECT_NE(message.find("big.png: the image's header declares more pixels than can be decoded"),
             std::string::npos)
       << message;

@@ -154,7 +154,7 @@ TEST_F(TransformsLoaderTest, RejectsFilesOutsideTheClipsFolder) {
 TEST_F(TransformsLoaderTest, ADeclaredSizeOverTheLimitNamesItsKeys) {
   transforms_["w"] = 64000;
   transforms_["h"] = 48000;
-  const std::string message = ErrorFrom([&] { Load(); }, ErrorCode::kResourceExhausted);
+  const std::string message = ErrorFrom([&] { Load(); }, ErrorCode::kInvalidArgument);
   EXPECT_NE(message.find("transforms.json frame 0: \"w\" x \"h\": frames of 64000x48000"), std::string::npos)
       << message;
 }

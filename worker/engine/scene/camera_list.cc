@@ -30,7 +30,7 @@ std::vector<CameraAtTime> ReadCameraList(const std::filesystem::path& path) {
     // The clips' limit holds for views too (a larger view would not fit in memory to render).
     const std::size_t limit = LoadOptions{}.max_pixels_per_frame;
     if (*w > double(limit) || *h > double(limit)) {
-      Fail(ErrorCode::kResourceExhausted,
+      Fail(ErrorCode::kInvalidArgument,
            where + ": \"w\" x \"h\" exceed the limit of " + std::to_string(limit) + " pixels per frame");
     }
     CheckFrameLimit(int(*w), int(*h), limit, where + ": \"w\" x \"h\"");

@@ -132,9 +132,11 @@ void CheckClipGeometry(const Clip& clip, const std::string& where) {
 void CheckFrameLimit(int width, int height, std::size_t max_pixels, const std::string& where) {
   const auto pixels = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
   if (pixels > max_pixels) {
-    Fail(ErrorCode::kResourceExhausted, where + ": frames of " + SizeText(width, height) + " (" +
-                                            std::to_string(pixels) + " pixels) exceed the limit of " +
-                                            std::to_string(max_pixels) + " pixels per frame");
+    // The input's fault, not a resource another worker has: INVALID_ARGUMENT, so the job fails at once
+    // (as RESOURCE_EXHAUSTED it was retried on three leases and read as vanished workers).
+    Fail(ErrorCode::kInvalidArgument, where + ": frames of " + SizeText(width, height) + " (" +
+                                          std::to_string(pixels) + " pixels) exceed the limit of " +
+                                          std::to_string(max_pixels) + " pixels per frame");
   }
 }
 

@@ -18,7 +18,7 @@ cv::Mat DecodeImageFile(const fs::path& path) {
   } catch (const cv::Exception& e) {
     // OpenCV asserts on a header declaring a size over its limits (tests/fuzz/image_decode_fuzz.cc).
     if (e.err.find("CV_IO_MAX_IMAGE_PIXELS") != std::string::npos) {
-      Fail(ErrorCode::kResourceExhausted,
+      Fail(ErrorCode::kInvalidArgument,
            path.string() +
                ": the image's header declares more pixels than can be decoded (over 2^30; a clip's "
                "frames may have at most 4096 x 4096)");
