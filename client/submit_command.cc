@@ -23,6 +23,7 @@
 #include "common/file_upload.h"
 #include "common/grpc_status.h"
 #include "common/job_bounds.h"
+#include "common/json_file.h"
 #include "common/manifest.h"
 #include "common/prepare_flags_cli.h"
 #include "common/prepare_flags_proto.h"
@@ -67,8 +68,7 @@ v1::ReconstructionOptions OptionsOf(const SubmitFlags& flags) {
       FailInvalid("--config " + flags.config + ": " + std::to_string(options.config_json().size()) +
                   " bytes; at most " + std::to_string(kMaxConfigBytes));
     }
-    const auto config = nlohmann::json::parse(options.config_json(), nullptr, false);
-    if (config.is_discarded() || !config.is_object())
+    if (!ParseJson(options.config_json(), "--config " + flags.config).is_object())
       FailInvalid("--config " + flags.config + ": not a JSON object (as config.json's \"train\")");
   }
   options.set_preset(flags.preset);

@@ -11,6 +11,7 @@
 #include "common/dicom_values.h"
 #include "common/error.h"
 #include "common/job_bounds.h"
+#include "common/json_file.h"
 #include "common/manifest.h"
 #include "common/prepare_flags_proto.h"
 #include "server/job_states.h"
@@ -41,8 +42,8 @@ void ValidateOptions(const v1::ReconstructionOptions& options) {
                 " bytes; at most " + std::to_string(kMaxConfigBytes));
   }
   if (!options.config_json().empty()) {
-    const auto config = nlohmann::json::parse(options.config_json(), nullptr, false);
-    if (config.is_discarded() || !config.is_object()) FailInvalid("options.config_json is not a JSON object");
+    if (!ParseJson(options.config_json(), "options.config_json").is_object())
+      FailInvalid("options.config_json is not a JSON object");
   }
 }
 

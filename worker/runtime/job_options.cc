@@ -1,6 +1,7 @@
 #include "worker/runtime/job_options.h"
 
 #include "common/error.h"
+#include "common/json_file.h"
 
 namespace endorecon::worker {
 
@@ -11,11 +12,7 @@ ReconstructOptions OptionsFor(const v1::Job& job, const std::filesystem::path& j
   options.clip_dir = (job_dir / "clip").string();
   options.out_dir = (job_dir / "out").string();
   if (!o.config_json().empty()) {
-    try {
-      options.config = nlohmann::json::parse(o.config_json());
-    } catch (const nlohmann::json::exception& e) {
-      FailInvalid("job " + job.id() + ": its config is not valid JSON: " + e.what());
-    }
+    options.config = ParseJson(o.config_json(), "job " + job.id() + ": its config");
     if (!options.config.is_object()) FailInvalid("job " + job.id() + ": its config must be a JSON object");
   }
   if (!o.preset().empty()) options.preset = o.preset();

@@ -319,7 +319,9 @@ void ApplyJson(const nlohmann::json& json, TrainConfig& config) {
         const std::string prefix = Pointer(key).to_string();
         if (path == prefix || path.rfind(prefix + "/", 0) == 0) known = true;
       });
-      if (!known) FailInvalid("config: unknown key " + path);
+      if (!known) {
+        FailInvalid("config: unknown key " + (path.size() > 200 ? path.substr(0, 200) + "..." : path));
+      }
     }
   }
   Validate(config);
