@@ -4,18 +4,29 @@
 
 namespace endorecon {
 
-void ValidateJobName(const std::string& name) {
-  if (name.size() > kMaxJobNameBytes) {
-    FailInvalid("name has " + std::to_string(name.size()) + " bytes; at most " +
-                std::to_string(kMaxJobNameBytes));
+namespace {
+
+// `text` is printed in listings and terminals: no control character, at most `most` bytes.
+void CheckPrintable(const std::string& text, std::size_t most, const std::string& what) {
+  if (text.size() > most) {
+    FailInvalid(what + " has " + std::to_string(text.size()) + " bytes; at most " + std::to_string(most));
   }
-  for (const char c : name) {
+  for (const char c : text) {
     const auto byte = static_cast<unsigned char>(c);
     if (byte < 0x20 || byte == 0x7f) {
-      FailInvalid("name holds a control character (byte " + std::to_string(byte) +
-                  "); a job's name is printed in listings and terminals");
+      FailInvalid(what + " holds a control character (byte " + std::to_string(byte) +
+                  "); it is printed in listings and terminals");
     }
   }
+}
+
+}  // namespace
+
+void ValidateJobName(const std::string& name) { CheckPrintable(name, kMaxJobNameBytes, "name"); }
+
+void ValidateWorkerId(const std::string& id) {
+  if (id.empty()) FailInvalid("worker id is empty");
+  CheckPrintable(id, kMaxWorkerIdBytes, "worker id");
 }
 
 void ValidatePriority(int priority) {

@@ -19,6 +19,10 @@ inline constexpr double kMostTimeBudgetS = 7 * 24 * 3600;
 
 // Throws Error(kInvalidArgument) for a name over kMaxJobNameBytes or holding a control character.
 void ValidateJobName(const std::string& name);
+// A worker's id is listed by `endorecon workers` as a job's name is: the same rules, at most
+// kMaxWorkerIdBytes, not empty.
+inline constexpr std::size_t kMaxWorkerIdBytes = 128;
+void ValidateWorkerId(const std::string& id);
 // Throws Error(kInvalidArgument) unless -kMaxPriority <= priority <= kMaxPriority.
 void ValidatePriority(int priority);
 

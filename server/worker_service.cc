@@ -4,6 +4,7 @@
 #include <set>
 
 #include "common/error.h"
+#include "common/job_bounds.h"
 #include "server/file_sender.h"
 
 namespace endorecon::server {
@@ -23,7 +24,7 @@ WorkerServiceImpl::WorkerServiceImpl(CallGuard& guard, JobCoordinator& coordinat
 grpc::Status WorkerServiceImpl::Register(grpc::ServerContext* context, const v1::RegisterRequest* request,
                                          v1::RegisterResponse* response) {
   return guard_.Run(context, {"Register", Access::kWorker, kWrites, ""}, [&](Call&) {
-    if (request->worker_id().empty()) FailInvalid("worker_id is empty");
+    ValidateWorkerId(request->worker_id());
     workers_.Register(*request);
     response->set_lease_ttl_ms(timing_.lease_ttl.count());
     response->set_heartbeat_interval_ms(timing_.heartbeat_interval.count());

@@ -15,6 +15,7 @@
 
 #include "common/cli_checks.h"
 #include "common/error.h"
+#include "common/job_bounds.h"
 #include "common/private_folder.h"
 #include "common/transport_security.h"
 #include "common/warning_pacer.h"
@@ -140,6 +141,11 @@ int Serve(const ServeFlags& flags) {
       ParseDevices(flags.devices, flags.threads, static_cast<int>(std::thread::hardware_concurrency()));
   DescribeDevices(devices);
   const std::string worker_id = flags.id.empty() ? Hostname() + "-" + std::to_string(getpid()) : flags.id;
+  try {  // the server's rule, before anything starts
+    ValidateWorkerId(worker_id);
+  } catch (const Error& e) {
+    FailInvalid("--id: " + std::string(e.what()));
+  }
   WorkerMetrics metrics(
       flags.metrics_port >= 0 ? flags.metrics_host + ":" + std::to_string(flags.metrics_port) : "", devices);
   WorkerClient client(flags.server, SecurityOf(flags), worker_id,
@@ -263,7 +269,8 @@ Command AddServeCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--metrics-port", flags->metrics_port,
                   "Prometheus /metrics port (0 picks one, -1 disables)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(CLI::Range(-1, 65535));
   cmd->add_option("--metrics-host", flags->metrics_host, "interface for /metrics")->capture_default_str();
   cmd->add_option("--work-dir", flags->work_dir, "scratch folder for running jobs (default: in $TMPDIR)");
   cmd->add_option("--min-free-bytes", flags->min_free_bytes,
@@ -272,15 +279,22 @@ Command AddServeCommand(CLI::App& app) {
       ->capture_default_str()
       ->check(AtLeastZero());
   cmd->add_option("--id", flags->id, "worker id (default: hostname-pid)");
+  // Each bounded: --lease-wait -1 busy-polled an idle queue, --threads -3 was taken (found 2026-12-05).
   cmd->add_option("--threads", flags->threads, "engine threads per device (0: cores / devices)")
-      ->capture_default_str();
-  cmd->add_option("--timeout", flags->timeout_s, "deadline of each call in seconds")->capture_default_str();
+      ->capture_default_str()
+      ->check(AtLeastZero());
+  cmd->add_option("--timeout", flags->timeout_s, "deadline of each call in seconds")
+      ->capture_default_str()
+      ->check(AboveZero());
   cmd->add_option("--lease-wait", flags->lease_wait_s, "long-poll for a job this many seconds")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(AboveZero());
   cmd->add_option("--preview-interval", flags->preview_interval_s, "seconds between previews")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(AboveZero());
   cmd->add_option("--checkpoint-interval", flags->checkpoint_interval_s, "seconds between checkpoints")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(AboveZero());
   cmd->add_option("--ca", flags->ca_file, "TLS: verify the server against this CA certificate");
   cmd->add_option("--tls-cert", flags->tls_cert, "client certificate for a server that requires one (mTLS)");
   cmd->add_option("--tls-key", flags->tls_key, "its private key (refused if others may read it)");
