@@ -45,7 +45,10 @@ std::string HintFor(const endorecon::Error& error, const Globals& globals) {
       std::string_view(error.what()).find("Failed parsing HTTP/2") != std::string_view::npos)
     return "\nendorecon: " + globals.server +
            " answers, but not as endorecon-server's job API: is it the metrics or health port?";
-  if (error.code() == endorecon::ErrorCode::kUnavailable && globals.ca_file.empty())
+  // A plaintext channel to a TLS port fails to connect; a call cut mid-way (a server restart) or a
+  // local file that cannot be written has nothing to do with TLS (the hint followed every UNAVAILABLE).
+  if (error.code() == endorecon::ErrorCode::kUnavailable && globals.ca_file.empty() &&
+      std::string_view(error.what()).find("failed to connect to all addresses") != std::string_view::npos)
     return "\nendorecon: if the server uses TLS, pass --ca FILE or set ENDORECON_CA";
   if (error.code() == endorecon::ErrorCode::kUnauthenticated && globals.token_file.empty() &&
       !std::getenv("ENDORECON_TOKEN"))
