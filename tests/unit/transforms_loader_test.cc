@@ -247,6 +247,21 @@ TEST_F(TransformsLoaderTest, RejectsAFieldOfViewNoPinholeCameraHas) {
   EXPECT_EQ(Load().frame_count(), 3);
 }
 
+// cx = 5000 in a 96-pixel frame and fy = 1000 fx trained without a word (found 2026-12-05).
+TEST_F(TransformsLoaderTest, RejectsAPrincipalPointOutsideTheFrameAndPixelsOfNoCamera) {
+  transforms_["cx"] = 5000;
+  ExpectError("transforms.json frame 0", "the principal point (cx = 5000, cy = ");
+  transforms_["cx"] = -1e6;
+  ExpectError("transforms.json frame 0", "lies outside the");
+  transforms_.erase("cx");
+  transforms_.erase("camera_angle_x");
+  transforms_["fl_x"] = 10.0;
+  transforms_["fl_y"] = 10000.0;
+  ExpectError("transforms.json frame 0", "fy / fx is 1000");
+  transforms_["fl_y"] = 15.0;  // 1.5: an anamorphic lens's
+  EXPECT_EQ(Load().frame_count(), 3);
+}
+
 TEST_F(TransformsLoaderTest, RejectsNearNotBelowFar) {
   transforms_.update({{"near", 5}, {"far", 5}});
   ExpectError("transforms.json", "0 <= near < far (near = 5, far = 5)");

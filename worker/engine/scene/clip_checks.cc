@@ -70,6 +70,20 @@ void CheckCamera(const Camera& camera, const std::string& where) {
   if (camera.width <= 0 || camera.height <= 0) {
     FailInvalid(where + ": image size must be positive (" + SizeText(camera.width, camera.height) + ")");
   }
+  // The principal point lies in the frame (a crop may move it off the centre, not out of the image),
+  // and the two focal lengths agree within kMostFocalAspect (square pixels give 1; anamorphic lenses
+  // 1.33 to 2): cx = 5000 in a 96-pixel frame or fy = 1000 fx trained without a word (found 2026-12-05).
+  if (camera.cx < 0 || camera.cx > camera.width || camera.cy < 0 || camera.cy > camera.height) {
+    FailInvalid(where + ": the principal point (cx = " + Number(camera.cx) + ", cy = " + Number(camera.cy) +
+                ") lies outside the " + SizeText(camera.width, camera.height) +
+                " frame (a value in other units, or of another image size?)");
+  }
+  const double aspect = camera.fy / camera.fx;
+  if (aspect > kMostFocalAspect || aspect < 1 / kMostFocalAspect) {
+    FailInvalid(where + ": fy / fx is " + Number(aspect) + " (fx = " + Number(camera.fx) +
+                ", fy = " + Number(camera.fy) + "); pixels are at most " + Number(kMostFocalAspect) +
+                " times as tall as wide or wide as tall");
+  }
   CheckPose(camera.c2w, where);
 }
 

@@ -16,10 +16,12 @@ void CheckPose(const Eigen::Matrix<double, 3, 4>& c2w, const std::string& where)
 
 // Intrinsics: 0 < fx, fy ≤ kMostFocalPixels (a 1e300 focal length trained without a word), a field
 // of view across the frame of at most kMostFieldOfViewDegrees on either axis (a pinhole camera's; a
-// camera_angle_x of pi gave fx = 1e-14 and trained without a word), finite cx, cy, width and
-// height > 0; and the pose (CheckPose).
+// camera_angle_x of pi gave fx = 1e-14 and trained without a word), fy / fx within
+// [1 / kMostFocalAspect, kMostFocalAspect], the principal point (cx, cy) inside the frame
+// ([0, width] x [0, height]), width and height > 0; and the pose (CheckPose).
 constexpr double kMostFocalPixels = 1e9;
 constexpr double kMostFieldOfViewDegrees = 170;
+constexpr double kMostFocalAspect = 4;
 void CheckCamera(const Camera& camera, const std::string& where);
 
 // Depth bounds: finite, 0 ≤ near < far ≤ kMostDepth, and far − near at least kLeastDepthRange of
