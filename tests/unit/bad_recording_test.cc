@@ -70,6 +70,14 @@ TEST_F(BadRecordingTest, EyesOfDifferentLengths) {
   EXPECT_NE(message.find("right frame 5: it ends after 5 frames while"), std::string::npos) << message;
 }
 
+// One eye given twice prepared a clip of 29% depth coverage without a word (found 2026-12-05).
+TEST_F(BadRecordingTest, OneEyeGivenTwice) {
+  auto options = Options();
+  options.recording.right = dir_ / "left" / ".." / "left";
+  const std::string message = Refused(options);
+  EXPECT_NE(message.find("the right eye is the left eye's recording"), std::string::npos) << message;
+}
+
 TEST_F(BadRecordingTest, EyesOfDifferentSizes) {
   fs::remove_all(dir_ / "right");
   for (int i = 0; i < 6; ++i) WriteImage(dir_ / "right" / (std::to_string(i) + ".png"), Texture(i, {64, 40}));
