@@ -13,7 +13,9 @@ namespace endorecon {
 namespace fs = std::filesystem;
 
 v1::Manifest ListingOfDirectory(const fs::path& dir) {
-  if (!fs::is_directory(dir)) Fail(ErrorCode::kNotFound, "not a directory: " + dir.string());
+  std::error_code error;
+  if (!fs::exists(dir, error)) Fail(ErrorCode::kNotFound, dir.string() + ": no such file or folder");
+  if (!fs::is_directory(dir, error)) Fail(ErrorCode::kNotFound, "not a directory: " + dir.string());
   std::vector<fs::path> files;
   // Linked folders are followed (their files are the clip's); an entry that is neither a folder nor a
   // regular file (a broken or looping link, a pipe, a socket) is named: skipped, the clip would

@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cstdio>
 #include <memory>
 
@@ -144,11 +145,13 @@ Command AddReconstructCommand(CLI::App& app) {
         return;
       }
       const double percent = p.total_iterations > 0 ? 100.0 * p.iteration / p.total_iterations : 0.0;
+      // No held-out frames (or none scored yet): -1, not shown as a PSNR.
+      const std::string heldout =
+          p.heldout_psnr >= 0 ? fmt::format("  held-out {:5.2f} dB", p.heldout_psnr) : "";
       std::fprintf(stderr,
-                   "\r iter %6d/%d %5.1f%%  ETA %5.0fs  loss %.4f  PSNR %5.2f dB  held-out %5.2f dB  %.2f M "
-                   "samples/s ",
-                   p.iteration, p.total_iterations, percent, p.eta_s, p.loss, p.train_psnr, p.heldout_psnr,
-                   p.samples_per_second / 1e6);
+                   "\r iter %6d/%d %5.1f%%  ETA %5.0fs  loss %.4f  PSNR %5.2f dB%s  %.2f M samples/s ",
+                   p.iteration, p.total_iterations, percent, std::min(p.eta_s, 1e9), p.loss, p.train_psnr,
+                   heldout.c_str(), p.samples_per_second / 1e6);
     };
     const ReconstructSummary summary = Reconstruct(*options, hooks);
     std::fprintf(stderr, "\n");
