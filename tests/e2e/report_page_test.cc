@@ -278,6 +278,8 @@ TEST(ReportPageTest, RenderWritesAPageOfItsViews) {
   ASSERT_TRUE(browser->WaitFor("document.body.dataset.ready === 'true'", std::chrono::seconds(20)));
   EXPECT_EQ(browser->Evaluate("document.querySelectorAll('#panels img[data-layer]').length"), 4)
       << "rendered, depth, uncertainty and the model map";
+  // render.json's numbers as a reconstruction's are shown (999999995904 was printed as it is stored).
+  EXPECT_EQ(browser->Evaluate("document.querySelector('[data-render=\"/lambda\"]').textContent"), "1.00e+12");
   EXPECT_TRUE(browser->problems().empty()) << fmt::format("{}", fmt::join(browser->problems(), "\n"));
 }
 

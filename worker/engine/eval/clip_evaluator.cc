@@ -468,7 +468,8 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
     const auto& plain = what.plain->settings();
     how["reduced"] = fmt::format(
         "colour and depth from one dropout-off pass at every pixel ({0} + {1} samples per ray); uncertainty "
-        "from the dropout passes at every {2}th pixel of every {2}th row, bilinearly upsampled; their "
+        "from the dropout passes on a grid of one pixel in {2} of one row in {2}, bilinearly upsampled; "
+        "their "
         "calibration on that grid, against the error of the dropout passes' mean colour there",
         plain.coarse_samples, plain.fine_samples, what.plan.stride);
   }

@@ -33,8 +33,16 @@
   // `precision` that many significant digits; `factor` scales it for display (e.g. 100 for %).
   function metricSpan(pointer, format, source) {
     const f = Object.assign({ digits: 2, factor: 1 }, format || {});
-    const value = lookup(source === "config" ? data.config : metrics, pointer);
-    const attributes = { [source === "config" ? "data-config" : "data-metric"]: pointer };
+    const value = lookup(
+        source === 'config'     ? data.config :
+            source === 'render' ? data.render :
+                                  metrics,
+        pointer);
+    const attributes = {
+      [source === 'config'     ? 'data-config' :
+           source === 'render' ? 'data-render' :
+                                 'data-metric']: pointer
+    };
     if (f.factor !== 1) attributes["data-factor"] = f.factor;
     let text = "\u2014";
     if (typeof value === "number") {
@@ -86,7 +94,10 @@
   $("title").textContent = data.kind === "render" ? `endorecon views: ${data.title}` : `endorecon report: ${data.title}`;
   document.title = $("title").textContent;
   const subtitle = [];
-  if (frames) subtitle.push(`${frames.count} ${data.kind === "render" ? "views" : "frames"}, ${frames.source_width}\u00d7${frames.source_height} pixels`);
+  if (frames) {
+    const noun = (data.kind === 'render' ? 'view' : 'frame') + (frames.count === 1 ? '' : 's');
+    subtitle.push(`${frames.count} ${noun}, ${frames.source_width}\u00d7${frames.source_height} pixels`);
+  }
   subtitle.push(`written ${data.run.written}`, `endorecon ${data.run.version}`);
   if (metrics.cancelled) subtitle.push("CANCELLED before the end: no frames were evaluated");
   $("subtitle").textContent = subtitle.join(" \u00b7 ");
@@ -410,8 +421,9 @@
   // The uncertainty estimator's settings: metrics.json's for a reconstruction, render.json's for views.
   const settings = metrics.uncertainty_maps || data.render;
   if (settings && settings.mc_passes !== undefined) {
-    const number = (key, format) => (data.metrics ? metricSpan(`/uncertainty_maps/${key}`, format)
-                                                  : String(settings[key]));
+    const number = (key, format) =>
+        (data.metrics ? metricSpan(`/uncertainty_maps/${key}`, format) :
+                        metricSpan(`/${key}`, format, 'render'));
     runRows.push(["uncertainty", [`${settings.score}; `, number("mc_passes", { digits: 0 }), " dropout passes, lambda ",
                                   number("lambda", { precision: 3 }), ", variance floor ",
                                   number("variance_eps", { precision: 3 })]]);
