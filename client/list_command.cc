@@ -3,6 +3,7 @@
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <cctype>
 #include <iostream>
 
 #include "client/commands.h"
@@ -25,7 +26,9 @@ int List(const Globals& globals, const ListFlags& flags) {
   v1::ListJobsRequest request;
   for (const auto& name : flags.states) {
     v1::JobState state;
-    if (!v1::JobState_Parse(name, &state))
+    std::string upper = name;  // `--state queued` as `--state QUEUED`
+    for (char& c : upper) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+    if (!v1::JobState_Parse(upper, &state))
       FailInvalid("--state " + name + ": expected QUEUED, RUNNING, SUCCEEDED, FAILED or CANCELLED");
     request.add_states(state);
   }

@@ -287,7 +287,7 @@ Command AddSubmitCommand(CLI::App& app) {
   sub->add_option("--holdout", flags->holdout,
                   "hold out every K-th frame (0: none, else K >= 2; default: the preset's)")
       ->check(HoldoutSpacing());
-  sub->add_option("--seed", flags->seed, "random seed");
+  sub->add_option("--seed", flags->seed, "random seed")->check(CLI::NonNegativeNumber);
   sub->add_flag("--static", flags->force_static, "treat the clip as static (no deformation)");
   sub->add_option("--priority", flags->priority, "higher runs first, -100 to 100 (default 0)")
       ->check(CLI::Range(-kMaxPriority, kMaxPriority));

@@ -226,8 +226,15 @@ std::vector<FrameFiles> ListClipFrames(const fs::path& dir) {
                 ": not a clip: found neither transforms.json (transforms.json layout) nor poses_bounds.npy "
                 "(EndoNeRF layout)");
   }
-  if (*layout == ClipLayout::kTransforms)
+  if (*layout == ClipLayout::kTransforms) {
+    if (fs::exists(dir / "poses_bounds.npy")) {
+      spdlog::warn(
+          "{}: holds both transforms.json and poses_bounds.npy; transforms.json is read, "
+          "poses_bounds.npy left aside (remove the one that does not describe the frames)",
+          dir.string());
+    }
     return ListTransformsFrames(dir, ReadJsonFile(dir / "transforms.json"));
+  }
   const fs::path poses = dir / "poses_bounds.npy";
   if (!fs::exists(poses)) FailInvalid(poses.string() + ": file does not exist");
   return ListEndoNerfFrames(dir, PoseRowCount(ReadNpy(poses), poses));

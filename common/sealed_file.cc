@@ -62,8 +62,14 @@ std::ifstream OpenSealedFile(const std::filesystem::path& path, const char (&mag
   if (!in) Fail(ErrorCode::kNotFound, "cannot read " + name + " " + path.string());
   char found[8] = {};
   in.read(found, 8);
-  if (!in || !std::equal(found, found + 7, magic))
-    FailInvalid(path.string() + " is not an endorecon " + name + " file");
+  if (!in || !std::equal(found, found + 7, magic)) {
+    // Another of endorecon's sealed files (a checkpoint where a model goes): say which it is.
+    const bool ours = in && std::equal(found, found + 4, magic) &&
+                      std::all_of(found + 4, found + 8, [](char c) { return c >= '0' && c <= 'Z'; });
+    FailInvalid(
+        path.string() + " is not an endorecon " + name + " file" +
+        (ours ? " but another of endorecon's files (its header says " + std::string(found, 8) + ")" : ""));
+  }
   if (found[7] != magic[7]) {
     FailInvalid(path.string() + ": an endorecon " + name + " of format " + std::string(1, found[7]) +
                 "; this build reads format " + std::string(1, magic[7]));

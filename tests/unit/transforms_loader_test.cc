@@ -262,6 +262,14 @@ TEST_F(TransformsLoaderTest, RejectsAPrincipalPointOutsideTheFrameAndPixelsOfNoC
   EXPECT_EQ(Load().frame_count(), 3);
 }
 
+// A fisheye's pixels map to rays another way: ignored without a word until 2026-12-05.
+TEST_F(TransformsLoaderTest, RejectsACameraModelThatIsNoPinhole) {
+  transforms_["camera_model"] = "OPENCV";
+  EXPECT_EQ(Load().frame_count(), 3);
+  transforms_["camera_model"] = "OPENCV_FISHEYE";
+  ExpectError("transforms.json", "\"camera_model\" OPENCV_FISHEYE is not a pinhole camera's");
+}
+
 TEST_F(TransformsLoaderTest, RejectsNearNotBelowFar) {
   transforms_.update({{"near", 5}, {"far", 5}});
   ExpectError("transforms.json", "0 <= near < far (near = 5, far = 5)");

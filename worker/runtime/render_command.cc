@@ -6,6 +6,7 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 
+#include "common/error.h"
 #include "common/file_write.h"
 #include "common/output_folder.h"
 #include "worker/engine/eval/clip_evaluator.h"
@@ -36,12 +37,19 @@ Command AddRenderCommand(CLI::App& app) {
   cmd->add_option("-o,--out", args->out, "output folder (rgb/, depth/, uncertainty/)")->required();
   cmd->add_option("--mc-passes", args->mc_passes,
                   "dropout passes for the uncertainty maps (default: the model's, 0: no uncertainty)")
-      ->check(CLI::Range(0, 1024));
+      ->check(CLI::Range(0, 64));  // a configuration's mc_passes bound
   cmd->add_option("--device", args->device, "where the views are rendered: cpu or cuda:N")
       ->capture_default_str();
   return [args] {
     // Refuses, naming the reason, a device this build or machine cannot use (before reading anything).
     const render::RenderBackendFactory backend = BackendsFor(args->device).render;
+    const std::filesystem::path result(args->result);
+    if (!std::filesystem::is_directory(result))
+      FailInvalid(args->result + ": no such folder (render takes the results folder of a reconstruction)");
+    if (!std::filesystem::exists(result / "model" / "model.bin")) {
+      FailInvalid(args->result + ": not a reconstruction's results folder (it has no model/model.bin" +
+                  (std::filesystem::exists(result / "render.json") ? "; it holds rendered views)" : ")"));
+    }
     const train::Model model = train::ReadModel(std::filesystem::path(args->result) / "model" / "model.bin");
     const auto cameras = scene::ReadCameraList(args->cameras);
     auto settings = train::UncertaintyRenderSettings(model.config, model.near, model.far, 0);

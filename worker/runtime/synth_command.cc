@@ -33,7 +33,9 @@ Command AddSynthCommand(CLI::App& app) {
   cmd->add_option("--height", options->height, "frame height (with --object default 200)")
       ->capture_default_str()
       ->check(CLI::Range(8, 8192));
-  cmd->add_option("--seed", options->seed, "random seed")->capture_default_str();
+  cmd->add_option("--seed", options->seed, "random seed")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
   cmd->add_flag("--static", options->static_scene, "nothing moves");
   cmd->add_flag("--no-tool", flags->first, "no tool, no masks/ folder");
   cmd->add_flag("--no-depth", flags->second, "no depth/ folder");

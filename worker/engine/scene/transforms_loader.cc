@@ -38,6 +38,23 @@ void WarnAboutDistortion(const json& top, const std::string& file) {
   }
 }
 
+// nerfstudio's camera models other than a pinhole's (OPENCV_FISHEYE, EQUIRECTANGULAR) map pixels to
+// rays another way, which the pinhole rays here would get wrong everywhere but the centre: refused
+// (it was ignored without a word; found 2026-12-05). OPENCV and SIMPLE_PINHOLE are pinholes with or
+// without distortion (warned of above).
+void CheckCameraModel(const json& top, const std::string& file) {
+  if (!top.contains("camera_model")) return;
+  const json& model = top["camera_model"];
+  if (!model.is_string()) FailInvalid(file + ": \"camera_model\" must be a string, found " + model.dump());
+  const std::string name = model;
+  for (const char* pinhole : {"OPENCV", "PINHOLE", "SIMPLE_PINHOLE", "SIMPLE_RADIAL", "RADIAL"}) {
+    if (name == pinhole) return;
+  }
+  FailInvalid(file + ": \"camera_model\" " + name +
+              " is not a pinhole camera's; undistort the images to a pinhole camera (e.g. COLMAP's "
+              "image_undistorter) and give OPENCV or PINHOLE");
+}
+
 // The size named by "w"/"h" (top level or per frame), which every frame must agree on; 0x0 if none.
 void DeclaredSize(const json& top, const std::string& file, std::size_t max_pixels, Clip& clip) {
   const json& frames = top["frames"];
@@ -69,6 +86,7 @@ Clip LoadTransformsClip(const fs::path& dir, const LoadOptions& options) {
   const std::string file = path.string();
   const json top = ReadJsonFile(path);
   const std::vector<FrameFiles> files = ListTransformsFrames(dir, top);
+  CheckCameraModel(top, file);
   WarnAboutDistortion(top, file);
 
   Clip clip;
