@@ -256,11 +256,15 @@ bool RunLeasedJob(WorkerClient& client, const v1::LeaseResponse& lease, const De
   int last_iteration = 0;
   bool disk_full = false;
   try {
-    client.GetFiles(lease.lease_id(), job_dir / "clip", job.clip());
+    // A server restart mid-download is waited out while the lease is held, as the results' upload is
+    // (it cost the job an attempt; found 2026-12-05); what arrived is kept and the rest resumed.
+    WhileLeaseHeld(client, reporter,
+                   [&] { client.GetFiles(lease.lease_id(), job_dir / "clip", job.clip()); });
     if (job.has_checkpoint() && !job.checkpoint().sha256().empty()) {
       v1::Manifest checkpoint;
       *checkpoint.add_files() = job.checkpoint();
-      client.GetFiles(lease.lease_id(), job_dir / "checkpoint", checkpoint);
+      WhileLeaseHeld(client, reporter,
+                     [&] { client.GetFiles(lease.lease_id(), job_dir / "checkpoint", checkpoint); });
     }
     fs::remove_all(job_dir / "out");
     auto options = OptionsFor(job, job_dir, device);
