@@ -222,7 +222,8 @@ int Submit(const Globals& globals, const SubmitFlags& flags) {
       staged               ? staged->name()
       : flags.clip.empty() ? "pacs " + flags.pacs
                            : std::filesystem::path(flags.clip).lexically_normal().filename().string();
-  request.set_name(flags.name.empty() ? default_name : flags.name);
+  // A folder's name is no chosen name: made valid, not refused after the upload (a newline in it was).
+  request.set_name(flags.name.empty() ? ValidJobName(default_name) : flags.name);
   v1::Job job;
   auto context = CallContext(globals.timeout());
   ThrowIfFailed(stub->Submit(context.get(), request, &job), "submit");

@@ -1,6 +1,7 @@
 #include "common/job_bounds.h"
 
 #include "common/error.h"
+#include "common/safe_path.h"
 
 namespace endorecon {
 
@@ -23,6 +24,20 @@ void CheckPrintable(const std::string& text, std::size_t most, const std::string
 }  // namespace
 
 void ValidateJobName(const std::string& name) { CheckPrintable(name, kMaxJobNameBytes, "name"); }
+
+std::string ValidJobName(std::string name) {
+  const bool utf8 = IsUtf8(name);
+  for (char& c : name) {
+    const auto byte = static_cast<unsigned char>(c);
+    if (byte < 0x20 || byte == 0x7f || (!utf8 && byte >= 0x80)) c = '?';
+  }
+  if (name.size() > kMaxJobNameBytes) {
+    std::size_t end = kMaxJobNameBytes;
+    while (end > 0 && (static_cast<unsigned char>(name[end]) & 0xC0) == 0x80) --end;  // not mid-character
+    name.resize(end);
+  }
+  return name;
+}
 
 void ValidateWorkerId(const std::string& id) {
   if (id.empty()) FailInvalid("worker id is empty");

@@ -19,6 +19,9 @@ inline constexpr double kMostTimeBudgetS = 7 * 24 * 3600;
 
 // Throws Error(kInvalidArgument) for a name over kMaxJobNameBytes or holding a control character.
 void ValidateJobName(const std::string& name);
+// A name made from what the user did not choose as a name (a clip's folder name), made valid:
+// control characters and bytes of no UTF-8 text as '?', cut to kMaxJobNameBytes on a character's end.
+std::string ValidJobName(std::string name);
 // A worker's id is listed by `endorecon workers` as a job's name is: the same rules, at most
 // kMaxWorkerIdBytes, not empty.
 inline constexpr std::size_t kMaxWorkerIdBytes = 128;

@@ -16,8 +16,27 @@ namespace {
   FailInvalid(message);
 }
 
-// Well-formed UTF-8 (RFC 3629: no overlong forms, no surrogates, nothing past U+10FFFF). Written
-// out: the few lines no library here offers without its internals (protobuf's check is internal).
+// The path with every byte that is not printable ASCII as \xNN, for a message about its name.
+std::string Escaped(std::string_view path) {
+  std::string out;
+  for (const char ch : path.substr(0, 256)) {
+    const auto c = static_cast<unsigned char>(ch);
+    if (c >= 0x20 && c < 0x7F) {
+      out += ch;
+    } else {
+      static constexpr char kHex[] = "0123456789abcdef";
+      out += "\\x";
+      out += kHex[c >> 4];
+      out += kHex[c & 15];
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+// Written out: the few lines no library here offers without its internals (protobuf's check is
+// internal).
 bool IsUtf8(std::string_view text) {
   std::size_t i = 0;
   while (i < text.size()) {
@@ -47,25 +66,6 @@ bool IsUtf8(std::string_view text) {
   }
   return true;
 }
-
-// The path with every byte that is not printable ASCII as \xNN, for a message about its name.
-std::string Escaped(std::string_view path) {
-  std::string out;
-  for (const char ch : path.substr(0, 256)) {
-    const auto c = static_cast<unsigned char>(ch);
-    if (c >= 0x20 && c < 0x7F) {
-      out += ch;
-    } else {
-      static constexpr char kHex[] = "0123456789abcdef";
-      out += "\\x";
-      out += kHex[c >> 4];
-      out += kHex[c & 15];
-    }
-  }
-  return out;
-}
-
-}  // namespace
 
 void CheckRelativePath(std::string_view path) {
   if (path.empty()) Reject(path, "is empty");

@@ -10,4 +10,8 @@ namespace endorecon {
 // empty, "." or ".." segments, no backslash, no NUL and at most 4096 bytes.
 void CheckRelativePath(std::string_view path);
 
+// Whether `text` is well-formed UTF-8 (RFC 3629: no overlong forms, no surrogates, nothing past
+// U+10FFFF), as protobuf's strings must be.
+bool IsUtf8(std::string_view text);
+
 }  // namespace endorecon
