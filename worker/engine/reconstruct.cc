@@ -223,10 +223,10 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
       });
       if (reduced > 0) {
         spdlog::warn(
-            "the time budget cannot afford every held-out frame with all dropout passes: {} of {} "
-            "are planned reduced (full again if the frames run ahead; metrics.json: "
-            "evaluation.heldout_reduced)",
-            reduced, split.heldout.size());
+            "the time budget cannot afford every held-out frame {}: {} of {} are planned reduced (full again "
+            "if the frames run ahead; metrics.json: evaluation.heldout_reduced)",
+            config.mc_passes > 0 ? "with all dropout passes" : "at full quality", reduced,
+            split.heldout.size());
       }
       if (options.time_budget_s > 0 && what.plan.seconds > left + slack) {
         spdlog::warn(

@@ -466,12 +466,16 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
     // Frames whose maps took a coarser stride to keep the deadline (the plan's prices were low).
     if (!coarser.empty()) how["uncertainty_stride_late"] = coarser;
     const auto& plain = what.plain->settings();
-    how["reduced"] = fmt::format(
-        "colour and depth from one dropout-off pass at every pixel ({0} + {1} samples per ray); uncertainty "
-        "from the dropout passes on a grid of one pixel in {2} of one row in {2}, bilinearly upsampled; "
-        "their "
-        "calibration on that grid, against the error of the dropout passes' mean colour there",
-        plain.coarse_samples, plain.fine_samples, what.plan.stride);
+    how["reduced"] =
+        uncertain ? fmt::format(
+                        "colour and depth from one dropout-off pass at every pixel ({0} + {1} samples per "
+                        "ray); uncertainty from the dropout passes on a grid of one pixel in {2} of one row "
+                        "in {2}, bilinearly upsampled; their calibration on that grid, against the error "
+                        "of the dropout passes' mean colour there",
+                        plain.coarse_samples, plain.fine_samples, what.plan.stride)
+                  : fmt::format(
+                        "colour and depth from one pass at every pixel with fewer samples ({} + {} per ray)",
+                        plain.coarse_samples, plain.fine_samples);
   }
   how["seconds"] = {{"render", render_seconds},
                     {"model_maps", model_map_seconds},
