@@ -133,6 +133,10 @@ TEST(TrainConfigTest, JsonRoundTripKeepsEveryKey) {
   for (const auto& [key, value] : json.items()) top.insert(key);
   EXPECT_EQ(top, expected_top);
   EXPECT_EQ(json.at("adam").size(), 7u);
+  // Floats as the shortest decimals that read back as them: config.json showed 0.800000011920929.
+  EXPECT_EQ(json.at("adam").at("beta1").get<double>(), 0.8);
+  EXPECT_EQ(json.at("adam").at("eps").get<double>(), 1e-7);
+  EXPECT_EQ(json.at("adam").at("lr").at("color").get<double>(), 0.25);
   // encoding, frequencies, grids, blend_hidden, deformation, heads, exposure_times, learned_background,
   // trained_times
   EXPECT_EQ(json.at("field").size(), 9u);

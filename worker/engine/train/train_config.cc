@@ -1,10 +1,16 @@
 #include "worker/engine/train/train_config.h"
 
+#include <fmt/format.h>
+
+#include <array>
+#include <charconv>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <type_traits>
+#include <vector>
 
 #include "common/error.h"
 
@@ -279,10 +285,41 @@ void BackgroundColor(const TrainConfig& config, float (&rgb)[3]) {
   rgb[0] = rgb[1] = rgb[2] = v;
 }
 
+namespace {
+
+// A float as the shortest decimal that reads back as it (0.9, not 0.8999999761581421 as its double
+// has it; config.json and the report showed the latter).
+double ShortestDecimal(float value) {
+  if (!std::isfinite(value)) return value;
+  const std::string text = fmt::format("{}", value);  // the shortest that reads back as `value`
+  double shortest = value;
+  std::from_chars(text.data(), text.data() + text.size(), shortest);  // locale-free, unlike stod
+  return shortest;
+}
+
+template <typename T>
+nlohmann::json ConfigValue(const T& value) {
+  if constexpr (std::is_same_v<T, float>) {
+    return ShortestDecimal(value);
+  } else if constexpr (std::is_same_v<T, std::map<std::string, float>>) {
+    nlohmann::json object = nlohmann::json::object();
+    for (const auto& [name, number] : value) object[name] = ShortestDecimal(number);
+    return object;
+  } else if constexpr (std::is_same_v<T, std::vector<float>> || std::is_same_v<T, std::array<float, 2>>) {
+    nlohmann::json array = nlohmann::json::array();
+    for (const float number : value) array.push_back(ShortestDecimal(number));
+    return array;
+  } else {
+    return value;
+  }
+}
+
+}  // namespace
+
 nlohmann::json ToJson(const TrainConfig& config) {
   nlohmann::json json;
   TrainConfig copy = config;
-  VisitKeys(copy, [&](const char* key, auto& value) { json[Pointer(key)] = value; });
+  VisitKeys(copy, [&](const char* key, auto& value) { json[Pointer(key)] = ConfigValue(value); });
   return json;
 }
 
