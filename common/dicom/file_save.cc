@@ -30,7 +30,7 @@ void SaveFile(DcmFileFormat& file, const std::filesystem::path& path, E_Transfer
   file.transferInit();
   OFCondition written = EC_StreamNotifyClient;
   while (written == EC_StreamNotifyClient) {
-    written = file.write(stream, xfer, EET_ExplicitLength, nullptr);
+    written = file.write(stream, xfer, EET_UndefinedLength, nullptr);  // as saveFile's default
     take();
   }
   file.transferEnd();

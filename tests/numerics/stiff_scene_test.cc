@@ -63,12 +63,19 @@ TEST(StiffScene, ShortReconstructionHasNoNanOrInf) {
     std::snprintf(name, sizeof(name), "%06d.npy", f);
     const NpyArray depth = ReadNpy(dir / "out" / "depth" / name);
     ASSERT_EQ(depth.size(), std::size_t(clip.width * clip.height));
+    std::size_t without_surface = 0;
     for (double d : depth.data) {
       ASSERT_TRUE(std::isfinite(d)) << "depth/" << name;
-      // Evaluation depth is sum w_j s_j + (1 - opacity) far: within [near, far] up to float rounding.
+      // 0 where the ray met no surface (opacity under eval::kSurfaceOpacity); elsewhere sum w_j s_j +
+      // (1 - opacity) far: within [near, far] up to float rounding.
+      if (d == 0) {
+        ++without_surface;
+        continue;
+      }
       ASSERT_GE(d, clip.near - 1e-3) << "depth/" << name;
       ASSERT_LE(d, clip.far + 1e-3) << "depth/" << name;
     }
+    EXPECT_LT(without_surface, depth.size() / 10) << "depth/" << name << ": the tissue is a surface";
   }
   const train::Model model = train::ReadModel(dir / "out" / "model" / "model.bin");
   for (const auto& block : model.field->Blocks()) {

@@ -73,11 +73,15 @@ TEST(CheckerboardCalibrationTest, OneEyesViewsGivenTwiceAreRefused) {
   TempDir dir("checkerboard");
   scene::WriteSyntheticClip(RecordingOptions(320, 256, 1, 8), dir / "synth");
   const prepare::CheckerboardOptions board = SyntheticBoard();
-  const prepare::RecordingInput recording{prepare::StereoLayout::kTwoSources,
-                                          dir / "synth/recording/checkerboard/left",
-                                          dir / "synth/recording/checkerboard/left",
-                                          {}};
-  const std::string message = ErrorFrom([&] { prepare::CalibrateFromCheckerboard(recording, board); });
+  const std::filesystem::path left = dir / "synth/recording/checkerboard/left";
+  // The same folder for both eyes is named as such before a view is read; a copy of it is found by
+  // the calibration.
+  const prepare::RecordingInput same{prepare::StereoLayout::kTwoSources, left, left, {}};
+  std::string message = ErrorFrom([&] { prepare::CalibrateFromCheckerboard(same, board); });
+  EXPECT_NE(message.find("the right eye is the left eye's recording"), std::string::npos) << message;
+  std::filesystem::copy(left, dir / "copy");
+  const prepare::RecordingInput copy{prepare::StereoLayout::kTwoSources, left, dir / "copy", {}};
+  message = ErrorFrom([&] { prepare::CalibrateFromCheckerboard(copy, board); });
   EXPECT_NE(message.find("are the left and right images the same eye's?"), std::string::npos) << message;
 }
 
