@@ -39,7 +39,7 @@ class PartialFile {
     if (offset > have) FailInvalid("download of '" + entry.path() + "' starts past its partial file");
     if (fs::exists(part)) fs::resize_file(part, static_cast<std::uintmax_t>(offset));
     out_.open(part, std::ios::binary | std::ios::app);
-    if (!out_) Fail(ErrorCode::kUnavailable, "cannot write " + part.string());
+    if (!out_) Fail(ErrorCode::kInternal, "cannot write " + part.string());
     written_ = offset;
   }
 
@@ -73,10 +73,12 @@ class PartialFile {
  private:
   // A write the disk refused says so, with the system's words (a full disk is RESOURCE_EXHAUSTED and
   // reads "No space left on device", which the job runner takes for its scratch folder's fault).
-  // Unchecked, the short file failed its digest and was reported as data lost in transit.
+  // Unchecked, the short file failed its digest and was reported as data lost in transit. Any other
+  // local failure is INTERNAL, not UNAVAILABLE: it is no server's, and a call retried while the server
+  // is unavailable would retry it for ever (the CLI said "server unavailable" for a file too large).
   [[noreturn]] void WriteFailed(int error) const {
     const bool full = error == ENOSPC || error == EDQUOT;
-    Fail(full ? ErrorCode::kResourceExhausted : ErrorCode::kUnavailable,
+    Fail(full ? ErrorCode::kResourceExhausted : ErrorCode::kInternal,
          "cannot write " + PartPath(target_).string() + ": " +
              (error != 0 ? std::strerror(error) : "the write failed") + "; what arrived so far is kept");
   }
@@ -138,7 +140,7 @@ void SyncFolder(const fs::path& dir) {
   if (fd < 0 || ::syncfs(fd) != 0) {
     const int error = errno;
     if (fd >= 0) ::close(fd);
-    Fail(ErrorCode::kUnavailable, "cannot write " + dir.string() + " to its disk: " + std::strerror(error));
+    Fail(ErrorCode::kInternal, "cannot write " + dir.string() + " to its disk: " + std::strerror(error));
   }
   ::close(fd);
 }

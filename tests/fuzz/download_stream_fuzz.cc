@@ -25,7 +25,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const auto messages = fuzz::MessagesOf<v1::FileChunk>(data, size);
   fuzz::ClientStreamOf<v1::FileChunk> stream(messages);
   fuzz::Accepts([&] { ReceiveFiles(stream, dir); },
-                {ErrorCode::kInvalidArgument, ErrorCode::kDataLoss, ErrorCode::kUnavailable});
+                {ErrorCode::kInvalidArgument, ErrorCode::kDataLoss, ErrorCode::kUnavailable,
+                 ErrorCode::kInternal});                   // a local write that failed
   std::set<std::pair<std::string, std::string>> promised;  // (path, sha256) of every file header
   for (const auto& chunk : messages) {
     if (chunk.has_file()) promised.emplace(chunk.file().path(), chunk.file().sha256());

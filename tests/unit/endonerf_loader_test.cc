@@ -4,6 +4,7 @@
 #include <spdlog/sinks/ostream_sink.h>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -123,6 +124,24 @@ TEST_F(EndoNerfLoaderTest, PosesFarFromTheOriginLoadWithAWarningOfCoarseResults)
   spdlog::default_logger()->sinks().pop_back();
   EXPECT_EQ(clip.frame_count(), kFrames);
   EXPECT_NE(log.str().find("single-precision coordinates step by about 119"), std::string::npos) << log.str();
+}
+
+// A stereo.json without images_right/, and frames that are all black, loaded without a word until
+// 2026-12-05.
+TEST_F(EndoNerfLoaderTest, AStereoFileWithoutItsEyeAndBlackFramesAreWarnedOf) {
+  testing::WriteBytes(dir_ / "stereo.json", R"({"baseline": 5})");
+  std::ostringstream log;
+  const auto sink = std::make_shared<spdlog::sinks::ostream_sink_mt>(log);
+  spdlog::default_logger()->sinks().push_back(sink);
+  EXPECT_FALSE(LoadClip(dir_.path()).has_stereo());
+  EXPECT_EQ(log.str().find("every frame is black"), std::string::npos) << log.str();
+  for (int i = 0; i < kFrames; ++i)
+    WriteImage(dir_ / "images" / Name(i), cv::Mat(kH, kW, CV_8UC3, cv::Scalar(1, 1, 1)));
+  const Clip black = LoadClip(dir_.path());
+  spdlog::default_logger()->sinks().pop_back();
+  EXPECT_EQ(int(*std::max_element(black.rgb[0].begin(), black.rgb[0].end())), 1) << "nearly black frames";
+  EXPECT_NE(log.str().find("stereo.json without images_right/"), std::string::npos) << log.str();
+  EXPECT_NE(log.str().find("every frame is black"), std::string::npos) << log.str();
 }
 
 TEST_F(EndoNerfLoaderTest, ReadsSixteenBitAndNpyDepth) {

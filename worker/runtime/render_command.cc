@@ -50,7 +50,7 @@ Command AddRenderCommand(CLI::App& app) {
       FailInvalid(args->result + ": not a reconstruction's results folder (it has no model/model.bin" +
                   (std::filesystem::exists(result / "render.json") ? "; it holds rendered views)" : ")"));
     }
-    const train::Model model = train::ReadModel(std::filesystem::path(args->result) / "model" / "model.bin");
+    const train::Model model = train::ReadModel(result / "model" / "model.bin");
     const auto cameras = scene::ReadCameraList(args->cameras);
     auto settings = train::UncertaintyRenderSettings(model.config, model.near, model.far, 0);
     if (args->mc_passes >= 0) settings.mc_passes = args->mc_passes;

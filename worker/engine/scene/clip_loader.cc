@@ -1,6 +1,11 @@
 #include "worker/engine/scene/clip_loader.h"
 
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <cstdint>
 #include <optional>
+#include <vector>
 
 #include "common/clip_files.h"
 #include "common/error.h"
@@ -70,6 +75,13 @@ Clip LoadClip(const fs::path& dir, const LoadOptions& options) {
   }
   if (fs::is_directory(dir / "gt")) LoadGroundTruth(dir / "gt", options, clip);
   CheckClipGeometry(clip, dir.string());
+  // Frames with nothing in them (a lens cap, an exposure of 0) train a black field without a word.
+  const bool all_black =
+      std::all_of(clip.rgb.begin(), clip.rgb.end(), [](const std::vector<std::uint8_t>& image) {
+        return std::all_of(image.begin(), image.end(), [](std::uint8_t v) { return v < 2; });
+      });
+  if (all_black && !clip.rgb.empty())
+    spdlog::warn("{}: every frame is black (a lens cap, or an exposure of 0?)", dir.string());
   return clip;
 }
 

@@ -137,6 +137,9 @@ Clip LoadEndoNerfClip(const fs::path& dir, const LoadOptions& options) {
     const double baseline = ReadBaseline(dir);
     clip.right_cameras = clip.cameras;
     for (Camera& camera : clip.right_cameras) camera.c2w.col(3) += baseline * camera.c2w.col(0);
+  } else if (fs::exists(dir / "stereo.json")) {
+    spdlog::warn("{}: stereo.json without images_right/: the clip is trained on its left eye alone",
+                 dir.string());
   }
   clip.is_static = options.force_static || n == 1;
   return clip;
