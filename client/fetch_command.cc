@@ -31,6 +31,7 @@ struct FetchFlags {
 void CheckFetchFolder(const std::filesystem::path& out, const v1::Manifest& result) {
   namespace fs = std::filesystem;
   std::error_code error;
+  if (out.empty()) FailInvalid("-o is empty; give a folder");
   if (!fs::exists(out, error)) return;
   if (!fs::is_directory(out, error)) FailInvalid("-o " + out.string() + " is a file; give a folder");
   std::set<std::string> names;

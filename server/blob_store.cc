@@ -251,7 +251,9 @@ void BlobStore::Writer::Promote() {
   if (actual != entry_.sha256()) {
     fs::remove(partial_);
     Fail(ErrorCode::kDataLoss, "'" + entry_.path() + "' has sha256 " + actual + " but the manifest says " +
-                                   entry_.sha256() + "; its bytes were discarded");
+                                   entry_.sha256() +
+                                   "; its bytes were discarded (did the file change while it was "
+                                   "uploaded? upload it again)");
   }
   const fs::path dir = store_.root_ / "blobs" / entry_.sha256().substr(0, 2);
   if (fs::create_directories(dir)) FsyncDirectory(dir.parent_path());  // the new shard's entry too

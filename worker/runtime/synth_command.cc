@@ -3,7 +3,9 @@
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
+#include <filesystem>
 #include <memory>
+#include <system_error>
 
 #include "common/error.h"
 #include "worker/engine/scene/synthetic_clip.h"
@@ -81,6 +83,9 @@ Command AddSynthCommand(CLI::App& app) {
                 "(train it with background \"learned\")");
   return [cmd, out, options, flags, no_noise, object, backdrop, texture, texture_frame] {
     if (*backdrop && !*object) FailInvalid("synth: --backdrop needs --object");
+    if (std::error_code error;
+        std::filesystem::exists(*out, error) && !std::filesystem::is_directory(*out, error))
+      FailInvalid("synth: " + *out + " is a file; name the folder to write the clip into");
     if (*object) {
       scene::ObjectSynthOptions object_options;
       if (cmd->count("--frames") > 0) object_options.views = options->frames;
