@@ -152,9 +152,11 @@ std::string DescribeJob(const v1::Job& job) {
   const bool restarted =
       job.first_started_unix_ms() > 0 && job.first_started_unix_ms() != job.started_unix_ms();
   if (restarted) text += fmt::format("  started   {}\n", HumanTime(job.first_started_unix_ms()));
+  // One lease: no more to say. A record from before first starts were kept: it may be a later lease.
+  const bool one_lease = job.first_started_unix_ms() == job.started_unix_ms();
   if (job.started_unix_ms() > 0)
-    text += fmt::format("  {} {} (its latest lease)\n", restarted ? "restarted" : "started  ",
-                        HumanTime(job.started_unix_ms()));
+    text += fmt::format("  {} {}{}\n", restarted ? "restarted" : "started  ",
+                        HumanTime(job.started_unix_ms()), one_lease ? "" : " (its latest lease)");
   if (job.finished_unix_ms() > 0) text += fmt::format("  finished  {}\n", HumanTime(job.finished_unix_ms()));
   text += fmt::format("  attempts  {} lost of {} allowed\n", job.attempts(), job.max_attempts());
   if (!job.worker_id().empty()) text += fmt::format("  worker    {}\n", job.worker_id());
