@@ -264,11 +264,24 @@ TEST(ReportPageTest, RenderWritesAPageOfItsViews) {
   EXPECT_EQ(data["kind"], "render");
   EXPECT_EQ(data["render"], ReadJsonFile(dir / "views" / "render.json"));
   EXPECT_EQ(data["frames"]["count"], 2);
+  EXPECT_EQ(data["frames"]["sizes_vary"], false) << "both views 80 x 64";
   EXPECT_EQ(data["frames"]["times"], nlohmann::json::array({0.0, 1.0}));
   EXPECT_TRUE(data["frames"]["input"].is_null()) << "rendered views have no input images";
   EXPECT_EQ(data["frames"]["uncertainty"].size(), 2u);
   EXPECT_EQ(data["frames"]["model"].size(), 2u);
   EXPECT_EQ(data["surface"]["frames"].size(), 2u);
+  // Views of two sizes: the page names no one size for all (it named the first's).
+  testing::WriteBytes(dir / "mixed.json", R"({"fl_x": 71.18, "frames": [
+      {"w": 80, "h": 64, "transform_matrix": [[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]], "time": 0.0},
+      {"w": 40, "h": 32, "fl_x": 35.59, "transform_matrix": [[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]],
+       "time": 1.0}]})");
+  const std::string mixed =
+      fmt::format("{}/worker/runtime/endorecon-worker render {} --cameras {} -o {} --mc-passes 0 > {} 2>&1",
+                  ENDORECON_BINARY_DIR, (dir / "out").string(), (dir / "mixed.json").string(),
+                  (dir / "mixed").string(), (dir / "mixed.log").string());
+  ASSERT_EQ(std::system(mixed.c_str()), 0) << testing::ReadBytes(dir / "mixed.log");
+  EXPECT_EQ(testing::ReportData(dir / "mixed" / "report.html")["frames"]["sizes_vary"], true);
+  EXPECT_FALSE(fs::exists(dir / "mixed" / "uncertainty")) << "no dropout passes, no uncertainty maps";
 
   std::string why;
   auto browser = StartChromium(why);

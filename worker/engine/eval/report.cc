@@ -233,6 +233,11 @@ void AddFrames(const fs::path& results_dir, const Views& views, const json& reco
                  {"times", views.times},
                  {"source_width", first.width},
                  {"source_height", first.height},
+                 // Rendered views may differ in size: the page then does not name one for all.
+                 {"sizes_vary", std::any_of(views.cameras.begin(), views.cameras.end(),
+                                            [&](const scene::Camera& c) {
+                                              return c.width != first.width || c.height != first.height;
+                                            })},
                  {"width", std::min(first.width, kDisplayWidth)},
                  {"height", first.width > kDisplayWidth
                                 ? int(std::lround(double(first.height) * kDisplayWidth / first.width))

@@ -96,7 +96,10 @@
   const subtitle = [];
   if (frames) {
     const noun = (data.kind === 'render' ? 'view' : 'frame') + (frames.count === 1 ? '' : 's');
-    subtitle.push(`${frames.count} ${noun}, ${frames.source_width}\u00d7${frames.source_height} pixels`);
+    subtitle.push(
+        frames.sizes_vary ?
+            `${frames.count} ${noun} of several sizes` :
+            `${frames.count} ${noun}, ${frames.source_width}\u00d7${frames.source_height} pixels`);
   }
   subtitle.push(`written ${data.run.written}`, `endorecon ${data.run.version}`);
   if (metrics.cancelled) subtitle.push("CANCELLED before the end: no frames were evaluated");
