@@ -8,10 +8,9 @@ namespace endorecon {
 
 // Throws FailInvalid naming the file when it is missing or empty, when its first bytes are not those
 // of a PNG, JPEG, BMP or TIFF file (whatever its name says), when it is a PNG whose chunks end before
-// its IEND chunk (a truncated file: an interrupted copy or upload), declare an impossible length or
-// are no chunk (zero padding), or when it is a JPEG with no end-of-image marker after its scan.
-// A PNG's chunks are walked by their lengths only (no decoding, no CRC), so this reads a few bytes per
-// chunk; a JPEG is read whole (no decoding). Bytes after IEND or EOI are allowed, as decoders allow them.
+// its IEND chunk (a truncated file: an interrupted copy or upload), declare an impossible length, are
+// no chunk (zero padding) or fail their CRC, or when it is a JPEG with no end-of-image marker after its
+// scan. Both are read whole, without decoding. Bytes after IEND or EOI are allowed, as decoders allow them.
 void CheckImageBytes(const std::filesystem::path& path);
 
 }  // namespace endorecon

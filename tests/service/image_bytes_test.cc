@@ -1,6 +1,7 @@
 #include "common/image_bytes.h"
 
 #include <gtest/gtest.h>
+#include <zlib.h>
 
 #include <cstdint>
 #include <string>
@@ -14,12 +15,18 @@ namespace {
 using testing::TempDir;
 using testing::WriteBytes;
 
-// A chunk: length (big-endian), type, data, CRC (not checked by CheckImageBytes: zeros here).
+std::string BigEndian(std::uint32_t n) {
+  return {static_cast<char>(n >> 24), static_cast<char>(n >> 16), static_cast<char>(n >> 8),
+          static_cast<char>(n)};
+}
+
+// A chunk: length (big-endian), type, data, CRC (of type and data).
 std::string Chunk(const std::string& type, const std::string& data) {
-  const auto n = static_cast<std::uint32_t>(data.size());
-  std::string bytes = {static_cast<char>(n >> 24), static_cast<char>(n >> 16), static_cast<char>(n >> 8),
-                       static_cast<char>(n)};
-  return bytes + type + data + std::string(4, '\0');
+  const std::string crc_input = type + data;
+  const auto crc =
+      crc32(0L, reinterpret_cast<const Bytef*>(crc_input.data()), static_cast<uInt>(crc_input.size()));
+  return BigEndian(static_cast<std::uint32_t>(data.size())) + crc_input +
+         BigEndian(static_cast<std::uint32_t>(crc));
 }
 
 const std::string kSignature("\x89PNG\r\n\x1a\n", 8);
@@ -83,6 +90,17 @@ TEST(ImageBytesTest, OtherFormatsAreToldByTheirFirstBytes) {
   EXPECT_NE(Refusal(dir, "not an image at all").find("not a PNG, JPEG, BMP or TIFF image"),
             std::string::npos);
   EXPECT_NE(Refusal(dir, "").find("an empty file (0 bytes)"), std::string::npos);
+}
+
+// A damaged byte was reported by the decoder only as "cannot decode the image" (libpng's CRC error
+// went to stderr; found 2026-12-05).
+TEST(ImageBytesTest, AChunkFailingItsCrcIsDamage) {
+  TempDir dir;
+  std::string png = WholePng();
+  png[8 + 25 + 8 + 100] ^= 0x01;  // a bit of the first IDAT's data
+  const std::string message = Refusal(dir, png);
+  EXPECT_NE(message.find("a damaged PNG: its chunk IDAT at byte 33 fails its CRC check"), std::string::npos)
+      << message;
 }
 
 // A PNG zero-padded after an interrupted, preallocated copy was walked in 12-byte steps to its end
