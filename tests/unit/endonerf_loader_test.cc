@@ -5,6 +5,7 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <sstream>
 
@@ -142,6 +143,19 @@ TEST_F(EndoNerfLoaderTest, AStereoFileWithoutItsEyeAndBlackFramesAreWarnedOf) {
   EXPECT_EQ(int(*std::max_element(black.rgb[0].begin(), black.rgb[0].end())), 1) << "nearly black frames";
   EXPECT_NE(log.str().find("stereo.json without images_right/"), std::string::npos) << log.str();
   EXPECT_NE(log.str().find("every frame is black"), std::string::npos) << log.str();
+}
+
+// A job cancelled while its clip loads waited for the whole load (found 2026-12-04): the load asks
+// between frames.
+TEST_F(EndoNerfLoaderTest, ALoadAskedToStopStopsCancelled) {
+  LoadOptions options;
+  std::atomic<int> asked = 0;  // asked from the load's threads
+  options.should_stop = [&] { return ++asked > 0; };
+  const std::string message = ErrorFrom([&] { Load(options); }, ErrorCode::kCancelled);
+  EXPECT_NE(message.find("the clip's load was stopped"), std::string::npos) << message;
+  EXPECT_GE(asked, 1);
+  options.should_stop = [] { return false; };
+  EXPECT_EQ(Load(options).frame_count(), kFrames);
 }
 
 TEST_F(EndoNerfLoaderTest, ReadsSixteenBitAndNpyDepth) {

@@ -77,6 +77,7 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
   train::TrainConfig config = ResolveConfig(options);
   scene::LoadOptions load;
   load.force_static = options.force_static;
+  load.should_stop = hooks.should_stop;
   if (config.background == "black") load.alpha_background = {0, 0, 0};
   nlohmann::json outside_view;  // what the scope's view leaves out, for left_out
   const scene::Clip clip = [&] {

@@ -122,6 +122,7 @@ Clip LoadEndoNerfClip(const fs::path& dir, const LoadOptions& options) {
   FrameReadOptions read_options;
   read_options.max_pixels_per_frame = options.max_pixels_per_frame;
   read_options.alpha_background = options.alpha_background;
+  read_options.should_stop = options.should_stop;
   ReadFrames(frames, read_options, clip);
   MatchImageSize(frames[0].image, clip.width, clip.height, poses.cameras);
 

@@ -183,6 +183,8 @@ void ReadFrames(const std::vector<FrameFiles>& frames, const FrameReadOptions& o
   const int w = clip.width, h = clip.height;
   tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
     try {
+      if (options.should_stop && options.should_stop())
+        Fail(ErrorCode::kCancelled, clip.source + ": the clip's load was stopped");
       const FrameFiles& f = frames[i];
       clip.rgb[i] =
           (i == 0 && !first.rgb.empty()) ? std::move(first.rgb) : ReadRgb(f.image, options, w, h, transparent);

@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -19,6 +20,7 @@ struct FrameReadOptions {
   std::uint8_t tool_value = 255;  // the mask value that marks the tool (the other allowed value: 255 - this)
   std::size_t max_pixels_per_frame = std::size_t{4096} * 4096;
   std::array<std::uint8_t, 3> alpha_background = {255, 255, 255};  // what transparent pixels lie on
+  std::function<bool()> should_stop;                               // LoadOptions' (load_options.h)
 };
 
 // An image file as 8-bit RGB, row-major, top row first.

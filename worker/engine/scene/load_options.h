@@ -4,6 +4,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 
 namespace endorecon::scene {
 
@@ -13,6 +14,9 @@ struct LoadOptions {
   // The colour transparent pixels of RGBA images are composited onto (RGB): NeRF-synthetic's white
   // unless the run's background is black (train_config.h "background").
   std::array<std::uint8_t, 3> alpha_background = {255, 255, 255};
+  // Asked between frames: true stops the load with Error(kCancelled) (a job cancelled while its clip
+  // loads waited for the whole load). Empty: never.
+  std::function<bool()> should_stop;
 };
 
 }  // namespace endorecon::scene
