@@ -28,6 +28,7 @@
 #include "server/health_port.h"
 #include "server/idle_trim.h"
 #include "server/job_service.h"
+#include "server/port_probe.h"
 #include "server/worker_service.h"
 
 namespace {
@@ -129,6 +130,7 @@ int Run(const ServerFlags& flags) {
   dicom::CheckAeTitle(flags.dicom.ae_title, "--ae-title");
   if (!flags.dicom.uid_root.empty()) dicom::NewUid(flags.dicom.uid_root);  // refuses a malformed root now
   const auto credentials = ServerCredentials(flags.tls);
+  CheckPortFree(flags.listen);  // before the data folder is opened and its running jobs requeued
   const std::filesystem::path data_dir = flags.data_dir;
   if (MakePrivateFolder(data_dir)) {
     spdlog::warn(
