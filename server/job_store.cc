@@ -64,6 +64,7 @@ std::int64_t StoredBytes(const v1::Job& job) {
 JobStore::JobStore(const std::filesystem::path& db_file)
     : file_(db_file), db_(OpenDatabase(db_file, kStore)) {
   try {
+    CheckDatabase(db_, db_file, kStore);
     Exec(db_,
          "CREATE TABLE IF NOT EXISTS jobs ("
          " seq INTEGER PRIMARY KEY AUTOINCREMENT,"

@@ -124,6 +124,27 @@ void CheckExposure(const ServerFlags& flags) {
       flags.listen);
 }
 
+// A data folder whose blobs/ holds files but whose jobs.sqlite is missing or empty (a restore that
+// copied the blobs and not the store, or the store to another name): a new store would have no job
+// reference them, and the first retention sweep deleted every one as an orphan (found 2026-12-05).
+void RefuseBlobsWithoutTheirStore(const std::filesystem::path& data_dir) {
+  namespace fs = std::filesystem;
+  std::error_code error;
+  const fs::path store = data_dir / "jobs.sqlite";
+  const bool no_store = !fs::exists(store, error) || fs::file_size(store, error) == 0;
+  if (!no_store || !fs::is_directory(data_dir / "blobs", error)) return;
+  for (fs::recursive_directory_iterator it(data_dir / "blobs", error), end; !error && it != end;
+       it.increment(error)) {
+    if (!it->is_regular_file(error)) continue;
+    Fail(
+        ErrorCode::kFailedPrecondition,
+        data_dir.string() + ": blobs/ holds files (" + it->path().filename().string() +
+            ", ...) but there is no job store (jobs.sqlite is missing or empty), so retention would delete "
+            "them as no job's: restore jobs.sqlite beside them (docs/operations.md, \"Back it up\"), or move "
+            "blobs/ away to start afresh");
+  }
+}
+
 int Run(const ServerFlags& flags) {
   const sigset_t stop_signals = BlockStopSignals();
   CheckExposure(flags);
@@ -139,6 +160,7 @@ int Run(const ServerFlags& flags) {
         data_dir.string());
   }
   const DataDirLock lock(data_dir);
+  RefuseBlobsWithoutTheirStore(data_dir);
   JobStore store(data_dir / "jobs.sqlite");
   BlobStore blobs(data_dir);
   Scheduler scheduler;

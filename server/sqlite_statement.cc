@@ -1,5 +1,8 @@
 #include "server/sqlite_statement.h"
 
+#include <string>
+#include <string_view>
+
 #include "common/error.h"
 
 namespace endorecon::server {
@@ -69,11 +72,38 @@ sqlite3* OpenDatabase(const std::filesystem::path& file, const char* store) {
   try {
     Exec(db, "PRAGMA journal_mode=WAL", store);
     Exec(db, "PRAGMA synchronous=FULL", store);
-  } catch (...) {
+  } catch (const Error& e) {
+    // A file that is no database, or a damaged one, is named (the message named only the store).
+    const int code = sqlite3_errcode(db);
     sqlite3_close(db);
-    throw;
+    const bool damaged = code == SQLITE_CORRUPT || code == SQLITE_NOTADB ||
+                         std::string_view(e.what()).find("malformed") != std::string_view::npos ||
+                         std::string_view(e.what()).find("not a database") != std::string_view::npos;
+    Fail(
+        damaged ? ErrorCode::kDataLoss : e.code(),
+        file.string() + ": " + e.what() + (damaged ? "; restore it from a backup (docs/operations.md)" : ""));
   }
   return db;
+}
+
+void CheckDatabase(sqlite3* db, const std::filesystem::path& file, const char* store) {
+  if (sqlite3_db_readonly(db, "main") == 1) {
+    Fail(ErrorCode::kFailedPrecondition, std::string(store) + " " + file.string() +
+                                             " cannot be written by this user (its mode or owner: a restored "
+                                             "copy owned by another user?)");
+  }
+  Statement check(db, "PRAGMA quick_check", store);
+  std::string verdict;
+  while (check.Step()) {
+    if (!verdict.empty()) verdict += "; ";
+    verdict += check.Text(0);
+    if (verdict.size() > 300) break;
+  }
+  if (verdict != "ok") {
+    Fail(ErrorCode::kDataLoss, std::string(store) + " " + file.string() +
+                                   " is damaged (SQLite's quick_check: " + verdict +
+                                   "); restore it from a backup (docs/operations.md)");
+  }
 }
 
 }  // namespace endorecon::server

@@ -44,4 +44,10 @@ void Exec(sqlite3* db, const char* sql, const char* store);
 // Error(kUnavailable) naming the file.
 sqlite3* OpenDatabase(const std::filesystem::path& file, const char* store);
 
+// What a store's owner checks once at start, on its writing connection: that this process may write
+// the file (Error(kFailedPrecondition) naming it: a read-only jobs.sqlite started, accepted uploads,
+// then stopped at the first submit) and that SQLite's quick_check finds it whole (Error(kDataLoss):
+// a damaged file served its listing and failed each job's status as "unavailable").
+void CheckDatabase(sqlite3* db, const std::filesystem::path& file, const char* store);
+
 }  // namespace endorecon::server

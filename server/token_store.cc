@@ -88,6 +88,7 @@ TokenStore::TokenStore(const std::filesystem::path& db_file) {
         db_file, std::filesystem::perms::owner_read | std::filesystem::perms::owner_write, ignored);
   }
   try {
+    CheckDatabase(db_, db_file, kStore);
     Exec(db_,
          "CREATE TABLE IF NOT EXISTS tokens ("
          " id TEXT PRIMARY KEY,"

@@ -176,5 +176,24 @@ TEST(ServerStartTest, ASecondServerOnATakenPortIsRefused) {
   EXPECT_EQ(RunCli(cluster.address(), {"list"}).exit_code, 0);
 }
 
+// A restore that brought blobs/ back without jobs.sqlite (or with an empty one) started a new store,
+// and its first retention sweep deleted every blob as no job's (found 2026-12-05): refused at start.
+TEST(ServerStartTest, BlobsWithoutTheirJobStoreAreRefused) {
+  TempDir dir("blobs-alone");
+  std::filesystem::create_directories(dir / "data" / "blobs" / "ab");
+  WriteBytes(dir / "data" / "blobs" / "ab" / "abcdef", "a blob");
+  for (const bool empty_store : {false, true}) {
+    if (empty_store) WriteBytes(dir / "data" / "jobs.sqlite", "");
+    Process server({BuiltBinary("server/endorecon-server"), "--listen", "127.0.0.1:0", "--data-dir",
+                    (dir / "data").string(), "--metrics-port", "-1"},
+                   dir / "server.log");
+    EXPECT_NE(server.Wait(), 0);
+    EXPECT_NE(server.Log().find("blobs/ holds files (abcdef, ...) but there is no job store"),
+              std::string::npos)
+        << server.Log();
+    EXPECT_TRUE(std::filesystem::exists(dir / "data" / "blobs" / "ab" / "abcdef"));
+  }
+}
+
 }  // namespace
 }  // namespace endorecon::testing

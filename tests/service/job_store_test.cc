@@ -3,6 +3,9 @@
 #include <gtest/gtest.h>
 #include <sqlite3.h>
 
+#include <filesystem>
+#include <fstream>
+#include <string>
 #include <thread>
 #include <utility>
 #include <vector>
@@ -43,6 +46,40 @@ TEST(JobStoreTest, JobsSurviveReopening) {
   EXPECT_EQ(b->job.result().files(0).path(), "metrics.json");
   EXPECT_EQ(b->job.options().iterations(), 30);
   EXPECT_FALSE(reopened.Get("missing").has_value());
+}
+
+// A damaged jobs.sqlite started without a word, listed its jobs and failed each job's status as
+// "unavailable" (found 2026-12-05): it is refused at start, naming the file; so is one that is no
+// database at all.
+TEST(JobStoreTest, ADamagedStoreIsRefusedAtStartNamingTheFile) {
+  testing::TempDir dir("jobstore");
+  {
+    JobStore store(dir / "jobs.sqlite");
+    for (int i = 0; i < 300; ++i) store.Insert(MakeJob("job-" + std::to_string(i), v1::SUCCEEDED));
+  }
+  ASSERT_GT(std::filesystem::file_size(dir / "jobs.sqlite"), 16384u);
+  {
+    std::fstream file(dir / "jobs.sqlite", std::ios::in | std::ios::out | std::ios::binary);
+    file.seekp(8192);
+    const std::string noise(4096, '\x5a');
+    file.write(noise.data(), std::streamsize(noise.size()));
+  }
+  try {
+    JobStore damaged(dir / "jobs.sqlite");
+    ADD_FAILURE() << "a damaged store was opened";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kDataLoss) << e.what();
+    EXPECT_NE(std::string(e.what()).find((dir / "jobs.sqlite").string()), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("restore it from a backup"), std::string::npos) << e.what();
+  }
+  testing::WriteBytes(dir / "other.sqlite", std::string(20000, 'x'));
+  try {
+    JobStore other(dir / "other.sqlite");
+    ADD_FAILURE() << "a file that is no database was opened";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kDataLoss) << e.what();
+    EXPECT_NE(std::string(e.what()).find("other.sqlite"), std::string::npos) << e.what();
+  }
 }
 
 TEST(JobStoreTest, StagedWritesAreSeenByGetAtOnceAndReachTheDiskAndPagesOnlyWithFlush) {

@@ -5,8 +5,12 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
+#include <memory>
+
 #include "common/error.h"
 #include "common/json_file.h"
+#include "tests/unit/clip_fixture.h"
 #include "tests/unit/report_data.h"
 #include "tests/unit/temp_dir.h"
 #include "worker/engine/eval/surface_grid.h"
@@ -91,7 +95,15 @@ TEST_F(ReportTest, AReconstructionsPageHoldsEveryFrameItsMetricsAndItsRun) {
 TEST_F(ReportTest, ACancelledRunsPageHasNoFramesButTheRest) {
   const ReconstructOptions options = Options("cancelled");
   ReconstructHooks hooks;
+  // A stop asked while the clip loads ends the run without results (CANCELLED); asked once the 8
+  // frames are loaded (the load asks once a frame), the run ends cancelled with its page.
   hooks.should_stop = [] { return true; };
+  const std::string message =
+      testing::ErrorFrom([&] { Reconstruct(Options("cancelled-loading"), hooks); }, ErrorCode::kCancelled);
+  EXPECT_NE(message.find("the clip's load was stopped"), std::string::npos) << message;
+  EXPECT_FALSE(fs::exists(dir_->path() / "cancelled-loading" / "report.html"));
+  auto asked = std::make_shared<std::atomic<int>>(0);
+  hooks.should_stop = [asked] { return ++*asked > 8; };
   ASSERT_TRUE(Reconstruct(options, hooks).cancelled);
   const auto data = testing::ReportData(fs::path(options.out_dir) / "report.html");
   ASSERT_TRUE(data.is_object());
