@@ -233,7 +233,16 @@ int Submit(const Globals& globals, const SubmitFlags& flags) {
     std::cout << "job " << job.id() << " queued (priority " << job.priority() << ")" << std::endl;
   }
   if (!flags.wait) return kExitOk;
-  const auto done = WatchJob(globals, job.id(), {flags.previews});
+  // The job is the server's now: a watch that gives up (a long outage) says how to pick it up again.
+  const auto done = [&] {
+    try {
+      return WatchJob(globals, job.id(), {flags.previews});
+    } catch (const Error& e) {
+      if (e.code() != ErrorCode::kUnavailable) throw;
+      Fail(e.code(), std::string(e.what()) + "\nendorecon: job " + job.id() +
+                         " was queued and may still run on the server: `endorecon watch " + job.id() + "`");
+    }
+  }();
   // A send the job was submitted with that failed fails the command, as `send --wait` does: the
   // results did not reach the PACS.
   for (const auto& send : done.sends()) {
