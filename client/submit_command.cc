@@ -108,11 +108,11 @@ v1::Manifest Upload(const Globals& globals, v1::JobService::Stub& stub, const st
   // The manifest with its digests (64 characters and a tag each) travels in one message: a clip of
   // 120,000 files was refused as "Sent message larger than max", naming its largest file.
   const std::size_t manifest_bytes = manifest.ByteSizeLong() + std::size_t(manifest.files_size()) * 66;
-  if (manifest_bytes > std::size_t(kMaxMessageBytes) - 64 * 1024) {
+  constexpr std::size_t kMostManifestBytes = kMaxMessageBytes - 64 * 1024;  // room for the rest of a call
+  if (manifest_bytes > kMostManifestBytes) {
     FailInvalid(clip.string() + ": " + std::to_string(manifest.files_size()) +
                 " files; their manifest would take " + std::to_string(manifest_bytes) +
-                " bytes, more than the service's messages carry (" +
-                std::to_string(kMaxMessageBytes - 64 * 1024) +
+                " bytes, more than the service's messages carry (" + std::to_string(kMostManifestBytes) +
                 "): send fewer files (a recording as one video or DICOM file, not its frames)");
   }
   const auto root = std::filesystem::is_regular_file(clip) ? clip.parent_path() : clip;

@@ -7,15 +7,19 @@ namespace endorecon {
 
 namespace {
 
+bool IsControl(char c) {
+  const auto byte = static_cast<unsigned char>(c);
+  return byte < 0x20 || byte == 0x7f;
+}
+
 // `text` is printed in listings and terminals: no control character, at most `most` bytes.
 void CheckPrintable(const std::string& text, std::size_t most, const std::string& what) {
   if (text.size() > most) {
     FailInvalid(what + " has " + std::to_string(text.size()) + " bytes; at most " + std::to_string(most));
   }
   for (const char c : text) {
-    const auto byte = static_cast<unsigned char>(c);
-    if (byte < 0x20 || byte == 0x7f) {
-      FailInvalid(what + " holds a control character (byte " + std::to_string(byte) +
+    if (IsControl(c)) {
+      FailInvalid(what + " holds a control character (byte " + std::to_string(static_cast<unsigned char>(c)) +
                   "); it is printed in listings and terminals");
     }
   }
@@ -28,8 +32,7 @@ void ValidateJobName(const std::string& name) { CheckPrintable(name, kMaxJobName
 std::string ValidJobName(std::string name) {
   const bool utf8 = IsUtf8(name);
   for (char& c : name) {
-    const auto byte = static_cast<unsigned char>(c);
-    if (byte < 0x20 || byte == 0x7f || (!utf8 && byte >= 0x80)) c = '?';
+    if (IsControl(c) || (!utf8 && static_cast<unsigned char>(c) >= 0x80)) c = '?';
   }
   if (name.size() > kMaxJobNameBytes) {
     std::size_t end = kMaxJobNameBytes;

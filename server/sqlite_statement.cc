@@ -1,7 +1,6 @@
 #include "server/sqlite_statement.h"
 
 #include <string>
-#include <string_view>
 
 #include "common/error.h"
 
@@ -76,9 +75,7 @@ sqlite3* OpenDatabase(const std::filesystem::path& file, const char* store) {
     // A file that is no database, or a damaged one, is named (the message named only the store).
     const int code = sqlite3_errcode(db);
     sqlite3_close(db);
-    const bool damaged = code == SQLITE_CORRUPT || code == SQLITE_NOTADB ||
-                         std::string_view(e.what()).find("malformed") != std::string_view::npos ||
-                         std::string_view(e.what()).find("not a database") != std::string_view::npos;
+    const bool damaged = code == SQLITE_CORRUPT || code == SQLITE_NOTADB;
     Fail(
         damaged ? ErrorCode::kDataLoss : e.code(),
         file.string() + ": " + e.what() + (damaged ? "; restore it from a backup (docs/operations.md)" : ""));

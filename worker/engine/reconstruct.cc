@@ -172,8 +172,8 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
   if (!outside_view.is_null()) left_out.push_back(outside_view);
   nlohmann::json metrics = nlohmann::json::object();
   double evaluation_s = 0;
-  double least_s =
-      -1;  // the leanest plan's price (held-out frames full; with --full-eval every frame), when planned
+  // The leanest plan's price (held-out frames full; with --full-eval every frame), when planned.
+  double least_s = -1;
   double advised_s = 0;
   if (!trained.cancelled) {
     const auto start = Clock::now();
