@@ -2,6 +2,10 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <string>
+#include <utility>
+#include <vector>
+
 #include "common/sha256.h"
 #include "tests/integration/service_harness.h"
 
@@ -108,6 +112,27 @@ TEST(SubmitToCompletionTest, AServerAddressWithoutAPortOrPastTheLastIsRefused) {
   EXPECT_EQ(worker.Wait(), 2) << worker.Log();
   EXPECT_NE(worker.Log().find("the port must be a number from 1 to 65535"), std::string::npos)
       << worker.Log();
+}
+
+// A worker's numbers and id are checked at start: --lease-wait -1 busy-polled an idle queue,
+// --threads -3 was taken, and an id with a newline was listed raw (found 2026-12-05).
+TEST(SubmitToCompletionTest, AWorkersBadNumbersAndIdAreRefusedAtStart) {
+  TempDir dir("worker-flags");
+  const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+      {{"--lease-wait", "-1"}, "--lease-wait: -1 is not above 0"},
+      {{"--threads", "-3"}, "--threads"},
+      {{"--timeout", "0"}, "--timeout: 0 is not above 0"},
+      {{"--id", "a\nb"}, "--id: worker id holds a control character (byte 10)"},
+  };
+  for (const auto& [flags, expected] : cases) {
+    std::vector<std::string> argv = {
+        BuiltBinary("worker/runtime/endorecon-worker"), "serve",          "--server",
+        "127.0.0.1:" + std::to_string(FreePort()),      "--metrics-port", "-1"};
+    argv.insert(argv.end(), flags.begin(), flags.end());
+    Process worker(argv, dir / "worker.log");
+    EXPECT_EQ(worker.Wait(), 2) << flags[0] << ": " << worker.Log();
+    EXPECT_NE(worker.Log().find(expected), std::string::npos) << worker.Log();
+  }
 }
 
 }  // namespace
