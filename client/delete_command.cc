@@ -1,5 +1,6 @@
 // endorecon delete JOB: a finished job's files (clip, results, checkpoint) are deleted from the
-// server now, as retention would delete them later; the job's record stays, marked expired.
+// server now, as retention would delete them later; the job's record stays, marked expired. Deleting
+// a job whose files are gone already (deleted before, or by retention) succeeds and says when they went.
 #include <CLI/CLI.hpp>
 #include <iostream>
 
@@ -25,7 +26,8 @@ Command AddDeleteCommand(CLI::App& app) {
     if (globals.json) {
       std::cout << ToJson(job) << std::endl;
     } else {
-      std::cout << "job " << job.id() << ": its files are deleted from the server (its record stays)" << std::endl;
+      std::cout << "job " << job.id() << ": its files were deleted from the server at "
+                << HumanTime(job.expired_unix_ms()) << " (its record stays)" << std::endl;
     }
     return kExitOk;
   };

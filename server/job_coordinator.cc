@@ -354,11 +354,11 @@ v1::Job JobCoordinator::Cancel(const std::string& id, const Principal& caller) {
 
 v1::Job JobCoordinator::Delete(const std::string& id, const Principal& caller) {
   RetentionPlan plan;
+  bool deleted_before = false;
   const v1::Job job = Locked([&] {
     auto job = LoadVisible(id, caller).job;
-    if (job.expired_unix_ms() > 0) {
-      endorecon::Fail(ErrorCode::kFailedPrecondition, "job " + id + "'s files are already deleted");
-    }
+    deleted_before = job.expired_unix_ms() > 0;  // by an earlier delete or by retention: asking again is
+    if (deleted_before) return job;              // no error, and the job says when
     if (!Settled(job)) {
       endorecon::Fail(ErrorCode::kFailedPrecondition,
                       "job " + id + " is " + v1::JobState_Name(job.state()) +
@@ -371,6 +371,7 @@ v1::Job JobCoordinator::Delete(const std::string& id, const Principal& caller) {
     Save(job);
     return job;
   });
+  if (deleted_before) return job;
   parts_.metrics.JobsExpired(1);
   spdlog::info(
       "job {}: files deleted by request of {} ({} blob(s), {} bytes; {} shared with other jobs kept)", id,

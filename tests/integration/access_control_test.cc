@@ -371,13 +371,16 @@ TEST(TenantQuotaTest, DeletingAFinishedJobsFilesMakesRoomUnderTheByteQuota) {
   EXPECT_EQ(as(dave, {"delete", id}).exit_code, 3) << "another tenant's job is no job";
   const auto deleted = as(carol, {"delete", id});
   EXPECT_EQ(deleted.exit_code, 0) << deleted.err;
-  EXPECT_NE(deleted.out.find("its files are deleted from the server"), std::string::npos) << deleted.out;
+  EXPECT_NE(deleted.out.find("its files were deleted from the server at "), std::string::npos) << deleted.out;
+  const auto again = as(carol, {"delete", id});
+  EXPECT_EQ(again.exit_code, 0) << again.err;
+  EXPECT_EQ(again.out, deleted.out) << "the same time: nothing deleted twice";
   EXPECT_NE(as(carol, {"list"}).out.find("[files deleted]"), std::string::npos);
   EXPECT_NE(as(carol, {"status", id}).out.find("its clip and results were deleted"), std::string::npos);
   EXPECT_EQ(as(carol, {"fetch", id, "-o", (config / "out").string()}).exit_code, 7);
   const auto second = as(carol, {"submit", (config / "clip2").string()});
   EXPECT_EQ(second.exit_code, 0) << second.err;
-  EXPECT_EQ(AuditFind(AuditLines(cluster.data_dir() / "audit.jsonl"), "Delete", "OK", "carol").size(), 1u);
+  EXPECT_EQ(AuditFind(AuditLines(cluster.data_dir() / "audit.jsonl"), "Delete", "OK", "carol").size(), 2u);
 }
 
 TEST_F(AccessControlTest, NoLogHoldsATokenOrAJobName) {
