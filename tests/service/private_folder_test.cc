@@ -8,6 +8,7 @@
 
 #include <filesystem>
 
+#include "common/error.h"
 #include "tests/unit/temp_dir.h"
 
 namespace endorecon {
@@ -31,6 +32,26 @@ TEST(PrivateFolderTest, AFolderAndWhatIsCreatedInItAreTheOwnersAlone) {
   EXPECT_TRUE(MakePrivateFolder(dir / "old"));
   EXPECT_EQ(fs::status(dir / "old").permissions(), fs::perms::all);
   ::umask(before);
+}
+
+// `--data-dir` naming a file said "cannot create the folder ...: File exists".
+TEST(PrivateFolderTest, AFileWhereTheFolderOrItsParentShouldBeIsNamed) {
+  testing::TempDir dir("private");
+  testing::WriteBytes(dir / "jobs.db", "a file");
+  const auto message = [](const fs::path& path) {
+    try {
+      MakePrivateFolder(path);
+    } catch (const Error& error) {
+      EXPECT_EQ(error.code(), ErrorCode::kInvalidArgument);
+      return std::string(error.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(message(dir / "jobs.db").find("jobs.db as a folder: it is a file, not a folder"),
+            std::string::npos)
+      << message(dir / "jobs.db");
+  const std::string below = message(dir / "jobs.db" / "data" / "more");
+  EXPECT_NE(below.find((dir / "jobs.db").string() + " is a file, not a folder"), std::string::npos) << below;
 }
 
 }  // namespace
