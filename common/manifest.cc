@@ -1,9 +1,15 @@
 #include "common/manifest.h"
 
+#include <sys/stat.h>
+
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
 #include <limits>
 #include <set>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "common/error.h"
 #include "common/safe_path.h"
@@ -11,6 +17,18 @@
 
 namespace endorecon {
 namespace fs = std::filesystem;
+namespace {
+
+using FolderId = std::pair<dev_t, ino_t>;
+
+FolderId IdOfFolder(const fs::path& dir) {
+  struct stat info {};
+  if (::stat(dir.c_str(), &info) != 0)
+    FailInvalid(dir.string() + ": cannot read it (" + std::strerror(errno) + ")");
+  return {info.st_dev, info.st_ino};
+}
+
+}  // namespace
 
 v1::Manifest ListingOfDirectory(const fs::path& dir) {
   std::error_code error;
@@ -19,12 +37,27 @@ v1::Manifest ListingOfDirectory(const fs::path& dir) {
   std::vector<fs::path> files;
   // Linked folders are followed (their files are the clip's); an entry that is neither a folder nor a
   // regular file (a broken or looping link, a pipe, a socket) is named: skipped, the clip would
-  // arrive without it.
+  // arrive without it. A linked folder that leads back to one it is in is named too: followed, it
+  // listed the clip again under ever longer names until the system's limit on links.
+  std::vector<FolderId> open_folders{IdOfFolder(dir)};  // [k]: the folder that holds the entries at depth k
   try {
-    for (const auto& entry :
-         fs::recursive_directory_iterator(dir, fs::directory_options::follow_directory_symlink)) {
+    for (auto it = fs::recursive_directory_iterator(dir, fs::directory_options::follow_directory_symlink);
+         it != fs::recursive_directory_iterator(); ++it) {
+      const auto& entry = *it;
       std::error_code error;
-      if (entry.is_directory(error)) continue;
+      if (entry.is_directory(error)) {
+        const FolderId id = IdOfFolder(entry.path());
+        open_folders.resize(static_cast<std::size_t>(it.depth()) + 1);
+        const auto ancestor = std::find(open_folders.begin(), open_folders.end(), id);
+        if (ancestor != open_folders.end()) {
+          const fs::path target = fs::read_symlink(entry.path(), error);
+          FailInvalid(entry.path().string() +
+                      (error ? std::string() : " (a link to " + target.string() + ")") +
+                      ": leads back to a folder it is in, so the clip would hold itself; remove the link");
+        }
+        open_folders.push_back(id);
+        continue;
+      }
       if (!entry.is_regular_file(error)) {
         FailInvalid(entry.path().string() + ": not a regular file (" +
                     (error ? error.message() : std::string("a broken link, a pipe, a socket or a device")) +

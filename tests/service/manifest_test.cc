@@ -46,9 +46,19 @@ TEST(ManifestTest, AnEntryThatIsNoFileIsNamed) {
   message = ErrorOf(dir / "clip");
   EXPECT_NE(message.find("000002.png: not a regular file"), std::string::npos) << message;
   fs::remove(dir / "clip" / "000002.png");
-  fs::create_directory_symlink(dir / "clip", dir / "clip" / "loop");  // a folder linked into itself
+  // A folder linked into itself, or below itself, is named once, not as loop/loop/loop/... up to
+  // the system's limit on links.
+  fs::create_directories(dir / "clip" / "images");
+  fs::create_directory_symlink("..", dir / "clip" / "images" / "up");
   message = ErrorOf(dir / "clip");
-  EXPECT_NE(message.find("loop"), std::string::npos) << message;
+  EXPECT_NE(message.find("clip/images/up (a link to ..): leads back to a folder it is in"), std::string::npos)
+      << message;
+  EXPECT_EQ(message.find("up/images"), std::string::npos) << message;
+  // The same folder linked twice side by side is no loop: its files are listed under both names.
+  fs::remove(dir / "clip" / "images" / "up");
+  testing::WriteBytes(dir / "clip" / "images" / "000000.png", "i");
+  fs::create_directory_symlink(dir / "clip" / "images", dir / "clip" / "masks");
+  EXPECT_EQ(ManifestOfDirectory(dir / "clip").files_size(), 3);
 }
 
 // Sizes whose sum passed the largest int64 wrapped to a negative total, under the upload limit,
