@@ -100,10 +100,22 @@ void CheckSizes(const Globals& globals, v1::JobService::Stub& stub, const v1::Ma
   ThrowIfFailed(stub.QueryUpload(context.get(), listing, &status), "upload query");
 }
 
-// Uploads the clip (what the server lacks of it) and returns its manifest. A clip folder (not a
-// DICOM recording nor a raw one) is checked first, after its sizes (clip_check.h).
+// Asks the server to check the job as it would be submitted, with the clip's listing, before the
+// upload: options it refuses (an unknown --send-to PACS, a quota of jobs) were found after it.
+void CheckJob(const Globals& globals, v1::JobService::Stub& stub, v1::SubmitRequest request,
+              const v1::Manifest& listing) {
+  *request.mutable_clip() = listing;
+  request.set_validate_only(true);
+  v1::Job job;
+  auto context = CallContext(globals.timeout());
+  ThrowIfFailed(stub.Submit(context.get(), request, &job), "submit (checked before the upload)");
+}
+
+// Uploads the clip (what the server lacks of it) and returns its manifest. Its sizes and the job
+// (`request`, without its clip) are checked by the server first, then a clip folder (not a DICOM
+// recording nor a raw one) here (clip_check.h).
 v1::Manifest Upload(const Globals& globals, v1::JobService::Stub& stub, const std::filesystem::path& clip,
-                    bool clip_folder) {
+                    bool clip_folder, const v1::SubmitRequest& request) {
   auto manifest = ListingOfClip(clip);
   // The manifest with its digests (64 characters and a tag each) travels in one message: a clip of
   // 120,000 files was refused as "Sent message larger than max", naming its largest file.
@@ -117,6 +129,7 @@ v1::Manifest Upload(const Globals& globals, v1::JobService::Stub& stub, const st
   }
   const auto root = std::filesystem::is_regular_file(clip) ? clip.parent_path() : clip;
   CheckSizes(globals, stub, manifest);
+  CheckJob(globals, stub, request, manifest);
   if (clip_folder) CheckClipBeforeUpload(clip);
   AddDigests(root.empty() ? "." : root, manifest);
   UploadCalls calls;
@@ -201,9 +214,6 @@ int Submit(const Globals& globals, const SubmitFlags& flags) {
     request.mutable_pacs()->set_pacs(flags.pacs);
     request.mutable_pacs()->set_study_uid(flags.study_uid);
     request.mutable_pacs()->set_series_uid(flags.series_uid);
-  } else {
-    *request.mutable_clip() =
-        Upload(globals, *stub, staged ? staged->dir() : std::filesystem::path(flags.clip), clip_folder);
   }
   if (staged) {
     *request.mutable_prepare() = PrepareFlagsToProto(staged->flags());
@@ -224,6 +234,10 @@ int Submit(const Globals& globals, const SubmitFlags& flags) {
                            : std::filesystem::path(flags.clip).lexically_normal().filename().string();
   // A folder's name is no chosen name: made valid, not refused after the upload (a newline in it was).
   request.set_name(flags.name.empty() ? ValidJobName(default_name) : flags.name);
+  if (flags.pacs.empty()) {
+    *request.mutable_clip() = Upload(
+        globals, *stub, staged ? staged->dir() : std::filesystem::path(flags.clip), clip_folder, request);
+  }
   v1::Job job;
   auto context = CallContext(globals.timeout());
   ThrowIfFailed(stub->Submit(context.get(), request, &job), "submit");

@@ -263,7 +263,7 @@ v1::Job JobCoordinator::Submit(const v1::SubmitRequest& request, const Principal
     if (!request.pacs().series_uid().empty()) dicom::CheckUid(request.pacs().series_uid(), "pacs.series_uid");
     if (request.clip().files_size() > 0) FailInvalid("a job names either a clip or a PACS study, not both");
   } else {
-    ValidateManifest(request.clip());
+    ValidateManifest(request.clip(), request.validate_only() && IsSizesOnly(request.clip()));
   }
   ValidateJobName(request.name());
   ValidatePriority(request.priority());
@@ -302,6 +302,11 @@ v1::Job JobCoordinator::Submit(const v1::SubmitRequest& request, const Principal
   job.set_max_attempts(max_attempts_);
   job.set_tenant(caller.tenant);
   if (!caller.anonymous) job.set_submitted_by(caller.name);
+  if (request.validate_only()) {
+    CheckQuotas(caller.tenant, request.clip(), true);
+    job.clear_id();
+    return job;
+  }
   // Under the lock, so retention cannot delete a blob between this check and the insert, and two
   // submits cannot both take a tenant's last job slot.
   Locked([&] {

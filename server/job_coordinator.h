@@ -80,7 +80,9 @@ class JobCoordinator {
   // (the retrieve hook), and the recording's bytes count against the tenant once retrieved. Throws
   // kInvalidArgument (bad manifest, option, UID or PACS name, naming it), kFailedPrecondition (a
   // clip file not uploaded yet, naming it), kResourceExhausted (the tenant's max_jobs or max_bytes
-  // quota, naming it and the numbers).
+  // quota, naming it and the numbers). With request.validate_only it checks the same (the clip may be
+  // a sizes-only listing, not uploaded yet) and returns the job it would queue, without an id,
+  // queueing nothing.
   v1::Job Submit(const v1::SubmitRequest& request, const Principal& caller);
   // Throws kResourceExhausted when storing `manifest` in full would take the caller's tenant over
   // its max_bytes quota (checked before an upload writes anything).

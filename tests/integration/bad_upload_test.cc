@@ -219,6 +219,17 @@ TEST_F(BadUploadTest, AClipMissingAMaskOrHoldingATruncatedPngIsRefusedBeforeItsU
   EXPECT_NE(result.err.find("cut/images/000005.png: a truncated PNG"), std::string::npos) << result.err;
   EXPECT_EQ(Blobs(), 0);
   EXPECT_EQ(Partials(), 0);
+  // What the server refuses of the job itself is found before the upload too (a --send-to this server
+  // has no PACS for was refused after it).
+  MakeClip(cluster_.path("whole"));
+  result = RunCli(cluster_.address(), {"submit", cluster_.path("whole").string(), "--send-to", "pacs9"});
+  EXPECT_EQ(result.exit_code, 3) << result.err;
+  EXPECT_NE(result.err.find("submit (checked before the upload): no PACS named 'pacs9' is configured on the "
+                            "server"),
+            std::string::npos)
+      << result.err;
+  EXPECT_EQ(Blobs(), 0);
+  EXPECT_EQ(Partials(), 0);
   // The same clip whole goes up and is queued.
   MakeClip(cluster_.path("whole"));
   result = RunCli(cluster_.address(), {"submit", cluster_.path("whole").string()});

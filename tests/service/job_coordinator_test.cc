@@ -344,6 +344,29 @@ TEST_F(JobCoordinatorTest, DeletingAFinishedJobsFilesFreesItsTenantsBytes) {
   EXPECT_FALSE(blobs_.Has(request.clip().files(0).sha256()));
 }
 
+// The CLI asks before an upload whether the job would be taken: a listing of sizes (no digests, no
+// file stored yet) is checked as a submit would check it, and nothing is queued.
+TEST_F(JobCoordinatorTest, ACheckBeforeTheUploadQueuesNothing) {
+  v1::SubmitRequest request;
+  auto* file = request.mutable_clip()->add_files();
+  file->set_path("images/000000.png");
+  file->set_size(100);
+  request.set_name("clip");
+  request.set_validate_only(true);
+  const v1::Job checked = coordinator_.Submit(request, AnonymousPrincipal());
+  EXPECT_TRUE(checked.id().empty());
+  EXPECT_EQ(checked.state(), v1::QUEUED);
+  EXPECT_EQ(coordinator_.List({}, 10, 0, AnonymousPrincipal()).jobs.size(), 0u);
+  EXPECT_FALSE(LeaseNext().has_value());
+  request.add_send_to("pacs1");
+  EXPECT_EQ(CodeOf([&] { coordinator_.Submit(request, AnonymousPrincipal()); }), ErrorCode::kInvalidArgument)
+      << "no PACS on this server";
+  request.clear_send_to();
+  request.set_validate_only(false);
+  EXPECT_EQ(CodeOf([&] { coordinator_.Submit(request, AnonymousPrincipal()); }), ErrorCode::kInvalidArgument)
+      << "a real submit names files with their digests";
+}
+
 TEST_F(JobCoordinatorTest, AnotherTenantsJobIsNotFoundLikeAMissingOne) {
   v1::SubmitRequest request;
   *request.mutable_clip() = Uploaded("images/000000.png", "tenant a's frame");
