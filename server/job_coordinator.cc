@@ -15,6 +15,7 @@
 #include "common/manifest.h"
 #include "common/prepare_flags_proto.h"
 #include "server/job_states.h"
+#include "worker/engine/train/config_check.h"
 
 namespace endorecon::server {
 namespace {
@@ -42,8 +43,15 @@ void ValidateOptions(const v1::ReconstructionOptions& options) {
                 " bytes; at most " + std::to_string(kMaxConfigBytes));
   }
   if (!options.config_json().empty()) {
-    if (!ParseJson(options.config_json(), "options.config_json").is_object())
-      FailInvalid("options.config_json is not a JSON object");
+    const auto config = ParseJson(options.config_json(), "options.config_json");
+    if (!config.is_object()) FailInvalid("options.config_json is not a JSON object");
+    // Its keys, types and bounds as the worker's engine takes them: a misspelt key failed the job only
+    // when a worker leased it, after the upload and the queue.
+    try {
+      train::CheckConfigJson(config, options.preset().empty() ? "cpu" : options.preset());
+    } catch (const Error& e) {
+      FailInvalid(std::string("options.config_json (--config): ") + e.what());
+    }
   }
 }
 

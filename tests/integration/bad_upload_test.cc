@@ -228,6 +228,12 @@ TEST_F(BadUploadTest, AClipMissingAMaskOrHoldingATruncatedPngIsRefusedBeforeItsU
                             "server"),
             std::string::npos)
       << result.err;
+  WriteBytes(cluster_.path("typo.json"), R"({"rays_per_batch": 512, "iteration": 300})");
+  result = RunCli(cluster_.address(), {"submit", cluster_.path("whole").string(), "--config",
+                                       cluster_.path("typo.json").string()});
+  EXPECT_EQ(result.exit_code, 2) << result.err;
+  EXPECT_NE(result.err.find("options.config_json (--config): "), std::string::npos) << result.err;
+  EXPECT_NE(result.err.find("iteration"), std::string::npos) << result.err;
   EXPECT_EQ(Blobs(), 0);
   EXPECT_EQ(Partials(), 0);
   // The same clip whole goes up and is queued.

@@ -55,8 +55,12 @@ std::optional<std::string> Broken(const std::string& file, const std::string& in
     }
     return std::nullopt;
   }
+  // The server checks a job's training configuration at submit through its one face (linking the
+  // configuration's library, not the engine).
+  if (StartsWith(file, "server/") && include == "worker/engine/train/config_check.h") return std::nullopt;
   if ((StartsWith(file, "client/") || StartsWith(file, "server/")) && StartsWith(include, "worker/")) {
-    return "client/ and server/ never include the engine or the worker";
+    return "client/ and server/ never include the engine or the worker (the server: but for "
+           "worker/engine/train/config_check.h)";
   }
   if (StartsWith(file, "common/") && !StartsWith(include, "common/") && !StartsWith(include, "endorecon/")) {
     return "common/ includes only common/ and the generated protocol";

@@ -362,6 +362,13 @@ TEST_F(JobCoordinatorTest, ACheckBeforeTheUploadQueuesNothing) {
   EXPECT_EQ(CodeOf([&] { coordinator_.Submit(request, AnonymousPrincipal()); }), ErrorCode::kInvalidArgument)
       << "no PACS on this server";
   request.clear_send_to();
+  // The training configuration's keys and bounds, as the engine takes them.
+  request.mutable_options()->set_config_json(R"({"rays_per_batch": 0})");
+  EXPECT_EQ(CodeOf([&] { coordinator_.Submit(request, AnonymousPrincipal()); }), ErrorCode::kInvalidArgument);
+  request.mutable_options()->set_config_json(R"({"iteration": 300})");
+  EXPECT_EQ(CodeOf([&] { coordinator_.Submit(request, AnonymousPrincipal()); }), ErrorCode::kInvalidArgument);
+  request.mutable_options()->set_config_json(R"({"rays_per_batch": 512})");
+  EXPECT_TRUE(coordinator_.Submit(request, AnonymousPrincipal()).id().empty());
   request.set_validate_only(false);
   EXPECT_EQ(CodeOf([&] { coordinator_.Submit(request, AnonymousPrincipal()); }), ErrorCode::kInvalidArgument)
       << "a real submit names files with their digests";

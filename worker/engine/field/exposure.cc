@@ -13,15 +13,6 @@ namespace endorecon::field {
 
 static_assert(TrainableModule<Exposure<float>, float>);
 
-void CheckExposureTimes(const std::vector<float>& times) {
-  for (std::size_t k = 0; k < times.size(); ++k) {
-    if (!std::isfinite(times[k]) || (k > 0 && !(times[k] > times[k - 1]))) {
-      FailInvalid("field.exposure_times must be finite and ascending; knot " + std::to_string(k) + " is " +
-                  std::to_string(times[k]));
-    }
-  }
-}
-
 template <typename S>
 Exposure<S>::Exposure(std::vector<float> times) : times_(std::move(times)) {
   if (times_.empty()) FailInvalid("field.exposure_times: the exposure needs at least one knot");

@@ -8,12 +8,10 @@
 #include <vector>
 
 #include "worker/engine/field/batch_loop.h"
+#include "worker/engine/field/exposure_times.h"
 #include "worker/engine/field/module.h"
 
 namespace endorecon::field {
-
-// Throws Error(kInvalidArgument) naming the knot unless every time is finite and above the one before.
-void CheckExposureTimes(const std::vector<float>& times);
 
 template <typename S>
 class Exposure {

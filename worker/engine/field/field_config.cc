@@ -4,7 +4,7 @@
 #include <string>
 
 #include "common/error.h"
-#include "worker/engine/field/exposure.h"
+#include "worker/engine/field/exposure_times.h"
 
 namespace endorecon::field {
 

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "common/error.h"
+#include "worker/engine/train/config_check.h"
 
 namespace endorecon::train {
 
@@ -362,6 +363,11 @@ void ApplyJson(const nlohmann::json& json, TrainConfig& config) {
     }
   }
   Validate(config);
+}
+
+void CheckConfigJson(const nlohmann::json& config, const std::string& preset) {
+  TrainConfig resolved = TrainConfig::Preset(preset);
+  ApplyJson(config, resolved);
 }
 
 }  // namespace endorecon::train
