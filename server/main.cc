@@ -136,12 +136,12 @@ void RefuseBlobsWithoutTheirStore(const std::filesystem::path& data_dir) {
   for (fs::recursive_directory_iterator it(data_dir / "blobs", error), end; !error && it != end;
        it.increment(error)) {
     if (!it->is_regular_file(error)) continue;
-    Fail(
-        ErrorCode::kFailedPrecondition,
-        data_dir.string() + ": blobs/ holds files (" + it->path().filename().string() +
-            ", ...) but there is no job store (jobs.sqlite is missing or empty), so retention would delete "
-            "them as no job's: restore jobs.sqlite beside them (docs/operations.md, \"Back it up\"), or move "
-            "blobs/ away to start afresh");
+    Fail(ErrorCode::kFailedPrecondition,
+         data_dir.string() + ": blobs/ holds files (" + it->path().filename().string() +
+             ", ...) but there is no job store (jobs.sqlite is missing or empty), so retention would delete "
+             "them as no job's: restore jobs.sqlite beside them (docs/operations.md, \"Backup and "
+             "restore\"), or move "
+             "blobs/ away to start afresh");
   }
 }
 

@@ -47,8 +47,31 @@ std::string Statement::Text(int column) {
 }
 
 void Statement::Check(int rc, const char* what) {
-  if (rc != SQLITE_OK)
-    Fail(ErrorCode::kUnavailable, std::string(store_) + ": " + what + ": " + sqlite3_errmsg(db_));
+  if (rc != SQLITE_OK) FailStore(db_, store_, std::string(what) + ": " + sqlite3_errmsg(db_));
+}
+
+void FailStore(sqlite3* db, const char* store, const std::string& what) {
+  const int code = sqlite3_errcode(db) & 0xff;  // the primary result code
+  const char* name = sqlite3_db_filename(db, "main");
+  const std::filesystem::path file = name != nullptr ? name : "";
+  const std::string where = file.empty() ? std::string(store) : file.string() + ": " + store;
+  // A damaged file, a full disk and a read-only file are said as what they are: each was
+  // "UNAVAILABLE: job store: step: ...", which reads as a moment's trouble (found 2026-12-05).
+  if (code == SQLITE_CORRUPT || code == SQLITE_NOTADB) {
+    Fail(ErrorCode::kDataLoss, where + ": " + what + "; the file is damaged: restore it from a backup " +
+                                   "(docs/operations.md, \"Backup and restore\")");
+  }
+  if (code == SQLITE_FULL) Fail(ErrorCode::kResourceExhausted, where + ": " + what + " (its disk is full)");
+  if (code == SQLITE_READONLY) Fail(ErrorCode::kFailedPrecondition, where + ": " + what);
+  std::string note;
+  if (code == SQLITE_IOERR && !file.empty()) {
+    std::error_code error;
+    const auto space = std::filesystem::space(file.parent_path(), error);
+    if (!error && space.available < (std::uintmax_t{1} << 20)) {
+      note = " (its disk has " + std::to_string(space.available) + " bytes free: it is full)";
+    }
+  }
+  Fail(ErrorCode::kUnavailable, where + ": " + what + note);
 }
 
 void Exec(sqlite3* db, const char* sql, const char* store) {
@@ -56,7 +79,7 @@ void Exec(sqlite3* db, const char* sql, const char* store) {
   if (sqlite3_exec(db, sql, nullptr, nullptr, &message) != SQLITE_OK) {
     const std::string text = message ? message : "unknown error";
     sqlite3_free(message);
-    Fail(ErrorCode::kUnavailable, std::string(store) + ": " + text + " in: " + sql);
+    FailStore(db, store, text + " in: " + sql);
   }
 }
 
@@ -71,14 +94,9 @@ sqlite3* OpenDatabase(const std::filesystem::path& file, const char* store) {
   try {
     Exec(db, "PRAGMA journal_mode=WAL", store);
     Exec(db, "PRAGMA synchronous=FULL", store);
-  } catch (const Error& e) {
-    // A file that is no database, or a damaged one, is named (the message named only the store).
-    const int code = sqlite3_errcode(db);
-    sqlite3_close(db);
-    const bool damaged = code == SQLITE_CORRUPT || code == SQLITE_NOTADB;
-    Fail(
-        damaged ? ErrorCode::kDataLoss : e.code(),
-        file.string() + ": " + e.what() + (damaged ? "; restore it from a backup (docs/operations.md)" : ""));
+  } catch (const Error&) {
+    sqlite3_close(db);  // Exec's error names the file and says what it is
+    throw;
   }
   return db;
 }
@@ -97,9 +115,9 @@ void CheckDatabase(sqlite3* db, const std::filesystem::path& file, const char* s
     if (verdict.size() > 300) break;
   }
   if (verdict != "ok") {
-    Fail(ErrorCode::kDataLoss, std::string(store) + " " + file.string() +
-                                   " is damaged (SQLite's quick_check: " + verdict +
-                                   "); restore it from a backup (docs/operations.md)");
+    Fail(ErrorCode::kDataLoss,
+         std::string(store) + " " + file.string() + " is damaged (SQLite's quick_check: " + verdict +
+             "); restore it from a backup (docs/operations.md, \"Backup and restore\")");
   }
 }
 

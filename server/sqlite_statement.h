@@ -36,7 +36,12 @@ class Statement {
   sqlite3_stmt* stmt_ = nullptr;
 };
 
-// Runs statements without results. Throws Error(kUnavailable) naming `store` and the SQL.
+// Throws the error of `db`'s last failed call, naming its file, `store` and `what`: kDataLoss for a
+// damaged file (with how to restore it), kResourceExhausted for a full disk, kFailedPrecondition for a
+// read-only one, else kUnavailable (an I/O error with the disk's free bytes when they are few).
+[[noreturn]] void FailStore(sqlite3* db, const char* store, const std::string& what);
+
+// Runs statements without results. Throws as FailStore, naming the SQL.
 void Exec(sqlite3* db, const char* sql, const char* store);
 
 // Opens (creating) a database in WAL mode with synchronous=FULL and a busy timeout, so several
