@@ -267,12 +267,12 @@ int Run(const ServerFlags& flags) {
   } else if (IsLoopbackAddress(flags.listen)) {
     spdlog::info(
         "no token store: every local caller may use every API (create tokens with `endorecon-server "
-        "token create --data-dir {}`; they are required from then on)",
+        "token create --data-dir {} --role admin --name NAME`; they are required from then on)",
         data_dir.string());
   } else {
     spdlog::warn(
         "no token store in {}: any caller that reaches {} may use every API until the first "
-        "`endorecon-server token create --data-dir {}` (picked up within a second)",
+        "`endorecon-server token create --data-dir {} --role admin --name NAME` (picked up within a second)",
         data_dir.string(), address, data_dir.string());
   }
   if (flags.retention_days > 0) {
@@ -484,7 +484,10 @@ int main(int argc, char** argv) {
     return Run(flags);
   } catch (const endorecon::Error& e) {
     spdlog::error("{}: {}", endorecon::ErrorCodeName(e.code()), e.what());
-    return e.code() == endorecon::ErrorCode::kInvalidArgument ? 2 : 1;
+    // A file or folder the command line names and that is not there is its input's fault too.
+    return e.code() == endorecon::ErrorCode::kInvalidArgument || e.code() == endorecon::ErrorCode::kNotFound
+               ? 2
+               : 1;
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());
     return 1;

@@ -35,9 +35,18 @@ std::string LocalUser() {
   return "local:" + std::string(user ? user->pw_name : std::to_string(geteuid()));
 }
 
-// The store, created (in a data folder made private) only for `create`: reading or revoking never
-// makes one, since a running server requires tokens once its store holds one.
+// The store, created (in the data folder, which must exist) only for `create`: reading or revoking
+// never makes one, since a running server requires tokens once its store holds one.
 std::unique_ptr<TokenStore> OpenStore(const TokenFlags& flags, bool create) {
+  // A misspelt --data-dir said "no token store" (as if tokens were off), and `create` made a folder
+  // of its own that no server reads: the folder must exist, for every subcommand.
+  std::error_code error;
+  if (!std::filesystem::is_directory(flags.data_dir, error)) {
+    Fail(ErrorCode::kNotFound,
+         "--data-dir " + flags.data_dir +
+             (std::filesystem::exists(flags.data_dir, error) ? ": not a folder" : ": no such folder") +
+             ": name the server's data folder (a new deployment's is created first: install -d -m 700 DIR)");
+  }
   const auto path = TokenStore::PathIn(flags.data_dir);
   if (!create && !std::filesystem::exists(path)) return nullptr;
   if (create && MakePrivateFolder(flags.data_dir)) {

@@ -106,6 +106,20 @@ TEST_F(AccessControlTest, RevokingATokenTakesEffectWithoutARestart) {
   EXPECT_NE(listed.find("alice"), std::string::npos) << listed;
   EXPECT_NE(listed.find("revoked"), std::string::npos) << listed;
 
+  // A misspelt --data-dir is named, not taken for a folder without tokens (list said "no token
+  // store", and create made a store no server reads; found 2026-12-05).
+  for (const bool create : {false, true}) {
+    std::vector<std::string> argv{BuiltBinary("server/endorecon-server"), "token", create ? "create" : "list",
+                                  "--data-dir", cluster_.data_dir().string() + "x"};
+    if (create) argv.insert(argv.end(), {"--role", "admin", "--name", "ops"});
+    Process typo(argv, scratch / "typo");
+    EXPECT_EQ(typo.Wait(), 2) << create;
+    EXPECT_NE(ReadBytes(scratch / "typo").find("x: no such folder: name the server's data folder"),
+              std::string::npos)
+        << ReadBytes(scratch / "typo");
+    EXPECT_FALSE(std::filesystem::exists(cluster_.data_dir().string() + "x"));
+  }
+
   // Nothing accepted is lost: the job is still there, and its tenant's other tokens still work.
   EXPECT_EQ(cluster_.Job(id).state(), v1::QUEUED);
   const auto audit = Audit();
