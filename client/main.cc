@@ -1,5 +1,6 @@
 // endorecon: the thin client of endorecon-server (no engine linked). Uploads clips, submits,
 // watches, lists, cancels and fetches reconstruction jobs.
+#include <grpc/support/log.h>
 #include <spdlog/sinks/stdout_sinks.h>
 #include <spdlog/spdlog.h>
 
@@ -45,6 +46,12 @@ std::string HintFor(const endorecon::Error& error, const Globals& globals) {
       std::string_view(error.what()).find("Failed parsing HTTP/2") != std::string_view::npos)
     return "\nendorecon: " + globals.server +
            " answers, but not as endorecon-server's job API: is it the metrics or health port?";
+  if (error.code() == endorecon::ErrorCode::kUnavailable) {
+    endorecon::ChannelSecurity security;
+    security.ca_file = globals.ca_file;
+    if (auto hint = endorecon::TlsFailureHint(error.what(), security); !hint.empty())
+      return "\nendorecon:" + hint.substr(0, hint.size() - 1).replace(0, 2, " ");
+  }
   // A plaintext channel to a TLS port fails to connect; a call cut mid-way (a server restart) or a
   // local file that cannot be written has nothing to do with TLS (the hint followed every UNAVAILABLE).
   if (error.code() == endorecon::ErrorCode::kUnavailable && globals.ca_file.empty() &&
@@ -65,6 +72,10 @@ int main(int argc, char** argv) {
   // What the shared code logs (a token about to expire) goes to stderr, as every message of the CLI:
   // stdout carries results, JSON with --json.
   spdlog::set_default_logger(spdlog::stderr_logger_mt("endorecon"));
+  // gRPC's own log lines ("E1205 21:49:14 ssl_transport_security.cc:1501] Handshake failed ...") went
+  // to the user's terminal beside the CLI's message, which says the same with a hint: kept out unless
+  // asked for with GRPC_VERBOSITY.
+  if (std::getenv("GRPC_VERBOSITY") == nullptr) gpr_set_log_function([](gpr_log_func_args*) {});
   spdlog::set_pattern("endorecon: %l: %v");
   CLI::App app{
       "endorecon: submit endoscopic clips to endorecon-server, watch the reconstruction, fetch results"};

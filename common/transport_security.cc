@@ -12,8 +12,11 @@
 #include <openssl/x509.h>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <atomic>
+#include <cctype>
 #include <charconv>
+#include <ctime>
 #include <memory>
 #include <mutex>
 #include <thread>
@@ -24,6 +27,15 @@
 
 namespace endorecon {
 namespace {
+
+// "2021-01-01 00:00:00 UTC".
+std::string AsnTimeText(const ASN1_TIME* time) {
+  std::tm tm{};
+  if (ASN1_TIME_to_tm(time, &tm) != 1) return "(an unreadable date)";
+  char text[32];
+  std::strftime(text, sizeof text, "%Y-%m-%d %H:%M:%S UTC", &tm);
+  return text;
+}
 
 void RequirePair(const std::string& cert_file, const std::string& key_file) {
   if (cert_file.empty() != key_file.empty())
@@ -56,6 +68,22 @@ void CheckCertificateAndKey(const std::string& cert_pem, const std::string& key_
     ERR_clear_error();
     FailInvalid("--tls-cert " + cert_file + " and --tls-key " + key_file +
                 " are not a pair: the key belongs to another certificate");
+  }
+  // An expired certificate started and listened without a word; every peer then failed with a bare
+  // "certificate verify failed" (found 2026-12-05).
+  if (X509_cmp_current_time(X509_get0_notAfter(cert.get())) < 0) {
+    FailInvalid("--tls-cert " + cert_file + " expired on " + AsnTimeText(X509_get0_notAfter(cert.get())) +
+                ": renew it (docs/operations.md, \"Make the certificates\")");
+  }
+  if (X509_cmp_current_time(X509_get0_notBefore(cert.get())) > 0) {
+    FailInvalid("--tls-cert " + cert_file + " is valid only from " +
+                AsnTimeText(X509_get0_notBefore(cert.get())) + ": is this machine's clock right?");
+  }
+  constexpr long kWarnDays = 30;
+  const auto soon = std::time(nullptr) + kWarnDays * 86400;
+  if (X509_cmp_time(X509_get0_notAfter(cert.get()), const_cast<std::time_t*>(&soon)) < 0) {
+    spdlog::warn("--tls-cert {} expires on {}, within {} days: renew it", cert_file,
+                 AsnTimeText(X509_get0_notAfter(cert.get())), kWarnDays);
   }
 }
 
@@ -244,6 +272,22 @@ void PauseBeforeRetry(grpc::Channel& channel, std::chrono::milliseconds pause) {
   } else {
     channel.WaitForConnected(std::chrono::system_clock::now() + pause);
   }
+}
+
+std::string TlsFailureHint(std::string_view message, const ChannelSecurity& security) {
+  if (security.ca_file.empty()) return "";
+  std::string lower(message);
+  std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char c) { return std::tolower(c); });
+  const auto has = [&](std::string_view word) { return lower.find(word) != std::string::npos; };
+  if (has("certificate verify failed") || has("certificate_verify_failed")) {
+    return " (the server's certificate does not verify against --ca " + security.ca_file +
+           ": is it signed by that CA, and valid now?)";
+  }
+  if (has("wrong version number") || has("wrong_version_number")) {
+    return " (the address does not answer in TLS: a server without --tls-cert (then drop --ca), or a "
+           "port that is not its --listen, such as its health port)";
+  }
+  return "";
 }
 
 std::unique_ptr<grpc::ClientContext> CallContext(std::chrono::milliseconds timeout) {

@@ -206,7 +206,10 @@ int Serve(const ServeFlags& flags) {
       const std::string_view message = e.what();
       const bool closed = message.find("Socket closed") != std::string_view::npos ||
                           message.find("handshake") != std::string_view::npos;
-      const bool handshake = !flags.ca_file.empty() && closed;
+      ChannelSecurity security;
+      security.ca_file = flags.ca_file;
+      const std::string tls_hint = TlsFailureHint(message, security);
+      const bool handshake = !flags.ca_file.empty() && closed && tls_hint.empty();
       // Plaintext to a TLS port: the server drops the connection too (the CLI hints at --ca alike).
       const bool plaintext_to_tls = flags.ca_file.empty() && closed;
       if (int held = 0; !pacer.Due(held)) {
@@ -219,7 +222,8 @@ int Serve(const ServeFlags& flags) {
       spdlog::warn(
           "cannot register with {}{}: {}; retrying every second{}", flags.server,
           attempts > 1 ? fmt::format(" ({} attempts in {} s)", attempts, waited) : "", e.what(),
-          handshake && !flags.tls_cert.empty()
+          !tls_hint.empty() ? tls_hint
+          : handshake && !flags.tls_cert.empty()
               ? " (the server closed the connection in the TLS handshake: is --tls-cert signed by the "
                 "server's --tls-client-ca, valid now and made for client authentication?)"
           : handshake        ? " (the server closed the connection in the TLS handshake: does it require a "
