@@ -90,9 +90,17 @@ std::string OutcomeLine(const v1::Job& job) {
   };
   std::string line = fmt::format("done: {:.0f} iterations in {:.0f} s of training", number("iterations"),
                                  number("train_seconds"));
-  if (job.started_unix_ms() > 0 && job.finished_unix_ms() >= job.started_unix_ms())
-    line +=
-        fmt::format(", {} in all", HumanDuration((job.finished_unix_ms() - job.started_unix_ms()) / 1000.0));
+  // Training seconds count every run of a resumed job; its wall time is said for the last run and
+  // since the first ("36 s of training, 33s in all" read as a contradiction; found 2026-12-05).
+  if (job.started_unix_ms() > 0 && job.finished_unix_ms() >= job.started_unix_ms()) {
+    const double last = (job.finished_unix_ms() - job.started_unix_ms()) / 1000.0;
+    if (job.first_started_unix_ms() > 0 && job.first_started_unix_ms() < job.started_unix_ms()) {
+      line += fmt::format(", resumed: {} in its last run, {} since it first started", HumanDuration(last),
+                          HumanDuration((job.finished_unix_ms() - job.first_started_unix_ms()) / 1000.0));
+    } else {
+      line += fmt::format(", {} in all", HumanDuration(last));
+    }
+  }
   if (number("train_psnr") > 0) line += fmt::format(", PSNR {:.2f} dB", number("train_psnr"));
   if (number("heldout_psnr") >= 0) line += fmt::format(" (held-out {:.2f})", number("heldout_psnr"));
   if (number("budget_advised_s") > 0) {

@@ -96,6 +96,11 @@ TEST(DescribeJob, ASucceededJobShowsItsOutcomeNotItsLastProgress) {
   EXPECT_NE(requeued.find("  started   " + HumanTime(400'000) + "\n"), std::string::npos) << requeued;
   EXPECT_NE(requeued.find("  restarted " + HumanTime(1'000'000) + " (its latest lease)"), std::string::npos)
       << requeued;
+  // Its training seconds count both runs: its wall time is said for the last run and since the first.
+  EXPECT_EQ(OutcomeLine(job),
+            "done: 1858 iterations in 41 s of training, resumed: 1m02s in its last run, 11m02s since it first "
+            "started, PSNR 31.10 dB (held-out 31.75)");
+  job.set_first_started_unix_ms(1'000'000);
   // Without held-out frames the engine reports -1: not shown.
   job.set_summary_json(R"({"iterations":10,"train_seconds":1,"train_psnr":20,"heldout_psnr":-1})");
   EXPECT_EQ(OutcomeLine(job).find("held-out"), std::string::npos) << OutcomeLine(job);
