@@ -235,9 +235,11 @@ void JobCoordinator::CheckQuotas(const std::string& tenant, const v1::Manifest& 
   if (!counts_jobs && quota.max_bytes == 0) return;
   // A tenant's usage is a scan of its jobs: counted only when a quota needs it, and once.
   const auto usage = parts_.store.UsageOf(tenant);
+  // Admins and callers without a token have the empty tenant, which listings show as "-".
+  const std::string named = "tenant '" + (tenant.empty() ? std::string("-") : tenant) + "'";
   if (counts_jobs && usage.active_jobs >= quota.max_jobs) {
     endorecon::Fail(ErrorCode::kResourceExhausted,
-                    "tenant '" + tenant + "' has " + std::to_string(usage.active_jobs) +
+                    named + " has " + std::to_string(usage.active_jobs) +
                         " job(s) queued or running, its quota max_jobs is " + std::to_string(quota.max_jobs) +
                         "; submit again when one has finished");
   }
@@ -245,7 +247,7 @@ void JobCoordinator::CheckQuotas(const std::string& tenant, const v1::Manifest& 
   if (quota.max_bytes > 0 && usage.bytes + bytes > quota.max_bytes) {
     endorecon::Fail(
         ErrorCode::kResourceExhausted,
-        "tenant '" + tenant + "' keeps " + std::to_string(usage.bytes) + " bytes in its jobs and this adds " +
+        named + " keeps " + std::to_string(usage.bytes) + " bytes in its jobs and this adds " +
             std::to_string(bytes) + LargestFileNote(adding) + ": over its quota max_bytes of " +
             std::to_string(quota.max_bytes) +
             " bytes; delete the files of a finished job of it (`endorecon delete JOB`; a queued or "
