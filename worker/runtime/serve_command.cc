@@ -67,9 +67,17 @@ std::string Hostname() {
   return name;
 }
 
+// The time `file` was last written, or none (no file, or it cannot be read).
+std::optional<std::filesystem::file_time_type> WrittenAt(const std::string& file) {
+  std::error_code error;
+  const auto at = std::filesystem::last_write_time(file, error);
+  if (file.empty() || error) return std::nullopt;
+  return at;
+}
+
 void LeaseLoop(WorkerClient& client, const Device& device, const RunnerSettings& settings,
-               WorkerMetrics& metrics, const std::atomic<bool>& shutting_down,
-               std::chrono::milliseconds wait) {
+               WorkerMetrics& metrics, const std::atomic<bool>& shutting_down, std::chrono::milliseconds wait,
+               const std::string& token_file) {
   using Clock = std::chrono::steady_clock;
   auto backoff = std::chrono::milliseconds(500);
   std::optional<Clock::time_point> failing_since;  // since when calls fail, while they do
@@ -120,12 +128,24 @@ void LeaseLoop(WorkerClient& client, const Device& device, const RunnerSettings&
       if (e.what() != last_error) warnings.Reset();
       last_error = e.what();
       if (int held = 0; warnings.Due(held)) {
-        spdlog::warn("[{}] {}: {}; retrying every 2 s{}", device.name, ErrorCodeName(e.code()), e.what(),
+        spdlog::warn("[{}] {}: {}; retrying every {}{}", device.name, ErrorCodeName(e.code()), e.what(),
+                     Refused(e) ? "30 s at most (write a valid worker token into --token-file)" : "2 s",
                      failing_since ? " (still failing; warned every 30 s)" : "");
       }
       if (!failing_since) failing_since = Clock::now();
-      client.PauseBeforeRetry(backoff);
-      backoff = std::min(backoff * 2, std::chrono::milliseconds(2000));
+      // A refused token (revoked, expired, or tokens switched on after this worker started) is not
+      // back in 2 s: retried up to 30 s apart, each retry an audit line (one every 2 s was 1,800 an
+      // hour; found 2026-12-05). A rotated --token-file is taken at the next retry.
+      const bool refused = Refused(e);
+      const auto most = refused ? std::chrono::milliseconds(30000) : std::chrono::milliseconds(2000);
+      const auto token_written = WrittenAt(token_file);
+      bool rotated = false;
+      for (auto paused = std::chrono::milliseconds(0); paused < backoff && !shutting_down && !rotated;
+           paused += std::chrono::milliseconds(1000)) {
+        client.PauseBeforeRetry(std::min(backoff - paused, std::chrono::milliseconds(1000)));
+        rotated = refused && WrittenAt(token_file) != token_written;
+      }
+      backoff = rotated ? std::chrono::milliseconds(500) : std::min(backoff * 2, most);
     }
   }
 }
@@ -246,7 +266,8 @@ int Serve(const ServeFlags& flags) {
   std::vector<std::thread> loops;
   const auto wait = std::chrono::milliseconds(static_cast<long>(flags.lease_wait_s * 1000));
   for (const auto& device : devices) {
-    loops.emplace_back([&, device] { LeaseLoop(client, device, settings, metrics, shutting_down, wait); });
+    loops.emplace_back(
+        [&, device] { LeaseLoop(client, device, settings, metrics, shutting_down, wait, flags.token_file); });
   }
   for (auto& loop : loops) loop.join();
   if (!shutting_down) pthread_kill(signal_waiter.native_handle(), SIGTERM);
