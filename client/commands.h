@@ -42,6 +42,7 @@ Command AddCancelCommand(CLI::App& app);
 Command AddDeleteCommand(CLI::App& app);
 Command AddFetchCommand(CLI::App& app);
 Command AddWorkersCommand(CLI::App& app);
+Command AddDrainCommand(CLI::App& app);
 Command AddSendCommand(CLI::App& app);
 
 }  // namespace endorecon::client

@@ -111,6 +111,7 @@ int main(int argc, char** argv) {
   commands["delete"] = AddDeleteCommand(app);
   commands["fetch"] = AddFetchCommand(app);
   commands["workers"] = AddWorkersCommand(app);
+  commands["drain"] = AddDrainCommand(app);
   commands["send"] = AddSendCommand(app);
   try {
     app.parse(argc, argv);

@@ -23,10 +23,14 @@ Command AddWorkersCommand(CLI::App& app) {
       std::cout << ToJson(response) << std::endl;
       return kExitOk;
     }
-    std::cout << fmt::format("{:<28} {:<6} {:<16} {:<19} {}\n", "WORKER", "ALIVE", "DEVICES", "LAST SEEN",
+    std::cout << fmt::format("{:<28} {:<8} {:<16} {:<19} {}\n", "WORKER", "ALIVE", "DEVICES", "LAST SEEN",
                              "JOBS");
     for (const auto& worker : response.workers()) {
-      std::cout << fmt::format("{:<28} {:<6} {:<16} {:<19} {}\n", worker.id(), worker.alive() ? "yes" : "no",
+      // A draining worker (endorecon drain) is given no new job.
+      const char* alive = worker.draining() ? (worker.alive() ? "draining" : "no")
+                          : worker.alive()  ? "yes"
+                                            : "no";
+      std::cout << fmt::format("{:<28} {:<8} {:<16} {:<19} {}\n", worker.id(), alive,
                                fmt::format("{}", fmt::join(worker.devices(), ",")),
                                HumanTime(worker.last_seen_unix_ms()),
                                fmt::format("{}", fmt::join(worker.job_ids(), ",")));

@@ -168,7 +168,7 @@ void CallGuard::Record(const grpc::ServerContext& context, const Rpc& rpc, const
   audit_.Write({known ? call.caller.name : "-",
                 known && !call.caller.anonymous ? RoleName(call.caller.role) : "-", call.caller.tenant,
                 rpc.method, call.job_id, CodeName(status.error_code()), context.peer(),
-                CertificateName(context), ""});
+                CertificateName(context), rpc.subject});
 }
 
 void CallGuard::RecordServerAction(const std::string& method, const std::string& job_id,

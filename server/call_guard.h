@@ -46,6 +46,7 @@ struct Rpc {
   Access access;
   bool writes;         // audited whatever its outcome; reads only when refused
   std::string job_id;  // the job it concerns when the request names one
+  std::string subject;  // what else it acts on, for the audit log (a worker's id: Drain)
 };
 
 // The call as the handler sees it.

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <nlohmann/json.hpp>
+#include <thread>
 
 #include "common/dicom/recording.h"
 #include "common/dicom/uid.h"
@@ -398,12 +399,23 @@ std::optional<JobCoordinator::Granted> JobCoordinator::Lease(const std::string& 
                                                              Clock::time_point deadline) {
   parts_.workers.Touch(worker_id);
   while (true) {
+    // A draining worker is given nothing: its call waits out its deadline (as an empty queue's would,
+    // so it does not poll in a loop), or until the drain is undone.
+    while (parts_.workers.Draining(worker_id)) {
+      if (Clock::now() >= deadline) return std::nullopt;
+      std::this_thread::sleep_until(std::min(deadline, Clock::now() + std::chrono::milliseconds(200)));
+    }
     const auto next = parts_.scheduler.PopWait(deadline);
     if (!next) return std::nullopt;
     auto granted = Locked([&]() -> std::optional<Granted> {
       auto stored = parts_.store.Get(*next);
       if (!stored || stored->job.state() != v1::QUEUED) return std::nullopt;
       auto& job = stored->job;
+      // Drained while this call waited for a job: the job goes back for another worker.
+      if (parts_.workers.Draining(worker_id)) {
+        parts_.scheduler.Push(job.id(), job.priority(), stored->seq);
+        return std::nullopt;
+      }
       const auto lease = parts_.leases.Grant(job.id(), worker_id, clock_());
       job.set_state(v1::RUNNING);
       job.set_lease_id(lease.id);

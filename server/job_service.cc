@@ -1,6 +1,7 @@
 #include "server/job_service.h"
 
 #include <fmt/chrono.h>
+#include <spdlog/spdlog.h>
 
 #include <map>
 
@@ -212,6 +213,17 @@ grpc::Status JobServiceImpl::ListWorkers(grpc::ServerContext* context, const v1:
                                          v1::ListWorkersResponse* response) {
   return guard_.Run(context, {"ListWorkers", Access::kAdmin, kReads, ""}, [&](Call&) {
     for (auto& worker : workers_.List()) *response->add_workers() = std::move(worker);
+    return grpc::Status::OK;
+  });
+}
+
+grpc::Status JobServiceImpl::Drain(grpc::ServerContext* context, const v1::DrainRequest* request,
+                                   v1::WorkerInfo* worker) {
+  return guard_.Run(context, {"Drain", Access::kAdmin, kWrites, "", request->worker_id()}, [&](Call& call) {
+    *worker = workers_.SetDraining(request->worker_id(), !request->undo());
+    spdlog::info("worker {} {} by request of {}", request->worker_id(),
+                 request->undo() ? "serves again (drain undone)" : "drains: it is given no new job",
+                 call.caller.name);
     return grpc::Status::OK;
   });
 }

@@ -33,6 +33,7 @@ class JobServiceImpl final : public v1::JobService::Service {
   grpc::Status ListWorkers(grpc::ServerContext*, const v1::ListWorkersRequest*,
                            v1::ListWorkersResponse*) override;
   grpc::Status Send(grpc::ServerContext*, const v1::SendRequest*, v1::Job*) override;
+  grpc::Status Drain(grpc::ServerContext*, const v1::DrainRequest*, v1::WorkerInfo*) override;
 
  private:
   CallGuard& guard_;

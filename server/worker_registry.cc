@@ -1,5 +1,7 @@
 #include "server/worker_registry.h"
 
+#include "common/error.h"
+
 namespace endorecon::server {
 namespace {
 
@@ -25,6 +27,36 @@ void WorkerRegistry::Register(const v1::RegisterRequest& request) {
   entry.info.set_hostname(request.hostname());
   *entry.info.mutable_devices() = request.devices();
   *entry.info.mutable_device_info() = request.device_info();
+  entry.info.set_draining(false);
+}
+
+v1::WorkerInfo WorkerRegistry::SetDraining(const std::string& worker_id, bool draining) {
+  std::lock_guard lock(mutex_);
+  const auto found = workers_.find(worker_id);
+  if (found == workers_.end()) {
+    std::string known;
+    int named = 0;
+    for (const auto& [id, entry] : workers_) {
+      if (named++ == 10) {
+        known += ", ...";
+        break;
+      }
+      known += (known.empty() ? "" : ", ") + id;
+    }
+    Fail(ErrorCode::kNotFound, "no worker '" + worker_id + "' (known: " + (known.empty() ? "none" : known) +
+                                   "; `endorecon workers` lists them)");
+  }
+  found->second.info.set_draining(draining);
+  v1::WorkerInfo info = found->second.info;
+  info.set_alive(std::chrono::steady_clock::now() - found->second.last_seen <= alive_window_);
+  for (const auto& job : found->second.jobs) info.add_job_ids(job);
+  return info;
+}
+
+bool WorkerRegistry::Draining(const std::string& worker_id) const {
+  std::lock_guard lock(mutex_);
+  const auto found = workers_.find(worker_id);
+  return found != workers_.end() && found->second.info.draining();
 }
 
 bool WorkerRegistry::Registered(const std::string& worker_id) const {

@@ -26,6 +26,10 @@ class WorkerRegistry {
   void Touch(const std::string& worker_id);
   // The worker said it is stopping: not alive from now (listed until forgotten, as a silent one).
   void Leave(const std::string& worker_id);
+  // Marks a worker draining (or not): Draining says so until undone or until it registers again (a
+  // restarted worker serves again). Throws Error(kNotFound) for a worker never heard from.
+  v1::WorkerInfo SetDraining(const std::string& worker_id, bool draining);
+  bool Draining(const std::string& worker_id) const;
   void AddJob(const std::string& worker_id, const std::string& job_id);
   void RemoveJob(const std::string& worker_id, const std::string& job_id);
   std::vector<v1::WorkerInfo> List() const;

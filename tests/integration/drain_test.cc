@@ -1,0 +1,44 @@
+// An admin drains a worker for maintenance: it is given no new job while its running one goes on,
+// and `--undo` puts it back in service.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <string>
+#include <thread>
+
+#include "tests/integration/service_harness.h"
+
+namespace endorecon::testing {
+namespace {
+
+TEST(DrainTest, ADrainingWorkerIsGivenNoNewJobAndUndoPutsItBack) {
+  Cluster cluster;
+  auto& worker = cluster.StartWorker("w-maint");
+  ASSERT_TRUE(WaitUntil([&] { return RunCli(cluster.address(), {"workers"}).out.find("w-maint") != std::string::npos; }))
+      << worker.Log();
+  const auto unknown = RunCli(cluster.address(), {"drain", "w-other"});
+  EXPECT_EQ(unknown.exit_code, 3) << unknown.err;
+  EXPECT_NE(unknown.err.find("no worker 'w-other' (known: w-maint"), std::string::npos) << unknown.err;
+
+  const auto drained = RunCli(cluster.address(), {"drain", "w-maint"});
+  ASSERT_EQ(drained.exit_code, 0) << drained.err;
+  EXPECT_NE(drained.out.find("worker w-maint drains: it is given no new job and runs none"), std::string::npos)
+      << drained.out;
+  EXPECT_NE(RunCli(cluster.address(), {"workers"}).out.find("draining"), std::string::npos);
+  MakeClip(cluster.path("clip"));
+  const auto submitted =
+      RunCli(cluster.address(), {"--json", "submit", cluster.path("clip").string(), "--iterations", "20"});
+  ASSERT_EQ(submitted.exit_code, 0) << submitted.err;
+  const auto id = submitted.out.substr(submitted.out.find("\"id\":\"") + 6, 12);
+  std::this_thread::sleep_for(std::chrono::seconds(3));
+  EXPECT_EQ(cluster.Job(id).state(), v1::QUEUED) << "the only worker drains";
+
+  const auto undone = RunCli(cluster.address(), {"drain", "w-maint", "--undo"});
+  ASSERT_EQ(undone.exit_code, 0) << undone.err;
+  EXPECT_NE(undone.out.find("serves again"), std::string::npos) << undone.out;
+  EXPECT_EQ(cluster.WaitForState(id, v1::SUCCEEDED).worker_id(), "w-maint");
+  EXPECT_EQ(RunCli(cluster.address(), {"workers"}).out.find("draining"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace endorecon::testing
