@@ -4,6 +4,8 @@
 
 #include <chrono>
 
+#include "common/error.h"
+
 namespace endorecon::server {
 namespace {
 
@@ -24,6 +26,27 @@ TEST(WorkerRegistryTest, WorkersGoneLongAndHoldingNoJobAreForgotten) {
   ASSERT_EQ(registry.List().size(), 1u);
   EXPECT_EQ(registry.List()[0].id(), "host-102");
   EXPECT_FALSE(registry.Registered("host-101"));
+}
+
+// A drain lasts until undone or until the worker registers again (a restart after maintenance).
+TEST(WorkerRegistryTest, ADrainLastsUntilUndoneOrTheWorkersNextRegistration) {
+  WorkerRegistry registry(std::chrono::seconds(30));
+  v1::RegisterRequest request;
+  request.set_worker_id("gpu-7");
+  request.add_devices("cuda:0");
+  registry.Register(request);
+  registry.AddJob("gpu-7", "job-1");
+  const v1::WorkerInfo drained = registry.SetDraining("gpu-7", true);
+  EXPECT_TRUE(drained.draining());
+  ASSERT_EQ(drained.job_ids_size(), 1);
+  EXPECT_TRUE(registry.Draining("gpu-7"));
+  EXPECT_TRUE(registry.List()[0].draining());
+  EXPECT_FALSE(registry.SetDraining("gpu-7", false).draining());
+  registry.SetDraining("gpu-7", true);
+  registry.Register(request);
+  EXPECT_FALSE(registry.Draining("gpu-7"));
+  EXPECT_FALSE(registry.Draining("unknown"));
+  EXPECT_THROW(registry.SetDraining("unknown", true), Error);
 }
 
 }  // namespace
