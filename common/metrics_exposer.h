@@ -11,15 +11,17 @@
 
 namespace endorecon {
 
-// Serves /metrics on `bind_address` (HOST:PORT). Throws Error(kInvalidArgument) naming the address
-// and the flags when it cannot: CivetServer's own words name neither the port nor the flag.
+// Serves /metrics on `bind_address` (HOST:PORT). Throws Error(kUnavailable) naming the address and
+// the flags when it cannot, as a taken --listen port is: CivetServer's own words ("null context when
+// constructing CivetServer") name neither the port nor the flag, and are left out.
 inline std::unique_ptr<prometheus::Exposer> OpenMetricsExposer(const std::string& bind_address) {
   try {
     return std::make_unique<prometheus::Exposer>(bind_address);
-  } catch (const std::exception& e) {
-    FailInvalid("cannot serve metrics on " + bind_address +
-                " (--metrics-host, --metrics-port): the port is taken or the address is not this machine's (" +
-                e.what() + ")");
+  } catch (const std::exception&) {
+    Fail(ErrorCode::kUnavailable,
+         "cannot serve metrics on " + bind_address +
+             " (--metrics-host, --metrics-port): the port is taken or the address is "
+             "not this machine's");
   }
 }
 

@@ -262,6 +262,16 @@ int Run(const ServerFlags& flags) {
                    : "plaintext",
                data_dir.string(),
                flags.metrics_port >= 0 ? fmt::format("on {}:{}", flags.metrics_host, metrics.port()) : "off");
+  // /metrics has neither TLS nor tokens: beyond loopback, anyone who reaches it reads the queue's
+  // and the workers' numbers (no patient data). Said, as --insecure is, not refused: a scraper on
+  // another host is the usual deployment.
+  if (flags.metrics_port >= 0 &&
+      !IsLoopbackAddress(flags.metrics_host + ":" + std::to_string(metrics.port()))) {
+    spdlog::warn(
+        "/metrics is served on {} in plaintext without tokens: keep that port behind a firewall or a "
+        "network policy that lets only Prometheus reach it",
+        flags.metrics_host);
+  }
   if (guard.Refresh()) {
     spdlog::info("tokens required: {}", TokenStore::PathIn(data_dir).string());
   } else if (IsLoopbackAddress(flags.listen)) {
