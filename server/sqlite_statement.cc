@@ -1,5 +1,9 @@
 #include "server/sqlite_statement.h"
 
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
 #include <string>
 
 #include "common/error.h"
@@ -86,8 +90,17 @@ void Exec(sqlite3* db, const char* sql, const char* store) {
 sqlite3* OpenDatabase(const std::filesystem::path& file, const char* store) {
   sqlite3* db = nullptr;
   if (sqlite3_open(file.c_str(), &db) != SQLITE_OK) {
-    const std::string message = db ? sqlite3_errmsg(db) : "out of memory";
+    std::string message = db ? sqlite3_errmsg(db) : "out of memory";
     sqlite3_close(db);
+    // SQLite says "unable to open database file" for a folder this user may not write (a read-only
+    // mount, another user's folder): the folder is named.
+    const auto folder = file.parent_path().empty() ? std::filesystem::path(".") : file.parent_path();
+    if (::access(folder.c_str(), W_OK) != 0) {
+      message += " (its folder " + folder.string() +
+                 " cannot be written by this user: " + std::strerror(errno) + ")";
+      Fail(ErrorCode::kFailedPrecondition,
+           std::string("cannot open ") + store + " " + file.string() + ": " + message);
+    }
     Fail(ErrorCode::kUnavailable, std::string("cannot open ") + store + " " + file.string() + ": " + message);
   }
   sqlite3_busy_timeout(db, 5000);
