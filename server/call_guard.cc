@@ -2,11 +2,30 @@
 
 #include <spdlog/spdlog.h>
 
+#include <cctype>
+#include <string>
+
 #include "common/error.h"
 #include "common/transport_security.h"
 
 namespace endorecon::server {
 namespace {
+
+// gRPC's peer with its percent-escapes decoded: "ipv6:%5B::1%5D:39948" is "ipv6:[::1]:39948", as
+// log collectors and people read addresses.
+std::string PeerText(const std::string& peer) {
+  std::string text;
+  for (std::size_t i = 0; i < peer.size(); ++i) {
+    if (peer[i] == '%' && i + 2 < peer.size() && std::isxdigit(static_cast<unsigned char>(peer[i + 1])) &&
+        std::isxdigit(static_cast<unsigned char>(peer[i + 2]))) {
+      text += static_cast<char>(std::stoi(peer.substr(i + 1, 2), nullptr, 16));
+      i += 2;
+    } else {
+      text += peer[i];
+    }
+  }
+  return text;
+}
 
 std::string CertificateName(const grpc::ServerContext& context) {
   const auto auth = context.auth_context();
@@ -167,7 +186,7 @@ void CallGuard::Record(const grpc::ServerContext& context, const Rpc& rpc, const
   const bool known = !call.caller.name.empty();
   audit_.Write({known ? call.caller.name : "-",
                 known && !call.caller.anonymous ? RoleName(call.caller.role) : "-", call.caller.tenant,
-                rpc.method, call.job_id, CodeName(status.error_code()), context.peer(),
+                rpc.method, call.job_id, CodeName(status.error_code()), PeerText(context.peer()),
                 CertificateName(context), rpc.subject});
 }
 
