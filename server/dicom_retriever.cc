@@ -1,5 +1,6 @@
 #include "server/dicom_retriever.h"
 
+#include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
@@ -100,6 +101,14 @@ std::vector<std::string> DicomRetriever::RecordingSeries(const std::string& job_
                  e.what());
     return {};
   }
+  // C-FIND found nothing: no such study there. C-GET and C-MOVE were tried anyway, and their refusals
+  // read as a PACS that would not send (found 2026-12-05). The UID is not repeated: it leads to a
+  // patient, and the logs hold none.
+  if (contents.recording_series.empty() && contents.other_classes.empty()) {
+    Fail(ErrorCode::kNotFound, "PACS " + request.peer.ae_title +
+                                   " holds no such study (C-FIND found no instance of it): check the Study "
+                                   "Instance UID, and that the study is on this PACS");
+  }
   if (contents.other_classes.empty()) return {};  // nothing endorecon does not take: the whole study
   std::string others;
   for (const auto& [name, count] : contents.other_classes) {
@@ -168,7 +177,11 @@ std::pair<fs::path, std::string> DicomRetriever::Fetch(const std::string& job_id
     });
     return {folder, "C-GET"};
   } catch (const Error& e) {
-    if (scp_ == nullptr || e.code() == ErrorCode::kNotFound) throw;
+    if (e.code() == ErrorCode::kNotFound) throw;
+    if (scp_ == nullptr) {
+      Fail(e.code(), std::string(e.what()) +
+                         "; C-MOVE was not tried: this server has no --dicom-listen for a PACS to send to");
+    }
     get_error = e.what();
     spdlog::warn("job {}: C-GET from {} failed ({}); trying C-MOVE to this server's storage SCP", job_id,
                  source.pacs(), get_error);
@@ -214,7 +227,9 @@ std::pair<fs::path, std::string> DicomRetriever::Fetch(const std::string& job_id
   return {folder, "C-MOVE"};
 }
 
-// Each retrieved file is an entry of the clip, named after the file.
+// Each retrieved file is an entry of the clip, named by its place ("instance-0001.dcm"): the files
+// arrive named after their SOP Instance UIDs, which then stood in the job's errors and the logs, and
+// a UID leads to a patient (found 2026-12-05). The loader orders a recording by its tags, not by name.
 std::vector<std::pair<fs::path, v1::FileEntry>> DicomRetriever::Describe(const fs::path& folder) {
   std::vector<fs::path> files;
   for (const auto& entry : fs::directory_iterator(folder)) {
@@ -224,7 +239,7 @@ std::vector<std::pair<fs::path, v1::FileEntry>> DicomRetriever::Describe(const f
   std::vector<std::pair<fs::path, v1::FileEntry>> described;
   for (const auto& file : files) {
     v1::FileEntry entry;
-    entry.set_path(file.filename().string() + (file.extension() == ".dcm" ? "" : ".dcm"));
+    entry.set_path(fmt::format("instance-{:04}.dcm", described.size() + 1));
     CheckRelativePath(entry.path());
     entry.set_size(static_cast<std::int64_t>(fs::file_size(file)));
     entry.set_sha256(Sha256File(file));

@@ -114,19 +114,25 @@ void DicomSender::Attempt(const std::string& job_id, const std::string& destinat
     dicom::StoreSettings settings;
     settings.calling_ae_title = settings_.ae_title;
     settings.timeout_s = settings_.timeout_s;
-    const auto result = dicom::StoreFiles(pacs_.Find(destination), files, settings, [&](std::size_t i) {
-      metrics_.DicomInstanceSent(destination);
-      coordinator_.Update(job_id, [&](v1::Job& stored) {
-        v1::DicomSend* s = Find(stored, destination);
-        s->add_sent_paths(paths[i]);
-        s->set_sent(s->sent_paths_size());
-      });
-    });
+    const auto result = dicom::StoreFiles(
+        pacs_.Find(destination), files, settings,
+        [&](std::size_t i) {
+          metrics_.DicomInstanceSent(destination);
+          coordinator_.Update(job_id, [&](v1::Job& stored) {
+            v1::DicomSend* s = Find(stored, destination);
+            s->add_sent_paths(paths[i]);
+            s->set_sent(s->sent_paths_size());
+          });
+        },
+        paths);
     failure = result.first_error;
   } catch (const Error& e) {
     failure = e.what();
   }
-  const bool retry = !failure.empty() && attempt < settings_.send_attempts;
+  // A permanent rejection of the association (an AE title the PACS does not know) is not retried:
+  // it stays so until someone changes a configuration.
+  const bool permanent = failure.find("Rejected Permanent") != std::string::npos;
+  const bool retry = !failure.empty() && !permanent && attempt < settings_.send_attempts;
   const std::int64_t backoff = std::min<std::int64_t>(
       60000, static_cast<std::int64_t>(settings_.send_backoff_ms) << std::min(attempt - 1, 20));
   const std::int64_t next = NowUnixMs() + backoff;

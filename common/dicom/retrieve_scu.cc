@@ -5,6 +5,8 @@
 #include <dcmtk/dcmnet/scu.h>
 
 #include <set>
+#include <string>
+#include <string_view>
 
 #include "common/dicom/dataset_access.h"
 #include "common/dicom/dcmtk_logging.h"
@@ -66,7 +68,16 @@ void Connect(DcmSCU& scu, const RetrieveRequest& request) {
   const std::string where = "association with " + PeerText(request.peer);
   OFCondition status = scu.initNetwork();
   if (status.good()) status = scu.negotiateAssociation();
-  if (status.bad()) Fail(ErrorCode::kUnavailable, where + " failed: " + status.text());
+  if (status.bad()) {
+    // DcmSCU keeps the peer's reason to itself (its log): what a rejection usually means is said.
+    const bool rejected = std::string_view(status.text()).find("Rejected") != std::string_view::npos;
+    Fail(ErrorCode::kUnavailable,
+         where + " failed: " + status.text() +
+             (rejected ? " (the PACS refused this server: is " + request.peer.ae_title +
+                             " its AE title, and does it accept calls from AE title " +
+                             request.calling_ae_title + " at this host?)"
+                       : ""));
+  }
 }
 
 DcmDataset Query(const RetrieveRequest& request) {
@@ -115,16 +126,24 @@ int Finish(const OFList<RetrieveResponse*>& responses, const RetrieveRequest& re
     const std::string comment = last->m_statusDetail == nullptr
                                     ? ""
                                     : FindString(*last->m_statusDetail, DCM_ErrorComment).value_or("");
-    Fail(ErrorCode::kUnavailable,
-         verb + " of " + What(request) + " refused by " + PeerText(request.peer) + " with status " + status +
-             (comment.empty() ? "" : " (\"" + comment + "\")") +
-             ((last->m_status & 0xf000) == 0xc000 || last->m_status == 0xa701 || last->m_status == 0xa702
-                  ? std::string(": the PACS may not hold it") +
-                        (request.series_uid.empty()
-                             ? ", or the study holds objects other than a recording (a CT, a report), "
-                               "which endorecon does not take: name the recording's series with --series UID"
-                             : "")
-                  : ""));
+    Fail(
+        ErrorCode::kUnavailable,
+        verb + " of " + What(request) + " refused by " + PeerText(request.peer) + " with status " + status +
+            (comment.empty() ? "" : " (\"" + comment + "\")") +
+            (last->m_status == 0xa801
+                 ? std::string(": the PACS does not know the move destination: it must list this server's AE "
+                               "title at the host and port of its --dicom-listen")
+             : (last->m_status & 0xf000) == 0xc000 || last->m_status == 0xa701 || last->m_status == 0xa702
+                 ? std::string(": the PACS may not hold it") +
+                       (request.series_uid.empty()
+                            ? ", or the study holds objects other than a recording (a CT, a report), "
+                              "which endorecon does not take: name the recording's series with --series UID"
+                            : "") +
+                       (verb.rfind("C-MOVE", 0) == 0 ? "; or it cannot reach the move destination: it must "
+                                                       "list this server's AE title "
+                                                       "at the host and port of its --dicom-listen"
+                                                     : "")
+                 : ""));
   }
   if (last->m_numberOfFailedSubops > 0) {
     Fail(ErrorCode::kDataLoss, verb + " of " + What(request) + ": " +

@@ -125,15 +125,15 @@ std::string StatusText(Uint16 status) {
 }
 
 // Sends one file; returns "" on success, else why it failed.
-std::string StoreOne(T_ASC_Association* association, const fs::path& path, const FileInfo& info,
-                     int timeout_s) {
+std::string StoreOne(T_ASC_Association* association, const fs::path& path, const std::string& name,
+                     const FileInfo& info, int timeout_s) {
   T_ASC_PresentationContextID id = ASC_findAcceptedPresentationContextID(association, info.sop_class.c_str(),
                                                                          info.transfer_syntax.c_str());
   if (id == 0) return "the peer accepted no presentation context for " + UidName(info.sop_class);
   T_ASC_PresentationContext context;
   ASC_findAcceptedPresentationContext(association->params, id, &context);
   DcmFileFormat file;
-  if (file.loadFile(path.c_str()).bad()) return "cannot read " + path.string();
+  if (file.loadFile(path.c_str()).bad()) return "cannot read " + name;
   DcmDataset* dataset = file.getDataset();
   const E_TransferSyntax accepted = DcmXfer(context.acceptedTransferSyntax).getXfer();
   if (accepted != dataset->getOriginalXfer()) {
@@ -156,17 +156,18 @@ std::string StoreOne(T_ASC_Association* association, const fs::path& path, const
                                              DIMSE_NONBLOCKING, timeout_s, &response, &detail);
   delete detail;
   if (status.bad()) {
-    Fail(ErrorCode::kUnavailable, "C-STORE of " + path.filename().string() + " failed: " + status.text());
+    Fail(ErrorCode::kUnavailable, "C-STORE of " + name + " failed: " + status.text());
   }
   const Uint16 code = response.DimseStatus;
   if (code == STATUS_Success || (code & 0xf000) == 0xb000) return "";
-  return "C-STORE of " + path.filename().string() + " refused with status " + StatusText(code);
+  return "C-STORE of " + name + " refused with status " + StatusText(code);
 }
 
 }  // namespace
 
 StoreResult StoreFiles(const Peer& peer, const std::vector<fs::path>& files, const StoreSettings& settings,
-                       const std::function<void(std::size_t)>& on_stored) {
+                       const std::function<void(std::size_t)>& on_stored,
+                       const std::vector<std::string>& names) {
   QuietDcmtkLogs();
   std::vector<FileInfo> infos;
   for (const auto& file : files) infos.push_back(Inspect(file));
@@ -176,7 +177,8 @@ StoreResult StoreFiles(const Peer& peer, const std::vector<fs::path>& files, con
   Association association;
   association.Open(peer, settings, infos);
   for (std::size_t i = 0; i < files.size(); ++i) {
-    const std::string error = StoreOne(association.get(), files[i], infos[i], settings.timeout_s);
+    const std::string name = i < names.size() ? names[i] : files[i].filename().string();
+    const std::string error = StoreOne(association.get(), files[i], name, infos[i], settings.timeout_s);
     if (error.empty()) {
       result.stored[i] = true;
       if (on_stored) on_stored(i);

@@ -28,7 +28,10 @@ struct StoreResult {
 // Sends `files` and reports each success through `on_stored(index)`. Throws Error(kUnavailable)
 // when the peer cannot be reached or the association fails, with the peer's reason when it
 // rejected it (e.g. "rejected (permanent) by the called AE: called AE title not recognized").
+// Messages call file i `names[i]` when given (a result's path, not its blob's digest), else its
+// file name.
 StoreResult StoreFiles(const Peer& peer, const std::vector<std::filesystem::path>& files,
-                       const StoreSettings& settings, const std::function<void(std::size_t)>& on_stored = {});
+                       const StoreSettings& settings, const std::function<void(std::size_t)>& on_stored = {},
+                       const std::vector<std::string>& names = {});
 
 }  // namespace endorecon::dicom

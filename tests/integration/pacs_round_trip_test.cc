@@ -144,6 +144,8 @@ TEST_F(PacsRoundTripTest, RecordingFromThePacsResultsBackIntoItsStudy) {
   EXPECT_EQ(job.retrieval().state(), v1::Retrieval::RETRIEVED);
   EXPECT_EQ(job.retrieval().instances(), 1);
   ASSERT_EQ(job.clip().files_size(), 1);
+  // Named by its place, not by its SOP Instance UID, which stood in errors and logs.
+  EXPECT_EQ(job.clip().files(0).path(), "instance-0001.dcm");
   EXPECT_EQ(job.retrieval().bytes(), job.clip().files(0).size());
   EXPECT_GT(job.retrieval().bytes(), 1000);
 
@@ -215,6 +217,7 @@ TEST_F(PacsRoundTripTest, RecordingFromThePacsResultsBackIntoItsStudy) {
   EXPECT_EQ(SendTo(job, "wrongae")->state(), v1::DicomSend::SEND_FAILED);
   EXPECT_NE(SendTo(job, "wrongae")->error().find("rejected"), std::string::npos)
       << SendTo(job, "wrongae")->error();
+  EXPECT_EQ(SendTo(job, "wrongae")->attempts(), 1) << "a permanent rejection is not retried";
 
   // A job submitted with a send that fails: `submit --wait` says so in its exit code, as `send --wait`
   // does (it exited 0; found 2026-12-05).
@@ -243,6 +246,13 @@ TEST_F(PacsRoundTripTest, RecordingFromThePacsResultsBackIntoItsStudy) {
       RunCli(cluster.address(), {"submit", "--pacs", "orthanc", "--study", "1.2.3.4.5", "--wait"});
   EXPECT_EQ(missing.exit_code, 5) << missing.out << missing.err;
   EXPECT_NE(missing.out.find("FAILED: retrieval from PACS orthanc failed"), std::string::npos) << missing.out;
+  // ... said as what it is, not as a PACS that would not send (C-GET and C-MOVE were tried after
+  // C-FIND found nothing), and without the UID, as every log line.
+  const std::string missing_job = cluster.Job(JobIdIn(missing.out)).error();
+  EXPECT_NE(missing_job.find("NOT_FOUND: PACS ORTHANC holds no such study"), std::string::npos)
+      << missing_job;
+  EXPECT_EQ(missing_job.find("1.2.3.4.5"), std::string::npos) << missing_job;
+  EXPECT_EQ(missing_job.find("C-GET"), std::string::npos) << missing_job;
 }
 
 TEST_F(PacsRoundTripTest, CMoveToTheServersStorageScpWhenCGetIsRefused) {
