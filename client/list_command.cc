@@ -17,6 +17,16 @@
 namespace endorecon::client {
 namespace {
 
+// What the name is followed by: files deleted, and DICOM sends that failed (a SUCCEEDED job whose
+// results did not reach a PACS showed as any other; found 2026-12-05).
+std::string Marks(const v1::Job& job) {
+  std::string marks = job.expired_unix_ms() > 0 ? " [files deleted]" : "";
+  for (const auto& send : job.sends()) {
+    if (send.state() == v1::DicomSend::SEND_FAILED) marks += " [send to " + send.destination() + " failed]";
+  }
+  return marks;
+}
+
 struct ListFlags {
   std::vector<std::string> states;
   int limit = 50;
@@ -68,7 +78,7 @@ int List(const Globals& globals, const ListFlags& flags) {
                                       : "-";
     std::cout << fmt::format("{:<14} {}{:<10} {:>4} {:<19} {:>12} {}\n", job.id(), tenant_of(job),
                              v1::JobState_Name(job.state()), job.priority(), HumanTime(job.created_unix_ms()),
-                             iteration, job.name() + (job.expired_unix_ms() > 0 ? " [files deleted]" : ""));
+                             iteration, job.name() + Marks(job));
   }
   return kExitOk;
 }

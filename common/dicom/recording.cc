@@ -641,7 +641,8 @@ Recording ReadRecording(const fs::path& path, const RecordingOptions& options) {
   if (series.size() != (two ? 2u : 1u)) {
     FailInvalid(path.string() + ": holds " + std::to_string(series.size()) + " series; " +
                 (two ? "stereo as two series needs exactly two (left, then right, by Series Number)"
-                     : "a recording is one series (or two with --stereo series)"));
+                     : "a recording is one series (or two with --stereo series); from a PACS, name its "
+                       "series with --series UID"));
   }
   // The eyes are told apart by Series Number alone: equal numbers left them in the order of their
   // UIDs, which swapped the eyes without a word (found 2026-12-05).

@@ -225,6 +225,9 @@ TEST_F(PacsRoundTripTest, RecordingFromThePacsResultsBackIntoItsStudy) {
   const auto sent_badly = RunCli(cluster.address(), {"submit", (dir_ / "clip").string(), "--dicom",
                                                      "--send-to", "wrongae", "--iterations", "5", "--wait"});
   EXPECT_EQ(sent_badly.exit_code, 5) << sent_badly.out << sent_badly.err;
+  // The listing shows it: a SUCCEEDED job whose results did not reach the PACS.
+  const auto listed = RunCli(cluster.address(), {"list"});
+  EXPECT_NE(listed.out.find("[send to wrongae failed]"), std::string::npos) << listed.out;
 
   // The PACS down: the send fails and the job keeps its results; back up, a resend goes through.
   orthanc_->Stop();
