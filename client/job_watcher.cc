@@ -64,6 +64,9 @@ class EventPrinter {
   }
   void Progress(const v1::Progress& progress) {
     if (json_) return Json(progress);
+    // A finished job's last progress ("evaluating the results: frame 8/8") is history: its outcome
+    // line says how it ended (`send --wait` on a SUCCEEDED job printed it after that line).
+    if (Terminal(last_state_)) return;
     if (tty_) {
       std::cout << "\r" << ProgressLine(progress) << "\033[K" << std::flush;
       open_line_ = true;
