@@ -1,10 +1,18 @@
 // endorecon fetch JOB -o DIR: download a finished job's results, verified by SHA-256; files
 // already there are skipped and an interrupted download resumes.
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
 #include <CLI/CLI.hpp>
+#include <cctype>
+#include <cerrno>
+#include <cstring>
 #include <filesystem>
 #include <iostream>
 #include <set>
 #include <string>
+#include <utility>
 
 #include "client/commands.h"
 #include "client/exit_codes.h"
@@ -24,10 +32,32 @@ struct FetchFlags {
   double min_bytes_per_second = 1 << 20;
 };
 
-// A non-empty folder is taken when everything in it (dot files aside) is one of the results' names
-// or a download of one in progress (NAME.part): a fetch again, or one resumed. Anything else is
-// someone's files, which results would be mixed into (`fetch -o ~/Documents` was taken; found
+// An open file, closed (and so unlocked) with its owner.
+class FileDescriptor {
+ public:
+  explicit FileDescriptor(int fd) : fd_(fd) {}
+  FileDescriptor(FileDescriptor&& other) noexcept : fd_(std::exchange(other.fd_, -1)) {}
+  FileDescriptor(const FileDescriptor&) = delete;
+  FileDescriptor& operator=(const FileDescriptor&) = delete;
+  ~FileDescriptor() {
+    if (fd_ >= 0) ::close(fd_);
+  }
+  int get() const { return fd_; }
+
+ private:
+  int fd_;
+};
+
+// The file in a fetch's folder that names the job whose results it holds. Held locked while a fetch
+// writes there: four fetches into one folder mixed their partial files and failed as checksum
+// mismatches, and a folder holding another job's results took this one's over them (found
 // 2026-12-05).
+constexpr const char* kJobMark = ".endorecon-job";
+
+// A non-empty folder is taken when everything in it (dot files at its top aside) is one of the
+// results' files or a download of one in progress (PATH.part): a fetch again, or one resumed.
+// Anything else is someone's files, or another job's results, which these would be mixed into
+// (`fetch -o ~/Documents` was taken; found 2026-12-05).
 void CheckFetchFolder(const std::filesystem::path& out, const v1::Manifest& result) {
   namespace fs = std::filesystem;
   std::error_code error;
@@ -36,16 +66,48 @@ void CheckFetchFolder(const std::filesystem::path& out, const v1::Manifest& resu
   if (!fs::is_directory(out, error)) FailInvalid("-o " + out.string() + " is a file; give a folder");
   std::set<std::string> names;
   for (const auto& file : result.files()) {
-    const std::string top = fs::path(file.path()).begin()->string();
-    names.insert(top);
-    names.insert(top + ".part");
+    names.insert(file.path());
+    names.insert(file.path() + ".part");
   }
-  for (fs::directory_iterator it(out, error), end; !error && it != end; it.increment(error)) {
-    const std::string name = it->path().filename().string();
-    if (name.starts_with(".") || names.contains(name)) continue;
+  for (fs::recursive_directory_iterator it(out, error), end; !error && it != end; it.increment(error)) {
+    const std::string name = it->path().lexically_relative(out).generic_string();
+    if (it.depth() == 0 && it->path().filename().string().starts_with(".")) {
+      if (it->is_directory(error)) it.disable_recursion_pending();
+      continue;
+    }
+    if (it->is_directory(error) || names.contains(name)) continue;
     FailInvalid("-o " + out.string() + " holds other files (" + name +
                 ", ...) than this job's results: they would be mixed in; give an empty or new folder");
   }
+}
+
+// Opens and locks `out`/.endorecon-job for job `id`, refusing a folder another fetch is writing into
+// or one that holds another job's results. The lock lasts as long as the returned descriptor.
+FileDescriptor MarkFetchFolder(const std::filesystem::path& out, const std::string& id) {
+  std::filesystem::create_directories(out);
+  const auto mark = out / kJobMark;
+  FileDescriptor fd(::open(mark.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644));
+  if (fd.get() < 0) {
+    Fail(ErrorCode::kUnavailable, "cannot open " + mark.string() + ": " + std::strerror(errno));
+  }
+  if (::flock(fd.get(), LOCK_EX | LOCK_NB) != 0) {
+    Fail(ErrorCode::kFailedPrecondition,
+         "another endorecon fetch is writing into " + out.string() + ": wait for it, or give another folder");
+  }
+  char held[64] = {};
+  const ssize_t n = ::pread(fd.get(), held, sizeof(held) - 1, 0);
+  std::string before(held, n > 0 ? static_cast<std::size_t>(n) : 0);
+  while (!before.empty() && std::isspace(static_cast<unsigned char>(before.back()))) before.pop_back();
+  if (!before.empty() && before != id) {
+    FailInvalid("-o " + out.string() + " holds the results of job " + before + " (" + mark.string() +
+                "), not of job " + id + ": give an empty or new folder");
+  }
+  const std::string text = id + "\n";
+  if (::ftruncate(fd.get(), 0) != 0 ||
+      ::pwrite(fd.get(), text.data(), text.size(), 0) != static_cast<ssize_t>(text.size())) {
+    Fail(ErrorCode::kUnavailable, "cannot write " + mark.string() + ": " + std::strerror(errno));
+  }
+  return fd;
 }
 
 int Fetch(const Globals& globals, const FetchFlags& flags) {
@@ -65,6 +127,7 @@ int Fetch(const Globals& globals, const FetchFlags& flags) {
                                              "; results exist once it has SUCCEEDED");
   }
   CheckFetchFolder(flags.out, job.result());
+  const FileDescriptor mark = MarkFetchFolder(flags.out, job.id());
   const auto pending = PendingDownloads(flags.out, job.result());
   std::int64_t received = 0;
   if (!pending.empty()) {

@@ -15,6 +15,9 @@ std::string ToJson(const google::protobuf::Message& message) {
   std::string json;
   google::protobuf::util::JsonPrintOptions options;
   options.preserve_proto_field_names = true;
+  // Zeros and empty strings too: a script reading job["priority"] or ["attempts"] met a missing key
+  // whenever the value was 0 (found 2026-12-05).
+  options.always_print_primitive_fields = true;
   (void)google::protobuf::util::MessageToJsonString(message, &json, options);
   return json;
 }

@@ -12,6 +12,8 @@
 
 namespace endorecon::client {
 
+// protobuf's JSON mapping with the .proto field names, every scalar field written (0, "", false too);
+// 64-bit integers are strings, as the mapping has them.
 std::string ToJson(const google::protobuf::Message& message);
 // A multi-line description of one job.
 std::string DescribeJob(const v1::Job& job);

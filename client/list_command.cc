@@ -52,6 +52,13 @@ int List(const Globals& globals, const ListFlags& flags) {
     for (const auto& job : page.jobs()) *all.add_jobs() = job;
     request.set_page_token(page.next_page_token());
   } while (!request.page_token().empty() && all.jobs_size() < flags.limit);
+  // Jobs beyond --limit are said to exist: a script counting jobs got 50 without a word (found
+  // 2026-12-05). JSON carries the server's next_page_token, empty when none are left.
+  all.set_next_page_token(request.page_token());
+  if (!request.page_token().empty()) {
+    std::cerr << "endorecon: the newest " << all.jobs_size() << " job(s) are listed and there are more: "
+              << "--limit N lists more" << std::endl;
+  }
   if (globals.json) {
     std::cout << ToJson(all) << std::endl;
     return kExitOk;

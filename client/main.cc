@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <iostream>
 #include <map>
+#include <set>
 #include <string>
 #include <string_view>
 
@@ -63,6 +64,22 @@ std::string HintFor(const endorecon::Error& error, const Globals& globals) {
   return "";
 }
 
+// The first word of the command line that is neither an option, an option's value nor a command,
+// when it comes before any command: what the user meant as one.
+std::string UnknownCommand(int argc, char** argv, const std::map<std::string, Command>& commands) {
+  static const std::set<std::string> kTakesValue = {"--server", "--timeout", "--ca", "--token-file"};
+  for (int i = 1; i < argc; ++i) {
+    const std::string word = argv[i];
+    if (kTakesValue.contains(word)) {
+      ++i;
+      continue;
+    }
+    if (word.starts_with("-")) continue;
+    return commands.contains(word) ? "" : word;
+  }
+  return "";
+}
+
 }  // namespace
 
 }  // namespace endorecon::client
@@ -113,9 +130,19 @@ int main(int argc, char** argv) {
   commands["workers"] = AddWorkersCommand(app);
   commands["drain"] = AddDrainCommand(app);
   commands["send"] = AddSendCommand(app);
+  app.set_version_flag("--version", ENDORECON_VERSION);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
+    // A mistyped command ("statuss") was told "A subcommand is required": it is named.
+    if (const auto unknown = UnknownCommand(argc, argv, commands);
+        !unknown.empty() && app.get_subcommands().empty()) {
+      std::string known;
+      for (const auto& [name, command] : commands) known += (known.empty() ? "" : ", ") + name;
+      std::cerr << "endorecon: unknown command '" << unknown << "' (the commands: " << known
+                << "; endorecon --help)\n";
+      return kExitInvalid;
+    }
     return app.exit(e) == 0 ? kExitOk : kExitInvalid;
   }
   if (app.count("--server") == 0) {  // $ENDORECON_SERVER, checked as --server is

@@ -30,7 +30,7 @@ std::string ReadSecretFile(const std::filesystem::path& path, const std::string&
   if ((info.st_mode & S_IRWXO) != 0) {
     FailInvalid(
         fmt::format("{} {}: the file holds a secret but others may access it (mode {:04o}); "
-                    "run: chmod o-rwx {}",
+                    "run: chmod 600 {}",
                     flag, path.string(), info.st_mode & 07777, path.string()));
   }
   return ReadWhole(path, flag);

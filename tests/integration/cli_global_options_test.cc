@@ -27,6 +27,19 @@ TEST(CliGlobalOptionsTest, JsonAfterTheSubcommand) {
   const auto status = RunCli(cluster.address(), {"status", job["id"].get<std::string>(), "--json"});
   ASSERT_EQ(status.exit_code, 0) << status.err;
   EXPECT_EQ(nlohmann::json::parse(status.out)["id"], job["id"]);
+  // Every field, zeros too: a script read job["priority"] and met a missing key when it was 0.
+  const auto fields = nlohmann::json::parse(status.out);
+  EXPECT_EQ(fields.value("priority", -1), 0) << status.out;
+  EXPECT_EQ(fields.value("attempts", -1), 0) << status.out;
+  // More jobs than --limit: said on stderr, and the JSON has the next page's token.
+  ASSERT_EQ(
+      RunCli(cluster.address(), {"submit", cluster.path("clip").string(), "--iterations", "5"}).exit_code, 0);
+  const auto one = RunCli(cluster.address(), {"--json", "list", "--limit", "1"});
+  ASSERT_EQ(one.exit_code, 0) << one.err;
+  EXPECT_NE(one.err.find("the newest 1 job(s) are listed and there are more"), std::string::npos) << one.err;
+  EXPECT_FALSE(nlohmann::json::parse(one.out).value("next_page_token", "").empty()) << one.out;
+  EXPECT_EQ(RunCli(cluster.address(), {"list", "--limit", "2"}).err.find("there are more"),
+            std::string::npos);
 }
 
 TEST(CliGlobalOptionsTest, UnknownOptionsAreStillRefused) {
@@ -35,6 +48,15 @@ TEST(CliGlobalOptionsTest, UnknownOptionsAreStillRefused) {
   EXPECT_NE(result.err.find("--no-such-option"), std::string::npos) << result.err;
   const auto extra = RunCliAsTyped({"status", "abc", "def"});
   EXPECT_EQ(extra.exit_code, 2) << "a second job id is not taken";
+  // A mistyped command is named (it was "A subcommand is required").
+  const auto typo = RunCliAsTyped({"--timeout", "3", "statuss", "abc"});
+  EXPECT_EQ(typo.exit_code, 2);
+  EXPECT_NE(typo.err.find("unknown command 'statuss' (the commands: cancel, delete, drain, fetch, list"),
+            std::string::npos)
+      << typo.err;
+  const auto version = RunCliAsTyped({"--version"});
+  EXPECT_EQ(version.exit_code, 0);
+  EXPECT_FALSE(version.out.empty());
 }
 
 }  // namespace

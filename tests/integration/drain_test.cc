@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <csignal>
 #include <string>
 #include <thread>
 
@@ -32,6 +33,17 @@ TEST(DrainTest, ADrainingWorkerIsGivenNoNewJobAndUndoPutsItBack) {
   const auto id = submitted.out.substr(submitted.out.find("\"id\":\"") + 6, 12);
   std::this_thread::sleep_for(std::chrono::seconds(3));
   EXPECT_EQ(cluster.Job(id).state(), v1::QUEUED) << "the only worker drains";
+  // Ctrl-C while watching ends the watch, not the job, and says how to follow it again.
+  Process watch({BuiltBinary("client/endorecon"), "--server", cluster.address(), "watch", id},
+                cluster.path("watch.log"));
+  ASSERT_TRUE(WaitUntil([&] { return watch.Log().find("QUEUED") != std::string::npos; })) << watch.Log();
+  watch.Signal(SIGINT);
+  EXPECT_EQ(watch.Wait(), 130);
+  EXPECT_NE(
+      watch.Log().find("stopped watching; job " + id + " goes on on the server: `endorecon watch " + id),
+      std::string::npos)
+      << watch.Log();
+  EXPECT_EQ(cluster.Job(id).state(), v1::QUEUED);
 
   const auto undone = RunCli(cluster.address(), {"drain", "w-maint", "--undo"});
   ASSERT_EQ(undone.exit_code, 0) << undone.err;

@@ -1,6 +1,9 @@
 // A clip goes in through the CLI, a worker reconstructs it, the results come back verified.
+#include <fcntl.h>
 #include <fmt/format.h>
 #include <gtest/gtest.h>
+#include <sys/file.h>
+#include <unistd.h>
 
 #include <string>
 #include <utility>
@@ -68,6 +71,31 @@ TEST(SubmitToCompletionTest, ClipInResultsOut) {
             1);
   WriteBytes(cluster.path("resumed") / "metrics.json.part", "{");
   EXPECT_EQ(RunCli(cluster.address(), {"fetch", id, "-o", cluster.path("resumed").string()}).exit_code, 0);
+  EXPECT_EQ(ReadBytes(cluster.path("resumed") / ".endorecon-job"), id + "\n") << "the folder names its job";
+  // Another job's results are refused: by the job its folder names, and, in a folder without that
+  // name, by a file this job's results do not have (a longer clip's frame), however deep.
+  std::filesystem::copy(cluster.path("resumed"), cluster.path("other"),
+                        std::filesystem::copy_options::recursive);
+  WriteBytes(cluster.path("other") / ".endorecon-job", "0123456789ab\n");
+  const auto other = RunCli(cluster.address(), {"fetch", id, "-o", cluster.path("other").string()});
+  EXPECT_EQ(other.exit_code, 2) << other.err;
+  EXPECT_NE(other.err.find("holds the results of job 0123456789ab"), std::string::npos) << other.err;
+  std::filesystem::remove(cluster.path("other") / ".endorecon-job");
+  WriteBytes(cluster.path("other") / "rgb" / "000999.png", "a longer clip's frame");
+  const auto longer = RunCli(cluster.address(), {"fetch", id, "-o", cluster.path("other").string()});
+  EXPECT_EQ(longer.exit_code, 2) << longer.err;
+  EXPECT_NE(longer.err.find("holds other files (rgb/000999.png, ...)"), std::string::npos) << longer.err;
+  // A second fetch into a folder one is writing into is refused (four at once failed as checksum
+  // mismatches).
+  {
+    const int held = ::open((cluster.path("resumed") / ".endorecon-job").c_str(), O_RDWR);
+    ASSERT_GE(held, 0);
+    ASSERT_EQ(::flock(held, LOCK_EX), 0);
+    const auto busy = RunCli(cluster.address(), {"fetch", id, "-o", cluster.path("resumed").string()});
+    EXPECT_EQ(busy.exit_code, 7) << busy.err;
+    EXPECT_NE(busy.err.find("another endorecon fetch is writing into"), std::string::npos) << busy.err;
+    ::close(held);
+  }
 
   // A result file gone from the server's store (deleted under it) is named with its job, not by a
   // bare digest.
