@@ -110,5 +110,17 @@ TEST(BlobStoreTest, OneWriterPerContentAtATime) {
   EXPECT_NE(store.TryOpenWriter(entry), nullptr);
 }
 
+// A stream that waited for another to finish the same content opens a writer on a blob that now
+// exists: it leaves no empty partial file behind (parallel submits of one clip left dozens).
+TEST(BlobStoreTest, AWriterOnContentAlreadyStoredLeavesNoPartialFile) {
+  testing::TempDir dir("blobs");
+  BlobStore store(dir.path());
+  const auto entry = EntryOf("x.bin", "abc");
+  store.Put("abc");
+  { auto late = store.OpenWriter(entry); }
+  EXPECT_FALSE(std::filesystem::exists(dir.path() / "partial" / (entry.sha256() + ".part")));
+  EXPECT_TRUE(store.Has(entry.sha256()));
+}
+
 }  // namespace
 }  // namespace endorecon::server
