@@ -139,7 +139,10 @@ grpc::Status JobServiceImpl::Watch(grpc::ServerContext* context, const v1::Watch
         for (auto& preview : changes.previews) *events.emplace_back().mutable_preview() = std::move(preview);
       }
       if (changes.job) {
-        v1::Job job = ForClient(*changes.job);
+        // The hub's copy has no result manifest; a settled job's last event has it, read from the
+        // store, so `submit --wait --json` ends with the files it can fetch (found 2026-12-05).
+        v1::Job job =
+            ForClient(Settled(*changes.job) ? coordinator_.Get(request->id(), call.caller) : *changes.job);
         job.clear_clip();
         if (std::string bytes = job.SerializeAsString(); bytes != last_sent) {
           last_sent = std::move(bytes);
@@ -153,7 +156,6 @@ grpc::Status JobServiceImpl::Watch(grpc::ServerContext* context, const v1::Watch
         *last.mutable_job() = ForClient(coordinator_.Get(request->id(), call.caller));
         if (Settled(last.job())) {
           last.mutable_job()->clear_clip();
-          last.mutable_job()->clear_result();
           write(last);
           return grpc::Status::OK;
         }

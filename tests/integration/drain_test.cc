@@ -4,6 +4,7 @@
 
 #include <chrono>
 #include <csignal>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <thread>
 
@@ -49,6 +50,13 @@ TEST(DrainTest, ADrainingWorkerIsGivenNoNewJobAndUndoPutsItBack) {
   ASSERT_EQ(undone.exit_code, 0) << undone.err;
   EXPECT_NE(undone.out.find("serves again"), std::string::npos) << undone.out;
   EXPECT_EQ(cluster.WaitForState(id, v1::SUCCEEDED).worker_id(), "w-maint");
+  // The last event of a watch of a settled job carries its result manifest, for scripts.
+  const auto watched = RunCli(cluster.address(), {"--json", "watch", id});
+  ASSERT_EQ(watched.exit_code, 0) << watched.err;
+  const auto last_line = watched.out.substr(watched.out.rfind('\n', watched.out.size() - 2) + 1);
+  const auto last = nlohmann::json::parse(last_line);
+  EXPECT_EQ(last["job"]["state"], "SUCCEEDED") << last_line;
+  EXPECT_GT(last["job"]["result"]["files"].size(), 0u) << last_line;
   EXPECT_EQ(RunCli(cluster.address(), {"workers"}).out.find("draining"), std::string::npos);
 }
 
