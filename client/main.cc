@@ -8,7 +8,6 @@
 #include <cstdlib>
 #include <iostream>
 #include <map>
-#include <set>
 #include <string>
 #include <string_view>
 
@@ -51,7 +50,7 @@ std::string HintFor(const endorecon::Error& error, const Globals& globals) {
     endorecon::ChannelSecurity security;
     security.ca_file = globals.ca_file;
     if (auto hint = endorecon::TlsFailureHint(error.what(), security); !hint.empty())
-      return "\nendorecon:" + hint.substr(0, hint.size() - 1).replace(0, 2, " ");
+      return "\nendorecon: " + hint;
   }
   // A plaintext channel to a TLS port fails to connect; a call cut mid-way (a server restart) or a
   // local file that cannot be written has nothing to do with TLS (the hint followed every UNAVAILABLE).
@@ -66,15 +65,15 @@ std::string HintFor(const endorecon::Error& error, const Globals& globals) {
 
 // The first word of the command line that is neither an option, an option's value nor a command,
 // when it comes before any command: what the user meant as one.
-std::string UnknownCommand(int argc, char** argv, const std::map<std::string, Command>& commands) {
-  static const std::set<std::string> kTakesValue = {"--server", "--timeout", "--ca", "--token-file"};
+std::string UnknownCommand(const CLI::App& app, int argc, char** argv,
+                           const std::map<std::string, Command>& commands) {
   for (int i = 1; i < argc; ++i) {
     const std::string word = argv[i];
-    if (kTakesValue.contains(word)) {
-      ++i;
+    if (word.starts_with("-")) {
+      const CLI::Option* option = app.get_option_no_throw(word);
+      if (option != nullptr && option->get_items_expected_min() > 0) ++i;  // its value
       continue;
     }
-    if (word.starts_with("-")) continue;
     return commands.contains(word) ? "" : word;
   }
   return "";
@@ -135,7 +134,7 @@ int main(int argc, char** argv) {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     // A mistyped command ("statuss") was told "A subcommand is required": it is named.
-    if (const auto unknown = UnknownCommand(argc, argv, commands);
+    if (const auto unknown = UnknownCommand(app, argc, argv, commands);
         !unknown.empty() && app.get_subcommands().empty()) {
       std::string known;
       for (const auto& [name, command] : commands) known += (known.empty() ? "" : ", ") + name;

@@ -280,12 +280,12 @@ std::string TlsFailureHint(std::string_view message, const ChannelSecurity& secu
   std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char c) { return std::tolower(c); });
   const auto has = [&](std::string_view word) { return lower.find(word) != std::string::npos; };
   if (has("certificate verify failed") || has("certificate_verify_failed")) {
-    return " (the server's certificate does not verify against --ca " + security.ca_file +
-           ": is it signed by that CA, and valid now?)";
+    return "the server's certificate does not verify against --ca " + security.ca_file +
+           ": is it signed by that CA, and valid now?";
   }
   if (has("wrong version number") || has("wrong_version_number")) {
-    return " (the address does not answer in TLS: a server without --tls-cert (then drop --ca), or a "
-           "port that is not its --listen, such as its health port)";
+    return "the address does not answer in TLS: a server without --tls-cert (then drop --ca), or a port "
+           "that is not its --listen, such as its health port";
   }
   return "";
 }

@@ -76,7 +76,7 @@ bool IsLoopbackAddress(const std::string& address);
 void PauseBeforeRetry(grpc::Channel& channel, std::chrono::milliseconds pause);
 
 // What a caller (the CLI, a worker) can do about a failed connection whose gRPC `message` tells a TLS
-// failure, " (...)" to append, or "" when it tells none: a server certificate the caller's --ca does
+// failure, or "" when it tells none: a server certificate the caller's --ca does
 // not verify, and TLS spoken to a port that answers without it (a plaintext server, or its health
 // port). gRPC's words alone sent users to the other side's settings (found 2026-12-05).
 std::string TlsFailureHint(std::string_view message, const ChannelSecurity& security);

@@ -314,7 +314,7 @@ v1::Job JobCoordinator::Submit(const v1::SubmitRequest& request, const Principal
   job.set_tenant(caller.tenant);
   if (!caller.anonymous) job.set_submitted_by(caller.name);
   if (request.validate_only()) {
-    CheckQuotas(caller.tenant, request.clip(), true);
+    CheckUploadQuota(request.clip(), caller);
     job.clear_id();
     return job;
   }

@@ -95,13 +95,13 @@ sqlite3* OpenDatabase(const std::filesystem::path& file, const char* store) {
     // SQLite says "unable to open database file" for a folder this user may not write (a read-only
     // mount, another user's folder): the folder is named.
     const auto folder = file.parent_path().empty() ? std::filesystem::path(".") : file.parent_path();
-    if (::access(folder.c_str(), W_OK) != 0) {
+    const bool writable = ::access(folder.c_str(), W_OK) == 0;
+    if (!writable) {
       message += " (its folder " + folder.string() +
                  " cannot be written by this user: " + std::strerror(errno) + ")";
-      Fail(ErrorCode::kFailedPrecondition,
-           std::string("cannot open ") + store + " " + file.string() + ": " + message);
     }
-    Fail(ErrorCode::kUnavailable, std::string("cannot open ") + store + " " + file.string() + ": " + message);
+    Fail(writable ? ErrorCode::kUnavailable : ErrorCode::kFailedPrecondition,
+         std::string("cannot open ") + store + " " + file.string() + ": " + message);
   }
   sqlite3_busy_timeout(db, 5000);
   try {

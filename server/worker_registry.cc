@@ -47,10 +47,7 @@ v1::WorkerInfo WorkerRegistry::SetDraining(const std::string& worker_id, bool dr
                                    "; `endorecon workers` lists them)");
   }
   found->second.info.set_draining(draining);
-  v1::WorkerInfo info = found->second.info;
-  info.set_alive(std::chrono::steady_clock::now() - found->second.last_seen <= alive_window_);
-  for (const auto& job : found->second.jobs) info.add_job_ids(job);
-  return info;
+  return InfoOf(found->second, std::chrono::steady_clock::now());
 }
 
 bool WorkerRegistry::Draining(const std::string& worker_id) const {
@@ -91,13 +88,15 @@ std::vector<v1::WorkerInfo> WorkerRegistry::List() const {
   std::lock_guard lock(mutex_);
   const auto now = std::chrono::steady_clock::now();
   std::vector<v1::WorkerInfo> list;
-  for (const auto& [id, entry] : workers_) {
-    v1::WorkerInfo info = entry.info;
-    info.set_alive(now - entry.last_seen <= alive_window_);
-    for (const auto& job : entry.jobs) info.add_job_ids(job);
-    list.push_back(info);
-  }
+  for (const auto& [id, entry] : workers_) list.push_back(InfoOf(entry, now));
   return list;
+}
+
+v1::WorkerInfo WorkerRegistry::InfoOf(const Entry& entry, std::chrono::steady_clock::time_point now) const {
+  v1::WorkerInfo info = entry.info;
+  info.set_alive(now - entry.last_seen <= alive_window_);
+  for (const auto& job : entry.jobs) info.add_job_ids(job);
+  return info;
 }
 
 std::size_t WorkerRegistry::Forget(std::chrono::steady_clock::time_point cutoff) {

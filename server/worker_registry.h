@@ -45,6 +45,8 @@ class WorkerRegistry {
     std::chrono::steady_clock::time_point last_seen;
   };
   Entry& At(const std::string& worker_id);
+  // What List shows of `entry` at `now` (alive, and its jobs).
+  v1::WorkerInfo InfoOf(const Entry& entry, std::chrono::steady_clock::time_point now) const;
 
   std::chrono::milliseconds alive_window_;
   mutable std::mutex mutex_;

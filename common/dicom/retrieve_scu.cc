@@ -113,6 +113,10 @@ T_ASC_PresentationContextID Associate(DcmSCU& scu, const RetrieveRequest& reques
   return id;
 }
 
+// What a PACS needs to send a C-MOVE to this server.
+constexpr const char* kMoveDestinationAdvice =
+    "it must list this server's AE title at the host and port of its --dicom-listen";
+
 // Checks the final response; returns the completed sub-operations.
 int Finish(const OFList<RetrieveResponse*>& responses, const RetrieveRequest& request,
            const std::string& verb) {
@@ -126,24 +130,22 @@ int Finish(const OFList<RetrieveResponse*>& responses, const RetrieveRequest& re
     const std::string comment = last->m_statusDetail == nullptr
                                     ? ""
                                     : FindString(*last->m_statusDetail, DCM_ErrorComment).value_or("");
-    Fail(
-        ErrorCode::kUnavailable,
-        verb + " of " + What(request) + " refused by " + PeerText(request.peer) + " with status " + status +
-            (comment.empty() ? "" : " (\"" + comment + "\")") +
-            (last->m_status == 0xa801
-                 ? std::string(": the PACS does not know the move destination: it must list this server's AE "
-                               "title at the host and port of its --dicom-listen")
-             : (last->m_status & 0xf000) == 0xc000 || last->m_status == 0xa701 || last->m_status == 0xa702
-                 ? std::string(": the PACS may not hold it") +
-                       (request.series_uid.empty()
-                            ? ", or the study holds objects other than a recording (a CT, a report), "
-                              "which endorecon does not take: name the recording's series with --series UID"
-                            : "") +
-                       (verb.rfind("C-MOVE", 0) == 0 ? "; or it cannot reach the move destination: it must "
-                                                       "list this server's AE title "
-                                                       "at the host and port of its --dicom-listen"
-                                                     : "")
-                 : ""));
+    Fail(ErrorCode::kUnavailable,
+         verb + " of " + What(request) + " refused by " + PeerText(request.peer) + " with status " + status +
+             (comment.empty() ? "" : " (\"" + comment + "\")") +
+             (last->m_status == 0xa801
+                  ? std::string(": the PACS does not know the move destination: ") + kMoveDestinationAdvice
+              : (last->m_status & 0xf000) == 0xc000 || last->m_status == 0xa701 || last->m_status == 0xa702
+                  ? std::string(": the PACS may not hold it") +
+                        (request.series_uid.empty()
+                             ? ", or the study holds objects other than a recording (a CT, a report), "
+                               "which endorecon does not take: name the recording's series with --series UID"
+                             : "") +
+                        (verb.rfind("C-MOVE", 0) == 0
+                             ? std::string("; or it cannot reach the move destination: ") +
+                                   kMoveDestinationAdvice
+                             : "")
+                  : ""));
   }
   if (last->m_numberOfFailedSubops > 0) {
     Fail(ErrorCode::kDataLoss, verb + " of " + What(request) + ": " +

@@ -242,7 +242,7 @@ int Serve(const ServeFlags& flags) {
       spdlog::warn(
           "cannot register with {}{}: {}; retrying every second{}", flags.server,
           attempts > 1 ? fmt::format(" ({} attempts in {} s)", attempts, waited) : "", e.what(),
-          !tls_hint.empty() ? tls_hint
+          !tls_hint.empty() ? " (" + tls_hint + ")"
           : handshake && !flags.tls_cert.empty()
               ? " (the server closed the connection in the TLS handshake: is --tls-cert signed by the "
                 "server's --tls-client-ca, valid now and made for client authentication?)"
