@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "common/error.h"
+#include "common/jpeg_header.h"
 
 namespace endorecon {
 namespace {
@@ -101,34 +102,22 @@ void CheckPngChunks(const fs::path& path, std::ifstream& in, std::uint64_t size)
 }
 
 // A JPEG whose scan has no end-of-image marker after it was cut short: libjpeg decodes it with a
-// warning on stderr and grey below the cut (found 2026-12-05). The header's marker segments are
-// walked to the first scan (SOS) by their lengths (an Exif thumbnail's own EOI inside APP1 is
-// skipped); after it, in entropy-coded data a 0xFF byte is always followed by 0x00 or a marker, so
-// the next FF D9 is the image's end. A header this walk cannot follow is left to the decoder.
+// warning on stderr and grey below the cut (found 2026-12-05). The header is walked to the first
+// scan (SOS) by its segments' lengths (an Exif thumbnail's own EOI inside APP1 is skipped); after it,
+// in entropy-coded data a 0xFF byte is always followed by 0x00 or a marker, so the next FF D9 is the
+// image's end. A header the walk cannot follow is left to the decoder.
 void CheckJpegEnd(const fs::path& path, std::ifstream& in) {
   in.seekg(0);
   const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  const auto byte = [&](std::size_t i) { return static_cast<unsigned char>(bytes[i]); };
-  std::size_t at = 2;
-  while (at + 4 <= bytes.size()) {
-    if (byte(at) != 0xFF) return;
-    const unsigned char marker = byte(at + 1);
-    if (marker == 0xFF) {  // a fill byte
-      ++at;
-      continue;
-    }
-    if (marker == 0xD9 || marker == 0x01 || (marker >= 0xD0 && marker <= 0xD8)) return;
-    const std::size_t length = std::size_t{byte(at + 2)} << 8 | byte(at + 3);
-    if (length < 2) return;
-    if (marker == 0xDA) {
-      if (bytes.find("\xFF\xD9", at + 2 + length) == std::string::npos) {
-        FailInvalid(path.string() + ": a truncated JPEG: no end-of-image marker after its scan, which " +
-                    "starts at byte " + std::to_string(at) + " of " + std::to_string(bytes.size()) +
-                    " (an interrupted copy or upload?)");
-      }
-      return;
-    }
-    at += 2 + length;
+  const auto* data = reinterpret_cast<const unsigned char*>(bytes.data());
+  const auto scan =
+      FindJpegHeaderMarker(data, bytes.size(), [](unsigned char marker) { return marker == 0xDA; });
+  if (!scan) return;
+  const std::size_t length = std::size_t{data[*scan + 2]} << 8 | data[*scan + 3];
+  if (bytes.find("\xFF\xD9", *scan + 2 + length) == std::string::npos) {
+    FailInvalid(path.string() + ": a truncated JPEG: no end-of-image marker after its scan, which " +
+                "starts at byte " + std::to_string(*scan) + " of " + std::to_string(bytes.size()) +
+                " (an interrupted copy or upload?)");
   }
 }
 

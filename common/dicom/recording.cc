@@ -25,6 +25,7 @@
 #include "common/dicom/dataset_access.h"
 #include "common/dicom_file.h"
 #include "common/error.h"
+#include "common/jpeg_header.h"
 
 namespace endorecon::dicom {
 namespace fs = std::filesystem;
@@ -149,26 +150,15 @@ void ExtractStream(Instance& instance) {
 }
 
 // Whether a JPEG stream's header leads, by the standard's rules (ITU-T T.81 B.1.1), from its SOI
-// marker through length-prefixed marker segments and fill bytes to a frame header (SOFn).
+// marker through length-prefixed marker segments and fill bytes to a frame header (SOFn) whose
+// length bytes and a byte after them lie in the fragment.
 bool JpegHeaderReachesAFrame(const Fragment& fragment) {
   const Uint8* data = fragment.data;
   if (fragment.size < 4 || data[0] != 0xFF || data[1] != 0xD8) return false;
-  std::size_t at = 2;
-  while (at + 4 < fragment.size) {
-    if (data[at] != 0xFF) return false;
-    const Uint8 marker = data[at + 1];
-    if (marker == 0xFF) {  // a fill byte
-      ++at;
-      continue;
-    }
-    if (marker >= 0xC0 && marker <= 0xCF && marker != 0xC4 && marker != 0xC8 && marker != 0xCC) return true;
-    // Stand-alone markers (TEM, RSTn, SOI, EOI) and stuffed zeros have no place in a header.
-    if (marker == 0x00 || marker == 0x01 || (marker >= 0xD0 && marker <= 0xD9)) return false;
-    const std::size_t length = std::size_t(data[at + 2]) << 8 | data[at + 3];
-    if (length < 2) return false;
-    at += 2 + length;
-  }
-  return false;
+  const auto frame = FindJpegHeaderMarker(data, fragment.size, [](unsigned char marker) {
+    return marker >= 0xC0 && marker <= 0xCF && marker != 0xC4 && marker != 0xC8 && marker != 0xCC;
+  });
+  return frame && *frame + 4 < fragment.size;
 }
 
 // DCMTK 3.6.7 scans each JPEG frame's header for its bit depth before decoding it, and never returns
