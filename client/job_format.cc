@@ -119,9 +119,13 @@ std::string DicomLines(const v1::Job& job) {
   std::string text;
   if (job.has_retrieval()) {
     const auto& r = job.retrieval();
-    const char* state = r.state() == v1::Retrieval::RETRIEVING  ? "in progress"
+    std::string state = r.state() == v1::Retrieval::RETRIEVING  ? "in progress"
                         : r.state() == v1::Retrieval::RETRIEVED ? "done"
                                                                 : "failed";
+    if (r.state() == v1::Retrieval::RETRIEVING && r.next_attempt_unix_ms() > 0) {
+      state = fmt::format("waiting for the PACS (attempt {} failed; the next at {})", r.attempts(),
+                          HumanTime(r.next_attempt_unix_ms()));
+    }
     text += fmt::format("  retrieval from PACS {}{}: {} instance(s), {}, {}{}\n", r.source().pacs(),
                         r.method().empty() ? "" : " by " + r.method(), r.instances(), HumanBytes(r.bytes()),
                         state, r.error().empty() ? "" : ": " + r.error());

@@ -38,10 +38,14 @@ DicomRetriever::~DicomRetriever() {
   thread_.join();
 }
 
-void DicomRetriever::Retrieve(const std::string& job_id) {
+// The job is read when its turn comes (Retrieve may be called under the coordinator's lock): Run
+// puts it back when its next attempt is not due yet.
+void DicomRetriever::Retrieve(const std::string& job_id) { Schedule(job_id, 0); }
+
+void DicomRetriever::Schedule(const std::string& job_id, std::int64_t at_unix_ms) {
   {
     std::lock_guard lock(mutex_);
-    queue_.push_back(job_id);
+    due_.emplace(at_unix_ms, job_id);
   }
   wake_.notify_all();
 }
@@ -66,20 +70,27 @@ bool DicomRetriever::Awaits(const std::string& study_uid) const {
 }
 
 void DicomRetriever::Loop() {
-  while (true) {
-    std::string job_id;
-    {
-      std::unique_lock lock(mutex_);
-      wake_.wait(lock, [&] { return stopping_ || !queue_.empty(); });
-      if (stopping_) return;
-      job_id = queue_.front();
-      queue_.pop_front();
+  std::unique_lock lock(mutex_);
+  while (!stopping_) {
+    if (due_.empty()) {
+      wake_.wait(lock);
+      continue;
     }
+    const auto first = due_.begin();
+    const std::int64_t wait_ms = first->first - NowUnixMs();
+    if (wait_ms > 0) {
+      wake_.wait_for(lock, std::chrono::milliseconds(wait_ms));
+      continue;
+    }
+    const std::string job_id = first->second;
+    due_.erase(first);
+    lock.unlock();
     try {
       Run(job_id);
     } catch (const std::exception& e) {
       spdlog::error("job {}: retrieval: {}", job_id, e.what());
     }
+    lock.lock();
   }
 }
 
@@ -97,6 +108,7 @@ std::vector<std::string> DicomRetriever::RecordingSeries(const std::string& job_
   try {
     contents = dicom::FindStudyContents(request);
   } catch (const Error& e) {
+    if (e.code() == ErrorCode::kUnavailable) throw;  // no answer: the attempt waits for the PACS
     spdlog::warn("job {}: cannot list the study's instances ({}); retrieving the whole study", job_id,
                  e.what());
     return {};
@@ -177,7 +189,8 @@ std::pair<fs::path, std::string> DicomRetriever::Fetch(const std::string& job_id
     });
     return {folder, "C-GET"};
   } catch (const Error& e) {
-    if (e.code() == ErrorCode::kNotFound) throw;
+    // Not there, or no answer (C-MOVE would get none either): only a refusal turns to C-MOVE.
+    if (e.code() == ErrorCode::kNotFound || e.code() == ErrorCode::kUnavailable) throw;
     if (scp_ == nullptr) {
       Fail(e.code(), std::string(e.what()) +
                          "; C-MOVE was not tried: this server has no --dicom-listen for a PACS to send to");
@@ -267,9 +280,19 @@ void DicomRetriever::StoreBlobs(const std::vector<std::pair<fs::path, v1::FileEn
 
 void DicomRetriever::Run(const std::string& job_id) {
   const v1::Job job = coordinator_.Get(job_id, ServerPrincipal());
-  if (job.state() != v1::QUEUED) return;
+  if (job.state() != v1::QUEUED || job.retrieval().state() != v1::Retrieval::RETRIEVING) return;
+  if (job.retrieval().next_attempt_unix_ms() > NowUnixMs()) {
+    Schedule(job_id, job.retrieval().next_attempt_unix_ms());
+    return;
+  }
   const auto& source = job.retrieval().source();
-  spdlog::info("job {}: retrieving its recording from PACS {}", job_id, source.pacs());
+  const int attempt = job.retrieval().attempts() + 1;
+  coordinator_.Update(job_id, [&](v1::Job& stored) {
+    stored.mutable_retrieval()->set_attempts(attempt);
+    stored.mutable_retrieval()->set_next_attempt_unix_ms(0);
+  });
+  spdlog::info("job {}: retrieving its recording from PACS {}{}", job_id, source.pacs(),
+               attempt > 1 ? fmt::format(" (attempt {} of {})", attempt, settings_.retrieve_attempts) : "");
   try {
     const auto [folder, method] = Fetch(job_id, source);
     const auto files = Describe(folder);
@@ -287,8 +310,28 @@ void DicomRetriever::Run(const std::string& job_id) {
     std::error_code ignored;
     fs::remove_all(work_dir_ / job_id, ignored);
     audit_("PacsRetrieve", job_id, ErrorCodeName(e.code()), source.pacs());
-    coordinator_.RetrievalFailed(job_id, std::string(ErrorCodeName(e.code())) + ": " + e.what());
+    if (!Retry(job_id, e, attempt)) {
+      coordinator_.RetrievalFailed(job_id, std::string(ErrorCodeName(e.code())) + ": " + e.what());
+    }
   }
+}
+
+bool DicomRetriever::Retry(const std::string& job_id, const Error& failure, int attempt) {
+  if (failure.code() != ErrorCode::kUnavailable || attempt >= settings_.retrieve_attempts) return false;
+  const std::int64_t wait_ms = RetryWaitMs(settings_.retrieve_backoff_ms, attempt);
+  const std::int64_t next = NowUnixMs() + wait_ms;
+  bool waiting = false;
+  coordinator_.Update(job_id, [&](v1::Job& stored) {
+    if (stored.state() != v1::QUEUED) return;  // cancelled meanwhile
+    stored.mutable_retrieval()->set_error(std::string(ErrorCodeName(failure.code())) + ": " + failure.what());
+    stored.mutable_retrieval()->set_next_attempt_unix_ms(next);
+    waiting = true;
+  });
+  if (!waiting) return true;
+  spdlog::warn("job {}: retrieval from PACS failed (attempt {} of {}), trying again in {:.0f} s: {}", job_id,
+               attempt, settings_.retrieve_attempts, wait_ms / 1000.0, failure.what());
+  Schedule(job_id, next);
+  return true;
 }
 
 }  // namespace endorecon::server

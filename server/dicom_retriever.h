@@ -1,14 +1,18 @@
 // Retrieves the recordings of jobs submitted by Study UID from their PACS, one job at a time in a
 // thread of its own: C-GET into <data>/retrievals/<job>/, or, when the PACS refuses C-GET and the
 // server runs its storage SCP, C-MOVE to it. The files become blobs and the job's clip, and the job
-// is queued; the job's `retrieval` shows instances and bytes as they arrive. A failure FAILS the job
-// with the PACS's reason; so does a recording that would take the job's tenant over its byte quota
-// (checked before the files enter the blob store).
+// is queued; the job's `retrieval` shows instances and bytes as they arrive. A PACS that does not
+// answer (UNAVAILABLE: down, restarting, unreachable) is tried again, `retrieve_attempts` in all,
+// waiting as sends do (retrieve_backoff_ms, doubled, at most a minute); the job stays QUEUED and its
+// `retrieval` RETRIEVING, with the last reason and the next attempt's time, saved so that a restart
+// keeps to it. Any other failure (a refusal, a study it does not hold) FAILS the job at once with the
+// PACS's reason; so does a recording that would take the job's tenant over its byte quota (checked
+// before the files enter the blob store).
 #pragma once
 
 #include <condition_variable>
-#include <deque>
 #include <filesystem>
+#include <map>
 #include <mutex>
 #include <string>
 #include <thread>
@@ -16,6 +20,7 @@
 
 #include "common/dicom/retrieve_scu.h"
 #include "common/dicom/storage_scp.h"
+#include "common/error.h"
 #include "server/blob_store.h"
 #include "server/job_coordinator.h"
 #include "server/metrics.h"
@@ -34,7 +39,7 @@ class DicomRetriever {
   DicomRetriever(const DicomRetriever&) = delete;
   DicomRetriever& operator=(const DicomRetriever&) = delete;
 
-  // Queues the job's retrieval.
+  // Queues the job's retrieval, at the time of its next attempt when one failed before.
   void Retrieve(const std::string& job_id);
   // The storage SCP received an instance (for the progress of a C-MOVE).
   void Received(const std::string& study_uid, std::int64_t bytes);
@@ -43,7 +48,11 @@ class DicomRetriever {
 
  private:
   void Loop();
+  void Schedule(const std::string& job_id, std::int64_t at_unix_ms);
   void Run(const std::string& job_id);
+  // After a failed attempt: schedules the next one and returns true, or returns false when the
+  // failure is not one to wait out or the attempts are used up.
+  bool Retry(const std::string& job_id, const Error& failure, int attempt);
   // The series of a study to retrieve one by one, when it also holds objects endorecon does not take;
   // empty: the whole study at once. Throws Error(kNotFound) when it holds no recording at all.
   std::vector<std::string> RecordingSeries(const std::string& job_id, const dicom::RetrieveRequest& request);
@@ -65,7 +74,7 @@ class DicomRetriever {
 
   mutable std::mutex mutex_;
   std::condition_variable wake_;
-  std::deque<std::string> queue_;
+  std::multimap<std::int64_t, std::string> due_;  // jobs by the Unix ms of their attempt
   bool stopping_ = false;
   // The C-MOVE in progress: its study, job and what arrived so far.
   std::string moving_study_, moving_job_;

@@ -133,9 +133,7 @@ void DicomSender::Attempt(const std::string& job_id, const std::string& destinat
   // it stays so until someone changes a configuration.
   const bool permanent = failure.find("Rejected Permanent") != std::string::npos;
   const bool retry = !failure.empty() && !permanent && attempt < settings_.send_attempts;
-  const std::int64_t backoff = std::min<std::int64_t>(
-      60000, static_cast<std::int64_t>(settings_.send_backoff_ms) << std::min(attempt - 1, 20));
-  const std::int64_t next = NowUnixMs() + backoff;
+  const std::int64_t next = NowUnixMs() + RetryWaitMs(settings_.send_backoff_ms, attempt);
   coordinator_.Update(job_id, [&](v1::Job& stored) {
     v1::DicomSend* s = Find(stored, destination);
     if (failure.empty()) {

@@ -424,6 +424,15 @@ void AddDicomFlags(CLI::App& app, ServerFlags& flags) {
                  "wait before the second send attempt, doubled for each further one (at most 60 s)")
       ->capture_default_str()
       ->check(AboveZero());
+  app.add_option(
+         "--retrieve-attempts", flags.dicom.retrieve_attempts,
+         "attempts to retrieve a job's recording from a PACS that does not answer before the job FAILS")
+      ->capture_default_str()
+      ->check(AboveZero());
+  app.add_option("--retrieve-backoff-ms", flags.dicom.retrieve_backoff_ms,
+                 "wait before the second retrieval attempt, doubled for each further one (at most 60 s)")
+      ->capture_default_str()
+      ->check(AboveZero());
   app.add_option("--dicom-timeout", flags.dicom.timeout_s,
                  "seconds for a PACS to connect, associate and answer")
       ->capture_default_str()

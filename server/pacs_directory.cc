@@ -1,5 +1,7 @@
 #include "server/pacs_directory.h"
 
+#include <algorithm>
+
 #include "common/error.h"
 
 namespace endorecon::server {
@@ -33,6 +35,10 @@ std::vector<std::string> PacsDirectory::Names() const {
   std::vector<std::string> names;
   for (const auto& [name, peer] : peers_) names.push_back(name);
   return names;
+}
+
+std::int64_t RetryWaitMs(int first_ms, int attempt) {
+  return std::min<std::int64_t>(60000, static_cast<std::int64_t>(first_ms) << std::clamp(attempt - 1, 0, 20));
 }
 
 }  // namespace endorecon::server

@@ -2,6 +2,7 @@
 // (--ae-title, --dicom-listen, --uid-root). Workers never talk to a PACS; the server does.
 #pragma once
 
+#include <cstdint>
 #include <functional>
 #include <map>
 #include <string>
@@ -17,8 +18,14 @@ struct DicomSettings {
   std::string uid_root;                // root of new UIDs in results; "": 2.25 UUID UIDs
   int send_attempts = 5;               // C-STORE attempts per destination before SEND_FAILED
   int send_backoff_ms = 2000;          // wait before the second attempt, doubled each time (max 60 s)
+  int retrieve_attempts = 8;           // retrieval attempts while the PACS does not answer
+  int retrieve_backoff_ms = 2000;      // as send_backoff_ms (8 attempts span about 3 minutes)
   int timeout_s = 30;                  // connect, association and each DIMSE response
 };
+
+// The wait before attempt `attempt` + 1 when the first wait is `first_ms`: doubled for each further
+// attempt, at most a minute.
+std::int64_t RetryWaitMs(int first_ms, int attempt);
 
 // Audits what the server did with a PACS on its own: method ("PacsRetrieve", "PacsSend"), job,
 // outcome ("OK" or why not, as a status name) and the PACS's name.

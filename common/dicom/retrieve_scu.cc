@@ -70,8 +70,11 @@ void Connect(DcmSCU& scu, const RetrieveRequest& request) {
   if (status.good()) status = scu.negotiateAssociation();
   if (status.bad()) {
     // DcmSCU keeps the peer's reason to itself (its log): what a rejection usually means is said.
+    // A PACS that does not answer may be back soon (UNAVAILABLE: the server retries); one that
+    // refuses this server stays so until someone changes a configuration (FAILED_PRECONDITION, as
+    // every failure once the association stands: Orthanc aborts a C-GET it does not allow).
     const bool rejected = std::string_view(status.text()).find("Rejected") != std::string_view::npos;
-    Fail(ErrorCode::kUnavailable,
+    Fail(rejected ? ErrorCode::kFailedPrecondition : ErrorCode::kUnavailable,
          where + " failed: " + status.text() +
              (rejected ? " (the PACS refused this server: is " + request.peer.ae_title +
                              " its AE title, and does it accept calls from AE title " +
@@ -108,7 +111,8 @@ T_ASC_PresentationContextID Associate(DcmSCU& scu, const RetrieveRequest& reques
   const T_ASC_PresentationContextID id = scu.findPresentationContextID(model, "");
   if (id == 0) {
     scu.releaseAssociation();
-    Fail(ErrorCode::kUnavailable, PeerText(request.peer) + " does not offer " + verb + " (Study Root)");
+    Fail(ErrorCode::kFailedPrecondition,
+         PeerText(request.peer) + " does not offer " + verb + " (Study Root)");
   }
   return id;
 }
@@ -120,7 +124,8 @@ constexpr const char* kMoveDestinationAdvice =
 // Checks the final response; returns the completed sub-operations.
 int Finish(const OFList<RetrieveResponse*>& responses, const RetrieveRequest& request,
            const std::string& verb) {
-  if (responses.empty()) Fail(ErrorCode::kUnavailable, verb + " of " + What(request) + ": no response");
+  if (responses.empty())
+    Fail(ErrorCode::kFailedPrecondition, verb + " of " + What(request) + ": no response");
   const RetrieveResponse* last = responses.back();
   const std::string status = StatusText(last->m_status);
   if (last->m_status != STATUS_Success && (last->m_status & 0xf000) != 0xb000) {
@@ -130,7 +135,7 @@ int Finish(const OFList<RetrieveResponse*>& responses, const RetrieveRequest& re
     const std::string comment = last->m_statusDetail == nullptr
                                     ? ""
                                     : FindString(*last->m_statusDetail, DCM_ErrorComment).value_or("");
-    Fail(ErrorCode::kUnavailable,
+    Fail(ErrorCode::kFailedPrecondition,
          verb + " of " + What(request) + " refused by " + PeerText(request.peer) + " with status " + status +
              (comment.empty() ? "" : " (\"" + comment + "\")") +
              (last->m_status == 0xa801
@@ -174,7 +179,7 @@ int Retrieve(DcmSCU& scu, const RetrieveRequest& request, const char* model, con
   scu.releaseAssociation();
   try {
     if (status.bad())
-      Fail(ErrorCode::kUnavailable, verb + " of " + What(request) + " failed: " + status.text());
+      Fail(ErrorCode::kFailedPrecondition, verb + " of " + What(request) + " failed: " + status.text());
     const int completed = Finish(responses, request, verb);
     FreeAll(responses);
     return completed;
@@ -243,7 +248,7 @@ StudyContents FindStudyContents(const RetrieveRequest& request) {
   std::vector<std::string> order;
   std::map<std::string, bool> all_accepted;  // series -> every instance of a class endorecon takes
   StudyContents contents;
-  std::string failure;
+  std::string refusal;
   for (QRResponse* response : responses) {
     if (response->m_dataset != nullptr) {
       const std::string series = FindString(*response->m_dataset, DCM_SeriesInstanceUID).value_or("");
@@ -259,15 +264,13 @@ StudyContents FindStudyContents(const RetrieveRequest& request) {
       }
     }
     if (response == responses.back() && response->m_status != STATUS_Success) {
-      failure = "status " + StatusText(response->m_status);
+      refusal = "status " + StatusText(response->m_status);
     }
     delete response;
   }
-  if (status.bad()) failure = status.text();
-  if (!failure.empty()) {
-    Fail(ErrorCode::kUnavailable,
-         "C-FIND of the study's instances at " + PeerText(request.peer) + " failed: " + failure);
-  }
+  const std::string where = "C-FIND of the study's instances at " + PeerText(request.peer);
+  if (status.bad()) Fail(ErrorCode::kFailedPrecondition, where + " failed: " + status.text());
+  if (!refusal.empty()) Fail(ErrorCode::kFailedPrecondition, where + " refused: " + refusal);
   for (const std::string& series : order) {
     if (series.empty()) continue;
     if (all_accepted[series]) {

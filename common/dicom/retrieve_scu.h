@@ -25,9 +25,10 @@ struct RetrieveRequest {
 using RetrieveProgress = std::function<void(int instances, std::int64_t bytes)>;
 
 // C-GET of the study (or series) into `out_dir` (created), one file per instance. Returns the
-// number of instances received. Throws Error(kUnavailable) when the PACS cannot be reached,
-// rejects the association or refuses C-GET (say so: C-MOVE may work), kNotFound when it holds
-// nothing that matches, kDataLoss when some sub-operations failed.
+// number of instances received. Throws Error(kUnavailable) when the PACS cannot be reached (it may be
+// back later), kFailedPrecondition when it rejects the association, does not offer C-GET, refuses it
+// with a status or aborts it (say so: C-MOVE may work), kNotFound when it holds nothing that matches,
+// kDataLoss when some sub-operations failed.
 int GetStudy(const RetrieveRequest& request, const std::filesystem::path& out_dir,
              const RetrieveProgress& progress);
 
@@ -35,7 +36,8 @@ int GetStudy(const RetrieveRequest& request, const std::filesystem::path& out_di
 // instance is of a class endorecon takes (storage_classes.h), and the instances of other classes
 // (a CT, a report), counted by class name. A PACS fails a whole-study retrieval when one object has
 // no context, so a study holding others is retrieved series by series. Throws Error(kUnavailable)
-// when the PACS cannot be reached or refuses the query.
+// when the PACS cannot be reached, kFailedPrecondition when it refuses the association or fails the
+// query.
 struct StudyContents {
   std::vector<std::string> recording_series;  // in the order the PACS listed them
   std::map<std::string, int> other_classes;   // class name -> instances

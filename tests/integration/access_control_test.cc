@@ -55,9 +55,10 @@ class AccessControlTest : public ::testing::Test {
         .Wait();
   }
 
-  // A PACS the server knows by name; nothing listens there, so a retrieval from it fails at once.
+  // A PACS the server knows by name; nothing listens there, and with one attempt a retrieval from it
+  // fails at once.
   Cluster cluster_{{"--tenant-max-jobs", "2", "--pacs", "pacs1=PACS1@127.0.0.1:" + std::to_string(FreePort()),
-                    "--dicom-timeout", "5"},
+                    "--dicom-timeout", "5", "--retrieve-attempts", "1"},
                    false};
   ClientCredentials admin_, alice_, bob_, worker_;
   std::vector<std::string> tokens_;

@@ -2,8 +2,8 @@
 // stored in it, a job is submitted by its Study UID (the server retrieves it by C-GET; the job
 // scales its frames), runs, and its DICOM results go back into the same patient and study. Then:
 // the PACS down during a send (the send fails, the job stays SUCCEEDED, a resend after it is back
-// succeeds), an association refused by AE title, an unknown study, and a retrieval by C-MOVE to the
-// server's storage SCP.
+// succeeds), an association refused by AE title, an unknown study, a PACS down during a retrieval
+// (waited for), and a retrieval by C-MOVE to the server's storage SCP.
 #include <dcmtk/dcmdata/dctk.h>
 #include <gtest/gtest.h>
 
@@ -256,6 +256,47 @@ TEST_F(PacsRoundTripTest, RecordingFromThePacsResultsBackIntoItsStudy) {
       << missing_job;
   EXPECT_EQ(missing_job.find("1.2.3.4.5"), std::string::npos) << missing_job;
   EXPECT_EQ(missing_job.find("C-GET"), std::string::npos) << missing_job;
+}
+
+// A PACS that does not answer (down for maintenance, restarting) is waited for: the job stays QUEUED
+// and its retrieval is tried again, its last reason and next attempt shown; it failed at once until
+// 2026-12-06. A PACS that refuses this server is not: that stays so until someone changes a
+// configuration.
+TEST_F(PacsRoundTripTest, ARetrievalWaitsForAPacsThatIsDownNotForOneThatRefuses) {
+  const std::string study = MakeRecording(dir_.path(), dir_ / "recording.dcm");
+  ASSERT_EQ(Text(orthanc_->Store(dir_ / "recording.dcm"), "Status"), "Success");
+  orthanc_->Stop();
+  Cluster cluster({"--ae-title", "ENDORECON", "--pacs", "orthanc=" + orthanc_->Address(), "--pacs",
+                   "wrongae=WRONGAE@127.0.0.1:" + std::to_string(orthanc_->dicom_port()),
+                   "--retrieve-attempts", "12", "--retrieve-backoff-ms", "300", "--dicom-timeout", "5"});
+  const auto submitted = RunCli(cluster.address(), {"submit", "--pacs", "orthanc", "--study", study});
+  ASSERT_EQ(submitted.exit_code, 0) << submitted.err;
+  const std::string id = JobIdIn(submitted.out);
+  ASSERT_TRUE(
+      WaitUntil([&] { return cluster.Job(id).retrieval().attempts() >= 2; }, std::chrono::seconds(30)))
+      << cluster.ServerLog();
+  v1::Job waiting = cluster.Job(id);
+  EXPECT_EQ(waiting.state(), v1::QUEUED);
+  EXPECT_EQ(waiting.retrieval().state(), v1::Retrieval::RETRIEVING);
+  EXPECT_EQ(waiting.retrieval().error().rfind("UNAVAILABLE: ", 0), 0u) << waiting.retrieval().error();
+  const auto status = RunCli(cluster.address(), {"status", id});
+  EXPECT_NE(status.out.find("waiting for the PACS (attempt "), std::string::npos) << status.out;
+
+  ASSERT_EQ(orthanc_->Start(), "");
+  ASSERT_TRUE(WaitUntil([&] { return cluster.Job(id).retrieval().state() != v1::Retrieval::RETRIEVING; },
+                        std::chrono::seconds(90)));
+  const v1::Job retrieved = cluster.Job(id);
+  EXPECT_EQ(retrieved.retrieval().state(), v1::Retrieval::RETRIEVED) << retrieved.retrieval().error();
+  EXPECT_EQ(retrieved.state(), v1::QUEUED);
+  EXPECT_EQ(retrieved.retrieval().instances(), 1);
+  EXPECT_GE(retrieved.retrieval().attempts(), 3);
+
+  // Refused by AE title: one attempt, FAILED_PRECONDITION.
+  const auto refused = RunCli(cluster.address(), {"submit", "--pacs", "wrongae", "--study", study, "--wait"});
+  EXPECT_EQ(refused.exit_code, 5) << refused.out << refused.err;
+  const v1::Job failed = cluster.Job(JobIdIn(refused.out));
+  EXPECT_EQ(failed.retrieval().attempts(), 1);
+  EXPECT_EQ(failed.retrieval().error().rfind("FAILED_PRECONDITION: ", 0), 0u) << failed.retrieval().error();
 }
 
 TEST_F(PacsRoundTripTest, CMoveToTheServersStorageScpWhenCGetIsRefused) {
