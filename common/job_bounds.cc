@@ -1,5 +1,8 @@
 #include "common/job_bounds.h"
 
+#include <string_view>
+#include <utility>
+
 #include "common/error.h"
 #include "common/safe_path.h"
 
@@ -12,35 +15,65 @@ bool IsControl(char c) {
   return byte < 0x20 || byte == 0x7f;
 }
 
+// The bytes of a Unicode direction control at `at` (0: none): U+200E, U+200F, U+202A-U+202E and
+// U+2066-U+2069 turn the rest of a terminal's line around ("x\u202eevil" is shown "xlive"; found
+// 2026-12-06), and C1 controls (U+0080-U+009F) are escape sequences to some terminals.
+std::size_t DirectionControlAt(std::string_view text, std::size_t at) {
+  const auto byte = [&](std::size_t i) { return static_cast<unsigned char>(text[at + i]); };
+  if (at + 1 < text.size() && byte(0) == 0xC2 && byte(1) >= 0x80 && byte(1) <= 0x9F) return 2;
+  if (at + 2 >= text.size() || byte(0) != 0xE2) return 0;
+  const bool marks =
+      byte(1) == 0x80 && (byte(2) == 0x8E || byte(2) == 0x8F || (byte(2) >= 0xAA && byte(2) <= 0xAE));
+  const bool isolates = byte(1) == 0x81 && byte(2) >= 0xA6 && byte(2) <= 0xA9;
+  return marks || isolates ? 3 : 0;
+}
+
 // `text` is printed in listings and terminals: no control character, at most `most` bytes.
 void CheckPrintable(const std::string& text, std::size_t most, const std::string& what) {
   if (text.size() > most) {
     FailInvalid(what + " has " + std::to_string(text.size()) + " bytes; at most " + std::to_string(most));
   }
-  for (const char c : text) {
-    if (IsControl(c)) {
-      FailInvalid(what + " holds a control character (byte " + std::to_string(static_cast<unsigned char>(c)) +
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    if (IsControl(text[i])) {
+      FailInvalid(what + " holds a control character (byte " +
+                  std::to_string(static_cast<unsigned char>(text[i])) +
                   "); it is printed in listings and terminals");
+    }
+    if (DirectionControlAt(text, i) > 0) {
+      FailInvalid(what + " holds a Unicode control character (at byte " + std::to_string(i) +
+                  "): it would turn a terminal's text around; it is printed in listings and terminals");
     }
   }
 }
 
 }  // namespace
 
+std::string PrintableText(std::string text, std::size_t most) {
+  const bool utf8 = IsUtf8(text);
+  std::string out;
+  out.reserve(text.size());
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const std::size_t control = utf8 ? DirectionControlAt(text, i) : 0;
+    if (control > 0) {
+      out += '?';
+      i += control - 1;
+    } else if (IsControl(text[i]) || (!utf8 && static_cast<unsigned char>(text[i]) >= 0x80)) {
+      out += '?';
+    } else {
+      out += text[i];
+    }
+  }
+  if (out.size() > most) {
+    std::size_t end = most;
+    while (end > 0 && (static_cast<unsigned char>(out[end]) & 0xC0) == 0x80) --end;  // not mid-character
+    out.resize(end);
+  }
+  return out;
+}
+
 void ValidateJobName(const std::string& name) { CheckPrintable(name, kMaxJobNameBytes, "name"); }
 
-std::string ValidJobName(std::string name) {
-  const bool utf8 = IsUtf8(name);
-  for (char& c : name) {
-    if (IsControl(c) || (!utf8 && static_cast<unsigned char>(c) >= 0x80)) c = '?';
-  }
-  if (name.size() > kMaxJobNameBytes) {
-    std::size_t end = kMaxJobNameBytes;
-    while (end > 0 && (static_cast<unsigned char>(name[end]) & 0xC0) == 0x80) --end;  // not mid-character
-    name.resize(end);
-  }
-  return name;
-}
+std::string ValidJobName(std::string name) { return PrintableText(std::move(name), kMaxJobNameBytes); }
 
 void ValidateWorkerId(const std::string& id) {
   if (id.empty()) FailInvalid("worker id is empty");

@@ -17,15 +17,22 @@ inline constexpr double kLeastTimeBudgetS = 10;
 // ... and at most a week: a larger one is a unit slip too (1e300 ran without end, its ETA overflowing).
 inline constexpr double kMostTimeBudgetS = 7 * 24 * 3600;
 
-// Throws Error(kInvalidArgument) for a name over kMaxJobNameBytes or holding a control character.
+// Throws Error(kInvalidArgument) for a name over kMaxJobNameBytes or holding a control character
+// (ASCII or C1, or a Unicode direction control).
 void ValidateJobName(const std::string& name);
+// Text a terminal may show as it is: control characters (as ValidateJobName's) and bytes of no UTF-8
+// text as '?', cut to `most` bytes on a character's end. For text the server passes on from a worker
+// (a failure's reason, a device's description) and names made from what no one chose as a name.
+std::string PrintableText(std::string text, std::size_t most);
 // A name made from what the user did not choose as a name (a clip's folder name), made valid:
-// control characters and bytes of no UTF-8 text as '?', cut to kMaxJobNameBytes on a character's end.
+// PrintableText cut to kMaxJobNameBytes.
 std::string ValidJobName(std::string name);
 // A worker's id is listed by `endorecon workers` as a job's name is: the same rules, at most
 // kMaxWorkerIdBytes, not empty.
 inline constexpr std::size_t kMaxWorkerIdBytes = 128;
 void ValidateWorkerId(const std::string& id);
+// A worker's reason for a failure is kept (and shown) up to this many bytes.
+inline constexpr std::size_t kMaxFailureReasonBytes = 8192;
 // Throws Error(kInvalidArgument) unless -kMaxPriority <= priority <= kMaxPriority.
 void ValidatePriority(int priority);
 

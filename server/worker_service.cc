@@ -25,7 +25,12 @@ grpc::Status WorkerServiceImpl::Register(grpc::ServerContext* context, const v1:
                                          v1::RegisterResponse* response) {
   return guard_.Run(context, {"Register", Access::kWorker, kWrites, ""}, [&](Call&) {
     ValidateWorkerId(request->worker_id());
-    workers_.Register(*request);
+    // What a worker says of itself is listed by `endorecon workers`: printable, as its id.
+    v1::RegisterRequest registered = *request;
+    registered.set_hostname(PrintableText(registered.hostname(), kMaxWorkerIdBytes));
+    registered.set_version(PrintableText(registered.version(), kMaxWorkerIdBytes));
+    for (auto& device : *registered.mutable_devices()) device = PrintableText(device, 1024);
+    workers_.Register(registered);
     response->set_lease_ttl_ms(timing_.lease_ttl.count());
     response->set_heartbeat_interval_ms(timing_.heartbeat_interval.count());
     return grpc::Status::OK;
@@ -90,6 +95,9 @@ grpc::Status WorkerServiceImpl::Report(
         guard_.Admit(*context, rpc, call);
         admitted = std::chrono::steady_clock::now();
       }
+      if (update.has_progress()) {
+        update.mutable_progress()->set_phase(PrintableText(update.progress().phase(), 64));
+      }
       v1::ProgressReply reply;
       bool register_again = false;
       reply.set_action(coordinator_.Report(update, &call.job_id, &register_again));
@@ -112,7 +120,11 @@ grpc::Status WorkerServiceImpl::Complete(grpc::ServerContext* context, const v1:
 grpc::Status WorkerServiceImpl::Fail(grpc::ServerContext* context, const v1::FailRequest* request,
                                      v1::Job* job) {
   return guard_.Run(context, {"Fail", Access::kWorker, kWrites, ""}, [&](Call& call) {
-    *job = coordinator_.Fail(*request);
+    // The reason reaches `status`, `watch` and the logs: printable (a worker's "\x1b]0;...\n FAKE:
+    // job SUCCEEDED" was printed as it came; found 2026-12-06).
+    v1::FailRequest failed = *request;
+    failed.set_reason(PrintableText(failed.reason(), kMaxFailureReasonBytes));
+    *job = coordinator_.Fail(failed);
     call.job_id = job->id();
     return grpc::Status::OK;
   });

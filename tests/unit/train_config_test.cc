@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "common/error.h"
+#include "worker/engine/train/config_check.h"
 
 namespace endorecon::train {
 namespace {
@@ -350,6 +351,46 @@ TEST(TrainConfigTest, TheFieldsKeysAreCheckedNamingTheirWholeKey) {
   TrainConfig config;
   ApplyJson(nlohmann::json{{"field", {{"encoding", "frequency"}, {"grids", {{"log2_table", 30}}}}}}, config);
   ApplyJson(nlohmann::json{{"field", {{"deformation", {{"enabled", false}, {"resolution", 0}}}}}}, config);
+}
+
+// A configuration each of whose values is in bounds but whose whole is not: a tenant's tables of
+// 2^26 slots at 64 levels wrote 5.6 GB of results from a 64 x 48 clip, and heads of 8 x 1,024 units
+// with 65,536 rays did not end one step in three minutes, past the budget, a cancel and SIGTERM
+// (found 2026-12-06). The presets keep well inside every bound.
+TEST(TrainConfigTest, AConfigurationsSizeAndWorkAreBoundedAsAWhole) {
+  const std::vector<int> wide(8, 1024);
+  const std::vector<std::pair<std::string, nlohmann::json>> cases = {
+      {"config: field.grids: 3 grid(s) x 64 levels x 2^26 slots x 8 features",
+       {{"field", {{"grids", {{"log2_table", 26}, {"features", 8}, {"levels", 64}}}}}}},
+      {"config: a training step of rays_per_batch 65536",
+       {{"rays_per_batch", 65536},
+        {"field", {{"heads", {{"density_hidden", wide}, {"color_hidden", wide}}}}}}},
+      {"config: an evaluated pixel of 1024 + 1024 samples",
+       {{"eval_coarse_samples", 1024}, {"eval_fine_samples", 1024}, {"mc_passes", 64}}},
+  };
+  for (const auto& [start, bad] : cases) {
+    try {
+      CheckConfigJson(bad, "paper");
+      ADD_FAILURE() << bad.dump() << " was accepted";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument);
+      EXPECT_EQ(std::string(e.what()).rfind(start, 0), 0u) << e.what();
+    }
+  }
+  for (const char* preset : {"cpu", "gpu", "paper"}) {
+    const TrainConfig c = TrainConfig::Preset(preset);
+    const double per_sample = field::SampleMultiplyAdds(c.field);
+    EXPECT_LT(field::GridParamsBound(c.field.grids), field::kMostGridParams) << preset;
+    EXPECT_LT(c.rays_per_batch * double(c.depth_samples + c.stratified_samples) * per_sample,
+              kMostStepMultiplyAdds / 10)
+        << preset;
+    EXPECT_LT(double(c.eval_coarse_samples + c.eval_fine_samples) * (c.mc_passes + 1) * per_sample,
+              kMostPixelMultiplyAdds / 10)
+        << preset;
+  }
+  // The paper's heads: 128 inputs x 64 -> 17 and 31 x 64 -> 64 -> 4 multiply-adds a sample.
+  EXPECT_DOUBLE_EQ(field::SampleMultiplyAdds(TrainConfig::Preset("paper").field),
+                   128 * 64 + 64 * 17 + 31 * 64 + 64 * 64 + 64 * 4);
 }
 
 // The exposure's knot times (config.json of a run that models exposure): descending, repeated or

@@ -1,5 +1,7 @@
 #include "worker/engine/field/field_config.h"
 
+#include <fmt/format.h>
+
 #include <cmath>
 #include <string>
 
@@ -13,6 +15,34 @@ void CheckTrainedTimes(const std::array<float, 2>& times) {
   if (!(0 <= first && first <= last && last <= 1)) {  // NaN and infinities fail too
     FailInvalid("field.trained_times must be [first, last] with 0 <= first <= last <= 1");
   }
+}
+
+namespace {
+
+double LayersMultiplyAdds(int inputs, const std::vector<int>& hidden, int outputs) {
+  double sum = 0;
+  double width = inputs;
+  for (const int units : hidden) {
+    sum += width * units;
+    width = units;
+  }
+  return sum + width * outputs;
+}
+
+}  // namespace
+
+double GridParamsBound(const GridEnsembleConfig& grids) {
+  return double(grids.base_resolutions.size()) * grids.levels * std::ldexp(1.0, grids.log2_table) *
+         grids.features;
+}
+
+double SampleMultiplyAdds(const FieldConfig& config) {
+  const double density_inputs = config.encoding == "hash"
+                                    ? double(config.grids.levels) * config.grids.features
+                                    : 6.0 * config.frequencies + 3;
+  const int geo = config.heads.geo_features;
+  return LayersMultiplyAdds(int(density_inputs), config.heads.density_hidden, 2 + geo) +
+         LayersMultiplyAdds(geo + 16 + 2 * config.heads.color_time_frequencies, config.heads.color_hidden, 4);
 }
 
 namespace {
@@ -55,6 +85,13 @@ void CheckGrids(const GridEnsembleConfig& grids) {
                 std::to_string(kMostLog2Table) + "], got " + std::to_string(grids.log2_table));
   }
   if (grids.levels < 1) FailInvalid("field.grids.levels must be >= 1, got " + std::to_string(grids.levels));
+  if (GridParamsBound(grids) > kMostGridParams) {
+    FailInvalid(
+        fmt::format("field.grids: {} grid(s) x {} levels x 2^{} slots x {} features are {:.3g} "
+                    "parameters, more than {:.3g} (2^28: the paper's tables are 2.0e+08)",
+                    grids.base_resolutions.size(), grids.levels, grids.log2_table, grids.features,
+                    GridParamsBound(grids), kMostGridParams));
+  }
   if (grids.max_resolution < 0) {
     FailInvalid("field.grids.max_resolution must be >= 0 (0: no cap), got " +
                 std::to_string(grids.max_resolution));

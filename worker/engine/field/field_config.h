@@ -58,6 +58,19 @@ inline constexpr int kMostLayerWidth = 1024;
 // moments).
 inline constexpr std::size_t kMostDeformationParams = std::size_t{1} << 28;
 
+// The grid tables' parameters at most, counted as if every level used its whole table (2^28 floats:
+// 1 GiB, 4 GiB with its gradient and Adam's moments; the paper's tables, 3 x 16 x 2^19 x 8, are
+// 2^27.6). A tenant's --config of 2^26-slot tables at 64 levels wrote 5.6 GB of results from a 64 x 48
+// clip (found 2026-12-06).
+inline constexpr double kMostGridParams = double(std::size_t{1} << 28);
+
+// The grid tables' parameters as if every level used its whole table: an upper bound.
+double GridParamsBound(const GridEnsembleConfig& grids);
+// Multiply-adds of the field's networks for one sample: the heads' layers, with the density head's
+// input the levels' features (or the frequency encoding) and the colour head's the geometry features,
+// 16 direction terms and its time features. An estimate for bounding a configuration's work.
+double SampleMultiplyAdds(const FieldConfig& config);
+
 void CheckTrainedTimes(const std::array<float, 2>& times);
 // Refuses a configuration the field cannot be built from, naming the key (field.grids.log2_table, ...),
 // before a clip is loaded: the modules' own constructors check again for their direct users.

@@ -255,6 +255,24 @@ void Validate(const TrainConfig& c) {
   } catch (const Error& e) {
     FailInvalid(std::string("config: ") + e.what());
   }
+  // The networks' work, after the field's own checks (a layer wider than the field takes is named
+  // there first).
+  const double per_sample = field::SampleMultiplyAdds(c.field);
+  const double per_step = double(c.rays_per_batch) * (c.depth_samples + c.stratified_samples) * per_sample;
+  require(per_step <= kMostStepMultiplyAdds,
+          fmt::format("a training step of rays_per_batch {} x {} samples through the field's heads "
+                      "(field.heads: about {:.3g} multiply-adds a sample) is about {:.3g} multiply-adds, "
+                      "more than {:.3g}: fewer rays or samples, or smaller heads",
+                      c.rays_per_batch, c.depth_samples + c.stratified_samples, per_sample, per_step,
+                      kMostStepMultiplyAdds));
+  const double per_pixel =
+      double(c.eval_coarse_samples + c.eval_fine_samples) * (c.mc_passes + 1) * per_sample;
+  require(per_pixel <= kMostPixelMultiplyAdds,
+          fmt::format("an evaluated pixel of {} + {} samples (eval_coarse_samples, eval_fine_samples) in "
+                      "mc_passes {} + 1 passes is about {:.3g} multiply-adds, more than {:.3g}: fewer "
+                      "samples or passes, or smaller heads",
+                      c.eval_coarse_samples, c.eval_fine_samples, c.mc_passes, per_pixel,
+                      kMostPixelMultiplyAdds));
   require(c.nll_beta >= 0 && c.nll_beta <= 1, "nll_beta must be in [0, 1]");
   require(c.eval_coarse_samples >= 1 && c.eval_fine_samples >= 1, "eval samples must be >= 1");
   require(c.curve_interval_s > 0, "curve_interval_s must be > 0");
