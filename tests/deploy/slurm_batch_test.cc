@@ -47,6 +47,24 @@ TEST(SlurmBatchTest, SbatchStartsAWorkerThatFinishesAJob) {
   EXPECT_NE(job.worker_id().find("-slurm" + slurm_job + "-cpu"), std::string::npos) << job.worker_id();
   EXPECT_GT(job.result().files_size(), 0);
 
+  // The time limit's warning (--signal=B:TERM@120: SIGTERM to the batch shell alone) reaches the
+  // worker, which hands its job back whole; the script's TERM to srun made srun kill the worker, and
+  // the job lost an attempt to its lease's expiry (found 2026-12-06). Then the allocation ends and
+  // its scratch folder, which held the clip, goes with it.
+  const auto running = cluster.Submit(cluster.path("clip"), {"--time-budget", "600"});
+  cluster.WaitForState(running, v1::RUNNING, std::chrono::seconds(60));
+  ASSERT_EQ(slurm.Command({"/usr/bin/scancel", "--batch", "--signal=TERM", slurm_job}).exit_code, 0);
+  const auto handed_back = cluster.WaitForState(running, v1::QUEUED, std::chrono::seconds(60));
+  EXPECT_EQ(handed_back.state(), v1::QUEUED)
+      << ReadBytes(cluster.path("slurm-" + slurm_job + ".log")) << cluster.ServerLog();
+  EXPECT_EQ(handed_back.attempts(), 0) << handed_back.error();
+  EXPECT_TRUE(WaitUntil(
+      [&] {
+        return slurm.Command({"/usr/bin/squeue", "-h"}).out.empty();
+      },
+      std::chrono::seconds(60)));
+  EXPECT_FALSE(std::filesystem::exists(cluster.path("endorecon-" + slurm_job)));
+
   slurm.CancelAll();
   EXPECT_TRUE(slurm.Command({"/usr/bin/squeue", "-h"}).out.empty());
 }
