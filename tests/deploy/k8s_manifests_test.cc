@@ -170,6 +170,16 @@ TEST(K8sManifestsTest, ServicesReachTheirPodsAndWorkersTheServer) {
     ASSERT_TRUE(service_ports.count(host)) << app << " talks to " << server << ", which no service offers";
     EXPECT_EQ(service_ports[host], PortOf(server));
   }
+  // Each NetworkPolicy selects a deployment's pods and opens ports those pods name.
+  EXPECT_EQ(manifests.Of("NetworkPolicy").size(), 2u);
+  for (const auto& policy : manifests.Of("NetworkPolicy")) {
+    const std::string app = policy["spec"]["podSelector"]["matchLabels"]["app"].as<std::string>();
+    ASSERT_TRUE(deployments.count(app)) << "network policy selects no deployment: " << app;
+    const auto ports = ContainerPorts(deployments[app]["spec"]["template"]["spec"]["containers"][0]);
+    for (const auto& rule : policy["spec"]["ingress"]) {
+      for (const auto& port : rule["ports"]) EXPECT_TRUE(ports.count(port["port"].as<std::string>())) << app;
+    }
+  }
 }
 
 }  // namespace

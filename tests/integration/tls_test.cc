@@ -190,7 +190,8 @@ TEST_F(TlsTest, WorkersWithoutAClientCertificateOrWithAClientTokenLeaseNothing) 
   EXPECT_NE(plaintext.Log().find("if it serves TLS, give --ca FILE"), std::string::npos) << plaintext.Log();
 
   auto& client_token = cluster_->StartWorker("w-client-token", WorkerTlsFlags(*pki_, admin_.token_file));
-  EXPECT_NE(client_token.Wait(), 0);
+  EXPECT_EQ(client_token.Wait(), 11)
+      << "PERMISSION_DENIED: not restarted by systemd (RestartPreventExitStatus)";
   EXPECT_NE(client_token.Log().find("PERMISSION_DENIED"), std::string::npos) << client_token.Log();
 
   EXPECT_EQ(cluster_->Job(id).state(), v1::QUEUED);

@@ -12,6 +12,7 @@
 int main(int argc, char** argv) {
   CLI::App app{"endorecon-worker: reconstruct endoscopic clips, or serve jobs from endorecon-server"};
   app.require_subcommand(1);
+  app.set_version_flag("--version", ENDORECON_VERSION);  // server and workers run at one version
   std::map<std::string, endorecon::worker::Command> commands;
   commands["synth"] = endorecon::worker::AddSynthCommand(app);
   commands["reconstruct"] = endorecon::worker::AddReconstructCommand(app);
@@ -30,9 +31,19 @@ int main(int argc, char** argv) {
   } catch (const endorecon::Error& e) {
     spdlog::error("{}: {}", endorecon::ErrorCodeName(e.code()), e.what());
     // A clip or file the command was given that is not there is the user's input, as a bad one is.
-    return e.code() == endorecon::ErrorCode::kInvalidArgument || e.code() == endorecon::ErrorCode::kNotFound
-               ? 2
-               : 1;
+    // Credentials the server refused are 10 and 11, as the CLI's: a service manager keeps from
+    // restarting a worker that will be refused again (deploy/systemd, RestartPreventExitStatus).
+    switch (e.code()) {
+      case endorecon::ErrorCode::kInvalidArgument:
+      case endorecon::ErrorCode::kNotFound:
+        return 2;
+      case endorecon::ErrorCode::kUnauthenticated:
+        return 10;
+      case endorecon::ErrorCode::kPermissionDenied:
+        return 11;
+      default:
+        return 1;
+    }
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());
     return 1;

@@ -31,7 +31,7 @@ v1::RegisterResponse WorkerClient::Register(const std::string& hostname, const s
     info->set_memory_bytes(device.description.memory_bytes);
     info->set_threads(device.threads);
   }
-  request.set_version("0.1.0");
+  request.set_version(ENDORECON_VERSION);
   return Send(request);
 }
 
