@@ -366,7 +366,7 @@ int Run(const ServerFlags& flags) {
   server->Wait();
   signal_waiter.join();
   maintenance.join();
-  spdlog::info("endorecon-server stopped");
+  spdlog::info("serving stopped; closing the job store, the DICOM threads and the data folder");
   return exit_code;
 }
 
@@ -444,6 +444,7 @@ void AddDicomFlags(CLI::App& app, ServerFlags& flags) {
 int main(int argc, char** argv) {
   ServerFlags flags;
   CLI::App app{"endorecon-server: queues reconstruction jobs durably and hands them to pulling workers"};
+  app.set_version_flag("--version", ENDORECON_VERSION);  // server and workers run at one version
   app.add_option("--listen", flags.listen, "gRPC address host:port (loopback by default; port 0 picks one)")
       ->capture_default_str()
       ->check(ListenAddress());
@@ -500,7 +501,11 @@ int main(int argc, char** argv) {
   try {
     if (app.got_subcommand("token")) return token_command();
     if (app.got_subcommand("retention")) return retention_command();
-    return Run(flags);
+    // Said once everything Run made is gone, the data folder's lock last: "stopped" came up to 3 s
+    // before a new server could take the folder (found 2026-12-06).
+    const int code = Run(flags);
+    spdlog::info("endorecon-server stopped");
+    return code;
   } catch (const endorecon::Error& e) {
     spdlog::error("{}: {}", endorecon::ErrorCodeName(e.code()), e.what());
     // A file or folder the command line names and that is not there is its input's fault too.
