@@ -22,6 +22,7 @@ struct Globals {
   double timeout_s = 30;   // --timeout: deadline of each unary call
   std::string ca_file;     // --ca, else $ENDORECON_CA: TLS, verifying the server against this CA
   std::string token_file;  // --token-file: the bearer token; else $ENDORECON_TOKEN holds the token itself
+  bool insecure = false;   // --insecure: the token without TLS beyond loopback (isolated test networks)
   std::chrono::milliseconds timeout() const {
     return std::chrono::milliseconds(static_cast<long>(timeout_s * 1000));
   }

@@ -22,6 +22,7 @@ namespace endorecon::client {
 std::shared_ptr<grpc::Channel> Globals::Channel() const {
   ChannelSecurity security;
   security.ca_file = ca_file;
+  security.insecure = insecure;
   if (!token_file.empty()) {
     security.token = ReadTokenFile(token_file, "--token-file");
   } else if (const char* token = std::getenv("ENDORECON_TOKEN"); token && *token) {
@@ -118,6 +119,8 @@ int main(int argc, char** argv) {
                  "TLS: verify the server against this CA certificate (default: $ENDORECON_CA)");
   app.add_option("--token-file", globals.token_file,
                  "file holding the bearer token (mode 0600; default: the token in $ENDORECON_TOKEN)");
+  app.add_flag("--insecure", globals.insecure,
+               "send the token without TLS to an address beyond loopback (isolated test networks only)");
   std::map<std::string, Command> commands;
   commands["submit"] = AddSubmitCommand(app);
   commands["status"] = AddStatusCommand(app);
@@ -142,7 +145,20 @@ int main(int argc, char** argv) {
                 << "; endorecon --help)\n";
       return kExitInvalid;
     }
-    return app.exit(e) == 0 ? kExitOk : kExitInvalid;
+    if (e.get_exit_code() == 0) return app.exit(e) == 0 ? kExitOk : kExitInvalid;  // --help, --version
+    // CLI11 repeats the words it did not expect: a token typed after a "--token" that does not exist
+    // went to the terminal and its scrollback whole (found 2026-12-06).
+    std::cerr << endorecon::WithoutTokens(e.what()) << "\n";
+    for (int i = 1; i < argc; ++i) {
+      if (std::string_view(argv[i]).rfind("--token", 0) == 0 && std::string_view(argv[i]) != "--token-file") {
+        std::cerr
+            << "endorecon: a token is given by --token-file FILE (mode 0600) or $ENDORECON_TOKEN, never "
+               "on the command line, where other users' `ps` shows it\n";
+        break;
+      }
+    }
+    std::cerr << "Run with --help for more information.\n";
+    return kExitInvalid;
   }
   if (app.count("--server") == 0) {  // $ENDORECON_SERVER, checked as --server is
     std::string server = globals.server;

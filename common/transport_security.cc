@@ -187,6 +187,16 @@ std::shared_ptr<grpc::Channel> OpenChannel(const std::string& address, const Cha
   RequirePair(security.cert_file, security.key_file);
   if (!security.cert_file.empty() && security.ca_file.empty())
     FailInvalid("--tls-cert needs --ca: a client certificate is presented only over TLS");
+  // A token in plaintext is anyone's on the path: only to this machine (a server refuses to listen
+  // in plaintext beyond loopback, so such an address is a proxy or someone else; the CLI and the
+  // worker sent it there until 2026-12-06).
+  const bool token = !security.token.empty() || !security.token_file.empty();
+  if (token && security.ca_file.empty() && !security.insecure && !IsLoopbackAddress(address)) {
+    FailInvalid(
+        "a token is sent only over TLS beyond this machine: give --ca (the CA that signed the "
+        "server's certificate) to reach " +
+        address + ", reach the server on loopback, or on an isolated test network --insecure");
+  }
   std::shared_ptr<grpc::ChannelCredentials> credentials = grpc::InsecureChannelCredentials();
   if (!security.ca_file.empty()) {
     grpc::SslCredentialsOptions tls;
@@ -253,6 +263,19 @@ std::string CleanToken(std::string_view text, const std::string& source) {
 
 std::string ReadTokenFile(const std::filesystem::path& path, const std::string& flag) {
   return CleanToken(ReadSecretFile(path, flag), flag + " " + path.string());
+}
+
+std::string WithoutTokens(std::string text) {
+  constexpr std::string_view kPrefix = "endorecon.";
+  constexpr std::string_view kHex = "0123456789abcdef";
+  for (auto at = text.find(kPrefix); at != std::string::npos; at = text.find(kPrefix, at + 1)) {
+    const auto dot = text.find_first_not_of(kHex, at + kPrefix.size());
+    if (dot == std::string::npos || text[dot] != '.' || dot == at + kPrefix.size()) continue;
+    auto end = text.find_first_not_of(kHex, dot + 1);
+    if (end == std::string::npos) end = text.size();
+    if (end - dot - 1 >= 16) text.replace(dot + 1, end - dot - 1, "\u2026");  // "…"
+  }
+  return text;
 }
 
 bool IsLoopbackAddress(const std::string& address) {

@@ -35,6 +35,9 @@ struct ChannelSecurity {
   // when it changes (checked at most once a second), so a long-running worker takes a rotated token
   // without a restart. A changed file that holds no valid token is warned of and the last token kept.
   std::string token_file;
+  // Send the token without TLS beyond loopback too (--insecure: isolated test networks, as the
+  // server's --insecure); refused otherwise.
+  bool insecure = false;
 };
 
 // A channel to `address` ("host:port") with `security` and the service's message limits. Throws
@@ -61,6 +64,9 @@ std::shared_ptr<grpc::ServerCredentials> ServerCredentials(const ServerSecurity&
 // header value (a token set with a trailing newline crashed the CLI; found 2026-12-05).
 std::string CleanToken(std::string_view text, const std::string& source);
 
+// `text` with the secret part of every token in it ("endorecon.ID.SECRET") withheld: "endorecon.ID.…".
+// For messages that repeat what a user typed.
+std::string WithoutTokens(std::string text);
 // The token in `path`, checked as a secret file and by CleanToken. Throws as ReadSecretFile and
 // CleanToken.
 std::string ReadTokenFile(const std::filesystem::path& path, const std::string& flag);

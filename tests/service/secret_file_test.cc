@@ -79,5 +79,28 @@ TEST(SecretFileTest, ChannelsAndPortsRefuseHalfAConfiguration) {
   EXPECT_THROW(ServerCredentials({"cert.pem", "", ""}), Error);
 }
 
+// What repeats a user's words (CLI11's "arguments were not expected") withholds a token's secret.
+TEST(SecretFileTest, MessagesWithholdATokensSecret) {
+  EXPECT_EQ(WithoutTokens("not expected: endorecon.069a98af32362ec1.d840c55a0123456789abcdef808880 --token"),
+            "not expected: endorecon.069a98af32362ec1.\u2026 --token");
+  EXPECT_EQ(WithoutTokens("endorecon.1.2 and endorecon-server"), "endorecon.1.2 and endorecon-server");
+}
+
+// A token goes in plaintext only to this machine: the CLI and the worker sent it to any address
+// without --ca, where anyone on the path reads it (found 2026-12-06).
+TEST(SecretFileTest, ATokenTravelsInPlaintextOnlyOnLoopback) {
+  const std::string token = "endorecon.0123456789abcdef.0123456789abcdef0123456789abcdef";
+  for (const char* address : {"192.0.2.2:50051", "pacs-gw.hospital:50051", "[2001:db8::1]:50051"}) {
+    const std::string refusal = testing::ErrorFrom([&] { OpenChannel(address, {"", "", "", token, ""}); });
+    EXPECT_NE(refusal.find("a token is sent only over TLS beyond this machine: give --ca"), std::string::npos)
+        << address << ": " << refusal;
+  }
+  for (const char* address :
+       {"127.0.0.1:50051", "localhost:50051", "[::1]:50051", "unix:/run/endorecon.sock"}) {
+    EXPECT_NE(OpenChannel(address, {"", "", "", token, ""}), nullptr) << address;
+  }
+  EXPECT_NE(OpenChannel("192.0.2.2:50051", {}), nullptr) << "no token: nothing to keep";
+}
+
 }  // namespace
 }  // namespace endorecon

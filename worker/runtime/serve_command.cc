@@ -8,6 +8,7 @@
 #include <CLI/CLI.hpp>
 #include <atomic>
 #include <chrono>
+#include <cstdlib>
 #include <memory>
 #include <optional>
 #include <string_view>
@@ -45,6 +46,7 @@ struct ServeFlags {
   std::string tls_cert;
   std::string tls_key;
   std::string token_file;
+  bool insecure = false;
 };
 
 ChannelSecurity SecurityOf(const ServeFlags& flags) {
@@ -53,6 +55,7 @@ ChannelSecurity SecurityOf(const ServeFlags& flags) {
   security.cert_file = flags.tls_cert;
   security.key_file = flags.tls_key;
   security.token_file = flags.token_file;  // read again when rotated (transport_security.h)
+  security.insecure = flags.insecure;
   return security;
 }
 
@@ -195,13 +198,26 @@ int Serve(const ServeFlags& flags) {
                    temp.string());
   }
   std::atomic<bool> shutting_down{false};
+  std::atomic<bool> stopped{false};  // serving ended: the waiter is woken to return, not by a signal
+  // A second signal stops at once: a job hands itself back at the end of its training step, and an
+  // operator who cannot wait for that (a step of a large configuration took minutes; found
+  // 2026-12-06) need not reach for kill -9. The job's lease then expires and it runs again elsewhere.
   std::thread signal_waiter([&] {
     int signal = 0;
     sigwait(&stop_signals, &signal);
-    if (shutting_down.exchange(true)) return;  // woken by the refused registration below, not a signal
-    spdlog::info("signal {}: handing running jobs back and stopping", signal);
+    if (shutting_down.exchange(true) || stopped) return;  // the refused registration below, or the end
+    spdlog::info("signal {}: handing running jobs back and stopping (a second signal stops at once)", signal);
     client.CancelLeases();
+    sigwait(&stop_signals, &signal);
+    if (stopped) return;
+    spdlog::warn("signal {} again: stopping now; the running jobs' leases expire and they run again", signal);
+    std::_Exit(128 + signal);
   });
+  const auto stop_waiter = [&] {
+    stopped = true;
+    pthread_kill(signal_waiter.native_handle(), SIGTERM);
+    signal_waiter.join();
+  };
   // Retried every second (a server not up yet: as soon as it is); said at the first failure and then
   // every 30 s, not every retry (a refused certificate wrote a line a second for as long as it ran).
   const auto register_start = std::chrono::steady_clock::now();
@@ -216,8 +232,7 @@ int Serve(const ServeFlags& flags) {
     } catch (const Error& e) {
       if (Refused(e)) {
         shutting_down = true;
-        pthread_kill(signal_waiter.native_handle(), SIGTERM);
-        signal_waiter.join();
+        stop_waiter();
         throw;
       }
       // A server that refuses this worker's client certificate closes the connection in the TLS
@@ -255,7 +270,7 @@ int Serve(const ServeFlags& flags) {
   }
   std::error_code ignored;
   if (shutting_down) {  // a signal before the server took the worker: it never served
-    signal_waiter.join();
+    stop_waiter();
     if (flags.work_dir.empty()) std::filesystem::remove(settings.work_dir, ignored);
     spdlog::info("worker {} stopped before it could register with {}", worker_id, flags.server);
     return 0;
@@ -270,8 +285,7 @@ int Serve(const ServeFlags& flags) {
         [&, device] { LeaseLoop(client, device, settings, metrics, shutting_down, wait, flags.token_file); });
   }
   for (auto& loop : loops) loop.join();
-  if (!shutting_down) pthread_kill(signal_waiter.native_handle(), SIGTERM);
-  signal_waiter.join();
+  stop_waiter();
   client.Leave();  // its jobs are handed back by now
   // The default scratch folder is this process's alone: gone with it (its job folders went with their
   // jobs; a folder given by --work-dir stays for the next worker).
@@ -324,6 +338,8 @@ Command AddServeCommand(CLI::App& app) {
   cmd->add_option("--tls-cert", flags->tls_cert, "client certificate for a server that requires one (mTLS)");
   cmd->add_option("--tls-key", flags->tls_key, "its private key (refused if others may read it)");
   cmd->add_option("--token-file", flags->token_file, "file holding the worker's bearer token (mode 0600)");
+  cmd->add_flag("--insecure", flags->insecure,
+                "send the token without TLS to a server beyond loopback (isolated test networks only)");
   return [flags] { return Serve(*flags); };
 }
 
