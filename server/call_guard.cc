@@ -178,6 +178,12 @@ void CallGuard::Admit(const grpc::ServerContext& context, const Rpc& rpc, Call& 
   }
 }
 
+std::string AuditedJobId(const std::string& id) {
+  const bool made_here = id.size() == 12 && id.find_first_not_of("0123456789abcdef") ==
+                                                std::string::npos;  // lease_table.h, RandomId
+  return id.empty() || made_here ? id : "(not a job id)";
+}
+
 void CallGuard::Record(const grpc::ServerContext& context, const Rpc& rpc, const Call& call,
                        const grpc::Status& status) {
   const bool refused = Refused(status);

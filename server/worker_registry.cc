@@ -21,9 +21,18 @@ WorkerRegistry::Entry& WorkerRegistry::At(const std::string& worker_id) {
   return entry;
 }
 
-void WorkerRegistry::Register(const v1::RegisterRequest& request) {
+void WorkerRegistry::Register(const v1::RegisterRequest& request, const std::string& principal) {
   std::lock_guard lock(mutex_);
+  if (const auto found = workers_.find(request.worker_id());
+      found != workers_.end() && found->second.principal != principal &&
+      std::chrono::steady_clock::now() - found->second.last_seen <= alive_window_) {
+    Fail(ErrorCode::kFailedPrecondition, "worker id '" + request.worker_id() +
+                                             "' is in use by a worker of token '" + found->second.principal +
+                                             "' on " + found->second.info.hostname() +
+                                             ": give this worker an --id of its own");
+  }
   auto& entry = At(request.worker_id());
+  entry.principal = principal;
   entry.info.set_hostname(request.hostname());
   *entry.info.mutable_devices() = request.devices();
   *entry.info.mutable_device_info() = request.device_info();
@@ -67,9 +76,13 @@ void WorkerRegistry::Touch(const std::string& worker_id) {
   At(worker_id);
 }
 
-void WorkerRegistry::Leave(const std::string& worker_id) {
+void WorkerRegistry::Leave(const std::string& worker_id, const std::string& principal) {
   std::lock_guard lock(mutex_);
   if (const auto found = workers_.find(worker_id); found != workers_.end()) {
+    if (found->second.principal != principal) {
+      Fail(ErrorCode::kPermissionDenied,
+           "worker '" + worker_id + "' registered with another token: only it may say it leaves");
+    }
     found->second.last_seen = std::chrono::steady_clock::now() - alive_window_ - std::chrono::milliseconds(1);
   }
 }

@@ -19,13 +19,17 @@ class WorkerRegistry {
   // A worker counts as alive (connected) for `alive_window` after its last call.
   explicit WorkerRegistry(std::chrono::milliseconds alive_window) : alive_window_(alive_window) {}
 
-  // Records the worker's host and devices (names and what they are) from its registration.
-  void Register(const v1::RegisterRequest& request);
+  // Records the worker's host and devices (names and what they are) from its registration, and the
+  // token (its label, `principal`) it registered with. An id alive under another token is refused
+  // with kFailedPrecondition naming that token: a second worker claiming the id merged with the first in
+  // `workers`, undid its drain and could make it Leave (found 2026-12-06).
+  void Register(const v1::RegisterRequest& request, const std::string& principal = "");
   // Whether `worker_id` registered with this server (a worker only seen leasing did not).
   bool Registered(const std::string& worker_id) const;
   void Touch(const std::string& worker_id);
   // The worker said it is stopping: not alive from now (listed until forgotten, as a silent one).
-  void Leave(const std::string& worker_id);
+  // Throws Error(kPermissionDenied) when `principal` is not the token it registered with.
+  void Leave(const std::string& worker_id, const std::string& principal = "");
   // Marks a worker draining (or not): Draining says so until undone or until it registers again (a
   // restarted worker serves again). Throws Error(kNotFound) for a worker never heard from.
   v1::WorkerInfo SetDraining(const std::string& worker_id, bool draining);
@@ -43,6 +47,7 @@ class WorkerRegistry {
     v1::WorkerInfo info;
     std::set<std::string> jobs;
     std::chrono::steady_clock::time_point last_seen;
+    std::string principal;  // the label of the token it registered with
   };
   Entry& At(const std::string& worker_id);
   // What List shows of `entry` at `now` (alive, and its jobs).

@@ -21,29 +21,51 @@ WorkerServiceImpl::WorkerServiceImpl(CallGuard& guard, JobCoordinator& coordinat
       stalls_(stalls),
       timing_(timing) {}
 
+namespace {
+
+// The worker id a Register or Leave names, for the audit log's `subject`: as it is when it is one.
+std::string AuditedWorkerId(const std::string& id) {
+  try {
+    ValidateWorkerId(id);
+    return id;
+  } catch (const Error&) {
+    return "(not a worker id)";
+  }
+}
+
+}  // namespace
+
 grpc::Status WorkerServiceImpl::Register(grpc::ServerContext* context, const v1::RegisterRequest* request,
                                          v1::RegisterResponse* response) {
-  return guard_.Run(context, {"Register", Access::kWorker, kWrites, ""}, [&](Call&) {
-    ValidateWorkerId(request->worker_id());
-    // What a worker says of itself is listed by `endorecon workers`: printable, as its id.
-    v1::RegisterRequest registered = *request;
-    registered.set_hostname(PrintableText(registered.hostname(), kMaxWorkerIdBytes));
-    registered.set_version(PrintableText(registered.version(), kMaxWorkerIdBytes));
-    for (auto& device : *registered.mutable_devices()) device = PrintableText(device, 1024);
-    workers_.Register(registered);
-    response->set_lease_ttl_ms(timing_.lease_ttl.count());
-    response->set_heartbeat_interval_ms(timing_.heartbeat_interval.count());
-    return grpc::Status::OK;
-  });
+  return guard_.Run(context,
+                    {"Register", Access::kWorker, kWrites, "", AuditedWorkerId(request->worker_id())},
+                    [&](Call& call) {
+                      ValidateWorkerId(request->worker_id());
+                      // What a worker says of itself is listed by `endorecon workers`: printable, as its id.
+                      v1::RegisterRequest registered = *request;
+                      registered.set_hostname(PrintableText(registered.hostname(), kMaxWorkerIdBytes));
+                      registered.set_version(PrintableText(registered.version(), kMaxWorkerIdBytes));
+                      for (auto& device : *registered.mutable_devices()) device = PrintableText(device, 1024);
+                      for (auto& info : *registered.mutable_device_info()) {
+                        info.set_name(PrintableText(info.name(), 1024));
+                        info.set_kind(PrintableText(info.kind(), 64));
+                        info.set_model(PrintableText(info.model(), 1024));
+                      }
+                      workers_.Register(registered, call.caller.name);
+                      response->set_lease_ttl_ms(timing_.lease_ttl.count());
+                      response->set_heartbeat_interval_ms(timing_.heartbeat_interval.count());
+                      return grpc::Status::OK;
+                    });
 }
 
 grpc::Status WorkerServiceImpl::Leave(grpc::ServerContext* context, const v1::LeaveRequest* request,
                                       v1::LeaveResponse*) {
-  return guard_.Run(context, {"Leave", Access::kWorker, kWrites, ""}, [&](Call&) {
-    if (request->worker_id().empty()) FailInvalid("worker_id is empty");
-    workers_.Leave(request->worker_id());
-    return grpc::Status::OK;
-  });
+  return guard_.Run(context, {"Leave", Access::kWorker, kWrites, "", AuditedWorkerId(request->worker_id())},
+                    [&](Call& call) {
+                      if (request->worker_id().empty()) FailInvalid("worker_id is empty");
+                      workers_.Leave(request->worker_id(), call.caller.name);
+                      return grpc::Status::OK;
+                    });
 }
 
 grpc::Status WorkerServiceImpl::Lease(grpc::ServerContext* context, const v1::LeaseRequest* request,

@@ -477,8 +477,11 @@ TEST_F(AccessControlTest, DicomJobsKeepToTheirTenantAndOutOfTheLogs) {
       Cli(alice_, {"submit", cluster_.path("clip").string(), "--dicom", "--patient-id", "PAT-4711",
                    "--patient-name", "Doe^Jane", "--study-uid", study + ".2", "--send-to", "pacs1"});
   EXPECT_EQ(with_patient.exit_code, 0) << with_patient.err;
+  // A caller's words where a job id goes are not written down as they are (found 2026-12-06).
+  EXPECT_EQ(Cli(alice_, {"status", "Doe^Jane-PAT-4711"}).exit_code, 3);
 
   const auto audit = Audit();
+  EXPECT_EQ(AuditFind(audit, "Get", "NOT_FOUND", "alice", "(not a job id)").size(), 1u);
   const auto retrievals = AuditFind(audit, "PacsRetrieve", "UNAVAILABLE", "server", id);
   ASSERT_EQ(retrievals.size(), 1u);
   EXPECT_EQ(retrievals[0].value("subject", ""), "pacs1");

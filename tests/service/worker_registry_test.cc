@@ -5,6 +5,7 @@
 #include <chrono>
 
 #include "common/error.h"
+#include "tests/unit/clip_fixture.h"
 
 namespace endorecon::server {
 namespace {
@@ -47,6 +48,33 @@ TEST(WorkerRegistryTest, ADrainLastsUntilUndoneOrTheWorkersNextRegistration) {
   EXPECT_FALSE(registry.Draining("gpu-7"));
   EXPECT_FALSE(registry.Draining("unknown"));
   EXPECT_THROW(registry.SetDraining("unknown", true), Error);
+}
+
+// A live worker's id is its token's: another token's worker claiming it merged with it in `workers`,
+// undid its drain and could make it leave (found 2026-12-06). Its own token may register it again (a
+// restart), and once it is gone another may take the id.
+TEST(WorkerRegistryTest, ALiveWorkersIdBelongsToItsToken) {
+  WorkerRegistry registry(std::chrono::milliseconds(200));
+  v1::RegisterRequest request;
+  request.set_worker_id("wk1");
+  request.set_hostname("node-3");
+  request.add_devices("cpu0");
+  registry.Register(request, "node-3-token");
+  registry.SetDraining("wk1", true);
+  const std::string claimed =
+      testing::ErrorFrom([&] { registry.Register(request, "node-9-token"); }, ErrorCode::kFailedPrecondition);
+  EXPECT_NE(claimed.find("worker id 'wk1' is in use by a worker of token 'node-3-token' on node-3"),
+            std::string::npos)
+      << claimed;
+  EXPECT_TRUE(registry.Draining("wk1"));
+  EXPECT_NE(testing::ErrorFrom([&] { registry.Leave("wk1", "node-9-token"); }, ErrorCode::kPermissionDenied)
+                .find("registered with another token"),
+            std::string::npos);
+  EXPECT_TRUE(registry.List()[0].alive());
+  registry.Register(request, "node-3-token");
+  registry.Leave("wk1", "node-3-token");
+  EXPECT_FALSE(registry.List()[0].alive());
+  registry.Register(request, "node-9-token");  // gone: the id is free
 }
 
 }  // namespace
