@@ -2,6 +2,7 @@
 // already there are skipped and an interrupted download resumes.
 #include <fcntl.h>
 #include <sys/file.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
@@ -127,6 +128,9 @@ int Fetch(const Globals& globals, const FetchFlags& flags) {
                                              "; results exist once it has SUCCEEDED");
   }
   CheckFetchFolder(flags.out, job.result());
+  // Results hold patient data (DICOM names the patient): what fetch creates is the user's alone, as
+  // everything the server keeps is. They followed the umask, 0644 (found 2026-12-06).
+  ::umask(077);
   const FileDescriptor mark = MarkFetchFolder(flags.out, job.id());
   const auto pending = PendingDownloads(flags.out, job.result());
   std::int64_t received = 0;

@@ -49,6 +49,14 @@ TEST(SubmitToCompletionTest, ClipInResultsOut) {
     const auto local = cluster.path("results") / file.path();
     ASSERT_TRUE(std::filesystem::exists(local)) << file.path();
     EXPECT_EQ(Sha256File(local), file.sha256()) << file.path();
+    // The user's alone, whatever the umask: results hold patient data (they were 0644; found
+    // 2026-12-06).
+    const auto group_or_others = std::filesystem::perms::group_all | std::filesystem::perms::others_all;
+    EXPECT_EQ(std::filesystem::status(local).permissions() & group_or_others, std::filesystem::perms::none)
+        << file.path();
+    EXPECT_EQ(std::filesystem::status(local.parent_path()).permissions() & group_or_others,
+              std::filesystem::perms::none)
+        << file.path();
     has_metrics = has_metrics || file.path() == "metrics.json";
   }
   EXPECT_TRUE(has_metrics);
