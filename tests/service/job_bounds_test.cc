@@ -24,20 +24,32 @@ TEST(JobBoundsTest, NamesAndWorkerIdsArePrintableAndBounded) {
             std::string::npos);
   // Unicode's direction controls turn a terminal's line around ("x\u202eevil" shows as "xlive"), and
   // C1 controls are escapes to some terminals (found 2026-12-06); other text past ASCII is a name.
-  for (const char* turning : {"x\xe2\x80\xaeevil", "a\xe2\x81\xa6b", "a\xe2\x80\x8fb", "a\xc2\x9b2J"}) {
+  for (const char* turning : {"x\xe2\x80\xae"
+                              "evil",
+                              "a\xe2\x81\xa6"
+                              "b",
+                              "a\xe2\x80\x8f"
+                              "b",
+                              "a\xc2\x9b"
+                              "2J"}) {
     EXPECT_NE(
         testing::ErrorFrom([&] { ValidateJobName(turning); }).find("name holds a Unicode control character"),
         std::string::npos)
         << turning;
   }
-  EXPECT_NO_THROW(ValidateJobName("\xe2\x80\x94 caf\xc3\xa9 \xe2\x80\x9cquoted\xe2\x80\x9d \xc2\xa9"));
+  EXPECT_NO_THROW(
+      ValidateJobName("\xe2\x80\x94 caf\xc3\xa9 \xe2\x80\x9c"
+                      "quoted\xe2\x80\x9d \xc2\xa9"));
 }
 
 // What the server passes on from a worker (a failure's reason): shown as it is, less what a terminal
 // would act on (a worker's reason "boom\x1b]0;PWNED\x07\nFAKE: job SUCCEEDED" was printed as it came).
 TEST(JobBoundsTest, AWorkersTextIsMadePrintable) {
   EXPECT_EQ(PrintableText("boom\x1b]0;PWNED\x07\nFAKE", 100), "boom?]0;PWNED??FAKE");
-  EXPECT_EQ(PrintableText("x\xe2\x80\xaeevil \xe2\x80\x94 ok", 100), "x?evil \xe2\x80\x94 ok");
+  EXPECT_EQ(PrintableText("x\xe2\x80\xae"
+                          "evil \xe2\x80\x94 ok",
+                          100),
+            "x?evil \xe2\x80\x94 ok");
   EXPECT_EQ(PrintableText("abc\xc3\xa9", 4), "abc");
 }
 

@@ -20,7 +20,7 @@ inline constexpr int kMostSamplesPerRay = 1024;
 inline constexpr int kMostDropoutPasses = 64;
 // The networks' work a configuration may ask for (field::SampleMultiplyAdds, an estimate): per
 // training step (rays x samples x multiply-adds) and per evaluated pixel (samples x passes x
-// multiply-adds). The paper's preset asks for 3.0e9 and 1.3e7 (64-wide heads, 2,048 rays of 96
+// multiply-adds). The paper's preset asks for 3.1e9 and 1.8e7 (64-wide heads, 2,048 rays of 96
 // samples, 128 samples and 9 passes a pixel); 8 hidden layers of 1,024 units with 65,536 rays did
 // not finish one step in three minutes, and a cancel, the budget and SIGTERM wait for a step to end
 // (found 2026-12-06).
