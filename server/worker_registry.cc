@@ -24,7 +24,7 @@ WorkerRegistry::Entry& WorkerRegistry::At(const std::string& worker_id) {
 void WorkerRegistry::Register(const v1::RegisterRequest& request, const std::string& principal) {
   std::lock_guard lock(mutex_);
   if (const auto found = workers_.find(request.worker_id());
-      found != workers_.end() && found->second.principal != principal &&
+      found != workers_.end() && found->second.registered && found->second.principal != principal &&
       std::chrono::steady_clock::now() - found->second.last_seen <= alive_window_) {
     Fail(ErrorCode::kFailedPrecondition, "worker id '" + request.worker_id() +
                                              "' is in use by a worker of token '" + found->second.principal +
@@ -32,6 +32,7 @@ void WorkerRegistry::Register(const v1::RegisterRequest& request, const std::str
                                              ": give this worker an --id of its own");
   }
   auto& entry = At(request.worker_id());
+  entry.registered = true;
   entry.principal = principal;
   entry.info.set_hostname(request.hostname());
   *entry.info.mutable_devices() = request.devices();
@@ -79,7 +80,7 @@ void WorkerRegistry::Touch(const std::string& worker_id) {
 void WorkerRegistry::Leave(const std::string& worker_id, const std::string& principal) {
   std::lock_guard lock(mutex_);
   if (const auto found = workers_.find(worker_id); found != workers_.end()) {
-    if (found->second.principal != principal) {
+    if (found->second.registered && found->second.principal != principal) {
       Fail(ErrorCode::kPermissionDenied,
            "worker '" + worker_id + "' registered with another token: only it may say it leaves");
     }

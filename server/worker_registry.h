@@ -47,7 +47,10 @@ class WorkerRegistry {
     v1::WorkerInfo info;
     std::set<std::string> jobs;
     std::chrono::steady_clock::time_point last_seen;
-    std::string principal;  // the label of the token it registered with
+    // Whether it registered with this server (a worker only seen leasing, after a restart, did not)
+    // and the label of the token it did so with.
+    bool registered = false;
+    std::string principal;
   };
   Entry& At(const std::string& worker_id);
   // What List shows of `entry` at `now` (alive, and its jobs).

@@ -75,6 +75,12 @@ TEST(WorkerRegistryTest, ALiveWorkersIdBelongsToItsToken) {
   registry.Leave("wk1", "node-3-token");
   EXPECT_FALSE(registry.List()[0].alive());
   registry.Register(request, "node-9-token");  // gone: the id is free
+  // A worker the server knows only from its calls (it restarted since the worker registered) takes
+  // its id back by registering, whatever its token.
+  registry.Touch("wk2");
+  request.set_worker_id("wk2");
+  registry.Register(request, "node-3-token");
+  EXPECT_TRUE(registry.Registered("wk2"));
 }
 
 }  // namespace
