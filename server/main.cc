@@ -18,11 +18,11 @@
 #include "common/dicom/storage_scp.h"
 #include "common/dicom/uid.h"
 #include "common/error.h"
+#include "common/folder_lock.h"
 #include "common/private_folder.h"
 #include "common/transport_security.h"
 #include "server/call_guard.h"
 #include "server/commands.h"
-#include "server/data_dir_lock.h"
 #include "server/dicom_retriever.h"
 #include "server/dicom_sender.h"
 #include "server/health_port.h"
@@ -159,7 +159,7 @@ int Run(const ServerFlags& flags) {
         "(chmod 700)",
         data_dir.string());
   }
-  const DataDirLock lock(data_dir);
+  const FolderLock lock(data_dir, "server.lock", "endorecon-server", "data folder");
   RefuseBlobsWithoutTheirStore(data_dir);
   JobStore store(data_dir / "jobs.sqlite");
   BlobStore blobs(data_dir);

@@ -4,8 +4,13 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <chrono>
+#include <optional>
 #include <string>
 
+#include "common/error.h"
+#include "common/folder_lock.h"
+#include "tests/unit/clip_fixture.h"
 #include "tests/unit/temp_dir.h"
 #include "worker/runtime/job_runner.h"
 
@@ -48,6 +53,37 @@ TEST(LeftoverJobsTest, AStartRemovesTheScratchFoldersOfWorkersThatAreGone) {
   EXPECT_TRUE(fs::exists(temp / alive));
   EXPECT_TRUE(fs::exists(temp / ("endorecon-other-" + std::to_string(child))));
   EXPECT_TRUE(fs::exists(temp / "endorecon-host-gpu7"));
+}
+
+// A worker with an --id of its own (/tmp/endorecon-wA) left its folder, with the clip in it, after a
+// kill -9 for good: only a start with the same id removed it (found 2026-12-06). A worker holds a
+// lock in its scratch folder while it runs; a folder whose lock nobody holds, a minute old, is a
+// gone worker's. A second worker on the same folder is refused: its start cleared the first's jobs.
+TEST(LeftoverJobsTest, AScratchFolderIsItsWorkersWhileItRunsAndRemovedAfter) {
+  testing::TempDir temp("scratch");
+  for (const char* name : {"endorecon-wA", "endorecon-wB", "endorecon-wC"}) {
+    fs::create_directories(temp / name / "2dab33cc5a41");
+  }
+  std::optional<FolderLock> running(std::in_place, temp / "endorecon-wA", kWorkerLockFile, "endorecon-worker",
+                                    "scratch folder");
+  const std::string second = testing::ErrorFrom(
+      [&] { FolderLock(temp / "endorecon-wA", kWorkerLockFile, "endorecon-worker", "scratch folder"); },
+      ErrorCode::kFailedPrecondition);
+  EXPECT_NE(second.find("another endorecon-worker (process " + std::to_string(getpid()) +
+                        ") uses the scratch folder"),
+            std::string::npos)
+      << second;
+  { FolderLock gone(temp / "endorecon-wB", kWorkerLockFile, "endorecon-worker", "scratch folder"); }
+  const auto old = fs::file_time_type::clock::now() - std::chrono::minutes(5);
+  fs::last_write_time(temp / "endorecon-wA" / kWorkerLockFile, old);
+  fs::last_write_time(temp / "endorecon-wB" / kWorkerLockFile, old);
+  EXPECT_EQ(RemoveDeadWorkersFolders(temp.path(), "host"), 1);
+  EXPECT_TRUE(fs::exists(temp / "endorecon-wA")) << "its worker runs";
+  EXPECT_FALSE(fs::exists(temp / "endorecon-wB"));
+  EXPECT_TRUE(fs::exists(temp / "endorecon-wC")) << "no lock, no HOST-PID name: not known to be a worker's";
+  running.reset();
+  EXPECT_EQ(RemoveDeadWorkersFolders(temp.path(), "host"), 1);
+  EXPECT_FALSE(fs::exists(temp / "endorecon-wA"));
 }
 
 }  // namespace

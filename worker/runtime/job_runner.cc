@@ -13,6 +13,7 @@
 #include <thread>
 
 #include "common/error.h"
+#include "common/folder_lock.h"
 #include "common/manifest.h"
 #include "common/sha256.h"
 #include "common/warning_pacer.h"
@@ -213,23 +214,41 @@ fs::path DefaultWorkDir(const fs::path& temp, const std::string& worker_id) {
   return temp / ("endorecon-" + worker_id);
 }
 
+namespace {
+
+// A folder left by a worker that is gone, judged by its lock (or, without one, by its HOST-PID name).
+bool LeftByAWorkerGone(const fs::path& folder, const std::string& name, const std::string& pid_prefix) {
+  std::error_code error;
+  const fs::path lock = folder / kWorkerLockFile;
+  if (fs::is_regular_file(fs::symlink_status(lock, error))) {
+    const auto written = fs::last_write_time(lock, error);
+    return !error && fs::file_time_type::clock::now() - written > std::chrono::minutes(1) &&
+           LockAbandoned(lock);
+  }
+  if (!name.starts_with(pid_prefix)) return false;
+  const std::string pid_text = name.substr(pid_prefix.size());
+  if (pid_text.empty() || pid_text.size() > 9 ||
+      pid_text.find_first_not_of("0123456789") != std::string::npos)
+    return false;
+  const pid_t pid = static_cast<pid_t>(std::stol(pid_text));
+  return pid != ::getpid() && ::kill(pid, 0) != 0 && errno == ESRCH;  // not alive, and ours to ask
+}
+
+}  // namespace
+
 int RemoveDeadWorkersFolders(const fs::path& temp, const std::string& host) {
-  const std::string prefix = DefaultWorkDir(temp, host + "-").filename().string();
+  const std::string any = DefaultWorkDir(temp, "").filename().string();
+  const std::string pid_prefix = DefaultWorkDir(temp, host + "-").filename().string();
   int removed = 0;
   std::error_code error;
   for (auto it = fs::directory_iterator(temp, error); !error && it != fs::directory_iterator();
        it.increment(error)) {
     const std::string name = it->path().filename().string();
-    if (!name.starts_with(prefix)) continue;
-    const std::string pid_text = name.substr(prefix.size());
-    if (pid_text.empty() || pid_text.size() > 9 ||
-        pid_text.find_first_not_of("0123456789") != std::string::npos)
-      continue;
+    if (!name.starts_with(any)) continue;
     struct stat info {};
     if (::lstat(it->path().c_str(), &info) != 0 || !S_ISDIR(info.st_mode) || info.st_uid != ::getuid())
       continue;
-    const pid_t pid = static_cast<pid_t>(std::stol(pid_text));
-    if (pid == ::getpid() || ::kill(pid, 0) == 0 || errno != ESRCH) continue;  // alive, or not ours to ask
+    if (!LeftByAWorkerGone(it->path(), name, pid_prefix)) continue;
     std::error_code ignored;
     if (fs::remove_all(it->path(), ignored) > 0) ++removed;
   }

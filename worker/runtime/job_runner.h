@@ -39,9 +39,14 @@ std::int64_t ScratchFree(const std::filesystem::path& work_dir);
 int RemoveLeftoverJobs(const std::filesystem::path& work_dir);
 // A worker's default scratch folder: `temp`/endorecon-ID (the ID: HOST-PID unless --id is given).
 std::filesystem::path DefaultWorkDir(const std::filesystem::path& temp, const std::string& worker_id);
-// The default scratch folders (`temp`/endorecon-HOST-PID) of earlier workers on this host whose
-// process is gone (a kill -9, a crash): no later worker has their PID, so RemoveLeftoverJobs never
-// saw them and their patient data stayed for good. Only this user's folders. Returns how many.
+// The file in a scratch folder whose lock its worker holds while it runs (common/folder_lock.h).
+inline constexpr const char* kWorkerLockFile = "worker.lock";
+// The default scratch folders (`temp`/endorecon-ID) of earlier workers whose process is gone (a kill
+// -9, a crash): no later worker has their id (HOST-PID, or an --id not given again), so
+// RemoveLeftoverJobs never saw them and their patient data stayed for good. A folder is gone when
+// nobody holds its kWorkerLockFile and that file is a minute old (a worker starting takes it at
+// once), or, left by a worker of before the lock, when it is named HOST-PID after a process that is
+// gone. Only this user's folders. Returns how many.
 int RemoveDeadWorkersFolders(const std::filesystem::path& temp, const std::string& host);
 
 // Never throws for the job's own failures (they are reported to the server) nor for a lease that

@@ -16,6 +16,7 @@
 
 #include "common/cli_checks.h"
 #include "common/error.h"
+#include "common/folder_lock.h"
 #include "common/job_bounds.h"
 #include "common/private_folder.h"
 #include "common/transport_security.h"
@@ -189,6 +190,8 @@ int Serve(const ServeFlags& flags) {
         "owner's alone (chmod 700)",
         settings.work_dir.string());
   }
+  // One worker per scratch folder: a second one's start cleared the first's running jobs.
+  const FolderLock scratch_lock(settings.work_dir, kWorkerLockFile, "endorecon-worker", "scratch folder");
   if (const int removed = RemoveLeftoverJobs(settings.work_dir))
     spdlog::info("removed {} job folder(s) an earlier run left in {}", removed, settings.work_dir.string());
   if (flags.work_dir.empty()) {
@@ -271,7 +274,7 @@ int Serve(const ServeFlags& flags) {
   std::error_code ignored;
   if (shutting_down) {  // a signal before the server took the worker: it never served
     stop_waiter();
-    if (flags.work_dir.empty()) std::filesystem::remove(settings.work_dir, ignored);
+    if (flags.work_dir.empty()) std::filesystem::remove_all(settings.work_dir, ignored);
     spdlog::info("worker {} stopped before it could register with {}", worker_id, flags.server);
     return 0;
   }
