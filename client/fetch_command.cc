@@ -85,11 +85,13 @@ void CheckFetchFolder(const std::filesystem::path& out, const v1::Manifest& resu
 // Opens and locks `out`/.endorecon-job for job `id`, refusing a folder another fetch is writing into
 // or one that holds another job's results. The lock lasts as long as the returned descriptor.
 FileDescriptor MarkFetchFolder(const std::filesystem::path& out, const std::string& id) {
-  std::filesystem::create_directories(out);
+  std::error_code error;
+  std::filesystem::create_directories(out, error);
+  if (error) FailInvalid("-o " + out.string() + ": cannot make the folder: " + error.message());
   const auto mark = out / kJobMark;
   FileDescriptor fd(::open(mark.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644));
   if (fd.get() < 0) {
-    Fail(ErrorCode::kUnavailable, "cannot open " + mark.string() + ": " + std::strerror(errno));
+    Fail(ErrorCode::kInternal, "cannot open " + mark.string() + ": " + std::strerror(errno));
   }
   if (::flock(fd.get(), LOCK_EX | LOCK_NB) != 0) {
     Fail(ErrorCode::kFailedPrecondition,
@@ -106,7 +108,7 @@ FileDescriptor MarkFetchFolder(const std::filesystem::path& out, const std::stri
   const std::string text = id + "\n";
   if (::ftruncate(fd.get(), 0) != 0 ||
       ::pwrite(fd.get(), text.data(), text.size(), 0) != static_cast<ssize_t>(text.size())) {
-    Fail(ErrorCode::kUnavailable, "cannot write " + mark.string() + ": " + std::strerror(errno));
+    Fail(ErrorCode::kInternal, "cannot write " + mark.string() + ": " + std::strerror(errno));
   }
   return fd;
 }

@@ -9,7 +9,7 @@
 namespace endorecon::scene {
 
 struct LoadOptions {
-  std::size_t max_pixels_per_frame = std::size_t{4096} * 4096;  // larger frames: RESOURCE_EXHAUSTED
+  std::size_t max_pixels_per_frame = std::size_t{4096} * 4096;  // larger frames: INVALID_ARGUMENT
   bool force_static = false;  // mark the clip static (one time for all frames) whatever its layout says
   // The colour transparent pixels of RGBA images are composited onto (RGB): NeRF-synthetic's white
   // unless the run's background is black (train_config.h "background").
