@@ -344,7 +344,15 @@ v1::Job JobCoordinator::Get(const std::string& id, const Principal& caller) {
 }
 
 JobStore::Page JobCoordinator::List(const std::vector<v1::JobState>& states, int limit,
-                                    std::int64_t before_seq, const Principal& caller) {
+                                    const std::string& after_job, const Principal& caller) {
+  std::int64_t before_seq = 0;
+  if (!after_job.empty()) {
+    try {
+      before_seq = LoadVisible(after_job, caller).seq;
+    } catch (const Error&) {
+      FailInvalid("page_token '" + after_job + "' is not one this server returned to this caller");
+    }
+  }
   return parts_.store.List(
       states, limit, before_seq,
       caller.SeesAllTenants() ? std::nullopt : std::optional<std::string>(caller.tenant));

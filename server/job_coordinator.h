@@ -92,8 +92,10 @@ class JobCoordinator {
   void CheckRetrievalQuota(const std::string& id, const v1::Manifest& recording);
   // Throws kNotFound (also for another tenant's job).
   v1::Job Get(const std::string& id, const Principal& caller);
-  // Jobs newest first (see JobStore::List), the caller's tenant only unless it sees all tenants.
-  JobStore::Page List(const std::vector<v1::JobState>& states, int limit, std::int64_t before_seq,
+  // Jobs newest first (see JobStore::List), the caller's tenant only unless it sees all tenants,
+  // after `after_job` (the last job of the page before, as the page token names it; "": from the
+  // newest). Throws kInvalidArgument for a job the caller cannot see.
+  JobStore::Page List(const std::vector<v1::JobState>& states, int limit, const std::string& after_job,
                       const Principal& caller);
   // Throws kNotFound (also for another tenant's job), kFailedPrecondition when the job is already finished.
   v1::Job Cancel(const std::string& id, const Principal& caller);

@@ -78,23 +78,17 @@ grpc::Status JobServiceImpl::List(grpc::ServerContext* context, const v1::ListJo
                                   v1::ListJobsResponse* response) {
   return guard_.Run(context, {"List", Access::kJobs, kReads, ""}, [&](Call& call) {
     const int size = request->page_size() <= 0 ? 50 : std::min(request->page_size(), 1000);
-    std::int64_t before = 0;
-    if (!request->page_token().empty()) {
-      try {
-        before = std::stoll(request->page_token());
-      } catch (const std::exception&) {
-        FailInvalid("page_token '" + request->page_token() + "' is not one this server returned");
-      }
-    }
     std::vector<v1::JobState> states;
     for (const int state : request->states()) states.push_back(static_cast<v1::JobState>(state));
-    const auto page = coordinator_.List(states, size, before, call.caller);
+    const auto page = coordinator_.List(states, size, request->page_token(), call.caller);
     for (auto job : page.jobs) {
       job.clear_clip();
       job.clear_result();
       *response->add_jobs() = ForClient(std::move(job));
     }
-    if (page.next_before_seq > 0) response->set_next_page_token(std::to_string(page.next_before_seq));
+    // The next page starts after the last job of this one: its id, not its place in the server's one
+    // sequence, which told any tenant how many jobs all had submitted (found 2026-12-06).
+    if (page.next_before_seq > 0 && !page.jobs.empty()) response->set_next_page_token(page.jobs.back().id());
     return grpc::Status::OK;
   });
 }

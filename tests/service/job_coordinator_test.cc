@@ -356,7 +356,7 @@ TEST_F(JobCoordinatorTest, ACheckBeforeTheUploadQueuesNothing) {
   const v1::Job checked = coordinator_.Submit(request, AnonymousPrincipal());
   EXPECT_TRUE(checked.id().empty());
   EXPECT_EQ(checked.state(), v1::QUEUED);
-  EXPECT_EQ(coordinator_.List({}, 10, 0, AnonymousPrincipal()).jobs.size(), 0u);
+  EXPECT_EQ(coordinator_.List({}, 10, "", AnonymousPrincipal()).jobs.size(), 0u);
   EXPECT_FALSE(LeaseNext().has_value());
   request.add_send_to("pacs1");
   EXPECT_EQ(CodeOf([&] { coordinator_.Submit(request, AnonymousPrincipal()); }), ErrorCode::kInvalidArgument)
