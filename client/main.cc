@@ -170,11 +170,12 @@ int main(int argc, char** argv) {
   try {
     for (auto* sub : app.get_subcommands()) return commands.at(sub->get_name())(globals);
   } catch (const endorecon::Error& e) {
-    std::cerr << "endorecon: " << endorecon::ErrorCodeName(e.code()) << ": " << e.what()
-              << HintFor(e, globals) << "\n";
+    // A token pasted where a job id or a file name goes is repeated in messages: its secret is not.
+    std::cerr << "endorecon: " << endorecon::ErrorCodeName(e.code()) << ": "
+              << endorecon::WithoutTokens(e.what()) << HintFor(e, globals) << "\n";
     return ExitCodeFor(e.code());
   } catch (const std::exception& e) {
-    std::cerr << "endorecon: " << e.what() << "\n";
+    std::cerr << "endorecon: " << endorecon::WithoutTokens(e.what()) << "\n";
     return kExitInternal;
   }
   return kExitOk;

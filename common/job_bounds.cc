@@ -15,15 +15,19 @@ bool IsControl(char c) {
   return byte < 0x20 || byte == 0x7f;
 }
 
-// The bytes of a Unicode direction control at `at` (0: none): U+200E, U+200F, U+202A-U+202E and
-// U+2066-U+2069 turn the rest of a terminal's line around ("x\u202eevil" is shown "xlive"; found
-// 2026-12-06), and C1 controls (U+0080-U+009F) are escape sequences to some terminals.
+// The bytes of a Unicode control at `at` (0: none): the direction controls U+061C, U+200E, U+200F,
+// U+202A-U+202E and U+2066-U+2069 turn the rest of a terminal's line around ("x\u202eevil" is shown
+// "xlive"; found 2026-12-06), U+2028 and U+2029 break it, U+FEFF hides, and C1 controls
+// (U+0080-U+009F) are escape sequences to some terminals.
 std::size_t DirectionControlAt(std::string_view text, std::size_t at) {
   const auto byte = [&](std::size_t i) { return static_cast<unsigned char>(text[at + i]); };
   if (at + 1 < text.size() && byte(0) == 0xC2 && byte(1) >= 0x80 && byte(1) <= 0x9F) return 2;
-  if (at + 2 >= text.size() || byte(0) != 0xE2) return 0;
+  if (at + 1 < text.size() && byte(0) == 0xD8 && byte(1) == 0x9C) return 2;
+  if (at + 2 >= text.size()) return 0;
+  if (byte(0) == 0xEF) return byte(1) == 0xBB && byte(2) == 0xBF ? 3 : 0;
+  if (byte(0) != 0xE2) return 0;
   const bool marks =
-      byte(1) == 0x80 && (byte(2) == 0x8E || byte(2) == 0x8F || (byte(2) >= 0xAA && byte(2) <= 0xAE));
+      byte(1) == 0x80 && (byte(2) == 0x8E || byte(2) == 0x8F || (byte(2) >= 0xA8 && byte(2) <= 0xAE));
   const bool isolates = byte(1) == 0x81 && byte(2) >= 0xA6 && byte(2) <= 0xA9;
   return marks || isolates ? 3 : 0;
 }

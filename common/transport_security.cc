@@ -1,10 +1,12 @@
 #include "common/transport_security.h"
 
+#include <arpa/inet.h>
 #include <fmt/chrono.h>
 #include <grpcpp/create_channel.h>
 #include <grpcpp/security/credentials.h>
 #include <grpcpp/support/channel_arguments.h>
 #include <grpcpp/support/client_interceptor.h>
+#include <netinet/in.h>
 #include <openssl/bio.h>
 #include <openssl/err.h>
 #include <openssl/evp.h>
@@ -286,7 +288,13 @@ bool IsLoopbackAddress(const std::string& address) {
   } else if (const auto colon = host.rfind(':'); colon != std::string::npos) {
     host = host.substr(0, colon);
   }
-  return host == "localhost" || host == "::1" || host.rfind("127.", 0) == 0;
+  // An address, not a name that looks like one: "127.evil.example" resolves wherever its owner likes
+  // (found 2026-12-06).
+  if (host == "localhost") return true;
+  in_addr v4{};
+  if (::inet_pton(AF_INET, host.c_str(), &v4) == 1) return (ntohl(v4.s_addr) >> 24) == 127;
+  in6_addr v6{};
+  return ::inet_pton(AF_INET6, host.c_str(), &v6) == 1 && IN6_IS_ADDR_LOOPBACK(&v6);
 }
 
 void PauseBeforeRetry(grpc::Channel& channel, std::chrono::milliseconds pause) {

@@ -77,13 +77,18 @@ void WorkerRegistry::Touch(const std::string& worker_id) {
   At(worker_id);
 }
 
+void WorkerRegistry::CheckHolder(const std::string& worker_id, const std::string& principal) const {
+  std::lock_guard lock(mutex_);
+  if (const auto found = workers_.find(worker_id);
+      found != workers_.end() && found->second.registered && found->second.principal != principal) {
+    Fail(ErrorCode::kPermissionDenied, "worker '" + worker_id + "' registered with another token");
+  }
+}
+
 void WorkerRegistry::Leave(const std::string& worker_id, const std::string& principal) {
+  CheckHolder(worker_id, principal);
   std::lock_guard lock(mutex_);
   if (const auto found = workers_.find(worker_id); found != workers_.end()) {
-    if (found->second.registered && found->second.principal != principal) {
-      Fail(ErrorCode::kPermissionDenied,
-           "worker '" + worker_id + "' registered with another token: only it may say it leaves");
-    }
     found->second.last_seen = std::chrono::steady_clock::now() - alive_window_ - std::chrono::milliseconds(1);
   }
 }

@@ -27,6 +27,9 @@ class WorkerRegistry {
   // Whether `worker_id` registered with this server (a worker only seen leasing did not).
   bool Registered(const std::string& worker_id) const;
   void Touch(const std::string& worker_id);
+  // Throws Error(kPermissionDenied) when `worker_id` registered with another token than `principal`
+  // (a worker not registered here, after a server restart, passes).
+  void CheckHolder(const std::string& worker_id, const std::string& principal) const;
   // The worker said it is stopping: not alive from now (listed until forgotten, as a silent one).
   // Throws Error(kPermissionDenied) when `principal` is not the token it registered with.
   void Leave(const std::string& worker_id, const std::string& principal = "");

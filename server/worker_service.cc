@@ -71,7 +71,11 @@ grpc::Status WorkerServiceImpl::Leave(grpc::ServerContext* context, const v1::Le
 grpc::Status WorkerServiceImpl::Lease(grpc::ServerContext* context, const v1::LeaseRequest* request,
                                       v1::LeaseResponse* response) {
   return guard_.Run(context, {"Lease", Access::kWorker, kReads, ""}, [&](Call& call) {
-    if (request->worker_id().empty()) FailInvalid("worker_id is empty");
+    // The id goes into job records and `workers` as Register's does: the same rules, and a live
+    // worker's id is its token's (a Lease took any id, another token's and one holding escape
+    // sequences, which then reached terminals in a job's reason; found 2026-12-06).
+    ValidateWorkerId(request->worker_id());
+    workers_.CheckHolder(request->worker_id(), call.caller.name);
     const auto wait = std::min(std::chrono::milliseconds(std::max<std::int64_t>(request->wait_ms(), 0)),
                                timing_.max_lease_wait);
     // Answer a little before the caller's deadline, so an empty poll is not an error.

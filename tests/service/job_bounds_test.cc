@@ -31,7 +31,13 @@ TEST(JobBoundsTest, NamesAndWorkerIdsArePrintableAndBounded) {
                               "a\xe2\x80\x8f"
                               "b",
                               "a\xc2\x9b"
-                              "2J"}) {
+                              "2J",
+                              "a\xd8\x9c"
+                              "b",
+                              "a\xe2\x80\xa8"
+                              "b",
+                              "a\xef\xbb\xbf"
+                              "b"}) {
     EXPECT_NE(
         testing::ErrorFrom([&] { ValidateJobName(turning); }).find("name holds a Unicode control character"),
         std::string::npos)

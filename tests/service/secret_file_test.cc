@@ -90,13 +90,14 @@ TEST(SecretFileTest, MessagesWithholdATokensSecret) {
 // without --ca, where anyone on the path reads it (found 2026-12-06).
 TEST(SecretFileTest, ATokenTravelsInPlaintextOnlyOnLoopback) {
   const std::string token = "endorecon.0123456789abcdef.0123456789abcdef0123456789abcdef";
-  for (const char* address : {"192.0.2.2:50051", "pacs-gw.hospital:50051", "[2001:db8::1]:50051"}) {
+  for (const char* address : {"192.0.2.2:50051", "pacs-gw.hospital:50051", "[2001:db8::1]:50051",
+                              "127.evil.example:50051", "localhost.evil.example:50051"}) {
     const std::string refusal = testing::ErrorFrom([&] { OpenChannel(address, {"", "", "", token, ""}); });
     EXPECT_NE(refusal.find("a token is sent only over TLS beyond this machine: give --ca"), std::string::npos)
         << address << ": " << refusal;
   }
   for (const char* address :
-       {"127.0.0.1:50051", "localhost:50051", "[::1]:50051", "unix:/run/endorecon.sock"}) {
+       {"127.0.0.1:50051", "127.1.2.3:50051", "localhost:50051", "[::1]:50051", "unix:/run/endorecon.sock"}) {
     EXPECT_NE(OpenChannel(address, {"", "", "", token, ""}), nullptr) << address;
   }
   EXPECT_NE(OpenChannel("192.0.2.2:50051", {}), nullptr) << "no token: nothing to keep";

@@ -70,6 +70,13 @@ TEST(WorkerRegistryTest, ALiveWorkersIdBelongsToItsToken) {
   EXPECT_NE(testing::ErrorFrom([&] { registry.Leave("wk1", "node-9-token"); }, ErrorCode::kPermissionDenied)
                 .find("registered with another token"),
             std::string::npos);
+  // Nor may it lease as that worker: the job's records would name it.
+  EXPECT_NE(
+      testing::ErrorFrom([&] { registry.CheckHolder("wk1", "node-9-token"); }, ErrorCode::kPermissionDenied)
+          .find("worker 'wk1' registered with another token"),
+      std::string::npos);
+  registry.CheckHolder("wk1", "node-3-token");
+  registry.CheckHolder("unknown", "node-9-token");
   EXPECT_TRUE(registry.List()[0].alive());
   registry.Register(request, "node-3-token");
   registry.Leave("wk1", "node-3-token");

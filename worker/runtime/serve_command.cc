@@ -292,7 +292,7 @@ int Serve(const ServeFlags& flags) {
   client.Leave();  // its jobs are handed back by now
   // The default scratch folder is this process's alone: gone with it (its job folders went with their
   // jobs; a folder given by --work-dir stays for the next worker).
-  if (flags.work_dir.empty()) std::filesystem::remove(settings.work_dir, ignored);
+  if (flags.work_dir.empty()) std::filesystem::remove_all(settings.work_dir, ignored);
   spdlog::info("worker {} stopped", worker_id);
   return 0;
 }

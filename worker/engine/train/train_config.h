@@ -25,7 +25,7 @@ inline constexpr int kMostDropoutPasses = 64;
 // not finish one step in three minutes, and a cancel, the budget and SIGTERM wait for a step to end
 // (found 2026-12-06).
 inline constexpr double kMostStepMultiplyAdds = 64e9;
-inline constexpr double kMostPixelMultiplyAdds = 1e9;
+inline constexpr double kMostPixelMultiplyAdds = 2e8;
 // Adam's rates at most (the presets' largest is the grid's 3e-2).
 inline constexpr float kMostLearningRate = 1.0f;
 
