@@ -27,28 +27,17 @@ DicomRetriever::DicomRetriever(JobCoordinator& coordinator, BlobStore& blobs, co
       work_dir_(std::move(work_dir)),
       scp_(scp),
       audit_(std::move(audit)),
-      thread_([this] { Loop(); }) {}
-
-DicomRetriever::~DicomRetriever() {
-  {
-    std::lock_guard lock(mutex_);
-    stopping_ = true;
-  }
-  wake_.notify_all();
-  thread_.join();
-}
+      due_([this](const std::string& job_id) {
+        try {
+          Run(job_id);
+        } catch (const std::exception& e) {
+          spdlog::error("job {}: retrieval: {}", job_id, e.what());
+        }
+      }) {}
 
 // The job is read when its turn comes (Retrieve may be called under the coordinator's lock): Run
 // puts it back when its next attempt is not due yet.
-void DicomRetriever::Retrieve(const std::string& job_id) { Schedule(job_id, 0); }
-
-void DicomRetriever::Schedule(const std::string& job_id, std::int64_t at_unix_ms) {
-  {
-    std::lock_guard lock(mutex_);
-    due_.emplace(at_unix_ms, job_id);
-  }
-  wake_.notify_all();
-}
+void DicomRetriever::Retrieve(const std::string& job_id) { due_.Schedule(job_id, 0); }
 
 void DicomRetriever::Received(const std::string& study_uid, std::int64_t bytes) {
   std::string job;
@@ -67,31 +56,6 @@ void DicomRetriever::Received(const std::string& study_uid, std::int64_t bytes) 
 bool DicomRetriever::Awaits(const std::string& study_uid) const {
   std::lock_guard lock(mutex_);
   return !moving_job_.empty() && study_uid == moving_study_;
-}
-
-void DicomRetriever::Loop() {
-  std::unique_lock lock(mutex_);
-  while (!stopping_) {
-    if (due_.empty()) {
-      wake_.wait(lock);
-      continue;
-    }
-    const auto first = due_.begin();
-    const std::int64_t wait_ms = first->first - NowUnixMs();
-    if (wait_ms > 0) {
-      wake_.wait_for(lock, std::chrono::milliseconds(wait_ms));
-      continue;
-    }
-    const std::string job_id = first->second;
-    due_.erase(first);
-    lock.unlock();
-    try {
-      Run(job_id);
-    } catch (const std::exception& e) {
-      spdlog::error("job {}: retrieval: {}", job_id, e.what());
-    }
-    lock.lock();
-  }
 }
 
 void DicomRetriever::Progress(const std::string& job_id, int instances, std::int64_t bytes) {
@@ -282,7 +246,7 @@ void DicomRetriever::Run(const std::string& job_id) {
   const v1::Job job = coordinator_.Get(job_id, ServerPrincipal());
   if (job.state() != v1::QUEUED || job.retrieval().state() != v1::Retrieval::RETRIEVING) return;
   if (job.retrieval().next_attempt_unix_ms() > NowUnixMs()) {
-    Schedule(job_id, job.retrieval().next_attempt_unix_ms());
+    due_.Schedule(job_id, job.retrieval().next_attempt_unix_ms());
     return;
   }
   const auto& source = job.retrieval().source();
@@ -330,7 +294,7 @@ bool DicomRetriever::Retry(const std::string& job_id, const Error& failure, int 
   if (!waiting) return true;
   spdlog::warn("job {}: retrieval from PACS failed (attempt {} of {}), trying again in {:.0f} s: {}", job_id,
                attempt, settings_.retrieve_attempts, wait_ms / 1000.0, failure.what());
-  Schedule(job_id, next);
+  due_.Schedule(job_id, next);
   return true;
 }
 

@@ -10,18 +10,16 @@
 // before the files enter the blob store).
 #pragma once
 
-#include <condition_variable>
 #include <filesystem>
-#include <map>
 #include <mutex>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include "common/dicom/retrieve_scu.h"
 #include "common/dicom/storage_scp.h"
 #include "common/error.h"
 #include "server/blob_store.h"
+#include "server/due_queue.h"
 #include "server/job_coordinator.h"
 #include "server/metrics.h"
 #include "server/pacs_directory.h"
@@ -34,8 +32,6 @@ class DicomRetriever {
   DicomRetriever(JobCoordinator& coordinator, BlobStore& blobs, const PacsDirectory& pacs,
                  const DicomSettings& settings, Metrics& metrics, std::filesystem::path work_dir,
                  const dicom::StorageScp* scp, PacsAudit audit);
-  // Stops after the retrieval in progress and joins the thread.
-  ~DicomRetriever();
   DicomRetriever(const DicomRetriever&) = delete;
   DicomRetriever& operator=(const DicomRetriever&) = delete;
 
@@ -47,8 +43,6 @@ class DicomRetriever {
   bool Awaits(const std::string& study_uid) const;
 
  private:
-  void Loop();
-  void Schedule(const std::string& job_id, std::int64_t at_unix_ms);
   void Run(const std::string& job_id);
   // After a failed attempt: schedules the next one and returns true, or returns false when the
   // failure is not one to wait out or the attempts are used up.
@@ -72,15 +66,13 @@ class DicomRetriever {
   const dicom::StorageScp* scp_;
   PacsAudit audit_;
 
-  mutable std::mutex mutex_;
-  std::condition_variable wake_;
-  std::multimap<std::int64_t, std::string> due_;  // jobs by the Unix ms of their attempt
-  bool stopping_ = false;
+  mutable std::mutex mutex_;  // guards the C-MOVE's state below
   // The C-MOVE in progress: its study, job and what arrived so far.
   std::string moving_study_, moving_job_;
   int moved_instances_ = 0;
   std::int64_t moved_bytes_ = 0;
-  std::thread thread_;
+  DueQueue<std::string>
+      due_;  // last: its thread stops (after the retrieval in progress) before the rest goes
 };
 
 }  // namespace endorecon::server

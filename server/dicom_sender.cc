@@ -2,7 +2,6 @@
 
 #include <spdlog/spdlog.h>
 
-#include <algorithm>
 #include <set>
 
 #include "common/dicom/store_scu.h"
@@ -29,58 +28,19 @@ DicomSender::DicomSender(JobCoordinator& coordinator, BlobStore& blobs, const Pa
       settings_(settings),
       metrics_(metrics),
       audit_(std::move(audit)),
-      thread_([this] { Loop(); }) {}
-
-DicomSender::~DicomSender() {
-  {
-    std::lock_guard lock(mutex_);
-    stopping_ = true;
-  }
-  wake_.notify_all();
-  thread_.join();
-}
-
-void DicomSender::Schedule(const Key& key, std::int64_t at_unix_ms) {
-  {
-    std::lock_guard lock(mutex_);
-    for (const auto& [at, queued] : due_) {
-      if (queued == key) return;
-    }
-    due_.emplace(at_unix_ms, key);
-  }
-  wake_.notify_all();
-}
+      due_([this](const Key& key) {
+        try {
+          Attempt(key.first, key.second);
+        } catch (const std::exception& e) {
+          spdlog::error("job {}: sending to {}: {}", key.first, key.second, e.what());
+        }
+      }) {}
 
 void DicomSender::Send(const std::string& job_id) {
   const v1::Job job = coordinator_.Get(job_id, ServerPrincipal());
   if (job.state() != v1::SUCCEEDED) return;
   for (const auto& send : job.sends()) {
-    if (SendWaiting(send)) Schedule({job_id, send.destination()}, send.next_attempt_unix_ms());
-  }
-}
-
-void DicomSender::Loop() {
-  std::unique_lock lock(mutex_);
-  while (!stopping_) {
-    if (due_.empty()) {
-      wake_.wait(lock);
-      continue;
-    }
-    const auto first = due_.begin();
-    const std::int64_t wait_ms = first->first - NowUnixMs();
-    if (wait_ms > 0) {
-      wake_.wait_for(lock, std::chrono::milliseconds(wait_ms));
-      continue;
-    }
-    const Key key = first->second;
-    due_.erase(first);
-    lock.unlock();
-    try {
-      Attempt(key.first, key.second);
-    } catch (const std::exception& e) {
-      spdlog::error("job {}: sending to {}: {}", key.first, key.second, e.what());
-    }
-    lock.lock();
+    if (SendWaiting(send)) due_.Schedule({job_id, send.destination()}, send.next_attempt_unix_ms());
   }
 }
 
@@ -154,7 +114,7 @@ void DicomSender::Attempt(const std::string& job_id, const std::string& destinat
   metrics_.DicomSendFailed(destination);
   spdlog::warn("job {}: sending to {} failed (attempt {} of {}): {}", job_id, destination, attempt,
                settings_.send_attempts, failure);
-  if (retry) Schedule({job_id, destination}, next);
+  if (retry) due_.Schedule({job_id, destination}, next);
 }
 
 }  // namespace endorecon::server

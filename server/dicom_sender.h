@@ -7,14 +7,11 @@
 // so a restart resumes PENDING and SENDING sends.
 #pragma once
 
-#include <condition_variable>
-#include <map>
-#include <mutex>
 #include <string>
-#include <thread>
 #include <utility>
 
 #include "server/blob_store.h"
+#include "server/due_queue.h"
 #include "server/job_coordinator.h"
 #include "server/metrics.h"
 #include "server/pacs_directory.h"
@@ -25,8 +22,6 @@ class DicomSender {
  public:
   DicomSender(JobCoordinator& coordinator, BlobStore& blobs, const PacsDirectory& pacs,
               const DicomSettings& settings, Metrics& metrics, PacsAudit audit);
-  // Stops after the attempt in progress and joins the thread.
-  ~DicomSender();
   DicomSender(const DicomSender&) = delete;
   DicomSender& operator=(const DicomSender&) = delete;
 
@@ -35,9 +30,7 @@ class DicomSender {
 
  private:
   using Key = std::pair<std::string, std::string>;  // job, destination
-  void Loop();
   void Attempt(const std::string& job_id, const std::string& destination);
-  void Schedule(const Key& key, std::int64_t at_unix_ms);
 
   JobCoordinator& coordinator_;
   BlobStore& blobs_;
@@ -46,11 +39,7 @@ class DicomSender {
   Metrics& metrics_;
   PacsAudit audit_;
 
-  std::mutex mutex_;
-  std::condition_variable wake_;
-  std::multimap<std::int64_t, Key> due_;  // by the Unix ms of the attempt
-  bool stopping_ = false;
-  std::thread thread_;
+  DueQueue<Key> due_;  // last: its thread stops (after the attempt in progress) before the rest goes
 };
 
 }  // namespace endorecon::server

@@ -1,5 +1,7 @@
 #include "server/worker_registry.h"
 
+#include <utility>
+
 #include "common/error.h"
 
 namespace endorecon::server {
@@ -21,15 +23,13 @@ WorkerRegistry::Entry& WorkerRegistry::At(const std::string& worker_id) {
   return entry;
 }
 
-void WorkerRegistry::Register(const v1::RegisterRequest& request, const std::string& principal) {
+std::string WorkerRegistry::Register(const v1::RegisterRequest& request, const std::string& principal) {
   std::lock_guard lock(mutex_);
+  std::string before;
   if (const auto found = workers_.find(request.worker_id());
       found != workers_.end() && found->second.registered && found->second.principal != principal &&
       std::chrono::steady_clock::now() - found->second.last_seen <= alive_window_) {
-    Fail(ErrorCode::kFailedPrecondition, "worker id '" + request.worker_id() +
-                                             "' is in use by a worker of token '" + found->second.principal +
-                                             "' on " + found->second.info.hostname() +
-                                             ": give this worker an --id of its own");
+    before = found->second.principal;
   }
   auto& entry = At(request.worker_id());
   entry.registered = true;
@@ -38,6 +38,7 @@ void WorkerRegistry::Register(const v1::RegisterRequest& request, const std::str
   *entry.info.mutable_devices() = request.devices();
   *entry.info.mutable_device_info() = request.device_info();
   entry.info.set_draining(false);
+  return before;
 }
 
 v1::WorkerInfo WorkerRegistry::SetDraining(const std::string& worker_id, bool draining) {
@@ -77,16 +78,14 @@ void WorkerRegistry::Touch(const std::string& worker_id) {
   At(worker_id);
 }
 
-void WorkerRegistry::CheckHolder(const std::string& worker_id, const std::string& principal) const {
+std::string WorkerRegistry::NoteToken(const std::string& worker_id, const std::string& principal) {
   std::lock_guard lock(mutex_);
-  if (const auto found = workers_.find(worker_id);
-      found != workers_.end() && found->second.registered && found->second.principal != principal) {
-    Fail(ErrorCode::kPermissionDenied, "worker '" + worker_id + "' registered with another token");
-  }
+  const auto found = workers_.find(worker_id);
+  if (found == workers_.end() || !found->second.registered || found->second.principal == principal) return "";
+  return std::exchange(found->second.principal, principal);
 }
 
-void WorkerRegistry::Leave(const std::string& worker_id, const std::string& principal) {
-  CheckHolder(worker_id, principal);
+void WorkerRegistry::Leave(const std::string& worker_id) {
   std::lock_guard lock(mutex_);
   if (const auto found = workers_.find(worker_id); found != workers_.end()) {
     found->second.last_seen = std::chrono::steady_clock::now() - alive_window_ - std::chrono::milliseconds(1);

@@ -20,19 +20,19 @@ class WorkerRegistry {
   explicit WorkerRegistry(std::chrono::milliseconds alive_window) : alive_window_(alive_window) {}
 
   // Records the worker's host and devices (names and what they are) from its registration, and the
-  // token (its label, `principal`) it registered with. An id alive under another token is refused
-  // with kFailedPrecondition naming that token: a second worker claiming the id merged with the first in
-  // `workers`, undid its drain and could make it Leave (found 2026-12-06).
-  void Register(const v1::RegisterRequest& request, const std::string& principal = "");
+  // token (its label, `principal`) it registered with. Returns the label of the token the id was
+  // registered and alive with when that was another ("" otherwise), for the caller to log: a token
+  // rotated, or a second worker claiming the id (which merged with the first in `workers` and undid
+  // its drain; found 2026-12-06). Neither is refused: the server cannot tell them apart.
+  std::string Register(const v1::RegisterRequest& request, const std::string& principal = "");
   // Whether `worker_id` registered with this server (a worker only seen leasing did not).
   bool Registered(const std::string& worker_id) const;
   void Touch(const std::string& worker_id);
-  // Throws Error(kPermissionDenied) when `worker_id` registered with another token than `principal`
-  // (a worker not registered here, after a server restart, passes).
-  void CheckHolder(const std::string& worker_id, const std::string& principal) const;
+  // A call of `worker_id` carried the token labelled `principal`: when it registered with another,
+  // records this one and returns the other's label (for the caller to log), else "".
+  std::string NoteToken(const std::string& worker_id, const std::string& principal);
   // The worker said it is stopping: not alive from now (listed until forgotten, as a silent one).
-  // Throws Error(kPermissionDenied) when `principal` is not the token it registered with.
-  void Leave(const std::string& worker_id, const std::string& principal = "");
+  void Leave(const std::string& worker_id);
   // Marks a worker draining (or not): Draining says so until undone or until it registers again (a
   // restarted worker serves again). Throws Error(kNotFound) for a worker never heard from.
   v1::WorkerInfo SetDraining(const std::string& worker_id, bool draining);

@@ -1,5 +1,7 @@
 #include "server/worker_service.h"
 
+#include <spdlog/spdlog.h>
+
 #include <filesystem>
 #include <set>
 
@@ -33,6 +35,16 @@ std::string AuditedWorkerId(const std::string& id) {
   }
 }
 
+// A worker's calls carry another token than it registered with: a rotation, or a second worker
+// claiming its id. The server cannot tell which; the operator can (the audit log has both tokens).
+void WarnOfTokenChange(const std::string& worker_id, const std::string& token, const std::string& before) {
+  if (before.empty()) return;
+  spdlog::warn(
+      "worker {}: its calls carry token '{}', it registered with '{}': a rotated token, or two workers "
+      "sharing one --id",
+      AuditedWorkerId(worker_id), token, before);
+}
+
 }  // namespace
 
 grpc::Status WorkerServiceImpl::Register(grpc::ServerContext* context, const v1::RegisterRequest* request,
@@ -51,7 +63,8 @@ grpc::Status WorkerServiceImpl::Register(grpc::ServerContext* context, const v1:
                         info.set_kind(PrintableText(info.kind(), 64));
                         info.set_model(PrintableText(info.model(), 1024));
                       }
-                      workers_.Register(registered, call.caller.name);
+                      WarnOfTokenChange(request->worker_id(), call.caller.name,
+                                        workers_.Register(registered, call.caller.name));
                       response->set_lease_ttl_ms(timing_.lease_ttl.count());
                       response->set_heartbeat_interval_ms(timing_.heartbeat_interval.count());
                       return grpc::Status::OK;
@@ -61,9 +74,9 @@ grpc::Status WorkerServiceImpl::Register(grpc::ServerContext* context, const v1:
 grpc::Status WorkerServiceImpl::Leave(grpc::ServerContext* context, const v1::LeaveRequest* request,
                                       v1::LeaveResponse*) {
   return guard_.Run(context, {"Leave", Access::kWorker, kWrites, "", AuditedWorkerId(request->worker_id())},
-                    [&](Call& call) {
+                    [&](Call&) {
                       if (request->worker_id().empty()) FailInvalid("worker_id is empty");
-                      workers_.Leave(request->worker_id(), call.caller.name);
+                      workers_.Leave(request->worker_id());
                       return grpc::Status::OK;
                     });
 }
@@ -71,11 +84,12 @@ grpc::Status WorkerServiceImpl::Leave(grpc::ServerContext* context, const v1::Le
 grpc::Status WorkerServiceImpl::Lease(grpc::ServerContext* context, const v1::LeaseRequest* request,
                                       v1::LeaseResponse* response) {
   return guard_.Run(context, {"Lease", Access::kWorker, kReads, ""}, [&](Call& call) {
-    // The id goes into job records and `workers` as Register's does: the same rules, and a live
-    // worker's id is its token's (a Lease took any id, another token's and one holding escape
-    // sequences, which then reached terminals in a job's reason; found 2026-12-06).
+    // The id goes into job records and `workers` as Register's does: the same rules (a Lease took
+    // an id holding escape sequences, which then reached terminals in a job's reason; found
+    // 2026-12-06), and a change of token is logged.
     ValidateWorkerId(request->worker_id());
-    workers_.CheckHolder(request->worker_id(), call.caller.name);
+    WarnOfTokenChange(request->worker_id(), call.caller.name,
+                      workers_.NoteToken(request->worker_id(), call.caller.name));
     const auto wait = std::min(std::chrono::milliseconds(std::max<std::int64_t>(request->wait_ms(), 0)),
                                timing_.max_lease_wait);
     // Answer a little before the caller's deadline, so an empty poll is not an error.

@@ -250,7 +250,11 @@ TEST(Reconstruct, WithoutABudgetHeldOutFramesAreNeverReduced) {
   const nlohmann::json evaluation = ReadJsonFile(dir / "out" / "metrics.json").at("evaluation");
   ASSERT_TRUE(evaluation.contains("reduced_frames")) << "the test's premise: evaluation was cut to its share";
   EXPECT_FALSE(evaluation.contains("heldout_reduced")) << evaluation.dump();
-  EXPECT_EQ(evaluation.at("full_frames"), nlohmann::json({3, 7}));
+  // The held-out frames (3 and 7) are full; a training frame may be too when the run's quarter
+  // allows it, which depends on how long training took (a loaded machine gave [3, 6, 7]).
+  const auto full = evaluation.at("full_frames").get<std::vector<int>>();
+  for (const int held_out : {3, 7})
+    EXPECT_NE(std::find(full.begin(), full.end(), held_out), full.end()) << held_out;
 }
 
 // A resume may change settings the uncertainty map's stride is fitted from (here the refresh
