@@ -19,7 +19,7 @@ bool IsControl(char c) {
 // U+202A-U+202E and U+2066-U+2069 turn the rest of a terminal's line around ("x\u202eevil" is shown
 // "xlive"; found 2026-12-06), U+2028 and U+2029 break it, U+FEFF hides, and C1 controls
 // (U+0080-U+009F) are escape sequences to some terminals.
-std::size_t DirectionControlAt(std::string_view text, std::size_t at) {
+std::size_t UnicodeControlAt(std::string_view text, std::size_t at) {
   const auto byte = [&](std::size_t i) { return static_cast<unsigned char>(text[at + i]); };
   if (at + 1 < text.size() && byte(0) == 0xC2 && byte(1) >= 0x80 && byte(1) <= 0x9F) return 2;
   if (at + 1 < text.size() && byte(0) == 0xD8 && byte(1) == 0x9C) return 2;
@@ -43,7 +43,7 @@ void CheckPrintable(const std::string& text, std::size_t most, const std::string
                   std::to_string(static_cast<unsigned char>(text[i])) +
                   "); it is printed in listings and terminals");
     }
-    if (DirectionControlAt(text, i) > 0) {
+    if (UnicodeControlAt(text, i) > 0) {
       FailInvalid(what + " holds a Unicode control character (at byte " + std::to_string(i) +
                   "): it would turn a terminal's text around; it is printed in listings and terminals");
     }
@@ -57,7 +57,7 @@ std::string PrintableText(std::string text, std::size_t most) {
   std::string out;
   out.reserve(text.size());
   for (std::size_t i = 0; i < text.size(); ++i) {
-    const std::size_t control = utf8 ? DirectionControlAt(text, i) : 0;
+    const std::size_t control = utf8 ? UnicodeControlAt(text, i) : 0;
     if (control > 0) {
       out += '?';
       i += control - 1;

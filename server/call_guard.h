@@ -40,12 +40,12 @@ enum class Access {
 inline constexpr bool kWrites = true;
 inline constexpr bool kReads = false;
 
-// What a handler is, for the gate and the audit log.
 // A job id as the audit log records it: an id of the form the server makes (12 hex digits) as it is,
 // anything else as "(not a job id)". A caller's "status Doe^John-MRN-12345" put a patient's name in
 // the log, and an id of 120,000 bytes a line as long (found 2026-12-06).
 std::string AuditedJobId(const std::string& id);
 
+// What a handler is, for the gate and the audit log.
 struct Rpc {
   const char* method;
   Access access;

@@ -71,8 +71,8 @@ class DicomRetriever {
   std::string moving_study_, moving_job_;
   int moved_instances_ = 0;
   std::int64_t moved_bytes_ = 0;
-  DueQueue<std::string>
-      due_;  // last: its thread stops (after the retrieval in progress) before the rest goes
+  // Last: its thread stops (after the retrieval in progress) before the rest goes.
+  DueQueue<std::string> due_;
 };
 
 }  // namespace endorecon::server

@@ -12,6 +12,8 @@
 #include <thread>
 #include <utility>
 
+#include "server/unix_time.h"
+
 namespace endorecon::server {
 
 template <typename Key>
@@ -44,12 +46,6 @@ class DueQueue {
   }
 
  private:
-  static std::int64_t NowMs() {
-    return std::chrono::duration_cast<std::chrono::milliseconds>(
-               std::chrono::system_clock::now().time_since_epoch())
-        .count();
-  }
-
   void Loop() {
     std::unique_lock lock(mutex_);
     while (!stopping_) {
@@ -58,7 +54,7 @@ class DueQueue {
         continue;
       }
       const auto first = due_.begin();
-      const std::int64_t wait_ms = first->first - NowMs();
+      const std::int64_t wait_ms = first->first - NowUnixMs();
       if (wait_ms > 0) {
         wake_.wait_for(lock, std::chrono::milliseconds(wait_ms));
         continue;

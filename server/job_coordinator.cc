@@ -107,12 +107,6 @@ void SettleSends(v1::Job& job) {
 
 }  // namespace
 
-std::int64_t NowUnixMs() {
-  return std::chrono::duration_cast<std::chrono::milliseconds>(
-             std::chrono::system_clock::now().time_since_epoch())
-      .count();
-}
-
 JobCoordinator::JobCoordinator(CoordinatorParts parts, int max_attempts, TenantQuotas quotas,
                                std::function<Clock::time_point()> clock)
     : parts_(parts), max_attempts_(max_attempts), quotas_(std::move(quotas)), clock_(std::move(clock)) {}

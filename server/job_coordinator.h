@@ -38,6 +38,7 @@
 #include "server/retention.h"
 #include "server/scheduler.h"
 #include "server/tenant_quotas.h"
+#include "server/unix_time.h"
 #include "server/watch_hub.h"
 #include "server/worker_registry.h"
 
@@ -187,8 +188,5 @@ class JobCoordinator {
   std::function<Clock::time_point()> clock_;
   std::mutex mutex_;
 };
-
-// Milliseconds since the Unix epoch, as stored in jobs.
-std::int64_t NowUnixMs();
 
 }  // namespace endorecon::server

@@ -5,6 +5,7 @@
 #include <set>
 
 #include "server/job_states.h"
+#include "server/unix_time.h"
 
 namespace endorecon::server {
 namespace {
@@ -19,10 +20,7 @@ void AddBlobs(const v1::Job& job, std::set<std::string>& digests) {
 
 std::int64_t JobCutoff(double retention_days) {
   if (retention_days <= 0) return kKeepJobs;
-  const auto now_ms = std::chrono::duration_cast<std::chrono::milliseconds>(
-                          std::chrono::system_clock::now().time_since_epoch())
-                          .count();
-  return now_ms - static_cast<std::int64_t>(retention_days * 86'400'000.0);
+  return NowUnixMs() - static_cast<std::int64_t>(retention_days * 86'400'000.0);
 }
 
 std::filesystem::file_time_type OrphanCutoff(double orphan_hours) {

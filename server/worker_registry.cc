@@ -3,22 +3,14 @@
 #include <utility>
 
 #include "common/error.h"
+#include "server/unix_time.h"
 
 namespace endorecon::server {
-namespace {
-
-std::int64_t UnixMs() {
-  return std::chrono::duration_cast<std::chrono::milliseconds>(
-             std::chrono::system_clock::now().time_since_epoch())
-      .count();
-}
-
-}  // namespace
 
 WorkerRegistry::Entry& WorkerRegistry::At(const std::string& worker_id) {
   auto& entry = workers_[worker_id];
   entry.info.set_id(worker_id);
-  entry.info.set_last_seen_unix_ms(UnixMs());
+  entry.info.set_last_seen_unix_ms(NowUnixMs());
   entry.last_seen = std::chrono::steady_clock::now();
   return entry;
 }
@@ -70,7 +62,7 @@ bool WorkerRegistry::Draining(const std::string& worker_id) const {
 bool WorkerRegistry::Registered(const std::string& worker_id) const {
   std::lock_guard lock(mutex_);
   const auto found = workers_.find(worker_id);
-  return found != workers_.end() && found->second.info.devices_size() > 0;
+  return found != workers_.end() && found->second.registered;
 }
 
 void WorkerRegistry::Touch(const std::string& worker_id) {
