@@ -1,13 +1,17 @@
-// endorecon submit CLIP [options]: upload the clip folder (only what the server lacks, resuming a
-// partial upload), queue a reconstruction, optionally wait for it. With a raw stereo recording
-// instead of CLIP (--left L --right R --calibration C ..., prepare's flags), the recording's files
+// endorecon submit CLIP [options]: upload the clip folder (the files its layout names; only what the server
+// lacks, resuming a partial upload), queue a reconstruction, optionally wait for it. With a raw stereo
+// recording instead of CLIP (--left L --right R --calibration C ..., prepare's flags), the recording's files
 // are uploaded and the worker prepares the clip before reconstructing it, in the same job.
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <fstream>
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <set>
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include "client/clip_check.h"
 #include "client/commands.h"
@@ -80,9 +84,50 @@ v1::ReconstructionOptions OptionsOf(const SubmitFlags& flags) {
   return options;
 }
 
-// A folder is uploaded whole; a single file (a DICOM recording) as itself, named by its file name.
-// Paths and sizes only: the digests come after the server has seen the sizes.
-v1::Manifest ListingOfClip(const std::filesystem::path& clip) {
+// The files under `dir` that `listing` leaves out, by their relative paths (a walk that follows no
+// linked folder and skips what it cannot read: it only names what stays here).
+std::vector<std::string> LeftOut(const std::filesystem::path& dir, const v1::Manifest& listing) {
+  std::set<std::string> listed;
+  for (const auto& file : listing.files()) listed.insert(file.path());
+  std::vector<std::string> left;
+  std::error_code error;
+  for (std::filesystem::recursive_directory_iterator
+           it(dir, std::filesystem::directory_options::skip_permission_denied, error),
+       end;
+       !error && it != end; it.increment(error)) {
+    std::error_code type_error;
+    if (!it->is_regular_file(type_error)) continue;
+    const std::string relative = it->path().lexically_relative(dir).generic_string();
+    if (!listed.count(relative)) left.push_back(relative);
+  }
+  std::sort(left.begin(), left.end());
+  return left;
+}
+
+// A clip folder goes up as the files its layout names (ListClipFiles): what no loader reads (notes,
+// a video, a spreadsheet beside the frames) stays on this machine, and is named. A folder of DICOM
+// files goes up whole; a single file (a DICOM recording) as itself, named by its file name. Paths
+// and sizes only: the digests come after the server has seen the sizes.
+v1::Manifest ListingOfClip(const std::filesystem::path& clip, bool clip_folder, bool quiet) {
+  if (clip_folder) {
+    v1::Manifest listing;
+    try {
+      listing = ListingOfFiles(clip, ListClipFiles(clip));
+    } catch (const Error& e) {
+      Fail(e.code(), std::string(e.what()) + " (found before the upload: nothing was sent)");
+    }
+    const std::vector<std::string> left = LeftOut(clip, listing);
+    if (!left.empty() && !quiet) {
+      std::cerr << "left out " << left.size() << " file(s) under " << clip.string()
+                << " that the clip's layout does not name (docs/formats.md), not uploaded:";
+      constexpr std::size_t kNamed = 5;
+      for (std::size_t i = 0; i < std::min(left.size(), kNamed); ++i)
+        std::cerr << (i ? ", " : " ") << left[i];
+      if (left.size() > kNamed) std::cerr << " and " << left.size() - kNamed << " more";
+      std::cerr << "\n";
+    }
+    return listing;
+  }
   if (!std::filesystem::is_regular_file(clip)) return ListingOfDirectory(clip);
   v1::Manifest manifest;
   auto* entry = manifest.add_files();
@@ -116,7 +161,7 @@ void CheckJob(const Globals& globals, v1::JobService::Stub& stub, v1::SubmitRequ
 // recording nor a raw one) here (clip_check.h).
 v1::Manifest Upload(const Globals& globals, v1::JobService::Stub& stub, const std::filesystem::path& clip,
                     bool clip_folder, const v1::SubmitRequest& request) {
-  auto manifest = ListingOfClip(clip);
+  auto manifest = ListingOfClip(clip, clip_folder, globals.json);
   // The manifest with its digests (64 characters and a tag each) travels in one message: a clip of
   // 120,000 files was refused as "Sent message larger than max", naming its largest file.
   const std::size_t manifest_bytes = manifest.ByteSizeLong() + std::size_t(manifest.files_size()) * 66;

@@ -240,4 +240,47 @@ std::vector<FrameFiles> ListClipFrames(const fs::path& dir) {
   return ListEndoNerfFrames(dir, PoseRowCount(ReadNpy(poses), poses));
 }
 
+std::vector<FrameFiles> ListGroundTruthFrames(const fs::path& gt_dir, std::size_t frames) {
+  const auto count_of = [frames](const fs::path& folder, const std::vector<fs::path>& files) {
+    if (files.size() != frames) {
+      FailInvalid(folder.string() + ": holds " + std::to_string(files.size()) + " files but the clip has " +
+                  std::to_string(frames) + " frames");
+    }
+  };
+  const std::vector<fs::path> images = ListFiles(gt_dir / "images", ImageExtensions());
+  count_of(gt_dir / "images", images);
+  std::vector<fs::path> depths;
+  if (fs::exists(gt_dir / "depth")) {
+    depths = ListFiles(gt_dir / "depth", {".npy"});
+    count_of(gt_dir / "depth", depths);
+  }
+  std::vector<FrameFiles> truth(frames);
+  for (std::size_t i = 0; i < frames; ++i) {
+    truth[i].image = images[i];
+    if (!depths.empty()) truth[i].depth = depths[i];
+  }
+  return truth;
+}
+
+std::vector<fs::path> ListClipFiles(const fs::path& dir) {
+  const std::vector<FrameFiles> frames = ListClipFrames(dir);
+  std::vector<fs::path> files;
+  if (FindClipLayout(dir) == ClipLayout::kTransforms) {
+    files.push_back(dir / "transforms.json");
+  } else {
+    files.push_back(dir / "poses_bounds.npy");
+    if (fs::exists(dir / "stereo.json")) files.push_back(dir / "stereo.json");
+  }
+  const auto add = [&files](const FrameFiles& frame) {
+    for (const fs::path* file :
+         {&frame.image, &frame.depth, &frame.tool_mask, &frame.eval_mask, &frame.right_image})
+      if (!file->empty()) files.push_back(*file);
+  };
+  for (const FrameFiles& frame : frames) add(frame);
+  if (fs::is_directory(dir / "gt")) {
+    for (const FrameFiles& frame : ListGroundTruthFrames(dir / "gt", frames.size())) add(frame);
+  }
+  return files;
+}
+
 }  // namespace endorecon

@@ -69,6 +69,10 @@ v1::Manifest ListingOfDirectory(const fs::path& dir) {
     FailInvalid(e.path1().string() + ": cannot read it (" + e.code().message() + ")");
   }
   if (files.empty()) FailInvalid("no files under " + dir.string());
+  return ListingOfFiles(dir, std::move(files));
+}
+
+v1::Manifest ListingOfFiles(const fs::path& dir, std::vector<fs::path> files) {
   std::sort(files.begin(), files.end());
   v1::Manifest manifest;
   for (const auto& file : files) {

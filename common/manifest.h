@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "endorecon/v1/files.pb.h"
 
@@ -16,6 +17,9 @@ v1::Manifest ManifestOfDirectory(const std::filesystem::path& dir);
 // The same without the digests (sha256 empty): what a sizes-only QueryUpload sends before the
 // files are read, so a clip over a limit is refused before its hours of hashing.
 v1::Manifest ListingOfDirectory(const std::filesystem::path& dir);
+// The same for `files` under `dir` (each `dir` / relative path, as ListClipFiles gives them), sorted
+// by path. Throws Error(kInvalidArgument) for a path the server would refuse, naming it.
+v1::Manifest ListingOfFiles(const std::filesystem::path& dir, std::vector<std::filesystem::path> files);
 // Fills in the SHA-256 of every entry, reading `root`/path.
 void AddDigests(const std::filesystem::path& root, v1::Manifest& manifest);
 

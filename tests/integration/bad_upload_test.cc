@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <set>
+#include <string>
 #include <thread>
 
 #include "common/sha256.h"
@@ -170,9 +172,9 @@ TEST_F(BadUploadTest, SubmittingAnIncompleteUploadIsAFailedPrecondition) {
 }
 
 TEST_F(BadUploadTest, CliReportsTheSizeLimitWithExitCodeEight) {
-  std::filesystem::create_directories(cluster_.path("big"));
-  // Named so the CLI takes the folder for a clip and sends it to the server, which refuses its size.
-  WriteBytes(cluster_.path("big") / "poses_bounds.npy", std::string(2000000, 'x'));
+  // A clip whose frame is 2 MB (zeros: its bytes are the worker's to decode), over the server's 1 MB.
+  MakeClip(cluster_.path("big"));
+  std::filesystem::resize_file(cluster_.path("big") / "images" / "000003.png", 2000000);
   const auto result = RunCli(cluster_.address(), {"submit", cluster_.path("big").string()});
   EXPECT_EQ(result.exit_code, 8) << result.err;
   EXPECT_NE(result.err.find("RESOURCE_EXHAUSTED"), std::string::npos) << result.err;
@@ -184,16 +186,11 @@ TEST_F(BadUploadTest, CliReportsTheSizeLimitWithExitCodeEight) {
 // here: reading it whole would take this test minutes.
 TEST_F(BadUploadTest, AHugeClipIsRefusedFromItsSizesNamingItsLargestFile) {
   MakeClip(cluster_.path("huge"));
-  std::filesystem::resize_file(
-      [&] {
-        WriteBytes(cluster_.path("huge") / "images" / "zz_huge.png", "");
-        return cluster_.path("huge") / "images" / "zz_huge.png";
-      }(),
-      std::uintmax_t{50} << 30);
+  std::filesystem::resize_file(cluster_.path("huge") / "images" / "000007.png", std::uintmax_t{50} << 30);
   const auto started = std::chrono::steady_clock::now();
   const auto result = RunCli(cluster_.address(), {"submit", cluster_.path("huge").string()});
   EXPECT_EQ(result.exit_code, 8) << result.err;
-  EXPECT_NE(result.err.find("its largest file: images/zz_huge.png"), std::string::npos) << result.err;
+  EXPECT_NE(result.err.find("its largest file: images/000007.png"), std::string::npos) << result.err;
   EXPECT_LT(std::chrono::steady_clock::now() - started, std::chrono::seconds(30));
   EXPECT_EQ(Partials(), 0);
 }
@@ -236,11 +233,32 @@ TEST_F(BadUploadTest, AClipMissingAMaskOrHoldingATruncatedPngIsRefusedBeforeItsU
   EXPECT_NE(result.err.find("iteration"), std::string::npos) << result.err;
   EXPECT_EQ(Blobs(), 0);
   EXPECT_EQ(Partials(), 0);
-  // The same clip whole goes up and is queued.
+  // The same clip whole goes up and is queued: the files its layout names, not what else lies in its
+  // folder (a spreadsheet of patients, a 50 GB video beside the frames were uploaded too).
   MakeClip(cluster_.path("whole"));
+  WriteBytes(cluster_.path("whole") / "patients.csv", "MRN,name\n12345,Doe^John\n");
+  std::filesystem::create_directories(cluster_.path("whole") / "video");
+  WriteBytes(cluster_.path("whole") / "video" / "case.mp4", "");
+  std::filesystem::resize_file(cluster_.path("whole") / "video" / "case.mp4", std::uintmax_t{50} << 30);
   result = RunCli(cluster_.address(), {"submit", cluster_.path("whole").string()});
   EXPECT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_NE(result.err.find("left out 3 file(s) under " + cluster_.path("whole").string() +
+                            " that the clip's layout does not name (docs/formats.md), not uploaded: "
+                            "patients.csv, synth.json, video/case.mp4"),
+            std::string::npos)
+      << result.err;
   EXPECT_GT(Blobs(), 0);
+  grpc::ClientContext context;
+  v1::ListJobsRequest list;
+  v1::ListJobsResponse jobs;
+  ASSERT_TRUE(cluster_.stub().List(&context, list, &jobs).ok());
+  ASSERT_EQ(jobs.jobs_size(), 1);
+  std::set<std::string> paths;
+  const v1::Job queued = cluster_.Job(jobs.jobs(0).id());
+  for (const auto& file : queued.clip().files()) paths.insert(file.path());
+  EXPECT_TRUE(paths.count("poses_bounds.npy") && paths.count("images/000000.png") &&
+              paths.count("masks/000007.png"));
+  EXPECT_FALSE(paths.count("patients.csv") || paths.count("video/case.mp4"));
 }
 
 }  // namespace

@@ -135,5 +135,46 @@ TEST(ClipFilesTest, ATransformsFileResolvesItsPathsInsideTheClipOnly) {
   EXPECT_NE(message.find("transforms.json frame 0: not an object"), std::string::npos) << message;
 }
 
+// What the CLI uploads of a clip folder: the files a loader reads, in either layout, and nothing else
+// (a spreadsheet of patients beside the frames went up with them until 2026-12-06).
+TEST(ClipFilesTest, AClipsFilesAreTheOnesItsLayoutNames) {
+  TempDir dir;
+  MakeEndoNerfFolder(dir.path(), 2);
+  WriteBytes(dir / "stereo.json", R"({"baseline": 5})");
+  WriteBytes(dir / "patients.csv", "MRN,name");
+  WriteBytes(dir / "images" / "notes.txt", "not a frame");
+  for (const char* folder : {"gt/images", "gt/depth"}) fs::create_directories(dir / folder);
+  for (const char* name : {"000000", "000001"}) {
+    WriteBytes(dir / "gt" / "images" / (std::string(name) + ".png"), "truth");
+    WriteBytes(dir / "gt" / "depth" / (std::string(name) + ".npy"), "depth");
+  }
+  std::vector<fs::path> expected{dir / "poses_bounds.npy",
+                                 dir / "stereo.json",
+                                 dir / "images" / "000000.png",
+                                 dir / "masks" / "000000.png",
+                                 dir / "images" / "000001.png",
+                                 dir / "masks" / "000001.png",
+                                 dir / "gt" / "images" / "000000.png",
+                                 dir / "gt" / "depth" / "000000.npy",
+                                 dir / "gt" / "images" / "000001.png",
+                                 dir / "gt" / "depth" / "000001.npy"};
+  EXPECT_EQ(ListClipFiles(dir.path()), expected);
+  // The ground truth's count is the clip's, as the loader holds it.
+  fs::remove(dir / "gt" / "depth" / "000001.npy");
+  const std::string message = ErrorOf([&] { ListClipFiles(dir.path()); });
+  EXPECT_NE(message.find("gt/depth: holds 1 files but the clip has 2 frames"), std::string::npos) << message;
+
+  TempDir transforms;
+  fs::create_directories(transforms / "images");
+  WriteBytes(transforms / "images" / "a.png", "bytes");
+  WriteBytes(transforms / "images" / "unused.png", "bytes");
+  WriteBytes(transforms / "depth.npy", "bytes");
+  WriteBytes(transforms / "transforms.json",
+             R"({"frames": [{"file_path": "images/a", "depth_file_path": "depth.npy"}]})");
+  EXPECT_EQ(ListClipFiles(transforms.path()),
+            (std::vector<fs::path>{transforms / "transforms.json", transforms / "images" / "a.png",
+                                   transforms / "depth.npy"}));
+}
+
 }  // namespace
 }  // namespace endorecon

@@ -19,27 +19,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
-void CheckCount(const fs::path& folder, std::size_t found, std::size_t frames) {
-  if (found != frames) {
-    FailInvalid(folder.string() + ": holds " + std::to_string(found) + " files but the clip has " +
-                std::to_string(frames) + " frames");
-  }
-}
-
 void LoadGroundTruth(const fs::path& dir, const LoadOptions& options, Clip& clip) {
-  const auto count = static_cast<std::size_t>(clip.frame_count());
-  const std::vector<fs::path> images = ListFiles(dir / "images", ImageExtensions());
-  CheckCount(dir / "images", images.size(), count);
-  std::vector<fs::path> depths;
-  if (fs::exists(dir / "depth")) {
-    depths = ListFiles(dir / "depth", {".npy"});
-    CheckCount(dir / "depth", depths.size(), count);
-  }
-  std::vector<FrameFiles> frames(count);
-  for (std::size_t i = 0; i < count; ++i) {
-    frames[i].image = images[i];
-    if (!depths.empty()) frames[i].depth = depths[i];
-  }
+  const std::vector<FrameFiles> frames =
+      ListGroundTruthFrames(dir, static_cast<std::size_t>(clip.frame_count()));
   Clip truth;
   truth.source = dir.string();
   truth.width = clip.width;
