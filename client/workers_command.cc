@@ -34,6 +34,8 @@ Command AddWorkersCommand(CLI::App& app) {
                                fmt::format("{}", fmt::join(worker.devices(), ",")),
                                HumanTime(worker.last_seen_unix_ms()),
                                fmt::format("{}", fmt::join(worker.job_ids(), ",")));
+      if (!worker.tenant().empty())
+        std::cout << fmt::format("  runs the jobs of tenant '{}' only (its token's)\n", worker.tenant());
       for (const auto& device : worker.device_info()) {
         std::cout << fmt::format("  {}: {}, {}, {}, {} host thread(s)\n", device.name(), device.kind(),
                                  device.model(), HumanBytes(device.memory_bytes()), device.threads());

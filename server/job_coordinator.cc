@@ -120,7 +120,7 @@ void JobCoordinator::Recover() {
     if (stored.job.state() == v1::QUEUED && Retrieving(stored.job)) {
       retrieving.push_back(stored.job.id());
     } else if (stored.job.state() == v1::QUEUED) {
-      parts_.scheduler.Push(stored.job.id(), stored.job.priority(), stored.seq);
+      parts_.scheduler.Push(stored.job.id(), stored.job.priority(), stored.seq, stored.job.tenant());
       ++queued;
     } else {
       parts_.leases.Restore(stored.job.lease_id(), stored.job.id(), stored.job.worker_id(), now);
@@ -220,11 +220,12 @@ void JobCoordinator::Requeue(StoredJob& stored, bool count_attempt, const std::s
   job.clear_lease_id();
   job.clear_worker_id();
   Save(job);
-  parts_.scheduler.Push(job.id(), job.priority(), stored.seq);
+  parts_.scheduler.Push(job.id(), job.priority(), stored.seq, job.tenant());
   spdlog::info("job {} requeued (attempts {}/{}): {}", job.id(), job.attempts(), job.max_attempts(), reason);
 }
 
-void JobCoordinator::CheckQuotas(const std::string& tenant, const v1::Manifest& adding, bool adds_job) {
+void JobCoordinator::CheckQuotas(const std::string& tenant, const v1::Manifest& adding, bool adds_job,
+                                 std::int64_t pending) {
   const auto quota = quotas_.For(tenant);
   const bool counts_jobs = adds_job && quota.max_jobs > 0;
   if (!counts_jobs && quota.max_bytes == 0) return;
@@ -239,20 +240,36 @@ void JobCoordinator::CheckQuotas(const std::string& tenant, const v1::Manifest& 
                         "; submit again when one has finished");
   }
   const std::int64_t bytes = TotalBytes(adding);
-  if (quota.max_bytes > 0 && usage.bytes + bytes > quota.max_bytes) {
+  if (quota.max_bytes > 0 && usage.bytes + pending + bytes > quota.max_bytes) {
+    const std::string uploads =
+        pending == 0 ? ""
+                     : ", " + std::to_string(pending) +
+                           " in uploads not yet submitted (they count until submitted, or until "
+                           "--orphan-hours after their last upload),";
     endorecon::Fail(
         ErrorCode::kResourceExhausted,
-        named + " keeps " + std::to_string(usage.bytes) + " bytes in its jobs and this adds " +
+        named + " keeps " + std::to_string(usage.bytes) + " bytes in its jobs" + uploads + " and this adds " +
             std::to_string(bytes) + LargestFileNote(adding) + ": over its quota max_bytes of " +
             std::to_string(quota.max_bytes) +
             " bytes; delete the files of a finished job of it (`endorecon delete JOB`; a queued or "
-            "running one: cancel it first)");
+            "running one: cancel it first)" +
+            (pending == 0 ? "" : ", or submit the uploads not yet submitted"));
   }
 }
 
 void JobCoordinator::CheckUploadQuota(const v1::Manifest& manifest, const Principal& caller) {
   // Both quotas before any byte: an upload the submit would refuse is not sent.
   CheckQuotas(caller.tenant, manifest, true);
+}
+
+void JobCoordinator::AdmitUpload(const v1::Manifest& manifest, const Principal& caller) {
+  std::lock_guard lock(mutex_);
+  CheckQuotas(caller.tenant, manifest, true, uploads_.PendingBytes(caller.tenant, manifest));
+  if (quotas_.For(caller.tenant).max_bytes > 0) {
+    uploads_.Note(
+        caller.tenant, manifest, [this](const std::string& digest) { return parts_.blobs.Has(digest); },
+        UploadLedger::Time::clock::now());
+  }
 }
 
 void JobCoordinator::CheckRetrievalQuota(const std::string& id, const v1::Manifest& recording) {
@@ -316,10 +333,11 @@ v1::Job JobCoordinator::Submit(const v1::SubmitRequest& request, const Principal
   // submits cannot both take a tenant's last job slot.
   Locked([&] {
     if (!from_pacs) RequireBlobs(parts_.blobs, request.clip(), request.has_prepare() ? "recording" : "clip");
-    CheckUploadQuota(request.clip(), caller);
+    CheckQuotas(caller.tenant, request.clip(), true, uploads_.PendingBytes(caller.tenant, request.clip()));
     const auto seq = parts_.store.Insert(job);
+    uploads_.Submitted(caller.tenant, request.clip());
     parts_.hub.PublishJob(job);
-    if (!from_pacs) parts_.scheduler.Push(job.id(), job.priority(), seq);
+    if (!from_pacs) parts_.scheduler.Push(job.id(), job.priority(), seq, job.tenant());
     parts_.metrics.JobSubmitted();
   });
   if (from_pacs) {
@@ -398,7 +416,8 @@ v1::Job JobCoordinator::Delete(const std::string& id, const Principal& caller) {
 }
 
 std::optional<JobCoordinator::Granted> JobCoordinator::Lease(const std::string& worker_id,
-                                                             Clock::time_point deadline) {
+                                                             Clock::time_point deadline,
+                                                             const std::optional<std::string>& tenant) {
   parts_.workers.Touch(worker_id);
   while (true) {
     // A draining worker is given nothing: its call waits out its deadline (as an empty queue's would,
@@ -407,7 +426,7 @@ std::optional<JobCoordinator::Granted> JobCoordinator::Lease(const std::string& 
       if (Clock::now() >= deadline) return std::nullopt;
       std::this_thread::sleep_until(std::min(deadline, Clock::now() + std::chrono::milliseconds(200)));
     }
-    const auto next = parts_.scheduler.PopWait(deadline);
+    const auto next = parts_.scheduler.PopWait(deadline, tenant);
     if (!next) return std::nullopt;
     auto granted = Locked([&]() -> std::optional<Granted> {
       auto stored = parts_.store.Get(*next);
@@ -415,7 +434,7 @@ std::optional<JobCoordinator::Granted> JobCoordinator::Lease(const std::string& 
       auto& job = stored->job;
       // Drained while this call waited for a job: the job goes back for another worker.
       if (parts_.workers.Draining(worker_id)) {
-        parts_.scheduler.Push(job.id(), job.priority(), stored->seq);
+        parts_.scheduler.Push(job.id(), job.priority(), stored->seq, job.tenant());
         return std::nullopt;
       }
       const auto lease = parts_.leases.Grant(job.id(), worker_id, clock_());
@@ -523,6 +542,7 @@ RetentionPlan JobCoordinator::ExpireFinishedBefore(std::int64_t cutoff_unix_ms,
     // gone), never a job marked expired whose files are still kept.
     for (const auto& digest : plan.blobs) parts_.blobs.Remove(digest);
     for (const auto& file : plan.orphans) parts_.blobs.Remove(file);
+    uploads_.ForgetBefore(orphan_cutoff);  // what they were uploaded for is given up with them
     const auto now = NowUnixMs();
     for (auto& job : plan.jobs) {
       job.set_expired_unix_ms(now);
@@ -632,7 +652,7 @@ void JobCoordinator::RetrievalDone(const std::string& id, const v1::Manifest& cl
     *job.mutable_clip() = clip;
     job.mutable_retrieval()->set_state(v1::Retrieval::RETRIEVED);
     Save(job);
-    parts_.scheduler.Push(job.id(), job.priority(), stored.seq);
+    parts_.scheduler.Push(job.id(), job.priority(), stored.seq, job.tenant());
     spdlog::info("job {}: recording retrieved ({} file(s), {} bytes); queued", id, clip.files_size(),
                  TotalBytes(clip));
   });

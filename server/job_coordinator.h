@@ -39,6 +39,7 @@
 #include "server/scheduler.h"
 #include "server/tenant_quotas.h"
 #include "server/unix_time.h"
+#include "server/upload_ledger.h"
 #include "server/watch_hub.h"
 #include "server/worker_registry.h"
 
@@ -86,8 +87,14 @@ class JobCoordinator {
   // queueing nothing.
   v1::Job Submit(const v1::SubmitRequest& request, const Principal& caller);
   // Throws kResourceExhausted when storing `manifest` in full would take the caller's tenant over
-  // its max_bytes quota (checked before an upload writes anything).
+  // its max_jobs or max_bytes quota: the check of a listing before an upload (QueryUpload), which does
+  // not count the tenant's uploads not yet submitted (a sizes-only listing has no digests to tell an
+  // upload resumed from another).
   void CheckUploadQuota(const v1::Manifest& manifest, const Principal& caller);
+  // The same as an upload of `manifest` starts, before it writes anything, counting the tenant's
+  // other uploads not yet submitted too; then notes this one's files as the tenant's (UploadLedger)
+  // until they are submitted or retention forgets them.
+  void AdmitUpload(const v1::Manifest& manifest, const Principal& caller);
   // The same for a recording retrieved for job `id`, before it goes into the blob store: the job's
   // tenant pays for it.
   void CheckRetrievalQuota(const std::string& id, const v1::Manifest& recording);
@@ -110,8 +117,10 @@ class JobCoordinator {
     std::string lease_id;
     int attempt = 1;
   };
-  // Leases the next job to `worker_id`, waiting until `deadline`; nullopt when there is none.
-  std::optional<Granted> Lease(const std::string& worker_id, Clock::time_point deadline);
+  // Leases the next job to `worker_id`, waiting until `deadline`; nullopt when there is none. With
+  // `tenant`, only that tenant's jobs (a worker whose token serves one tenant).
+  std::optional<Granted> Lease(const std::string& worker_id, Clock::time_point deadline,
+                               const std::optional<std::string>& tenant = std::nullopt);
   // Renews the lease and records progress, preview or checkpoint; says whether to go on. Sets
   // `job_id` to the lease's job when the lease is held, and `register_again` to whether the lease's
   // worker is unknown to the registry (the server restarted since it registered).
@@ -173,9 +182,11 @@ class JobCoordinator {
   // Load, but another tenant's job is kNotFound exactly as a missing one.
   StoredJob LoadVisible(const std::string& id, const Principal& caller);
   StoredJob LoadLeased(const std::string& lease_id);
-  // Throws kResourceExhausted when `tenant` keeping the files of `adding` would pass its max_bytes
-  // (naming the largest), or, when the call `adds_job`, when it has max_jobs jobs queued or running.
-  void CheckQuotas(const std::string& tenant, const v1::Manifest& adding, bool adds_job);
+  // Throws kResourceExhausted when `tenant` keeping the files of `adding` (and `pending` bytes of its
+  // uploads not yet submitted) would pass its max_bytes (naming the largest), or, when the call
+  // `adds_job`, when it has max_jobs jobs queued or running.
+  void CheckQuotas(const std::string& tenant, const v1::Manifest& adding, bool adds_job,
+                   std::int64_t pending = 0);
   // Writes `job` to the store, then tells the watchers.
   void Save(const v1::Job& job);
   void Finish(v1::Job& job, v1::JobState state, const std::string& error);
@@ -185,6 +196,7 @@ class JobCoordinator {
   DicomHooks dicom_;
   int max_attempts_;
   TenantQuotas quotas_;
+  UploadLedger uploads_;  // under mutex_
   std::function<Clock::time_point()> clock_;
   std::mutex mutex_;
 };

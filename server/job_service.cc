@@ -37,7 +37,7 @@ grpc::Status JobServiceImpl::Upload(grpc::ServerContext* context,
   return guard_.Run(context, {"Upload", Access::kJobs, kWrites, ""}, [&](Call& call) {
     *status = uploads_.Receive(
         *reader, Uploader::kClient,
-        [&](const v1::Manifest& manifest) { coordinator_.CheckUploadQuota(manifest, call.caller); },
+        [&](const v1::Manifest& manifest) { coordinator_.AdmitUpload(manifest, call.caller); },
         [&](const std::function<bool()>& read) { return stalls_.Guard(context, read); },
         [context] { return context->IsCancelled(); });
     return grpc::Status::OK;

@@ -64,10 +64,10 @@ void Audit(const TokenFlags& flags, const std::string& method, const TokenRecord
 int Create(const TokenFlags& flags) {
   const auto role = ParseRole(flags.role);
   if (!role) FailInvalid("--role " + flags.role + ": expected client, worker or admin");
-  if (*role != Role::kClient && !flags.tenant.empty()) {
+  if (*role == Role::kAdmin && !flags.tenant.empty()) {
     FailInvalid(
-        "--tenant applies to client tokens: a worker token serves every tenant's jobs and an admin "
-        "token sees them all");
+        "--tenant applies to client tokens (whose jobs are that tenant's) and worker tokens (which then run "
+        "that tenant's jobs only): an admin token sees every tenant");
   }
   const bool expires_given = flags.expires_in != nullptr && flags.expires_in->count() > 0;
   if (expires_given && (flags.expires_in_s <= 0 || !(flags.expires_in_s <= 100.0 * 366 * 86400)))
@@ -133,7 +133,9 @@ Command AddTokenCommand(CLI::App& app) {
   AddCommonFlags(*create, *flags);
   create->add_option("--role", flags->role, "client (its tenant's jobs), worker (the worker API) or admin")
       ->required();
-  create->add_option("--tenant", flags->tenant, "the tenant whose jobs a client token works on");
+  create->add_option("--tenant", flags->tenant,
+                     "the tenant whose jobs a client token works on, or the one tenant whose jobs a worker "
+                     "token runs (without it: every tenant's)");
   create->add_option("--name", flags->name, "a label for the token (audit log, list, revoke)")->required();
   flags->expires_in =
       create

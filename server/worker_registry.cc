@@ -15,7 +15,8 @@ WorkerRegistry::Entry& WorkerRegistry::At(const std::string& worker_id) {
   return entry;
 }
 
-std::string WorkerRegistry::Register(const v1::RegisterRequest& request, const std::string& principal) {
+std::string WorkerRegistry::Register(const v1::RegisterRequest& request, const std::string& principal,
+                                     const std::string& tenant) {
   std::lock_guard lock(mutex_);
   std::string before;
   if (const auto found = workers_.find(request.worker_id());
@@ -30,6 +31,7 @@ std::string WorkerRegistry::Register(const v1::RegisterRequest& request, const s
   *entry.info.mutable_devices() = request.devices();
   *entry.info.mutable_device_info() = request.device_info();
   entry.info.set_draining(false);
+  entry.info.set_tenant(tenant);
   return before;
 }
 

@@ -24,7 +24,9 @@ class WorkerRegistry {
   // registered and alive with when that was another ("" otherwise), for the caller to log: a token
   // rotated, or a second worker claiming the id (which merged with the first in `workers` and undid
   // its drain; found 2026-12-06). Neither is refused: the server cannot tell them apart.
-  std::string Register(const v1::RegisterRequest& request, const std::string& principal = "");
+  // `tenant` is the one tenant whose jobs its token serves ("": every tenant's), listed with it.
+  std::string Register(const v1::RegisterRequest& request, const std::string& principal = "",
+                       const std::string& tenant = "");
   // Whether `worker_id` registered with this server (a worker only seen leasing did not).
   bool Registered(const std::string& worker_id) const;
   void Touch(const std::string& worker_id);

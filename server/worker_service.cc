@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 
 #include <filesystem>
+#include <optional>
 #include <set>
 
 #include "common/error.h"
@@ -45,6 +46,13 @@ void WarnOfTokenChange(const std::string& worker_id, const std::string& token, c
       AuditedWorkerId(worker_id), token, before);
 }
 
+// The one tenant whose jobs a worker's token serves (`token create --role worker --tenant T`: a
+// research department's GPU node that must not see clinical recordings); nullopt: every tenant's.
+std::optional<std::string> ServedTenant(const Principal& caller) {
+  if (caller.anonymous || caller.tenant.empty()) return std::nullopt;
+  return caller.tenant;
+}
+
 }  // namespace
 
 grpc::Status WorkerServiceImpl::Register(grpc::ServerContext* context, const v1::RegisterRequest* request,
@@ -64,7 +72,8 @@ grpc::Status WorkerServiceImpl::Register(grpc::ServerContext* context, const v1:
                         info.set_model(PrintableText(info.model(), 1024));
                       }
                       WarnOfTokenChange(request->worker_id(), call.caller.name,
-                                        workers_.Register(registered, call.caller.name));
+                                        workers_.Register(registered, call.caller.name,
+                                                          ServedTenant(call.caller).value_or("")));
                       response->set_lease_ttl_ms(timing_.lease_ttl.count());
                       response->set_heartbeat_interval_ms(timing_.heartbeat_interval.count());
                       return grpc::Status::OK;
@@ -101,7 +110,7 @@ grpc::Status WorkerServiceImpl::Lease(grpc::ServerContext* context, const v1::Le
     const auto deadline =
         Clock::now() + (unknown ? std::chrono::milliseconds(0)
                                 : std::max(std::chrono::milliseconds(0), std::min(wait, caller_left)));
-    auto granted = coordinator_.Lease(request->worker_id(), deadline);
+    auto granted = coordinator_.Lease(request->worker_id(), deadline, ServedTenant(call.caller));
     response->set_register_again(unknown);
     if (!granted) return grpc::Status::OK;
     call.wrote = true;

@@ -282,11 +282,32 @@ TEST_F(AccessControlTest, AnotherTenantsJobIsNotFoundLikeAMissingOne) {
 }
 
 // A tenant on a worker or admin token meant nothing and was taken without a word (found 2026-12-05).
-TEST_F(AccessControlTest, OnlyClientTokensHaveATenant) {
+// A worker token with a tenant runs that tenant's jobs only: a research department's GPU node never
+// leases a clinical recording (every worker leased every tenant's jobs until 2026-12-06). An admin
+// token has no tenant.
+TEST_F(AccessControlTest, AWorkerTokenWithATenantRunsThatTenantsJobsOnly) {
   const auto refused =
       Capture(BuiltBinary("server/endorecon-server") + " token create --data-dir " +
-              cluster_.data_dir().string() + " --role worker --tenant radiology --name w 2>&1");
-  EXPECT_NE(refused.find("--tenant applies to client tokens"), std::string::npos) << refused;
+              cluster_.data_dir().string() + " --role admin --tenant radiology --name a 2>&1");
+  EXPECT_NE(refused.find("an admin token sees every tenant"), std::string::npos) << refused;
+  const auto submit = [&](const ClientCredentials& who) {
+    const auto result = Cli(who, {"--json", "submit", cluster_.path("clip").string(), "--iterations", "30"});
+    EXPECT_EQ(result.exit_code, 0) << result.err;
+    return result.out.substr(result.out.find("\"id\":\"") + 6, 12);
+  };
+  const auto radiology = submit(alice_);
+  const auto oncology = submit(bob_);
+  const auto file = WriteTokenFile(cluster_.path("oncology-node.token"),
+                                   CreateToken(cluster_.data_dir(), "worker", "oncology", "onc-node"));
+  auto& worker = cluster_.StartWorker("w-onc", {"--token-file", file.string()});
+  EXPECT_EQ(cluster_.WaitForState(oncology, v1::SUCCEEDED, std::chrono::seconds(120)).worker_id(), "w-onc")
+      << worker.Log();
+  const auto listed = Cli(admin_, {"workers"});
+  EXPECT_NE(listed.out.find("runs the jobs of tenant 'oncology' only"), std::string::npos) << listed.out;
+  std::this_thread::sleep_for(std::chrono::seconds(2));
+  EXPECT_EQ(cluster_.Job(radiology).state(), v1::QUEUED) << "submitted first, and another tenant's";
+  cluster_.StartWorker("w-any", {"--token-file", worker_.token_file});  // every tenant's jobs
+  EXPECT_EQ(cluster_.WaitForState(radiology, v1::SUCCEEDED, std::chrono::seconds(120)).worker_id(), "w-any");
 }
 
 TEST_F(AccessControlTest, OverQuotaSubmitsAreRefusedAndNothingIsLost) {

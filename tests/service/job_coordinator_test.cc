@@ -12,6 +12,7 @@
 #include <thread>
 
 #include "common/error.h"
+#include "common/sha256.h"
 #include "tests/unit/clip_fixture.h"
 #include "tests/unit/temp_dir.h"
 
@@ -385,6 +386,59 @@ TEST_F(JobCoordinatorTest, AnotherTenantsJobIsNotFoundLikeAMissingOne) {
   EXPECT_EQ(CodeOf([&] { coordinator_.Cancel(id, b); }), ErrorCode::kNotFound);
   EXPECT_EQ(CodeOf([&] { coordinator_.Get("no-such-job", a); }), ErrorCode::kNotFound);
   EXPECT_EQ(Get(id).state(), v1::QUEUED);
+}
+
+// A tenant's uploads not yet submitted count against its byte quota: each upload under the quota, and
+// none submitted, let a tenant keep any number of them on the data disk for --orphan-hours (found
+// 2026-12-06).
+TEST_F(JobCoordinatorTest, UploadsNotYetSubmittedCountAgainstTheByteQuota) {
+  JobCoordinator quoted({store_, blobs_, scheduler_, leases_, workers_, hub_, metrics_}, 2,
+                        TenantQuotas({0, 1000}, ""), [this] { return now_; });
+  const Principal a{"a-client", Role::kClient, "a", false};
+  const Principal b{"b-client", Role::kClient, "b", false};
+  const auto upload = [](const std::string& bytes) {
+    v1::Manifest manifest;
+    auto* file = manifest.add_files();
+    file->set_path("images/000000.png");
+    file->set_size(static_cast<std::int64_t>(bytes.size()));
+    file->set_sha256(Sha256Hex(bytes));
+    return manifest;
+  };
+  const std::string first(600, '1'), second(600, '2');
+  const auto refusal = [&](const v1::Manifest& manifest, const Principal& who) -> std::string {
+    try {
+      quoted.AdmitUpload(manifest, who);
+    } catch (const Error& e) {
+      EXPECT_EQ(e.code(), ErrorCode::kResourceExhausted);
+      return e.what();
+    }
+    return "";
+  };
+  EXPECT_EQ(refusal(upload(first), a), "");
+  EXPECT_EQ(refusal(upload(first), a), "") << "an upload resumed is not counted twice";
+  std::string message = refusal(upload(second), a);
+  EXPECT_NE(message.find("tenant 'a' keeps 0 bytes in its jobs, 600 in uploads not yet submitted"),
+            std::string::npos)
+      << message;
+  EXPECT_NE(message.find("or submit the uploads not yet submitted"), std::string::npos) << message;
+  quoted.CheckUploadQuota(upload(second), a);  // a listing before an upload: not counted there
+  EXPECT_EQ(refusal(upload(second), b), "") << "another tenant's uploads are its own";
+
+  // Submitted, the upload's bytes are the job's, counted once.
+  blobs_.Put(first);
+  v1::SubmitRequest request;
+  *request.mutable_clip() = upload(first);
+  quoted.Submit(request, a);
+  message = refusal(upload(second), a);
+  EXPECT_NE(message.find("tenant 'a' keeps 600 bytes in its jobs and this adds 600"), std::string::npos)
+      << message;
+  EXPECT_EQ(refusal(upload(std::string(300, '3')), a), "");
+  message = refusal(upload(std::string(300, '4')), a);
+  EXPECT_NE(message.find("600 bytes in its jobs, 300 in uploads not yet submitted"), std::string::npos)
+      << message;
+  // Retention forgets an upload as it deletes its partial: after --orphan-hours.
+  quoted.ExpireFinishedBefore(0, UploadLedger::Time::clock::now() + seconds(1));
+  EXPECT_EQ(refusal(upload(std::string(300, '4')), a), "");
 }
 
 }  // namespace

@@ -57,5 +57,30 @@ TEST(SchedulerTest, ShutdownReleasesWaiters) {
   EXPECT_EQ(got, std::nullopt);
 }
 
+// A worker whose token serves one tenant takes that tenant's jobs in their order and leaves the rest
+// queued in theirs; one waiting is woken by its tenant's job even when another's came first.
+TEST(SchedulerTest, AWorkerOfOneTenantTakesItsTenantsJobsAndLeavesTheRest) {
+  Scheduler scheduler;
+  scheduler.Push("a-old", 0, 1, "a");
+  scheduler.Push("b", 5, 2, "b");
+  scheduler.Push("a-high", 9, 3, "a");
+  scheduler.Push("no-tenant", 0, 4);
+  const auto now = [] { return std::chrono::steady_clock::now(); };
+  EXPECT_EQ(scheduler.PopWait(now(), "b"), "b");
+  EXPECT_EQ(scheduler.PopWait(now(), "b"), std::nullopt);
+  EXPECT_EQ(scheduler.PopWait(now(), "a"), "a-high");
+  EXPECT_EQ(scheduler.Depth(), 2u);
+  EXPECT_EQ(PopNow(scheduler), "a-old") << "a worker of every tenant takes the queue's head";
+  EXPECT_EQ(scheduler.PopWait(now(), ""), "no-tenant");
+
+  std::optional<std::string> got;
+  std::thread waiter([&] { got = scheduler.PopWait(now() + std::chrono::seconds(30), "c"); });
+  scheduler.Push("b-late", 0, 5, "b");
+  scheduler.Push("c-late", 0, 6, "c");
+  waiter.join();
+  EXPECT_EQ(got, "c-late");
+  EXPECT_EQ(PopNow(scheduler), "b-late");
+}
+
 }  // namespace
 }  // namespace endorecon::server

@@ -1,0 +1,41 @@
+#include "server/upload_ledger.h"
+
+#include <set>
+
+namespace endorecon::server {
+
+std::int64_t UploadLedger::PendingBytes(const std::string& tenant, const v1::Manifest& except) const {
+  const auto found = tenants_.find(tenant);
+  if (found == tenants_.end()) return 0;
+  std::set<std::string> left_out;
+  for (const auto& file : except.files()) left_out.insert(file.sha256());
+  std::int64_t bytes = 0;
+  for (const auto& [digest, entry] : found->second) {
+    if (!left_out.count(digest)) bytes += entry.bytes;
+  }
+  return bytes;
+}
+
+void UploadLedger::Add(const std::string& tenant, const v1::FileEntry& file, Time now) {
+  if (file.sha256().empty()) return;  // a sizes-only listing brings nothing yet
+  tenants_[tenant][file.sha256()] = {file.size(), now};
+}
+
+void UploadLedger::Submitted(const std::string& tenant, const v1::Manifest& manifest) {
+  const auto found = tenants_.find(tenant);
+  if (found == tenants_.end()) return;
+  for (const auto& file : manifest.files()) found->second.erase(file.sha256());
+  if (found->second.empty()) tenants_.erase(found);
+}
+
+std::size_t UploadLedger::ForgetBefore(Time cutoff) {
+  std::size_t forgotten = 0;
+  for (auto tenant = tenants_.begin(); tenant != tenants_.end();) {
+    auto& files = tenant->second;
+    forgotten += std::erase_if(files, [cutoff](const auto& item) { return item.second.noted < cutoff; });
+    tenant = files.empty() ? tenants_.erase(tenant) : std::next(tenant);
+  }
+  return forgotten;
+}
+
+}  // namespace endorecon::server

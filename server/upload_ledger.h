@@ -1,0 +1,48 @@
+// Which tenant's uploads brought which content that no job of it holds yet: a tenant's byte quota
+// (max_bytes) counts its uploads not yet submitted, not only its jobs' files. Without this, a tenant
+// could leave any number of uploads unsubmitted, each under its quota, for --orphan-hours (found
+// 2026-12-06). Kept in the server's memory: a restart forgets it (the partial uploads themselves are
+// still deleted --orphan-hours after their last write). Not thread-safe: the coordinator holds its lock.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <map>
+#include <string>
+
+#include "endorecon/v1/files.pb.h"
+
+namespace endorecon::server {
+
+class UploadLedger {
+ public:
+  using Time = std::filesystem::file_time_type;  // the clock of retention's orphan cutoff
+
+  // The bytes `tenant`'s uploads not yet submitted bring, leaving out the files of `except` (an
+  // upload resumed, or the manifest being submitted, is not counted twice).
+  std::int64_t PendingBytes(const std::string& tenant, const v1::Manifest& except) const;
+  // `tenant` uploads the files of `manifest` that are no blob yet (`stored` says which are): they count
+  // as its until submitted or forgotten. A file noted again is dated anew.
+  template <typename Stored>
+  void Note(const std::string& tenant, const v1::Manifest& manifest, Stored&& stored, Time now) {
+    for (const auto& file : manifest.files()) {
+      if (!stored(file.sha256())) Add(tenant, file, now);
+    }
+  }
+  // A job of `tenant` now holds the files of `manifest` (submitted): they count as the job's.
+  void Submitted(const std::string& tenant, const v1::Manifest& manifest);
+  // Forgets what was last noted before `cutoff`: retention deletes those partial uploads and unused
+  // blobs then. Returns how many entries went.
+  std::size_t ForgetBefore(Time cutoff);
+
+ private:
+  struct Entry {
+    std::int64_t bytes = 0;
+    Time noted;
+  };
+  void Add(const std::string& tenant, const v1::FileEntry& file, Time now);
+
+  std::map<std::string, std::map<std::string, Entry>> tenants_;  // tenant -> sha256 -> entry
+};
+
+}  // namespace endorecon::server
