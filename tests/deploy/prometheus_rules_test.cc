@@ -3,6 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <nlohmann/json.hpp>
+#include <regex>
+#include <set>
+#include <string>
 
 #include "tests/deploy/deploy_files.h"
 
@@ -28,6 +31,44 @@ TEST(PrometheusRulesTest, PromtoolAcceptsTheRulesAndTheirTests) {
     EXPECT_NE(ReadBytes(dir / "alerts_test.yml").find("alertname: " + alert), std::string::npos)
         << alert << " has no unit test";
   }
+}
+
+// Every query of the dashboard is PromQL promtool parses (with its variables as "All" gives them),
+// and keeps to the instances its Server or Workers variable picks: with two servers or many workers
+// scraped, the panels summed them all (the dashboard had no variables until 2026-12-06).
+TEST(PrometheusRulesTest, TheDashboardsQueriesParseAndKeepToThePickedInstances) {
+  if (!std::filesystem::exists("/usr/bin/promtool"))
+    GTEST_SKIP() << "promtool is not installed (scripts/install-deps installs prometheus)";
+  const auto dashboard = nlohmann::json::parse(ReadBytes(SourcePath("deploy/grafana/endorecon.json")));
+  std::set<std::string> variables;
+  for (const auto& variable : dashboard.at("templating").at("list")) {
+    variables.insert(variable.at("name").get<std::string>());
+    EXPECT_EQ(variable.at("allValue"), ".*");
+  }
+  EXPECT_EQ(variables, (std::set<std::string>{"server", "worker"}));
+  TempDir dir("dashboard-rules");
+  std::string rules = "groups:\n  - name: dashboard\n    rules:\n";
+  int count = 0;
+  const std::regex metric("(endorecon_[a-z_]+)(\\{[^}]*\\})?");
+  for (const auto& panel : dashboard.at("panels")) {
+    for (const auto& target : panel.at("targets")) {
+      const std::string expr = target.at("expr").get<std::string>();
+      for (auto it = std::sregex_iterator(expr.begin(), expr.end(), metric); it != std::sregex_iterator();
+           ++it) {
+        const std::string scope = (*it)[1].str().starts_with("endorecon_worker_") ? "$worker" : "$server";
+        EXPECT_NE((*it)[2].str().find("instance=~\"" + scope + "\""), std::string::npos)
+            << panel.at("title") << ": " << (*it)[0].str() << " is not kept to " << scope;
+      }
+      std::string query = std::regex_replace(expr, std::regex("\\$(server|worker)"), ".*");
+      rules += "      - record: dashboard:query_" + std::to_string(++count) +
+               "\n        expr: " + nlohmann::json(query).dump() + "\n";
+    }
+  }
+  WriteBytes(dir / "dashboard.yml", rules);
+  const auto check =
+      Capture("promtool check rules '" + (dir / "dashboard.yml").string() + "' 2>&1; echo rc=$?");
+  EXPECT_NE(check.find("SUCCESS: " + std::to_string(count) + " rules found"), std::string::npos) << check;
+  EXPECT_NE(check.find("rc=0"), std::string::npos) << check;
 }
 
 TEST(PrometheusRulesTest, AlertsAndDashboardUseOnlyExportedMetrics) {
