@@ -3,9 +3,7 @@
 // running job completes.
 #include <gtest/gtest.h>
 #include <signal.h>
-#include <zlib.h>
 
-#include <cstdint>
 #include <random>
 #include <string>
 #include <thread>
@@ -31,23 +29,11 @@ TEST(ServerRestartTest, KillDuringUploadThenTheUploadResumes) {
   Cluster cluster;
   const auto clip = cluster.path("bigclip");
   MakeClip(clip);  // a clip, which the CLI checks before its upload (and whose named files it uploads)
-  // Its first frame made 24 MiB: a private ancillary chunk of random bytes (with its CRC, as the CLI
-  // checks) before the PNG's IEND, which decoders skip.
+  // Its first frame made 24 MiB larger (random bytes in a chunk decoders skip).
   std::string data(24 << 20, '\0');
   std::mt19937_64 random(7);
   for (auto& byte : data) byte = static_cast<char>(random());
-  const std::string png = ReadBytes(clip / "images" / "000000.png");
-  const auto big_endian = [](std::uint32_t value) {
-    return std::string{static_cast<char>(value >> 24), static_cast<char>(value >> 16),
-                       static_cast<char>(value >> 8), static_cast<char>(value)};
-  };
-  const std::string ancillary = "reCo" + data;
-  const auto crc = static_cast<std::uint32_t>(
-      crc32(0L, reinterpret_cast<const Bytef*>(ancillary.data()), static_cast<uInt>(ancillary.size())));
-  const std::string bytes = png.substr(0, png.size() - 12) +
-                            big_endian(static_cast<std::uint32_t>(data.size())) + ancillary +
-                            big_endian(crc) + png.substr(png.size() - 12);
-  WriteBytes(clip / "images" / "000000.png", bytes);
+  const std::string bytes = AddPngPayload(clip / "images" / "000000.png", data);
   v1::FileEntry entry;
   entry.set_path("images/000000.png");
   entry.set_size(static_cast<std::int64_t>(bytes.size()));

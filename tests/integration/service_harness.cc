@@ -7,6 +7,7 @@
 #include <sys/socket.h>
 #include <sys/wait.h>
 #include <unistd.h>
+#include <zlib.h>
 
 #include <cerrno>
 #include <cstdio>
@@ -139,7 +140,7 @@ std::vector<std::string> ClientCredentials::CliFlags() const {
 }
 
 std::string CreateToken(const fs::path& data_dir, const std::string& role, const std::string& tenant,
-                        const std::string& name) {
+                        const std::string& name, const std::vector<std::string>& more) {
   TempDir scratch("token");
   std::vector<std::string> argv{BuiltBinary("server/endorecon-server"),
                                 "token",
@@ -151,6 +152,7 @@ std::string CreateToken(const fs::path& data_dir, const std::string& role, const
                                 "--name",
                                 name};
   if (!tenant.empty()) argv.insert(argv.end(), {"--tenant", tenant});
+  argv.insert(argv.end(), more.begin(), more.end());
   if (Process(argv, scratch / "out").Wait() != 0)
     throw std::runtime_error("token create failed: " + ReadBytes(scratch / "out"));
   const std::string out = ReadBytes(scratch / "out");
@@ -170,6 +172,22 @@ void MakeClip(const fs::path& dir, int seed) {
                               " --frames 8 --width 32 --height 24 --seed " + std::to_string(seed) +
                               " > /dev/null 2>&1";
   if (std::system(command.c_str()) != 0) throw std::runtime_error("synth failed: " + command);
+}
+
+std::string AddPngPayload(const fs::path& path, const std::string& payload) {
+  const std::string png = ReadBytes(path);
+  const auto big_endian = [](std::uint32_t value) {
+    return std::string{static_cast<char>(value >> 24), static_cast<char>(value >> 16),
+                       static_cast<char>(value >> 8), static_cast<char>(value)};
+  };
+  const std::string chunk = "reCo" + payload;  // ancillary, private, safe to copy
+  const auto crc = static_cast<std::uint32_t>(
+      crc32(0L, reinterpret_cast<const Bytef*>(chunk.data()), static_cast<uInt>(chunk.size())));
+  const std::string bytes = png.substr(0, png.size() - 12) +
+                            big_endian(static_cast<std::uint32_t>(payload.size())) + chunk + big_endian(crc) +
+                            png.substr(png.size() - 12);
+  WriteBytes(path, bytes);
+  return bytes;
 }
 
 std::string Capture(const std::string& command) {

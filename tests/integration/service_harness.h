@@ -68,15 +68,21 @@ struct ClientCredentials {
   // The CLI's global options for these ("--ca", FILE, "--token-file", FILE).
   std::vector<std::string> CliFlags() const;
 };
-// Runs `endorecon-server token create --data-dir DIR ...`; returns the token (its output's last word).
+// Runs `endorecon-server token create --data-dir DIR ...` (`more`: further options, as --expires-in);
+// returns the token (its output's last word).
 std::string CreateToken(const std::filesystem::path& data_dir, const std::string& role,
-                        const std::string& tenant, const std::string& name);
+                        const std::string& tenant, const std::string& name,
+                        const std::vector<std::string>& more = {});
 // Writes `token` into `path` with mode 0600; returns the path.
 std::filesystem::path WriteTokenFile(const std::filesystem::path& path, const std::string& token);
 // Runs `endorecon args...` to completion, with no --server added.
 CliResult RunCliAsTyped(const std::vector<std::string>& args);
 // Writes a tiny synthetic clip (endorecon-worker synth, 8 frames of 32x24) into `dir`.
 void MakeClip(const std::filesystem::path& dir, int seed = 1);
+// Makes the PNG at `path` hold `payload` too, in a private ancillary chunk (with its CRC, as the CLI
+// checks) before its IEND, which decoders skip; returns the file's new bytes. A large file in a clip,
+// for tests of large transfers (the CLI uploads only the files a clip's layout names).
+std::string AddPngPayload(const std::filesystem::path& path, const std::string& payload);
 // Runs a command line through the shell; returns its stdout (for curl).
 std::string Capture(const std::string& command);
 

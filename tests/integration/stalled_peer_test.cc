@@ -6,7 +6,6 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
-#include <fstream>
 #include <random>
 #include <thread>
 
@@ -21,15 +20,14 @@ namespace endorecon::testing {
 namespace {
 namespace fs = std::filesystem;
 
-// Submits a clip carrying a 16 MiB random file (far more than a slow reader's flow-control window);
-// returns the job id and fills `bytes` with the file.
+// Submits a clip whose first frame carries 16 MiB of random bytes (far more than a slow reader's
+// flow-control window); returns the job id and fills `bytes` with that frame's file.
 std::string SubmitWithLargeFile(Cluster& cluster, std::uint32_t seed, std::string& bytes) {
   MakeClip(cluster.path("clip"));
-  bytes.assign(16 << 20, '\0');
+  std::string payload(16 << 20, '\0');
   std::mt19937 random(seed);
-  for (auto& c : bytes) c = static_cast<char>(random() & 0xff);
-  std::ofstream(cluster.path("clip") / "extra.bin", std::ios::binary)
-      .write(bytes.data(), std::streamsize(bytes.size()));
+  for (auto& c : payload) c = static_cast<char>(random() & 0xff);
+  bytes = AddPngPayload(cluster.path("clip") / "images" / "000000.png", payload);
   return cluster.Submit(cluster.path("clip"), {"--iterations", "10"});
 }
 
@@ -46,7 +44,7 @@ std::unique_ptr<v1::WorkerService::Stub> SlowReader(const Cluster& cluster, int 
 }
 
 // Registers the hand-made worker "stalled" and leases job `id` (again once a lease it never renews
-// has expired); returns the request for extra.bin under that lease.
+// has expired); returns the request for the large frame under that lease.
 v1::GetBlobsRequest LeaseLargeFile(v1::WorkerService::Stub& worker, const std::string& id,
                                    const std::string& bytes) {
   {
@@ -68,7 +66,7 @@ v1::GetBlobsRequest LeaseLargeFile(v1::WorkerService::Stub& worker, const std::s
   v1::GetBlobsRequest request;
   request.set_lease_id(lease.lease_id());
   auto* range = request.add_files();
-  range->set_path("extra.bin");
+  range->set_path("images/000000.png");
   range->set_sha256(Sha256Hex(bytes));
   return request;
 }
