@@ -4,6 +4,7 @@
 
 #include <cctype>
 #include <string>
+#include <vector>
 
 #include "common/error.h"
 #include "common/transport_security.h"
@@ -114,6 +115,17 @@ CallGuard::CallGuard(std::filesystem::path token_store, bool require_worker_cert
 }
 
 bool CallGuard::Refresh() { return Tokens() != nullptr; }
+
+void CallGuard::PublishTokenExpiries() {
+  TokenStore* tokens = Tokens();
+  if (tokens == nullptr) return;
+  std::vector<Metrics::ExpiringToken> expiring;
+  for (const auto& record : tokens->List()) {
+    if (record.revoked_unix_ms == 0 && record.expires_unix_ms != 0)
+      expiring.push_back({record.name, RoleName(record.role), record.expires_unix_ms});
+  }
+  metrics_.SetTokenExpiries(expiring);
+}
 
 TokenStore* CallGuard::Tokens() {
   std::lock_guard lock(mutex_);

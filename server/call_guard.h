@@ -87,6 +87,9 @@ class CallGuard {
   // Opens the token store once its file exists (at start, and from the server's maintenance
   // thread). Returns whether tokens are required now.
   bool Refresh();
+  // Sets the token expiry gauges (Metrics::SetTokenExpiries) from the token store, if there is one:
+  // the maintenance thread's, once a minute (an alert warns days ahead).
+  void PublishTokenExpiries();
   // Audits something the server did on its own (retention, PACS retrievals and sends), as principal
   // "server"; `subject` names what it acted with (a PACS's name), never patient data.
   void RecordServerAction(const std::string& method, const std::string& job_id, const std::string& outcome,

@@ -329,6 +329,13 @@ int Run(const ServerFlags& flags) {
           metrics.SetDataDisk(static_cast<std::int64_t>(space.available),
                               static_cast<std::int64_t>(space.capacity));
         guard.Refresh();
+        if (tick % 300 == 0) {
+          try {
+            guard.PublishTokenExpiries();
+          } catch (const Error& e) {
+            spdlog::error("token expiries: {}: {}", ErrorCodeName(e.code()), e.what());
+          }
+        }
         hub.Prune(std::chrono::steady_clock::now(), std::chrono::seconds(60));
         workers.Forget(std::chrono::steady_clock::now() - std::chrono::hours(24));  // `workers` lists a day
         const auto trim_start = IdleTrim::Clock::now();

@@ -69,7 +69,11 @@ Metrics::Metrics(const std::string& bind_address)
               .Help("Duration of the job store's commits (a transaction and its fsyncs)")
               .Register(*registry_)
               .Add({}, prometheus::Histogram::BucketBoundaries{0.001, 0.0025, 0.005, 0.01, 0.025, 0.05, 0.1,
-                                                               0.25, 0.5, 1, 2.5, 10})) {
+                                                               0.25, 0.5, 1, 2.5, 10})),
+      token_expiry_(BuildGauge()
+                        .Name("endorecon_token_expiry_timestamp_seconds")
+                        .Help("When each token that expires does (Unix seconds), for tokens not revoked")
+                        .Register(*registry_)) {
   for (const auto* code : {"UNAUTHENTICATED", "PERMISSION_DENIED"}) refused_.Add({{"code", code}});
   for (const auto state : {v1::QUEUED, v1::RUNNING, v1::SUCCEEDED, v1::FAILED, v1::CANCELLED}) {
     jobs_.Add({{"state", v1::JobState_Name(state)}}).Set(0);
@@ -104,6 +108,23 @@ void Metrics::SetJobsByState(const std::map<v1::JobState, std::int64_t>& counts)
     jobs_.Add({{"state", v1::JobState_Name(state)}})
         .Set(found == counts.end() ? 0.0 : static_cast<double>(found->second));
   }
+}
+
+void Metrics::SetTokenExpiries(const std::vector<ExpiringToken>& tokens) {
+  std::map<std::pair<std::string, std::string>, prometheus::Gauge*> now;
+  for (const auto& token : tokens) {
+    const std::pair key{token.name, token.role};
+    auto found = token_gauges_.find(key);
+    prometheus::Gauge* gauge = found != token_gauges_.end()
+                                   ? found->second
+                                   : &token_expiry_.Add({{"token", token.name}, {"role", token.role}});
+    gauge->Set(static_cast<double>(token.expires_unix_ms) / 1000.0);
+    now[key] = gauge;
+  }
+  for (const auto& [key, gauge] : token_gauges_) {
+    if (!now.count(key)) token_expiry_.Remove(gauge);
+  }
+  token_gauges_ = std::move(now);
 }
 
 void Metrics::CallHandled(const char* method, double seconds) {

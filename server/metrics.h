@@ -25,6 +25,9 @@
 //   endorecon_store_commit_seconds           histogram: the job store's commits (one transaction and
 //                                            its fsyncs for every write staged meanwhile); a writing
 //                                            call waits for one or two of them
+//   endorecon_token_expiry_timestamp_seconds{token,role}  gauge: when each token that expires does
+//                                            (Unix seconds), for tokens not revoked (an expired one
+//                                            stays until it is revoked or its label is reused)
 #pragma once
 
 #include <prometheus/counter.h>
@@ -37,6 +40,8 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "endorecon/v1/job.pb.h"
 
@@ -78,6 +83,15 @@ class Metrics {
   // `method`: the RPC's name (a literal: few distinct values).
   void CallHandled(const char* method, double seconds);
   void StoreCommitted(double seconds) { store_commit_seconds_.Observe(seconds); }
+  // A token not revoked that expires: its label, its role's name and when it expires.
+  struct ExpiringToken {
+    std::string name;
+    std::string role;
+    std::int64_t expires_unix_ms = 0;
+  };
+  // The token expiry series become `tokens`' (a token revoked since loses its series). One caller
+  // thread at a time.
+  void SetTokenExpiries(const std::vector<ExpiringToken>& tokens);
 
  private:
   std::shared_ptr<prometheus::Registry> registry_;
@@ -103,6 +117,8 @@ class Metrics {
   prometheus::Gauge& data_capacity_;
   prometheus::Family<prometheus::Histogram>& rpc_seconds_;
   prometheus::Histogram& store_commit_seconds_;
+  prometheus::Family<prometheus::Gauge>& token_expiry_;
+  std::map<std::pair<std::string, std::string>, prometheus::Gauge*> token_gauges_;  // (label, role)
 };
 
 }  // namespace endorecon::server

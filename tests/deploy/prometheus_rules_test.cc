@@ -17,7 +17,7 @@ TEST(PrometheusRulesTest, PromtoolAcceptsTheRulesAndTheirTests) {
     GTEST_SKIP() << "promtool is not installed (scripts/install-deps installs prometheus)";
   const auto dir = SourcePath("deploy/prometheus");
   const auto check = Capture("cd '" + dir.string() + "' && promtool check rules alerts.yml 2>&1; echo rc=$?");
-  EXPECT_NE(check.find("SUCCESS: 7 rules found"), std::string::npos) << check;
+  EXPECT_NE(check.find("SUCCESS: 8 rules found"), std::string::npos) << check;
   EXPECT_NE(check.find("rc=0"), std::string::npos) << check;
   const auto config =
       Capture("cd '" + dir.string() + "' && promtool check config prometheus.yml 2>&1; echo rc=$?");
@@ -26,8 +26,9 @@ TEST(PrometheusRulesTest, PromtoolAcceptsTheRulesAndTheirTests) {
       Capture("cd '" + dir.string() + "' && promtool test rules alerts_test.yml 2>&1; echo rc=$?");
   EXPECT_NE(tests.find("SUCCESS"), std::string::npos) << tests;
   EXPECT_NE(tests.find("rc=0"), std::string::npos) << tests;
-  for (const std::string alert : {"EndoreconQueueStuck", "EndoreconNoLiveWorkers", "EndoreconJobsFailing",
-                                  "EndoreconDiskNearlyFull", "EndoreconLeaseExpiriesRising"}) {
+  for (const std::string alert :
+       {"EndoreconQueueStuck", "EndoreconNoLiveWorkers", "EndoreconJobsFailing", "EndoreconDiskNearlyFull",
+        "EndoreconLeaseExpiriesRising", "EndoreconWorkerTokenExpiring"}) {
     EXPECT_NE(ReadBytes(dir / "alerts_test.yml").find("alertname: " + alert), std::string::npos)
         << alert << " has no unit test";
   }
@@ -72,9 +73,15 @@ TEST(PrometheusRulesTest, TheDashboardsQueriesParseAndKeepToThePickedInstances) 
 }
 
 TEST(PrometheusRulesTest, AlertsAndDashboardUseOnlyExportedMetrics) {
-  // A PACS destination (nothing listens there: it is only named) so that the per-PACS series exist.
-  Cluster cluster({"--pacs", "pacs1=PACS1@127.0.0.1:1"});
-  cluster.StartWorker("w1");
+  // A PACS destination (nothing listens there: it is only named) so that the per-PACS series exist,
+  // and a worker token that expires so that its expiry's series does.
+  Cluster cluster({"--pacs", "pacs1=PACS1@127.0.0.1:1"}, false);
+  cluster.UseCredentials(MakeCredentials(cluster, "", "admin", "", "ops"));
+  const auto token =
+      WriteTokenFile(cluster.path("worker.token"),
+                     CreateToken(cluster.data_dir(), "worker", "", "w1", {"--expires-in", "30d"}));
+  cluster.StartServer();
+  cluster.StartWorker("w1", {"--token-file", token.string()});
   const auto metrics_of = [](int port) {
     return Capture("curl -s --max-time 5 http://127.0.0.1:" + std::to_string(port) + "/metrics");
   };

@@ -324,7 +324,7 @@ TEST_F(AccessControlTest, OverQuotaSubmitsAreRefusedAndNothingIsLost) {
   EXPECT_NE(fourth.err.find("max_jobs"), std::string::npos) << fourth.err;
   EXPECT_EQ(fourth.err.find("largest file"), std::string::npos)
       << "a job count is no file's size: " << fourth.err;
-  EXPECT_EQ(fourth.err.find("uploaded"), std::string::npos) << fourth.err;
+  EXPECT_EQ(fourth.err.find("already on the server"), std::string::npos) << fourth.err;
   // Options the server would refuse are refused before the upload too.
   // A budget is 0 (none) or 10 s to a week: -5, 0.001 and 1e300 (unit slips) are refused.
   for (const std::string budget : {"-5", "0.001", "1e300"}) {
@@ -339,7 +339,7 @@ TEST_F(AccessControlTest, OverQuotaSubmitsAreRefusedAndNothingIsLost) {
       Cli(alice_, {"submit", cluster_.path("clip2").string(), "--name", std::string(300, 'n')});
   EXPECT_EQ(long_name.exit_code, 2) << long_name.err;
   EXPECT_NE(long_name.err.find("name has 300 bytes; at most 256"), std::string::npos) << long_name.err;
-  EXPECT_EQ(long_name.err.find("uploaded"), std::string::npos) << long_name.err;
+  EXPECT_EQ(long_name.err.find("already on the server"), std::string::npos) << long_name.err;
   // Another tenant has its own quota.
   SubmitAs(bob_, "bobs");
   EXPECT_EQ(cluster_.Job(first).state(), v1::QUEUED);
@@ -541,6 +541,37 @@ TEST_F(AccessControlTest, AJobThatEndsWithoutResultsSettlesItsSends) {
 // `token list`, `token revoke` and a refused `token create` on the data folder of a server without
 // tokens made an empty store, and the server then refused every call, with no token to use (found
 // 2026-12-05).
+// A token that expires is on /metrics with its expiry, for an alert days ahead
+// (EndoreconWorkerTokenExpiring): a worker whose token expired stopped leasing, and Prometheus saw only
+// the queue grow (until 2026-12-06). A revoked token's series goes; a token that never expires has none.
+TEST(TokenExpiryMetricTest, TokensThatExpireAreOnTheMetricsUntilRevoked) {
+  Cluster cluster({}, false);
+  cluster.UseCredentials(MakeCredentials(cluster, "", "admin", "", "ops"));
+  CreateToken(cluster.data_dir(), "worker", "", "gpu-7", {"--expires-in", "2d"});
+  CreateToken(cluster.data_dir(), "client", "radiology", "dr-x", {"--expires-in", "90d"});
+  CreateToken(cluster.data_dir(), "worker", "", "gone", {"--expires-in", "1d"});
+  Capture(BuiltBinary("server/endorecon-server") + " token revoke --data-dir " + cluster.data_dir().string() +
+          " gone");
+  const double now_s = static_cast<double>(
+      std::chrono::duration_cast<std::chrono::seconds>(std::chrono::system_clock::now().time_since_epoch())
+          .count());
+  cluster.StartServer();
+  std::string metrics;
+  ASSERT_TRUE(WaitUntil([&] {
+    metrics = Capture("curl -s --max-time 5 http://127.0.0.1:" + std::to_string(cluster.metrics_port()) +
+                      "/metrics");
+    return metrics.find("token=\"gpu-7\"") != std::string::npos;
+  }));
+  const auto value_of = [&](const std::string& labels) {
+    const auto at = metrics.find("endorecon_token_expiry_timestamp_seconds{" + labels + "} ");
+    return at == std::string::npos ? -1.0 : std::stod(metrics.substr(metrics.find("} ", at) + 2));
+  };
+  EXPECT_NEAR(value_of("role=\"worker\",token=\"gpu-7\""), now_s + 2 * 86400, 120) << metrics;
+  EXPECT_NEAR(value_of("role=\"client\",token=\"dr-x\""), now_s + 90 * 86400, 120) << metrics;
+  EXPECT_EQ(metrics.find("token=\"gone\""), std::string::npos) << "revoked";
+  EXPECT_EQ(metrics.find("token=\"ops\""), std::string::npos) << "never expires";
+}
+
 TEST(TokenCommandsTest, ReadingOrARefusedCreateLocksNobodyOut) {
   Cluster cluster;
   const auto server = BuiltBinary("server/endorecon-server");
