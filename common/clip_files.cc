@@ -271,10 +271,13 @@ std::vector<fs::path> ListClipFiles(const fs::path& dir) {
     files.push_back(dir / "poses_bounds.npy");
     if (fs::exists(dir / "stereo.json")) files.push_back(dir / "stereo.json");
   }
-  const auto add = [&files](const FrameFiles& frame) {
+  // Once each: frames of a transforms.json may share a mask or a depth map (one mask for a tool that
+  // stays put), which a manifest listing twice is refused for.
+  std::set<fs::path> listed;
+  const auto add = [&](const FrameFiles& frame) {
     for (const fs::path* file :
          {&frame.image, &frame.depth, &frame.tool_mask, &frame.eval_mask, &frame.right_image})
-      if (!file->empty()) files.push_back(*file);
+      if (!file->empty() && listed.insert(file->lexically_normal()).second) files.push_back(*file);
   };
   for (const FrameFiles& frame : frames) add(frame);
   if (fs::is_directory(dir / "gt")) {

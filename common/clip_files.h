@@ -68,8 +68,8 @@ std::vector<FrameFiles> ListClipFrames(const std::filesystem::path& dir);
 // Throws FailInvalid naming the folder whose count differs.
 std::vector<FrameFiles> ListGroundTruthFrames(const std::filesystem::path& gt_dir, std::size_t frames);
 
-// Every file the loaders read of the clip in `dir`: its layout's file, stereo.json (EndoNeRF layout,
-// when present), each frame's files and gt/'s, as `dir` / relative path. What the CLI uploads of a
+// Every file the loaders read of the clip in `dir`, once each: its layout's file, stereo.json (EndoNeRF
+// layout, when present), each frame's files and gt/'s, as `dir` / relative path. What the CLI uploads of a
 // clip folder: a file no loader reads (notes, a video, a spreadsheet beside the frames) stays on the
 // user's machine. Throws as ListClipFrames and ListGroundTruthFrames.
 std::vector<std::filesystem::path> ListClipFiles(const std::filesystem::path& dir);

@@ -169,11 +169,17 @@ TEST(ClipFilesTest, AClipsFilesAreTheOnesItsLayoutNames) {
   WriteBytes(transforms / "images" / "a.png", "bytes");
   WriteBytes(transforms / "images" / "unused.png", "bytes");
   WriteBytes(transforms / "depth.npy", "bytes");
-  WriteBytes(transforms / "transforms.json",
-             R"({"frames": [{"file_path": "images/a", "depth_file_path": "depth.npy"}]})");
+  WriteBytes(transforms / "images" / "b.png", "bytes");
+  WriteBytes(transforms / "mask.png", "bytes");
+  // Frames may share a mask (a tool that stays put): listed once, as a manifest must.
+  WriteBytes(
+      transforms / "transforms.json",
+      R"({"frames": [{"file_path": "images/a", "depth_file_path": "depth.npy", "mask_path": "mask.png"},
+                            {"file_path": "images/b.png", "mask_path": "./mask.png"}]})");
   EXPECT_EQ(ListClipFiles(transforms.path()),
             (std::vector<fs::path>{transforms / "transforms.json", transforms / "images" / "a.png",
-                                   transforms / "depth.npy"}));
+                                   transforms / "depth.npy", transforms / "mask.png",
+                                   transforms / "images" / "b.png"}));
 }
 
 }  // namespace
