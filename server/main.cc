@@ -165,7 +165,7 @@ int Run(const ServerFlags& flags) {
   BlobStore blobs(data_dir);
   Scheduler scheduler;
   LeaseTable leases(std::chrono::milliseconds(flags.lease_ttl_ms));
-  WorkerRegistry workers(std::chrono::milliseconds(flags.lease_ttl_ms));
+  WorkerRegistry workers(std::chrono::milliseconds(flags.lease_ttl_ms), data_dir / "drains.json");
   WatchHub hub;
   Metrics metrics(flags.metrics_port >= 0 ? flags.metrics_host + ":" + std::to_string(flags.metrics_port)
                                           : "");

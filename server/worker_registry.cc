@@ -1,11 +1,50 @@
 #include "server/worker_registry.h"
 
+#include <spdlog/spdlog.h>
+
 #include <utility>
 
 #include "common/error.h"
+#include "server/drain_file.h"
 #include "server/unix_time.h"
 
 namespace endorecon::server {
+
+WorkerRegistry::WorkerRegistry(std::chrono::milliseconds alive_window, std::filesystem::path drains_file)
+    : alive_window_(alive_window), drains_file_(std::move(drains_file)) {
+  if (drains_file_.empty()) return;
+  Drains drains;
+  try {
+    drains = ReadDrains(drains_file_);
+  } catch (const Error& e) {
+    spdlog::warn("{}; no worker starts drained (drain them again with `endorecon drain WORKER`)", e.what());
+  }
+  for (const auto& [id, seen] : drains) {
+    auto& entry = workers_[id];
+    entry.info.set_id(id);
+    entry.info.set_last_seen_unix_ms(seen);
+    entry.info.set_draining(true);
+    entry.last_seen = std::chrono::steady_clock::now() - alive_window_ - std::chrono::milliseconds(1);
+  }
+  if (!drains.empty()) spdlog::info("{} worker(s) drained before the restart still drain", drains.size());
+}
+
+void WorkerRegistry::SaveDrains() const {
+  if (drains_file_.empty()) return;
+  Drains drains;
+  for (const auto& [id, entry] : workers_) {
+    if (entry.info.draining()) drains[id] = entry.info.last_seen_unix_ms();
+  }
+  WriteDrains(drains_file_, drains);
+}
+
+void WorkerRegistry::SaveDrainsOrWarn() const {
+  try {
+    SaveDrains();
+  } catch (const Error& e) {
+    spdlog::warn("drained workers: {}", e.what());
+  }
+}
 
 WorkerRegistry::Entry& WorkerRegistry::At(const std::string& worker_id) {
   auto& entry = workers_[worker_id];
@@ -30,8 +69,11 @@ std::string WorkerRegistry::Register(const v1::RegisterRequest& request, const s
   entry.info.set_hostname(request.hostname());
   *entry.info.mutable_devices() = request.devices();
   *entry.info.mutable_device_info() = request.device_info();
-  entry.info.set_draining(false);
   entry.info.set_tenant(tenant);
+  if (!request.again() && entry.info.draining()) {
+    entry.info.set_draining(false);  // a restarted worker serves again
+    SaveDrainsOrWarn();
+  }
   return before;
 }
 
@@ -51,7 +93,16 @@ v1::WorkerInfo WorkerRegistry::SetDraining(const std::string& worker_id, bool dr
     Fail(ErrorCode::kNotFound, "no worker '" + worker_id + "' (known: " + (known.empty() ? "none" : known) +
                                    "; `endorecon workers` lists them)");
   }
+  const bool was = found->second.info.draining();
   found->second.info.set_draining(draining);
+  if (was != draining) {
+    try {
+      SaveDrains();
+    } catch (...) {
+      found->second.info.set_draining(was);
+      throw;
+    }
+  }
   return InfoOf(found->second, std::chrono::steady_clock::now());
 }
 
@@ -113,8 +164,14 @@ v1::WorkerInfo WorkerRegistry::InfoOf(const Entry& entry, std::chrono::steady_cl
 
 std::size_t WorkerRegistry::Forget(std::chrono::steady_clock::time_point cutoff) {
   std::lock_guard lock(mutex_);
-  return std::erase_if(
-      workers_, [&](const auto& item) { return item.second.last_seen < cutoff && item.second.jobs.empty(); });
+  bool drained = false;
+  const std::size_t forgotten = std::erase_if(workers_, [&](const auto& item) {
+    const bool gone = item.second.last_seen < cutoff && item.second.jobs.empty();
+    drained |= gone && item.second.info.draining();
+    return gone;
+  });
+  if (drained) SaveDrainsOrWarn();
+  return forgotten;
 }
 
 int WorkerRegistry::CountAlive() const {

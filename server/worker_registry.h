@@ -1,8 +1,10 @@
 // The workers the server has heard from: any worker call (Register, Lease, Report) counts as a
-// sign of life, so workers need not re-register after a server restart. In memory. Thread-safe.
+// sign of life, so workers need not re-register after a server restart. In memory, but for the drains,
+// which are kept in a file (server/drain_file.h) across restarts. Thread-safe.
 #pragma once
 
 #include <chrono>
+#include <filesystem>
 #include <map>
 #include <mutex>
 #include <set>
@@ -17,7 +19,9 @@ namespace endorecon::server {
 class WorkerRegistry {
  public:
   // A worker counts as alive (connected) for `alive_window` after its last call.
-  explicit WorkerRegistry(std::chrono::milliseconds alive_window) : alive_window_(alive_window) {}
+  // `drains_file`: where the drains are kept ("": in memory only). The workers it names are listed as
+  // draining (and not alive) from the start; a file that cannot be read is warned of and left aside.
+  explicit WorkerRegistry(std::chrono::milliseconds alive_window, std::filesystem::path drains_file = {});
 
   // Records the worker's host and devices (names and what they are) from its registration, and the
   // token (its label, `principal`) it registered with. Returns the label of the token the id was
@@ -35,8 +39,10 @@ class WorkerRegistry {
   std::string NoteToken(const std::string& worker_id, const std::string& principal);
   // The worker said it is stopping: not alive from now (listed until forgotten, as a silent one).
   void Leave(const std::string& worker_id);
-  // Marks a worker draining (or not): Draining says so until undone or until it registers again (a
-  // restarted worker serves again). Throws Error(kNotFound) for a worker never heard from.
+  // Marks a worker draining (or not): Draining says so until undone or until it registers anew (a
+  // restarted worker serves again; a registration that answers register_again, RegisterRequest.again,
+  // is the same process after a server restart and keeps its drain). Throws Error(kNotFound) for a
+  // worker never heard from, and as WriteDrains when the drains file cannot be written.
   v1::WorkerInfo SetDraining(const std::string& worker_id, bool draining);
   bool Draining(const std::string& worker_id) const;
   void AddJob(const std::string& worker_id, const std::string& job_id);
@@ -58,10 +64,15 @@ class WorkerRegistry {
     std::string principal;
   };
   Entry& At(const std::string& worker_id);
+  // Writes the drains file (under mutex_). Throws as WriteDrains.
+  void SaveDrains() const;
+  // The same, but warns instead of throwing: for changes the caller did not ask for.
+  void SaveDrainsOrWarn() const;
   // What List shows of `entry` at `now` (alive, and its jobs).
   v1::WorkerInfo InfoOf(const Entry& entry, std::chrono::steady_clock::time_point now) const;
 
   std::chrono::milliseconds alive_window_;
+  std::filesystem::path drains_file_;
   mutable std::mutex mutex_;
   std::map<std::string, Entry> workers_;
 };

@@ -1,5 +1,5 @@
 // An admin drains a worker for maintenance: it is given no new job while its running one goes on,
-// and `--undo` puts it back in service.
+// a server restart does not undo it, and `--undo` puts it back in service.
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -45,6 +45,14 @@ TEST(DrainTest, ADrainingWorkerIsGivenNoNewJobAndUndoPutsItBack) {
       std::string::npos)
       << watch.Log();
   EXPECT_EQ(cluster.Job(id).state(), v1::QUEUED);
+  // A server restart keeps the drain: the worker registers again (the same process) and still drains.
+  cluster.KillServer(SIGKILL);
+  cluster.StartServer();
+  ASSERT_TRUE(WaitUntil([&] { return worker.Log().find("registered again") != std::string::npos; }))
+      << worker.Log();
+  std::this_thread::sleep_for(std::chrono::seconds(3));
+  EXPECT_NE(RunCli(cluster.address(), {"workers"}).out.find("draining"), std::string::npos);
+  EXPECT_EQ(cluster.Job(id).state(), v1::QUEUED) << "drained before the restart";
 
   const auto undone = RunCli(cluster.address(), {"drain", "w-maint", "--undo"});
   ASSERT_EQ(undone.exit_code, 0) << undone.err;

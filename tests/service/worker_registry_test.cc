@@ -5,6 +5,7 @@
 #include <chrono>
 
 #include "common/error.h"
+#include "tests/unit/temp_dir.h"
 
 namespace endorecon::server {
 namespace {
@@ -47,6 +48,44 @@ TEST(WorkerRegistryTest, ADrainLastsUntilUndoneOrTheWorkersNextRegistration) {
   EXPECT_FALSE(registry.Draining("gpu-7"));
   EXPECT_FALSE(registry.Draining("unknown"));
   EXPECT_THROW(registry.SetDraining("unknown", true), Error);
+}
+
+// A drain outlives a server restart (a server upgraded in a maintenance window put every drained
+// worker back in service until 2026-12-06): kept in the drains file, and kept by the registration a
+// worker makes because the server restarted (`again`); a restarted worker's registration ends it.
+TEST(WorkerRegistryTest, ADrainOutlivesAServerRestartButNotTheWorkersRestart) {
+  testing::TempDir dir("drains");
+  const auto file = dir / "drains.json";
+  v1::RegisterRequest request;
+  request.set_worker_id("gpu-7");
+  {
+    WorkerRegistry registry(std::chrono::seconds(30), file);
+    registry.Register(request);
+    registry.Register([] {
+      v1::RegisterRequest other;
+      other.set_worker_id("gpu-8");
+      return other;
+    }());
+    registry.SetDraining("gpu-7", true);
+  }
+  WorkerRegistry restarted(std::chrono::seconds(30), file);
+  EXPECT_TRUE(restarted.Draining("gpu-7"));
+  EXPECT_FALSE(restarted.Draining("gpu-8"));
+  ASSERT_EQ(restarted.List().size(), 1u) << "a drained worker is listed from the start";
+  EXPECT_FALSE(restarted.List()[0].alive()) << "until it calls";
+  EXPECT_FALSE(restarted.Registered("gpu-7")) << "so its lease asks it to register again";
+  v1::RegisterRequest again = request;
+  again.set_again(true);
+  restarted.Register(again);
+  EXPECT_TRUE(restarted.Draining("gpu-7"));
+  EXPECT_TRUE(restarted.List()[0].alive());
+  restarted.Register(request);  // the worker restarted
+  EXPECT_FALSE(restarted.Draining("gpu-7"));
+  EXPECT_FALSE(WorkerRegistry(std::chrono::seconds(30), file).Draining("gpu-7"));
+
+  // A file that is not the registry's is warned of and left aside: the server still starts.
+  testing::WriteBytes(file, R"({"draining": ["gpu-7"]})");
+  EXPECT_FALSE(WorkerRegistry(std::chrono::seconds(30), file).Draining("gpu-7"));
 }
 
 // A live worker's calls that carry another token than it registered with are noted for the log:

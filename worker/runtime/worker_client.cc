@@ -61,6 +61,7 @@ void WorkerClient::RegisterAgain() {
     if (!registration_) return;
     request = *registration_;
   }
+  request.set_again(true);
   try {
     Send(request);
     spdlog::info("registered again with the server (it restarted since)");
