@@ -108,7 +108,7 @@ std::vector<std::string> LeftOut(const std::filesystem::path& dir, const v1::Man
 // a video, a spreadsheet beside the frames) stays on this machine, and is named. A folder of DICOM
 // files goes up whole; a single file (a DICOM recording) as itself, named by its file name. Paths
 // and sizes only: the digests come after the server has seen the sizes.
-v1::Manifest ListingOfClip(const std::filesystem::path& clip, bool clip_folder, bool quiet) {
+v1::Manifest ListingOfClip(const std::filesystem::path& clip, bool clip_folder) {
   if (clip_folder) {
     v1::Manifest listing;
     try {
@@ -116,13 +116,15 @@ v1::Manifest ListingOfClip(const std::filesystem::path& clip, bool clip_folder, 
     } catch (const Error& e) {
       Fail(e.code(), std::string(e.what()) + " (found before the upload: nothing was sent)");
     }
+    // On stderr with --json too (stdout is the job's JSON): a script's log should say what stayed
+    // here. Names as printable text: a file named "a\nuploaded 0 file(s)\e[31m" printed a line of its own.
     const std::vector<std::string> left = LeftOut(clip, listing);
-    if (!left.empty() && !quiet) {
-      std::cerr << "left out " << left.size() << " file(s) under " << clip.string()
+    if (!left.empty()) {
+      std::cerr << "left out " << left.size() << " file(s) under " << PrintableText(clip.string(), 4096)
                 << " that the clip's layout does not name (docs/formats.md), not uploaded:";
-      constexpr std::size_t kNamed = 5;
+      constexpr std::size_t kNamed = 10;
       for (std::size_t i = 0; i < std::min(left.size(), kNamed); ++i)
-        std::cerr << (i ? ", " : " ") << left[i];
+        std::cerr << (i ? ", " : " ") << PrintableText(left[i], 4096);
       if (left.size() > kNamed) std::cerr << " and " << left.size() - kNamed << " more";
       std::cerr << "\n";
     }
@@ -161,7 +163,7 @@ void CheckJob(const Globals& globals, v1::JobService::Stub& stub, v1::SubmitRequ
 // recording nor a raw one) here (clip_check.h).
 v1::Manifest Upload(const Globals& globals, v1::JobService::Stub& stub, const std::filesystem::path& clip,
                     bool clip_folder, const v1::SubmitRequest& request) {
-  auto manifest = ListingOfClip(clip, clip_folder, globals.json);
+  auto manifest = ListingOfClip(clip, clip_folder);
   // The manifest with its digests (64 characters and a tag each) travels in one message: a clip of
   // 120,000 files was refused as "Sent message larger than max", naming its largest file.
   const std::size_t manifest_bytes = manifest.ByteSizeLong() + std::size_t(manifest.files_size()) * 66;

@@ -243,9 +243,10 @@ void JobCoordinator::CheckQuotas(const std::string& tenant, const v1::Manifest& 
   if (quota.max_bytes > 0 && usage.bytes + pending + bytes > quota.max_bytes) {
     const std::string uploads =
         pending == 0 ? ""
-                     : ", " + std::to_string(pending) +
-                           " in uploads not yet submitted (they count until submitted, or until "
-                           "--orphan-hours after their last upload),";
+                     : ", " + std::to_string(pending) + " in uploads not yet submitted (the last at " +
+                           UtcText(uploads_.LastNotedUnixMs(tenant)) +
+                           "; they count until submitted, or until the server's --orphan-hours after their "
+                           "last upload),";
     endorecon::Fail(
         ErrorCode::kResourceExhausted,
         named + " keeps " + std::to_string(usage.bytes) + " bytes in its jobs" + uploads + " and this adds " +
@@ -253,7 +254,9 @@ void JobCoordinator::CheckQuotas(const std::string& tenant, const v1::Manifest& 
             std::to_string(quota.max_bytes) +
             " bytes; delete the files of a finished job of it (`endorecon delete JOB`; a queued or "
             "running one: cancel it first)" +
-            (pending == 0 ? "" : ", or submit the uploads not yet submitted"));
+            (pending == 0 ? ""
+                          : ", or finish an upload not yet submitted (`endorecon submit` of the same clip "
+                            "resumes and submits it)"));
   }
 }
 
@@ -417,23 +420,33 @@ v1::Job JobCoordinator::Delete(const std::string& id, const Principal& caller) {
 
 std::optional<JobCoordinator::Granted> JobCoordinator::Lease(const std::string& worker_id,
                                                              Clock::time_point deadline,
-                                                             const std::optional<std::string>& tenant) {
+                                                             const std::optional<std::string>& tenant,
+                                                             const std::function<bool()>& cancelled) {
   parts_.workers.Touch(worker_id);
+  // The wait is cut into slices, and a call its worker cancelled (a worker stopping cancels its lease
+  // calls, then leaves) ends at the next: it took the next job 4 s after its worker had stopped, and
+  // listed the worker alive again (found 2026-12-06).
+  const auto gone = [&] { return Clock::now() >= deadline || (cancelled && cancelled()); };
+  constexpr auto kSlice = std::chrono::milliseconds(500);
   while (true) {
+    if (cancelled && cancelled()) return std::nullopt;
     // A draining worker is given nothing: its call waits out its deadline (as an empty queue's would,
     // so it does not poll in a loop), or until the drain is undone.
     while (parts_.workers.Draining(worker_id)) {
-      if (Clock::now() >= deadline) return std::nullopt;
+      if (gone()) return std::nullopt;
       std::this_thread::sleep_until(std::min(deadline, Clock::now() + std::chrono::milliseconds(200)));
     }
-    const auto next = parts_.scheduler.PopWait(deadline, tenant);
-    if (!next) return std::nullopt;
+    const auto next = parts_.scheduler.PopWait(std::min(deadline, Clock::now() + kSlice), tenant);
+    if (!next) {
+      if (gone()) return std::nullopt;
+      continue;
+    }
     auto granted = Locked([&]() -> std::optional<Granted> {
       auto stored = parts_.store.Get(*next);
       if (!stored || stored->job.state() != v1::QUEUED) return std::nullopt;
       auto& job = stored->job;
-      // Drained while this call waited for a job: the job goes back for another worker.
-      if (parts_.workers.Draining(worker_id)) {
+      // Drained or cancelled while this call waited for a job: the job goes back for another worker.
+      if (parts_.workers.Draining(worker_id) || (cancelled && cancelled())) {
         parts_.scheduler.Push(job.id(), job.priority(), stored->seq, job.tenant());
         return std::nullopt;
       }

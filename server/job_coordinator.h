@@ -117,10 +117,12 @@ class JobCoordinator {
     std::string lease_id;
     int attempt = 1;
   };
-  // Leases the next job to `worker_id`, waiting until `deadline`; nullopt when there is none. With
-  // `tenant`, only that tenant's jobs (a worker whose token serves one tenant).
+  // Leases the next job to `worker_id`, waiting until `deadline`, or until `cancelled` (asked twice a
+  // second) says the call was cancelled; nullopt when there is none. With `tenant`, only that
+  // tenant's jobs (a worker whose token serves one tenant).
   std::optional<Granted> Lease(const std::string& worker_id, Clock::time_point deadline,
-                               const std::optional<std::string>& tenant = std::nullopt);
+                               const std::optional<std::string>& tenant = std::nullopt,
+                               const std::function<bool()>& cancelled = {});
   // Renews the lease and records progress, preview or checkpoint; says whether to go on. Sets
   // `job_id` to the lease's job when the lease is held, and `register_again` to whether the lease's
   // worker is unknown to the registry (the server restarted since it registered).

@@ -394,7 +394,7 @@ void AddSecurityFlags(CLI::App& app, ServerFlags& flags) {
       ->capture_default_str()
       ->check(AtLeastZero());
   app.add_option("--tenant-max-bytes", flags.tenant_quota.max_bytes,
-                 "bytes each tenant's jobs may keep stored (0: no limit)")
+                 "bytes each tenant's jobs may keep stored, with its uploads not yet submitted (0: no limit)")
       ->capture_default_str()
       ->check(AtLeastZero());
   app.add_option("--quotas", flags.quotas_file, "JSON file of per-tenant quotas (overrides the two above)");

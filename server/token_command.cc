@@ -16,6 +16,7 @@
 #include "server/commands.h"
 #include "server/job_coordinator.h"
 #include "server/token_store.h"
+#include "server/unix_time.h"
 
 namespace endorecon::server {
 namespace {
@@ -25,6 +26,7 @@ struct TokenFlags {
   std::string audit_log;
   std::string role;
   std::string tenant;
+  bool tenant_given = false;  // --tenant given, perhaps empty
   std::string name;
   double expires_in_s = 0;
   CLI::Option* expires_in = nullptr;  // not given: the token never expires
@@ -64,6 +66,11 @@ void Audit(const TokenFlags& flags, const std::string& method, const TokenRecord
 int Create(const TokenFlags& flags) {
   const auto role = ParseRole(flags.role);
   if (!role) FailInvalid("--role " + flags.role + ": expected client, worker or admin");
+  // `--tenant "$TENANT"` with the variable unset made a worker token that serves every tenant.
+  if (flags.tenant_given && flags.tenant.empty())
+    FailInvalid(
+        "--tenant is empty: name the tenant, or leave --tenant out (a worker token then serves every "
+        "tenant)");
   if (*role == Role::kAdmin && !flags.tenant.empty()) {
     FailInvalid(
         "--tenant applies to client tokens (whose jobs are that tenant's) and worker tokens (which then run "
@@ -133,9 +140,11 @@ Command AddTokenCommand(CLI::App& app) {
   AddCommonFlags(*create, *flags);
   create->add_option("--role", flags->role, "client (its tenant's jobs), worker (the worker API) or admin")
       ->required();
-  create->add_option("--tenant", flags->tenant,
-                     "the tenant whose jobs a client token works on, or the one tenant whose jobs a worker "
-                     "token runs (without it: every tenant's)");
+  create
+      ->add_option("--tenant", flags->tenant,
+                   "the tenant whose jobs a client token works on, or the one tenant whose jobs a worker "
+                   "token runs (without it: every tenant's)")
+      ->each([flags](const std::string&) { flags->tenant_given = true; });
   create->add_option("--name", flags->name, "a label for the token (audit log, list, revoke)")->required();
   flags->expires_in =
       create

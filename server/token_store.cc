@@ -9,6 +9,7 @@
 #include "server/job_coordinator.h"
 #include "server/lease_table.h"
 #include "server/sqlite_statement.h"
+#include "server/unix_time.h"
 
 namespace endorecon::server {
 namespace {
@@ -52,13 +53,7 @@ void AddExpiryColumn(sqlite3* db) {
   }
 }
 
-std::string UtcText(std::int64_t unix_ms) { return UtcTime(unix_ms) + " UTC"; }
-
 }  // namespace
-
-std::string UtcTime(std::int64_t unix_ms) {
-  return fmt::format("{:%Y-%m-%d %H:%M:%S}", fmt::gmtime(static_cast<std::time_t>(unix_ms / 1000)));
-}
 
 std::string_view TokenRecord::StateAt(std::int64_t now_unix_ms) const {
   const bool expired = expires_unix_ms != 0 && expires_unix_ms <= now_unix_ms;

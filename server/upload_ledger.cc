@@ -1,6 +1,9 @@
 #include "server/upload_ledger.h"
 
+#include <algorithm>
 #include <set>
+
+#include "server/unix_time.h"
 
 namespace endorecon::server {
 
@@ -16,9 +19,17 @@ std::int64_t UploadLedger::PendingBytes(const std::string& tenant, const v1::Man
   return bytes;
 }
 
+std::int64_t UploadLedger::LastNotedUnixMs(const std::string& tenant) const {
+  const auto found = tenants_.find(tenant);
+  if (found == tenants_.end()) return 0;
+  std::int64_t last = 0;
+  for (const auto& [digest, entry] : found->second) last = std::max(last, entry.noted_unix_ms);
+  return last;
+}
+
 void UploadLedger::Add(const std::string& tenant, const v1::FileEntry& file, Time now) {
   if (file.sha256().empty()) return;  // a sizes-only listing brings nothing yet
-  tenants_[tenant][file.sha256()] = {file.size(), now};
+  tenants_[tenant][file.sha256()] = {file.size(), now, NowUnixMs()};
 }
 
 void UploadLedger::Submitted(const std::string& tenant, const v1::Manifest& manifest) {

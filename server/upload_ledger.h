@@ -21,6 +21,8 @@ class UploadLedger {
   // The bytes `tenant`'s uploads not yet submitted bring, leaving out the files of `except` (an
   // upload resumed, or the manifest being submitted, is not counted twice).
   std::int64_t PendingBytes(const std::string& tenant, const v1::Manifest& except) const;
+  // When the last of `tenant`'s uploads not yet submitted was noted (Unix ms); 0 when it has none.
+  std::int64_t LastNotedUnixMs(const std::string& tenant) const;
   // `tenant` uploads the files of `manifest` that are no blob yet (`stored` says which are): they count
   // as its until submitted or forgotten. A file noted again is dated anew.
   template <typename Stored>
@@ -39,6 +41,7 @@ class UploadLedger {
   struct Entry {
     std::int64_t bytes = 0;
     Time noted;
+    std::int64_t noted_unix_ms = 0;  // the same moment, for messages
   };
   void Add(const std::string& tenant, const v1::FileEntry& file, Time now);
 

@@ -123,10 +123,15 @@ void WorkerRegistry::Touch(const std::string& worker_id) {
   At(worker_id);
 }
 
-std::string WorkerRegistry::NoteToken(const std::string& worker_id, const std::string& principal) {
+std::string WorkerRegistry::NoteToken(const std::string& worker_id, const std::string& principal,
+                                      const std::string& tenant) {
   std::lock_guard lock(mutex_);
   const auto found = workers_.find(worker_id);
-  if (found == workers_.end() || !found->second.registered || found->second.principal == principal) return "";
+  if (found == workers_.end() || !found->second.registered) return "";
+  // Listed with the tenant its calls carry now: a token of another scope written into a worker's
+  // --token-file changed the jobs it ran, and `workers` went on showing the old scope.
+  found->second.info.set_tenant(tenant);
+  if (found->second.principal == principal) return "";
   return std::exchange(found->second.principal, principal);
 }
 

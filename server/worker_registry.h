@@ -34,9 +34,11 @@ class WorkerRegistry {
   // Whether `worker_id` registered with this server (a worker only seen leasing did not).
   bool Registered(const std::string& worker_id) const;
   void Touch(const std::string& worker_id);
-  // A call of `worker_id` carried the token labelled `principal`: when it registered with another,
-  // records this one and returns the other's label (for the caller to log), else "".
-  std::string NoteToken(const std::string& worker_id, const std::string& principal);
+  // A call of `worker_id` carried the token labelled `principal`, which serves `tenant` ("": every
+  // tenant): lists the worker with that tenant, and when it registered with another token, records
+  // this one and returns the other's label (for the caller to log), else "".
+  std::string NoteToken(const std::string& worker_id, const std::string& principal,
+                        const std::string& tenant = "");
   // The worker said it is stopping: not alive from now (listed until forgotten, as a silent one).
   void Leave(const std::string& worker_id);
   // Marks a worker draining (or not): Draining says so until undone or until it registers anew (a

@@ -97,8 +97,9 @@ grpc::Status WorkerServiceImpl::Lease(grpc::ServerContext* context, const v1::Le
     // an id holding escape sequences, which then reached terminals in a job's reason; found
     // 2026-12-06), and a change of token is logged.
     ValidateWorkerId(request->worker_id());
-    WarnOfTokenChange(request->worker_id(), call.caller.name,
-                      workers_.NoteToken(request->worker_id(), call.caller.name));
+    WarnOfTokenChange(
+        request->worker_id(), call.caller.name,
+        workers_.NoteToken(request->worker_id(), call.caller.name, ServedTenant(call.caller).value_or("")));
     const auto wait = std::min(std::chrono::milliseconds(std::max<std::int64_t>(request->wait_ms(), 0)),
                                timing_.max_lease_wait);
     // Answer a little before the caller's deadline, so an empty poll is not an error.
@@ -110,7 +111,8 @@ grpc::Status WorkerServiceImpl::Lease(grpc::ServerContext* context, const v1::Le
     const auto deadline =
         Clock::now() + (unknown ? std::chrono::milliseconds(0)
                                 : std::max(std::chrono::milliseconds(0), std::min(wait, caller_left)));
-    auto granted = coordinator_.Lease(request->worker_id(), deadline, ServedTenant(call.caller));
+    auto granted = coordinator_.Lease(request->worker_id(), deadline, ServedTenant(call.caller),
+                                      [context] { return context->IsCancelled(); });
     response->set_register_again(unknown);
     if (!granted) return grpc::Status::OK;
     call.wrote = true;

@@ -290,6 +290,10 @@ TEST_F(AccessControlTest, AWorkerTokenWithATenantRunsThatTenantsJobsOnly) {
       Capture(BuiltBinary("server/endorecon-server") + " token create --data-dir " +
               cluster_.data_dir().string() + " --role admin --tenant radiology --name a 2>&1");
   EXPECT_NE(refused.find("an admin token sees every tenant"), std::string::npos) << refused;
+  // `--tenant "$TENANT"` with the variable unset made a worker token for every tenant.
+  const auto empty = Capture(BuiltBinary("server/endorecon-server") + " token create --data-dir " +
+                             cluster_.data_dir().string() + " --role worker --tenant '' --name w-empty 2>&1");
+  EXPECT_NE(empty.find("--tenant is empty"), std::string::npos) << empty;
   const auto submit = [&](const ClientCredentials& who) {
     const auto result = Cli(who, {"--json", "submit", cluster_.path("clip").string(), "--iterations", "30"});
     EXPECT_EQ(result.exit_code, 0) << result.err;

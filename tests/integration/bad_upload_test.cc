@@ -259,6 +259,14 @@ TEST_F(BadUploadTest, AClipMissingAMaskOrHoldingATruncatedPngIsRefusedBeforeItsU
   EXPECT_TRUE(paths.count("poses_bounds.npy") && paths.count("images/000000.png") &&
               paths.count("masks/000007.png"));
   EXPECT_FALSE(paths.count("patients.csv") || paths.count("video/case.mp4"));
+  // Said with --json too (on stderr; stdout is the job), and names print as text: a file named with a
+  // line break and an escape sequence printed a line of its own.
+  WriteBytes(cluster_.path("whole") / "evil\nuploaded 0 file(s)\x1b[31m", "");
+  result = RunCli(cluster_.address(), {"--json", "submit", cluster_.path("whole").string()});
+  EXPECT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_NE(result.err.find("left out 4 file(s)"), std::string::npos) << result.err;
+  EXPECT_NE(result.err.find("evil?uploaded 0 file(s)?[31m"), std::string::npos) << result.err;
+  EXPECT_EQ(result.err.find("\nuploaded 0"), std::string::npos) << result.err;
 }
 
 }  // namespace

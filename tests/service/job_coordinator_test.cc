@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <functional>
 #include <limits>
 #include <optional>
@@ -417,10 +418,15 @@ TEST_F(JobCoordinatorTest, UploadsNotYetSubmittedCountAgainstTheByteQuota) {
   EXPECT_EQ(refusal(upload(first), a), "");
   EXPECT_EQ(refusal(upload(first), a), "") << "an upload resumed is not counted twice";
   std::string message = refusal(upload(second), a);
-  EXPECT_NE(message.find("tenant 'a' keeps 0 bytes in its jobs, 600 in uploads not yet submitted"),
-            std::string::npos)
+  EXPECT_NE(
+      message.find("tenant 'a' keeps 0 bytes in its jobs, 600 in uploads not yet submitted (the last at 20"),
+      std::string::npos)
       << message;
-  EXPECT_NE(message.find("or submit the uploads not yet submitted"), std::string::npos) << message;
+  EXPECT_NE(
+      message.find("or finish an upload not yet submitted (`endorecon submit` of the same clip resumes and "
+                   "submits it)"),
+      std::string::npos)
+      << message;
   quoted.CheckUploadQuota(upload(second), a);  // a listing before an upload: not counted there
   EXPECT_EQ(refusal(upload(second), b), "") << "another tenant's uploads are its own";
 
@@ -439,6 +445,28 @@ TEST_F(JobCoordinatorTest, UploadsNotYetSubmittedCountAgainstTheByteQuota) {
   // Retention forgets an upload as it deletes its partial: after --orphan-hours.
   quoted.ExpireFinishedBefore(0, UploadLedger::Time::clock::now() + seconds(1));
   EXPECT_EQ(refusal(upload(std::string(300, '4')), a), "");
+}
+
+// A lease call its worker cancelled (a worker stopping cancels its calls, then leaves) takes no job:
+// one took the next job 4 s after its worker had stopped (found 2026-12-06).
+TEST_F(JobCoordinatorTest, ACancelledLeaseCallTakesNoJobAndEndsWithoutWaitingItsDeadline) {
+  std::atomic<bool> cancelled{false};
+  const auto started = Clock::now();
+  std::thread canceller([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    cancelled = true;
+  });
+  EXPECT_FALSE(coordinator_.Lease("worker-1", Clock::now() + seconds(20), std::nullopt,
+                                  [&] { return cancelled.load(); }));
+  canceller.join();
+  EXPECT_LT(Clock::now() - started, seconds(5))
+      << "it ended within a slice of its cancel, not at its deadline";
+  const std::string id = Submit();
+  EXPECT_FALSE(coordinator_.Lease("worker-1", Clock::now() + seconds(20), std::nullopt, [] { return true; }));
+  EXPECT_EQ(Get(id).state(), v1::QUEUED);
+  const auto granted = LeaseNext("worker-2");
+  ASSERT_TRUE(granted.has_value());
+  EXPECT_EQ(granted->job.id(), id);
 }
 
 }  // namespace

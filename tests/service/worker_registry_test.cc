@@ -102,6 +102,11 @@ TEST(WorkerRegistryTest, AWorkersChangeOfTokenIsNoted) {
   EXPECT_EQ(registry.NoteToken("wk1", "node-3-rotated"), "node-3-token");
   EXPECT_EQ(registry.NoteToken("wk1", "node-3-rotated"), "") << "noted once";
   EXPECT_EQ(registry.Register(request, "node-9-token"), "node-3-rotated");
+  // A token of another scope written into its --token-file: listed with the scope its calls carry.
+  registry.NoteToken("wk1", "research-token", "research");
+  EXPECT_EQ(registry.List()[0].tenant(), "research");
+  registry.NoteToken("wk1", "node-9-token");
+  EXPECT_EQ(registry.List()[0].tenant(), "");
   // A worker the server knows only from its calls (it restarted since the worker registered).
   registry.Touch("wk2");
   EXPECT_EQ(registry.NoteToken("wk2", "any"), "");
