@@ -1,6 +1,5 @@
 #include "client/job_watcher.h"
 
-#include <signal.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -12,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "client/interrupt_note.h"
 #include "client/job_format.h"
 #include "common/file_write.h"
 #include "common/grpc_status.h"
@@ -102,46 +102,17 @@ class EventPrinter {
   std::vector<std::string> last_dicom_;
 };
 
-// Ctrl-C while a job is watched ends the watch, not the job: said, with how to pick it up again
-// (exit 130, as a shell's SIGINT). A script that ran `submit --wait` again submitted the job twice
-// (found 2026-12-05). The message is made before the signal can come: the handler only writes it.
-char interrupt_message[256];
-std::size_t interrupt_length = 0;
-
-extern "C" void OnInterrupt(int) {
-  (void)!::write(STDERR_FILENO, interrupt_message, interrupt_length);
-  ::_exit(130);
-}
-
-class InterruptNote {
- public:
-  explicit InterruptNote(const std::string& id) {
-    const int n =
-        std::snprintf(interrupt_message, sizeof(interrupt_message),
-                      "\nendorecon: stopped watching; job %s goes on on the server: `endorecon watch %s` "
-                      "follows it again, `endorecon cancel %s` stops it\n",
-                      id.c_str(), id.c_str(), id.c_str());
-    interrupt_length = n > 0 ? std::min(static_cast<std::size_t>(n), sizeof(interrupt_message) - 1) : 0;
-    struct sigaction action {};
-    action.sa_handler = OnInterrupt;
-    sigemptyset(&action.sa_mask);
-    ::sigaction(SIGINT, &action, &previous_);
-  }
-  ~InterruptNote() { ::sigaction(SIGINT, &previous_, nullptr); }
-  InterruptNote(const InterruptNote&) = delete;
-  InterruptNote& operator=(const InterruptNote&) = delete;
-
- private:
-  struct sigaction previous_ {};
-};
-
 }  // namespace
 
 v1::Job WatchJob(const Globals& globals, const std::string& id, const WatchOptions& options) {
   const auto channel = globals.Channel();
   const auto stub = v1::JobService::NewStub(channel);
   EventPrinter printer(globals.json);
-  const InterruptNote interrupt_note(id);
+  // Ctrl-C ends the watch, not the job: a script that ran `submit --wait` again submitted the job twice
+  // (found 2026-12-05).
+  const InterruptNote interrupt_note("stopped watching; job " + id +
+                                     " goes on on the server: `endorecon watch " + id +
+                                     "` follows it again, `endorecon cancel " + id + "` stops it");
   v1::WatchJobRequest request;
   request.set_id(id);
   request.set_previews(!options.previews_dir.empty());

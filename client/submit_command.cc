@@ -16,6 +16,7 @@
 #include "client/clip_check.h"
 #include "client/commands.h"
 #include "client/exit_codes.h"
+#include "client/interrupt_note.h"
 #include "client/job_format.h"
 #include "client/job_watcher.h"
 #include "client/recording_upload.h"
@@ -188,6 +189,10 @@ v1::Manifest Upload(const Globals& globals, v1::JobService::Stub& stub, const st
   };
   UploadOptions upload_options;
   upload_options.call_timeout = globals.timeout();
+  // Ctrl-C mid-upload said nothing, and a user did not know that running it again resumes.
+  const InterruptNote interrupt_note(
+      "upload interrupted; what arrived is kept on the server (and counts against your tenant's bytes) until "
+      "the server's --orphan-hours: run the same `endorecon submit` again to resume it");
   const auto upload = UploadFiles(root.empty() ? "." : root, manifest, calls, upload_options);
   if (!globals.json) {
     std::cerr << "uploaded " << manifest.files_size() << " file(s): " << HumanBytes(upload.bytes_sent)

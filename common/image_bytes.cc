@@ -4,8 +4,10 @@
 
 #include <algorithm>
 #include <array>
+#include <cerrno>
 #include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <iterator>
 #include <string>
@@ -126,8 +128,12 @@ void CheckJpegEnd(const fs::path& path, std::ifstream& in) {
 void CheckImageBytes(const fs::path& path) {
   std::error_code error;
   if (!fs::is_regular_file(path, error)) FailInvalid(path.string() + ": file does not exist");
+  errno = 0;
   std::ifstream in(path, std::ios::binary);
-  if (!in) FailInvalid(path.string() + ": cannot open the file");
+  // Why, where the system says (an unreadable image was "cannot open the file" alone).
+  if (!in)
+    FailInvalid(path.string() + ": cannot open the file" +
+                (errno ? std::string(" (") + std::strerror(errno) + ")" : ""));
   char head[8] = {};
   in.read(head, sizeof(head));
   const std::string_view bytes(head, static_cast<std::size_t>(in.gcount()));

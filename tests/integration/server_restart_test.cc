@@ -85,6 +85,34 @@ TEST(ServerRestartTest, KillDuringUploadThenTheUploadResumes) {
   EXPECT_EQ(Sha256File(blob), entry.sha256());
 }
 
+// Ctrl-C during an upload says that what arrived is kept and the same submit resumes it (it said
+// nothing), and exits 130; the same submit then resumes.
+TEST(ServerRestartTest, CtrlCDuringAnUploadSaysHowToResume) {
+  Cluster cluster;
+  const auto clip = cluster.path("bigclip");
+  MakeClip(clip);
+  std::string data(256 << 20, '\0');
+  std::mt19937_64 random(11);
+  for (std::size_t i = 0; i < data.size(); i += 8) data[i] = static_cast<char>(random());
+  AddPngPayload(clip / "images" / "000000.png", data);
+  Process submit({BuiltBinary("client/endorecon"), "--server", cluster.address(), "submit", clip.string(),
+                  "--iterations", "30"},
+                 cluster.path("submit.log"));
+  ASSERT_TRUE(WaitUntil(
+      [&] {
+        std::error_code error;
+        return !std::filesystem::is_empty(cluster.data_dir() / "partial", error) && !error;
+      },
+      std::chrono::seconds(120)));
+  submit.Signal(SIGINT);
+  EXPECT_EQ(submit.Wait(), 130) << submit.Log();
+  EXPECT_NE(submit.Log().find("upload interrupted; what arrived is kept on the server"), std::string::npos)
+      << submit.Log();
+  const auto resumed = RunCli(cluster.address(), {"submit", clip.string(), "--iterations", "30"});
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.err;
+  EXPECT_NE(resumed.err.find("already on the server"), std::string::npos) << resumed.err;
+}
+
 TEST(ServerRestartTest, KillDuringAJobLosesNothing) {
   Cluster cluster;
   MakeClip(cluster.path("clip"));

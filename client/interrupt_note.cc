@@ -1,0 +1,33 @@
+#include "client/interrupt_note.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdio>
+
+namespace endorecon::client {
+namespace {
+
+char interrupt_message[512];
+std::size_t interrupt_length = 0;
+
+extern "C" void OnInterrupt(int) {
+  (void)!::write(STDERR_FILENO, interrupt_message, interrupt_length);
+  ::_exit(130);
+}
+
+}  // namespace
+
+InterruptNote::InterruptNote(const std::string& message) {
+  const int n =
+      std::snprintf(interrupt_message, sizeof(interrupt_message), "\nendorecon: %s\n", message.c_str());
+  interrupt_length = n > 0 ? std::min(static_cast<std::size_t>(n), sizeof(interrupt_message) - 1) : 0;
+  struct sigaction action {};
+  action.sa_handler = OnInterrupt;
+  sigemptyset(&action.sa_mask);
+  ::sigaction(SIGINT, &action, &previous_);
+}
+
+InterruptNote::~InterruptNote() { ::sigaction(SIGINT, &previous_, nullptr); }
+
+}  // namespace endorecon::client
