@@ -4,10 +4,8 @@
 
 #include <algorithm>
 #include <array>
-#include <cerrno>
 #include <cstdint>
 #include <cstdio>
-#include <cstring>
 #include <fstream>
 #include <iterator>
 #include <string>
@@ -15,6 +13,7 @@
 #include <vector>
 
 #include "common/error.h"
+#include "common/file_read.h"
 #include "common/jpeg_header.h"
 
 namespace endorecon {
@@ -128,12 +127,7 @@ void CheckJpegEnd(const fs::path& path, std::ifstream& in) {
 void CheckImageBytes(const fs::path& path) {
   std::error_code error;
   if (!fs::is_regular_file(path, error)) FailInvalid(path.string() + ": file does not exist");
-  errno = 0;
-  std::ifstream in(path, std::ios::binary);
-  // Why, where the system says (an unreadable image was "cannot open the file" alone).
-  if (!in)
-    FailInvalid(path.string() + ": cannot open the file" +
-                (errno ? std::string(" (") + std::strerror(errno) + ")" : ""));
+  std::ifstream in = OpenToRead(path);
   char head[8] = {};
   in.read(head, sizeof(head));
   const std::string_view bytes(head, static_cast<std::size_t>(in.gcount()));

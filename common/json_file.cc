@@ -1,11 +1,10 @@
 #include "common/json_file.h"
 
-#include <cerrno>
-#include <cstring>
 #include <fstream>
 #include <iterator>
 
 #include "common/error.h"
+#include "common/file_read.h"
 
 namespace endorecon {
 
@@ -27,12 +26,7 @@ nlohmann::json ReadJsonFile(const std::filesystem::path& path) {
   std::error_code error;
   if (std::filesystem::exists(path, error) && !std::filesystem::is_regular_file(path, error))
     FailInvalid(path.string() + ": not a regular file (a folder, a pipe or a device)");
-  errno = 0;
-  std::ifstream in(path, std::ios::binary);
-  // Why, where the system says (an unreadable image was "cannot open the file" alone).
-  if (!in)
-    FailInvalid(path.string() + ": cannot open the file" +
-                (errno ? std::string(" (") + std::strerror(errno) + ")" : ""));
+  std::ifstream in = OpenToRead(path);
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   return ParseJson(text, path.string());
 }

@@ -24,7 +24,7 @@ WorkerRegistry::WorkerRegistry(std::chrono::milliseconds alive_window, std::file
     entry.info.set_id(id);
     entry.info.set_last_seen_unix_ms(seen);
     entry.info.set_draining(true);
-    entry.last_seen = std::chrono::steady_clock::now() - alive_window_ - std::chrono::milliseconds(1);
+    entry.last_seen = NotAliveSince();
   }
   if (!drains.empty()) spdlog::info("{} worker(s) drained before the restart still drain", drains.size());
 }
@@ -138,7 +138,7 @@ std::string WorkerRegistry::NoteToken(const std::string& worker_id, const std::s
 void WorkerRegistry::Leave(const std::string& worker_id) {
   std::lock_guard lock(mutex_);
   if (const auto found = workers_.find(worker_id); found != workers_.end()) {
-    found->second.last_seen = std::chrono::steady_clock::now() - alive_window_ - std::chrono::milliseconds(1);
+    found->second.last_seen = NotAliveSince();
   }
 }
 

@@ -66,6 +66,10 @@ class WorkerRegistry {
     std::string principal;
   };
   Entry& At(const std::string& worker_id);
+  // A last-seen time just outside the alive window: listed as not alive from now.
+  std::chrono::steady_clock::time_point NotAliveSince() const {
+    return std::chrono::steady_clock::now() - alive_window_ - std::chrono::milliseconds(1);
+  }
   // Writes the drains file (under mutex_). Throws as WriteDrains.
   void SaveDrains() const;
   // The same, but warns instead of throwing: for changes the caller did not ask for.
