@@ -45,5 +45,6 @@ Command AddFetchCommand(CLI::App& app);
 Command AddWorkersCommand(CLI::App& app);
 Command AddDrainCommand(CLI::App& app);
 Command AddSendCommand(CLI::App& app);
+Command AddUploadsCommand(CLI::App& app);
 
 }  // namespace endorecon::client

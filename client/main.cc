@@ -132,6 +132,7 @@ int main(int argc, char** argv) {
   commands["workers"] = AddWorkersCommand(app);
   commands["drain"] = AddDrainCommand(app);
   commands["send"] = AddSendCommand(app);
+  commands["uploads"] = AddUploadsCommand(app);
   app.set_version_flag("--version", ENDORECON_VERSION);
   try {
     app.parse(argc, argv);

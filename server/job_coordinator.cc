@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <thread>
 
 #include "common/dicom/recording.h"
@@ -245,8 +246,8 @@ void JobCoordinator::CheckQuotas(const std::string& tenant, const v1::Manifest& 
         pending == 0 ? ""
                      : ", " + std::to_string(pending) + " in uploads not yet submitted (the last at " +
                            UtcText(uploads_.LastNotedUnixMs(tenant)) +
-                           "; they count until submitted, or until the server's --orphan-hours after their "
-                           "last upload),";
+                           "; they count until submitted or dropped, or until the server's --orphan-hours "
+                           "after their last upload),";
     endorecon::Fail(
         ErrorCode::kResourceExhausted,
         named + " keeps " + std::to_string(usage.bytes) + " bytes in its jobs" + uploads + " and this adds " +
@@ -256,7 +257,7 @@ void JobCoordinator::CheckQuotas(const std::string& tenant, const v1::Manifest& 
             "running one: cancel it first)" +
             (pending == 0 ? ""
                           : ", or finish an upload not yet submitted (`endorecon submit` of the same clip "
-                            "resumes and submits it)"));
+                            "resumes and submits it), or give those up (`endorecon uploads --drop`)"));
   }
 }
 
@@ -268,11 +269,61 @@ void JobCoordinator::CheckUploadQuota(const v1::Manifest& manifest, const Princi
 void JobCoordinator::AdmitUpload(const v1::Manifest& manifest, const Principal& caller) {
   std::lock_guard lock(mutex_);
   CheckQuotas(caller.tenant, manifest, true, uploads_.PendingBytes(caller.tenant, manifest));
-  if (quotas_.For(caller.tenant).max_bytes > 0) {
-    uploads_.Note(
-        caller.tenant, manifest, [this](const std::string& digest) { return parts_.blobs.Has(digest); },
-        UploadLedger::Time::clock::now());
+  // Noted with or without a byte quota: `endorecon uploads` lists and drops them either way.
+  uploads_.Note(
+      caller.tenant, manifest, [this](const std::string& digest) { return parts_.blobs.Has(digest); },
+      UploadLedger::Time::clock::now());
+}
+
+v1::UploadsResponse JobCoordinator::Uploads(const v1::UploadsRequest& request, const Principal& caller) {
+  std::optional<std::string> tenant;  // nullopt: every tenant's
+  if (caller.SeesAllTenants()) {
+    if (!request.tenant().empty()) tenant = request.tenant() == "-" ? "" : request.tenant();
+  } else {
+    if (!request.tenant().empty() && request.tenant() != caller.tenant) {
+      endorecon::Fail(
+          ErrorCode::kPermissionDenied,
+          "a client token acts on its own tenant's uploads only (tenant '" + caller.tenant + "')");
+    }
+    tenant = caller.tenant;
   }
+  if (request.drop() && !tenant) {
+    FailInvalid("name the tenant whose uploads not yet submitted to drop (--tenant; '-' for that of admins)");
+  }
+  // The store's files are a folder walk: listed outside the lock, as retention's are (a file stored
+  // after the listing is not in it, so it cannot be taken for one no job holds).
+  const auto files = request.drop() ? FilesWrittenBefore(parts_.blobs, std::filesystem::file_time_type::max())
+                                    : std::vector<BlobStore::StoredFile>{};
+  std::lock_guard lock(mutex_);
+  v1::UploadsResponse response;
+  for (const auto& [name, pending] : uploads_.Tenants()) {
+    if (tenant && name != *tenant) continue;
+    auto* listed = response.add_tenants();
+    listed->set_tenant(name);
+    listed->set_files(pending.files);
+    listed->set_bytes(pending.bytes);
+    listed->set_last_unix_ms(pending.last_unix_ms);
+  }
+  if (!request.drop()) return response;
+  const auto digests = uploads_.Drop(*tenant);
+  std::set<std::string> dropped;
+  for (const auto& digest : digests) {
+    if (!uploads_.Holds(digest)) dropped.insert(digest);  // another tenant's upload brings it too
+  }
+  std::vector<BlobStore::StoredFile> candidates;
+  for (const auto& file : files) {
+    if (dropped.count(file.sha256)) candidates.push_back(file);
+  }
+  // Of those, the files no job references (PlanExpiry's orphans, with no job expiring).
+  const auto plan = PlanExpiry(
+      parts_.store, parts_.blobs, [](const v1::Job&) { return false; }, candidates);
+  for (const auto& file : plan.orphans) parts_.blobs.Remove(file);
+  response.set_deleted_files(static_cast<std::int64_t>(plan.orphans.size()));
+  response.set_deleted_bytes(plan.orphan_bytes);
+  spdlog::info("uploads not yet submitted of tenant '{}' dropped by {}: {} file(s), {} deleted ({} bytes)",
+               tenant->empty() ? "-" : *tenant, caller.name, digests.size(), plan.orphans.size(),
+               plan.orphan_bytes);
+  return response;
 }
 
 void JobCoordinator::CheckRetrievalQuota(const std::string& id, const v1::Manifest& recording) {
@@ -421,7 +472,8 @@ v1::Job JobCoordinator::Delete(const std::string& id, const Principal& caller) {
 std::optional<JobCoordinator::Granted> JobCoordinator::Lease(const std::string& worker_id,
                                                              Clock::time_point deadline,
                                                              const std::optional<std::string>& tenant,
-                                                             const std::function<bool()>& cancelled) {
+                                                             const std::function<bool()>& cancelled,
+                                                             const LeaseToken& token) {
   parts_.workers.Touch(worker_id);
   // The wait is cut into slices, and a call its worker cancelled (a worker stopping cancels its lease
   // calls, then leaves) ends at the next: it took the next job 4 s after its worker had stopped, and
@@ -450,7 +502,7 @@ std::optional<JobCoordinator::Granted> JobCoordinator::Lease(const std::string& 
         parts_.scheduler.Push(job.id(), job.priority(), stored->seq, job.tenant());
         return std::nullopt;
       }
-      const auto lease = parts_.leases.Grant(job.id(), worker_id, clock_());
+      const auto lease = parts_.leases.Grant(job.id(), worker_id, clock_(), token);
       job.set_state(v1::RUNNING);
       job.set_lease_id(lease.id);
       job.set_worker_id(worker_id);
@@ -468,14 +520,15 @@ std::optional<JobCoordinator::Granted> JobCoordinator::Lease(const std::string& 
   }
 }
 
-v1::ProgressReply::Action JobCoordinator::Report(const v1::ProgressUpdate& update, std::string* job_id,
-                                                 bool* register_again) {
-  return Locked([&] { return ReportLocked(update, job_id, register_again); });
+v1::ProgressReply::Action JobCoordinator::Report(const v1::ProgressUpdate& update, const LeaseToken& token,
+                                                 std::string* job_id, bool* register_again) {
+  return Locked([&] { return ReportLocked(update, token, job_id, register_again); });
 }
 
-v1::ProgressReply::Action JobCoordinator::ReportLocked(const v1::ProgressUpdate& update, std::string* job_id,
+v1::ProgressReply::Action JobCoordinator::ReportLocked(const v1::ProgressUpdate& update,
+                                                       const LeaseToken& token, std::string* job_id,
                                                        bool* register_again) {
-  const auto lease = parts_.leases.Renew(update.lease_id(), clock_());
+  const auto lease = parts_.leases.Renew(update.lease_id(), clock_(), token);
   if (!lease) return v1::ProgressReply::STOP_LEASE_LOST;
   if (job_id) *job_id = lease->job_id;
   if (register_again) *register_again = !parts_.workers.Registered(lease->worker_id);
@@ -586,11 +639,18 @@ void JobCoordinator::ExpireLeases(Clock::time_point now) {
       auto stored = parts_.store.Get(lease.job_id);
       if (!stored || stored->job.state() != v1::RUNNING || stored->job.lease_id() != lease.id) continue;
       parts_.metrics.LeaseExpired();
-      const std::string reason = "worker " + lease.worker_id + " stopped reporting; its lease expired";
+      const auto& token = lease.token;
+      const bool token_lapsed = token.expires_unix_ms > 0 && token.expires_unix_ms <= NowUnixMs();
+      const std::string reason =
+          "worker " + lease.worker_id +
+          (token_lapsed ? "'s token '" + token.name + "' expired at " + UtcText(token.expires_unix_ms) +
+                              ", so its calls were refused and its lease expired (not counted as an attempt; "
+                              "renew worker tokens before they expire)"
+                        : " stopped reporting; its lease expired");
       if (stored->job.cancel_requested()) {
         Finish(stored->job, v1::CANCELLED, "cancelled by request; " + reason);
       } else {
-        Requeue(*stored, true, reason);
+        Requeue(*stored, !token_lapsed, reason);
       }
     }
   });

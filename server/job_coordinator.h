@@ -93,8 +93,13 @@ class JobCoordinator {
   void CheckUploadQuota(const v1::Manifest& manifest, const Principal& caller);
   // The same as an upload of `manifest` starts, before it writes anything, counting the tenant's
   // other uploads not yet submitted too; then notes this one's files as the tenant's (UploadLedger)
-  // until they are submitted or retention forgets them.
+  // until they are submitted, dropped (Uploads) or retention forgets them.
   void AdmitUpload(const v1::Manifest& manifest, const Principal& caller);
+  // The uploads not yet submitted of the caller's tenant (an admin's: every tenant's, or the one
+  // it names); with `drop`, forgets them and deletes their files that no job, and no other tenant's
+  // upload, holds (a partial being written is kept). A client naming another tenant is refused
+  // (kPermissionDenied); an admin's drop names its tenant (kInvalidArgument otherwise).
+  v1::UploadsResponse Uploads(const v1::UploadsRequest& request, const Principal& caller);
   // The same for a recording retrieved for job `id`, before it goes into the blob store: the job's
   // tenant pays for it.
   void CheckRetrievalQuota(const std::string& id, const v1::Manifest& recording);
@@ -119,15 +124,16 @@ class JobCoordinator {
   };
   // Leases the next job to `worker_id`, waiting until `deadline`, or until `cancelled` (asked twice a
   // second) says the call was cancelled; nullopt when there is none. With `tenant`, only that
-  // tenant's jobs (a worker whose token serves one tenant).
+  // tenant's jobs (a worker whose token serves one tenant). `token`: the one the call carried.
   std::optional<Granted> Lease(const std::string& worker_id, Clock::time_point deadline,
                                const std::optional<std::string>& tenant = std::nullopt,
-                               const std::function<bool()>& cancelled = {});
-  // Renews the lease and records progress, preview or checkpoint; says whether to go on. Sets
-  // `job_id` to the lease's job when the lease is held, and `register_again` to whether the lease's
-  // worker is unknown to the registry (the server restarted since it registered).
-  v1::ProgressReply::Action Report(const v1::ProgressUpdate& update, std::string* job_id = nullptr,
-                                   bool* register_again = nullptr);
+                               const std::function<bool()>& cancelled = {}, const LeaseToken& token = {});
+  // Renews the lease (noting the `token` the call carried) and records progress, preview or
+  // checkpoint; says whether to go on. Sets `job_id` to the lease's job when the lease is held, and
+  // `register_again` to whether the lease's worker is unknown to the registry (the server restarted
+  // since it registered).
+  v1::ProgressReply::Action Report(const v1::ProgressUpdate& update, const LeaseToken& token = {},
+                                   std::string* job_id = nullptr, bool* register_again = nullptr);
   // Throws kFailedPrecondition when the lease is not held or a result file is not uploaded.
   v1::Job Complete(const v1::CompleteRequest& request);
   // Throws kFailedPrecondition when the lease is not held.
@@ -135,7 +141,9 @@ class JobCoordinator {
   // The leased job. Throws kFailedPrecondition unless `lease_id` is held (workers download only
   // while leasing, and only their job's files).
   v1::Job CheckLease(const std::string& lease_id);
-  // Takes back every lease expired at `now`: requeues the job or fails it after max attempts.
+  // Takes back every lease expired at `now`: requeues the job or fails it after max attempts. A lease
+  // whose worker's token had expired (its calls refused, so it could not renew) costs no attempt: a
+  // token expiring mid-job failed jobs that had nothing wrong with them (found 2026-12-06).
   void ExpireLeases(Clock::time_point now);
   // Retention: deletes the files of jobs finished before `cutoff_unix_ms` that no other job shares
   // and marks those jobs expired, and deletes the files no job references last written before
@@ -178,8 +186,8 @@ class JobCoordinator {
       return result;
     }
   }
-  v1::ProgressReply::Action ReportLocked(const v1::ProgressUpdate& update, std::string* job_id,
-                                         bool* register_again);
+  v1::ProgressReply::Action ReportLocked(const v1::ProgressUpdate& update, const LeaseToken& token,
+                                         std::string* job_id, bool* register_again);
   StoredJob Load(const std::string& id);
   // Load, but another tenant's job is kNotFound exactly as a missing one.
   StoredJob LoadVisible(const std::string& id, const Principal& caller);

@@ -6,6 +6,7 @@
 #include <map>
 
 #include "common/error.h"
+#include "common/job_bounds.h"
 #include "server/file_sender.h"
 #include "server/job_states.h"
 
@@ -220,6 +221,17 @@ grpc::Status JobServiceImpl::Drain(grpc::ServerContext* context, const v1::Drain
     spdlog::info("worker {} {} by request of {}", request->worker_id(),
                  request->undo() ? "serves again (drain undone)" : "drains: it is given no new job",
                  call.caller.name);
+    return grpc::Status::OK;
+  });
+}
+
+grpc::Status JobServiceImpl::Uploads(grpc::ServerContext* context, const v1::UploadsRequest* request,
+                                     v1::UploadsResponse* response) {
+  // A drop deletes files: audited as a write, naming the tenant an admin asked for.
+  const Rpc rpc{request->drop() ? "DropUploads" : "ListUploads", Access::kJobs, request->drop(), "",
+                PrintableText(request->tenant(), 64)};
+  return guard_.Run(context, rpc, [&](Call& call) {
+    *response = coordinator_.Uploads(*request, call.caller);
     return grpc::Status::OK;
   });
 }

@@ -34,6 +34,7 @@ class JobServiceImpl final : public v1::JobService::Service {
                            v1::ListWorkersResponse*) override;
   grpc::Status Send(grpc::ServerContext*, const v1::SendRequest*, v1::Job*) override;
   grpc::Status Drain(grpc::ServerContext*, const v1::DrainRequest*, v1::WorkerInfo*) override;
+  grpc::Status Uploads(grpc::ServerContext*, const v1::UploadsRequest*, v1::UploadsResponse*) override;
 
  private:
   CallGuard& guard_;

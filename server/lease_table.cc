@@ -2,6 +2,7 @@
 
 #include <openssl/rand.h>
 
+#include <utility>
 #include <vector>
 
 #include "common/error.h"
@@ -20,8 +21,9 @@ std::string RandomId(int bytes) {
   return id;
 }
 
-Lease LeaseTable::Grant(const std::string& job_id, const std::string& worker_id, Clock::time_point now) {
-  Lease lease{RandomId(12), job_id, worker_id, now + ttl_};
+Lease LeaseTable::Grant(const std::string& job_id, const std::string& worker_id, Clock::time_point now,
+                        LeaseToken token) {
+  Lease lease{RandomId(12), job_id, worker_id, now + ttl_, std::move(token)};
   std::lock_guard lock(mutex_);
   leases_[lease.id] = lease;
   return lease;
@@ -33,11 +35,13 @@ void LeaseTable::Restore(const std::string& lease_id, const std::string& job_id,
   leases_[lease_id] = Lease{lease_id, job_id, worker_id, now + ttl_};
 }
 
-std::optional<Lease> LeaseTable::Renew(const std::string& lease_id, Clock::time_point now) {
+std::optional<Lease> LeaseTable::Renew(const std::string& lease_id, Clock::time_point now,
+                                       const LeaseToken& token) {
   std::lock_guard lock(mutex_);
   const auto found = leases_.find(lease_id);
   if (found == leases_.end() || found->second.expiry <= now) return std::nullopt;
   found->second.expiry = now + ttl_;
+  found->second.token = token;
   return found->second;
 }
 

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <chrono>
+#include <cstdint>
 #include <map>
 #include <mutex>
 #include <optional>
@@ -15,11 +16,19 @@ namespace endorecon::server {
 
 using Clock = std::chrono::steady_clock;
 
+// The token a lease's worker last called with. When it expires the worker's calls are refused and
+// the lease cannot be renewed: the job was lost to the credential, not to the job or the worker.
+struct LeaseToken {
+  std::string name;                  // its label
+  std::int64_t expires_unix_ms = 0;  // 0: never (or no token store)
+};
+
 struct Lease {
   std::string id;
   std::string job_id;
   std::string worker_id;
   Clock::time_point expiry;
+  LeaseToken token;
 };
 
 class LeaseTable {
@@ -27,12 +36,15 @@ class LeaseTable {
   explicit LeaseTable(Clock::duration ttl) : ttl_(ttl) {}
 
   // Grants a new lease (a fresh random id) on `job_id` to `worker_id`, expiring ttl after `now`.
-  Lease Grant(const std::string& job_id, const std::string& worker_id, Clock::time_point now);
+  Lease Grant(const std::string& job_id, const std::string& worker_id, Clock::time_point now,
+              LeaseToken token = {});
   // Re-creates a lease known from the job store under its old id.
   void Restore(const std::string& lease_id, const std::string& job_id, const std::string& worker_id,
                Clock::time_point now);
-  // Extends a lease to ttl after `now`; nullopt if it is unknown or already expired.
-  std::optional<Lease> Renew(const std::string& lease_id, Clock::time_point now);
+  // Extends a lease to ttl after `now`, noting the `token` the renewing call carried (the worker's
+  // token may have been replaced); nullopt if it is unknown or already expired.
+  std::optional<Lease> Renew(const std::string& lease_id, Clock::time_point now,
+                             const LeaseToken& token = {});
   std::optional<Lease> Find(const std::string& lease_id) const;
   // Ends a lease; false if it was not held.
   bool Release(const std::string& lease_id);

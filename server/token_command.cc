@@ -1,6 +1,7 @@
 // endorecon-server token create|list|revoke --data-dir DIR: the token store of a data folder.
 // Run it as the server's user, so the store's files stay readable by the server.
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <pwd.h>
 #include <spdlog/spdlog.h>
 #include <unistd.h>
@@ -9,6 +10,7 @@
 #include <iostream>
 #include <map>
 #include <memory>
+#include <set>
 
 #include "common/error.h"
 #include "common/private_folder.h"
@@ -63,6 +65,25 @@ void Audit(const TokenFlags& flags, const std::string& method, const TokenRecord
   log.Write({LocalUser(), "-", record.tenant, method, "", "OK", "", "", record.name});
 }
 
+// A worker token's tenant is a name typed by hand, and the server keeps no list of tenants: a
+// misspelt one ("radiolgy") made workers that leased nothing, and nothing said why (found
+// 2026-12-06). Tenants are made by client tokens, so one that no active client token names is
+// warned of (the token is still made: its client tokens may come next).
+void WarnOfAnUnknownTenant(TokenStore& store, const std::string& tenant, std::int64_t now) {
+  std::set<std::string> tenants;
+  for (const auto& record : store.List()) {
+    if (record.role == Role::kClient && record.StateAt(now) == "active") tenants.insert(record.tenant);
+  }
+  if (tenants.count(tenant)) return;
+  tenants.erase("");
+  std::cerr << fmt::format(
+      "warning: no active client token is for tenant '{}' ({}): this worker token's workers run that "
+      "tenant's jobs only, so check the name\n",
+      tenant,
+      tenants.empty() ? "no client token has a tenant"
+                      : fmt::format("client tokens are for {}", fmt::join(tenants, ", ")));
+}
+
 int Create(const TokenFlags& flags) {
   const auto role = ParseRole(flags.role);
   if (!role) FailInvalid("--role " + flags.role + ": expected client, worker or admin");
@@ -82,8 +103,10 @@ int Create(const TokenFlags& flags) {
   const std::int64_t now = NowUnixMs();
   const std::int64_t expires = expires_given ? now + static_cast<std::int64_t>(flags.expires_in_s * 1000) : 0;
   ValidateTokenRequest(flags.name, *role, flags.tenant, expires, now);  // before a store is made
-  const auto token = OpenStore(flags, true)->Create(flags.name, *role, flags.tenant, expires);
+  const auto store = OpenStore(flags, true);
+  const auto token = store->Create(flags.name, *role, flags.tenant, expires);
   Audit(flags, "TokenCreate", {flags.name, *role, flags.tenant, 0, 0, expires});
+  if (*role == Role::kWorker && !flags.tenant.empty()) WarnOfAnUnknownTenant(*store, flags.tenant, now);
   std::cout << fmt::format(
       "created {} token '{}'{}{}; it is shown only now, keep it in a file only its user can "
       "read (chmod 600):\n{}\n",

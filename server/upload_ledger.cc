@@ -49,4 +49,31 @@ std::size_t UploadLedger::ForgetBefore(Time cutoff) {
   return forgotten;
 }
 
+std::map<std::string, UploadLedger::Pending> UploadLedger::Tenants() const {
+  std::map<std::string, Pending> tenants;
+  for (const auto& [tenant, files] : tenants_) {
+    auto& pending = tenants[tenant];
+    for (const auto& [digest, entry] : files) {
+      ++pending.files;
+      pending.bytes += entry.bytes;
+      pending.last_unix_ms = std::max(pending.last_unix_ms, entry.noted_unix_ms);
+    }
+  }
+  return tenants;
+}
+
+std::vector<std::string> UploadLedger::Drop(const std::string& tenant) {
+  std::vector<std::string> digests;
+  const auto found = tenants_.find(tenant);
+  if (found == tenants_.end()) return digests;
+  for (const auto& [digest, entry] : found->second) digests.push_back(digest);
+  tenants_.erase(found);
+  return digests;
+}
+
+bool UploadLedger::Holds(const std::string& sha256) const {
+  return std::any_of(tenants_.begin(), tenants_.end(),
+                     [&](const auto& tenant) { return tenant.second.count(sha256) > 0; });
+}
+
 }  // namespace endorecon::server

@@ -1,14 +1,16 @@
 // Which tenant's uploads brought which content that no job of it holds yet: a tenant's byte quota
 // (max_bytes) counts its uploads not yet submitted, not only its jobs' files. Without this, a tenant
 // could leave any number of uploads unsubmitted, each under its quota, for --orphan-hours (found
-// 2026-12-06). Kept in the server's memory: a restart forgets it (the partial uploads themselves are
-// still deleted --orphan-hours after their last write). Not thread-safe: the coordinator holds its lock.
+// 2026-12-06). `endorecon uploads` lists it, and drops a tenant's. Kept in the server's memory: a
+// restart forgets it (the partial uploads themselves are still deleted --orphan-hours after their
+// last write). Not thread-safe: the coordinator holds its lock.
 #pragma once
 
 #include <cstdint>
 #include <filesystem>
 #include <map>
 #include <string>
+#include <vector>
 
 #include "endorecon/v1/files.pb.h"
 
@@ -36,6 +38,18 @@ class UploadLedger {
   // Forgets what was last noted before `cutoff`: retention deletes those partial uploads and unused
   // blobs then. Returns how many entries went.
   std::size_t ForgetBefore(Time cutoff);
+
+  struct Pending {
+    std::int64_t files = 0;
+    std::int64_t bytes = 0;
+    std::int64_t last_unix_ms = 0;
+  };
+  // Each tenant's uploads not yet submitted (tenants with none are left out).
+  std::map<std::string, Pending> Tenants() const;
+  // Forgets `tenant`'s; returns the digests it had noted.
+  std::vector<std::string> Drop(const std::string& tenant);
+  // Whether some tenant's upload not yet submitted brings this content.
+  bool Holds(const std::string& sha256) const;
 
  private:
   struct Entry {

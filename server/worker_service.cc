@@ -53,6 +53,12 @@ std::optional<std::string> ServedTenant(const Principal& caller) {
   return caller.tenant;
 }
 
+// The token a worker's call carried, for its lease (an anonymous caller's never expires).
+LeaseToken TokenOf(const Principal& caller) {
+  if (caller.anonymous) return {};
+  return {caller.name, caller.token_expires_unix_ms};
+}
+
 }  // namespace
 
 grpc::Status WorkerServiceImpl::Register(grpc::ServerContext* context, const v1::RegisterRequest* request,
@@ -111,8 +117,9 @@ grpc::Status WorkerServiceImpl::Lease(grpc::ServerContext* context, const v1::Le
     const auto deadline =
         Clock::now() + (unknown ? std::chrono::milliseconds(0)
                                 : std::max(std::chrono::milliseconds(0), std::min(wait, caller_left)));
-    auto granted = coordinator_.Lease(request->worker_id(), deadline, ServedTenant(call.caller),
-                                      [context] { return context->IsCancelled(); });
+    auto granted = coordinator_.Lease(
+        request->worker_id(), deadline, ServedTenant(call.caller),
+        [context] { return context->IsCancelled(); }, TokenOf(call.caller));
     response->set_register_again(unknown);
     if (!granted) return grpc::Status::OK;
     call.wrote = true;
@@ -151,7 +158,7 @@ grpc::Status WorkerServiceImpl::Report(
       }
       v1::ProgressReply reply;
       bool register_again = false;
-      reply.set_action(coordinator_.Report(update, &call.job_id, &register_again));
+      reply.set_action(coordinator_.Report(update, TokenOf(call.caller), &call.job_id, &register_again));
       reply.set_register_again(register_again);
       if (!stream->Write(reply) || reply.action() != v1::ProgressReply::CONTINUE) break;
     }

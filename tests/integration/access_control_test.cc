@@ -38,8 +38,11 @@ class AccessControlTest : public ::testing::Test {
     return RunCli(cluster_.address(), argv);
   }
 
-  std::string SubmitAs(const ClientCredentials& who, const std::string& name) {
-    const auto result = Cli(who, {"--json", "submit", cluster_.path("clip").string(), "--name", name});
+  std::string SubmitAs(const ClientCredentials& who, const std::string& name,
+                       std::vector<std::string> more = {}) {
+    std::vector<std::string> args{"--json", "submit", cluster_.path("clip").string(), "--name", name};
+    args.insert(args.end(), more.begin(), more.end());
+    const auto result = Cli(who, args);
     EXPECT_EQ(result.exit_code, 0) << result.err;
     return result.out.substr(result.out.find("\"id\":\"") + 6, 12);
   }
@@ -294,6 +297,15 @@ TEST_F(AccessControlTest, AWorkerTokenWithATenantRunsThatTenantsJobsOnly) {
   const auto empty = Capture(BuiltBinary("server/endorecon-server") + " token create --data-dir " +
                              cluster_.data_dir().string() + " --role worker --tenant '' --name w-empty 2>&1");
   EXPECT_NE(empty.find("--tenant is empty"), std::string::npos) << empty;
+  // A misspelt tenant is made, with a warning naming the tenants client tokens are for.
+  const auto misspelt =
+      Capture(BuiltBinary("server/endorecon-server") + " token create --data-dir " +
+              cluster_.data_dir().string() + " --role worker --tenant radiolgy --name w-typo 2>&1");
+  EXPECT_NE(misspelt.find("warning: no active client token is for tenant 'radiolgy' (client tokens are for "
+                          "oncology, radiology)"),
+            std::string::npos)
+      << misspelt;
+  EXPECT_NE(misspelt.find("created worker token 'w-typo'"), std::string::npos) << misspelt;
   const auto submit = [&](const ClientCredentials& who) {
     const auto result = Cli(who, {"--json", "submit", cluster_.path("clip").string(), "--iterations", "30"});
     EXPECT_EQ(result.exit_code, 0) << result.err;
@@ -312,6 +324,31 @@ TEST_F(AccessControlTest, AWorkerTokenWithATenantRunsThatTenantsJobsOnly) {
   EXPECT_EQ(cluster_.Job(radiology).state(), v1::QUEUED) << "submitted first, and another tenant's";
   cluster_.StartWorker("w-any", {"--token-file", worker_.token_file});  // every tenant's jobs
   EXPECT_EQ(cluster_.WaitForState(radiology, v1::SUCCEEDED, std::chrono::seconds(120)).worker_id(), "w-any");
+}
+
+// A worker token that expires mid-job: the worker's reports are refused, its lease expires, and the
+// job goes back to the queue without an attempt counted (it cost one, and two such losses failed a
+// sound job; found 2026-12-06). The reason names the token.
+TEST_F(AccessControlTest, AWorkerTokenExpiringMidJobCostsTheJobNoAttempt) {
+  const auto id = SubmitAs(alice_, "long", {"--iterations", "100000"});
+  const auto file = WriteTokenFile(cluster_.path("short.token"),
+                                   CreateToken(cluster_.data_dir(), "worker", "", "short-lived",
+                                               {"--expires-in", std::to_string(5 * kSlowdown) + "s"}));
+  auto& worker = cluster_.StartWorker("w-short", {"--token-file", file.string()});
+  cluster_.WaitForState(id, v1::RUNNING, std::chrono::seconds(30));
+  ASSERT_TRUE(WaitUntil(
+      [&] {
+        const auto job = cluster_.Job(id);
+        return job.state() == v1::QUEUED && !job.error().empty();
+      },
+      std::chrono::seconds(60)))
+      << worker.Log();
+  const auto job = cluster_.Job(id);
+  EXPECT_EQ(job.attempts(), 0) << job.error();
+  EXPECT_NE(job.error().find("worker w-short's token 'short-lived' expired at"), std::string::npos)
+      << job.error();
+  EXPECT_NE(job.error().find("not counted as an attempt"), std::string::npos) << job.error();
+  EXPECT_EQ(Cli(admin_, {"cancel", id}).exit_code, 0);
 }
 
 TEST_F(AccessControlTest, OverQuotaSubmitsAreRefusedAndNothingIsLost) {

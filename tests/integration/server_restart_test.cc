@@ -113,6 +113,48 @@ TEST(ServerRestartTest, CtrlCDuringAnUploadSaysHowToResume) {
   EXPECT_NE(resumed.err.find("already on the server"), std::string::npos) << resumed.err;
 }
 
+// An upload given up counted against its tenant's bytes until --orphan-hours, and nothing listed it
+// or let it go sooner (found 2026-12-06): `endorecon uploads` lists it, `--drop` deletes it.
+TEST(ServerRestartTest, AnInterruptedUploadIsListedAndCanBeDropped) {
+  Cluster cluster;
+  const auto clip = cluster.path("bigclip");
+  MakeClip(clip);
+  std::string data(256 << 20, '\0');
+  std::mt19937_64 random(12);
+  for (std::size_t i = 0; i < data.size(); i += 8) data[i] = static_cast<char>(random());
+  AddPngPayload(clip / "images" / "000000.png", data);
+  Process submit({BuiltBinary("client/endorecon"), "--server", cluster.address(), "submit", clip.string()},
+                 cluster.path("submit.log"));
+  const auto partial = cluster.data_dir() / "partial";
+  ASSERT_TRUE(WaitUntil(
+      [&] {
+        std::error_code error;
+        return !std::filesystem::is_empty(partial, error) && !error;
+      },
+      std::chrono::seconds(120)));
+  submit.Signal(SIGINT);
+  EXPECT_EQ(submit.Wait(), 130) << submit.Log();
+  const auto listed = RunCli(cluster.address(), {"uploads"});
+  ASSERT_EQ(listed.exit_code, 0) << listed.err;
+  EXPECT_NE(listed.out.find("uploads not yet submitted (they count against the tenant's byte quota"),
+            std::string::npos)
+      << listed.out;
+  EXPECT_NE(listed.out.find("tenant '-': "), std::string::npos) << listed.out;
+  EXPECT_NE(listed.out.find(" MB, the last upload begun "), std::string::npos) << listed.out;
+  // An admin (here, a caller without a token) names the tenant it drops.
+  EXPECT_EQ(RunCli(cluster.address(), {"uploads", "--drop"}).exit_code, 2);
+  const auto dropped = RunCli(cluster.address(), {"uploads", "--drop", "--tenant", "-"});
+  ASSERT_EQ(dropped.exit_code, 0) << dropped.err;
+  EXPECT_NE(dropped.out.find("dropped the uploads not yet submitted of tenant '-'"), std::string::npos)
+      << dropped.out;
+  EXPECT_NE(dropped.out.find("; deleted "), std::string::npos) << dropped.out;
+  EXPECT_TRUE(std::filesystem::is_empty(partial)) << "the interrupted file's partial went";
+  EXPECT_NE(RunCli(cluster.address(), {"uploads"}).out.find("no upload not yet submitted"),
+            std::string::npos);
+  const auto again = RunCli(cluster.address(), {"--json", "uploads"});
+  EXPECT_EQ(again.out, "{\"tenants\":[],\"deleted_files\":\"0\",\"deleted_bytes\":\"0\"}\n") << again.out;
+}
+
 TEST(ServerRestartTest, KillDuringAJobLosesNothing) {
   Cluster cluster;
   MakeClip(cluster.path("clip"));

@@ -234,6 +234,42 @@ TEST_F(JobCoordinatorTest, ReportsKeepTheLeaseAndSilenceExpiresIt) {
   EXPECT_GT(Get(id).started_unix_ms(), first_start);
 }
 
+// A worker whose token expired mid-job cannot renew its lease (every call is refused): the job
+// went back to the queue with an attempt counted, and a second such loss failed a job that had
+// nothing wrong with it (found 2026-12-06). The token a lease notes is the last one its worker's
+// calls carried: one replaced in time (a rotation) leaves a lost lease counted as usual.
+TEST_F(JobCoordinatorTest, ALeaseLostToItsWorkersExpiredTokenCostsNoAttempt) {
+  const std::string id = Submit();  // max_attempts 2
+  const std::int64_t expired = NowUnixMs() - 1000;
+  for (int loss = 0; loss < 3; ++loss) {
+    const auto granted =
+        coordinator_.Lease("node-7", Clock::now(), std::nullopt, {}, {"node-7-token", expired});
+    ASSERT_TRUE(granted.has_value()) << loss;
+    EXPECT_EQ(granted->attempt, 1);
+    Advance(kTtl + seconds(1));
+    const v1::Job requeued = Get(id);
+    ASSERT_EQ(requeued.state(), v1::QUEUED) << requeued.error();
+    EXPECT_EQ(requeued.attempts(), 0);
+    EXPECT_NE(
+        requeued.error().find("worker node-7's token 'node-7-token' expired at " + UtcText(expired) +
+                              ", so its calls were refused and its lease expired (not counted as an attempt"),
+        std::string::npos)
+        << requeued.error();
+  }
+  // Rotated in time: the lease notes the new token from the worker's next report.
+  const auto granted =
+      coordinator_.Lease("node-7", Clock::now(), std::nullopt, {}, {"node-7-token", expired});
+  ASSERT_TRUE(granted.has_value());
+  v1::ProgressUpdate update;
+  update.set_lease_id(granted->lease_id);
+  EXPECT_EQ(coordinator_.Report(update, {"node-7-token-2", NowUnixMs() + 3600 * 1000}),
+            v1::ProgressReply::CONTINUE);
+  Advance(kTtl + seconds(1));
+  EXPECT_EQ(Get(id).attempts(), 1);
+  EXPECT_NE(Get(id).error().find("worker node-7 stopped reporting; its lease expired"), std::string::npos)
+      << Get(id).error();
+}
+
 TEST_F(JobCoordinatorTest, TheJobFailsWhenItsAttemptsAreUsedUp) {
   const std::string id = Submit();  // max_attempts 2
   ASSERT_TRUE(LeaseNext().has_value());
@@ -392,6 +428,68 @@ TEST_F(JobCoordinatorTest, AnotherTenantsJobIsNotFoundLikeAMissingOne) {
 // A tenant's uploads not yet submitted count against its byte quota: each upload under the quota, and
 // none submitted, let a tenant keep any number of them on the data disk for --orphan-hours (found
 // 2026-12-06).
+// An interrupted upload counted against its tenant's bytes until --orphan-hours (24 h by default),
+// and nothing could give it up sooner (found 2026-12-06): `endorecon uploads` lists a tenant's, and
+// --drop forgets them and deletes their files, but not a file a job or another tenant's upload holds.
+TEST_F(JobCoordinatorTest, UploadsNotYetSubmittedAreListedAndDroppedWithTheFilesNoOneElseHolds) {
+  const Principal a{"a-client", Role::kClient, "a", false};
+  const Principal b{"b-client", Role::kClient, "b", false};
+  const Principal admin{"it-ops", Role::kAdmin, "", false};
+  const auto entry = [](const std::string& bytes) {
+    v1::FileEntry file;
+    file.set_path("images/" + Sha256Hex(bytes).substr(0, 6) + ".png");
+    file.set_size(static_cast<std::int64_t>(bytes.size()));
+    file.set_sha256(Sha256Hex(bytes));
+    return file;
+  };
+  const std::string complete(100, 'c'), partial(200, 'p'), shared(300, 's'), in_job(400, 'j');
+  v1::Manifest uploads;
+  for (const auto* bytes : {&complete, &partial, &shared, &in_job}) *uploads.add_files() = entry(*bytes);
+  coordinator_.AdmitUpload(uploads, a);
+  v1::Manifest theirs;
+  *theirs.add_files() = entry(shared);
+  coordinator_.AdmitUpload(theirs, b);
+  // What arrived: `complete` and `in_job` whole, half of `partial`; `in_job` is the clip of b's job.
+  blobs_.Put(complete);
+  blobs_.Put(shared);
+  blobs_.OpenWriter(entry(partial))->Append(0, partial.substr(0, 100));
+  blobs_.Put(in_job);
+  v1::SubmitRequest request;
+  *request.mutable_clip()->add_files() = entry(in_job);
+  coordinator_.Submit(request, b);
+
+  v1::UploadsRequest list;
+  const auto listed = coordinator_.Uploads(list, a);
+  ASSERT_EQ(listed.tenants_size(), 1);
+  EXPECT_EQ(listed.tenants(0).tenant(), "a");
+  EXPECT_EQ(listed.tenants(0).files(), 4);
+  EXPECT_EQ(listed.tenants(0).bytes(), 1000);
+  EXPECT_GT(listed.tenants(0).last_unix_ms(), 0);
+  EXPECT_EQ(coordinator_.Uploads(list, admin).tenants_size(), 2) << "an admin sees every tenant's";
+  list.set_tenant("a");
+  EXPECT_EQ(testing::ErrorFrom([&] { coordinator_.Uploads(list, b); }, ErrorCode::kPermissionDenied),
+            "a client token acts on its own tenant's uploads only (tenant 'b')");
+  v1::UploadsRequest drop;
+  drop.set_drop(true);
+  EXPECT_NE(testing::ErrorFrom([&] { coordinator_.Uploads(drop, admin); }).find("name the tenant"),
+            std::string::npos);
+
+  const auto dropped = coordinator_.Uploads(drop, a);
+  ASSERT_EQ(dropped.tenants_size(), 1);
+  EXPECT_EQ(dropped.tenants(0).bytes(), 1000) << "what it dropped";
+  EXPECT_EQ(dropped.deleted_files(), 2);
+  EXPECT_EQ(dropped.deleted_bytes(), 200) << "the complete blob and the partial's 100 bytes";
+  EXPECT_FALSE(blobs_.Has(Sha256Hex(complete)));
+  EXPECT_EQ(blobs_.Committed(entry(partial)), 0) << "the partial went";
+  EXPECT_TRUE(blobs_.Has(Sha256Hex(shared))) << "b's upload brings it too";
+  EXPECT_TRUE(blobs_.Has(Sha256Hex(in_job))) << "b's job holds it";
+  EXPECT_EQ(coordinator_.Uploads(v1::UploadsRequest(), a).tenants_size(), 0);
+  const auto left = coordinator_.Uploads(v1::UploadsRequest(), admin);
+  ASSERT_EQ(left.tenants_size(), 1);
+  EXPECT_EQ(left.tenants(0).tenant(), "b");
+  EXPECT_EQ(left.tenants(0).bytes(), 300);
+}
+
 TEST_F(JobCoordinatorTest, UploadsNotYetSubmittedCountAgainstTheByteQuota) {
   JobCoordinator quoted({store_, blobs_, scheduler_, leases_, workers_, hub_, metrics_}, 2,
                         TenantQuotas({0, 1000}, ""), [this] { return now_; });
@@ -424,7 +522,7 @@ TEST_F(JobCoordinatorTest, UploadsNotYetSubmittedCountAgainstTheByteQuota) {
       << message;
   EXPECT_NE(
       message.find("or finish an upload not yet submitted (`endorecon submit` of the same clip resumes and "
-                   "submits it)"),
+                   "submits it), or give those up (`endorecon uploads --drop`)"),
       std::string::npos)
       << message;
   quoted.CheckUploadQuota(upload(second), a);  // a listing before an upload: not counted there

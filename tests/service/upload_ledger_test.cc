@@ -4,6 +4,7 @@
 
 #include <chrono>
 #include <string>
+#include <vector>
 
 namespace endorecon::server {
 namespace {
@@ -36,6 +37,26 @@ TEST(UploadLedgerTest, ATenantsUploadsCountUntilSubmittedOrForgotten) {
   EXPECT_EQ(ledger.ForgetBefore(t0 + std::chrono::hours(3)), 0u) << "noted again: dated anew";
   ledger.Submitted("a", Files({{"z", 3}}));
   EXPECT_EQ(ledger.PendingBytes("a", {}), 0);
+}
+
+TEST(UploadLedgerTest, ATenantsUploadsAreListedAndDroppedAlone) {
+  UploadLedger ledger;
+  const auto t0 = UploadLedger::Time::clock::now();
+  const auto none = [](const std::string&) { return false; };
+  ledger.Note("a", Files({{"x", 100}, {"shared", 20}}), none, t0);
+  ledger.Note("b", Files({{"shared", 20}}), none, t0);
+  const auto tenants = ledger.Tenants();
+  ASSERT_EQ(tenants.size(), 2u);
+  EXPECT_EQ(tenants.at("a").files, 2);
+  EXPECT_EQ(tenants.at("a").bytes, 120);
+  EXPECT_GT(tenants.at("a").last_unix_ms, 0);
+  EXPECT_EQ(tenants.at("b").bytes, 20);
+  EXPECT_EQ(ledger.Drop("a"), (std::vector<std::string>{"shared", "x"}));
+  EXPECT_TRUE(ledger.Drop("a").empty()) << "dropped once";
+  EXPECT_EQ(ledger.PendingBytes("a", {}), 0);
+  EXPECT_TRUE(ledger.Holds("shared")) << "b's upload still brings it";
+  EXPECT_FALSE(ledger.Holds("x"));
+  EXPECT_EQ(ledger.Tenants().count("a"), 0u);
 }
 
 }  // namespace

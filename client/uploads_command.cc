@@ -1,0 +1,71 @@
+// endorecon uploads [--drop] [--tenant T]: the uploads not yet submitted (an upload interrupted, or one
+// whose submit never came) count against the tenant's byte quota until submitted, or until the
+// server's --orphan-hours after the last of them. This lists them, and --drop gives them up: they
+// stop counting and the server deletes their files (those no job or other upload holds). A client
+// sees its own tenant's; an admin every tenant's, and drops a tenant's named with --tenant.
+#include <fmt/format.h>
+
+#include <CLI/CLI.hpp>
+#include <iostream>
+
+#include "client/commands.h"
+#include "client/exit_codes.h"
+#include "client/job_format.h"
+#include "common/grpc_status.h"
+#include "common/transport_security.h"
+
+namespace endorecon::client {
+namespace {
+
+std::string TenantName(const std::string& tenant) { return tenant.empty() ? "-" : tenant; }
+
+std::string Described(const v1::TenantUploads& uploads) {
+  return fmt::format("tenant '{}': {} file(s), {}, the last upload begun {}", TenantName(uploads.tenant()),
+                     uploads.files(), HumanBytes(uploads.bytes()), HumanTime(uploads.last_unix_ms()));
+}
+
+}  // namespace
+
+Command AddUploadsCommand(CLI::App& app) {
+  auto request = std::make_shared<v1::UploadsRequest>();
+  auto* sub = app.add_subcommand("uploads",
+                                 "list the uploads not yet submitted, which count against the tenant's byte "
+                                 "quota; --drop gives them up");
+  sub->add_flag(
+      "--drop", [request](std::int64_t) { request->set_drop(true); },
+      "give them up: they stop counting, and the server deletes their files that no job holds");
+  sub->add_option("--tenant", *request->mutable_tenant(),
+                  "an admin's: the tenant ('-' for that of admins); a client acts on its own");
+  return [request](const Globals& globals) {
+    v1::UploadsResponse response;
+    auto context = CallContext(globals.timeout());
+    ThrowIfFailed(globals.Connect()->Uploads(context.get(), *request, &response),
+                  request->drop() ? "uploads --drop" : "uploads");
+    if (globals.json) {
+      std::cout << ToJson(response) << std::endl;
+      return kExitOk;
+    }
+    if (request->drop()) {
+      if (response.tenants_size() == 0) {
+        std::cout << "no upload not yet submitted to drop" << std::endl;
+        return kExitOk;
+      }
+      std::cout << "dropped the uploads not yet submitted of " << Described(response.tenants(0))
+                << "; deleted " << response.deleted_files() << " file(s), "
+                << HumanBytes(response.deleted_bytes())
+                << ", from the server (a file a job or another upload holds is kept)" << std::endl;
+      return kExitOk;
+    }
+    if (response.tenants_size() == 0) {
+      std::cout << "no upload not yet submitted" << std::endl;
+      return kExitOk;
+    }
+    std::cout << "uploads not yet submitted (they count against the tenant's byte quota until submitted, "
+                 "or dropped with `endorecon uploads --drop`):"
+              << std::endl;
+    for (const auto& uploads : response.tenants()) std::cout << "  " << Described(uploads) << std::endl;
+    return kExitOk;
+  };
+}
+
+}  // namespace endorecon::client
