@@ -112,6 +112,11 @@ JobCoordinator::JobCoordinator(CoordinatorParts parts, int max_attempts, TenantQ
                                std::function<Clock::time_point()> clock)
     : parts_(parts), max_attempts_(max_attempts), quotas_(std::move(quotas)), clock_(std::move(clock)) {}
 
+void JobCoordinator::KeepUploadsIn(const std::filesystem::path& file) {
+  std::lock_guard lock(mutex_);
+  uploads_.KeepIn(file);
+}
+
 void JobCoordinator::Recover() {
   std::lock_guard lock(mutex_);
   const auto now = clock_();

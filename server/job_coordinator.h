@@ -77,6 +77,8 @@ class JobCoordinator {
   // retrieve hook), re-grants the leases of its RUNNING ones and hands SUCCEEDED jobs with PENDING
   // or SENDING sends back to the send hook.
   void Recover();
+  // Keeps the tenants' uploads not yet submitted in `file` (UploadLedger::KeepIn), read now.
+  void KeepUploadsIn(const std::filesystem::path& file);
 
   // Queues a job of the caller's tenant; a job naming a PACS study waits for its retrieval first
   // (the retrieve hook), and the recording's bytes count against the tenant once retrieved. Throws

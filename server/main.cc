@@ -203,6 +203,7 @@ int Run(const ServerFlags& flags) {
     spdlog::info("PACS {} = {} (this server calls as {})", name, dicom::PeerText(pacs.Find(name)),
                  flags.dicom.ae_title);
   }
+  coordinator.KeepUploadsIn(data_dir / "uploads.json");
   coordinator.Recover();
   IdleTrim idle_trim;
   UploadReceiver uploads(blobs, flags.max_upload_bytes, flags.min_free_bytes, flags.max_uploads,

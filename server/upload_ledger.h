@@ -1,9 +1,13 @@
 // Which tenant's uploads brought which content that no job of it holds yet: a tenant's byte quota
 // (max_bytes) counts its uploads not yet submitted, not only its jobs' files. Without this, a tenant
 // could leave any number of uploads unsubmitted, each under its quota, for --orphan-hours (found
-// 2026-12-06). `endorecon uploads` lists it, and drops a tenant's. Kept in the server's memory: a
-// restart forgets it (the partial uploads themselves are still deleted --orphan-hours after their
-// last write). Not thread-safe: the coordinator holds its lock.
+// 2026-12-06). `endorecon uploads` lists it, and drops a tenant's. Kept in <data-dir>/uploads.json
+// (KeepIn), written whole at every change, so a server restart neither forgets nor frees them:
+//
+//   {"uploads": [{"tenant": "radiology", "sha256": "3f9c...", "bytes": 1048576,
+//                 "noted_unix_ms": 1765000000000}]}
+//
+// Not thread-safe: the coordinator holds its lock.
 #pragma once
 
 #include <cstdint>
@@ -20,6 +24,10 @@ class UploadLedger {
  public:
   using Time = std::filesystem::file_time_type;  // the clock of retention's orphan cutoff
 
+  // Reads `file` when it exists (one that cannot be read is warned of and left aside: the server
+  // starts, and the uploads from before count again when resumed), then writes it at every change.
+  void KeepIn(const std::filesystem::path& file);
+
   // The bytes `tenant`'s uploads not yet submitted bring, leaving out the files of `except` (an
   // upload resumed, or the manifest being submitted, is not counted twice).
   std::int64_t PendingBytes(const std::string& tenant, const v1::Manifest& except) const;
@@ -29,9 +37,11 @@ class UploadLedger {
   // as its until submitted or forgotten. A file noted again is dated anew.
   template <typename Stored>
   void Note(const std::string& tenant, const v1::Manifest& manifest, Stored&& stored, Time now) {
+    bool added = false;
     for (const auto& file : manifest.files()) {
-      if (!stored(file.sha256())) Add(tenant, file, now);
+      if (!stored(file.sha256())) added = Add(tenant, file, now) || added;
     }
+    if (added) Save();
   }
   // A job of `tenant` now holds the files of `manifest` (submitted): they count as the job's.
   void Submitted(const std::string& tenant, const v1::Manifest& manifest);
@@ -57,9 +67,12 @@ class UploadLedger {
     Time noted;
     std::int64_t noted_unix_ms = 0;  // the same moment, for messages
   };
-  void Add(const std::string& tenant, const v1::FileEntry& file, Time now);
+  bool Add(const std::string& tenant, const v1::FileEntry& file, Time now);  // false: nothing to note
+  // Writes the file given to KeepIn, if any; a failure is logged (the ledger in memory holds).
+  void Save() const;
 
   std::map<std::string, std::map<std::string, Entry>> tenants_;  // tenant -> sha256 -> entry
+  std::filesystem::path file_;
 };
 
 }  // namespace endorecon::server

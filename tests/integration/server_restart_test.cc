@@ -114,7 +114,8 @@ TEST(ServerRestartTest, CtrlCDuringAnUploadSaysHowToResume) {
 }
 
 // An upload given up counted against its tenant's bytes until --orphan-hours, and nothing listed it
-// or let it go sooner (found 2026-12-06): `endorecon uploads` lists it, `--drop` deletes it.
+// or let it go sooner (found 2026-12-06): `endorecon uploads` lists it, after a server restart too,
+// and `--drop` deletes it.
 TEST(ServerRestartTest, AnInterruptedUploadIsListedAndCanBeDropped) {
   Cluster cluster;
   const auto clip = cluster.path("bigclip");
@@ -134,6 +135,8 @@ TEST(ServerRestartTest, AnInterruptedUploadIsListedAndCanBeDropped) {
       std::chrono::seconds(120)));
   submit.Signal(SIGINT);
   EXPECT_EQ(submit.Wait(), 130) << submit.Log();
+  cluster.KillServer(SIGKILL);  // the ledger is kept in the data folder (a restart forgot it)
+  cluster.StartServer();
   const auto listed = RunCli(cluster.address(), {"uploads"});
   ASSERT_EQ(listed.exit_code, 0) << listed.err;
   EXPECT_NE(listed.out.find("uploads not yet submitted (they count against the tenant's byte quota"),

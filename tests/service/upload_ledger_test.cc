@@ -3,8 +3,12 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <filesystem>
+#include <fstream>
 #include <string>
 #include <vector>
+
+#include "tests/unit/temp_dir.h"
 
 namespace endorecon::server {
 namespace {
@@ -57,6 +61,43 @@ TEST(UploadLedgerTest, ATenantsUploadsAreListedAndDroppedAlone) {
   EXPECT_TRUE(ledger.Holds("shared")) << "b's upload still brings it";
   EXPECT_FALSE(ledger.Holds("x"));
   EXPECT_EQ(ledger.Tenants().count("a"), 0u);
+}
+
+// A server restart forgot the ledger: the uploads from before it stopped counting and `endorecon
+// uploads` listed none of them (found 2026-12-06). It is kept in a file, read at start.
+TEST(UploadLedgerTest, TheLedgerOutlivesARestartInItsFile) {
+  testing::TempDir dir("ledger");
+  const auto file = dir / "uploads.json";
+  const auto t0 = UploadLedger::Time::clock::now();
+  const auto none = [](const std::string&) { return false; };
+  {
+    UploadLedger ledger;
+    ledger.KeepIn(file);
+    EXPECT_FALSE(std::filesystem::exists(file)) << "written at the first change";
+    ledger.Note("a", Files({{"x", 100}, {"y", 20}}), none, t0);
+    ledger.Note("b", Files({{"z", 7}}), none, t0);
+    ledger.Submitted("a", Files({{"y", 20}}));
+  }
+  UploadLedger restarted;
+  restarted.KeepIn(file);
+  EXPECT_EQ(restarted.PendingBytes("a", {}), 100);
+  EXPECT_EQ(restarted.PendingBytes("b", {}), 7);
+  EXPECT_EQ(restarted.ForgetBefore(t0 - std::chrono::minutes(1)), 0u) << "dated as when noted, not older";
+  EXPECT_EQ(restarted.ForgetBefore(UploadLedger::Time::clock::now() + std::chrono::minutes(1)), 2u)
+      << "nor newer";
+  UploadLedger emptied;
+  emptied.KeepIn(file);
+  EXPECT_TRUE(emptied.Tenants().empty()) << "the forgetting was written";
+
+  // A file that is no ledger is left aside (the server starts), and replaced at the next change.
+  std::ofstream(file) << "{\"uploads\": [{\"tenant\": 5}]}";
+  UploadLedger broken;
+  broken.KeepIn(file);
+  EXPECT_TRUE(broken.Tenants().empty());
+  broken.Note("c", Files({{"w", 1}}), none, t0);
+  UploadLedger again;
+  again.KeepIn(file);
+  EXPECT_EQ(again.PendingBytes("c", {}), 1);
 }
 
 }  // namespace
