@@ -693,9 +693,11 @@ class Campaign {
           ++corrupt;
           std::printf("  CORRUPT: blob %s\n", relative.c_str());
         }
-      } else if (top == "partial"
-                     ? entry.path().extension() != ".part"
-                     : !(top.starts_with("jobs.sqlite") || top == "audit.jsonl" || top == "server.lock")) {
+      } else if (top == "partial" ? entry.path().extension() != ".part"
+                                  // uploads.json.tmp: a server killed while it wrote the ledger; the next
+                                  // write replaces it.
+                                  : !(top.starts_with("jobs.sqlite") || top == "audit.jsonl" ||
+                                      top == "server.lock" || top.starts_with("uploads.json"))) {
         ++stray;
         std::printf("  STRAY: %s\n", relative.c_str());
       }

@@ -45,24 +45,26 @@ Command AddUploadsCommand(CLI::App& app) {
       std::cout << ToJson(response) << std::endl;
       return kExitOk;
     }
+    const std::string whose = request->tenant().empty() ? "" : " of tenant '" + request->tenant() + "'";
     if (request->drop()) {
       if (response.tenants_size() == 0) {
-        std::cout << "no upload not yet submitted to drop" << std::endl;
+        std::cout << "no uploads" << whose << " waiting to be submitted: nothing dropped" << std::endl;
         return kExitOk;
       }
-      std::cout << "dropped the uploads not yet submitted of " << Described(response.tenants(0))
+      std::cout << "dropped the uploads waiting to be submitted of " << Described(response.tenants(0))
                 << "; deleted " << response.deleted_files() << " file(s), "
                 << HumanBytes(response.deleted_bytes())
                 << ", from the server (a file a job or another upload holds is kept)" << std::endl;
       return kExitOk;
     }
     if (response.tenants_size() == 0) {
-      std::cout << "no upload not yet submitted" << std::endl;
+      std::cout << "no uploads" << whose << " waiting to be submitted" << std::endl;
       return kExitOk;
     }
-    std::cout << "uploads not yet submitted (they count against the tenant's byte quota until submitted, "
-                 "or dropped with `endorecon uploads --drop`):"
-              << std::endl;
+    std::cout
+        << "uploads waiting to be submitted (they count against the tenant's byte quota until submitted, "
+           "or dropped with `endorecon uploads --drop`):"
+        << std::endl;
     for (const auto& uploads : response.tenants()) std::cout << "  " << Described(uploads) << std::endl;
     return kExitOk;
   };

@@ -8,6 +8,7 @@
 
 #include "common/error.h"
 #include "common/transport_security.h"
+#include "server/unix_time.h"
 
 namespace endorecon::server {
 namespace {
@@ -125,6 +126,22 @@ void CallGuard::PublishTokenExpiries() {
       expiring.push_back({record.name, RoleName(record.role), record.expires_unix_ms});
   }
   metrics_.SetTokenExpiries(expiring);
+}
+
+std::string CallGuard::TokenLapse(const std::string& name) {
+  TokenStore* tokens = Tokens();
+  if (tokens == nullptr || name.empty()) return "";
+  const std::int64_t now = NowUnixMs();
+  const TokenRecord* latest = nullptr;
+  const auto records = tokens->List();
+  for (const auto& record : records) {
+    if (record.name != name) continue;
+    if (record.StateAt(now) == "active") return "";
+    if (!latest || record.created_unix_ms > latest->created_unix_ms) latest = &record;
+  }
+  if (!latest) return "";
+  return latest->StateAt(now) == "revoked" ? "was revoked at " + UtcText(latest->revoked_unix_ms)
+                                           : "expired at " + UtcText(latest->expires_unix_ms);
 }
 
 TokenStore* CallGuard::Tokens() {

@@ -284,6 +284,7 @@ v1::UploadsResponse JobCoordinator::Uploads(const v1::UploadsRequest& request, c
   std::optional<std::string> tenant;  // nullopt: every tenant's
   if (caller.SeesAllTenants()) {
     if (!request.tenant().empty()) tenant = request.tenant() == "-" ? "" : request.tenant();
+    if (tenant && !tenant->empty()) ValidateTenant(*tenant);  // a typo, or text for the server's log
   } else {
     if (!request.tenant().empty() && request.tenant() != caller.tenant) {
       endorecon::Fail(
@@ -639,19 +640,29 @@ RetentionPlan JobCoordinator::ExpireFinishedBefore(std::int64_t cutoff_unix_ms,
 void JobCoordinator::ExpireLeases(Clock::time_point now) {
   const auto expired = parts_.leases.TakeExpired(now);
   if (expired.empty()) return;
+  // Why each lease's worker may have been refused, asked of the token store outside the lock: a token
+  // revoked mid-job made a reason of "stopped reporting" (found 2026-12-06).
+  std::vector<std::string> revoked(expired.size());
+  for (std::size_t i = 0; i < expired.size(); ++i) {
+    if (!token_lapse_) break;
+    const auto lapse = token_lapse_(expired[i].token.name);
+    if (lapse.starts_with("was revoked")) revoked[i] = lapse;
+  }
   Locked([&] {
-    for (const auto& lease : expired) {
+    for (std::size_t i = 0; i < expired.size(); ++i) {
+      const auto& lease = expired[i];
       auto stored = parts_.store.Get(lease.job_id);
       if (!stored || stored->job.state() != v1::RUNNING || stored->job.lease_id() != lease.id) continue;
       parts_.metrics.LeaseExpired();
       const auto& token = lease.token;
       const bool token_lapsed = token.expires_unix_ms > 0 && token.expires_unix_ms <= NowUnixMs();
+      const std::string refused = ", so its calls were refused and its lease expired";
       const std::string reason =
           "worker " + lease.worker_id +
           (token_lapsed ? "'s token '" + token.name + "' expired at " + UtcText(token.expires_unix_ms) +
-                              ", so its calls were refused and its lease expired (not counted as an attempt; "
-                              "renew worker tokens before they expire)"
-                        : " stopped reporting; its lease expired");
+                              refused + " (not counted as an attempt; renew worker tokens before they expire)"
+           : !revoked[i].empty() ? "'s token '" + token.name + "' " + revoked[i] + refused
+                                 : " stopped reporting; its lease expired");
       if (stored->job.cancel_requested()) {
         Finish(stored->job, v1::CANCELLED, "cancelled by request; " + reason);
       } else {

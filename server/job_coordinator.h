@@ -79,6 +79,11 @@ class JobCoordinator {
   void Recover();
   // Keeps the tenants' uploads not yet submitted in `file` (UploadLedger::KeepIn), read now.
   void KeepUploadsIn(const std::filesystem::path& file);
+  // Says why a token label is refused now ("was revoked at T UTC"; "" when it is not), for the
+  // reason of a lease lost to it (CallGuard::TokenLapse). Set before serving.
+  void SetTokenLapse(std::function<std::string(const std::string&)> lapse) {
+    token_lapse_ = std::move(lapse);
+  }
 
   // Queues a job of the caller's tenant; a job naming a PACS study waits for its retrieval first
   // (the retrieve hook), and the recording's bytes count against the tenant once retrieved. Throws
@@ -209,6 +214,7 @@ class JobCoordinator {
   int max_attempts_;
   TenantQuotas quotas_;
   UploadLedger uploads_;  // under mutex_
+  std::function<std::string(const std::string&)> token_lapse_;
   std::function<Clock::time_point()> clock_;
   std::mutex mutex_;
 };

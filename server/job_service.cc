@@ -41,6 +41,13 @@ grpc::Status JobServiceImpl::Upload(grpc::ServerContext* context,
         [&](const v1::Manifest& manifest) { coordinator_.AdmitUpload(manifest, call.caller); },
         [&](const std::function<bool()>& read) { return stalls_.Guard(context, read); },
         [context] { return context->IsCancelled(); });
+    // An upload its client gave up (Ctrl-C, a lost connection) was audited OK, like a whole one
+    // (found 2026-12-06): CANCELLED says it did not finish.
+    if (context->IsCancelled()) {
+      return grpc::Status(
+          grpc::StatusCode::CANCELLED,
+          "the client went away during the upload; what arrived is kept for a resumed upload");
+    }
     return grpc::Status::OK;
   });
 }

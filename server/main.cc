@@ -5,6 +5,7 @@
 #include <grpcpp/health_check_service_interface.h>
 #include <grpcpp/resource_quota.h>
 #include <signal.h>
+#include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 #include <unistd.h>
 
@@ -204,6 +205,7 @@ int Run(const ServerFlags& flags) {
                  flags.dicom.ae_title);
   }
   coordinator.KeepUploadsIn(data_dir / "uploads.json");
+  coordinator.SetTokenLapse([&guard](const std::string& name) { return guard.TokenLapse(name); });
   coordinator.Recover();
   IdleTrim idle_trim;
   UploadReceiver uploads(blobs, flags.max_upload_bytes, flags.min_free_bytes, flags.max_uploads,
@@ -505,6 +507,13 @@ int main(int argc, char** argv) {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 2;  // a usage error is 2, as every other invalid input
+  }
+  if (app.got_subcommand("token") || app.got_subcommand("retention")) {
+    // These print their result on stdout (a token, a plan): their log lines and errors go to stderr,
+    // so a script reading stdout gets the result alone (an error's last word was taken for a token,
+    // found 2026-12-06). The server's own log stays on stdout, for its supervisor.
+    spdlog::set_default_logger(
+        std::make_shared<spdlog::logger>("", std::make_shared<spdlog::sinks::stderr_color_sink_mt>()));
   }
   try {
     if (app.got_subcommand("token")) return token_command();

@@ -30,6 +30,11 @@ struct Principal {
   bool SeesAllTenants() const { return anonymous || role == Role::kAdmin; }
 };
 
+// Throws Error(kInvalidArgument) unless `tenant` is 1-63 characters of a-z, 0-9, '.', '_', '-'
+// starting with a letter or digit (it appears in paths, logs and metrics). The message shows the
+// name as printable text, cut short.
+void ValidateTenant(const std::string& tenant);
+
 inline Principal AnonymousPrincipal() { return Principal{"anonymous", Role::kAdmin, "", true}; }
 // The server acting on its own behalf (PACS retrievals and sends, which follow the jobs of every
 // tenant); named "server" as in the audit log's entries for such actions.

@@ -4,7 +4,7 @@
 #include <nlohmann/json.hpp>
 
 #include "common/error.h"
-#include "server/token_store.h"
+#include "server/principal.h"
 
 namespace endorecon::server {
 

@@ -61,15 +61,6 @@ std::string_view TokenRecord::StateAt(std::int64_t now_unix_ms) const {
   return expired ? "expired" : "active";
 }
 
-void ValidateTenant(const std::string& tenant) {
-  if (tenant.empty() || tenant.size() > 63 ||
-      tenant.find_first_not_of("abcdefghijklmnopqrstuvwxyz0123456789._-") != std::string::npos ||
-      tenant.find_first_of("._-") == 0) {
-    FailInvalid("tenant '" + tenant +
-                "': expected 1-63 characters of a-z, 0-9, '.', '_', '-', starting with a letter or digit");
-  }
-}
-
 std::filesystem::path TokenStore::PathIn(const std::filesystem::path& data_dir) {
   return data_dir / "tokens.sqlite";
 }

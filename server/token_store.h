@@ -71,8 +71,4 @@ class TokenStore {
 void ValidateTokenRequest(const std::string& name, Role role, const std::string& tenant,
                           std::int64_t expires_unix_ms, std::int64_t now_unix_ms);
 
-// Throws Error(kInvalidArgument) unless `tenant` is 1-63 characters of a-z, 0-9, '.', '_', '-'
-// starting with a letter or digit (it appears in paths, logs and metrics).
-void ValidateTenant(const std::string& tenant);
-
 }  // namespace endorecon::server

@@ -306,6 +306,11 @@ TEST_F(AccessControlTest, AWorkerTokenWithATenantRunsThatTenantsJobsOnly) {
             std::string::npos)
       << misspelt;
   EXPECT_NE(misspelt.find("created worker token 'w-typo'"), std::string::npos) << misspelt;
+  // Errors go to stderr: a script reading the token from stdout took an error's last word for one.
+  const auto refused_out =
+      Capture(BuiltBinary("server/endorecon-server") + " token create --data-dir " +
+              cluster_.data_dir().string() + " --role worker --tenant Radiology --name w-2 2>/dev/null");
+  EXPECT_EQ(refused_out, "");
   const auto submit = [&](const ClientCredentials& who) {
     const auto result = Cli(who, {"--json", "submit", cluster_.path("clip").string(), "--iterations", "30"});
     EXPECT_EQ(result.exit_code, 0) << result.err;
@@ -348,6 +353,29 @@ TEST_F(AccessControlTest, AWorkerTokenExpiringMidJobCostsTheJobNoAttempt) {
   EXPECT_NE(job.error().find("worker w-short's token 'short-lived' expired at"), std::string::npos)
       << job.error();
   EXPECT_NE(job.error().find("not counted as an attempt"), std::string::npos) << job.error();
+  // The worker stops the job the server took back (it trained on, reporting into refusals).
+  EXPECT_TRUE(
+      WaitUntil([&] { return worker.Log().find("it has taken the job of lease") != std::string::npos; },
+                std::chrono::seconds(30)))
+      << worker.Log();
+  EXPECT_EQ(Cli(admin_, {"cancel", id}).exit_code, 0);
+}
+
+// Revoked and not replaced: the lost lease counts an attempt (revoking is a judgement on the node),
+// and the reason names the token (it said "stopped reporting"; found 2026-12-06).
+TEST_F(AccessControlTest, ALeaseLostToARevokedTokenSaysSo) {
+  const auto id = SubmitAs(alice_, "long", {"--iterations", "100000"});
+  const auto file = WriteTokenFile(cluster_.path("revoked.token"),
+                                   CreateToken(cluster_.data_dir(), "worker", "", "node-rev"));
+  auto& worker = cluster_.StartWorker("w-rev", {"--token-file", file.string()});
+  cluster_.WaitForState(id, v1::RUNNING, std::chrono::seconds(30));
+  ASSERT_EQ(RevokeToken("node-rev"), 0);
+  ASSERT_TRUE(WaitUntil([&] { return cluster_.Job(id).state() == v1::QUEUED; }, std::chrono::seconds(60)))
+      << worker.Log();
+  const auto job = cluster_.Job(id);
+  EXPECT_EQ(job.attempts(), 1) << job.error();
+  EXPECT_NE(job.error().find("worker w-rev's token 'node-rev' was revoked at "), std::string::npos)
+      << job.error();
   EXPECT_EQ(Cli(admin_, {"cancel", id}).exit_code, 0);
 }
 

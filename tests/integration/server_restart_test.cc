@@ -139,7 +139,7 @@ TEST(ServerRestartTest, AnInterruptedUploadIsListedAndCanBeDropped) {
   cluster.StartServer();
   const auto listed = RunCli(cluster.address(), {"uploads"});
   ASSERT_EQ(listed.exit_code, 0) << listed.err;
-  EXPECT_NE(listed.out.find("uploads not yet submitted (they count against the tenant's byte quota"),
+  EXPECT_NE(listed.out.find("uploads waiting to be submitted (they count against the tenant's byte quota"),
             std::string::npos)
       << listed.out;
   EXPECT_NE(listed.out.find("tenant '-': "), std::string::npos) << listed.out;
@@ -148,11 +148,19 @@ TEST(ServerRestartTest, AnInterruptedUploadIsListedAndCanBeDropped) {
   EXPECT_EQ(RunCli(cluster.address(), {"uploads", "--drop"}).exit_code, 2);
   const auto dropped = RunCli(cluster.address(), {"uploads", "--drop", "--tenant", "-"});
   ASSERT_EQ(dropped.exit_code, 0) << dropped.err;
-  EXPECT_NE(dropped.out.find("dropped the uploads not yet submitted of tenant '-'"), std::string::npos)
+  EXPECT_NE(dropped.out.find("dropped the uploads waiting to be submitted of tenant '-'"), std::string::npos)
       << dropped.out;
   EXPECT_NE(dropped.out.find("; deleted "), std::string::npos) << dropped.out;
   EXPECT_TRUE(std::filesystem::is_empty(partial)) << "the interrupted file's partial went";
-  EXPECT_NE(RunCli(cluster.address(), {"uploads"}).out.find("no upload not yet submitted"),
+  EXPECT_NE(RunCli(cluster.address(), {"uploads"}).out.find("no uploads waiting to be submitted"),
+            std::string::npos);
+  // An admin's tenant is a tenant's name: a typo, or text meant for the server's log, is refused.
+  const auto typo = RunCli(cluster.address(), {"uploads", "--drop", "--tenant", "Radiology\n[info] forged"});
+  EXPECT_EQ(typo.exit_code, 2);
+  EXPECT_NE(typo.err.find("tenant 'Radiology?[info] forged': expected 1-63 characters"), std::string::npos)
+      << typo.err;
+  EXPECT_NE(RunCli(cluster.address(), {"uploads", "--drop", "--tenant", "radiology"})
+                .out.find("no uploads of tenant 'radiology' waiting to be submitted: nothing dropped"),
             std::string::npos);
   const auto again = RunCli(cluster.address(), {"--json", "uploads"});
   EXPECT_EQ(again.out, "{\"tenants\":[],\"deleted_files\":\"0\",\"deleted_bytes\":\"0\"}\n") << again.out;

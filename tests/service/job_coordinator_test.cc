@@ -268,6 +268,19 @@ TEST_F(JobCoordinatorTest, ALeaseLostToItsWorkersExpiredTokenCostsNoAttempt) {
   EXPECT_EQ(Get(id).attempts(), 1);
   EXPECT_NE(Get(id).error().find("worker node-7 stopped reporting; its lease expired"), std::string::npos)
       << Get(id).error();
+  // A revoked token costs an attempt (revoking is a judgement on the node), and the reason names it.
+  coordinator_.SetTokenLapse([](const std::string& name) {
+    return name == "node-7-token-3" ? std::string("was revoked at 2026-12-06 07:00:00 UTC") : std::string();
+  });
+  ASSERT_TRUE(
+      coordinator_.Lease("node-7", Clock::now(), std::nullopt, {}, {"node-7-token-3", 0}).has_value());
+  Advance(kTtl + seconds(1));
+  EXPECT_EQ(Get(id).state(), v1::FAILED) << "its second attempt";
+  EXPECT_NE(
+      Get(id).error().find("last: worker node-7's token 'node-7-token-3' was revoked at 2026-12-06 07:00:00 "
+                           "UTC, so its calls were refused and its lease expired"),
+      std::string::npos)
+      << Get(id).error();
 }
 
 TEST_F(JobCoordinatorTest, TheJobFailsWhenItsAttemptsAreUsedUp) {

@@ -266,7 +266,7 @@ bool RunLeasedJob(WorkerClient& client, const v1::LeaseResponse& lease, const De
       job.has_checkpoint() ? " resuming from checkpoint " + job.checkpoint().sha256().substr(0, 12) : "");
   auto& gauges = metrics.For(device.name);
   gauges.busy.Set(1);
-  ProgressReporter reporter(client, lease.lease_id(), settings.heartbeat);
+  ProgressReporter reporter(client, lease.lease_id(), settings.heartbeat, settings.lease_ttl);
   // The job's reporting ends: heartbeats stop (the lease is then the server's to keep or expire).
   const auto stop_reporting = [&] {
     reporter.Stop();

@@ -22,6 +22,7 @@ namespace endorecon::worker {
 struct RunnerSettings {
   std::filesystem::path work_dir;             // the job's files live in <work_dir>/<job id>/ while it runs
   std::chrono::milliseconds heartbeat{2000};  // report interval (the server's)
+  std::chrono::milliseconds lease_ttl{30000};  // a lease not renewed within this expires (the server's)
   double preview_interval_s = 30;
   double checkpoint_interval_s = 120;
   // A job that fails while the scratch folder has less than this free is handed back without

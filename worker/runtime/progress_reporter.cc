@@ -7,8 +7,12 @@
 namespace endorecon::worker {
 
 ProgressReporter::ProgressReporter(WorkerClient& client, std::string lease_id,
-                                   std::chrono::milliseconds interval)
-    : client_(client), lease_id_(std::move(lease_id)), interval_(interval), thread_([this] { Loop(); }) {}
+                                   std::chrono::milliseconds interval, std::chrono::milliseconds lease_ttl)
+    : client_(client),
+      lease_id_(std::move(lease_id)),
+      interval_(interval),
+      lease_ttl_(lease_ttl),
+      thread_([this] { Loop(); }) {}
 
 ProgressReporter::~ProgressReporter() { Stop(); }
 
@@ -83,6 +87,22 @@ bool ProgressReporter::SendPending() {
       stream_.reset();
       std::lock_guard lock(mutex_);  // keep what could not be sent for the next attempt
       if (update.has_checkpoint() && !checkpoint_) checkpoint_ = update.checkpoint();
+      // Refused (the server is up) since before a lease would have expired: the job is no longer
+      // this worker's. A worker whose token expired trained on, reporting every 2.5 s into the audit
+      // log, while the server gave the job to another (found 2026-12-06).
+      const bool refused = status.error_code() == grpc::StatusCode::UNAUTHENTICATED ||
+                           status.error_code() == grpc::StatusCode::PERMISSION_DENIED;
+      const auto silent = std::chrono::steady_clock::now() - last_answer_;
+      if (refused && silent > lease_ttl_ + interval_) {
+        spdlog::error(
+            "the server has refused this worker's reports for {:.1f} s, longer than it keeps a lease ({:.1f} "
+            "s): it "
+            "has taken the job of lease {} back, so it stops here ({}; write a valid worker token into "
+            "--token-file)",
+            std::chrono::duration<double>(silent).count(), std::chrono::duration<double>(lease_ttl_).count(),
+            lease_id_, status.error_message());
+        stop_ = v1::ProgressReply::STOP_LEASE_LOST;
+      }
       return false;
     }
     if (reply.register_again()) client_.RegisterAgain();

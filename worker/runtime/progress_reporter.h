@@ -3,7 +3,8 @@
 // and reads the server's answer. When the server says stop (the job was cancelled, or the lease
 // is lost) stop_requested() turns true and the engine's should_stop hook sees it. A broken stream
 // (server restart) is reopened; the lease outlives it as long as the server comes back within
-// the lease TTL.
+// the lease TTL. A server that refuses the worker's token (expired or revoked, not replaced) for
+// longer than a lease lives has taken the job back: that is a stop too (STOP_LEASE_LOST).
 #pragma once
 
 #include <atomic>
@@ -23,7 +24,9 @@ namespace endorecon::worker {
 
 class ProgressReporter {
  public:
-  ProgressReporter(WorkerClient& client, std::string lease_id, std::chrono::milliseconds interval);
+  // `lease_ttl`: how long the server keeps a lease that is not renewed.
+  ProgressReporter(WorkerClient& client, std::string lease_id, std::chrono::milliseconds interval,
+                   std::chrono::milliseconds lease_ttl = std::chrono::seconds(30));
   ~ProgressReporter();  // Stop()s
 
   void SetProgress(const v1::Progress& progress);
@@ -45,6 +48,7 @@ class ProgressReporter {
   WorkerClient& client_;
   std::string lease_id_;
   std::chrono::milliseconds interval_;
+  std::chrono::milliseconds lease_ttl_;
   mutable std::mutex mutex_;
   std::condition_variable wake_;
   std::optional<v1::Progress> progress_;

@@ -231,6 +231,8 @@ int Serve(const ServeFlags& flags) {
       ++attempts;
       const auto registered = client.Register(Hostname(), devices);
       settings.heartbeat = std::chrono::milliseconds(registered.heartbeat_interval_ms());
+      if (registered.lease_ttl_ms() > 0)
+        settings.lease_ttl = std::chrono::milliseconds(registered.lease_ttl_ms());
       break;
     } catch (const Error& e) {
       if (Refused(e)) {
