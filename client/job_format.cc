@@ -94,11 +94,12 @@ std::string OutcomeLine(const v1::Job& job) {
   std::string line = fmt::format("done: {:.0f} iterations in {:.0f} s of training", number("iterations"),
                                  number("train_seconds"));
   // Training seconds count every run of a resumed job; its wall time is said for the last run and
-  // since the first ("36 s of training, 33s in all" read as a contradiction; found 2026-12-05).
+  // since the first ("36 s of training, 33s in all" read as a contradiction; found 2026-12-05). Not
+  // "resumed": a run without a checkpoint to resume from started over (found 2026-12-06).
   if (job.started_unix_ms() > 0 && job.finished_unix_ms() >= job.started_unix_ms()) {
     const double last = (job.finished_unix_ms() - job.started_unix_ms()) / 1000.0;
     if (job.first_started_unix_ms() > 0 && job.first_started_unix_ms() < job.started_unix_ms()) {
-      line += fmt::format(", resumed: {} in its last run, {} since it first started", HumanDuration(last),
+      line += fmt::format(", {} in its last run, {} since it first started", HumanDuration(last),
                           HumanDuration((job.finished_unix_ms() - job.first_started_unix_ms()) / 1000.0));
     } else {
       line += fmt::format(", {} in all", HumanDuration(last));
@@ -183,11 +184,19 @@ std::string DescribeJob(const v1::Job& job) {
   if (const auto outcome = OutcomeLine(job); !outcome.empty()) {
     text += "  outcome   " + outcome + "\n";
   } else if (job.has_progress()) {
-    // A job that ended otherwise shows where it stopped; a live one where it is.
+    // A job that ended otherwise shows where it stopped; a live one where it is; a requeued one where
+    // its last run stopped, without that run's ETA (it showed one while queued; found 2026-12-06).
     const bool ended = job.finished_unix_ms() > 0;
-    text += (ended ? "  stopped   " : "  progress  ") + ProgressLine(job.progress(), ended) + "\n";
+    const bool waits = job.state() == v1::QUEUED;
+    text += (ended   ? "  stopped   "
+             : waits ? "  last run  "
+                     : "  progress  ") +
+            ProgressLine(job.progress(), ended || waits) + "\n";
   }
-  if (!job.error().empty()) text += fmt::format("  reason    {}\n", job.error());
+  // A job not finished has an error only from a lost run, which a running job no longer is in.
+  const bool finished = job.finished_unix_ms() > 0;
+  if (!job.error().empty())
+    text += fmt::format("  {}{}\n", finished ? "reason    " : "requeued  ", job.error());
   text += DicomLines(job);
   if (job.expired_unix_ms() > 0) {
     text +=

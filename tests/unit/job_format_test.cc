@@ -98,7 +98,7 @@ TEST(DescribeJob, ASucceededJobShowsItsOutcomeNotItsLastProgress) {
       << requeued;
   // Its training seconds count both runs: its wall time is said for the last run and since the first.
   EXPECT_EQ(OutcomeLine(job),
-            "done: 1858 iterations in 41 s of training, resumed: 1m02s in its last run, 11m02s since it first "
+            "done: 1858 iterations in 41 s of training, 1m02s in its last run, 11m02s since it first "
             "started, PSNR 31.10 dB (held-out 31.75)");
   job.set_first_started_unix_ms(1'000'000);
   // Without held-out frames the engine reports -1: not shown.
@@ -136,6 +136,14 @@ TEST(DescribeJob, AJobThatEndedOtherwiseShowsWhereItStopped) {
   job = Finished(v1::RUNNING);
   job.set_finished_unix_ms(0);
   EXPECT_NE(DescribeJob(job).find("  progress  "), std::string::npos) << DescribeJob(job);
+  // Requeued: where its last run stopped, without an ETA, and why it was requeued; running again,
+  // that reason is said as the requeue's, not the job's.
+  job.set_error("worker w1 stopped reporting; its lease expired");
+  EXPECT_NE(DescribeJob(job).find("  requeued  worker w1 stopped reporting"), std::string::npos)
+      << DescribeJob(job);
+  job.set_state(v1::QUEUED);
+  EXPECT_NE(DescribeJob(job).find("  last run  "), std::string::npos) << DescribeJob(job);
+  EXPECT_EQ(DescribeJob(job).find("ETA"), std::string::npos) << DescribeJob(job);
 }
 
 TEST(HumanUnits, DurationsAndBytes) {
