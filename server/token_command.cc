@@ -7,10 +7,13 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <iostream>
+#include <iterator>
 #include <map>
 #include <memory>
 #include <set>
+#include <vector>
 
 #include "common/error.h"
 #include "common/private_folder.h"
@@ -71,17 +74,30 @@ void Audit(const TokenFlags& flags, const std::string& method, const TokenRecord
 // warned of (the token is still made: its client tokens may come next).
 void WarnOfAnUnknownTenant(TokenStore& store, const std::string& tenant, std::int64_t now) {
   std::set<std::string> tenants;
+  std::vector<std::string> lapsed;  // the tenant's client tokens no longer active, "'c-1' was revoked"
   for (const auto& record : store.List()) {
-    if (record.role == Role::kClient && record.StateAt(now) == "active") tenants.insert(record.tenant);
+    if (record.role != Role::kClient) continue;
+    const auto state = record.StateAt(now);
+    if (state == "active") {
+      tenants.insert(record.tenant);
+    } else if (record.tenant == tenant) {
+      lapsed.push_back(fmt::format("'{}' {}", record.name, state == "revoked" ? "was revoked" : "expired"));
+    }
   }
   if (tenants.count(tenant)) return;
   tenants.erase("");
+  // Named up to ten: a hospital with many tenants got one long line.
+  constexpr std::size_t kNamed = 10;
+  std::vector<std::string> named(tenants.begin(),
+                                 std::next(tenants.begin(), std::min(tenants.size(), kNamed)));
+  const std::string more =
+      tenants.size() > kNamed ? fmt::format(" and {} more", tenants.size() - kNamed) : "";
   std::cerr << fmt::format(
-      "warning: no active client token is for tenant '{}' ({}): this worker token's workers run that "
+      "warning: no active client token is for tenant '{}' ({}{}): this worker token's workers run that "
       "tenant's jobs only, so check the name\n",
-      tenant,
-      tenants.empty() ? "no client token has a tenant"
-                      : fmt::format("client tokens are for {}", fmt::join(tenants, ", ")));
+      tenant, lapsed.empty() ? "" : fmt::format("its client token(s): {}; ", fmt::join(lapsed, ", ")),
+      tenants.empty() ? "no active client token has a tenant"
+                      : fmt::format("active client tokens are for {}{}", fmt::join(named, ", "), more));
 }
 
 int Create(const TokenFlags& flags) {

@@ -301,11 +301,22 @@ TEST_F(AccessControlTest, AWorkerTokenWithATenantRunsThatTenantsJobsOnly) {
   const auto misspelt =
       Capture(BuiltBinary("server/endorecon-server") + " token create --data-dir " +
               cluster_.data_dir().string() + " --role worker --tenant radiolgy --name w-typo 2>&1");
-  EXPECT_NE(misspelt.find("warning: no active client token is for tenant 'radiolgy' (client tokens are for "
-                          "oncology, radiology)"),
-            std::string::npos)
+  EXPECT_NE(
+      misspelt.find("warning: no active client token is for tenant 'radiolgy' (active client tokens are for "
+                    "oncology, radiology)"),
+      std::string::npos)
       << misspelt;
   EXPECT_NE(misspelt.find("created worker token 'w-typo'"), std::string::npos) << misspelt;
+  // A tenant whose client token was revoked: that is said too.
+  CreateToken(cluster_.data_dir(), "client", "cardio", "c-card");
+  ASSERT_EQ(RevokeToken("c-card"), 0);
+  const auto lapsed =
+      Capture(BuiltBinary("server/endorecon-server") + " token create --data-dir " +
+              cluster_.data_dir().string() + " --role worker --tenant cardio --name w-card 2>&1");
+  EXPECT_NE(lapsed.find("no active client token is for tenant 'cardio' (its client token(s): 'c-card' was "
+                        "revoked; active client tokens are for oncology, radiology)"),
+            std::string::npos)
+      << lapsed;
   // Errors go to stderr: a script reading the token from stdout took an error's last word for one.
   const auto refused_out =
       Capture(BuiltBinary("server/endorecon-server") + " token create --data-dir " +
