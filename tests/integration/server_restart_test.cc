@@ -85,20 +85,20 @@ TEST(ServerRestartTest, KillDuringUploadThenTheUploadResumes) {
   EXPECT_EQ(Sha256File(blob), entry.sha256());
 }
 
-// Ctrl-C during an upload says that what arrived is kept and the same submit resumes it (it said
-// nothing), and exits 130; the same submit then resumes.
-TEST(ServerRestartTest, CtrlCDuringAnUploadSaysHowToResume) {
-  Cluster cluster;
-  const auto clip = cluster.path("bigclip");
+// Makes a clip under `clip` with a 256 MB frame (random bytes from `seed`), starts `submit` of it
+// with `more`, and sends it SIGINT once the server holds part of the upload; the submit's output.
+std::string InterruptedUpload(Cluster& cluster, const std::filesystem::path& clip, std::uint64_t seed,
+                              const std::vector<std::string>& more = {}) {
   MakeClip(clip);
   std::string data(256 << 20, '\0');
-  std::mt19937_64 random(11);
+  std::mt19937_64 random(seed);
   for (std::size_t i = 0; i < data.size(); i += 8) data[i] = static_cast<char>(random());
   AddPngPayload(clip / "images" / "000000.png", data);
-  Process submit({BuiltBinary("client/endorecon"), "--server", cluster.address(), "submit", clip.string(),
-                  "--iterations", "30"},
-                 cluster.path("submit.log"));
-  ASSERT_TRUE(WaitUntil(
+  std::vector<std::string> argv{BuiltBinary("client/endorecon"), "--server", cluster.address(), "submit",
+                                clip.string()};
+  argv.insert(argv.end(), more.begin(), more.end());
+  Process submit(argv, cluster.path("submit.log"));
+  EXPECT_TRUE(WaitUntil(
       [&] {
         std::error_code error;
         return !std::filesystem::is_empty(cluster.data_dir() / "partial", error) && !error;
@@ -106,8 +106,16 @@ TEST(ServerRestartTest, CtrlCDuringAnUploadSaysHowToResume) {
       std::chrono::seconds(120)));
   submit.Signal(SIGINT);
   EXPECT_EQ(submit.Wait(), 130) << submit.Log();
-  EXPECT_NE(submit.Log().find("upload interrupted; what arrived is kept on the server"), std::string::npos)
-      << submit.Log();
+  return submit.Log();
+}
+
+// Ctrl-C during an upload says that what arrived is kept and the same submit resumes it (it said
+// nothing), and exits 130; the same submit then resumes.
+TEST(ServerRestartTest, CtrlCDuringAnUploadSaysHowToResume) {
+  Cluster cluster;
+  const auto clip = cluster.path("bigclip");
+  const auto log = InterruptedUpload(cluster, clip, 11, {"--iterations", "30"});
+  EXPECT_NE(log.find("upload interrupted; what arrived is kept on the server"), std::string::npos) << log;
   const auto resumed = RunCli(cluster.address(), {"submit", clip.string(), "--iterations", "30"});
   ASSERT_EQ(resumed.exit_code, 0) << resumed.err;
   EXPECT_NE(resumed.err.find("already on the server"), std::string::npos) << resumed.err;
@@ -118,23 +126,8 @@ TEST(ServerRestartTest, CtrlCDuringAnUploadSaysHowToResume) {
 // and `--drop` deletes it.
 TEST(ServerRestartTest, AnInterruptedUploadIsListedAndCanBeDropped) {
   Cluster cluster;
-  const auto clip = cluster.path("bigclip");
-  MakeClip(clip);
-  std::string data(256 << 20, '\0');
-  std::mt19937_64 random(12);
-  for (std::size_t i = 0; i < data.size(); i += 8) data[i] = static_cast<char>(random());
-  AddPngPayload(clip / "images" / "000000.png", data);
-  Process submit({BuiltBinary("client/endorecon"), "--server", cluster.address(), "submit", clip.string()},
-                 cluster.path("submit.log"));
+  InterruptedUpload(cluster, cluster.path("bigclip"), 12);
   const auto partial = cluster.data_dir() / "partial";
-  ASSERT_TRUE(WaitUntil(
-      [&] {
-        std::error_code error;
-        return !std::filesystem::is_empty(partial, error) && !error;
-      },
-      std::chrono::seconds(120)));
-  submit.Signal(SIGINT);
-  EXPECT_EQ(submit.Wait(), 130) << submit.Log();
   cluster.KillServer(SIGKILL);  // the ledger is kept in the data folder (a restart forgot it)
   cluster.StartServer();
   const auto listed = RunCli(cluster.address(), {"uploads"});
