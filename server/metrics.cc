@@ -59,6 +59,8 @@ Metrics::Metrics(const std::string& bind_address)
           Gauge(*registry_, "endorecon_data_available_bytes", "Free bytes on the data folder's file system")),
       data_capacity_(
           Gauge(*registry_, "endorecon_data_capacity_bytes", "Size of the data folder's file system")),
+      uploads_pending_(Gauge(*registry_, "endorecon_uploads_pending_bytes",
+                             "Bytes of the uploads waiting to be submitted, every tenant's")),
       rpc_seconds_(BuildHistogram()
                        .Name("endorecon_rpc_seconds")
                        .Help("Time the server spent on each call, by method (streams: the whole stream)")

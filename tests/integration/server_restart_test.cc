@@ -5,6 +5,7 @@
 #include <signal.h>
 
 #include <random>
+#include <regex>
 #include <string>
 #include <thread>
 
@@ -137,6 +138,16 @@ TEST(ServerRestartTest, AnInterruptedUploadIsListedAndCanBeDropped) {
       << listed.out;
   EXPECT_NE(listed.out.find("tenant '-': "), std::string::npos) << listed.out;
   EXPECT_NE(listed.out.find(" MB, the last upload begun "), std::string::npos) << listed.out;
+  // The metrics say how many bytes wait, every tenant's (the dashboard shows them).
+  const auto pending_bytes = [&] {
+    const auto text = Capture(
+        "curl -s --max-time 5 http://127.0.0.1:" + std::to_string(cluster.metrics_port()) + "/metrics");
+    std::smatch match;
+    static const std::regex kLine("\nendorecon_uploads_pending_bytes ([0-9.e+]+)");
+    return std::regex_search(text, match, kLine) ? std::stod(match[1]) : -1.0;
+  };
+  EXPECT_TRUE(WaitUntil([&] { return pending_bytes() > 256e6; }, std::chrono::seconds(20)))
+      << pending_bytes();
   // An admin (here, a caller without a token) names the tenant it drops.
   EXPECT_EQ(RunCli(cluster.address(), {"uploads", "--drop"}).exit_code, 2);
   const auto dropped = RunCli(cluster.address(), {"uploads", "--drop", "--tenant", "-"});
@@ -145,6 +156,7 @@ TEST(ServerRestartTest, AnInterruptedUploadIsListedAndCanBeDropped) {
       << dropped.out;
   EXPECT_NE(dropped.out.find("; deleted "), std::string::npos) << dropped.out;
   EXPECT_TRUE(std::filesystem::is_empty(partial)) << "the interrupted file's partial went";
+  EXPECT_TRUE(WaitUntil([&] { return pending_bytes() == 0; }, std::chrono::seconds(20))) << pending_bytes();
   EXPECT_NE(RunCli(cluster.address(), {"uploads"}).out.find("no uploads waiting to be submitted"),
             std::string::npos);
   // An admin's tenant is a tenant's name: a typo, or text meant for the server's log, is refused.
