@@ -9,10 +9,37 @@
 
 #include "common/error.h"
 #include "common/file_write.h"
+#include "common/job_bounds.h"
 #include "common/json_file.h"
+#include "server/principal.h"
 #include "server/unix_time.h"
 
 namespace endorecon::server {
+namespace {
+
+// Whether `entry` is one upload of the file: a tenant's name ("" for the admins'), a SHA-256 in hex,
+// its bytes and when it was noted.
+bool IsUpload(const nlohmann::json& entry) {
+  if (!entry.is_object()) return false;
+  const auto field = [&](const char* key) { return entry.value(key, nlohmann::json()); };
+  const auto tenant = field("tenant"), sha256 = field("sha256"), bytes = field("bytes"),
+             noted = field("noted_unix_ms");
+  if (!tenant.is_string() || !sha256.is_string() || !bytes.is_number_integer() || !noted.is_number_integer())
+    return false;
+  const auto digest = sha256.get<std::string>();
+  if (digest.size() != 64 || digest.find_first_not_of("0123456789abcdef") != std::string::npos) return false;
+  if (bytes.get<std::int64_t>() < 0 || noted.get<std::int64_t>() <= 0) return false;
+  if (const auto name = tenant.get<std::string>(); !name.empty()) {
+    try {
+      ValidateTenant(name);
+    } catch (const Error&) {
+      return false;
+    }
+  }
+  return true;
+}
+
+}  // namespace
 
 std::int64_t UploadLedger::PendingBytes(const std::string& tenant, const v1::Manifest& except) const {
   const auto found = tenants_.find(tenant);
@@ -74,27 +101,43 @@ void UploadLedger::KeepIn(const std::filesystem::path& file) {
     const auto now = Time::clock::now();
     const std::int64_t now_unix_ms = NowUnixMs();
     decltype(tenants_) read;
+    std::size_t left_out = 0;
+    std::string first_left_out;
     for (const auto& upload : top["uploads"]) {
-      const auto entry = upload.is_object() ? upload : nlohmann::json::object();
-      const auto text = [&](const char* key) { return entry.value(key, nlohmann::json()).is_string(); };
-      const auto number = [&](const char* key) {
-        return entry.value(key, nlohmann::json()).is_number_integer();
-      };
-      if (!text("tenant") || !text("sha256") || !number("bytes") || !number("noted_unix_ms"))
-        FailInvalid(
-            file.string() +
-            ": an upload is not {\"tenant\", \"sha256\", \"bytes\", \"noted_unix_ms\"}: " + upload.dump());
-      const auto noted_unix_ms = entry["noted_unix_ms"].get<std::int64_t>();
-      read[entry["tenant"].get<std::string>()][entry["sha256"].get<std::string>()] = {
-          entry["bytes"].get<std::int64_t>(),
+      // An entry that is no upload (edited by hand, or from a newer version) is left out and said.
+      if (!IsUpload(upload)) {
+        if (left_out++ == 0) first_left_out = PrintableText(upload.dump(), 200);
+        continue;
+      }
+      const auto noted_unix_ms = upload["noted_unix_ms"].get<std::int64_t>();
+      read[upload["tenant"].get<std::string>()][upload["sha256"].get<std::string>()] = {
+          upload["bytes"].get<std::int64_t>(),
           now - std::chrono::duration_cast<Time::duration>(
                     std::chrono::milliseconds(std::max<std::int64_t>(0, now_unix_ms - noted_unix_ms))),
           noted_unix_ms};
     }
     tenants_ = std::move(read);
+    if (left_out > 0) {
+      spdlog::warn(
+          "{}: left out {} entr{} that are no upload ({}, expected {{\"tenant\", \"sha256\" (64 hex "
+          "digits), \"bytes\" (>= 0), \"noted_unix_ms\" (> 0)}}){}",
+          file.string(), left_out, left_out == 1 ? "y" : "ies", first_left_out,
+          left_out > 1 ? ", the first shown" : "");
+    }
+    std::int64_t files = 0, bytes = 0;
+    for (const auto& [tenant, pending] : Tenants()) {
+      files += pending.files;
+      bytes += pending.bytes;
+    }
+    if (files > 0) {
+      spdlog::info("uploads waiting to be submitted, from {}: {} file(s), {} bytes, of {} tenant(s)",
+                   file.string(), files, bytes, tenants_.size());
+    }
   } catch (const Error& e) {
-    spdlog::warn("{}; the uploads not yet submitted from before this start count again when resumed",
-                 e.what());
+    spdlog::warn(
+        "{}; the uploads waiting to be submitted from before this start are not counted or listed until "
+        "resumed, and their partial files are deleted --orphan-hours after their last write",
+        e.what());
   }
 }
 

@@ -70,13 +70,15 @@ TEST(UploadLedgerTest, TheLedgerOutlivesARestartInItsFile) {
   const auto file = dir / "uploads.json";
   const auto t0 = UploadLedger::Time::clock::now();
   const auto none = [](const std::string&) { return false; };
+  // Digests as the file keeps them (64 hex digits): an entry with another is no upload.
+  const std::string x(64, '1'), y(64, '2'), z(64, '3'), w(64, '4');
   {
     UploadLedger ledger;
     ledger.KeepIn(file);
     EXPECT_FALSE(std::filesystem::exists(file)) << "written at the first change";
-    ledger.Note("a", Files({{"x", 100}, {"y", 20}}), none, t0);
-    ledger.Note("b", Files({{"z", 7}}), none, t0);
-    ledger.Submitted("a", Files({{"y", 20}}));
+    ledger.Note("a", Files({{x.c_str(), 100}, {y.c_str(), 20}}), none, t0);
+    ledger.Note("b", Files({{z.c_str(), 7}}), none, t0);
+    ledger.Submitted("a", Files({{y.c_str(), 20}}));
   }
   UploadLedger restarted;
   restarted.KeepIn(file);
@@ -94,10 +96,23 @@ TEST(UploadLedgerTest, TheLedgerOutlivesARestartInItsFile) {
   UploadLedger broken;
   broken.KeepIn(file);
   EXPECT_TRUE(broken.Tenants().empty());
-  broken.Note("c", Files({{"w", 1}}), none, t0);
+  broken.Note("c", Files({{w.c_str(), 1}}), none, t0);
   UploadLedger again;
   again.KeepIn(file);
   EXPECT_EQ(again.PendingBytes("c", {}), 1);
+
+  // An entry that is no upload (a bad tenant, digest or size) is left out; the others are read.
+  std::ofstream(file) << R"({"uploads": [{"tenant": "Bad Name", "sha256": ")" << x
+                      << R"(", "bytes": 5, "noted_unix_ms": 1}, {"tenant": "d", "sha256": "zz", "bytes": 5,
+                      "noted_unix_ms": 1}, {"tenant": "d", "sha256": ")"
+                      << x << R"(", "bytes": -5, "noted_unix_ms": 1}, {"tenant": "", "sha256": ")" << y
+                      << R"(", "bytes": 9, "noted_unix_ms": 1765000000000}]})";
+  UploadLedger mixed;
+  mixed.KeepIn(file);
+  const auto tenants = mixed.Tenants();
+  ASSERT_EQ(tenants.size(), 1u);
+  EXPECT_EQ(tenants.begin()->first, "") << "the admins' tenant";
+  EXPECT_EQ(tenants.begin()->second.bytes, 9);
 }
 
 }  // namespace
