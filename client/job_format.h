@@ -21,7 +21,7 @@ std::string DescribeJob(const v1::Job& job);
 // 3 instance(s), 1.2 MB, done") and each destination's send ("send to PACS1: sent 4 of 4"; "failed
 // after 5 attempt(s): <the peer's reason>"). Empty when the job has neither.
 std::string DicomLines(const v1::Job& job);
-// What a SUCCEEDED job's engine reported (its summary): "done: 1858 iterations in 41 s of training,
+// What a SUCCEEDED job's engine reported (its summary): "done: 1858 iterations in 41s of training,
 // 1m02s in all, PSNR 31.10 dB (held-out 31.75)". Empty for any other job or an unreadable summary.
 std::string OutcomeLine(const v1::Job& job);
 // The iterations a job trained, from the engine's summary (summary_json, set when it SUCCEEDED); none

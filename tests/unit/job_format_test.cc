@@ -80,7 +80,7 @@ TEST(DescribeJob, ASucceededJobShowsItsOutcomeNotItsLastProgress) {
   job.set_summary_json(
       R"({"iterations":1858,"train_seconds":41.2,"train_psnr":31.1,"heldout_psnr":31.754,"metrics":"metrics.json"})");
   EXPECT_EQ(OutcomeLine(job),
-            "done: 1858 iterations in 41 s of training, 1m02s in all, PSNR 31.10 dB (held-out 31.75)");
+            "done: 1858 iterations in 41s of training, 1m02s in all, PSNR 31.10 dB (held-out 31.75)");
   const std::string text = DescribeJob(job);
   EXPECT_NE(text.find("  outcome   done: 1858 iterations"), std::string::npos) << text;
   EXPECT_EQ(text.find("evaluating the results"), std::string::npos) << text;
@@ -98,7 +98,7 @@ TEST(DescribeJob, ASucceededJobShowsItsOutcomeNotItsLastProgress) {
       << requeued;
   // Its training seconds count both runs: its wall time is said for the last run and since the first.
   EXPECT_EQ(OutcomeLine(job),
-            "done: 1858 iterations in 41 s of training, 1m02s in its last run, 11m02s since it first "
+            "done: 1858 iterations in 41s of training, 1m02s in its last run, 11m02s since it first "
             "started, PSNR 31.10 dB (held-out 31.75)");
   job.set_first_started_unix_ms(1'000'000);
   // Without held-out frames the engine reports -1: not shown.
@@ -109,7 +109,7 @@ TEST(DescribeJob, ASucceededJobShowsItsOutcomeNotItsLastProgress) {
       R"({"iterations":2211,"train_seconds":74.1,"train_psnr":24.05,"heldout_psnr":23.13,"budget_advised_s":190})");
   EXPECT_EQ(
       OutcomeLine(job),
-      "done: 2211 iterations in 74 s of training, 1m02s in all, PSNR 24.05 dB (held-out 23.13); its "
+      "done: 2211 iterations in 1m14s of training, 1m02s in all, PSNR 24.05 dB (held-out 23.13); its "
       "results took more than a quarter of the time budget: 190 s or more leaves training three quarters");
 }
 
