@@ -28,14 +28,17 @@ std::string Described(const v1::TenantUploads& uploads) {
 
 Command AddUploadsCommand(CLI::App& app) {
   auto request = std::make_shared<v1::UploadsRequest>();
-  auto* sub = app.add_subcommand("uploads",
-                                 "list the uploads not yet submitted, which count against the tenant's byte "
-                                 "quota; --drop gives them up");
+  auto* sub =
+      app.add_subcommand("uploads",
+                         "list the uploads waiting to be submitted (an interrupted one, say), which count "
+                         "against the tenant's byte quota; --drop gives them up");
   sub->add_flag(
       "--drop", [request](std::int64_t) { request->set_drop(true); },
-      "give them up: they stop counting, and the server deletes their files that no job holds");
+      "give them up: they stop counting, and the server deletes their files that no job or other tenant's "
+      "upload holds");
   sub->add_option("--tenant", *request->mutable_tenant(),
-                  "an admin's: the tenant ('-' for that of admins); a client acts on its own");
+                  "an admin's: the tenant to list or drop ('-' for that of admins; without it an admin lists "
+                  "every tenant's); a client acts on its own tenant's");
   return [request](const Globals& globals) {
     v1::UploadsResponse response;
     auto context = CallContext(globals.timeout());
