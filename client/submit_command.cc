@@ -192,9 +192,8 @@ v1::Manifest Upload(const Globals& globals, v1::JobService::Stub& stub, const st
   // Ctrl-C mid-upload said nothing, and a user did not know that running it again resumes.
   const InterruptNote interrupt_note(
       "upload interrupted; what arrived is kept on the server (and counts against your tenant's bytes) until "
-      "the server's --orphan-hours: run the same `endorecon submit` again to resume it, or `endorecon "
-      "uploads "
-      "--drop` to give it up");
+      "the server's --orphan-hours: run the same `endorecon submit` again to resume it, or "
+      "`endorecon uploads --drop` to give it up");
   const auto upload = UploadFiles(root.empty() ? "." : root, manifest, calls, upload_options);
   if (!globals.json) {
     std::cerr << "uploaded " << manifest.files_size() << " file(s): " << HumanBytes(upload.bytes_sent)

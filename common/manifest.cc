@@ -105,6 +105,12 @@ bool IsSizesOnly(const v1::Manifest& manifest) {
                                                   [](const v1::FileEntry& f) { return f.sha256().empty(); });
 }
 
+bool IsSha256Hex(std::string_view text) {
+  return text.size() == 64 && std::all_of(text.begin(), text.end(), [](char c) {
+           return (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f');
+         });
+}
+
 void ValidateManifest(const v1::Manifest& manifest, bool sizes_only) {
   if (manifest.files_size() == 0) FailInvalid("the manifest lists no files");
   std::set<std::string> seen;
@@ -119,10 +125,7 @@ void ValidateManifest(const v1::Manifest& manifest, bool sizes_only) {
     }
     const auto& digest = file.sha256();
     if (sizes_only && digest.empty()) continue;
-    const bool hex = digest.size() == 64 && std::all_of(digest.begin(), digest.end(), [](char c) {
-                       return (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f');
-                     });
-    if (!hex)
+    if (!IsSha256Hex(digest))
       FailInvalid("file '" + file.path() + "' has sha256 '" + digest + "', not 64 lowercase hex digits");
   }
 }

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "endorecon/v1/files.pb.h"
@@ -30,6 +31,8 @@ inline constexpr std::int64_t kMaxFileBytes = std::int64_t{1} << 50;
 // paths are unique, sizes are in [0, kMaxFileBytes] and digests are 64 lowercase hex characters
 // (or, with `sizes_only`, every digest is empty).
 void ValidateManifest(const v1::Manifest& manifest, bool sizes_only = false);
+// Whether `text` is a SHA-256 as manifests carry it: 64 lowercase hex characters.
+bool IsSha256Hex(std::string_view text);
 // Whether `manifest` is a sizes-only listing (some files, and no digest in any of them).
 bool IsSizesOnly(const v1::Manifest& manifest);
 

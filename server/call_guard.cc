@@ -128,20 +128,18 @@ void CallGuard::PublishTokenExpiries() {
   metrics_.SetTokenExpiries(expiring);
 }
 
-std::string CallGuard::TokenLapse(const std::string& name) {
+std::int64_t CallGuard::TokenRevokedAt(const std::string& name) {
   TokenStore* tokens = Tokens();
-  if (tokens == nullptr || name.empty()) return "";
+  if (tokens == nullptr || name.empty()) return 0;
   const std::int64_t now = NowUnixMs();
   const TokenRecord* latest = nullptr;
   const auto records = tokens->List();
   for (const auto& record : records) {
     if (record.name != name) continue;
-    if (record.StateAt(now) == "active") return "";
+    if (record.StateAt(now) == "active") return 0;
     if (!latest || record.created_unix_ms > latest->created_unix_ms) latest = &record;
   }
-  if (!latest) return "";
-  return latest->StateAt(now) == "revoked" ? "was revoked at " + UtcText(latest->revoked_unix_ms)
-                                           : "expired at " + UtcText(latest->expires_unix_ms);
+  return latest && latest->StateAt(now) == "revoked" ? latest->revoked_unix_ms : 0;
 }
 
 TokenStore* CallGuard::Tokens() {

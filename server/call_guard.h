@@ -90,9 +90,9 @@ class CallGuard {
   // Sets the token expiry gauges (Metrics::SetTokenExpiries) from the token store, if there is one:
   // the maintenance thread's, once a minute (an alert warns days ahead).
   void PublishTokenExpiries();
-  // Why the token labelled `name` is refused now: "was revoked at T UTC" or "expired at T UTC"
-  // (its latest holder of the label); "" when a token of that label is active, or none is known.
-  std::string TokenLapse(const std::string& name);
+  // When the token labelled `name` was revoked (Unix ms; its latest holder of the label), 0 when a
+  // token of that label is active, or none is known, or the latest one lapsed otherwise (expired).
+  std::int64_t TokenRevokedAt(const std::string& name);
   // Audits something the server did on its own (retention, PACS retrievals and sends), as principal
   // "server"; `subject` names what it acted with (a PACS's name), never patient data.
   void RecordServerAction(const std::string& method, const std::string& job_id, const std::string& outcome,

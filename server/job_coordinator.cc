@@ -642,12 +642,9 @@ void JobCoordinator::ExpireLeases(Clock::time_point now) {
   if (expired.empty()) return;
   // Why each lease's worker may have been refused, asked of the token store outside the lock: a token
   // revoked mid-job made a reason of "stopped reporting" (found 2026-12-06).
-  std::vector<std::string> revoked(expired.size());
-  for (std::size_t i = 0; i < expired.size(); ++i) {
-    if (!token_lapse_) break;
-    const auto lapse = token_lapse_(expired[i].token.name);
-    if (lapse.starts_with("was revoked")) revoked[i] = lapse;
-  }
+  std::vector<std::int64_t> revoked_at(expired.size(), 0);
+  for (std::size_t i = 0; i < expired.size() && token_revoked_at_; ++i)
+    revoked_at[i] = token_revoked_at_(expired[i].token.name);
   Locked([&] {
     for (std::size_t i = 0; i < expired.size(); ++i) {
       const auto& lease = expired[i];
@@ -661,8 +658,9 @@ void JobCoordinator::ExpireLeases(Clock::time_point now) {
           "worker " + lease.worker_id +
           (token_lapsed ? "'s token '" + token.name + "' expired at " + UtcText(token.expires_unix_ms) +
                               refused + " (not counted as an attempt; renew worker tokens before they expire)"
-           : !revoked[i].empty() ? "'s token '" + token.name + "' " + revoked[i] + refused
-                                 : " stopped reporting; its lease expired");
+           : revoked_at[i] > 0
+               ? "'s token '" + token.name + "' was revoked at " + UtcText(revoked_at[i]) + refused
+               : " stopped reporting; its lease expired");
       if (stored->job.cancel_requested()) {
         Finish(stored->job, v1::CANCELLED, "cancelled by request; " + reason);
       } else {

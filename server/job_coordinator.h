@@ -79,10 +79,10 @@ class JobCoordinator {
   void Recover();
   // Keeps the tenants' uploads not yet submitted in `file` (UploadLedger::KeepIn), read now.
   void KeepUploadsIn(const std::filesystem::path& file);
-  // Says why a token label is refused now ("was revoked at T UTC"; "" when it is not), for the
-  // reason of a lease lost to it (CallGuard::TokenLapse). Set before serving.
-  void SetTokenLapse(std::function<std::string(const std::string&)> lapse) {
-    token_lapse_ = std::move(lapse);
+  // When a token label was revoked (Unix ms; 0: it was not), for the reason of a lease lost to it
+  // (CallGuard::TokenRevokedAt). Set before serving.
+  void SetTokenRevokedAt(std::function<std::int64_t(const std::string&)> revoked_at) {
+    token_revoked_at_ = std::move(revoked_at);
   }
 
   // Queues a job of the caller's tenant; a job naming a PACS study waits for its retrieval first
@@ -214,7 +214,7 @@ class JobCoordinator {
   int max_attempts_;
   TenantQuotas quotas_;
   UploadLedger uploads_;  // under mutex_
-  std::function<std::string(const std::string&)> token_lapse_;
+  std::function<std::int64_t(const std::string&)> token_revoked_at_;
   std::function<Clock::time_point()> clock_;
   std::mutex mutex_;
 };

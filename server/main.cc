@@ -205,7 +205,7 @@ int Run(const ServerFlags& flags) {
                  flags.dicom.ae_title);
   }
   coordinator.KeepUploadsIn(data_dir / "uploads.json");
-  coordinator.SetTokenLapse([&guard](const std::string& name) { return guard.TokenLapse(name); });
+  coordinator.SetTokenRevokedAt([&guard](const std::string& name) { return guard.TokenRevokedAt(name); });
   coordinator.Recover();
   IdleTrim idle_trim;
   UploadReceiver uploads(blobs, flags.max_upload_bytes, flags.min_free_bytes, flags.max_uploads,

@@ -11,6 +11,7 @@
 #include "common/file_write.h"
 #include "common/job_bounds.h"
 #include "common/json_file.h"
+#include "common/manifest.h"
 #include "server/principal.h"
 #include "server/unix_time.h"
 
@@ -26,8 +27,7 @@ bool IsUpload(const nlohmann::json& entry) {
              noted = field("noted_unix_ms");
   if (!tenant.is_string() || !sha256.is_string() || !bytes.is_number_integer() || !noted.is_number_integer())
     return false;
-  const auto digest = sha256.get<std::string>();
-  if (digest.size() != 64 || digest.find_first_not_of("0123456789abcdef") != std::string::npos) return false;
+  if (!IsSha256Hex(sha256.get<std::string>())) return false;
   if (bytes.get<std::int64_t>() < 0 || noted.get<std::int64_t>() <= 0) return false;
   if (const auto name = tenant.get<std::string>(); !name.empty()) {
     try {
@@ -55,10 +55,7 @@ std::int64_t UploadLedger::PendingBytes(const std::string& tenant, const v1::Man
 
 std::int64_t UploadLedger::LastNotedUnixMs(const std::string& tenant) const {
   const auto found = tenants_.find(tenant);
-  if (found == tenants_.end()) return 0;
-  std::int64_t last = 0;
-  for (const auto& [digest, entry] : found->second) last = std::max(last, entry.noted_unix_ms);
-  return last;
+  return found == tenants_.end() ? 0 : Summary(found->second).last_unix_ms;
 }
 
 bool UploadLedger::Add(const std::string& tenant, const v1::FileEntry& file, Time now) {
@@ -159,16 +156,19 @@ void UploadLedger::Save() const {
   }
 }
 
+UploadLedger::Pending UploadLedger::Summary(const std::map<std::string, Entry>& files) {
+  Pending pending;
+  for (const auto& [digest, entry] : files) {
+    ++pending.files;
+    pending.bytes += entry.bytes;
+    pending.last_unix_ms = std::max(pending.last_unix_ms, entry.noted_unix_ms);
+  }
+  return pending;
+}
+
 std::map<std::string, UploadLedger::Pending> UploadLedger::Tenants() const {
   std::map<std::string, Pending> tenants;
-  for (const auto& [tenant, files] : tenants_) {
-    auto& pending = tenants[tenant];
-    for (const auto& [digest, entry] : files) {
-      ++pending.files;
-      pending.bytes += entry.bytes;
-      pending.last_unix_ms = std::max(pending.last_unix_ms, entry.noted_unix_ms);
-    }
-  }
+  for (const auto& [tenant, files] : tenants_) tenants[tenant] = Summary(files);
   return tenants;
 }
 

@@ -68,6 +68,7 @@ class UploadLedger {
     std::int64_t noted_unix_ms = 0;  // the same moment, for messages
   };
   bool Add(const std::string& tenant, const v1::FileEntry& file, Time now);  // false: nothing to note
+  static Pending Summary(const std::map<std::string, Entry>& files);         // one tenant's
   // Writes the file given to KeepIn, if any; a failure is logged (the ledger in memory holds).
   void Save() const;
 

@@ -269,8 +269,8 @@ TEST_F(JobCoordinatorTest, ALeaseLostToItsWorkersExpiredTokenCostsNoAttempt) {
   EXPECT_NE(Get(id).error().find("worker node-7 stopped reporting; its lease expired"), std::string::npos)
       << Get(id).error();
   // A revoked token costs an attempt (revoking is a judgement on the node), and the reason names it.
-  coordinator_.SetTokenLapse([](const std::string& name) {
-    return name == "node-7-token-3" ? std::string("was revoked at 2026-12-06 07:00:00 UTC") : std::string();
+  coordinator_.SetTokenRevokedAt([](const std::string& name) -> std::int64_t {
+    return name == "node-7-token-3" ? 1796540400000 : 0;  // 2026-12-06 07:00:00 UTC
   });
   ASSERT_TRUE(
       coordinator_.Lease("node-7", Clock::now(), std::nullopt, {}, {"node-7-token-3", 0}).has_value());
