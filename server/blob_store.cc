@@ -68,13 +68,12 @@ std::optional<std::int64_t> BlobStore::SizeOf(const std::string& sha256) const {
   return static_cast<std::int64_t>(size);
 }
 
-bool BlobStore::PromoteIfFull(const v1::FileEntry& entry) {
-  if (Has(entry.sha256())) return true;
-  if (Committed(entry) != entry.size()) return false;
-  const auto writer = TryOpenWriter(entry);
-  if (!writer) return false;
-  if (!Has(entry.sha256()) && writer->full()) writer->Promote();
-  return Has(entry.sha256());
+bool BlobStore::PromoteIfFull(const v1::FileEntry& entry, const std::string& owner) {
+  if (PartialBytes(entry, owner) != entry.size()) return false;
+  const auto writer = TryOpenWriter(entry, std::chrono::milliseconds(0), owner);
+  if (!writer || !writer->full()) return false;
+  writer->Promote();
+  return true;
 }
 
 void BlobStore::Remove(const std::string& sha256) {
@@ -86,53 +85,67 @@ void BlobStore::Remove(const std::string& sha256) {
 
 std::vector<BlobStore::StoredFile> BlobStore::Files() const {
   std::vector<StoredFile> files;
-  const auto add = [&](const fs::directory_entry& entry, std::string sha256, bool partial) {
+  const auto add = [&](const fs::directory_entry& entry, std::string sha256, bool partial,
+                       std::string owner) {
     std::error_code error;
     if (!entry.is_regular_file(error)) return;
     const auto bytes = entry.file_size(error);
     const auto written = error ? fs::file_time_type{} : entry.last_write_time(error);
-    if (!error)
-      files.push_back({std::move(sha256), entry.path(), partial, static_cast<std::int64_t>(bytes), written});
+    if (!error) {
+      files.push_back({std::move(sha256), entry.path(), partial, std::move(owner),
+                       static_cast<std::int64_t>(bytes), written});
+    }
   };
   std::error_code error;
   for (const auto& shard : fs::directory_iterator(root_ / "blobs", error)) {
     std::error_code inner;
     for (const auto& entry : fs::directory_iterator(shard.path(), inner))
-      add(entry, entry.path().filename().string(), false);
+      add(entry, entry.path().filename().string(), false, "");
   }
   std::lock_guard lock(mutex_);
   for (const auto& entry : fs::directory_iterator(root_ / "partial", error)) {
     std::string name = entry.path().filename().string();
-    if (name.size() != 64 + 5 || !name.ends_with(".part")) continue;
-    name.resize(64);
-    if (!writing_.count(name)) add(entry, std::move(name), true);
+    if (!name.ends_with(".part")) continue;
+    name.resize(name.size() - 5);  // "<sha256>" or "<sha256>.<owner>" (PartialName)
+    if (name.size() < 64 || (name.size() > 64 && (name.size() == 65 || name[64] != '.'))) continue;
+    if (writing_.count(name)) continue;
+    add(entry, name.substr(0, 64), true, name.size() > 64 ? name.substr(65) : "");
   }
   return files;
 }
 
 void BlobStore::Remove(const StoredFile& file) {
   if (!file.partial) return Remove(file.sha256);
-  std::lock_guard lock(mutex_);             // held while removing: no writer opens the partial meanwhile
-  if (writing_.count(file.sha256)) return;  // an upload of it began since it was listed
+  const auto name = PartialName(file.sha256, file.owner);
+  std::lock_guard lock(mutex_);      // held while removing: no writer opens the partial meanwhile
+  if (writing_.count(name)) return;  // an upload of it began since it was listed
   std::error_code error;
-  fs::remove(PartialPath(file.sha256), error);
+  fs::remove(PartialPath(name), error);
   if (error) Fail(ErrorCode::kUnavailable, "cannot delete " + file.path.string() + ": " + error.message());
 }
 
-fs::path BlobStore::PartialPath(const std::string& sha256) const {
-  return root_ / "partial" / (sha256 + ".part");
+std::string BlobStore::PartialName(const std::string& sha256, const std::string& owner) {
+  return owner.empty() ? sha256 : sha256 + "." + owner;
 }
 
-std::int64_t BlobStore::Committed(const v1::FileEntry& entry) const {
-  if (Has(entry.sha256())) return entry.size();
+fs::path BlobStore::PartialPath(const std::string& name) const {
+  return root_ / "partial" / (name + ".part");
+}
+
+std::int64_t BlobStore::Committed(const v1::FileEntry& entry, const std::string& owner) const {
+  return Has(entry.sha256()) ? entry.size() : PartialBytes(entry, owner);
+}
+
+std::int64_t BlobStore::PartialBytes(const v1::FileEntry& entry, const std::string& owner) const {
   std::error_code error;
-  const auto size = fs::file_size(PartialPath(entry.sha256()), error);
+  const auto size = fs::file_size(PartialPath(PartialName(entry.sha256(), owner)), error);
   if (error) return 0;
   return std::min(static_cast<std::int64_t>(size), entry.size());
 }
 
-std::unique_ptr<BlobStore::Writer> BlobStore::OpenWriter(const v1::FileEntry& entry) {
-  auto writer = TryOpenWriter(entry);
+std::unique_ptr<BlobStore::Writer> BlobStore::OpenWriter(const v1::FileEntry& entry,
+                                                         const std::string& owner) {
+  auto writer = TryOpenWriter(entry, std::chrono::milliseconds(0), owner);
   if (!writer) {
     Fail(ErrorCode::kFailedPrecondition, "'" + entry.path() + "' (sha256 " + entry.sha256() +
                                              ") is being uploaded by another stream right now");
@@ -141,25 +154,27 @@ std::unique_ptr<BlobStore::Writer> BlobStore::OpenWriter(const v1::FileEntry& en
 }
 
 std::unique_ptr<BlobStore::Writer> BlobStore::TryOpenWriter(const v1::FileEntry& entry,
-                                                            std::chrono::milliseconds wait) {
+                                                            std::chrono::milliseconds wait,
+                                                            const std::string& owner) {
+  auto name = PartialName(entry.sha256(), owner);
   {
     std::unique_lock lock(mutex_);
-    const bool free = released_.wait_for(lock, wait, [&] { return writing_.count(entry.sha256()) == 0; });
+    const bool free = released_.wait_for(lock, wait, [&] { return writing_.count(name) == 0; });
     if (!free) return nullptr;
-    writing_.insert(entry.sha256());
+    writing_.insert(name);
   }
   try {
-    return std::unique_ptr<Writer>(new Writer(*this, entry));
+    return std::unique_ptr<Writer>(new Writer(*this, entry, name));
   } catch (...) {
-    Release(entry.sha256());
+    Release(name);
     throw;
   }
 }
 
-void BlobStore::Release(const std::string& sha256) {
+void BlobStore::Release(const std::string& name) {
   {
     std::lock_guard lock(mutex_);
-    writing_.erase(sha256);
+    writing_.erase(name);
   }
   released_.notify_all();
 }
@@ -176,8 +191,8 @@ std::string BlobStore::Put(std::string_view bytes) {
   return entry.sha256();
 }
 
-BlobStore::Writer::Writer(BlobStore& store, const v1::FileEntry& entry)
-    : store_(store), entry_(entry), partial_(store.PartialPath(entry.sha256())) {
+BlobStore::Writer::Writer(BlobStore& store, const v1::FileEntry& entry, std::string name)
+    : store_(store), entry_(entry), name_(std::move(name)), partial_(store.PartialPath(name_)) {
   fd_ = ::open(partial_.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
   if (fd_ < 0) FailErrno("cannot open", partial_);
   try {  // a constructor that throws runs no destructor: the descriptor is closed here
@@ -208,11 +223,12 @@ BlobStore::Writer::~Writer() {
   }
   // A writer opened while another stream finished the same content (parallel uploads of one clip)
   // made an empty partial file that nothing would use: 8 parallel submits left 27 (found 2026-12-05).
-  if (store_.Has(entry_.sha256())) {
+  // One with bytes is kept: another tenant's content, sent again as proof, resumes from it.
+  if (committed_ == 0 && store_.Has(entry_.sha256())) {
     std::error_code ignored;
     fs::remove(partial_, ignored);
   }
-  store_.Release(entry_.sha256());
+  store_.Release(name_);
 }
 
 void BlobStore::Writer::Append(std::int64_t offset, std::string_view data) {

@@ -1,7 +1,10 @@
 // Content-addressed file storage: <root>/blobs/<first two hex>/<sha256>. A blob appears only
-// complete and verified. Its bytes first accumulate in <root>/partial/<sha256>.part, which survives
-// restarts (so an upload resumes from what it committed), and is fsynced, checked against the
-// digest and renamed into place; a mismatch removes the partial, so nothing half-written is visible.
+// complete and verified. Its bytes first accumulate in a partial, which survives restarts (so an
+// upload resumes from what it committed), and is fsynced, checked against the digest and renamed into
+// place; a mismatch removes the partial, so nothing half-written is visible. Each tenant uploads into
+// partials of its own, <root>/partial/<sha256>.<tenant>.part (<sha256>.part for the server's own,
+// admins' and workers of every tenant): a digest that checks out then says that the tenant sent every
+// byte itself, which is what BlobHolders takes as proof that it holds the content.
 #pragma once
 
 #include <chrono>
@@ -31,8 +34,11 @@ class BlobStore {
   std::filesystem::path PathOf(const std::string& sha256) const;
   // The blob's size; nullopt when it is absent (one stat, where Has and PathOf take one each).
   std::optional<std::int64_t> SizeOf(const std::string& sha256) const;
-  // Bytes held for `entry`: its size when the blob exists, otherwise the partial's length.
-  std::int64_t Committed(const v1::FileEntry& entry) const;
+  // Bytes held for `entry`: its size when the blob exists, otherwise the length of `owner`'s partial.
+  std::int64_t Committed(const v1::FileEntry& entry, const std::string& owner = "") const;
+  // The length of `owner`'s partial of `entry` (0 when there is none), whether or not the blob exists:
+  // what an uploader that must send the content again (BlobHolders) has sent of it.
+  std::int64_t PartialBytes(const v1::FileEntry& entry, const std::string& owner = "") const;
 
   // Appends to the partial of one entry, then promotes it. One writer per digest at a time.
   class Writer {
@@ -51,26 +57,30 @@ class BlobStore {
 
    private:
     friend class BlobStore;
-    Writer(BlobStore& store, const v1::FileEntry& entry);
+    Writer(BlobStore& store, const v1::FileEntry& entry, std::string name);
     BlobStore& store_;
     v1::FileEntry entry_;
+    std::string name_;  // the partial's (PartialName)
     std::filesystem::path partial_;
     int fd_ = -1;
     std::int64_t committed_ = 0;
     std::int64_t written_back_ = 0;  // bytes handed to the kernel's writeback (write-behind)
     Sha256 digest_;
   };
-  // Throws kFailedPrecondition when another stream is writing the same content right now.
-  std::unique_ptr<Writer> OpenWriter(const v1::FileEntry& entry);
-  // The same, but waits up to `wait` for another writer of the content to finish, then returns
-  // null instead of throwing.
+  // Opens `owner`'s partial of `entry` (a tenant; "" for the server's own). Throws kFailedPrecondition
+  // when another stream is writing that partial right now.
+  std::unique_ptr<Writer> OpenWriter(const v1::FileEntry& entry, const std::string& owner = "");
+  // The same, but waits up to `wait` for another writer of the partial to finish, then returns null
+  // instead of throwing.
   std::unique_ptr<Writer> TryOpenWriter(const v1::FileEntry& entry,
-                                        std::chrono::milliseconds wait = std::chrono::milliseconds(0));
+                                        std::chrono::milliseconds wait = std::chrono::milliseconds(0),
+                                        const std::string& owner = "");
 
-  // Promotes the partial of `entry` when it already holds every byte (the server died between the
-  // last write and the rename: no client sends more for it, so nothing else would). Returns whether
-  // the blob exists now; false also while another stream writes the content. Throws as Promote.
-  bool PromoteIfFull(const v1::FileEntry& entry);
+  // Promotes `owner`'s partial of `entry` when it already holds every byte (the server died between
+  // the last write and the rename: no client sends more for it, so nothing else would), also when
+  // the blob exists already. Returns whether it promoted it now: false for a partial not full, none,
+  // or one another stream writes. Throws as Promote.
+  bool PromoteIfFull(const v1::FileEntry& entry, const std::string& owner = "");
 
   // Deletes the blob (retention); a missing blob is not an error. Throws Error(kUnavailable) when
   // the file exists but cannot be removed.
@@ -84,6 +94,7 @@ class BlobStore {
     std::string sha256;
     std::filesystem::path path;
     bool partial = false;
+    std::string owner;  // a partial's tenant ("": the server's own)
     std::int64_t bytes = 0;
     std::filesystem::file_time_type written;  // last modified
   };
@@ -95,13 +106,15 @@ class BlobStore {
   const std::filesystem::path& root() const { return root_; }
 
  private:
-  std::filesystem::path PartialPath(const std::string& sha256) const;
-  void Release(const std::string& sha256);
+  // "<sha256>" or "<sha256>.<owner>": the partial's file name without ".part", and what writing_ holds.
+  static std::string PartialName(const std::string& sha256, const std::string& owner);
+  std::filesystem::path PartialPath(const std::string& name) const;
+  void Release(const std::string& name);
 
   std::filesystem::path root_;
   mutable std::mutex mutex_;
   std::condition_variable released_;
-  std::set<std::string> writing_;
+  std::set<std::string> writing_;  // the partials open in a Writer, by PartialName
 };
 
 }  // namespace endorecon::server

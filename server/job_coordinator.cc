@@ -71,11 +71,15 @@ bool Retrieving(const v1::Job& job) {
 }
 
 // Throws kFailedPrecondition naming the first file of `manifest` the blob store lacks.
-void RequireBlobs(const BlobStore& blobs, const v1::Manifest& manifest, const std::string& what) {
+// `usable` (BlobHolders::MayUse of the tenant naming them, when given) says which stored contents the
+// caller may name: one it may not is reported as not uploaded, exactly as a missing one, so a refusal
+// does not tell that another tenant stored it.
+void RequireBlobs(const BlobStore& blobs, const v1::Manifest& manifest, const std::string& what,
+                  const std::function<bool(const std::string&)>& usable = {}) {
   int missing = 0;
   std::string first;
   for (const auto& file : manifest.files()) {
-    const auto stored = blobs.SizeOf(file.sha256());
+    const auto stored = usable && !usable(file.sha256()) ? std::nullopt : blobs.SizeOf(file.sha256());
     if (!stored) {
       if (missing++ == 0) first = file.path();
       continue;
@@ -115,10 +119,44 @@ JobCoordinator::JobCoordinator(CoordinatorParts parts, int max_attempts, TenantQ
 void JobCoordinator::KeepUploadsIn(const std::filesystem::path& file) {
   std::lock_guard lock(mutex_);
   uploads_.KeepIn(file);
+  for (const auto& [tenant, digest] : uploads_.Proven()) holders_.Add(tenant, digest);
+}
+
+std::function<bool(const std::string&)> JobCoordinator::UsableBy(const std::string& tenant) const {
+  return [this, tenant](const std::string& digest) { return holders_.MayUse(tenant, digest); };
+}
+
+UploadOwner JobCoordinator::UploadOwnerOf(const std::string& tenant) {
+  UploadOwner owner;
+  owner.tenant = tenant;
+  owner.unproven = [this, tenant](const v1::Manifest& manifest) {
+    std::set<std::string> unproven;
+    std::lock_guard lock(mutex_);
+    for (const auto& file : manifest.files()) {
+      if (!holders_.MayUse(tenant, file.sha256()) && parts_.blobs.Has(file.sha256()))
+        unproven.insert(file.sha256());
+    }
+    return unproven;
+  };
+  owner.proven = [this, tenant](const std::string& digest) {
+    std::lock_guard lock(mutex_);
+    holders_.Add(tenant, digest);
+    uploads_.NoteProven(tenant, digest);
+  };
+  return owner;
+}
+
+UploadOwner JobCoordinator::ClientUploadOwner(const Principal& caller) {
+  return UploadOwnerOf(caller.tenant);
+}
+
+UploadOwner JobCoordinator::WorkerUploadOwner(const std::optional<std::string>& served_tenant) {
+  return served_tenant ? UploadOwnerOf(*served_tenant) : UploadOwner{};
 }
 
 void JobCoordinator::Recover() {
   std::lock_guard lock(mutex_);
+  parts_.store.Scan([this](const StoredJob& stored) { holders_.AddJob(stored.job); });
   const auto now = clock_();
   int queued = 0, running = 0;
   std::vector<std::string> retrieving, sending;
@@ -165,6 +203,16 @@ void JobCoordinator::Recover() {
 }
 
 void JobCoordinator::SetDicomHooks(DicomHooks hooks) { dicom_ = std::move(hooks); }
+
+void JobCoordinator::RemoveBlob(const std::string& digest) {
+  parts_.blobs.Remove(digest);
+  holders_.Forget(digest);
+}
+
+void JobCoordinator::RemoveFile(const BlobStore::StoredFile& file) {
+  if (!file.partial) return RemoveBlob(file.sha256);
+  parts_.blobs.Remove(file);
+}
 
 StoredJob JobCoordinator::Load(const std::string& id) {
   auto stored = parts_.store.Get(id);
@@ -275,8 +323,12 @@ void JobCoordinator::AdmitUpload(const v1::Manifest& manifest, const Principal& 
   std::lock_guard lock(mutex_);
   CheckQuotas(caller.tenant, manifest, true, uploads_.PendingBytes(caller.tenant, manifest));
   // Noted with or without a byte quota: `endorecon uploads` lists and drops them either way.
+  // A content another tenant holds is uploaded again (BlobHolders): it is this upload's too.
   uploads_.Note(
-      caller.tenant, manifest, [this](const std::string& digest) { return parts_.blobs.Has(digest); },
+      caller.tenant, manifest,
+      [&](const std::string& digest) {
+        return parts_.blobs.Has(digest) && holders_.MayUse(caller.tenant, digest);
+      },
       UploadLedger::Time::clock::now());
 }
 
@@ -316,14 +368,18 @@ v1::UploadsResponse JobCoordinator::Uploads(const v1::UploadsRequest& request, c
   for (const auto& digest : digests) {
     if (!uploads_.Holds(digest)) dropped.insert(digest);  // another tenant's upload brings it too
   }
+  // The tenant's own partials go whoever else uploads the content; a blob only when no other
+  // tenant's upload brings it.
+  const std::set<std::string> own(digests.begin(), digests.end());
   std::vector<BlobStore::StoredFile> candidates;
   for (const auto& file : files) {
-    if (dropped.count(file.sha256)) candidates.push_back(file);
+    if (file.partial ? file.owner == *tenant && own.count(file.sha256) : dropped.count(file.sha256) > 0)
+      candidates.push_back(file);
   }
   // Of those, the files no job references (PlanExpiry's orphans, with no job expiring).
   const auto plan = PlanExpiry(
       parts_.store, parts_.blobs, [](const v1::Job&) { return false; }, candidates);
-  for (const auto& file : plan.orphans) parts_.blobs.Remove(file);
+  for (const auto& file : plan.orphans) RemoveFile(file);
   response.set_deleted_files(static_cast<std::int64_t>(plan.orphans.size()));
   response.set_deleted_bytes(plan.orphan_bytes);
   spdlog::info("uploads not yet submitted of tenant '{}' dropped by {}: {} file(s), {} deleted ({} bytes)",
@@ -392,9 +448,13 @@ v1::Job JobCoordinator::Submit(const v1::SubmitRequest& request, const Principal
   // Under the lock, so retention cannot delete a blob between this check and the insert, and two
   // submits cannot both take a tenant's last job slot.
   Locked([&] {
-    if (!from_pacs) RequireBlobs(parts_.blobs, request.clip(), request.has_prepare() ? "recording" : "clip");
+    if (!from_pacs) {
+      RequireBlobs(parts_.blobs, request.clip(), request.has_prepare() ? "recording" : "clip",
+                   UsableBy(caller.tenant));
+    }
     CheckQuotas(caller.tenant, request.clip(), true, uploads_.PendingBytes(caller.tenant, request.clip()));
     const auto seq = parts_.store.Insert(job);
+    holders_.AddJob(job);
     uploads_.Submitted(caller.tenant, request.clip());
     parts_.hub.PublishJob(job);
     if (!from_pacs) parts_.scheduler.Push(job.id(), job.priority(), seq, job.tenant());
@@ -462,7 +522,7 @@ v1::Job JobCoordinator::Delete(const std::string& id, const Principal& caller) {
                                                  : ": cancel it first, or delete it once it has finished"));
     }
     plan = PlanExpiry(parts_.store, parts_.blobs, [&](const v1::Job& one) { return one.id() == id; });
-    for (const auto& digest : plan.blobs) parts_.blobs.Remove(digest);  // files first, as retention
+    for (const auto& digest : plan.blobs) RemoveBlob(digest);  // files first, as retention
     job.set_expired_unix_ms(NowUnixMs());
     Save(job);
     return job;
@@ -527,13 +587,15 @@ std::optional<JobCoordinator::Granted> JobCoordinator::Lease(const std::string& 
 }
 
 v1::ProgressReply::Action JobCoordinator::Report(const v1::ProgressUpdate& update, const LeaseToken& token,
-                                                 std::string* job_id, bool* register_again) {
-  return Locked([&] { return ReportLocked(update, token, job_id, register_again); });
+                                                 std::string* job_id, bool* register_again,
+                                                 const std::optional<std::string>& served_tenant) {
+  return Locked([&] { return ReportLocked(update, token, job_id, register_again, served_tenant); });
 }
 
 v1::ProgressReply::Action JobCoordinator::ReportLocked(const v1::ProgressUpdate& update,
                                                        const LeaseToken& token, std::string* job_id,
-                                                       bool* register_again) {
+                                                       bool* register_again,
+                                                       const std::optional<std::string>& served_tenant) {
   const auto lease = parts_.leases.Renew(update.lease_id(), clock_(), token);
   if (!lease) return v1::ProgressReply::STOP_LEASE_LOST;
   if (job_id) *job_id = lease->job_id;
@@ -546,8 +608,12 @@ v1::ProgressReply::Action JobCoordinator::ReportLocked(const v1::ProgressUpdate&
     return v1::ProgressReply::STOP_CANCELLED;
   }
   bool changed = false;
-  if (update.has_checkpoint() && parts_.blobs.Has(update.checkpoint().sha256())) {
+  // A worker of one tenant names only content that tenant holds: a checkpoint is downloaded again by
+  // the job's next worker (GetBlobs).
+  if (update.has_checkpoint() && parts_.blobs.Has(update.checkpoint().sha256()) &&
+      (!served_tenant || holders_.MayUse(job.tenant(), update.checkpoint().sha256()))) {
     *job.mutable_checkpoint() = update.checkpoint();
+    holders_.Add(job.tenant(), update.checkpoint().sha256());
     changed = true;
   }
   if (update.has_progress()) {
@@ -570,12 +636,17 @@ v1::ProgressReply::Action JobCoordinator::ReportLocked(const v1::ProgressUpdate&
   return v1::ProgressReply::CONTINUE;
 }
 
-v1::Job JobCoordinator::Complete(const v1::CompleteRequest& request) {
+v1::Job JobCoordinator::Complete(const v1::CompleteRequest& request,
+                                 const std::optional<std::string>& served_tenant) {
   ValidateManifest(request.result());
   auto job = Locked([&] {
     auto job = LoadLeased(request.lease_id()).job;
-    RequireBlobs(parts_.blobs, request.result(), "result");
+    // A worker of one tenant names only content that tenant holds (or that it uploaded itself): its
+    // results are downloaded by the tenant's clients and sent to its PACS.
+    RequireBlobs(parts_.blobs, request.result(), "result",
+                 served_tenant ? UsableBy(job.tenant()) : std::function<bool(const std::string&)>{});
     *job.mutable_result() = request.result();
+    holders_.AddFiles(job.tenant(), job.result());
     job.set_summary_json(request.summary_json());
     Finish(job, v1::SUCCEEDED, "");
     return job;
@@ -612,8 +683,8 @@ RetentionPlan JobCoordinator::ExpireFinishedBefore(std::int64_t cutoff_unix_ms,
     auto plan = PlanRetention(parts_.store, parts_.blobs, cutoff_unix_ms, old_files);
     // Files first: a crash in between leaves jobs that the next run expires (their blobs already
     // gone), never a job marked expired whose files are still kept.
-    for (const auto& digest : plan.blobs) parts_.blobs.Remove(digest);
-    for (const auto& file : plan.orphans) parts_.blobs.Remove(file);
+    for (const auto& digest : plan.blobs) RemoveBlob(digest);
+    for (const auto& file : plan.orphans) RemoveFile(file);
     uploads_.ForgetBefore(orphan_cutoff);  // what they were uploaded for is given up with them
     const auto now = NowUnixMs();
     for (auto& job : plan.jobs) {
@@ -737,6 +808,7 @@ void JobCoordinator::RetrievalDone(const std::string& id, const v1::Manifest& cl
     CheckQuotas(job.tenant(), clip, false);
     RequireBlobs(parts_.blobs, clip, "retrieved recording");  // retention may share and delete blobs
     *job.mutable_clip() = clip;
+    holders_.AddFiles(job.tenant(), clip);
     job.mutable_retrieval()->set_state(v1::Retrieval::RETRIEVED);
     Save(job);
     parts_.scheduler.Push(job.id(), job.priority(), stored.seq, job.tenant());

@@ -29,6 +29,7 @@
 
 #include "endorecon/v1/job_service.pb.h"
 #include "endorecon/v1/worker_service.pb.h"
+#include "server/blob_holders.h"
 #include "server/blob_store.h"
 #include "server/job_store.h"
 #include "server/lease_table.h"
@@ -40,6 +41,7 @@
 #include "server/tenant_quotas.h"
 #include "server/unix_time.h"
 #include "server/upload_ledger.h"
+#include "server/upload_receiver.h"
 #include "server/watch_hub.h"
 #include "server/worker_registry.h"
 
@@ -107,6 +109,11 @@ class JobCoordinator {
   // upload, holds (a partial being written is kept). A client naming another tenant is refused
   // (kPermissionDenied); an admin's drop names its tenant (kInvalidArgument otherwise).
   v1::UploadsResponse Uploads(const v1::UploadsRequest& request, const Principal& caller);
+  // Whose uploads a client's are (its tenant's) and a worker's (its served tenant's; a worker of
+  // every tenant is trusted with every stored content): a content another tenant holds is sent
+  // again before the caller's jobs may name it (BlobHolders).
+  UploadOwner ClientUploadOwner(const Principal& caller);
+  UploadOwner WorkerUploadOwner(const std::optional<std::string>& served_tenant);
   // The same for a recording retrieved for job `id`, before it goes into the blob store: the job's
   // tenant pays for it.
   void CheckRetrievalQuota(const std::string& id, const v1::Manifest& recording);
@@ -138,11 +145,15 @@ class JobCoordinator {
   // Renews the lease (noting the `token` the call carried) and records progress, preview or
   // checkpoint; says whether to go on. Sets `job_id` to the lease's job when the lease is held, and
   // `register_again` to whether the lease's worker is unknown to the registry (the server restarted
-  // since it registered).
+  // since it registered). A worker serving one tenant (`served_tenant`) names as checkpoint only
+  // content that tenant holds (BlobHolders); another is left out.
   v1::ProgressReply::Action Report(const v1::ProgressUpdate& update, const LeaseToken& token = {},
-                                   std::string* job_id = nullptr, bool* register_again = nullptr);
-  // Throws kFailedPrecondition when the lease is not held or a result file is not uploaded.
-  v1::Job Complete(const v1::CompleteRequest& request);
+                                   std::string* job_id = nullptr, bool* register_again = nullptr,
+                                   const std::optional<std::string>& served_tenant = std::nullopt);
+  // Throws kFailedPrecondition when the lease is not held or a result file is not uploaded (for a
+  // worker serving one tenant: also content that tenant does not hold, reported the same).
+  v1::Job Complete(const v1::CompleteRequest& request,
+                   const std::optional<std::string>& served_tenant = std::nullopt);
   // Throws kFailedPrecondition when the lease is not held.
   v1::Job Fail(const v1::FailRequest& request);
   // The leased job. Throws kFailedPrecondition unless `lease_id` is held (workers download only
@@ -194,7 +205,14 @@ class JobCoordinator {
     }
   }
   v1::ProgressReply::Action ReportLocked(const v1::ProgressUpdate& update, const LeaseToken& token,
-                                         std::string* job_id, bool* register_again);
+                                         std::string* job_id, bool* register_again,
+                                         const std::optional<std::string>& served_tenant);
+  UploadOwner UploadOwnerOf(const std::string& tenant);
+  // BlobHolders::MayUse of `tenant`, for RequireBlobs.
+  std::function<bool(const std::string&)> UsableBy(const std::string& tenant) const;
+  // Deletes a blob (or any stored file) and forgets who held it.
+  void RemoveBlob(const std::string& digest);
+  void RemoveFile(const BlobStore::StoredFile& file);
   StoredJob Load(const std::string& id);
   // Load, but another tenant's job is kNotFound exactly as a missing one.
   StoredJob LoadVisible(const std::string& id, const Principal& caller);
@@ -214,6 +232,7 @@ class JobCoordinator {
   int max_attempts_;
   TenantQuotas quotas_;
   UploadLedger uploads_;  // under mutex_
+  BlobHolders holders_;   // under mutex_
   std::function<std::int64_t(const std::string&)> token_revoked_at_;
   std::function<Clock::time_point()> clock_;
   std::mutex mutex_;

@@ -27,7 +27,7 @@ JobServiceImpl::JobServiceImpl(CallGuard& guard, JobCoordinator& coordinator, Up
 grpc::Status JobServiceImpl::QueryUpload(grpc::ServerContext* context, const v1::Manifest* manifest,
                                          v1::UploadStatus* status) {
   return guard_.Run(context, {"QueryUpload", Access::kJobs, kReads, ""}, [&](Call& call) {
-    *status = uploads_.Query(*manifest, Uploader::kClient);
+    *status = uploads_.Query(*manifest, Uploader::kClient, coordinator_.ClientUploadOwner(call.caller));
     coordinator_.CheckUploadQuota(*manifest, call.caller);
     return grpc::Status::OK;
   });
@@ -37,7 +37,7 @@ grpc::Status JobServiceImpl::Upload(grpc::ServerContext* context,
                                     grpc::ServerReader<v1::UploadRequest>* reader, v1::UploadStatus* status) {
   return guard_.Run(context, {"Upload", Access::kJobs, kWrites, ""}, [&](Call& call) {
     *status = uploads_.Receive(
-        *reader, Uploader::kClient,
+        *reader, Uploader::kClient, coordinator_.ClientUploadOwner(call.caller),
         [&](const v1::Manifest& manifest) { coordinator_.AdmitUpload(manifest, call.caller); },
         [&](const std::function<bool()>& read) { return stalls_.Guard(context, read); },
         [context] { return context->IsCancelled(); });

@@ -68,7 +68,9 @@ RetentionPlan PlanExpiry(JobStore& store, const BlobStore& blobs,
     }
   }
   for (const auto& file : old_files) {
-    if (expiring.count(file.sha256) || kept.count(file.sha256)) continue;
+    // A partial is given up at the cutoff even where its content is a job's: that content is stored
+    // whole, and the partial is another tenant's upload of it (BlobHolders) left unfinished.
+    if (!file.partial && (expiring.count(file.sha256) || kept.count(file.sha256))) continue;
     plan.orphans.push_back(file);
     plan.orphan_bytes += file.bytes;
   }

@@ -60,8 +60,28 @@ std::int64_t UploadLedger::LastNotedUnixMs(const std::string& tenant) const {
 
 bool UploadLedger::Add(const std::string& tenant, const v1::FileEntry& file, Time now) {
   if (file.sha256().empty()) return false;  // a sizes-only listing brings nothing yet
-  tenants_[tenant][file.sha256()] = {file.size(), now, NowUnixMs()};
+  auto& entry = tenants_[tenant][file.sha256()];
+  entry = {file.size(), now, NowUnixMs(), entry.proven};
   return true;
+}
+
+void UploadLedger::NoteProven(const std::string& tenant, const std::string& sha256) {
+  const auto found = tenants_.find(tenant);
+  if (found == tenants_.end()) return;
+  const auto entry = found->second.find(sha256);
+  if (entry == found->second.end() || entry->second.proven) return;
+  entry->second.proven = true;
+  Save();
+}
+
+std::vector<std::pair<std::string, std::string>> UploadLedger::Proven() const {
+  std::vector<std::pair<std::string, std::string>> proven;
+  for (const auto& [tenant, files] : tenants_) {
+    for (const auto& [digest, entry] : files) {
+      if (entry.proven) proven.emplace_back(tenant, digest);
+    }
+  }
+  return proven;
 }
 
 void UploadLedger::Submitted(const std::string& tenant, const v1::Manifest& manifest) {
@@ -111,7 +131,7 @@ void UploadLedger::KeepIn(const std::filesystem::path& file) {
           upload["bytes"].get<std::int64_t>(),
           now - std::chrono::duration_cast<Time::duration>(
                     std::chrono::milliseconds(std::max<std::int64_t>(0, now_unix_ms - noted_unix_ms))),
-          noted_unix_ms};
+          noted_unix_ms, upload.value("proven", nlohmann::json(false)) == true};
     }
     tenants_ = std::move(read);
     if (left_out > 0) {
@@ -146,7 +166,8 @@ void UploadLedger::Save() const {
       uploads.push_back({{"tenant", tenant},
                          {"sha256", digest},
                          {"bytes", entry.bytes},
-                         {"noted_unix_ms", entry.noted_unix_ms}});
+                         {"noted_unix_ms", entry.noted_unix_ms},
+                         {"proven", entry.proven}});
     }
   }
   try {

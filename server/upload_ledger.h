@@ -5,7 +5,10 @@
 // (KeepIn), written whole at every change, so a server restart neither forgets nor frees them:
 //
 //   {"uploads": [{"tenant": "radiology", "sha256": "3f9c...", "bytes": 1048576,
-//                 "noted_unix_ms": 1765000000000}]}
+//                 "noted_unix_ms": 1765000000000, "proven": true}]}
+//
+// `proven`: the tenant's upload sent every byte of the content, digest checked (BlobHolders); an entry
+// without it (a file of before 2026-12-06) is not.
 //
 // Not thread-safe: the coordinator holds its lock.
 #pragma once
@@ -14,6 +17,7 @@
 #include <filesystem>
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "endorecon/v1/files.pb.h"
@@ -43,6 +47,10 @@ class UploadLedger {
     }
     if (added) Save();
   }
+  // `tenant`'s upload sent every byte of the content, digest checked; kept across restarts (Proven).
+  void NoteProven(const std::string& tenant, const std::string& sha256);
+  // Each (tenant, sha256) noted proven and not yet submitted, dropped or forgotten.
+  std::vector<std::pair<std::string, std::string>> Proven() const;
   // A job of `tenant` now holds the files of `manifest` (submitted): they count as the job's.
   void Submitted(const std::string& tenant, const v1::Manifest& manifest);
   // Forgets what was last noted before `cutoff`: retention deletes those partial uploads and unused
@@ -66,6 +74,7 @@ class UploadLedger {
     std::int64_t bytes = 0;
     Time noted;
     std::int64_t noted_unix_ms = 0;  // the same moment, for messages
+    bool proven = false;             // NoteProven
   };
   bool Add(const std::string& tenant, const v1::FileEntry& file, Time now);  // false: nothing to note
   static Pending Summary(const std::map<std::string, Entry>& files);         // one tenant's

@@ -41,7 +41,16 @@ void UploadReceiver::CheckSpace(std::int64_t bytes, Uploader uploader) const {
   }
 }
 
-v1::UploadStatus UploadReceiver::Query(const v1::Manifest& manifest, Uploader uploader) const {
+v1::UploadStatus UploadReceiver::Query(const v1::Manifest& manifest, Uploader uploader,
+                                       const UploadOwner& owner) const {
+  const bool sizes_only = IsSizesOnly(manifest);
+  return Status(manifest, uploader, owner.tenant,
+                owner.unproven && !sizes_only ? owner.unproven(manifest) : std::set<std::string>{});
+}
+
+v1::UploadStatus UploadReceiver::Status(const v1::Manifest& manifest, Uploader uploader,
+                                        const std::string& tenant,
+                                        const std::set<std::string>& unproven) const {
   const bool sizes_only = IsSizesOnly(manifest);
   ValidateManifest(manifest, sizes_only);
   const std::int64_t total = TotalBytes(manifest);
@@ -64,20 +73,22 @@ v1::UploadStatus UploadReceiver::Query(const v1::Manifest& manifest, Uploader up
     auto* file = status.add_files();
     file->set_path(entry.path());
     file->set_size(entry.size());
-    file->set_committed(blobs_.Committed(entry));
+    file->set_committed(unproven.count(entry.sha256()) ? blobs_.PartialBytes(entry, tenant)
+                                                       : blobs_.Committed(entry, tenant));
     committed += file->committed();
   }
   CheckSpace(total - committed, uploader);
   status.set_committed_bytes(committed);
   status.set_total_bytes(total);
   bool complete = true;
-  for (const auto& entry : manifest.files()) complete = complete && blobs_.Has(entry.sha256());
+  for (const auto& entry : manifest.files())
+    complete = complete && !unproven.count(entry.sha256()) && blobs_.Has(entry.sha256());
   status.set_complete(complete);
   return status;
 }
 
 v1::UploadStatus UploadReceiver::Receive(grpc::ServerReaderInterface<v1::UploadRequest>& reader,
-                                         Uploader uploader,
+                                         Uploader uploader, const UploadOwner& owner,
                                          const std::function<void(const v1::Manifest&)>& admit,
                                          const ReadGuard& guard, const std::function<bool()>& cancelled) {
   v1::UploadRequest request;
@@ -91,7 +102,9 @@ v1::UploadStatus UploadReceiver::Receive(grpc::ServerReaderInterface<v1::UploadR
   }
   const v1::Manifest manifest = request.manifest();
   ValidateManifest(manifest);  // with its digests: a sizes-only manifest is for a query
-  Query(manifest, uploader);
+  // Asked once: a content proven by another stream meanwhile is taken again here, not refused.
+  std::set<std::string> unproven = owner.unproven ? owner.unproven(manifest) : std::set<std::string>{};
+  Status(manifest, uploader, owner.tenant, unproven);
   if (admit) admit(manifest);
   std::map<std::string, const v1::FileEntry*> entries;
   for (const auto& entry : manifest.files()) entries[entry.path()] = &entry;
@@ -105,6 +118,10 @@ v1::UploadStatus UploadReceiver::Receive(grpc::ServerReaderInterface<v1::UploadR
   }
   const std::unique_ptr<std::counting_semaphore<>, void (*)(std::counting_semaphore<>*)> slot(
       &slots_, [](std::counting_semaphore<>* slots) { slots->release(); });
+  // Stored, as far as this tenant goes.
+  const auto stored_for = [&](const v1::FileEntry& entry) {
+    return !unproven.count(entry.sha256()) && blobs_.Has(entry.sha256());
+  };
   std::unique_ptr<BlobStore::Writer> writer;
   std::string writer_path;
   std::set<std::string> busy;
@@ -119,14 +136,14 @@ v1::UploadStatus UploadReceiver::Receive(grpc::ServerReaderInterface<v1::UploadR
                   " bytes; at most " + std::to_string(kChunkBytes) + " per chunk");
     }
     const v1::FileEntry& entry = *found->second;
-    if (blobs_.Has(entry.sha256()) || busy.count(entry.path())) continue;
+    if (stored_for(entry) || busy.count(entry.path())) continue;
     if (writer_path != entry.path()) {
       writer.reset();
       writer_path.clear();
       // A stream that was just cut may still hold the file for a moment; a concurrent upload of the
       // same content holds it longer, and then the client asks again later.
-      writer = blobs_.TryOpenWriter(entry, std::chrono::seconds(2));
-      if (writer && blobs_.Has(entry.sha256())) {
+      writer = blobs_.TryOpenWriter(entry, std::chrono::seconds(2), owner.tenant);
+      if (writer && stored_for(entry)) {
         writer.reset();
         continue;
       }
@@ -143,14 +160,18 @@ v1::UploadStatus UploadReceiver::Receive(grpc::ServerReaderInterface<v1::UploadR
       const auto promoting = std::move(writer);
       writer_path.clear();
       promoting->Promote();
+      unproven.erase(entry.sha256());
+      if (owner.proven) owner.proven(entry.sha256());
     }
   }
   writer.reset();
-  // A file whose bytes all arrived before a server crash is sent no more: promote it here.
+  // A file whose bytes all arrived before a server crash is sent no more: promote it here (they are
+  // the tenant's partial's, so they prove as much as a promotion above).
   for (const auto& entry : manifest.files()) {
-    if (!busy.count(entry.path())) blobs_.PromoteIfFull(entry);
+    if (busy.count(entry.path()) || stored_for(entry)) continue;
+    if (blobs_.PromoteIfFull(entry, owner.tenant) && owner.proven) owner.proven(entry.sha256());
   }
-  return Query(manifest, uploader);
+  return Query(manifest, uploader, owner);
 }
 
 }  // namespace endorecon::server

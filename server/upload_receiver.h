@@ -24,6 +24,8 @@
 #include <cstdint>
 #include <functional>
 #include <semaphore>
+#include <set>
+#include <string>
 
 #include "endorecon/v1/files.pb.h"
 #include "server/blob_store.h"
@@ -34,6 +36,19 @@ namespace endorecon::server {
 // of the reserve: the reserve is there for them).
 enum class Uploader { kClient, kWorker };
 
+// The tenant an upload is for. Its bytes go to that tenant's partials (BlobStore), and a content
+// another tenant holds (BlobHolders) counts as not stored for it: its bytes are sent again, then
+// checked against the digest, to show that this tenant holds it too. The default is the server's own
+// partials, trusted with every stored content (a worker of every tenant, admins, tests).
+struct UploadOwner {
+  std::string tenant;
+  // Of the contents of a manifest, those stored that the tenant has not shown it holds.
+  std::function<std::set<std::string>(const v1::Manifest&)> unproven;
+  // Told each content the tenant's partial held in full, digest checked, whether it was stored
+  // before or not.
+  std::function<void(const std::string& sha256)> proven;
+};
+
 class UploadReceiver {
  public:
   // `on_bytes` is told every committed chunk's size (for the metrics).
@@ -41,9 +56,10 @@ class UploadReceiver {
                  int max_streams, std::function<void(std::int64_t)> on_bytes);
 
   // Validates `manifest` (and, for a client, the size limit) and says how much of each file is
-  // committed. A sizes-only manifest (no digests: IsSizesOnly) is checked against the limit only and
-  // answered with its total.
-  v1::UploadStatus Query(const v1::Manifest& manifest, Uploader uploader) const;
+  // committed for `owner`. A sizes-only manifest (no digests: IsSizesOnly) is checked against the
+  // limit only and answered with its total.
+  v1::UploadStatus Query(const v1::Manifest& manifest, Uploader uploader,
+                         const UploadOwner& owner = {}) const;
   // Runs one blocking Read of the stream (a StallWatch's Guard); returns what the Read returned.
   using ReadGuard = std::function<bool(const std::function<bool()>& read)>;
   // Consumes one upload stream. Throws Error as described above. `admit`, when given, sees the
@@ -52,12 +68,16 @@ class UploadReceiver {
   // thread or its slot. `cancelled`, when given, is asked while the stream waits for an upload slot:
   // a call cancelled or past its deadline stops waiting (CANCELLED), so it holds no thread.
   v1::UploadStatus Receive(grpc::ServerReaderInterface<v1::UploadRequest>& reader, Uploader uploader,
+                           const UploadOwner& owner = {},
                            const std::function<void(const v1::Manifest&)>& admit = {},
                            const ReadGuard& guard = {}, const std::function<bool()>& cancelled = {});
 
  private:
   // Refuses `bytes` more that would leave less than the reserve free.
   void CheckSpace(std::int64_t bytes, Uploader uploader) const;
+  // Query with the unproven contents already asked for.
+  v1::UploadStatus Status(const v1::Manifest& manifest, Uploader uploader, const std::string& tenant,
+                          const std::set<std::string>& unproven) const;
 
   BlobStore& blobs_;
   std::int64_t max_upload_bytes_;

@@ -158,7 +158,8 @@ grpc::Status WorkerServiceImpl::Report(
       }
       v1::ProgressReply reply;
       bool register_again = false;
-      reply.set_action(coordinator_.Report(update, TokenOf(call.caller), &call.job_id, &register_again));
+      reply.set_action(coordinator_.Report(update, TokenOf(call.caller), &call.job_id, &register_again,
+                                           ServedTenant(call.caller)));
       reply.set_register_again(register_again);
       if (!stream->Write(reply) || reply.action() != v1::ProgressReply::CONTINUE) break;
     }
@@ -169,7 +170,7 @@ grpc::Status WorkerServiceImpl::Report(
 grpc::Status WorkerServiceImpl::Complete(grpc::ServerContext* context, const v1::CompleteRequest* request,
                                          v1::Job* job) {
   return guard_.Run(context, {"Complete", Access::kWorker, kWrites, ""}, [&](Call& call) {
-    *job = coordinator_.Complete(*request);
+    *job = coordinator_.Complete(*request, ServedTenant(call.caller));
     call.job_id = job->id();
     return grpc::Status::OK;
   });
@@ -190,8 +191,9 @@ grpc::Status WorkerServiceImpl::Fail(grpc::ServerContext* context, const v1::Fai
 
 grpc::Status WorkerServiceImpl::QueryBlobs(grpc::ServerContext* context, const v1::Manifest* manifest,
                                            v1::UploadStatus* status) {
-  return guard_.Run(context, {"QueryBlobs", Access::kWorker, kReads, ""}, [&](Call&) {
-    *status = uploads_.Query(*manifest, Uploader::kWorker);
+  return guard_.Run(context, {"QueryBlobs", Access::kWorker, kReads, ""}, [&](Call& call) {
+    *status = uploads_.Query(*manifest, Uploader::kWorker,
+                             coordinator_.WorkerUploadOwner(ServedTenant(call.caller)));
     return grpc::Status::OK;
   });
 }
@@ -199,9 +201,9 @@ grpc::Status WorkerServiceImpl::QueryBlobs(grpc::ServerContext* context, const v
 grpc::Status WorkerServiceImpl::PutBlobs(grpc::ServerContext* context,
                                          grpc::ServerReader<v1::UploadRequest>* reader,
                                          v1::UploadStatus* status) {
-  return guard_.Run(context, {"PutBlobs", Access::kWorker, kWrites, ""}, [&](Call&) {
+  return guard_.Run(context, {"PutBlobs", Access::kWorker, kWrites, ""}, [&](Call& call) {
     *status = uploads_.Receive(
-        *reader, Uploader::kWorker, {},
+        *reader, Uploader::kWorker, coordinator_.WorkerUploadOwner(ServedTenant(call.caller)), {},
         [&](const std::function<bool()>& read) { return stalls_.Guard(context, read); },
         [context] { return context->IsCancelled(); });
     return grpc::Status::OK;

@@ -284,6 +284,47 @@ TEST_F(AccessControlTest, AnotherTenantsJobIsNotFoundLikeAMissingOne) {
   EXPECT_EQ(cluster_.Job(id).state(), v1::CANCELLED);
 }
 
+// The server keeps each content once: a tenant that knew the digests of another tenant's clip named
+// them in a Submit without uploading a byte, and its job trained on the other tenant's patient (found
+// 2026-12-06). Now the Submit is refused as for files never uploaded, and the same clip submitted with
+// the CLI sends its bytes again (proof of possession), then runs.
+TEST_F(AccessControlTest, AnotherTenantsClipIsNamedOnlyByATenantThatUploadsItToo) {
+  const auto metric = [&] {
+    const auto text = Capture(
+        "curl -s --max-time 5 http://127.0.0.1:" + std::to_string(cluster_.metrics_port()) + "/metrics");
+    std::smatch match;
+    EXPECT_TRUE(std::regex_search(text, match, std::regex("\nendorecon_upload_bytes_total ([0-9.e+]+)")))
+        << text;
+    return match.empty() ? 0.0 : std::stod(match[1]);
+  };
+  const auto id = SubmitAs(alice_, "alice-job");
+  const auto clip = cluster_.Job(id).clip();
+  std::int64_t clip_bytes = 0;
+  for (const auto& file : clip.files()) clip_bytes += file.size();
+
+  cluster_.UseCredentials(bob_);
+  v1::SubmitRequest forged;
+  *forged.mutable_clip() = clip;
+  forged.set_name("forged");
+  grpc::ClientContext context;
+  v1::Job job;
+  const auto status = cluster_.stub().Submit(&context, forged, &job);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::FAILED_PRECONDITION) << status.error_message();
+  EXPECT_NE(status.error_message().find("not uploaded yet"), std::string::npos) << status.error_message();
+  EXPECT_EQ(status.error_message().find("radiology"), std::string::npos) << status.error_message();
+
+  const double before = metric();
+  const auto bobs = SubmitAs(bob_, "bob-job");
+  EXPECT_GE(metric() - before, static_cast<double>(clip_bytes)) << "every byte of the clip was sent again";
+  EXPECT_EQ(cluster_.Job(bobs).clip().files_size(), clip.files_size());
+  const auto again = metric();
+  SubmitAs(bob_, "bob-job-2");
+  EXPECT_EQ(metric(), again) << "bob holds the clip now: nothing is sent";
+  EXPECT_TRUE(std::filesystem::is_empty(cluster_.data_dir() / "partial")) << "no partial left behind";
+  cluster_.UseCredentials(admin_);
+  EXPECT_EQ(AuditFind(Audit(), "Submit", "FAILED_PRECONDITION", "bob").size(), 1u);
+}
+
 // A tenant on a worker or admin token meant nothing and was taken without a word (found 2026-12-05).
 // A worker token with a tenant runs that tenant's jobs only: a research department's GPU node never
 // leases a clinical recording (every worker leased every tenant's jobs until 2026-12-06). An admin

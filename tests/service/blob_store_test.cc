@@ -2,6 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
+#include <map>
+
 #include "common/error.h"
 #include "common/sha256.h"
 #include "tests/unit/temp_dir.h"
@@ -77,7 +80,7 @@ TEST(BlobStoreTest, AFullPartialLeftByACrashIsPromoted) {
   EXPECT_FALSE(store.Has(entry.sha256()));
   EXPECT_TRUE(store.PromoteIfFull(entry));
   EXPECT_EQ(testing::ReadBytes(store.PathOf(entry.sha256())), bytes);
-  EXPECT_TRUE(store.PromoteIfFull(entry));
+  EXPECT_FALSE(store.PromoteIfFull(entry)) << "no partial left to promote";
 }
 
 TEST(BlobStoreTest, WrongDigestDiscardsTheBytes) {
@@ -120,6 +123,55 @@ TEST(BlobStoreTest, AWriterOnContentAlreadyStoredLeavesNoPartialFile) {
   { auto late = store.OpenWriter(entry); }
   EXPECT_FALSE(std::filesystem::exists(dir.path() / "partial" / (entry.sha256() + ".part")));
   EXPECT_TRUE(store.Has(entry.sha256()));
+}
+
+// Each tenant's upload goes into a partial of its own, so a digest that checks out says that tenant
+// sent every byte (BlobHolders' proof): two tenants write the same content at once, a partial sent
+// again for content already stored is kept for its resume, and its promotion replaces the blob.
+TEST(BlobStoreTest, EachTenantUploadsIntoAPartialOfItsOwn) {
+  testing::TempDir dir("blobs");
+  BlobStore store(dir.path());
+  const std::string bytes = "content two tenants have";
+  const auto entry = EntryOf("x.bin", bytes);
+  {
+    auto a = store.OpenWriter(entry, "radiology");
+    auto b = store.OpenWriter(entry, "oncology");
+    EXPECT_EQ(store.TryOpenWriter(entry, std::chrono::milliseconds(0), "radiology"), nullptr);
+    a->Append(0, bytes.substr(0, 7));
+    b->Append(0, bytes.substr(0, 3));
+  }
+  EXPECT_EQ(store.Committed(entry, "radiology"), 7);
+  EXPECT_EQ(store.Committed(entry, "oncology"), 3);
+  EXPECT_EQ(store.Committed(entry), 0) << "the server's own partial is another";
+  EXPECT_TRUE(std::filesystem::exists(dir.path() / "partial" / (entry.sha256() + ".radiology.part")));
+  std::map<std::string, std::int64_t> partials;
+  for (const auto& file : store.Files()) {
+    EXPECT_TRUE(file.partial);
+    EXPECT_EQ(file.sha256, entry.sha256());
+    partials[file.owner] = file.bytes;
+  }
+  EXPECT_EQ(partials, (std::map<std::string, std::int64_t>{{"oncology", 3}, {"radiology", 7}}));
+
+  store.Put(bytes);  // someone else's upload completes the content
+  EXPECT_EQ(store.Committed(entry, "oncology"), entry.size());
+  EXPECT_EQ(store.PartialBytes(entry, "oncology"), 3);
+  { auto resumed = store.OpenWriter(entry, "oncology"); }
+  EXPECT_EQ(store.PartialBytes(entry, "oncology"), 3) << "a partial with bytes is kept for its resume";
+  auto resumed = store.OpenWriter(entry, "oncology");
+  resumed->Append(3, bytes.substr(3));
+  resumed->Promote();
+  resumed.reset();
+  EXPECT_EQ(store.PartialBytes(entry, "oncology"), 0);
+  EXPECT_EQ(testing::ReadBytes(store.PathOf(entry.sha256())), bytes);
+
+  BlobStore::StoredFile radiology;
+  for (const auto& file : store.Files()) {
+    if (file.partial) radiology = file;
+  }
+  EXPECT_EQ(radiology.owner, "radiology");
+  store.Remove(radiology);
+  EXPECT_EQ(store.PartialBytes(entry, "radiology"), 0);
+  EXPECT_TRUE(store.Has(entry.sha256())) << "removing a partial leaves the blob";
 }
 
 }  // namespace

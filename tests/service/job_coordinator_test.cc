@@ -9,6 +9,7 @@
 #include <functional>
 #include <limits>
 #include <optional>
+#include <set>
 #include <string>
 #include <thread>
 
@@ -438,6 +439,71 @@ TEST_F(JobCoordinatorTest, AnotherTenantsJobIsNotFoundLikeAMissingOne) {
   EXPECT_EQ(Get(id).state(), v1::QUEUED);
 }
 
+// The store keeps each content once, whoever sent it: a tenant that learned a digest of another
+// tenant's file named it in a job without uploading it, and got a reconstruction of that patient back
+// (found 2026-12-06). Content a tenant holds is another's to name only after that one uploads it too;
+// a worker serving one tenant names as result or checkpoint only what that tenant holds.
+TEST_F(JobCoordinatorTest, AnotherTenantsContentIsNamedOnlyAfterItIsUploadedAgain) {
+  const Principal a{"a-client", Role::kClient, "a", false};
+  const Principal b{"b-client", Role::kClient, "b", false};
+  v1::SubmitRequest theirs;
+  *theirs.mutable_clip() = Uploaded("images/000000.png", "b's patient");
+  coordinator_.Submit(theirs, b);  // b's job holds the content now
+  const auto missing = testing::ErrorFrom(
+      [&] {
+        v1::SubmitRequest never;
+        *never.mutable_clip()->add_files() = theirs.clip().files(0);
+        never.mutable_clip()->mutable_files(0)->set_sha256(std::string(64, 'f'));
+        coordinator_.Submit(never, a);
+      },
+      ErrorCode::kFailedPrecondition);
+  EXPECT_EQ(testing::ErrorFrom([&] { coordinator_.Submit(theirs, a); }, ErrorCode::kFailedPrecondition),
+            missing)
+      << "refused as a content never uploaded: the refusal does not tell that b stored it";
+
+  const auto owner = coordinator_.ClientUploadOwner(a);
+  EXPECT_EQ(owner.tenant, "a");
+  const std::set<std::string> digest{theirs.clip().files(0).sha256()};
+  EXPECT_EQ(owner.unproven(theirs.clip()), digest);
+  EXPECT_TRUE(coordinator_.ClientUploadOwner(b).unproven(theirs.clip()).empty());
+  owner.proven(theirs.clip().files(0).sha256());  // a's upload sent every byte (UploadReceiver)
+  EXPECT_TRUE(owner.unproven(theirs.clip()).empty());
+  const auto id = coordinator_.Submit(theirs, a).id();
+
+  // A worker serving tenant b cannot name b's content as a's results, nor as a's checkpoint; a worker of
+  // every tenant is trusted with every content.
+  Scheduler scheduler;
+  LeaseTable leases(kTtl);
+  WorkerRegistry workers(kTtl);
+  JobCoordinator restarted({store_, blobs_, scheduler, leases, workers, hub_, metrics_}, 2, {},
+                           [this] { return now_; });
+  restarted.Recover();
+  EXPECT_EQ(restarted.WorkerUploadOwner("b").unproven(theirs.clip()).size(), 0u) << "b's job holds it";
+  const auto result = Uploaded("metrics.json", "{\"psnr\": 31}");
+  v1::SubmitRequest b_again;
+  *b_again.mutable_clip() = result;
+  restarted.Submit(b_again, b);  // now b holds the result's content too, a does not
+  EXPECT_EQ(restarted.WorkerUploadOwner("a").unproven(result),
+            (std::set<std::string>{result.files(0).sha256()}));
+  EXPECT_EQ(restarted.WorkerUploadOwner(std::nullopt).unproven, nullptr);
+  const auto granted = restarted.Lease("w-a", Clock::now(), "a");
+  ASSERT_TRUE(granted.has_value());
+  ASSERT_EQ(granted->job.id(), id);
+  v1::ProgressUpdate update;
+  update.set_lease_id(granted->lease_id);
+  *update.mutable_checkpoint() = result.files(0);
+  EXPECT_EQ(restarted.Report(update, {}, nullptr, nullptr, "a"), v1::ProgressReply::CONTINUE);
+  EXPECT_FALSE(restarted.Get(id, a).has_checkpoint()) << "b's content is no checkpoint of a's job";
+  v1::CompleteRequest complete;
+  complete.set_lease_id(granted->lease_id);
+  *complete.mutable_result() = result;
+  EXPECT_NE(testing::ErrorFrom([&] { restarted.Complete(complete, "a"); }, ErrorCode::kFailedPrecondition)
+                .find("not uploaded yet"),
+            std::string::npos);
+  EXPECT_EQ(restarted.Get(id, a).state(), v1::RUNNING);
+  EXPECT_EQ(restarted.Complete(complete, std::nullopt).state(), v1::SUCCEEDED);
+}
+
 // A tenant's uploads not yet submitted count against its byte quota: each upload under the quota, and
 // none submitted, let a tenant keep any number of them on the data disk for --orphan-hours (found
 // 2026-12-06).
@@ -465,7 +531,7 @@ TEST_F(JobCoordinatorTest, UploadsNotYetSubmittedAreListedAndDroppedWithTheFiles
   // What arrived: `complete` and `in_job` whole, half of `partial`; `in_job` is the clip of b's job.
   blobs_.Put(complete);
   blobs_.Put(shared);
-  blobs_.OpenWriter(entry(partial))->Append(0, partial.substr(0, 100));
+  blobs_.OpenWriter(entry(partial), "a")->Append(0, partial.substr(0, 100));
   blobs_.Put(in_job);
   v1::SubmitRequest request;
   *request.mutable_clip()->add_files() = entry(in_job);
@@ -493,7 +559,7 @@ TEST_F(JobCoordinatorTest, UploadsNotYetSubmittedAreListedAndDroppedWithTheFiles
   EXPECT_EQ(dropped.deleted_files(), 2);
   EXPECT_EQ(dropped.deleted_bytes(), 200) << "the complete blob and the partial's 100 bytes";
   EXPECT_FALSE(blobs_.Has(Sha256Hex(complete)));
-  EXPECT_EQ(blobs_.Committed(entry(partial)), 0) << "the partial went";
+  EXPECT_EQ(blobs_.Committed(entry(partial), "a"), 0) << "the partial went";
   EXPECT_TRUE(blobs_.Has(Sha256Hex(shared))) << "b's upload brings it too";
   EXPECT_TRUE(blobs_.Has(Sha256Hex(in_job))) << "b's job holds it";
   EXPECT_EQ(coordinator_.Uploads(v1::UploadsRequest(), a).tenants_size(), 0);

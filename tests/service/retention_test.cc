@@ -84,25 +84,33 @@ TEST(RetentionTest, FilesNoJobReferencesGoOnceOldEnough) {
   store.Insert(JobWith("live", v1::RUNNING, 0, {clip}, checkpoint));
   const std::string partial_sha(64, 'e');
   testing::WriteBytes(dir / "partial" / (partial_sha + ".part"), "half an upl");
+  // Another tenant's upload of the live job's clip (proof of possession, BlobHolders), given up: the
+  // clip is stored whole, so the partial goes too.
+  const auto proof = dir / "partial" / (clip + ".oncology.part");
+  testing::WriteBytes(proof, "cl");
   const auto two_days_ago = std::filesystem::file_time_type::clock::now() - std::chrono::hours(48);
   for (const auto& sha : {clip, checkpoint, earlier})
     std::filesystem::last_write_time(blobs.PathOf(sha), two_days_ago);
   std::filesystem::last_write_time(dir / "partial" / (partial_sha + ".part"), two_days_ago);
+  std::filesystem::last_write_time(proof, two_days_ago);
 
   const auto plan = PlanRetention(
       store, blobs, kKeepJobs,
       FilesWrittenBefore(blobs, std::filesystem::file_time_type::clock::now() - std::chrono::hours(24)));
   EXPECT_TRUE(plan.jobs.empty());
-  ASSERT_EQ(plan.orphans.size(), 2u);
+  ASSERT_EQ(plan.orphans.size(), 3u);
   std::set<std::string> orphans;
-  for (const auto& file : plan.orphans) orphans.insert(file.sha256 + (file.partial ? ".part" : ""));
-  EXPECT_EQ(orphans, (std::set<std::string>{earlier, partial_sha + ".part"}));
-  EXPECT_EQ(plan.orphan_bytes, 12 + 11);
+  for (const auto& file : plan.orphans)
+    orphans.insert(file.sha256 + (file.owner.empty() ? "" : "." + file.owner) +
+                   (file.partial ? ".part" : ""));
+  EXPECT_EQ(orphans, (std::set<std::string>{earlier, partial_sha + ".part", clip + ".oncology.part"}));
+  EXPECT_EQ(plan.orphan_bytes, 12 + 11 + 2);
   EXPECT_TRUE(PlanRetention(store, blobs, kKeepJobs).orphans.empty()) << "no cutoff, no orphans";
 
   for (const auto& file : plan.orphans) blobs.Remove(file);
   EXPECT_FALSE(blobs.Has(earlier));
   EXPECT_FALSE(std::filesystem::exists(dir / "partial" / (partial_sha + ".part")));
+  EXPECT_FALSE(std::filesystem::exists(proof));
   for (const auto& sha : {clip, checkpoint, fresh}) EXPECT_TRUE(blobs.Has(sha));
 }
 

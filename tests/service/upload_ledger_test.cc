@@ -79,11 +79,15 @@ TEST(UploadLedgerTest, TheLedgerOutlivesARestartInItsFile) {
     ledger.Note("a", Files({{x.c_str(), 100}, {y.c_str(), 20}}), none, t0);
     ledger.Note("b", Files({{z.c_str(), 7}}), none, t0);
     ledger.Submitted("a", Files({{y.c_str(), 20}}));
+    ledger.NoteProven("a", x);                              // a's upload sent every byte of x
+    ledger.NoteProven("b", x);                              // b never noted x: nothing to prove
+    ledger.Note("a", Files({{x.c_str(), 100}}), none, t0);  // noted again: still proven
   }
   UploadLedger restarted;
   restarted.KeepIn(file);
   EXPECT_EQ(restarted.PendingBytes("a", {}), 100);
   EXPECT_EQ(restarted.PendingBytes("b", {}), 7);
+  EXPECT_EQ(restarted.Proven(), (std::vector<std::pair<std::string, std::string>>{{"a", x}}));
   EXPECT_EQ(restarted.ForgetBefore(t0 - std::chrono::minutes(1)), 0u) << "dated as when noted, not older";
   EXPECT_EQ(restarted.ForgetBefore(UploadLedger::Time::clock::now() + std::chrono::minutes(1)), 2u)
       << "nor newer";

@@ -4,6 +4,8 @@
 
 #include <atomic>
 #include <chrono>
+#include <set>
+#include <string>
 #include <thread>
 
 #include "common/error.h"
@@ -52,6 +54,54 @@ TEST(UploadReceiverTest, TheUploadLimitIsOnClientsNotOnAWorkersResults) {
   EXPECT_TRUE(receiver.Receive(stream, Uploader::kWorker).complete());
 }
 
+// Content another tenant holds counts as not stored for this one (BlobHolders): its bytes are sent
+// again into the tenant's own partial, resumed across streams like any upload, and only a whole
+// partial whose digest checks out is told proven; wrong bytes are discarded and prove nothing.
+TEST(UploadReceiverTest, ContentAnotherTenantHoldsIsSentAgainAsProof) {
+  testing::TempDir dir("uploads");
+  BlobStore blobs(dir.path());
+  UploadReceiver receiver(blobs, 1 << 20, 0, /*max_streams=*/1, {});
+  const std::string bytes = "another tenant's patient, byte for byte";
+  const auto sha = blobs.Put(bytes);
+  std::set<std::string> proven;
+  UploadOwner owner;
+  owner.tenant = "a";
+  owner.unproven = [&](const v1::Manifest&) {
+    return proven.count(sha) ? std::set<std::string>{} : std::set<std::string>{sha};
+  };
+  owner.proven = [&](const std::string& digest) { proven.insert(digest); };
+  const auto manifest = ManifestOf("clip/frame.png", bytes);
+
+  auto status = receiver.Query(manifest.manifest(), Uploader::kClient, owner);
+  EXPECT_EQ(status.files(0).committed(), 0);
+  EXPECT_FALSE(status.complete());
+  EXPECT_TRUE(receiver.Query(manifest.manifest(), Uploader::kClient).complete()) << "the server's own view";
+
+  Stream forged({manifest, ChunkOf("clip/frame.png", std::string(bytes.size(), 'x'))});
+  try {
+    receiver.Receive(forged, Uploader::kClient, owner);
+    ADD_FAILURE() << "bytes that are not the content were taken";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kDataLoss);
+  }
+  EXPECT_TRUE(proven.empty());
+  EXPECT_EQ(testing::ReadBytes(blobs.PathOf(sha)), bytes);
+
+  const auto half = bytes.size() / 2;
+  Stream first({manifest, ChunkOf("clip/frame.png", bytes.substr(0, half))});
+  status = receiver.Receive(first, Uploader::kClient, owner);
+  EXPECT_EQ(status.files(0).committed(), static_cast<std::int64_t>(half));
+  EXPECT_FALSE(status.complete());
+  EXPECT_TRUE(proven.empty());
+  auto rest = ChunkOf("clip/frame.png", bytes.substr(half));
+  rest.mutable_chunk()->set_offset(static_cast<std::int64_t>(half));
+  Stream second({manifest, rest});
+  EXPECT_TRUE(receiver.Receive(second, Uploader::kClient, owner).complete());
+  EXPECT_EQ(proven, std::set<std::string>{sha});
+  EXPECT_EQ(blobs.PartialBytes(manifest.manifest().files(0), "a"), 0);
+  EXPECT_EQ(testing::ReadBytes(blobs.PathOf(sha)), bytes);
+}
+
 // A manifest without digests asks only whether its sizes may come; an upload must name them.
 TEST(UploadReceiverTest, ASizesOnlyQueryIsCheckedAgainstTheLimitAndAnUploadNeedsDigests) {
   testing::TempDir dir("uploads");
@@ -86,7 +136,7 @@ TEST(UploadReceiverTest, AnUploadCancelledWhileItWaitsForASlotStopsWaiting) {
   std::thread holder([&] {
     Stream stream({ManifestOf("held.bin", "bytes that come late")});
     int reads = 0;
-    receiver.Receive(stream, Uploader::kClient, {}, [&](const std::function<bool()>& read) {
+    receiver.Receive(stream, Uploader::kClient, {}, {}, [&](const std::function<bool()>& read) {
       if (reads++ > 0) {  // past the manifest: the slot is held
         holding = true;
         while (!release) std::this_thread::sleep_for(std::chrono::milliseconds(10));
@@ -99,7 +149,7 @@ TEST(UploadReceiverTest, AnUploadCancelledWhileItWaitsForASlotStopsWaiting) {
   const auto start = Clock::now();
   Stream waiting({ManifestOf("a.bin", "abc"), ChunkOf("a.bin", "abc")});
   try {
-    receiver.Receive(waiting, Uploader::kClient, {}, {},
+    receiver.Receive(waiting, Uploader::kClient, {}, {}, {},
                      [&] { return Clock::now() - start > std::chrono::milliseconds(300); });
     ADD_FAILURE() << "the upload waited for the slot to the end";
   } catch (const Error& e) {
