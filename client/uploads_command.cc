@@ -54,10 +54,17 @@ Command AddUploadsCommand(CLI::App& app) {
         std::cout << "no uploads" << whose << " waiting to be submitted: nothing dropped" << std::endl;
         return kExitOk;
       }
-      std::cout << "dropped the uploads waiting to be submitted of " << Described(response.tenants(0))
-                << "; deleted " << response.deleted_files() << " file(s), "
-                << HumanBytes(response.deleted_bytes())
-                << ", from the server (a file a job or another upload holds is kept)" << std::endl;
+      std::cout << "dropped the uploads waiting to be submitted of " << Described(response.tenants(0));
+      // The server tells an admin what it deleted; a client, nothing that would say which of its files
+      // another tenant holds.
+      if (response.deleted_files() > 0) {
+        std::cout << "; deleted " << response.deleted_files() << " file(s), "
+                  << HumanBytes(response.deleted_bytes())
+                  << ", from the server (a file a job or another upload holds is kept)";
+      } else {
+        std::cout << "; they no longer count against the byte quota";
+      }
+      std::cout << std::endl;
       return kExitOk;
     }
     if (response.tenants_size() == 0) {

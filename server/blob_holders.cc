@@ -56,16 +56,33 @@ void BlobHolders::AddJob(const v1::Job& job) {
   if (!job.checkpoint().sha256().empty()) Add(job.tenant(), job.checkpoint().sha256());
 }
 
-bool BlobHolders::MayUse(const std::string& tenant, const std::string& sha256) const {
+bool BlobHolders::Holds(const std::string& tenant, const std::string& sha256) const {
   const auto digest = ParseDigest(sha256);
   if (!digest) return false;
   const auto found = holders_.find(*digest);
-  if (found == holders_.end()) return true;
+  if (found == holders_.end()) return false;
   const auto index = tenant_index_.find(tenant);
   if (index == tenant_index_.end()) return false;
   const auto& holders = found->second;
   return holders.first == index->second ||
          std::find(holders.more.begin(), holders.more.end(), index->second) != holders.more.end();
+}
+
+void BlobHolders::Remove(const std::string& tenant, const std::string& sha256) {
+  const auto digest = ParseDigest(sha256);
+  const auto index = tenant_index_.find(tenant);
+  if (!digest || index == tenant_index_.end()) return;
+  const auto found = holders_.find(*digest);
+  if (found == holders_.end()) return;
+  auto& holders = found->second;
+  std::erase(holders.more, index->second);
+  if (holders.first != index->second) return;
+  if (holders.more.empty()) {
+    holders_.erase(found);
+    return;
+  }
+  holders.first = holders.more.back();
+  holders.more.pop_back();
 }
 
 void BlobHolders::Forget(const std::string& sha256) {

@@ -3,15 +3,16 @@
 // tenant's file (a log line, a shared listing) could name it in a job, skip its upload, and get a
 // reconstruction of the other tenant's patient back. A tenant holds a content when one of its jobs
 // names it (clip, checkpoint, result) or when its own upload sent every byte of it (digest checked);
-// a worker token scoped to a tenant uploads for that tenant. Content held by a tenant is given to
-// another only after that one uploads it too; content no tenant holds (the server's own, a worker's
-// of every tenant before its job takes it) is anyone's to name.
+// a worker token scoped to a tenant uploads for that tenant. Any other stored content (another
+// tenant's, or one no tenant holds: a worker's results before its job takes them, an earlier
+// checkpoint) is the tenant's to name only after it uploads it too. The server's own (a PACS
+// retrieval) and a worker of every tenant's are trusted, and become their job's tenant's.
 //
 // Kept in memory: rebuilt at start from the jobs not expired and the uploads not yet submitted that
-// were proven (UploadLedger). A content is forgotten when the store deletes it. A tenant whose job
-// expired while another tenant's job keeps the content holds it until the next restart, then uploads
-// it again: the safe side. About 100 bytes per content held (a million contents: 96 MB of nodes and
-// 8 MB of buckets, measured 2026-12-06). Not thread-safe: the coordinator holds its lock.
+// were proven (UploadLedger). A content is forgotten when the store deletes it. A worker's proof of
+// a content no job names yet, or a tenant's of one its expired job named, is not kept across a
+// restart: it uploads the content again, the safe side. About 100 bytes per content held (a million contents:
+// 96 MB of nodes and 8 MB of buckets, measured 2026-12-06). Not thread-safe: the coordinator holds its lock.
 #pragma once
 
 #include <array>
@@ -32,8 +33,10 @@ class BlobHolders {
   void AddFiles(const std::string& tenant, const v1::Manifest& files);
   // The job's tenant holds its clip, checkpoint and result; an expired job's are left out.
   void AddJob(const v1::Job& job);
-  // Whether `tenant` may name the content in a job: it holds it, or no tenant does.
-  bool MayUse(const std::string& tenant, const std::string& sha256) const;
+  // Whether `tenant` holds the content, so that it may name it in a job.
+  bool Holds(const std::string& tenant, const std::string& sha256) const;
+  // `tenant` gave its upload of the content up (and no job of it names the content).
+  void Remove(const std::string& tenant, const std::string& sha256);
   // The store deleted the content: no one holds it any more.
   void Forget(const std::string& sha256);
   // How many contents some tenant holds.

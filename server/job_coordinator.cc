@@ -71,7 +71,7 @@ bool Retrieving(const v1::Job& job) {
 }
 
 // Throws kFailedPrecondition naming the first file of `manifest` the blob store lacks.
-// `usable` (BlobHolders::MayUse of the tenant naming them, when given) says which stored contents the
+// `usable` (BlobHolders::Holds of the tenant naming them, when given) says which stored contents the
 // caller may name: one it may not is reported as not uploaded, exactly as a missing one, so a refusal
 // does not tell that another tenant stored it.
 void RequireBlobs(const BlobStore& blobs, const v1::Manifest& manifest, const std::string& what,
@@ -122,8 +122,8 @@ void JobCoordinator::KeepUploadsIn(const std::filesystem::path& file) {
   for (const auto& [tenant, digest] : uploads_.Proven()) holders_.Add(tenant, digest);
 }
 
-std::function<bool(const std::string&)> JobCoordinator::UsableBy(const std::string& tenant) const {
-  return [this, tenant](const std::string& digest) { return holders_.MayUse(tenant, digest); };
+std::function<bool(const std::string&)> JobCoordinator::HeldBy(const std::string& tenant) const {
+  return [this, tenant](const std::string& digest) { return holders_.Holds(tenant, digest); };
 }
 
 UploadOwner JobCoordinator::UploadOwnerOf(const std::string& tenant) {
@@ -133,7 +133,7 @@ UploadOwner JobCoordinator::UploadOwnerOf(const std::string& tenant) {
     std::set<std::string> unproven;
     std::lock_guard lock(mutex_);
     for (const auto& file : manifest.files()) {
-      if (!holders_.MayUse(tenant, file.sha256()) && parts_.blobs.Has(file.sha256()))
+      if (!holders_.Holds(tenant, file.sha256()) && parts_.blobs.Has(file.sha256()))
         unproven.insert(file.sha256());
     }
     return unproven;
@@ -323,11 +323,11 @@ void JobCoordinator::AdmitUpload(const v1::Manifest& manifest, const Principal& 
   std::lock_guard lock(mutex_);
   CheckQuotas(caller.tenant, manifest, true, uploads_.PendingBytes(caller.tenant, manifest));
   // Noted with or without a byte quota: `endorecon uploads` lists and drops them either way.
-  // A content another tenant holds is uploaded again (BlobHolders): it is this upload's too.
+  // A stored content the tenant does not hold is uploaded again (BlobHolders): it is this upload's too.
   uploads_.Note(
       caller.tenant, manifest,
       [&](const std::string& digest) {
-        return parts_.blobs.Has(digest) && holders_.MayUse(caller.tenant, digest);
+        return parts_.blobs.Has(digest) && holders_.Holds(caller.tenant, digest);
       },
       UploadLedger::Time::clock::now());
 }
@@ -380,8 +380,25 @@ v1::UploadsResponse JobCoordinator::Uploads(const v1::UploadsRequest& request, c
   const auto plan = PlanExpiry(
       parts_.store, parts_.blobs, [](const v1::Job&) { return false; }, candidates);
   for (const auto& file : plan.orphans) RemoveFile(file);
-  response.set_deleted_files(static_cast<std::int64_t>(plan.orphans.size()));
-  response.set_deleted_bytes(plan.orphan_bytes);
+  // The tenant gives its uploads up: it holds (BlobHolders) only what its jobs name. Without this a
+  // dropped upload's content could still be submitted while another tenant kept it, and no more
+  // after a restart (found 2026-12-06).
+  std::set<std::string> named;
+  parts_.store.Scan([&](const StoredJob& stored) {
+    const auto& job = stored.job;
+    if (job.tenant() != *tenant || job.expired_unix_ms() > 0) return;
+    for (const auto& file : job.clip().files()) named.insert(file.sha256());
+    for (const auto& file : job.result().files()) named.insert(file.sha256());
+    named.insert(job.checkpoint().sha256());
+  });
+  for (const auto& digest : digests) {
+    if (!named.count(digest)) holders_.Remove(*tenant, digest);
+  }
+  // What the drop deleted tells which of the files another tenant or its job holds: an admin's only.
+  if (caller.SeesAllTenants()) {
+    response.set_deleted_files(static_cast<std::int64_t>(plan.orphans.size()));
+    response.set_deleted_bytes(plan.orphan_bytes);
+  }
   spdlog::info("uploads not yet submitted of tenant '{}' dropped by {}: {} file(s), {} deleted ({} bytes)",
                tenant->empty() ? "-" : *tenant, caller.name, digests.size(), plan.orphans.size(),
                plan.orphan_bytes);
@@ -450,7 +467,7 @@ v1::Job JobCoordinator::Submit(const v1::SubmitRequest& request, const Principal
   Locked([&] {
     if (!from_pacs) {
       RequireBlobs(parts_.blobs, request.clip(), request.has_prepare() ? "recording" : "clip",
-                   UsableBy(caller.tenant));
+                   HeldBy(caller.tenant));
     }
     CheckQuotas(caller.tenant, request.clip(), true, uploads_.PendingBytes(caller.tenant, request.clip()));
     const auto seq = parts_.store.Insert(job);
@@ -610,11 +627,17 @@ v1::ProgressReply::Action JobCoordinator::ReportLocked(const v1::ProgressUpdate&
   bool changed = false;
   // A worker of one tenant names only content that tenant holds: a checkpoint is downloaded again by
   // the job's next worker (GetBlobs).
-  if (update.has_checkpoint() && parts_.blobs.Has(update.checkpoint().sha256()) &&
-      (!served_tenant || holders_.MayUse(job.tenant(), update.checkpoint().sha256()))) {
-    *job.mutable_checkpoint() = update.checkpoint();
-    holders_.Add(job.tenant(), update.checkpoint().sha256());
-    changed = true;
+  if (update.has_checkpoint() && parts_.blobs.Has(update.checkpoint().sha256())) {
+    if (!served_tenant || holders_.Holds(job.tenant(), update.checkpoint().sha256())) {
+      *job.mutable_checkpoint() = update.checkpoint();
+      holders_.Add(job.tenant(), update.checkpoint().sha256());
+      changed = true;
+    } else {
+      spdlog::warn(
+          "job {}: the checkpoint worker {} names is no content tenant '{}' holds (not uploaded by it, "
+          "or uploaded before a server restart): left out",
+          job.id(), job.worker_id(), job.tenant());
+    }
   }
   if (update.has_progress()) {
     *job.mutable_progress() = update.progress();
@@ -644,7 +667,7 @@ v1::Job JobCoordinator::Complete(const v1::CompleteRequest& request,
     // A worker of one tenant names only content that tenant holds (or that it uploaded itself): its
     // results are downloaded by the tenant's clients and sent to its PACS.
     RequireBlobs(parts_.blobs, request.result(), "result",
-                 served_tenant ? UsableBy(job.tenant()) : std::function<bool(const std::string&)>{});
+                 served_tenant ? HeldBy(job.tenant()) : std::function<bool(const std::string&)>{});
     *job.mutable_result() = request.result();
     holders_.AddFiles(job.tenant(), job.result());
     job.set_summary_json(request.summary_json());

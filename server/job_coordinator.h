@@ -110,8 +110,8 @@ class JobCoordinator {
   // (kPermissionDenied); an admin's drop names its tenant (kInvalidArgument otherwise).
   v1::UploadsResponse Uploads(const v1::UploadsRequest& request, const Principal& caller);
   // Whose uploads a client's are (its tenant's) and a worker's (its served tenant's; a worker of
-  // every tenant is trusted with every stored content): a content another tenant holds is sent
-  // again before the caller's jobs may name it (BlobHolders).
+  // every tenant is trusted with every stored content): a stored content the tenant does not hold is
+  // sent again before the caller's jobs may name it (BlobHolders).
   UploadOwner ClientUploadOwner(const Principal& caller);
   UploadOwner WorkerUploadOwner(const std::optional<std::string>& served_tenant);
   // The same for a recording retrieved for job `id`, before it goes into the blob store: the job's
@@ -208,8 +208,8 @@ class JobCoordinator {
                                          std::string* job_id, bool* register_again,
                                          const std::optional<std::string>& served_tenant);
   UploadOwner UploadOwnerOf(const std::string& tenant);
-  // BlobHolders::MayUse of `tenant`, for RequireBlobs.
-  std::function<bool(const std::string&)> UsableBy(const std::string& tenant) const;
+  // BlobHolders::Holds of `tenant`, for RequireBlobs.
+  std::function<bool(const std::string&)> HeldBy(const std::string& tenant) const;
   // Deletes a blob (or any stored file) and forgets who held it.
   void RemoveBlob(const std::string& digest);
   void RemoveFile(const BlobStore::StoredFile& file);

@@ -36,10 +36,10 @@ namespace endorecon::server {
 // of the reserve: the reserve is there for them).
 enum class Uploader { kClient, kWorker };
 
-// The tenant an upload is for. Its bytes go to that tenant's partials (BlobStore), and a content
-// another tenant holds (BlobHolders) counts as not stored for it: its bytes are sent again, then
-// checked against the digest, to show that this tenant holds it too. The default is the server's own
-// partials, trusted with every stored content (a worker of every tenant, admins, tests).
+// The tenant an upload is for. Its bytes go to that tenant's partials (BlobStore), and a stored
+// content the tenant does not hold (another tenant's, or no one's: BlobHolders) counts as not stored
+// for it: its bytes are sent again, then checked against the digest, to show that it holds it. The default is
+// the server's own partials, trusted with every stored content (a worker of every tenant, admins, tests).
 struct UploadOwner {
   std::string tenant;
   // Of the contents of a manifest, those stored that the tenant has not shown it holds.

@@ -46,13 +46,18 @@ class JobCoordinatorTest : public ::testing::Test {
         coordinator_({store_, blobs_, scheduler_, leases_, workers_, hub_, metrics_}, 2, {},
                      [this] { return now_; }) {}
 
-  // A manifest of one uploaded file with these bytes.
-  v1::Manifest Uploaded(const std::string& path, const std::string& bytes) {
+  // A manifest of one file with these bytes, uploaded by `tenant` (BlobHolders: it holds them) to
+  // `coordinator` (the fixture's by default).
+  v1::Manifest Uploaded(const std::string& path, const std::string& bytes, const std::string& tenant = "",
+                        JobCoordinator* coordinator = nullptr) {
     v1::Manifest manifest;
     auto* file = manifest.add_files();
     file->set_path(path);
     file->set_size(static_cast<std::int64_t>(bytes.size()));
     file->set_sha256(blobs_.Put(bytes));
+    (coordinator ? *coordinator : coordinator_)
+        .ClientUploadOwner(Principal{tenant + "-client", Role::kClient, tenant, false})
+        .proven(file->sha256());
     return manifest;
   }
 
@@ -368,9 +373,9 @@ TEST_F(JobCoordinatorTest, DeletingAFinishedJobsFilesFreesItsTenantsBytes) {
   const Principal a{"a-client", Role::kClient, "a", false};
   const Principal b{"b-client", Role::kClient, "b", false};
   v1::SubmitRequest request;
-  *request.mutable_clip() = Uploaded("images/000000.png", "a's frame");
+  *request.mutable_clip() = Uploaded("images/000000.png", "a's frame", "a");
   const std::string first = coordinator_.Submit(request, a).id();
-  *request.mutable_clip()->add_files() = Uploaded("images/000001.png", "a's other frame").files(0);
+  *request.mutable_clip()->add_files() = Uploaded("images/000001.png", "a's other frame", "a").files(0);
   const std::string second = coordinator_.Submit(request, a).id();  // shares the first frame
   EXPECT_EQ(CodeOf([&] { coordinator_.Delete(first, a); }), ErrorCode::kFailedPrecondition) << "queued";
   const auto granted = LeaseNext();
@@ -428,7 +433,7 @@ TEST_F(JobCoordinatorTest, ACheckBeforeTheUploadQueuesNothing) {
 
 TEST_F(JobCoordinatorTest, AnotherTenantsJobIsNotFoundLikeAMissingOne) {
   v1::SubmitRequest request;
-  *request.mutable_clip() = Uploaded("images/000000.png", "tenant a's frame");
+  *request.mutable_clip() = Uploaded("images/000000.png", "tenant a's frame", "a");
   const Principal a{"a-client", Role::kClient, "a", false};
   const Principal b{"b-client", Role::kClient, "b", false};
   const std::string id = coordinator_.Submit(request, a).id();
@@ -441,13 +446,14 @@ TEST_F(JobCoordinatorTest, AnotherTenantsJobIsNotFoundLikeAMissingOne) {
 
 // The store keeps each content once, whoever sent it: a tenant that learned a digest of another
 // tenant's file named it in a job without uploading it, and got a reconstruction of that patient back
-// (found 2026-12-06). Content a tenant holds is another's to name only after that one uploads it too;
-// a worker serving one tenant names as result or checkpoint only what that tenant holds.
+// (found 2026-12-06). Content a tenant does not hold (another's, or no one's: a worker's results
+// before its job takes them) is its to name only after it uploads it too; a worker serving one tenant
+// names as result or checkpoint only what that tenant holds.
 TEST_F(JobCoordinatorTest, AnotherTenantsContentIsNamedOnlyAfterItIsUploadedAgain) {
   const Principal a{"a-client", Role::kClient, "a", false};
   const Principal b{"b-client", Role::kClient, "b", false};
   v1::SubmitRequest theirs;
-  *theirs.mutable_clip() = Uploaded("images/000000.png", "b's patient");
+  *theirs.mutable_clip() = Uploaded("images/000000.png", "b's patient", "b");
   coordinator_.Submit(theirs, b);  // b's job holds the content now
   const auto missing = testing::ErrorFrom(
       [&] {
@@ -466,6 +472,20 @@ TEST_F(JobCoordinatorTest, AnotherTenantsContentIsNamedOnlyAfterItIsUploadedAgai
   const std::set<std::string> digest{theirs.clip().files(0).sha256()};
   EXPECT_EQ(owner.unproven(theirs.clip()), digest);
   EXPECT_TRUE(coordinator_.ClientUploadOwner(b).unproven(theirs.clip()).empty());
+  v1::Manifest no_ones;
+  auto* left = no_ones.add_files();
+  *left = theirs.clip().files(0);
+  left->set_sha256(blobs_.Put("a result no job names yet"));
+  left->set_size(25);
+  EXPECT_EQ(owner.unproven(no_ones).size(), 1u) << "stored, but not a's";
+  EXPECT_EQ(testing::ErrorFrom(
+                [&] {
+                  v1::SubmitRequest request;
+                  *request.mutable_clip() = no_ones;
+                  coordinator_.Submit(request, a);
+                },
+                ErrorCode::kFailedPrecondition),
+            missing);
   owner.proven(theirs.clip().files(0).sha256());  // a's upload sent every byte (UploadReceiver)
   EXPECT_TRUE(owner.unproven(theirs.clip()).empty());
   const auto id = coordinator_.Submit(theirs, a).id();
@@ -479,7 +499,7 @@ TEST_F(JobCoordinatorTest, AnotherTenantsContentIsNamedOnlyAfterItIsUploadedAgai
                            [this] { return now_; });
   restarted.Recover();
   EXPECT_EQ(restarted.WorkerUploadOwner("b").unproven(theirs.clip()).size(), 0u) << "b's job holds it";
-  const auto result = Uploaded("metrics.json", "{\"psnr\": 31}");
+  const auto result = Uploaded("metrics.json", "{\"psnr\": 31}", "b", &restarted);
   v1::SubmitRequest b_again;
   *b_again.mutable_clip() = result;
   restarted.Submit(b_again, b);  // now b holds the result's content too, a does not
@@ -533,6 +553,9 @@ TEST_F(JobCoordinatorTest, UploadsNotYetSubmittedAreListedAndDroppedWithTheFiles
   blobs_.Put(shared);
   blobs_.OpenWriter(entry(partial), "a")->Append(0, partial.substr(0, 100));
   blobs_.Put(in_job);
+  for (const auto* bytes : {&complete, &in_job}) coordinator_.ClientUploadOwner(a).proven(Sha256Hex(*bytes));
+  coordinator_.ClientUploadOwner(b).proven(Sha256Hex(shared));
+  coordinator_.ClientUploadOwner(b).proven(Sha256Hex(in_job));
   v1::SubmitRequest request;
   *request.mutable_clip()->add_files() = entry(in_job);
   coordinator_.Submit(request, b);
@@ -556,8 +579,8 @@ TEST_F(JobCoordinatorTest, UploadsNotYetSubmittedAreListedAndDroppedWithTheFiles
   const auto dropped = coordinator_.Uploads(drop, a);
   ASSERT_EQ(dropped.tenants_size(), 1);
   EXPECT_EQ(dropped.tenants(0).bytes(), 1000) << "what it dropped";
-  EXPECT_EQ(dropped.deleted_files(), 2);
-  EXPECT_EQ(dropped.deleted_bytes(), 200) << "the complete blob and the partial's 100 bytes";
+  EXPECT_EQ(dropped.deleted_files(), 0)
+      << "a client is not told: it would say which files another tenant holds";
   EXPECT_FALSE(blobs_.Has(Sha256Hex(complete)));
   EXPECT_EQ(blobs_.Committed(entry(partial), "a"), 0) << "the partial went";
   EXPECT_TRUE(blobs_.Has(Sha256Hex(shared))) << "b's upload brings it too";
@@ -567,6 +590,18 @@ TEST_F(JobCoordinatorTest, UploadsNotYetSubmittedAreListedAndDroppedWithTheFiles
   ASSERT_EQ(left.tenants_size(), 1);
   EXPECT_EQ(left.tenants(0).tenant(), "b");
   EXPECT_EQ(left.tenants(0).bytes(), 300);
+  // a gave its uploads up: it holds none of their content any more, though b's job and upload keep
+  // some of it stored (a submit of it was accepted until a restart; found 2026-12-06).
+  v1::Manifest given_up;
+  for (const auto* bytes : {&shared, &in_job}) *given_up.add_files() = entry(*bytes);
+  EXPECT_EQ(coordinator_.ClientUploadOwner(a).unproven(given_up).size(), 2u);
+  EXPECT_TRUE(coordinator_.ClientUploadOwner(b).unproven(given_up).empty());
+  // An admin's drop is told what it deleted: b's upload of `shared`, which no job holds.
+  drop.set_tenant("b");
+  const auto admins = coordinator_.Uploads(drop, admin);
+  EXPECT_EQ(admins.deleted_files(), 1);
+  EXPECT_EQ(admins.deleted_bytes(), 300);
+  EXPECT_FALSE(blobs_.Has(Sha256Hex(shared)));
 }
 
 TEST_F(JobCoordinatorTest, UploadsNotYetSubmittedCountAgainstTheByteQuota) {
@@ -609,6 +644,7 @@ TEST_F(JobCoordinatorTest, UploadsNotYetSubmittedCountAgainstTheByteQuota) {
 
   // Submitted, the upload's bytes are the job's, counted once.
   blobs_.Put(first);
+  quoted.ClientUploadOwner(a).proven(Sha256Hex(first));
   v1::SubmitRequest request;
   *request.mutable_clip() = upload(first);
   quoted.Submit(request, a);
