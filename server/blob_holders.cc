@@ -4,19 +4,28 @@
 #include <cstring>
 #include <optional>
 
-#include "common/manifest.h"
-
 namespace endorecon::server {
 namespace {
 
-int HexValue(char c) { return c <= '9' ? c - '0' : c - 'a' + 10; }
-
-// The 32 bytes of a digest kept as 64 lowercase hex characters (IsSha256Hex); nullopt otherwise.
+// A digest's 32 bytes from its 64 lowercase hex characters (as IsSha256Hex checks them); nullopt for
+// anything else. One pass with a table: it runs for every file of every upload query and submit.
 std::optional<std::array<std::uint8_t, 32>> ParseDigest(const std::string& sha256) {
-  if (!IsSha256Hex(sha256)) return std::nullopt;
+  static const auto kValue = [] {
+    std::array<std::int8_t, 256> value{};
+    value.fill(-1);
+    for (int c = '0'; c <= '9'; ++c) value[static_cast<std::size_t>(c)] = static_cast<std::int8_t>(c - '0');
+    for (int c = 'a'; c <= 'f'; ++c)
+      value[static_cast<std::size_t>(c)] = static_cast<std::int8_t>(c - 'a' + 10);
+    return value;
+  }();
+  if (sha256.size() != 64) return std::nullopt;
   std::array<std::uint8_t, 32> digest{};
-  for (std::size_t i = 0; i < digest.size(); ++i)
-    digest[i] = static_cast<std::uint8_t>(HexValue(sha256[2 * i]) * 16 + HexValue(sha256[2 * i + 1]));
+  for (std::size_t i = 0; i < digest.size(); ++i) {
+    const int high = kValue[static_cast<unsigned char>(sha256[2 * i])];
+    const int low = kValue[static_cast<unsigned char>(sha256[2 * i + 1])];
+    if ((high | low) < 0) return std::nullopt;
+    digest[i] = static_cast<std::uint8_t>(high * 16 + low);
+  }
   return digest;
 }
 
@@ -57,12 +66,12 @@ void BlobHolders::AddJob(const v1::Job& job) {
 }
 
 bool BlobHolders::Holds(const std::string& tenant, const std::string& sha256) const {
+  const auto index = tenant_index_.find(tenant);
+  if (index == tenant_index_.end()) return false;
   const auto digest = ParseDigest(sha256);
   if (!digest) return false;
   const auto found = holders_.find(*digest);
   if (found == holders_.end()) return false;
-  const auto index = tenant_index_.find(tenant);
-  if (index == tenant_index_.end()) return false;
   const auto& holders = found->second;
   return holders.first == index->second ||
          std::find(holders.more.begin(), holders.more.end(), index->second) != holders.more.end();
