@@ -122,8 +122,26 @@ void JobCoordinator::KeepUploadsIn(const std::filesystem::path& file) {
   for (const auto& [tenant, digest] : uploads_.Proven()) holders_.Add(tenant, digest);
 }
 
-std::function<bool(const std::string&)> JobCoordinator::HeldBy(const std::string& tenant) const {
-  return [this, tenant](const std::string& digest) { return holders_.Holds(tenant, digest); };
+void JobCoordinator::RequireHeld(const v1::Manifest& manifest, const std::string& what,
+                                 const std::string& tenant, const std::string& who) {
+  int unheld = 0;
+  for (const auto& file : manifest.files()) {
+    if (!holders_.Holds(tenant, file.sha256()) && parts_.blobs.Has(file.sha256())) ++unheld;
+  }
+  // The caller is told "not uploaded yet", as for content never stored; the server's log says more,
+  // for the IT staff. No file name: those may carry patient data.
+  if (unheld > 0) {
+    spdlog::warn(
+        "{} named {} stored file(s) of the {} that tenant '{}' does not hold, without uploading them: "
+        "refused "
+        "as not uploaded (proof of possession). The endorecon client and worker upload what they name: from "
+        "a "
+        "client this is a request made by hand or with digests learned elsewhere; from a worker, results it "
+        "uploaded before a server restart, which it sends again",
+        who, unheld, what, tenant.empty() ? "-" : tenant);
+  }
+  RequireBlobs(parts_.blobs, manifest, what,
+               [this, &tenant](const std::string& digest) { return holders_.Holds(tenant, digest); });
 }
 
 UploadOwner JobCoordinator::UploadOwnerOf(const std::string& tenant) {
@@ -466,8 +484,8 @@ v1::Job JobCoordinator::Submit(const v1::SubmitRequest& request, const Principal
   // submits cannot both take a tenant's last job slot.
   Locked([&] {
     if (!from_pacs) {
-      RequireBlobs(parts_.blobs, request.clip(), request.has_prepare() ? "recording" : "clip",
-                   HeldBy(caller.tenant));
+      RequireHeld(request.clip(), request.has_prepare() ? "recording" : "clip", caller.tenant,
+                  "client '" + caller.name + "'");
     }
     CheckQuotas(caller.tenant, request.clip(), true, uploads_.PendingBytes(caller.tenant, request.clip()));
     const auto seq = parts_.store.Insert(job);
@@ -666,8 +684,11 @@ v1::Job JobCoordinator::Complete(const v1::CompleteRequest& request,
     auto job = LoadLeased(request.lease_id()).job;
     // A worker of one tenant names only content that tenant holds (or that it uploaded itself): its
     // results are downloaded by the tenant's clients and sent to its PACS.
-    RequireBlobs(parts_.blobs, request.result(), "result",
-                 served_tenant ? HeldBy(job.tenant()) : std::function<bool(const std::string&)>{});
+    if (served_tenant) {
+      RequireHeld(request.result(), "result", job.tenant(), "worker " + job.worker_id());
+    } else {
+      RequireBlobs(parts_.blobs, request.result(), "result");
+    }
     *job.mutable_result() = request.result();
     holders_.AddFiles(job.tenant(), job.result());
     job.set_summary_json(request.summary_json());

@@ -208,8 +208,10 @@ class JobCoordinator {
                                          std::string* job_id, bool* register_again,
                                          const std::optional<std::string>& served_tenant);
   UploadOwner UploadOwnerOf(const std::string& tenant);
-  // BlobHolders::Holds of `tenant`, for RequireBlobs.
-  std::function<bool(const std::string&)> HeldBy(const std::string& tenant) const;
+  // RequireBlobs, with the content `tenant` does not hold (BlobHolders) reported as not uploaded;
+  // the server's log names `who` named stored content that way.
+  void RequireHeld(const v1::Manifest& manifest, const std::string& what, const std::string& tenant,
+                   const std::string& who);
   // Deletes a blob (or any stored file) and forgets who held it.
   void RemoveBlob(const std::string& digest);
   void RemoveFile(const BlobStore::StoredFile& file);

@@ -312,6 +312,11 @@ TEST_F(AccessControlTest, AnotherTenantsClipIsNamedOnlyByATenantThatUploadsItToo
   EXPECT_EQ(status.error_code(), grpc::StatusCode::FAILED_PRECONDITION) << status.error_message();
   EXPECT_NE(status.error_message().find("not uploaded yet"), std::string::npos) << status.error_message();
   EXPECT_EQ(status.error_message().find("radiology"), std::string::npos) << status.error_message();
+  // The IT staff are told, in the server's log, what the caller is not.
+  EXPECT_NE(cluster_.ServerLog().find("client 'bob' named " + std::to_string(clip.files_size()) +
+                                      " stored file(s) of the clip that tenant 'oncology' does not hold"),
+            std::string::npos)
+      << cluster_.ServerLog();
 
   const double before = metric();
   const auto bobs = SubmitAs(bob_, "bob-job");
