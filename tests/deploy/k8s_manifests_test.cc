@@ -118,6 +118,13 @@ TEST(K8sManifestsTest, DeploymentsAreConsistentWithImagesFlagsVolumesAndPorts) {
                                 [&](const std::string& mount) { return path.rfind(mount, 0) == 0; }))
             << name << ": " << flag << " " << path << " is not in a mounted volume";
       }
+      // A volume's root is group-owned under fsGroup: the data and scratch folders are folders below
+      // it, which the binaries create their owner's alone (each start warned of the root).
+      for (const auto& flag : {"--data-dir", "--work-dir"}) {
+        const auto path = FlagValue(command, flag);
+        EXPECT_EQ(std::count(mounts.begin(), mounts.end(), path), 0)
+            << name << ": " << flag << " is a volume's root";
+      }
       EXPECT_FALSE(FlagValue(command, "--tls-key").empty() && FlagValue(command, "--ca").empty())
           << name << " talks without TLS";
 

@@ -286,5 +286,24 @@ TEST(ServerStartTest, BlobsWithoutTheirJobStoreAreRefused) {
   }
 }
 
+// The Kubernetes manifest's --data-dir moved from the volume's root to a folder below it (2026-12-06:
+// fsGroup makes the root group-owned, and the server warned of it at every start). A deployment
+// upgraded with its data still at the root would have started an empty store beside it: refused,
+// saying what to do, and nothing is made in the new folder.
+TEST(ServerStartTest, AStoreOneFolderUpIsRefused) {
+  Cluster cluster;
+  cluster.KillServer(SIGTERM);
+  const auto moved = cluster.data_dir() / "endorecon";
+  Process server({BuiltBinary("server/endorecon-server"), "--listen", "127.0.0.1:0", "--data-dir",
+                  moved.string(), "--metrics-port", "-1"},
+                 cluster.path("moved.log"));
+  EXPECT_NE(server.Wait(), 0);
+  EXPECT_NE(server.Log().find("has no job store, but its parent " + cluster.data_dir().string() +
+                              " has one (jobs.sqlite): a --data-dir moved one folder down?"),
+            std::string::npos)
+      << server.Log();
+  EXPECT_FALSE(std::filesystem::exists(moved));
+}
+
 }  // namespace
 }  // namespace endorecon::testing
