@@ -20,8 +20,13 @@ namespace {
 std::string TenantName(const std::string& tenant) { return tenant.empty() ? "-" : tenant; }
 
 std::string Described(const v1::TenantUploads& uploads) {
-  return fmt::format("tenant '{}': {} file(s), {}, the last upload begun {}", TenantName(uploads.tenant()),
-                     uploads.files(), HumanBytes(uploads.bytes()), HumanTime(uploads.last_unix_ms()));
+  // The bytes count whole against the quota; an interrupted upload holds less on the disk.
+  const std::string arrived = uploads.arrived_bytes() < uploads.bytes()
+                                  ? " (" + HumanBytes(uploads.arrived_bytes()) + " of it arrived)"
+                                  : "";
+  return fmt::format("tenant '{}': {} file(s), {}{}, the last upload begun {}", TenantName(uploads.tenant()),
+                     uploads.files(), HumanBytes(uploads.bytes()), arrived,
+                     HumanTime(uploads.last_unix_ms()));
 }
 
 }  // namespace

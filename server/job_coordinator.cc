@@ -379,6 +379,17 @@ v1::UploadsResponse JobCoordinator::Uploads(const v1::UploadsRequest& request, c
     listed->set_files(pending.files);
     listed->set_bytes(pending.bytes);
     listed->set_last_unix_ms(pending.last_unix_ms);
+    // What arrived: a stat a file (a listing is an admin's or a user's question, not a hot path).
+    std::int64_t arrived = 0;
+    for (const auto& [digest, bytes] : uploads_.Files(name)) {
+      v1::FileEntry entry;
+      entry.set_sha256(digest);
+      entry.set_size(bytes);
+      arrived += holders_.Holds(name, digest) && parts_.blobs.Has(digest)
+                     ? bytes
+                     : parts_.blobs.PartialBytes(entry, name);
+    }
+    listed->set_arrived_bytes(arrived);
   }
   if (!request.drop()) return response;
   const auto digests = uploads_.Drop(*tenant);
@@ -678,10 +689,11 @@ v1::ProgressReply::Action JobCoordinator::ReportLocked(const v1::ProgressUpdate&
 }
 
 v1::Job JobCoordinator::Complete(const v1::CompleteRequest& request,
-                                 const std::optional<std::string>& served_tenant) {
+                                 const std::optional<std::string>& served_tenant, std::string* job_id) {
   ValidateManifest(request.result());
   auto job = Locked([&] {
     auto job = LoadLeased(request.lease_id()).job;
+    if (job_id) *job_id = job.id();
     // A worker of one tenant names only content that tenant holds (or that it uploaded itself): its
     // results are downloaded by the tenant's clients and sent to its PACS.
     if (served_tenant) {

@@ -151,9 +151,11 @@ class JobCoordinator {
                                    std::string* job_id = nullptr, bool* register_again = nullptr,
                                    const std::optional<std::string>& served_tenant = std::nullopt);
   // Throws kFailedPrecondition when the lease is not held or a result file is not uploaded (for a
-  // worker serving one tenant: also content that tenant does not hold, reported the same).
+  // worker serving one tenant: also content that tenant does not hold, reported the same). Sets
+  // `job_id` to the lease's job once the lease is found (the audit line of a refusal names it).
   v1::Job Complete(const v1::CompleteRequest& request,
-                   const std::optional<std::string>& served_tenant = std::nullopt);
+                   const std::optional<std::string>& served_tenant = std::nullopt,
+                   std::string* job_id = nullptr);
   // Throws kFailedPrecondition when the lease is not held.
   v1::Job Fail(const v1::FailRequest& request);
   // The leased job. Throws kFailedPrecondition unless `lease_id` is held (workers download only

@@ -193,6 +193,14 @@ std::map<std::string, UploadLedger::Pending> UploadLedger::Tenants() const {
   return tenants;
 }
 
+std::vector<std::pair<std::string, std::int64_t>> UploadLedger::Files(const std::string& tenant) const {
+  std::vector<std::pair<std::string, std::int64_t>> files;
+  if (const auto found = tenants_.find(tenant); found != tenants_.end()) {
+    for (const auto& [digest, entry] : found->second) files.emplace_back(digest, entry.bytes);
+  }
+  return files;
+}
+
 std::vector<std::string> UploadLedger::Drop(const std::string& tenant) {
   std::vector<std::string> digests;
   const auto found = tenants_.find(tenant);

@@ -64,6 +64,8 @@ class UploadLedger {
   };
   // Each tenant's uploads not yet submitted (tenants with none are left out).
   std::map<std::string, Pending> Tenants() const;
+  // `tenant`'s uploads not yet submitted: each content's sha256 and bytes.
+  std::vector<std::pair<std::string, std::int64_t>> Files(const std::string& tenant) const;
   // Forgets `tenant`'s; returns the digests it had noted.
   std::vector<std::string> Drop(const std::string& tenant);
   // Whether some tenant's upload not yet submitted brings this content.

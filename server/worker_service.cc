@@ -170,8 +170,7 @@ grpc::Status WorkerServiceImpl::Report(
 grpc::Status WorkerServiceImpl::Complete(grpc::ServerContext* context, const v1::CompleteRequest* request,
                                          v1::Job* job) {
   return guard_.Run(context, {"Complete", Access::kWorker, kWrites, ""}, [&](Call& call) {
-    *job = coordinator_.Complete(*request, ServedTenant(call.caller));
-    call.job_id = job->id();
+    *job = coordinator_.Complete(*request, ServedTenant(call.caller), &call.job_id);
     return grpc::Status::OK;
   });
 }

@@ -137,7 +137,7 @@ TEST(ServerRestartTest, AnInterruptedUploadIsListedAndCanBeDropped) {
             std::string::npos)
       << listed.out;
   EXPECT_NE(listed.out.find("tenant '-': "), std::string::npos) << listed.out;
-  EXPECT_NE(listed.out.find(" MB, the last upload begun "), std::string::npos) << listed.out;
+  EXPECT_NE(listed.out.find(" MB of it arrived), the last upload begun "), std::string::npos) << listed.out;
   // The metrics say how many bytes wait, every tenant's (the dashboard shows them).
   const auto pending_bytes = [&] {
     const auto text = Capture(

@@ -517,9 +517,12 @@ TEST_F(JobCoordinatorTest, AnotherTenantsContentIsNamedOnlyAfterItIsUploadedAgai
   v1::CompleteRequest complete;
   complete.set_lease_id(granted->lease_id);
   *complete.mutable_result() = result;
-  EXPECT_NE(testing::ErrorFrom([&] { restarted.Complete(complete, "a"); }, ErrorCode::kFailedPrecondition)
-                .find("not uploaded yet"),
-            std::string::npos);
+  std::string refused;  // the job the audit line of the refusal names
+  EXPECT_NE(
+      testing::ErrorFrom([&] { restarted.Complete(complete, "a", &refused); }, ErrorCode::kFailedPrecondition)
+          .find("not uploaded yet"),
+      std::string::npos);
+  EXPECT_EQ(refused, id);
   EXPECT_EQ(restarted.Get(id, a).state(), v1::RUNNING);
   EXPECT_EQ(restarted.Complete(complete, std::nullopt).state(), v1::SUCCEEDED);
 }
@@ -566,6 +569,8 @@ TEST_F(JobCoordinatorTest, UploadsNotYetSubmittedAreListedAndDroppedWithTheFiles
   EXPECT_EQ(listed.tenants(0).tenant(), "a");
   EXPECT_EQ(listed.tenants(0).files(), 4);
   EXPECT_EQ(listed.tenants(0).bytes(), 1000);
+  EXPECT_EQ(listed.tenants(0).arrived_bytes(), 100 + 100 + 400)
+      << "complete and in_job whole, half of partial, none of shared (b's upload sent it, a's did not)";
   EXPECT_GT(listed.tenants(0).last_unix_ms(), 0);
   EXPECT_EQ(coordinator_.Uploads(list, admin).tenants_size(), 2) << "an admin sees every tenant's";
   list.set_tenant("a");
