@@ -62,7 +62,7 @@ Command AddUploadsCommand(CLI::App& app) {
       std::cout << "dropped the uploads waiting to be submitted of " << Described(response.tenants(0));
       // The server tells an admin what it deleted; a client, nothing that would say which of its files
       // another tenant holds.
-      if (response.deleted_files() > 0) {
+      if (response.has_deleted_files()) {
         std::cout << "; deleted " << response.deleted_files() << " file(s), "
                   << HumanBytes(response.deleted_bytes())
                   << ", from the server (a file a job or another upload holds is kept)";

@@ -363,6 +363,9 @@ v1::UploadsResponse JobCoordinator::Uploads(const v1::UploadsRequest& request, c
     }
     tenant = caller.tenant;
   }
+  // A server without tokens has one tenant, its callers' own: a drop needs no name there (it asked for
+  // `--tenant -` on the demo server).
+  if (request.drop() && !tenant && caller.anonymous) tenant = "";
   if (request.drop() && !tenant) {
     FailInvalid("name the tenant whose uploads not yet submitted to drop (--tenant; '-' for that of admins)");
   }

@@ -584,7 +584,7 @@ TEST_F(JobCoordinatorTest, UploadsNotYetSubmittedAreListedAndDroppedWithTheFiles
   const auto dropped = coordinator_.Uploads(drop, a);
   ASSERT_EQ(dropped.tenants_size(), 1);
   EXPECT_EQ(dropped.tenants(0).bytes(), 1000) << "what it dropped";
-  EXPECT_EQ(dropped.deleted_files(), 0)
+  EXPECT_FALSE(dropped.has_deleted_files())
       << "a client is not told: it would say which files another tenant holds";
   EXPECT_FALSE(blobs_.Has(Sha256Hex(complete)));
   EXPECT_EQ(blobs_.Committed(entry(partial), "a"), 0) << "the partial went";
@@ -604,6 +604,7 @@ TEST_F(JobCoordinatorTest, UploadsNotYetSubmittedAreListedAndDroppedWithTheFiles
   // An admin's drop is told what it deleted: b's upload of `shared`, which no job holds.
   drop.set_tenant("b");
   const auto admins = coordinator_.Uploads(drop, admin);
+  ASSERT_TRUE(admins.has_deleted_files());
   EXPECT_EQ(admins.deleted_files(), 1);
   EXPECT_EQ(admins.deleted_bytes(), 300);
   EXPECT_FALSE(blobs_.Has(Sha256Hex(shared)));
