@@ -133,11 +133,9 @@ void JobCoordinator::RequireHeld(const v1::Manifest& manifest, const std::string
   if (unheld > 0) {
     spdlog::warn(
         "{} named {} stored file(s) of the {} that tenant '{}' does not hold, without uploading them: "
-        "refused "
-        "as not uploaded (proof of possession). The endorecon client and worker upload what they name: from "
-        "a "
-        "client this is a request made by hand or with digests learned elsewhere; from a worker, results it "
-        "uploaded before a server restart, which it sends again",
+        "refused as not uploaded (proof of possession). The endorecon client and worker upload what they "
+        "name: from a client this is a request made by hand or with digests learned elsewhere; from a "
+        "worker, results it uploaded before a server restart, which it sends again",
         who, unheld, what, tenant.empty() ? "-" : tenant);
   }
   RequireBlobs(parts_.blobs, manifest, what,

@@ -41,7 +41,7 @@
 #include "server/tenant_quotas.h"
 #include "server/unix_time.h"
 #include "server/upload_ledger.h"
-#include "server/upload_receiver.h"
+#include "server/upload_owner.h"
 #include "server/watch_hub.h"
 #include "server/worker_registry.h"
 

@@ -29,25 +29,13 @@
 
 #include "endorecon/v1/files.pb.h"
 #include "server/blob_store.h"
+#include "server/upload_owner.h"
 
 namespace endorecon::server {
 
 // Who uploads: a client's clip, or a worker's checkpoint and results (which keep only a quarter
 // of the reserve: the reserve is there for them).
 enum class Uploader { kClient, kWorker };
-
-// The tenant an upload is for. Its bytes go to that tenant's partials (BlobStore), and a stored
-// content the tenant does not hold (another tenant's, or no one's: BlobHolders) counts as not stored
-// for it: its bytes are sent again, then checked against the digest, to show that it holds it. The default is
-// the server's own partials, trusted with every stored content (a worker of every tenant, admins, tests).
-struct UploadOwner {
-  std::string tenant;
-  // Of the contents of a manifest, those stored that the tenant has not shown it holds.
-  std::function<std::set<std::string>(const v1::Manifest&)> unproven;
-  // Told each content the tenant's partial held in full, digest checked, whether it was stored
-  // before or not.
-  std::function<void(const std::string& sha256)> proven;
-};
 
 class UploadReceiver {
  public:
