@@ -147,11 +147,14 @@ UploadOwner JobCoordinator::UploadOwnerOf(const std::string& tenant) {
   owner.tenant = tenant;
   owner.unproven = [this, tenant](const v1::Manifest& manifest) {
     std::set<std::string> unproven;
-    std::lock_guard lock(mutex_);
-    for (const auto& file : manifest.files()) {
-      if (!holders_.Holds(tenant, file.sha256()) && parts_.blobs.Has(file.sha256()))
-        unproven.insert(file.sha256());
+    {
+      std::lock_guard lock(mutex_);
+      for (const auto& file : manifest.files()) {
+        if (!holders_.Holds(tenant, file.sha256())) unproven.insert(file.sha256());
+      }
     }
+    // A stat a file: outside the lock (a new clip's files are all not held).
+    std::erase_if(unproven, [this](const std::string& digest) { return !parts_.blobs.Has(digest); });
     return unproven;
   };
   owner.proven = [this, tenant](const std::string& digest) {
