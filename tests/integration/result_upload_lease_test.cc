@@ -10,6 +10,9 @@
 #include <filesystem>
 #include <thread>
 
+#include "common/error.h"
+#include "common/manifest.h"
+#include "tests/integration/audit_reader.h"
 #include "tests/integration/leased_worker.h"
 #include "tests/integration/sanitizer_build.h"
 #include "tests/integration/service_harness.h"
@@ -59,6 +62,62 @@ TEST(ResultUploadLeaseTest, ResultsThatWaitLongerThanTheLeaseForAnUploadSlotAreK
   EXPECT_EQ(job.state(), v1::SUCCEEDED) << job.error() << "\n" << cluster.ServerLog();
   EXPECT_EQ(job.attempts(), 0);
   EXPECT_GT(job.result().files_size(), 0);
+}
+
+// A worker whose token serves one tenant shows its results are its own by uploading them (proof of
+// possession, server/blob_holders.h); the server keeps that in memory only, so a restart between the
+// upload and the Complete made the Complete refuse them as not uploaded, and the job went back with an
+// attempt counted after its whole training. CompleteWithResults sends them again, once.
+TEST(ResultUploadLeaseTest, AScopedWorkersResultsForgottenByARestartAreSentAgain) {
+  Cluster cluster({}, false);
+  const auto admin = MakeCredentials(cluster, "", "admin", "", "ops");
+  const auto alice = MakeCredentials(cluster, "", "client", "radiology", "alice");
+  const auto node = MakeCredentials(cluster, "", "worker", "radiology", "node-r");
+  cluster.UseCredentials(admin);
+  cluster.StartServer();
+  MakeClip(cluster.path("clip"));
+  auto submit = alice.CliFlags();
+  submit.insert(submit.end(), {"submit", cluster.path("clip").string(), "--iterations", "5"});
+  ASSERT_EQ(RunCli(cluster.address(), submit).exit_code, 0);
+
+  worker::Device device;
+  device.name = "cpu0";
+  device.kind = "cpu";
+  device.threads = 1;
+  ChannelSecurity security;
+  security.token_file = node.token_file;
+  worker::WorkerClient client(cluster.address(), security, "w-radiology", std::chrono::seconds(10));
+  client.Register("localhost", {device});
+  const auto lease = client.Lease(device.name, std::chrono::seconds(10));
+  ASSERT_TRUE(lease.has_value()) << cluster.ServerLog();
+  const auto results = cluster.path("results");
+  std::filesystem::create_directories(results);
+  WriteBytes(results / "metrics.json", "{\"psnr\": 30.25, \"job\": \"" + lease->job().id() + "\"}");
+  v1::CompleteRequest complete;
+  complete.set_lease_id(lease->lease_id());
+  *complete.mutable_result() = ManifestOfDirectory(results);
+  client.PutFiles(results, complete.result());
+
+  cluster.KillServer(SIGKILL);  // the running job's lease is kept for one lease time after the start
+  cluster.StartServer();
+  const auto refused = [&] {
+    try {
+      client.Complete(complete);
+    } catch (const Error& e) {
+      return e.code() == ErrorCode::kFailedPrecondition &&
+             std::string(e.what()).find("not uploaded yet") != std::string::npos;
+    }
+    return false;
+  };
+  ASSERT_TRUE(refused()) << "the restarted server took results it had not seen sent: the test tests nothing";
+  const auto puts = [&] {
+    return AuditFind(AuditLines(cluster.data_dir() / "audit.jsonl"), "PutBlobs", "OK", "node-r").size();
+  };
+  const auto before = puts();
+  const v1::Job job = client.CompleteWithResults(results, complete);
+  EXPECT_EQ(job.state(), v1::SUCCEEDED) << job.error();
+  EXPECT_EQ(job.attempts(), 0);
+  EXPECT_EQ(puts(), before + 1) << "the results were sent again";
 }
 
 }  // namespace

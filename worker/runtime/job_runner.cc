@@ -348,19 +348,7 @@ bool RunLeasedJob(WorkerClient& client, const v1::LeaseResponse& lease, const De
       WhileLeaseHeld(client, reporter, [&] { client.PutFiles(options.out_dir, complete.result()); });
       stop_reporting();
       complete.set_summary_json(SummaryJson(summary));
-      try {
-        WhileUnavailable(client, [&] { return client.Complete(complete); });
-      } catch (const Error& e) {
-        // A worker serving one tenant shows that its results are its own by sending them (the server's
-        // BlobHolders); a server restarted between the upload and the Complete forgot that, and asks
-        // for them again ("not uploaded yet"): they are sent once more. A lease lost meanwhile fails
-        // the same way twice.
-        if (e.code() != ErrorCode::kFailedPrecondition) throw;
-        spdlog::warn("[{}] job {}: the server refused the results ({}); sending what it lacks again",
-                     device.name, job.id(), e.what());
-        client.PutFiles(options.out_dir, complete.result());
-        WhileUnavailable(client, [&] { return client.Complete(complete); });
-      }
+      WhileUnavailable(client, [&] { return client.CompleteWithResults(options.out_dir, complete); });
       spdlog::info("[{}] job {} done: {} iterations, {} result file(s)", device.name, job.id(),
                    summary.iterations, complete.result().files_size());
     }

@@ -111,6 +111,18 @@ v1::Job WorkerClient::Complete(const v1::CompleteRequest& request) {
   return job;
 }
 
+v1::Job WorkerClient::CompleteWithResults(const std::filesystem::path& dir,
+                                          const v1::CompleteRequest& request) {
+  try {
+    return Complete(request);
+  } catch (const Error& e) {
+    if (e.code() != ErrorCode::kFailedPrecondition) throw;
+    spdlog::warn("the server refused the results ({}); sending what it lacks again", e.what());
+    PutFiles(dir, request.result());
+    return Complete(request);
+  }
+}
+
 v1::Job WorkerClient::Fail(const v1::FailRequest& request) {
   v1::Job job;
   auto context = CallContext(timeout_);

@@ -39,6 +39,12 @@ class WorkerClient {
   // most, PauseBeforeRetry); the next answer asks again.
   void RegisterAgain();
   v1::Job Complete(const v1::CompleteRequest& request);
+  // Complete, with the results already uploaded from `dir` (PutFiles). A worker serving one tenant
+  // shows that its results are its own by sending them (the server's BlobHolders); a server restarted
+  // between the upload and the Complete forgot that and refuses them as not uploaded
+  // (FAILED_PRECONDITION): they are sent once more, and the Complete tried again. A lease lost
+  // meanwhile is refused the same way twice, and thrown.
+  v1::Job CompleteWithResults(const std::filesystem::path& dir, const v1::CompleteRequest& request);
   v1::Job Fail(const v1::FailRequest& request);
   // Uploads the files of `manifest` from `dir` (only what the server lacks).
   void PutFiles(const std::filesystem::path& dir, const v1::Manifest& manifest);
