@@ -24,6 +24,7 @@
 #include "common/transport_security.h"
 #include "server/call_guard.h"
 #include "server/commands.h"
+#include "server/data_folder.h"
 #include "server/dicom_retriever.h"
 #include "server/dicom_sender.h"
 #include "server/health_port.h"
@@ -146,23 +147,6 @@ void RefuseBlobsWithoutTheirStore(const std::filesystem::path& data_dir) {
   }
 }
 
-// A data folder without a job store whose parent holds one: a --data-dir moved one folder down (the
-// Kubernetes manifest's did on 2026-12-06, from the volume's root, which fsGroup makes group-owned, to
-// a folder of the server's own) would start an empty store beside the old one, its jobs unlisted.
-void RefuseAStoreOneFolderUp(const std::filesystem::path& data_dir) {
-  namespace fs = std::filesystem;
-  std::error_code error;
-  const fs::path parent = fs::absolute(data_dir, error).parent_path();
-  if (error || fs::exists(data_dir / "jobs.sqlite", error) || !fs::exists(parent / "jobs.sqlite", error))
-    return;
-  Fail(ErrorCode::kFailedPrecondition,
-       "--data-dir " + data_dir.string() + " has no job store, but its parent " + parent.string() +
-           " has one (jobs.sqlite): a --data-dir moved one folder down? Starting here would begin an empty "
-           "store beside it. Stop the server and move that folder's files into " +
-           data_dir.string() + " (docs/operations.md, \"Kubernetes\"), or point --data-dir at " +
-           parent.string());
-}
-
 int Run(const ServerFlags& flags) {
   const sigset_t stop_signals = BlockStopSignals();
   CheckExposure(flags);
@@ -171,7 +155,7 @@ int Run(const ServerFlags& flags) {
   const auto credentials = ServerCredentials(flags.tls);
   CheckPortFree(flags.listen);  // before the data folder is opened and its running jobs requeued
   const std::filesystem::path data_dir = flags.data_dir;
-  RefuseAStoreOneFolderUp(data_dir);
+  RefuseAStoreBesideIt(data_dir);
   if (MakePrivateFolder(data_dir)) {
     spdlog::warn(
         "{} is open to its group or others, and holds patient data: make it its owner's alone "

@@ -19,6 +19,7 @@
 #include "common/private_folder.h"
 #include "server/audit_log.h"
 #include "server/commands.h"
+#include "server/data_folder.h"
 #include "server/job_coordinator.h"
 #include "server/token_store.h"
 #include "server/unix_time.h"
@@ -54,6 +55,7 @@ std::unique_ptr<TokenStore> OpenStore(const TokenFlags& flags, bool create) {
              (std::filesystem::exists(flags.data_dir, error) ? ": not a folder" : ": no such folder") +
              ": name the server's data folder (a new deployment's is created first: install -d -m 700 DIR)");
   }
+  RefuseAStoreBesideIt(flags.data_dir);  // a second token store, which a move of the data overwrote
   const auto path = TokenStore::PathIn(flags.data_dir);
   if (!create && !std::filesystem::exists(path)) return nullptr;
   if (create && MakePrivateFolder(flags.data_dir)) {

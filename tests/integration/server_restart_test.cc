@@ -288,9 +288,10 @@ TEST(ServerStartTest, BlobsWithoutTheirJobStoreAreRefused) {
 
 // The Kubernetes manifest's --data-dir moved from the volume's root to a folder below it (2026-12-06:
 // fsGroup makes the root group-owned, and the server warned of it at every start). A deployment
-// upgraded with its data still at the root would have started an empty store beside it: refused,
-// saying what to do, and nothing is made in the new folder.
-TEST(ServerStartTest, AStoreOneFolderUpIsRefused) {
+// upgraded with its data still at the root would have started an empty store beside it, and one
+// rolled back with its data below would have started empty with every API open (no token store):
+// both refused, saying what to do, and nothing is made.
+TEST(ServerStartTest, AStoreInTheFolderAboveOrBelowIsRefused) {
   Cluster cluster;
   cluster.KillServer(SIGTERM);
   const auto moved = cluster.data_dir() / "endorecon";
@@ -303,6 +304,28 @@ TEST(ServerStartTest, AStoreOneFolderUpIsRefused) {
             std::string::npos)
       << server.Log();
   EXPECT_FALSE(std::filesystem::exists(moved));
+  // `token create` there made a second token store, which the move of the data then overwrote.
+  std::filesystem::create_directories(moved);
+  Process token({BuiltBinary("server/endorecon-server"), "token", "create", "--data-dir", moved.string(),
+                 "--role", "admin", "--name", "ops"},
+                cluster.path("token.log"));
+  EXPECT_NE(token.Wait(), 0);
+  EXPECT_NE(token.Log().find("a --data-dir moved one folder down?"), std::string::npos) << token.Log();
+  EXPECT_FALSE(std::filesystem::exists(moved / "tokens.sqlite"));
+
+  // And back up (a rollback, a unit file left behind): the store is in a folder of the data folder.
+  const auto moved_up = cluster.path("up");
+  std::filesystem::create_directories(moved_up);
+  std::filesystem::rename(cluster.data_dir(), moved_up / "endorecon");
+  Process parent({BuiltBinary("server/endorecon-server"), "--listen", "127.0.0.1:0", "--data-dir",
+                  moved_up.string(), "--metrics-port", "-1"},
+                 cluster.path("up.log"));
+  EXPECT_NE(parent.Wait(), 0);
+  EXPECT_NE(parent.Log().find("has no job store, but its folder " + (moved_up / "endorecon").string() +
+                              " has one (jobs.sqlite): point --data-dir at it"),
+            std::string::npos)
+      << parent.Log();
+  EXPECT_FALSE(std::filesystem::exists(moved_up / "jobs.sqlite"));
 }
 
 }  // namespace
