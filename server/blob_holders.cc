@@ -77,6 +77,16 @@ bool BlobHolders::Holds(const std::string& tenant, const std::string& sha256) co
          std::find(holders.more.begin(), holders.more.end(), index->second) != holders.more.end();
 }
 
+bool BlobHolders::HeldByAnother(const std::string& tenant, const std::string& sha256) const {
+  const auto digest = ParseDigest(sha256);
+  if (!digest) return false;
+  const auto found = holders_.find(*digest);
+  if (found == holders_.end()) return false;
+  const auto index = tenant_index_.find(tenant);
+  const std::size_t holders = 1 + found->second.more.size();
+  return index == tenant_index_.end() || holders > 1 || found->second.first != index->second;
+}
+
 void BlobHolders::Remove(const std::string& tenant, const std::string& sha256) {
   const auto digest = ParseDigest(sha256);
   const auto index = tenant_index_.find(tenant);

@@ -36,6 +36,8 @@ class BlobHolders {
   void AddJob(const v1::Job& job);
   // Whether `tenant` holds the content, so that it may name it in a job.
   bool Holds(const std::string& tenant, const std::string& sha256) const;
+  // Whether a tenant other than `tenant` holds the content.
+  bool HeldByAnother(const std::string& tenant, const std::string& sha256) const;
   // `tenant` gave its upload of the content up (and no job of it names the content).
   void Remove(const std::string& tenant, const std::string& sha256);
   // The store deleted the content: no one holds it any more.

@@ -76,6 +76,17 @@ bool BlobStore::PromoteIfFull(const v1::FileEntry& entry, const std::string& own
   return true;
 }
 
+bool BlobStore::AdoptPartial(const std::string& sha256, const std::string& owner) {
+  const auto from = PartialName(sha256, ""), to = PartialName(sha256, owner);
+  std::lock_guard lock(mutex_);
+  std::error_code error;
+  if (owner.empty() || writing_.count(from) || writing_.count(to) || !fs::exists(PartialPath(from), error) ||
+      fs::exists(PartialPath(to), error))
+    return false;
+  fs::rename(PartialPath(from), PartialPath(to), error);
+  return !error;
+}
+
 void BlobStore::Remove(const std::string& sha256) {
   if (!Has(sha256)) return;
   std::error_code error;

@@ -82,6 +82,11 @@ class BlobStore {
   // or one another stream writes. Throws as Promote.
   bool PromoteIfFull(const v1::FileEntry& entry, const std::string& owner = "");
 
+  // Makes the server's own partial of `sha256` (<sha256>.part) `owner`'s, when it has none and neither
+  // is being written: an upload of before 2026-12-06, when every tenant's went there. Returns whether
+  // it did.
+  bool AdoptPartial(const std::string& sha256, const std::string& owner);
+
   // Deletes the blob (retention); a missing blob is not an error. Throws Error(kUnavailable) when
   // the file exists but cannot be removed.
   void Remove(const std::string& sha256);

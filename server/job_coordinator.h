@@ -214,6 +214,9 @@ class JobCoordinator {
   // the server's log names `who` named stored content that way.
   void RequireHeld(const v1::Manifest& manifest, const std::string& what, const std::string& tenant,
                    const std::string& who);
+  // Settles the uploads of uploads.json noted by a server of before 2026-12-06 (UploadLedger::Legacy),
+  // once the jobs' holdings are known.
+  void SettleLegacyUploads();
   // Deletes a blob (or any stored file) and forgets who held it.
   void RemoveBlob(const std::string& digest);
   void RemoveFile(const BlobStore::StoredFile& file);

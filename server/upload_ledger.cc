@@ -6,6 +6,7 @@
 #include <chrono>
 #include <nlohmann/json.hpp>
 #include <set>
+#include <utility>
 
 #include "common/error.h"
 #include "common/file_write.h"
@@ -74,6 +75,29 @@ void UploadLedger::NoteProven(const std::string& tenant, const std::string& sha2
   Save();
 }
 
+std::vector<std::pair<std::string, std::string>> UploadLedger::Legacy() const {
+  std::vector<std::pair<std::string, std::string>> legacy;
+  for (const auto& [tenant, files] : tenants_) {
+    for (const auto& [digest, entry] : files) {
+      if (entry.legacy) legacy.emplace_back(tenant, digest);
+    }
+  }
+  return legacy;
+}
+
+std::size_t UploadLedger::Noters(const std::string& sha256) const {
+  return static_cast<std::size_t>(std::count_if(
+      tenants_.begin(), tenants_.end(), [&](const auto& tenant) { return tenant.second.count(sha256) > 0; }));
+}
+
+void UploadLedger::SettleLegacy() {
+  bool settled = false;
+  for (auto& [tenant, files] : tenants_) {
+    for (auto& [digest, entry] : files) settled = std::exchange(entry.legacy, false) || settled;
+  }
+  if (settled) Save();
+}
+
 std::vector<std::pair<std::string, std::string>> UploadLedger::Proven() const {
   std::vector<std::pair<std::string, std::string>> proven;
   for (const auto& [tenant, files] : tenants_) {
@@ -131,7 +155,7 @@ void UploadLedger::KeepIn(const std::filesystem::path& file) {
           upload["bytes"].get<std::int64_t>(),
           now - std::chrono::duration_cast<Time::duration>(
                     std::chrono::milliseconds(std::max<std::int64_t>(0, now_unix_ms - noted_unix_ms))),
-          noted_unix_ms, upload.value("proven", nlohmann::json(false)) == true};
+          noted_unix_ms, upload.value("proven", nlohmann::json(false)) == true, !upload.contains("proven")};
     }
     tenants_ = std::move(read);
     if (left_out > 0) {

@@ -51,6 +51,12 @@ class UploadLedger {
   void NoteProven(const std::string& tenant, const std::string& sha256);
   // Each (tenant, sha256) noted proven and not yet submitted, dropped or forgotten.
   std::vector<std::pair<std::string, std::string>> Proven() const;
+  // Each (tenant, sha256) read from a file of before 2026-12-06 (no `proven`), until SettleLegacy.
+  std::vector<std::pair<std::string, std::string>> Legacy() const;
+  // How many tenants' uploads not yet submitted bring this content.
+  std::size_t Noters(const std::string& sha256) const;
+  // The entries Legacy listed are settled (proven or not, as NoteProven said): writes the file.
+  void SettleLegacy();
   // A job of `tenant` now holds the files of `manifest` (submitted): they count as the job's.
   void Submitted(const std::string& tenant, const v1::Manifest& manifest);
   // Forgets what was last noted before `cutoff`: retention deletes those partial uploads and unused
@@ -77,6 +83,7 @@ class UploadLedger {
     Time noted;
     std::int64_t noted_unix_ms = 0;  // the same moment, for messages
     bool proven = false;             // NoteProven
+    bool legacy = false;             // read without `proven` (Legacy)
   };
   bool Add(const std::string& tenant, const v1::FileEntry& file, Time now);  // false: nothing to note
   static Pending Summary(const std::map<std::string, Entry>& files);         // one tenant's

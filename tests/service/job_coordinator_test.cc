@@ -527,6 +527,65 @@ TEST_F(JobCoordinatorTest, AnotherTenantsContentIsNamedOnlyAfterItIsUploadedAgai
   EXPECT_EQ(restarted.Complete(complete, std::nullopt).state(), v1::SUCCEEDED);
 }
 
+// Uploads noted by a server of before proof of possession (uploads.json without "proven") went into
+// the shared partial <sha256>.part. The upgrade re-test found 247 MB of an upload not yet submitted
+// sent again, and its partial left behind, unlisted (found 2026-12-06). Content only its tenant's
+// upload brings, and no other tenant's job names, is now taken as that tenant's, and its partial made
+// the tenant's to resume; the rest is sent again.
+TEST_F(JobCoordinatorTest, UploadsFromBeforeProofOfPossessionAreTheirTenantsWhereNoOneElseBringsThem) {
+  const Principal oncology{"bob", Role::kClient, "oncology", false};
+  const std::string complete = "radiology's whole file", half = "radiology's half-sent file",
+                    shared = "a file both tenants began", in_job = "oncology's clip file";
+  for (const auto* bytes : {&complete, &shared, &in_job}) blobs_.Put(*bytes);
+  testing::WriteBytes(dir_ / "blobs" / "partial" / (Sha256Hex(half) + ".part"), half.substr(0, 10));
+  v1::SubmitRequest request;
+  *request.mutable_clip() = Uploaded("images/000000.png", in_job, "oncology");
+  coordinator_.Submit(request, oncology);
+  const auto entry = [](const std::string& tenant, const std::string& bytes) {
+    return R"({"tenant": ")" + tenant + R"(", "sha256": ")" + Sha256Hex(bytes) + R"(", "bytes": )" +
+           std::to_string(bytes.size()) + R"(, "noted_unix_ms": 1765000000000})";
+  };
+  const auto file = dir_ / "uploads.json";
+  testing::WriteBytes(file, "{\"uploads\": [" + entry("radiology", complete) + ", " +
+                                entry("radiology", half) + ", " + entry("radiology", shared) + ", " +
+                                entry("oncology", shared) + ", " + entry("radiology", in_job) + "]}");
+
+  Scheduler scheduler;
+  LeaseTable leases(kTtl);
+  WorkerRegistry workers(kTtl);
+  JobCoordinator upgraded({store_, blobs_, scheduler, leases, workers, hub_, metrics_}, 2, {},
+                          [this] { return now_; });
+  upgraded.KeepUploadsIn(file);
+  upgraded.Recover();
+  const auto unproven = [&](const std::string& tenant, const std::string& bytes) {
+    v1::Manifest manifest;
+    auto* one = manifest.add_files();
+    one->set_path("f");
+    one->set_size(static_cast<std::int64_t>(bytes.size()));
+    one->set_sha256(Sha256Hex(bytes));
+    return !upgraded.ClientUploadOwner(Principal{"x", Role::kClient, tenant, false})
+                .unproven(manifest)
+                .empty();
+  };
+  EXPECT_FALSE(unproven("radiology", complete)) << "only radiology's upload brought it: radiology's";
+  EXPECT_TRUE(unproven("radiology", shared)) << "oncology's upload brought it too: sent again";
+  EXPECT_TRUE(unproven("oncology", shared));
+  EXPECT_TRUE(unproven("radiology", in_job)) << "oncology's job names it";
+  v1::FileEntry halfway;
+  halfway.set_sha256(Sha256Hex(half));
+  halfway.set_size(static_cast<std::int64_t>(half.size()));
+  EXPECT_EQ(blobs_.Committed(halfway, "radiology"), 10) << "the partial is radiology's to resume";
+  EXPECT_EQ(blobs_.Committed(halfway), 0);
+  const auto written = testing::ReadBytes(file);
+  EXPECT_NE(written.find("\"proven\": true"), std::string::npos) << written;
+  EXPECT_NE(written.find("\"proven\": false"), std::string::npos) << written;
+  v1::UploadsRequest list;
+  list.set_tenant("radiology");
+  EXPECT_EQ(upgraded.Uploads(list, AnonymousPrincipal()).tenants(0).arrived_bytes(),
+            static_cast<std::int64_t>(complete.size()) + 10)
+      << "what arrived: the whole file and the partial's bytes";
+}
+
 // A tenant's uploads not yet submitted count against its byte quota: each upload under the quota, and
 // none submitted, let a tenant keep any number of them on the data disk for --orphan-hours (found
 // 2026-12-06).
