@@ -232,18 +232,19 @@ void JobCoordinator::SettleLegacyUploads() {
   // of the upgrade found 247 MB of an upload not yet submitted sent again, its 12.6 MB partial left
   // behind, unlisted, until --orphan-hours).
   int taken = 0, partials = 0, left = 0;
-  for (const auto& [tenant, digest] : uploads_.Legacy()) {
+  uploads_.SettleLegacy([&](const std::string& tenant, const std::string& digest) {
     if (uploads_.Noters(digest) != 1 || holders_.HeldByAnother(tenant, digest)) {
       ++left;
-    } else if (parts_.blobs.Has(digest)) {
-      holders_.Add(tenant, digest);
-      uploads_.NoteProven(tenant, digest);
-      ++taken;
-    } else if (parts_.blobs.AdoptPartial(digest, tenant)) {  // none for the admins' (theirs already)
-      ++partials;
+      return false;
     }
-  }
-  uploads_.SettleLegacy();
+    if (parts_.blobs.Has(digest)) {
+      holders_.Add(tenant, digest);
+      ++taken;
+      return true;
+    }
+    if (parts_.blobs.AdoptPartial(digest, tenant)) ++partials;  // none for the admins' (theirs already)
+    return false;
+  });
   if (taken + partials + left > 0) {
     spdlog::info(
         "uploads not yet submitted from before proof of possession: {} complete file(s) taken as their "

@@ -75,25 +75,19 @@ void UploadLedger::NoteProven(const std::string& tenant, const std::string& sha2
   Save();
 }
 
-std::vector<std::pair<std::string, std::string>> UploadLedger::Legacy() const {
-  std::vector<std::pair<std::string, std::string>> legacy;
-  for (const auto& [tenant, files] : tenants_) {
-    for (const auto& [digest, entry] : files) {
-      if (entry.legacy) legacy.emplace_back(tenant, digest);
-    }
-  }
-  return legacy;
-}
-
 std::size_t UploadLedger::Noters(const std::string& sha256) const {
   return static_cast<std::size_t>(std::count_if(
       tenants_.begin(), tenants_.end(), [&](const auto& tenant) { return tenant.second.count(sha256) > 0; }));
 }
 
-void UploadLedger::SettleLegacy() {
+void UploadLedger::SettleLegacy(const std::function<bool(const std::string&, const std::string&)>& proven) {
   bool settled = false;
   for (auto& [tenant, files] : tenants_) {
-    for (auto& [digest, entry] : files) settled = std::exchange(entry.legacy, false) || settled;
+    for (auto& [digest, entry] : files) {
+      if (!std::exchange(entry.legacy, false)) continue;
+      entry.proven = proven(tenant, digest);
+      settled = true;
+    }
   }
   if (settled) Save();
 }

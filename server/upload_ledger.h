@@ -15,6 +15,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <string>
 #include <utility>
@@ -51,12 +52,11 @@ class UploadLedger {
   void NoteProven(const std::string& tenant, const std::string& sha256);
   // Each (tenant, sha256) noted proven and not yet submitted, dropped or forgotten.
   std::vector<std::pair<std::string, std::string>> Proven() const;
-  // Each (tenant, sha256) read from a file of before 2026-12-06 (no `proven`), until SettleLegacy.
-  std::vector<std::pair<std::string, std::string>> Legacy() const;
   // How many tenants' uploads not yet submitted bring this content.
   std::size_t Noters(const std::string& sha256) const;
-  // The entries Legacy listed are settled (proven or not, as NoteProven said): writes the file.
-  void SettleLegacy();
+  // Settles the entries read from a file of before 2026-12-06 (no `proven`): each is proven as
+  // `proven(tenant, sha256)` says; the file is written once.
+  void SettleLegacy(const std::function<bool(const std::string& tenant, const std::string& sha256)>& proven);
   // A job of `tenant` now holds the files of `manifest` (submitted): they count as the job's.
   void Submitted(const std::string& tenant, const v1::Manifest& manifest);
   // Forgets what was last noted before `cutoff`: retention deletes those partial uploads and unused
