@@ -5,12 +5,13 @@
 
 namespace endorecon::server {
 
-// Throws Error(kFailedPrecondition) when `data_dir` holds no job store (jobs.sqlite) but the folder
-// above it, or a folder in it, does: a --data-dir moved one folder down (the Kubernetes manifest's did
-// on 2026-12-06, from the volume's root, which fsGroup makes group-owned, to /data/endorecon) or back
-// up (a rollback, or a unit file left behind). Started there, the server began an empty store beside
-// the real one, its jobs unlisted and, without the tokens beside them, every API open to every caller;
-// `token create` made a second token store that the move of the data then overwrote.
+// Throws Error(kFailedPrecondition) when `data_dir` holds no store (jobs.sqlite, or the tokens.sqlite
+// of tokens made before the server's first start) but the folder above it, or a folder in it, does: a
+// --data-dir moved one folder down (the Kubernetes manifest's did on 2026-12-06, from the volume's root,
+// which fsGroup makes group-owned, to /data/endorecon) or back up (a rollback, or a unit file left behind).
+// Started there, the server began an empty store beside the real one, its jobs unlisted and, without the
+// tokens beside them, every API open to every caller; `token create` made a second token store that the move
+// of the data then overwrote.
 void RefuseAStoreBesideIt(const std::filesystem::path& data_dir);
 
 }  // namespace endorecon::server
