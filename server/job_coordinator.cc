@@ -124,22 +124,27 @@ void JobCoordinator::KeepUploadsIn(const std::filesystem::path& file) {
 
 void JobCoordinator::RequireHeld(const v1::Manifest& manifest, const std::string& what,
                                  const std::string& tenant, const std::string& who) {
-  int unheld = 0;
-  for (const auto& file : manifest.files()) {
-    if (!holders_.Holds(tenant, file.sha256()) && parts_.blobs.Has(file.sha256())) ++unheld;
+  int unheld = 0;  // stored, but not the tenant's
+  try {
+    RequireBlobs(parts_.blobs, manifest, what, [&](const std::string& digest) {
+      if (holders_.Holds(tenant, digest)) return true;
+      if (parts_.blobs.Has(digest)) ++unheld;
+      return false;
+    });
+  } catch (const Error& e) {
+    // The caller is told "not uploaded yet", as for content never stored; the server's log says more,
+    // for the IT staff. No file name: those may carry patient data.
+    if (e.code() == ErrorCode::kFailedPrecondition && unheld > 0) {
+      spdlog::warn(
+          "{} named {} stored file(s) of the {} that tenant '{}' does not hold, without uploading "
+          "them: refused as not uploaded (proof of possession). The endorecon client and worker "
+          "upload what they name: from a client this is a request made by hand or with digests "
+          "learned elsewhere; from a worker, results it uploaded before a server restart, which it "
+          "sends again",
+          who, unheld, what, tenant.empty() ? "-" : tenant);
+    }
+    throw;
   }
-  // The caller is told "not uploaded yet", as for content never stored; the server's log says more,
-  // for the IT staff. No file name: those may carry patient data.
-  if (unheld > 0) {
-    spdlog::warn(
-        "{} named {} stored file(s) of the {} that tenant '{}' does not hold, without uploading them: "
-        "refused as not uploaded (proof of possession). The endorecon client and worker upload what they "
-        "name: from a client this is a request made by hand or with digests learned elsewhere; from a "
-        "worker, results it uploaded before a server restart, which it sends again",
-        who, unheld, what, tenant.empty() ? "-" : tenant);
-  }
-  RequireBlobs(parts_.blobs, manifest, what,
-               [this, &tenant](const std::string& digest) { return holders_.Holds(tenant, digest); });
 }
 
 UploadOwner JobCoordinator::UploadOwnerOf(const std::string& tenant) {
@@ -248,10 +253,8 @@ void JobCoordinator::SettleLegacyUploads() {
   if (taken + partials + left > 0) {
     spdlog::info(
         "uploads not yet submitted from before proof of possession: {} complete file(s) taken as their "
-        "tenant's, "
-        "{} partial(s) made their tenant's to resume, {} to be sent again (another tenant's upload or job "
-        "brings "
-        "the same content)",
+        "tenant's, {} partial(s) made their tenant's to resume, {} to be sent again (another tenant's "
+        "upload or job brings the same content)",
         taken, partials, left);
   }
 }
@@ -384,6 +387,13 @@ void JobCoordinator::AdmitUpload(const v1::Manifest& manifest, const Principal& 
       UploadLedger::Time::clock::now());
 }
 
+std::int64_t JobCoordinator::PendingUploadBytes() {
+  std::lock_guard lock(mutex_);
+  std::int64_t bytes = 0;
+  for (const auto& [tenant, pending] : uploads_.Tenants()) bytes += pending.bytes;
+  return bytes;
+}
+
 v1::UploadsResponse JobCoordinator::Uploads(const v1::UploadsRequest& request, const Principal& caller) {
   std::optional<std::string> tenant;  // nullopt: every tenant's
   if (caller.SeesAllTenants()) {
@@ -451,11 +461,7 @@ v1::UploadsResponse JobCoordinator::Uploads(const v1::UploadsRequest& request, c
   // after a restart (found 2026-12-06).
   std::set<std::string> named;
   parts_.store.Scan([&](const StoredJob& stored) {
-    const auto& job = stored.job;
-    if (job.tenant() != *tenant || job.expired_unix_ms() > 0) return;
-    for (const auto& file : job.clip().files()) named.insert(file.sha256());
-    for (const auto& file : job.result().files()) named.insert(file.sha256());
-    named.insert(job.checkpoint().sha256());
+    if (stored.job.tenant() == *tenant && stored.job.expired_unix_ms() == 0) AddJobFiles(stored.job, named);
   });
   for (const auto& digest : digests) {
     if (!named.count(digest)) holders_.Remove(*tenant, digest);

@@ -113,6 +113,9 @@ class JobCoordinator {
   // every tenant is trusted with every stored content): a stored content the tenant does not hold is
   // sent again before the caller's jobs may name it (BlobHolders).
   UploadOwner ClientUploadOwner(const Principal& caller);
+  // Every tenant's uploads not yet submitted, in bytes as declared (the metrics' gauge: the ledger in
+  // memory, no file is read).
+  std::int64_t PendingUploadBytes();
   UploadOwner WorkerUploadOwner(const std::optional<std::string>& served_tenant);
   // The same for a recording retrieved for job `id`, before it goes into the blob store: the job's
   // tenant pays for it.

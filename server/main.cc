@@ -327,10 +327,7 @@ int Run(const ServerFlags& flags) {
           spdlog::error("job counts: {}: {}", ErrorCodeName(e.code()), e.what());
         }
         metrics.SetQueueDepth(scheduler.Depth());
-        std::int64_t pending = 0;
-        const auto uploads = coordinator.Uploads({}, ServerPrincipal());
-        for (const auto& tenant : uploads.tenants()) pending += tenant.bytes();
-        metrics.SetPendingUploads(pending);
+        metrics.SetPendingUploads(coordinator.PendingUploadBytes());
         metrics.SetWorkersConnected(workers.CountAlive());
         std::error_code error;
         const auto space = std::filesystem::space(data_dir, error);

@@ -8,15 +8,11 @@
 #include "server/unix_time.h"
 
 namespace endorecon::server {
-namespace {
-
-void AddBlobs(const v1::Job& job, std::set<std::string>& digests) {
+void AddJobFiles(const v1::Job& job, std::set<std::string>& digests) {
   for (const auto& file : job.clip().files()) digests.insert(file.sha256());
   for (const auto& file : job.result().files()) digests.insert(file.sha256());
   if (!job.checkpoint().sha256().empty()) digests.insert(job.checkpoint().sha256());
 }
-
-}  // namespace
 
 std::int64_t JobCutoff(double retention_days) {
   if (retention_days <= 0) return kKeepJobs;
@@ -54,9 +50,9 @@ RetentionPlan PlanExpiry(JobStore& store, const BlobStore& blobs,
     if (job.expired_unix_ms() > 0) return;
     if (expires(job)) {
       plan.jobs.push_back(job);
-      AddBlobs(job, expiring);
+      AddJobFiles(job, expiring);
     } else {
-      AddBlobs(job, kept);
+      AddJobFiles(job, kept);
     }
   });
   for (const auto& digest : expiring) {

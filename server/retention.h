@@ -31,6 +31,9 @@ struct RetentionPlan {
 
 inline constexpr std::int64_t kKeepJobs = std::numeric_limits<std::int64_t>::min();
 
+// Adds the digests of `job`'s files (clip, result, checkpoint) to `digests`.
+void AddJobFiles(const v1::Job& job, std::set<std::string>& digests);
+
 // The cutoffs of the flags: jobs finished more than `retention_days` ago (kKeepJobs for 0), files
 // last written more than `orphan_hours` ago (file_time_type::min(), none, for 0).
 std::int64_t JobCutoff(double retention_days);

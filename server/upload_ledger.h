@@ -7,8 +7,8 @@
 //   {"uploads": [{"tenant": "radiology", "sha256": "3f9c...", "bytes": 1048576,
 //                 "noted_unix_ms": 1765000000000, "proven": true}]}
 //
-// `proven`: the tenant's upload sent every byte of the content, digest checked (BlobHolders); an entry
-// without it (a file of before 2026-12-06) is not.
+// `proven`: the tenant's upload sent every byte of the content, digest checked (BlobHolders); entries
+// without it (a file of before 2026-12-06) are settled at the first start (SettleLegacy).
 //
 // Not thread-safe: the coordinator holds its lock.
 #pragma once
