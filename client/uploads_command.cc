@@ -17,16 +17,18 @@
 namespace endorecon::client {
 namespace {
 
-std::string TenantName(const std::string& tenant) { return tenant.empty() ? "-" : tenant; }
+// Tenant "" is that of admins, and the one tenant of a server without tokens; --tenant names it '-'.
+std::string Whose(const std::string& tenant) {
+  return tenant.empty() ? "no tenant ('-')" : "tenant '" + tenant + "'";
+}
 
 std::string Described(const v1::TenantUploads& uploads) {
   // The bytes count whole against the quota; an interrupted upload holds less on the disk.
   const std::string arrived = uploads.arrived_bytes() < uploads.bytes()
                                   ? " (" + HumanBytes(uploads.arrived_bytes()) + " of it arrived)"
                                   : "";
-  return fmt::format("tenant '{}': {} file(s), {}{}, the last upload begun {}", TenantName(uploads.tenant()),
-                     uploads.files(), HumanBytes(uploads.bytes()), arrived,
-                     HumanTime(uploads.last_unix_ms()));
+  return fmt::format("{} file(s), {}{}, the last upload begun {}", uploads.files(),
+                     HumanBytes(uploads.bytes()), arrived, HumanTime(uploads.last_unix_ms()));
 }
 
 }  // namespace
@@ -59,7 +61,9 @@ Command AddUploadsCommand(CLI::App& app) {
         std::cout << "no uploads" << whose << " waiting to be submitted: nothing dropped" << std::endl;
         return kExitOk;
       }
-      std::cout << "dropped the uploads waiting to be submitted of " << Described(response.tenants(0));
+      const auto& dropped = response.tenants(0);
+      std::cout << "dropped the uploads waiting to be submitted (" << Whose(dropped.tenant())
+                << "): " << Described(dropped);
       // The server tells an admin what it deleted; a client, nothing that would say which of its files
       // another tenant holds.
       if (response.has_deleted_files()) {
@@ -80,7 +84,9 @@ Command AddUploadsCommand(CLI::App& app) {
         << "uploads waiting to be submitted (they count against the tenant's byte quota until submitted, "
            "or dropped with `endorecon uploads --drop`):"
         << std::endl;
-    for (const auto& uploads : response.tenants()) std::cout << "  " << Described(uploads) << std::endl;
+    for (const auto& uploads : response.tenants()) {
+      std::cout << "  " << Whose(uploads.tenant()) << ": " << Described(uploads) << std::endl;
+    }
     return kExitOk;
   };
 }

@@ -136,7 +136,7 @@ TEST(ServerRestartTest, AnInterruptedUploadIsListedAndCanBeDropped) {
   EXPECT_NE(listed.out.find("uploads waiting to be submitted (they count against the tenant's byte quota"),
             std::string::npos)
       << listed.out;
-  EXPECT_NE(listed.out.find("tenant '-': "), std::string::npos) << listed.out;
+  EXPECT_NE(listed.out.find("  no tenant ('-'): "), std::string::npos) << listed.out;
   // What arrived before the Ctrl-C: some kB or MB of the 268.5 MB, whenever the signal came.
   EXPECT_TRUE(std::regex_search(
       listed.out, std::regex(" 268\\.5 MB \\([0-9.]+ [kM]?B of it arrived\\), the last upload begun ")))
@@ -155,7 +155,8 @@ TEST(ServerRestartTest, AnInterruptedUploadIsListedAndCanBeDropped) {
   // JobCoordinatorTest).
   const auto dropped = RunCli(cluster.address(), {"uploads", "--drop"});
   ASSERT_EQ(dropped.exit_code, 0) << dropped.err;
-  EXPECT_NE(dropped.out.find("dropped the uploads waiting to be submitted of tenant '-'"), std::string::npos)
+  EXPECT_NE(dropped.out.find("dropped the uploads waiting to be submitted (no tenant ('-')): "),
+            std::string::npos)
       << dropped.out;
   EXPECT_NE(dropped.out.find("; deleted "), std::string::npos) << dropped.out;
   EXPECT_TRUE(std::filesystem::is_empty(partial)) << "the interrupted file's partial went";
