@@ -104,6 +104,60 @@ TEST_F(BadRecordingTest, CalibrationForAnotherImageSize) {
       << message;
 }
 
+// A calibration file may leave the image size out (docs/formats.md): the recording's is taken. It
+// failed with OpenCV's "Matrix operand is an empty matrix" (found 2026-12-06).
+TEST_F(BadRecordingTest, CalibrationWithoutItsImageSizeIsTheRecordings) {
+  const prepare::StereoCalibration rig = prepare::RectifiedCalibration({64, 48}, 60, 4);
+  {
+    cv::FileStorage file((dir_ / "calibration.yaml").string(), cv::FileStorage::WRITE);
+    file << "K1" << cv::Mat(rig.k1) << "D1" << rig.d1 << "K2" << cv::Mat(rig.k2) << "D2" << rig.d2 << "R"
+         << cv::Mat(rig.r) << "T" << cv::Mat(rig.t);
+  }
+  prepare::PrepareOptions options = Options();
+  options.rectified = false;
+  options.calibration = {dir_ / "calibration.yaml"};
+  EXPECT_EQ(prepare::PrepareClip(options).frames, 6);
+}
+
+// Swapped eyes prepared a clip with a third of its depth, too far, without a word (found 2026-12-06).
+TEST_F(BadRecordingTest, EyesTheOtherWayRound) {
+  prepare::PrepareOptions options = Options();
+  std::swap(options.recording.left, options.recording.right);
+  const std::string message = Refused(options);
+  EXPECT_NE(message.find("the points of the left eye lie further left in the right eye (a median disparity "
+                         "of -6"),
+            std::string::npos)
+      << message;
+  EXPECT_NE(message.find("the eyes are given the other way round (swap --left and --right, or the halves of "
+                         "the frame)"),
+            std::string::npos)
+      << message;
+}
+
+// The eyes' frames are paired by their order: recordings of other rates or lengths are refused before
+// any frame is prepared (a 25 and a 30 fps eye prepared a clip without a word; found 2026-12-06).
+TEST_F(BadRecordingTest, EyesOfDifferentFrameRatesOrLengths) {
+  const auto video = [&](const std::string& name, double fps, int frames) {
+    cv::VideoWriter writer((dir_ / name).string(), cv::CAP_OPENCV_MJPEG,
+                           cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), fps, cv::Size(64, 48));
+    for (int i = 0; i < frames; ++i) writer.write(Texture(i, {64, 48}));
+    return dir_ / name;
+  };
+  prepare::PrepareOptions options = Options();
+  options.recording.left = video("left.avi", 25, 12);
+  options.recording.right = video("right30.avi", 30, 12);
+  std::string message = Refused(options);
+  EXPECT_NE(message.find("right30.avi: 30 frames per second while "), std::string::npos) << message;
+  EXPECT_NE(message.find("left.avi has 25: the eyes' frames are paired by their order"), std::string::npos)
+      << message;
+  options.recording.right = video("right_short.avi", 25, 8);
+  message = Refused(options);
+  EXPECT_NE(message.find("right_short.avi: 8 frames while "), std::string::npos) << message;
+  EXPECT_NE(message.find("left.avi has 12 (both eyes' recordings must have the same length)"),
+            std::string::npos)
+      << message;
+}
+
 TEST_F(BadRecordingTest, UnreadableAndTruncatedVideos) {
   WriteBytes(dir_ / "noise.mp4", std::string(4096, 'z'));
   prepare::PrepareOptions options = Options();

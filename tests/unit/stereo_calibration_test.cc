@@ -104,6 +104,18 @@ TEST(StereoCalibrationTest, FaultsNameTheFileAndField) {
   prepare::WriteStereoCalibration(dir / "short_d.yaml", rig);
   message = ErrorFrom([&] { prepare::LoadStereoCalibration({dir / "short_d.yaml"}); });
   EXPECT_NE(message.find("short_d.yaml: D1 must hold 4, 5, 8, 12 or 14"), std::string::npos) << message;
+  // A coefficient written as a NaN is named (it was "must hold 4, 5, 8, 12 or 14 finite coefficients
+  // ..., found 1x5" of a 1x5; OpenCV's own ".Nan" is refused as not a number when read).
+  rig = Rig();
+  prepare::WriteStereoCalibration(dir / "nan_d.yaml", rig);
+  std::string text = ReadBytes(dir / "nan_d.yaml");
+  const auto d2 = text.find("data:", text.find("D2:"));
+  text.replace(d2, text.find(']', d2) - d2, "data: [ 0., 0., nan, 0., 0. ");
+  WriteBytes(dir / "nan_d.yaml", text);
+  message = ErrorFrom([&] { prepare::LoadStereoCalibration({dir / "nan_d.yaml"}); });
+  EXPECT_NE(message.find("nan_d.yaml: D2 coefficient 2 is not a finite number"), std::string::npos)
+      << message << "\n"
+      << text;
 
   WriteBytes(dir / "junk.yaml", "%YAML:1.0\nK1: [unclosed\n");
   ErrorFrom([&] { prepare::LoadStereoCalibration({dir / "junk.yaml"}); });
@@ -143,6 +155,13 @@ TEST(StereoCalibrationTest, ACalibrationForAnotherSizeIsRefused) {
   EXPECT_NE(message.find("the calibration is for 640x512 images but the recording's eyes are 1280x1024"),
             std::string::npos)
       << message;
+  // As many pixels in another shape: the layout flag of the other kind, or a rotated video.
+  const std::string reshaped = ErrorFrom([&] { prepare::CheckCalibrationFits(rig, {1280, 256}); });
+  EXPECT_NE(
+      reshaped.find("(as many pixels in another shape: is the recording's layout the other one, "
+                    "--side-by-side or --top-bottom, or is the video turned by a rotation in its file?)"),
+      std::string::npos)
+      << reshaped;
   prepare::StereoCalibration unsized = rig;
   unsized.image_size = {};
   prepare::CheckCalibrationFits(unsized, {640, 512});

@@ -73,5 +73,17 @@ TEST(StereoRectifierTest, RefusesAnotherRigsCalibration) {
   ErrorFrom([&] { prepare::StereoRectifier(rig, {}); });
 }
 
+TEST(StereoRectifierTest, RefusesARightEyeOnTheLeft) {
+  prepare::StereoCalibration rig = SyntheticCalibration(RecordingOptions(320, 256, 1));
+  rig.source = "calib.yaml";
+  rig.t = -rig.t;  // T's sign flipped, or the eyes given the other way round
+  const std::string error = ErrorFrom([&] { prepare::StereoRectifier(rig, {}); });
+  EXPECT_NE(error.find("calib.yaml: T = (5"), std::string::npos) << error;
+  EXPECT_NE(error.find("puts the right eye to the left of the left eye (after rectification the baseline "
+                       "is -5"),
+            std::string::npos)
+      << error;
+}
+
 }  // namespace
 }  // namespace endorecon::testing

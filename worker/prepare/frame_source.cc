@@ -87,6 +87,7 @@ class VideoFileSource final : public FrameSource {
   const std::string& name() const override { return name_; }
   cv::Size frame_size() const override { return size_; }
   int announced_frames() const override { return announced_; }
+  double frame_rate() const override { return fps_ > 0 && std::isfinite(fps_) ? fps_ : 0; }
 
   bool Next(SourceFrame& frame) override { return Advance(&frame); }
   bool Skip() override { return Advance(nullptr); }

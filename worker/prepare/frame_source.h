@@ -30,6 +30,8 @@ class FrameSource {
   virtual cv::Size frame_size() const = 0;
   // How many frames the recording says it holds (a video's header, a folder's files); -1: unknown.
   virtual int announced_frames() const = 0;
+  // The frame rate the recording announces (a video's header); 0: none (a folder of images).
+  virtual double frame_rate() const { return 0; }
   // Reads the next frame into `frame`; false after the last. Throws Error(kInvalidArgument) naming
   // the source and the frame when the frame cannot be decoded, has another size, or when the
   // recording ends well before the frames it announced (a truncated file).

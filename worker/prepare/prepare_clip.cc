@@ -31,6 +31,8 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 
 constexpr int kSurveyFrames = 6;
+// Below it, a warning.
+constexpr double kLowDepthCoverage = 0.4;
 const cv::Matx44d kFlipYz(1, 0, 0, 0, 0, -1, 0, 0, 0, 0, -1, 0, 0, 0, 0, 1);  // OpenCV <-> OpenGL axes
 
 std::string SizeText(cv::Size size) { return std::to_string(size.width) + "x" + std::to_string(size.height); }
@@ -314,6 +316,7 @@ class Preparation {
     calibration_ = options.rectified ? RectifiedCalibration(eye, options.focal, options.baseline)
                                      : LoadStereoCalibration(options.calibration);
     CheckCalibrationFits(calibration_, eye);
+    if (calibration_.image_size == cv::Size()) calibration_.image_size = eye;  // a file that names none
     rectifier_ =
         std::make_unique<StereoRectifier>(calibration_, cv::Size(options.size.width, options.size.height));
     camera_ = rectifier_->camera();
@@ -323,6 +326,13 @@ class Preparation {
     masks_ = std::make_unique<MaskReader>(options.masks, options.masks_tool_black, eye);
     placer_ = std::make_unique<Placer>(options, camera_);
     survey_ = Survey(options, *rectifier_, excluded_[0], source_.announced_frames());
+    survey_.CheckEyeOrder(source_.name());
+    if (survey_.disparities.size() < StereoSurvey::kEyeOrderMatches) {
+      spdlog::warn(
+          "{}: only {} point(s) of the left eye were found in the right eye on the same row: is it "
+          "a stereo recording, of this layout, with this rig's calibration? (depth will be sparse)",
+          source_.name(), survey_.disparities.size());
+    }
     range_ = survey_.Range(camera_.size.width);
     depth_ = std::make_unique<StereoDepth>(options.depth, range_, camera_.focal, camera_.baseline);
     layout_ = placer_->moving() ? ClipLayout::kTransforms : ClipLayout::kEndoNerf;
@@ -363,6 +373,15 @@ class Preparation {
     WritePreview(near, far);
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     PrepareSummary summary = Summary(seconds);
+    if (summary.depth_coverage < kLowDepthCoverage) {
+      // Stereo tissue is mostly matched (80-90% on the synthetic rig); this little is a recording,
+      // layout, calibration or mask of another kind (found 2026-12-06: each prepared silently).
+      spdlog::warn(
+          "{}: depth for {:.0f}% of the frames' pixels only (outside masks and --exclude): is it a "
+          "stereo recording of this layout and rig, and do the masks mark the tools, not the tissue "
+          "(--mask-tool)? Training leans on the images alone where depth is missing",
+          source_.name(), 100 * summary.depth_coverage);
+    }
     WriteReport(summary, near, far);
     staged_.Commit();
     return summary;

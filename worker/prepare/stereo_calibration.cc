@@ -29,12 +29,15 @@ cv::Matx33d CameraMatrix(const cv::Mat& m, const std::string& where) {
 
 cv::Mat Distortion(const cv::Mat& m, const std::string& where) {
   static const std::set<int> kLengths = {4, 5, 8, 12, 14};
-  if (std::min(m.rows, m.cols) != 1 || !kLengths.count(m.rows * m.cols) || !AllFinite(m)) {
-    FailInvalid(where + " must hold 4, 5, 8, 12 or 14 finite coefficients (OpenCV's model), found " +
-                ShapeText(m));
+  if (std::min(m.rows, m.cols) != 1 || !kLengths.count(m.rows * m.cols)) {
+    FailInvalid(where + " must hold 4, 5, 8, 12 or 14 coefficients (OpenCV's model), found " + ShapeText(m));
   }
   cv::Mat d;
   m.reshape(1, 1).convertTo(d, CV_64F);
+  for (int i = 0; i < d.cols; ++i) {
+    if (!std::isfinite(d.at<double>(0, i)) || std::abs(d.at<double>(0, i)) > 1e12)
+      FailInvalid(where + " coefficient " + std::to_string(i) + " is not a finite number");
+  }
   return d;
 }
 
@@ -237,9 +240,15 @@ void CheckCalibrationFits(const StereoCalibration& c, cv::Size eye_size) {
   const auto text = [](cv::Size s) { return std::to_string(s.width) + "x" + std::to_string(s.height); };
   if (c.image_size != cv::Size()) {
     if (c.image_size != eye_size) {
+      // The same pixels in another shape: a layout flag of the other kind, or a video turned by its
+      // container's rotation tag, rather than another calibration (found 2026-12-06).
+      const bool reshaped = c.image_size.area() == eye_size.area();
       FailInvalid(c.source + ": the calibration is for " + text(c.image_size) +
                   " images but the recording's eyes are " + text(eye_size) +
-                  " (calibrate at the recording's size)");
+                  (reshaped ? " (as many pixels in another shape: is the recording's layout the other one, "
+                              "--side-by-side or --top-bottom, or is the video turned by a rotation in its "
+                              "file?)"
+                            : " (calibrate at the recording's size)"));
     }
     return;
   }

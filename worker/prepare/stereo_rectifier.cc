@@ -1,5 +1,7 @@
 #include "worker/prepare/stereo_rectifier.h"
 
+#include <fmt/format.h>
+
 #include <cmath>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
@@ -69,6 +71,20 @@ StereoRectifier::StereoRectifier(const StereoCalibration& calibration, cv::Size 
   const double canvas_focal = p[0].at<double>(0, 0);
   camera_.baseline = calibration.kind == "rectified" ? calibration.baseline()
                                                      : -p[1].at<double>(0, 3) / p[1].at<double>(0, 0);
+  if (!(camera_.baseline > 0)) {
+    // stereoRectify keeps the file's direction: a T whose x is positive puts the rectified right
+    // eye on the left, every disparity turns negative and every depth with it (such a file prepared
+    // a clip of 0% depth coverage without a word, and training then refused its negative depth
+    // bounds; found 2026-12-06).
+    const cv::Vec3d& t = calibration.t;
+    FailInvalid(fmt::format(
+        "{}: T = ({:.4g}, {:.4g}, {:.4g}) puts the right eye to the left of the left eye (after "
+        "rectification the baseline is {:.4g}): either the eyes are given the other way round (swap "
+        "--left and --right, or the halves of the frame, and K1 D1 with K2 D2), or T's sign is flipped "
+        "(X_right = R X_left + T, so a right eye on the right has T's x < 0, as OpenCV's stereoCalibrate "
+        "writes it)",
+        calibration.source, t[0], t[1], t[2], camera_.baseline));
+  }
   camera_.left_rotation = cv::Matx33d(r[0]);
   camera_.right_rotation = cv::Matx33d(r[1]);
   if (passthrough_) {

@@ -1,5 +1,10 @@
 #include "worker/prepare/stereo_source.h"
 
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
 #include "common/error.h"
 
 namespace endorecon::prepare {
@@ -25,6 +30,7 @@ StereoSource::StereoSource(const RecordingInput& input) : layout_(input.layout) 
       FailInvalid(second_->name() + ": frames of " + SizeText(second_->frame_size()) + " differ from " +
                   first_->name() + "'s " + SizeText(eye_size_) + " (both eyes must have one size)");
     }
+    CheckPairedByOrder();
     return;
   }
   first_ = OpenFrameSource(input.combined);
@@ -41,6 +47,29 @@ StereoSource::StereoSource(const RecordingInput& input) : layout_(input.layout) 
                   SizeText(whole));
     }
     eye_size_ = {whole.width, whole.height / 2};
+  }
+}
+
+// The eyes' frames are paired by their order: two recordings of other rates or lengths would pair
+// frames of different moments, and the disparities between them are motion, not depth (a 25 and a
+// 30 fps eye prepared a clip without a word; found 2026-12-06). Checked before any frame is
+// prepared, where the headers say; Next checks each pair's times as it goes.
+void StereoSource::CheckPairedByOrder() {
+  const double a = first_->frame_rate(), b = second_->frame_rate();
+  if (a > 0 && b > 0 && std::abs(a - b) > 0.01 * std::max(a, b)) {
+    FailInvalid(
+        fmt::format("{}: {:.4g} frames per second while {} has {:.4g}: the eyes' frames are paired "
+                    "by their order, so both recordings must have one frame rate (were they "
+                    "recorded together?)",
+                    second_->name(), b, first_->name(), a));
+  }
+  frame_period_s_ = a > 0 ? 1 / a : b > 0 ? 1 / b : 0;
+  const int m = first_->announced_frames(), n = second_->announced_frames();
+  // A video's count may be an estimate (from its duration) a frame or two off: the exact check is
+  // Ended's, at the end.
+  if (m > 0 && n > 0 && std::abs(m - n) > 2) {
+    FailInvalid(fmt::format("{}: {} frames while {} has {} (both eyes' recordings must have the same length)",
+                            second_->name(), n, first_->name(), m));
   }
 }
 
@@ -69,6 +98,15 @@ bool StereoSource::Next(StereoFrame& frame) {
     SourceFrame left, right;
     const bool a = first_->Next(left), b = second_->Next(right);
     if (Ended(a, b, index)) return false;
+    // Pairs out of step by more than a frame and a half (a variable-rate eye, say; timestamps
+    // jitter by less).
+    if (frame_period_s_ > 0 && std::abs(left.time_s - right.time_s) > 1.5 * frame_period_s_) {
+      FailInvalid(
+          fmt::format("{} frame {}: at {:.3f} s while {}'s frame {} is at {:.3f} s: the eyes are out of "
+                      "step (the frames are paired by their order; is one of them of a variable "
+                      "frame rate, or cut?)",
+                      second_->name(), index, right.time_s, first_->name(), index, left.time_s));
+    }
     frame.left = std::move(left.image);
     frame.right = std::move(right.image);
     frame.time_s = left.time_s;

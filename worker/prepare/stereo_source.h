@@ -1,6 +1,7 @@
 // The two eyes of a stereo recording, frame by frame: two frame sources (one per eye), or one
 // whose frames hold both eyes side by side (left eye in the left half) or top-bottom (left eye on
-// top). Checks what pairing needs: equal sizes and lengths, even widths or heights to split.
+// top). Checks what pairing needs: equal sizes, lengths and frame rates, pairs in step, even widths
+// or heights to split.
 #pragma once
 
 #include <filesystem>
@@ -29,7 +30,8 @@ struct StereoFrame {
 class StereoSource {
  public:
   // Opens the sources (OpenFrameSource's errors), and throws FailInvalid naming the file when the
-  // eyes differ in size or a combined frame cannot be split in equal halves.
+  // eyes differ in size, frame rate or announced length, or a combined frame cannot be split in
+  // equal halves.
   explicit StereoSource(const RecordingInput& input);
 
   cv::Size eye_size() const { return eye_size_; }
@@ -39,16 +41,18 @@ class StereoSource {
   std::string name() const;
 
   // The next pair; false after the last. Throws the sources' errors, and FailInvalid naming both
-  // when one eye's recording ends before the other's.
+  // when one eye's recording ends before the other's or their frames' times are out of step.
   bool Next(StereoFrame& frame);
   bool Skip();
 
  private:
   bool Ended(bool first, bool second, int index) const;
+  void CheckPairedByOrder();
 
   StereoLayout layout_;
   std::unique_ptr<FrameSource> first_, second_;  // second_ only for two sources
   cv::Size eye_size_;
+  double frame_period_s_ = 0;  // two videos': one frame's time at their rate; 0: unknown
   int next_ = 0;
 };
 

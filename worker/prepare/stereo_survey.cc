@@ -4,6 +4,7 @@
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 
+#include "common/error.h"
 #include "worker/prepare/feature_tracks.h"
 
 namespace endorecon::prepare {
@@ -42,6 +43,17 @@ DisparityRange StereoSurvey::Range(int width) const {
   const int min = std::max(0, static_cast<int>(std::floor(lo - margin)));
   const int max = static_cast<int>(std::ceil(hi + margin));
   return {min, std::max(16, (max - min + 15) / 16 * 16), std::max({static_cast<double>(min), 0.8 * lo, 0.5})};
+}
+
+void StereoSurvey::CheckEyeOrder(const std::string& recording) const {
+  if (disparities.size() < kEyeOrderMatches) return;
+  const double median = Percentile(disparities, 0.5);
+  if (median < -1) {
+    FailInvalid(recording + ": the points of the left eye lie further left in the right eye (a median " +
+                "disparity of " + std::to_string(median) + " px over " + std::to_string(disparities.size()) +
+                " matches; a right eye on the right sees them further right): the eyes are given the other " +
+                "way round (swap --left and --right, or the halves of the frame)");
+  }
 }
 
 void SurveyPair(const cv::Mat& left, const cv::Mat& right, const cv::Mat& allowed, StereoSurvey& survey,

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <opencv2/core.hpp>
+#include <string>
 #include <vector>
 
 #include "worker/prepare/stereo_depth.h"
@@ -23,6 +24,11 @@ struct StereoSurvey {
   // of their span and 8 pixels each way, at least 0, rounded out to a multiple of 16 wide; its
   // floor 0.8 x the 1st percentile. Without matches: [0, width / 4), floor 0.5.
   DisparityRange Range(int width) const;
+  // Throws FailInvalid naming `recording` when the disparities say the eyes are swapped: most of them
+  // negative (below -1 px), of kEyeOrderMatches matches or more. Swapped eyes prepared a clip with a
+  // third of its pixels' depth, and that a third too far, without a word (found 2026-12-06).
+  void CheckEyeOrder(const std::string& recording) const;
+  static constexpr std::size_t kEyeOrderMatches = 20;
 };
 
 // Adds the matches of one rectified pair (8-bit BGR) to `survey`: up to `max_corners` corners of
