@@ -107,6 +107,27 @@ TEST(Calibration, ZeroErrorEverywhereIsPerfect) {
   for (double v : c.curves.oracle) EXPECT_EQ(v, 0.0);
 }
 
+// Errors below what the measure can tell rank only noise: NaN, as a frame with nothing to rank.
+TEST(Calibration, ErrorsBelowTheResolutionAreNotRanked) {
+  std::vector<float> error(64), uncertainty(64);
+  for (int i = 0; i < 64; ++i) {
+    error[i] = 1e-5f * static_cast<float>(i);  // float noise of a perfect render: well under 0.5/255
+    uncertainty[i] = static_cast<float>(64 - i);
+  }
+  const Calibration unresolved =
+      MeasureCalibration(uncertainty, error, {}, kSparsificationSteps, kEightBitErrorResolution);
+  EXPECT_TRUE(std::isnan(unresolved.spearman));
+  EXPECT_TRUE(std::isnan(unresolved.ause));
+  EXPECT_TRUE(unresolved.curves.fractions.empty());
+  EXPECT_EQ(unresolved.pixels, 64);
+  const Calibration ranked = MeasureCalibration(uncertainty, error, {});
+  EXPECT_NEAR(ranked.spearman, -1, 1e-12) << "without a resolution the same errors are ranked";
+  for (float& e : error) e += 0.01f;  // errors of a couple of 8-bit steps are ranked
+  EXPECT_NEAR(
+      MeasureCalibration(uncertainty, error, {}, kSparsificationSteps, kEightBitErrorResolution).spearman, -1,
+      1e-12);
+}
+
 TEST(Calibration, ToolPixelsAreLeftOut) {
   std::vector<float> error = {1, 2, 3, 4, 100, 100};
   std::vector<float> uncertainty = {1, 2, 3, 4, -50, -60};  // tool pixels would break the ranking

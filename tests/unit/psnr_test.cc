@@ -31,6 +31,15 @@ TEST(Psnr, IdenticalImagesAreCapped) {
   EXPECT_EQ(Psnr(AsFloat(reference), reference, {}, kW, kH), kPsnrCapDb);
 }
 
+// The training step's PSNR (the curve's and the log's train_psnr) keeps the same cap: it reached
+// 120 dB on an all-white clip (found 2026-12-06).
+TEST(Psnr, TheStepsPsnrFromItsMseHasTheSameCap) {
+  EXPECT_EQ(base::PsnrFromMse(0), kPsnrCapDb);
+  EXPECT_EQ(base::PsnrFromMse(1e-12), kPsnrCapDb);
+  EXPECT_NEAR(base::PsnrFromMse(0.0025), -10 * std::log10(0.0025), 1e-12);
+  EXPECT_TRUE(std::isnan(base::PsnrFromMse(std::nan(""))));
+}
+
 TEST(Psnr, RenderedValuesAreClampedToUnitRange) {
   const std::vector<std::uint8_t> reference(kW * kH * 3, 255);
   EXPECT_EQ(Psnr(std::vector<float>(kW * kH * 3, 3.0f), reference, {}, kW, kH), kPsnrCapDb);

@@ -27,7 +27,8 @@ class TrainingLoop {
         config_(run.trainer.config()),
         clock_(config_.iterations, run.time_budget_s, extras.train_seconds),
         probe_(run.clip, run.split.heldout, config_.curve_frames),
-        curve_(config_.curve_interval_s, extras.curve.empty() ? -config_.curve_interval_s : clock_.seconds()),
+        curve_(config_.curve_interval_s,
+               extras.curve.empty() ? -1 : clock_.seconds() + config_.curve_interval_s),
         progress_line_(hooks.progress_interval_s, 0),
         previews_(hooks.preview_interval_s, 0),
         checkpoints_(hooks.checkpoint_interval_s, 0),
@@ -49,9 +50,11 @@ class TrainingLoop {
       result.last = run_.trainer.Step(clock_.Progress(run_.trainer.iteration()));
       clock_.AddStep(SecondsSince(start), result.last.samples);
       if (curve_.Due(clock_.seconds()) || run_.trainer.iteration() == config_.iterations) {
+        const auto point_start = Clock::now();
         run_.trainer.SyncField();  // the probe and the pricing render the field as it is now
         AddCurvePoint(result.last);
         PriceAfterTraining();
+        curve_.Taken(clock_.seconds(), SecondsSince(point_start));
       }
       if (progress_line_.Due(SecondsSince(wall_))) {
         UpdateBudget();
@@ -151,7 +154,8 @@ class TrainingLoop {
   const train::TrainConfig& config_;
   train::RunClock clock_;
   const eval::CurveProbe probe_;
-  train::Every curve_, progress_line_, previews_, checkpoints_;
+  train::CurveTimes curve_;
+  train::Every progress_line_, previews_, checkpoints_;
   Progress progress_;
   double spent_before_;  // training seconds of earlier processes (a resumed run)
   Clock::time_point wall_;

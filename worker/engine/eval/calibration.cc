@@ -85,7 +85,7 @@ double TrapezoidArea(const std::vector<double>& x, const std::vector<double>& y)
 }  // namespace
 
 Calibration MeasureCalibration(std::span<const float> uncertainty, std::span<const float> error,
-                               std::span<const std::uint8_t> tool_mask, int steps) {
+                               std::span<const std::uint8_t> tool_mask, int steps, double resolution) {
   if (uncertainty.size() != error.size() || (!tool_mask.empty() && tool_mask.size() != error.size())) {
     FailInvalid("calibration: uncertainty has " + std::to_string(uncertainty.size()) + " values, error " +
                 std::to_string(error.size()) + ", tool mask " + std::to_string(tool_mask.size()) +
@@ -105,7 +105,7 @@ Calibration MeasureCalibration(std::span<const float> uncertainty, std::span<con
   }
   Calibration c;
   c.pixels = static_cast<long>(e.size());
-  if (e.empty() || !finite) {
+  if (e.empty() || !finite || std::accumulate(e.begin(), e.end(), 0.0) < resolution * e.size()) {
     c.pearson = c.spearman = c.ause = std::numeric_limits<double>::quiet_NaN();
     return c;
   }

@@ -36,11 +36,19 @@ struct Calibration {
 
 // Calibration of `uncertainty` against `error` (one value per pixel each, same length) over tissue
 // pixels (`tool_mask` empty, or 0 there; 1 = tool), with `steps` sparsification fractions.
-// A correlation with a constant side (zero variance) is defined as 0. With no tissue pixel, or a
-// non-finite value on one, the three numbers are NaN and the curves empty (never a silent number).
+// A correlation with a constant side (zero variance) is defined as 0. With no tissue pixel, a
+// non-finite value on one, or a mean error below `resolution` (errors smaller than the measure can
+// tell), the three numbers are NaN and the curves empty (never a silent number).
 // Throws InvalidArgument when the lengths disagree or steps < 1.
 Calibration MeasureCalibration(std::span<const float> uncertainty, std::span<const float> error,
-                               std::span<const std::uint8_t> tool_mask, int steps = kSparsificationSteps);
+                               std::span<const std::uint8_t> tool_mask, int steps = kSparsificationSteps,
+                               double resolution = 0);
+
+// The resolution of a per-pixel error between a rendering and an 8-bit image (in [0, 1] units): half
+// a step. A frame rendered within it on average is as exact as its image can tell, and its errors
+// rank only float noise (an all-white clip rendered perfectly reported an AUSE of 0.46; found
+// 2026-12-06).
+inline constexpr double kEightBitErrorResolution = 0.5 / 255;
 
 struct CalibrationSummary {
   Summary pearson, spearman, ause;   // mean ± std over frames

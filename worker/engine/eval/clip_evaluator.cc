@@ -121,7 +121,9 @@ struct UncertaintyMaps {
 
   // The heat maps of `count` frames from their files, on every core, then the scratch folder goes.
   void WriteHeatmaps(int count, int w, int h, nlohmann::json& json) const {
-    const double total_bound = total.UpperBound(), error_bound = error.UpperBound(),
+    // The error map's top is at least an 8-bit step: a perfect render's float noise (5e-7 on an
+    // all-white clip) drew a bright map of nothing (found 2026-12-06).
+    const double total_bound = total.UpperBound(), error_bound = std::max(error.UpperBound(), 1.0 / 255),
                  model_bound = model.UpperBound();
     const auto read = [](const std::filesystem::path& path) {
       const NpyArray array = ReadNpy(path);
@@ -226,8 +228,10 @@ std::vector<float> CalibrationError(const EvaluatedFrame& evaluated, std::span<c
 Calibration FrameCalibration(std::span<const float> map, std::span<const float> grid_map,
                              const std::vector<int>& grid, std::span<const float> error,
                              const std::vector<std::uint8_t>& mask) {
-  if (grid.empty()) return MeasureCalibration(map, error, mask);
-  return MeasureCalibration(grid_map, error, Gather<std::uint8_t>(mask, grid));
+  if (grid.empty())
+    return MeasureCalibration(map, error, mask, kSparsificationSteps, kEightBitErrorResolution);
+  return MeasureCalibration(grid_map, error, Gather<std::uint8_t>(mask, grid), kSparsificationSteps,
+                            kEightBitErrorResolution);
 }
 
 PendingModelMap ModelMap(const EvaluatedFrame& evaluated, const std::vector<std::uint8_t>& mask) {

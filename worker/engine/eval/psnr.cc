@@ -26,9 +26,7 @@ double Psnr(std::span<const float> rendered, std::span<const std::uint8_t> refer
     ++kept;
   }
   if (kept == 0) return std::numeric_limits<double>::quiet_NaN();
-  const double mse = squared_error / (3.0 * kept);
-  if (std::isnan(mse)) return mse;
-  return std::min(kPsnrCapDb, -10.0 * std::log10(mse));
+  return base::PsnrFromMse(squared_error / (3.0 * kept));
 }
 
 }  // namespace endorecon::eval

@@ -4,11 +4,11 @@
 #include <cstdint>
 #include <span>
 
+#include "worker/engine/base/psnr_from_mse.h"
+
 namespace endorecon::eval {
 
-// PSNR of identical images is infinite; metrics report this cap instead (an MSE of 1e-10), so
-// every number in metrics.json is finite and averages over frames stay meaningful.
-inline constexpr double kPsnrCapDb = 100.0;
+using base::kPsnrCapDb;
 
 // PSNR in dB, peak 1, between `rendered` (float RGB, width*height*3, clamped to [0, 1] first as the
 // PNG a user sees) and `reference` (uint8 RGB, 255 = 1.0). The MSE runs over every channel of the

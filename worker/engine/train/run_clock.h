@@ -6,6 +6,8 @@
 // of the run done never goes back.
 #pragma once
 
+#include <algorithm>
+
 namespace endorecon::train {
 
 // The share of a run done in [0, 1]: iteration / iterations (iterations 0: no cap), or
@@ -51,6 +53,27 @@ class Every {
     if (now < next_) return false;
     next_ = now + interval_;
     return true;
+  }
+
+ private:
+  double interval_;
+  double next_;
+};
+
+// When the error-against-time curve takes its points, on the training clock (curve.svg's axis is
+// log time). A point every `interval` (curve_interval_s) left a 20 s run 3 points, none between
+// 0.03 s and 10 s (found 2026-12-06); so early on a point comes half the training time after the
+// last (evenly on the log axis), never closer than `interval` / 8 nor than ten times what the last
+// point cost (so points take a tenth of the time at most), and every `interval` once that is the
+// shorter.
+class CurveTimes {
+ public:
+  // The first point is due at `first` (negative: at the first step).
+  CurveTimes(double interval, double first) : interval_(interval), next_(first) {}
+  bool Due(double now) const { return now >= next_; }
+  // A point was taken at `now`, costing `cost_s`.
+  void Taken(double now, double cost_s) {
+    next_ = now + std::min(interval_, std::max({0.5 * now, interval_ / 8, 10 * cost_s}));
   }
 
  private:

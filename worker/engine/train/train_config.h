@@ -139,7 +139,8 @@ struct TrainConfig {
   // (no motion until the photometric loss finds some).
   std::string deformation_start = "flow";
 
-  double curve_interval_s = 10.0;  // a point of the error-against-time curve every this many seconds
+  double curve_interval_s = 10.0;  // the error-against-time curve's points: at most this far apart
+                                   // (closer early on: train/run_clock.h, CurveTimes)
   int curve_frames = 4;            // held-out frames rendered for each curve point (evenly spread)
 
   field::FieldConfig field;

@@ -11,6 +11,7 @@
 
 #include "common/error.h"
 #include "worker/engine/base/counter_rng.h"
+#include "worker/engine/base/psnr_from_mse.h"
 #include "worker/engine/field/field_state.h"
 #include "worker/engine/render/frame_renderer.h"
 #include "worker/engine/train/background_start.h"
@@ -222,7 +223,7 @@ StepStats Trainer::Step(double progress) {
   const StepResult result = backend_->Step(request);
   stats.loss = result.loss;
   stats.rgb_mse = result.rgb_mse;
-  stats.psnr = -10.0 * std::log10(std::max(result.rgb_mse, 1e-12));
+  stats.psnr = base::PsnrFromMse(result.rgb_mse);
   stats.samples = result.samples;
   ++iteration_;
   return stats;
