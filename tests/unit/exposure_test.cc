@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <numeric>
+#include <opencv2/core.hpp>
 #include <vector>
 
 #include "common/error.h"
@@ -196,6 +197,27 @@ TEST(ExposureChangeTest, MeasuresAWholeFrameGainDespiteMotionAndTools) {
   EXPECT_NEAR(scene::ExposureChange(TwoFrames(1.1, true), {0, 1}), std::log(1.1), 0.01);
   EXPECT_LT(scene::ExposureChange(TwoFrames(1.0, true), {0, 1}), 0.003);
   EXPECT_EQ(scene::ExposureChange(TwoFrames(1.1, false), {0}), 0.0);
+}
+
+// Noise, or a handful of pixels, is no exposure change: a noisy clip's and a 10 x 8 clip's medians
+// strayed past the threshold and turned the gains on (found 2026-12-06).
+TEST(ExposureChangeTest, NoiseOrAFewPixelsAreNoChange) {
+  scene::Clip noisy = TwoFrames(1.0, false);
+  cv::RNG random(3);
+  for (auto& frame : noisy.rgb) {
+    for (auto& v : frame) v = cv::saturate_cast<std::uint8_t>(v + random.gaussian(12));
+  }
+  EXPECT_LT(scene::ExposureChange(noisy, {0, 1}), 0.002);
+  scene::Clip gained = TwoFrames(1.1, false);
+  for (auto& frame : gained.rgb) {
+    for (auto& v : frame) v = cv::saturate_cast<std::uint8_t>(v + random.gaussian(12));
+  }
+  EXPECT_GT(scene::ExposureChange(gained, {0, 1}), 0.05) << "a real gain still shows through the noise";
+  scene::Clip tiny = TwoFrames(1.1, false);
+  tiny.width = 10;
+  tiny.height = 8;
+  for (auto& frame : tiny.rgb) frame.resize(3 * 10 * 8);
+  EXPECT_EQ(scene::ExposureChange(tiny, {0, 1}), 0.0) << "12 pixels a channel say nothing";
 }
 
 }  // namespace

@@ -126,6 +126,7 @@ TEST(TrainConfigTest, JsonRoundTripKeepsEveryKey) {
                                               "preset",
                                               "rays_per_batch",
                                               "rgb_l2_weight",
+                                              "still_threshold_px",
                                               "stratified_samples",
                                               "uncertainty_lambda",
                                               "variance_eps",

@@ -262,6 +262,7 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
   metrics["cancelled"] = trained.cancelled;
   metrics["curve"] = extras.curve;
   metrics["left_out"] = left_out;
+  metrics["kept"] = fit.kept;
   metrics["field"] = field::DescribeField(trainer.field());
   // A resumed run reports the start of the run that began it (the checkpoint carries it).
   metrics["deformation_start"] = train::DeformationStartOf(trainer, extras);

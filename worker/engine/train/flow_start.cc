@@ -17,6 +17,8 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
 
+#include "worker/engine/train/flow_image.h"
+
 namespace endorecon::train {
 namespace {
 
@@ -25,8 +27,6 @@ namespace {
 constexpr int kFlowWidth = 320;
 // Flow more than this from the way back (flow pixels) is an occlusion, a highlight or a mistake.
 constexpr double kRoundTripPx = 0.5;
-// Grey levels at or above this are taken for specular highlights, which move with the light.
-constexpr int kSaturated = 250;
 // About this many points a frame (the grid has a few thousand vertices near the surface), and at
 // most about this many in all (the least squares' cost grows with them: 367k points on a
 // 160-frame clip took 11 s to start, docs/benchmarks.md).
@@ -37,37 +37,6 @@ constexpr int kPoints = 160000;
 // vertex without points takes its neighbours' motion. 0.003-0.05 measured alike, 0.3 worse
 // (docs/benchmarks.md, "The deformation started from optical flow").
 constexpr double kSmooth = 0.01;
-
-// One frame as the flow sees it: grey, its mean scaled to the reference's (a flickering light or an
-// auto exposure breaks DIS's brightness constancy), and where a pixel may be followed (no tool in
-// it, not saturated).
-struct FlowImage {
-  cv::Mat grey;    // CV_8U
-  cv::Mat usable;  // CV_8U, 1 or 0
-};
-
-FlowImage FlowImageOf(const scene::Clip& clip, int f, cv::Size size, double mean) {
-  const cv::Mat rgb(clip.height, clip.width, CV_8UC3, const_cast<std::uint8_t*>(clip.rgb[f].data()));
-  FlowImage image;
-  cv::Mat grey;
-  cv::cvtColor(rgb, grey, cv::COLOR_RGB2GRAY);
-  if (size != grey.size()) cv::resize(grey, grey, size, 0, 0, cv::INTER_AREA);
-  const double own = cv::mean(grey)[0];
-  if (mean > 0 && own > 0) grey.convertTo(grey, CV_8U, mean / own);
-  image.grey = grey;
-  image.usable = grey < kSaturated;
-  if (clip.has_masks()) {
-    const cv::Mat tool(clip.height, clip.width, CV_8U, const_cast<std::uint8_t*>(clip.tool_mask[f].data()));
-    // The block's share of tool pixels, in floats: any tool pixel makes it nonzero (the mask's 0/1
-    // bytes averaged would round a block less than half tool to 0, and its edge's motion is the tool's).
-    cv::Mat share;
-    cv::Mat(tool != 0).convertTo(share, CV_32F);
-    if (size != share.size()) cv::resize(share, share, size, 0, 0, cv::INTER_AREA);
-    image.usable &= share == 0;
-  }
-  image.usable /= 255;
-  return image;
-}
 
 cv::Vec2f Bilinear(const cv::Mat& field, double x, double y) {
   const int x0 = std::clamp(int(std::floor(x)), 0, field.cols - 1),

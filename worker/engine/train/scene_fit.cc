@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <string>
 #include <utility>
@@ -12,6 +13,7 @@
 #include "worker/engine/field/hash_grid.h"
 #include "worker/engine/scene/exposure_change.h"
 #include "worker/engine/scene/scene_box.h"
+#include "worker/engine/train/still_clip.h"
 
 namespace endorecon::train {
 namespace {
@@ -38,20 +40,23 @@ TrainingTimes InTimeOrder(const scene::Clip& clip, std::vector<int> frames) {
 
 // Resolves config.exposure and gives the field a knot at each training frame's time (distinct times
 // only: a static clip's frames share one).
-template <typename LeaveOut>
-void FitExposure(const scene::Clip& clip, TrainConfig& config, TrainingTimes training,
-                 const LeaveOut& leave_out) {
+template <typename Note>
+void FitExposure(const scene::Clip& clip, TrainConfig& config, TrainingTimes training, const Note& leave_out,
+                 const Note& keep) {
   if (!config.field.exposure_times.empty()) return;  // fitted already
   const auto& [frames, times] = training;
+  if (config.exposure == "auto" && frames.size() < 2) {
+    config.exposure = "off";
+    leave_out("per-frame exposure gains", "training sees one frame: there is no next to change from");
+  }
   if (config.exposure == "auto") {
     const double change = scene::ExposureChange(clip, frames);
     config.exposure = change > config.exposure_threshold ? "on" : "off";
-    if (config.exposure == "off") {
-      leave_out("per-frame exposure gains",
-                fmt::format("the frames' brightness changes by {:.2g}% from one to the "
-                            "next (median), at most {:.2g}%",
-                            100 * change, 100 * config.exposure_threshold));
-    }
+    const std::string why = fmt::format(
+        "the frames' brightness changes by {:.2g}% from one to the next (median, beyond what the pixels' "
+        "noise and count leave uncertain), {} {:.2g}% (exposure_threshold)",
+        100 * change, config.exposure == "on" ? "more than" : "at most", 100 * config.exposure_threshold);
+    (config.exposure == "on" ? keep : leave_out)("per-frame exposure gains", why);
   }
   if (config.exposure == "on" && times.size() < 2) {
     config.exposure = "off";
@@ -84,8 +89,13 @@ scene::Camera SceneFit::preview_camera(const scene::Camera& camera) const {
 
 SceneFit FitToScene(const scene::Clip& clip, TrainConfig& config, std::vector<int> train_frames) {
   SceneFit fit;
-  const auto leave_out = [&](const std::string& what, const std::string& why) {
+  const std::function<void(const std::string&, const std::string&)> leave_out = [&](const std::string& what,
+                                                                                    const std::string& why) {
     fit.left_out.push_back({{"what", what}, {"why", why}});
+  };
+  const std::function<void(const std::string&, const std::string&)> keep = [&](const std::string& what,
+                                                                               const std::string& why) {
+    fit.kept.push_back({{"what", what}, {"why", why}});
   };
   if (!clip.has_masks()) leave_out("tool-mask handling", "the clip has no masks/");
   if (!clip.has_depth()) {
@@ -99,22 +109,43 @@ SceneFit FitToScene(const scene::Clip& clip, TrainConfig& config, std::vector<in
     config.background = clip.transparent ? "white" : clip.object_radius > 0 ? "learned" : "black";
   }
   config.field.learned_background = config.background == "learned";
+  TrainingTimes training = InTimeOrder(clip, std::move(train_frames));
+  std::string still;
   if (clip.is_static) {
-    leave_out("deformation network", "the clip is static");
+    still = "the clip is static";
+  } else if (config.field.deformation.enabled && config.still_threshold_px > 0) {
+    const Stillness s = MeasureStillness(clip, training.frames, config.still_threshold_px);
+    if (!s.still) {
+      keep("deformation network",
+           s.tested
+               ? fmt::format(
+                     "the clip's tissue moves: in a frame tried, 5% of it moves {:.2g} px or more from the "
+                     "first training frame (still_threshold_px {:.2g})",
+                     s.motion_px, config.still_threshold_px)
+               : "not tested for stillness: " + s.why);
+    } else {
+      still = fmt::format(
+          "the clip's tissue stands still: with the camera fixed, 95% of it moves less than {:.2g} px from "
+          "the "
+          "first training frame in each of the {} others (at most {:.2g} px; still_threshold_px)",
+          config.still_threshold_px, s.frames, s.motion_px);
+    }
+  }
+  if (!still.empty()) {
+    leave_out("deformation network", still);
     config.field.deformation.enabled = false;
     if (config.field.heads.color_time_frequencies > 0) {
-      leave_out("the colour head's time inputs", "the clip is static");
+      leave_out("the colour head's time inputs", still);
       config.field.heads.color_time_frequencies = 0;
     }
   }
-  TrainingTimes training = InTimeOrder(clip, std::move(train_frames));
   if (config.adaptive_sampling && config.adaptive_ray_fraction > 0) {
     config.adaptive_map_stride =
         UncertaintyMapStride(clip.width, clip.height, int(training.frames.size()), config);
   }
   // The times the field is trained at (field_config.h: it holds its state outside them).
   if (!training.times.empty()) config.field.trained_times = {training.times.front(), training.times.back()};
-  FitExposure(clip, config, std::move(training), leave_out);
+  FitExposure(clip, config, std::move(training), leave_out, keep);
   // Finest useful grid resolution: two cells per pixel footprint at the typical depth, over the box.
   const scene::SceneBox box = scene::ClipBox(clip);
   double focal = 0;

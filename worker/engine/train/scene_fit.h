@@ -1,8 +1,8 @@
 // "Leave out what a scene does not need": adapts a config to the clip at hand and records what was
 // left out and why (it goes into metrics.json). No masks: no mask handling; no depth: no depth loss
-// and no depth-guided sampling; a static clip: no deformation; hash levels finer than a pixel's
-// footprint in the scene: dropped; a steady exposure (exposure "auto"): no per-frame gains; frames
-// too many or too large for the guided rays' uncertainty map at its stride: a coarser map.
+// and no depth-guided sampling; a static clip, or one whose tissue stands still: no deformation; hash levels
+// finer than a pixel's footprint in the scene: dropped; a steady exposure (exposure "auto"): no per-frame
+// gains; frames too many or too large for the guided rays' uncertainty map at its stride: a coarser map.
 #pragma once
 
 #include <nlohmann/json.hpp>
@@ -16,6 +16,9 @@ namespace endorecon::train {
 
 struct SceneFit {
   nlohmann::json left_out = nlohmann::json::array();  // [{"what": ..., "why": ...}]
+  // What a measurement kept that it could have left out, and what it measured (the exposure gains
+  // of "auto", the deformation of a clip tested for stillness): [{"what": ..., "why": ...}].
+  nlohmann::json kept = nlohmann::json::array();
   int preview_width = 64;
 
   // The camera scaled down to preview size (same view, fewer pixels).

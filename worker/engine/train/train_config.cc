@@ -121,6 +121,7 @@ void VisitKeys(TrainConfig& c, Visit&& visit) {
   visit("outside_view_level", c.outside_view_level);
   visit("exposure", c.exposure);
   visit("exposure_threshold", c.exposure_threshold);
+  visit("still_threshold_px", c.still_threshold_px);
   visit("deformation_start", c.deformation_start);
   visit("curve_interval_s", c.curve_interval_s);
   visit("curve_frames", c.curve_frames);
@@ -246,6 +247,7 @@ void Validate(const TrainConfig& c) {
   require(c.exposure == "auto" || c.exposure == "on" || c.exposure == "off",
           "exposure must be auto, on or off, got " + c.exposure);
   require(c.exposure_threshold >= 0, "exposure_threshold must be >= 0");
+  require(c.still_threshold_px >= 0, "still_threshold_px must be >= 0");
   require(c.deformation_start == "flow" || c.deformation_start == "zero",
           "deformation_start must be flow or zero, got " + c.deformation_start);
   // The field's keys (field.*), checked here, before a clip is loaded; the field's own checks name the

@@ -134,6 +134,11 @@ struct TrainConfig {
   std::string exposure = "auto";
   double exposure_threshold = 0.02;
 
+  // A clip whose times differ but whose tissue stands still gets no deformation: FitToScene leaves it
+  // out when, with the camera fixed, 95% of the tissue moves less than this many pixels from the
+  // first training frame in every other (train/still_clip.h). 0: never.
+  double still_threshold_px = 0.25;
+
   // Where the deformation starts (train/flow_start.h): "flow" (fitted to the optical flow from each
   // training frame back to the frame at time 0, where the clip has depth and such a frame) or "zero"
   // (no motion until the photometric loss finds some).
