@@ -38,6 +38,8 @@ struct Clip {
   std::vector<std::vector<float>> gt_depth;
 
   bool is_static = false;  // no per-frame time, or the user said --static
+  // Why LoadClip brought near and far to the depth priors (scene/depth_bounds.h); empty: as given.
+  std::string bounds_fitted;
 
   // Object captures (NeRF-synthetic style): the images had transparent pixels, composited onto
   // LoadOptions::alpha_background when read; and the cameras stand around an object at the origin

@@ -10,6 +10,7 @@
 #include "common/clip_files.h"
 #include "common/error.h"
 #include "worker/engine/scene/clip_checks.h"
+#include "worker/engine/scene/depth_bounds.h"
 #include "worker/engine/scene/endonerf_loader.h"
 #include "worker/engine/scene/frame_reader.h"
 #include "worker/engine/scene/transforms_loader.h"
@@ -57,6 +58,8 @@ Clip LoadClip(const fs::path& dir, const LoadOptions& options) {
   }
   if (fs::is_directory(dir / "gt")) LoadGroundTruth(dir / "gt", options, clip);
   CheckClipGeometry(clip, dir.string());
+  clip.bounds_fitted = FitBoundsToPriors(clip);
+  if (!clip.bounds_fitted.empty()) spdlog::warn("{}: {}", dir.string(), clip.bounds_fitted);
   // Frames with nothing in them (a lens cap, an exposure of 0) train a black field without a word.
   const bool all_black =
       std::all_of(clip.rgb.begin(), clip.rgb.end(), [](const std::vector<std::uint8_t>& image) {

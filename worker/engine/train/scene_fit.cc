@@ -98,6 +98,7 @@ SceneFit FitToScene(const scene::Clip& clip, TrainConfig& config, std::vector<in
     fit.kept.push_back({{"what", what}, {"why", why}});
   };
   if (!clip.has_masks()) leave_out("tool-mask handling", "the clip has no masks/");
+  if (!clip.bounds_fitted.empty()) leave_out("the depth bounds beyond the depth priors", clip.bounds_fitted);
   if (!clip.has_depth()) {
     leave_out("depth loss and depth-guided sampling", "the clip has no depth/");
     config.depth_weight = 0;

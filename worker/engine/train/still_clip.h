@@ -1,7 +1,8 @@
 // Whether a clip's tissue moves at all. A clip whose times differ but whose tissue stands still (a
 // fixed scope on a still organ, a static phantom) trained a deformation for nothing: on a still
-// synthetic clip at 20 s, 27.1 dB held out against 33.6 with the deformation left out, and the flow
-// start measured 0.03 px (found 2026-12-06). FitToScene leaves the deformation out of such a clip.
+// synthetic clip at 20 s, 32.7 dB held out (37.3 against the noise-free truth) against 33.9 (41.4)
+// with the deformation left out, and the flow start measured 0.03 px (found 2026-12-06;
+// docs/benchmarks.md). FitToScene leaves the deformation out of such a clip.
 //
 // Tested where it can be told cheaply: the camera stays put (every training frame's pose the same;
 // a moving camera's frames move whatever the tissue does), the frames have images. Each training

@@ -1,0 +1,55 @@
+#include "worker/engine/scene/depth_bounds.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+namespace endorecon::scene {
+namespace {
+
+constexpr std::size_t kLattice = 61;       // every 61st pixel of every frame
+constexpr std::size_t kLeastPriors = 100;  // fewer say too little
+constexpr double kMargin = 1.25;           // the priors' range widened by a quarter each way
+constexpr double kLooseFactor = 2;         // bounds over twice that range are loose
+constexpr double kOutsideShare = 0.25;     // bounds leaving more priors outside cut them off
+
+double Percentile(std::vector<float>& values, double p) {
+  const auto k = std::ptrdiff_t(p * double(values.size() - 1));
+  std::nth_element(values.begin(), values.begin() + k, values.end());
+  return values[std::size_t(k)];
+}
+
+}  // namespace
+
+std::string FitBoundsToPriors(Clip& clip) {
+  if (!clip.has_depth() || clip.object_radius > 0) return {};
+  std::vector<float> priors;
+  std::size_t outside = 0, foreign = 0;
+  for (const auto& frame : clip.depth) {
+    for (std::size_t i = 0; i < frame.size(); i += kLattice) {
+      const float z = frame[i];
+      if (!(z > 0) || !std::isfinite(z)) continue;
+      priors.push_back(z);
+      outside += z < clip.near || z > clip.far;
+      foreign += z < 0.5 * clip.near || z > 2 * clip.far;
+    }
+  }
+  if (priors.size() < kLeastPriors || 2 * foreign > priors.size()) return {};
+  const double lo = Percentile(priors, 0.005) / kMargin, hi = Percentile(priors, 0.995) * kMargin;
+  const bool loose = clip.far - clip.near > kLooseFactor * (hi - lo);
+  const double cut = double(outside) / double(priors.size());
+  if (!loose && cut <= kOutsideShare) return {};
+  const std::string why = fmt::format(
+      "the depth bounds [{:.6g}, {:.6g}] {} the depth priors (their 0.5th to 99.5th percentile, widened by a "
+      "quarter: [{:.6g}, {:.6g}]{}): the bounds are now that range, so the samples and the grids' cells lie "
+      "where the surface is",
+      clip.near, clip.far, loose ? "are over twice as wide as" : "cut off", lo, hi,
+      loose ? "" : fmt::format("; {:.0f}% of the priors lay outside the bounds", 100 * cut));
+  clip.near = lo;
+  clip.far = hi;
+  return why;
+}
+
+}  // namespace endorecon::scene
