@@ -111,6 +111,16 @@ TEST(DescribeJob, ASucceededJobShowsItsOutcomeNotItsLastProgress) {
       OutcomeLine(job),
       "done: 2211 iterations in 1m14s of training, 1m02s in all, PSNR 24.05 dB (held-out 23.13); its "
       "results took more than a quarter of the time budget: 190 s or more leaves training three quarters");
+  // A run over its budget says by how much (within a tenth it is on time).
+  job.set_summary_json(
+      R"({"iterations":120,"train_seconds":12,"train_psnr":24,"heldout_psnr":23,"time_budget_s":30,)"
+      R"("run_seconds":62.9,"budget_advised_s":230})");
+  EXPECT_NE(OutcomeLine(job).find("; the run took 1m03s of its 30s time budget; its results took more than"),
+            std::string::npos)
+      << OutcomeLine(job);
+  job.set_summary_json(
+      R"({"iterations":120,"train_seconds":12,"train_psnr":24,"time_budget_s":30,"run_seconds":32.9})");
+  EXPECT_EQ(OutcomeLine(job).find("time budget"), std::string::npos) << OutcomeLine(job);
 }
 
 TEST(DescribeJob, TheIterationsTrainedComeFromTheSummary) {

@@ -154,6 +154,12 @@ TEST(Reconstruct, ProgressUnderABudgetEndsAtTheIterationsRun) {
       return by_render.contains(render) ? by_render.at(render).at("count").get<int>() : 0;
     };
     EXPECT_EQ(count("full") + count("reduced"), 6);
+    // The depth the same way (the clip has ground-truth depth).
+    const auto& depth = evaluation.at("train_depth_rmse");
+    const auto depth_count = [&](const char* render) {
+      return depth.contains(render) ? depth.at(render).at("count").get<int>() : 0;
+    };
+    EXPECT_EQ(depth_count("full") + depth_count("reduced"), 6);
   }
   // The deformation started from the training frames' optical flow (the clip has depth, moves, and
   // trains on its frame at time 0): 5 frames besides that one.

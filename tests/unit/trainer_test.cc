@@ -128,6 +128,22 @@ TEST_F(TrainerTest, FixedSeedOnOneThreadRepeats) {
   EXPECT_EQ(a, b);
 }
 
+// Progress that leaps over several rounds' times at once (a budget revised down) makes one round,
+// not one a step for each (a 10 s run made three in nine steps; found 2026-12-06).
+TEST_F(TrainerTest, AProgressLeapMakesOneRefinementRoundForAll) {
+  TrainConfig config = SmallConfig();
+  ASSERT_GT(config.depth_weight, 0);
+  config.depth_refine_every = 0.25;
+  Trainer trainer(*clip_, config, AllFrames(), 7);
+  EXPECT_FALSE(trainer.Step(0.1).depth_refined);
+  EXPECT_TRUE(trainer.Step(0.8).depth_refined) << "the times of 0.25, 0.5 and 0.75 have passed";
+  EXPECT_EQ(trainer.depth_refiner().rounds(), 3);
+  EXPECT_FALSE(trainer.Step(0.81).depth_refined);
+  EXPECT_FALSE(trainer.Step(0.82).depth_refined);
+  EXPECT_FALSE(trainer.Step(0.99).depth_refined);
+  EXPECT_TRUE(trainer.Step(1.0).depth_refined) << "the next time still comes";
+}
+
 TEST_F(TrainerTest, CheckpointResumesTheSameCurve) {
   tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
   // Depth refinement at iterations 5, 10 and 15: the saved state holds refined priors, and the

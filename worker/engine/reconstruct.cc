@@ -304,6 +304,8 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
   summary.device = trainer.device();
   summary.metrics_path = (out_dir / "metrics.json").string();
   summary.budget_advised_s = advised_s;
+  summary.time_budget_s = options.time_budget_s;
+  summary.run_seconds = metrics["time"]["total_s"].get<double>();
   const auto heldout = "/heldout/image/psnr_tissue/mean"_json_pointer;
   if (metrics.contains(heldout) && metrics.at(heldout).is_number())
     summary.heldout_psnr = metrics.at(heldout);

@@ -77,6 +77,8 @@ struct ReconstructSummary {
   // > 0 when the clip's results cost more than evaluation's quarter of the time budget: the budget
   // that would have left training three quarters (metrics.json time.budget_advised_s).
   double budget_advised_s = 0;
+  double time_budget_s = 0;  // the run's --time-budget (0: none)
+  double run_seconds = 0;    // the whole run, up to metrics.json (metrics.json time.total_s)
 };
 
 // Throws endorecon::Error: kInvalidArgument for a bad clip or option (message names the file),

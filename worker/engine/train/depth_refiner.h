@@ -9,6 +9,7 @@
 // the measurements around it when the refiner was made (depth_fill.h).
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <iosfwd>
@@ -52,6 +53,8 @@ class DepthRefiner {
   DepthRefineStats Refine(render::FrameRenderer& renderer, float fraction, float ema,
                           std::size_t max_pixels = 0);
   int rounds() const { return rounds_; }
+  // Counts the rounds up to `rounds` whose time passed with the one just made (Trainer::Step).
+  void CatchUp(int rounds) { rounds_ = std::max(rounds_, rounds); }
 
   // Exact state for resume (the refined frames, the round count and where the next round starts). Load throws
   // Error(kDataLoss) for a truncated stream or one of another clip size.
