@@ -137,6 +137,23 @@ TEST_F(CheckpointTest, AConfigurationThisBuildCannotUseIsNamed) {
   }
 }
 
+// A checkpoint of before 2026-12-06 (its configuration without the two keys) resumes with the
+// stillness test and the depth bounds' fit off: its field and box were laid out without them.
+TEST_F(CheckpointTest, ACheckpointOfBeforeTheStillnessTestAndTheBoundsFitKeepsThemOff) {
+  EXPECT_EQ(ReadCheckpointConfig(path_).still_threshold_px, config_.still_threshold_px);
+  EXPECT_TRUE(ReadCheckpointConfig(path_).fit_depth_bounds);
+  std::string body = bytes_.substr(0, bytes_.size() - 64);
+  for (const std::string key : {"\"still_threshold_px\":0.25,", "\"fit_depth_bounds\":true,"}) {
+    const auto at = body.find(key);
+    ASSERT_NE(at, std::string::npos) << key;
+    body.replace(at, key.size(), std::string(key.size(), ' '));  // the same length: framing kept
+  }
+  WriteBytes(path_, body + Sha256Hex(body));
+  const TrainConfig old = ReadCheckpointConfig(path_);
+  EXPECT_EQ(old.still_threshold_px, 0);
+  EXPECT_FALSE(old.fit_depth_bounds);
+}
+
 TEST_F(CheckpointTest, AModelWithAFlippedByteIsFound) {
   const fs::path model = dir_->path() / "model.bin";
   WriteModel(model, config_, trainer_->box(), clip_->near, clip_->far, trainer_->field());

@@ -112,6 +112,7 @@ TEST(TrainConfigTest, JsonRoundTripKeepsEveryKey) {
                                               "exposure",
                                               "exposure_threshold",
                                               "field",
+                                              "fit_depth_bounds",
                                               "holdout",
                                               "huber_delta",
                                               "iterations",

@@ -78,6 +78,7 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
   scene::LoadOptions load;
   load.force_static = options.force_static;
   load.should_stop = hooks.should_stop;
+  load.fit_depth_bounds = config.fit_depth_bounds;
   if (config.background == "black") load.alpha_background = {0, 0, 0};
   nlohmann::json outside_view;  // what the scope's view leaves out, for left_out
   const scene::Clip clip = [&] {

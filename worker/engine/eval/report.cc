@@ -306,6 +306,9 @@ fs::path WriteReport(const fs::path& results_dir) {
     scene::LoadOptions load;  // transparent inputs shown on the background the run used
     if (config.contains("/train/background"_json_pointer) && config["train"]["background"] == "black")
       load.alpha_background = {0, 0, 0};
+    // The bounds the run trained with (results of before 2026-12-06 had the clip's own).
+    load.fit_depth_bounds = config.contains("/train/fit_depth_bounds"_json_pointer) &&
+                            config["train"]["fit_depth_bounds"] == true;
     views.clip = scene::LoadClip(clip_dir, load);
     views.cameras = views.clip->cameras;
     views.times = views.clip->times;

@@ -58,7 +58,7 @@ Clip LoadClip(const fs::path& dir, const LoadOptions& options) {
   }
   if (fs::is_directory(dir / "gt")) LoadGroundTruth(dir / "gt", options, clip);
   CheckClipGeometry(clip, dir.string());
-  clip.bounds_fitted = FitBoundsToPriors(clip);
+  if (options.fit_depth_bounds) clip.bounds_fitted = FitBoundsToPriors(clip);
   if (!clip.bounds_fitted.empty()) spdlog::warn("{}: {}", dir.string(), clip.bounds_fitted);
   // Frames with nothing in them (a lens cap, an exposure of 0) train a black field without a word.
   const bool all_black =

@@ -17,6 +17,9 @@ struct LoadOptions {
   // Asked between frames: true stops the load with Error(kCancelled) (a job cancelled while its clip
   // loads waited for the whole load). Empty: never.
   std::function<bool()> should_stop;
+  // Bring near/far to the depth priors where they are far looser or cut them off
+  // (scene/depth_bounds.h; the training key fit_depth_bounds).
+  bool fit_depth_bounds = true;
 };
 
 }  // namespace endorecon::scene

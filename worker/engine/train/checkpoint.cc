@@ -43,7 +43,13 @@ std::string ReadString(std::istream& in, const std::filesystem::path& path) {
 TrainConfig ConfigFromString(const std::string& text, const std::filesystem::path& path) {
   TrainConfig config;
   try {
-    ApplyJson(nlohmann::json::parse(text), config);
+    const nlohmann::json json = nlohmann::json::parse(text);
+    // A checkpoint of before 2026-12-06 laid its field and its scene box out without the stillness
+    // test and the depth bounds' fit: resumed, it keeps them off, or its parameters would be read
+    // into a field of another layout or a box of other bounds.
+    if (json.is_object() && !json.contains("still_threshold_px")) config.still_threshold_px = 0;
+    if (json.is_object() && !json.contains("fit_depth_bounds")) config.fit_depth_bounds = false;
+    ApplyJson(json, config);
   } catch (const nlohmann::json::exception& e) {
     Fail(ErrorCode::kDataLoss, path.string() + ": its configuration does not parse: " + e.what());
   } catch (const Error& e) {

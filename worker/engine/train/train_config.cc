@@ -122,6 +122,7 @@ void VisitKeys(TrainConfig& c, Visit&& visit) {
   visit("exposure", c.exposure);
   visit("exposure_threshold", c.exposure_threshold);
   visit("still_threshold_px", c.still_threshold_px);
+  visit("fit_depth_bounds", c.fit_depth_bounds);
   visit("deformation_start", c.deformation_start);
   visit("curve_interval_s", c.curve_interval_s);
   visit("curve_frames", c.curve_frames);

@@ -138,6 +138,9 @@ struct TrainConfig {
   // out when, with the camera fixed, 95% of the tissue moves less than this many pixels from the
   // first training frame in every other (train/still_clip.h). 0: never.
   double still_threshold_px = 0.25;
+  // Depth bounds far looser than the clip's depth priors, or cutting them off, are brought to the
+  // priors' range when the clip is loaded (scene/depth_bounds.h); false: as the clip gives them.
+  bool fit_depth_bounds = true;
 
   // Where the deformation starts (train/flow_start.h): "flow" (fitted to the optical flow from each
   // training frame back to the frame at time 0, where the clip has depth and such a frame) or "zero"
