@@ -156,6 +156,19 @@ TEST_F(BadRecordingTest, EyesOfDifferentFrameRatesOrLengths) {
   EXPECT_NE(message.find("left.avi has 12 (both eyes' recordings must have the same length)"),
             std::string::npos)
       << message;
+  // A folder has no rate (its times are its order at 25 fps): beside a 30 fps video it is paired by
+  // order, its times not compared.
+  WritePair(dir_ / "long", 20);  // 20 frames: 0.76 s at 25 fps against 0.63 s at 30
+  {
+    cv::VideoWriter writer((dir_ / "long" / "right30.avi").string(), cv::CAP_OPENCV_MJPEG,
+                           cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 30, cv::Size(64, 48));
+    for (int i = 0; i < 20; ++i)
+      writer.write(cv::imread((dir_ / "long" / "right" / (std::to_string(100 + i) + ".png")).string()));
+  }
+  options = Options();
+  options.recording.left = dir_ / "long" / "left";
+  options.recording.right = dir_ / "long" / "right30.avi";
+  EXPECT_EQ(prepare::PrepareClip(options).frames, 20);
 }
 
 TEST_F(BadRecordingTest, UnreadableAndTruncatedVideos) {

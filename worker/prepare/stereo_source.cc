@@ -63,7 +63,8 @@ void StereoSource::CheckPairedByOrder() {
                     "recorded together?)",
                     second_->name(), b, first_->name(), a));
   }
-  frame_period_s_ = a > 0 ? 1 / a : b > 0 ? 1 / b : 0;
+  // Times are compared only between two videos: a folder's are its order at a nominal 25 fps.
+  frame_period_s_ = a > 0 && b > 0 ? 1 / a : 0;
   const int m = first_->announced_frames(), n = second_->announced_frames();
   // A video's count may be an estimate (from its duration) a frame or two off: the exact check is
   // Ended's, at the end.

@@ -52,7 +52,7 @@ class StereoSource {
   StereoLayout layout_;
   std::unique_ptr<FrameSource> first_, second_;  // second_ only for two sources
   cv::Size eye_size_;
-  double frame_period_s_ = 0;  // two videos': one frame's time at their rate; 0: unknown
+  double frame_period_s_ = 0;  // two videos': one frame's time at their rate; 0: not two videos
   int next_ = 0;
 };
 
