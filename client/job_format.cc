@@ -108,11 +108,12 @@ std::string OutcomeLine(const v1::Job& job) {
   }
   if (number("train_psnr") > 0) line += fmt::format(", PSNR {:.2f} dB", number("train_psnr"));
   if (number("heldout_psnr") >= 0) line += fmt::format(" (held-out {:.2f})", number("heldout_psnr"));
-  // A run over its budget by more than the tenth it keeps to (a budget too small for the clip's
-  // results): said here, not only in the worker's log (found 2026-12-06).
+  // A reconstruction over its budget by more than the tenth it keeps to (a budget too small for the
+  // clip's results): said here, not only in the worker's log (found 2026-12-06). The budget is the
+  // engine's run's; the job's wall time above adds preparation and transfers.
   if (number("time_budget_s") > 0 && number("run_seconds") > 1.1 * number("time_budget_s")) {
-    line += fmt::format("; the run took {} of its {} time budget", HumanDuration(number("run_seconds")),
-                        HumanDuration(number("time_budget_s")));
+    line += fmt::format("; the reconstruction took {} of its {} time budget",
+                        HumanDuration(number("run_seconds")), HumanDuration(number("time_budget_s")));
   }
   if (number("budget_advised_s") > 0) {
     line += fmt::format(

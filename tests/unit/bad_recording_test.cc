@@ -66,8 +66,11 @@ TEST_F(BadRecordingTest, GoodRecordingPasses) { EXPECT_EQ(prepare::PrepareClip(O
 
 TEST_F(BadRecordingTest, EyesOfDifferentLengths) {
   fs::remove(dir_ / "right/105.png");
+  // Two folders' counts are exact: refused before any frame is prepared.
   const std::string message = Refused(Options());
-  EXPECT_NE(message.find("right frame 5: it ends after 5 frames while"), std::string::npos) << message;
+  EXPECT_NE(message.find("right: 5 frames while "), std::string::npos) << message;
+  EXPECT_NE(message.find("left has 6 (both eyes' recordings must have the same length)"), std::string::npos)
+      << message;
 }
 
 // One eye given twice prepared a clip of 29% depth coverage without a word (found 2026-12-05).
@@ -129,7 +132,22 @@ TEST_F(BadRecordingTest, EyesTheOtherWayRound) {
             std::string::npos)
       << message;
   EXPECT_NE(message.find("the eyes are given the other way round (swap --left and --right, or the halves of "
-                         "the frame)"),
+                         "the frame; if the other way gives this too, the calibration is not this rig's)"),
+            std::string::npos)
+      << message;
+}
+
+// One picture given as both eyes (a mono recording as stereo) read as swapped eyes, whose swap said
+// the same, or prepared 0% depth (found 2026-12-06).
+TEST_F(BadRecordingTest, OnePictureGivenAsBothEyes) {
+  fs::create_directories(dir_ / "copy");
+  for (const auto& entry : fs::directory_iterator(dir_ / "left"))
+    fs::copy_file(entry.path(), dir_ / "copy" / entry.path().filename());
+  prepare::PrepareOptions options = Options();
+  options.recording.right = dir_ / "copy";
+  const std::string message = Refused(options);
+  EXPECT_NE(message.find("the two eyes show the same picture (under a grey level apart on average in each of "
+                         "the 6 pairs surveyed): a mono recording given as stereo?"),
             std::string::npos)
       << message;
 }

@@ -115,7 +115,8 @@ TEST(DescribeJob, ASucceededJobShowsItsOutcomeNotItsLastProgress) {
   job.set_summary_json(
       R"({"iterations":120,"train_seconds":12,"train_psnr":24,"heldout_psnr":23,"time_budget_s":30,)"
       R"("run_seconds":62.9,"budget_advised_s":230})");
-  EXPECT_NE(OutcomeLine(job).find("; the run took 1m03s of its 30s time budget; its results took more than"),
+  EXPECT_NE(OutcomeLine(job).find(
+                "; the reconstruction took 1m03s of its 30s time budget; its results took more than"),
             std::string::npos)
       << OutcomeLine(job);
   job.set_summary_json(

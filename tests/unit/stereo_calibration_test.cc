@@ -113,7 +113,7 @@ TEST(StereoCalibrationTest, FaultsNameTheFileAndField) {
   text.replace(d2, text.find(']', d2) - d2, "data: [ 0., 0., nan, 0., 0. ");
   WriteBytes(dir / "nan_d.yaml", text);
   message = ErrorFrom([&] { prepare::LoadStereoCalibration({dir / "nan_d.yaml"}); });
-  EXPECT_NE(message.find("nan_d.yaml: D2 coefficient 2 is not a finite number"), std::string::npos)
+  EXPECT_NE(message.find("nan_d.yaml: D2's coefficient 3 of 5 is not a finite number"), std::string::npos)
       << message << "\n"
       << text;
 
@@ -166,6 +166,12 @@ TEST(StereoCalibrationTest, ACalibrationForAnotherSizeIsRefused) {
   unsized.image_size = {};
   prepare::CheckCalibrationFits(unsized, {640, 512});
   ErrorFrom([&] { prepare::CheckCalibrationFits(unsized, {320, 256}); });
+  // Twice the size: the principal point inside the frame but at a quarter of it.
+  const std::string quarter = ErrorFrom([&] { prepare::CheckCalibrationFits(unsized, {1280, 1024}); });
+  EXPECT_NE(
+      quarter.find("lies a quarter of the frame or more from the centre of the recording's 1280x1024 eyes"),
+      std::string::npos)
+      << quarter;
 }
 
 TEST(StereoCalibrationTest, RectifiedCalibrationCentresThePrincipalPoint) {

@@ -61,7 +61,8 @@ double TailSeconds(const scene::Clip& clip) {
 // Records what the occupancy grid leaves out of the final field's renders (rebuilt from it).
 void RebuildOccupancy(train::Trainer& trainer, nlohmann::json& left_out) {
   trainer.RebuildOccupancy();
-  if (trainer.occupancy().empty()) return;
+  // A grid that leaves nothing out is no entry ("sampling of 0.0% of the rays' range"; found 2026-12-06).
+  if (trainer.occupancy().empty() || trainer.occupancy_span_fraction() > 0.9995) return;
   const auto& config = trainer.config();
   left_out.push_back(
       {{"what", fmt::format("sampling of {:.1f}% of the rays' range (occupancy grid {}^3, {:.1f}% of the "

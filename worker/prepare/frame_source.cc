@@ -37,6 +37,7 @@ class ImageFolderSource final : public FrameSource {
   const std::string& name() const override { return name_; }
   cv::Size frame_size() const override { return size_; }
   int announced_frames() const override { return static_cast<int>(files_.size()); }
+  bool count_is_exact() const override { return true; }
 
   bool Next(SourceFrame& frame) override {
     if (next_ >= files_.size()) return false;

@@ -32,6 +32,9 @@ class FrameSource {
   virtual int announced_frames() const = 0;
   // The frame rate the recording announces (a video's header); 0: none (a folder of images).
   virtual double frame_rate() const { return 0; }
+  // Whether announced_frames() is exact (a folder's files) rather than a header's, which may be an
+  // estimate from the duration a frame or two off.
+  virtual bool count_is_exact() const { return false; }
   // Reads the next frame into `frame`; false after the last. Throws Error(kInvalidArgument) naming
   // the source and the frame when the frame cannot be decoded, has another size, or when the
   // recording ends well before the frames it announced (a truncated file).

@@ -265,6 +265,8 @@ StereoSurvey Survey(const PrepareOptions& options, const StereoRectifier& rectif
     }
     if (!source.Next(frame)) return survey;
     ++position;
+    ++survey.frames;
+    survey.same_picture += cv::norm(frame.left, frame.right, cv::NORM_L1) < double(frame.left.total()) * 3;
     SurveyPair(rectifier.Left(frame.left), rectifier.Right(frame.right), allowed, survey);
   }
   return survey;
@@ -326,6 +328,7 @@ class Preparation {
     masks_ = std::make_unique<MaskReader>(options.masks, options.masks_tool_black, eye);
     placer_ = std::make_unique<Placer>(options, camera_);
     survey_ = Survey(options, *rectifier_, excluded_[0], source_.announced_frames());
+    survey_.CheckTwoViews(source_.name());
     survey_.CheckEyeOrder(source_.name());
     if (survey_.disparities.size() < StereoSurvey::kEyeOrderMatches) {
       spdlog::warn(

@@ -36,7 +36,8 @@ cv::Mat Distortion(const cv::Mat& m, const std::string& where) {
   m.reshape(1, 1).convertTo(d, CV_64F);
   for (int i = 0; i < d.cols; ++i) {
     if (!std::isfinite(d.at<double>(0, i)) || std::abs(d.at<double>(0, i)) > 1e12)
-      FailInvalid(where + " coefficient " + std::to_string(i) + " is not a finite number");
+      FailInvalid(where + "'s coefficient " + std::to_string(i + 1) + " of " + std::to_string(d.cols) +
+                  " is not a finite number");
   }
   return d;
 }
@@ -252,11 +253,19 @@ void CheckCalibrationFits(const StereoCalibration& c, cv::Size eye_size) {
     }
     return;
   }
+  // A lens's principal point lies near its image's centre (a few per cent off); one a quarter of the
+  // frame or more away is a calibration of another size (one for 160x128 taken for 320x256 eyes
+  // prepared a corner of them without a word; found 2026-12-06).
   for (const cv::Matx33d& k : {c.k1, c.k2}) {
-    if (k(0, 2) < 0 || k(0, 2) > eye_size.width || k(1, 2) < 0 || k(1, 2) > eye_size.height) {
+    if (std::abs(k(0, 2) - eye_size.width / 2.0) > 0.25 * eye_size.width ||
+        std::abs(k(1, 2) - eye_size.height / 2.0) > 0.25 * eye_size.height) {
       FailInvalid(c.source + ": the principal point (" + std::to_string(k(0, 2)) + ", " +
-                  std::to_string(k(1, 2)) + ") lies outside the recording's " + text(eye_size) +
-                  " eyes: the calibration is for another image size");
+                  std::to_string(k(1, 2)) +
+                  ") lies a quarter of the frame or more from the centre of the "
+                  "recording's " +
+                  text(eye_size) +
+                  " eyes: the calibration is for another image size (it names none; add image_width and "
+                  "image_height)");
     }
   }
 }

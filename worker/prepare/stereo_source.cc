@@ -66,9 +66,10 @@ void StereoSource::CheckPairedByOrder() {
   // Times are compared only between two videos: a folder's are its order at a nominal 25 fps.
   frame_period_s_ = a > 0 && b > 0 ? 1 / a : 0;
   const int m = first_->announced_frames(), n = second_->announced_frames();
-  // A video's count may be an estimate (from its duration) a frame or two off: the exact check is
-  // Ended's, at the end.
-  if (m > 0 && n > 0 && std::abs(m - n) > 2) {
+  // A video's count may be an estimate (from its duration) a frame or two off: then the exact check
+  // is Ended's, at the end; two folders' counts are exact.
+  const int slack = first_->count_is_exact() && second_->count_is_exact() ? 0 : 2;
+  if (m > 0 && n > 0 && std::abs(m - n) > slack) {
     FailInvalid(fmt::format("{}: {} frames while {} has {} (both eyes' recordings must have the same length)",
                             second_->name(), n, first_->name(), m));
   }

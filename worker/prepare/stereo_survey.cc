@@ -45,6 +45,16 @@ DisparityRange StereoSurvey::Range(int width) const {
   return {min, std::max(16, (max - min + 15) / 16 * 16), std::max({static_cast<double>(min), 0.8 * lo, 0.5})};
 }
 
+void StereoSurvey::CheckTwoViews(const std::string& recording) const {
+  if (frames > 0 && same_picture == frames) {
+    FailInvalid(recording + ": the two eyes show the same picture (under a grey level apart on average in " +
+                "each of the " + std::to_string(frames) +
+                " pairs surveyed): a mono recording given as stereo? " +
+                "Depth needs each eye's own view; a mono video is reconstructed as a recording of one eye " +
+                "(`endorecon-worker to-dicom VIDEO -o REC.dcm`, then reconstruct or submit REC.dcm)");
+  }
+}
+
 void StereoSurvey::CheckEyeOrder(const std::string& recording) const {
   if (disparities.size() < kEyeOrderMatches) return;
   const double median = Percentile(disparities, 0.5);
@@ -52,7 +62,8 @@ void StereoSurvey::CheckEyeOrder(const std::string& recording) const {
     FailInvalid(recording + ": the points of the left eye lie further left in the right eye (a median " +
                 "disparity of " + std::to_string(median) + " px over " + std::to_string(disparities.size()) +
                 " matches; a right eye on the right sees them further right): the eyes are given the other " +
-                "way round (swap --left and --right, or the halves of the frame)");
+                "way round (swap --left and --right, or the halves of the frame; if the other way gives this "
+                "too, the calibration is not this rig's)");
   }
 }
 

@@ -17,6 +17,8 @@ struct ErrorStats {
 };
 
 struct StereoSurvey {
+  int frames = 0;                     // pairs surveyed
+  int same_picture = 0;               // of them, eyes whose raw frames differ by under a grey level
   std::vector<float> disparities;     // x_left - x_right of the matches on the same row
   std::vector<float> vertical;        // y_right - y_left of every match
   ErrorStats epipolar_error() const;  // of |vertical|
@@ -28,6 +30,9 @@ struct StereoSurvey {
   // negative (below -1 px), of kEyeOrderMatches matches or more. Swapped eyes prepared a clip with a
   // third of its pixels' depth, and that a third too far, without a word (found 2026-12-06).
   void CheckEyeOrder(const std::string& recording) const;
+  // Throws FailInvalid naming `recording` when every pair surveyed shows one picture twice (a mono
+  // recording given as stereo: it read as swapped eyes, or prepared 0% depth; found 2026-12-06).
+  void CheckTwoViews(const std::string& recording) const;
   static constexpr std::size_t kEyeOrderMatches = 20;
 };
 
