@@ -253,15 +253,16 @@ void CheckCalibrationFits(const StereoCalibration& c, cv::Size eye_size) {
     }
     return;
   }
-  // A lens's principal point lies near its image's centre (a few per cent off); one a quarter of the
-  // frame or more away is a calibration of another size (one for 160x128 taken for 320x256 eyes
-  // prepared a corner of them without a word; found 2026-12-06).
+  // A lens's principal point lies near its image's centre (a few per cent off); one 15% of the frame
+  // or more away is a calibration of another size (one for 160x128 taken for 320x256 eyes, its
+  // principal point at a quarter of them, prepared a corner without a word; found 2026-12-06).
+  constexpr double kMostCentreOffset = 0.15;
   for (const cv::Matx33d& k : {c.k1, c.k2}) {
-    if (std::abs(k(0, 2) - eye_size.width / 2.0) > 0.25 * eye_size.width ||
-        std::abs(k(1, 2) - eye_size.height / 2.0) > 0.25 * eye_size.height) {
+    if (std::abs(k(0, 2) - eye_size.width / 2.0) > kMostCentreOffset * eye_size.width ||
+        std::abs(k(1, 2) - eye_size.height / 2.0) > kMostCentreOffset * eye_size.height) {
       FailInvalid(c.source + ": the principal point (" + std::to_string(k(0, 2)) + ", " +
                   std::to_string(k(1, 2)) +
-                  ") lies a quarter of the frame or more from the centre of the "
+                  ") lies 15% of the frame or more from the centre of the "
                   "recording's " +
                   text(eye_size) +
                   " eyes: the calibration is for another image size (it names none; add image_width and "
