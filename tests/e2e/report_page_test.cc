@@ -168,6 +168,12 @@ TEST(ReportPageTest, APageWorksInHeadlessChromium) {
             "Sparsification, held-out frames|Sparsification, training frames|"
             "Sparsification of the noise-free error, held-out frames|"
             "Sparsification of the noise-free error, training frames");
+  // What the clip did not need, and what a measurement kept (the deformation of a moving clip).
+  const std::string reasons =
+      browser->Evaluate("Array.from(document.querySelectorAll('#left-out th'), h => h.textContent).join('|')")
+          .get<std::string>();
+  EXPECT_NE(reasons.find("left out|why"), std::string::npos) << reasons;
+  EXPECT_NE(reasons.find("kept, as measured|why"), std::string::npos) << reasons;
   // Every layer a reconstruction has is a panel: the model map's heat map beside the paper's map.
   EXPECT_EQ(browser->Evaluate("Array.from(document.querySelectorAll('#panels img[data-layer]'), i => "
                               "i.dataset.layer).filter(l => l !== 'tool').join()"),

@@ -386,14 +386,27 @@
     $("calibration-section").appendChild(node("p", { class: "missing", text: "No uncertainty calibration was measured." }));
   }
 
-  // ---- what was left out, the run ----
+  // ---- what was left out (and what a measurement kept), the run ----
   const leftOut = metrics.left_out || [];
-  if (leftOut.length > 0) {
-    $("left-out").appendChild(node("tr", {}, [node("th", { class: "text", text: "left out" }), node("th", { class: "text", text: "why" })]));
-    for (const item of leftOut) $("left-out").appendChild(node("tr", {}, [node("td", { text: item.what }), node("td", { text: item.why })]));
-  } else {
-    $("left-out-section").appendChild(node("p", { class: "missing", text:
-      data.kind === "render" ? "See the reconstruction's own report." : "Nothing: the clip needed every part." }));
+  const kept = metrics.kept || [];
+  const reasons = (heading, items) => {
+    if (items.length === 0) return;
+    $('left-out').appendChild(node('tr', {}, [
+      node('th', {class: 'text', text: heading}), node('th', {class: 'text', text: 'why'})
+    ]));
+    for (const item of items)
+      $('left-out').appendChild(node('tr', {}, [
+        node('td', {text: item.what}), node('td', {text: item.why})
+      ]));
+  };
+  reasons('left out', leftOut);
+  reasons('kept, as measured', kept);
+  if (leftOut.length === 0) {
+    $('left-out-section').appendChild(node('p', {
+      class: 'missing',
+      text: data.kind === 'render' ? 'See the reconstruction\'s own report.' :
+                                     'Nothing left out: the clip needed every part.'
+    }));
   }
   const runRows = [];
   const run = data.run;
