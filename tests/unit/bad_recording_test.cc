@@ -152,6 +152,18 @@ TEST_F(BadRecordingTest, OnePictureGivenAsBothEyes) {
       << message;
 }
 
+// Two views of a dark scene differ by little too, but by as much as the scene varies: not one picture.
+TEST_F(BadRecordingTest, ADarkPairIsNotOnePicture) {
+  for (const char* eye : {"left", "right"}) {
+    for (const auto& entry : fs::directory_iterator(dir_ / eye)) {
+      cv::Mat image = cv::imread(entry.path().string());
+      image.convertTo(image, CV_8U, 0.012);  // 30..200 becomes 0..2 grey levels: under one apart
+      WriteImage(entry.path(), image);
+    }
+  }
+  EXPECT_EQ(prepare::PrepareClip(Options()).frames, 6);
+}
+
 // The eyes' frames are paired by their order: recordings of other rates or lengths are refused before
 // any frame is prepared (a 25 and a 30 fps eye prepared a clip without a word; found 2026-12-06).
 TEST_F(BadRecordingTest, EyesOfDifferentFrameRatesOrLengths) {

@@ -18,7 +18,8 @@ struct ErrorStats {
 
 struct StereoSurvey {
   int frames = 0;                     // pairs surveyed
-  int same_picture = 0;               // of them, eyes whose raw frames differ by under a grey level
+  int same_picture = 0;               // of them, eyes showing one picture (under a grey level apart, and
+                                      // under a tenth of the picture's own spread)
   std::vector<float> disparities;     // x_left - x_right of the matches on the same row
   std::vector<float> vertical;        // y_right - y_left of every match
   ErrorStats epipolar_error() const;  // of |vertical|
