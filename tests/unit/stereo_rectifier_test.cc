@@ -73,6 +73,15 @@ TEST(StereoRectifierTest, RefusesAnotherRigsCalibration) {
   ErrorFrom([&] { prepare::StereoRectifier(rig, {}); });
 }
 
+TEST(StereoRectifierTest, RefusesEyesOneAboveTheOther) {
+  prepare::StereoCalibration rig = SyntheticCalibration(RecordingOptions(320, 256, 1));
+  rig.source = "calib.yaml";
+  rig.t = cv::Vec3d(0, -5, 0);
+  const std::string error = ErrorFrom([&] { prepare::StereoRectifier(rig, {}); });
+  EXPECT_NE(error.find("calib.yaml: T = (0, -5, 0) puts the eyes one above the other"), std::string::npos)
+      << error;
+}
+
 TEST(StereoRectifierTest, RefusesARightEyeOnTheLeft) {
   prepare::StereoCalibration rig = SyntheticCalibration(RecordingOptions(320, 256, 1));
   rig.source = "calib.yaml";

@@ -77,6 +77,12 @@ StereoRectifier::StereoRectifier(const StereoCalibration& calibration, cv::Size 
     // a clip of 0% depth coverage without a word, and training then refused its negative depth
     // bounds; found 2026-12-06).
     const cv::Vec3d& t = calibration.t;
+    if (std::abs(t[0]) < std::abs(t[1])) {
+      FailInvalid(fmt::format(
+          "{}: T = ({:.4g}, {:.4g}, {:.4g}) puts the eyes one above the other: depth is measured along "
+          "rows, so the right eye must sit beside the left (T's x the largest part of T)",
+          calibration.source, t[0], t[1], t[2]));
+    }
     FailInvalid(fmt::format(
         "{}: T = ({:.4g}, {:.4g}, {:.4g}) puts the right eye to the left of the left eye (after "
         "rectification the baseline is {:.4g}): either the eyes are given the other way round (swap "
