@@ -28,8 +28,8 @@ Clip ClipWithPriors(double near, double far, float scale = 1) {
 TEST(DepthBoundsTest, LooseBoundsAreTightenedToThePriors) {
   Clip clip = ClipWithPriors(0, 1000);
   const std::string why = FitBoundsToPriors(clip);
-  EXPECT_NEAR(clip.near, 60 / 1.25, 2.5);  // percentiles of a lattice of pixels
-  EXPECT_NEAR(clip.far, 105 * 1.25, 2.5);
+  EXPECT_NEAR(clip.near, 60 - 0.25 * 45, 2.5);  // percentiles of a lattice of pixels
+  EXPECT_NEAR(clip.far, 105 + 0.25 * 45, 2.5);
   EXPECT_NE(why.find("the depth bounds [0, 1000] are over twice as wide as the depth priors"),
             std::string::npos)
       << why;
@@ -38,10 +38,22 @@ TEST(DepthBoundsTest, LooseBoundsAreTightenedToThePriors) {
 TEST(DepthBoundsTest, BoundsThatCutThePriorsOffAreWidened) {
   Clip clip = ClipWithPriors(84, 86);
   const std::string why = FitBoundsToPriors(clip);
-  EXPECT_NEAR(clip.near, 60 / 1.25, 2.5);  // percentiles of a lattice of pixels
-  EXPECT_NEAR(clip.far, 105 * 1.25, 2.5);
+  EXPECT_NEAR(clip.near, 60 - 0.25 * 45, 2.5);  // percentiles of a lattice of pixels
+  EXPECT_NEAR(clip.far, 105 + 0.25 * 45, 2.5);
   EXPECT_NE(why.find("[84, 86] cut off the depth priors"), std::string::npos) << why;
   EXPECT_NE(why.find("% of the priors lay outside the bounds"), std::string::npos) << why;
+}
+
+// A thin, far surface's noisy priors widen its bounds by a quarter of the priors' span, not of their
+// depth (that made 81-89 into 62-114).
+TEST(DepthBoundsTest, AThinFarSurfaceIsWidenedByItsOwnSpan) {
+  Clip clip = ClipWithPriors(81, 89);
+  for (auto& frame : clip.depth) {
+    for (std::size_t i = 0; i < frame.size(); ++i) frame[i] = float(77 + 15.0 * double(i) / frame.size());
+  }
+  EXPECT_NE(FitBoundsToPriors(clip), "");
+  EXPECT_NEAR(clip.near, 77 - 0.25 * 15, 1);
+  EXPECT_NEAR(clip.far, 92 + 0.25 * 15, 1);
 }
 
 TEST(DepthBoundsTest, FittingBoundsAndOtherClipsAreLeftAlone) {

@@ -1,6 +1,7 @@
 #include "worker/prepare/stereo_source.h"
 
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 
 #include <algorithm>
 #include <cmath>
@@ -63,13 +64,16 @@ void StereoSource::CheckPairedByOrder() {
                     "recorded together?)",
                     second_->name(), b, first_->name(), a));
   }
-  // Times are compared only between two videos: a folder's are its order at a nominal 25 fps.
+  // Times are compared only between two videos: a folder's are its order at a nominal 25 fps. The
+  // right eye's are scaled by the rates' ratio: one synchronised rig's eyes labelled 30 and 29.97 fps
+  // drift apart by a frame every 33 s (a 52 s recording was refused at its end; found 2026-12-06).
   frame_period_s_ = a > 0 && b > 0 ? 1 / a : 0;
+  rate_ratio_ = a > 0 && b > 0 ? b / a : 1;
+  // Two folders' counts are exact: compared before any frame is prepared. A video's header count may
+  // be an estimate (from its duration; a start time of 0.5 s read as 15 frames more), so two videos'
+  // lengths are compared as they end (Ended).
   const int m = first_->announced_frames(), n = second_->announced_frames();
-  // A video's count may be an estimate (from its duration) a frame or two off: then the exact check
-  // is Ended's, at the end; two folders' counts are exact.
-  const int slack = first_->count_is_exact() && second_->count_is_exact() ? 0 : 2;
-  if (m > 0 && n > 0 && std::abs(m - n) > slack) {
+  if (first_->count_is_exact() && second_->count_is_exact() && m != n) {
     FailInvalid(fmt::format("{}: {} frames while {} has {} (both eyes' recordings must have the same length)",
                             second_->name(), n, first_->name(), m));
   }
@@ -86,10 +90,21 @@ std::string StereoSource::name() const {
   return second_ ? first_->name() + " + " + second_->name() : first_->name();
 }
 
-bool StereoSource::Ended(bool first, bool second, int index) const {
+bool StereoSource::Ended(bool first, bool second, int index) {
   if (first == second) return !first;
-  const FrameSource& ended = first ? *second_ : *first_;
-  const FrameSource& going = first ? *first_ : *second_;
+  FrameSource& ended = first ? *second_ : *first_;
+  FrameSource& going = first ? *first_ : *second_;
+  // A video a frame or two longer than the other (a trailing frame one eye's file kept) ends the
+  // pairs with the shorter, said; two folders are exact (refused before any frame).
+  if (!(ended.count_is_exact() && going.count_is_exact())) {
+    int extra = 1;  // the going eye's frame `index` was read already
+    while (extra <= kTrailingFrames && going.Skip()) ++extra;
+    if (extra <= kTrailingFrames) {
+      spdlog::warn("{}: {} frame(s) after the {} of {} left out: the eyes are paired up to the shorter",
+                   going.name(), extra, index, ended.name());
+      return true;
+    }
+  }
   FailInvalid(ended.name() + " frame " + std::to_string(index) + ": it ends after " + std::to_string(index) +
               " frames while " + going.name() + " goes on (both eyes' recordings must have the same length)");
 }
@@ -102,7 +117,7 @@ bool StereoSource::Next(StereoFrame& frame) {
     if (Ended(a, b, index)) return false;
     // Pairs out of step by more than a frame and a half (a variable-rate eye, say; timestamps
     // jitter by less).
-    if (frame_period_s_ > 0 && std::abs(left.time_s - right.time_s) > 1.5 * frame_period_s_) {
+    if (frame_period_s_ > 0 && std::abs(left.time_s - right.time_s * rate_ratio_) > 1.5 * frame_period_s_) {
       FailInvalid(
           fmt::format("{} frame {}: at {:.3f} s while {}'s frame {} is at {:.3f} s: the eyes are out of "
                       "step (the frames are paired by their order; is one of them of a variable "

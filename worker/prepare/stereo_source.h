@@ -30,7 +30,7 @@ struct StereoFrame {
 class StereoSource {
  public:
   // Opens the sources (OpenFrameSource's errors), and throws FailInvalid naming the file when the
-  // eyes differ in size, frame rate or announced length, or a combined frame cannot be split in
+  // eyes differ in size, frame rate or (two folders) length, or a combined frame cannot be split in
   // equal halves.
   explicit StereoSource(const RecordingInput& input);
 
@@ -41,18 +41,21 @@ class StereoSource {
   std::string name() const;
 
   // The next pair; false after the last. Throws the sources' errors, and FailInvalid naming both
-  // when one eye's recording ends before the other's or their frames' times are out of step.
+  // when one eye's recording ends before the other's (a video may go on by kTrailingFrames, left out
+  // with a warning) or their frames' times are out of step.
   bool Next(StereoFrame& frame);
   bool Skip();
 
  private:
-  bool Ended(bool first, bool second, int index) const;
+  bool Ended(bool first, bool second, int index);
   void CheckPairedByOrder();
 
   StereoLayout layout_;
   std::unique_ptr<FrameSource> first_, second_;  // second_ only for two sources
   cv::Size eye_size_;
   double frame_period_s_ = 0;  // two videos': one frame's time at their rate; 0: not two videos
+  double rate_ratio_ = 1;      // two videos': the right eye's rate over the left's
+  static constexpr int kTrailingFrames = 2;  // a longer video's frames past the shorter's, tolerated
   int next_ = 0;
 };
 

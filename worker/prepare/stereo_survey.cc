@@ -47,11 +47,13 @@ DisparityRange StereoSurvey::Range(int width) const {
 
 void StereoSurvey::CheckTwoViews(const std::string& recording) const {
   if (frames > 0 && same_picture == frames) {
-    FailInvalid(recording + ": the two eyes show the same picture (under a grey level apart on average in " +
-                "each of the " + std::to_string(frames) +
-                " pairs surveyed): a mono recording given as stereo? " +
-                "Depth needs each eye's own view; a mono video is reconstructed as a recording of one eye " +
-                "(`endorecon-worker to-dicom VIDEO -o REC.dcm`, then reconstruct or submit REC.dcm)");
+    FailInvalid(
+        recording + ": the two eyes show the same picture (under a grey level apart on average in " +
+        "each of the " + std::to_string(frames) +
+        " pairs surveyed): a mono recording given as stereo, or a scene too far for the eyes to see it "
+        "apart? " +
+        "Depth needs each eye's own view; a mono video is reconstructed as a recording of one eye " +
+        "(`endorecon-worker to-dicom VIDEO -o REC.dcm`, then reconstruct or submit REC.dcm)");
   }
 }
 

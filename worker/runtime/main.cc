@@ -8,8 +8,10 @@
 
 #include "common/error.h"
 #include "worker/runtime/commands.h"
+#include "worker/runtime/progress_line.h"
 
 int main(int argc, char** argv) {
+  endorecon::worker::EndProgressBeforeEachLog();
   CLI::App app{"endorecon-worker: reconstruct endoscopic clips, or serve jobs from endorecon-server"};
   app.require_subcommand(1);
   app.set_version_flag("--version", ENDORECON_VERSION);  // server and workers run at one version

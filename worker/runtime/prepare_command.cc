@@ -9,6 +9,7 @@
 #include "common/prepare_flags_cli.h"
 #include "worker/prepare/options_from_flags.h"
 #include "worker/runtime/commands.h"
+#include "worker/runtime/progress_line.h"
 
 namespace endorecon::worker {
 
@@ -25,14 +26,11 @@ Command AddPrepareCommand(CLI::App& app) {
     options.out = *out;
     prepare::PrepareHooks hooks;
     hooks.on_frame = [](int done, int total) {
-      if (total > 0) {
-        std::fprintf(stderr, "\r prepared %d/%d frames ", done, total);
-      } else {
-        std::fprintf(stderr, "\r prepared %d frames ", done);
-      }
+      ShowProgress(total > 0 ? fmt::format(" prepared {}/{} frames ", done, total)
+                             : fmt::format(" prepared {} frames ", done));
     };
     const prepare::PrepareSummary summary = prepare::PrepareClip(options, hooks);
-    std::fprintf(stderr, "\n");
+    EndProgress();
     spdlog::info(
         "wrote {} ({} layout): {} frames of the recording's {}{}, {:.1f} s ({:.2f} frames/s)",
         summary.clip.string(), summary.layout, summary.frames, summary.recording_frames,

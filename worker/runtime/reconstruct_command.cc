@@ -18,6 +18,7 @@
 #include "worker/engine/run_config.h"
 #include "worker/runtime/commands.h"
 #include "worker/runtime/dicom_job.h"
+#include "worker/runtime/progress_line.h"
 
 namespace endorecon::worker {
 
@@ -140,21 +141,21 @@ Command AddReconstructCommand(CLI::App& app) {
     hooks.progress_interval_s = 1.0;
     hooks.on_progress = [](const Progress& p) {
       if (p.phase == "evaluate") {
-        std::fprintf(stderr, "\r evaluating the results: frame %d/%d  ETA %4.0fs%60s", p.iteration,
-                     p.total_iterations, p.eta_s, "");
+        ShowProgress(fmt::format(" evaluating the results: frame {}/{}  ETA {:4.0f}s{:60}", p.iteration,
+                                 p.total_iterations, p.eta_s, ""));
         return;
       }
       const double percent = p.total_iterations > 0 ? 100.0 * p.iteration / p.total_iterations : 0.0;
       // No held-out frames (or none scored yet): -1, not shown as a PSNR.
       const std::string heldout =
           p.heldout_psnr >= 0 ? fmt::format("  held-out {:5.2f} dB", p.heldout_psnr) : "";
-      std::fprintf(stderr,
-                   "\r iter %6d/%d %5.1f%%  ETA %5.0fs  loss %.4f  PSNR %5.2f dB%s  %.2f M samples/s ",
-                   p.iteration, p.total_iterations, percent, std::min(p.eta_s, 1e9), p.loss, p.train_psnr,
-                   heldout.c_str(), p.samples_per_second / 1e6);
+      ShowProgress(fmt::format(
+          " iter {:6}/{} {:5.1f}%  ETA {:5.0f}s  loss {:.4f}  PSNR {:5.2f} dB{}  {:.2f} M samples/s ",
+          p.iteration, p.total_iterations, percent, std::min(p.eta_s, 1e9), p.loss, p.train_psnr, heldout,
+          p.samples_per_second / 1e6));
     };
     const ReconstructSummary summary = Reconstruct(*options, hooks);
-    std::fprintf(stderr, "\n");
+    EndProgress();
     // No training PSNR when this process ran no step (a resume whose budget was spent), as the CLI.
     spdlog::info("{} {} iterations in {:.1f} s; training PSNR {}; held-out tissue PSNR {}",
                  summary.cancelled ? "stopped after" : "done:", summary.iterations, summary.train_seconds,
