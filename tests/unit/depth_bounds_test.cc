@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <vector>
 
 namespace endorecon::scene {
@@ -52,8 +53,14 @@ TEST(DepthBoundsTest, AThinFarSurfaceIsWidenedByItsOwnSpan) {
     for (std::size_t i = 0; i < frame.size(); ++i) frame[i] = float(77 + 15.0 * double(i) / frame.size());
   }
   EXPECT_NE(FitBoundsToPriors(clip), "");
-  EXPECT_NEAR(clip.near, 77 - 0.25 * 15, 1);
-  EXPECT_NEAR(clip.far, 92 + 0.25 * 15, 1);
+  EXPECT_NEAR(clip.near, 77 - 0.05 * 92, 1) << "a twentieth of the depth: more than a quarter of the span";
+  EXPECT_NEAR(clip.far, 92 + 0.05 * 92, 1);
+  // Priors of one value have no span: a twentieth of their depth each way.
+  Clip flat = ClipWithPriors(40, 130);
+  for (auto& frame : flat.depth) std::fill(frame.begin(), frame.end(), 85.0f);
+  EXPECT_NE(FitBoundsToPriors(flat), "");
+  EXPECT_NEAR(flat.near, 85 * 0.95, 1e-3);
+  EXPECT_NEAR(flat.far, 85 * 1.05, 1e-3);
 }
 
 TEST(DepthBoundsTest, FittingBoundsAndOtherClipsAreLeftAlone) {

@@ -11,7 +11,8 @@ namespace {
 
 constexpr std::size_t kLattice = 61;       // every 61st pixel of every frame
 constexpr std::size_t kLeastPriors = 100;  // fewer say too little
-constexpr double kMargin = 0.25;           // the priors' range widened by a quarter of its span each way
+constexpr double kMargin = 0.25;           // the priors' range widened by a quarter of its span each way,
+constexpr double kLeastMargin = 0.05;      // and by at least this share of their depth
 constexpr double kLooseFactor = 2;         // bounds over twice that range are loose
 constexpr double kOutsideShare = 0.25;     // bounds leaving more priors outside cut them off
 
@@ -37,11 +38,12 @@ std::string FitBoundsToPriors(Clip& clip) {
     }
   }
   if (priors.size() < kLeastPriors || 2 * foreign > priors.size()) return {};
-  // Widened by a quarter of their span each way (down to half the lowest at most): a thin, far
-  // surface's priors widened by a quarter of their depth became seven times their span (found
-  // 2026-12-06).
+  // Widened by a quarter of their span each way, and by a twentieth of their depth at least (priors
+  // of one value have no span; found 2026-12-06), never below half the lowest: a thin, far surface's
+  // priors widened by a quarter of their depth became seven times their span.
   const double p_lo = Percentile(priors, 0.005), p_hi = Percentile(priors, 0.995);
-  const double lo = std::max(0.5 * p_lo, p_lo - kMargin * (p_hi - p_lo)), hi = p_hi + kMargin * (p_hi - p_lo);
+  const double margin = std::max(kMargin * (p_hi - p_lo), kLeastMargin * p_hi);
+  const double lo = std::max(0.5 * p_lo, p_lo - margin), hi = p_hi + margin;
   const bool loose = clip.far - clip.near > kLooseFactor * (hi - lo);
   const double cut = double(outside) / double(priors.size());
   if (!loose && cut <= kOutsideShare) return {};

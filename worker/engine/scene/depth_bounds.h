@@ -6,10 +6,10 @@
 // out of reach of every ray (found 2026-12-06).
 //
 // The priors' range is their 0.5th to 99.5th percentile, widened by a quarter of its span each way
-// (not below half the lowest). Bounds spanning more than twice that range, or leaving more than a
-// quarter of the priors outside them, become that range. Left as they are: a clip without depth, an
-// object capture (its box is the object's), and priors mostly outside [near / 2, 2 far], which are
-// more likely in other units than the poses (CheckClipGeometry warns of those).
+// (at least a twentieth of the highest; not below half the lowest). Bounds spanning more than twice that
+// range, or leaving more than a quarter of the priors outside them, become that range. Left as they are: a
+// clip without depth, an object capture (its box is the object's), and priors mostly outside [near / 2, 2
+// far], which are more likely in other units than the poses (CheckClipGeometry warns of those).
 #pragma once
 
 #include <string>
