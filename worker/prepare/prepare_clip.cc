@@ -252,18 +252,6 @@ std::vector<int> SurveyFrames(const FrameRange& range, int announced) {
   return selected;
 }
 
-// Whether two raw eyes show one picture: under a grey level apart on average, and under a tenth of
-// how much the picture itself varies (two views of a dark scene differ little as well, yet differ
-// as much as the scene does).
-bool SamePicture(const cv::Mat& left, const cv::Mat& right) {
-  const double values = double(left.total()) * left.channels();
-  const double apart = cv::norm(left, right, cv::NORM_L1) / values;
-  cv::Scalar mean, deviation;
-  cv::meanStdDev(left, mean, deviation);
-  const double varies = (deviation[0] + deviation[1] + deviation[2]) / 3;
-  return apart < 1 && apart < 0.1 * varies;
-}
-
 StereoSurvey Survey(const PrepareOptions& options, const StereoRectifier& rectifier,
                     const cv::Mat& excluded_left, int announced) {
   StereoSurvey survey;
@@ -277,8 +265,7 @@ StereoSurvey Survey(const PrepareOptions& options, const StereoRectifier& rectif
     }
     if (!source.Next(frame)) return survey;
     ++position;
-    ++survey.frames;
-    survey.same_picture += SamePicture(frame.left, frame.right);
+    SurveyRawPair(frame.left, frame.right, survey);
     SurveyPair(rectifier.Left(frame.left), rectifier.Right(frame.right), allowed, survey);
   }
   return survey;

@@ -69,6 +69,18 @@ void StereoSurvey::CheckEyeOrder(const std::string& recording) const {
   }
 }
 
+void SurveyRawPair(const cv::Mat& left, const cv::Mat& right, StereoSurvey& survey) {
+  // One picture: under a grey level apart on average, and under a tenth of how much the picture
+  // itself varies (two views of a dark scene differ little as well, yet differ as much as the scene
+  // does).
+  const double apart = cv::norm(left, right, cv::NORM_L1) / (double(left.total()) * left.channels());
+  cv::Scalar mean, deviation;
+  cv::meanStdDev(left, mean, deviation);
+  const double varies = (deviation[0] + deviation[1] + deviation[2]) / 3;
+  ++survey.frames;
+  survey.same_picture += apart < 1 && apart < 0.1 * varies;
+}
+
 void SurveyPair(const cv::Mat& left, const cv::Mat& right, const cv::Mat& allowed, StereoSurvey& survey,
                 int max_corners) {
   cv::Mat left_grey, right_grey;

@@ -37,6 +37,10 @@ struct StereoSurvey {
   static constexpr std::size_t kEyeOrderMatches = 20;
 };
 
+// Counts one raw pair (8-bit BGR, before rectification) in `survey`: whether its eyes show one
+// picture (CheckTwoViews).
+void SurveyRawPair(const cv::Mat& left, const cv::Mat& right, StereoSurvey& survey);
+
 // Adds the matches of one rectified pair (8-bit BGR) to `survey`: up to `max_corners` corners of
 // the left eye where `allowed` (0/255 or empty) is set, tracked into the right eye.
 void SurveyPair(const cv::Mat& left, const cv::Mat& right, const cv::Mat& allowed, StereoSurvey& survey,

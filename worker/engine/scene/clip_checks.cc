@@ -132,7 +132,7 @@ void CheckClipGeometry(const Clip& clip, const std::string& where) {
     for (std::size_t i = 0; i < frame.size(); i += 61) {
       if (!(frame[i] > 0)) continue;
       ++seen;
-      outside += frame[i] < 0.5 * clip.near || frame[i] > 2 * clip.far;
+      outside += InOtherUnits(frame[i], clip.near, clip.far);
     }
   }
   if (seen > 0 && 2 * outside > seen) {

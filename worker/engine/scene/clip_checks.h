@@ -40,6 +40,13 @@ constexpr double kMostCameraSpread = 1e4;
 struct Clip;
 void CheckClipGeometry(const Clip& clip, const std::string& where);
 
+// Whether a depth prior lies so far outside [near, far] (below near / 2, above 2 far) that the depth
+// maps are likely in other units than the poses; CheckClipGeometry warns when most do, and
+// FitBoundsToPriors (depth_bounds.h) then leaves the bounds alone.
+inline bool InOtherUnits(float prior, double near, double far) {
+  return prior < 0.5 * near || prior > 2 * far;
+}
+
 // width x height must not exceed max_pixels; otherwise Error(kResourceExhausted).
 void CheckFrameLimit(int width, int height, std::size_t max_pixels, const std::string& where);
 

@@ -6,6 +6,8 @@
 #include <cmath>
 #include <vector>
 
+#include "worker/engine/scene/clip_checks.h"
+
 namespace endorecon::scene {
 namespace {
 
@@ -34,7 +36,7 @@ std::string FitBoundsToPriors(Clip& clip) {
       if (!(z > 0) || !std::isfinite(z)) continue;
       priors.push_back(z);
       outside += z < clip.near || z > clip.far;
-      foreign += z < 0.5 * clip.near || z > 2 * clip.far;
+      foreign += InOtherUnits(z, clip.near, clip.far);
     }
   }
   if (priors.size() < kLeastPriors || 2 * foreign > priors.size()) return {};
@@ -49,9 +51,8 @@ std::string FitBoundsToPriors(Clip& clip) {
   if (!loose && cut <= kOutsideShare) return {};
   const std::string why = fmt::format(
       "the depth bounds [{:.6g}, {:.6g}] {} the depth priors (their 0.5th to 99.5th percentile, widened by a "
-      "quarter of their span: [{:.6g}, {:.6g}]{}): the bounds are now that range, so the samples and the "
-      "grids' "
-      "cells lie where the surface is",
+      "quarter of their span: [{:.6g}, {:.6g}]{}): the bounds are now that range, so the samples and "
+      "the grids' cells lie where the surface is",
       clip.near, clip.far, loose ? "are over twice as wide as" : "cut off", lo, hi,
       loose ? "" : fmt::format("; {:.0f}% of the priors lay outside the bounds", 100 * cut));
   clip.near = lo;

@@ -10,6 +10,10 @@
 
 namespace endorecon::train {
 
+// OpenCV's DIS flow refuses images under this many pixels a side (an assertion, which ended a run on
+// a clip `synth` makes at 8 x 8, 2026-12-05): such frames get no flow.
+inline constexpr int kLeastFlowSide = 12;
+
 struct FlowImage {
   cv::Mat grey;    // CV_8U
   cv::Mat usable;  // CV_8U, 1 or 0

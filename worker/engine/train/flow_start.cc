@@ -201,9 +201,7 @@ FlowStart FitDeformationToFlow(const scene::Clip& clip, const std::vector<int>& 
   const int ref = order.front();
   const int factor = (clip.width + kFlowWidth - 1) / kFlowWidth;
   const cv::Size size(clip.width / factor, clip.height / factor);
-  // OpenCV's DIS flow refuses images under 12 pixels a side (an assertion, which ended a run on a
-  // clip `synth` makes at 8 x 8, 2026-12-05): such a clip starts from zero.
-  constexpr int kLeastFlowSide = 12;
+  // Frames too small for DIS (kLeastFlowSide): such a clip starts from zero.
   if (size.width < kLeastFlowSide || size.height < kLeastFlowSide) {
     result.skipped = "frames of " + std::to_string(size.width) + "x" + std::to_string(size.height) +
                      " are too small for optical flow (" + std::to_string(kLeastFlowSide) + " pixels a side)";

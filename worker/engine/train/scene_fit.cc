@@ -40,7 +40,9 @@ TrainingTimes InTimeOrder(const scene::Clip& clip, std::vector<int> frames) {
 
 // Resolves config.exposure and gives the field a knot at each training frame's time (distinct times
 // only: a static clip's frames share one).
-template <typename Note>
+// Records a part left out or kept, and why (SceneFit::left_out, SceneFit::kept).
+using Note = std::function<void(const std::string& what, const std::string& why)>;
+
 void FitExposure(const scene::Clip& clip, TrainConfig& config, TrainingTimes training, const Note& leave_out,
                  const Note& keep) {
   if (!config.field.exposure_times.empty()) return;  // fitted already
@@ -89,12 +91,10 @@ scene::Camera SceneFit::preview_camera(const scene::Camera& camera) const {
 
 SceneFit FitToScene(const scene::Clip& clip, TrainConfig& config, std::vector<int> train_frames) {
   SceneFit fit;
-  const std::function<void(const std::string&, const std::string&)> leave_out = [&](const std::string& what,
-                                                                                    const std::string& why) {
+  const Note leave_out = [&](const std::string& what, const std::string& why) {
     fit.left_out.push_back({{"what", what}, {"why", why}});
   };
-  const std::function<void(const std::string&, const std::string&)> keep = [&](const std::string& what,
-                                                                               const std::string& why) {
+  const Note keep = [&](const std::string& what, const std::string& why) {
     fit.kept.push_back({{"what", what}, {"why", why}});
   };
   if (!clip.has_masks()) leave_out("tool-mask handling", "the clip has no masks/");
@@ -126,9 +126,8 @@ SceneFit FitToScene(const scene::Clip& clip, TrainConfig& config, std::vector<in
                : "not tested for stillness: " + s.why);
     } else {
       still = fmt::format(
-          "the clip's tissue stands still: with the camera fixed, 95% of it moves less than {:.2g} px from "
-          "the "
-          "first training frame in each of the {} others (at most {:.2g} px; still_threshold_px)",
+          "the clip's tissue stands still: with the camera fixed, 95% of it moves less than {:.2g} px "
+          "from the first training frame in each of the {} others (at most {:.2g} px; still_threshold_px)",
           config.still_threshold_px, s.frames, s.motion_px);
     }
   }

@@ -11,8 +11,6 @@ namespace {
 
 // Fewer usable pixels than this in a frame say nothing of its motion (a frame that is all tool).
 constexpr int kLeastPixels = 64;
-// DIS refuses images under 12 pixels a side (flow_start.cc).
-constexpr int kLeastFlowSide = 12;
 
 }  // namespace
 
