@@ -293,6 +293,7 @@ TEST(TrainConfigTest, BadValuesAreRejected) {
         nlohmann::json{{"field", {{"heads", {{"color_dropout", 1.5}}}}}},
         nlohmann::json{{"field", {{"heads", {{"color_time_frequencies", 9}}}}}},
         nlohmann::json{{"exposure", "sometimes"}}, nlohmann::json{{"exposure_threshold", -0.1}},
+        nlohmann::json{{"still_threshold_px", -1}}, nlohmann::json{{"fit_depth_bounds", "yes"}},
         nlohmann::json{{"deformation_start", "optical"}}, nlohmann::json{{"outside_view", "on"}},
         nlohmann::json{{"outside_view_level", 255}},
         nlohmann::json{{"field", {{"learned_background", true}}}},
