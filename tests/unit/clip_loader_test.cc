@@ -77,5 +77,38 @@ TEST(ClipLoaderTest, LoadsGroundTruthFolder) {
   EXPECT_NE(message.find("gt/depth: holds 1 files but the clip has 2 frames"), std::string::npos) << message;
 }
 
+// A clip whose decoded frames times the run's factor exceed the memory given is refused before a frame
+// is decoded (a damaged frame is not reached), naming the need, what is there and how many frames fit;
+// a ground-truth folder counts its colour and depth too.
+TEST(ClipLoaderTest, AClipTooLargeForMemoryIsRefusedBeforeDecoding) {
+  TempDir dir("clip");
+  WriteEndoNerfClip(dir.path(), 10);  // 8x6 frames, colour only: 3 bytes a pixel
+  LoadOptions options;
+  options.memory_factor = 3;  // 9 bytes a pixel, 432 a frame, 4,320 the clip
+  options.memory_bytes = 4320;
+  EXPECT_EQ(LoadClip(dir.path(), options).frame_count(), 10);
+
+  testing::WriteBytes(dir / "images/1.png", "not a png");
+  options.memory_bytes = 2000;
+  const std::string message =
+      ErrorFrom([&] { LoadClip(dir.path(), options); }, ErrorCode::kResourceExhausted);
+  EXPECT_NE(message.find(dir.path().string() + ": 10 frames of 8x6 need about 0.0 GiB of memory"),
+            std::string::npos)
+      << message;
+  EXPECT_NE(message.find("about 4 frames of this size fit"), std::string::npos) << message;
+  EXPECT_NE(message.find("--frames START:END:STEP"), std::string::npos) << message;
+
+  WriteEndoNerfClip(dir.path(), 10);
+  fs::create_directories(dir / "gt/images");
+  for (int i = 0; i < 10; ++i) {
+    WriteImage(dir / "gt/images" / (std::to_string(i) + ".png"),
+               Pattern(8, 6, CV_8UC3, [](int, int) { return 9; }));
+  }
+  options.memory_bytes = 4320;  // 30 bytes a pixel with the ground truth's colour and depth
+  ErrorFrom([&] { LoadClip(dir.path(), options); }, ErrorCode::kResourceExhausted);
+  options.memory_bytes = 14400;
+  EXPECT_EQ(LoadClip(dir.path(), options).gt_rgb.size(), 10u);
+}
+
 }  // namespace
 }  // namespace endorecon::scene

@@ -12,6 +12,7 @@
 
 #include "common/file_write.h"
 #include "common/output_folder.h"
+#include "worker/engine/base/machine_memory.h"
 #include "worker/engine/base/seconds_since.h"
 #include "worker/engine/eval/clip_evaluator.h"
 #include "worker/engine/eval/eval_plan.h"
@@ -54,6 +55,12 @@ constexpr double kBudgetTolerance = 0.1;
 // "The budget is the job") and rounded up.
 constexpr double kTailSecondsPerPixel = 1.0e-6;
 
+// A run's peak memory as a multiple of its decoded frames' bytes (beside them the depth refiner's
+// refined and filled priors, the sampler's and the uncertainty map's tables, evaluation's buffers):
+// 2.3 to 2.8 measured on clips of 33 and 131 million pixels with and without depth, masks and ground
+// truth (docs/benchmarks.md, "A clip too large for memory"), rounded up.
+constexpr double kRunMemoryFactor = 3;
+
 double TailSeconds(const scene::Clip& clip) {
   return kTailSecondsPerPixel * double(clip.frame_count()) * clip.width * clip.height;
 }
@@ -80,6 +87,8 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
   load.force_static = options.force_static;
   load.should_stop = hooks.should_stop;
   load.fit_depth_bounds = config.fit_depth_bounds;
+  load.memory_bytes = options.memory_bytes > 0 ? options.memory_bytes : base::AvailableMemoryBytes();
+  load.memory_factor = kRunMemoryFactor;
   if (config.background == "black") load.alpha_background = {0, 0, 0};
   nlohmann::json outside_view;  // what the scope's view leaves out, for left_out
   const scene::Clip clip = [&] {

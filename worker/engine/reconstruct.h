@@ -35,6 +35,10 @@ struct ReconstructOptions {
   // Optional checkpoint file to resume training from; its configuration replaces the preset, and
   // config, iterations and holdout still apply over it (a field of another shape fails to load).
   std::string resume_from;
+  // The memory the run may take, in bytes; a clip that needs more is refused before its frames are
+  // decoded (scene/load_options.h). 0: what this machine has available when the run starts
+  // (base/machine_memory.h AvailableMemoryBytes).
+  std::uint64_t memory_bytes = 0;
 };
 
 struct Progress {

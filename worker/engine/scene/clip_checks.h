@@ -47,7 +47,7 @@ inline bool InOtherUnits(float prior, double near, double far) {
   return prior < 0.5 * near || prior > 2 * far;
 }
 
-// width x height must not exceed max_pixels; otherwise Error(kResourceExhausted).
+// width x height must not exceed max_pixels; otherwise Error(kInvalidArgument).
 void CheckFrameLimit(int width, int height, std::size_t max_pixels, const std::string& where);
 
 // "WxH", for messages.

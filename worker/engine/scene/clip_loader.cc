@@ -47,10 +47,14 @@ Clip LoadClip(const fs::path& dir, const LoadOptions& options) {
   }
   Clip clip;
   const std::optional<ClipLayout> layout = FindClipLayout(dir);
+  // A synthetic clip's ground truth (gt/, loaded after the frames) takes colour and depth per pixel
+  // more: counted in the frames' memory check.
+  LoadOptions loading = options;
+  if (fs::is_directory(dir / "gt")) loading.extra_bytes_per_pixel += 3 + 4;
   if (layout == ClipLayout::kTransforms) {
-    clip = LoadTransformsClip(dir, options);
+    clip = LoadTransformsClip(dir, loading);
   } else if (layout == ClipLayout::kEndoNerf) {
-    clip = LoadEndoNerfClip(dir, options);
+    clip = LoadEndoNerfClip(dir, loading);
   } else {
     FailInvalid(dir.string() +
                 ": not a clip: found neither transforms.json (transforms.json layout) nor "

@@ -125,6 +125,33 @@ void CheckAllOrNone(const std::vector<FrameFiles>& frames, fs::path FrameFiles::
   }
 }
 
+// What one pixel of a frame takes decoded (clip.h): colour 3 bytes, depth a float, each mask a byte,
+// a right eye 3 bytes.
+double DecodedBytesPerPixel(const FrameFiles& frame) {
+  return 3.0 + (frame.depth.empty() ? 0 : 4.0) + (frame.tool_mask.empty() ? 0 : 1.0) +
+         (frame.eval_mask.empty() ? 0 : 1.0) + (frame.right_image.empty() ? 0 : 3.0);
+}
+
+// A clip that cannot fit in memory is refused before its frames are decoded: decoding it was a
+// worker's death by the kernel's OOM killer, its job retried on the next worker to the same end.
+void CheckMemory(const FrameFiles& first, std::size_t n, const FrameReadOptions& options, const Clip& clip) {
+  if (options.memory_bytes == 0) return;
+  const double frame_pixels = double(clip.width) * double(clip.height);
+  const double decoded = frame_pixels * (DecodedBytesPerPixel(first) + options.extra_bytes_per_pixel);
+  const double per_frame = decoded * options.memory_factor;
+  const double available = double(options.memory_bytes);
+  if (double(n) * per_frame <= available) return;
+  constexpr double kGib = double(1 << 30);
+  Fail(ErrorCode::kResourceExhausted,
+       fmt::format("{}: {} frames of {}x{} need about {:.1f} GiB of memory to reconstruct ({:.1f} GiB of it "
+                   "the decoded frames, the rest what training and evaluation keep beside them), and this "
+                   "machine has {:.1f} GiB available: about {} frames of this size fit. Use fewer frames "
+                   "(prepare's or submit's --frames START:END:STEP), smaller ones (--size WxH), or a "
+                   "machine with more memory",
+                   clip.source, n, clip.width, clip.height, double(n) * per_frame / kGib,
+                   double(n) * decoded / kGib, available / kGib, std::size_t(available / per_frame)));
+}
+
 }  // namespace
 
 RgbImage ReadRgbImage(const fs::path& path, const std::array<std::uint8_t, 3>& background) {
@@ -172,6 +199,7 @@ void ReadFrames(const std::vector<FrameFiles>& frames, const FrameReadOptions& o
 
   const std::size_t n = frames.size();
   const FrameFiles& f0 = frames.front();
+  CheckMemory(f0, n, options, clip);
   clip.rgb.assign(n, {});
   clip.depth.assign(f0.depth.empty() ? 0 : n, {});
   clip.tool_mask.assign(f0.tool_mask.empty() ? 0 : n, {});

@@ -19,6 +19,9 @@ struct FrameReadOptions {
   double depth_scale = 1.0;       // clip units per raw depth value (integer or float files)
   std::uint8_t tool_value = 255;  // the mask value that marks the tool (the other allowed value: 255 - this)
   std::size_t max_pixels_per_frame = std::size_t{4096} * 4096;
+  std::uint64_t memory_bytes = 0;                                  // LoadOptions'
+  double memory_factor = 1;                                        // LoadOptions'
+  double extra_bytes_per_pixel = 0;                                // LoadOptions'
   std::array<std::uint8_t, 3> alpha_background = {255, 255, 255};  // what transparent pixels lie on
   std::function<bool()> should_stop;                               // LoadOptions' (load_options.h)
 };
@@ -41,9 +44,10 @@ RgbImage ReadRgbImage(const std::filesystem::path& path,
 
 // Reads every frame into clip.rgb / depth / tool_mask / eval_mask / right_rgb (a part whose path is
 // empty in the first frame stays empty and must be empty in all); clip.transparent is set when some
-// colour image had transparent pixels (composited onto options.alpha_background). Every file must have the size
-// clip.width x clip.height; when that is 0x0 the first image sets it. Throws the error of the
-// lowest failing frame; Error(kResourceExhausted) for frames over options.max_pixels_per_frame.
+// colour image had transparent pixels (composited onto options.alpha_background). Every file must have the
+// size clip.width x clip.height; when that is 0x0 the first image sets it. Throws the error of the lowest
+// failing frame; Error(kInvalidArgument) for frames over options.max_pixels_per_frame, and
+// Error(kResourceExhausted), before any frame is decoded, for a clip over options.memory_bytes.
 void ReadFrames(const std::vector<FrameFiles>& frames, const FrameReadOptions& options, Clip& clip);
 
 }  // namespace endorecon::scene

@@ -95,6 +95,9 @@ Clip LoadTransformsClip(const fs::path& dir, const LoadOptions& options) {
   FrameReadOptions read_options;
   read_options.tool_value = 0;
   read_options.max_pixels_per_frame = options.max_pixels_per_frame;
+  read_options.memory_bytes = options.memory_bytes;
+  read_options.memory_factor = options.memory_factor;
+  read_options.extra_bytes_per_pixel = options.extra_bytes_per_pixel;
   read_options.alpha_background = options.alpha_background;
   read_options.should_stop = options.should_stop;
   read_options.depth_scale = OptionalNumber(top, "depth_unit_scale_factor", file).value_or(1.0);
