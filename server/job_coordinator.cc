@@ -167,6 +167,10 @@ UploadOwner JobCoordinator::UploadOwnerOf(const std::string& tenant) {
     holders_.Add(tenant, digest);
     uploads_.NoteProven(tenant, digest);
   };
+  owner.ended = [this] {
+    std::lock_guard lock(mutex_);
+    uploads_.Flush();
+  };
   return owner;
 }
 

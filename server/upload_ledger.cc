@@ -72,7 +72,12 @@ void UploadLedger::NoteProven(const std::string& tenant, const std::string& sha2
   const auto entry = found->second.find(sha256);
   if (entry == found->second.end() || entry->second.proven) return;
   entry->second.proven = true;
-  Save();
+  unsaved_ = true;
+  if (std::chrono::steady_clock::now() - saved_at_ >= kProvenSaveInterval) Save();
+}
+
+void UploadLedger::Flush() {
+  if (unsaved_) Save();
 }
 
 std::size_t UploadLedger::Noters(const std::string& sha256) const {
@@ -176,7 +181,9 @@ void UploadLedger::KeepIn(const std::filesystem::path& file) {
   }
 }
 
-void UploadLedger::Save() const {
+void UploadLedger::Save() {
+  unsaved_ = false;
+  saved_at_ = std::chrono::steady_clock::now();
   if (file_.empty()) return;
   nlohmann::json uploads = nlohmann::json::array();
   for (const auto& [tenant, files] : tenants_) {

@@ -13,6 +13,7 @@
 // Not thread-safe: the coordinator holds its lock.
 #pragma once
 
+#include <chrono>
 #include <cstdint>
 #include <filesystem>
 #include <functional>
@@ -49,7 +50,13 @@ class UploadLedger {
     if (added) Save();
   }
   // `tenant`'s upload sent every byte of the content, digest checked; kept across restarts (Proven).
+  // Written at most once a second (kProvenSaveInterval), and by Flush: written at each file, the
+  // ledger's whole file made an upload of N files write O(N^2) bytes (10,001 files missed the
+  // client's deadline; found 2026-12-06). A server crash forgets at most the last second's, whose
+  // files the tenant's next upload sends again.
   void NoteProven(const std::string& tenant, const std::string& sha256);
+  // Writes what NoteProven has not written yet (an upload stream's end).
+  void Flush();
   // Each (tenant, sha256) noted proven and not yet submitted, dropped or forgotten.
   std::vector<std::pair<std::string, std::string>> Proven() const;
   // How many tenants' uploads not yet submitted bring this content.
@@ -88,10 +95,14 @@ class UploadLedger {
   bool Add(const std::string& tenant, const v1::FileEntry& file, Time now);  // false: nothing to note
   static Pending Summary(const std::map<std::string, Entry>& files);         // one tenant's
   // Writes the file given to KeepIn, if any; a failure is logged (the ledger in memory holds).
-  void Save() const;
+  void Save();
+
+  static constexpr std::chrono::seconds kProvenSaveInterval{1};
 
   std::map<std::string, std::map<std::string, Entry>> tenants_;  // tenant -> sha256 -> entry
   std::filesystem::path file_;
+  bool unsaved_ = false;  // NoteProven marked an entry the file does not have yet
+  std::chrono::steady_clock::time_point saved_at_;
 };
 
 }  // namespace endorecon::server

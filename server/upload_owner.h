@@ -22,6 +22,8 @@ struct UploadOwner {
   // Told each content the tenant's partial held in full, digest checked, whether it was stored
   // before or not.
   std::function<void(const std::string& sha256)> proven;
+  // Told once the upload stream ends, however it ends: what `proven` was told is made durable.
+  std::function<void()> ended;
 };
 
 }  // namespace endorecon::server

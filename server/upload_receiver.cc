@@ -91,6 +91,10 @@ v1::UploadStatus UploadReceiver::Receive(grpc::ServerReaderInterface<v1::UploadR
                                          Uploader uploader, const UploadOwner& owner,
                                          const std::function<void(const v1::Manifest&)>& admit,
                                          const ReadGuard& guard, const std::function<bool()>& cancelled) {
+  const std::unique_ptr<const UploadOwner, void (*)(const UploadOwner*)> ending(&owner,
+                                                                                [](const UploadOwner* o) {
+                                                                                  if (o->ended) o->ended();
+                                                                                });
   v1::UploadRequest request;
   const auto read = [&] {
     return guard ? guard([&] { return reader.Read(&request); }) : reader.Read(&request);

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "tests/unit/temp_dir.h"
@@ -117,6 +118,36 @@ TEST(UploadLedgerTest, TheLedgerOutlivesARestartInItsFile) {
   ASSERT_EQ(tenants.size(), 1u);
   EXPECT_EQ(tenants.begin()->first, "") << "the admins' tenant";
   EXPECT_EQ(tenants.begin()->second.bytes, 9);
+}
+
+// Written at each proven file, the ledger's whole file made an upload of N files write O(N^2) bytes:
+// 10,001 files missed the client's deadline (found 2026-12-06). A proven mark is written once a
+// second has passed since the last write, and at the upload's end (Flush).
+TEST(UploadLedgerTest, ProvenMarksAreWrittenOnceASecondAndAtTheUploadsEnd) {
+  testing::TempDir dir("ledger");
+  const auto file = dir / "uploads.json";
+  const auto none = [](const std::string&) { return false; };
+  const auto proven_in_file = [&] {
+    UploadLedger read;
+    read.KeepIn(file);
+    return read.Proven().size();
+  };
+  const std::string x(64, '1'), y(64, '2'), z(64, '3');
+  UploadLedger ledger;
+  ledger.KeepIn(file);
+  const auto written = std::chrono::steady_clock::now();
+  ledger.Note("a", Files({{x.c_str(), 1}, {y.c_str(), 2}, {z.c_str(), 3}}), none,
+              UploadLedger::Time::clock::now());
+  ledger.NoteProven("a", x);
+  ledger.NoteProven("a", y);
+  if (std::chrono::steady_clock::now() - written < std::chrono::milliseconds(900)) {
+    EXPECT_EQ(proven_in_file(), 0u) << "within a second of the last write";
+  }
+  ledger.Flush();
+  EXPECT_EQ(proven_in_file(), 2u);
+  std::this_thread::sleep_for(std::chrono::milliseconds(1100));
+  ledger.NoteProven("a", z);
+  EXPECT_EQ(proven_in_file(), 3u) << "a second after the last write";
 }
 
 }  // namespace
