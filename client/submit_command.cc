@@ -168,12 +168,26 @@ v1::Manifest Upload(const Globals& globals, v1::JobService::Stub& stub, const st
   // The manifest with its digests (64 characters and a tag each) travels in one message: a clip of
   // 120,000 files was refused as "Sent message larger than max", naming its largest file.
   const std::size_t manifest_bytes = manifest.ByteSizeLong() + std::size_t(manifest.files_size()) * 66;
-  constexpr std::size_t kMostManifestBytes = kMaxMessageBytes - 64 * 1024;  // room for the rest of a call
-  if (manifest_bytes > kMostManifestBytes) {
+  if (manifest_bytes > MostManifestBytes()) {
     FailInvalid(clip.string() + ": " + std::to_string(manifest.files_size()) +
                 " files; their manifest would take " + std::to_string(manifest_bytes) +
-                " bytes, more than the service's messages carry (" + std::to_string(kMostManifestBytes) +
-                "): send fewer files (a recording as one video or DICOM file, not its frames)");
+                " bytes, more than the service's messages carry (" + std::to_string(MostManifestBytes()) +
+                ", about " +
+                std::to_string(MostManifestBytes() * std::size_t(manifest.files_size()) / manifest_bytes) +
+                " files of these names): send fewer files (a recording as one video or DICOM file, not its "
+                "frames) (found before the upload: nothing was sent)");
+  }
+  // A clip whose results no call could hand back would train for nothing (found 2026-12-06).
+  if (clip_folder) {
+    const nlohmann::json config = request.options().config_json().empty()
+                                      ? nlohmann::json::object()
+                                      : ParseJson(request.options().config_json(), "--config");
+    const bool uncertainty = !(config.contains("mc_passes") && config["mc_passes"] == 0);
+    try {
+      CheckResultsFit(ListClipFrames(clip).size(), uncertainty, clip.string());
+    } catch (const Error& e) {
+      FailInvalid(std::string(e.what()) + " (found before the upload: nothing was sent)");
+    }
   }
   const auto root = std::filesystem::is_regular_file(clip) ? clip.parent_path() : clip;
   CheckSizes(globals, stub, manifest);

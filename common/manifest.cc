@@ -14,6 +14,7 @@
 #include "common/error.h"
 #include "common/safe_path.h"
 #include "common/sha256.h"
+#include "common/transport_security.h"
 
 namespace endorecon {
 namespace fs = std::filesystem;
@@ -146,6 +147,23 @@ std::string LargestFileNote(const v1::Manifest& manifest) {
                                         [](const auto& a, const auto& b) { return a.size() < b.size(); });
   if (largest == manifest.files().end()) return "";
   return " (its largest file: " + largest->path() + ", " + std::to_string(largest->size()) + " bytes)";
+}
+
+std::size_t MostManifestBytes() { return std::size_t(kMaxMessageBytes) - 64 * 1024; }
+
+void CheckResultsFit(std::size_t frames, bool uncertainty, const std::string& where) {
+  const std::size_t per_frame =
+      uncertainty ? kResultManifestBytesPerFrame : kResultManifestBytesPerFrameWithoutUncertainty;
+  if (frames * per_frame <= MostManifestBytes()) return;
+  FailInvalid(
+      where + ": " + std::to_string(frames) + " frames: their results would take a manifest of about " +
+      std::to_string(frames * per_frame) + " bytes, more than the service's calls carry (" +
+      std::to_string(MostManifestBytes()) + "), so the job could not hand them back: at most " +
+      std::to_string(MostManifestBytes() / kResultManifestBytesPerFrame) + " frames with uncertainty maps, " +
+      std::to_string(MostManifestBytes() / kResultManifestBytesPerFrameWithoutUncertainty) +
+      " without (config mc_passes 0). Choose fewer frames (a recording's with prepare's or "
+      "submit's --frames START:END:STEP, a clip folder's by making one of fewer), or reconstruct "
+      "the clip on one machine (endorecon-worker reconstruct)");
 }
 
 }  // namespace endorecon

@@ -36,6 +36,20 @@ bool IsSha256Hex(std::string_view text);
 // Whether `manifest` is a sizes-only listing (some files, and no digest in any of them).
 bool IsSizesOnly(const v1::Manifest& manifest);
 
+// The most bytes a manifest with its digests may take: one call carries it, in the service's messages
+// (transport_security.h kMaxMessageBytes) with room for the rest of the call.
+std::size_t MostManifestBytes();
+// The bytes a results folder's manifest takes per frame of its clip: rgb/, depth/ (.npy and .png),
+// error/ and pointcloud/, and with uncertainty maps uncertainty/'s six files a frame. 1,081 measured
+// on the demo's results (539 files for 48 frames, the run's own files spread over its frames), 473
+// by the same count without uncertainty/; rounded up.
+inline constexpr std::size_t kResultManifestBytesPerFrame = 1100;
+inline constexpr std::size_t kResultManifestBytesPerFrameWithoutUncertainty = 500;
+// Throws Error(kInvalidArgument) when the results of a clip of `frames` frames would need a manifest
+// over MostManifestBytes() (a run that could not hand its results back), naming `where`, the frames
+// and how many fit, with uncertainty maps and without.
+void CheckResultsFit(std::size_t frames, bool uncertainty, const std::string& where);
+
 // The sum of the sizes, saturated at the largest int64 (so it is over every limit, never negative).
 std::int64_t TotalBytes(const v1::Manifest& manifest);
 // " (its largest file: PATH, N bytes)", the end of a refusal by size, so the user knows where to look;

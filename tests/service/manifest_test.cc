@@ -80,5 +80,41 @@ TEST(ManifestTest, SizesTooLargeAreRefusedAndTheirSumDoesNotWrap) {
   EXPECT_EQ(TotalBytes(manifest), kMaxFileBytes + 2);
 }
 
+// A clip of more frames than a results manifest can name trained for nothing: the run could not hand
+// its results back (found 2026-12-06). The bound is the measured bytes a frame of results takes.
+TEST(ManifestTest, ResultsNoCallCouldCarryAreRefusedNamingHowManyFramesFit) {
+  const std::size_t with = MostManifestBytes() / kResultManifestBytesPerFrame;
+  const std::size_t without = MostManifestBytes() / kResultManifestBytesPerFrameWithoutUncertainty;
+  EXPECT_EQ(with, 3813u);
+  CheckResultsFit(with, true, "clip");
+  CheckResultsFit(without, false, "clip");
+  const std::string message = testing::ErrorFrom([&] { CheckResultsFit(with + 1, true, "/data/clip"); });
+  EXPECT_NE(message.find("/data/clip: 3814 frames: their results would take a manifest of about"),
+            std::string::npos)
+      << message;
+  EXPECT_NE(
+      message.find("at most 3813 frames with uncertainty maps, " + std::to_string(without) + " without"),
+      std::string::npos)
+      << message;
+  testing::ErrorFrom([&] { CheckResultsFit(without + 1, false, "clip"); });
+
+  // The per-frame figure holds for a results folder's names: 11 files a frame with uncertainty maps,
+  // 5 without, each a path, a size and a digest.
+  v1::Manifest results;
+  for (const char* name :
+       {"rgb/000123.png", "depth/000123.npy", "depth/000123.png", "error/000123.png", "pointcloud/000123.ply",
+        "uncertainty/000123.npy", "uncertainty/000123.png", "uncertainty/000123_aleatoric.npy",
+        "uncertainty/000123_epistemic.npy", "uncertainty/000123_model.npy", "uncertainty/000123_model.png"}) {
+    auto* file = results.add_files();
+    file->set_path(name);
+    file->set_size(1 << 20);
+    file->set_sha256(std::string(64, 'a'));
+  }
+  EXPECT_LE(results.ByteSizeLong(), kResultManifestBytesPerFrame);
+  EXPECT_GT(results.ByteSizeLong(), kResultManifestBytesPerFrame * 9 / 10);
+  results.mutable_files()->DeleteSubrange(5, 6);
+  EXPECT_LE(results.ByteSizeLong(), kResultManifestBytesPerFrameWithoutUncertainty);
+}
+
 }  // namespace
 }  // namespace endorecon

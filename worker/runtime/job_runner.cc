@@ -12,12 +12,14 @@
 #include <string_view>
 #include <thread>
 
+#include "common/clip_files.h"
 #include "common/error.h"
 #include "common/folder_lock.h"
 #include "common/manifest.h"
 #include "common/sha256.h"
 #include "common/warning_pacer.h"
 #include "worker/engine/reconstruct.h"
+#include "worker/engine/run_config.h"
 #include "worker/runtime/dicom_job.h"
 #include "worker/runtime/job_options.h"
 #include "worker/runtime/job_preparation.h"
@@ -302,6 +304,10 @@ bool RunLeasedJob(WorkerClient& client, const v1::LeaseResponse& lease, const De
       recording = PrepareRecording(options.clip_dir, job.recording(), job_dir / "clip-from-dicom");
       if (recording) options.clip_dir = recording->clip_dir.string();
     }
+    // Results no call could hand back are refused before the training (a recording's frames are
+    // known only now; a clip folder's the CLI checked).
+    CheckResultsFit(ListClipFrames(options.clip_dir).size(), ResolveConfig(options).mc_passes > 0,
+                    options.clip_dir);
 
     ReconstructHooks hooks;
     hooks.progress_interval_s = std::min(2.0, std::chrono::duration<double>(settings.heartbeat).count());
