@@ -2,8 +2,11 @@
 // lacks, resuming a partial upload), queue a reconstruction, optionally wait for it. With a raw stereo
 // recording instead of CLIP (--left L --right R --calibration C ..., prepare's flags), the recording's files
 // are uploaded and the worker prepares the clip before reconstructing it, in the same job.
+#include <unistd.h>
+
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <chrono>
 #include <fstream>
 #include <iostream>
 #include <nlohmann/json.hpp>
@@ -159,6 +162,36 @@ void CheckJob(const Globals& globals, v1::JobService::Stub& stub, v1::SubmitRequ
   ThrowIfFailed(stub.Submit(context.get(), request, &job), "submit (checked before the upload)");
 }
 
+// On a terminal, an upload's progress on one line of stderr, rewritten at most four times a second:
+// 10,001 small files took minutes in silence and read as a hang (found 2026-12-06). Erased when the
+// upload is done; ended with a newline when it fails, so the error stands on a line of its own.
+class UploadProgressLine {
+ public:
+  explicit UploadProgressLine(bool on) : on_(on) {}
+  UploadProgressLine(const UploadProgressLine&) = delete;
+  UploadProgressLine& operator=(const UploadProgressLine&) = delete;
+  ~UploadProgressLine() {
+    if (drawn_) std::cerr << "\n" << std::flush;
+  }
+  void Show(std::int64_t sent, std::int64_t to_send) {
+    const auto now = std::chrono::steady_clock::now();
+    if (!on_ || (drawn_ && sent < to_send && now - shown_ < std::chrono::milliseconds(250))) return;
+    shown_ = now;
+    drawn_ = true;
+    std::cerr << "\ruploading: " << HumanBytes(sent) << " of " << HumanBytes(to_send) << " ("
+              << (to_send > 0 ? 100 * sent / to_send : 100) << "%)\033[K" << std::flush;
+  }
+  void Erase() {
+    if (drawn_) std::cerr << "\r\033[K" << std::flush;
+    drawn_ = false;
+  }
+
+ private:
+  bool on_;
+  bool drawn_ = false;
+  std::chrono::steady_clock::time_point shown_;
+};
+
 // Uploads the clip (what the server lacks of it) and returns its manifest. Its sizes and the job
 // (`request`, without its clip) are checked by the server first, then a clip folder (not a DICOM
 // recording nor a raw one) here (clip_check.h).
@@ -208,7 +241,10 @@ v1::Manifest Upload(const Globals& globals, v1::JobService::Stub& stub, const st
       "upload interrupted; what arrived is kept on the server (and counts against your tenant's bytes) until "
       "the server's --orphan-hours: run the same `endorecon submit` again to resume it, or "
       "`endorecon uploads --drop` to give it up");
+  UploadProgressLine progress(!globals.json && isatty(STDERR_FILENO) != 0);
+  upload_options.on_progress = [&](std::int64_t sent, std::int64_t to_send) { progress.Show(sent, to_send); };
   const auto upload = UploadFiles(root.empty() ? "." : root, manifest, calls, upload_options);
+  progress.Erase();
   if (!globals.json) {
     std::cerr << "uploaded " << manifest.files_size() << " file(s): " << HumanBytes(upload.bytes_sent)
               << " sent, " << HumanBytes(upload.bytes_skipped) << " already on the server\n";

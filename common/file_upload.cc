@@ -1,5 +1,6 @@
 #include "common/file_upload.h"
 
+#include <algorithm>
 #include <fstream>
 #include <map>
 #include <string>
@@ -45,9 +46,14 @@ void SendRound(const std::filesystem::path& dir, const v1::Manifest& manifest, c
   std::map<std::string, std::int64_t> committed;
   for (const auto& file : result.status.files()) committed[file.path()] = file.committed();
   const std::int64_t to_send = result.status.total_bytes() - result.status.committed_bytes();
+  const auto files_to_send =
+      std::count_if(manifest.files().begin(), manifest.files().end(),
+                    [&](const v1::FileEntry& entry) { return committed[entry.path()] < entry.size(); });
   const auto stream_timeout =
-      options.call_timeout + std::chrono::milliseconds(static_cast<std::int64_t>(
-                                 1000.0 * static_cast<double>(to_send) / options.min_bytes_per_second));
+      options.call_timeout +
+      std::chrono::milliseconds(static_cast<std::int64_t>(
+          1000.0 * (static_cast<double>(to_send) / options.min_bytes_per_second +
+                    static_cast<double>(files_to_send) / options.min_files_per_second)));
   auto context = CallContext(stream_timeout);
   v1::UploadStatus final_status;
   auto writer = calls.open(context.get(), &final_status);

@@ -27,6 +27,9 @@ struct UploadCalls {
 struct UploadOptions {
   std::chrono::milliseconds call_timeout{30000};  // for the query, and added to the stream's deadline
   double min_bytes_per_second = 1 << 20;          // the stream's deadline allows this slowest rate
+  // ... and this many files a second (the server makes each a blob: a write, a sync, a rename), so a
+  // clip of many small files is not held to its bytes' time alone.
+  double min_files_per_second = 50;
   std::function<void(std::int64_t sent, std::int64_t to_send)> on_progress;
   int max_rounds = 5;  // query-and-send rounds while another upload holds a file of the same content
 };
