@@ -20,6 +20,7 @@
 #include "worker/engine/train/render_settings.h"
 #include "worker/engine/train/trainer.h"
 #include "worker/runtime/commands.h"
+#include "worker/runtime/progress_line.h"
 
 namespace endorecon::worker {
 
@@ -76,6 +77,8 @@ Command AddRenderCommand(CLI::App& app) {
     for (std::size_t i = 0; i < cameras.size(); ++i) {
       const auto& view = cameras[i];
       auto frame = renderer.Render(view.camera, view.time);
+      // 2,000 views rendered for minutes without a word (found 2026-12-06).
+      ShowProgress(fmt::format(" rendered {}/{} views ", i + 1, cameras.size()));
       const int w = frame.width, h = frame.height;
       eval::ClearDepthWithoutSurface(frame.depth, frame.opacity);
       eval::WritePng8(out / "rgb" / eval::FrameFileName(int(i), ".png"), frame.rgb, w, h);
@@ -92,6 +95,7 @@ Command AddRenderCommand(CLI::App& app) {
       eval::WriteDepthNpy(path("_model.npy"), models.back(), w, h);
       totals.push_back(std::move(frame.uncertainty));
     }
+    EndProgress();
     const double heat = eval::HeatmapUpperBound(totals), model_heat = eval::HeatmapUpperBound(models);
     for (std::size_t i = 0; i < totals.size(); ++i) {
       const int w = cameras[i].camera.width, h = cameras[i].camera.height;
