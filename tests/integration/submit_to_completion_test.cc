@@ -9,6 +9,7 @@
 #include <utility>
 #include <vector>
 
+#include "common/json_file.h"
 #include "common/sha256.h"
 #include "tests/integration/service_harness.h"
 
@@ -44,6 +45,8 @@ TEST(SubmitToCompletionTest, ClipInResultsOut) {
   EXPECT_NE(fetched.out.find("report: " + (cluster.path("results") / "report.html").string()),
             std::string::npos)
       << fetched.out;
+  // The report is titled by the job's name (its clip folder on the worker is "clip" whatever it was).
+  EXPECT_EQ(ReadJsonFile(cluster.path("results") / "config.json").value("title", ""), job.name());
   bool has_metrics = false;
   for (const auto& file : job.result().files()) {
     const auto local = cluster.path("results") / file.path();

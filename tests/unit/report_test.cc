@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <fstream>
 #include <memory>
 
 #include "common/error.h"
@@ -90,6 +91,14 @@ TEST_F(ReportTest, AReconstructionsPageHoldsEveryFrameItsMetricsAndItsRun) {
   EXPECT_EQ(surface["frames"][0]["uncertainty"].get<std::string>().size(), 4 * ((points + 2) / 3));
   EXPECT_EQ(surface["frames"][0]["model"].get<std::string>().size(), 4 * ((points + 2) / 3));
   EXPECT_EQ(surface["view"]["eye"].size(), 3u);
+
+  // A service job's page is titled by the job's name (config.json "title"): its clip folder is
+  // "clip" for every job, and every job's page read "endorecon report: clip" (found 2026-12-06).
+  nlohmann::json config = ReadJsonFile(out / "config.json");
+  config["title"] = "liver, case 12";
+  std::ofstream(out / "config.json") << config.dump(2);
+  WriteReport(out);
+  EXPECT_EQ(testing::ReportData(out / "report.html")["title"], "liver, case 12");
 }
 
 TEST_F(ReportTest, ACancelledRunsPageHasNoFramesButTheRest) {

@@ -39,6 +39,9 @@ struct ReconstructOptions {
   // decoded (scene/load_options.h). 0: what this machine has available when the run starts
   // (base/machine_memory.h AvailableMemoryBytes).
   std::uint64_t memory_bytes = 0;
+  // What report.html calls the run (config.json "title"): a service job's name; empty: the clip
+  // folder's name (a job's clip folder is "clip": every job's report was "endorecon report: clip").
+  std::string title;
 };
 
 struct Progress {

@@ -59,8 +59,11 @@ DeviceBackends BackendsFor(const std::string& device) {
 
 nlohmann::json RunConfigJson(const train::TrainConfig& config, const ReconstructOptions& options,
                              int threads) {
-  return {{"train", train::ToJson(config)},         {"clip", options.clip_dir}, {"seed", options.seed},
-          {"time_budget_s", options.time_budget_s}, {"threads", threads},       {"device", options.device}};
+  nlohmann::json json{
+      {"train", train::ToJson(config)},         {"clip", options.clip_dir}, {"seed", options.seed},
+      {"time_budget_s", options.time_budget_s}, {"threads", threads},       {"device", options.device}};
+  if (!options.title.empty()) json["title"] = options.title;
+  return json;
 }
 
 }  // namespace endorecon

@@ -21,6 +21,7 @@ ReconstructOptions OptionsFor(const v1::Job& job, const std::filesystem::path& j
   if (o.has_holdout()) options.holdout = o.holdout();
   options.seed = o.seed();
   options.force_static = o.force_static();
+  options.title = job.name().empty() ? "job " + job.id() : job.name();
   options.threads = device.threads;
   options.device = device.EngineDevice();
   if (job.has_checkpoint() && !job.checkpoint().sha256().empty()) {

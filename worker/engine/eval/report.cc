@@ -313,7 +313,9 @@ fs::path WriteReport(const fs::path& results_dir) {
     views.cameras = views.clip->cameras;
     views.times = views.clip->times;
     data["kind"] = "reconstruction";
-    data["title"] = FolderName(clip_dir);
+    data["title"] = config.contains("title") && config["title"].is_string()
+                        ? config["title"].get<std::string>()
+                        : FolderName(clip_dir);
     data["clip"] = clip_dir;
     const std::string device = config.value("device", "cpu");
     const int threads = config.value("threads", 0);
