@@ -301,7 +301,7 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
         advised_s);
   }
   eval::WriteMetrics(out_dir / "metrics.json", metrics);
-  eval::WriteReport(out_dir);
+  eval::WriteReport(out_dir, &clip);
   spdlog::info("run took {:.1f} s ({:.1f} s training, {:.1f} s evaluation{})", SecondsSince(run_start),
                trained.wall_seconds, evaluation_s,
                options.time_budget_s > 0 ? fmt::format(", budget {:.0f} s", options.time_budget_s) : "");

@@ -43,7 +43,8 @@ constexpr int kJpegQuality = 88;
 struct Views {
   std::vector<scene::Camera> cameras;
   std::vector<float> times;
-  std::optional<scene::Clip> clip;  // a reconstruction's: its images and evaluation masks
+  const scene::Clip* clip = nullptr;  // a reconstruction's: its images and evaluation masks
+  std::optional<scene::Clip> loaded;  // ... read again from the folder config.json names
 };
 
 std::string BytesBase64(const void* data, std::size_t size) {
@@ -288,7 +289,7 @@ void AddFrames(const fs::path& results_dir, const Views& views, const json& reco
 
 }  // namespace
 
-fs::path WriteReport(const fs::path& results_dir) {
+fs::path WriteReport(const fs::path& results_dir, const scene::Clip* clip) {
   json data = {{"format", "endorecon-report/1"}, {"run", DescribeRunEnvironment()}};
   data["colormaps"] = {{"inferno", ColormapHex(cv::COLORMAP_INFERNO)},
                        {"viridis", ColormapHex(cv::COLORMAP_VIRIDIS)}};
@@ -303,13 +304,17 @@ fs::path WriteReport(const fs::path& results_dir) {
                   ": no \"clip\" (the clip folder) to show the input of");
     }
     const std::string clip_dir = config["clip"];
-    scene::LoadOptions load;  // transparent inputs shown on the background the run used
-    if (config.contains("/train/background"_json_pointer) && config["train"]["background"] == "black")
-      load.alpha_background = {0, 0, 0};
-    // The bounds the run trained with (results of before 2026-12-06 had the clip's own).
-    load.fit_depth_bounds = config.contains("/train/fit_depth_bounds"_json_pointer) &&
-                            config["train"]["fit_depth_bounds"] == true;
-    views.clip = scene::LoadClip(clip_dir, load);
+    if (clip == nullptr) {
+      scene::LoadOptions load;  // transparent inputs shown on the background the run used
+      if (config.contains("/train/background"_json_pointer) && config["train"]["background"] == "black")
+        load.alpha_background = {0, 0, 0};
+      // The bounds the run trained with (results of before 2026-12-06 had the clip's own).
+      load.fit_depth_bounds = config.contains("/train/fit_depth_bounds"_json_pointer) &&
+                              config["train"]["fit_depth_bounds"] == true;
+      views.loaded = scene::LoadClip(clip_dir, load);
+      clip = &*views.loaded;
+    }
+    views.clip = clip;
     views.cameras = views.clip->cameras;
     views.times = views.clip->times;
     data["kind"] = "reconstruction";
