@@ -77,14 +77,15 @@ TEST(ClipLoaderTest, LoadsGroundTruthFolder) {
   EXPECT_NE(message.find("gt/depth: holds 1 files but the clip has 2 frames"), std::string::npos) << message;
 }
 
-// A clip whose decoded frames times the run's factor exceed the memory given is refused before a frame
-// is decoded (a damaged frame is not reached), naming the need, what is there and how many frames fit;
+// A clip whose decoded frames and the run's per-pixel state exceed the memory given is refused before a
+// frame is decoded (a damaged frame is not reached), naming the need, what is there and how many frames fit;
 // a ground-truth folder counts its colour and depth too.
 TEST(ClipLoaderTest, AClipTooLargeForMemoryIsRefusedBeforeDecoding) {
   TempDir dir("clip");
   WriteEndoNerfClip(dir.path(), 10);  // 8x6 frames, colour only: 3 bytes a pixel
   LoadOptions options;
-  options.memory_factor = 3;  // 9 bytes a pixel, 432 a frame, 4,320 the clip
+  options.run_bytes_per_pixel = 6;          // 9 bytes a pixel, 432 a frame, 4,320 the clip
+  options.run_bytes_per_depth_pixel = 100;  // the clip has no depth
   options.memory_bytes = 4320;
   EXPECT_EQ(LoadClip(dir.path(), options).frame_count(), 10);
 
@@ -104,10 +105,19 @@ TEST(ClipLoaderTest, AClipTooLargeForMemoryIsRefusedBeforeDecoding) {
     WriteImage(dir / "gt/images" / (std::to_string(i) + ".png"),
                Pattern(8, 6, CV_8UC3, [](int, int) { return 9; }));
   }
-  options.memory_bytes = 4320;  // 30 bytes a pixel with the ground truth's colour and depth
+  options.memory_bytes = 4320;  // 16 bytes a pixel with the ground truth's colour and depth: 7,680
   ErrorFrom([&] { LoadClip(dir.path(), options); }, ErrorCode::kResourceExhausted);
-  options.memory_bytes = 14400;
+  options.memory_bytes = 7680;
   EXPECT_EQ(LoadClip(dir.path(), options).gt_rgb.size(), 10u);
+
+  // Depth priors: 4 bytes a pixel decoded, and the run's state for them (100 here) beside.
+  const std::vector<float> depth(48, 1.5f);
+  fs::create_directories(dir / "depth");
+  for (int i = 0; i < 10; ++i)
+    WriteNpyFloat32(dir / "depth" / (std::to_string(i) + ".npy"), depth.data(), {6, 8});
+  ErrorFrom([&] { LoadClip(dir.path(), options); }, ErrorCode::kResourceExhausted);
+  options.memory_bytes = 10 * 48 * (3 + 7 + 4 + 6 + 100);
+  EXPECT_EQ(LoadClip(dir.path(), options).depth.size(), 10u);
 }
 
 }  // namespace

@@ -55,11 +55,12 @@ constexpr double kBudgetTolerance = 0.1;
 // "The budget is the job") and rounded up.
 constexpr double kTailSecondsPerPixel = 1.0e-6;
 
-// A run's peak memory as a multiple of its decoded frames' bytes (beside them the depth refiner's
-// refined and filled priors, the sampler's and the uncertainty map's tables, evaluation's buffers):
-// 2.3 to 2.8 measured on clips of 33 and 131 million pixels with and without depth, masks and ground
-// truth (docs/benchmarks.md, "A clip too large for memory"), rounded up.
-constexpr double kRunMemoryFactor = 3;
+// What a run keeps per pixel of its clip beside the decoded frames (the sampler's and the uncertainty
+// map's tables, evaluation's buffers), and with depth priors the depth refiner's refined priors
+// more: 4.1 and 3.7 bytes measured on clips of 33 million pixels with and without depth, masks and
+// ground truth (docs/benchmarks.md, "A clip too large for memory"), rounded up.
+constexpr double kRunBytesPerPixel = 5;
+constexpr double kRunBytesPerDepthPixel = 5;
 
 double TailSeconds(const scene::Clip& clip) {
   return kTailSecondsPerPixel * double(clip.frame_count()) * clip.width * clip.height;
@@ -88,7 +89,8 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
   load.should_stop = hooks.should_stop;
   load.fit_depth_bounds = config.fit_depth_bounds;
   load.memory_bytes = options.memory_bytes > 0 ? options.memory_bytes : base::AvailableMemoryBytes();
-  load.memory_factor = kRunMemoryFactor;
+  load.run_bytes_per_pixel = kRunBytesPerPixel;
+  load.run_bytes_per_depth_pixel = kRunBytesPerDepthPixel;
   if (config.background == "black") load.alpha_background = {0, 0, 0};
   nlohmann::json outside_view;  // what the scope's view leaves out, for left_out
   const scene::Clip clip = [&] {

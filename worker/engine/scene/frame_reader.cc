@@ -138,7 +138,9 @@ void CheckMemory(const FrameFiles& first, std::size_t n, const FrameReadOptions&
   if (options.memory_bytes == 0) return;
   const double frame_pixels = double(clip.width) * double(clip.height);
   const double decoded = frame_pixels * (DecodedBytesPerPixel(first) + options.extra_bytes_per_pixel);
-  const double per_frame = decoded * options.memory_factor;
+  const double per_frame =
+      decoded + frame_pixels * (options.run_bytes_per_pixel +
+                                (first.depth.empty() ? 0.0 : options.run_bytes_per_depth_pixel));
   const double available = double(options.memory_bytes);
   if (double(n) * per_frame <= available) return;
   constexpr double kGib = double(1 << 30);

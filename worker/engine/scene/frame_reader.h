@@ -20,7 +20,8 @@ struct FrameReadOptions {
   std::uint8_t tool_value = 255;  // the mask value that marks the tool (the other allowed value: 255 - this)
   std::size_t max_pixels_per_frame = std::size_t{4096} * 4096;
   std::uint64_t memory_bytes = 0;                                  // LoadOptions'
-  double memory_factor = 1;                                        // LoadOptions'
+  double run_bytes_per_pixel = 0;                                  // LoadOptions'
+  double run_bytes_per_depth_pixel = 0;                            // LoadOptions'
   double extra_bytes_per_pixel = 0;                                // LoadOptions'
   std::array<std::uint8_t, 3> alpha_background = {255, 255, 255};  // what transparent pixels lie on
   std::function<bool()> should_stop;                               // LoadOptions' (load_options.h)

@@ -20,11 +20,13 @@ struct LoadOptions {
   // Bring near/far to the depth priors where they are far looser or cut them off
   // (scene/depth_bounds.h; the training key fit_depth_bounds).
   bool fit_depth_bounds = true;
-  // The memory the run may take (bytes; 0: unchecked), and how many times its decoded frames' bytes
-  // the run takes at its peak (training's and evaluation's state beside the frames, reconstruct.cc):
-  // a clip that needs more is refused before a frame is decoded, Error(kResourceExhausted).
+  // The memory the run may take (bytes; 0: unchecked), and what it keeps per pixel of the clip beside
+  // the decoded frames (training's and evaluation's state, reconstruct.cc), with depth priors that
+  // much and run_bytes_per_depth_pixel more: a clip that needs more is refused before a frame is
+  // decoded, Error(kResourceExhausted).
   std::uint64_t memory_bytes = 0;
-  double memory_factor = 1;
+  double run_bytes_per_pixel = 0;
+  double run_bytes_per_depth_pixel = 0;
   // Decoded bytes a pixel the clip loads beside its frames' files: LoadClip's, for a gt/ folder.
   double extra_bytes_per_pixel = 0;
 };
