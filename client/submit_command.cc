@@ -217,7 +217,7 @@ v1::Manifest Upload(const Globals& globals, v1::JobService::Stub& stub, const st
                                       : ParseJson(request.options().config_json(), "--config");
     const bool uncertainty = !(config.contains("mc_passes") && config["mc_passes"] == 0);
     try {
-      CheckResultsFit(ListClipFrames(clip).size(), uncertainty, clip.string());
+      CheckResultsFit(ListClipFrames(clip).size(), uncertainty, manifest_bytes, clip.string());
     } catch (const Error& e) {
       FailInvalid(std::string(e.what()) + " (found before the upload: nothing was sent)");
     }
@@ -243,7 +243,17 @@ v1::Manifest Upload(const Globals& globals, v1::JobService::Stub& stub, const st
       "`endorecon uploads --drop` to give it up");
   UploadProgressLine progress(!globals.json && isatty(STDERR_FILENO) != 0);
   upload_options.on_progress = [&](std::int64_t sent, std::int64_t to_send) { progress.Show(sent, to_send); };
-  const auto upload = UploadFiles(root.empty() ? "." : root, manifest, calls, upload_options);
+  const auto upload = [&] {
+    try {
+      return UploadFiles(root.empty() ? "." : root, manifest, calls, upload_options);
+    } catch (const Error& e) {
+      // A server gone or a deadline passed mid-upload said only "Socket closed" (found 2026-12-06).
+      if (e.code() != ErrorCode::kUnavailable) throw;
+      Fail(e.code(), std::string(e.what()) +
+                         "; what arrived is kept on the server: run the same `endorecon submit` again to "
+                         "resume the upload");
+    }
+  }();
   progress.Erase();
   if (!globals.json) {
     std::cerr << "uploaded " << manifest.files_size() << " file(s): " << HumanBytes(upload.bytes_sent)

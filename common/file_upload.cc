@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <fstream>
 #include <map>
+#include <set>
 #include <string>
 #include <thread>
 
@@ -60,11 +61,15 @@ void SendRound(const std::filesystem::path& dir, const v1::Manifest& manifest, c
   v1::UploadRequest first;
   *first.mutable_manifest() = manifest;
   bool open = writer->Write(first);
+  // A content sent whole once in this stream is not sent again for another path (the server keeps one
+  // blob a content: 3,000 hard links of one frame went up as 7.1 GB; found 2026-12-06).
+  std::set<std::string> sent;
   for (const auto& entry : manifest.files()) {
     if (!open) break;
     const std::int64_t offset = committed[entry.path()];
-    if (offset >= entry.size()) continue;
+    if (offset >= entry.size() || sent.count(entry.sha256())) continue;
     open = SendFile(dir / entry.path(), entry, offset, *writer, result, options, to_send);
+    if (open) sent.insert(entry.sha256());
   }
   if (open) writer->WritesDone();
   ThrowIfFailed(writer->Finish(), "upload");

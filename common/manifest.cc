@@ -151,19 +151,28 @@ std::string LargestFileNote(const v1::Manifest& manifest) {
 
 std::size_t MostManifestBytes() { return std::size_t(kMaxMessageBytes) - 64 * 1024; }
 
-void CheckResultsFit(std::size_t frames, bool uncertainty, const std::string& where) {
+void CheckResultsFit(std::size_t frames, bool uncertainty, std::size_t clip_manifest_bytes,
+                     const std::string& where) {
   const std::size_t per_frame =
       uncertainty ? kResultManifestBytesPerFrame : kResultManifestBytesPerFrameWithoutUncertainty;
-  if (frames * per_frame <= MostManifestBytes()) return;
-  FailInvalid(
-      where + ": " + std::to_string(frames) + " frames: their results would take a manifest of about " +
-      std::to_string(frames * per_frame) + " bytes, more than the service's calls carry (" +
-      std::to_string(MostManifestBytes()) + "), so the job could not hand them back: at most " +
-      std::to_string(MostManifestBytes() / kResultManifestBytesPerFrame) + " frames with uncertainty maps, " +
-      std::to_string(MostManifestBytes() / kResultManifestBytesPerFrameWithoutUncertainty) +
-      " without (config mc_passes 0). Choose fewer frames (a recording's with prepare's or "
-      "submit's --frames START:END:STEP, a clip folder's by making one of fewer), or reconstruct "
-      "the clip on one machine (endorecon-worker reconstruct)");
+  const std::size_t results = frames * per_frame;
+  if (clip_manifest_bytes + results <= MostManifestBytes()) return;
+  // The clip's manifest grows with its frames too: how many frames of this clip's kind fit.
+  const double clip_per_frame = frames > 0 ? double(clip_manifest_bytes) / double(frames) : 0.0;
+  const auto fit = [&](std::size_t results_per_frame) {
+    return std::to_string(
+        std::size_t(double(MostManifestBytes()) / (double(results_per_frame) + clip_per_frame)));
+  };
+  FailInvalid(where + ": " + std::to_string(frames) +
+              " frames: their results would take a manifest of about " + std::to_string(results) +
+              " bytes, and with the clip's (" + std::to_string(clip_manifest_bytes) +
+              ") more than the service's messages carry (" + std::to_string(MostManifestBytes()) +
+              "): the job could not hand them back, nor `status` and `fetch` show them. At most about " +
+              fit(kResultManifestBytesPerFrame) + " frames of this clip fit with uncertainty maps, " +
+              fit(kResultManifestBytesPerFrameWithoutUncertainty) +
+              " without (config mc_passes 0). Choose fewer frames (a recording's with prepare's or "
+              "submit's --frames START:END:STEP, a clip folder's by making one of fewer), or reconstruct "
+              "the clip on one machine (endorecon-worker reconstruct)");
 }
 
 }  // namespace endorecon

@@ -40,15 +40,19 @@ bool IsSizesOnly(const v1::Manifest& manifest);
 // (transport_security.h kMaxMessageBytes) with room for the rest of the call.
 std::size_t MostManifestBytes();
 // The bytes a results folder's manifest takes per frame of its clip: rgb/, depth/ (.npy and .png),
-// error/ and pointcloud/, and with uncertainty maps uncertainty/'s six files a frame. 1,081 measured
-// on the demo's results (539 files for 48 frames, the run's own files spread over its frames), 473
-// by the same count without uncertainty/; rounded up.
-inline constexpr std::size_t kResultManifestBytesPerFrame = 1100;
+// error/ and pointcloud/, and with uncertainty maps uncertainty/'s six files a frame. 1,054 and
+// 1,081 counted on the results of 200 and 48 frames (the run's own files spread over its frames);
+// a 3,813-frame job's results took 4,348,147 bytes in its Complete call, 1,140 a frame; rounded
+// up. About 500 without uncertainty/ (an 8,388-frame job's results went through).
+inline constexpr std::size_t kResultManifestBytesPerFrame = 1200;
 inline constexpr std::size_t kResultManifestBytesPerFrameWithoutUncertainty = 500;
-// Throws Error(kInvalidArgument) when the results of a clip of `frames` frames would need a manifest
-// over MostManifestBytes() (a run that could not hand its results back), naming `where`, the frames
-// and how many fit, with uncertainty maps and without.
-void CheckResultsFit(std::size_t frames, bool uncertainty, const std::string& where);
+// Throws Error(kInvalidArgument) when the results of a clip of `frames` frames, beside the clip's own
+// manifest of `clip_manifest_bytes` (a job's status carries both), would need more than
+// MostManifestBytes(): a run that could not hand its results back, a job `status` and `fetch` could
+// not show (a 3,813-frame job succeeded and could not be fetched; found 2026-12-06). Names `where`,
+// the frames and about how many of this clip's fit, with uncertainty maps and without.
+void CheckResultsFit(std::size_t frames, bool uncertainty, std::size_t clip_manifest_bytes,
+                     const std::string& where);
 
 // The sum of the sizes, saturated at the largest int64 (so it is over every limit, never negative).
 std::int64_t TotalBytes(const v1::Manifest& manifest);

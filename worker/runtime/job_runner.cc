@@ -307,7 +307,7 @@ bool RunLeasedJob(WorkerClient& client, const v1::LeaseResponse& lease, const De
     // Results no call could hand back are refused before the training (a recording's frames are
     // known only now; a clip folder's the CLI checked).
     CheckResultsFit(ListClipFrames(options.clip_dir).size(), ResolveConfig(options).mc_passes > 0,
-                    options.clip_dir);
+                    job.clip().ByteSizeLong(), options.clip_dir);
 
     ReconstructHooks hooks;
     hooks.progress_interval_s = std::min(2.0, std::chrono::duration<double>(settings.heartbeat).count());
