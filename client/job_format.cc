@@ -56,6 +56,7 @@ std::string ProgressLine(const v1::Progress& p, bool stopped) {
                ? fmt::format("preparing the recording: frame {}/{}", p.iteration(), p.total_iterations())
                : fmt::format("preparing the recording: frame {}", p.iteration());
   }
+  if (p.phase() == "upload") return fmt::format("uploading the results: {} file(s)", p.total_iterations());
   if (p.phase() == "evaluate") {
     return fmt::format("evaluating the results: frame {}/{}  {:.0f} s{}", p.iteration(), p.total_iterations(),
                        p.seconds(), eta);

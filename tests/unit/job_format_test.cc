@@ -54,6 +54,15 @@ TEST(ProgressLine, SaysWhenTheResultsAreBeingRendered) {
   EXPECT_EQ(ProgressLine(p), "evaluating the results: frame 12/48  6 s  ETA 18s");
 }
 
+// The results' upload took minutes after "evaluating the results: frame 3813/3813 ETA 0s" stood still
+// (found 2026-12-06).
+TEST(ProgressLine, SaysWhenTheResultsAreBeingUploaded) {
+  v1::Progress p;
+  p.set_phase("upload");
+  p.set_total_iterations(538);
+  EXPECT_EQ(ProgressLine(p), "uploading the results: 538 file(s)");
+}
+
 TEST(ProgressLine, ClampsTheBarAndHandlesAnUnknownTotal) {
   v1::Progress p = MidRun();
   p.set_iteration(12000);

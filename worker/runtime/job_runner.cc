@@ -355,6 +355,10 @@ bool RunLeasedJob(WorkerClient& client, const v1::LeaseResponse& lease, const De
       v1::CompleteRequest complete;
       complete.set_lease_id(lease.lease_id());
       *complete.mutable_result() = ManifestOfDirectory(options.out_dir);
+      v1::Progress uploading;
+      uploading.set_phase("upload");
+      uploading.set_total_iterations(complete.result().files_size());
+      reporter.SetProgress(uploading);
       WhileLeaseHeld(client, reporter, [&] { client.PutFiles(options.out_dir, complete.result()); });
       stop_reporting();
       complete.set_summary_json(SummaryJson(summary));
