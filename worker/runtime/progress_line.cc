@@ -2,7 +2,9 @@
 
 #include <spdlog/sinks/sink.h>
 #include <spdlog/spdlog.h>
+#include <unistd.h>
 
+#include <chrono>
 #include <cstdio>
 #include <memory>
 #include <mutex>
@@ -13,6 +15,11 @@ namespace {
 
 std::mutex progress_mutex;
 bool line_open = false;
+// Into a pipe or a file, a line rewritten with "\r" is one line of every update (a log of a long run
+// held thousands); there the progress is a line of its own at most every kPipedInterval.
+constexpr std::chrono::seconds kPipedInterval{10};
+std::chrono::steady_clock::time_point piped_at;
+bool piped_once = false;
 
 // A logger's sink that ends the progress line before the message it passes on.
 class EndsProgressSink final : public spdlog::sinks::sink {
@@ -36,6 +43,16 @@ class EndsProgressSink final : public spdlog::sinks::sink {
 
 void ShowProgress(const std::string& text) {
   const std::lock_guard lock(progress_mutex);
+  static const bool terminal = isatty(STDERR_FILENO) != 0;
+  if (!terminal) {
+    const auto now = std::chrono::steady_clock::now();
+    if (piped_once && now - piped_at < kPipedInterval) return;
+    piped_once = true;
+    piped_at = now;
+    std::fprintf(stderr, "%s\n", text.c_str());
+    std::fflush(stderr);
+    return;
+  }
   std::fprintf(stderr, "\r%s", text.c_str());
   std::fflush(stderr);
   line_open = true;

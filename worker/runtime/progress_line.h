@@ -8,7 +8,8 @@
 
 namespace endorecon::worker {
 
-// Rewrites the open line with `text` (opening one if none is).
+// Rewrites the open line with `text` (opening one if none is). When stderr is no terminal (a pipe, a
+// log file), writes `text` as a line of its own instead, at most once every 10 seconds.
 void ShowProgress(const std::string& text);
 // Ends the open line, if any, with a newline.
 void EndProgress();
