@@ -140,13 +140,14 @@ int Fetch(const Globals& globals, const FetchFlags& flags) {
     v1::FetchRequest request;
     request.set_id(job.id());
     std::int64_t to_receive = 0;
-    for (const auto& range : pending) *request.add_files() = range;
+    for (const auto& range : OnePerContent(pending)) *request.add_files() = range;
     for (const auto& file : job.result().files()) to_receive += file.size();
     auto stream_context = CallContext(
         globals.timeout() + std::chrono::milliseconds(static_cast<std::int64_t>(
                                 1000.0 * static_cast<double>(to_receive) / flags.min_bytes_per_second)));
     auto reader = stub->Fetch(stream_context.get(), request);
     received = ReceiveFiles(*reader, flags.out);
+    CopyDuplicates(flags.out, pending);
     // On disk before "verified" is said: the results may be the only copy once retention runs.
     SyncFolder(flags.out);
   }

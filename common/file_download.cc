@@ -6,7 +6,9 @@
 #include <cerrno>
 #include <cstring>
 #include <fstream>
+#include <map>
 #include <optional>
+#include <set>
 #include <string>
 
 #include "common/error.h"
@@ -110,6 +112,30 @@ std::vector<v1::FileRange> PendingDownloads(const fs::path& dir, const v1::Manif
     pending.push_back(range);
   }
   return pending;
+}
+
+std::vector<v1::FileRange> OnePerContent(const std::vector<v1::FileRange>& pending) {
+  std::vector<v1::FileRange> unique;
+  std::set<std::string> asked;
+  for (const auto& range : pending) {
+    if (asked.insert(range.sha256()).second) unique.push_back(range);
+  }
+  return unique;
+}
+
+void CopyDuplicates(const fs::path& dir, const std::vector<v1::FileRange>& pending) {
+  std::map<std::string, fs::path> received;  // content -> the file of it received
+  for (const auto& range : OnePerContent(pending)) received.emplace(range.sha256(), dir / range.path());
+  for (const auto& range : pending) {
+    const auto target = dir / range.path();
+    const auto& source = received.at(range.sha256());
+    if (target == source) continue;
+    std::error_code error;
+    fs::create_directories(target.parent_path(), error);
+    if (!error) fs::copy_file(source, target, fs::copy_options::overwrite_existing, error);
+    if (error) Fail(ErrorCode::kUnavailable, "cannot write " + target.string() + ": " + error.message());
+    fs::remove(PartPath(target), error);
+  }
 }
 
 std::int64_t ReceiveFiles(grpc::ClientReaderInterface<v1::FileChunk>& reader, const fs::path& dir) {

@@ -17,6 +17,14 @@ namespace endorecon {
 // digest), each with the offset its .part file reached. Sets path, sha256 and offset.
 std::vector<v1::FileRange> PendingDownloads(const std::filesystem::path& dir, const v1::Manifest& manifest);
 
+// The ranges of `pending` whose content no earlier one asks for: a content under several names (the
+// identical masks of frames without a tool) is downloaded once, then copied by CopyDuplicates.
+std::vector<v1::FileRange> OnePerContent(const std::vector<v1::FileRange>& pending);
+// After OnePerContent(pending) was received into `dir`: makes each other range of `pending` a copy of
+// the received file of its content (replacing what is there), and removes its .part. Throws
+// Error(kUnavailable) naming the file when a copy cannot be written.
+void CopyDuplicates(const std::filesystem::path& dir, const std::vector<v1::FileRange>& pending);
+
 // Writes a FileChunk stream into `dir`; returns the bytes written. Throws Error(kDataLoss) when a
 // file's digest does not match (its .part is removed), kInvalidArgument for an unsafe path or an
 // out-of-order chunk. Checks the stream's status itself.

@@ -131,9 +131,11 @@ TEST(SubmitToCompletionTest, ClipInResultsOut) {
 }
 
 // A content the clip holds under several names goes up once: the server keeps one blob a content,
-// and 3,000 hard links of one frame went up as 7.1 GB (found 2026-12-06).
+// and 3,000 hard links of one frame went up as 7.1 GB (found 2026-12-06). The worker downloads it
+// once too and copies it to the other names (the run needs every frame).
 TEST(SubmitToCompletionTest, AContentUnderSeveralNamesIsSentOnce) {
   Cluster cluster;
+  cluster.StartWorker("w1");
   const auto clip = cluster.path("clip");
   MakeClip(clip);
   std::string payload(8 << 20, '\0');
@@ -143,10 +145,11 @@ TEST(SubmitToCompletionTest, AContentUnderSeveralNamesIsSentOnce) {
     std::filesystem::copy_file(clip / "images" / "000000.png", clip / "images" / copy,
                                std::filesystem::copy_options::overwrite_existing);
   }
-  const auto submitted = RunCli(cluster.address(), {"submit", clip.string(), "--iterations", "1"});
-  ASSERT_EQ(submitted.exit_code, 0) << submitted.err;
+  const auto submitted = RunCli(cluster.address(), {"submit", clip.string(), "--iterations", "5", "--wait"});
+  ASSERT_EQ(submitted.exit_code, 0) << submitted.err << submitted.out << cluster.ServerLog();
   // One 8.4 MB frame and the clip's few kB, not four of them.
   EXPECT_NE(submitted.err.find("file(s): 8.4 MB sent"), std::string::npos) << submitted.err;
+  EXPECT_NE(submitted.out.find("SUCCEEDED"), std::string::npos) << submitted.out;
 }
 
 TEST(SubmitToCompletionTest, UnreachableServerExitsWithFour) {

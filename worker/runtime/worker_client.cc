@@ -150,11 +150,12 @@ void WorkerClient::GetFiles(const std::string& lease_id, const std::filesystem::
   v1::GetBlobsRequest request;
   request.set_lease_id(lease_id);
   std::int64_t bytes = 0;
-  for (const auto& range : pending) *request.add_files() = range;
+  for (const auto& range : OnePerContent(pending)) *request.add_files() = range;
   for (const auto& file : manifest.files()) bytes += file.size();
   auto context = CallContext(timeout_ + std::chrono::milliseconds(bytes / 1000));  // at least 1 MB/s
   auto reader = stub_->GetBlobs(context.get(), request);
   ReceiveFiles(*reader, dir);
+  CopyDuplicates(dir, pending);
 }
 
 std::unique_ptr<grpc::ClientReaderWriter<v1::ProgressUpdate, v1::ProgressReply>> WorkerClient::OpenReport(
