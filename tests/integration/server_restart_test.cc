@@ -137,6 +137,7 @@ TEST(ServerRestartTest, AnInterruptedUploadIsListedAndCanBeDropped) {
             std::string::npos)
       << listed.out;
   EXPECT_NE(listed.out.find("  no tenant ('-'): "), std::string::npos) << listed.out;
+  EXPECT_NE(listed.out.find(" distinct file(s), 268.5 MB"), std::string::npos) << listed.out;
   // What arrived before the Ctrl-C: some kB or MB of the 268.5 MB, whenever the signal came.
   EXPECT_TRUE(std::regex_search(
       listed.out, std::regex(" 268\\.5 MB \\([0-9.]+ [kM]?B of it arrived\\), the last upload begun ")))
