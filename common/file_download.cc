@@ -133,7 +133,13 @@ void CopyDuplicates(const fs::path& dir, const std::vector<v1::FileRange>& pendi
     std::error_code error;
     fs::create_directories(target.parent_path(), error);
     if (!error) fs::copy_file(source, target, fs::copy_options::overwrite_existing, error);
-    if (error) Fail(ErrorCode::kUnavailable, "cannot write " + target.string() + ": " + error.message());
+    // As a received file's write (WriteFailed): a full disk is RESOURCE_EXHAUSTED, anything else
+    // INTERNAL, never UNAVAILABLE, which a download retried while the server is away would retry.
+    if (error) {
+      const bool full = error.value() == ENOSPC || error.value() == EDQUOT;
+      Fail(full ? ErrorCode::kResourceExhausted : ErrorCode::kInternal,
+           "cannot write " + target.string() + ": " + error.message());
+    }
     fs::remove(PartPath(target), error);
   }
 }

@@ -22,7 +22,8 @@ std::vector<v1::FileRange> PendingDownloads(const std::filesystem::path& dir, co
 std::vector<v1::FileRange> OnePerContent(const std::vector<v1::FileRange>& pending);
 // After OnePerContent(pending) was received into `dir`: makes each other range of `pending` a copy of
 // the received file of its content (replacing what is there), and removes its .part. Throws
-// Error(kUnavailable) naming the file when a copy cannot be written.
+// Error naming the file when a copy cannot be written: kResourceExhausted for a full disk (as a
+// received file's write), else kInternal.
 void CopyDuplicates(const std::filesystem::path& dir, const std::vector<v1::FileRange>& pending);
 
 // Writes a FileChunk stream into `dir`; returns the bytes written. Throws Error(kDataLoss) when a
