@@ -215,9 +215,9 @@ v1::Manifest Upload(const Globals& globals, v1::JobService::Stub& stub, const st
     const nlohmann::json config = request.options().config_json().empty()
                                       ? nlohmann::json::object()
                                       : ParseJson(request.options().config_json(), "--config");
-    const bool uncertainty = !(config.contains("mc_passes") && config["mc_passes"] == 0);
     try {
-      CheckResultsFit(ListClipFrames(clip).size(), uncertainty, manifest_bytes, clip.string());
+      CheckResultsFit(ListClipFrames(clip).size(), WritesUncertaintyMaps(config), manifest_bytes,
+                      clip.string());
     } catch (const Error& e) {
       FailInvalid(std::string(e.what()) + " (found before the upload: nothing was sent)");
     }

@@ -6,6 +6,7 @@
 #include <cerrno>
 #include <cstring>
 #include <limits>
+#include <nlohmann/json.hpp>
 #include <set>
 #include <string>
 #include <utility>
@@ -150,6 +151,10 @@ std::string LargestFileNote(const v1::Manifest& manifest) {
 }
 
 std::size_t MostManifestBytes() { return std::size_t(kMaxMessageBytes) - 64 * 1024; }
+
+bool WritesUncertaintyMaps(const nlohmann::json& config) {
+  return !(config.is_object() && config.contains("mc_passes") && config["mc_passes"] == 0);
+}
 
 void CheckResultsFit(std::size_t frames, bool uncertainty, std::size_t clip_manifest_bytes,
                      const std::string& where) {

@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <nlohmann/json_fwd.hpp>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -53,6 +54,10 @@ inline constexpr std::size_t kResultManifestBytesPerFrameWithoutUncertainty = 50
 // the frames and about how many of this clip's fit, with uncertainty maps and without.
 void CheckResultsFit(std::size_t frames, bool uncertainty, std::size_t clip_manifest_bytes,
                      const std::string& where);
+// Whether a job of this training configuration (its --config keys, as the job carries them) writes
+// uncertainty maps: every preset does, unless the keys set mc_passes 0. A resumed job's are its first
+// run's, so the checkpoint need not be read to tell.
+bool WritesUncertaintyMaps(const nlohmann::json& config);
 
 // The sum of the sizes, saturated at the largest int64 (so it is over every limit, never negative).
 std::int64_t TotalBytes(const v1::Manifest& manifest);

@@ -7,6 +7,7 @@
 
 #include <filesystem>
 #include <limits>
+#include <nlohmann/json.hpp>
 #include <string>
 
 #include "tests/unit/clip_fixture.h"
@@ -101,6 +102,10 @@ TEST(ManifestTest, ResultsNoCallCouldCarryAreRefusedNamingHowManyFramesFit) {
       << message;
   testing::ErrorFrom([&] { CheckResultsFit(without + 1, false, (without + 1) * 100, "clip"); });
   testing::ErrorFrom([&] { CheckResultsFit(1, true, MostManifestBytes(), "clip"); });
+  // Every preset writes uncertainty maps; only mc_passes 0 in the job's keys leaves them out.
+  EXPECT_TRUE(WritesUncertaintyMaps(nlohmann::json::object()));
+  EXPECT_TRUE(WritesUncertaintyMaps({{"mc_passes", 4}, {"iterations", 0}}));
+  EXPECT_FALSE(WritesUncertaintyMaps({{"mc_passes", 0}}));
 
   // The per-frame figure holds for a results folder's names: 11 files a frame with uncertainty maps,
   // 5 without, each a path, a size and a digest.

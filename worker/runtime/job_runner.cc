@@ -19,7 +19,6 @@
 #include "common/sha256.h"
 #include "common/warning_pacer.h"
 #include "worker/engine/reconstruct.h"
-#include "worker/engine/run_config.h"
 #include "worker/runtime/dicom_job.h"
 #include "worker/runtime/job_options.h"
 #include "worker/runtime/job_preparation.h"
@@ -306,7 +305,7 @@ bool RunLeasedJob(WorkerClient& client, const v1::LeaseResponse& lease, const De
     }
     // Results no call could hand back are refused before the training (a recording's frames are
     // known only now; a clip folder's the CLI checked).
-    CheckResultsFit(ListClipFrames(options.clip_dir).size(), ResolveConfig(options).mc_passes > 0,
+    CheckResultsFit(ListClipFrames(options.clip_dir).size(), WritesUncertaintyMaps(options.config),
                     job.clip().ByteSizeLong(), options.clip_dir);
 
     ReconstructHooks hooks;

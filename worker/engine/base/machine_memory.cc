@@ -55,16 +55,15 @@ std::optional<std::uint64_t> CgroupRoom() {
     }
   }
   struct Layout {
-    std::string dir, limit, usage, stat, inactive;
+    std::string dir, limit, usage, inactive;  // the files in dir, and memory.stat's key
   };
   std::vector<Layout> tries;
   if (!v1_path.empty()) {
     for (const std::string& dir : {"/sys/fs/cgroup/memory" + v1_path, std::string("/sys/fs/cgroup/memory")})
-      tries.push_back(
-          {dir, "memory.limit_in_bytes", "memory.usage_in_bytes", "memory.stat", "total_inactive_file"});
+      tries.push_back({dir, "memory.limit_in_bytes", "memory.usage_in_bytes", "total_inactive_file"});
   } else {
     for (const std::string& dir : {"/sys/fs/cgroup" + v2_path, std::string("/sys/fs/cgroup")})
-      tries.push_back({dir, "memory.max", "memory.current", "memory.stat", "inactive_file"});
+      tries.push_back({dir, "memory.max", "memory.current", "inactive_file"});
   }
   for (const Layout& l : tries) {
     const std::optional<std::uint64_t> usage = NumberFile(l.dir + "/" + l.usage);
@@ -72,7 +71,7 @@ std::optional<std::uint64_t> CgroupRoom() {
     const std::optional<std::uint64_t> limit = NumberFile(l.dir + "/" + l.limit);
     // v1 writes "no limit" as a number near 2^63 (rounded to pages).
     if (!limit || *limit >= (std::uint64_t{1} << 62)) return std::nullopt;
-    const std::uint64_t inactive = StatField(l.dir + "/" + l.stat, l.inactive);
+    const std::uint64_t inactive = StatField(l.dir + "/memory.stat", l.inactive);
     const std::uint64_t working_set = *usage > inactive ? *usage - inactive : 0;
     return *limit > working_set ? *limit - working_set : 0;
   }
