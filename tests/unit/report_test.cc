@@ -99,6 +99,10 @@ TEST_F(ReportTest, AReconstructionsPageHoldsEveryFrameItsMetricsAndItsRun) {
   std::ofstream(out / "config.json") << config.dump(2);
   WriteReport(out);
   EXPECT_EQ(testing::ReportData(out / "report.html")["title"], "liver, case 12");
+  config["title"] = 12;  // no name: the clip folder's, as before
+  std::ofstream(out / "config.json") << config.dump(2);
+  WriteReport(out);
+  EXPECT_EQ(testing::ReportData(out / "report.html")["title"], "clip");
 }
 
 TEST_F(ReportTest, ACancelledRunsPageHasNoFramesButTheRest) {
