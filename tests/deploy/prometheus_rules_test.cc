@@ -87,7 +87,9 @@ TEST(PrometheusRulesTest, AlertsAndDashboardUseOnlyExportedMetrics) {
   };
   std::string exported;
   ASSERT_TRUE(WaitUntil([&] {
-    exported = metrics_of(cluster.metrics_port()) + metrics_of(cluster.worker_metrics_port("w1"));
+    const int worker_port = cluster.worker_metrics_port("w1");
+    if (worker_port == 0) return false;
+    exported = metrics_of(cluster.metrics_port()) + metrics_of(worker_port);
     return exported.find("endorecon_worker_busy") != std::string::npos;
   }));
   const auto available = MetricNames(exported);

@@ -24,6 +24,7 @@ TEST(PrometheusScrapeTest, ServerAndWorkerMetricsReachPrometheus) {
     GTEST_SKIP() << "prometheus is not installed (scripts/install-deps)";
   Cluster cluster;
   cluster.StartWorker("w1");
+  ASSERT_TRUE(WaitUntil([&] { return cluster.worker_metrics_port("w1") > 0; }));
   const int prometheus_port = FreePort();
   const auto config = cluster.path("prometheus.yml");
   std::ofstream(config)

@@ -11,7 +11,9 @@
 
 #include <cerrno>
 #include <cstdio>
+#include <cstdlib>
 #include <stdexcept>
+#include <string_view>
 #include <thread>
 
 #include "common/grpc_status.h"
@@ -262,7 +264,8 @@ void Cluster::KillServer(int signal) {
 }
 
 Process& Cluster::StartWorker(const std::string& id, std::vector<std::string> flags) {
-  const int metrics_port = FreePort();
+  // The worker picks its metrics port: a port from FreePort() could be taken by another process
+  // before the worker bound it, and the worker then exited (a CI run lost a test so, 2026-12-06).
   std::vector<std::string> argv{BuiltBinary("worker/runtime/endorecon-worker"),
                                 "serve",
                                 "--server",
@@ -270,7 +273,7 @@ Process& Cluster::StartWorker(const std::string& id, std::vector<std::string> fl
                                 "--id",
                                 id,
                                 "--metrics-port",
-                                std::to_string(metrics_port),
+                                "0",
                                 "--work-dir",
                                 (dir_ / ("work-" + id)).string(),
                                 "--threads",
@@ -279,7 +282,6 @@ Process& Cluster::StartWorker(const std::string& id, std::vector<std::string> fl
     argv.insert(argv.end(), {"--lease-wait", "2"});
   argv.insert(argv.end(), flags.begin(), flags.end());
   workers_.emplace_back(id, std::make_unique<Process>(argv, dir_ / ("worker-" + id + ".log")));
-  worker_metrics_ports_.emplace_back(id, metrics_port);
   return *workers_.back().second;
 }
 
@@ -293,8 +295,12 @@ void Cluster::StopWorker(const std::string& id, int signal) {
 }
 
 int Cluster::worker_metrics_port(const std::string& id) const {
-  for (const auto& [name, port] : worker_metrics_ports_) {
-    if (name == id) return port;
+  static constexpr std::string_view kSaid = "metrics on port ";
+  for (const auto& [name, process] : workers_) {
+    if (name != id) continue;
+    const std::string log = process->Log();
+    const auto at = log.find(kSaid);
+    if (at != std::string::npos) return std::atoi(log.c_str() + at + kSaid.size());
   }
   return 0;
 }

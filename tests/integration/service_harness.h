@@ -103,6 +103,8 @@ class Cluster {
   const std::string& address() const { return address_; }
   pid_t server_pid() const { return server_->pid(); }
   int metrics_port() const { return metrics_port_; }
+  // The port the worker's /metrics took (it picks a free one, said in its "serving" line once it has
+  // registered); 0 until then.
   int worker_metrics_port(const std::string& id) const;
   std::filesystem::path path(const std::string& name) const { return dir_ / name; }
   std::filesystem::path data_dir() const { return dir_ / "data"; }
@@ -126,7 +128,6 @@ class Cluster {
   std::unique_ptr<Process> server_;
   int server_starts_ = 0;
   std::vector<std::pair<std::string, std::unique_ptr<Process>>> workers_;
-  std::vector<std::pair<std::string, int>> worker_metrics_ports_;
   std::unique_ptr<v1::JobService::Stub> stub_;
   ClientCredentials credentials_;
 };

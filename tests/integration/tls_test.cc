@@ -184,7 +184,8 @@ TEST_F(TlsTest, WorkersWithoutAClientCertificateOrWithAClientTokenLeaseNothing) 
   // Plaintext to the TLS port: the log says to give --ca, as the CLI does (it said nothing).
   auto& plaintext = cluster_->StartWorker("w-plaintext", {"--token-file", worker_token_, "--timeout", "2"});
   ASSERT_TRUE(WaitUntil([&] { return plaintext.Log().find("cannot register") != std::string::npos; },
-                        std::chrono::seconds(20)));
+                        std::chrono::seconds(20)))
+      << plaintext.Log();
   plaintext.Signal(SIGTERM);
   plaintext.Wait();
   EXPECT_NE(plaintext.Log().find("if it serves TLS, give --ca FILE"), std::string::npos) << plaintext.Log();
