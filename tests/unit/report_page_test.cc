@@ -32,6 +32,26 @@ TEST(ReportPageTest, InvalidUtf8IsReplacedNotThrown) {
   EXPECT_EQ(back["clip"], "/data/\xEF\xBF\xBD\xEF\xBF\xBD");
 }
 
+// The run's name is in the page's <title> and heading without a script running (a browser's tabs and
+// history, a viewer without JavaScript): every page read "endorecon report" until 2026-12-06.
+TEST(ReportPageTest, TheTitleNamesTheRunEscapedWithoutAScript) {
+  const std::string page = FillReportPage({{"title", "liver <3 & \"B\""}});
+  EXPECT_NE(page.find("<title>endorecon report: liver &lt;3 &amp; &quot;B&quot;</title>"), std::string::npos);
+  EXPECT_NE(page.find("<h1 id=\"title\">endorecon report: liver &lt;3 &amp; &quot;B&quot;</h1>"),
+            std::string::npos);
+  EXPECT_EQ(page.find("@ENDORECON_REPORT_HEADING@"), std::string::npos);
+  EXPECT_EQ(testing::ReportData(page)["title"], "liver <3 & \"B\"");
+
+  EXPECT_NE(
+      FillReportPage({{"kind", "render"}, {"title", "views"}}).find("<title>endorecon views: views</title>"),
+      std::string::npos);
+  EXPECT_NE(FillReportPage(nlohmann::json::object()).find("<title>endorecon report</title>"),
+            std::string::npos);
+  EXPECT_NE(FillReportPage({{"title", std::string("c\xff")}})
+                .find("<title>endorecon report: c\xEF\xBF\xBD</title>"),
+            std::string::npos);
+}
+
 TEST(ReportPageTest, ThePageIsSelfContained) {
   const std::string page = FillReportPage(nlohmann::json::object());
   // The stylesheet and scripts are inlined at build time; nothing is loaded from anywhere.

@@ -91,8 +91,6 @@
 
   // ---- header ----
   const frames = data.frames;
-  $("title").textContent = data.kind === "render" ? `endorecon views: ${data.title}` : `endorecon report: ${data.title}`;
-  document.title = $("title").textContent;
   const subtitle = [];
   if (frames) {
     const noun = (data.kind === 'render' ? 'view' : 'frame') + (frames.count === 1 ? '' : 's');
