@@ -15,6 +15,9 @@ find_package(SQLite3 REQUIRED)
 find_package(Protobuf REQUIRED)
 find_package(PkgConfig REQUIRED)
 pkg_check_modules(GRPCPP REQUIRED IMPORTED_TARGET grpc++)
+# A video's container header (worker/prepare/video_header; a test muxes video with it): the FFmpeg
+# that OpenCV's videoio decodes with.
+pkg_check_modules(LIBAV REQUIRED IMPORTED_TARGET libavformat libavcodec libavutil)
 find_program(GRPC_CPP_PLUGIN grpc_cpp_plugin REQUIRED)
 find_package(prometheus-cpp CONFIG REQUIRED)
 # DICOM: every byte of it through DCMTK (libdcmtk-dev); its targets are named dcmdata, dcmnet, ...

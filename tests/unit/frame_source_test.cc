@@ -4,6 +4,10 @@
 
 #include <gtest/gtest.h>
 
+extern "C" {
+#include <libavformat/avformat.h>
+}
+
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
 
@@ -34,6 +38,40 @@ fs::path WriteVideo(const fs::path& path, int frames, cv::Size size = {64, 48}) 
                          size);
   EXPECT_TRUE(writer.isOpened());
   for (int i = 0; i < frames; ++i) writer.write(Frame(i, size));
+  return path;
+}
+
+// A Matroska file of `frames` Motion-JPEG frames at 25 fps whose timestamps start at `start_ms`, as a
+// clip cut from a longer recording with its timestamps kept: muxed with libavformat (OpenCV's writer
+// always starts at zero).
+fs::path WriteMatroska(const fs::path& path, int frames, int start_ms) {
+  AVFormatContext* out = nullptr;
+  EXPECT_GE(avformat_alloc_output_context2(&out, nullptr, "matroska", path.c_str()), 0);
+  AVStream* stream = avformat_new_stream(out, nullptr);
+  stream->time_base = {1, 1000};
+  stream->avg_frame_rate = {25, 1};
+  stream->codecpar->codec_type = AVMEDIA_TYPE_VIDEO;
+  stream->codecpar->codec_id = AV_CODEC_ID_MJPEG;
+  stream->codecpar->width = 64;
+  stream->codecpar->height = 48;
+  EXPECT_GE(avio_open(&out->pb, path.c_str(), AVIO_FLAG_WRITE), 0);
+  EXPECT_GE(avformat_write_header(out, nullptr), 0);
+  AVPacket* packet = av_packet_alloc();
+  for (int i = 0; i < frames; ++i) {
+    std::vector<std::uint8_t> jpeg;
+    cv::imencode(".jpg", Frame(i), jpeg);
+    EXPECT_GE(av_new_packet(packet, static_cast<int>(jpeg.size())), 0);
+    std::copy(jpeg.begin(), jpeg.end(), packet->data);
+    packet->pts = packet->dts = av_rescale_q(start_ms + 40 * i, {1, 1000}, stream->time_base);
+    packet->duration = av_rescale_q(40, {1, 1000}, stream->time_base);
+    packet->flags |= AV_PKT_FLAG_KEY;
+    packet->stream_index = stream->index;
+    EXPECT_GE(av_interleaved_write_frame(out, packet), 0);
+  }
+  av_packet_free(&packet);
+  EXPECT_GE(av_write_trailer(out), 0);
+  avio_closep(&out->pb);
+  avformat_free_context(out);
   return path;
 }
 
@@ -122,6 +160,34 @@ TEST(FrameSourceTest, TruncatedOrUnreadableVideosAreNamed) {
   const std::string unreadable = ErrorFrom([&] { prepare::OpenFrameSource(dir / "noise.mp4"); });
   EXPECT_NE(unreadable.find("noise.mp4: cannot open it as a video"), std::string::npos) << unreadable;
   ErrorFrom([&] { prepare::OpenFrameSource(dir / "missing.mp4"); }, ErrorCode::kNotFound);
+}
+
+// A Matroska clip whose timestamps start at 10 s announced the 250 frames of (10 s + its 4 s) x 25 fps
+// and was refused as truncated after its 100 (found 2026-12-06); cut short, it still is.
+TEST(FrameSourceTest, AVideoWhoseTimestampsStartLateIsCountedFromItsStart) {
+  TempDir dir("late");
+  const fs::path video = WriteMatroska(dir / "late.mkv", 100, 10000);
+  auto source = prepare::OpenFrameSource(video);
+  EXPECT_EQ(source->announced_frames(), 100);
+  prepare::SourceFrame frame;
+  int frames = 0;
+  while (source->Next(frame)) {
+    if (frames == 1) {
+      EXPECT_NEAR(frame.time_s, 0.04, 1e-3) << "since the clip's first frame";
+    }
+    ++frames;
+  }
+  EXPECT_EQ(frames, 100);
+
+  const std::string bytes = ReadBytes(video);
+  WriteBytes(dir / "cut.mkv", bytes.substr(0, bytes.size() / 2));
+  const std::string message = ErrorFrom([&] {
+    auto cut = prepare::OpenFrameSource(dir / "cut.mkv");
+    while (cut->Skip()) {
+    }
+  });
+  EXPECT_NE(message.find("of the 100 frames its header announces (truncated or damaged)"), std::string::npos)
+      << message;
 }
 
 // Real H.264 from a laparoscope (1280x720, 25 fps): what FFmpeg says of it matches what it decodes.

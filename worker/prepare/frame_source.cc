@@ -10,6 +10,7 @@
 #include "common/clip_files.h"
 #include "common/error.h"
 #include "worker/engine/scene/image_file.h"
+#include "worker/prepare/video_header.h"
 
 namespace endorecon::prepare {
 namespace {
@@ -81,6 +82,7 @@ class VideoFileSource final : public FrameSource {
     size_ = first.size();
     const double count = capture_.get(cv::CAP_PROP_FRAME_COUNT);
     announced_ = count >= 1 && std::isfinite(count) ? static_cast<int>(std::lround(count)) : -1;
+    if (const VideoHeader header = ReadVideoHeader(file); header.frames > 0) announced_ = header.frames;
     fps_ = capture_.get(cv::CAP_PROP_FPS);
     pending_ = scene::ToBgr8(first);
   }
