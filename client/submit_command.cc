@@ -216,8 +216,15 @@ v1::Manifest Upload(const Globals& globals, v1::JobService::Stub& stub, const st
                                       ? nlohmann::json::object()
                                       : ParseJson(request.options().config_json(), "--config");
     try {
-      CheckResultsFit(ListClipFrames(clip).size(), WritesUncertaintyMaps(config), manifest_bytes,
-                      clip.string());
+      // The frames --frames picks (the worker loads those; the whole clip is uploaded).
+      const std::size_t all = ListClipFrames(clip).size();
+      const FrameRange range = ParseFrameRange(request.recording().frames());
+      const std::size_t picked = range.Of(static_cast<int>(all)).size();
+      if (picked == 0) {
+        FailInvalid("--frames " + range.ToString() + " picks none of " + clip.string() + "'s " +
+                    std::to_string(all) + " frames (START:END:STEP counts them from 0, END exclusive)");
+      }
+      CheckResultsFit(picked, WritesUncertaintyMaps(config), manifest_bytes, clip.string());
     } catch (const Error& e) {
       FailInvalid(std::string(e.what()) + " (found before the upload: nothing was sent)");
     }
@@ -313,10 +320,10 @@ int Submit(const Globals& globals, const SubmitFlags& flags) {
     FailInvalid("--study and --series name a recording in a PACS: they go with --pacs NAME");
   // A clip folder is used as it is: the recording's options are refused before its upload (as the
   // worker would after it).
-  if (clip_folder && (!flags.raw.frames.empty() || !flags.raw.size.empty() || flags.recording.fps() > 0 ||
+  if (clip_folder && (!flags.raw.size.empty() || flags.recording.fps() > 0 ||
                       !flags.recording.stereo().empty() || !flags.recording.endoscope().empty())) {
-    FailInvalid("--frames, --size, --fps, --stereo and --endoscope apply to a DICOM recording, and " +
-                flags.clip + " is a clip folder, whose frames are used as they are");
+    FailInvalid("--size, --fps, --stereo and --endoscope apply to a DICOM recording, and " + flags.clip +
+                " is a clip folder, whose frames are used as they are (--frames picks some)");
   }
   // A raw recording is staged under canonical names (recording_upload.h); its folder is uploaded.
   std::optional<StagedRecording> staged;

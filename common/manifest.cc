@@ -175,8 +175,8 @@ void CheckResultsFit(std::size_t frames, bool uncertainty, std::size_t clip_mani
               "): the job could not hand them back, nor `status` and `fetch` show them. At most about " +
               fit(kResultManifestBytesPerFrame) + " frames of this clip fit with uncertainty maps, " +
               fit(kResultManifestBytesPerFrameWithoutUncertainty) +
-              " without (config mc_passes 0). Choose fewer frames (a recording's with prepare's or "
-              "submit's --frames START:END:STEP, a clip folder's by making one of fewer), or reconstruct "
+              " without (config mc_passes 0). Choose fewer frames (submit's --frames START:END:STEP), or "
+              "reconstruct "
               "the clip on one machine (endorecon-worker reconstruct)");
 }
 

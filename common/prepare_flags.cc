@@ -1,5 +1,6 @@
 #include "common/prepare_flags.h"
 
+#include <algorithm>
 #include <charconv>
 #include <vector>
 
@@ -33,6 +34,13 @@ bool ParseCount(std::string_view text, int& value) {
 }
 
 }  // namespace
+
+std::vector<int> FrameRange::Of(int total) const {
+  std::vector<int> frames;
+  for (int frame = start; frame < (end < 0 ? total : std::min(end, total)); frame += step)
+    frames.push_back(frame);
+  return frames;
+}
 
 std::string FrameRange::ToString() const {
   return std::to_string(start) + ":" + (end < 0 ? std::string() : std::to_string(end)) + ":" +

@@ -20,6 +20,9 @@ struct FrameRange {
   bool Selects(int frame) const {
     return frame >= start && (end < 0 || frame < end) && (frame - start) % step == 0;
   }
+  bool SelectsAll() const { return start == 0 && end < 0 && step == 1; }
+  // The frames it selects of `total` (0 .. total - 1), in order.
+  std::vector<int> Of(int total) const;
   std::string ToString() const;
 };
 

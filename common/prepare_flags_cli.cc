@@ -34,7 +34,8 @@ void AddPrepareFlags(CLI::App& cmd, PrepareFlags& f) {
          "X,Y,W,H: a fixed screen region (overlay, toolbar) excluded from training and metrics; repeatable")
       ->group(extras);
   cmd.add_option("--frames", f.frames,
-                 "START:END:STEP: the recording's frames to use (0-based, END exclusive)")
+                 "START:END:STEP: the recording's frames to use (0-based, END exclusive; with submit, a "
+                 "clip folder's too, in its own order)")
       ->group(extras);
   cmd.add_option("--size", f.size, "WxH: the clip's frame size (default: the calibration's resolution)")
       ->group(extras);

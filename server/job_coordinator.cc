@@ -59,7 +59,7 @@ void ValidateOptions(const v1::ReconstructionOptions& options) {
 
 void ValidateRecording(const v1::RecordingOptions& recording) {
   dicom::ParseStereoLayout(recording.stereo());
-  dicom::ParseFrameWindow(recording.frames());
+  ParseFrameRange(recording.frames());
   dicom::ParseEndoscope(recording.endoscope());
   if (!recording.size().empty()) ParseFrameSize(recording.size());
   if (!(recording.fps() >= 0))

@@ -402,11 +402,10 @@ std::vector<FrameRef> Timeline(const std::vector<Instance>& series) {
 std::vector<FrameRef> Select(const std::vector<FrameRef>& all, const RecordingOptions& options,
                              const std::string& where) {
   const int n = static_cast<int>(all.size());
-  const FrameWindow& w = options.frames;
-  const int end = w.end < 0 ? n : std::min(w.end, n);
+  const FrameRange& w = options.frames;
   std::vector<FrameRef> picked;
   double next_time = -INFINITY;
-  for (int i = w.start; i < end; i += w.step) {
+  for (const int i : w.Of(n)) {
     if (options.fps > 0) {
       if (all[i].time + 1e-9 < next_time) continue;
       next_time = (picked.empty() ? all[i].time : next_time) + 1.0 / options.fps;
@@ -414,9 +413,8 @@ std::vector<FrameRef> Select(const std::vector<FrameRef>& all, const RecordingOp
     picked.push_back(all[i]);
   }
   if (picked.empty()) {
-    FailInvalid(where + ": zero frames: the window " + std::to_string(w.start) + ":" +
-                (w.end < 0 ? std::string() : std::to_string(w.end)) + ":" + std::to_string(w.step) +
-                " holds none of the recording's " + std::to_string(n) + " frames");
+    FailInvalid(where + ": zero frames: the window " + w.ToString() + " holds none of the recording's " +
+                std::to_string(n) + " frames");
   }
   return picked;
 }
@@ -588,41 +586,6 @@ std::string StereoLayoutName(StereoLayout layout) {
       break;
   }
   return "mono";
-}
-
-FrameWindow ParseFrameWindow(const std::string& text) {
-  FrameWindow window;
-  if (text.empty()) return window;
-  const auto bad = [&](const std::string& why) {
-    FailInvalid("frame window '" + text + "': " + why + " (expected START:END:STEP, e.g. 0:200:2)");
-  };
-  std::vector<std::string> parts;
-  std::size_t start = 0;
-  while (true) {
-    const std::size_t colon = text.find(':', start);
-    parts.push_back(text.substr(start, colon == std::string::npos ? std::string::npos : colon - start));
-    if (colon == std::string::npos) break;
-    start = colon + 1;
-  }
-  if (parts.size() > 3) bad("more than three fields");
-  const auto number = [&](const std::string& part, int fallback) {
-    if (part.empty()) return fallback;
-    std::size_t used = 0;
-    int value = 0;
-    try {
-      value = std::stoi(part, &used);
-    } catch (const std::exception&) {
-      bad("'" + part + "' is not a number");
-    }
-    if (used != part.size() || value < 0) bad("'" + part + "' is not a non-negative integer");
-    return value;
-  };
-  window.start = number(parts[0], 0);
-  window.end = parts.size() > 1 ? number(parts[1], -1) : -1;
-  window.step = parts.size() > 2 ? number(parts[2], 1) : 1;
-  if (window.step == 0) bad("STEP must be at least 1");
-  if (window.end >= 0 && window.end <= window.start) bad("END must be greater than START");
-  return window;
 }
 
 Recording ReadRecording(const fs::path& path, const RecordingOptions& options) {

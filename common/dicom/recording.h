@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "common/dicom/study_context.h"
+#include "common/prepare_flags.h"
 
 namespace endorecon::dicom {
 
@@ -33,18 +34,9 @@ enum class Endoscope { kMoving, kFixed };
 Endoscope ParseEndoscope(const std::string& text);
 std::string EndoscopeName(Endoscope endoscope);
 
-// Frames [start, end) every `step`-th, as Python's slice A:B:STEP (end < 0: to the last frame).
-struct FrameWindow {
-  int start = 0;
-  int end = -1;
-  int step = 1;
-};
-// "A:B:STEP", "A:B", "A:" or "" (every frame). Throws InvalidArgument naming the text.
-FrameWindow ParseFrameWindow(const std::string& text);
-
 struct RecordingOptions {
   StereoLayout stereo = StereoLayout::kMono;
-  FrameWindow frames;  // applied first, on the recording's frame indices
+  FrameRange frames;   // applied first, on the recording's frame indices
   double fps = 0;      // > 0: then keep at most this many frames per second of recording time
   Endoscope endoscope = Endoscope::kMoving;  // not read here: for the clip made from it
   cv::Size size;                             // not read here: the clip's frame size (empty: as recorded)

@@ -152,6 +152,35 @@ TEST(SubmitToCompletionTest, AContentUnderSeveralNamesIsSentOnce) {
   EXPECT_NE(submitted.out.find("SUCCEEDED"), std::string::npos) << submitted.out;
 }
 
+// --frames picks a clip folder's frames through the service, as `reconstruct --frames` does (a
+// long clip was cut by hand, slicing poses_bounds.npy; found 2026-12-06); picking none is refused
+// before the upload.
+TEST(SubmitToCompletionTest, FramesPicksAClipFoldersFrames) {
+  Cluster cluster;
+  const auto clip = cluster.path("clip");
+  MakeClip(clip);  // 8 frames
+  const auto none =
+      RunCli(cluster.address(), {"submit", clip.string(), "--frames", "8:", "--iterations", "5"});
+  EXPECT_EQ(none.exit_code, 2) << none.err;
+  EXPECT_NE(none.err.find("--frames 8::1 picks none of " + clip.string() + "'s 8 frames"), std::string::npos)
+      << none.err;
+  EXPECT_NE(none.err.find("nothing was sent"), std::string::npos) << none.err;
+
+  cluster.StartWorker("w1");
+  const auto submitted = RunCli(cluster.address(), {"--json", "submit", clip.string(), "--frames", "2:8:3",
+                                                    "--iterations", "5", "--wait"});
+  ASSERT_EQ(submitted.exit_code, 0) << submitted.err << submitted.out << cluster.ServerLog();
+  const auto id = submitted.out.substr(submitted.out.find("\"id\":\"") + 6, 12);
+  const auto fetched = RunCli(cluster.address(), {"fetch", id, "-o", cluster.path("results").string()});
+  ASSERT_EQ(fetched.exit_code, 0) << fetched.err;
+  EXPECT_EQ(ReadJsonFile(cluster.path("results") / "config.json").value("frames", ""), "2:8:3");
+  int frames = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(cluster.path("results") / "rgb")) {
+    frames += entry.path().extension() == ".png";
+  }
+  EXPECT_EQ(frames, 2) << "frames 2 and 5";
+}
+
 TEST(SubmitToCompletionTest, UnreachableServerExitsWithFour) {
   const auto result = RunCli("127.0.0.1:" + std::to_string(FreePort()), {"--timeout", "1", "list"});
   EXPECT_EQ(result.exit_code, 4) << result.err;

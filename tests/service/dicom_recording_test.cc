@@ -86,7 +86,7 @@ TEST(DicomRecordingTest, WindowAndFrameRatePickFrames) {
   for (int f = 0; f < 8; ++f) times.push_back(0.05 * f);
   WriteEndoscopicFrames(frames, times, false, Header(), dir / "rec.dcm");
   RecordingOptions options;
-  options.frames = ParseFrameWindow("1:7:2");
+  options.frames = ParseFrameRange("1:7:2");
   const Recording window = ReadRecording(dir / "rec.dcm", options);
   ASSERT_EQ(window.left.size(), 3u);
   EXPECT_EQ(MeanAbsDifference(window.left[1], frames[3]), 0.0);
@@ -303,12 +303,12 @@ TEST(DicomRecordingTest, BadInputsAreNamed) {
       << junk;
 
   RecordingOptions past_the_end;
-  past_the_end.frames = ParseFrameWindow("10:");
+  past_the_end.frames = ParseFrameRange("10:");
   EXPECT_NE(ErrorOf(dir / "full.dcm", past_the_end).find("zero frames: the window 10::1"), std::string::npos);
 
-  EXPECT_THROW(ParseFrameWindow("5:2"), Error);
-  EXPECT_THROW(ParseFrameWindow("1:2:0"), Error);
-  EXPECT_THROW(ParseFrameWindow("a:b"), Error);
+  EXPECT_THROW(ParseFrameRange("5:2"), Error);
+  EXPECT_THROW(ParseFrameRange("1:2:0"), Error);
+  EXPECT_THROW(ParseFrameRange("a:b"), Error);
   EXPECT_THROW(ParseStereoLayout("diagonal"), Error);
   EXPECT_THROW(ParseEndoscope("wobbly"), Error);
   EXPECT_EQ(ParseEndoscope(""), Endoscope::kMoving);

@@ -77,6 +77,51 @@ TEST(ClipLoaderTest, LoadsGroundTruthFolder) {
   EXPECT_NE(message.find("gt/depth: holds 1 files but the clip has 2 frames"), std::string::npos) << message;
 }
 
+// --frames picks a clip folder's frames, as if the clip had been cut to them by hand: a long clip
+// was cut by slicing poses_bounds.npy or transforms.json (found 2026-12-06). An EndoNeRF clip's times
+// spread over the picked frames, a transforms.json clip's own times stay; gt/ is picked alike.
+TEST(ClipLoaderTest, FramesPicksTheClipFoldersFramesAsIfCutByHand) {
+  TempDir dir("clip");
+  std::vector<testing::PoseRow> rows(8);
+  for (int i = 0; i < 8; ++i) {
+    rows[i].t[0] = i;  // each frame's camera told apart by its position
+    WriteImage(dir / "images" / (std::to_string(i) + ".png"),
+               Pattern(8, 6, CV_8UC3, [i](int, int) { return 10 * i; }));
+    WriteImage(dir / "gt/images" / (std::to_string(i) + ".png"),
+               Pattern(8, 6, CV_8UC3, [i](int, int) { return 100 + i; }));
+  }
+  testing::WritePoses(dir / "poses_bounds.npy", rows);
+  LoadOptions options;
+  options.frames = ParseFrameRange("2:8:2");
+  const Clip clip = LoadClip(dir.path(), options);
+  ASSERT_EQ(clip.frame_count(), 3);
+  EXPECT_EQ(clip.rgb[1][2], 40);  // frame 4 (blue: Pattern fills the first of BGR)
+  EXPECT_EQ(clip.cameras[2].c2w(0, 3), 6.0);
+  EXPECT_EQ(clip.times, (std::vector<float>{0.f, 0.5f, 1.f}));
+  ASSERT_EQ(clip.gt_rgb.size(), 3u);
+  EXPECT_EQ(clip.gt_rgb[2][2], 106);
+
+  options.frames = ParseFrameRange("8:");
+  const std::string none = ErrorFrom([&] { LoadClip(dir.path(), options); });
+  EXPECT_NE(none.find(dir.path().string() + ": --frames 8::1 picks none of the clip's 8 frames"),
+            std::string::npos)
+      << none;
+
+  testing::WriteBytes(dir / "transforms.json", R"({"fl_x": 5, "near": 1, "far": 2, "frames": [
+    {"file_path": "images/0.png", "time": 0.0, "transform_matrix": [[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]},
+    {"file_path": "images/1.png", "time": 0.1, "transform_matrix": [[1,0,0,1],[0,1,0,0],[0,0,1,0],[0,0,0,1]]},
+    {"file_path": "images/2.png", "time": 0.2, "transform_matrix": [[1,0,0,2],[0,1,0,0],[0,0,1,0],[0,0,0,1]]},
+    {"file_path": "images/3.png", "time": 1.0, "transform_matrix": [[1,0,0,3],[0,1,0,0],[0,0,1,0],[0,0,0,1]]}]})");
+  fs::remove_all(dir / "gt");
+  options.frames = ParseFrameRange("1:3");
+  const Clip picked = LoadClip(dir.path(), options);
+  ASSERT_EQ(picked.frame_count(), 2);
+  EXPECT_EQ(picked.rgb[0][2], 10);
+  EXPECT_EQ(picked.cameras[1].c2w(0, 3), 2.0);
+  EXPECT_FLOAT_EQ(picked.times[0], 0.1f);
+  EXPECT_FLOAT_EQ(picked.times[1], 0.2f);
+}
+
 // A clip whose decoded frames and the run's per-pixel state exceed the memory given is refused before a
 // frame is decoded (a damaged frame is not reached), naming the need, what is there and how many frames fit;
 // a ground-truth folder counts its colour and depth too.

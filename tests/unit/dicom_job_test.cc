@@ -1,5 +1,6 @@
-// A clip folder is used as it is: the options that pick or scale a recording's frames are refused
-// for it, naming them, where they were once ignored without a word.
+// A clip folder is used as it is (--frames may pick some of its frames): the options that thin or
+// scale a recording's frames are refused for it, naming them, where they were once ignored without a
+// word.
 #include "worker/runtime/dicom_job.h"
 
 #include <gtest/gtest.h>
@@ -23,6 +24,12 @@ TEST(DicomJobTest, RecordingOptionsOnAClipFolderAreRefused) {
       testing::ErrorFrom([&] { PrepareRecording(dir.path(), options, dir / "clip"); });
   EXPECT_NE(message.find("--fps, --size apply to a DICOM recording"), std::string::npos) << message;
   EXPECT_NE(message.find("is a clip folder"), std::string::npos) << message;
+
+  v1::RecordingOptions frames;
+  frames.set_frames("2:8:3");
+  const auto none = PrepareRecording(dir.path(), frames, dir / "clip");
+  EXPECT_FALSE(none.has_value());
+  EXPECT_EQ(ClipFolderFrames(none, frames).ToString(), "2:8:3") << "a clip folder's frames, picked";
 }
 
 }  // namespace

@@ -105,6 +105,24 @@ TEST_F(ReportTest, AReconstructionsPageHoldsEveryFrameItsMetricsAndItsRun) {
   EXPECT_EQ(testing::ReportData(out / "report.html")["title"], "clip");
 }
 
+// A run of some of a clip folder's frames (--frames) says which in config.json, and its page, drawn
+// again from the results, shows those frames.
+TEST_F(ReportTest, ARunOfPickedFramesRecordsThemAndItsPageShowsThem) {
+  ReconstructOptions options = Options("picked");
+  options.frames = ParseFrameRange("1:8:2");
+  options.iterations = 5;
+  Reconstruct(options, {});
+  const fs::path out = options.out_dir;
+  EXPECT_EQ(ReadJsonFile(out / "config.json")["frames"], "1:8:2");
+  EXPECT_EQ(ReadJsonFile(out / "metrics.json")["train"]["frames"].size() +
+                ReadJsonFile(out / "metrics.json")["heldout"]["frames"].size(),
+            4u);
+  WriteReport(out);
+  const auto data = testing::ReportData(out / "report.html");
+  EXPECT_EQ(data["frames"]["count"], 4);
+  EXPECT_EQ(data["frames"]["input"].size(), 4u);
+}
+
 TEST_F(ReportTest, ACancelledRunsPageHasNoFramesButTheRest) {
   const ReconstructOptions options = Options("cancelled");
   ReconstructHooks hooks;

@@ -86,6 +86,7 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
   train::TrainConfig config = ResolveConfig(options);
   scene::LoadOptions load;
   load.force_static = options.force_static;
+  load.frames = options.frames;
   load.should_stop = hooks.should_stop;
   load.fit_depth_bounds = config.fit_depth_bounds;
   load.memory_bytes = options.memory_bytes > 0 ? options.memory_bytes : base::AvailableMemoryBytes();

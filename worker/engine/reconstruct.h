@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "common/prepare_flags.h"
 #include "worker/engine/eval/preview.h"
 
 namespace endorecon {
@@ -42,6 +43,8 @@ struct ReconstructOptions {
   // What report.html calls the run (config.json "title"): a service job's name; empty: the clip
   // folder's name (a job's clip folder is "clip": every job's report was "endorecon report: clip").
   std::string title;
+  // The clip folder's frames to reconstruct (config.json "frames"; scene/load_options.h): default all.
+  FrameRange frames;
 };
 
 struct Progress {

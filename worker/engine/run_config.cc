@@ -63,6 +63,7 @@ nlohmann::json RunConfigJson(const train::TrainConfig& config, const Reconstruct
       {"train", train::ToJson(config)},         {"clip", options.clip_dir}, {"seed", options.seed},
       {"time_budget_s", options.time_budget_s}, {"threads", threads},       {"device", options.device}};
   if (!options.title.empty()) json["title"] = options.title;
+  if (!options.frames.SelectsAll()) json["frames"] = options.frames.ToString();
   return json;
 }
 

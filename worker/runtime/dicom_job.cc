@@ -15,7 +15,7 @@ namespace endorecon::worker {
 dicom::RecordingOptions RecordingOptionsOf(const v1::RecordingOptions& options) {
   dicom::RecordingOptions out;
   out.stereo = dicom::ParseStereoLayout(options.stereo());
-  out.frames = dicom::ParseFrameWindow(options.frames());
+  out.frames = ParseFrameRange(options.frames());
   out.fps = options.fps();
   out.endoscope = dicom::ParseEndoscope(options.endoscope());
   if (!options.size().empty()) {
@@ -31,12 +31,12 @@ std::optional<RecordingClip> PrepareRecording(const std::filesystem::path& input
   auto clip = ClipFromRecording(input, RecordingOptionsOf(options), clip_dir);
   std::error_code error;
   if (!clip && std::filesystem::is_directory(input, error)) {
-    // A clip folder is used as it is: options that would pick or scale a recording's frames are
-    // refused rather than ignored.
+    // A clip folder's frames are used as they are (--frames picks some: the caller's ClipFolderFrames);
+    // options that would thin or scale a recording's frames are refused rather than ignored.
     std::string given;
     for (const auto& [name, set] :
-         {std::pair{"--stereo", !options.stereo().empty()}, std::pair{"--frames", !options.frames().empty()},
-          std::pair{"--fps", options.fps() > 0}, std::pair{"--size", !options.size().empty()},
+         {std::pair{"--stereo", !options.stereo().empty()}, std::pair{"--fps", options.fps() > 0},
+          std::pair{"--size", !options.size().empty()},
           std::pair{"--endoscope", !options.endoscope().empty()}}) {
       if (set) given += (given.empty() ? "" : ", ") + std::string(name);
     }
@@ -47,6 +47,12 @@ std::optional<RecordingClip> PrepareRecording(const std::filesystem::path& input
     }
   }
   return clip;
+}
+
+FrameRange ClipFolderFrames(const std::optional<RecordingClip>& recording,
+                            const v1::RecordingOptions& options) {
+  // A recording's window was applied when its clip was made.
+  return recording ? FrameRange{} : ParseFrameRange(options.frames());
 }
 
 void WriteJobDicom(const std::filesystem::path& out_dir, const std::optional<RecordingClip>& recording,

@@ -302,11 +302,12 @@ bool RunLeasedJob(WorkerClient& client, const v1::LeaseResponse& lease, const De
     } else {
       recording = PrepareRecording(options.clip_dir, job.recording(), job_dir / "clip-from-dicom");
       if (recording) options.clip_dir = recording->clip_dir.string();
+      options.frames = ClipFolderFrames(recording, job.recording());
     }
     // Results no call could hand back are refused before the training (a recording's frames are
     // known only now; a clip folder's the CLI checked).
-    CheckResultsFit(ListClipFrames(options.clip_dir).size(), WritesUncertaintyMaps(options.config),
-                    job.clip().ByteSizeLong(), options.clip_dir);
+    CheckResultsFit(options.frames.Of(static_cast<int>(ListClipFrames(options.clip_dir).size())).size(),
+                    WritesUncertaintyMaps(options.config), job.clip().ByteSizeLong(), options.clip_dir);
 
     ReconstructHooks hooks;
     hooks.progress_interval_s = std::min(2.0, std::chrono::duration<double>(settings.heartbeat).count());

@@ -67,7 +67,8 @@ void AddDicomOptions(CLI::App& cmd, v1::RecordingOptions& recording, v1::DicomOu
       ->check(CLI::IsMember({"mono", "side-by-side", "top-bottom", "series"}));
   cmd.add_option_function<std::string>(
       "--frames", [&](const std::string& v) { recording.set_frames(v); },
-      "DICOM recording: frames START:END:STEP (as a Python slice)");
+      "the frames to reconstruct, START:END:STEP (as a Python slice) of a DICOM recording or a clip "
+      "folder (its frames in its own order)");
   cmd.add_option_function<double>(
          "--fps", [&](double v) { recording.set_fps(v); },
          "DICOM recording: keep at most this many frames per second")
@@ -137,6 +138,7 @@ Command AddReconstructCommand(CLI::App& app) {
     if (recording_input) RefuseToReplaceAForeignFolder(options->out_dir + ".clip");
     const auto from_dicom = PrepareRecording(options->clip_dir, *recording, options->out_dir + ".clip");
     if (from_dicom) options->clip_dir = from_dicom->clip_dir.string();
+    options->frames = ClipFolderFrames(from_dicom, *recording);
     ReconstructHooks hooks;
     hooks.progress_interval_s = 1.0;
     hooks.on_progress = [](const Progress& p) {

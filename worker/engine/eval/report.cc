@@ -18,6 +18,7 @@
 #include "common/error.h"
 #include "common/json_file.h"
 #include "common/npy.h"
+#include "common/prepare_flags.h"
 #include "worker/engine/eval/clip_evaluator.h"
 #include "worker/engine/eval/evaluation_mask.h"
 #include "worker/engine/eval/exports.h"
@@ -311,6 +312,8 @@ fs::path WriteReport(const fs::path& results_dir, const scene::Clip* clip) {
       // The bounds the run trained with (results of before 2026-12-06 had the clip's own).
       load.fit_depth_bounds = config.contains("/train/fit_depth_bounds"_json_pointer) &&
                               config["train"]["fit_depth_bounds"] == true;
+      if (config.contains("frames") && config["frames"].is_string())
+        load.frames = ParseFrameRange(config["frames"].get<std::string>());
       views.loaded = scene::LoadClip(clip_dir, load);
       clip = &*views.loaded;
     }

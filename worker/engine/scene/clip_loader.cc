@@ -12,6 +12,7 @@
 #include "worker/engine/scene/clip_checks.h"
 #include "worker/engine/scene/depth_bounds.h"
 #include "worker/engine/scene/endonerf_loader.h"
+#include "worker/engine/scene/frame_pick.h"
 #include "worker/engine/scene/frame_reader.h"
 #include "worker/engine/scene/transforms_loader.h"
 
@@ -20,9 +21,15 @@ namespace {
 
 namespace fs = std::filesystem;
 
-void LoadGroundTruth(const fs::path& dir, const LoadOptions& options, Clip& clip) {
-  const std::vector<FrameFiles> frames =
-      ListGroundTruthFrames(dir, static_cast<std::size_t>(clip.frame_count()));
+// gt/ of the clip in `clip_dir`: one file a frame of the clip folder, of which the loaded clip took
+// `options.frames`.
+void LoadGroundTruth(const fs::path& clip_dir, const LoadOptions& options, Clip& clip) {
+  const fs::path dir = clip_dir / "gt";
+  std::vector<FrameFiles> frames =
+      ListGroundTruthFrames(dir, options.frames.SelectsAll() ? static_cast<std::size_t>(clip.frame_count())
+                                                             : ListClipFrames(clip_dir).size());
+  if (!options.frames.SelectsAll())
+    KeepPicked(PickFrames(options.frames, frames.size(), clip_dir.string()), frames);
   Clip truth;
   truth.source = dir.string();
   truth.width = clip.width;
@@ -60,7 +67,7 @@ Clip LoadClip(const fs::path& dir, const LoadOptions& options) {
                 ": not a clip: found neither transforms.json (transforms.json layout) nor "
                 "poses_bounds.npy (EndoNeRF layout)");
   }
-  if (fs::is_directory(dir / "gt")) LoadGroundTruth(dir / "gt", options, clip);
+  if (fs::is_directory(dir / "gt")) LoadGroundTruth(dir, options, clip);
   CheckClipGeometry(clip, dir.string());
   if (options.fit_depth_bounds) clip.bounds_fitted = FitBoundsToPriors(clip);
   if (!clip.bounds_fitted.empty()) spdlog::warn("{}: {}", dir.string(), clip.bounds_fitted);

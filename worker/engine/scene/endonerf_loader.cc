@@ -10,6 +10,7 @@
 #include "common/json_file.h"
 #include "common/npy.h"
 #include "worker/engine/scene/clip_checks.h"
+#include "worker/engine/scene/frame_pick.h"
 #include "worker/engine/scene/frame_reader.h"
 
 namespace endorecon::scene {
@@ -113,9 +114,13 @@ void MatchImageSize(const fs::path& first_image, int width, int height, std::vec
 
 Clip LoadEndoNerfClip(const fs::path& dir, const LoadOptions& options) {
   PoseRows poses = ReadPoseRows(dir / "poses_bounds.npy");
+  std::vector<FrameFiles> frames = ListEndoNerfFrames(dir, poses.cameras.size());
+  if (!options.frames.SelectsAll()) {
+    const std::vector<int> picked = PickFrames(options.frames, frames.size(), dir.string());
+    KeepPicked(picked, frames);
+    KeepPicked(picked, poses.cameras);
+  }
   const std::size_t n = poses.cameras.size();
-
-  const std::vector<FrameFiles> frames = ListEndoNerfFrames(dir, n);
 
   Clip clip;
   clip.source = dir.string();

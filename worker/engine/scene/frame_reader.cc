@@ -149,8 +149,7 @@ void CheckMemory(const FrameFiles& first, std::size_t n, const FrameReadOptions&
            "{}: {} frames of {}x{} need about {:.1f} GiB of memory to reconstruct ({:.1f} GiB of it "
            "the decoded frames, the rest what training and evaluation keep beside them), and this "
            "machine has {:.1f} GiB available: about {} frames of this size fit. Use fewer frames "
-           "(a recording's with prepare's or submit's --frames START:END:STEP, a clip folder's by "
-           "making one of fewer), smaller ones (a recording's with --size WxH), or a machine with more "
+           "(--frames START:END:STEP), smaller ones (a recording's with --size WxH), or a machine with more "
            "memory",
            clip.source, n, clip.width, clip.height, double(n) * per_frame / kGib, double(n) * decoded / kGib,
            available / kGib, std::size_t(available / per_frame)));

@@ -6,11 +6,17 @@
 #include <cstdint>
 #include <functional>
 
+#include "common/prepare_flags.h"
+
 namespace endorecon::scene {
 
 struct LoadOptions {
   std::size_t max_pixels_per_frame = std::size_t{4096} * 4096;  // larger frames: INVALID_ARGUMENT
   bool force_static = false;  // mark the clip static (one time for all frames) whatever its layout says
+  // The clip folder's frames to load (START:END:STEP of its own order; default all): the clip is then
+  // as if cut to them by hand, an EndoNeRF clip's times spread over them again, a transforms.json
+  // clip's own times kept. None selected: INVALID_ARGUMENT.
+  FrameRange frames;
   // The colour transparent pixels of RGBA images are composited onto (RGB): NeRF-synthetic's white
   // unless the run's background is black (train_config.h "background").
   std::array<std::uint8_t, 3> alpha_background = {255, 255, 255};

@@ -12,6 +12,7 @@
 #include "common/json_file.h"
 #include "worker/engine/scene/camera_json.h"
 #include "worker/engine/scene/clip_checks.h"
+#include "worker/engine/scene/frame_pick.h"
 #include "worker/engine/scene/frame_reader.h"
 #include "worker/engine/scene/transforms_clip.h"
 
@@ -84,7 +85,13 @@ void DeclaredSize(const json& top, const std::string& file, std::size_t max_pixe
 Clip LoadTransformsClip(const fs::path& dir, const LoadOptions& options) {
   const fs::path path = dir / "transforms.json";
   const std::string file = path.string();
-  const json top = ReadJsonFile(path);
+  json top = ReadJsonFile(path);
+  if (!options.frames.SelectsAll() && top.is_object() && top.contains("frames") && top["frames"].is_array()) {
+    json picked = json::array();
+    for (const int frame : PickFrames(options.frames, top["frames"].size(), dir.string()))
+      picked.push_back(std::move(top["frames"][frame]));
+    top["frames"] = std::move(picked);
+  }
   const std::vector<FrameFiles> files = ListTransformsFrames(dir, top);
   CheckCameraModel(top, file);
   WarnAboutDistortion(top, file);
