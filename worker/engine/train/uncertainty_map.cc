@@ -82,10 +82,11 @@ void UncertaintyMap::Load(std::istream& in) {
   in.read(reinterpret_cast<char*>(&count), sizeof(count));
   if (!in) Fail(ErrorCode::kDataLoss, "checkpoint: truncated before the uncertainty map");
   if (count != std::int64_t(probe_.size())) {
-    Fail(ErrorCode::kDataLoss, "checkpoint: uncertainty map has " + std::to_string(count) +
-                                   " cells, expected " + std::to_string(probe_.size()) +
-                                   " (a checkpoint of another clip, or of another --holdout, is resumed "
-                                   "only on its own)");
+    Fail(ErrorCode::kDataLoss,
+         "checkpoint: uncertainty map has " + std::to_string(count) + " cells, expected " +
+             std::to_string(probe_.size()) +
+             " (a checkpoint of another clip, or of another --holdout or --frames, is resumed "
+             "only on its own)");
   }
   std::vector<float> scores(probe_.size());
   in.read(reinterpret_cast<char*>(scores.data()), std::streamsize(scores.size() * sizeof(float)));
