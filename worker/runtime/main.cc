@@ -1,5 +1,6 @@
 // endorecon-worker: the engine's command line (synth, reconstruct, render, prepare, calibrate) and the
 // service worker (serve), which leases jobs from endorecon-server and runs one engine per device.
+#include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
@@ -11,7 +12,6 @@
 #include "worker/runtime/progress_line.h"
 
 int main(int argc, char** argv) {
-  endorecon::worker::EndProgressBeforeEachLog();
   CLI::App app{"endorecon-worker: reconstruct endoscopic clips, or serve jobs from endorecon-server"};
   app.require_subcommand(1);
   app.set_version_flag("--version", ENDORECON_VERSION);  // server and workers run at one version
@@ -28,6 +28,14 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 2;  // a usage error is 2, as every other invalid input
   }
+  // The commands (synth, reconstruct, prepare, ...) log to stderr, as their progress goes: `synth DIR
+  // > /dev/null` hid a failure's message (found 2026-12-06). `serve`, a service, logs to stdout for
+  // its supervisor, as the server does.
+  if (!app.got_subcommand("serve")) {
+    spdlog::set_default_logger(
+        std::make_shared<spdlog::logger>("", std::make_shared<spdlog::sinks::stderr_color_sink_mt>()));
+  }
+  endorecon::worker::EndProgressBeforeEachLog();
   try {
     for (auto* sub : app.get_subcommands()) return commands.at(sub->get_name())();
   } catch (const endorecon::Error& e) {
