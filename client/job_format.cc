@@ -186,9 +186,14 @@ std::string DescribeJob(const v1::Job& job) {
   text += fmt::format("  attempts  {} lost of {} allowed\n", job.attempts(), job.max_attempts());
   if (!job.worker_id().empty()) text += fmt::format("  worker    {}\n", job.worker_id());
   if (job.clip().files_size() > 0) {
-    text +=
-        fmt::format("  {}  {} file(s){}\n", job.has_prepare() ? "recording" : "clip     ",
-                    job.clip().files_size(), job.has_prepare() ? " (prepared into the results' clip/)" : "");
+    // The frames --frames picked of a clip folder or a DICOM recording (a raw recording's are in
+    // its preparation's record, clip/prepare.json).
+    const std::string picked = !job.has_prepare() && !job.recording().frames().empty()
+                                   ? " (frames " + job.recording().frames() + ")"
+                                   : "";
+    text += fmt::format("  {}  {} file(s){}{}\n", job.has_prepare() ? "recording" : "clip     ",
+                        job.clip().files_size(),
+                        job.has_prepare() ? " (prepared into the results' clip/)" : "", picked);
   }
   if (const auto outcome = OutcomeLine(job); !outcome.empty()) {
     text += "  outcome   " + outcome + "\n";

@@ -133,6 +133,17 @@ TEST(DescribeJob, ASucceededJobShowsItsOutcomeNotItsLastProgress) {
   EXPECT_EQ(OutcomeLine(job).find("time budget"), std::string::npos) << OutcomeLine(job);
 }
 
+// The frames --frames picked are shown with the clip (a clip folder's, since 2026-12-06).
+TEST(DescribeJob, TheClipLineSaysWhichFramesWerePicked) {
+  v1::Job job;
+  job.set_id("0123456789ab");
+  job.mutable_clip()->add_files()->set_path("poses_bounds.npy");
+  EXPECT_NE(DescribeJob(job).find("  clip       1 file(s)\n"), std::string::npos) << DescribeJob(job);
+  job.mutable_recording()->set_frames("0:500:2");
+  EXPECT_NE(DescribeJob(job).find("  clip       1 file(s) (frames 0:500:2)\n"), std::string::npos)
+      << DescribeJob(job);
+}
+
 TEST(DescribeJob, TheIterationsTrainedComeFromTheSummary) {
   v1::Job job = Finished(v1::SUCCEEDED);
   EXPECT_FALSE(TrainedIterations(job).has_value());
