@@ -109,6 +109,42 @@ TEST_F(CheckpointTest, EveryFlippedByteIsFound) {
   }
 }
 
+// A checkpoint says which of its clip folder's frames it trained on (--frames); one of other frames is
+// refused before its state is read: of as many frames it resumed on them without a word (found
+// 2026-12-06).
+TEST_F(CheckpointTest, ACheckpointOfOtherFramesIsRefusedNamingThem) {
+  CheckpointExtras extras;
+  extras.frames = ParseFrameRange("1:9:3");
+  WriteCheckpoint(path_, *trainer_, extras);
+  Trainer fresh(*clip_, config_, AllFrames(), 3);
+  EXPECT_EQ(ReadCheckpointState(path_, fresh, ParseFrameRange("1:9:3")).frames.ToString(), "1:9:3");
+  try {
+    Trainer other(*clip_, config_, AllFrames(), 3);
+    ReadCheckpointState(path_, other, ParseFrameRange("0:9:3"));
+    FAIL() << "resumed a checkpoint of other frames";
+  } catch (const Error& e) {
+    ExpectNamed(
+        e, ErrorCode::kInvalidArgument,
+        "a checkpoint of the clip's frames 1:9:3 (--frames), and this run takes the clip's frames 0:9:3: "
+        "resume it with --frames 1:9:3");
+  }
+  WriteCheckpoint(path_, *trainer_, {});  // every frame: resumed by a run of every frame only
+  EXPECT_NO_THROW(ReadCheckpointState(path_, fresh));
+  ExpectNamed(
+      [&] {
+        try {
+          ReadCheckpointState(path_, fresh, ParseFrameRange("::2"));
+        } catch (const Error& e) {
+          return e;
+        }
+        return Error(ErrorCode::kInternal, "");
+      }(),
+      ErrorCode::kInvalidArgument,
+      "a checkpoint of every frame of its clip (--frames), and this run takes the clip's frames 0::2: resume "
+      "it "
+      "without --frames");
+}
+
 TEST_F(CheckpointTest, AFieldOfAnotherShapeIsNamed) {
   TrainConfig other = config_;
   other.field.heads.color_hidden = {8};

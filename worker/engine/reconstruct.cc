@@ -123,12 +123,13 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
   train::Trainer trainer(clip, config, split.train, options.seed, backends.step, backends.render);
   train::CheckpointExtras extras;
   if (!options.resume_from.empty()) {
-    extras = train::ReadCheckpointState(options.resume_from, trainer);
+    extras = train::ReadCheckpointState(options.resume_from, trainer, options.frames);
     // The budget is the job's: a job handed back and resumed keeps what it had left.
     spdlog::info("resumed from {} at iteration {} after {:.1f} s of training{}", options.resume_from,
                  trainer.iteration(), extras.train_seconds,
                  options.time_budget_s > 0 ? ", which the time budget counts" : "");
   }
+  extras.frames = options.frames;  // what its checkpoints record
   // A resumed run's deformation is the checkpoint's: nothing to fit. A stop asked for while the clip
   // loaded skips the fit (seconds of optical flow on a large clip: a cancel took 8 s to land); the
   // training loop then stops at its first poll, and metrics.json says the start was not fitted.

@@ -86,7 +86,8 @@ void WriteCheckpoint(const std::filesystem::path& path, const Trainer& trainer,
         WriteString(out, ToJson(trainer.config()).dump());
         WriteString(out, nlohmann::json{{"train_seconds", extras.train_seconds},
                                         {"curve", extras.curve},
-                                        {"deformation_start", DeformationStartOf(trainer, extras)}}
+                                        {"deformation_start", DeformationStartOf(trainer, extras)},
+                                        {"frames", extras.frames.ToString()}}
                              .dump());
         trainer.Save(out);
       },
@@ -98,13 +99,27 @@ TrainConfig ReadCheckpointConfig(const std::filesystem::path& path) {
   return ConfigFromString(ReadString(in, path), path);
 }
 
-CheckpointExtras ReadCheckpointState(const std::filesystem::path& path, Trainer& trainer) {
+CheckpointExtras ReadCheckpointState(const std::filesystem::path& path, Trainer& trainer,
+                                     const FrameRange& frames) {
   auto in = OpenSealedFile(path, kCheckpointMagic, "checkpoint");
   return NamingTheFile(path, [&] {
     ReadString(in, path);
     const auto extras_json = nlohmann::json::parse(ReadString(in, path));
-    trainer.Load(in);
     CheckpointExtras extras;
+    const auto saved = extras_json.find("frames");
+    if (saved != extras_json.end() && saved->is_string())
+      extras.frames = ParseFrameRange(saved->get<std::string>());
+    if (extras.frames.ToString() != frames.ToString()) {
+      const auto which = [](const FrameRange& range) {
+        return range.SelectsAll() ? std::string("every frame of its clip")
+                                  : "the clip's frames " + range.ToString();
+      };
+      FailInvalid("a checkpoint of " + which(extras.frames) + " (--frames), and this run takes " +
+                  which(frames) + ": resume it " +
+                  (extras.frames.SelectsAll() ? std::string("without --frames")
+                                              : "with --frames " + extras.frames.ToString()));
+    }
+    trainer.Load(in);
     extras.train_seconds = extras_json.at("train_seconds").get<double>();
     extras.curve = extras_json.at("curve");
     extras.deformation_start = extras_json.value("deformation_start", nlohmann::json());

@@ -8,6 +8,7 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 
+#include "common/prepare_flags.h"
 #include "worker/engine/field/field.h"
 #include "worker/engine/scene/scene_box.h"
 #include "worker/engine/train/train_config.h"
@@ -21,6 +22,9 @@ struct CheckpointExtras {
   // How the run's deformation started (FlowStartJson), kept through resumes; null in a checkpoint
   // written before it was recorded (DeformationStartOf then asks the trainer).
   nlohmann::json deformation_start;
+  // The clip folder's frames the run trains on (--frames; every frame in a checkpoint that does not
+  // say, written before 2026-12-06).
+  FrameRange frames;
 };
 
 // How the run's deformation started, as its checkpoints and metrics.json record it: the account a
@@ -31,8 +35,11 @@ void WriteCheckpoint(const std::filesystem::path& path, const Trainer& trainer,
                      const CheckpointExtras& extras);
 // The config stored in a checkpoint, to build the Trainer that ReadCheckpointState then fills.
 TrainConfig ReadCheckpointConfig(const std::filesystem::path& path);
-// Throws Error(kDataLoss) for a corrupt or truncated file, kInvalidArgument for a file that is no checkpoint.
-CheckpointExtras ReadCheckpointState(const std::filesystem::path& path, Trainer& trainer);
+// Throws Error(kDataLoss) for a corrupt or truncated file, kInvalidArgument for a file that is no checkpoint
+// or one of other `frames` of its clip than the run's (before its state is read: a checkpoint of as many
+// other frames resumed on them without a word).
+CheckpointExtras ReadCheckpointState(const std::filesystem::path& path, Trainer& trainer,
+                                     const FrameRange& frames = {});
 // The iteration a run resumed from the checkpoint starts at, without building a trainer (how much
 // progress a checkpoint holds: bench/fault_campaign). Throws as ReadCheckpointState.
 int ReadCheckpointIteration(const std::filesystem::path& path);
