@@ -341,7 +341,9 @@ int Submit(const Globals& globals, const SubmitFlags& flags) {
       (*request.mutable_prepare()->mutable_sources())[name] = path;
   } else {
     *request.mutable_recording() = flags.recording;
-    request.mutable_recording()->set_frames(flags.raw.frames);
+    // As config.json and the checkpoints write it ("::2" is "0::2").
+    if (const FrameRange range = ParseFrameRange(flags.raw.frames); !range.SelectsAll())
+      request.mutable_recording()->set_frames(range.ToString());
     request.mutable_recording()->set_size(flags.raw.size);
   }
   *request.mutable_options() = options;

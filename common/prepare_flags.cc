@@ -52,6 +52,18 @@ FrameRange ParseFrameRange(std::string_view text) {
       "START:END:STEP (frame numbers from 0, END exclusive, each part optional, STEP > 0)";
   const auto parts = Split(text, ':');
   if (parts.size() > 3) Bad(text, expected);
+  // Python's negative numbers count from the end, which the recording's or clip's length (not known
+  // where this is parsed) would have to resolve; a number alone is a frame or a start to the reader.
+  if (text.find('-') != std::string_view::npos)
+    Bad(text, expected + "; numbers from the end (negative, as in Python) are not taken");
+  if (parts.size() == 1 && !text.empty()) {
+    int frame = 0;
+    Bad(text, ParseCount(text, frame)
+                  ? expected + ": " + std::string(text) + ": takes frame " + std::string(text) + " on, " +
+                        std::string(text) + ":" + std::to_string(frame + 1) + " frame " + std::string(text) +
+                        " alone"
+                  : expected);
+  }
   FrameRange range;
   if (!parts[0].empty() && !ParseCount(parts[0], range.start)) Bad(text, expected);
   if (parts.size() > 1 && !parts[1].empty() && !ParseCount(parts[1], range.end)) Bad(text, expected);

@@ -17,11 +17,18 @@ TEST(PrepareFlagsTest, FrameRanges) {
   EXPECT_FALSE(range.Selects(0) || range.Selects(6) || range.Selects(50));
   EXPECT_EQ(ParseFrameRange("10:").ToString(), "10::1");
   EXPECT_EQ(ParseFrameRange("::3").step, 3);
-  for (const char* bad : {"a:b", "1:2:0", "5:5", "1:2:3:4", "-1:", "2.5:"}) {
+  for (const char* bad : {"a:b", "1:2:0", "5:5", "1:2:3:4", "-1:", "2.5:", "2", "::-1"}) {
     const std::string message = ErrorFrom([&] { ParseFrameRange(bad); });
     EXPECT_NE(message.find(std::string("'") + bad + "': expected START:END:STEP"), std::string::npos)
         << message;
   }
+  // A number alone read as "frame 2" took frame 2 on (found 2026-12-06); Python's negatives are named.
+  EXPECT_NE(ErrorFrom([&] { ParseFrameRange("2"); }).find("2: takes frame 2 on, 2:3 frame 2 alone"),
+            std::string::npos);
+  EXPECT_NE(ErrorFrom([&] {
+              ParseFrameRange("-3:");
+            }).find("numbers from the end (negative, as in Python) are not"),
+            std::string::npos);
 }
 
 TEST(PrepareFlagsTest, SizesAndRegions) {

@@ -134,9 +134,11 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
   // loaded skips the fit (seconds of optical flow on a large clip: a cancel took 8 s to land); the
   // training loop then stops at its first poll, and metrics.json says the start was not fitted.
   if (!(hooks.should_stop && hooks.should_stop())) trainer.StartDeformation();
-  spdlog::info("clip {}: {} frames {}x{}, {} train / {} held out, {} threads, steps on {}; {}", clip.source,
-               clip.frame_count(), clip.width, clip.height, split.train.size(), split.heldout.size(), threads,
-               trainer.device(), field::DescribeField(trainer.field()));
+  spdlog::info("clip {}: {} frame{}{} {}x{}, {} train / {} held out, {} threads, steps on {}; {}",
+               clip.source, clip.frame_count(), clip.frame_count() == 1 ? "" : "s",
+               options.frames.SelectsAll() ? "" : " (--frames " + options.frames.ToString() + ")", clip.width,
+               clip.height, split.train.size(), split.heldout.size(), threads, trainer.device(),
+               field::DescribeField(trainer.field()));
   // The renderers run where the steps do and skip what the trainer's occupancy grid says is empty.
   render::FrameRenderer renderer(trainer.field(), trainer.box(),
                                  train::EvalRenderSettings(config, clip.near, clip.far), backends.render);
