@@ -75,7 +75,12 @@ std::string PrintableText(std::string text, std::size_t most) {
   return out;
 }
 
-void ValidateJobName(const std::string& name) { CheckPrintable(name, kMaxJobNameBytes, "name"); }
+void ValidateJobName(const std::string& name) {
+  CheckPrintable(name, kMaxJobNameBytes, "name");
+  // Listed as a blank and titling a report "endorecon report:    " (found 2026-12-06).
+  if (!name.empty() && name.find_first_not_of(" \t") == std::string::npos)
+    FailInvalid("name is only spaces: give a name, or none (the clip's is taken)");
+}
 
 std::string ValidJobName(std::string name) { return PrintableText(std::move(name), kMaxJobNameBytes); }
 

@@ -18,7 +18,7 @@ inline constexpr double kLeastTimeBudgetS = 10;
 inline constexpr double kMostTimeBudgetS = 7 * 24 * 3600;
 
 // Throws Error(kInvalidArgument) for a name over kMaxJobNameBytes or holding a control character
-// (ASCII or C1, or a Unicode direction control).
+// (ASCII or C1, or a Unicode direction control), or of spaces alone.
 void ValidateJobName(const std::string& name);
 // Text a terminal may show as it is: control characters (as ValidateJobName's) and bytes of no UTF-8
 // text as '?', cut to `most` bytes on a character's end. For text the server passes on from a worker

@@ -18,6 +18,9 @@ TEST(JobBoundsTest, NamesAndWorkerIdsArePrintableAndBounded) {
             std::string::npos);
   EXPECT_NE(testing::ErrorFrom([] { ValidateJobName(std::string(300, 'n')); }).find("name has 300 bytes; at most 256"),
             std::string::npos);
+  EXPECT_NE(testing::ErrorFrom([] { ValidateJobName("   "); }).find("name is only spaces"),
+            std::string::npos);
+  EXPECT_NO_THROW(ValidateJobName(""));  // none: the clip's
   EXPECT_NO_THROW(ValidateWorkerId("node7-gpu0"));
   EXPECT_NE(testing::ErrorFrom([] { ValidateWorkerId(""); }).find("worker id is empty"), std::string::npos);
   EXPECT_NE(testing::ErrorFrom([] { ValidateWorkerId("w\x1b[2J"); }).find("worker id holds a control character"),

@@ -5,6 +5,7 @@
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 
 #include "common/cli_checks.h"
@@ -137,7 +138,12 @@ Command AddReconstructCommand(CLI::App& app) {
     if (!dicom->uid_root().empty()) dicom::NewUid(dicom->uid_root());
     if (recording_input) RefuseToReplaceAForeignFolder(options->out_dir + ".clip");
     const auto from_dicom = PrepareRecording(options->clip_dir, *recording, options->out_dir + ".clip");
-    if (from_dicom) options->clip_dir = from_dicom->clip_dir.string();
+    if (from_dicom) {
+      // The page names the recording, not the clip made of it beside the results (OUT.clip).
+      const auto input = std::filesystem::absolute(options->clip_dir).lexically_normal();
+      options->title = (input.has_filename() ? input.filename() : input.parent_path().filename()).string();
+      options->clip_dir = from_dicom->clip_dir.string();
+    }
     options->frames = ClipFolderFrames(from_dicom, *recording);
     ReconstructHooks hooks;
     hooks.progress_interval_s = 1.0;

@@ -204,7 +204,10 @@ std::optional<json> HeatScale(const json& record, const std::string& pointer, co
 }
 
 std::string FolderName(const fs::path& path) {
-  const fs::path normal = path.lexically_normal();
+  // Absolute first: `reconstruct .` was titled ".".
+  std::error_code failed;
+  const fs::path absolute = fs::absolute(path, failed);
+  const fs::path normal = (failed ? path : absolute).lexically_normal();
   const fs::path name = normal.has_filename() ? normal.filename() : normal.parent_path().filename();
   return name.empty() ? normal.string() : name.string();
 }
