@@ -186,8 +186,9 @@ std::string DescribeJob(const v1::Job& job) {
   text += fmt::format("  attempts  {} lost of {} allowed\n", job.attempts(), job.max_attempts());
   if (!job.worker_id().empty()) text += fmt::format("  worker    {}\n", job.worker_id());
   if (job.clip().files_size() > 0) {
-    // The frames --frames picked of a clip folder or a DICOM recording (a raw recording's are in
-    // its preparation's record, clip/prepare.json).
+    // The frames --frames picked of a DICOM recording (a clip folder's were cut before its upload,
+    // and the job's name says which; a raw recording's are in its preparation's record,
+    // clip/prepare.json).
     const std::string picked = !job.has_prepare() && !job.recording().frames().empty()
                                    ? " (frames " + job.recording().frames() + ")"
                                    : "";

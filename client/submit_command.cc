@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "client/clip_check.h"
+#include "client/clip_cut.h"
 #include "client/commands.h"
 #include "client/exit_codes.h"
 #include "client/interrupt_note.h"
@@ -216,15 +217,8 @@ v1::Manifest Upload(const Globals& globals, v1::JobService::Stub& stub, const st
                                       ? nlohmann::json::object()
                                       : ParseJson(request.options().config_json(), "--config");
     try {
-      // The frames --frames picks (the worker loads those; the whole clip is uploaded).
-      const std::size_t all = ListClipFrames(clip).size();
-      const FrameRange range = ParseFrameRange(request.recording().frames());
-      const std::size_t picked = range.Of(static_cast<int>(all)).size();
-      if (picked == 0) {
-        FailInvalid("--frames " + range.ToString() + " picks none of " + clip.string() + "'s " +
-                    std::to_string(all) + " frames (START:END:STEP counts them from 0, END exclusive)");
-      }
-      CheckResultsFit(picked, WritesUncertaintyMaps(config), manifest_bytes, clip.string());
+      CheckResultsFit(ListClipFrames(clip).size(), WritesUncertaintyMaps(config), manifest_bytes,
+                      clip.string());
     } catch (const Error& e) {
       FailInvalid(std::string(e.what()) + " (found before the upload: nothing was sent)");
     }
@@ -328,6 +322,19 @@ int Submit(const Globals& globals, const SubmitFlags& flags) {
   // A raw recording is staged under canonical names (recording_upload.h); its folder is uploaded.
   std::optional<StagedRecording> staged;
   if (!flags.raw.empty()) staged.emplace(flags.raw);
+  // A clip folder's picked frames go up alone, as a clip cut to them (clip_cut.h); the worker loads
+  // it as it is. The name says which frames they were.
+  const FrameRange frames = ParseFrameRange(flags.raw.frames);
+  std::optional<StagedClipCut> cut;
+  if (clip_folder && !frames.SelectsAll()) {
+    try {
+      cut.emplace(flags.clip, frames);
+    } catch (const Error& e) {
+      Fail(e.code(), std::string(e.what()) + " (found before the upload: nothing was sent)");
+    }
+    std::cerr << "uploading frames " << frames.ToString() << " of " << PrintableText(flags.clip, 4096) << ": "
+              << cut->picked() << " of its " << cut->total() << " frames\n";
+  }
   const auto stub = globals.Connect();
   v1::SubmitRequest request;
   if (!flags.pacs.empty()) {
@@ -341,9 +348,8 @@ int Submit(const Globals& globals, const SubmitFlags& flags) {
       (*request.mutable_prepare()->mutable_sources())[name] = path;
   } else {
     *request.mutable_recording() = flags.recording;
-    // As config.json and the checkpoints write it ("::2" is "0::2").
-    if (const FrameRange range = ParseFrameRange(flags.raw.frames); !range.SelectsAll())
-      request.mutable_recording()->set_frames(range.ToString());
+    // A DICOM recording's window, as config.json and the checkpoints write one ("::2" is "0::2").
+    if (!clip_folder && !frames.SelectsAll()) request.mutable_recording()->set_frames(frames.ToString());
     request.mutable_recording()->set_size(flags.raw.size);
   }
   *request.mutable_options() = options;
@@ -353,12 +359,21 @@ int Submit(const Globals& globals, const SubmitFlags& flags) {
   const std::string default_name =
       staged               ? staged->name()
       : flags.clip.empty() ? "pacs " + flags.pacs
-                           : std::filesystem::path(flags.clip).lexically_normal().filename().string();
+                           : std::filesystem::path(flags.clip).lexically_normal().filename().string() +
+                                 (cut ? " frames " + frames.ToString() : "");
   // A folder's name is no chosen name: made valid, not refused after the upload (a newline in it was).
   request.set_name(flags.name.empty() ? ValidJobName(default_name) : flags.name);
   if (flags.pacs.empty()) {
-    *request.mutable_clip() = Upload(
-        globals, *stub, staged ? staged->dir() : std::filesystem::path(flags.clip), clip_folder, request);
+    try {
+      *request.mutable_clip() = Upload(globals, *stub,
+                                       staged ? staged->dir()
+                                       : cut  ? cut->dir()
+                                              : std::filesystem::path(flags.clip),
+                                       clip_folder, request);
+    } catch (const Error& e) {
+      if (!cut) throw;
+      Fail(e.code(), cut->InClip(e.what()));  // the user's files, not their links in the cut
+    }
   }
   v1::Job job;
   auto context = CallContext(globals.timeout());

@@ -153,8 +153,9 @@ TEST(SubmitToCompletionTest, AContentUnderSeveralNamesIsSentOnce) {
 }
 
 // --frames picks a clip folder's frames through the service, as `reconstruct --frames` does (a
-// long clip was cut by hand, slicing poses_bounds.npy; found 2026-12-06); picking none is refused
-// before the upload.
+// long clip was cut by hand, slicing poses_bounds.npy; found 2026-12-06): the picked frames go up
+// alone, as a clip cut to them, and the job's name says which. Picking none is refused before the
+// upload.
 TEST(SubmitToCompletionTest, FramesPicksAClipFoldersFrames) {
   Cluster cluster;
   const auto clip = cluster.path("clip");
@@ -165,15 +166,32 @@ TEST(SubmitToCompletionTest, FramesPicksAClipFoldersFrames) {
   EXPECT_NE(none.err.find("--frames 8::1 picks none of " + clip.string() + "'s 8 frames"), std::string::npos)
       << none.err;
   EXPECT_NE(none.err.find("nothing was sent"), std::string::npos) << none.err;
+  // A damaged picked frame is named where the user has it (not by its link in the cut clip); a damaged
+  // frame not picked is not sent, nor checked.
+  const std::string frame = ReadBytes(clip / "images" / "000005.png");
+  WriteBytes(clip / "images" / "000005.png", "not a png");
+  const auto damaged = RunCli(cluster.address(), {"submit", clip.string(), "--frames", "2:8:3"});
+  EXPECT_EQ(damaged.exit_code, 2) << damaged.err;
+  EXPECT_NE(damaged.err.find((clip / "images" / "000005.png").string()), std::string::npos) << damaged.err;
+  EXPECT_EQ(damaged.err.find("endorecon-clip-"), std::string::npos) << damaged.err;
+  WriteBytes(clip / "images" / "000005.png", frame);
+  WriteBytes(clip / "images" / "000004.png", "not a png");
 
   cluster.StartWorker("w1");
   const auto submitted = RunCli(cluster.address(), {"--json", "submit", clip.string(), "--frames", "2:8:3",
                                                     "--iterations", "5", "--wait"});
   ASSERT_EQ(submitted.exit_code, 0) << submitted.err << submitted.out << cluster.ServerLog();
+  EXPECT_NE(submitted.err.find("uploading frames 2:8:3 of " + clip.string() + ": 2 of its 8 frames"),
+            std::string::npos)
+      << submitted.err;
   const auto id = submitted.out.substr(submitted.out.find("\"id\":\"") + 6, 12);
+  const v1::Job job = cluster.Job(id);
+  EXPECT_EQ(job.name(), "clip frames 2:8:3");
+  // Frames 2 and 5: their image, depth map, mask and gt/ image and depth, and the cut poses_bounds.npy.
+  EXPECT_EQ(job.clip().files_size(), 11);
   const auto fetched = RunCli(cluster.address(), {"fetch", id, "-o", cluster.path("results").string()});
   ASSERT_EQ(fetched.exit_code, 0) << fetched.err;
-  EXPECT_EQ(ReadJsonFile(cluster.path("results") / "config.json").value("frames", ""), "2:8:3");
+  EXPECT_EQ(ReadJsonFile(cluster.path("results") / "config.json").value("title", ""), "clip frames 2:8:3");
   int frames = 0;
   for (const auto& entry : std::filesystem::directory_iterator(cluster.path("results") / "rgb")) {
     frames += entry.path().extension() == ".png";

@@ -133,7 +133,7 @@ TEST(DescribeJob, ASucceededJobShowsItsOutcomeNotItsLastProgress) {
   EXPECT_EQ(OutcomeLine(job).find("time budget"), std::string::npos) << OutcomeLine(job);
 }
 
-// The frames --frames picked are shown with the clip (a clip folder's, since 2026-12-06).
+// The frames --frames picked of a DICOM recording are shown with the clip.
 TEST(DescribeJob, TheClipLineSaysWhichFramesWerePicked) {
   v1::Job job;
   job.set_id("0123456789ab");
