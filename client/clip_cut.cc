@@ -1,11 +1,9 @@
 #include "client/clip_cut.h"
 
-#include <unistd.h>
-
 #include <nlohmann/json.hpp>
-#include <random>
 #include <vector>
 
+#include "client/staging_folder.h"
 #include "common/clip_files.h"
 #include "common/error.h"
 #include "common/file_write.h"
@@ -16,7 +14,9 @@ namespace endorecon::client {
 namespace fs = std::filesystem;
 
 StagedClipCut::StagedClipCut(const fs::path& clip, const FrameRange& frames)
-    : clip_(fs::absolute(clip).lexically_normal()) {
+    : clip_(fs::absolute(clip).lexically_normal()), given_(clip.string()) {
+  while (given_.size() > 1 && given_.back() == '/') given_.pop_back();
+  if (!clip_.has_filename()) clip_ = clip_.parent_path();  // "clips/c12/"
   const std::vector<FrameFiles> all = ListClipFrames(clip_);
   total_ = all.size();
   const std::vector<int> picked = frames.Of(static_cast<int>(total_));
@@ -25,9 +25,7 @@ StagedClipCut::StagedClipCut(const fs::path& clip, const FrameRange& frames)
     FailInvalid("--frames " + frames.ToString() + " picks none of " + clip.string() + "'s " +
                 std::to_string(total_) + " frames (START:END:STEP counts them from 0, END exclusive)");
   }
-  dir_ = fs::temp_directory_path() /
-         ("endorecon-clip-" + std::to_string(::getpid()) + "-" + std::to_string(std::random_device{}()));
-  fs::create_directories(dir_);
+  dir_ = MakeStagingFolder("clip");
   // Each file once: frames of a transforms.json may share a mask.
   const auto link = [&](const fs::path& file) {
     if (file.empty()) return;
@@ -75,7 +73,7 @@ StagedClipCut::~StagedClipCut() {
 }
 
 std::string StagedClipCut::InClip(std::string text) const {
-  const std::string staged = dir_.string(), own = clip_.string();
+  const std::string staged = dir_.string(), own = given_;
   for (auto at = text.find(staged); at != std::string::npos; at = text.find(staged, at + own.size()))
     text.replace(at, staged.size(), own);
   return text;

@@ -30,7 +30,8 @@ class StagedClipCut {
   std::string InClip(std::string text) const;
 
  private:
-  std::filesystem::path clip_;
+  std::filesystem::path clip_;  // absolute
+  std::string given_;           // as the user gave it, for messages
   std::filesystem::path dir_;
   std::size_t picked_ = 0;
   std::size_t total_ = 0;

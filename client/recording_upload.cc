@@ -1,9 +1,6 @@
 #include "client/recording_upload.h"
 
-#include <unistd.h>
-
-#include <random>
-
+#include "client/staging_folder.h"
 #include "common/clip_files.h"
 #include "common/error.h"
 
@@ -12,9 +9,7 @@ namespace fs = std::filesystem;
 
 StagedRecording::StagedRecording(const PrepareFlags& flags) : flags_(flags) {
   CheckPrepareFlags(flags);
-  dir_ = fs::temp_directory_path() /
-         ("endorecon-recording-" + std::to_string(::getpid()) + "-" + std::to_string(std::random_device{}()));
-  fs::create_directories(dir_);
+  dir_ = MakeStagingFolder("recording");
   const auto stage = [&](std::string& path, const std::string& name, const char* flag = nullptr) {
     if (!path.empty()) path = Stage(path, name, flag);
   };

@@ -113,6 +113,15 @@ std::vector<std::string> LeftOut(const std::filesystem::path& dir, const v1::Man
 // a video, a spreadsheet beside the frames) stays on this machine, and is named. A folder of DICOM
 // files goes up whole; a single file (a DICOM recording) as itself, named by its file name. Paths
 // and sizes only: the digests come after the server has seen the sizes.
+// A job's default name: the clip's folder or file name, also for "clips/c12/" and "." (they were
+// named "" and ".").
+std::string FolderName(const std::string& path) {
+  std::error_code failed;
+  const auto absolute = std::filesystem::absolute(path, failed);
+  const auto normal = (failed ? std::filesystem::path(path) : absolute).lexically_normal();
+  return (normal.has_filename() ? normal.filename() : normal.parent_path().filename()).string();
+}
+
 v1::Manifest ListingOfClip(const std::filesystem::path& clip, bool clip_folder) {
   if (clip_folder) {
     v1::Manifest listing;
@@ -323,8 +332,8 @@ int Submit(const Globals& globals, const SubmitFlags& flags) {
   std::optional<StagedRecording> staged;
   if (!flags.raw.empty()) staged.emplace(flags.raw);
   // A clip folder's picked frames go up alone, as a clip cut to them (clip_cut.h); the worker loads
-  // it as it is. The name says which frames they were.
-  const FrameRange frames = ParseFrameRange(flags.raw.frames);
+  // it as it is, and the job's recording.frames records which they were.
+  FrameRange frames = ParseFrameRange(flags.raw.frames);
   std::optional<StagedClipCut> cut;
   if (clip_folder && !frames.SelectsAll()) {
     try {
@@ -332,8 +341,13 @@ int Submit(const Globals& globals, const SubmitFlags& flags) {
     } catch (const Error& e) {
       Fail(e.code(), std::string(e.what()) + " (found before the upload: nothing was sent)");
     }
-    std::cerr << "uploading frames " << frames.ToString() << " of " << PrintableText(flags.clip, 4096) << ": "
-              << cut->picked() << " of its " << cut->total() << " frames\n";
+    if (cut->picked() == cut->total()) {  // 0:99999 of a clip of 12: the clip as it is
+      cut.reset();
+      frames = FrameRange{};
+    } else {
+      std::cerr << "uploading frames " << frames.ToString() << " of " << PrintableText(flags.clip, 4096)
+                << ": " << cut->picked() << " of its " << cut->total() << " frames\n";
+    }
   }
   const auto stub = globals.Connect();
   v1::SubmitRequest request;
@@ -348,19 +362,18 @@ int Submit(const Globals& globals, const SubmitFlags& flags) {
       (*request.mutable_prepare()->mutable_sources())[name] = path;
   } else {
     *request.mutable_recording() = flags.recording;
-    // A DICOM recording's window, as config.json and the checkpoints write one ("::2" is "0::2").
-    if (!clip_folder && !frames.SelectsAll()) request.mutable_recording()->set_frames(frames.ToString());
+    // A DICOM recording's window, or the frames a clip folder was cut to, as config.json and the
+    // checkpoints write them ("::2" is "0::2").
+    if (!frames.SelectsAll()) request.mutable_recording()->set_frames(frames.ToString());
     request.mutable_recording()->set_size(flags.raw.size);
   }
   *request.mutable_options() = options;
   *request.mutable_dicom() = flags.dicom;
   for (const auto& name : flags.send_to) request.add_send_to(name);
   request.set_priority(flags.priority);
-  const std::string default_name =
-      staged               ? staged->name()
-      : flags.clip.empty() ? "pacs " + flags.pacs
-                           : std::filesystem::path(flags.clip).lexically_normal().filename().string() +
-                                 (cut ? " frames " + frames.ToString() : "");
+  const std::string default_name = staged               ? staged->name()
+                                   : flags.clip.empty() ? "pacs " + flags.pacs
+                                                        : FolderName(flags.clip);
   // A folder's name is no chosen name: made valid, not refused after the upload (a newline in it was).
   request.set_name(flags.name.empty() ? ValidJobName(default_name) : flags.name);
   if (flags.pacs.empty()) {
@@ -374,6 +387,7 @@ int Submit(const Globals& globals, const SubmitFlags& flags) {
       if (!cut) throw;
       Fail(e.code(), cut->InClip(e.what()));  // the user's files, not their links in the cut
     }
+    cut.reset();  // uploaded: the links go now, not when a --wait ends
   }
   v1::Job job;
   auto context = CallContext(globals.timeout());

@@ -154,8 +154,8 @@ TEST(SubmitToCompletionTest, AContentUnderSeveralNamesIsSentOnce) {
 
 // --frames picks a clip folder's frames through the service, as `reconstruct --frames` does (a
 // long clip was cut by hand, slicing poses_bounds.npy; found 2026-12-06): the picked frames go up
-// alone, as a clip cut to them, and the job's name says which. Picking none is refused before the
-// upload.
+// alone, as a clip cut to them, and the job, its status and its config.json say which. Picking none is
+// refused before the upload. A cut's temporary folder a killed CLI left is removed by the next.
 TEST(SubmitToCompletionTest, FramesPicksAClipFoldersFrames) {
   Cluster cluster;
   const auto clip = cluster.path("clip");
@@ -177,6 +177,13 @@ TEST(SubmitToCompletionTest, FramesPicksAClipFoldersFrames) {
   WriteBytes(clip / "images" / "000005.png", frame);
   WriteBytes(clip / "images" / "000004.png", "not a png");
 
+  // A cut folder a killed CLI left (its process is gone): removed by the next cut.
+  Process gone({"/bin/true"}, cluster.path("true.log"));
+  gone.Wait();
+  const auto left =
+      std::filesystem::temp_directory_path() / ("endorecon-clip-" + std::to_string(gone.pid()) + "-1");
+  std::filesystem::create_directories(left / "images");
+
   cluster.StartWorker("w1");
   const auto submitted = RunCli(cluster.address(), {"--json", "submit", clip.string(), "--frames", "2:8:3",
                                                     "--iterations", "5", "--wait"});
@@ -185,13 +192,16 @@ TEST(SubmitToCompletionTest, FramesPicksAClipFoldersFrames) {
             std::string::npos)
       << submitted.err;
   const auto id = submitted.out.substr(submitted.out.find("\"id\":\"") + 6, 12);
+  EXPECT_FALSE(std::filesystem::exists(left));
   const v1::Job job = cluster.Job(id);
-  EXPECT_EQ(job.name(), "clip frames 2:8:3");
+  EXPECT_EQ(job.name(), "clip");
+  EXPECT_EQ(job.recording().frames(), "2:8:3");
+  EXPECT_NE(RunCli(cluster.address(), {"status", id}).out.find("(frames 2:8:3)"), std::string::npos);
   // Frames 2 and 5: their image, depth map, mask and gt/ image and depth, and the cut poses_bounds.npy.
   EXPECT_EQ(job.clip().files_size(), 11);
   const auto fetched = RunCli(cluster.address(), {"fetch", id, "-o", cluster.path("results").string()});
   ASSERT_EQ(fetched.exit_code, 0) << fetched.err;
-  EXPECT_EQ(ReadJsonFile(cluster.path("results") / "config.json").value("title", ""), "clip frames 2:8:3");
+  EXPECT_EQ(ReadJsonFile(cluster.path("results") / "config.json").value("frames", ""), "2:8:3");
   int frames = 0;
   for (const auto& entry : std::filesystem::directory_iterator(cluster.path("results") / "rgb")) {
     frames += entry.path().extension() == ".png";

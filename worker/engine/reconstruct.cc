@@ -10,6 +10,7 @@
 #include <limits>
 #include <thread>
 
+#include "common/error.h"
 #include "common/file_write.h"
 #include "common/output_folder.h"
 #include "worker/engine/base/machine_memory.h"
@@ -86,7 +87,7 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
   train::TrainConfig config = ResolveConfig(options);
   scene::LoadOptions load;
   load.force_static = options.force_static;
-  load.frames = options.frames;
+  if (!options.frames_cut) load.frames = options.frames;
   load.should_stop = hooks.should_stop;
   load.fit_depth_bounds = config.fit_depth_bounds;
   load.memory_bytes = options.memory_bytes > 0 ? options.memory_bytes : base::AvailableMemoryBytes();
@@ -95,7 +96,16 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
   if (config.background == "black") load.alpha_background = {0, 0, 0};
   nlohmann::json outside_view;  // what the scope's view leaves out, for left_out
   const scene::Clip clip = [&] {
-    scene::Clip loaded = scene::LoadClip(options.clip_dir, load);
+    scene::Clip loaded = [&] {
+      try {
+        return scene::LoadClip(options.clip_dir, load);
+      } catch (const Error& e) {
+        if (!options.frames_cut) throw;
+        // "poses_bounds.npy row 2" of a clip cut to frames 6:10 is the user's row 8.
+        Fail(e.code(), std::string(e.what()) + " (in the clip cut to frames " + options.frames.ToString() +
+                           " of the user's: its rows and frames count the picked frames from 0)");
+      }
+    }();
     if (config.outside_view != "auto") return loaded;
     const std::vector<std::uint8_t> outside = scene::OutsideViewMask(loaded, config.outside_view_level);
     if (outside.empty()) return loaded;

@@ -45,6 +45,9 @@ struct ReconstructOptions {
   std::string title;
   // The clip folder's frames to reconstruct (config.json "frames"; scene/load_options.h): default all.
   FrameRange frames;
+  // The clip is cut to `frames` already (a service job's: the CLI uploads the picked frames alone):
+  // they are recorded (config.json, checkpoints), not picked again.
+  bool frames_cut = false;
 };
 
 struct Progress {

@@ -303,11 +303,13 @@ bool RunLeasedJob(WorkerClient& client, const v1::LeaseResponse& lease, const De
       recording = PrepareRecording(options.clip_dir, job.recording(), job_dir / "clip-from-dicom");
       if (recording) options.clip_dir = recording->clip_dir.string();
       options.frames = ClipFolderFrames(recording, job.recording());
+      // A clip folder's picked frames were cut by the CLI before the upload (client/clip_cut.h).
+      options.frames_cut = !recording && !options.frames.SelectsAll();
     }
     // Results no call could hand back are refused before the training (a recording's frames are
     // known only now; a clip folder's the CLI checked).
-    CheckResultsFit(options.frames.Of(static_cast<int>(ListClipFrames(options.clip_dir).size())).size(),
-                    WritesUncertaintyMaps(options.config), job.clip().ByteSizeLong(), options.clip_dir);
+    CheckResultsFit(ListClipFrames(options.clip_dir).size(), WritesUncertaintyMaps(options.config),
+                    job.clip().ByteSizeLong(), options.clip_dir);
 
     ReconstructHooks hooks;
     hooks.progress_interval_s = std::min(2.0, std::chrono::duration<double>(settings.heartbeat).count());
