@@ -1,5 +1,8 @@
 #include "client/clip_check.h"
 
+#include <utility>
+#include <vector>
+
 #include "common/clip_files.h"
 #include "common/error.h"
 #include "common/image_bytes.h"
@@ -9,7 +12,13 @@ namespace endorecon::client {
 
 void CheckClipBeforeUpload(const std::filesystem::path& dir) {
   try {
-    for (const FrameFiles& frame : ListClipFrames(dir)) {
+    std::vector<FrameFiles> frames = ListClipFrames(dir);
+    // gt/'s too: a damaged gt/depth/*.npy failed the job on a worker (found 2026-12-06).
+    if (std::filesystem::is_directory(dir / "gt")) {
+      for (FrameFiles& truth : ListGroundTruthFrames(dir / "gt", frames.size()))
+        frames.push_back(std::move(truth));
+    }
+    for (const FrameFiles& frame : frames) {
       for (const auto* image : {&frame.image, &frame.tool_mask, &frame.eval_mask, &frame.right_image}) {
         if (!image->empty()) CheckImageBytes(*image);
       }

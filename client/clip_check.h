@@ -8,7 +8,7 @@ namespace endorecon::client {
 
 // The layout's files are all there and paired frame by frame (common/clip_files.h: a missing mask, an
 // extra depth map, a path out of the clip), every image is a PNG, JPEG, BMP or TIFF by its bytes and
-// a PNG is whole (common/image_bytes.h), and every .npy depth map reads. Throws Error
+// a PNG is whole (common/image_bytes.h), and every .npy depth map reads; gt/'s files alike. Throws Error
 // (kInvalidArgument) naming the file and saying that nothing was uploaded. Pixels, poses and sizes
 // are the worker's to check.
 void CheckClipBeforeUpload(const std::filesystem::path& dir);

@@ -215,6 +215,15 @@ TEST_F(BadUploadTest, AClipMissingAMaskOrHoldingATruncatedPngIsRefusedBeforeItsU
   EXPECT_EQ(result.exit_code, 2) << result.err;
   EXPECT_NE(result.err.find("cut/images/000005.png: a truncated PNG"), std::string::npos) << result.err;
   EXPECT_EQ(Blobs(), 0);
+  // The ground truth's files too (a damaged gt/depth/*.npy failed the job on a worker).
+  MakeClip(cluster_.path("gtcut"));
+  const auto truth = cluster_.path("gtcut") / "gt" / "depth" / "000002.npy";
+  WriteBytes(truth, ReadBytes(truth).substr(0, 20));
+  result = RunCli(cluster_.address(), {"submit", cluster_.path("gtcut").string()});
+  EXPECT_EQ(result.exit_code, 2) << result.err;
+  EXPECT_NE(result.err.find("gtcut/gt/depth/000002.npy"), std::string::npos) << result.err;
+  EXPECT_NE(result.err.find("found before the upload: nothing was sent"), std::string::npos) << result.err;
+  EXPECT_EQ(Blobs(), 0);
   EXPECT_EQ(Partials(), 0);
   // What the server refuses of the job itself is found before the upload too (a --send-to this server
   // has no PACS for was refused after it).
