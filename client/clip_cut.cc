@@ -19,12 +19,8 @@ StagedClipCut::StagedClipCut(const fs::path& clip, const FrameRange& frames)
   if (!clip_.has_filename()) clip_ = clip_.parent_path();  // "clips/c12/"
   const std::vector<FrameFiles> all = ListClipFrames(clip_);
   total_ = all.size();
-  const std::vector<int> picked = frames.Of(static_cast<int>(total_));
+  const std::vector<int> picked = frames.PickedOf(static_cast<int>(total_), "", clip.string() + "'s");
   picked_ = picked.size();
-  if (picked.empty()) {
-    FailInvalid("--frames " + frames.ToString() + " picks none of " + clip.string() + "'s " +
-                std::to_string(total_) + " frames (START:END:STEP counts them from 0, END exclusive)");
-  }
   dir_ = MakeStagingFolder("clip");
   // Each file once: frames of a transforms.json may share a mask.
   const auto link = [&](const fs::path& file) {

@@ -113,15 +113,6 @@ std::vector<std::string> LeftOut(const std::filesystem::path& dir, const v1::Man
 // a video, a spreadsheet beside the frames) stays on this machine, and is named. A folder of DICOM
 // files goes up whole; a single file (a DICOM recording) as itself, named by its file name. Paths
 // and sizes only: the digests come after the server has seen the sizes.
-// A job's default name: the clip's folder or file name, also for "clips/c12/" and "." (they were
-// named "" and ".").
-std::string FolderName(const std::string& path) {
-  std::error_code failed;
-  const auto absolute = std::filesystem::absolute(path, failed);
-  const auto normal = (failed ? std::filesystem::path(path) : absolute).lexically_normal();
-  return (normal.has_filename() ? normal.filename() : normal.parent_path().filename()).string();
-}
-
 v1::Manifest ListingOfClip(const std::filesystem::path& clip, bool clip_folder) {
   if (clip_folder) {
     v1::Manifest listing;
@@ -373,7 +364,7 @@ int Submit(const Globals& globals, const SubmitFlags& flags) {
   request.set_priority(flags.priority);
   const std::string default_name = staged               ? staged->name()
                                    : flags.clip.empty() ? "pacs " + flags.pacs
-                                                        : FolderName(flags.clip);
+                                                        : PathName(flags.clip);
   // A folder's name is no chosen name: made valid, not refused after the upload (a newline in it was).
   request.set_name(flags.name.empty() ? ValidJobName(default_name) : flags.name);
   if (flags.pacs.empty()) {

@@ -84,6 +84,15 @@ void ValidateJobName(const std::string& name) {
 
 std::string ValidJobName(std::string name) { return PrintableText(std::move(name), kMaxJobNameBytes); }
 
+std::string PathName(const std::filesystem::path& path) {
+  std::error_code failed;
+  const std::filesystem::path absolute = std::filesystem::absolute(path, failed);
+  const std::filesystem::path normal = (failed ? path : absolute).lexically_normal();
+  const std::filesystem::path name =
+      normal.has_filename() ? normal.filename() : normal.parent_path().filename();
+  return name.empty() ? normal.string() : name.string();
+}
+
 void ValidateWorkerId(const std::string& id) {
   if (id.empty()) FailInvalid("worker id is empty");
   CheckPrintable(id, kMaxWorkerIdBytes, "worker id");

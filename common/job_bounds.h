@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstddef>
+#include <filesystem>
 #include <string>
 
 namespace endorecon {
@@ -27,6 +28,10 @@ std::string PrintableText(std::string text, std::size_t most);
 // A name made from what the user did not choose as a name (a clip's folder name), made valid:
 // PrintableText cut to kMaxJobNameBytes.
 std::string ValidJobName(std::string name);
+// What the last part of `path` names (a clip folder, a recording, a results folder), of its absolute,
+// normal form: "clips/c12/" and "." name their folder (a job and a report were named "" and "."); the
+// root names itself.
+std::string PathName(const std::filesystem::path& path);
 // A worker's id is listed by `endorecon workers` as a job's name is: the same rules, at most
 // kMaxWorkerIdBytes, not empty.
 inline constexpr std::size_t kMaxWorkerIdBytes = 128;

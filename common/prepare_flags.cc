@@ -42,6 +42,15 @@ std::vector<int> FrameRange::Of(int total) const {
   return frames;
 }
 
+std::vector<int> FrameRange::PickedOf(int total, const std::string& prefix, const std::string& whose) const {
+  std::vector<int> frames = Of(total);
+  if (frames.empty()) {
+    FailInvalid(prefix + "--frames " + ToString() + " picks none of " + whose + " " + std::to_string(total) +
+                " frames (START:END:STEP counts them from 0, END exclusive)");
+  }
+  return frames;
+}
+
 std::string FrameRange::ToString() const {
   return std::to_string(start) + ":" + (end < 0 ? std::string() : std::to_string(end)) + ":" +
          std::to_string(step);

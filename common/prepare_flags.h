@@ -23,6 +23,9 @@ struct FrameRange {
   bool SelectsAll() const { return start == 0 && end < 0 && step == 1; }
   // The frames it selects of `total` (0 .. total - 1), in order.
   std::vector<int> Of(int total) const;
+  // As Of, and throws Error(kInvalidArgument) when it selects none: "PREFIX--frames RANGE picks none
+  // of WHOSE TOTAL frames (...)".
+  std::vector<int> PickedOf(int total, const std::string& prefix, const std::string& whose) const;
   std::string ToString() const;
 };
 

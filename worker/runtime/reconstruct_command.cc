@@ -14,6 +14,7 @@
 #include "common/dicom_file.h"
 #include "common/dicom_values.h"
 #include "common/error.h"
+#include "common/job_bounds.h"
 #include "common/json_file.h"
 #include "worker/engine/reconstruct.h"
 #include "worker/engine/run_config.h"
@@ -140,8 +141,7 @@ Command AddReconstructCommand(CLI::App& app) {
     const auto from_dicom = PrepareRecording(options->clip_dir, *recording, options->out_dir + ".clip");
     if (from_dicom) {
       // The page names the recording, not the clip made of it beside the results (OUT.clip).
-      const auto input = std::filesystem::absolute(options->clip_dir).lexically_normal();
-      options->title = (input.has_filename() ? input.filename() : input.parent_path().filename()).string();
+      options->title = PathName(options->clip_dir);
       options->clip_dir = from_dicom->clip_dir.string();
     }
     options->frames = ClipFolderFrames(from_dicom, *recording);

@@ -9,6 +9,7 @@
 
 #include "common/error.h"
 #include "common/file_write.h"
+#include "worker/engine/eval/markup_text.h"
 
 namespace endorecon::eval {
 namespace {
@@ -17,29 +18,6 @@ namespace {
 constexpr const char* kPalette[] = {"#0072B2", "#D55E00", "#009E73", "#CC79A7",
                                     "#E69F00", "#56B4E9", "#000000", "#F0E442"};
 constexpr double kLeft = 64, kRight = 20, kTop = 36, kBottom = 52;
-
-std::string Escape(const std::string& text) {
-  std::string out;
-  for (char c : text) {
-    switch (c) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
-}
 
 std::string Num(double value) {
   char text[32];
@@ -123,7 +101,7 @@ std::string CurveSvg(std::span<const CurveSeries> series, const CurvePlotOptions
       << "\" font-family=\"sans-serif\" font-size=\"12\">\n"
       << "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n"
       << "<text x=\"" << Num(w / 2) << "\" y=\"22\" text-anchor=\"middle\" font-size=\"15\">"
-      << Escape(options.title) << "</text>\n";
+      << EscapeMarkup(options.title) << "</text>\n";
 
   svg << "<g class=\"x-axis\" stroke=\"#000\">\n";
   for (double decade = xr.lo; decade <= xr.hi * 1.0001; decade *= 10) {
@@ -154,9 +132,9 @@ std::string CurveSvg(std::span<const CurveSeries> series, const CurvePlotOptions
       << "<rect x=\"" << Num(x0) << "\" y=\"" << Num(y1) << "\" width=\"" << Num(x1 - x0) << "\" height=\""
       << Num(y0 - y1) << "\" fill=\"none\" stroke=\"#000\"/>\n"
       << "<text x=\"" << Num((x0 + x1) / 2) << "\" y=\"" << Num(h - 12) << "\" text-anchor=\"middle\">"
-      << Escape(options.x_label) << "</text>\n"
+      << EscapeMarkup(options.x_label) << "</text>\n"
       << "<text x=\"16\" y=\"" << Num((y0 + y1) / 2) << "\" text-anchor=\"middle\" transform=\"rotate(-90 16 "
-      << Num((y0 + y1) / 2) << ")\">" << Escape(options.y_label) << "</text>\n";
+      << Num((y0 + y1) / 2) << ")\">" << EscapeMarkup(options.y_label) << "</text>\n";
 
   const auto colour_of = [&](std::size_t k) {
     return series[k].colour.empty() ? std::string(kPalette[k % std::size(kPalette)]) : series[k].colour;
@@ -185,8 +163,8 @@ std::string CurveSvg(std::span<const CurveSeries> series, const CurvePlotOptions
       svg << "<line x1=\"" << Num(x1 - 190) << "\" y1=\"" << Num(ly) << "\" x2=\"" << Num(x1 - 160)
           << "\" y2=\"" << Num(ly) << "\" stroke=\"" << colour_of(k) << "\" stroke-width=\"2\"" << dash_of(k)
           << "/>\n"
-          << "<text x=\"" << Num(x1 - 154) << "\" y=\"" << Num(ly + 4) << "\">" << Escape(series[k].label)
-          << "</text>\n";
+          << "<text x=\"" << Num(x1 - 154) << "\" y=\"" << Num(ly + 4) << "\">"
+          << EscapeMarkup(series[k].label) << "</text>\n";
     }
     svg << "</g>\n";
   }

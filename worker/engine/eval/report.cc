@@ -16,6 +16,7 @@
 
 #include "common/base64.h"
 #include "common/error.h"
+#include "common/job_bounds.h"
 #include "common/json_file.h"
 #include "common/npy.h"
 #include "common/prepare_flags.h"
@@ -203,15 +204,6 @@ std::optional<json> HeatScale(const json& record, const std::string& pointer, co
   return scale;
 }
 
-std::string FolderName(const fs::path& path) {
-  // Absolute first: `reconstruct .` was titled ".".
-  std::error_code failed;
-  const fs::path absolute = fs::absolute(path, failed);
-  const fs::path normal = (failed ? path : absolute).lexically_normal();
-  const fs::path name = normal.has_filename() ? normal.filename() : normal.parent_path().filename();
-  return name.empty() ? normal.string() : name.string();
-}
-
 // The frames (every image as a data: URI), their 3D surfaces and the colour scales.
 void AddFrames(const fs::path& results_dir, const Views& views, const json& record, const std::string& heat,
                json& data) {
@@ -326,7 +318,7 @@ fs::path WriteReport(const fs::path& results_dir, const scene::Clip* clip) {
     data["kind"] = "reconstruction";
     data["title"] = config.contains("title") && config["title"].is_string()
                         ? config["title"].get<std::string>()
-                        : FolderName(clip_dir);
+                        : PathName(clip_dir);
     data["clip"] = clip_dir;
     const std::string device = config.value("device", "cpu");
     const int threads = config.value("threads", 0);
@@ -342,7 +334,7 @@ fs::path WriteReport(const fs::path& results_dir, const scene::Clip* clip) {
       views.times.push_back(view.time);
     }
     data["kind"] = "render";
-    data["title"] = FolderName(results_dir);
+    data["title"] = PathName(results_dir);
     data["run"]["device"] = fmt::format("CPU, {} threads", std::thread::hardware_concurrency());
     data["render"] = record;
     heat = "/heatmap_scale";

@@ -5,6 +5,7 @@
 #include <string_view>
 
 #include "common/error.h"
+#include "worker/engine/eval/markup_text.h"
 
 namespace endorecon::eval {
 namespace detail {
@@ -27,26 +28,7 @@ std::string Heading(const nlohmann::json& data) {
   // Re-encoded so that invalid UTF-8 is replaced as in the data block.
   heading = nlohmann::json(heading).dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
   heading = nlohmann::json::parse(heading).get<std::string>();
-  std::string escaped;
-  for (char c : heading) {
-    switch (c) {
-      case '&':
-        escaped += "&amp;";
-        break;
-      case '<':
-        escaped += "&lt;";
-        break;
-      case '>':
-        escaped += "&gt;";
-        break;
-      case '"':
-        escaped += "&quot;";
-        break;
-      default:
-        escaped.push_back(c);
-    }
-  }
-  return escaped;
+  return EscapeMarkup(heading);
 }
 }  // namespace
 

@@ -12,7 +12,9 @@ namespace endorecon::scene {
 
 // The frames `range` picks of a clip folder's `count`, in order. Throws Error(kInvalidArgument)
 // naming `where` and the range when it picks none.
-std::vector<int> PickFrames(const FrameRange& range, std::size_t count, const std::string& where);
+inline std::vector<int> PickFrames(const FrameRange& range, std::size_t count, const std::string& where) {
+  return range.PickedOf(static_cast<int>(count), where + ": ", "the clip's");
+}
 
 // Keeps the items at `picked` (in that order) of one entry a frame.
 template <class T>
