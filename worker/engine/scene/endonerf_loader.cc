@@ -124,15 +124,7 @@ Clip LoadEndoNerfClip(const fs::path& dir, const LoadOptions& options) {
 
   Clip clip;
   clip.source = dir.string();
-  FrameReadOptions read_options;
-  read_options.max_pixels_per_frame = options.max_pixels_per_frame;
-  read_options.memory_bytes = options.memory_bytes;
-  read_options.run_bytes_per_pixel = options.run_bytes_per_pixel;
-  read_options.run_bytes_per_depth_pixel = options.run_bytes_per_depth_pixel;
-  read_options.extra_bytes_per_pixel = options.extra_bytes_per_pixel;
-  read_options.alpha_background = options.alpha_background;
-  read_options.should_stop = options.should_stop;
-  ReadFrames(frames, read_options, clip);
+  ReadFrames(frames, FrameReadOptionsOf(options), clip);
   MatchImageSize(frames[0].image, clip.width, clip.height, poses.cameras);
 
   clip.cameras = std::move(poses.cameras);

@@ -246,4 +246,16 @@ void ReadFrames(const std::vector<FrameFiles>& frames, const FrameReadOptions& o
   }
 }
 
+FrameReadOptions FrameReadOptionsOf(const LoadOptions& options) {
+  FrameReadOptions read_options;
+  read_options.max_pixels_per_frame = options.max_pixels_per_frame;
+  read_options.memory_bytes = options.memory_bytes;
+  read_options.run_bytes_per_pixel = options.run_bytes_per_pixel;
+  read_options.run_bytes_per_depth_pixel = options.run_bytes_per_depth_pixel;
+  read_options.extra_bytes_per_pixel = options.extra_bytes_per_pixel;
+  read_options.alpha_background = options.alpha_background;
+  read_options.should_stop = options.should_stop;
+  return read_options;
+}
+
 }  // namespace endorecon::scene

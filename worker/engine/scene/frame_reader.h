@@ -12,6 +12,7 @@
 
 #include "common/clip_files.h"
 #include "worker/engine/scene/clip.h"
+#include "worker/engine/scene/load_options.h"
 
 namespace endorecon::scene {
 
@@ -26,6 +27,10 @@ struct FrameReadOptions {
   std::array<std::uint8_t, 3> alpha_background = {255, 255, 255};  // what transparent pixels lie on
   std::function<bool()> should_stop;                               // LoadOptions' (load_options.h)
 };
+
+// The options a loader reads its frames with: the fields marked LoadOptions' taken from `options`,
+// the rest at their defaults.
+FrameReadOptions FrameReadOptionsOf(const LoadOptions& options);
 
 // An image file as 8-bit RGB, row-major, top row first.
 struct RgbImage {

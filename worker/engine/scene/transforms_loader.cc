@@ -99,15 +99,8 @@ Clip LoadTransformsClip(const fs::path& dir, const LoadOptions& options) {
   Clip clip;
   clip.source = dir.string();
   DeclaredSize(top, file, options.max_pixels_per_frame, clip);
-  FrameReadOptions read_options;
+  FrameReadOptions read_options = FrameReadOptionsOf(options);
   read_options.tool_value = 0;
-  read_options.max_pixels_per_frame = options.max_pixels_per_frame;
-  read_options.memory_bytes = options.memory_bytes;
-  read_options.run_bytes_per_pixel = options.run_bytes_per_pixel;
-  read_options.run_bytes_per_depth_pixel = options.run_bytes_per_depth_pixel;
-  read_options.extra_bytes_per_pixel = options.extra_bytes_per_pixel;
-  read_options.alpha_background = options.alpha_background;
-  read_options.should_stop = options.should_stop;
   read_options.depth_scale = OptionalNumber(top, "depth_unit_scale_factor", file).value_or(1.0);
   if (read_options.depth_scale <= 0) FailInvalid(file + ": \"depth_unit_scale_factor\" must be positive");
   ReadFrames(files, read_options, clip);
