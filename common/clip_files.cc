@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <set>
@@ -14,6 +15,17 @@
 
 namespace endorecon {
 namespace {
+
+// What column `column` of a poses_bounds.npy row holds: the 3x5 matrix [R | t | (H, W, f)] row by
+// row, then near and far.
+std::string PoseColumnName(std::size_t column) {
+  if (column == 15) return "near";
+  if (column == 16) return "far";
+  const std::size_t r = column / 5, c = column % 5;
+  if (c < 3) return "R[" + std::to_string(r) + "][" + std::to_string(c) + "]";
+  if (c == 3) return "t[" + std::to_string(r) + "]";
+  return r == 0 ? "H" : r == 1 ? "W" : "focal length";
+}
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -165,6 +177,14 @@ std::size_t PoseRowCount(const NpyArray& poses, const fs::path& path) {
     FailInvalid(path.string() + ": expected an array of shape (N, 17), found (" + shape + ")");
   }
   if (poses.shape[0] == 0) FailInvalid(path.string() + ": zero frames (the array has no rows)");
+  // Here, not only in the loader's camera checks, so that the CLI refuses a NaN before the upload.
+  for (std::size_t at = 0; at < poses.data.size(); ++at) {
+    if (std::isfinite(poses.data[at])) continue;
+    const std::size_t row = at / kPoseColumns, column = at % kPoseColumns;
+    FailInvalid(path.string() + " row " + std::to_string(row) + ": column " + std::to_string(column) + " (" +
+                PoseColumnName(column) + ") is " + (std::isnan(poses.data[at]) ? "NaN" : "infinite") +
+                "; every value must be finite");
+  }
   return poses.shape[0];
 }
 

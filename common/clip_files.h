@@ -43,8 +43,9 @@ enum class ClipLayout { kEndoNerf, kTransforms };
 // transforms.json present: kTransforms; else poses_bounds.npy present: kEndoNerf; else nothing.
 std::optional<ClipLayout> FindClipLayout(const std::filesystem::path& dir);
 
-// EndoNeRF layout. The rows of poses_bounds.npy (`path`), which must be an N x 17 array with N > 0;
-// throws FailInvalid naming the file and the shape found.
+// EndoNeRF layout. The rows of poses_bounds.npy (`path`), which must be an N x 17 array of finite
+// values with N > 0; throws FailInvalid naming the file and the shape found, or the row and column
+// of a NaN or infinity.
 constexpr std::size_t kPoseColumns = 17;
 std::size_t PoseRowCount(const NpyArray& poses, const std::filesystem::path& path);
 

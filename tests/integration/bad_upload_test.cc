@@ -3,10 +3,13 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <cmath>
 #include <set>
 #include <string>
 #include <thread>
 
+#include "common/clip_files.h"
+#include "common/npy.h"
 #include "common/sha256.h"
 #include "tests/integration/service_harness.h"
 #include "tests/integration/upload_requests.h"
@@ -223,6 +226,19 @@ TEST_F(BadUploadTest, AClipMissingAMaskOrHoldingATruncatedPngIsRefusedBeforeItsU
   EXPECT_EQ(result.exit_code, 2) << result.err;
   EXPECT_NE(result.err.find("gtcut/gt/depth/000002.npy"), std::string::npos) << result.err;
   EXPECT_NE(result.err.find("found before the upload: nothing was sent"), std::string::npos) << result.err;
+  EXPECT_EQ(Blobs(), 0);
+  // A NaN in a pose (it failed the job on a worker, after the upload).
+  MakeClip(cluster_.path("nanpose"));
+  const auto poses = cluster_.path("nanpose") / "poses_bounds.npy";
+  NpyArray rows = ReadNpy(poses);
+  rows.data[3 * kPoseColumns + 8] = NAN;
+  WriteNpyFloat64(poses, rows.data.data(), rows.shape);
+  result = RunCli(cluster_.address(), {"submit", cluster_.path("nanpose").string()});
+  EXPECT_EQ(result.exit_code, 2) << result.err;
+  EXPECT_NE(result.err.find("nanpose/poses_bounds.npy row 3: column 8 (t[1]) is NaN; every value must be "
+                            "finite (found before the upload: nothing was sent)"),
+            std::string::npos)
+      << result.err;
   EXPECT_EQ(Blobs(), 0);
   EXPECT_EQ(Partials(), 0);
   // What the server refuses of the job itself is found before the upload too (a --send-to this server

@@ -290,7 +290,11 @@ TEST_F(EndoNerfLoaderTest, RejectsAFrameThatIsNoRegularFile) {
 TEST_F(EndoNerfLoaderTest, RejectsNonFinitePose) {
   rows_[1].t[2] = NAN;
   WritePoses(dir_ / "poses_bounds.npy", rows_);
-  ExpectError("poses_bounds.npy row 1", "non-finite");
+  ExpectError("poses_bounds.npy row 1", "column 13 (t[2]) is NaN; every value must be finite");
+  rows_[1].t[2] = 0;
+  rows_[2].far = INFINITY;
+  WritePoses(dir_ / "poses_bounds.npy", rows_);
+  ExpectError("poses_bounds.npy row 2", "column 16 (far) is infinite");
 }
 
 TEST_F(EndoNerfLoaderTest, RejectsNonOrthonormalRotation) {
