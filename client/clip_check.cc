@@ -7,12 +7,14 @@
 #include "common/error.h"
 #include "common/image_bytes.h"
 #include "common/npy.h"
+#include "common/pose_rows.h"
 
 namespace endorecon::client {
 
 void CheckClipBeforeUpload(const std::filesystem::path& dir) {
   try {
     std::vector<FrameFiles> frames = ListClipFrames(dir);
+    if (FindClipLayout(dir) == ClipLayout::kEndoNerf) ReadPoseRows(dir / "poses_bounds.npy");
     // gt/'s too: a damaged gt/depth/*.npy failed the job on a worker (found 2026-12-06).
     if (std::filesystem::is_directory(dir / "gt")) {
       for (FrameFiles& truth : ListGroundTruthFrames(dir / "gt", frames.size()))

@@ -227,7 +227,7 @@ TEST_F(BadUploadTest, AClipMissingAMaskOrHoldingATruncatedPngIsRefusedBeforeItsU
   EXPECT_NE(result.err.find("gtcut/gt/depth/000002.npy"), std::string::npos) << result.err;
   EXPECT_NE(result.err.find("found before the upload: nothing was sent"), std::string::npos) << result.err;
   EXPECT_EQ(Blobs(), 0);
-  // A NaN in a pose (it failed the job on a worker, after the upload).
+  // A NaN in a pose (it failed the job on a worker, after the upload), and a row the loader refuses.
   MakeClip(cluster_.path("nanpose"));
   const auto poses = cluster_.path("nanpose") / "poses_bounds.npy";
   NpyArray rows = ReadNpy(poses);
@@ -239,6 +239,18 @@ TEST_F(BadUploadTest, AClipMissingAMaskOrHoldingATruncatedPngIsRefusedBeforeItsU
                             "finite (found before the upload: nothing was sent)"),
             std::string::npos)
       << result.err;
+  EXPECT_EQ(Blobs(), 0);
+  // And what the loader's camera checks refuse of a row (common/pose_rows.h): near beyond far.
+  rows.data[3 * kPoseColumns + 8] = 0;
+  rows.data[2 * kPoseColumns + 15] = rows.data[2 * kPoseColumns + 16] + 1;
+  WriteNpyFloat64(poses, rows.data.data(), rows.shape);
+  result = RunCli(cluster_.address(), {"submit", cluster_.path("nanpose").string()});
+  EXPECT_EQ(result.exit_code, 2) << result.err;
+  EXPECT_NE(
+      result.err.find("nanpose/poses_bounds.npy row 2: depth bounds must be finite with 0 <= near < far"),
+      std::string::npos)
+      << result.err;
+  EXPECT_NE(result.err.find("(found before the upload: nothing was sent)"), std::string::npos) << result.err;
   EXPECT_EQ(Blobs(), 0);
   EXPECT_EQ(Partials(), 0);
   // What the server refuses of the job itself is found before the upload too (a --send-to this server

@@ -1,35 +1,20 @@
-// Checks shared by the clip loaders. Each throws an endorecon::Error whose message starts with
-// `where` (a file, or a file and a frame) and says what was found.
+// Checks shared by the clip loaders (the rules on plain numbers: common/camera_values.h). Each throws
+// an endorecon::Error whose message starts with `where` (a file, or a file and a frame) and says what
+// was found.
 #pragma once
 
 #include <Eigen/Core>
 #include <cstddef>
 #include <string>
 
+#include "common/camera_values.h"
 #include "worker/engine/scene/camera.h"
 
 namespace endorecon::scene {
 
-// A camera-to-world [R | t]: every entry finite, R orthonormal (max |RᵀR − I| ≤ 1e-3) with det +1,
-// and the centre t within kMostDepth of the origin.
-void CheckPose(const Eigen::Matrix<double, 3, 4>& c2w, const std::string& where);
-
-// Intrinsics: 0 < fx, fy ≤ kMostFocalPixels (a 1e300 focal length trained without a word), a field
-// of view across the frame of at most kMostFieldOfViewDegrees on either axis (a pinhole camera's; a
-// camera_angle_x of pi gave fx = 1e-14 and trained without a word), fy / fx within
-// [1 / kMostFocalAspect, kMostFocalAspect], the principal point (cx, cy) inside the frame
-// ([0, width] x [0, height]), width and height > 0; and the pose (CheckPose).
-constexpr double kMostFocalPixels = 1e9;
-constexpr double kMostFieldOfViewDegrees = 170;
-constexpr double kMostFocalAspect = 4;
+// The camera's intrinsics and pose, by common/camera_values.h's rules (CheckIntrinsics,
+// CheckRigidPose).
 void CheckCamera(const Camera& camera, const std::string& where);
-
-// Depth bounds: finite, 0 ≤ near < far ≤ kMostDepth, and far − near at least kLeastDepthRange of
-// far (a thinner range leaves the samplers nothing to place samples in; a farther bound overflows the
-// scene box's arithmetic in single precision).
-constexpr double kLeastDepthRange = 1e-4;
-constexpr double kMostDepth = 1e12;
-void CheckNearFar(double near, double far, const std::string& where);
 
 // What the clip's files say together, checked once they are loaded (`where`: the clip's folder):
 // the cameras' centres lie within kMostCameraSpread times `far` of each other (farther, a pose's
@@ -49,8 +34,5 @@ inline bool InOtherUnits(float prior, double near, double far) {
 
 // width x height must not exceed max_pixels; otherwise Error(kInvalidArgument).
 void CheckFrameLimit(int width, int height, std::size_t max_pixels, const std::string& where);
-
-// "WxH", for messages.
-std::string SizeText(int width, int height);
 
 }  // namespace endorecon::scene

@@ -8,7 +8,7 @@
 #include "common/clip_files.h"
 #include "common/error.h"
 #include "common/json_file.h"
-#include "common/npy.h"
+#include "common/pose_rows.h"
 #include "worker/engine/scene/clip_checks.h"
 #include "worker/engine/scene/frame_pick.h"
 #include "worker/engine/scene/frame_reader.h"
@@ -18,58 +18,22 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct PoseRows {
-  std::vector<Camera> cameras;  // width/height/f from the file; cx, cy set later
-  double near = 0, far = 0;
-};
-
-std::string Number(double value) {
-  char text[32];
-  std::snprintf(text, sizeof(text), "%.9g", value);
-  return text;
-}
-
-PoseRows ReadPoseRows(const fs::path& path) {
-  if (!fs::exists(path)) FailInvalid(path.string() + ": file does not exist");
-  const NpyArray array = ReadNpy(path);
-  const std::size_t rows = PoseRowCount(array, path);
-
-  PoseRows poses;
-  poses.near = INFINITY;
-  poses.far = -INFINITY;
-  for (std::size_t i = 0; i < rows; ++i) {
-    const double* row = &array.data[i * kPoseColumns];
-    const std::string where = path.string() + " row " + std::to_string(i);
-    const double h = row[4], w = row[9], f = row[14], near = row[15], far = row[16];
-    if (!(h >= 1 && w >= 1 && h == std::floor(h) && w == std::floor(w) && h <= 1e6 && w <= 1e6)) {
-      FailInvalid(where + ": H and W must be positive integers (H = " + Number(h) + ", W = " + Number(w) +
-                  ")");
-    }
+// The cameras of poses_bounds.npy's rows (common/pose_rows.h, which checks them), at the size the
+// file gives; MatchImageSize adapts them to the images'.
+std::vector<Camera> CamerasOf(const PoseRows& poses) {
+  std::vector<Camera> cameras;
+  cameras.reserve(poses.rows.size());
+  for (const PoseRow& row : poses.rows) {
     Camera camera;
-    camera.width = static_cast<int>(w);
-    camera.height = static_cast<int>(h);
-    camera.fx = camera.fy = f;
-    camera.cx = w / 2;
-    camera.cy = h / 2;
-    // LLFF stores the rotation's columns as [down, right, back]; OpenGL wants [right, up, back].
-    for (int r = 0; r < 3; ++r) {
-      camera.c2w(r, 0) = row[r * 5 + 1];
-      camera.c2w(r, 1) = -row[r * 5 + 0];
-      camera.c2w(r, 2) = row[r * 5 + 2];
-      camera.c2w(r, 3) = row[r * 5 + 3];
-    }
-    CheckCamera(camera, where);
-    if (!poses.cameras.empty() &&
-        (camera.width != poses.cameras[0].width || camera.height != poses.cameras[0].height)) {
-      FailInvalid(where + ": image size " + SizeText(camera.width, camera.height) + " differs from row 0's " +
-                  SizeText(poses.cameras[0].width, poses.cameras[0].height));
-    }
-    CheckNearFar(near, far, where);
-    poses.near = std::min(poses.near, near);
-    poses.far = std::max(poses.far, far);
-    poses.cameras.push_back(camera);
+    camera.width = row.width;
+    camera.height = row.height;
+    camera.fx = camera.fy = row.focal;
+    camera.cx = row.width / 2.0;
+    camera.cy = row.height / 2.0;
+    std::copy(row.c2w, row.c2w + 12, camera.c2w.data());
+    cameras.push_back(camera);
   }
-  return poses;
+  return cameras;
 }
 
 double ReadBaseline(const fs::path& dir) {
@@ -113,24 +77,24 @@ void MatchImageSize(const fs::path& first_image, int width, int height, std::vec
 }  // namespace
 
 Clip LoadEndoNerfClip(const fs::path& dir, const LoadOptions& options) {
-  PoseRows poses = ReadPoseRows(dir / "poses_bounds.npy");
-  std::vector<FrameFiles> frames = ListEndoNerfFrames(dir, poses.cameras.size());
+  const PoseRows poses = ReadPoseRows(dir / "poses_bounds.npy");
+  std::vector<Camera> cameras = CamerasOf(poses);
+  std::vector<FrameFiles> frames = ListEndoNerfFrames(dir, cameras.size());
   if (!options.frames.SelectsAll()) {
     const std::vector<int> picked = PickFrames(options.frames, frames.size(), dir.string());
     KeepPicked(picked, frames);
-    KeepPicked(picked, poses.cameras);
+    KeepPicked(picked, cameras);
   }
-  const std::size_t n = poses.cameras.size();
+  const std::size_t n = cameras.size();
 
   Clip clip;
   clip.source = dir.string();
   ReadFrames(frames, FrameReadOptionsOf(options), clip);
-  MatchImageSize(frames[0].image, clip.width, clip.height, poses.cameras);
+  MatchImageSize(frames[0].image, clip.width, clip.height, cameras);
 
-  clip.cameras = std::move(poses.cameras);
+  clip.cameras = std::move(cameras);
   clip.near = poses.near;
   clip.far = poses.far;
-  CheckNearFar(clip.near, clip.far, (dir / "poses_bounds.npy").string() + " (over all rows)");
   clip.times.resize(n);
   for (std::size_t i = 0; i < n; ++i)
     clip.times[i] = n == 1 ? 0.f : static_cast<float>(i) / static_cast<float>(n - 1);
