@@ -614,7 +614,9 @@ v1::Job JobCoordinator::Delete(const std::string& id, const Principal& caller) {
                           (Terminal(job.state()) ? " with DICOM sends to go: delete it once they are done"
                                                  : ": cancel it first, or delete it once it has finished"));
     }
-    plan = PlanExpiry(parts_.store, parts_.blobs, [&](const v1::Job& one) { return one.id() == id; });
+    plan = PlanExpiry(
+        parts_.store, parts_.blobs, [&](const v1::Job& one) { return one.id() == id; }, {},
+        [&](const std::string& digest) { return uploads_.Holds(digest); });
     for (const auto& digest : plan.blobs) RemoveBlob(digest);  // files first, as retention
     job.set_expired_unix_ms(NowUnixMs());
     Save(job);
@@ -623,8 +625,9 @@ v1::Job JobCoordinator::Delete(const std::string& id, const Principal& caller) {
   if (deleted_before) return job;
   parts_.metrics.JobsExpired(1);
   spdlog::info(
-      "job {}: files deleted by request of {} ({} blob(s), {} bytes; {} shared with other jobs kept)", id,
-      caller.name, plan.blobs.size(), plan.bytes, plan.kept_shared);
+      "job {}: files deleted by request of {} ({} blob(s), {} bytes; kept {} shared with other jobs, {} "
+      "that uploads not yet submitted bring)",
+      id, caller.name, plan.blobs.size(), plan.bytes, plan.kept_shared, plan.kept_uploading);
   return job;
 }
 
@@ -783,12 +786,14 @@ RetentionPlan JobCoordinator::ExpireFinishedBefore(std::int64_t cutoff_unix_ms,
                                                    std::filesystem::file_time_type orphan_cutoff) {
   const auto old_files = FilesWrittenBefore(parts_.blobs, orphan_cutoff);  // a folder walk: outside the lock
   auto plan = Locked([&] {
-    auto plan = PlanRetention(parts_.store, parts_.blobs, cutoff_unix_ms, old_files);
+    // Uploads last noted before the cutoff are given up first, and their files with the plan's.
+    uploads_.ForgetBefore(orphan_cutoff);
+    auto plan = PlanRetention(parts_.store, parts_.blobs, cutoff_unix_ms, old_files,
+                              [&](const std::string& digest) { return uploads_.Holds(digest); });
     // Files first: a crash in between leaves jobs that the next run expires (their blobs already
     // gone), never a job marked expired whose files are still kept.
     for (const auto& digest : plan.blobs) RemoveBlob(digest);
     for (const auto& file : plan.orphans) RemoveFile(file);
-    uploads_.ForgetBefore(orphan_cutoff);  // what they were uploaded for is given up with them
     const auto now = NowUnixMs();
     for (auto& job : plan.jobs) {
       job.set_expired_unix_ms(now);
@@ -799,8 +804,9 @@ RetentionPlan JobCoordinator::ExpireFinishedBefore(std::int64_t cutoff_unix_ms,
   parts_.metrics.JobsExpired(plan.jobs.size());
   if (!plan.jobs.empty()) {
     spdlog::info(
-        "retention: expired {} job(s), deleted {} blob(s) ({} bytes), kept {} shared with other jobs",
-        plan.jobs.size(), plan.blobs.size(), plan.bytes, plan.kept_shared);
+        "retention: expired {} job(s), deleted {} blob(s) ({} bytes), kept {} shared with other jobs, {} "
+        "that uploads not yet submitted bring",
+        plan.jobs.size(), plan.blobs.size(), plan.bytes, plan.kept_shared, plan.kept_uploading);
   }
   if (!plan.orphans.empty()) {
     spdlog::info(

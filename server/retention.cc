@@ -34,15 +34,18 @@ std::vector<BlobStore::StoredFile> FilesWrittenBefore(const BlobStore& blobs,
 }
 
 RetentionPlan PlanRetention(JobStore& store, const BlobStore& blobs, std::int64_t cutoff_unix_ms,
-                            const std::vector<BlobStore::StoredFile>& old_files) {
+                            const std::vector<BlobStore::StoredFile>& old_files,
+                            const UploadingFn& uploading) {
   return PlanExpiry(
       store, blobs,
-      [&](const v1::Job& job) { return Settled(job) && job.finished_unix_ms() < cutoff_unix_ms; }, old_files);
+      [&](const v1::Job& job) { return Settled(job) && job.finished_unix_ms() < cutoff_unix_ms; }, old_files,
+      uploading);
 }
 
 RetentionPlan PlanExpiry(JobStore& store, const BlobStore& blobs,
                          const std::function<bool(const v1::Job&)>& expires,
-                         const std::vector<BlobStore::StoredFile>& old_files) {
+                         const std::vector<BlobStore::StoredFile>& old_files, const UploadingFn& uploading) {
+  const auto brought = [&](const std::string& digest) { return uploading && uploading(digest); };
   RetentionPlan plan;
   std::set<std::string> expiring, kept;
   store.Scan([&](const StoredJob& stored) {
@@ -58,6 +61,8 @@ RetentionPlan PlanExpiry(JobStore& store, const BlobStore& blobs,
   for (const auto& digest : expiring) {
     if (kept.count(digest)) {
       ++plan.kept_shared;
+    } else if (brought(digest)) {
+      ++plan.kept_uploading;
     } else if (const auto bytes = blobs.SizeOf(digest)) {
       plan.blobs.push_back(digest);
       plan.bytes += *bytes;
@@ -66,7 +71,8 @@ RetentionPlan PlanExpiry(JobStore& store, const BlobStore& blobs,
   for (const auto& file : old_files) {
     // A partial is given up at the cutoff even where its content is a job's: that content is stored
     // whole, and the partial is another tenant's upload of it (BlobHolders) left unfinished.
-    if (!file.partial && (expiring.count(file.sha256) || kept.count(file.sha256))) continue;
+    if (!file.partial && (expiring.count(file.sha256) || kept.count(file.sha256) || brought(file.sha256)))
+      continue;
     plan.orphans.push_back(file);
     plan.orphan_bytes += file.bytes;
   }

@@ -23,6 +23,7 @@ struct RetentionPlan {
   std::vector<std::string> blobs;  // digests referenced only by those jobs, present in the store
   std::int64_t bytes = 0;          // the size of those blobs
   std::int64_t kept_shared = 0;    // blobs of those jobs kept because other jobs reference them
+  std::int64_t kept_uploading = 0;  // and because an upload not yet submitted brings them
   // Files no job references, last written before the orphan cutoff: a running job's earlier
   // checkpoints, uploads never submitted, results a server refused, partial uploads given up.
   std::vector<BlobStore::StoredFile> orphans;
@@ -45,15 +46,23 @@ std::filesystem::file_time_type OrphanCutoff(double orphan_hours);
 std::vector<BlobStore::StoredFile> FilesWrittenBefore(const BlobStore& blobs,
                                                       std::filesystem::file_time_type cutoff);
 
-// The jobs not expired yet that `expires` picks expire, with the blobs only they reference; of
-// `old_files` (FilesWrittenBefore), those no job references go too. Reads only.
+// A content some tenant's upload not yet submitted brings (UploadLedger::Holds): kept, as a job's
+// is. Without it, deleting one tenant's job deleted the files another tenant's interrupted upload of
+// the same content had sent, and that upload had to send them again (found 2026-12-06).
+using UploadingFn = std::function<bool(const std::string& sha256)>;
+
+// The jobs not expired yet that `expires` picks expire, with the blobs only they reference (and no
+// upload brings: `uploading`); of `old_files` (FilesWrittenBefore), those no job references and no
+// upload brings go too (partial files go whoever's they are). Reads only.
 RetentionPlan PlanExpiry(JobStore& store, const BlobStore& blobs,
                          const std::function<bool(const v1::Job&)>& expires,
-                         const std::vector<BlobStore::StoredFile>& old_files = {});
+                         const std::vector<BlobStore::StoredFile>& old_files = {},
+                         const UploadingFn& uploading = {});
 
 // Jobs settled (Settled: finished, their sends too) before `cutoff_unix_ms` expire (none for
 // kKeepJobs); PlanExpiry. Reads only, so it also serves the dry run.
 RetentionPlan PlanRetention(JobStore& store, const BlobStore& blobs, std::int64_t cutoff_unix_ms,
-                            const std::vector<BlobStore::StoredFile>& old_files = {});
+                            const std::vector<BlobStore::StoredFile>& old_files = {},
+                            const UploadingFn& uploading = {});
 
 }  // namespace endorecon::server

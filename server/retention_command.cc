@@ -14,6 +14,7 @@
 #include "server/commands.h"
 #include "server/job_coordinator.h"
 #include "server/retention.h"
+#include "server/upload_ledger.h"
 
 namespace endorecon::server {
 namespace {
@@ -36,9 +37,14 @@ int DryRun(const RetentionFlags& flags) {
     Fail(ErrorCode::kNotFound, "no job store in " + dir.string());
   JobStore store(dir / "jobs.sqlite");
   BlobStore blobs(dir);
-  // The server's cutoffs: 0 days keeps every job, as --retention-days 0 there.
-  const auto plan = PlanRetention(store, blobs, JobCutoff(flags.days),
-                                  FilesWrittenBefore(blobs, OrphanCutoff(flags.orphan_hours)));
+  UploadLedger uploads;  // read; written only at a change, which a dry run makes none of
+  uploads.KeepIn(dir / "uploads.json");
+  // The server's cutoffs: 0 days keeps every job, as --retention-days 0 there, and uploads last
+  // noted before the orphan cutoff are given up.
+  const auto orphan_cutoff = OrphanCutoff(flags.orphan_hours);
+  const auto plan =
+      PlanRetention(store, blobs, JobCutoff(flags.days), FilesWrittenBefore(blobs, orphan_cutoff),
+                    [&](const std::string& digest) { return uploads.Holds(digest, orphan_cutoff); });
   for (const auto& job : plan.jobs) {
     std::cout << fmt::format("would expire job {} (tenant {}, {}, finished {:%Y-%m-%d %H:%M} UTC)\n",
                              job.id(), job.tenant().empty() ? "-" : job.tenant(),
@@ -49,8 +55,8 @@ int DryRun(const RetentionFlags& flags) {
       "dry run: {} job(s) finished more than {} day(s) ago would expire (0: none); {} blob(s), {} bytes, "
       "would be "
       "deleted; "
-      "{} blob(s) stay because other jobs share them\n",
-      plan.jobs.size(), flags.days, plan.blobs.size(), plan.bytes, plan.kept_shared);
+      "{} blob(s) stay because other jobs share them, {} because uploads not yet submitted bring them\n",
+      plan.jobs.size(), flags.days, plan.blobs.size(), plan.bytes, plan.kept_shared, plan.kept_uploading);
   std::cout << fmt::format(
       "{} file(s), {} bytes, that no job references would be deleted (--orphan-hours {})\n",
       plan.orphans.size(), plan.orphan_bytes, flags.orphan_hours);

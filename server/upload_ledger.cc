@@ -236,9 +236,11 @@ std::vector<std::string> UploadLedger::Drop(const std::string& tenant) {
   return digests;
 }
 
-bool UploadLedger::Holds(const std::string& sha256) const {
-  return std::any_of(tenants_.begin(), tenants_.end(),
-                     [&](const auto& tenant) { return tenant.second.count(sha256) > 0; });
+bool UploadLedger::Holds(const std::string& sha256, Time since) const {
+  return std::any_of(tenants_.begin(), tenants_.end(), [&](const auto& tenant) {
+    const auto entry = tenant.second.find(sha256);
+    return entry != tenant.second.end() && entry->second.noted >= since;
+  });
 }
 
 }  // namespace endorecon::server

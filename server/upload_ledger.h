@@ -81,8 +81,8 @@ class UploadLedger {
   std::vector<std::pair<std::string, std::int64_t>> Files(const std::string& tenant) const;
   // Forgets `tenant`'s; returns the digests it had noted.
   std::vector<std::string> Drop(const std::string& tenant);
-  // Whether some tenant's upload not yet submitted brings this content.
-  bool Holds(const std::string& sha256) const;
+  // Whether some tenant's upload not yet submitted, noted at `since` or later, brings this content.
+  bool Holds(const std::string& sha256, Time since = Time::min()) const;
 
  private:
   struct Entry {

@@ -669,6 +669,47 @@ TEST_F(JobCoordinatorTest, UploadsNotYetSubmittedAreListedAndDroppedWithTheFiles
   EXPECT_FALSE(blobs_.Has(Sha256Hex(shared)));
 }
 
+// Deleting a job, or its retention, keeps the files another tenant's upload not yet submitted
+// brings: deleting one tenant's job deleted what another's interrupted upload of the same content
+// had sent, and `uploads` showed it gone (found 2026-12-06).
+TEST_F(JobCoordinatorTest, DeletingAJobKeepsTheFilesAnUploadNotYetSubmittedBrings) {
+  const Principal a{"a-client", Role::kClient, "a", false};
+  const Principal b{"b-client", Role::kClient, "b", false};
+  const std::string shared(300, 's'), own(200, 'o');
+  v1::Manifest theirs;
+  auto* file = theirs.add_files();
+  file->set_path("images/000000.png");
+  file->set_size(static_cast<std::int64_t>(shared.size()));
+  file->set_sha256(Sha256Hex(shared));
+  coordinator_.AdmitUpload(theirs, b);  // b's upload, interrupted once the file had arrived
+  blobs_.Put(shared);
+  coordinator_.ClientUploadOwner(b).proven(Sha256Hex(shared));
+  const auto arrived = [&] {
+    return coordinator_.Uploads(v1::UploadsRequest(), b).tenants(0).arrived_bytes();
+  };
+  ASSERT_EQ(arrived(), 300);
+
+  for (const bool by_retention : {false, true}) {
+    SCOPED_TRACE(by_retention ? "retention" : "delete");
+    v1::SubmitRequest request;
+    *request.mutable_clip() = Uploaded("images/000000.png", shared, "a");
+    *request.mutable_clip()->add_files() =
+        Uploaded("images/000001.png", own + (by_retention ? "r" : ""), "a").files(0);
+    const std::string id = coordinator_.Submit(request, a).id();
+    coordinator_.Cancel(id, a);
+    if (by_retention) {
+      coordinator_.ExpireFinishedBefore(std::numeric_limits<std::int64_t>::max(),
+                                        std::filesystem::file_time_type::min());
+    } else {
+      coordinator_.Delete(id, a);
+    }
+    EXPECT_GT(Get(id).expired_unix_ms(), 0);
+    EXPECT_FALSE(blobs_.Has(Sha256Hex(own + (by_retention ? "r" : "")))) << "a's own file went";
+    EXPECT_TRUE(blobs_.Has(Sha256Hex(shared))) << "b's upload brings it";
+    EXPECT_EQ(arrived(), 300);
+  }
+}
+
 TEST_F(JobCoordinatorTest, UploadsNotYetSubmittedCountAgainstTheByteQuota) {
   JobCoordinator quoted({store_, blobs_, scheduler_, leases_, workers_, hub_, metrics_}, 2,
                         TenantQuotas({0, 1000}, ""), [this] { return now_; });
