@@ -382,7 +382,19 @@ int Submit(const Globals& globals, const SubmitFlags& flags) {
   }
   v1::Job job;
   auto context = CallContext(globals.timeout());
-  ThrowIfFailed(stub->Submit(context.get(), request, &job), "submit");
+  try {
+    ThrowIfFailed(stub->Submit(context.get(), request, &job), "submit");
+  } catch (const Error& e) {
+    if (!flags.pacs.empty()) throw;
+    // Refused after the upload (a submit beside it took the tenant's last job slot, or the server's
+    // checks changed in between): what was sent stays, and counts toward the tenant's bytes; said,
+    // as a Ctrl-C mid-upload says it (found by a multi-tenant walk-through, 2026-12-06).
+    Fail(e.code(), std::string(e.what()) +
+                       "\nendorecon: what was uploaded is kept on the server (and counts against your "
+                       "tenant's bytes) until the server's --orphan-hours: run the same `endorecon submit` "
+                       "again to submit it without sending it again, or `endorecon uploads --drop` to give "
+                       "it up");
+  }
   if (globals.json) {
     std::cout << ToJson(job) << std::endl;
   } else {

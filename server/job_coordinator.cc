@@ -339,6 +339,7 @@ void JobCoordinator::Requeue(StoredJob& stored, bool count_attempt, const std::s
 
 void JobCoordinator::CheckQuotas(const std::string& tenant, const v1::Manifest& adding, bool adds_job,
                                  std::int64_t pending) {
+  quotas_.Refresh();  // an admin's change to the --quotas file holds from the next check
   const auto quota = quotas_.For(tenant);
   const bool counts_jobs = adds_job && quota.max_jobs > 0;
   if (!counts_jobs && quota.max_bytes == 0) return;
@@ -375,6 +376,7 @@ void JobCoordinator::CheckQuotas(const std::string& tenant, const v1::Manifest& 
 
 void JobCoordinator::CheckUploadQuota(const v1::Manifest& manifest, const Principal& caller) {
   // Both quotas before any byte: an upload the submit would refuse is not sent.
+  std::lock_guard lock(mutex_);
   CheckQuotas(caller.tenant, manifest, true);
 }
 
@@ -482,6 +484,7 @@ v1::UploadsResponse JobCoordinator::Uploads(const v1::UploadsRequest& request, c
 }
 
 void JobCoordinator::CheckRetrievalQuota(const std::string& id, const v1::Manifest& recording) {
+  std::lock_guard lock(mutex_);
   CheckQuotas(Load(id).job.tenant(), recording, false);
 }
 

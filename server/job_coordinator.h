@@ -229,7 +229,7 @@ class JobCoordinator {
   StoredJob LoadLeased(const std::string& lease_id);
   // Throws kResourceExhausted when `tenant` keeping the files of `adding` (and `pending` bytes of its
   // uploads not yet submitted) would pass its max_bytes (naming the largest), or, when the call
-  // `adds_job`, when it has max_jobs jobs queued or running.
+  // `adds_job`, when it has max_jobs jobs queued or running. The caller holds the lock.
   void CheckQuotas(const std::string& tenant, const v1::Manifest& adding, bool adds_job,
                    std::int64_t pending = 0);
   // Writes `job` to the store, then tells the watchers.

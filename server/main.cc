@@ -183,8 +183,10 @@ int Run(const ServerFlags& flags) {
   });
   AuditLog audit(flags.audit_log.empty() ? data_dir / "audit.jsonl" : std::filesystem::path(flags.audit_log));
   CallGuard guard(TokenStore::PathIn(data_dir), !flags.tls.client_ca_file.empty(), audit, metrics);
+  TenantQuotas quotas(flags.tenant_quota, flags.quotas_file);
+  spdlog::info("tenant quotas: {}", quotas.Describe());  // an admin checks what is in force
   JobCoordinator coordinator({store, blobs, scheduler, leases, workers, hub, metrics}, flags.max_attempts,
-                             TenantQuotas(flags.tenant_quota, flags.quotas_file));
+                             std::move(quotas));
   const PacsDirectory pacs(flags.pacs);
   for (const auto& name : pacs.Names()) metrics.DeclarePacs(name);
   DicomRetriever* retriever_for_scp = nullptr;

@@ -5,7 +5,9 @@
 //
 //   {"radiology": {"max_jobs": 20, "max_bytes": 500000000000}, "research": {"max_jobs": 2}}
 //
-// A key left out takes the default; 0 means no limit.
+// A key left out takes the default; 0 means no limit. The file is read again when it changes (its
+// time or size: Refresh, at each check), so an admin raises a tenant's quota without a restart; a
+// changed file that does not read is logged and the quotas read before stay in force.
 #pragma once
 
 #include <cstdint>
@@ -27,11 +29,25 @@ class TenantQuotas {
   // or a negative value; kNotFound when the file cannot be read. An empty `file`: defaults only.
   TenantQuotas(Quota defaults, const std::filesystem::path& file);
 
+  // Reads the file again when its time or size changed since it was last read; returns whether the
+  // quotas in force changed. A file that no longer reads is logged (once a change) and left aside.
+  bool Refresh();
+
   Quota For(const std::string& tenant) const;
 
+  // The quotas in force, for the log: "defaults max_jobs 20, max_bytes 0 (no limit); from FILE:
+  // radiology max_jobs 3, max_bytes 600000".
+  std::string Describe() const;
+
  private:
+  using Tenants = std::map<std::string, Quota>;
+  static Tenants Read(Quota defaults, const std::filesystem::path& file);
+
   Quota defaults_;
-  std::map<std::string, Quota> tenants_;
+  Tenants tenants_;
+  std::filesystem::path file_;
+  std::filesystem::file_time_type modified_{};  // the file's, when last read (or tried)
+  std::uintmax_t size_ = 0;
 };
 
 }  // namespace endorecon::server

@@ -59,7 +59,9 @@ v1::UploadStatus UploadReceiver::Status(const v1::Manifest& manifest, Uploader u
   if (uploader == Uploader::kClient && total > max_upload_bytes_) {
     Fail(ErrorCode::kResourceExhausted,
          "upload of " + std::to_string(total) + " bytes exceeds the server's limit of " +
-             std::to_string(max_upload_bytes_) + " bytes (--max-upload-bytes)" + LargestFileNote(manifest));
+             std::to_string(max_upload_bytes_) + " bytes (--max-upload-bytes)" + LargestFileNote(manifest) +
+             ": send fewer frames (`endorecon submit --frames START:END:STEP` uploads a clip's picked frames "
+             "alone) or smaller ones, or ask the server's admin to raise the limit");
   }
   v1::UploadStatus status;
   if (sizes_only) {

@@ -140,6 +140,9 @@ TEST_F(BadUploadTest, OverTheSizeLimitIsResourceExhaustedBeforeAnyByte) {
   EXPECT_EQ(outcome.status.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED)
       << outcome.status.error_message();
   EXPECT_NE(outcome.status.error_message().find("--max-upload-bytes"), std::string::npos);
+  EXPECT_NE(outcome.status.error_message().find("send fewer frames (`endorecon submit --frames"),
+            std::string::npos)
+      << "what to do";
   EXPECT_EQ(Partials(), 0);
   grpc::ClientContext query;
   v1::Manifest manifest;

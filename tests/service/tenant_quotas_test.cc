@@ -44,5 +44,30 @@ TEST(TenantQuotasTest, BadFilesNameWhatIsWrong) {
   }
 }
 
+// An admin raises a tenant's quota by editing the file: it holds from the next check, without a
+// restart (it held only after one; found 2026-12-06). A change that does not read keeps what held.
+TEST(TenantQuotasTest, TheFileIsReadAgainWhenItChanges) {
+  testing::TempDir dir("quotas");
+  const auto file = dir / "quotas.json";
+  testing::WriteBytes(file, R"({"radiology": {"max_bytes": 600000}})");
+  TenantQuotas quotas({2, 0}, file);
+  EXPECT_EQ(quotas.Describe(), "defaults max_jobs 2, max_bytes 0 (no limit); from " + file.string() +
+                                   ": radiology max_jobs 2, max_bytes 600000");
+  EXPECT_FALSE(quotas.Refresh()) << "unchanged";
+  testing::WriteBytes(file, R"({"radiology": {"max_bytes": 100000000}, "oncology": {"max_jobs": 1}})");
+  EXPECT_TRUE(quotas.Refresh());
+  EXPECT_EQ(quotas.For("radiology").max_bytes, 100000000);
+  EXPECT_EQ(quotas.For("oncology").max_jobs, 1);
+  testing::WriteBytes(file, R"({"radiology": {"max_bytes": -1}})");  // a mistake, or a half-written file
+  EXPECT_FALSE(quotas.Refresh());
+  EXPECT_EQ(quotas.For("radiology").max_bytes, 100000000) << "what was read before stays in force";
+  std::filesystem::remove(file);
+  EXPECT_FALSE(quotas.Refresh());
+  EXPECT_EQ(quotas.For("oncology").max_jobs, 1);
+  testing::WriteBytes(file, R"({})");
+  EXPECT_TRUE(quotas.Refresh());
+  EXPECT_EQ(quotas.For("oncology").max_jobs, 2) << "back to the default";
+}
+
 }  // namespace
 }  // namespace endorecon::server
