@@ -3,6 +3,7 @@
 #include "client/staging_folder.h"
 #include "common/clip_files.h"
 #include "common/error.h"
+#include "common/file_read.h"
 
 namespace endorecon::client {
 namespace fs = std::filesystem;
@@ -57,6 +58,7 @@ std::string StagedRecording::Stage(const std::string& path, const std::string& n
     sources_[name + "/"] = fs::path(path).lexically_normal().string() + (path.back() == '/' ? "" : "/");
     return name;
   }
+  RequireRegularFile(source, "video file or folder of frames");  // a FIFO: named as one, not as missing
   if (!fs::is_regular_file(source)) Fail(ErrorCode::kNotFound, path + ": no such file or folder");
   const std::string staged = name + source.extension().string();
   fs::create_symlink(source, dir_ / staged);

@@ -29,6 +29,7 @@
 #include "common/dicom_file.h"
 #include "common/dicom_values.h"
 #include "common/error.h"
+#include "common/file_read.h"
 #include "common/file_upload.h"
 #include "common/grpc_status.h"
 #include "common/job_bounds.h"
@@ -62,6 +63,7 @@ struct SubmitFlags {
 };
 
 std::string ReadFile(const std::string& path) {
+  RequireRegularFile(path);
   std::ifstream in(path, std::ios::binary);
   if (!in) Fail(ErrorCode::kNotFound, "cannot read config file " + path);
   std::ostringstream text;
@@ -475,7 +477,7 @@ Command AddSubmitCommand(CLI::App& app) {
   sub->add_option("--holdout", flags->holdout,
                   "hold out every K-th frame (0: none, else K >= 2; default: the preset's)")
       ->check(HoldoutSpacing());
-  sub->add_option("--seed", flags->seed, "random seed")->check(CLI::NonNegativeNumber);
+  sub->add_option("--seed", flags->seed, "random seed")->check(AtLeastZero());
   sub->add_flag("--static", flags->force_static, "treat the clip as static (no deformation)");
   sub->add_option("--priority", flags->priority, "higher runs first, -100 to 100 (default 0)")
       ->check(CLI::Range(-kMaxPriority, kMaxPriority));

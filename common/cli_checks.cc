@@ -1,6 +1,7 @@
 #include "common/cli_checks.h"
 
 #include <cmath>
+#include <cstdio>
 #include <string>
 
 #include "common/job_bounds.h"
@@ -39,6 +40,22 @@ CLI::Validator AboveZero() {
         return value <= 0 ? text + " is not above 0" : "";
       },
       "> 0", "AboveZero");
+}
+
+CLI::Validator Within(double low, double high) {
+  const auto shown = [](double bound) {
+    char text[32];
+    std::snprintf(text, sizeof(text), "%g", bound);
+    return std::string(text);
+  };
+  const std::string range = shown(low) + " to " + shown(high);
+  return CLI::Validator(
+      [low, high, range](const std::string& text) -> std::string {
+        const double value = Number(text);
+        if (std::isnan(value)) return text + " is not a number";
+        return value < low || value > high ? text + ": expected " + range : "";
+      },
+      range, "Within");
 }
 
 CLI::Validator TimeBudget() {

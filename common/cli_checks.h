@@ -13,6 +13,10 @@ CLI::Validator AtLeastZero();
 // A finite number > 0: "--limit: 0 is not above 0".
 CLI::Validator AboveZero();
 
+// A finite number in [low, high]: "--fps: 2000: expected 0.01 to 1000". CLI11's Range lets NaN
+// through (no comparison with it is true): `to-dicom --fps nan` wrote a file (found 2026-12-06).
+CLI::Validator Within(double low, double high);
+
 // The held-out frames' spacing: 0 (none held out) or K >= 2 (every K-th frame); 1 would hold every
 // frame out of training.
 CLI::Validator HoldoutSpacing();

@@ -7,12 +7,15 @@
 #include <system_error>
 
 #include "common/clip_files.h"
+#include "common/file_read.h"
 
 namespace endorecon::dicom {
 
 namespace fs = std::filesystem;
 
 bool IsDicomFile(const fs::path& path) {
+  std::error_code error;
+  if (!fs::is_regular_file(path, error)) return false;  // a FIFO's read waits for a writer
   std::ifstream in(path, std::ios::binary);
   char magic[4] = {};
   in.seekg(128);

@@ -8,6 +8,7 @@
 #include <thread>
 
 #include "common/error.h"
+#include "common/file_read.h"
 #include "common/grpc_status.h"
 #include "common/manifest.h"
 #include "common/transport_security.h"
@@ -19,6 +20,7 @@ namespace {
 bool SendFile(const std::filesystem::path& file, const v1::FileEntry& entry, std::int64_t offset,
               grpc::ClientWriterInterface<v1::UploadRequest>& writer, UploadResult& result,
               const UploadOptions& options, std::int64_t to_send) {
+  RequireRegularFile(file);
   std::ifstream in(file, std::ios::binary);
   if (!in) Fail(ErrorCode::kNotFound, "cannot read " + file.string());
   in.seekg(offset);

@@ -22,11 +22,7 @@ nlohmann::json ParseJson(std::string_view text, const std::string& what) {
 }
 
 nlohmann::json ReadJsonFile(const std::filesystem::path& path) {
-  // A pipe would block the read for ever (found 2026-12-05 with a FIFO as transforms.json).
-  std::error_code error;
-  if (std::filesystem::exists(path, error) && !std::filesystem::is_regular_file(path, error))
-    FailInvalid(path.string() + ": not a regular file (a folder, a pipe or a device)");
-  std::ifstream in = OpenToRead(path);
+  std::ifstream in = OpenToRead(path);  // no FIFO (its read would wait for ever): RequireRegularFile
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   return ParseJson(text, path.string());
 }

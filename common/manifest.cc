@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "common/error.h"
+#include "common/file_read.h"
 #include "common/safe_path.h"
 #include "common/sha256.h"
 #include "common/transport_security.h"
@@ -35,7 +36,10 @@ FolderId IdOfFolder(const fs::path& dir) {
 v1::Manifest ListingOfDirectory(const fs::path& dir) {
   std::error_code error;
   if (!fs::exists(dir, error)) Fail(ErrorCode::kNotFound, dir.string() + ": no such file or folder");
-  if (!fs::is_directory(dir, error)) Fail(ErrorCode::kNotFound, "not a directory: " + dir.string());
+  if (!fs::is_directory(dir, error)) {
+    RequireRegularFile(dir, "clip folder");  // a FIFO, a socket, a device: named as what they are
+    FailInvalid(dir.string() + ": a file, not a clip folder");
+  }
   std::vector<fs::path> files;
   // Linked folders are followed (their files are the clip's); an entry that is neither a folder nor a
   // regular file (a broken or looping link, a pipe, a socket) is named: skipped, the clip would

@@ -9,6 +9,7 @@
 #include <limits>
 
 #include "common/error.h"
+#include "common/file_read.h"
 
 namespace endorecon {
 namespace {
@@ -139,9 +140,7 @@ std::size_t ItemSize(const std::string& descr, const std::filesystem::path& path
 
 NpyArray ReadNpy(const std::filesystem::path& path) {
   // A pipe would block the read for ever (found 2026-12-05 with a FIFO as poses_bounds.npy).
-  std::error_code error;
-  if (std::filesystem::exists(path, error) && !std::filesystem::is_regular_file(path, error))
-    FailInvalid(path.string() + ": not a regular file (a folder, a pipe or a device)");
+  RequireRegularFile(path);
   std::ifstream in(path, std::ios::binary);
   if (!in) FailInvalid(path.string() + ": cannot open .npy file");
   const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "common/error.h"
+#include "common/file_read.h"
 #include "common/file_write.h"
 #include "common/sha256.h"
 
@@ -58,6 +59,7 @@ void WriteSealedFile(const std::filesystem::path& path, const char (&magic)[8],
 std::ifstream OpenSealedFile(const std::filesystem::path& path, const char (&magic)[8],
                              std::string_view what) {
   const std::string name(what);
+  RequireRegularFile(path);
   std::ifstream in(path, std::ios::binary);
   if (!in) Fail(ErrorCode::kNotFound, "cannot read " + name + " " + path.string());
   char found[8] = {};

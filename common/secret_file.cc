@@ -7,11 +7,17 @@
 #include <sstream>
 
 #include "common/error.h"
+#include "common/file_read.h"
 
 namespace endorecon {
 namespace {
 
 std::string ReadWhole(const std::filesystem::path& path, const std::string& flag) {
+  try {
+    RequireRegularFile(path);
+  } catch (const Error& e) {
+    FailInvalid(flag + " " + e.what());
+  }
   std::ifstream in(path, std::ios::binary);
   if (!in) Fail(ErrorCode::kNotFound, flag + " " + path.string() + ": cannot be read");
   std::ostringstream bytes;
@@ -27,6 +33,8 @@ std::string ReadSecretFile(const std::filesystem::path& path, const std::string&
   struct stat info {};
   if (::stat(path.c_str(), &info) != 0)
     Fail(ErrorCode::kNotFound, flag + " " + path.string() + ": no such file");
+  // Its kind before its mode: a FIFO's 0644 was reported as a secret others may read.
+  if (!S_ISREG(info.st_mode)) ReadWhole(path, flag);
   if ((info.st_mode & S_IRWXO) != 0) {
     FailInvalid(
         fmt::format("{} {}: the file holds a secret but others may access it (mode {:04o}); "
@@ -37,7 +45,14 @@ std::string ReadSecretFile(const std::filesystem::path& path, const std::string&
 }
 
 std::string ReadPublicFile(const std::filesystem::path& path, const std::string& flag) {
-  return ReadWhole(path, flag);
+  std::string pem = ReadWhole(path, flag);
+  // A file of other text reached gRPC, which failed the channel as "empty address list" (found
+  // 2026-12-06).
+  if (pem.find("-----BEGIN CERTIFICATE-----") == std::string::npos) {
+    FailInvalid(flag + " " + path.string() +
+                ": holds no PEM certificate (no \"-----BEGIN CERTIFICATE-----\" line)");
+  }
+  return pem;
 }
 
 }  // namespace endorecon

@@ -14,8 +14,9 @@ namespace endorecon {
 // mode and the chmod that fixes it), kNotFound when it cannot be read or is empty.
 std::string ReadSecretFile(const std::filesystem::path& path, const std::string& flag);
 
-// The contents of a non-secret file (a certificate, a CA bundle). Throws Error(kNotFound) naming
-// `flag` when it cannot be read or is empty.
+// The contents of a non-secret file (a certificate, a CA bundle: PEM). Throws Error(kNotFound) naming
+// `flag` when it cannot be read, kInvalidArgument when it is empty, no regular file or holds no PEM
+// certificate.
 std::string ReadPublicFile(const std::filesystem::path& path, const std::string& flag);
 
 }  // namespace endorecon

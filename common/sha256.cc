@@ -6,6 +6,7 @@
 #include <fstream>
 
 #include "common/error.h"
+#include "common/file_read.h"
 
 namespace endorecon {
 
@@ -43,6 +44,7 @@ std::string Sha256Hex(std::string_view bytes) {
 }
 
 std::string Sha256File(const std::filesystem::path& path) {
+  RequireRegularFile(path);
   std::ifstream in(path, std::ios::binary);
   if (!in) Fail(ErrorCode::kNotFound, "cannot read " + path.string());
   Sha256 digest;

@@ -3,10 +3,10 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
-#include <fstream>
 #include <nlohmann/json.hpp>
 
 #include "common/error.h"
+#include "common/json_file.h"
 #include "server/principal.h"
 
 namespace endorecon::server {
@@ -74,11 +74,16 @@ std::string TenantQuotas::Describe() const {
 
 TenantQuotas::Tenants TenantQuotas::Read(Quota defaults, const std::filesystem::path& file) {
   Tenants tenants;
-  std::ifstream in(file);
-  if (!in) Fail(ErrorCode::kNotFound, "--quotas " + file.string() + ": cannot be read");
-  const auto json = nlohmann::json::parse(in, nullptr, false);
-  if (json.is_discarded() || !json.is_object())
-    FailInvalid("--quotas " + file.string() + ": expected a JSON object of tenants");
+  std::error_code missing;
+  if (!std::filesystem::exists(file, missing))
+    Fail(ErrorCode::kNotFound, "--quotas " + file.string() + ": no such file");
+  nlohmann::json json;
+  try {
+    json = ReadJsonFile(file);  // a FIFO refused, a syntax error placed (line, column)
+  } catch (const Error& e) {
+    FailInvalid("--quotas " + std::string(e.what()));
+  }
+  if (!json.is_object()) FailInvalid("--quotas " + file.string() + ": expected a JSON object of tenants");
   for (const auto& [tenant, limits] : json.items()) {
     try {
       ValidateTenant(tenant);

@@ -18,6 +18,7 @@
 #include "common/dicom/rgb_pixels.h"
 #include "common/dicom/uid.h"
 #include "common/error.h"
+#include "common/file_read.h"
 
 namespace endorecon::dicom {
 namespace fs = std::filesystem;
@@ -61,6 +62,7 @@ void PutHeader(DcmDataset& data, const RecordingHeader& header, const std::strin
 
 std::string WriteVideoEndoscopic(const fs::path& video, int frames, int width, int height, double fps,
                                  const RecordingHeader& header, const fs::path& out) {
+  RequireRegularFile(video);
   std::ifstream in(video, std::ios::binary);
   if (!in) FailInvalid(video.string() + ": cannot read the video");
   std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());

@@ -1,11 +1,14 @@
 #include "common/file_read.h"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
+#include <functional>
 #include <iterator>
 #include <string>
 
 #include "common/error.h"
+#include "common/secret_file.h"
 #include "tests/unit/temp_dir.h"
 
 namespace endorecon {
@@ -27,6 +30,50 @@ TEST(FileRead, OpensAFileAndSaysWhyOneCannotBeOpened) {
               std::string::npos)
         << e.what();
   }
+}
+
+// A named pipe is refused by its kind, not opened: its open waits for a writer, and a server given
+// one for --quotas or --tls-cert hung deaf to SIGTERM (found 2026-12-06). So are a folder and a
+// device; a missing path is left to the open, or refused by RequireExistingFile as missing.
+TEST(FileRead, APipeAFolderOrADeviceIsRefusedByItsKindBeforeItIsOpened) {
+  testing::TempDir dir("file-read");
+  ASSERT_EQ(::mkfifo((dir / "quotas.json").c_str(), 0600), 0);
+  const auto message = [](const std::function<void()>& call) {
+    try {
+      call();
+    } catch (const Error& e) {
+      EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument) << e.what();
+      return std::string(e.what());
+    }
+    ADD_FAILURE() << "no error";
+    return std::string();
+  };
+  EXPECT_EQ(message([&] { OpenToRead(dir / "quotas.json"); }),
+            (dir / "quotas.json").string() + ": a named pipe (FIFO), not a file");
+  EXPECT_EQ(message([&] { RequireRegularFile(dir.path(), "calibration file"); }),
+            dir.path().string() + ": a folder, not a calibration file");
+  EXPECT_EQ(message([] { RequireRegularFile("/dev/null"); }), "/dev/null: a device, not a file");
+  EXPECT_NO_THROW(RequireRegularFile(dir / "missing"));
+  try {
+    RequireExistingFile(dir / "missing", "pose file");
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kNotFound);
+    EXPECT_EQ(std::string(e.what()), (dir / "missing").string() + ": pose file does not exist");
+  }
+  // The secret and certificate files of TLS and tokens alike: a pipe's mode 0644 was reported as a
+  // secret others may read; a file of other text as gRPC's "empty address list".
+  ::chmod((dir / "quotas.json").c_str(), 0644);
+  EXPECT_EQ(message([&] { ReadSecretFile(dir / "quotas.json", "--token-file"); }),
+            "--token-file " + (dir / "quotas.json").string() + ": a named pipe (FIFO), not a file");
+  EXPECT_EQ(message([&] { ReadPublicFile(dir / "quotas.json", "--ca"); }),
+            "--ca " + (dir / "quotas.json").string() + ": a named pipe (FIFO), not a file");
+  EXPECT_EQ(message([&] { ReadPublicFile(dir.path(), "--ca"); }),
+            "--ca " + dir.path().string() + ": a folder, not a file");
+  testing::WriteBytes(dir / "hello.crt", "hello\n");
+  EXPECT_EQ(message([&] { ReadPublicFile(dir / "hello.crt", "--ca"); }),
+            "--ca " + (dir / "hello.crt").string() +
+                ": holds no PEM certificate (no \"-----BEGIN CERTIFICATE-----\" line)");
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 #include "server/tenant_quotas.h"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include "common/error.h"
 #include "tests/unit/temp_dir.h"
@@ -33,6 +34,25 @@ TEST(TenantQuotasTest, BadFilesNameWhatIsWrong) {
     EXPECT_NE(std::string(e.what()).find("x.max_job"), std::string::npos) << e.what();
   }
   EXPECT_THROW(TenantQuotas({}, dir / "missing.json"), Error);
+  // A syntax error is placed; a named pipe is refused, not waited on (the server hung at start, deaf
+  // to SIGTERM; found 2026-12-06).
+  try {
+    testing::WriteBytes(dir / "quotas.json", "{\"x\": {\"max_jobs\": 1}\n");
+    TenantQuotas({}, dir / "quotas.json");
+    ADD_FAILURE() << "accepted a file cut short";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("--quotas " + (dir / "quotas.json").string() + ": not valid JSON"),
+              std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("line 2"), std::string::npos) << e.what();
+  }
+  ASSERT_EQ(::mkfifo((dir / "pipe.json").c_str(), 0600), 0);
+  try {
+    TenantQuotas({}, dir / "pipe.json");
+    ADD_FAILURE() << "accepted a pipe";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("a named pipe (FIFO), not a file"), std::string::npos) << e.what();
+  }
   // Found by tests/fuzz/quotas_fuzz.cc: a bad tenant name did not say which file it came from.
   try {
     testing::WriteBytes(dir / "quotas.json", R"({"ra`iology": {"max_jobs": 1}})");

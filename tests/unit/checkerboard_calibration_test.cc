@@ -32,6 +32,7 @@ TEST(CheckerboardCalibrationTest, RecoversTheSyntheticRig) {
   EXPECT_EQ(result.frames_read, options.checkerboard_views);
   EXPECT_GE(result.views_used, options.checkerboard_views * 3 / 4);
   EXPECT_LT(result.rms_px, 0.5);
+  EXPECT_EQ(prepare::CalibrationWarning(result, board), "");
 
   const prepare::StereoCalibration truth = SyntheticCalibration(options);
   const prepare::StereoCalibration& estimate = result.calibration;
@@ -50,6 +51,17 @@ TEST(CheckerboardCalibrationTest, RecoversTheSyntheticRig) {
   prepare::WriteStereoCalibration(dir / "calibration.yaml", estimate,
                                   {{"rms_reprojection_error_px", result.rms_px}});
   EXPECT_EQ(prepare::LoadStereoCalibration({dir / "calibration.yaml"}).image_size, cv::Size(320, 256));
+
+  // A --board of fewer inner corners than the board's finds corners anyway, and calibrates badly:
+  // warned of, naming the flag (it was written without a word; found 2026-12-06).
+  prepare::CheckerboardOptions wrong = board;
+  wrong.inner_corners = {5, 4};
+  const prepare::CheckerboardCalibration bad = prepare::CalibrateFromCheckerboard(recording, wrong);
+  EXPECT_GT(bad.rms_px, prepare::kMostPlausibleRmsPx);
+  EXPECT_NE(
+      prepare::CalibrationWarning(bad, wrong).find("check that --board 5x4 counts the board's inner corners"),
+      std::string::npos)
+      << prepare::CalibrationWarning(bad, wrong);
 }
 
 TEST(CheckerboardCalibrationTest, TooFewViewsOfTheBoardIsAClearError) {

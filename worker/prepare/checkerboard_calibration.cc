@@ -3,6 +3,8 @@
 #include <spdlog/spdlog.h>
 #include <tbb/parallel_for.h>
 
+#include <cmath>
+#include <cstdio>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 #include <vector>
@@ -25,7 +27,8 @@ bool FindBoard(const cv::Mat& bgr, cv::Size corners, std::vector<cv::Point2f>& f
 
 CheckerboardCalibration CalibrateFromCheckerboard(const RecordingInput& recording,
                                                   const CheckerboardOptions& options) {
-  if (options.inner_corners.width < 2 || options.inner_corners.height < 2 || !(options.square > 0)) {
+  if (options.inner_corners.width < 2 || options.inner_corners.height < 2 || !(options.square > 0) ||
+      !std::isfinite(options.square)) {
     FailInvalid("the board needs at least 2x2 inner corners and a square size > 0");
   }
   StereoSource source(recording);
@@ -110,6 +113,18 @@ CheckerboardCalibration CalibrateFromCheckerboard(const RecordingInput& recordin
   c.kind = "opencv";
   c.source = source.name();
   return result;
+}
+
+std::string CalibrationWarning(const CheckerboardCalibration& result, const CheckerboardOptions& options) {
+  if (!(result.rms_px > kMostPlausibleRmsPx)) return "";
+  char text[512];
+  std::snprintf(
+      text, sizeof(text),
+      "the RMS reprojection error of %.3g px is high (a sharp, flat board calibrates well under %g px): "
+      "check that --board %dx%d counts the board's inner corners (COLUMNSxROWS: a board of 10 x 7 "
+      "squares has 9x6), and that the views are sharp; the baseline and focal lengths may be off",
+      result.rms_px, kMostPlausibleRmsPx, options.inner_corners.width, options.inner_corners.height);
+  return text;
 }
 
 }  // namespace endorecon::prepare

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <opencv2/core.hpp>
+#include <string>
 
 #include "common/prepare_flags.h"
 #include "worker/prepare/stereo_calibration.h"
@@ -32,6 +33,14 @@ struct CheckerboardCalibration {
 // Eyes calibrated closer than this many squares apart are one eye given twice (a stereo endoscope's
 // eyes lie about a millimetre or more apart, boards' squares a few millimetres).
 constexpr double kLeastBaselineSquares = 1e-3;
+
+// A calibration whose RMS reprojection error is over this many pixels is warned of: a sharp board
+// calibrates well under 1 px; a --board of other inner corners than the board's (5x4 for 9x6) found
+// corners anyway and calibrated to 4.6 px, a baseline 28 times off, without a word (found 2026-12-06).
+constexpr double kMostPlausibleRmsPx = 1.0;
+
+// The warning for `result`, or "" when its error is plausible.
+std::string CalibrationWarning(const CheckerboardCalibration& result, const CheckerboardOptions& options);
 
 // Throws the source's errors, and FailInvalid naming the recording when fewer than 4 frames show
 // the whole board to both eyes, or when the eyes calibrate to less than kLeastBaselineSquares apart.

@@ -9,6 +9,7 @@
 
 #include "common/clip_files.h"
 #include "common/error.h"
+#include "common/file_read.h"
 #include "worker/engine/scene/image_file.h"
 #include "worker/prepare/video_header.h"
 
@@ -153,6 +154,7 @@ class VideoFileSource final : public FrameSource {
 std::unique_ptr<FrameSource> OpenFrameSource(const fs::path& path) {
   if (!fs::exists(path)) Fail(ErrorCode::kNotFound, path.string() + ": does not exist");
   if (fs::is_directory(path)) return std::make_unique<ImageFolderSource>(path);
+  RequireRegularFile(path, "video file or folder of frames");  // FFmpeg would wait on a FIFO for ever
   return std::make_unique<VideoFileSource>(path);
 }
 

@@ -9,7 +9,7 @@
 #include <sstream>
 
 #include "common/error.h"
-#include "worker/prepare/required_file.h"
+#include "common/file_read.h"
 
 namespace endorecon::prepare {
 namespace {
@@ -38,7 +38,7 @@ bool ParseNumber(const std::string& text, T& value) {
 
 OpenCvStorage OpenCvStorage::Load(const fs::path& path) {
   const std::string name = path.string();
-  RequireRegularFile(path, "calibration file");
+  RequireExistingFile(path, "calibration file");
   std::error_code error;
   const std::uintmax_t size = fs::file_size(path, error);
   if (error || size > kMaxBytes) {

@@ -7,8 +7,8 @@
 #include <string>
 
 #include "common/error.h"
+#include "common/file_read.h"
 #include "common/json_file.h"
-#include "worker/prepare/required_file.h"
 
 namespace endorecon::prepare {
 namespace {
@@ -108,7 +108,7 @@ std::vector<cv::Matx44d> ReadCsv(const fs::path& path) {
 }  // namespace
 
 std::vector<cv::Matx44d> ReadPoseFile(const fs::path& path) {
-  RequireRegularFile(path, "pose file");
+  RequireExistingFile(path, "pose file");
   std::vector<cv::Matx44d> poses = path.extension() == ".json" ? ReadJson(path) : ReadCsv(path);
   if (poses.empty()) FailInvalid(path.string() + ": holds no pose");
   return poses;

@@ -6,8 +6,8 @@
 #include <set>
 
 #include "common/error.h"
+#include "common/file_read.h"
 #include "worker/prepare/opencv_storage.h"
-#include "worker/prepare/required_file.h"
 
 namespace endorecon::prepare {
 namespace {
@@ -63,8 +63,6 @@ cv::Vec3d Translation(const cv::Mat& m, const std::string& where) {
   if (!(cv::norm(v) > 0)) FailInvalid(where + " is zero: the eyes must be apart");
   return v;
 }
-
-void RequireFile(const fs::path& path) { RequireRegularFile(path, "calibration file"); }
 
 cv::Mat ReadMatrix(const OpenCvStorage& file, const std::string& name,
                    std::initializer_list<const char*> keys) {
@@ -142,7 +140,7 @@ cv::Mat RosMatrix(const YAML::Node& top, const char* key, int rows, int cols, co
 }
 
 RosCameraInfo LoadRos(const fs::path& path) {
-  RequireFile(path);
+  RequireExistingFile(path, "calibration file");
   const std::string name = path.string();
   YAML::Node top;
   try {

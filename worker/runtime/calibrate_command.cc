@@ -55,7 +55,8 @@ Command AddCalibrateCommand(CLI::App& app) {
   cmd->add_option("--board", f->board, "inner corners of the checkerboard, COLUMNSxROWS")
       ->capture_default_str();
   cmd->add_option("--square", f->square, "side of a square, in the unit the clip will use (e.g. mm)")
-      ->required();
+      ->required()
+      ->check(AboveZero());
   cmd->add_option("--frames", f->frames, "START:END:STEP: the frames to search for the board");
   cmd->add_option("--max-views", f->max_views, "views used at most, spread over those found")
       ->capture_default_str()
@@ -82,6 +83,8 @@ Command AddCalibrateCommand(CLI::App& app) {
         "RMS reprojection error {:.3f} px (left eye alone {:.3f} px, right eye alone {:.3f} px); baseline "
         "{:.4g}",
         result.rms_px, result.left_rms_px, result.right_rms_px, result.calibration.baseline());
+    if (const std::string warning = prepare::CalibrationWarning(result, options); !warning.empty())
+      spdlog::warn("{}", warning);
     spdlog::info("wrote {}", f->out);
     return 0;
   };

@@ -58,7 +58,7 @@ void AddReconstructOptions(CLI::App& cmd, ReconstructOptions& options, std::stri
   cmd.add_option("--holdout", options.holdout,
                  "hold every K-th frame out of training (0: none, else K >= 2; default: the preset's)")
       ->check(HoldoutSpacing());
-  cmd.add_option("--seed", options.seed, "random seed")->capture_default_str()->check(CLI::NonNegativeNumber);
+  cmd.add_option("--seed", options.seed, "random seed")->capture_default_str()->check(AtLeastZero());
   cmd.add_flag("--static", options.force_static, "treat the clip as static (no deformation network)");
 }
 

@@ -7,6 +7,7 @@
 #include <memory>
 #include <system_error>
 
+#include "common/cli_checks.h"
 #include "common/error.h"
 #include "worker/engine/scene/synthetic_clip.h"
 #include "worker/engine/scene/synthetic_object.h"
@@ -35,9 +36,7 @@ Command AddSynthCommand(CLI::App& app) {
   cmd->add_option("--height", options->height, "frame height (with --object default 200)")
       ->capture_default_str()
       ->check(CLI::Range(8, 8192));
-  cmd->add_option("--seed", options->seed, "random seed")
-      ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--seed", options->seed, "random seed")->capture_default_str()->check(AtLeastZero());
   cmd->add_flag("--static", options->static_scene, "nothing moves");
   cmd->add_flag("--no-tool", flags->first, "no tool, no masks/ folder");
   cmd->add_flag("--no-depth", flags->second, "no depth/ folder");
@@ -50,7 +49,7 @@ Command AddSynthCommand(CLI::App& app) {
                   "the real laparoscopic recording in shared/data shows less than K = 0.1 gives, "
                   "docs/formats.md)")
       ->capture_default_str()
-      ->check(CLI::Range(0.0, 10.0))
+      ->check(Within(0.0, 10.0))
       ->excludes(no_noise_flag);
   cmd->add_flag("--stiff", options->stiff,
                 "thin depth range, near-opaque surface, near-black tissue, saturated speculars");
@@ -69,12 +68,12 @@ Command AddSynthCommand(CLI::App& app) {
          "scale the tissue's motion: the pull (which drags the texture) K times as long, back and forth "
          "(1 + K) / 2 times, and the light circling the lens so the speculars move")
       ->capture_default_str()
-      ->check(CLI::Range(1.0, 10.0));
+      ->check(Within(1.0, 10.0));
   cmd->add_flag("--push", options->push, "the tool's tip presses a dent into the tissue that follows it");
   cmd->add_option("--flicker", options->flicker,
                   "each frame's exposure scaled by 1 + F u, u uniform in [-1, 1] (gt/images too)")
       ->capture_default_str()
-      ->check(CLI::Range(0.0, 0.99));
+      ->check(Within(0.0, 0.99));
   cmd->add_flag("--object", *object,
                 "an object capture instead: cameras around a textured object at the origin, RGBA images on "
                 "transparency, transforms.json as NeRF-synthetic (the endoscope options do not apply)");

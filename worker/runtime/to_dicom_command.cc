@@ -10,6 +10,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/videoio.hpp>
 
+#include "common/cli_checks.h"
 #include "common/dicom/recording_writer.h"
 #include "common/error.h"
 #include "worker/prepare/frame_source.h"
@@ -148,7 +149,7 @@ Command AddToDicomCommand(CLI::App& app) {
       ->check(CLI::IsMember({"h264", "vl", "vl-jpeg"}));
   cmd->add_option("--fps", flags->fps,
                   "frames per second, 0.01 to 1000 (default: a video's own, 25 for a folder of frames)")
-      ->check(CLI::Range(0.01, 1000.0));
+      ->check(Within(0.01, 1000.0));
   cmd->add_option("--patient-id", flags->patient_id, "Patient ID")->capture_default_str();
   cmd->add_option("--patient-name", flags->patient_name, "Patient's Name (DICOM PN, e.g. Doe^Jane)");
   cmd->add_option("--study-uid", flags->study_uid, "Study Instance UID (default: a new one)");
