@@ -1,13 +1,16 @@
 #include "server/blob_store.h"
 
 #include <fcntl.h>
+#include <spdlog/spdlog.h>
 #include <unistd.h>
 
 #include <array>
 #include <cerrno>
+#include <chrono>
 #include <cstring>
 
 #include "common/error.h"
+#include "common/sha256.h"
 
 namespace endorecon::server {
 namespace fs = std::filesystem;
@@ -92,6 +95,46 @@ void BlobStore::Remove(const std::string& sha256) {
   std::error_code error;
   fs::remove(root_ / "blobs" / sha256.substr(0, 2) / sha256, error);
   if (error) Fail(ErrorCode::kUnavailable, "cannot delete blob " + sha256 + ": " + error.message());
+}
+
+bool BlobStore::Intact(const std::string& sha256) const {
+  if (!Has(sha256)) return false;
+  try {
+    return Sha256File(PathOf(sha256)) == sha256;
+  } catch (const Error&) {
+    return false;  // unreadable: damaged as far as anyone reading it can tell
+  }
+}
+
+fs::path BlobStore::SetAsideDamaged(const std::string& sha256, const std::string& what) {
+  const fs::path from = root_ / "blobs" / sha256.substr(0, 2) / sha256;
+  const auto seconds =
+      std::chrono::duration_cast<std::chrono::seconds>(std::chrono::system_clock::now().time_since_epoch());
+  const fs::path to = root_ / "damaged" / (sha256 + "." + std::to_string(seconds.count()));
+  std::error_code error;
+  fs::create_directories(to.parent_path(), error);
+  if (!error) fs::rename(from, to, error);
+  if (error) {
+    fs::remove(from, error);  // out of the store at least: the next upload stores it anew
+    spdlog::error(
+        "stored file {} ({}) is damaged: its bytes no longer hash to their digest (a disk fault?); "
+        "deleted, as it could not be set aside",
+        sha256, what);
+    return {};
+  }
+  spdlog::error(
+      "stored file {} ({}) is damaged: its bytes no longer hash to their digest (a disk fault?); set "
+      "aside as {}; the next upload of the content stores it anew",
+      sha256, what, to.string());
+  return to;
+}
+
+std::size_t BlobStore::DamagedCount() const {
+  std::error_code error;
+  std::size_t count = 0;
+  for (fs::directory_iterator it(root_ / "damaged", error), end; !error && it != end; it.increment(error))
+    ++count;
+  return count;
 }
 
 std::vector<BlobStore::StoredFile> BlobStore::Files() const {

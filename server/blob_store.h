@@ -91,6 +91,17 @@ class BlobStore {
   // the file exists but cannot be removed.
   void Remove(const std::string& sha256);
 
+  // Whether the blob's bytes still hash to its digest (reads it whole); false for a missing blob.
+  bool Intact(const std::string& sha256) const;
+  // Takes a damaged blob (its bytes no longer hash to its digest: a disk fault, a file cut short)
+  // out of the store, to <root>/damaged/<sha256>.<Unix seconds> for an admin to look at, so that
+  // the next upload of the content stores it anew; logs an error naming `what` (a file's path in a
+  // clip). Returns where it went. A damaged copy left in place was sent to every worker and refused
+  // every upload of the content as "already on the server" (found 2026-12-06).
+  std::filesystem::path SetAsideDamaged(const std::string& sha256, const std::string& what);
+  // How many files lie set aside as damaged (an admin deletes them once the disk is checked).
+  std::size_t DamagedCount() const;
+
   // Stores `bytes` as a blob at once; returns its digest.
   std::string Put(std::string_view bytes);
 

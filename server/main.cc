@@ -336,6 +336,7 @@ int Run(const ServerFlags& flags) {
         if (!error)
           metrics.SetDataDisk(static_cast<std::int64_t>(space.available),
                               static_cast<std::int64_t>(space.capacity));
+        metrics.SetDamagedFiles(blobs.DamagedCount());
         guard.Refresh();
         if (tick % 300 == 0) {
           try {

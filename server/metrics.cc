@@ -59,6 +59,9 @@ Metrics::Metrics(const std::string& bind_address)
           Gauge(*registry_, "endorecon_data_available_bytes", "Free bytes on the data folder's file system")),
       data_capacity_(
           Gauge(*registry_, "endorecon_data_capacity_bytes", "Size of the data folder's file system")),
+      damaged_(Gauge(*registry_, "endorecon_damaged_files",
+                     "Stored files set aside as damaged, their bytes no longer matching their digest (a disk "
+                     "fault), in the data folder's damaged/")),
       uploads_pending_(Gauge(*registry_, "endorecon_uploads_pending_bytes",
                              "Bytes of the uploads waiting to be submitted, every tenant's")),
       rpc_seconds_(BuildHistogram()

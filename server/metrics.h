@@ -19,6 +19,7 @@
 //   endorecon_jobs_expired_total             counter: finished jobs whose files retention deleted
 //   endorecon_data_available_bytes           gauge: free bytes on the data folder's file system
 //   endorecon_data_capacity_bytes            gauge: size of that file system
+//   endorecon_damaged_files                  gauge: stored files set aside as damaged (<data>/damaged)
 //   endorecon_uploads_pending_bytes          gauge: bytes of the uploads waiting to be submitted, every
 //                                            tenant's (`endorecon uploads` lists them by tenant)
 //   endorecon_rpc_seconds{method}            histogram: time the server spent on each call, from the
@@ -65,6 +66,7 @@ class Metrics {
   void CallRefused(const std::string& code) { refused_.Add({{"code", code}}).Increment(); }
   void JobsExpired(std::size_t jobs) { expired_.Increment(static_cast<double>(jobs)); }
   void SetDataDisk(std::int64_t available, std::int64_t capacity);
+  void SetDamagedFiles(std::size_t files) { damaged_.Set(static_cast<double>(files)); }
   void SetPendingUploads(std::int64_t bytes) { uploads_pending_.Set(static_cast<double>(bytes)); }
   void UploadBytes(std::int64_t bytes) { upload_bytes_.Increment(static_cast<double>(bytes)); }
   void DownloadBytes(std::int64_t bytes) { download_bytes_.Increment(static_cast<double>(bytes)); }
@@ -118,6 +120,7 @@ class Metrics {
   prometheus::Counter& expired_;
   prometheus::Gauge& data_available_;
   prometheus::Gauge& data_capacity_;
+  prometheus::Gauge& damaged_;
   prometheus::Gauge& uploads_pending_;
   prometheus::Family<prometheus::Histogram>& rpc_seconds_;
   prometheus::Histogram& store_commit_seconds_;

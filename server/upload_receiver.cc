@@ -72,6 +72,14 @@ v1::UploadStatus UploadReceiver::Status(const v1::Manifest& manifest, Uploader u
   }
   std::int64_t committed = 0;
   for (const auto& entry : manifest.files()) {
+    // A stored copy of another size than the file's is damaged (cut short on the disk) unless its bytes
+    // still hash to the digest (a client that declared the size wrong, which the submit refuses): set
+    // aside, the upload sends the file anew. Left in place it was "already on the server" for good,
+    // and the submit blamed the user's intact file (found 2026-12-06).
+    if (const auto stored = blobs_.SizeOf(entry.sha256());
+        stored && *stored != entry.size() && !blobs_.Intact(entry.sha256())) {
+      blobs_.SetAsideDamaged(entry.sha256(), entry.path());
+    }
     auto* file = status.add_files();
     file->set_path(entry.path());
     file->set_size(entry.size());

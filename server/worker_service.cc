@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 
 #include <filesystem>
+#include <map>
 #include <optional>
 #include <set>
 
@@ -214,21 +215,41 @@ grpc::Status WorkerServiceImpl::GetBlobs(grpc::ServerContext* context, const v1:
   return guard_.Run(context, {"GetBlobs", Access::kWorker, kReads, ""}, [&](Call& call) {
     const auto job = coordinator_.CheckLease(request->lease_id());
     call.job_id = job.id();
-    // A lease opens its own job's clip and checkpoint, not every blob of every tenant.
-    std::set<std::string> allowed{job.checkpoint().sha256()};
-    for (const auto& file : job.clip().files()) allowed.insert(file.sha256());
+    // A lease opens its own job's clip and checkpoint, not every blob of every tenant; each at the
+    // size the job declares (SendFiles sets a stored copy of another size aside as damaged).
+    std::map<std::string, std::int64_t> allowed{{job.checkpoint().sha256(), job.checkpoint().size()}};
+    for (const auto& file : job.clip().files()) allowed[file.sha256()] = file.size();
     std::vector<std::pair<v1::FileEntry, std::int64_t>> files;
     for (const auto& range : request->files()) {
-      if (range.sha256().empty() || !allowed.count(range.sha256()))
+      const auto found = range.sha256().empty() ? allowed.end() : allowed.find(range.sha256());
+      if (found == allowed.end())
         endorecon::Fail(ErrorCode::kNotFound,
                         "job " + job.id() + " has no file with sha256 '" + range.sha256() + "'");
       v1::FileEntry entry;
       entry.set_path(range.path());
       entry.set_sha256(range.sha256());
-      entry.set_size(static_cast<std::int64_t>(std::filesystem::file_size(blobs_.PathOf(range.sha256()))));
+      entry.set_size(found->second);
       files.emplace_back(entry, range.offset());
     }
-    metrics_.DownloadBytes(SendFiles(blobs_, files, *writer, stalls_, context));
+    try {
+      metrics_.DownloadBytes(SendFiles(blobs_, files, *writer, stalls_, context));
+    } catch (const Error& e) {
+      if (e.code() != ErrorCode::kDataLoss && e.code() != ErrorCode::kNotFound) throw;
+      // The server's copy of the job's file is damaged and set aside (DATA_LOSS), or gone (set aside
+      // while another job of the same content ran): no attempt can succeed, and three did, each
+      // refused (found 2026-12-06). The job fails saying what to do; a submit of the clip uploads the
+      // file anew.
+      const std::string why = e.code() == ErrorCode::kDataLoss
+                                  ? std::string(e.what())
+                                  : "a file of the job is no longer in the server's store (" +
+                                        std::string(e.what()) + "; set aside as damaged?)";
+      v1::FailRequest failed;
+      failed.set_lease_id(request->lease_id());
+      failed.set_retry(false);
+      failed.set_reason(why + ": submit the clip again");
+      coordinator_.Fail(failed);
+      throw;
+    }
     return grpc::Status::OK;
   });
 }

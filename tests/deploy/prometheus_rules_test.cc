@@ -17,7 +17,7 @@ TEST(PrometheusRulesTest, PromtoolAcceptsTheRulesAndTheirTests) {
     GTEST_SKIP() << "promtool is not installed (scripts/install-deps installs prometheus)";
   const auto dir = SourcePath("deploy/prometheus");
   const auto check = Capture("cd '" + dir.string() + "' && promtool check rules alerts.yml 2>&1; echo rc=$?");
-  EXPECT_NE(check.find("SUCCESS: 9 rules found"), std::string::npos) << check;
+  EXPECT_NE(check.find("SUCCESS: 10 rules found"), std::string::npos) << check;
   EXPECT_NE(check.find("rc=0"), std::string::npos) << check;
   const auto config =
       Capture("cd '" + dir.string() + "' && promtool check config prometheus.yml 2>&1; echo rc=$?");
@@ -28,7 +28,7 @@ TEST(PrometheusRulesTest, PromtoolAcceptsTheRulesAndTheirTests) {
   EXPECT_NE(tests.find("rc=0"), std::string::npos) << tests;
   for (const std::string alert :
        {"EndoreconQueueStuck", "EndoreconNoLiveWorkers", "EndoreconJobsFailing", "EndoreconDiskNearlyFull",
-        "EndoreconLeaseExpiriesRising", "EndoreconWorkerTokenExpiring"}) {
+        "EndoreconLeaseExpiriesRising", "EndoreconWorkerTokenExpiring", "EndoreconStoredFilesDamaged"}) {
     EXPECT_NE(ReadBytes(dir / "alerts_test.yml").find("alertname: " + alert), std::string::npos)
         << alert << " has no unit test";
   }

@@ -40,6 +40,23 @@ TEST(BlobStoreTest, PutStoresContentUnderItsDigest) {
   EXPECT_EQ(CodeOf([&] { store.PathOf(Sha256Hex("other")); }), ErrorCode::kNotFound);
 }
 
+// A blob the disk damaged is told by its digest and set aside out of the store, kept for an admin.
+TEST(BlobStoreTest, ADamagedBlobIsToldByItsDigestAndSetAside) {
+  testing::TempDir dir("blobs");
+  BlobStore store(dir.path());
+  const std::string sha = store.Put("hello, tissue");
+  EXPECT_TRUE(store.Intact(sha));
+  testing::WriteBytes(store.PathOf(sha), "hello, tiSsue");
+  EXPECT_FALSE(store.Intact(sha));
+  EXPECT_FALSE(store.Intact(Sha256Hex("never stored")));
+  const auto aside = store.SetAsideDamaged(sha, "images/000003.png");
+  EXPECT_FALSE(store.Has(sha)) << "the next upload of the content stores it anew";
+  EXPECT_EQ(aside.parent_path(), dir.path() / "damaged");
+  EXPECT_EQ(testing::ReadBytes(aside), "hello, tiSsue");
+  EXPECT_EQ(store.Put("hello, tissue"), sha);
+  EXPECT_TRUE(store.Intact(sha));
+}
+
 TEST(BlobStoreTest, PartialBytesSurviveAndResume) {
   testing::TempDir dir("blobs");
   const std::string bytes = "0123456789abcdefghij";
