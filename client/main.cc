@@ -15,6 +15,7 @@
 #include "client/exit_codes.h"
 #include "common/cli_checks.h"
 #include "common/error.h"
+#include "common/job_bounds.h"
 #include "common/transport_security.h"
 
 namespace endorecon::client {
@@ -149,7 +150,7 @@ int main(int argc, char** argv) {
     if (e.get_exit_code() == 0) return app.exit(e) == 0 ? kExitOk : kExitInvalid;  // --help, --version
     // CLI11 repeats the words it did not expect: a token typed after a "--token" that does not exist
     // went to the terminal and its scrollback whole (found 2026-12-06).
-    std::cerr << endorecon::WithoutTokens(e.what()) << "\n";
+    std::cerr << endorecon::PrintableLines(endorecon::WithoutTokens(e.what())) << "\n";
     for (int i = 1; i < argc; ++i) {
       if (std::string_view(argv[i]).rfind("--token", 0) == 0 && std::string_view(argv[i]) != "--token-file") {
         std::cerr
@@ -173,10 +174,10 @@ int main(int argc, char** argv) {
   } catch (const endorecon::Error& e) {
     // A token pasted where a job id or a file name goes is repeated in messages: its secret is not.
     std::cerr << "endorecon: " << endorecon::ErrorCodeName(e.code()) << ": "
-              << endorecon::WithoutTokens(e.what()) << HintFor(e, globals) << "\n";
+              << endorecon::PrintableLines(endorecon::WithoutTokens(e.what())) << HintFor(e, globals) << "\n";
     return ExitCodeFor(e.code());
   } catch (const std::exception& e) {
-    std::cerr << "endorecon: " << endorecon::WithoutTokens(e.what()) << "\n";
+    std::cerr << "endorecon: " << endorecon::PrintableLines(endorecon::WithoutTokens(e.what())) << "\n";
     return kExitInternal;
   }
   return kExitOk;

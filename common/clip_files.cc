@@ -10,6 +10,7 @@
 #include <set>
 
 #include "common/error.h"
+#include "common/job_bounds.h"
 #include "common/json_file.h"
 #include "common/npy.h"
 
@@ -83,6 +84,12 @@ fs::path ResolveFile(const fs::path& dir, const json& frame, const char* key, co
   // A clip is its folder: a path that leaves it (absolute, or up through "..") is refused, so a clip
   // uploaded to the service cannot make a worker read its own files (or another job's).
   if (value.get<std::string>().empty()) FailInvalid(where + ": \"" + key + "\" is empty");
+  // No file name holds a NUL (the system's calls end the name there) or another control character:
+  // the message cut at it, saying where but not what (found 2026-12-06).
+  if (const std::string& text = value.get<std::string>(); PrintableText(text, text.size()) != text) {
+    FailInvalid(where + ": \"" + key + "\" " + value.dump() +
+                " holds a control character (a NUL, a line break, an escape) or bytes of no UTF-8 text");
+  }
   const fs::path relative = fs::path(value.get<std::string>()).lexically_normal();
   if (relative.is_absolute() || relative.has_root_name() || *relative.begin() == "..") {
     FailInvalid(where + ": " + key + " \"" + value.get<std::string>() +

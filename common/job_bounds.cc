@@ -1,5 +1,6 @@
 #include "common/job_bounds.h"
 
+#include <algorithm>
 #include <string_view>
 #include <utility>
 
@@ -71,6 +72,19 @@ std::string PrintableText(std::string text, std::size_t most) {
     std::size_t end = most;
     while (end > 0 && (static_cast<unsigned char>(out[end]) & 0xC0) == 0x80) --end;  // not mid-character
     out.resize(end);
+  }
+  return out;
+}
+
+std::string PrintableLines(std::string_view text) {
+  std::string out;
+  out.reserve(text.size());
+  for (std::size_t start = 0; start <= text.size();) {
+    const std::size_t end = std::min(text.find('\n', start), text.size());
+    out += PrintableText(std::string(text.substr(start, end - start)), end - start);
+    if (end == text.size()) break;
+    out += '\n';
+    start = end + 1;
   }
   return out;
 }

@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <filesystem>
 #include <string>
+#include <string_view>
 
 namespace endorecon {
 
@@ -25,6 +26,10 @@ void ValidateJobName(const std::string& name);
 // text as '?', cut to `most` bytes on a character's end. For text the server passes on from a worker
 // (a failure's reason, a device's description) and names made from what no one chose as a name.
 std::string PrintableText(std::string text, std::size_t most);
+// PrintableText of each line, the line breaks kept, uncut: what a command prints of an error, which
+// repeats what it was given (`endorecon status "$(printf 'a\x1b[2Jb')"` cleared the terminal; found
+// 2026-12-06).
+std::string PrintableLines(std::string_view text);
 // A name made from what the user did not choose as a name (a clip's folder name), made valid:
 // PrintableText cut to kMaxJobNameBytes.
 std::string ValidJobName(std::string name);

@@ -20,6 +20,7 @@
 #include "common/dicom/uid.h"
 #include "common/error.h"
 #include "common/folder_lock.h"
+#include "common/job_bounds.h"
 #include "common/private_folder.h"
 #include "common/transport_security.h"
 #include "server/call_guard.h"
@@ -530,7 +531,7 @@ int main(int argc, char** argv) {
     spdlog::info("endorecon-server stopped");
     return code;
   } catch (const endorecon::Error& e) {
-    spdlog::error("{}: {}", endorecon::ErrorCodeName(e.code()), e.what());
+    spdlog::error("{}: {}", endorecon::ErrorCodeName(e.code()), endorecon::PrintableLines(e.what()));
     // A file or folder the command line names and that is not there is its input's fault too.
     return e.code() == endorecon::ErrorCode::kInvalidArgument || e.code() == endorecon::ErrorCode::kNotFound
                ? 2

@@ -75,5 +75,14 @@ TEST(JobBoundsTest, AFoldersNameIsMadeAValidJobName) {
   EXPECT_NO_THROW(ValidateJobName(ValidJobName(std::string(1000, '\t'))));
 }
 
+// What a command prints of an error keeps its line breaks and nothing else a terminal would act on.
+TEST(JobBoundsTest, PrintableLinesKeepTheLineBreaksAlone) {
+  EXPECT_EQ(PrintableLines("no job 'a\x1b[2Jb'\nendorecon: try again"),
+            "no job 'a?[2Jb'\nendorecon: try again");
+  EXPECT_EQ(PrintableLines("ends with a break\n"), "ends with a break\n");
+  EXPECT_EQ(PrintableLines("tab\there \xc3\xa9"), "tab?here \xc3\xa9");
+  EXPECT_EQ(PrintableLines(""), "");
+}
+
 }  // namespace
 }  // namespace endorecon

@@ -148,6 +148,10 @@ TEST_F(TransformsLoaderTest, RejectsFilesOutsideTheClipsFolder) {
   ExpectError("transforms.json frame 1: file_path", "is not a regular file");
   Frame(1)["file_path"] = "";
   ExpectError("transforms.json frame 1: \"file_path\" is empty", "");
+  // A NUL cut the message at it (found 2026-12-06): the name is shown escaped, and what is wrong said.
+  Frame(1)["file_path"] = std::string("./train/r_1\0.png", 16);
+  ExpectError("transforms.json frame 1: \"file_path\" \"./train/r_1\\u0000.png\" holds a control character",
+              "NUL");
 }
 
 // A declared size over the limit is blamed on transforms.json's "w" and "h", not on the images.

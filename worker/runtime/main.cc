@@ -8,6 +8,7 @@
 #include <string>
 
 #include "common/error.h"
+#include "common/job_bounds.h"
 #include "worker/runtime/commands.h"
 #include "worker/runtime/progress_line.h"
 
@@ -39,7 +40,7 @@ int main(int argc, char** argv) {
   try {
     for (auto* sub : app.get_subcommands()) return commands.at(sub->get_name())();
   } catch (const endorecon::Error& e) {
-    spdlog::error("{}: {}", endorecon::ErrorCodeName(e.code()), e.what());
+    spdlog::error("{}: {}", endorecon::ErrorCodeName(e.code()), endorecon::PrintableLines(e.what()));
     // A clip or file the command was given that is not there is the user's input, as a bad one is.
     // Credentials the server refused are 10 and 11, as the CLI's: a service manager keeps from
     // restarting a worker that will be refused again (deploy/systemd, RestartPreventExitStatus).
