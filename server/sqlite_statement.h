@@ -46,7 +46,8 @@ void Exec(sqlite3* db, const char* sql, const char* store);
 
 // Opens (creating) a database in WAL mode with synchronous=FULL and a busy timeout, so several
 // processes (the server, `endorecon-server token ...`) may use it at once. Throws
-// Error(kUnavailable) naming the file.
+// Error(kUnavailable) naming the file, Error(kDataLoss) for a write-ahead log with committed
+// transactions past a damaged frame (wal_check.h), which SQLite would drop in silence.
 sqlite3* OpenDatabase(const std::filesystem::path& file, const char* store);
 
 // What a store's owner checks once at start, on its writing connection: that this process may write
