@@ -99,6 +99,11 @@ void RequireBlobs(const BlobStore& blobs, const v1::Manifest& manifest, const st
   }
 }
 
+// "cancelled by request", or "cancelled by it-ops (admin)" when the caller had a token.
+std::string CancelledBy(const v1::Job& job) {
+  return job.cancelled_by().empty() ? "cancelled by request" : "cancelled by " + job.cancelled_by();
+}
+
 // A job that did not succeed has nothing to send: its sends end SEND_FAILED saying why, so the job
 // is settled (a watch ends, retention may expire it). They were left PENDING for good.
 void SettleSends(v1::Job& job) {
@@ -593,9 +598,11 @@ v1::Job JobCoordinator::Cancel(const std::string& id, const Principal& caller) {
       endorecon::Fail(ErrorCode::kFailedPrecondition,
                       "job " + id + " is already " + v1::JobState_Name(job.state()));
     }
+    if (!caller.anonymous)
+      job.set_cancelled_by(caller.name + (caller.role == Role::kAdmin ? " (admin)" : ""));
     if (job.state() == v1::QUEUED) {
       parts_.scheduler.Remove(id);
-      Finish(job, v1::CANCELLED, "cancelled by request while queued");
+      Finish(job, v1::CANCELLED, CancelledBy(job) + " while queued");
     } else {
       job.set_cancel_requested(true);
       Save(job);
@@ -703,7 +710,7 @@ v1::ProgressReply::Action JobCoordinator::ReportLocked(const v1::ProgressUpdate&
   auto stored = Load(lease->job_id);
   auto& job = stored.job;
   if (job.cancel_requested()) {
-    Finish(job, v1::CANCELLED, "cancelled by request while running on " + job.worker_id());
+    Finish(job, v1::CANCELLED, CancelledBy(job) + " while running on " + job.worker_id());
     return v1::ProgressReply::STOP_CANCELLED;
   }
   bool changed = false;
@@ -770,7 +777,7 @@ v1::Job JobCoordinator::Fail(const v1::FailRequest& request) {
     auto& job = stored.job;
     const std::string reason = request.reason().empty() ? "the worker gave no reason" : request.reason();
     if (job.cancel_requested()) {
-      Finish(job, v1::CANCELLED, "cancelled by request while running on " + job.worker_id());
+      Finish(job, v1::CANCELLED, CancelledBy(job) + " while running on " + job.worker_id());
     } else if (request.retry()) {
       Requeue(stored, !request.release(), "worker " + job.worker_id() + ": " + reason);
     } else {
@@ -845,7 +852,7 @@ void JobCoordinator::ExpireLeases(Clock::time_point now) {
                ? "'s token '" + token.name + "' was revoked at " + UtcText(revoked_at[i]) + refused
                : " stopped reporting; its lease expired");
       if (stored->job.cancel_requested()) {
-        Finish(stored->job, v1::CANCELLED, "cancelled by request; " + reason);
+        Finish(stored->job, v1::CANCELLED, CancelledBy(stored->job) + "; " + reason);
       } else {
         Requeue(*stored, !token_lapsed, reason);
       }

@@ -223,7 +223,9 @@ grpc::Status JobServiceImpl::ListWorkers(grpc::ServerContext* context, const v1:
 
 grpc::Status JobServiceImpl::Drain(grpc::ServerContext* context, const v1::DrainRequest* request,
                                    v1::WorkerInfo* worker) {
-  return guard_.Run(context, {"Drain", Access::kAdmin, kWrites, "", request->worker_id()}, [&](Call& call) {
+  // Audited apart: "Drain" and its undo read alike in the log (found 2026-12-06).
+  const char* method = request->undo() ? "DrainUndo" : "Drain";
+  return guard_.Run(context, {method, Access::kAdmin, kWrites, "", request->worker_id()}, [&](Call& call) {
     *worker = workers_.SetDraining(request->worker_id(), !request->undo());
     spdlog::info("worker {} {} by request of {}", request->worker_id(),
                  request->undo() ? "serves again (drain undone)" : "drains: it is given no new job",

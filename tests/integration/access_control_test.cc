@@ -279,9 +279,11 @@ TEST_F(AccessControlTest, AnotherTenantsJobIsNotFoundLikeAMissingOne) {
   for (const std::string method : {"Watch", "Cancel"})
     EXPECT_EQ(AuditFind(audit, method, "NOT_FOUND", "bob", id).size(), 1u) << method;
   EXPECT_EQ(AuditFind(audit, "Get", "NOT_FOUND", "bob", id).size(), 2u);  // status, fetch
-  // The admin may cancel anything.
+  // The admin may cancel anything, and the job's owner sees who did (it read "by request").
   EXPECT_EQ(Cli(admin_, {"cancel", id}).exit_code, 0);
   EXPECT_EQ(cluster_.Job(id).state(), v1::CANCELLED);
+  EXPECT_EQ(cluster_.Job(id).error(), "cancelled by ops (admin) while queued");
+  EXPECT_EQ(cluster_.Job(id).cancelled_by(), "ops (admin)");
 }
 
 // The server keeps each content once: a tenant that knew the digests of another tenant's clip named

@@ -8,6 +8,7 @@
 #include <string>
 #include <thread>
 
+#include "tests/integration/audit_reader.h"
 #include "tests/integration/service_harness.h"
 
 namespace endorecon::testing {
@@ -57,6 +58,10 @@ TEST(DrainTest, ADrainingWorkerIsGivenNoNewJobAndUndoPutsItBack) {
   const auto undone = RunCli(cluster.address(), {"drain", "w-maint", "--undo"});
   ASSERT_EQ(undone.exit_code, 0) << undone.err;
   EXPECT_NE(undone.out.find("serves again"), std::string::npos) << undone.out;
+  // The audit log tells a drain from its undo (they read alike; found 2026-12-06).
+  const auto audit = AuditLines(cluster.data_dir() / "audit.jsonl");
+  EXPECT_EQ(AuditFind(audit, "Drain", "OK").size(), 1u);
+  EXPECT_EQ(AuditFind(audit, "DrainUndo", "OK").size(), 1u);
   EXPECT_EQ(cluster.WaitForState(id, v1::SUCCEEDED).worker_id(), "w-maint");
   // The last event of a watch of a settled job carries its result manifest, for scripts.
   const auto watched = RunCli(cluster.address(), {"--json", "watch", id});
