@@ -11,16 +11,19 @@
 #include <cstring>
 #include <filesystem>
 #include <iostream>
+#include <nlohmann/json.hpp>
 #include <set>
 #include <string>
 #include <utility>
 
 #include "client/commands.h"
 #include "client/exit_codes.h"
+#include "client/interrupt_note.h"
 #include "client/job_format.h"
 #include "common/error.h"
 #include "common/file_download.h"
 #include "common/grpc_status.h"
+#include "common/job_bounds.h"
 #include "common/manifest.h"
 #include "common/transport_security.h"
 
@@ -136,6 +139,11 @@ int Fetch(const Globals& globals, const FetchFlags& flags) {
   const FileDescriptor mark = MarkFetchFolder(flags.out, job.id());
   const auto pending = PendingDownloads(flags.out, job.result());
   std::int64_t received = 0;
+  // Stopped by Ctrl-C or SIGTERM, it said nothing (found 2026-12-06).
+  const InterruptNote interrupt_note(
+      "fetch interrupted; the files fetched so far are kept: run the same `endorecon fetch " + job.id() +
+      " -o " + PrintableText(flags.out, 200) +
+      "` again to finish (every file is checked against its digest)");
   if (!pending.empty()) {
     v1::FetchRequest request;
     request.set_id(job.id());
@@ -151,16 +159,25 @@ int Fetch(const Globals& globals, const FetchFlags& flags) {
     // On disk before "verified" is said: the results may be the only copy once retention runs.
     SyncFolder(flags.out);
   }
+  std::string report;
+  for (const auto& file : job.result().files()) {
+    if (file.path() == "report.html") report = (std::filesystem::path(flags.out) / file.path()).string();
+  }
   if (globals.json) {
-    std::cout << ToJson(job.result()) << std::endl;
+    // What the text says, for scripts: where the results went, what was fetched now, the manifest (it
+    // printed the manifest alone).
+    nlohmann::json out = {{"job", job.id()},
+                          {"out", flags.out},
+                          {"report", report.empty() ? nlohmann::json(nullptr) : nlohmann::json(report)},
+                          {"fetched_files", pending.size()},
+                          {"files", job.result().files_size()},
+                          {"received_bytes", received},
+                          {"result", nlohmann::json::parse(ToJson(job.result()))}};
+    std::cout << out.dump() << std::endl;
   } else {
     std::cout << "fetched " << pending.size() << " of " << job.result().files_size() << " file(s) ("
               << HumanBytes(received) << ") into " << flags.out << "; every file verified" << std::endl;
-    for (const auto& file : job.result().files()) {
-      if (file.path() == "report.html") {
-        std::cout << "report: " << (std::filesystem::path(flags.out) / file.path()).string() << std::endl;
-      }
-    }
+    if (!report.empty()) std::cout << "report: " << report << std::endl;
   }
   return kExitOk;
 }

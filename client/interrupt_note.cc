@@ -11,9 +11,9 @@ namespace {
 char interrupt_message[512];
 std::size_t interrupt_length = 0;
 
-extern "C" void OnInterrupt(int) {
+extern "C" void OnInterrupt(int signal) {
   (void)!::write(STDERR_FILENO, interrupt_message, interrupt_length);
-  ::_exit(130);
+  ::_exit(128 + signal);  // 130 for SIGINT, 143 for SIGTERM, as a shell reports them
 }
 
 }  // namespace
@@ -26,8 +26,12 @@ InterruptNote::InterruptNote(const std::string& message) {
   action.sa_handler = OnInterrupt;
   sigemptyset(&action.sa_mask);
   ::sigaction(SIGINT, &action, &previous_);
+  ::sigaction(SIGTERM, &action, &previous_term_);
 }
 
-InterruptNote::~InterruptNote() { ::sigaction(SIGINT, &previous_, nullptr); }
+InterruptNote::~InterruptNote() {
+  ::sigaction(SIGINT, &previous_, nullptr);
+  ::sigaction(SIGTERM, &previous_term_, nullptr);
+}
 
 }  // namespace endorecon::client

@@ -1,4 +1,5 @@
-// Ctrl-C during a step the CLI can pick up again says how, then exits 130 (as a shell's SIGINT):
+// Ctrl-C (or SIGTERM, which job runners send: `timeout`, Python's terminate(), systemd) during a step
+// the CLI can pick up again says how, then exits 130 (143 for SIGTERM), as a shell reports them:
 // while a job is watched (the job goes on on the server) and while a clip uploads (what arrived is
 // kept, and the same submit resumes it). The message is made before the signal can come: the handler
 // only writes it. One at a time; the previous handler comes back when the note goes.
@@ -20,6 +21,7 @@ class InterruptNote {
 
  private:
   struct sigaction previous_ {};
+  struct sigaction previous_term_ {};
 };
 
 }  // namespace endorecon::client

@@ -30,6 +30,7 @@ std::string Marks(const v1::Job& job) {
 struct ListFlags {
   std::vector<std::string> states;
   int limit = 50;
+  std::string page_token;  // a listing's next_page_token: go on from there (its JSON gave it, unusable)
 };
 
 int List(const Globals& globals, const ListFlags& flags) {
@@ -43,6 +44,7 @@ int List(const Globals& globals, const ListFlags& flags) {
     request.add_states(state);
   }
   const auto stub = globals.Connect();
+  request.set_page_token(flags.page_token);
   v1::ListJobsResponse all;
   do {
     request.set_page_size(std::min(flags.limit - all.jobs_size(), 1000));
@@ -56,8 +58,9 @@ int List(const Globals& globals, const ListFlags& flags) {
   // 2026-12-05). JSON carries the server's next_page_token, empty when none are left.
   all.set_next_page_token(request.page_token());
   if (!request.page_token().empty()) {
-    std::cerr << "endorecon: the newest " << all.jobs_size() << " job(s) are listed and there are more: "
-              << "--limit N lists more" << std::endl;
+    std::cerr << "endorecon: " << all.jobs_size()
+              << " job(s) are listed and there are more: --limit N lists more, "
+              << "--page-token " << request.page_token() << " goes on from here" << std::endl;
   }
   if (globals.json) {
     std::cout << ToJson(all) << std::endl;
@@ -100,6 +103,8 @@ Command AddListCommand(CLI::App& app) {
   sub->add_option("--limit", flags->limit, "at most this many jobs")
       ->capture_default_str()
       ->check(AboveZero());
+  sub->add_option("--page-token", flags->page_token,
+                  "go on from where a listing with the same --state left off (its next_page_token)");
   return [flags](const Globals& globals) { return List(globals, *flags); };
 }
 

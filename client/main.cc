@@ -3,9 +3,13 @@
 #include <grpc/support/log.h>
 #include <spdlog/sinks/stdout_sinks.h>
 #include <spdlog/spdlog.h>
+#include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <cerrno>
+#include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <iostream>
 #include <map>
 #include <string>
@@ -79,6 +83,21 @@ std::string UnknownCommand(const CLI::App& app, int argc, char** argv,
     return commands.contains(word) ? "" : word;
   }
   return "";
+}
+
+// `rc`, unless what the command wrote to stdout did not all arrive: `list --json > jobs.json` on a full
+// disk exited 0 with the file cut short (found 2026-12-06). 8 for a full disk, as a server's; else 1.
+int OutputWritten(int rc) {
+  errno = 0;
+  const bool flushed = std::fflush(stdout) == 0;
+  int error = errno;
+  if (flushed && !std::ferror(stdout) && std::cout.good()) return rc;
+  // The write that failed was an earlier flush (std::endl), whose errno is gone: a byte more asks again.
+  if (error == 0 && ::write(STDOUT_FILENO, "\n", 1) < 0) error = errno;
+  std::cerr << "endorecon: cannot write the output to stdout"
+            << (error != 0 ? std::string(" (") + std::strerror(error) + ")" : std::string())
+            << ": what was written is incomplete\n";
+  return error == ENOSPC || error == EDQUOT ? kExitResourceExhausted : kExitInternal;
 }
 
 }  // namespace
@@ -170,7 +189,7 @@ int main(int argc, char** argv) {
     }
   }
   try {
-    for (auto* sub : app.get_subcommands()) return commands.at(sub->get_name())(globals);
+    for (auto* sub : app.get_subcommands()) return OutputWritten(commands.at(sub->get_name())(globals));
   } catch (const endorecon::Error& e) {
     // A token pasted where a job id or a file name goes is repeated in messages: its secret is not.
     std::cerr << "endorecon: " << endorecon::ErrorCodeName(e.code()) << ": "

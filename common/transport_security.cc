@@ -250,14 +250,17 @@ std::string CleanToken(std::string_view text, const std::string& source) {
   const auto begin = text.find_first_not_of(" \t\r\n");
   const auto end = text.find_last_not_of(" \t\r\n");
   const std::string_view token = begin == std::string::npos ? "" : text.substr(begin, end - begin + 1);
+  // A malformed token is refused as the server refuses one (exit 10, which a script maps to "get a new
+  // token"); a bad byte in it was exit 2 while "garbage" was 10 (found 2026-12-06).
   if (token.empty() || token.find_first_of(" \t\r\n") != std::string::npos)
-    FailInvalid(source + ": expected one token (one word)");
+    Fail(ErrorCode::kUnauthenticated, source + ": expected one token (one word)");
   for (std::size_t i = 0; i < token.size(); ++i) {
     const auto byte = static_cast<unsigned char>(token[i]);
     if (byte < 0x21 || byte > 0x7e) {
-      FailInvalid(source + ": the token holds byte 0x" + fmt::format("{:02x}", byte) + " at position " +
-                  std::to_string(i + 1) +
-                  "; a token is printable ASCII, as endorecon-server token create prints it");
+      Fail(ErrorCode::kUnauthenticated,
+           source + ": the token holds byte 0x" + fmt::format("{:02x}", byte) + " at position " +
+               std::to_string(i + 1) +
+               "; a token is printable ASCII, as endorecon-server token create prints it");
     }
   }
   return std::string(token);

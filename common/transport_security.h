@@ -60,8 +60,9 @@ std::shared_ptr<grpc::ServerCredentials> ServerCredentials(const ServerSecurity&
 
 // The token in `text` (from `source`, named in errors): surrounding whitespace and a leading UTF-8
 // byte-order mark removed (an editor's), then one word of printable ASCII. A control or other byte
-// inside is refused with kInvalidArgument naming its position: gRPC aborted the process on one in a
-// header value (a token set with a trailing newline crashed the CLI; found 2026-12-05).
+// inside is refused with kUnauthenticated (a malformed token, exit 10 as the server's refusal of one)
+// naming its position: gRPC aborted the process on one in a header value (a token set with a trailing
+// newline crashed the CLI; found 2026-12-05).
 std::string CleanToken(std::string_view text, const std::string& source);
 
 // `text` with the secret part of every token in it ("endorecon.ID.SECRET") withheld: "endorecon.ID.…".

@@ -129,6 +129,14 @@ fs::path BlobStore::SetAsideDamaged(const std::string& sha256, const std::string
   return to;
 }
 
+bool BlobStore::WasSetAside(const std::string& sha256) const {
+  std::error_code error;
+  for (fs::directory_iterator it(root_ / "damaged", error), end; !error && it != end; it.increment(error)) {
+    if (it->path().filename().string().rfind(sha256 + ".", 0) == 0) return true;
+  }
+  return false;
+}
+
 std::size_t BlobStore::DamagedCount() const {
   std::error_code error;
   std::size_t count = 0;

@@ -101,6 +101,8 @@ class BlobStore {
   std::filesystem::path SetAsideDamaged(const std::string& sha256, const std::string& what);
   // How many files lie set aside as damaged (an admin deletes them once the disk is checked).
   std::size_t DamagedCount() const;
+  // Whether a copy of `sha256` lies set aside as damaged.
+  bool WasSetAside(const std::string& sha256) const;
 
   // Stores `bytes` as a blob at once; returns its digest.
   std::string Put(std::string_view bytes);

@@ -206,6 +206,16 @@ grpc::Status JobServiceImpl::Fetch(grpc::ServerContext* context, const v1::Fetch
       if (e.code() != ErrorCode::kNotFound) throw;
       const auto now = coordinator_.Get(request->id(), call.caller);
       if (now.expired_unix_ms() > 0) refuse_expired(now);
+      // A result set aside as damaged is that, not a missing job (a script read exit 3 as "no such
+      // job" on the fetch after the one that found the damage; found 2026-12-06).
+      for (const auto& [entry, offset] : files) {
+        if (!blobs_.Has(entry.sha256()) && blobs_.WasSetAside(entry.sha256())) {
+          Fail(ErrorCode::kDataLoss, "job " + job.id() + ": the server's stored copy of its result '" +
+                                         entry.path() +
+                                         "' was found damaged and set aside (a disk fault?): its results "
+                                         "cannot be fetched whole; submit its clip again to make them anew");
+        }
+      }
       Fail(ErrorCode::kNotFound,
            "job " + job.id() + ": a result file is missing from the server's store (" + e.what() + ")");
     }

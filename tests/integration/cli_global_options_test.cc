@@ -1,7 +1,10 @@
 // The CLI's global options (--server, --json, --timeout, and any added later) work after the
 // subcommand too, as git, docker and kubectl users type them: `endorecon submit clip --json`.
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 
+#include <csignal>
+#include <cstdlib>
 #include <nlohmann/json.hpp>
 
 #include "tests/integration/service_harness.h"
@@ -36,14 +39,51 @@ TEST(CliGlobalOptionsTest, JsonAfterTheSubcommand) {
       RunCli(cluster.address(), {"submit", cluster.path("clip").string(), "--iterations", "5"}).exit_code, 0);
   const auto one = RunCli(cluster.address(), {"--json", "list", "--limit", "1"});
   ASSERT_EQ(one.exit_code, 0) << one.err;
-  EXPECT_NE(one.err.find("the newest 1 job(s) are listed and there are more"), std::string::npos) << one.err;
+  EXPECT_NE(one.err.find("1 job(s) are listed and there are more: --limit N lists more, --page-token "),
+            std::string::npos)
+      << one.err;
   // The token is the listed job's id, not its place in the server's one sequence of jobs, which told
   // a tenant how many jobs every tenant had submitted (found 2026-12-06).
   const auto first_page = nlohmann::json::parse(one.out);
   ASSERT_EQ(first_page["jobs"].size(), 1u) << one.out;
   EXPECT_EQ(first_page.value("next_page_token", ""), first_page["jobs"][0].value("id", "")) << one.out;
+  // A script goes on from there with --page-token (the token was offered and could not be used).
+  const auto rest =
+      RunCli(cluster.address(), {"--json", "list", "--page-token", first_page["next_page_token"]});
+  ASSERT_EQ(rest.exit_code, 0) << rest.err;
+  const auto second_page = nlohmann::json::parse(rest.out);
+  ASSERT_EQ(second_page["jobs"].size(), 1u) << rest.out;
+  EXPECT_NE(second_page["jobs"][0]["id"], first_page["jobs"][0]["id"]);
+  EXPECT_EQ(second_page.value("next_page_token", ""), "");
   EXPECT_EQ(RunCli(cluster.address(), {"list", "--limit", "2"}).err.find("there are more"),
             std::string::npos);
+}
+
+// What a script needs of the CLI's ends: output that did not arrive is an error (`list --json >
+// jobs.json` on a full disk exited 0 with the file cut short), and SIGTERM, which job runners send,
+// ends a watch as Ctrl-C does, saying the job goes on (it killed the CLI without a word; found
+// 2026-12-06).
+TEST(CliGlobalOptionsTest, AnOutputNotWrittenIsAnErrorAndSigtermEndsAWatchSayingSo) {
+  Cluster cluster;
+  MakeClip(cluster.path("clip"));
+  const std::string id = cluster.Submit(cluster.path("clip"), {"--iterations", "100000"});
+  const std::string err = cluster.path("err.txt").string();
+  const int status = std::system((BuiltBinary("client/endorecon") + " --server " + cluster.address() +
+                                  " --json list > /dev/full 2> " + err)
+                                     .c_str());
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 8);
+  EXPECT_NE(ReadBytes(err).find("cannot write the output to stdout (No space left on device)"),
+            std::string::npos)
+      << ReadBytes(err);
+
+  Process watch({BuiltBinary("client/endorecon"), "--server", cluster.address(), "watch", id},
+                cluster.path("watch.log"));
+  ASSERT_TRUE(WaitUntil([&] { return watch.Log().find("QUEUED") != std::string::npos; })) << watch.Log();
+  watch.Signal(SIGTERM);
+  EXPECT_EQ(watch.Wait(), 143);
+  EXPECT_NE(watch.Log().find("stopped watching; job " + id), std::string::npos) << watch.Log();
+  EXPECT_EQ(cluster.Job(id).state(), v1::QUEUED) << "the job goes on";
 }
 
 TEST(CliGlobalOptionsTest, UnknownOptionsAreStillRefused) {

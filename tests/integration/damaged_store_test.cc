@@ -68,6 +68,24 @@ TEST(DamagedStoreTest, ADamagedStoredFileIsSetAsideItsJobFailsOnceAndTheSameSubm
   EXPECT_NE(gone.error().find("submit the clip again"), std::string::npos) << gone.error();
   CliResult third = RunCli(cluster.address(), {"submit", clip.string(), "--iterations", "5", "--wait"});
   EXPECT_EQ(third.exit_code, 0) << third.err << cluster.ServerLog();
+
+  // A result damaged: its fetch is refused as DATA_LOSS, and so is the next one (it was NOT_FOUND,
+  // exit 3, which a script reads as "no such job").
+  const auto at = third.out.find("job ");
+  ASSERT_NE(at, std::string::npos) << third.out;
+  const std::string done = third.out.substr(at + 4, third.out.find(' ', at + 4) - at - 4);
+  std::string metrics_sha;
+  const v1::Job finished = cluster.Job(done);
+  for (const auto& file : finished.result().files()) {
+    if (file.path() == "metrics.json") metrics_sha = file.sha256();
+  }
+  ASSERT_FALSE(metrics_sha.empty());
+  fs::resize_file(cluster.data_dir() / "blobs" / metrics_sha.substr(0, 2) / metrics_sha, 10);
+  for (int attempt = 0; attempt < 2; ++attempt) {
+    const CliResult fetched = RunCli(cluster.address(), {"fetch", done, "-o", cluster.path("out").string()});
+    EXPECT_EQ(fetched.exit_code, 9) << fetched.err;
+    EXPECT_NE(fetched.err.find("metrics.json"), std::string::npos) << fetched.err;
+  }
 }
 
 }  // namespace

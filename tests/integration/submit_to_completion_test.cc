@@ -5,6 +5,7 @@
 #include <sys/file.h>
 #include <unistd.h>
 
+#include <nlohmann/json.hpp>
 #include <string>
 #include <utility>
 #include <vector>
@@ -68,6 +69,16 @@ TEST(SubmitToCompletionTest, ClipInResultsOut) {
   const auto again = RunCli(cluster.address(), {"fetch", id, "-o", cluster.path("results").string()});
   EXPECT_EQ(again.exit_code, 0);
   EXPECT_NE(again.out.find("fetched 0 of"), std::string::npos) << again.out;
+  // With --json, what the text says (it printed the manifest alone).
+  const auto json =
+      RunCli(cluster.address(), {"--json", "fetch", id, "-o", cluster.path("results").string()});
+  ASSERT_EQ(json.exit_code, 0) << json.err;
+  const auto fetch = nlohmann::json::parse(json.out);
+  EXPECT_EQ(fetch["job"], id);
+  EXPECT_EQ(fetch["report"], (cluster.path("results") / "report.html").string());
+  EXPECT_EQ(fetch["fetched_files"], 0);
+  EXPECT_EQ(fetch["files"], job.result().files_size());
+  EXPECT_EQ(fetch["result"]["files"].size(), static_cast<std::size_t>(job.result().files_size()));
   // A folder of someone's files is refused, nothing written into it (found 2026-12-05); one holding
   // a download in progress (a .part) is a resume.
   std::filesystem::create_directories(cluster.path("documents"));

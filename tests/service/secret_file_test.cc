@@ -40,11 +40,13 @@ TEST(SecretFileTest, ATokenIsOneWordOfPrintableAscii) {
                        "$ENDORECON_TOKEN"),
             "endorecon.abc.def");
   EXPECT_EQ(CleanToken(" endorecon.abc.def\t", "$ENDORECON_TOKEN"), "endorecon.abc.def");
-  const std::string message = testing::ErrorFrom([] {
-    CleanToken(std::string("endorecon.a\x01"
-                           "c.def"),
-               "$ENDORECON_TOKEN");
-  });
+  const std::string message = testing::ErrorFrom(
+      [] {
+        CleanToken(std::string("endorecon.a\x01"
+                               "c.def"),
+                   "$ENDORECON_TOKEN");
+      },
+      ErrorCode::kUnauthenticated);
   EXPECT_NE(message.find("$ENDORECON_TOKEN: the token holds byte 0x01 at position 12"), std::string::npos)
       << message;
   EXPECT_THROW(CleanToken("endorecon.\xC3\xA9.def", "--token-file t"), Error);
