@@ -1,9 +1,13 @@
 #include "client/recording_upload.h"
 
+#include <string>
+#include <vector>
+
 #include "client/staging_folder.h"
 #include "common/clip_files.h"
 #include "common/error.h"
 #include "common/file_read.h"
+#include "common/image_bytes.h"
 
 namespace endorecon::client {
 namespace fs = std::filesystem;
@@ -64,6 +68,36 @@ std::string StagedRecording::Stage(const std::string& path, const std::string& n
   fs::create_symlink(source, dir_ / staged);
   sources_[staged] = path;
   return staged;
+}
+
+void StagedRecording::CheckBeforeUpload() const {
+  const auto frames_of = [&](const std::string& name) {
+    std::vector<fs::path> files;
+    if (!fs::is_directory(dir_ / name)) return files;
+    for (const auto& entry : fs::directory_iterator(dir_ / name)) files.push_back(entry.path());
+    return files;
+  };
+  const auto users = [&](const std::string& name) { return sources_.at(name + "/"); };
+  const auto left = frames_of("left"), right = frames_of("right");
+  if (!left.empty() && !right.empty() && left.size() != right.size()) {
+    FailInvalid(users("right") + ": " + std::to_string(right.size()) + " frames while " + users("left") +
+                " has " + std::to_string(left.size()) + " (both eyes' recordings must have the same length)");
+  }
+  if (!flags_.frames.empty()) return;  // frames outside the window are neither read nor checked
+  for (const char* name : {"left", "right", "side_by_side", "top_bottom", "masks"}) {
+    for (const fs::path& frame : frames_of(name)) {
+      try {
+        CheckImageBytes(frame);
+      } catch (const Error& e) {
+        // Named at the user's path, not at its link in the staging folder.
+        std::string message = e.what();
+        const std::string staged = frame.string();
+        if (const auto at = message.find(staged); at != std::string::npos)
+          message.replace(at, staged.size(), users(name) + frame.filename().string());
+        Fail(e.code(), message);
+      }
+    }
+  }
 }
 
 }  // namespace endorecon::client

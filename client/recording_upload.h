@@ -29,6 +29,14 @@ class StagedRecording {
   // Each staged name ("side_by_side.mp4", a folder's "left/") and the path as the user gave it.
   const std::map<std::string, std::string>& sources() const { return sources_; }
 
+  // What the worker's preparation would refuse after the upload and a wait in the queue, as far as
+  // that needs no decoding (its videos and calibration are the worker's to read): two folders of
+  // frames as eyes must hold as many frames, and, for a whole recording (no --frames), every frame
+  // of a folder (eyes, masks) is a whole PNG, JPEG, BMP or TIFF (common/image_bytes.h). A raw
+  // recording with a truncated frame or an eye a frame short was uploaded, queued and failed on a
+  // worker (found 2026-12-06). Throws Error (kInvalidArgument) naming the user's path.
+  void CheckBeforeUpload() const;
+
  private:
   // Links `path` (a file, or a folder's visible image files) as `name` (+ the file's extension);
   // returns the staged name. With `file_flag` (the flag's name) a folder is refused: the flag takes

@@ -323,7 +323,14 @@ int Submit(const Globals& globals, const SubmitFlags& flags) {
   }
   // A raw recording is staged under canonical names (recording_upload.h); its folder is uploaded.
   std::optional<StagedRecording> staged;
-  if (!flags.raw.empty()) staged.emplace(flags.raw);
+  if (!flags.raw.empty()) {
+    staged.emplace(flags.raw);
+    try {
+      staged->CheckBeforeUpload();
+    } catch (const Error& e) {
+      Fail(e.code(), std::string(e.what()) + " (found before the upload: nothing was sent)");
+    }
+  }
   // A clip folder's picked frames go up alone, as a clip cut to them (clip_cut.h); the worker loads
   // it as it is, and the job's recording.frames records which they were.
   FrameRange frames = ParseFrameRange(flags.raw.frames);

@@ -3,8 +3,10 @@
 // and the prepared clip comes back with the results.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
+#include <vector>
 
 #include "tests/integration/service_harness.h"
 #include "worker/engine/scene/synthetic_clip.h"
@@ -121,6 +123,30 @@ TEST(PrepareJobTest, AnEyesFolderSendsOnlyItsFramesAndAFolderIsNoCalibration) {
   EXPECT_EQ(result.exit_code, 2) << result.err;
   EXPECT_NE(result.err.find("synth: a folder, and --calibration takes a file"), std::string::npos)
       << result.err;
+  // An eye a frame short, or a frame cut short, is refused before the upload too, naming the user's
+  // folder and frame (both were uploaded, queued and failed on a worker; found 2026-12-06).
+  fs::copy(rec / "synth/recording/right", rec / "short", fs::copy_options::recursive);
+  fs::copy(rec / "synth/recording/left", rec / "cut", fs::copy_options::recursive);
+  std::vector<fs::path> frames;
+  for (const auto& entry : fs::directory_iterator(rec / "short")) frames.push_back(entry.path());
+  std::sort(frames.begin(), frames.end());
+  fs::remove(frames.back());
+  result = RunCli(cluster.address(), {"submit", "--left", (rec / "synth/recording/left").string(), "--right",
+                                      (rec / "short").string(), "--calibration", calibration});
+  EXPECT_EQ(result.exit_code, 2) << result.err;
+  EXPECT_NE(result.err.find((rec / "short").string() + "/: " + std::to_string(frames.size() - 1) +
+                            " frames while " + (rec / "synth/recording/left").string() + "/ has " +
+                            std::to_string(frames.size())),
+            std::string::npos)
+      << result.err;
+  EXPECT_NE(result.err.find("(found before the upload: nothing was sent)"), std::string::npos) << result.err;
+  const fs::path cut = rec / "cut" / frames.front().filename();
+  WriteBytes(cut, ReadBytes(cut).substr(0, 200));
+  result =
+      RunCli(cluster.address(), {"submit", "--left", (rec / "cut").string(), "--right",
+                                 (rec / "synth/recording/right").string(), "--calibration", calibration});
+  EXPECT_EQ(result.exit_code, 2) << result.err;
+  EXPECT_NE(result.err.find(cut.string() + ": a truncated PNG"), std::string::npos) << result.err;
   int uploaded = 0;
   for (const char* folder : {"blobs", "partial"}) {
     if (!fs::exists(cluster.data_dir() / folder)) continue;
