@@ -62,7 +62,9 @@ std::string StagedRecording::Stage(const std::string& path, const std::string& n
     sources_[name + "/"] = fs::path(path).lexically_normal().string() + (path.back() == '/' ? "" : "/");
     return name;
   }
-  RequireRegularFile(source, "video file or folder of frames");  // a FIFO: named as one, not as missing
+  // A FIFO: named as one (with what the flag takes), not as missing.
+  RequireRegularFile(source, file_flag ? "file (" + std::string(file_flag) + " takes a file)"
+                                       : "video file or folder of frames");
   if (!fs::is_regular_file(source)) Fail(ErrorCode::kNotFound, path + ": no such file or folder");
   const std::string staged = name + source.extension().string();
   fs::create_symlink(source, dir_ / staged);

@@ -26,7 +26,7 @@ CLI::Validator AtLeastZero() {
   return CLI::Validator(
       [](const std::string& text) -> std::string {
         const double value = Number(text);
-        if (std::isnan(value)) return text + " is not a number";
+        if (std::isnan(value)) return text + " is not a finite number";
         return value < 0 ? text + " is negative; expected a number >= 0" : "";
       },
       ">= 0", "AtLeastZero");
@@ -36,7 +36,7 @@ CLI::Validator AboveZero() {
   return CLI::Validator(
       [](const std::string& text) -> std::string {
         const double value = Number(text);
-        if (std::isnan(value)) return text + " is not a number";
+        if (std::isnan(value)) return text + " is not a finite number";
         return value <= 0 ? text + " is not above 0" : "";
       },
       "> 0", "AboveZero");
@@ -52,7 +52,7 @@ CLI::Validator Within(double low, double high) {
   return CLI::Validator(
       [low, high, range](const std::string& text) -> std::string {
         const double value = Number(text);
-        if (std::isnan(value)) return text + " is not a number";
+        if (std::isnan(value)) return text + " is not a finite number";
         return value < low || value > high ? text + ": expected " + range : "";
       },
       range, "Within");
@@ -62,7 +62,7 @@ CLI::Validator TimeBudget() {
   return CLI::Validator(
       [](const std::string& text) -> std::string {
         const double value = Number(text);
-        if (std::isnan(value)) return text + " is not a number";
+        if (std::isnan(value)) return text + " is not a finite number";
         if (value == 0 || (value >= kLeastTimeBudgetS && value <= kMostTimeBudgetS)) return "";
         return text + ": expected 0 (no budget) or " + std::to_string(int(kLeastTimeBudgetS)) + " to " +
                std::to_string(int(kMostTimeBudgetS)) +

@@ -26,9 +26,18 @@ std::string UtcNow() {
 }  // namespace
 
 AuditLog::AuditLog(const std::filesystem::path& file) : path_(file) {
-  fd_ = ::open(file.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0640);
+  // Non-blocking to open: a named pipe without a reader held the server in open() at start, deaf to
+  // SIGTERM (found 2026-12-06); one with a reader (a log shipper) is taken. Writes block as before.
+  fd_ = ::open(file.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC | O_NONBLOCK, 0640);
+  if (fd_ < 0 && errno == ENXIO) {
+    Fail(ErrorCode::kInvalidArgument,
+         "--audit-log " + file.string() +
+             ": a named pipe (FIFO) that no process reads: start its reader first, "
+             "or name a file");
+  }
   if (fd_ < 0)
     Fail(ErrorCode::kUnavailable, "cannot open audit log " + file.string() + ": " + std::strerror(errno));
+  ::fcntl(fd_, F_SETFL, ::fcntl(fd_, F_GETFL) & ~O_NONBLOCK);
 }
 
 AuditLog::~AuditLog() { ::close(fd_); }

@@ -1,11 +1,13 @@
 #include "server/audit_log.h"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <thread>
 
+#include "common/error.h"
 #include "tests/unit/temp_dir.h"
 
 namespace endorecon::server {
@@ -40,6 +42,21 @@ TEST(AuditLogTest, OneJsonLinePerEntryFromManyThreadsAndWriters) {
   EXPECT_EQ(last["certificate"], "worker-1");
   EXPECT_EQ(last["time"].get<std::string>().size(), 24u);  // 2026-11-30T12:00:00.000Z
   EXPECT_EQ(last["time"].get<std::string>().back(), 'Z');
+}
+
+// A named pipe with no reader is refused at once: the server hung in open() at start, deaf to SIGTERM
+// (found 2026-12-06).
+TEST(AuditLogTest, APipeNoProcessReadsIsRefusedNotWaitedOn) {
+  testing::TempDir dir("audit");
+  ASSERT_EQ(::mkfifo((dir / "audit.fifo").c_str(), 0600), 0);
+  try {
+    AuditLog log(dir / "audit.fifo");
+    ADD_FAILURE() << "opened a pipe no one reads";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument);
+    EXPECT_NE(std::string(e.what()).find("a named pipe (FIFO) that no process reads"), std::string::npos)
+        << e.what();
+  }
 }
 
 }  // namespace
