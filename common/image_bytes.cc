@@ -6,6 +6,7 @@
 #include <array>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <iterator>
 #include <string>
@@ -123,6 +124,42 @@ void CheckJpegEnd(const fs::path& path, std::ifstream& in) {
 }
 
 }  // namespace
+
+std::optional<ImageSize> ImageSizeOf(const fs::path& path) {
+  std::ifstream in = OpenToRead(path);
+  std::vector<unsigned char> head(std::size_t{1} << 20);
+  in.read(reinterpret_cast<char*>(head.data()), static_cast<std::streamsize>(head.size()));
+  head.resize(static_cast<std::size_t>(in.gcount()));
+  const std::string_view bytes(reinterpret_cast<const char*>(head.data()), head.size());
+  const auto positive = [](std::int64_t width, std::int64_t height) -> std::optional<ImageSize> {
+    if (width <= 0 || height <= 0 || width > 1 << 30 || height > 1 << 30) return std::nullopt;
+    return ImageSize{static_cast<int>(width), static_cast<int>(height)};
+  };
+  if (StartsWith(bytes, kPngSignature) && head.size() >= 24 && bytes.substr(12, 4) == "IHDR")
+    return positive(BigEndian32(&head[16]), BigEndian32(&head[20]));
+  if (StartsWith(bytes, "BM") && head.size() >= 26) {
+    const auto little16 = [&](std::size_t at) {
+      return std::int64_t{head[at]} | std::int64_t{head[at + 1]} << 8;
+    };
+    const auto little32 = [&](std::size_t at) {
+      return static_cast<std::int32_t>(std::uint32_t{head[at]} | std::uint32_t{head[at + 1]} << 8 |
+                                       std::uint32_t{head[at + 2]} << 16 | std::uint32_t{head[at + 3]} << 24);
+    };
+    if (little32(14) == 12) return positive(little16(18), little16(20));  // BITMAPCOREHEADER
+    return positive(little32(18), std::abs(std::int64_t{little32(22)}));  // height < 0: top-down rows
+  }
+  if (StartsWith(bytes, std::string_view("\xff\xd8\xff", 3))) {
+    // Start of frame: SOF0-3, 5-7, 9-11, 13-15 (C4 is DHT, C8 JPG, CC DAC): FF Cn, length, precision,
+    // height, width.
+    const auto frame = FindJpegHeaderMarker(head.data(), head.size(), [](unsigned char marker) {
+      return marker >= 0xc0 && marker <= 0xcf && marker != 0xc4 && marker != 0xc8 && marker != 0xcc;
+    });
+    if (!frame || *frame + 9 > head.size()) return std::nullopt;
+    const unsigned char* sof = head.data() + *frame;
+    return positive(std::int64_t{sof[7]} << 8 | sof[8], std::int64_t{sof[5]} << 8 | sof[6]);  // X, then Y
+  }
+  return std::nullopt;
+}
 
 void CheckImageBytes(const fs::path& path) {
   std::error_code error;

@@ -4,6 +4,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <set>
 #include <string>
 #include <thread>
@@ -229,6 +230,22 @@ TEST_F(BadUploadTest, AClipMissingAMaskOrHoldingATruncatedPngIsRefusedBeforeItsU
   EXPECT_EQ(result.exit_code, 2) << result.err;
   EXPECT_NE(result.err.find("gtcut/gt/depth/000002.npy"), std::string::npos) << result.err;
   EXPECT_NE(result.err.find("found before the upload: nothing was sent"), std::string::npos) << result.err;
+  EXPECT_EQ(Blobs(), 0);
+  // A mask of another size than the frames' (told by its header; found only on a worker before).
+  MakeClip(cluster_.path("bigmask"));
+  ASSERT_EQ(
+      std::system((BuiltBinary("worker/runtime/endorecon-worker") + " synth " +
+                   cluster_.path("small").string() + " --frames 2 --width 16 --height 12 > /dev/null 2>&1")
+                      .c_str()),
+      0);
+  std::filesystem::copy_file(cluster_.path("small") / "masks" / "000000.png",
+                             cluster_.path("bigmask") / "masks" / "000002.png",
+                             std::filesystem::copy_options::overwrite_existing);
+  result = RunCli(cluster_.address(), {"submit", cluster_.path("bigmask").string()});
+  EXPECT_EQ(result.exit_code, 2) << result.err;
+  EXPECT_NE(result.err.find("bigmask/masks/000002.png: size 16x12 differs from the clip's 32x24"),
+            std::string::npos)
+      << result.err;
   EXPECT_EQ(Blobs(), 0);
   // A NaN in a pose (it failed the job on a worker, after the upload), and a row the loader refuses.
   MakeClip(cluster_.path("nanpose"));
