@@ -15,9 +15,12 @@ namespace endorecon::client {
 
 void CheckClipBeforeUpload(const std::filesystem::path& dir) {
   try {
-    std::vector<FrameFiles> frames = ListClipFrames(dir);
+    // An EndoNeRF clip's pose rows are checked as the loader checks them, and count its frames.
+    std::vector<FrameFiles> frames =
+        FindClipLayout(dir) == ClipLayout::kEndoNerf
+            ? ListEndoNerfFrames(dir, ReadPoseRows(dir / "poses_bounds.npy").rows.size())
+            : ListClipFrames(dir);
     const std::size_t clip_frames = frames.size();
-    if (FindClipLayout(dir) == ClipLayout::kEndoNerf) ReadPoseRows(dir / "poses_bounds.npy");
     // gt/'s too: a damaged gt/depth/*.npy failed the job on a worker (found 2026-12-06).
     if (std::filesystem::is_directory(dir / "gt")) {
       for (FrameFiles& truth : ListGroundTruthFrames(dir / "gt", frames.size()))

@@ -45,8 +45,8 @@ StagedClipCut::StagedClipCut(const fs::path& clip, const FrameRange& frames)
     WriteFile(dir_ / "transforms.json", top.dump(2) + "\n", "the cut clip's transforms.json");
   } else {
     const fs::path poses = clip_ / "poses_bounds.npy";
-    ReadPoseRows(poses);  // every row, as a local run of the same frames checks them
     const NpyArray rows = ReadNpy(poses);
+    PoseRowsOf(rows, poses);  // every row, as a local run of the same frames checks them
     std::vector<double> cut;
     for (const int frame : picked) {
       const auto row = rows.data.begin() + static_cast<std::ptrdiff_t>(frame * kPoseColumns);

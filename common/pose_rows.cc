@@ -25,7 +25,10 @@ std::string Number(double value) {
 
 PoseRows ReadPoseRows(const fs::path& path) {
   if (!fs::exists(path)) FailInvalid(path.string() + ": file does not exist");
-  const NpyArray array = ReadNpy(path);
+  return PoseRowsOf(ReadNpy(path), path);
+}
+
+PoseRows PoseRowsOf(const NpyArray& array, const fs::path& path) {
   const std::size_t count = PoseRowCount(array, path);
 
   PoseRows poses;

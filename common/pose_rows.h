@@ -26,5 +26,8 @@ struct PoseRows {
 // centre) and pose by common/camera_values.h, its near and far, and the bounds over all rows. Throws
 // FailInvalid naming the file and the row.
 PoseRows ReadPoseRows(const std::filesystem::path& path);
+// The same, of the array already read from `path` (named in errors).
+struct NpyArray;
+PoseRows PoseRowsOf(const NpyArray& array, const std::filesystem::path& path);
 
 }  // namespace endorecon

@@ -61,8 +61,7 @@ std::int64_t StoredBytes(const v1::Job& job) {
   return TotalBytes(job.clip()) + TotalBytes(job.result()) + job.checkpoint().size();
 }
 
-JobStore::JobStore(const std::filesystem::path& db_file)
-    : file_(db_file), db_(OpenDatabase(db_file, kStore)) {
+JobStore::JobStore(const std::filesystem::path& db_file) : file_(db_file), db_(OpenStore(db_file, kStore)) {
   try {
     CheckDatabase(db_, db_file, kStore);
     Exec(db_,

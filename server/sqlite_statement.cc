@@ -89,21 +89,6 @@ void Exec(sqlite3* db, const char* sql, const char* store) {
 }
 
 sqlite3* OpenDatabase(const std::filesystem::path& file, const char* store) {
-  // Before SQLite reads the log: it would drop what follows the damage and go on (wal_check.h).
-  const std::filesystem::path wal = file.string() + "-wal";
-  if (const auto damage = FindWalDamage(wal)) {
-    Fail(ErrorCode::kDataLoss,
-         std::string(store) + " " + file.string() + ": its write-ahead log " + wal.string() +
-             " is damaged: " +
-             (damage->bad_frame < 0 ? std::string("its header")
-                                    : "frame " + std::to_string(damage->bad_frame)) +
-             " fails its checksum, and " + std::to_string(damage->commits_after) +
-             " committed transaction(s) follow, which SQLite would drop without a word (jobs accepted, "
-             "tokens made). Restore the data folder from a backup (docs/operations.md, \"Backup and "
-             "restore\"); or, to start with what the store held before the damage and lose what "
-             "followed, move " +
-             wal.filename().string() + " aside");
-  }
   sqlite3* db = nullptr;
   if (sqlite3_open(file.c_str(), &db) != SQLITE_OK) {
     std::string message = db ? sqlite3_errmsg(db) : "out of memory";
@@ -128,6 +113,25 @@ sqlite3* OpenDatabase(const std::filesystem::path& file, const char* store) {
     throw;
   }
   return db;
+}
+
+sqlite3* OpenStore(const std::filesystem::path& file, const char* store) {
+  // Before SQLite reads the log: it would drop what follows the damage and go on (wal_check.h).
+  const std::filesystem::path wal = file.string() + "-wal";
+  if (const auto damage = FindWalDamage(wal)) {
+    Fail(ErrorCode::kDataLoss,
+         std::string(store) + " " + file.string() + ": its write-ahead log " + wal.string() +
+             " is damaged: " +
+             (damage->bad_frame < 0 ? std::string("its header")
+                                    : "frame " + std::to_string(damage->bad_frame)) +
+             " fails its checksum, and " + std::to_string(damage->commits_after) +
+             " committed transaction(s) follow, which SQLite would drop without a word (jobs accepted, "
+             "tokens made). Restore the data folder from a backup (docs/operations.md, \"Backup and "
+             "restore\"); or, to start with what the store held before the damage and lose what "
+             "followed, move " +
+             wal.filename().string() + " aside");
+  }
+  return OpenDatabase(file, store);
 }
 
 void CheckDatabase(sqlite3* db, const std::filesystem::path& file, const char* store) {

@@ -46,9 +46,14 @@ void Exec(sqlite3* db, const char* sql, const char* store);
 
 // Opens (creating) a database in WAL mode with synchronous=FULL and a busy timeout, so several
 // processes (the server, `endorecon-server token ...`) may use it at once. Throws
-// Error(kUnavailable) naming the file, Error(kDataLoss) for a write-ahead log with committed
-// transactions past a damaged frame (wal_check.h), which SQLite would drop in silence.
+// Error(kUnavailable) naming the file.
 sqlite3* OpenDatabase(const std::filesystem::path& file, const char* store);
+
+// A store's first connection: OpenDatabase, once its write-ahead log is read for committed
+// transactions past a damaged frame (wal_check.h), which SQLite would drop in silence:
+// Error(kDataLoss) naming the frame. Its further connections (a reader, the checkpointer) open the
+// log this one has already taken, with OpenDatabase.
+sqlite3* OpenStore(const std::filesystem::path& file, const char* store);
 
 // What a store's owner checks once at start, on its writing connection: that this process may write
 // the file (Error(kFailedPrecondition) naming it: a read-only jobs.sqlite started, accepted uploads,

@@ -67,7 +67,7 @@ std::filesystem::path TokenStore::PathIn(const std::filesystem::path& data_dir) 
 
 TokenStore::TokenStore(const std::filesystem::path& db_file) {
   const bool created = !std::filesystem::exists(db_file);
-  db_ = OpenDatabase(db_file, kStore);
+  db_ = OpenStore(db_file, kStore);
   if (created) {
     std::error_code ignored;
     std::filesystem::permissions(

@@ -3,12 +3,12 @@
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 
-#include <functional>
 #include <iterator>
 #include <string>
 
 #include "common/error.h"
 #include "common/secret_file.h"
+#include "tests/unit/clip_fixture.h"
 #include "tests/unit/temp_dir.h"
 
 namespace endorecon {
@@ -38,21 +38,11 @@ TEST(FileRead, OpensAFileAndSaysWhyOneCannotBeOpened) {
 TEST(FileRead, APipeAFolderOrADeviceIsRefusedByItsKindBeforeItIsOpened) {
   testing::TempDir dir("file-read");
   ASSERT_EQ(::mkfifo((dir / "quotas.json").c_str(), 0600), 0);
-  const auto message = [](const std::function<void()>& call) {
-    try {
-      call();
-    } catch (const Error& e) {
-      EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument) << e.what();
-      return std::string(e.what());
-    }
-    ADD_FAILURE() << "no error";
-    return std::string();
-  };
-  EXPECT_EQ(message([&] { OpenToRead(dir / "quotas.json"); }),
+  EXPECT_EQ(testing::ErrorFrom([&] { OpenToRead(dir / "quotas.json"); }),
             (dir / "quotas.json").string() + ": a named pipe (FIFO), not a file");
-  EXPECT_EQ(message([&] { RequireRegularFile(dir.path(), "calibration file"); }),
+  EXPECT_EQ(testing::ErrorFrom([&] { RequireRegularFile(dir.path(), "calibration file"); }),
             dir.path().string() + ": a folder, not a calibration file");
-  EXPECT_EQ(message([] { RequireRegularFile("/dev/null"); }), "/dev/null: a device, not a file");
+  EXPECT_EQ(testing::ErrorFrom([] { RequireRegularFile("/dev/null"); }), "/dev/null: a device, not a file");
   EXPECT_NO_THROW(RequireRegularFile(dir / "missing"));
   try {
     RequireExistingFile(dir / "missing", "pose file");
@@ -64,14 +54,14 @@ TEST(FileRead, APipeAFolderOrADeviceIsRefusedByItsKindBeforeItIsOpened) {
   // The secret and certificate files of TLS and tokens alike: a pipe's mode 0644 was reported as a
   // secret others may read; a file of other text as gRPC's "empty address list".
   ::chmod((dir / "quotas.json").c_str(), 0644);
-  EXPECT_EQ(message([&] { ReadSecretFile(dir / "quotas.json", "--token-file"); }),
+  EXPECT_EQ(testing::ErrorFrom([&] { ReadSecretFile(dir / "quotas.json", "--token-file"); }),
             "--token-file " + (dir / "quotas.json").string() + ": a named pipe (FIFO), not a file");
-  EXPECT_EQ(message([&] { ReadPublicFile(dir / "quotas.json", "--ca"); }),
+  EXPECT_EQ(testing::ErrorFrom([&] { ReadPublicFile(dir / "quotas.json", "--ca"); }),
             "--ca " + (dir / "quotas.json").string() + ": a named pipe (FIFO), not a file");
-  EXPECT_EQ(message([&] { ReadPublicFile(dir.path(), "--ca"); }),
+  EXPECT_EQ(testing::ErrorFrom([&] { ReadPublicFile(dir.path(), "--ca"); }),
             "--ca " + dir.path().string() + ": a folder, not a file");
   testing::WriteBytes(dir / "hello.crt", "hello\n");
-  EXPECT_EQ(message([&] { ReadPublicFile(dir / "hello.crt", "--ca"); }),
+  EXPECT_EQ(testing::ErrorFrom([&] { ReadPublicFile(dir / "hello.crt", "--ca"); }),
             "--ca " + (dir / "hello.crt").string() +
                 ": holds no PEM certificate (no \"-----BEGIN CERTIFICATE-----\" line)");
 }

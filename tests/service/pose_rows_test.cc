@@ -3,7 +3,6 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <functional>
 #include <string>
 #include <vector>
 
@@ -11,23 +10,14 @@
 #include "common/clip_files.h"
 #include "common/error.h"
 #include "common/npy.h"
+#include "tests/unit/clip_fixture.h"
 #include "tests/unit/temp_dir.h"
 
 namespace endorecon {
 namespace {
 
+using testing::ErrorFrom;
 using testing::TempDir;
-
-std::string ErrorOf(const std::function<void()>& call) {
-  try {
-    call();
-  } catch (const Error& e) {
-    EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument);
-    return e.what();
-  }
-  ADD_FAILURE() << "no error";
-  return "";
-}
 
 // An LLFF row: rotation columns [down, right, back] = identity here, t, H, W, f, near, far.
 std::vector<double> Row(double tx, double near, double far, double h = 48, double w = 64) {
@@ -62,28 +52,28 @@ TEST(PoseRowsTest, EachRowIsCheckedNamingIt) {
     WriteNpyFloat64(path, values.data(), {2, kPoseColumns});
   };
   write(Row(0, 1, 10, 48, 63.5));
-  EXPECT_NE(ErrorOf([&] {
+  EXPECT_NE(ErrorFrom([&] {
               ReadPoseRows(path);
             }).find("row 1: H and W must be positive integers (H = 48, W = 63.5)"),
             std::string::npos);
   write(Row(0, 1, 10, 40, 64));
-  EXPECT_NE(ErrorOf([&] { ReadPoseRows(path); }).find("row 1: image size 64x40 differs from row 0's 64x48"),
+  EXPECT_NE(ErrorFrom([&] { ReadPoseRows(path); }).find("row 1: image size 64x40 differs from row 0's 64x48"),
             std::string::npos);
   write(Row(0, 10, 1));
   EXPECT_NE(
-      ErrorOf([&] { ReadPoseRows(path); }).find("row 1: depth bounds must be finite with 0 <= near < far"),
+      ErrorFrom([&] { ReadPoseRows(path); }).find("row 1: depth bounds must be finite with 0 <= near < far"),
       std::string::npos);
   std::vector<double> flat = Row(0, 1, 10);
   flat[14] = 1e-3;  // a focal length in metres: a field of view near 180 degrees
   write(flat);
-  EXPECT_NE(ErrorOf([&] {
+  EXPECT_NE(ErrorFrom([&] {
               ReadPoseRows(path);
             }).find("row 1: the focal length (fx = 0.001, fy = 0.001) gives a field of view"),
             std::string::npos);
   std::vector<double> mirrored = Row(0, 1, 10);
   mirrored[12] = -1;  // the back axis flipped: a reflection
   write(mirrored);
-  EXPECT_NE(ErrorOf([&] {
+  EXPECT_NE(ErrorFrom([&] {
               ReadPoseRows(path);
             }).find("row 1: the pose's rotation has determinant -1 (a reflection)"),
             std::string::npos);
@@ -96,31 +86,33 @@ TEST(CameraValuesTest, RigidPosesAreOrthonormalProperAndNearTheOrigin) {
   double stretched[12];
   std::copy(turned, turned + 12, stretched);
   stretched[1] = 1.1;
-  EXPECT_EQ(ErrorOf([&] { CheckRigidPose(stretched, "here"); }),
+  EXPECT_EQ(ErrorFrom([&] { CheckRigidPose(stretched, "here"); }),
             "here: the pose's rotation is not orthonormal (max |RᵀR − I| = 0.21)");
   double far_away[12];
   std::copy(turned, turned + 12, far_away);
   far_away[11] = 1e200;  // its square overflows; the distance does not
-  EXPECT_NE(ErrorOf([&] {
+  EXPECT_NE(ErrorFrom([&] {
               CheckRigidPose(far_away, "here");
             }).find("the camera's centre lies 1e+200 from the origin"),
             std::string::npos);
   double broken[12];
   std::copy(turned, turned + 12, broken);
   broken[4] = NAN;
-  EXPECT_EQ(ErrorOf([&] { CheckRigidPose(broken, "here"); }), "here: the pose has non-finite entries");
+  EXPECT_EQ(ErrorFrom([&] { CheckRigidPose(broken, "here"); }), "here: the pose has non-finite entries");
 }
 
 TEST(CameraValuesTest, IntrinsicsAndBounds) {
   EXPECT_NO_THROW(CheckIntrinsics(50, 60, 32, 24, 64, 48, "here"));
-  EXPECT_NE(
-      ErrorOf([] { CheckIntrinsics(50, 50, 5000, 24, 64, 48, "here"); }).find("lies outside the 64x48 frame"),
-      std::string::npos);
-  EXPECT_NE(ErrorOf([] { CheckIntrinsics(50, 500, 32, 24, 64, 48, "here"); }).find("fy / fx is 10"),
+  EXPECT_NE(ErrorFrom([] {
+              CheckIntrinsics(50, 50, 5000, 24, 64, 48, "here");
+            }).find("lies outside the 64x48 frame"),
+            std::string::npos);
+  EXPECT_NE(ErrorFrom([] { CheckIntrinsics(50, 500, 32, 24, 64, 48, "here"); }).find("fy / fx is 10"),
             std::string::npos);
   EXPECT_NO_THROW(CheckNearFar(0, 1, "here"));
-  EXPECT_NE(ErrorOf([] { CheckNearFar(1, 1 + 1e-6, "here"); }).find("too thin to sample"), std::string::npos);
-  EXPECT_NE(ErrorOf([] { CheckNearFar(1, 1e13, "here"); }).find("implausible units"), std::string::npos);
+  EXPECT_NE(ErrorFrom([] { CheckNearFar(1, 1 + 1e-6, "here"); }).find("too thin to sample"),
+            std::string::npos);
+  EXPECT_NE(ErrorFrom([] { CheckNearFar(1, 1e13, "here"); }).find("implausible units"), std::string::npos);
 }
 
 }  // namespace
