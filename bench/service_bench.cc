@@ -1,9 +1,11 @@
-// service_bench: the service's three numbers, against a real endorecon-server over loopback.
+// service_bench: the service's numbers, against a real endorecon-server over loopback.
 //   1. upload throughput (endorecon's resumable upload) against a plain copy of the same bytes on
-//      the same disk (read, write, fsync): the ratio, target >= 0.5;
+//      the same disk (read, write, fsync): the ratio, target >= 0.5; then the same file downloaded
+//      as a worker downloads a clip (GetBlobs: hashed on the server's side as it is sent, verified
+//      and synced on the receiver's), with the server's CPU time per GiB sent;
 //   2. submit-to-start latency with an idle worker long-polling: target < 100 ms;
 //   3. server resident memory with 1,000 queued jobs and 100 concurrent watchers: target < 200 MB.
-// Usage: service_bench [--upload-mib N] [--jobs N] [--watchers N] [--dir SCRATCH]
+// Usage: service_bench [--upload-mib N] [--jobs N] [--watchers N] [--dir SCRATCH] [--server BINARY]
 #include <fcntl.h>
 #include <signal.h>
 #include <sys/wait.h>
@@ -15,11 +17,14 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <random>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "common/file_download.h"
 #include "common/file_upload.h"
 #include "common/grpc_status.h"
 #include "common/manifest.h"
@@ -36,9 +41,8 @@ double Seconds(Clock::time_point since) {
   return std::chrono::duration<double>(Clock::now() - since).count();
 }
 
-pid_t StartServer(const fs::path& data, int port, const fs::path& log) {
+pid_t StartServer(const std::string& binary, const fs::path& data, int port, const fs::path& log) {
   // Made before fork: the child of a threaded process may only call async-signal-safe functions.
-  const std::string binary = std::string(ENDORECON_BINARY_DIR) + "/server/endorecon-server";
   const std::string listen = "127.0.0.1:" + std::to_string(port);
   const pid_t pid = fork();
   if (pid == 0) {
@@ -50,6 +54,19 @@ pid_t StartServer(const fs::path& data, int port, const fs::path& log) {
     _exit(127);
   }
   return pid;
+}
+
+// The CPU time (user + system) `pid` has used, in seconds.
+double CpuSeconds(pid_t pid) {
+  std::ifstream stat("/proc/" + std::to_string(pid) + "/stat");
+  std::string text((std::istreambuf_iterator<char>(stat)), std::istreambuf_iterator<char>());
+  std::istringstream fields(text.substr(text.rfind(')') + 2));  // after the command's name
+  std::string field;
+  double ticks = 0;
+  for (int i = 3; i <= 15 && fields >> field; ++i) {
+    if (i == 14 || i == 15) ticks += std::stod(field);  // utime, stime
+  }
+  return ticks / double(sysconf(_SC_CLK_TCK));
 }
 
 long RssKiB(pid_t pid) {
@@ -106,15 +123,28 @@ int main(int argc, char** argv) {
   app.add_option("--jobs", jobs, "jobs queued")->capture_default_str();
   app.add_option("--watchers", watchers, "watch streams")->capture_default_str();
   app.add_option("--dir", scratch, "scratch folder")->capture_default_str();
+  std::string server_binary = std::string(ENDORECON_BINARY_DIR) + "/server/endorecon-server";
+  app.add_option("--server", server_binary, "the server binary (another build, to compare)")
+      ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   fs::create_directories(scratch / "clip");
   const int port = 20000 + getpid() % 20000;
   const std::string address = "127.0.0.1:" + std::to_string(port);
-  const pid_t server = StartServer(scratch / "data", port, scratch / "server.log");
+  const pid_t server = StartServer(server_binary, scratch / "data", port, scratch / "server.log");
   auto channel = OpenChannel(address);
   channel->WaitForConnected(std::chrono::system_clock::now() + std::chrono::seconds(10));
   auto jobs_stub = v1::JobService::NewStub(channel);
   auto workers_stub = v1::WorkerService::NewStub(channel);
+
+  {
+    // A worker the server does not know is answered at once, not long-polled: register first.
+    grpc::ClientContext context;
+    v1::RegisterRequest request;
+    request.set_worker_id("bench-worker");
+    request.add_devices("cpu");
+    v1::RegisterResponse response;
+    ThrowIfFailed(workers_stub->Register(&context, request, &response), "register");
+  }
 
   // 1. Upload throughput against a plain copy.
   WriteRandom(scratch / "clip" / "video.bin", std::int64_t(upload_mib) << 20);
@@ -132,6 +162,47 @@ int main(int argc, char** argv) {
       "upload  %d MiB: plain copy %.2f s (%.0f MiB/s), upload over loopback %.2f s (%.0f MiB/s), ratio "
       "%.2f\n",
       upload_mib, copy_s, mib / copy_s, upload_s, mib / upload_s, copy_s / upload_s);
+
+  // 1b. The same file downloaded as a worker downloads its clip.
+  {
+    v1::SubmitRequest submit;
+    *submit.mutable_clip() = manifest;
+    submit.mutable_options()->set_iterations(30);
+    grpc::ClientContext submit_context;
+    v1::Job job;
+    ThrowIfFailed(jobs_stub->Submit(&submit_context, submit, &job), "submit");
+    grpc::ClientContext lease_context;
+    v1::LeaseRequest lease_request;
+    lease_request.set_worker_id("bench-worker");
+    lease_request.set_wait_ms(10000);
+    v1::LeaseResponse lease;
+    ThrowIfFailed(workers_stub->Lease(&lease_context, lease_request, &lease), "lease");
+    v1::GetBlobsRequest get;
+    get.set_lease_id(lease.lease_id());
+    *get.add_files() = PendingDownloads(scratch / "download", manifest).front();
+    fs::create_directories(scratch / "download");
+    ::sync();
+    const double server_cpu_before = CpuSeconds(server);
+    const auto download_start = Clock::now();
+    grpc::ClientContext get_context;
+    auto reader = workers_stub->GetBlobs(&get_context, get);
+    ReceiveFiles(*reader, scratch / "download");
+    SyncFolder(scratch / "download");
+    const double download_s = Seconds(download_start);
+    const double server_cpu_s = CpuSeconds(server) - server_cpu_before;
+    std::printf(
+        "download %d MiB (GetBlobs, hashed by both ends, synced): %.2f s (%.0f MiB/s), ratio to the "
+        "plain copy %.2f; server CPU %.2f s (%.2f s per GiB sent)\n",
+        upload_mib, download_s, mib / download_s, copy_s / download_s, server_cpu_s,
+        server_cpu_s / (mib / 1024));
+    fs::remove_all(scratch / "download");
+    grpc::ClientContext fail_context;
+    v1::FailRequest fail;
+    fail.set_lease_id(lease.lease_id());
+    fail.set_reason("benchmark");
+    v1::Job failed;
+    workers_stub->Fail(&fail_context, fail, &failed);
+  }
 
   // 2. Submit-to-start latency: an idle "worker" long-polls Lease, the client submits.
   v1::SubmitRequest submit;

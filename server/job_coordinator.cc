@@ -8,7 +8,7 @@
 #include <set>
 #include <thread>
 
-#include "common/dicom/recording.h"
+#include "common/dicom/recording_layout.h"
 #include "common/dicom/uid.h"
 #include "common/dicom_values.h"
 #include "common/error.h"

@@ -14,25 +14,11 @@
 #include <string>
 #include <vector>
 
+#include "common/dicom/recording_layout.h"
 #include "common/dicom/study_context.h"
 #include "common/prepare_flags.h"
 
 namespace endorecon::dicom {
-
-enum class StereoLayout { kMono, kSideBySide, kTopBottom, kTwoSeries };
-
-// "" or "mono", "side-by-side", "top-bottom", "series". Throws InvalidArgument naming the value.
-StereoLayout ParseStereoLayout(const std::string& text);
-std::string StereoLayoutName(StereoLayout layout);
-
-// How the endoscope is placed in the clip made from a recording: moving (its motion estimated from
-// the frames: a mono recording's turns, worker/prepare/camera_rotation.h; a stereo recording's
-// poses, worker/prepare/pose_estimator.h) or fixed (one pose for every frame).
-enum class Endoscope { kMoving, kFixed };
-
-// "" or "moving", "fixed". Throws InvalidArgument naming the value.
-Endoscope ParseEndoscope(const std::string& text);
-std::string EndoscopeName(Endoscope endoscope);
 
 struct RecordingOptions {
   StereoLayout stereo = StereoLayout::kMono;

@@ -309,10 +309,6 @@ TEST(DicomRecordingTest, BadInputsAreNamed) {
   EXPECT_THROW(ParseFrameRange("5:2"), Error);
   EXPECT_THROW(ParseFrameRange("1:2:0"), Error);
   EXPECT_THROW(ParseFrameRange("a:b"), Error);
-  EXPECT_THROW(ParseStereoLayout("diagonal"), Error);
-  EXPECT_THROW(ParseEndoscope("wobbly"), Error);
-  EXPECT_EQ(ParseEndoscope(""), Endoscope::kMoving);
-  EXPECT_EQ(EndoscopeName(ParseEndoscope("fixed")), "fixed");
 }
 
 }  // namespace
