@@ -2,7 +2,7 @@
 # repository root:
 #   docker build -f deploy/containers/endorecon-server.Dockerfile -t endorecon-server:0.1.0 .
 # The build stage installs exactly what scripts/install-deps installs; the runtime stage only the
-# shared libraries the binaries load (scripts/install-deps --runtime), all Debian 12 packages.
+# shared libraries the binaries load (scripts/install-deps --runtime IMAGE), all Debian 12 packages.
 FROM debian:12 AS build
 COPY . /src
 RUN /src/scripts/install-deps \
@@ -12,7 +12,7 @@ RUN /src/scripts/install-deps \
 
 FROM debian:12-slim
 COPY scripts/install-deps /usr/local/lib/endorecon/install-deps
-RUN /usr/local/lib/endorecon/install-deps --runtime && rm -rf /var/lib/apt/lists/* \
+RUN /usr/local/lib/endorecon/install-deps --runtime server && rm -rf /var/lib/apt/lists/* \
  && useradd --system --uid 10001 --user-group --home-dir /data endorecon
 COPY --from=build /build/server/endorecon-server /usr/local/bin/endorecon-server
 USER 10001:10001

@@ -2,7 +2,7 @@
 # CPU preset next to GPU workers. Build from the repository root:
 #   docker build -f deploy/containers/endorecon-worker-cpu.Dockerfile -t endorecon-worker-cpu:0.1.0 .
 # The build stage installs exactly what scripts/install-deps installs; the runtime stage only the
-# shared libraries the binaries load (scripts/install-deps --runtime), all Debian 12 packages.
+# shared libraries the binaries load (scripts/install-deps --runtime IMAGE), all Debian 12 packages.
 # Not -march=native: the image runs on whatever x86-64 node the scheduler picks.
 FROM debian:12 AS build
 COPY . /src
@@ -13,7 +13,7 @@ RUN /src/scripts/install-deps \
 
 FROM debian:12-slim
 COPY scripts/install-deps /usr/local/lib/endorecon/install-deps
-RUN /usr/local/lib/endorecon/install-deps --runtime && rm -rf /var/lib/apt/lists/* \
+RUN /usr/local/lib/endorecon/install-deps --runtime worker && rm -rf /var/lib/apt/lists/* \
  && useradd --system --uid 10001 --user-group --home-dir /scratch endorecon
 COPY --from=build /build/worker/runtime/endorecon-worker /usr/local/bin/endorecon-worker
 COPY --from=build /build/client/endorecon /usr/local/bin/endorecon

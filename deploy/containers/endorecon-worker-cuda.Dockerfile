@@ -26,7 +26,7 @@ RUN /src/scripts/install-deps \
 
 FROM debian:12-slim
 COPY scripts/install-deps /usr/local/lib/endorecon/install-deps
-RUN /usr/local/lib/endorecon/install-deps --runtime && rm -rf /var/lib/apt/lists/* \
+RUN /usr/local/lib/endorecon/install-deps --runtime worker && rm -rf /var/lib/apt/lists/* \
  && useradd --system --uid 10001 --user-group --home-dir /scratch endorecon
 COPY --from=build /build/worker/runtime/endorecon-worker /usr/local/bin/endorecon-worker
 COPY --from=build /build/client/endorecon /usr/local/bin/endorecon

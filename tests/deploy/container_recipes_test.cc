@@ -70,8 +70,11 @@ TEST(ContainerRecipesTest, EachRecipeBuildsWithInstallDepsAndShipsTheRuntimePack
     EXPECT_EQ(runtime.from, "debian:12-slim") << file.path();
     EXPECT_NE(runtime.text.find("COPY scripts/install-deps /usr/local/lib/endorecon/install-deps"),
               std::string::npos);
-    EXPECT_NE(runtime.text.find("RUN /usr/local/lib/endorecon/install-deps --runtime"), std::string::npos)
-        << file.path();
+    // The server's image installs the server's libraries (no OpenCV), a worker's the worker's.
+    const std::string image = file.path().stem().string() == "endorecon-server" ? "server" : "worker";
+    EXPECT_NE(runtime.text.find("RUN /usr/local/lib/endorecon/install-deps --runtime " + image + " "),
+              std::string::npos)
+        << file.path() << ": expected install-deps --runtime " << image;
     EXPECT_NE(runtime.text.find("USER 10001"), std::string::npos) << file.path() << ": runs as root";
     // Every binary it copies is one the build stage builds.
     const std::regex copied("COPY --from=build /build/\\S+ /usr/local/bin/(\\S+)");
@@ -90,15 +93,13 @@ TEST(ContainerRecipesTest, EachRecipeBuildsWithInstallDepsAndShipsTheRuntimePack
   EXPECT_NE(cuda.find("-DENDORECON_CUDA=ON"), std::string::npos);
 }
 
-// The runtime packages and everything they depend on (the dpkg database of this machine, which
-// install-deps set up from the same Debian 12 archive as the images) own every library ldd finds.
+// Each image's runtime packages and everything they depend on (the dpkg database of this machine,
+// which install-deps set up from the same Debian 12 archive as the images) own every library its
+// binary loads: the server's packages the server's and the CLI's, the worker's the worker's.
 TEST(ContainerRecipesTest, RuntimePackagesProvideEveryLibraryTheBinariesLoad) {
   if (kAddressSanitizer || kThreadSanitizer)
     GTEST_SKIP() << "the images ship Release binaries; an instrumented build loads the sanitizer's runtime "
                     "(libatomic) too";
-  const auto runtime =
-      Lines(Capture(fmt::format("'{}' --list-runtime", SourcePath("scripts/install-deps").string())));
-  ASSERT_FALSE(runtime.empty());
   std::map<std::string, std::vector<std::string>> depends;
   for (const auto& line : Lines(Capture("dpkg-query -W -f='${Package} ${Depends}, ${Pre-Depends}\\n'"))) {
     std::istringstream words(line);
@@ -111,16 +112,22 @@ TEST(ContainerRecipesTest, RuntimePackagesProvideEveryLibraryTheBinariesLoad) {
         depends[package].push_back(clean);
     }
   }
-  std::set<std::string> closure;
-  std::vector<std::string> pending(runtime.begin(), runtime.end());
-  while (!pending.empty()) {
-    const auto package = pending.back();
-    pending.pop_back();
-    if (!closure.insert(package).second) continue;
-    for (const auto& dependency : depends[package]) pending.push_back(dependency);
+  std::map<std::string, std::set<std::string>> closures;  // image -> packages with their dependencies
+  for (const auto* image : {"server", "worker"}) {
+    const auto runtime = Lines(
+        Capture(fmt::format("'{}' --list-runtime {}", SourcePath("scripts/install-deps").string(), image)));
+    ASSERT_FALSE(runtime.empty()) << image;
+    for (const auto& package : runtime)
+      EXPECT_TRUE(depends.count(package)) << package << " is not a Debian package here";
+    std::vector<std::string> pending(runtime.begin(), runtime.end());
+    while (!pending.empty()) {
+      const auto package = pending.back();
+      pending.pop_back();
+      if (!closures[image].insert(package).second) continue;
+      for (const auto& dependency : depends[package]) pending.push_back(dependency);
+    }
   }
-  for (const auto& package : runtime)
-    EXPECT_TRUE(depends.count(package)) << package << " is not a Debian package here";
+  EXPECT_FALSE(closures["server"].count("libopencv-core406")) << "the server's image brings OpenCV";
   // Each library ldd resolves, and the file it links to: with /usr merged, dpkg knows one of the two.
   std::map<std::string, std::vector<std::string>> libraries;  // binary -> libraries
   std::string paths;
@@ -140,8 +147,10 @@ TEST(ContainerRecipesTest, RuntimePackagesProvideEveryLibraryTheBinariesLoad) {
     for (const auto& library : paths_of) {
       const auto owner = owners.count(library) ? owners[library] : owners[fs::canonical(library).string()];
       ASSERT_FALSE(owner.empty()) << binary << " loads " << library << ", which no package owns";
-      EXPECT_TRUE(closure.count(owner)) << binary << " loads " << library << " from " << owner
-                                        << ", which scripts/install-deps --runtime does not bring";
+      const std::string image = binary.starts_with("worker/") ? "worker" : "server";
+      EXPECT_TRUE(closures[image].count(owner))
+          << binary << " loads " << library << " from " << owner << ", which scripts/install-deps --runtime "
+          << image << " does not bring";
     }
   }
 }
