@@ -158,7 +158,7 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
   renderer.SetOccupancy(&trainer.occupancy());
   uncertainty_renderer.SetOccupancy(&trainer.occupancy());
 
-  // Reduced frames' colour and depth (eval/eval_plan.h): half the samples per ray.
+  // Reduced frames' colour and depth (eval/eval_plan.h): half the coarse samples per ray.
   render::FrameRenderer reduced_renderer(trainer.field(), trainer.box(),
                                          train::ReducedRenderSettings(config, clip.near, clip.far),
                                          backends.render);

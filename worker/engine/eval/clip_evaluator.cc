@@ -504,9 +504,8 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
         if (summary.count > 0) how[key][name] = ToJson(summary);  // no NaN for none
       }
     }
-    // The depth the same way: a reduced frame's is one plain pass's with half the samples, about
-    // twice the full frames' error (its mean read as a regression against a run of all-full
-    // frames; found 2026-12-06).
+    // The depth the same way: a reduced frame's is one plain pass's, a little worse than the full
+    // frames' (its mean was read as a regression against a run of all-full frames; found 2026-12-06).
     if (!depths.empty()) {
       for (const auto& [name, frames] :
            {std::pair{"full", &full_frames}, std::pair{"reduced", &reduced_frames}}) {

@@ -17,8 +17,8 @@ render::FrameRenderSettings EvalRenderSettings(const TrainConfig& config, double
 render::FrameRenderSettings UncertaintyRenderSettings(const TrainConfig& config, double near, double far,
                                                       std::uint64_t seed);
 
-// EvalRenderSettings with half the coarse and fine samples (at least 8 each): the colour and depth
-// of the results' reduced frames (eval/eval_plan.h).
+// EvalRenderSettings with half the coarse samples (at least 8) and all the fine ones: the colour and
+// depth of the results' reduced frames (eval/eval_plan.h).
 render::FrameRenderSettings ReducedRenderSettings(const TrainConfig& config, double near, double far);
 
 // EvalRenderSettings with depth_refine_samples coarse and as many fine samples.
