@@ -202,7 +202,27 @@ TEST(ReportPageTest, APageWorksInHeadlessChromium) {
       browser->WaitFor(fmt::format("document.getElementById('frame-label').dataset.frame !== '{}'", heldout),
                        std::chrono::seconds(3)))
       << "play advances the frames";
+  EXPECT_EQ(browser->Evaluate("document.getElementById('play').getAttribute('aria-label')"), "pause");
   browser->Evaluate("document.getElementById('play').click()");
+  EXPECT_EQ(browser->Evaluate("document.getElementById('play').getAttribute('aria-label')"), "play");
+  // A row of the per-frame table is reached with the keyboard and shows its frame on Enter.
+  browser->Evaluate("document.querySelector('#per-frame-table tr[data-frame=\"3\"]').focus()");
+  browser->PressKey("Enter", 13);
+  EXPECT_EQ(shown()[0], "3") << "Enter on a focused row shows its frame";
+  // Which frames were rendered reduced, in the table and above it, as metrics.json says.
+  const auto reduced = metrics["evaluation"].value("reduced_frames", nlohmann::json::array());
+  EXPECT_EQ(browser->Evaluate("document.querySelectorAll('#per-frame-table td').length > 0 && "
+                              "Array.from(document.querySelectorAll('#per-frame-table tr[data-frame]'))"
+                              ".filter(r => Array.from(r.cells).some(c => c.textContent === 'reduced')).length"),
+            reduced.size());
+  EXPECT_EQ(browser->Evaluate("document.getElementById('warnings').textContent.includes('rendered reduced')"),
+            !reduced.empty());
+  // Printed, the per-frame table shows every row (on screen it scrolls in a box).
+  browser->Evaluate("window.dispatchEvent(new Event('beforeprint'))");
+  EXPECT_EQ(browser->Evaluate("document.querySelector('#run-section details').open"), true);
+  EXPECT_NE(browser->Evaluate("document.querySelector('footer').textContent").get<std::string>().find(
+                "not a medical device"),
+            std::string::npos);
 
   // The 3D view draws the surface, and dragging turns it.
   const auto box = browser->Evaluate(

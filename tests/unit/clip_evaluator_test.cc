@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "common/npy.h"
+#include "tests/unit/clip_fixture.h"
 #include "tests/unit/temp_dir.h"
 #include "worker/engine/scene/clip_loader.h"
 #include "worker/engine/scene/outside_view.h"
@@ -215,6 +216,26 @@ TEST(ClipEvaluatorTest, APlanPricedTooLowIsKeptToItsDeadline) {
 
 // Outside the scope's view every uncertainty map written holds 0, on full and reduced frames alike:
 // the reduced frames' upsampled maps and the model maps held values there (found 2026-12-05).
+// A stop asked for while the frames render (a cancel, a worker's shutdown) is heeded before the next
+// frame, with the files of the frame in flight written: CANCELLED, saying how far it got.
+TEST(ClipEvaluatorTest, AStopIsHeededBeforeTheNextFrame) {
+  testing::TempDir dir("clip_evaluator_stop");
+  scene::SynthOptions synth;
+  synth.frames = 5;
+  BrieflyTrained run(synth, dir.path(), {0, 1, 3, 4}, 2, 10);
+  ClipEvaluation what;
+  what.train_frames = {0, 1, 3, 4};
+  what.heldout_frames = {2};
+  int asked = 0;
+  what.should_stop = [&] { return ++asked > 2; };  // after two frames
+  const std::string stopped = testing::ErrorFrom(
+      [&] { EvaluateClip(run.clip, run.renderer, what, dir / "out"); }, ErrorCode::kCancelled);
+  EXPECT_NE(stopped.find("2 of 5 frames rendered"), std::string::npos) << stopped;
+  EXPECT_EQ(asked, 3);
+  EXPECT_TRUE(std::filesystem::exists(dir / "out" / "rgb" / "000001.png"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "out" / "rgb" / "000002.png"));
+}
+
 TEST(ClipEvaluatorTest, OutsideTheViewEveryMapIsZero) {
   testing::TempDir dir("clip_evaluator_outside");
   scene::SynthOptions synth;

@@ -202,7 +202,9 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
   // The leanest plan's price (held-out frames full; with --full-eval every frame), when planned.
   double least_s = -1;
   double advised_s = 0;
-  if (!trained.cancelled) {
+  // A stop during evaluation (a cancel, a shutdown) ends the run as one during training does.
+  bool cancelled = trained.cancelled;
+  if (!cancelled) {
     const auto start = Clock::now();
     RebuildOccupancy(trainer, left_out);
     eval::ClipEvaluation what;
@@ -277,16 +279,24 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
         hooks.on_progress(last);
       };
     }
-    metrics = eval::EvaluateClip(clip, uncertainty_renderer, what, out_dir);
+    what.should_stop = hooks.should_stop;
+    try {
+      metrics = eval::EvaluateClip(clip, uncertainty_renderer, what, out_dir);
+      if (least_s >= 0) metrics["evaluation"]["seconds"]["render_least"] = least_s;
+    } catch (const Error& e) {
+      if (e.code() != ErrorCode::kCancelled || !what.should_stop || !what.should_stop()) throw;
+      spdlog::info("{}", e.what());
+      cancelled = true;
+      metrics = nlohmann::json::object();
+    }
     evaluation_s = SecondsSince(start);
-    if (least_s >= 0) metrics["evaluation"]["seconds"]["render_least"] = least_s;
   }
   metrics["iterations"] = trainer.iteration();
   metrics["train_seconds"] = extras.train_seconds;
   metrics["samples_per_second"] = trained.samples_per_second;
   metrics["threads"] = threads;
   metrics["device"] = trainer.device();
-  metrics["cancelled"] = trained.cancelled;
+  metrics["cancelled"] = cancelled;
   metrics["curve"] = extras.curve;
   metrics["left_out"] = left_out;
   metrics["kept"] = fit.kept;
@@ -323,7 +333,7 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
                options.time_budget_s > 0 ? fmt::format(", budget {:.0f} s", options.time_budget_s) : "");
 
   ReconstructSummary summary;
-  summary.cancelled = trained.cancelled;
+  summary.cancelled = cancelled;
   summary.iterations = trainer.iteration();
   summary.train_seconds = extras.train_seconds;
   summary.train_psnr = trained.last.psnr;

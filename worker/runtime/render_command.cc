@@ -71,6 +71,9 @@ Command AddRenderCommand(CLI::App& app) {
     // again with the heat maps' scales once they are known.
     nlohmann::json info = eval::UncertaintySettings(settings);
     info["depth_png_scale"] = scale;
+    // Where the views came from and were rendered, for the page (report.html names both).
+    info["results"] = std::filesystem::absolute(args->result).lexically_normal().string();
+    info["device"] = renderer.device();
     WriteFile(out / "render.json", info.dump(2), "render description");
     // The heat maps share one scale over all views, so they are written once every view is rendered.
     std::vector<std::vector<float>> totals, models;

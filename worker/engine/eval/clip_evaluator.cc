@@ -13,6 +13,7 @@
 #include <string>
 #include <utility>
 
+#include "common/error.h"
 #include "common/npy.h"
 #include "worker/engine/base/seconds_since.h"
 #include "worker/engine/eval/calibration.h"
@@ -348,6 +349,13 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
     model_map_seconds += SecondsSince(start);
   };
   for (int f = 0; f < count; ++f) {
+    // A cancel or a shutdown is heeded between frames: rendering every frame of a large clip took
+    // minutes after a cancel, the worker busy and its next job waiting (found 2026-12-07).
+    if (what.should_stop && what.should_stop()) {
+      if (writing.valid()) writing.get();
+      Fail(ErrorCode::kCancelled,
+           fmt::format("stopped during evaluation, {} of {} frames rendered", f, count));
+    }
     const auto start = Clock::now();
     const FrameChoice choice =
         pacer.Choose(f, what.deadline == Clock::time_point::max()

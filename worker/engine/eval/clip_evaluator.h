@@ -29,6 +29,9 @@ struct ClipEvaluation {
   // at the pace measured so far.
   std::chrono::steady_clock::time_point deadline = std::chrono::steady_clock::time_point::max();
   double heldout_slack_s = 0;  // how far past it a held-out frame may run full (FramePacer)
+  // Polled before each frame: true stops the evaluation (a cancel, a worker's shutdown), which then
+  // throws Error(kCancelled) once the frame in flight is written.
+  std::function<bool()> should_stop;
 };
 
 // Metrics: "train" and "heldout" splits each with per-frame and summarised image metrics (tissue

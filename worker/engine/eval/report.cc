@@ -283,6 +283,26 @@ void AddFrames(const fs::path& results_dir, const Views& views, const json& reco
                      {"frames", std::move(surfaces)}};
 }
 
+// What the page says of a clip made from a recording (its recording.json, written by the worker
+// runtime's recording_clip; docs/formats.md): where the frames came from, the window and sizes, and
+// each frame's time and number in the recording. Null when the clip has none or it does not read.
+json RecordingOf(const fs::path& clip_dir) {
+  const fs::path path = clip_dir / "recording.json";
+  if (!fs::exists(path)) return nullptr;
+  try {
+    const json record = ReadJsonFile(path);
+    json shown = json::object();
+    for (const char* key : {"source", "stereo", "endoscope", "frames", "recording_frames", "recorded_size",
+                            "size", "fps", "times_s"}) {
+      if (record.contains(key)) shown[key] = record[key];
+    }
+    return shown;
+  } catch (const std::exception& e) {
+    spdlog::warn("report: {} is not shown: {}", path.string(), e.what());
+    return nullptr;
+  }
+}
+
 }  // namespace
 
 fs::path WriteReport(const fs::path& results_dir, const scene::Clip* clip) {
@@ -319,7 +339,12 @@ fs::path WriteReport(const fs::path& results_dir, const scene::Clip* clip) {
     data["title"] = config.contains("title") && config["title"].is_string()
                         ? config["title"].get<std::string>()
                         : PathName(clip_dir);
-    data["clip"] = clip_dir;
+    data["clip"] = fs::absolute(clip_dir).lexically_normal().string();
+    data["recording"] = RecordingOf(clip_dir);
+    // The depth's scale: measured (depth images, or a second eye the loss reads) or only the field's
+    // own, in the units the clip's near and far bounds set (a mono recording).
+    data["depth_bounds"] = {clip->near, clip->far};
+    data["depth_measured"] = clip->has_depth() || clip->has_stereo();
     const std::string device = config.value("device", "cpu");
     const int threads = config.value("threads", 0);
     data["run"]["device"] = device == "cpu" ? fmt::format("CPU, {} threads", threads)
@@ -335,14 +360,24 @@ fs::path WriteReport(const fs::path& results_dir, const scene::Clip* clip) {
     }
     data["kind"] = "render";
     data["title"] = PathName(results_dir);
-    data["run"]["device"] = fmt::format("CPU, {} threads", std::thread::hardware_concurrency());
+    // The device and the results rendered from, as render.json records them (since 2026-12-07).
+    const std::string device = record.contains("device") && record["device"].is_string()
+                                   ? record["device"].get<std::string>()
+                                   : "cpu";
+    const unsigned threads = std::thread::hardware_concurrency();
+    data["run"]["device"] = device == "cpu" ? fmt::format("CPU, {} threads", threads)
+                                            : fmt::format("{} ({} host threads)", device, threads);
+    if (record.contains("results") && record["results"].is_string()) data["clip"] = record["results"];
     data["render"] = record;
     heat = "/heatmap_scale";
   } else {
     FailInvalid(results_dir.string() +
                 ": holds neither metrics.json (a reconstruction's results) nor render.json (rendered views)");
   }
-  if (!views.cameras.empty() && fs::exists(results_dir / "rgb" / FrameFileName(0, ".png"))) {
+  // A run cancelled during its evaluation left some frames' files: the page shows none (its metrics
+  // have none).
+  const bool cancelled = record.is_object() && record.value("cancelled", false);
+  if (!cancelled && !views.cameras.empty() && fs::exists(results_dir / "rgb" / FrameFileName(0, ".png"))) {
     AddFrames(results_dir, views, record, heat, data);
   }
 

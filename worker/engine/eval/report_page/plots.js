@@ -1,4 +1,4 @@
-// Small SVG line plots (linear or log x axis) for the report: a few axes, lines and markers need no
+// Small SVG line plots (linear or log axes) for the report: a few axes, lines and markers need no
 // plotting library. EndoPlots.linePlot(options) returns a <figure>.
 "use strict";
 const EndoPlots = (() => {
@@ -28,6 +28,18 @@ const EndoPlots = (() => {
     return value.toFixed(Math.min(digits, 6));
   }
 
+  // A value as a tooltip shows it: four significant digits, not the float's seventeen.
+  function shortNumber(value) {
+    return Number.isInteger(value) ? String(value) : String(Number(value.toPrecision(4)));
+  }
+
+  // [lo, hi] widened to whole decades, for a log axis.
+  function decades(lo, hi) {
+    lo = Math.pow(10, Math.floor(Math.log10(lo)));
+    hi = Math.pow(10, Math.ceil(Math.log10(hi)));
+    return [lo, hi > lo ? hi : lo * 10];
+  }
+
   function extent(values) {
     let lo = Infinity, hi = -Infinity;
     for (const v of values) if (Number.isFinite(v)) { lo = Math.min(lo, v); hi = Math.max(hi, v); }
@@ -37,15 +49,37 @@ const EndoPlots = (() => {
   function linePlot(options) {
     const width = options.width || 460, height = options.height || 280;
     const margin = { left: 58, right: 14, top: 44, bottom: 42 };
+    // The legend runs along the top margin, one entry per series, in as many rows as their labels need
+    // (about 6.5 px a character at 11 px), clear of the data.
+    const legend = [];
+    {
+      let x = margin.left, row = 0;
+      for (const s of options.series.filter((entry) => entry.x.length > 0)) {
+        const entryWidth = 27 + 6.5 * s.label.length + 16;
+        if (x > margin.left && x + entryWidth > width - margin.right) {
+          x = margin.left;
+          ++row;
+        }
+        legend.push({x, y: 32 + 14 * row});
+        x += entryWidth;
+      }
+      margin.top += 14 * row;
+    }
     const figure = document.createElement("figure");
     figure.className = "plot";
     const svg = el("svg", { width, height, viewBox: `0 0 ${width} ${height}`, role: "img" }, figure);
     el("title", {}, svg).textContent = options.title || "";
     const series = options.series.filter((s) => s.x.length > 0);
     const usable = (x) => Number.isFinite(x) && (!options.xLog || x > 0);
+    const usableY = (y) => Number.isFinite(y) && (!options.yLog || y > 0);
     const xs = [], ys = [];
     for (const s of series) {
-      s.x.forEach((x, i) => { if (usable(x) && Number.isFinite(s.y[i])) { xs.push(x); ys.push(s.y[i]); } });
+      s.x.forEach((x, i) => {
+        if (usable(x) && usableY(s.y[i])) {
+          xs.push(x);
+          ys.push(s.y[i]);
+        }
+      });
     }
     const text = (x, y, content, attributes) => {
       const node = el("text", Object.assign({ x, y, "font-size": 11, fill: "#5b6475" }, attributes), svg);
@@ -60,26 +94,51 @@ const EndoPlots = (() => {
     let [x0, x1] = extent(xs);
     let [y0, y1] = options.yRange || extent(ys);
     if (options.xLog) {
-      x0 = Math.pow(10, Math.floor(Math.log10(x0)));
-      x1 = Math.pow(10, Math.ceil(Math.log10(x1)));
-      if (x1 <= x0) x1 = x0 * 10;
+      [x0, x1] = decades(x0, x1);
     } else if (x1 <= x0) {
       x1 = x0 + 1;
     }
-    if (y1 <= y0) { y0 -= 0.5; y1 += 0.5; }
-    const pad = (y1 - y0) * 0.06;
-    if (!options.yRange) { y0 -= pad; y1 += pad; }
+    if (options.yLog) {
+      [y0, y1] = decades(y0, y1);
+    } else {
+      if (y1 <= y0) {
+        y0 -= 0.5;
+        y1 += 0.5;
+      }
+      const pad = (y1 - y0) * 0.06;
+      if (!options.yRange) {
+        y0 -= pad;
+        y1 += pad;
+      }
+    }
     const plotW = width - margin.left - margin.right, plotH = height - margin.top - margin.bottom;
     const px = options.xLog
       ? (x) => margin.left + (Math.log10(x) - Math.log10(x0)) / (Math.log10(x1) - Math.log10(x0)) * plotW
       : (x) => margin.left + (x - x0) / (x1 - x0) * plotW;
-    const py = (y) => margin.top + (1 - (y - y0) / (y1 - y0)) * plotH;
+    const py = options.yLog ? (y) => margin.top +
+            (1 - (Math.log10(y) - Math.log10(y0)) / (Math.log10(y1) - Math.log10(y0))) * plotH :
+                              (y) => margin.top + (1 - (y - y0) / (y1 - y0)) * plotH;
     el("rect", { x: margin.left, y: margin.top, width: plotW, height: plotH, fill: "none", stroke: "#d9dde5" }, svg);
 
-    const yTicks = linearTicks(y0, y1, 5);
-    for (const t of yTicks.ticks) {
-      el("line", { x1: margin.left, x2: margin.left + plotW, y1: py(t), y2: py(t), stroke: "#eef0f4" }, svg);
-      text(margin.left - 6, py(t) + 4, tickLabel(t, yTicks.step), { "text-anchor": "end" });
+    if (options.yLog) {
+      for (let decade = Math.log10(y0); decade <= Math.log10(y1) + 1e-9; ++decade) {
+        const value = Math.pow(10, decade);
+        el('line',
+           {x1: margin.left, x2: margin.left + plotW, y1: py(value), y2: py(value), stroke: '#eef0f4'}, svg);
+        text(margin.left - 6, py(value) + 4, tickLabel(value, value), {'text-anchor': 'end'});
+        for (let m = 2; m <= 9 && value * m < y1; ++m) {
+          const y = py(value * m);
+          el('line', {x1: margin.left, x2: margin.left + 4, y1: y, y2: y, stroke: '#9aa3b2'}, svg);
+          if (m === 2 || m === 5)
+            text(margin.left - 6, y + 4, tickLabel(value * m, value), {'text-anchor': 'end'});
+        }
+      }
+    } else {
+      const yTicks = linearTicks(y0, y1, 5);
+      for (const t of yTicks.ticks) {
+        el('line', {x1: margin.left, x2: margin.left + plotW, y1: py(t), y2: py(t), stroke: '#eef0f4'}, svg);
+        text(margin.left - 6, py(t) + 4, tickLabel(t, yTicks.step), {'text-anchor': 'end'});
+      }
     }
     if (options.xLog) {
       for (let decade = Math.log10(x0); decade <= Math.log10(x1) + 1e-9; ++decade) {
@@ -107,7 +166,7 @@ const EndoPlots = (() => {
       if (!s.markersOnly) {
         let path = "", pen = false;
         s.x.forEach((x, i) => {
-          const ok = usable(x) && Number.isFinite(s.y[i]);
+          const ok = usable(x) && usableY(s.y[i]);
           if (ok) path += `${pen ? "L" : "M"}${px(x).toFixed(1)},${py(s.y[i]).toFixed(1)}`;
           pen = ok;
         });
@@ -115,14 +174,23 @@ const EndoPlots = (() => {
                                  s.dashed ? { "stroke-dasharray": "5 4" } : {}), svg);
       }
       s.x.forEach((x, i) => {
-        if (!usable(x) || !Number.isFinite(s.y[i])) return;
-        const dot = el("circle", { cx: px(x), cy: py(s.y[i]), r: s.markersOnly ? 3 : 2.2, fill: colour }, svg);
-        el("title", {}, dot).textContent = `${s.label}: ${s.y[i]} at ${x}`;
+        if (!usable(x) || !usableY(s.y[i])) return;
+        const dot =
+            el('circle',
+               Object.assign(
+                   {cx: px(x), cy: py(s.y[i]), r: s.markersOnly ? 3 : 2.2, fill: colour},
+                   s.hollow ? {fill: '#fff', stroke: colour, 'stroke-width': 1.5} : {}),
+               svg);
+        el('title', {}, dot).textContent =
+            `${s.label}: ${shortNumber(s.y[i])} at ${options.xName || 'x'} ${shortNumber(x)}`;
       });
-      // The legend runs along the top margin, one entry per series, clear of the data.
-      const lx = margin.left + index * Math.min(170, plotW / series.length), ly = 32;
+      const lx = legend[index].x, ly = legend[index].y;
       if (s.markersOnly) {
-        el("circle", { cx: lx + 11, cy: ly - 4, r: 3, fill: colour }, svg);
+        el('circle',
+           Object.assign(
+               {cx: lx + 11, cy: ly - 4, r: 3, fill: colour},
+               s.hollow ? {fill: '#fff', stroke: colour, 'stroke-width': 1.5} : {}),
+           svg);
       } else {
         el("line", Object.assign({ x1: lx, x2: lx + 22, y1: ly - 4, y2: ly - 4, stroke: colour, "stroke-width": 2 },
                                  s.dashed ? { "stroke-dasharray": "5 4" } : {}), svg);

@@ -103,6 +103,45 @@
   if (metrics.cancelled) subtitle.push("CANCELLED before the end: no frames were evaluated");
   $("subtitle").textContent = subtitle.join(" \u00b7 ");
 
+  // What a reader must know before trusting the numbers, above them.
+  const warn = (children) => $('warnings').appendChild(node('p', {class: 'warning'}, children));
+  if (metrics.time && metrics.time.budget_advised_s) {
+    warn([
+      'The time budget was too small for this clip: training had ',
+      metricSpan('/time/training_s', {digits: 1}), ' s of the run\'s ',
+      metricSpan('/time/total_s', {digits: 1}), ' s (', metricSpan('/iterations', {digits: 0}),
+      ' iterations) because rendering the results needed the rest, so the model is likely underfitted. ',
+      'A budget of ', metricSpan('/time/budget_advised_s', {digits: 0}),
+      ' s or more leaves training three quarters of the run.'
+    ]);
+  }
+  const evaluation = metrics.evaluation || {};
+  const reducedFrames = new Set(evaluation.reduced_frames || []);
+  if (reducedFrames.size > 0) {
+    warn([
+      `${reducedFrames.size} of the ${
+          (evaluation.full_frames || []).length + reducedFrames.size} evaluated frames ` +
+          'were rendered reduced, to keep evaluation to its share of the run: their colour and depth come from one pass ' +
+          'without dropout, their uncertainty maps from a coarser grid, upsampled. Their scores are a little worse than ' +
+          'a full render\'s; compare full frames with full frames (the per-frame table\'s render column, hollow markers ' +
+          'in its plots). ',
+      node('code', {text: 'reconstruct --full-eval'}), ' renders every frame full.'
+    ]);
+  }
+  if (data.kind === 'reconstruction' && data.depth_measured === false) {
+    warn([
+      'The clip has no depth images and no second eye, so the depth has no absolute scale: it is in clip units ',
+      'set by the clip\'s near and far bounds, and the 3D surface shows shape only.'
+    ]);
+  }
+
+  // The clip's near-far range the relative depth errors divide by, as " (40.0-130.0 clip units)".
+  function depthRangeText() {
+    const bounds = data.depth_bounds;
+    if (!bounds) return '';
+    return ` (${bounds[0].toFixed(1)}\u2013${bounds[1].toFixed(1)} clip units)`;
+  }
+
   function card(label, value, extra) {
     return node("div", { class: "card" }, [node("div", { class: "label", text: label }),
                                            node("div", { class: "value" }, value),
@@ -118,9 +157,11 @@
       summary.append(card(`${splitName} SSIM, tissue`, meanStd(`/${reported}/image/ssim_tissue`, { digits: 4 })));
     }
     if (lookup(metrics, `/${reported}/depth`)) {
-      summary.append(card(`${splitName} depth RMSE (clip units)`, meanStd(`/${reported}/depth/rmse`, { digits: 3 }),
-                          [metricSpan(`/${reported}/depth/rmse_relative/mean`, { digits: 2, factor: 100 }),
-                           " % of the depth range"]));
+      summary.append(
+          card(`${splitName} depth RMSE (clip units)`, meanStd(`/${reported}/depth/rmse`, {digits: 3}), [
+            metricSpan(`/${reported}/depth/rmse_relative/mean`, {digits: 2, factor: 100}),
+            ` % of the near\u2013far range${depthRangeText()}`
+          ]));
     }
     if (lookup(metrics, `/${reported}/calibration`)) {
       summary.append(card(`${splitName} Spearman (uncertainty, error)`, meanStd(`/${reported}/calibration/spearman`, { digits: 3 })));
@@ -131,9 +172,10 @@
       summary.append(card(`${splitName} Spearman (model map, noise-free error)`,
                           meanStd(`/${reported}/calibration_model_map_noise_free/spearman`, { digits: 3 })));
     }
-    summary.append(card("training", [metricSpan("/iterations", { digits: 0 }), " iterations"],
-                        [metricSpan("/train_seconds", { digits: 1 }), " s, ",
-                         metricSpan("/samples_per_second", { digits: 2, factor: 1e-6 }), " M samples/s"]));
+    summary.append(card('training', [metricSpan('/iterations', {digits: 0}), ' iterations'], [
+      metricSpan('/train_seconds', {digits: 1}), ' s of steps, ',
+      metricSpan('/samples_per_second', {digits: 2, factor: 1e-6}), ' M samples/s'
+    ]));
   } else {
     summary.append(card("views", [node("span", { text: String(frames ? frames.count : 0) })]));
     summary.append(card("dropout passes (uncertainty)", [node("span", { text: String(data.render.mc_passes) })]));
@@ -170,6 +212,9 @@
     }
     $("tool-shading").addEventListener("change", () => showFrame(current));
     if (!frames.tool) $("tool-shading").parentElement.style.display = "none";
+    // The mask covers tools and, on a real scope, the dark corners outside its view: both are left out.
+    if (data.recording)
+      $('tool-shading').nextSibling.textContent = ' shade masked pixels (tools, outside the view)';
     slider.addEventListener("input", () => showFrame(Number(slider.value)));
     let timer = null;
     $("play").addEventListener("click", () => {
@@ -177,9 +222,11 @@
         clearInterval(timer);
         timer = null;
         $("play").textContent = "\u25b6 play";
+        $('play').setAttribute('aria-label', 'play');
       } else {
         timer = setInterval(() => showFrame((current + 1) % frames.count), 125);
         $("play").textContent = "\u275a\u275a pause";
+        $('play').setAttribute('aria-label', 'pause');
       }
     });
   } else {
@@ -201,6 +248,7 @@
       parts.push(" \u00b7 Spearman ", metricSpan(at("calibration", "spearman"), { digits: 3 }),
                  " \u00b7 AUSE ", metricSpan(at("calibration", "ause"), { digits: 3 }));
     }
+    if (reducedFrames.has(frame)) parts.push(' \u00b7 reduced render');
     return parts;
   }
 
@@ -217,7 +265,12 @@
     }
     const where = splitOf.get(frame);
     const label = $("frame-label");
-    label.replaceChildren(`${data.kind === "render" ? "view" : "frame"} ${frame} / ${frames.count - 1} \u00b7 t = ${frames.times[frame].toFixed(3)} `);
+    // A recording's frames also by their time in it (t is the clip's, 0 to 1).
+    const seconds = data.recording && data.recording.times_s ? data.recording.times_s[frame] : undefined;
+    label.replaceChildren(
+        `${data.kind === 'render' ? 'view' : 'frame'} ${frame} / ${frames.count - 1} \u00b7 t = ` +
+        `${frames.times[frame].toFixed(3)}` +
+        (typeof seconds === 'number' ? ` (${seconds.toFixed(2)} s into the recording) ` : ' '));
     label.dataset.frame = String(frame);
     if (where) label.appendChild(node("span", { class: `badge ${where.split}`, text: where.split === "heldout" ? "held out" : "trained on" }));
     $("frame-metrics").replaceChildren(...frameMetricsLine(frame));
@@ -253,9 +306,10 @@
         surfaceScale();
       });
       surfaceScale();
-      $("surface-note").textContent =
-        `The frame's rendered depth back-projected through its camera, one point per ` +
-        `${data.surface.stride} \u00d7 ${data.surface.stride} pixels (clip units); tool pixels are left out.`;
+      $('surface-note').textContent =
+          `The frame's rendered depth back-projected through its camera, one point per ` +
+          `${data.surface.stride} \u00d7 ${data.surface.stride} pixels (clip units); masked pixels (tools, ` +
+          `outside the view) are left out.`;
     } catch (error) {
       viewer = null;
       $("surface-note").textContent = `The 3D view needs WebGL, which this browser did not provide (${error.message}).`;
@@ -273,9 +327,15 @@
     const field = (key, factor) => curve.map((p) => (typeof p[key] === "number" ? p[key] * (factor || 1) : NaN));
     const last = curve.length - 1;
     const psnrPlot = EndoPlots.linePlot({
-      title: "PSNR against training time", xLog: true, xLabel: "training time (s, log scale)", yLabel: "PSNR (dB)",
-      series: [{ label: "held-out (tissue)", x: seconds, y: field("heldout_psnr") },
-               { label: "training batch", x: seconds, y: field("train_psnr"), dashed: true }],
+      title: 'PSNR against training time',
+      xLog: true,
+      xLabel: 'training time (s, log scale)',
+      yLabel: 'PSNR (dB)',
+      xName: 's',
+      series: [
+        {label: 'held-out (tissue)', x: seconds, y: field('heldout_psnr')},
+        {label: 'training batch', x: seconds, y: field('train_psnr'), dashed: true}
+      ],
     });
     const psnrLast = ["last point, ", metricSpan(`/curve/${last}/seconds`, { digits: 1 }), " s: "];
     if (typeof curve[last].heldout_psnr === "number") psnrLast.push("held-out ", metricSpan(`/curve/${last}/heldout_psnr`), " dB, ");
@@ -284,13 +344,20 @@
     $("curve-plots").appendChild(psnrPlot);
     if (curve.some((p) => typeof p.heldout_depth_rmse_relative === "number")) {
       const depthPlot = EndoPlots.linePlot({
-        title: "Depth error against training time", xLog: true, xLabel: "training time (s, log scale)",
-        yLabel: "depth RMSE (% of depth range)",
-        series: [{ label: "held-out", x: seconds, y: field("heldout_depth_rmse_relative", 100), colour: "#c2410c" }],
+        title: 'Depth error against training time',
+        xLog: true,
+        xLabel: 'training time (s, log scale)',
+        yLabel: 'depth RMSE (% of near\u2013far range, log)',
+        yLog: true,
+        xName: 's',
+        series: [
+          {label: 'held-out', x: seconds, y: field('heldout_depth_rmse_relative', 100), colour: '#c2410c'}
+        ],
       });
-      depthPlot.appendChild(node("figcaption", { class: "numbers" }, [
-        "last point: ", metricSpan(`/curve/${last}/heldout_depth_rmse_relative`, { digits: 2, factor: 100 }),
-        " % of the depth range"]));
+      depthPlot.appendChild(node('figcaption', {class: 'numbers'}, [
+        'last point: ', metricSpan(`/curve/${last}/heldout_depth_rmse_relative`, {digits: 2, factor: 100}),
+        ` % of the near\u2013far range${depthRangeText()}`
+      ]));
       $("curve-plots").appendChild(depthPlot);
     }
     $("curve-plots").appendChild(node("p", { class: "note", text:
@@ -301,41 +368,89 @@
 
   // ---- per-frame metrics ----
   const columns = [
-    { group: "image", key: "psnr", label: "PSNR (dB)" }, { group: "image", key: "psnr_tissue", label: "PSNR tissue" },
-    { group: "image", key: "ssim", label: "SSIM", digits: 4 }, { group: "image", key: "ssim_tissue", label: "SSIM tissue", digits: 4 },
-    { group: "depth", key: "rmse", label: "depth RMSE", digits: 3 }, { group: "depth", key: "mae", label: "depth MAE", digits: 3 },
-    { group: "calibration", key: "pearson", label: "Pearson", digits: 3 },
-    { group: "calibration", key: "spearman", label: "Spearman", digits: 3 },
-    { group: "calibration", key: "ause", label: "AUSE", digits: 3 },
+    {group: 'image', key: 'psnr', label: 'PSNR (dB)'},
+    {group: 'image', key: 'psnr_tissue', label: 'PSNR tissue (dB)'},
+    {group: 'image', key: 'ssim', label: 'SSIM', digits: 4},
+    {group: 'image', key: 'ssim_tissue', label: 'SSIM tissue', digits: 4},
+    {group: 'depth', key: 'rmse', label: 'depth RMSE (clip units)', digits: 3},
+    {group: 'depth', key: 'mae', label: 'depth MAE (clip units)', digits: 3},
+    {group: 'calibration', key: 'pearson', label: 'Pearson', digits: 3},
+    {group: 'calibration', key: 'spearman', label: 'Spearman', digits: 3},
+    {group: 'calibration', key: 'ause', label: 'AUSE', digits: 3},
   ].filter((c) => lookup(metrics, `/train/${c.group}`) || lookup(metrics, `/heldout/${c.group}`));
   const evaluated = [...splitOf.keys()].sort((a, b) => a - b);
   if (evaluated.length > 0) {
     const table = $("per-frame-table");
-    table.appendChild(node("tr", {}, [node("th", { text: "frame" }), node("th", { text: "t" }),
-                                      node("th", { class: "text", text: "split" }),
-                                      ...columns.map((c) => node("th", { text: c.label }))]));
+    const mixed = reducedFrames.size > 0;
+    table.appendChild(node('tr', {}, [
+      node('th', {text: 'frame'}), node('th', {text: 't (0\u20131)'}),
+      node('th', {class: 'text', text: 'split'}),
+      ...(mixed ? [node('th', {class: 'text', text: 'render'})] : []),
+      ...columns.map((c) => node('th', {text: c.label}))
+    ]));
     for (const frame of evaluated) {
       const where = splitOf.get(frame);
       const cells = columns.map((c) => node("td", {}, [metricSpan(`/${where.split}/${c.group}/per_frame/${where.position}/${c.key}`,
                                                                    { digits: c.digits || 2 })]));
-      const row = node("tr", { class: where.split, "data-frame": frame }, [
-        node("td", { text: String(frame) }), node("td", { text: frames ? frames.times[frame].toFixed(3) : "" }),
-        node("td", { class: "text", text: where.split === "heldout" ? "held out" : "trained on" }), ...cells]);
-      if (frames && frames.count > 0) row.addEventListener("click", () => showFrame(frame));
+      const row = node('tr', {class: where.split, 'data-frame': frame}, [
+        node('td', {text: String(frame)}), node('td', {text: frames ? frames.times[frame].toFixed(3) : ''}),
+        node('td', {class: 'text', text: where.split === 'heldout' ? 'held out' : 'trained on'}),
+        ...(mixed ? [node('td', {class: 'text', text: reducedFrames.has(frame) ? 'reduced' : 'full'})] : []),
+        ...cells
+      ]);
+      if (frames && frames.count > 0) {
+        // Shown by a click, or from the keyboard: Tab to the row, Enter or Space.
+        row.tabIndex = 0;
+        row.setAttribute('aria-label', `show frame ${frame}`);
+        row.addEventListener('click', () => showFrame(frame));
+        row.addEventListener('keydown', (event) => {
+          if (event.key !== 'Enter' && event.key !== ' ') return;
+          event.preventDefault();
+          showFrame(frame);
+        });
+      }
       table.appendChild(row);
     }
     const perFrame = (split, group, key) => {
       const list = lookup(metrics, `/${split}/frames`) || [];
       return { x: list, y: list.map((_, i) => { const v = lookup(metrics, `/${split}/${group}/per_frame/${i}/${key}`); return typeof v === "number" ? v : NaN; }) };
     };
-    const series = (group, key) => ["train", "heldout"].filter((s) => metrics[s]).map((s) => Object.assign(
-      { label: s === "heldout" ? "held out" : "trained on", markersOnly: true, colour: s === "heldout" ? "#c2410c" : "#1f6feb" },
-      perFrame(s, group, key)));
-    $("per-frame-plot").appendChild(EndoPlots.linePlot({ title: "PSNR per frame (tissue)", xLabel: "frame",
-                                                         yLabel: "PSNR (dB)", series: series("image", "psnr_tissue") }));
+    // Reduced renders hollow, apart from the full ones (their scores are a little worse).
+    const series = (group, key) => {
+      const out = [];
+      for (const s of ['train', 'heldout'].filter((split) => metrics[split])) {
+        const all = perFrame(s, group, key);
+        for (const reduced of [false, true]) {
+          const keep = all.x.map((frame) => reducedFrames.has(frame) === reduced);
+          if (!keep.some(Boolean)) continue;
+          const name = s === 'heldout' ? 'held out' : 'trained on';
+          out.push({
+            label: mixed ? `${name}, ${reduced ? 'reduced' : 'full'}` : name,
+            markersOnly: true,
+            hollow: reduced,
+            colour: s === 'heldout' ? '#c2410c' : '#1f6feb',
+            x: all.x.filter((_, i) => keep[i]),
+            y: all.y.filter((_, i) => keep[i])
+          });
+        }
+      }
+      return out;
+    };
+    $('per-frame-plot').appendChild(EndoPlots.linePlot({
+      title: 'PSNR per frame (tissue)',
+      xLabel: 'frame',
+      xName: 'frame',
+      yLabel: 'PSNR (dB)',
+      series: series('image', 'psnr_tissue')
+    }));
     if (columns.some((c) => c.group === "depth")) {
-      $("per-frame-plot").appendChild(EndoPlots.linePlot({ title: "Depth RMSE per frame", xLabel: "frame",
-                                                           yLabel: "RMSE (clip units)", series: series("depth", "rmse") }));
+      $('per-frame-plot').appendChild(EndoPlots.linePlot({
+        title: 'Depth RMSE per frame',
+        xLabel: 'frame',
+        xName: 'frame',
+        yLabel: 'RMSE (clip units)',
+        series: series('depth', 'rmse')
+      }));
     }
   } else {
     $("per-frame-section").appendChild(node("p", { class: "missing", text: "No frame was evaluated." }));
@@ -411,23 +526,50 @@
   runRows.push(["machine", `${run.machine.hostname}: ${run.machine.cpu}, ${run.machine.logical_cores} logical cores, ` +
                            `${run.machine.memory_gib.toFixed(1)} GiB memory, ${run.machine.os}`]);
   runRows.push(["device", run.device], ["written", run.written], ["version", `endorecon ${run.version}`]);
-  if (data.clip) runRows.push(["clip", data.clip]);
+  if (data.clip) runRows.push([data.kind === 'render' ? 'rendered from' : 'clip', data.clip]);
+  const recording = data.recording;
+  if (recording) {
+    const parts = [recording.source || 'a recording'];
+    const window = recording.frames;
+    if (window && typeof window.start === 'number') {
+      parts.push(`frames ${window.start}:${window.end}:${window.step} of its ${recording.recording_frames}`);
+    }
+    if (recording.fps > 0) parts.push(`at most ${recording.fps} frames a second`);
+    if (recording.size && recording.recorded_size) {
+      parts.push(
+          `${recording.size[0]}\u00d7${recording.size[1]} pixels from ${recording.recorded_size[0]}\u00d7` +
+          `${recording.recorded_size[1]}`);
+    }
+    if (recording.stereo) parts.push(recording.stereo === 'mono' ? 'mono' : `stereo (${recording.stereo})`);
+    if (recording.endoscope) parts.push(`endoscope ${recording.endoscope}`);
+    runRows.push(['recording', parts.join('; ')]);
+  }
   if (metrics.time) {
     // Where the run's time went, against its budget; and, when the clip's results cost more than
     // evaluation's quarter of it, the budget that would have left training its three quarters.
     const seconds = (key) => metricSpan(`/time/${key}`, { digits: 1 });
     const time = [seconds("total_s"), " s"];
     if (metrics.time.budget_s > 0) time.push(" of a ", seconds("budget_s"), " s budget");
-    time.push(": training ", seconds("training_s"), " s, evaluation ", seconds("evaluation_s"), " s, writing ",
-              seconds("writing_s"), " s");
+    time.push(
+        ': training ', seconds('training_s'), ' s (', metricSpan('/train_seconds', {digits: 1}),
+        ' s of it steps, the rest periodic work), evaluation ', seconds('evaluation_s'), ' s, writing ',
+        seconds('writing_s'), ' s');
     if (metrics.time.budget_advised_s) {
-      time.push("; rendering the results takes about ", metricSpan("/evaluation/seconds/render_least", { digits: 0 }),
-                " s at the least, so training gave way: a budget of ",
-                metricSpan("/time/budget_advised_s", { digits: 0 }), " s or more leaves it three quarters of the run");
+      time.push(
+          '; rendering the results was priced, before it ran, at about ',
+          metricSpan('/evaluation/seconds/render_least', {digits: 0}), ' s at the least (it took ',
+          metricSpan('/evaluation/seconds/render', {digits: 1}), ' s), so training gave way: a budget of ',
+          metricSpan('/time/budget_advised_s', {digits: 0}),
+          ' s or more leaves it three quarters of the run');
     }
     runRows.push(["time", time]);
   }
   if (metrics.field) runRows.push(["field", [node("span", { class: "lines", text: metrics.field })]]);
+  if (evaluation.full) {
+    const how = [`full (${(evaluation.full_frames || []).length} frames): ${evaluation.full}`];
+    if (reducedFrames.size > 0) how.push(`reduced (${reducedFrames.size} frames): ${evaluation.reduced}`);
+    runRows.push(['evaluation', [node('span', {class: 'lines', text: how.join('\n')})]]);
+  }
   if (metrics.evaluation_mask) runRows.push(["evaluation mask", metrics.evaluation_mask]);
   if (metrics.video) {
     runRows.push(["video", [`${metrics.video.path} (${metrics.video.codec}, `, metricSpan("/video/frames", { digits: 0 }), " frames)"]]);
@@ -462,6 +604,11 @@
       : node("td", { text: JSON.stringify(value) });
     $("config").appendChild(node("tr", {}, [node("th", { text: pointer.slice(1) }), cell]));
   }
+
+  // A printed page shows the configuration too.
+  window.addEventListener('beforeprint', () => {
+    for (const d of document.querySelectorAll('details')) d.open = true;
+  });
 
   if (frames && frames.count > 0) showFrame(0);
   // When the page was built, in ms since navigation (bench/report_page_bench reads them): shownMs for
