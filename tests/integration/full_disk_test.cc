@@ -2,7 +2,8 @@
 // naming the limit (before any byte, or at the chunk where a disk filled from elsewhere runs out),
 // what is stored stays intact and verifiable, committed bytes are kept, and once space is freed the
 // same upload resumes and completes on the same server. The data folder is a 16 MiB tmpfs. And a
-// worker's scratch folder that fills up hands its job back rather than failing it.
+// worker's scratch folder that fills up hands its job back rather than failing it; a worker whose
+// results the full server refuses keeps them until space is freed there.
 #include <gtest/gtest.h>
 
 #include <cerrno>
@@ -214,6 +215,33 @@ TEST(FullDiskTest, AWorkerWhoseScratchFillsHandsTheJobBackUncountedAndAnotherWor
   EXPECT_EQ(done.state(), v1::SUCCEEDED) << done.error() << cluster.ServerLog();
   EXPECT_EQ(done.attempts(), 0);
   EXPECT_EQ(done.worker_id(), "roomy");
+}
+
+// A server whose data disk is full when a worker's results are ready: the worker keeps them and
+// the lease, and sends them once space is freed; the job succeeds with no attempt counted. (It failed
+// after three attempts, each training again, within a minute; found 2026-12-07.)
+TEST(FullDiskTest, ResultsTheFullServerRefusesWaitOnTheWorkerUntilSpaceIsFreed) {
+  Cluster cluster({"--min-free-bytes", std::to_string(8 * kMiB)}, false);
+  SmallFilesystem data(cluster.data_dir(), 24 * kMiB);
+  if (!data.mounted()) GTEST_SKIP() << data.why();
+  cluster.StartServer();
+  MakeClip(cluster.path("clip"));
+  const auto id = cluster.Submit(cluster.path("clip"), {"--iterations", "30"});
+  // Less free than a worker's reserve (a quarter of --min-free-bytes), room left for the job store.
+  FillLeaving(cluster.data_dir() / "filler", kMiB);
+  auto& worker = cluster.StartWorker("w");
+  ASSERT_TRUE(
+      WaitUntil([&] { return worker.Log().find("the results wait on this worker") != std::string::npos; },
+                std::chrono::seconds(120)))
+      << worker.Log() << cluster.ServerLog();
+  const v1::Job waiting = cluster.Job(id);
+  EXPECT_EQ(waiting.state(), v1::RUNNING) << waiting.error();
+  EXPECT_EQ(waiting.attempts(), 0);
+
+  fs::remove(cluster.data_dir() / "filler");
+  const v1::Job done = cluster.WaitForState(id, v1::SUCCEEDED, std::chrono::seconds(60));
+  EXPECT_EQ(done.state(), v1::SUCCEEDED) << done.error() << worker.Log();
+  EXPECT_EQ(done.attempts(), 0);
 }
 
 }  // namespace

@@ -97,6 +97,8 @@ class Cluster {
   void UseCredentials(const ClientCredentials& credentials);
   void StartServer();
   void KillServer(int signal);
+  // The extra server flags of the next StartServer().
+  void SetServerFlags(std::vector<std::string> flags) { server_flags_ = std::move(flags); }
   Process& StartWorker(const std::string& id, std::vector<std::string> flags = {});
   void StopWorker(const std::string& id, int signal);
 

@@ -69,26 +69,43 @@ std::string SummaryJson(const ReconstructSummary& summary) {
   return json.dump();
 }
 
+// What may pass while a call is retried, besides the server being unreachable.
+struct RetryAlso {
+  bool token_change = false;  // UNAUTHENTICATED: --token-file is read again when it changes
+  bool server_space = false;  // RESOURCE_EXHAUSTED for the server's data disk: space may be freed
+};
+
+// Whether `e` is the server refusing an upload for its data disk's free space (UploadReceiver).
+bool ServerDiskFull(const Error& e) {
+  return e.code() == ErrorCode::kResourceExhausted &&
+         std::string_view(e.what()).find("the server's data disk") != std::string_view::npos;
+}
+
 // Retries `call` (a call through `client`), a second apart or as soon as the server is back, while it
-// fails UNAVAILABLE (or, with `token_may_change`, UNAUTHENTICATED: --token-file is read again when
-// it changes) and `go_on()` holds; the warning of each retry ends with `while_what`.
+// fails UNAVAILABLE (or as `also` allows) and `go_on()` holds; the warning of each retry ends with
+// `while_what`.
 template <typename Call, typename GoOn>
 auto RetryUnavailable(WorkerClient& client, Call&& call, GoOn&& go_on, const char* while_what,
-                      bool token_may_change = false) {
+                      RetryAlso also = {}) {
   WarningPacer pacer;
   while (true) {
     try {
       return call();
     } catch (const Error& e) {
-      const bool refused = e.code() == ErrorCode::kUnauthenticated && token_may_change;
-      if ((e.code() != ErrorCode::kUnavailable && !refused) || !go_on()) throw;
+      const bool refused = e.code() == ErrorCode::kUnauthenticated && also.token_change;
+      // A full server disk fails no job that has its results (they were refused, the job failed
+      // after three attempts of training again; found 2026-12-07): they wait here for space.
+      const bool no_space = also.server_space && ServerDiskFull(e);
+      if ((e.code() != ErrorCode::kUnavailable && !refused && !no_space) || !go_on()) throw;
       int held = 0;
       if (pacer.Due(held)) {
-        spdlog::warn("{}; retrying every second{}{}{}", e.what(), while_what,
-                     refused ? " (write a valid worker token into --token-file)" : "",
+        spdlog::warn("{}; retrying every {}{}{}{}", e.what(), no_space ? "10 s" : "second", while_what,
+                     refused    ? " (write a valid worker token into --token-file)"
+                     : no_space ? " (the results wait on this worker until space is freed on the server)"
+                                : "",
                      held > 0 ? fmt::format(" ({} more failures since the last warning)", held) : "");
       }
-      client.PauseBeforeRetry(std::chrono::seconds(1));
+      client.PauseBeforeRetry(std::chrono::seconds(no_space ? 10 : 1));
     }
   }
 }
@@ -106,16 +123,18 @@ auto WhileUnavailable(WorkerClient& client, Call&& call,
 // taken by clients' uploads until the call's deadline) or UNAUTHENTICATED (the worker's token
 // expired or was revoked, and a new one may be written into --token-file) as long as the lease is
 // held: the server answered the job's heartbeats within the last `patience` and asked for no stop.
+// With `server_space`, also while the server refuses an upload for want of space on its data disk.
 template <typename Call>
 auto WhileLeaseHeld(WorkerClient& client, const ProgressReporter& reporter, Call&& call,
-                    std::chrono::seconds patience = std::chrono::seconds(30)) {
+                    bool server_space = false) {
+  const auto patience = std::chrono::seconds(30);
   return RetryUnavailable(
       client, std::forward<Call>(call),
       [&] {
         return !reporter.stop_requested() &&
                std::chrono::steady_clock::now() - reporter.last_answer() < patience;
       },
-      " while the server holds the lease", true);
+      " while the server holds the lease", {.token_change = true, .server_space = server_space});
 }
 
 // `message` with the job's folder on this worker taken out of its paths: the user who reads it
@@ -329,12 +348,13 @@ bool RunLeasedJob(WorkerClient& client, const v1::LeaseResponse& lease, const De
     };
     hooks.on_checkpoint = [&](const std::string& path) {
       // A checkpoint only spares a job handed out again its training so far: one the server cannot
-      // take now (unreachable, or its upload slots all taken) is skipped, and the job goes on.
+      // take now (unreachable, its upload slots all taken, or its data disk full) is skipped, and the
+      // job goes on.
       try {
         reporter.SetCheckpoint(
             WhileLeaseHeld(client, reporter, [&] { return UploadCheckpoint(client, path); }));
       } catch (const Error& e) {
-        if (e.code() != ErrorCode::kUnavailable) throw;
+        if (e.code() != ErrorCode::kUnavailable && !ServerDiskFull(e)) throw;
         spdlog::warn("[{}] job {}: checkpoint not uploaded ({}); the job goes on", device.name, job.id(),
                      e.what());
       }
@@ -361,7 +381,8 @@ bool RunLeasedJob(WorkerClient& client, const v1::LeaseResponse& lease, const De
       uploading.set_phase("upload");
       uploading.set_total_iterations(complete.result().files_size());
       reporter.SetProgress(uploading);
-      WhileLeaseHeld(client, reporter, [&] { client.PutFiles(options.out_dir, complete.result()); });
+      WhileLeaseHeld(
+          client, reporter, [&] { client.PutFiles(options.out_dir, complete.result()); }, true);
       stop_reporting();
       complete.set_summary_json(SummaryJson(summary));
       WhileUnavailable(client, [&] { return client.CompleteWithResults(options.out_dir, complete); });
