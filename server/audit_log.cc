@@ -35,8 +35,14 @@ AuditLog::AuditLog(const std::filesystem::path& file) : path_(file) {
              ": a named pipe (FIFO) that no process reads: start its reader first, "
              "or name a file");
   }
-  if (fd_ < 0)
-    Fail(ErrorCode::kUnavailable, "cannot open audit log " + file.string() + ": " + std::strerror(errno));
+  if (fd_ < 0) {
+    const int error = errno;
+    // Permissions are the operator's to fix, not a passing fault (a restored log another user owns).
+    Fail(error == EACCES || error == EPERM || error == EROFS ? ErrorCode::kFailedPrecondition
+                                                             : ErrorCode::kUnavailable,
+         "cannot open audit log " + file.string() + ": " + std::strerror(error) +
+             (error == EACCES ? " (owned by another user? chown it to the server's user)" : ""));
+  }
   ::fcntl(fd_, F_SETFL, ::fcntl(fd_, F_GETFL) & ~O_NONBLOCK);
 }
 

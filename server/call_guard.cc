@@ -113,6 +113,13 @@ CallGuard::CallGuard(std::filesystem::path token_store, bool require_worker_cert
       audit_(audit),
       metrics_(metrics) {
   Refresh();
+  // At start a store that does not open stops the server, saying why (not a temporary fault).
+  if (!open_failure_.empty()) {
+    Fail(ErrorCode::kFailedPrecondition,
+         open_failure_ +
+             " (owned by another user? chown it to the server's user; an empty file that `sqlite3 "
+             "tokens.sqlite .backup` left where there was no store: remove it)");
+  }
 }
 
 bool CallGuard::Refresh() { return Tokens() != nullptr; }
@@ -145,8 +152,26 @@ std::int64_t CallGuard::TokenRevokedAt(const std::string& name) {
 TokenStore* CallGuard::Tokens() {
   std::lock_guard lock(mutex_);
   if (enforcing_) return tokens_.get();
-  if (!tokens_ && std::filesystem::exists(token_store_path_))
-    tokens_ = std::make_unique<TokenStore>(token_store_path_);
+  if (!tokens_ && !std::filesystem::exists(token_store_path_)) open_failure_.clear();  // removed
+  if (!tokens_ && std::filesystem::exists(token_store_path_)) {
+    // A store that appears but does not open (an empty file another user owns: `sqlite3
+    // tokens.sqlite .backup` run as root where there was no store creates one) is logged and every
+    // call refused until it opens; it threw out of the server's periodic work and aborted it (found
+    // 2026-12-07).
+    try {
+      tokens_ = std::make_unique<TokenStore>(token_store_path_);
+      open_failure_.clear();
+    } catch (const Error& e) {
+      if (open_failure_ != e.what()) {
+        spdlog::error(
+            "{}: {}; every call is refused until the token store opens (a file another user owns, or "
+            "an empty one `sqlite3 tokens.sqlite .backup` left where there was no store: remove it)",
+            ErrorCodeName(e.code()), e.what());
+      }
+      open_failure_ = e.what();
+      return nullptr;
+    }
+  }
   // A store requires tokens once it holds one (revoked or not), never before: an empty one (made by
   // a failed `token create` of an older version, say) would lock every caller out.
   if (tokens_ && !tokens_->Empty()) {
@@ -169,6 +194,14 @@ void CallGuard::Admit(const grpc::ServerContext& context, const Rpc& rpc, Call& 
   }
   TokenStore* tokens = Tokens();
   if (!tokens) {
+    std::string failure;
+    {
+      std::lock_guard lock(mutex_);
+      failure = open_failure_;
+    }
+    if (!failure.empty())
+      Fail(ErrorCode::kUnavailable,
+           "the server's token store cannot be opened, so no call is admitted: " + failure);
     call.caller = AnonymousPrincipal();
     return;
   }

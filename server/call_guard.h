@@ -118,6 +118,9 @@ class CallGuard {
   std::mutex mutex_;
   std::unique_ptr<TokenStore> tokens_;
   bool enforcing_ = false;  // the store holds a token: from then on every call needs one
+  // Why a token store that exists could not be opened (empty when it was, or there is none): every
+  // call is refused meanwhile, and the periodic work goes on.
+  std::string open_failure_;
 };
 
 }  // namespace endorecon::server

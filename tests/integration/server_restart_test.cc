@@ -3,6 +3,7 @@
 // running job completes.
 #include <gtest/gtest.h>
 #include <signal.h>
+#include <sqlite3.h>
 
 #include <random>
 #include <regex>
@@ -278,8 +279,20 @@ TEST(ServerStartTest, BlobsWithoutTheirJobStoreAreRefused) {
   TempDir dir("blobs-alone");
   std::filesystem::create_directories(dir / "data" / "blobs" / "ab");
   WriteBytes(dir / "data" / "blobs" / "ab" / "abcdef", "a blob");
-  for (const bool empty_store : {false, true}) {
-    if (empty_store) WriteBytes(dir / "data" / "jobs.sqlite", "");
+  // No store; an empty file; a store of no table whose log was not copied beside it (a copy of a
+  // running server's jobs.sqlite without jobs.sqlite-wal: every job was still in the log).
+  for (const int store : {0, 1, 2}) {
+    if (store == 1) WriteBytes(dir / "data" / "jobs.sqlite", "");
+    if (store == 2) {
+      std::filesystem::remove(dir / "data" / "jobs.sqlite");
+      sqlite3* db = nullptr;
+      ASSERT_EQ(sqlite3_open((dir / "data" / "jobs.sqlite").c_str(), &db), SQLITE_OK);
+      ASSERT_EQ(
+          sqlite3_exec(db, "PRAGMA journal_mode=WAL; PRAGMA user_version=1;", nullptr, nullptr, nullptr),
+          SQLITE_OK);
+      sqlite3_close(db);
+      ASSERT_GT(std::filesystem::file_size(dir / "data" / "jobs.sqlite"), 0u);
+    }
     Process server({BuiltBinary("server/endorecon-server"), "--listen", "127.0.0.1:0", "--data-dir",
                     (dir / "data").string(), "--metrics-port", "-1"},
                    dir / "server.log");
@@ -289,6 +302,44 @@ TEST(ServerStartTest, BlobsWithoutTheirJobStoreAreRefused) {
         << server.Log();
     EXPECT_TRUE(std::filesystem::exists(dir / "data" / "blobs" / "ab" / "abcdef"));
   }
+}
+
+// A token store that appears and does not open (`sqlite3 tokens.sqlite .backup` run where there is
+// no store leaves an empty file, which another user may own): the running server goes on, refusing
+// every call and saying why, and admits callers again once it is removed; a server started beside
+// it refuses to start (it aborted within a second, and every restart after; found 2026-12-07).
+TEST(ServerStartTest, ATokenStoreThatDoesNotOpenRefusesCallsAndDoesNotStopTheServer) {
+  Cluster cluster;
+  const auto store = cluster.data_dir() / "tokens.sqlite";
+  WriteBytes(store, "not a database, and not empty");  // as root, what does not open whoever owns it
+  const auto list = [&] {
+    grpc::ClientContext context;
+    v1::ListJobsRequest request;
+    v1::ListJobsResponse response;
+    return cluster.stub().List(&context, request, &response);
+  };
+  ASSERT_TRUE(WaitUntil([&] { return !list().ok(); }, std::chrono::seconds(10)));
+  const grpc::Status refused = list();
+  EXPECT_EQ(refused.error_code(), grpc::StatusCode::UNAVAILABLE);
+  EXPECT_NE(refused.error_message().find("token store cannot be opened"), std::string::npos)
+      << refused.error_message();
+  std::this_thread::sleep_for(std::chrono::seconds(2));  // the periodic work meets it too
+  EXPECT_EQ(::kill(cluster.server_pid(), 0), 0) << cluster.ServerLog();
+  EXPECT_NE(cluster.ServerLog().find("every call is refused until the token store opens"), std::string::npos)
+      << cluster.ServerLog();
+  std::filesystem::remove(store);
+  EXPECT_TRUE(WaitUntil([&] { return list().ok(); }, std::chrono::seconds(10))) << cluster.ServerLog();
+
+  cluster.KillServer(SIGTERM);
+  WriteBytes(store, "not a database, and not empty");
+  Process restarted({BuiltBinary("server/endorecon-server"), "--listen", "127.0.0.1:0", "--data-dir",
+                     cluster.data_dir().string(), "--metrics-port", "-1"},
+                    cluster.path("restarted.log"));
+  EXPECT_NE(restarted.Wait(), 0);
+  EXPECT_NE(restarted.Log().find("FAILED_PRECONDITION"), std::string::npos) << restarted.Log();
+  EXPECT_NE(restarted.Log().find("an empty file that `sqlite3 tokens.sqlite .backup` left"),
+            std::string::npos)
+      << restarted.Log();
 }
 
 // The Kubernetes manifest's --data-dir moved from the volume's root to a folder below it (2026-12-06:
