@@ -320,9 +320,17 @@ int Run(const ServerFlags& flags) {
   }
   if (flags.orphan_hours > 0) {
     spdlog::info(
-        "files no job references are deleted {} hour(s) after they were last written (checked every {} s)",
+        "files no job references are deleted {0} hour(s) after they were last written, from {0} hour(s) "
+        "after this start on (a restored folder keeps its files' times: `endorecon-server retention "
+        "--dry-run` shows what would go; checked every {1} s)",
         flags.orphan_hours, flags.retention_check_s);
   }
+  // Orphans wait for the server to have run --orphan-hours: a data folder restored with a job store
+  // older than its blobs (copies keep the files' times) had the newer jobs' results deleted as no
+  // job's 56 ms after the start (found 2026-12-07); now the operator has the same hours to notice.
+  const auto orphans_from =
+      std::chrono::steady_clock::now() +
+      std::chrono::milliseconds(static_cast<std::int64_t>(flags.orphan_hours * 3600 * 1000));
 
   std::atomic<bool> stopping{false};
   std::atomic<int> exit_code{0};
@@ -382,8 +390,10 @@ int Run(const ServerFlags& flags) {
         next_retention +=
             std::chrono::milliseconds(static_cast<std::int64_t>(flags.retention_check_s * 1000));
         try {
-          const auto plan = coordinator.ExpireFinishedBefore(JobCutoff(flags.retention_days),
-                                                             OrphanCutoff(flags.orphan_hours));
+          const bool orphans_due = std::chrono::steady_clock::now() >= orphans_from;
+          const auto plan = coordinator.ExpireFinishedBefore(
+              JobCutoff(flags.retention_days),
+              orphans_due ? OrphanCutoff(flags.orphan_hours) : std::filesystem::file_time_type::min());
           for (const auto& job : plan.jobs) guard.RecordServerAction("Retention", job.id(), "EXPIRED");
         } catch (const Error& e) {
           spdlog::error("retention: {}: {}", ErrorCodeName(e.code()), e.what());

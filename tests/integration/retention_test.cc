@@ -1,6 +1,6 @@
 // Retention against a real server: finished jobs' files go after the configured age, their records
 // stay marked expired, content that a live job shares stays, and the dry run shows it all first
-// without changing anything.
+// without changing anything. Files no job references wait for the server to have run --orphan-hours.
 #include <gtest/gtest.h>
 
 #include <set>
@@ -74,6 +74,24 @@ TEST(RetentionTest, ExpiresFinishedJobsAndKeepsWhatLiveJobsShare) {
   const auto audit = AuditLines(retaining.data_dir() / "audit.jsonl");
   EXPECT_EQ(AuditFind(audit, "Retention", "EXPIRED", "server", old_alone).size(), 1u);
   EXPECT_EQ(AuditFind(audit, "Retention", "EXPIRED", "server", live_shared).size(), 0u);
+}
+
+// A data folder restored with a job store older than its blobs: the files only newer jobs named
+// are no job's, and their copies keep their old times. They stay until the server has run
+// --orphan-hours (they were deleted 56 ms after the start; found 2026-12-07), then go.
+TEST(RetentionTest, FilesNoJobNamesWaitForTheServerToHaveRunTheOrphanHours) {
+  const auto started = std::chrono::steady_clock::now();
+  Cluster cluster({"--orphan-hours", "0.001", "--retention-check-s", "0.2"});  // 3.6 s
+  MakeClip(cluster.path("clip"));
+  cluster.Submit(cluster.path("clip"), {});  // a job store that names other files
+  const fs::path orphan = cluster.data_dir() / "blobs" / "ab" / ("ab" + std::string(62, 'a'));
+  fs::create_directories(orphan.parent_path());
+  WriteBytes(orphan, "the result of a job the restored store does not have");
+  fs::last_write_time(orphan, fs::file_time_type::clock::now() - std::chrono::hours(72));
+  std::this_thread::sleep_until(started + std::chrono::milliseconds(2500));
+  EXPECT_TRUE(fs::exists(orphan)) << "deleted before the server had run --orphan-hours";
+  EXPECT_TRUE(WaitUntil([&] { return !fs::exists(orphan); }, std::chrono::seconds(10)))
+      << cluster.ServerLog();
 }
 
 }  // namespace
