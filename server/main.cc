@@ -301,8 +301,20 @@ int Run(const ServerFlags& flags) {
         "network policy that lets only Prometheus reach it",
         flags.metrics_host);
   }
+  // The newest job's submitter: a job submitted with a token, and no token store now, is a store
+  // restored without its tokens (every caller saw every tenant's jobs, and only an info line said so;
+  // found 2026-12-07).
+  const auto newest = store.List({}, 1, 0).jobs;
+  const bool tokens_before = !newest.empty() && !newest.front().submitted_by().empty();
   if (guard.Refresh()) {
     spdlog::info("tokens required: {}", TokenStore::PathIn(data_dir).string());
+  } else if (tokens_before) {
+    spdlog::warn(
+        "no token store in {}, yet the newest job was submitted with a token ('{}'{}): was tokens.sqlite "
+        "left out of a restore? Until it is back (docs/operations.md, \"Backup and restore\") every caller "
+        "that reaches {} may use every API and see every tenant's jobs",
+        data_dir.string(), newest.front().submitted_by(),
+        newest.front().tenant().empty() ? "" : " of tenant '" + newest.front().tenant() + "'", address);
   } else if (IsLoopbackAddress(flags.listen)) {
     spdlog::info(
         "no token store: every local caller may use every API (create tokens with `endorecon-server "

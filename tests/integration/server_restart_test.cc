@@ -342,6 +342,26 @@ TEST(ServerStartTest, ATokenStoreThatDoesNotOpenRefusesCallsAndDoesNotStopTheSer
       << restarted.Log();
 }
 
+// A data folder restored without its tokens.sqlite: the server starts (the operator may mean it) but
+// warns that its newest job came with a token, naming who sent it; it said only that every local
+// caller may use every API (found 2026-12-07).
+TEST(ServerStartTest, AStoreRestoredWithoutItsTokensIsWarnedOf) {
+  Cluster cluster({}, false);
+  const auto carol = MakeCredentials(cluster, "", "client", "research", "carol");
+  cluster.UseCredentials(carol);
+  cluster.StartServer();
+  MakeClip(cluster.path("clip"));
+  cluster.Submit(cluster.path("clip"), {});
+  cluster.KillServer(SIGTERM);
+  std::filesystem::remove(cluster.data_dir() / "tokens.sqlite");
+  cluster.UseCredentials({});
+  cluster.StartServer();
+  EXPECT_NE(cluster.ServerLog().find("yet the newest job was submitted with a token ('carol' of tenant "
+                                     "'research'): was tokens.sqlite left out of a restore?"),
+            std::string::npos)
+      << cluster.ServerLog();
+}
+
 // The Kubernetes manifest's --data-dir moved from the volume's root to a folder below it (2026-12-06:
 // fsGroup makes the root group-owned, and the server warned of it at every start). A deployment
 // upgraded with its data still at the root would have started an empty store beside it, and one
