@@ -49,9 +49,27 @@ void FsyncDirectory(const fs::path& dir) {
 
 }  // namespace
 
+namespace {
+// A folder of the store this user cannot list, read or write: a restore chowned without -R. Every
+// job then failed as if its files were gone ("no blob ...: set aside as damaged?"), for good (found
+// 2026-12-07); refused at start instead.
+void RequireUsable(const fs::path& dir) {
+  if (::access(dir.c_str(), R_OK | W_OK | X_OK) == 0) return;
+  Fail(ErrorCode::kFailedPrecondition,
+       dir.string() + ": this user cannot read and write it (" + std::strerror(errno) +
+           "): a restored data folder owned by another user? chown -R it to the server's user");
+}
+}  // namespace
+
 BlobStore::BlobStore(fs::path root) : root_(std::move(root)) {
   fs::create_directories(root_ / "blobs");
   fs::create_directories(root_ / "partial");
+  for (const char* folder : {"blobs", "partial"}) {
+    RequireUsable(root_ / folder);
+    for (const auto& entry : fs::directory_iterator(root_ / folder)) {
+      if (entry.is_directory()) RequireUsable(entry.path());
+    }
+  }
 }
 
 bool BlobStore::Has(const std::string& sha256) const {
@@ -66,7 +84,13 @@ fs::path BlobStore::PathOf(const std::string& sha256) const {
 std::optional<std::int64_t> BlobStore::SizeOf(const std::string& sha256) const {
   if (sha256.size() != 64) return std::nullopt;
   std::error_code error;
-  const auto size = fs::file_size(root_ / "blobs" / sha256.substr(0, 2) / sha256, error);
+  const fs::path path = root_ / "blobs" / sha256.substr(0, 2) / sha256;
+  const auto size = fs::file_size(path, error);
+  if (error == std::errc::permission_denied) {
+    Fail(ErrorCode::kFailedPrecondition,
+         path.string() + ": this user cannot read it (a restored data folder owned by another user? chown "
+                         "-R it to the server's user)");
+  }
   if (error) return std::nullopt;
   return static_cast<std::int64_t>(size);
 }
