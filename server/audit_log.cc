@@ -57,8 +57,10 @@ void AuditLog::Write(const AuditEntry& entry) {
   if (!entry.subject.empty()) line["subject"] = entry.subject;
   // Invalid UTF-8 from a caller (a worker id, a peer name) is replaced rather than thrown.
   const std::string text = line.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
-  if (::write(fd_, text.data(), text.size()) != static_cast<ssize_t>(text.size()))
+  if (::write(fd_, text.data(), text.size()) != static_cast<ssize_t>(text.size())) {
     spdlog::error("audit log {}: write failed: {}", path_.string(), std::strerror(errno));
+    if (on_failure_) on_failure_();
+  }
 }
 
 }  // namespace endorecon::server

@@ -11,6 +11,7 @@
 #pragma once
 
 #include <filesystem>
+#include <functional>
 #include <string>
 
 namespace endorecon::server {
@@ -36,14 +37,18 @@ class AuditLog {
   AuditLog& operator=(const AuditLog&) = delete;
 
   // Writes one line with the current time. A failed write is logged (spdlog) and not thrown: the
-  // call it describes has already happened.
+  // call it describes has already happened. It is counted (SetFailureObserver) for an alert: lines
+  // lost to a full disk were only logged (found 2026-12-07).
   void Write(const AuditEntry& entry);
+  // Called once per failed write; set before the log is shared between threads.
+  void SetFailureObserver(std::function<void()> observer) { on_failure_ = std::move(observer); }
 
   const std::filesystem::path& path() const { return path_; }
 
  private:
   std::filesystem::path path_;
   int fd_ = -1;
+  std::function<void()> on_failure_;
 };
 
 }  // namespace endorecon::server

@@ -185,7 +185,10 @@ void JobStore::Flush() {
       }
     } else {
       broken_ = "job store " + file_.string() + ": a commit of " + std::to_string(batch.size()) +
-                " write(s) failed (" + failure + "); the server must restart to recover from the disk";
+                " write(s) failed (" + failure + "); the server must restart to recover from the disk" +
+                (failure.find("its disk is full") != std::string::npos
+                     ? ", and free space on it first: a restart alone meets the same full disk"
+                     : "");
       spdlog::critical("{}", broken_);
     }
     committed_.notify_all();

@@ -188,6 +188,17 @@ int Run(const ServerFlags& flags) {
   RefuseBlobsWithoutTheirStore(data_dir);
   JobStore store(data_dir / "jobs.sqlite");
   BlobStore blobs(data_dir);
+  // A start on a disk already below the reserve (a restart after the job store met a full disk):
+  // said at once, not at the first refused upload or failed commit (found 2026-12-07).
+  if (std::error_code error; flags.min_free_bytes > 0) {
+    const auto space = std::filesystem::space(data_dir, error);
+    if (!error && static_cast<std::int64_t>(space.available) < flags.min_free_bytes) {
+      spdlog::warn(
+          "the data disk of {} has {} bytes free, less than --min-free-bytes {}: clients' uploads are "
+          "refused and the job store may fail to commit until space is freed there",
+          data_dir.string(), space.available, flags.min_free_bytes);
+    }
+  }
   Scheduler scheduler;
   LeaseTable leases(std::chrono::milliseconds(flags.lease_ttl_ms));
   WorkerRegistry workers(std::chrono::milliseconds(flags.lease_ttl_ms), data_dir / "drains.json");
@@ -204,6 +215,7 @@ int Run(const ServerFlags& flags) {
     }
   });
   AuditLog audit(flags.audit_log.empty() ? data_dir / "audit.jsonl" : std::filesystem::path(flags.audit_log));
+  audit.SetFailureObserver([&metrics] { metrics.AuditWriteFailed(); });
   CallGuard guard(TokenStore::PathIn(data_dir), !flags.tls.client_ca_file.empty(), audit, metrics);
   TenantQuotas quotas(flags.tenant_quota, flags.quotas_file);
   spdlog::info("tenant quotas: {}", quotas.Describe());  // an admin checks what is in force
@@ -417,7 +429,8 @@ int Run(const ServerFlags& flags) {
   std::thread signal_waiter([&] {
     int signal = 0;
     sigwait(&stop_signals, &signal);
-    spdlog::info("signal {}: shutting down", signal);
+    // The job store's stop sends the server its own SIGTERM: that is not an operator's signal.
+    if (exit_code == 0) spdlog::info("signal {}: shutting down", signal);
     stopping = true;
     scheduler.Shutdown();
     hub.Shutdown();

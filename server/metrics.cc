@@ -62,6 +62,9 @@ Metrics::Metrics(const std::string& bind_address)
       damaged_(Gauge(*registry_, "endorecon_damaged_files",
                      "Stored files set aside as damaged, their bytes no longer matching their digest (a disk "
                      "fault), in the data folder's damaged/")),
+      audit_failures_(Counter(*registry_, "endorecon_audit_write_failures_total",
+                              "Audit log lines that could not be written (a full or failing disk): calls "
+                              "that happened without their audit record")),
       uploads_pending_(Gauge(*registry_, "endorecon_uploads_pending_bytes",
                              "Bytes of the uploads waiting to be submitted, every tenant's")),
       rpc_seconds_(BuildHistogram()

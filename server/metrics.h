@@ -20,6 +20,7 @@
 //   endorecon_data_available_bytes           gauge: free bytes on the data folder's file system
 //   endorecon_data_capacity_bytes            gauge: size of that file system
 //   endorecon_damaged_files                  gauge: stored files set aside as damaged (<data>/damaged)
+//   endorecon_audit_write_failures_total     counter: audit log lines that could not be written
 //   endorecon_uploads_pending_bytes          gauge: bytes of the uploads waiting to be submitted, every
 //                                            tenant's (`endorecon uploads` lists them by tenant)
 //   endorecon_rpc_seconds{method}            histogram: time the server spent on each call, from the
@@ -67,6 +68,7 @@ class Metrics {
   void JobsExpired(std::size_t jobs) { expired_.Increment(static_cast<double>(jobs)); }
   void SetDataDisk(std::int64_t available, std::int64_t capacity);
   void SetDamagedFiles(std::size_t files) { damaged_.Set(static_cast<double>(files)); }
+  void AuditWriteFailed() { audit_failures_.Increment(); }
   void SetPendingUploads(std::int64_t bytes) { uploads_pending_.Set(static_cast<double>(bytes)); }
   void UploadBytes(std::int64_t bytes) { upload_bytes_.Increment(static_cast<double>(bytes)); }
   void DownloadBytes(std::int64_t bytes) { download_bytes_.Increment(static_cast<double>(bytes)); }
@@ -121,6 +123,7 @@ class Metrics {
   prometheus::Gauge& data_available_;
   prometheus::Gauge& data_capacity_;
   prometheus::Gauge& damaged_;
+  prometheus::Counter& audit_failures_;
   prometheus::Gauge& uploads_pending_;
   prometheus::Family<prometheus::Histogram>& rpc_seconds_;
   prometheus::Histogram& store_commit_seconds_;

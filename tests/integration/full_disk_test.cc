@@ -217,6 +217,17 @@ TEST(FullDiskTest, AWorkerWhoseScratchFillsHandsTheJobBackUncountedAndAnotherWor
   EXPECT_EQ(done.worker_id(), "roomy");
 }
 
+// A server started on a disk with less free than its reserve says so at once.
+TEST(FullDiskTest, AStartBelowTheReserveIsWarnedOf) {
+  Cluster cluster({"--min-free-bytes", std::to_string(64 * kMiB)}, false);
+  SmallFilesystem data(cluster.data_dir(), 16 * kMiB);
+  if (!data.mounted()) GTEST_SKIP() << data.why();
+  cluster.StartServer();
+  EXPECT_NE(cluster.ServerLog().find("less than --min-free-bytes 67108864: clients' uploads are refused"),
+            std::string::npos)
+      << cluster.ServerLog();
+}
+
 // A server whose data disk is full when a worker's results are ready: the worker keeps them and
 // the lease, and sends them once space is freed; the job succeeds with no attempt counted. (It failed
 // after three attempts, each training again, within a minute; found 2026-12-07.)

@@ -60,4 +60,17 @@ TEST(AuditLogTest, APipeNoProcessReadsIsRefusedNotWaitedOn) {
 }
 
 }  // namespace
+// A line the disk refuses (/dev/full: ENOSPC on every write) is counted for the metric and its alert
+// (it was only logged).
+TEST(AuditLogTest, AFailedWriteIsCounted) {
+  AuditLog log("/dev/full");
+  int failures = 0;
+  log.SetFailureObserver([&] { ++failures; });
+  AuditEntry entry;
+  entry.method = "Submit";
+  log.Write(entry);
+  log.Write(entry);
+  EXPECT_EQ(failures, 2);
+}
+
 }  // namespace endorecon::server
