@@ -154,7 +154,16 @@ int Fetch(const Globals& globals, const FetchFlags& flags) {
         globals.timeout() + std::chrono::milliseconds(static_cast<std::int64_t>(
                                 1000.0 * static_cast<double>(to_receive) / flags.min_bytes_per_second)));
     auto reader = stub->Fetch(stream_context.get(), request);
-    received = ReceiveFiles(*reader, flags.out);
+    try {
+      received = ReceiveFiles(*reader, flags.out);
+    } catch (const Error& e) {
+      // A server that went away mid-download (a restart, a crash) said only "recvmsg: Connection
+      // reset by peer" (found 2026-12-07): the fetch resumes, so say how.
+      if (e.code() != ErrorCode::kUnavailable) throw;
+      Fail(e.code(), std::string(e.what()) +
+                         "; the files fetched so far are kept: run the same `endorecon fetch " + job.id() +
+                         " -o " + PrintableText(flags.out, 200) + "` again to resume");
+    }
     CopyDuplicates(flags.out, pending);
     // On disk before "verified" is said: the results may be the only copy once retention runs.
     SyncFolder(flags.out);

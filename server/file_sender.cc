@@ -31,7 +31,10 @@ std::int64_t SendFiles(BlobStore& blobs, const std::vector<std::pair<v1::FileEnt
                   std::to_string(entry.size()) + " bytes");
     }
     const auto stored = blobs.SizeOf(entry.sha256());
-    if (!stored) Fail(ErrorCode::kNotFound, "no blob with sha256 " + entry.sha256());
+    if (!stored) {
+      Fail(ErrorCode::kNotFound,
+           "'" + entry.path() + "' (sha256 " + entry.sha256() + ") is not in the server's store");
+    }
     if (*stored != entry.size()) {
       Damaged(blobs, entry,
               "it holds " + std::to_string(*stored) + " bytes of the file's " + std::to_string(entry.size()));

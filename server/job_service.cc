@@ -216,8 +216,10 @@ grpc::Status JobServiceImpl::Fetch(grpc::ServerContext* context, const v1::Fetch
                                          "cannot be fetched whole; submit its clip again to make them anew");
         }
       }
-      Fail(ErrorCode::kNotFound,
-           "job " + job.id() + ": a result file is missing from the server's store (" + e.what() + ")");
+      // Said in the server's log too: the operator restores it (a restore without it, the likely cause).
+      spdlog::error("job {}: a result file is missing from the store: {}", job.id(), e.what());
+      Fail(ErrorCode::kNotFound, "job " + job.id() + ": a result file is missing from the server's store: " +
+                                     e.what() + " (tell the server's admin: its log names it)");
     }
     return grpc::Status::OK;
   });

@@ -239,10 +239,13 @@ grpc::Status WorkerServiceImpl::GetBlobs(grpc::ServerContext* context, const v1:
       // while another job of the same content ran): no attempt can succeed, and three did, each
       // refused (found 2026-12-06). The job fails saying what to do; a submit of the clip uploads the
       // file anew.
-      const std::string why = e.code() == ErrorCode::kDataLoss
-                                  ? std::string(e.what())
-                                  : "a file of the job is no longer in the server's store (" +
-                                        std::string(e.what()) + "; set aside as damaged?)";
+      const std::string why =
+          e.code() == ErrorCode::kDataLoss
+              ? std::string(e.what())
+              : "a file of the job is no longer in the server's store: " + std::string(e.what()) +
+                    " (set aside as damaged, or left out of a restore: the server's log says which)";
+      // The operator's side of it, in the server's log (a missing file was said to the user alone).
+      spdlog::error("job {}: {}", job.id(), why);
       v1::FailRequest failed;
       failed.set_lease_id(request->lease_id());
       failed.set_retry(false);

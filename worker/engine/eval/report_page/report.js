@@ -210,6 +210,15 @@
       $("panels").appendChild(figure);
       panels.push({ key: def.key, image, overlay });
     }
+    // The heat maps' scales are this run's own (docs/formats.md, heatmap_scale): say so once.
+    if (data.scales.uncertainty || data.scales.model || data.scales.error) {
+      $('frames-section').appendChild(node('p', {
+        class: 'note',
+        text:
+            'Each heat map\'s colours run from 0 to the 99th percentile of this run\'s values on tissue, the same ' +
+            'for every frame of the run: compare colours within a run, not between runs.'
+      }));
+    }
     $("tool-shading").addEventListener("change", () => showFrame(current));
     if (!frames.tool) $("tool-shading").parentElement.style.display = "none";
     // The mask covers tools and, on a real scope, the dark corners outside its view: both are left out.
