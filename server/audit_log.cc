@@ -3,6 +3,7 @@
 #include <fcntl.h>
 #include <fmt/chrono.h>
 #include <spdlog/spdlog.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -57,10 +58,17 @@ void AuditLog::Write(const AuditEntry& entry) {
   if (!entry.subject.empty()) line["subject"] = entry.subject;
   // Invalid UTF-8 from a caller (a worker id, a peer name) is replaced rather than thrown.
   const std::string text = line.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
-  if (::write(fd_, text.data(), text.size()) != static_cast<ssize_t>(text.size())) {
-    spdlog::error("audit log {}: write failed: {}", path_.string(), std::strerror(errno));
-    if (on_failure_) on_failure_();
-  }
+  std::lock_guard lock(mutex_);  // a part line is cut back before another line follows it
+  const ssize_t written = ::write(fd_, text.data(), text.size());
+  if (written == static_cast<ssize_t>(text.size())) return;
+  // A short write (a disk that filled mid-line) reports no errno and left a part line, which the next
+  // line was glued to, spoiling both (found 2026-12-07): the part is cut off again.
+  const int error = written < 0 ? errno : ENOSPC;
+  struct stat status {};
+  if (written > 0 && ::fstat(fd_, &status) == 0 && S_ISREG(status.st_mode) && status.st_size >= written)
+    static_cast<void>(::ftruncate(fd_, status.st_size - written));
+  spdlog::error("audit log {}: write failed: {}", path_.string(), std::strerror(error));
+  if (on_failure_) on_failure_();
 }
 
 }  // namespace endorecon::server

@@ -12,6 +12,7 @@
 
 #include <filesystem>
 #include <functional>
+#include <mutex>
 #include <string>
 
 namespace endorecon::server {
@@ -48,6 +49,7 @@ class AuditLog {
  private:
   std::filesystem::path path_;
   int fd_ = -1;
+  std::mutex mutex_;
   std::function<void()> on_failure_;
 };
 

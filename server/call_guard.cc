@@ -124,6 +124,11 @@ CallGuard::CallGuard(std::filesystem::path token_store, bool require_worker_cert
 
 bool CallGuard::Refresh() { return Tokens() != nullptr; }
 
+std::string CallGuard::OpenFailure() {
+  std::lock_guard lock(mutex_);
+  return open_failure_;
+}
+
 void CallGuard::PublishTokenExpiries() {
   TokenStore* tokens = Tokens();
   if (tokens == nullptr) return;
@@ -194,11 +199,7 @@ void CallGuard::Admit(const grpc::ServerContext& context, const Rpc& rpc, Call& 
   }
   TokenStore* tokens = Tokens();
   if (!tokens) {
-    std::string failure;
-    {
-      std::lock_guard lock(mutex_);
-      failure = open_failure_;
-    }
+    const std::string failure = OpenFailure();
     if (!failure.empty())
       Fail(ErrorCode::kUnavailable,
            "the server's token store cannot be opened, so no call is admitted: " + failure);

@@ -103,6 +103,10 @@ class CallGuard {
   // revoked or expired meanwhile ends the stream (its caller reopens it with its current token).
   void Admit(const grpc::ServerContext& context, const Rpc& rpc, Call& call);
 
+  // Why a token store that exists does not open, every call being refused meanwhile; "" when it opens
+  // or there is none.
+  std::string OpenFailure();
+
  private:
   // Tells a caller whose token expires when: initial metadata kTokenExpiresHeader (Unix ms), read by
   // every client's channel (common/transport_security.h), which warns a week ahead.

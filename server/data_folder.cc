@@ -1,5 +1,8 @@
 #include "server/data_folder.h"
 
+#include <fstream>
+#include <string_view>
+
 #include "common/error.h"
 
 namespace endorecon::server {
@@ -15,6 +18,23 @@ std::string StoreIn(const fs::path& dir) {
     if (fs::exists(dir / file, error)) return file;
   }
   return "";
+}
+
+// Whether the SQLite database `file` holds no table in its main file and has no write-ahead log with
+// anything in it: a store copied without its -wal while the server ran (every job was still in the
+// log) reads as one never used. Read by hand, before SQLite opens (and would set up) anything: the
+// file's header, then page 1's b-tree header, whose cell count is the schema's entries (sqlite.org
+// "Database File Format" 1.3, 1.6).
+bool HoldsNoTable(const std::filesystem::path& file) {
+  std::error_code error;
+  const auto wal = file.string() + "-wal";
+  if (std::filesystem::exists(wal, error) && std::filesystem::file_size(wal, error) > 0) return false;
+  std::ifstream in(file, std::ios::binary);
+  char bytes[105] = {};
+  if (!in.read(bytes, sizeof bytes)) return false;
+  if (std::string_view(bytes, 16) != std::string_view("SQLite format 3\0", 16)) return false;
+  const int cells = (static_cast<unsigned char>(bytes[103]) << 8) | static_cast<unsigned char>(bytes[104]);
+  return cells == 0;
 }
 
 }  // namespace
@@ -42,6 +62,29 @@ void RefuseAStoreBesideIt(const std::filesystem::path& data_dir) {
              " has one (" + store +
              "): point --data-dir at it (the Kubernetes manifest's data folder is /data/endorecon since "
              "2026-12-06). Starting here would begin an empty store beside it, without its tokens");
+  }
+}
+
+// A data folder whose blobs/ holds files but whose jobs.sqlite is missing, empty or holds no table (a
+// restore that copied the blobs and not the store, the store to another name, or the store without
+// its write-ahead log): a new store would have no job reference them, and the first retention sweep
+// deleted every one as an orphan (found 2026-12-05; without the log, 2026-12-07).
+void RefuseBlobsWithoutTheirStore(const std::filesystem::path& data_dir) {
+  namespace fs = std::filesystem;
+  std::error_code error;
+  const fs::path store = data_dir / "jobs.sqlite";
+  const bool no_store = !fs::exists(store, error) || fs::file_size(store, error) == 0 || HoldsNoTable(store);
+  if (!no_store || !fs::is_directory(data_dir / "blobs", error)) return;
+  for (fs::recursive_directory_iterator it(data_dir / "blobs", error), end; !error && it != end;
+       it.increment(error)) {
+    if (!it->is_regular_file(error)) continue;
+    Fail(ErrorCode::kFailedPrecondition,
+         data_dir.string() + ": blobs/ holds files (" + it->path().filename().string() +
+             ", ...) but there is no job store (jobs.sqlite is missing, empty, or holds no table and "
+             "no write-ahead log: copied without its jobs.sqlite-wal while the server ran?), so "
+             "retention would delete them as no job's: restore jobs.sqlite beside them, taken with "
+             "`sqlite3 jobs.sqlite \".backup FILE\"` (docs/operations.md, \"Backup and restore\"), or "
+             "move blobs/ away to start afresh");
   }
 }
 

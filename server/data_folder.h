@@ -14,4 +14,11 @@ namespace endorecon::server {
 // of the data then overwrote.
 void RefuseAStoreBesideIt(const std::filesystem::path& data_dir);
 
+// Throws Error(kFailedPrecondition) when `data_dir`'s blobs/ holds files but its jobs.sqlite is
+// missing, empty, or holds no table and has no write-ahead log (a restore that copied the blobs and
+// not the store, the store to another name, or a running server's store without its log): a new
+// store would have no job reference them, and retention would delete every one as no job's. Before
+// the server starts, and before `retention --dry-run` reads (its store open made the missing table).
+void RefuseBlobsWithoutTheirStore(const std::filesystem::path& data_dir);
+
 }  // namespace endorecon::server

@@ -1,5 +1,8 @@
 #include "server/file_sender.h"
 
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <string>
 
@@ -39,7 +42,18 @@ std::int64_t SendFiles(BlobStore& blobs, const std::vector<std::pair<v1::FileEnt
       Damaged(blobs, entry,
               "it holds " + std::to_string(*stored) + " bytes of the file's " + std::to_string(entry.size()));
     }
-    std::ifstream in(blobs.PathOf(entry.sha256()), std::ios::binary);
+    const std::filesystem::path path = blobs.PathOf(entry.sha256());
+    std::ifstream in(path, std::ios::binary);
+    if (!in.is_open()) {
+      // Not read is not damaged: a file another user owns (a restore whose chown missed the files)
+      // was hashed as no bytes, set aside as damaged and its job failed (found 2026-12-07).
+      const int error = errno;
+      Fail(error == EACCES || error == EPERM ? ErrorCode::kFailedPrecondition : ErrorCode::kUnavailable,
+           "the server cannot read its stored copy of '" + entry.path() + "' (" + path.string() + ": " +
+               std::strerror(error) +
+               (error == EACCES ? "; owned by another user? chown -R the data folder to the server's user)"
+                                : ")"));
+    }
     // Every byte is hashed as it is read, the bytes before a resumed download's offset too, and the
     // last chunk goes out only once the digest matches: a damaged copy never arrives whole.
     Sha256 digest;

@@ -827,7 +827,7 @@ RetentionPlan JobCoordinator::ExpireFinishedBefore(std::int64_t cutoff_unix_ms,
   return plan;
 }
 
-void JobCoordinator::ExpireLeases(Clock::time_point now) {
+void JobCoordinator::ExpireLeases(Clock::time_point now, const std::string& server_refusing) {
   const auto expired = parts_.leases.TakeExpired(now);
   if (expired.empty()) return;
   // Why each lease's worker may have been refused, asked of the token store outside the lock: a token
@@ -844,17 +844,22 @@ void JobCoordinator::ExpireLeases(Clock::time_point now) {
       const auto& token = lease.token;
       const bool token_lapsed = token.expires_unix_ms > 0 && token.expires_unix_ms <= NowUnixMs();
       const std::string refused = ", so its calls were refused and its lease expired";
+      // The server's own token store not opening refused every worker's calls (found 2026-12-07).
+      const bool server_fault = !server_refusing.empty();
       const std::string reason =
           "worker " + lease.worker_id +
-          (token_lapsed ? "'s token '" + token.name + "' expired at " + UtcText(token.expires_unix_ms) +
-                              refused + " (not counted as an attempt; renew worker tokens before they expire)"
+          (server_fault ? "'s calls were refused because the server's token store does not open (" +
+                              server_refusing + "), so its lease expired (not counted as an attempt)"
+           : token_lapsed
+               ? "'s token '" + token.name + "' expired at " + UtcText(token.expires_unix_ms) + refused +
+                     " (not counted as an attempt; renew worker tokens before they expire)"
            : revoked_at[i] > 0
                ? "'s token '" + token.name + "' was revoked at " + UtcText(revoked_at[i]) + refused
                : " stopped reporting; its lease expired");
       if (stored->job.cancel_requested()) {
         Finish(stored->job, v1::CANCELLED, CancelledBy(stored->job) + "; " + reason);
       } else {
-        Requeue(*stored, !token_lapsed, reason);
+        Requeue(*stored, !token_lapsed && !server_fault, reason);
       }
     }
   });

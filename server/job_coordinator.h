@@ -167,7 +167,9 @@ class JobCoordinator {
   // Takes back every lease expired at `now`: requeues the job or fails it after max attempts. A lease
   // whose worker's token had expired (its calls refused, so it could not renew) costs no attempt: a
   // token expiring mid-job failed jobs that had nothing wrong with them (found 2026-12-06).
-  void ExpireLeases(Clock::time_point now);
+  // `server_refusing` (CallGuard::OpenFailure: the server refused every call meanwhile) makes each
+  // expiry the server's fault: requeued with no attempt counted, the reason naming it.
+  void ExpireLeases(Clock::time_point now, const std::string& server_refusing = "");
   // Retention: deletes the files of jobs finished before `cutoff_unix_ms` that no other job shares
   // and marks those jobs expired, and deletes the files no job references last written before
   // `orphan_cutoff` (PlanRetention). Returns what it did.

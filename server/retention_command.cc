@@ -3,6 +3,7 @@
 // knows which blobs an upload in flight is about to reference).
 #include <fmt/chrono.h>
 #include <fmt/format.h>
+#include <sys/stat.h>
 
 #include <CLI/CLI.hpp>
 #include <iostream>
@@ -12,6 +13,7 @@
 #include "common/error.h"
 #include "server/blob_store.h"
 #include "server/commands.h"
+#include "server/data_folder.h"
 #include "server/job_coordinator.h"
 #include "server/retention.h"
 #include "server/upload_ledger.h"
@@ -35,6 +37,11 @@ int DryRun(const RetentionFlags& flags) {
   const std::filesystem::path dir = flags.data_dir;
   if (!std::filesystem::exists(dir / "jobs.sqlite"))
     Fail(ErrorCode::kNotFound, "no job store in " + dir.string());
+  // Before the store is opened: opening one of no table (a running server's, copied without its log)
+  // made an empty jobs table, and the server then started on it and deleted every blob as no job's
+  // (found 2026-12-07).
+  RefuseBlobsWithoutTheirStore(dir);
+  ::umask(077);  // a folder the store makes (partial/) is the server's alone, as the server makes it
   JobStore store(dir / "jobs.sqlite");
   BlobStore blobs(dir);
   UploadLedger uploads;  // read; written only at a change, which a dry run makes none of

@@ -1,6 +1,7 @@
 #include "server/wal_check.h"
 
 #include <array>
+#include <cerrno>
 #include <cstring>
 #include <fstream>
 #include <string>
@@ -44,7 +45,12 @@ std::optional<WalDamage> FindWalDamage(const std::filesystem::path& wal) {
   std::error_code error;
   if (!std::filesystem::is_regular_file(wal, error)) return std::nullopt;
   std::ifstream in(wal, std::ios::binary);
-  if (!in) Fail(ErrorCode::kUnavailable, wal.string() + ": cannot be read");
+  if (!in) {
+    const int failure = errno;
+    Fail(failure == EACCES || failure == EPERM ? ErrorCode::kFailedPrecondition : ErrorCode::kUnavailable,
+         wal.string() + ": cannot be read (" + std::strerror(failure) +
+             (failure == EACCES ? "; owned by another user? chown it to the server's user)" : ")"));
+  }
   std::array<unsigned char, kHeaderBytes> header{};
   if (!in.read(reinterpret_cast<char*>(header.data()), header.size())) return std::nullopt;
   const std::uint32_t magic = BigEndian(header.data());

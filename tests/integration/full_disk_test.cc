@@ -231,7 +231,7 @@ TEST(FullDiskTest, AStartBelowTheReserveIsWarnedOf) {
 // A server whose data disk is full when a worker's results are ready: the worker keeps them and
 // the lease, and sends them once space is freed; the job succeeds with no attempt counted. (It failed
 // after three attempts, each training again, within a minute; found 2026-12-07.)
-TEST(FullDiskTest, ResultsTheFullServerRefusesWaitOnTheWorkerUntilSpaceIsFreed) {
+TEST(FullDiskTest, ResultsTheFullServerRefusesWaitOnTheWorkerUntilSpaceIsFreedOrItStops) {
   Cluster cluster({"--min-free-bytes", std::to_string(8 * kMiB)}, false);
   SmallFilesystem data(cluster.data_dir(), 24 * kMiB);
   if (!data.mounted()) GTEST_SKIP() << data.why();
@@ -248,10 +248,19 @@ TEST(FullDiskTest, ResultsTheFullServerRefusesWaitOnTheWorkerUntilSpaceIsFreed) 
   const v1::Job waiting = cluster.Job(id);
   EXPECT_EQ(waiting.state(), v1::RUNNING) << waiting.error();
   EXPECT_EQ(waiting.attempts(), 0);
+  // A worker stopped meanwhile (SIGTERM) does not wait for the space: it hands the job back,
+  // uncounted (it waited on until the disk was freed; found 2026-12-07).
+  const auto stop_started = std::chrono::steady_clock::now();
+  cluster.StopWorker("w", SIGTERM);
+  EXPECT_LT(std::chrono::steady_clock::now() - stop_started, std::chrono::seconds(20)) << worker.Log();
+  const v1::Job handed_back = cluster.Job(id);
+  EXPECT_EQ(handed_back.state(), v1::QUEUED) << handed_back.error();
+  EXPECT_EQ(handed_back.attempts(), 0);
 
   fs::remove(cluster.data_dir() / "filler");
-  const v1::Job done = cluster.WaitForState(id, v1::SUCCEEDED, std::chrono::seconds(60));
-  EXPECT_EQ(done.state(), v1::SUCCEEDED) << done.error() << worker.Log();
+  auto& second = cluster.StartWorker("w2");
+  const v1::Job done = cluster.WaitForState(id, v1::SUCCEEDED, std::chrono::seconds(90));
+  EXPECT_EQ(done.state(), v1::SUCCEEDED) << done.error() << second.Log();
   EXPECT_EQ(done.attempts(), 0);
 }
 

@@ -301,6 +301,17 @@ TEST(ServerStartTest, BlobsWithoutTheirJobStoreAreRefused) {
               std::string::npos)
         << server.Log();
     EXPECT_TRUE(std::filesystem::exists(dir / "data" / "blobs" / "ab" / "abcdef"));
+    // The dry run the docs advise before a restored folder's first start refuses alike, and leaves
+    // the store as it was (it made the missing table, and the server then started on it).
+    if (store == 2) {
+      const auto size = std::filesystem::file_size(dir / "data" / "jobs.sqlite");
+      Process dry_run({BuiltBinary("server/endorecon-server"), "retention", "--data-dir",
+                       (dir / "data").string(), "--retention-days", "1", "--dry-run"},
+                      dir / "dry-run.log");
+      EXPECT_NE(dry_run.Wait(), 0);
+      EXPECT_NE(dry_run.Log().find("but there is no job store"), std::string::npos) << dry_run.Log();
+      EXPECT_EQ(std::filesystem::file_size(dir / "data" / "jobs.sqlite"), size);
+    }
   }
 }
 
@@ -329,6 +340,24 @@ TEST(ServerStartTest, ATokenStoreThatDoesNotOpenRefusesCallsAndDoesNotStopTheSer
       << cluster.ServerLog();
   std::filesystem::remove(store);
   EXPECT_TRUE(WaitUntil([&] { return list().ok(); }, std::chrono::seconds(10))) << cluster.ServerLog();
+
+  // A job running meanwhile: its worker's calls are refused too, and the lease that expires for it
+  // is the server's fault, not an attempt (it cost one each time; found 2026-12-07).
+  MakeClip(cluster.path("clip"));
+  auto& worker = cluster.StartWorker("w");
+  const auto id = cluster.Submit(cluster.path("clip"), {"--iterations", "100000"});
+  cluster.WaitForState(id, v1::RUNNING);
+  WriteBytes(store, "not a database, and not empty");
+  ASSERT_TRUE(
+      WaitUntil([&] { return cluster.ServerLog().find("token store does not open") != std::string::npos; },
+                std::chrono::seconds(30)))
+      << cluster.ServerLog() << worker.Log();
+  std::filesystem::remove(store);
+  ASSERT_TRUE(WaitUntil([&] { return list().ok(); }, std::chrono::seconds(10)));
+  const v1::Job requeued = cluster.Job(id);
+  EXPECT_EQ(requeued.attempts(), 0) << requeued.error();
+  EXPECT_NE(requeued.error().find("(not counted as an attempt)"), std::string::npos) << requeued.error();
+  ASSERT_EQ(RunCli(cluster.address(), {"cancel", id}).exit_code, 0);
 
   cluster.KillServer(SIGTERM);
   WriteBytes(store, "not a database, and not empty");

@@ -1,8 +1,10 @@
 #include "server/audit_log.h"
 
 #include <gtest/gtest.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 
+#include <csignal>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <thread>
@@ -59,7 +61,6 @@ TEST(AuditLogTest, APipeNoProcessReadsIsRefusedNotWaitedOn) {
   }
 }
 
-}  // namespace
 // A line the disk refuses (/dev/full: ENOSPC on every write) is counted for the metric and its alert
 // (it was only logged).
 TEST(AuditLogTest, AFailedWriteIsCounted) {
@@ -73,4 +74,37 @@ TEST(AuditLogTest, AFailedWriteIsCounted) {
   EXPECT_EQ(failures, 2);
 }
 
+// A line the disk takes only part of (a file-size limit here, as a disk that fills mid-line) is cut
+// back: the next line starts a line, and every line reads as JSON (the part line had the next glued
+// to it; found 2026-12-07).
+TEST(AuditLogTest, APartLineIsCutBack) {
+  testing::TempDir dir("audit-part");
+  AuditLog log(dir / "audit.jsonl");
+  AuditEntry entry;
+  entry.method = "Submit";
+  log.Write(entry);
+  const auto one_line = std::filesystem::file_size(dir / "audit.jsonl");
+  struct rlimit before {};
+  ASSERT_EQ(::getrlimit(RLIMIT_FSIZE, &before), 0);
+  const auto old_handler = std::signal(SIGXFSZ, SIG_IGN);
+  struct rlimit limit = before;
+  limit.rlim_cur = static_cast<rlim_t>(one_line + one_line / 2);  // room for half the next line
+  ASSERT_EQ(::setrlimit(RLIMIT_FSIZE, &limit), 0);
+  int failures = 0;
+  log.SetFailureObserver([&] { ++failures; });
+  log.Write(entry);
+  ASSERT_EQ(::setrlimit(RLIMIT_FSIZE, &before), 0);
+  std::signal(SIGXFSZ, old_handler);
+  EXPECT_EQ(failures, 1);
+  EXPECT_EQ(std::filesystem::file_size(dir / "audit.jsonl"), one_line);
+  entry.method = "Cancel";
+  log.Write(entry);
+  std::istringstream lines(testing::ReadBytes(dir / "audit.jsonl"));
+  int count = 0;
+  for (std::string line; std::getline(lines, line); ++count)
+    EXPECT_TRUE(nlohmann::json::accept(line)) << line;
+  EXPECT_EQ(count, 2);
+}
+
+}  // namespace
 }  // namespace endorecon::server

@@ -123,18 +123,20 @@ auto WhileUnavailable(WorkerClient& client, Call&& call,
 // taken by clients' uploads until the call's deadline) or UNAUTHENTICATED (the worker's token
 // expired or was revoked, and a new one may be written into --token-file) as long as the lease is
 // held: the server answered the job's heartbeats within the last `patience` and asked for no stop.
-// With `server_space`, also while the server refuses an upload for want of space on its data disk.
+// With `server_space`, also while the server refuses an upload for want of space on its data disk,
+// until `shutting_down` (a SIGTERM waited on that for as long as the disk stayed full; found
+// 2026-12-07).
 template <typename Call>
 auto WhileLeaseHeld(WorkerClient& client, const ProgressReporter& reporter, Call&& call,
-                    bool server_space = false) {
+                    const std::atomic<bool>* shutting_down = nullptr) {
   const auto patience = std::chrono::seconds(30);
-  return RetryUnavailable(
-      client, std::forward<Call>(call),
-      [&] {
-        return !reporter.stop_requested() &&
-               std::chrono::steady_clock::now() - reporter.last_answer() < patience;
-      },
-      " while the server holds the lease", {.token_change = true, .server_space = server_space});
+  return RetryUnavailable(client, std::forward<Call>(call),
+                          [&] {
+                            return !reporter.stop_requested() && !(shutting_down && shutting_down->load()) &&
+                                   std::chrono::steady_clock::now() - reporter.last_answer() < patience;
+                          },
+                          " while the server holds the lease",
+                          {.token_change = true, .server_space = shutting_down != nullptr});
 }
 
 // `message` with the job's folder on this worker taken out of its paths: the user who reads it
@@ -382,7 +384,7 @@ bool RunLeasedJob(WorkerClient& client, const v1::LeaseResponse& lease, const De
       uploading.set_total_iterations(complete.result().files_size());
       reporter.SetProgress(uploading);
       WhileLeaseHeld(
-          client, reporter, [&] { client.PutFiles(options.out_dir, complete.result()); }, true);
+          client, reporter, [&] { client.PutFiles(options.out_dir, complete.result()); }, &shutting_down);
       stop_reporting();
       complete.set_summary_json(SummaryJson(summary));
       WhileUnavailable(client, [&] { return client.CompleteWithResults(options.out_dir, complete); });
@@ -408,8 +410,10 @@ bool RunLeasedJob(WorkerClient& client, const v1::LeaseResponse& lease, const De
                           std::to_string(settings.min_free_bytes) + " to take a job): " + e.what()
                     : std::string(ErrorCodeName(e.code())) + ": " +
                           InTheUsersNames(InTheClip(e.what(), job_dir), job);
-      // Issue 16: stopped by a shutdown while preparing: handed back without counting an attempt.
-      Tell(client, lease.lease_id(), reason, !bad_input, e.code() == ErrorCode::kCancelled || disk_full);
+      // Issue 16: stopped by a shutdown while preparing: handed back without counting an attempt; so
+      // are results the server's full disk refused (a shutdown while they waited: not the job's fault).
+      Tell(client, lease.lease_id(), reason, !bad_input,
+           e.code() == ErrorCode::kCancelled || disk_full || ServerDiskFull(e));
     }
   } catch (const std::exception& e) {
     stop_reporting();
