@@ -113,6 +113,7 @@ CallGuard::CallGuard(std::filesystem::path token_store, bool require_worker_cert
       audit_(audit),
       metrics_(metrics) {
   Refresh();
+  serving_ = true;
   // At start a store that does not open stops the server, saying why (not a temporary fault).
   if (!open_failure_.empty()) {
     Fail(ErrorCode::kFailedPrecondition,
@@ -167,7 +168,7 @@ TokenStore* CallGuard::Tokens() {
       tokens_ = std::make_unique<TokenStore>(token_store_path_);
       open_failure_.clear();
     } catch (const Error& e) {
-      if (open_failure_ != e.what()) {
+      if (open_failure_ != e.what() && serving_) {
         spdlog::error(
             "{}: {}; every call is refused until the token store opens (a file another user owns, or "
             "an empty one `sqlite3 tokens.sqlite .backup` left where there was no store: remove it)",

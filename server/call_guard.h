@@ -125,6 +125,7 @@ class CallGuard {
   // Why a token store that exists could not be opened (empty when it was, or there is none): every
   // call is refused meanwhile, and the periodic work goes on.
   std::string open_failure_;
+  bool serving_ = false;  // past the constructor: a failure to open is logged (at start it is thrown)
 };
 
 }  // namespace endorecon::server

@@ -315,7 +315,7 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
                      {"writing_s", SecondsSince(after_training) - evaluation_s}};
   // A clip whose results cost more than evaluation's share of the budget took training time: say
   // which budget would have left training its three quarters.
-  if (options.time_budget_s > 0 && least_s >= 0 &&
+  if (!cancelled && options.time_budget_s > 0 && least_s >= 0 &&
       least_s + tail_s > kEvaluationShare * options.time_budget_s) {
     advised_s = eval::BudgetForEvaluationShare(least_s, tail_s, kEvaluationShare);
     metrics["time"]["budget_advised_s"] = advised_s;
