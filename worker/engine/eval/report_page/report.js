@@ -356,7 +356,7 @@
         title: 'Depth error against training time',
         xLog: true,
         xLabel: 'training time (s, log scale)',
-        yLabel: 'depth RMSE (% of near\u2013far range, log)',
+        yLabel: 'depth RMSE, % of near\u2013far (log)',
         yLog: true,
         xName: 's',
         series: [
