@@ -57,6 +57,12 @@ std::string ProgressLine(const v1::Progress& p, bool stopped) {
                : fmt::format("preparing the recording: frame {}", p.iteration());
   }
   if (p.phase() == "upload") return fmt::format("uploading the results: {} file(s)", p.total_iterations());
+  if (p.phase() == "upload-wait") {
+    return fmt::format(
+        "the results ({} file(s)) wait on the worker for space on the server's data disk: sent once it is "
+        "freed",
+        p.total_iterations());
+  }
   if (p.phase() == "evaluate") {
     return fmt::format("evaluating the results: frame {}/{}  {:.0f} s{}", p.iteration(), p.total_iterations(),
                        p.seconds(), eta);

@@ -82,8 +82,9 @@ int List(const Globals& globals, const ListFlags& flags) {
     const auto& p = job.progress();
     const std::string phase = p.phase() == "evaluate" ? "eval " : p.phase() == "prepare" ? "prep " : "";
     const auto trained = TrainedIterations(job);
-    const std::string iteration = trained                 ? std::to_string(*trained)
-                                  : p.phase() == "upload" ? std::string("upload")
+    const std::string iteration = trained                      ? std::to_string(*trained)
+                                  : p.phase() == "upload"      ? std::string("upload")
+                                  : p.phase() == "upload-wait" ? std::string("upload-wait")
                                   : job.has_progress()
                                       ? fmt::format("{}{}/{}", phase, p.iteration(), p.total_iterations())
                                       : "-";

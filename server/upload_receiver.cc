@@ -1,5 +1,7 @@
 #include "server/upload_receiver.h"
 
+#include <spdlog/spdlog.h>
+
 #include <chrono>
 #include <filesystem>
 #include <map>
@@ -31,13 +33,25 @@ void UploadReceiver::CheckSpace(std::int64_t bytes, Uploader uploader) const {
   }
   const auto free_bytes = static_cast<std::int64_t>(space.available);
   if (bytes > free_bytes - reserve) {
-    Fail(ErrorCode::kResourceExhausted,
-         "upload needs " + std::to_string(bytes) + " more bytes but the server's data disk has " +
-             std::to_string(free_bytes) + " bytes free and keeps " + std::to_string(reserve) +
-             (uploader == Uploader::kClient
-                  ? " of them for the job store and accepted jobs' results (--min-free-bytes)"
-                  : " of them for the job store (a quarter of --min-free-bytes)") +
-             "; committed bytes are kept: retry once space is freed");
+    const std::string message =
+        "upload needs " + std::to_string(bytes) + " more bytes but the server's data disk has " +
+        std::to_string(free_bytes) + " bytes free and keeps " + std::to_string(reserve) +
+        (uploader == Uploader::kClient
+             ? " of them for the job store and accepted jobs' results (--min-free-bytes)"
+             : " of them for the job store (a quarter of --min-free-bytes)") +
+        "; committed bytes are kept: retry once space is freed";
+    if (uploader == Uploader::kWorker) {
+      std::lock_guard lock(space_warning_mutex_);
+      int held = 0;
+      if (space_warnings_.Due(held)) {
+        spdlog::warn(
+            "a worker's results or checkpoint were refused: {}; the worker keeps them and tries again: free "
+            "space on {}{}",
+            message, blobs_.root().string(),
+            held > 0 ? " (" + std::to_string(held) + " more refusals since the last warning)" : "");
+      }
+    }
+    Fail(ErrorCode::kResourceExhausted, message);
   }
 }
 

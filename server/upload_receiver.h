@@ -21,12 +21,15 @@
 
 #include <grpcpp/support/sync_stream.h>
 
+#include <chrono>
 #include <cstdint>
 #include <functional>
+#include <mutex>
 #include <semaphore>
 #include <set>
 #include <string>
 
+#include "common/warning_pacer.h"
 #include "endorecon/v1/files.pb.h"
 #include "server/blob_store.h"
 #include "server/upload_owner.h"
@@ -72,6 +75,10 @@ class UploadReceiver {
   std::int64_t min_free_bytes_;
   std::counting_semaphore<> slots_;
   std::function<void(std::int64_t)> on_bytes_;
+  // A worker's upload refused for space is said in the server's log, once a minute at most (the
+  // worker tries again every 10 s): it was said to the worker alone (found 2026-12-07).
+  mutable std::mutex space_warning_mutex_;
+  mutable WarningPacer space_warnings_{std::chrono::minutes(1)};
 };
 
 }  // namespace endorecon::server

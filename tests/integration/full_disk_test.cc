@@ -248,6 +248,11 @@ TEST(FullDiskTest, ResultsTheFullServerRefusesWaitOnTheWorkerUntilSpaceIsFreedOr
   const v1::Job waiting = cluster.Job(id);
   EXPECT_EQ(waiting.state(), v1::RUNNING) << waiting.error();
   EXPECT_EQ(waiting.attempts(), 0);
+  // The job's progress and the server's log say so (`status` said only "uploading the results").
+  EXPECT_TRUE(WaitUntil([&] { return cluster.Job(id).progress().phase() == "upload-wait"; },
+                        std::chrono::seconds(10)));
+  EXPECT_NE(cluster.ServerLog().find("a worker's results or checkpoint were refused"), std::string::npos)
+      << cluster.ServerLog();
   // A worker stopped meanwhile (SIGTERM) does not wait for the space: it hands the job back,
   // uncounted (it waited on until the disk was freed; found 2026-12-07).
   const auto stop_started = std::chrono::steady_clock::now();

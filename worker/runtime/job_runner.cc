@@ -73,6 +73,7 @@ std::string SummaryJson(const ReconstructSummary& summary) {
 struct RetryAlso {
   bool token_change = false;  // UNAUTHENTICATED: --token-file is read again when it changes
   bool server_space = false;  // RESOURCE_EXHAUSTED for the server's data disk: space may be freed
+  std::function<void()> on_space_wait;  // called at each such refusal (the job's progress says so)
 };
 
 // Whether `e` is the server refusing an upload for its data disk's free space (UploadReceiver).
@@ -105,6 +106,7 @@ auto RetryUnavailable(WorkerClient& client, Call&& call, GoOn&& go_on, const cha
                                 : "",
                      held > 0 ? fmt::format(" ({} more failures since the last warning)", held) : "");
       }
+      if (no_space && also.on_space_wait) also.on_space_wait();
       client.PauseBeforeRetry(std::chrono::seconds(no_space ? 10 : 1));
     }
   }
@@ -128,7 +130,8 @@ auto WhileUnavailable(WorkerClient& client, Call&& call,
 // 2026-12-07).
 template <typename Call>
 auto WhileLeaseHeld(WorkerClient& client, const ProgressReporter& reporter, Call&& call,
-                    const std::atomic<bool>* shutting_down = nullptr) {
+                    const std::atomic<bool>* shutting_down = nullptr,
+                    std::function<void()> on_space_wait = {}) {
   const auto patience = std::chrono::seconds(30);
   return RetryUnavailable(client, std::forward<Call>(call),
                           [&] {
@@ -136,7 +139,9 @@ auto WhileLeaseHeld(WorkerClient& client, const ProgressReporter& reporter, Call
                                    std::chrono::steady_clock::now() - reporter.last_answer() < patience;
                           },
                           " while the server holds the lease",
-                          {.token_change = true, .server_space = shutting_down != nullptr});
+                          {.token_change = true,
+                           .server_space = shutting_down != nullptr,
+                           .on_space_wait = std::move(on_space_wait)});
 }
 
 // `message` with the job's folder on this worker taken out of its paths: the user who reads it
@@ -383,8 +388,16 @@ bool RunLeasedJob(WorkerClient& client, const v1::LeaseResponse& lease, const De
       uploading.set_phase("upload");
       uploading.set_total_iterations(complete.result().files_size());
       reporter.SetProgress(uploading);
+      // While the server's full disk refuses them, `status` says the results wait for its space.
+      v1::Progress waiting = uploading;
+      waiting.set_phase("upload-wait");
       WhileLeaseHeld(
-          client, reporter, [&] { client.PutFiles(options.out_dir, complete.result()); }, &shutting_down);
+          client, reporter,
+          [&] {
+            reporter.SetProgress(uploading);
+            client.PutFiles(options.out_dir, complete.result());
+          },
+          &shutting_down, [&] { reporter.SetProgress(waiting); });
       stop_reporting();
       complete.set_summary_json(SummaryJson(summary));
       WhileUnavailable(client, [&] { return client.CompleteWithResults(options.out_dir, complete); });
