@@ -275,10 +275,12 @@ TEST(ReportPageTest, APageWorksInHeadlessChromium) {
 TEST(ReportPageTest, RenderWritesAPageOfItsViews) {
   testing::TempDir dir("report-render");
   ReconstructSmallClip(dir, 6, 10);
-  // Two views: the clip's camera (identity pose, f = 0.8898 W) at the start, and moved sideways at the end.
+  // Three views: the clip's camera (identity pose, f = 0.8898 W) at the start, moved sideways at the
+  // end, and turned away from the tissue.
   testing::WriteBytes(dir / "cameras.json", R"({"w": 80, "h": 64, "fl_x": 71.18, "frames": [
       {"transform_matrix": [[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]], "time": 0.0},
-      {"transform_matrix": [[1,0,0,2],[0,1,0,0],[0,0,1,0],[0,0,0,1]], "time": 1.0}]})");
+      {"transform_matrix": [[1,0,0,2],[0,1,0,0],[0,0,1,0],[0,0,0,1]], "time": 1.0},
+      {"transform_matrix": [[-1,0,0,0],[0,1,0,0],[0,0,-1,0],[0,0,0,1]], "time": 0.5}]})");
   const std::string command = fmt::format(
       "{}/worker/runtime/endorecon-worker render {} --cameras {} -o {} --mc-passes 2 "
       "> {} 2>&1",
@@ -289,13 +291,22 @@ TEST(ReportPageTest, RenderWritesAPageOfItsViews) {
   ASSERT_TRUE(data.is_object());
   EXPECT_EQ(data["kind"], "render");
   EXPECT_EQ(data["render"], ReadJsonFile(dir / "views" / "render.json"));
-  EXPECT_EQ(data["frames"]["count"], 2);
-  EXPECT_EQ(data["frames"]["sizes_vary"], false) << "both views 80 x 64";
-  EXPECT_EQ(data["frames"]["times"], nlohmann::json::array({0.0, 1.0}));
+  EXPECT_EQ(data["frames"]["count"], 3);
+  EXPECT_EQ(data["frames"]["sizes_vary"], false) << "every view 80 x 64";
+  EXPECT_EQ(data["frames"]["times"], nlohmann::json::array({0.0, 1.0, 0.5}));
   EXPECT_TRUE(data["frames"]["input"].is_null()) << "rendered views have no input images";
-  EXPECT_EQ(data["frames"]["uncertainty"].size(), 2u);
-  EXPECT_EQ(data["frames"]["model"].size(), 2u);
-  EXPECT_EQ(data["surface"]["frames"].size(), 2u);
+  EXPECT_EQ(data["frames"]["uncertainty"].size(), 3u);
+  EXPECT_EQ(data["frames"]["model"].size(), 3u);
+  EXPECT_EQ(data["surface"]["frames"].size(), 3u);
+  // The page names where the views came from and the device.
+  EXPECT_EQ(data["clip"], fs::absolute(dir / "out").lexically_normal().string());
+  EXPECT_EQ(data["run"]["device"].get<std::string>().rfind("CPU, ", 0), 0u) << data["run"]["device"];
+  // A view that sees no surface has grey heat maps, as its depth is grey (they were black: "certain").
+  for (const char* map : {"000002.png", "000002_model.png"}) {
+    const cv::Mat away = cv::imread((dir / "views" / "uncertainty" / map).string());
+    ASSERT_FALSE(away.empty()) << map;
+    EXPECT_LT(FractionUnlike(away, cv::Vec3b(128, 128, 128)), 0.01) << map;
+  }
   // Views of two sizes: the page names no one size for all (it named the first's).
   testing::WriteBytes(dir / "mixed.json", R"({"fl_x": 71.18, "frames": [
       {"w": 80, "h": 64, "transform_matrix": [[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]], "time": 0.0},

@@ -3,6 +3,8 @@
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
+#include <cstdint>
+#include <limits>
 #include <memory>
 #include <nlohmann/json.hpp>
 
@@ -77,6 +79,9 @@ Command AddRenderCommand(CLI::App& app) {
     WriteFile(out / "render.json", info.dump(2), "render description");
     // The heat maps share one scale over all views, so they are written once every view is rendered.
     std::vector<std::vector<float>> totals, models;
+    // The heat maps are drawn grey where a view sees no surface, as its depth is: black there read as
+    // "most certain" (a camera pointed away from the tissue; found 2026-12-07). The .npy keep the values.
+    std::vector<std::vector<std::uint8_t>> surfaces;
     for (std::size_t i = 0; i < cameras.size(); ++i) {
       const auto& view = cameras[i];
       auto frame = renderer.Render(view.camera, view.time);
@@ -84,6 +89,8 @@ Command AddRenderCommand(CLI::App& app) {
       ShowProgress(fmt::format(" rendered {}/{} views ", i + 1, cameras.size()));
       const int w = frame.width, h = frame.height;
       eval::ClearDepthWithoutSurface(frame.depth, frame.opacity);
+      std::vector<std::uint8_t> surface(frame.opacity.size());
+      for (std::size_t p = 0; p < surface.size(); ++p) surface[p] = frame.opacity[p] >= eval::kSurfaceOpacity;
       eval::WritePng8(out / "rgb" / eval::FrameFileName(int(i), ".png"), frame.rgb, w, h);
       eval::WriteDepthNpy(out / "depth" / eval::FrameFileName(int(i), ".npy"), frame.depth, w, h);
       eval::WriteDepthPng16(out / "depth" / eval::FrameFileName(int(i), ".png"), frame.depth, w, h, scale);
@@ -97,8 +104,17 @@ Command AddRenderCommand(CLI::App& app) {
       models.push_back(eval::ModelUncertainty(frame.rgb, frame.aleatoric, frame.epistemic, {}));
       eval::WriteDepthNpy(path("_model.npy"), models.back(), w, h);
       totals.push_back(std::move(frame.uncertainty));
+      surfaces.push_back(std::move(surface));
     }
     EndProgress();
+    // NaN (grey, and left out of the scale) where there is no surface.
+    for (std::size_t i = 0; i < totals.size(); ++i) {
+      for (std::size_t p = 0; p < totals[i].size(); ++p) {
+        if (surfaces[i][p]) continue;
+        totals[i][p] = std::numeric_limits<float>::quiet_NaN();
+        models[i][p] = std::numeric_limits<float>::quiet_NaN();
+      }
+    }
     const double heat = eval::HeatmapUpperBound(totals), model_heat = eval::HeatmapUpperBound(models);
     for (std::size_t i = 0; i < totals.size(); ++i) {
       const int w = cameras[i].camera.width, h = cameras[i].camera.height;
