@@ -79,8 +79,8 @@ Command AddRenderCommand(CLI::App& app) {
     WriteFile(out / "render.json", info.dump(2), "render description");
     // The heat maps share one scale over all views, so they are written once every view is rendered.
     std::vector<std::vector<float>> totals, models;
-    // The heat maps are drawn grey where a view sees no surface, as its depth is: black there read as
-    // "most certain" (a camera pointed away from the tissue; found 2026-12-07). The .npy keep the values.
+    // The heat maps are drawn grey where a view sees no surface (its depth 0, grey on the report): black read
+    // as "most certain" (a camera pointed away from the tissue; found 2026-12-07). The .npy keep the values.
     std::vector<std::vector<std::uint8_t>> surfaces;
     for (std::size_t i = 0; i < cameras.size(); ++i) {
       const auto& view = cameras[i];
