@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "common/error.h"
+#include "server/access_failure.h"
 
 namespace endorecon::server {
 namespace {
@@ -36,14 +37,7 @@ AuditLog::AuditLog(const std::filesystem::path& file) : path_(file) {
              ": a named pipe (FIFO) that no process reads: start its reader first, "
              "or name a file");
   }
-  if (fd_ < 0) {
-    const int error = errno;
-    // Permissions are the operator's to fix, not a passing fault (a restored log another user owns).
-    Fail(error == EACCES || error == EPERM || error == EROFS ? ErrorCode::kFailedPrecondition
-                                                             : ErrorCode::kUnavailable,
-         "cannot open audit log " + file.string() + ": " + std::strerror(error) +
-             (error == EACCES ? " (owned by another user? chown it to the server's user)" : ""));
-  }
+  if (fd_ < 0) FailAccess("cannot open audit log " + file.string(), errno);
   ::fcntl(fd_, F_SETFL, ::fcntl(fd_, F_GETFL) & ~O_NONBLOCK);
 }
 

@@ -11,6 +11,7 @@
 
 #include "common/error.h"
 #include "common/sha256.h"
+#include "server/access_failure.h"
 
 namespace endorecon::server {
 namespace fs = std::filesystem;
@@ -47,18 +48,14 @@ void FsyncDirectory(const fs::path& dir) {
   ::close(fd);
 }
 
-}  // namespace
-
-namespace {
 // A folder of the store this user cannot list, read or write: a restore chowned without -R. Every
 // job then failed as if its files were gone ("no blob ...: set aside as damaged?"), for good (found
 // 2026-12-07); refused at start instead.
 void RequireUsable(const fs::path& dir) {
-  if (::access(dir.c_str(), R_OK | W_OK | X_OK) == 0) return;
-  Fail(ErrorCode::kFailedPrecondition,
-       dir.string() + ": this user cannot read and write it (" + std::strerror(errno) +
-           "): a restored data folder owned by another user? chown -R it to the server's user");
+  if (::access(dir.c_str(), R_OK | W_OK | X_OK) != 0)
+    FailAccess(dir.string() + ": this user cannot use it", errno);
 }
+
 }  // namespace
 
 BlobStore::BlobStore(fs::path root) : root_(std::move(root)) {
@@ -86,11 +83,7 @@ std::optional<std::int64_t> BlobStore::SizeOf(const std::string& sha256) const {
   std::error_code error;
   const fs::path path = root_ / "blobs" / sha256.substr(0, 2) / sha256;
   const auto size = fs::file_size(path, error);
-  if (error == std::errc::permission_denied) {
-    Fail(ErrorCode::kFailedPrecondition,
-         path.string() + ": this user cannot read it (a restored data folder owned by another user? chown "
-                         "-R it to the server's user)");
-  }
+  if (error == std::errc::permission_denied) FailAccess(path.string() + ": this user cannot read it", EACCES);
   if (error) return std::nullopt;
   return static_cast<std::int64_t>(size);
 }

@@ -158,8 +158,9 @@ std::int64_t CallGuard::TokenRevokedAt(const std::string& name) {
 TokenStore* CallGuard::Tokens() {
   std::lock_guard lock(mutex_);
   if (enforcing_) return tokens_.get();
-  if (!tokens_ && !std::filesystem::exists(token_store_path_)) open_failure_.clear();  // removed
-  if (!tokens_ && std::filesystem::exists(token_store_path_)) {
+  const bool appeared = !tokens_ && std::filesystem::exists(token_store_path_);
+  if (!tokens_ && !appeared) open_failure_.clear();  // none, or the one that did not open removed
+  if (appeared) {
     // A store that appears but does not open (an empty file another user owns: `sqlite3
     // tokens.sqlite .backup` run as root where there was no store creates one) is logged and every
     // call refused until it opens; it threw out of the server's periodic work and aborted it (found

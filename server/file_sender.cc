@@ -1,7 +1,6 @@
 #include "server/file_sender.h"
 
 #include <cerrno>
-#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -9,6 +8,7 @@
 #include "common/error.h"
 #include "common/sha256.h"
 #include "common/transport_security.h"
+#include "server/access_failure.h"
 
 namespace endorecon::server {
 namespace {
@@ -47,12 +47,8 @@ std::int64_t SendFiles(BlobStore& blobs, const std::vector<std::pair<v1::FileEnt
     if (!in.is_open()) {
       // Not read is not damaged: a file another user owns (a restore whose chown missed the files)
       // was hashed as no bytes, set aside as damaged and its job failed (found 2026-12-07).
-      const int error = errno;
-      Fail(error == EACCES || error == EPERM ? ErrorCode::kFailedPrecondition : ErrorCode::kUnavailable,
-           "the server cannot read its stored copy of '" + entry.path() + "' (" + path.string() + ": " +
-               std::strerror(error) +
-               (error == EACCES ? "; owned by another user? chown -R the data folder to the server's user)"
-                                : ")"));
+      FailAccess("the server cannot read its stored copy of '" + entry.path() + "' (" + path.string() + ")",
+                 errno);
     }
     // Every byte is hashed as it is read, the bytes before a resumed download's offset too, and the
     // last chunk goes out only once the digest matches: a damaged copy never arrives whole.

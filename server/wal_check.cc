@@ -9,6 +9,7 @@
 
 #include "common/error.h"
 #include "common/file_read.h"
+#include "server/access_failure.h"
 
 namespace endorecon::server {
 namespace {
@@ -45,12 +46,7 @@ std::optional<WalDamage> FindWalDamage(const std::filesystem::path& wal) {
   std::error_code error;
   if (!std::filesystem::is_regular_file(wal, error)) return std::nullopt;
   std::ifstream in(wal, std::ios::binary);
-  if (!in) {
-    const int failure = errno;
-    Fail(failure == EACCES || failure == EPERM ? ErrorCode::kFailedPrecondition : ErrorCode::kUnavailable,
-         wal.string() + ": cannot be read (" + std::strerror(failure) +
-             (failure == EACCES ? "; owned by another user? chown it to the server's user)" : ")"));
-  }
+  if (!in) FailAccess(wal.string() + ": cannot be read", errno);
   std::array<unsigned char, kHeaderBytes> header{};
   if (!in.read(reinterpret_cast<char*>(header.data()), header.size())) return std::nullopt;
   const std::uint32_t magic = BigEndian(header.data());

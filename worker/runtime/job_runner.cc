@@ -72,8 +72,9 @@ std::string SummaryJson(const ReconstructSummary& summary) {
 // What may pass while a call is retried, besides the server being unreachable.
 struct RetryAlso {
   bool token_change = false;  // UNAUTHENTICATED: --token-file is read again when it changes
-  bool server_space = false;  // RESOURCE_EXHAUSTED for the server's data disk: space may be freed
-  std::function<void()> on_space_wait;  // called at each such refusal (the job's progress says so)
+  // When set, RESOURCE_EXHAUSTED for the server's data disk too (space may be freed), called at each
+  // such refusal (the job's progress says so).
+  std::function<void()> on_space_wait;
 };
 
 // Whether `e` is the server refusing an upload for its data disk's free space (UploadReceiver).
@@ -96,7 +97,7 @@ auto RetryUnavailable(WorkerClient& client, Call&& call, GoOn&& go_on, const cha
       const bool refused = e.code() == ErrorCode::kUnauthenticated && also.token_change;
       // A full server disk fails no job that has its results (they were refused, the job failed
       // after three attempts of training again; found 2026-12-07): they wait here for space.
-      const bool no_space = also.server_space && ServerDiskFull(e);
+      const bool no_space = also.on_space_wait && ServerDiskFull(e);
       if ((e.code() != ErrorCode::kUnavailable && !refused && !no_space) || !go_on()) throw;
       int held = 0;
       if (pacer.Due(held)) {
@@ -106,7 +107,7 @@ auto RetryUnavailable(WorkerClient& client, Call&& call, GoOn&& go_on, const cha
                                 : "",
                      held > 0 ? fmt::format(" ({} more failures since the last warning)", held) : "");
       }
-      if (no_space && also.on_space_wait) also.on_space_wait();
+      if (no_space) also.on_space_wait();
       client.PauseBeforeRetry(std::chrono::seconds(no_space ? 10 : 1));
     }
   }
@@ -125,9 +126,9 @@ auto WhileUnavailable(WorkerClient& client, Call&& call,
 // taken by clients' uploads until the call's deadline) or UNAUTHENTICATED (the worker's token
 // expired or was revoked, and a new one may be written into --token-file) as long as the lease is
 // held: the server answered the job's heartbeats within the last `patience` and asked for no stop.
-// With `server_space`, also while the server refuses an upload for want of space on its data disk,
-// until `shutting_down` (a SIGTERM waited on that for as long as the disk stayed full; found
-// 2026-12-07).
+// With `on_space_wait`, also while the server refuses an upload for want of space on its data disk;
+// with `shutting_down`, only until it is set (a SIGTERM waited on a full disk for as long as it stayed
+// full; found 2026-12-07).
 template <typename Call>
 auto WhileLeaseHeld(WorkerClient& client, const ProgressReporter& reporter, Call&& call,
                     const std::atomic<bool>* shutting_down = nullptr,
@@ -139,9 +140,7 @@ auto WhileLeaseHeld(WorkerClient& client, const ProgressReporter& reporter, Call
                                    std::chrono::steady_clock::now() - reporter.last_answer() < patience;
                           },
                           " while the server holds the lease",
-                          {.token_change = true,
-                           .server_space = shutting_down != nullptr,
-                           .on_space_wait = std::move(on_space_wait)});
+                          {.token_change = true, .on_space_wait = std::move(on_space_wait)});
 }
 
 // `message` with the job's folder on this worker taken out of its paths: the user who reads it

@@ -285,7 +285,13 @@ void AddFrames(const fs::path& results_dir, const Views& views, const json& reco
 
 // What the page says of a clip made from a recording (its recording.json, written by the worker
 // runtime's recording_clip; docs/formats.md): where the frames came from, the window and sizes, and
-// each frame's time and number in the recording. Null when the clip has none or it does not read.
+// each frame's time in the recording. Null when the clip has none or it does not read.
+// The Run table's device: "CPU, N threads" or "cuda:N (N host threads)".
+std::string DeviceText(const std::string& device, unsigned threads) {
+  return device == "cpu" ? fmt::format("CPU, {} threads", threads)
+                         : fmt::format("{} ({} host threads)", device, threads);
+}
+
 json RecordingOf(const fs::path& clip_dir) {
   const fs::path path = clip_dir / "recording.json";
   if (!fs::exists(path)) return nullptr;
@@ -345,10 +351,7 @@ fs::path WriteReport(const fs::path& results_dir, const scene::Clip* clip) {
     // own, in the units the clip's near and far bounds set (a mono recording).
     data["depth_bounds"] = {clip->near, clip->far};
     data["depth_measured"] = clip->has_depth() || clip->has_stereo();
-    const std::string device = config.value("device", "cpu");
-    const int threads = config.value("threads", 0);
-    data["run"]["device"] = device == "cpu" ? fmt::format("CPU, {} threads", threads)
-                                            : fmt::format("{} ({} host threads)", device, threads);
+    data["run"]["device"] = DeviceText(config.value("device", "cpu"), config.value("threads", 0u));
     data["metrics"] = record;
     data["config"] = config;
     heat = "/uncertainty_maps/heatmap_scale";
@@ -361,12 +364,10 @@ fs::path WriteReport(const fs::path& results_dir, const scene::Clip* clip) {
     data["kind"] = "render";
     data["title"] = PathName(results_dir);
     // The device and the results rendered from, as render.json records them (since 2026-12-07).
-    const std::string device = record.contains("device") && record["device"].is_string()
-                                   ? record["device"].get<std::string>()
-                                   : "cpu";
-    const unsigned threads = std::thread::hardware_concurrency();
-    data["run"]["device"] = device == "cpu" ? fmt::format("CPU, {} threads", threads)
-                                            : fmt::format("{} ({} host threads)", device, threads);
+    data["run"]["device"] = DeviceText(record.contains("device") && record["device"].is_string()
+                                           ? record["device"].get<std::string>()
+                                           : "cpu",
+                                       std::thread::hardware_concurrency());
     if (record.contains("results") && record["results"].is_string()) data["clip"] = record["results"];
     data["render"] = record;
     heat = "/heatmap_scale";

@@ -33,6 +33,11 @@ const EndoPlots = (() => {
     return Number.isInteger(value) ? String(value) : String(Number(value.toPrecision(4)));
   }
 
+  // A marker's fill and outline: hollow (reduced renders) or filled in the series' colour.
+  function markerStyle(s, colour) {
+    return s.hollow ? {fill: '#fff', stroke: colour, 'stroke-width': 1.5} : {fill: colour};
+  }
+
   // [lo, hi] widened to whole decades, for a log axis.
   function decades(lo, hi) {
     lo = Math.pow(10, Math.floor(Math.log10(lo)));
@@ -177,20 +182,14 @@ const EndoPlots = (() => {
         if (!usable(x) || !usableY(s.y[i])) return;
         const dot =
             el('circle',
-               Object.assign(
-                   {cx: px(x), cy: py(s.y[i]), r: s.markersOnly ? 3 : 2.2, fill: colour},
-                   s.hollow ? {fill: '#fff', stroke: colour, 'stroke-width': 1.5} : {}),
+               Object.assign({cx: px(x), cy: py(s.y[i]), r: s.markersOnly ? 3 : 2.2}, markerStyle(s, colour)),
                svg);
         el('title', {}, dot).textContent =
             `${s.label}: ${shortNumber(s.y[i])} at ${options.xName || 'x'} ${shortNumber(x)}`;
       });
       const lx = legend[index].x, ly = legend[index].y;
       if (s.markersOnly) {
-        el('circle',
-           Object.assign(
-               {cx: lx + 11, cy: ly - 4, r: 3, fill: colour},
-               s.hollow ? {fill: '#fff', stroke: colour, 'stroke-width': 1.5} : {}),
-           svg);
+        el('circle', Object.assign({cx: lx + 11, cy: ly - 4, r: 3}, markerStyle(s, colour)), svg);
       } else {
         el("line", Object.assign({ x1: lx, x2: lx + 22, y1: ly - 4, y2: ly - 4, stroke: colour, "stroke-width": 2 },
                                  s.dashed ? { "stroke-dasharray": "5 4" } : {}), svg);
