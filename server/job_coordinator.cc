@@ -127,6 +127,11 @@ void JobCoordinator::KeepUploadsIn(const std::filesystem::path& file) {
   for (const auto& [tenant, digest] : uploads_.Proven()) holders_.Add(tenant, digest);
 }
 
+void JobCoordinator::KeepOrphansIn(const std::filesystem::path& file) {
+  std::lock_guard lock(mutex_);
+  orphans_.KeepIn(file);
+}
+
 void JobCoordinator::RequireHeld(const v1::Manifest& manifest, const std::string& what,
                                  const std::string& tenant, const std::string& who) {
   int unheld = 0;  // stored, but not the tenant's
@@ -426,8 +431,7 @@ v1::UploadsResponse JobCoordinator::Uploads(const v1::UploadsRequest& request, c
   }
   // The store's files are a folder walk: listed outside the lock, as retention's are (a file stored
   // after the listing is not in it, so it cannot be taken for one no job holds).
-  const auto files = request.drop() ? FilesWrittenBefore(parts_.blobs, std::filesystem::file_time_type::max())
-                                    : std::vector<BlobStore::StoredFile>{};
+  const auto files = request.drop() ? parts_.blobs.Files() : std::vector<BlobStore::StoredFile>{};
   std::lock_guard lock(mutex_);
   v1::UploadsResponse response;
   for (const auto& [name, pending] : uploads_.Tenants()) {
@@ -793,13 +797,17 @@ v1::Job JobCoordinator::CheckLease(const std::string& lease_id) {
 }
 
 RetentionPlan JobCoordinator::ExpireFinishedBefore(std::int64_t cutoff_unix_ms,
-                                                   std::filesystem::file_time_type orphan_cutoff) {
-  const auto old_files = FilesWrittenBefore(parts_.blobs, orphan_cutoff);  // a folder walk: outside the lock
+                                                   const OrphanCutoff& orphan_cutoff) {
+  // Every file, not only old ones: the watch notes when each is first found no job's. A folder walk:
+  // outside the lock (PlanExpiry).
+  const bool orphans_go = orphan_cutoff.written_before != std::filesystem::file_time_type::min();
+  const auto files = orphans_go ? parts_.blobs.Files() : std::vector<BlobStore::StoredFile>{};
   auto plan = Locked([&] {
     // Uploads last noted before the cutoff are given up first, and their files with the plan's.
-    uploads_.ForgetBefore(orphan_cutoff);
-    auto plan = PlanRetention(parts_.store, parts_.blobs, cutoff_unix_ms, old_files,
+    uploads_.ForgetBefore(orphan_cutoff.written_before);
+    auto plan = PlanRetention(parts_.store, parts_.blobs, cutoff_unix_ms, files,
                               [&](const std::string& digest) { return uploads_.Holds(digest); });
+    if (orphans_go) orphans_.Sift(plan, orphan_cutoff, NowUnixMs());
     // Files first: a crash in between leaves jobs that the next run expires (their blobs already
     // gone), never a job marked expired whose files are still kept.
     for (const auto& digest : plan.blobs) RemoveBlob(digest);

@@ -34,6 +34,7 @@
 #include "server/job_store.h"
 #include "server/lease_table.h"
 #include "server/metrics.h"
+#include "server/orphan_watch.h"
 #include "server/pacs_directory.h"
 #include "server/principal.h"
 #include "server/retention.h"
@@ -81,6 +82,8 @@ class JobCoordinator {
   void Recover();
   // Keeps the tenants' uploads not yet submitted in `file` (UploadLedger::KeepIn), read now.
   void KeepUploadsIn(const std::filesystem::path& file);
+  // Keeps when files no job references were first found so in `file` (OrphanWatch::KeepIn), read now.
+  void KeepOrphansIn(const std::filesystem::path& file);
   // When a token label was revoked (Unix ms; 0: it was not), for the reason of a lease lost to it
   // (CallGuard::TokenRevokedAt). Set before serving.
   void SetTokenRevokedAt(std::function<std::int64_t(const std::string&)> revoked_at) {
@@ -171,11 +174,9 @@ class JobCoordinator {
   // expiry the server's fault: requeued with no attempt counted, the reason naming it.
   void ExpireLeases(Clock::time_point now, const std::string& server_refusing = "");
   // Retention: deletes the files of jobs finished before `cutoff_unix_ms` that no other job shares
-  // and marks those jobs expired, and deletes the files no job references last written before
-  // `orphan_cutoff` (PlanRetention). Returns what it did.
-  RetentionPlan ExpireFinishedBefore(
-      std::int64_t cutoff_unix_ms,
-      std::filesystem::file_time_type orphan_cutoff = std::filesystem::file_time_type::min());
+  // and marks those jobs expired, and deletes the files no job references that `orphan_cutoff` makes
+  // due (PlanRetention, OrphanWatch::Sift). Returns what it did.
+  RetentionPlan ExpireFinishedBefore(std::int64_t cutoff_unix_ms, const OrphanCutoff& orphan_cutoff = {});
 
   // Asks for the DICOM results of a SUCCEEDED job of the caller's tenant to go (again) to the PACS
   // `destination`. Throws kNotFound (job, also another tenant's, or PACS), kFailedPrecondition (not
@@ -244,6 +245,7 @@ class JobCoordinator {
   int max_attempts_;
   TenantQuotas quotas_;
   UploadLedger uploads_;  // under mutex_
+  OrphanWatch orphans_;   // under mutex_
   BlobHolders holders_;   // under mutex_
   std::function<std::int64_t(const std::string&)> token_revoked_at_;
   std::function<Clock::time_point()> clock_;

@@ -201,6 +201,7 @@ int Run(const ServerFlags& flags) {
                  flags.dicom.ae_title);
   }
   coordinator.KeepUploadsIn(data_dir / "uploads.json");
+  coordinator.KeepOrphansIn(data_dir / "orphans.json");
   coordinator.SetTokenRevokedAt([&guard](const std::string& name) { return guard.TokenRevokedAt(name); });
   coordinator.Recover();
   IdleTrim idle_trim;
@@ -302,17 +303,11 @@ int Run(const ServerFlags& flags) {
   }
   if (flags.orphan_hours > 0) {
     spdlog::info(
-        "files no job references are deleted {0} hour(s) after they were last written, from {0} hour(s) "
-        "after this start on (a restored folder keeps its files' times: `endorecon-server retention "
-        "--dry-run` shows what would go; checked every {1} s)",
-        flags.orphan_hours, flags.retention_check_s);
+        "files no job references are deleted once last written and first found so {} hour(s) ago (when "
+        "each was first found is kept in {}, so a restart does not count the hours anew; a restored "
+        "folder's files are first found at its first check; checked every {} s)",
+        flags.orphan_hours, (data_dir / "orphans.json").string(), flags.retention_check_s);
   }
-  // Orphans wait for the server to have run --orphan-hours: a data folder restored with a job store
-  // older than its blobs (copies keep the files' times) had the newer jobs' results deleted as no
-  // job's 56 ms after the start (found 2026-12-07); now the operator has the same hours to notice.
-  const auto orphans_from =
-      std::chrono::steady_clock::now() +
-      std::chrono::milliseconds(static_cast<std::int64_t>(flags.orphan_hours * 3600 * 1000));
 
   std::atomic<bool> stopping{false};
   std::atomic<int> exit_code{0};
@@ -372,10 +367,8 @@ int Run(const ServerFlags& flags) {
         next_retention +=
             std::chrono::milliseconds(static_cast<std::int64_t>(flags.retention_check_s * 1000));
         try {
-          const bool orphans_due = std::chrono::steady_clock::now() >= orphans_from;
-          const auto plan = coordinator.ExpireFinishedBefore(
-              JobCutoff(flags.retention_days),
-              orphans_due ? OrphanCutoff(flags.orphan_hours) : std::filesystem::file_time_type::min());
+          const auto plan = coordinator.ExpireFinishedBefore(JobCutoff(flags.retention_days),
+                                                             OrphanCutoffFor(flags.orphan_hours));
           for (const auto& job : plan.jobs) guard.RecordServerAction("Retention", job.id(), "EXPIRED");
         } catch (const Error& e) {
           spdlog::error("retention: {}: {}", ErrorCodeName(e.code()), e.what());

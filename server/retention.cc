@@ -19,32 +19,23 @@ std::int64_t JobCutoff(double retention_days) {
   return NowUnixMs() - static_cast<std::int64_t>(retention_days * 86'400'000.0);
 }
 
-std::filesystem::file_time_type OrphanCutoff(double orphan_hours) {
-  if (orphan_hours <= 0) return std::filesystem::file_time_type::min();
-  return std::filesystem::file_time_type::clock::now() -
-         std::chrono::milliseconds(static_cast<std::int64_t>(orphan_hours * 3'600'000.0));
-}
-
-std::vector<BlobStore::StoredFile> FilesWrittenBefore(const BlobStore& blobs,
-                                                      std::filesystem::file_time_type cutoff) {
-  if (cutoff == std::filesystem::file_time_type::min()) return {};
-  auto files = blobs.Files();
-  std::erase_if(files, [&](const BlobStore::StoredFile& file) { return file.written >= cutoff; });
-  return files;
+OrphanCutoff OrphanCutoffFor(double orphan_hours) {
+  if (orphan_hours <= 0) return {};
+  const std::chrono::milliseconds hours(static_cast<std::int64_t>(orphan_hours * 3'600'000.0));
+  return {std::filesystem::file_time_type::clock::now() - hours, NowUnixMs() - hours.count()};
 }
 
 RetentionPlan PlanRetention(JobStore& store, const BlobStore& blobs, std::int64_t cutoff_unix_ms,
-                            const std::vector<BlobStore::StoredFile>& old_files,
-                            const UploadingFn& uploading) {
+                            const std::vector<BlobStore::StoredFile>& files, const UploadingFn& uploading) {
   return PlanExpiry(
       store, blobs,
-      [&](const v1::Job& job) { return Settled(job) && job.finished_unix_ms() < cutoff_unix_ms; }, old_files,
+      [&](const v1::Job& job) { return Settled(job) && job.finished_unix_ms() < cutoff_unix_ms; }, files,
       uploading);
 }
 
 RetentionPlan PlanExpiry(JobStore& store, const BlobStore& blobs,
                          const std::function<bool(const v1::Job&)>& expires,
-                         const std::vector<BlobStore::StoredFile>& old_files, const UploadingFn& uploading) {
+                         const std::vector<BlobStore::StoredFile>& files, const UploadingFn& uploading) {
   const auto brought = [&](const std::string& digest) { return uploading && uploading(digest); };
   RetentionPlan plan;
   std::set<std::string> expiring, kept;
@@ -68,7 +59,7 @@ RetentionPlan PlanExpiry(JobStore& store, const BlobStore& blobs,
       plan.bytes += *bytes;
     }
   }
-  for (const auto& file : old_files) {
+  for (const auto& file : files) {
     // A partial is given up at the cutoff even where its content is a job's: that content is stored
     // whole, and the partial is another tenant's upload of it (BlobHolders) left unfinished.
     if (!file.partial && (expiring.count(file.sha256) || kept.count(file.sha256) || brought(file.sha256)))

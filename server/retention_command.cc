@@ -15,7 +15,9 @@
 #include "server/commands.h"
 #include "server/data_folder.h"
 #include "server/job_coordinator.h"
+#include "server/orphan_watch.h"
 #include "server/retention.h"
+#include "server/unix_time.h"
 #include "server/upload_ledger.h"
 
 namespace endorecon::server {
@@ -46,12 +48,16 @@ int DryRun(const RetentionFlags& flags) {
   BlobStore blobs(dir);
   UploadLedger uploads;  // read; written only at a change, which a dry run makes none of
   uploads.KeepIn(dir / "uploads.json");
+  OrphanWatch orphans;  // read only
+  orphans.ReadFrom(dir / "orphans.json");
   // The server's cutoffs: 0 days keeps every job, as --retention-days 0 there, and uploads last
   // noted before the orphan cutoff are given up.
-  const auto orphan_cutoff = OrphanCutoff(flags.orphan_hours);
-  const auto plan =
-      PlanRetention(store, blobs, JobCutoff(flags.days), FilesWrittenBefore(blobs, orphan_cutoff),
-                    [&](const std::string& digest) { return uploads.Holds(digest, orphan_cutoff); });
+  const auto orphan_cutoff = OrphanCutoffFor(flags.orphan_hours);
+  const bool orphans_go = flags.orphan_hours > 0;
+  auto plan = PlanRetention(
+      store, blobs, JobCutoff(flags.days), orphans_go ? blobs.Files() : std::vector<BlobStore::StoredFile>{},
+      [&](const std::string& digest) { return uploads.Holds(digest, orphan_cutoff.written_before); });
+  if (orphans_go) orphans.Sift(plan, orphan_cutoff, NowUnixMs());
   for (const auto& job : plan.jobs) {
     std::cout << fmt::format("would expire job {} (tenant {}, {}, finished {:%Y-%m-%d %H:%M} UTC)\n",
                              job.id(), job.tenant().empty() ? "-" : job.tenant(),
@@ -65,8 +71,9 @@ int DryRun(const RetentionFlags& flags) {
       "{} blob(s) stay because other jobs share them, {} because uploads not yet submitted bring them\n",
       plan.jobs.size(), flags.days, plan.blobs.size(), plan.bytes, plan.kept_shared, plan.kept_uploading);
   std::cout << fmt::format(
-      "{} file(s), {} bytes, that no job references would be deleted (--orphan-hours {})\n",
-      plan.orphans.size(), plan.orphan_bytes, flags.orphan_hours);
+      "{} file(s), {} bytes, that no job references would be deleted (--orphan-hours {}); {} more wait "
+      "until last written and first found so by the server that long ago\n",
+      plan.orphans.size(), plan.orphan_bytes, flags.orphan_hours, plan.orphans_waiting);
   return 0;
 }
 

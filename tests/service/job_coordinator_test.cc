@@ -698,8 +698,7 @@ TEST_F(JobCoordinatorTest, DeletingAJobKeepsTheFilesAnUploadNotYetSubmittedBring
     const std::string id = coordinator_.Submit(request, a).id();
     coordinator_.Cancel(id, a);
     if (by_retention) {
-      coordinator_.ExpireFinishedBefore(std::numeric_limits<std::int64_t>::max(),
-                                        std::filesystem::file_time_type::min());
+      coordinator_.ExpireFinishedBefore(std::numeric_limits<std::int64_t>::max());
     } else {
       coordinator_.Delete(id, a);
     }
@@ -762,7 +761,8 @@ TEST_F(JobCoordinatorTest, UploadsNotYetSubmittedCountAgainstTheByteQuota) {
   EXPECT_NE(message.find("600 bytes in its jobs, 300 in uploads not yet submitted"), std::string::npos)
       << message;
   // Retention forgets an upload as it deletes its partial: after --orphan-hours.
-  quoted.ExpireFinishedBefore(0, UploadLedger::Time::clock::now() + seconds(1));
+  quoted.ExpireFinishedBefore(
+      0, {UploadLedger::Time::clock::now() + seconds(1), std::numeric_limits<std::int64_t>::max()});
   EXPECT_EQ(refusal(upload(std::string(300, '4')), a), "");
 }
 

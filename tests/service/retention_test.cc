@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <set>
 
+#include "server/orphan_watch.h"
 #include "tests/unit/temp_dir.h"
 
 namespace endorecon::server {
@@ -94,10 +95,15 @@ TEST(RetentionTest, FilesNoJobReferencesGoOnceOldEnough) {
   std::filesystem::last_write_time(dir / "partial" / (partial_sha + ".part"), two_days_ago);
   std::filesystem::last_write_time(proof, two_days_ago);
 
-  const auto plan = PlanRetention(
-      store, blobs, kKeepJobs,
-      FilesWrittenBefore(blobs, std::filesystem::file_time_type::clock::now() - std::chrono::hours(24)));
+  auto plan = PlanRetention(store, blobs, kKeepJobs, blobs.Files());
   EXPECT_TRUE(plan.jobs.empty());
+  EXPECT_EQ(plan.orphans.size(), 4u) << "the fresh upload is no job's too";
+  // Found so long ago, as the server's OrphanWatch would have: old enough by their last write alone.
+  OrphanWatch().Sift(plan,
+                     {std::filesystem::file_time_type::clock::now() - std::chrono::hours(24),
+                      std::numeric_limits<std::int64_t>::max()},
+                     0);
+  EXPECT_EQ(plan.orphans_waiting, 1);
   ASSERT_EQ(plan.orphans.size(), 3u);
   std::set<std::string> orphans;
   for (const auto& file : plan.orphans)
