@@ -4,6 +4,7 @@
 #include <string_view>
 
 #include "common/error.h"
+#include "server/access_failure.h"
 
 namespace endorecon::server {
 namespace {
@@ -86,6 +87,8 @@ void RefuseBlobsWithoutTheirStore(const std::filesystem::path& data_dir) {
              "`sqlite3 jobs.sqlite \".backup FILE\"` (docs/operations.md, \"Backup and restore\"), or "
              "move blobs/ away to start afresh");
   }
+  // A blobs/ this user cannot list (a restore chowned without -R) passed as empty.
+  if (error) FailAccess((data_dir / "blobs").string() + ": this user cannot list it", error.value());
 }
 
 }  // namespace endorecon::server

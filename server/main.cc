@@ -144,8 +144,10 @@ int Run(const ServerFlags& flags) {
   }
   const FolderLock lock(data_dir, "server.lock", "endorecon-server", "data folder");
   RefuseBlobsWithoutTheirStore(data_dir);
-  JobStore store(data_dir / "jobs.sqlite");
+  // The blob folders before the store: a start refused for them made an empty store, and the next
+  // start (blobs/ chowned back) took every blob for no job's (found 2026-12-07).
   BlobStore blobs(data_dir);
+  JobStore store(data_dir / "jobs.sqlite");
   // A start on a disk already below the reserve (a restart after the job store met a full disk):
   // said at once, not at the first refused upload or failed commit (found 2026-12-07).
   if (std::error_code error; flags.min_free_bytes > 0) {

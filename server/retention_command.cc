@@ -44,8 +44,8 @@ int DryRun(const RetentionFlags& flags) {
   // (found 2026-12-07).
   RefuseBlobsWithoutTheirStore(dir);
   ::umask(077);  // a folder the store makes (partial/) is the server's alone, as the server makes it
+  BlobStore blobs(dir);  // before the store, as the server: a refusal of its folders leaves no store made
   JobStore store(dir / "jobs.sqlite");
-  BlobStore blobs(dir);
   UploadLedger uploads;  // read; written only at a change, which a dry run makes none of
   uploads.KeepIn(dir / "uploads.json");
   OrphanWatch orphans;  // read only

@@ -144,7 +144,7 @@ void CheckDatabase(sqlite3* db, const std::filesystem::path& file, const char* s
   if (sqlite3_db_readonly(db, "main") == 1) {
     Fail(ErrorCode::kFailedPrecondition, std::string(store) + " " + file.string() +
                                              " cannot be written by this user (its mode or owner: a restored "
-                                             "copy owned by another user?)");
+                                             "copy owned by another user? chown it to the server's user)");
   }
   Statement check(db, "PRAGMA quick_check", store);
   std::string verdict;

@@ -4,7 +4,10 @@
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sqlite3.h>
+#include <unistd.h>
 
+#include <filesystem>
+#include <memory>
 #include <random>
 #include <regex>
 #include <string>
@@ -313,6 +316,68 @@ TEST(ServerStartTest, BlobsWithoutTheirJobStoreAreRefused) {
       EXPECT_EQ(std::filesystem::file_size(dir / "data" / "jobs.sqlite"), size);
     }
   }
+}
+
+// A restore chowned without -R leaves the server's folders and stores another user's. Each is refused
+// at start, named, with the chown to do; the server runs as `nobody` here, as the suite runs as root
+// and root passes every permission check (this was tried by hand only, 2026-12-07).
+TEST(ServerStartTest, FilesTheServersUserCannotUseAreRefusedNamingThem) {
+  if (::geteuid() != 0 || !std::filesystem::exists("/usr/bin/setpriv"))
+    GTEST_SKIP() << "needs root and setpriv, to run the server as another user";
+  constexpr int kNobody = 65534;
+  TempDir dir("owners");
+  std::filesystem::permissions(dir.path(), std::filesystem::perms(0755));
+  const auto data = dir / "data";
+  std::filesystem::create_directories(data / "blobs");
+  std::filesystem::permissions(data, std::filesystem::perms::owner_all);
+  std::filesystem::permissions(data / "blobs", std::filesystem::perms::owner_all);
+  const auto own = [&](const std::filesystem::path& path, int user) {
+    ASSERT_EQ(::chown(path.c_str(), user, user), 0);
+  };
+  own(data, kNobody);
+  const auto start = [&] {
+    return std::make_unique<Process>(
+        std::vector<std::string>{"/usr/bin/setpriv", "--reuid=65534", "--regid=65534", "--clear-groups",
+                                 BuiltBinary("server/endorecon-server"), "--listen", "127.0.0.1:0",
+                                 "--data-dir", data.string(), "--metrics-port", "-1"},
+        dir / "server.log");
+  };
+  const auto refused = [&](const std::string& named) {
+    auto server = start();
+    EXPECT_NE(server->Wait(), 0);
+    const auto log = server->Log();
+    EXPECT_NE(log.find("FAILED_PRECONDITION"), std::string::npos) << log;
+    EXPECT_NE(log.find(named), std::string::npos) << log;
+    EXPECT_NE(log.find("chown it"), std::string::npos) << log;
+  };
+  // Another's blobs/ holding a file, and no store: it passed as empty, and the refusal of the blob
+  // store after made an empty job store, which took every blob for no job's once blobs/ was chowned.
+  WriteBytes(data / "blobs" / "abcdef", "a blob");
+  refused((data / "blobs").string() + ": this user cannot list it");
+  std::filesystem::remove(data / "blobs" / "abcdef");
+  refused((data / "blobs").string() + ": this user cannot");
+  EXPECT_FALSE(std::filesystem::exists(data / "jobs.sqlite")) << "a refused start made a store";
+  own(data / "blobs", kNobody);
+
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open((data / "jobs.sqlite").c_str(), &db), SQLITE_OK);  // root's, 0644
+  ASSERT_EQ(sqlite3_exec(db, "PRAGMA journal_mode=WAL", nullptr, nullptr, nullptr), SQLITE_OK);
+  sqlite3_close(db);
+  refused("job store " + (data / "jobs.sqlite").string() + " cannot be written by this user");
+  own(data / "jobs.sqlite", kNobody);
+
+  WriteBytes(data / "audit.jsonl", "");
+  refused("cannot open audit log " + (data / "audit.jsonl").string());
+  own(data / "audit.jsonl", kNobody);
+
+  // Everything the server's user's: it starts (the refusals above were the owners').
+  auto server = start();
+  EXPECT_TRUE(
+      WaitUntil([&] { return server->Log().find("endorecon-server listening on") != std::string::npos; },
+                std::chrono::seconds(20)))
+      << server->Log();
+  server->Signal(SIGTERM);
+  EXPECT_EQ(server->Wait(), 0) << server->Log();
 }
 
 // A token store that appears and does not open (`sqlite3 tokens.sqlite .backup` run where there is
