@@ -23,6 +23,7 @@
 #include "common/warning_pacer.h"
 #include "worker/runtime/commands.h"
 #include "worker/runtime/device_list.h"
+#include "worker/runtime/idle_watch.h"
 #include "worker/runtime/job_runner.h"
 #include "worker/runtime/worker_client.h"
 #include "worker/runtime/worker_metrics.h"
@@ -48,6 +49,7 @@ struct ServeFlags {
   std::string tls_key;
   std::string token_file;
   bool insecure = false;
+  double exit_when_idle_s = 0;
 };
 
 ChannelSecurity SecurityOf(const ServeFlags& flags) {
@@ -79,9 +81,36 @@ std::optional<std::filesystem::file_time_type> WrittenAt(const std::string& file
   return at;
 }
 
+// Whether the worker has been idle for --exit-when-idle; the first loop to see it stops them all.
+bool LeaveIdle(IdleWatch& idle, WorkerClient& client, std::atomic<bool>& shutting_down, double idle_s) {
+  if (!idle.Due(std::chrono::steady_clock::now())) return false;
+  if (!shutting_down.exchange(true)) {  // not stopping for a signal already
+    idle.Leave();
+    if (idle.ServerFailing()) {
+      spdlog::error(
+          "no job for {} s and the server cannot be reached or refuses this worker (--exit-when-idle): "
+          "stopping (exit {})",
+          idle_s, kIdleUnreachableExit);
+    } else {
+      spdlog::info("no job for {} s (--exit-when-idle): stopping", idle_s);
+    }
+    client.CancelLeases();  // the other devices' long polls
+  }
+  return true;
+}
+
+// Ends the device's job for the idle watch however the job ends.
+struct JobOnDevice {
+  explicit JobOnDevice(IdleWatch& idle) : idle(idle) { idle.JobStarted(); }
+  ~JobOnDevice() { idle.JobEnded(std::chrono::steady_clock::now()); }
+  JobOnDevice(const JobOnDevice&) = delete;
+  JobOnDevice& operator=(const JobOnDevice&) = delete;
+  IdleWatch& idle;
+};
+
 void LeaseLoop(WorkerClient& client, const Device& device, const RunnerSettings& settings,
-               WorkerMetrics& metrics, const std::atomic<bool>& shutting_down, std::chrono::milliseconds wait,
-               const std::string& token_file) {
+               WorkerMetrics& metrics, std::atomic<bool>& shutting_down, std::chrono::milliseconds wait,
+               const std::string& token_file, IdleWatch& idle, double idle_s) {
   using Clock = std::chrono::steady_clock;
   auto backoff = std::chrono::milliseconds(500);
   std::optional<Clock::time_point> failing_since;  // since when calls fail, while they do
@@ -90,6 +119,7 @@ void LeaseLoop(WorkerClient& client, const Device& device, const RunnerSettings&
   bool waiting_for_space = false;
   auto disk_backoff = std::chrono::seconds(30);
   while (!shutting_down) {
+    if (LeaveIdle(idle, client, shutting_down, idle_s)) break;
     // A full scratch folder takes no job: it would only fail there.
     const std::int64_t free_bytes = ScratchFree(settings.work_dir);
     if (free_bytes >= 0 && free_bytes < settings.min_free_bytes) {
@@ -106,6 +136,7 @@ void LeaseLoop(WorkerClient& client, const Device& device, const RunnerSettings&
     waiting_for_space = false;
     try {
       const auto lease = client.Lease(device.name, wait);
+      idle.ServerAnswered(true);
       if (failing_since) {
         spdlog::info("[{}] the server answers again ({} s after the first failure)", device.name,
                      std::chrono::duration_cast<std::chrono::seconds>(Clock::now() - *failing_since).count());
@@ -113,7 +144,11 @@ void LeaseLoop(WorkerClient& client, const Device& device, const RunnerSettings&
       failing_since.reset();
       warnings.Reset();
       backoff = std::chrono::milliseconds(500);
-      if (lease && RunLeasedJob(client, *lease, device, settings, metrics, shutting_down)) {
+      const auto full = [&] {
+        const JobOnDevice job(idle);
+        return RunLeasedJob(client, *lease, device, settings, metrics, shutting_down);
+      };
+      if (lease && full()) {
         // The job needed more scratch than this worker has: leave it to others for a while
         // (30 s, doubling to 10 minutes while it keeps happening).
         spdlog::warn("[{}] scratch folder full: taking no job for {} s", device.name, disk_backoff.count());
@@ -126,6 +161,7 @@ void LeaseLoop(WorkerClient& client, const Device& device, const RunnerSettings&
         disk_backoff = std::chrono::seconds(30);
       }
     } catch (const Error& e) {
+      idle.ServerAnswered(false);
       // Retried at most 2 s apart (the channel's own reconnect backoff), so a restarted server has
       // its workers back within a second; while it stays away, a warning every 30 s, not every retry.
       // Another error than the last is said at once.
@@ -224,6 +260,8 @@ int Serve(const ServeFlags& flags) {
   // Retried every second (a server not up yet: as soon as it is); said at the first failure and then
   // every 30 s, not every retry (a refused certificate wrote a line a second for as long as it ran).
   const auto register_start = std::chrono::steady_clock::now();
+  IdleWatch idle(std::chrono::milliseconds(static_cast<std::int64_t>(flags.exit_when_idle_s * 1000)),
+                 register_start);
   WarningPacer pacer;
   int attempts = 0;
   while (!shutting_down) {
@@ -239,6 +277,15 @@ int Serve(const ServeFlags& flags) {
         shutting_down = true;
         stop_waiter();
         throw;
+      }
+      if (idle.Due(std::chrono::steady_clock::now())) {
+        shutting_down = true;
+        stop_waiter();
+        std::error_code ignored;
+        if (flags.work_dir.empty()) std::filesystem::remove_all(settings.work_dir, ignored);
+        spdlog::error("cannot register with {} after {} s (--exit-when-idle): {}; stopping (exit {})",
+                      flags.server, flags.exit_when_idle_s, e.what(), kIdleUnreachableExit);
+        return kIdleUnreachableExit;
       }
       // A server that refuses this worker's client certificate closes the connection in the TLS
       // handshake; gRPC says only "Socket closed", so the likely reasons are named (TLS over plain
@@ -286,8 +333,10 @@ int Serve(const ServeFlags& flags) {
   std::vector<std::thread> loops;
   const auto wait = std::chrono::milliseconds(static_cast<long>(flags.lease_wait_s * 1000));
   for (const auto& device : devices) {
-    loops.emplace_back(
-        [&, device] { LeaseLoop(client, device, settings, metrics, shutting_down, wait, flags.token_file); });
+    loops.emplace_back([&, device] {
+      LeaseLoop(client, device, settings, metrics, shutting_down, wait, flags.token_file, idle,
+                flags.exit_when_idle_s);
+    });
   }
   for (auto& loop : loops) loop.join();
   stop_waiter();
@@ -296,7 +345,7 @@ int Serve(const ServeFlags& flags) {
   // jobs; a folder given by --work-dir stays for the next worker).
   if (flags.work_dir.empty()) std::filesystem::remove_all(settings.work_dir, ignored);
   spdlog::info("worker {} stopped", worker_id);
-  return 0;
+  return idle.ExitCode();
 }
 
 }  // namespace
@@ -343,6 +392,12 @@ Command AddServeCommand(CLI::App& app) {
   cmd->add_option("--tls-cert", flags->tls_cert, "client certificate for a server that requires one (mTLS)");
   cmd->add_option("--tls-key", flags->tls_key, "its private key (refused if others may read it)");
   cmd->add_option("--token-file", flags->token_file, "file holding the worker's bearer token (mode 0600)");
+  cmd->add_option(
+         "--exit-when-idle", flags->exit_when_idle_s,
+         "stop after this many seconds without a job on any device (0: never; for batch allocations); "
+         "exit 69 when the server could not be reached or refused this worker meanwhile")
+      ->capture_default_str()
+      ->check(AtLeastZero());
   cmd->add_flag("--insecure", flags->insecure,
                 "send the token without TLS to a server beyond loopback (isolated test networks only)");
   return [flags] { return Serve(*flags); };

@@ -1,0 +1,53 @@
+// --exit-when-idle, for batch allocations (Slurm): a worker with nothing to do leaves instead of
+// holding its allocation to the time limit, never while it runs a job, and its exit status tells
+// an empty queue (0) from a server it could not reach or that refused it (69).
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <string>
+
+#include "tests/integration/service_harness.h"
+
+namespace endorecon::testing {
+namespace {
+
+TEST(WorkerIdleExitTest, AWorkerLeavesWhenIdleButNotWhileItRunsAJob) {
+  Cluster cluster;
+  MakeClip(cluster.path("clip"));
+  const auto id = cluster.Submit(cluster.path("clip"), {"--time-budget", "10"});
+  const auto started = std::chrono::steady_clock::now();
+  auto& worker = cluster.StartWorker("w-batch", {"--exit-when-idle", "2", "--lease-wait", "0.5"});
+  EXPECT_EQ(worker.Wait(), 0) << worker.Log();
+  EXPECT_EQ(cluster.Job(id).state(), v1::SUCCEEDED) << worker.Log();
+  EXPECT_GE(std::chrono::steady_clock::now() - started, std::chrono::seconds(9)) << "left before its job ended";
+  EXPECT_NE(worker.Log().find("no job for 2 s (--exit-when-idle): stopping"), std::string::npos)
+      << worker.Log();
+}
+
+TEST(WorkerIdleExitTest, AWorkerThatCannotReachTheServerLeavesWithStatus69) {
+  TempDir dir("idle");
+  const int port = FreePort();  // nothing listens there
+  Process worker({BuiltBinary("worker/runtime/endorecon-worker"), "serve", "--server",
+                  "127.0.0.1:" + std::to_string(port), "--exit-when-idle", "2", "--metrics-port", "-1",
+                  "--work-dir", (dir / "scratch").string()},
+                 dir / "worker.log");
+  EXPECT_EQ(worker.Wait(), 69) << worker.Log();
+  EXPECT_NE(worker.Log().find("cannot register with 127.0.0.1:" + std::to_string(port) + " after 2 s"),
+            std::string::npos)
+      << worker.Log();
+}
+
+// Registered, then the server goes away for good: the worker leaves with 69 too.
+TEST(WorkerIdleExitTest, AWorkerWhoseServerGoesAwayLeavesWithStatus69) {
+  Cluster cluster;
+  auto& worker = cluster.StartWorker("w-lost", {"--exit-when-idle", "3", "--lease-wait", "0.5"});
+  ASSERT_TRUE(WaitUntil([&] { return worker.Log().find("serving") != std::string::npos; })) << worker.Log();
+  cluster.KillServer(SIGKILL);
+  EXPECT_EQ(worker.Wait(), 69) << worker.Log();
+  EXPECT_NE(worker.Log().find("the server cannot be reached or refuses this worker (--exit-when-idle)"),
+            std::string::npos)
+      << worker.Log();
+}
+
+}  // namespace
+}  // namespace endorecon::testing

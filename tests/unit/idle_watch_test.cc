@@ -1,0 +1,40 @@
+#include "worker/runtime/idle_watch.h"
+
+#include <gtest/gtest.h>
+
+namespace endorecon::worker {
+namespace {
+
+using std::chrono::seconds;
+
+// Idle is counted from the start and from the end of the last job on any device, never while one
+// runs; the exit says whether the server was failing when the worker left.
+TEST(IdleWatchTest, IdleCountsFromTheLastJobsEndAndNeverWhileOneRuns) {
+  const auto t0 = IdleWatch::Clock::now();
+  IdleWatch idle(seconds(60), t0);
+  EXPECT_FALSE(idle.Due(t0 + seconds(59)));
+  EXPECT_TRUE(idle.Due(t0 + seconds(60)));
+  idle.JobStarted();
+  idle.JobStarted();  // two devices
+  EXPECT_FALSE(idle.Due(t0 + seconds(600)));
+  idle.JobEnded(t0 + seconds(600));
+  EXPECT_FALSE(idle.Due(t0 + seconds(700))) << "the other device still runs its job";
+  idle.JobEnded(t0 + seconds(700));
+  EXPECT_FALSE(idle.Due(t0 + seconds(759)));
+  EXPECT_TRUE(idle.Due(t0 + seconds(760)));
+  EXPECT_EQ(idle.ExitCode(), 0) << "not left yet";
+  idle.ServerAnswered(false);
+  idle.Leave();
+  EXPECT_EQ(idle.ExitCode(), kIdleUnreachableExit);
+  idle.ServerAnswered(true);
+  EXPECT_EQ(idle.ExitCode(), 0) << "the queue was empty: a worker that had nothing to do";
+}
+
+TEST(IdleWatchTest, ALimitOfZeroIsNeverDue) {
+  const auto t0 = IdleWatch::Clock::now();
+  const IdleWatch idle(seconds(0), t0);
+  EXPECT_FALSE(idle.Due(t0 + std::chrono::hours(10'000)));
+}
+
+}  // namespace
+}  // namespace endorecon::worker

@@ -1,0 +1,43 @@
+#include "worker/runtime/idle_watch.h"
+
+namespace endorecon::worker {
+
+IdleWatch::IdleWatch(std::chrono::milliseconds limit, Clock::time_point now)
+    : limit_(limit), idle_since_(now) {}
+
+void IdleWatch::JobStarted() {
+  std::lock_guard lock(mutex_);
+  ++running_;
+}
+
+void IdleWatch::JobEnded(Clock::time_point now) {
+  std::lock_guard lock(mutex_);
+  if (--running_ == 0) idle_since_ = now;
+}
+
+void IdleWatch::ServerAnswered(bool answered) {
+  std::lock_guard lock(mutex_);
+  server_failing_ = !answered;
+}
+
+bool IdleWatch::Due(Clock::time_point now) const {
+  std::lock_guard lock(mutex_);
+  return limit_.count() > 0 && running_ == 0 && now - idle_since_ >= limit_;
+}
+
+bool IdleWatch::ServerFailing() const {
+  std::lock_guard lock(mutex_);
+  return server_failing_;
+}
+
+void IdleWatch::Leave() {
+  std::lock_guard lock(mutex_);
+  left_ = true;
+}
+
+int IdleWatch::ExitCode() const {
+  std::lock_guard lock(mutex_);
+  return left_ && server_failing_ ? kIdleUnreachableExit : 0;
+}
+
+}  // namespace endorecon::worker

@@ -1,0 +1,45 @@
+// --exit-when-idle: a worker that has had no job on any of its devices for this long leaves, so that
+// an allocation of a batch system (Slurm) is given back rather than held, idle, to its time limit (a
+// queue empty for an hour held four GPUs for the script's 24 hours; found 2026-12-07). Time spent
+// unable to reach the server, or refused by it, counts as idle too; the exit status then says so
+// (kIdleUnreachableExit), so that the allocation shows as failed. Thread-safe.
+#pragma once
+
+#include <chrono>
+#include <mutex>
+
+namespace endorecon::worker {
+
+// EX_UNAVAILABLE: the worker left idle because it could not reach the server or was refused.
+inline constexpr int kIdleUnreachableExit = 69;
+
+class IdleWatch {
+ public:
+  using Clock = std::chrono::steady_clock;
+  // `limit` 0: never idle.
+  IdleWatch(std::chrono::milliseconds limit, Clock::time_point now);
+
+  // A device took a job / finished it (handed back, failed or done).
+  void JobStarted();
+  void JobEnded(Clock::time_point now);
+  // How the latest call to the server went: answered (a job or none) or failed.
+  void ServerAnswered(bool answered);
+  // True once no device has run a job for the limit.
+  bool Due(Clock::time_point now) const;
+  // Whether the latest call to the server failed.
+  bool ServerFailing() const;
+  // The worker leaves for being idle.
+  void Leave();
+  // The worker's exit status: kIdleUnreachableExit when it left idle while the server failed, else 0.
+  int ExitCode() const;
+
+ private:
+  const std::chrono::milliseconds limit_;
+  mutable std::mutex mutex_;
+  int running_ = 0;
+  Clock::time_point idle_since_;
+  bool server_failing_ = false;
+  bool left_ = false;
+};
+
+}  // namespace endorecon::worker
