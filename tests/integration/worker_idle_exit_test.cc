@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <filesystem>
 #include <string>
 
 #include "tests/integration/service_harness.h"
@@ -16,8 +17,15 @@ TEST(WorkerIdleExitTest, AWorkerLeavesWhenIdleButNotWhileItRunsAJob) {
   MakeClip(cluster.path("clip"));
   const auto id = cluster.Submit(cluster.path("clip"), {"--time-budget", "10"});
   const auto started = std::chrono::steady_clock::now();
-  auto& worker = cluster.StartWorker("w-batch", {"--exit-when-idle", "2", "--lease-wait", "0.5"});
+  const auto target = cluster.path("targets") / "w-batch.json";
+  auto& worker = cluster.StartWorker("w-batch", {"--exit-when-idle", "2", "--lease-wait", "0.5",
+                                                 "--prometheus-target-file", target.string()});
+  // While it serves, a Prometheus reading the folder finds it (file_sd_configs); gone when it leaves.
+  ASSERT_TRUE(WaitUntil([&] { return std::filesystem::exists(target); })) << worker.Log();
+  EXPECT_NE(ReadBytes(target).find("\"endorecon_worker\":\"w-batch\""), std::string::npos)
+      << ReadBytes(target);
   EXPECT_EQ(worker.Wait(), 0) << worker.Log();
+  EXPECT_FALSE(std::filesystem::exists(target));
   EXPECT_EQ(cluster.Job(id).state(), v1::SUCCEEDED) << worker.Log();
   EXPECT_GE(std::chrono::steady_clock::now() - started, std::chrono::seconds(9)) << "left before its job ended";
   EXPECT_NE(worker.Log().find("no job for 2 s (--exit-when-idle): stopping"), std::string::npos)

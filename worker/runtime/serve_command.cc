@@ -25,6 +25,7 @@
 #include "worker/runtime/device_list.h"
 #include "worker/runtime/idle_watch.h"
 #include "worker/runtime/job_runner.h"
+#include "worker/runtime/prometheus_target_file.h"
 #include "worker/runtime/worker_client.h"
 #include "worker/runtime/worker_metrics.h"
 
@@ -50,6 +51,7 @@ struct ServeFlags {
   std::string token_file;
   bool insecure = false;
   double exit_when_idle_s = 0;
+  std::string prometheus_target_file;
 };
 
 ChannelSecurity SecurityOf(const ServeFlags& flags) {
@@ -329,7 +331,19 @@ int Serve(const ServeFlags& flags) {
   }
   spdlog::info("worker {} serving {} with {} device(s) [{}], metrics {}", worker_id, flags.server,
                devices.size(), fmt::join(names, ","),
-               flags.metrics_port >= 0 ? fmt::format("on port {}", metrics.port()) : std::string("off"));
+               flags.metrics_port >= 0 ? fmt::format("on port {} of {}", metrics.port(), flags.metrics_host)
+                                       : std::string("off"));
+  std::optional<PrometheusTargetFile> target_file;
+  if (!flags.prometheus_target_file.empty() && flags.metrics_port >= 0) {
+    const auto host = ScrapeHost(flags.metrics_host, Hostname());
+    target_file.emplace(flags.prometheus_target_file, host, metrics.port(), worker_id);
+    spdlog::info("Prometheus target {}:{} written to {}{}", host, metrics.port(),
+                 flags.prometheus_target_file,
+                 LoopbackOnly(flags.metrics_host)
+                     ? " (only this machine reaches it: a Prometheus elsewhere needs --metrics-host set to "
+                       "this machine's address on its network, or 0.0.0.0)"
+                     : "");
+  }
   std::vector<std::thread> loops;
   const auto wait = std::chrono::milliseconds(static_cast<long>(flags.lease_wait_s * 1000));
   for (const auto& device : devices) {
@@ -398,6 +412,10 @@ Command AddServeCommand(CLI::App& app) {
          "exit 69 when the server could not be reached or refused this worker meanwhile")
       ->capture_default_str()
       ->check(AtLeastZero());
+  cmd->add_option(
+      "--prometheus-target-file", flags->prometheus_target_file,
+      "write a Prometheus file_sd target naming this worker's /metrics here while it serves (batch "
+      "allocations: a Prometheus reading the folder finds each worker wherever it runs)");
   cmd->add_flag("--insecure", flags->insecure,
                 "send the token without TLS to a server beyond loopback (isolated test networks only)");
   return [flags] { return Serve(*flags); };

@@ -1,0 +1,42 @@
+#include "worker/runtime/prometheus_target_file.h"
+
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include "tests/unit/temp_dir.h"
+
+namespace endorecon::worker {
+namespace {
+
+TEST(PrometheusTargetFileTest, AWildcardBindIsScrapedByTheMachinesName) {
+  EXPECT_EQ(ScrapeHost("0.0.0.0", "node17"), "node17");
+  EXPECT_EQ(ScrapeHost("::", "node17"), "node17");
+  EXPECT_EQ(ScrapeHost("10.1.0.17", "node17"), "10.1.0.17");
+  EXPECT_EQ(ScrapeHost("fd00::17", "node17"), "[fd00::17]");
+  EXPECT_TRUE(LoopbackOnly("127.0.0.1"));
+  EXPECT_TRUE(LoopbackOnly("::1"));
+  EXPECT_FALSE(LoopbackOnly("0.0.0.0"));
+  EXPECT_FALSE(LoopbackOnly("10.1.0.17"));
+}
+
+// The file Prometheus' file_sd_configs reads: one target, labelled with the worker; gone at the end.
+TEST(PrometheusTargetFileTest, TheFileNamesTheTargetWhileTheWorkerServes) {
+  testing::TempDir dir("targets");
+  const auto file = dir / "node17-gpu0.json";
+  {
+    const PrometheusTargetFile target(file, "node17", 9466, "node17-slurm42-gpu0");
+    const auto json = nlohmann::json::parse(testing::ReadBytes(file));
+    ASSERT_TRUE(json.is_array());
+    ASSERT_EQ(json.size(), 1u);
+    EXPECT_EQ(json[0]["targets"], nlohmann::json::array({"node17:9466"}));
+    EXPECT_EQ(json[0]["labels"]["endorecon_worker"], "node17-slurm42-gpu0");
+  }
+  EXPECT_FALSE(std::filesystem::exists(file));
+  testing::WriteBytes(dir / "a-file", "");
+  EXPECT_THROW(PrometheusTargetFile(dir / "a-file" / "t.json", "h", 1, "w"), std::exception)
+      << "a folder that cannot be made";
+}
+
+}  // namespace
+}  // namespace endorecon::worker
