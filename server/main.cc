@@ -28,6 +28,7 @@
 #include "server/data_folder.h"
 #include "server/dicom_retriever.h"
 #include "server/dicom_sender.h"
+#include "server/grpc_log.h"
 #include "server/health_port.h"
 #include "server/idle_trim.h"
 #include "server/job_service.h"
@@ -176,6 +177,7 @@ int Run(const ServerFlags& flags) {
   });
   AuditLog audit(flags.audit_log.empty() ? data_dir / "audit.jsonl" : std::filesystem::path(flags.audit_log));
   audit.SetFailureObserver([&metrics] { metrics.AuditWriteFailed(); });
+  const GrpcLogRoute grpc_log([&metrics] { metrics.TlsHandshakeFailed(); });
   CallGuard guard(TokenStore::PathIn(data_dir), !flags.tls.client_ca_file.empty(), audit, metrics);
   TenantQuotas quotas(flags.tenant_quota, flags.quotas_file);
   spdlog::info("tenant quotas: {}", quotas.Describe());  // an admin checks what is in force

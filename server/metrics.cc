@@ -65,6 +65,10 @@ Metrics::Metrics(const std::string& bind_address)
       audit_failures_(Counter(*registry_, "endorecon_audit_write_failures_total",
                               "Audit log lines that could not be written (a full or failing disk): calls "
                               "that happened without their audit record")),
+      handshake_failures_(
+          Counter(*registry_, "endorecon_tls_handshake_failures_total",
+                  "Connections whose TLS handshake failed (a client or worker certificate this "
+                  "server does not trust, plaintext to the TLS port): refused before any call")),
       uploads_pending_(Gauge(*registry_, "endorecon_uploads_pending_bytes",
                              "Bytes of the uploads waiting to be submitted, every tenant's")),
       rpc_seconds_(BuildHistogram()

@@ -21,6 +21,8 @@
 //   endorecon_data_capacity_bytes            gauge: size of that file system
 //   endorecon_damaged_files                  gauge: stored files set aside as damaged (<data>/damaged)
 //   endorecon_audit_write_failures_total     counter: audit log lines that could not be written
+//   endorecon_tls_handshake_failures_total   counter: connections whose TLS handshake failed (a
+//                                            certificate this server does not trust, plaintext to TLS)
 //   endorecon_uploads_pending_bytes          gauge: bytes of the uploads waiting to be submitted, every
 //                                            tenant's (`endorecon uploads` lists them by tenant)
 //   endorecon_rpc_seconds{method}            histogram: time the server spent on each call, from the
@@ -69,6 +71,7 @@ class Metrics {
   void SetDataDisk(std::int64_t available, std::int64_t capacity);
   void SetDamagedFiles(std::size_t files) { damaged_.Set(static_cast<double>(files)); }
   void AuditWriteFailed() { audit_failures_.Increment(); }
+  void TlsHandshakeFailed() { handshake_failures_.Increment(); }
   void SetPendingUploads(std::int64_t bytes) { uploads_pending_.Set(static_cast<double>(bytes)); }
   void UploadBytes(std::int64_t bytes) { upload_bytes_.Increment(static_cast<double>(bytes)); }
   void DownloadBytes(std::int64_t bytes) { download_bytes_.Increment(static_cast<double>(bytes)); }
@@ -124,6 +127,7 @@ class Metrics {
   prometheus::Gauge& data_capacity_;
   prometheus::Gauge& damaged_;
   prometheus::Counter& audit_failures_;
+  prometheus::Counter& handshake_failures_;
   prometheus::Gauge& uploads_pending_;
   prometheus::Family<prometheus::Histogram>& rpc_seconds_;
   prometheus::Histogram& store_commit_seconds_;

@@ -180,6 +180,17 @@ TEST_F(TlsTest, WorkersWithoutAClientCertificateOrWithAClientTokenLeaseNothing) 
   // Stopped before it ever registered, it does not say it was serving (it did, found 2026-12-05).
   EXPECT_EQ(rogue_log.find("serving"), std::string::npos) << rogue_log;
   EXPECT_NE(rogue_log.find("stopped before it could register"), std::string::npos) << rogue_log;
+  // The server says so too, once in those 3 s, and counts each failed handshake for the alerts: it
+  // fails before any call, so it wrote a bare gRPC line a retry and nothing counted it (found 2026-12-07).
+  const auto server_log = cluster_->ServerLog();
+  EXPECT_NE(server_log.find("grpc: Handshake failed"), std::string::npos) << server_log;
+  EXPECT_NE(server_log.find("endorecon_tls_handshake_failures_total counts them"), std::string::npos)
+      << server_log;
+  const auto metrics = Capture(
+      "curl -s --max-time 5 http://127.0.0.1:" + std::to_string(cluster_->metrics_port()) + "/metrics");
+  const auto counted = metrics.find("\nendorecon_tls_handshake_failures_total ");
+  ASSERT_NE(counted, std::string::npos) << metrics;
+  EXPECT_GE(std::stod(metrics.substr(counted + 40)), 2.0) << "a handshake a retry";
 
   // Plaintext to the TLS port: the log says to give --ca, as the CLI does (it said nothing).
   auto& plaintext = cluster_->StartWorker("w-plaintext", {"--token-file", worker_token_, "--timeout", "2"});

@@ -1,0 +1,69 @@
+#include "server/grpc_log.h"
+
+#include <grpc/support/log.h>
+#include <spdlog/spdlog.h>
+
+#include <map>
+#include <mutex>
+#include <string>
+#include <string_view>
+#include <utility>
+
+#include "common/warning_pacer.h"
+
+namespace endorecon::server {
+namespace {
+
+struct Route {
+  std::mutex mutex;
+  std::function<void()> handshake_failed;
+  std::map<std::string, WarningPacer> pacers;  // by the line's source and severity
+};
+
+Route& TheRoute() {
+  static Route route;
+  return route;
+}
+
+void Log(gpr_log_func_args* args) {
+  auto& route = TheRoute();
+  const std::string_view message = args->message ? args->message : "";
+  const bool handshake = message.find("Handshake failed") != std::string_view::npos;
+  std::function<void()> count;
+  int held = 0;
+  bool due = false;
+  {
+    std::lock_guard lock(route.mutex);
+    if (handshake) count = route.handshake_failed;
+    // Paced by where it comes from: a client retrying every second makes the same line each time.
+    auto& pacer = route.pacers[std::string(args->file ? args->file : "") + ":" + std::to_string(args->line)];
+    due = pacer.Due(held);
+  }
+  if (count) count();
+  if (!due) return;
+  const auto level = args->severity == GPR_LOG_SEVERITY_ERROR  ? spdlog::level::err
+                     : args->severity == GPR_LOG_SEVERITY_INFO ? spdlog::level::info
+                                                               : spdlog::level::debug;
+  spdlog::log(level, "grpc: {}{}{}", message,
+              handshake ? " (a client or worker whose certificate this server does not trust, or plaintext "
+                          "to the TLS port: endorecon_tls_handshake_failures_total counts them)"
+                        : "",
+              held > 0 ? " (" + std::to_string(held) + " more like it in the last 30 s)" : "");
+}
+
+}  // namespace
+
+GrpcLogRoute::GrpcLogRoute(std::function<void()> handshake_failed) {
+  {
+    std::lock_guard lock(TheRoute().mutex);
+    TheRoute().handshake_failed = std::move(handshake_failed);
+  }
+  gpr_set_log_function(Log);
+}
+
+GrpcLogRoute::~GrpcLogRoute() {
+  std::lock_guard lock(TheRoute().mutex);
+  TheRoute().handshake_failed = nullptr;
+}
+
+}  // namespace endorecon::server

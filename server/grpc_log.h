@@ -1,0 +1,23 @@
+// gRPC's own log lines (its C core's gpr_log: a failed TLS handshake, a refused connection) into the
+// server's log (spdlog), repeats paced, and each failed TLS handshake counted. A handshake fails
+// before any call, so nothing else saw it: a worker presenting a certificate of another CA retried
+// every second for hours, writing a bare line to stderr each time, while
+// endorecon_calls_refused_total stayed 0 and no alert fired (found 2026-12-07).
+#pragma once
+
+#include <functional>
+
+namespace endorecon::server {
+
+// Installs the route for the process (gRPC's log is process-wide); `handshake_failed` is called for
+// each failed TLS handshake while the route lives (the lines still go to the log after). GRPC_VERBOSITY
+// still picks which lines gRPC writes (ERROR by default).
+class GrpcLogRoute {
+ public:
+  explicit GrpcLogRoute(std::function<void()> handshake_failed);
+  ~GrpcLogRoute();
+  GrpcLogRoute(const GrpcLogRoute&) = delete;
+  GrpcLogRoute& operator=(const GrpcLogRoute&) = delete;
+};
+
+}  // namespace endorecon::server
