@@ -854,10 +854,17 @@ void JobCoordinator::ExpireLeases(Clock::time_point now, const std::string& serv
       const std::string refused = ", so its calls were refused and its lease expired";
       // The server's own token store not opening refused every worker's calls (found 2026-12-07).
       const bool server_fault = !server_refusing.empty();
+      // A worker stopping while the server was down (a batch allocation's time limit) could not hand
+      // its job back, and the lease the restarted server re-granted then expired: it cost an attempt,
+      // and a few outages failed jobs outright (found 2026-12-07).
+      const bool server_was_down = lease.restored;
       const std::string reason =
           "worker " + lease.worker_id +
           (server_fault ? "'s calls were refused because the server's token store does not open (" +
                               server_refusing + "), so its lease expired (not counted as an attempt)"
+           : server_was_down
+               ? " did not call after the server restarted (it may have stopped, handing the job back, while "
+                 "the server was down), so its lease expired (not counted as an attempt)"
            : token_lapsed
                ? "'s token '" + token.name + "' expired at " + UtcText(token.expires_unix_ms) + refused +
                      " (not counted as an attempt; renew worker tokens before they expire)"
@@ -867,7 +874,7 @@ void JobCoordinator::ExpireLeases(Clock::time_point now, const std::string& serv
       if (stored->job.cancel_requested()) {
         Finish(stored->job, v1::CANCELLED, CancelledBy(stored->job) + "; " + reason);
       } else {
-        Requeue(*stored, !token_lapsed && !server_fault, reason);
+        Requeue(*stored, !token_lapsed && !server_fault && !server_was_down, reason);
       }
     }
   });

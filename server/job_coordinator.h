@@ -171,7 +171,8 @@ class JobCoordinator {
   // whose worker's token had expired (its calls refused, so it could not renew) costs no attempt: a
   // token expiring mid-job failed jobs that had nothing wrong with them (found 2026-12-06).
   // `server_refusing` (CallGuard::OpenFailure: the server refused every call meanwhile) makes each
-  // expiry the server's fault: requeued with no attempt counted, the reason naming it.
+  // expiry the server's fault: requeued with no attempt counted, the reason naming it. So is a lease
+  // re-granted at the server's start whose worker never called since (Lease::restored).
   void ExpireLeases(Clock::time_point now, const std::string& server_refusing = "");
   // Retention: deletes the files of jobs finished before `cutoff_unix_ms` that no other job shares
   // and marks those jobs expired, and deletes the files no job references that `orphan_cutoff` makes

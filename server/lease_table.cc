@@ -32,7 +32,7 @@ Lease LeaseTable::Grant(const std::string& job_id, const std::string& worker_id,
 void LeaseTable::Restore(const std::string& lease_id, const std::string& job_id, const std::string& worker_id,
                          Clock::time_point now) {
   std::lock_guard lock(mutex_);
-  leases_[lease_id] = Lease{lease_id, job_id, worker_id, now + ttl_};
+  leases_[lease_id] = Lease{lease_id, job_id, worker_id, now + ttl_, {}, true};
 }
 
 std::optional<Lease> LeaseTable::Renew(const std::string& lease_id, Clock::time_point now,
@@ -42,6 +42,7 @@ std::optional<Lease> LeaseTable::Renew(const std::string& lease_id, Clock::time_
   if (found == leases_.end() || found->second.expiry <= now) return std::nullopt;
   found->second.expiry = now + ttl_;
   found->second.token = token;
+  found->second.restored = false;
   return found->second;
 }
 

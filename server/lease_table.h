@@ -29,6 +29,9 @@ struct Lease {
   std::string worker_id;
   Clock::time_point expiry;
   LeaseToken token;
+  // Re-created at the server's start (Restore) and not renewed since: its worker has not called
+  // this server, and may have handed the job back while it was down.
+  bool restored = false;
 };
 
 class LeaseTable {
@@ -38,7 +41,7 @@ class LeaseTable {
   // Grants a new lease (a fresh random id) on `job_id` to `worker_id`, expiring ttl after `now`.
   Lease Grant(const std::string& job_id, const std::string& worker_id, Clock::time_point now,
               LeaseToken token = {});
-  // Re-creates a lease known from the job store under its old id.
+  // Re-creates a lease known from the job store under its old id (restored until renewed).
   void Restore(const std::string& lease_id, const std::string& job_id, const std::string& worker_id,
                Clock::time_point now);
   // Extends a lease to ttl after `now`, noting the `token` the renewing call carried (the worker's

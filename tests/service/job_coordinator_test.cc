@@ -240,6 +240,51 @@ TEST_F(JobCoordinatorTest, ReportsKeepTheLeaseAndSilenceExpiresIt) {
   EXPECT_GT(Get(id).started_unix_ms(), first_start);
 }
 
+// A worker that stops while the server is down (a batch allocation's time limit) cannot hand its job
+// back, and the lease the restarted server re-grants then expires: that cost an attempt, and a few
+// outages failed jobs outright (found 2026-12-07). A worker that calls after the restart and then
+// goes silent is lost as usual.
+TEST_F(JobCoordinatorTest, ALeaseWhoseWorkerNeverCalledAfterARestartCostsNoAttempt) {
+  const std::string id = Submit();
+  ASSERT_TRUE(LeaseNext().has_value());
+  // A server restarted on the same store: its own queue, leases and workers, rebuilt by Recover.
+  struct Restarted {
+    Restarted(JobStore& store, BlobStore& blobs, WatchHub& hub, Metrics& metrics,
+              const Clock::time_point& now)
+        : coordinator({store, blobs, scheduler, leases, workers, hub, metrics}, 2, {},
+                      [&now] { return now; }) {
+      coordinator.Recover();
+    }
+    Scheduler scheduler;
+    LeaseTable leases{kTtl};
+    WorkerRegistry workers{kTtl};
+    JobCoordinator coordinator;
+  };
+  Restarted first(store_, blobs_, hub_, metrics_, now_);
+  EXPECT_EQ(first.coordinator.Get(id, AnonymousPrincipal()).state(), v1::RUNNING);
+  now_ += kTtl + seconds(1);
+  first.coordinator.ExpireLeases(now_);
+  const auto requeued = first.coordinator.Get(id, AnonymousPrincipal());
+  EXPECT_EQ(requeued.state(), v1::QUEUED);
+  EXPECT_EQ(requeued.attempts(), 0);
+  EXPECT_NE(requeued.error().find("did not call after the server restarted"), std::string::npos)
+      << requeued.error();
+
+  const auto granted = first.coordinator.Lease("worker-1", Clock::now());
+  ASSERT_TRUE(granted.has_value());
+  Restarted second(store_, blobs_, hub_, metrics_, now_);
+  v1::ProgressUpdate update;
+  update.set_lease_id(granted->lease_id);
+  update.mutable_progress()->set_iteration(1);
+  EXPECT_EQ(second.coordinator.Report(update), v1::ProgressReply::CONTINUE);
+  now_ += kTtl + seconds(1);
+  second.coordinator.ExpireLeases(now_);
+  const auto lost = second.coordinator.Get(id, AnonymousPrincipal());
+  EXPECT_EQ(lost.state(), v1::QUEUED);
+  EXPECT_EQ(lost.attempts(), 1) << "it called after the restart, then went silent";
+  EXPECT_NE(lost.error().find("stopped reporting"), std::string::npos) << lost.error();
+}
+
 // A worker whose token expired mid-job cannot renew its lease (every call is refused): the job
 // went back to the queue with an attempt counted, and a second such loss failed a job that had
 // nothing wrong with it (found 2026-12-06). The token a lease notes is the last one its worker's
