@@ -19,11 +19,6 @@ std::string ScrapeHost(const std::string& metrics_host, const std::string& hostn
   return metrics_host;
 }
 
-bool LoopbackOnly(const std::string& metrics_host) {
-  return metrics_host.rfind("127.", 0) == 0 || metrics_host == "::1" || metrics_host == "[::1]" ||
-         metrics_host == "localhost";
-}
-
 PrometheusTargetFile::PrometheusTargetFile(std::filesystem::path file, const std::string& host, int port,
                                            const std::string& worker_id)
     : file_(std::move(file)) {

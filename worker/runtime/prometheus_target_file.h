@@ -12,8 +12,6 @@ namespace endorecon::worker {
 
 // The host a scraper reaches `metrics_host` by: this machine's name for a wildcard bind (0.0.0.0, ::).
 std::string ScrapeHost(const std::string& metrics_host, const std::string& hostname);
-// Whether only this machine can reach `metrics_host` (127.x, ::1, localhost).
-bool LoopbackOnly(const std::string& metrics_host);
 
 class PrometheusTargetFile {
  public:

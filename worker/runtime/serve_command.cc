@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cstdlib>
@@ -333,13 +334,22 @@ int Serve(const ServeFlags& flags) {
                devices.size(), fmt::join(names, ","),
                flags.metrics_port >= 0 ? fmt::format("on port {} of {}", metrics.port(), flags.metrics_host)
                                        : std::string("off"));
+  const bool metrics_on_loopback =
+      IsLoopbackAddress(flags.metrics_host + ":" + std::to_string(std::max(metrics.port(), 0)));
+  // As the server's: /metrics has neither TLS nor tokens (it carries no patient data).
+  if (flags.metrics_port >= 0 && !metrics_on_loopback) {
+    spdlog::warn(
+        "/metrics is served on {} in plaintext without tokens: keep that port behind a firewall or a "
+        "network policy that lets only Prometheus reach it",
+        flags.metrics_host);
+  }
   std::optional<PrometheusTargetFile> target_file;
   if (!flags.prometheus_target_file.empty() && flags.metrics_port >= 0) {
     const auto host = ScrapeHost(flags.metrics_host, Hostname());
     target_file.emplace(flags.prometheus_target_file, host, metrics.port(), worker_id);
     spdlog::info("Prometheus target {}:{} written to {}{}", host, metrics.port(),
                  flags.prometheus_target_file,
-                 LoopbackOnly(flags.metrics_host)
+                 metrics_on_loopback
                      ? " (only this machine reaches it: a Prometheus elsewhere needs --metrics-host set to "
                        "this machine's address on its network, or 0.0.0.0)"
                      : "");
