@@ -694,10 +694,11 @@ class Campaign {
           std::printf("  CORRUPT: blob %s\n", relative.c_str());
         }
       } else if (top == "partial" ? entry.path().extension() != ".part"
-                                  // uploads.json.tmp: a server killed while it wrote the ledger; the next
-                                  // write replaces it.
+                                  // uploads.json.tmp, orphans.json.tmp: a server killed while it wrote the
+                                  // file; the next write replaces it.
                                   : !(top.starts_with("jobs.sqlite") || top == "audit.jsonl" ||
-                                      top == "server.lock" || top.starts_with("uploads.json"))) {
+                                      top == "server.lock" || top.starts_with("uploads.json") ||
+                                      top.starts_with("orphans.json"))) {
         ++stray;
         std::printf("  STRAY: %s\n", relative.c_str());
       }
