@@ -18,7 +18,15 @@ void OrphanWatch::KeepIn(const std::filesystem::path& file) {
 
 void OrphanWatch::ReadFrom(const std::filesystem::path& file) { Read(file); }
 
+std::string OrphanWatch::Key(const std::filesystem::path& path) const {
+  if (root_.empty()) return path.string();
+  const auto relative = path.lexically_relative(root_);
+  if (relative.empty() || *relative.begin() == "..") return path.string();
+  return relative.generic_string();
+}
+
 void OrphanWatch::Read(const std::filesystem::path& file) {
+  root_ = file.parent_path();
   std::error_code error;
   if (!std::filesystem::exists(file, error)) return;
   try {
@@ -46,11 +54,14 @@ void OrphanWatch::Sift(RetentionPlan& plan, const OrphanCutoff& cutoff, std::int
   std::vector<BlobStore::StoredFile> due;
   plan.orphan_bytes = 0;
   plan.orphans_waiting = 0;
-  for (auto& file : plan.orphans) {
-    const auto key = file.path.string();
+  const auto note = [&](const BlobStore::StoredFile& file) {
+    const auto key = Key(file.path);
     const auto known = found_.find(key);
-    const auto since = known == found_.end() ? now_unix_ms : known->second;
-    found[key] = since;
+    return found[key] = known == found_.end() ? now_unix_ms : known->second;
+  };
+  for (const auto& file : plan.uploading) note(file);
+  for (auto& file : plan.orphans) {
+    const auto since = note(file);
     if (file.written < cutoff.written_before && since < cutoff.found_before_unix_ms) {
       plan.orphan_bytes += file.bytes;
       due.push_back(std::move(file));

@@ -8,7 +8,7 @@
 // hours counted from each start, a server restarted more often than --orphan-hours never deleted
 // an orphan (found 2026-12-07).
 //
-//   {"orphans": [{"path": "/var/lib/endorecon/blobs/3f/3f9c...", "found_unix_ms": 1765000000000}]}
+//   {"orphans": [{"path": "blobs/3f/3f9c...", "found_unix_ms": 1765000000000}]}
 //
 // A file that cannot be read is warned of and left aside (its orphans are found anew: later
 // deletion, never earlier). Not thread-safe: the coordinator holds its lock.
@@ -30,18 +30,23 @@ class OrphanWatch {
   // As KeepIn, never writing (the dry run).
   void ReadFrom(const std::filesystem::path& file);
 
-  // `plan.orphans` are all the store's files no job references (PlanExpiry of every file): notes the
-  // ones found now at `now_unix_ms`, forgets those no longer among them (deleted, or a job's now),
-  // and leaves in the plan only those due by `cutoff` (the others are counted in
-  // plan.orphans_waiting).
+  // `plan.orphans` and `plan.uploading` are all the store's files no job references (PlanExpiry of
+  // every file): notes the ones found now at `now_unix_ms`, forgets those no longer among them
+  // (deleted, or a job's now), and leaves in plan.orphans only those due by `cutoff` (the others are
+  // counted in plan.orphans_waiting).
   void Sift(RetentionPlan& plan, const OrphanCutoff& cutoff, std::int64_t now_unix_ms);
 
  private:
   void Read(const std::filesystem::path& file);
   void Save() const;
+  // A file's key: its path in the data folder (the folder of the file read), so that `--data-dir d`,
+  // `./d` and `/srv/d` name it alike (a restart spelling the folder otherwise found every file anew;
+  // found 2026-12-07).
+  std::string Key(const std::filesystem::path& path) const;
 
   std::filesystem::path file_;                 // "" : kept in memory only
-  std::map<std::string, std::int64_t> found_;  // path -> first found (Unix ms)
+  std::filesystem::path root_;                 // the folder of the file read, "" for none
+  std::map<std::string, std::int64_t> found_;  // Key -> first found (Unix ms)
 };
 
 }  // namespace endorecon::server

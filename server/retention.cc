@@ -62,8 +62,11 @@ RetentionPlan PlanExpiry(JobStore& store, const BlobStore& blobs,
   for (const auto& file : files) {
     // A partial is given up at the cutoff even where its content is a job's: that content is stored
     // whole, and the partial is another tenant's upload of it (BlobHolders) left unfinished.
-    if (!file.partial && (expiring.count(file.sha256) || kept.count(file.sha256) || brought(file.sha256)))
+    if (!file.partial && (expiring.count(file.sha256) || kept.count(file.sha256))) continue;
+    if (!file.partial && brought(file.sha256)) {
+      plan.uploading.push_back(file);
       continue;
+    }
     plan.orphans.push_back(file);
     plan.orphan_bytes += file.bytes;
   }

@@ -29,6 +29,10 @@ struct RetentionPlan {
   std::vector<BlobStore::StoredFile> orphans;
   std::int64_t orphan_bytes = 0;
   std::int64_t orphans_waiting = 0;  // (Sift) files no job references that are not due yet
+  // Files no job references that an upload not yet submitted brings: no orphans while it does, but
+  // found no job's all the same (OrphanWatch), so that once the upload is given up they go
+  // --orphan-hours after they arrived, not --orphan-hours after that (found 2026-12-07).
+  std::vector<BlobStore::StoredFile> uploading;
 };
 
 // When a file no job references goes: last written before `written_before` and first found so

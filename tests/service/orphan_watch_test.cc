@@ -82,6 +82,36 @@ TEST(OrphanWatchTest, AFileNoLongerAnOrphanIsForgotten) {
   EXPECT_NE(text.find("\"found_unix_ms\": 5"), std::string::npos) << text;
 }
 
+// Keys are paths in the data folder: a server started with the folder spelled otherwise (a unit file's
+// absolute path, a shell's ./d) found every file anew, so restarts so spelled never deleted one; and
+// files an upload brought are found while it does, so once it is given up they go --orphan-hours
+// after they arrived, not that long after (found 2026-12-07).
+TEST(OrphanWatchTest, APathIsTheSameWhateverTheFolderIsCalledAndUploadsAreFoundWhileTheyWait) {
+  testing::TempDir dir("orphans");
+  const auto long_ago = FileTime::clock::now() - std::chrono::hours(72);
+  const auto in = [&](const std::filesystem::path& root, const std::string& name) {
+    auto file = Orphan(name, long_ago);
+    file.path = root / "blobs" / "ab" / name;
+    return file;
+  };
+  {
+    OrphanWatch watch;
+    watch.KeepIn(dir / "orphans.json");
+    RetentionPlan plan;
+    plan.orphans = {in(dir.path(), "left")};
+    plan.uploading = {in(dir.path(), "uploading")};
+    watch.Sift(plan, {}, 100);
+  }
+  EXPECT_NE(testing::ReadBytes(dir / "orphans.json").find("\"blobs/ab/left\""), std::string::npos);
+  OrphanWatch respelled;
+  const auto other = dir.path() / ".";  // the same folder, spelled otherwise
+  respelled.KeepIn(other / "orphans.json");
+  RetentionPlan plan;
+  plan.orphans = {in(other, "left"), in(other, "uploading")};  // the upload given up
+  respelled.Sift(plan, {FileTime::clock::now(), 101}, 5000);
+  EXPECT_EQ(plan.orphans.size(), 2u) << "both found at 100, before 101";
+}
+
 // A file that cannot be read is left aside: every orphan is found anew (later deletion, never
 // earlier); the dry run's watch reads and never writes.
 TEST(OrphanWatchTest, AnUnreadableFileIsLeftAsideAndTheDryRunWritesNothing) {
