@@ -16,8 +16,14 @@ FolderLock::FolderLock(const std::filesystem::path& folder, const std::string& f
                        const std::string& program, const std::string& kind) {
   const auto path = folder / file;
   fd_ = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0600);
-  if (fd_ < 0)
-    Fail(ErrorCode::kFailedPrecondition, "cannot open " + path.string() + ": " + std::strerror(errno));
+  if (fd_ < 0) {
+    const int error = errno;
+    Fail(ErrorCode::kFailedPrecondition,
+         "cannot open " + path.string() + ": " + std::strerror(error) +
+             (error == EACCES || error == EPERM
+                  ? " (owned by another user? chown it, or the folder with -R, to this program's user)"
+                  : ""));
+  }
   if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
     const int error = errno;
     char holder[32] = {};

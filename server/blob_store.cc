@@ -61,6 +61,9 @@ void RequireUsable(const fs::path& dir) {
 BlobStore::BlobStore(fs::path root) : root_(std::move(root)) {
   fs::create_directories(root_ / "blobs");
   fs::create_directories(root_ / "partial");
+  // damaged/ is made when a file is first set aside: one another user owns made a damaged file be
+  // deleted instead, its evidence lost (found 2026-12-07).
+  if (std::error_code error; fs::is_directory(root_ / "damaged", error)) RequireUsable(root_ / "damaged");
   for (const char* folder : {"blobs", "partial"}) {
     RequireUsable(root_ / folder);
     for (const auto& entry : fs::directory_iterator(root_ / folder)) {

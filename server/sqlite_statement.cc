@@ -89,6 +89,18 @@ void Exec(sqlite3* db, const char* sql, const char* store) {
 }
 
 sqlite3* OpenDatabase(const std::filesystem::path& file, const char* store) {
+  // The file and its log and shared-memory files, before SQLite opens them: one this user may read
+  // but not write (another user's, 0644) opened read-only without a word, and the first write
+  // stopped the server ("attempt to write a readonly database"; found 2026-12-07).
+  for (const char* suffix : {"", "-wal", "-shm"}) {
+    const auto part = file.string() + suffix;
+    if (::access(part.c_str(), F_OK) == 0 && ::access(part.c_str(), R_OK | W_OK) != 0) {
+      Fail(ErrorCode::kFailedPrecondition,
+           std::string("cannot open ") + store + " " + file.string() + ": " + part +
+               " cannot be read and written by this user: " + std::strerror(errno) +
+               " (a restored copy owned by another user? chown it to the server's user)");
+    }
+  }
   sqlite3* db = nullptr;
   if (sqlite3_open(file.c_str(), &db) != SQLITE_OK) {
     std::string message = db ? sqlite3_errmsg(db) : "out of memory";
@@ -96,16 +108,10 @@ sqlite3* OpenDatabase(const std::filesystem::path& file, const char* store) {
     // SQLite says "unable to open database file" for a folder this user may not write (a read-only
     // mount, another user's folder): the folder is named.
     const auto folder = file.parent_path().empty() ? std::filesystem::path(".") : file.parent_path();
-    bool writable = ::access(folder.c_str(), W_OK) == 0;
+    const bool writable = ::access(folder.c_str(), W_OK) == 0;
     if (!writable) {
       message += " (its folder " + folder.string() +
                  " cannot be written by this user: " + std::strerror(errno) + ")";
-    } else if (::access(file.c_str(), F_OK) == 0 && ::access(file.c_str(), R_OK | W_OK) != 0) {
-      // The file itself (a restored copy another user owns, mode 0600): not a passing fault, which
-      // UNAVAILABLE said to a supervisor that restarted the server for ever (found 2026-12-07).
-      message += std::string(" (it cannot be read and written by this user: ") + std::strerror(errno) +
-                 "; a restored copy owned by another user? chown it to the server's user)";
-      writable = false;
     }
     Fail(writable ? ErrorCode::kUnavailable : ErrorCode::kFailedPrecondition,
          std::string("cannot open ") + store + " " + file.string() + ": " + message);

@@ -363,12 +363,27 @@ TEST(ServerStartTest, FilesTheServersUserCannotUseAreRefusedNamingThem) {
   ASSERT_EQ(sqlite3_open((data / "jobs.sqlite").c_str(), &db), SQLITE_OK);  // root's, 0644
   ASSERT_EQ(sqlite3_exec(db, "PRAGMA journal_mode=WAL", nullptr, nullptr, nullptr), SQLITE_OK);
   sqlite3_close(db);
-  refused("job store " + (data / "jobs.sqlite").string() + " cannot be written by this user");
+  refused((data / "jobs.sqlite").string() + " cannot be read and written by this user");
   own(data / "jobs.sqlite", kNobody);
+
+  // Its shared-memory file another's (0644): SQLite opened the store read-only without a word, and
+  // the first write stopped the server (found 2026-12-07).
+  WriteBytes(data / "jobs.sqlite-shm", "");
+  refused((data / "jobs.sqlite-shm").string() + " cannot be read and written by this user");
+  std::filesystem::remove(data / "jobs.sqlite-shm");
 
   WriteBytes(data / "audit.jsonl", "");
   refused("cannot open audit log " + (data / "audit.jsonl").string());
   own(data / "audit.jsonl", kNobody);
+
+  std::filesystem::create_directory(data / "damaged");  // root's: a damaged file was deleted, not set aside
+  refused((data / "damaged").string() + ": this user cannot use it");
+  own(data / "damaged", kNobody);
+
+  std::filesystem::remove(data / "server.lock");  // an earlier start's, the server's user's
+  WriteBytes(data / "server.lock", "");
+  refused("cannot open " + (data / "server.lock").string());
+  own(data / "server.lock", kNobody);
 
   // Everything the server's user's: it starts (the refusals above were the owners').
   auto server = start();
