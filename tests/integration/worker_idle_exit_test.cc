@@ -18,16 +18,23 @@ TEST(WorkerIdleExitTest, AWorkerLeavesWhenIdleButNotWhileItRunsAJob) {
   const auto id = cluster.Submit(cluster.path("clip"), {"--time-budget", "10"});
   const auto started = std::chrono::steady_clock::now();
   const auto target = cluster.path("targets") / "w-batch.json";
-  auto& worker = cluster.StartWorker("w-batch", {"--exit-when-idle", "2", "--lease-wait", "0.5",
-                                                 "--prometheus-target-file", target.string()});
+  // The default --lease-wait (10 s) is no longer than the idle time left: it left at the poll's end.
+  auto& worker =
+      cluster.StartWorker("w-batch", {"--exit-when-idle", "2", "--prometheus-target-file", target.string()});
   // While it serves, a Prometheus reading the folder finds it (file_sd_configs); gone when it leaves.
   ASSERT_TRUE(WaitUntil([&] { return std::filesystem::exists(target); })) << worker.Log();
   EXPECT_NE(ReadBytes(target).find("\"endorecon_worker\":\"w-batch\""), std::string::npos)
       << ReadBytes(target);
   EXPECT_EQ(worker.Wait(), 0) << worker.Log();
+  const auto left_unix_ms = std::chrono::duration_cast<std::chrono::milliseconds>(
+                                std::chrono::system_clock::now().time_since_epoch())
+                                .count();
   EXPECT_FALSE(std::filesystem::exists(target));
-  EXPECT_EQ(cluster.Job(id).state(), v1::SUCCEEDED) << worker.Log();
-  EXPECT_GE(std::chrono::steady_clock::now() - started, std::chrono::seconds(9)) << "left before its job ended";
+  const auto job = cluster.Job(id);
+  EXPECT_EQ(job.state(), v1::SUCCEEDED) << worker.Log();
+  EXPECT_LT(left_unix_ms - job.finished_unix_ms(), 8000) << "2 s after its job, not at the poll's end";
+  const auto ended = std::chrono::steady_clock::now();
+  EXPECT_GE(ended - started, std::chrono::seconds(9)) << "left before its job ended";
   EXPECT_NE(worker.Log().find("no job for 2 s (--exit-when-idle): stopping"), std::string::npos)
       << worker.Log();
 }

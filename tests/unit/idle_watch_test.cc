@@ -30,6 +30,19 @@ TEST(IdleWatchTest, IdleCountsFromTheLastJobsEndAndNeverWhileOneRuns) {
   EXPECT_EQ(idle.ExitCode(), 0) << "the queue was empty: a worker that had nothing to do";
 }
 
+// A lease's long poll waits no longer than the idle time left, so the worker leaves on time.
+TEST(IdleWatchTest, WhatIsLeftBoundsTheLongPoll) {
+  using std::chrono::milliseconds;
+  const auto t0 = IdleWatch::Clock::now();
+  IdleWatch idle(seconds(3), t0);
+  EXPECT_EQ(idle.Left(t0 + seconds(1), milliseconds(10'000)), milliseconds(2000));
+  EXPECT_EQ(idle.Left(t0 + seconds(5), milliseconds(10'000)), milliseconds(0));
+  EXPECT_EQ(idle.Left(t0, milliseconds(500)), milliseconds(500));
+  idle.JobStarted();
+  EXPECT_EQ(idle.Left(t0 + seconds(5), milliseconds(10'000)), milliseconds(10'000)) << "a job runs";
+  EXPECT_EQ(IdleWatch(seconds(0), t0).Left(t0, milliseconds(10'000)), milliseconds(10'000));
+}
+
 TEST(IdleWatchTest, ALimitOfZeroIsNeverDue) {
   const auto t0 = IdleWatch::Clock::now();
   const IdleWatch idle(seconds(0), t0);

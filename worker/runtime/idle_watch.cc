@@ -1,5 +1,7 @@
 #include "worker/runtime/idle_watch.h"
 
+#include <algorithm>
+
 namespace endorecon::worker {
 
 IdleWatch::IdleWatch(std::chrono::milliseconds limit, Clock::time_point now)
@@ -23,6 +25,13 @@ void IdleWatch::ServerAnswered(bool answered) {
 bool IdleWatch::Due(Clock::time_point now) const {
   std::lock_guard lock(mutex_);
   return limit_.count() > 0 && running_ == 0 && now - idle_since_ >= limit_;
+}
+
+std::chrono::milliseconds IdleWatch::Left(Clock::time_point now, std::chrono::milliseconds most) const {
+  std::lock_guard lock(mutex_);
+  if (limit_.count() <= 0 || running_ > 0) return most;
+  const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(idle_since_ + limit_ - now);
+  return std::clamp(left, std::chrono::milliseconds(0), most);
 }
 
 bool IdleWatch::ServerFailing() const {

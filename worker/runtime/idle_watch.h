@@ -26,6 +26,9 @@ class IdleWatch {
   void ServerAnswered(bool answered);
   // True once no device has run a job for the limit.
   bool Due(Clock::time_point now) const;
+  // How long until Due, at most `most` (`most` while a job runs or without a limit): a lease's
+  // long poll waits no longer, so the worker leaves on time (it left at the poll's end, 10 s for 3).
+  std::chrono::milliseconds Left(Clock::time_point now, std::chrono::milliseconds most) const;
   // Whether the latest call to the server failed.
   bool ServerFailing() const;
   // The worker leaves for being idle.

@@ -138,7 +138,9 @@ void LeaseLoop(WorkerClient& client, const Device& device, const RunnerSettings&
     if (waiting_for_space) spdlog::info("[{}] scratch folder has room again", device.name);
     waiting_for_space = false;
     try {
-      const auto lease = client.Lease(device.name, wait);
+      // A poll of at least 200 ms: one of none would spin while another device's job ends.
+      const auto lease = client.Lease(device.name, std::max(idle.Left(std::chrono::steady_clock::now(), wait),
+                                                            std::chrono::milliseconds(200)));
       idle.ServerAnswered(true);
       if (failing_since) {
         spdlog::info("[{}] the server answers again ({} s after the first failure)", device.name,
