@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <memory>
 #include <nlohmann/json.hpp>
 
 #include "tests/unit/temp_dir.h"
@@ -27,6 +28,22 @@ TEST(PrometheusTargetFileTest, TheFileNamesTheTargetWhileTheWorkerServes) {
     ASSERT_EQ(json.size(), 1u);
     EXPECT_EQ(json[0]["targets"], nlohmann::json::array({"node17:9466"}));
     EXPECT_EQ(json[0]["labels"]["endorecon_worker"], "node17-slurm42-gpu0");
+  }
+  EXPECT_FALSE(std::filesystem::exists(file));
+  {
+    const PrometheusTargetFile target(dir / "made" / "t.json", "node17", 9466, "w");
+    EXPECT_EQ(std::filesystem::status(dir / "made" / "t.json").permissions() & std::filesystem::perms::all,
+              std::filesystem::perms(0644))
+        << "Prometheus runs as a user of its own";
+    EXPECT_EQ(std::filesystem::status(dir / "made").permissions() & std::filesystem::perms::all,
+              std::filesystem::perms(0755));
+  }
+  // Two workers given one file: the first to stop leaves the second's target.
+  {
+    auto first = std::make_unique<PrometheusTargetFile>(file, "node17", 9466, "first");
+    const PrometheusTargetFile second(file, "node18", 9466, "second");
+    first.reset();
+    EXPECT_NE(testing::ReadBytes(file).find("second"), std::string::npos) << "the second's target went";
   }
   EXPECT_FALSE(std::filesystem::exists(file));
   testing::WriteBytes(dir / "a-file", "");

@@ -2,6 +2,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <fstream>
 #include <nlohmann/json.hpp>
 #include <system_error>
 #include <utility>
@@ -10,6 +11,19 @@
 #include "common/file_write.h"
 
 namespace endorecon::worker {
+
+namespace {
+
+// The file's bytes, or "" when it cannot be read or is larger than a target file.
+std::string ReadIfSmall(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::string text(4096, '\0');
+  in.read(text.data(), static_cast<std::streamsize>(text.size()));
+  text.resize(static_cast<std::size_t>(in.gcount()));
+  return in.eof() ? text : std::string();
+}
+
+}  // namespace
 
 std::string ScrapeHost(const std::string& metrics_host, const std::string& hostname) {
   if (metrics_host == "0.0.0.0" || metrics_host == "::" || metrics_host == "[::]") return hostname;
@@ -22,13 +36,22 @@ std::string ScrapeHost(const std::string& metrics_host, const std::string& hostn
 PrometheusTargetFile::PrometheusTargetFile(std::filesystem::path file, const std::string& host, int port,
                                            const std::string& worker_id)
     : file_(std::move(file)) {
+  namespace fs = std::filesystem;
   const nlohmann::json targets = nlohmann::json::array(
       {{{"targets", {host + ":" + std::to_string(port)}}, {"labels", {{"endorecon_worker", worker_id}}}}});
-  WriteFile(file_, targets.dump() + "\n", "Prometheus target file");
+  text_ = targets.dump() + "\n";
+  const auto folder = file_.parent_path().empty() ? fs::path(".") : file_.parent_path();
+  std::error_code error;
+  if (!fs::exists(folder, error) && fs::create_directories(folder, error)) {
+    fs::permissions(folder, fs::perms(0755), error);
+  }
+  WriteFile(file_, text_, "Prometheus target file");
+  fs::permissions(file_, fs::perms(0644), error);
 }
 
 PrometheusTargetFile::~PrometheusTargetFile() {
   std::error_code error;
+  if (ReadIfSmall(file_) != text_) return;  // another worker's now, or gone
   std::filesystem::remove(file_, error);
   if (error) spdlog::warn("cannot remove the Prometheus target file {}: {}", file_.string(), error.message());
 }

@@ -15,16 +15,21 @@ std::string ScrapeHost(const std::string& metrics_host, const std::string& hostn
 
 class PrometheusTargetFile {
  public:
-  // Writes `file` (atomically, making its folder). Throws Error naming it when it cannot.
+  // Writes `file` (atomically), readable by all (a Prometheus runs as a user of its own; the file
+  // names a host and port, no secret), making its folder readable by all if it is not there. Throws
+  // Error naming it when it cannot.
   PrometheusTargetFile(std::filesystem::path file, const std::string& host, int port,
                        const std::string& worker_id);
-  // Removes it (a failure is logged).
+  // Removes it if it still holds what this one wrote (another worker given the same file since
+  // keeps its target; found 2026-12-07). A failure is logged. A worker killed (kill -9, a node lost)
+  // leaves its file, naming a port nobody serves, until the next worker of that file starts.
   ~PrometheusTargetFile();
   PrometheusTargetFile(const PrometheusTargetFile&) = delete;
   PrometheusTargetFile& operator=(const PrometheusTargetFile&) = delete;
 
  private:
   std::filesystem::path file_;
+  std::string text_;  // what it wrote
 };
 
 }  // namespace endorecon::worker

@@ -346,6 +346,10 @@ int Serve(const ServeFlags& flags) {
         flags.metrics_host);
   }
   std::optional<PrometheusTargetFile> target_file;
+  if (!flags.prometheus_target_file.empty() && flags.metrics_port < 0) {
+    spdlog::warn("--prometheus-target-file {}: none written, as metrics are off (--metrics-port -1)",
+                 flags.prometheus_target_file);
+  }
   if (!flags.prometheus_target_file.empty() && flags.metrics_port >= 0) {
     const auto host = ScrapeHost(flags.metrics_host, Hostname());
     target_file.emplace(flags.prometheus_target_file, host, metrics.port(), worker_id);
