@@ -21,6 +21,7 @@
 #include "common/error.h"
 #include "common/folder_lock.h"
 #include "common/job_bounds.h"
+#include "common/metrics_exposer.h"
 #include "common/private_folder.h"
 #include "common/transport_security.h"
 #include "server/call_guard.h"
@@ -164,8 +165,7 @@ int Run(const ServerFlags& flags) {
   LeaseTable leases(std::chrono::milliseconds(flags.lease_ttl_ms));
   WorkerRegistry workers(std::chrono::milliseconds(flags.lease_ttl_ms), data_dir / "drains.json");
   WatchHub hub;
-  Metrics metrics(flags.metrics_port >= 0 ? flags.metrics_host + ":" + std::to_string(flags.metrics_port)
-                                          : "");
+  Metrics metrics(flags.metrics_port >= 0 ? MetricsAddress(flags.metrics_host, flags.metrics_port) : "");
   // A commit slower than this is logged: a writing call waited for it (the disk's fsync, usually).
   constexpr double kSlowCommitSeconds = 0.1;
   store.SetCommitObserver([&metrics](double seconds, std::size_t writes) {
@@ -269,8 +269,7 @@ int Run(const ServerFlags& flags) {
   // /metrics has neither TLS nor tokens: beyond loopback, anyone who reaches it reads the queue's
   // and the workers' numbers (no patient data). Said, as --insecure is, not refused: a scraper on
   // another host is the usual deployment.
-  if (flags.metrics_port >= 0 &&
-      !IsLoopbackAddress(flags.metrics_host + ":" + std::to_string(metrics.port()))) {
+  if (flags.metrics_port >= 0 && !IsLoopbackAddress(MetricsAddress(flags.metrics_host, metrics.port()))) {
     spdlog::warn(
         "/metrics is served on {} in plaintext without tokens: keep that port behind a firewall or a "
         "network policy that lets only Prometheus reach it",

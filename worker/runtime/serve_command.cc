@@ -19,6 +19,7 @@
 #include "common/error.h"
 #include "common/folder_lock.h"
 #include "common/job_bounds.h"
+#include "common/metrics_exposer.h"
 #include "common/private_folder.h"
 #include "common/transport_security.h"
 #include "common/warning_pacer.h"
@@ -211,8 +212,8 @@ int Serve(const ServeFlags& flags) {
   } catch (const Error& e) {
     FailInvalid("--id: " + std::string(e.what()));
   }
-  WorkerMetrics metrics(
-      flags.metrics_port >= 0 ? flags.metrics_host + ":" + std::to_string(flags.metrics_port) : "", devices);
+  WorkerMetrics metrics(flags.metrics_port >= 0 ? MetricsAddress(flags.metrics_host, flags.metrics_port) : "",
+                        devices);
   WorkerClient client(flags.server, SecurityOf(flags), worker_id,
                       std::chrono::milliseconds(static_cast<long>(flags.timeout_s * 1000)));
   std::vector<std::string> names;
@@ -337,7 +338,7 @@ int Serve(const ServeFlags& flags) {
                flags.metrics_port >= 0 ? fmt::format("on port {} of {}", metrics.port(), flags.metrics_host)
                                        : std::string("off"));
   const bool metrics_on_loopback =
-      IsLoopbackAddress(flags.metrics_host + ":" + std::to_string(std::max(metrics.port(), 0)));
+      IsLoopbackAddress(MetricsAddress(flags.metrics_host, std::max(metrics.port(), 0)));
   // As the server's: /metrics has neither TLS nor tokens (it carries no patient data).
   if (flags.metrics_port >= 0 && !metrics_on_loopback) {
     spdlog::warn(
