@@ -35,8 +35,12 @@ void Log(gpr_log_func_args* args) {
   {
     std::lock_guard lock(route.mutex);
     if (handshake) count = route.handshake_failed;
-    // Paced by where it comes from: a client retrying every second makes the same line each time.
-    auto& pacer = route.pacers[std::string(args->file ? args->file : "") + ":" + std::to_string(args->line)];
+    // Paced by where it comes from and what it says: a client retrying every second makes the same
+    // line each time, and a plaintext client's failure is not lumped with a rogue certificate's. The
+    // messages are gRPC's own few; should they vary without end, the count restarts.
+    if (route.pacers.size() > 256) route.pacers.clear();
+    auto& pacer = route.pacers[std::string(args->file ? args->file : "") + ":" + std::to_string(args->line) +
+                               ":" + std::string(message.substr(0, 160))];
     due = pacer.Due(held);
   }
   if (count) count();

@@ -1,7 +1,7 @@
 // gRPC's own log lines (its C core's gpr_log: a failed TLS handshake, a refused connection) into the
-// server's log (spdlog), repeats paced, and each failed TLS handshake counted. A handshake fails
-// before any call, so nothing else saw it: a worker presenting a certificate of another CA retried
-// every second for hours, writing a bare line to stderr each time, while
+// server's log (spdlog), repeats of a line paced (once per 30 s, with their count), and each failed TLS
+// handshake counted. A handshake fails before any call, so nothing else saw it: a worker presenting a
+// certificate of another CA retried every second for hours, writing a bare line to stderr each time, while
 // endorecon_calls_refused_total stayed 0 and no alert fired (found 2026-12-07).
 #pragma once
 
