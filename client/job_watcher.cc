@@ -122,8 +122,9 @@ v1::Job WatchJob(const Globals& globals, const std::string& id, const WatchOptio
     auto context = CallContext(std::chrono::milliseconds(static_cast<long>(options.stream_s * 1000)));
     auto reader = stub->Watch(context.get(), request);
     v1::JobEvent event;
+    bool heard = false;
     while (reader->Read(&event)) {
-      unreachable_since = std::chrono::steady_clock::now();
+      heard = true;
       if (event.has_progress()) printer.Progress(event.progress());
       if (event.has_preview()) {
         SavePreview(options.previews_dir, event.preview());
@@ -135,6 +136,10 @@ v1::Job WatchJob(const Globals& globals, const std::string& id, const WatchOptio
       }
     }
     const auto status = reader->Finish();
+    // The server answered this stream: it was reachable until the stream's end (its deadline, with
+    // nothing new to say). Counted from the stream's last event, a job waiting longer than
+    // --timeout for a worker failed the watch "Deadline Exceeded" (found 2026-12-07).
+    if (heard) unreachable_since = std::chrono::steady_clock::now();
     if (status.ok() && Terminal(job.state())) break;
     const bool retry = status.ok() || status.error_code() == grpc::StatusCode::DEADLINE_EXCEEDED ||
                        status.error_code() == grpc::StatusCode::UNAVAILABLE;
