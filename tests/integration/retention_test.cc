@@ -92,7 +92,8 @@ TEST(RetentionTest, FilesNoJobNamesGoTheOrphanHoursAfterTheServerFirstFoundThemR
   const auto written = std::chrono::steady_clock::now();
   ASSERT_TRUE(WaitUntil(
       [&] {
-        return ReadBytes(cluster.data_dir() / "orphans.json").find(orphan.string()) != std::string::npos;
+        return ReadBytes(cluster.data_dir() / "orphans.json")
+                   .find("\"blobs/ab/" + orphan.filename().string() + "\"") != std::string::npos;
       },
       std::chrono::seconds(5)))
       << cluster.ServerLog();
