@@ -8,6 +8,7 @@
 #include <CLI/CLI.hpp>
 #include <iostream>
 #include <memory>
+#include <vector>
 
 #include "common/cli_checks.h"
 #include "common/error.h"
@@ -43,7 +44,20 @@ int DryRun(const RetentionFlags& flags) {
   // made an empty jobs table, and the server then started on it and deleted every blob as no job's
   // (found 2026-12-07).
   RefuseBlobsWithoutTheirStore(dir);
-  ::umask(077);  // a folder the store makes (partial/) is the server's alone, as the server makes it
+  // The blob store makes blobs/ and partial/ when they are missing; a dry run changes nothing, so the
+  // ones it made go again, empty, however it ends (a restored folder without partial/ gained one).
+  struct MadeFolders {
+    std::vector<std::filesystem::path> folders;
+    ~MadeFolders() {
+      std::error_code ignored;
+      for (const auto& folder : folders) std::filesystem::remove(folder, ignored);  // only if empty
+    }
+  } made;
+  for (const char* folder : {"blobs", "partial"}) {
+    if (std::error_code error; !std::filesystem::exists(dir / folder, error))
+      made.folders.push_back(dir / folder);
+  }
+  ::umask(077);  // what SQLite makes beside the store (its log) is the server's alone, as the server makes it
   BlobStore blobs(dir);  // before the store, as the server: a refusal of its folders leaves no store made
   JobStore store(dir / "jobs.sqlite");
   UploadLedger uploads;  // read; written only at a change, which a dry run makes none of

@@ -395,6 +395,30 @@ TEST(ServerStartTest, FilesTheServersUserCannotUseAreRefusedNamingThem) {
   EXPECT_EQ(server->Wait(), 0) << server->Log();
 }
 
+// The dry run changes nothing: a restored folder without blobs/ or partial/ gained them (found
+// 2026-12-07).
+TEST(ServerStartTest, TheRetentionDryRunMakesNoFolder) {
+  TempDir dir("dry-run");
+  std::filesystem::create_directories(dir / "data");
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open((dir / "data" / "jobs.sqlite").c_str(), &db), SQLITE_OK);
+  ASSERT_EQ(
+      sqlite3_exec(db,
+                   "PRAGMA journal_mode=WAL; CREATE TABLE jobs (seq INTEGER PRIMARY KEY AUTOINCREMENT, "
+                   "id TEXT NOT NULL UNIQUE, state INTEGER NOT NULL, priority INTEGER NOT NULL, job BLOB "
+                   "NOT NULL)",
+                   nullptr, nullptr, nullptr),
+      SQLITE_OK);
+  sqlite3_close(db);
+  Process dry_run({BuiltBinary("server/endorecon-server"), "retention", "--data-dir", (dir / "data").string(),
+                   "--retention-days", "1", "--dry-run"},
+                  dir / "dry-run.log");
+  EXPECT_EQ(dry_run.Wait(), 0) << dry_run.Log();
+  EXPECT_NE(dry_run.Log().find("0 job(s)"), std::string::npos) << dry_run.Log();
+  EXPECT_FALSE(std::filesystem::exists(dir / "data" / "blobs"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "data" / "partial"));
+}
+
 // A token store that appears and does not open (`sqlite3 tokens.sqlite .backup` run where there is
 // no store leaves an empty file, which another user may own): the running server goes on, refusing
 // every call and saying why, and admits callers again once it is removed; a server started beside
