@@ -18,6 +18,7 @@ class IdleWatch {
   using Clock = std::chrono::steady_clock;
   // `limit` 0: never idle.
   IdleWatch(std::chrono::milliseconds limit, Clock::time_point now);
+  std::chrono::milliseconds limit() const { return limit_; }
 
   // A device took a job / finished it (handed back, failed or done).
   void JobStarted();

@@ -86,7 +86,8 @@ std::optional<std::filesystem::file_time_type> WrittenAt(const std::string& file
 }
 
 // Whether the worker has been idle for --exit-when-idle; the first loop to see it stops them all.
-bool LeaveIdle(IdleWatch& idle, WorkerClient& client, std::atomic<bool>& shutting_down, double idle_s) {
+bool LeaveIdle(IdleWatch& idle, WorkerClient& client, std::atomic<bool>& shutting_down) {
+  const double idle_s = static_cast<double>(idle.limit().count()) / 1000;
   if (!idle.Due(std::chrono::steady_clock::now())) return false;
   if (!shutting_down.exchange(true)) {  // not stopping for a signal already
     idle.Leave();
@@ -114,7 +115,7 @@ struct JobOnDevice {
 
 void LeaseLoop(WorkerClient& client, const Device& device, const RunnerSettings& settings,
                WorkerMetrics& metrics, std::atomic<bool>& shutting_down, std::chrono::milliseconds wait,
-               const std::string& token_file, IdleWatch& idle, double idle_s) {
+               const std::string& token_file, IdleWatch& idle) {
   using Clock = std::chrono::steady_clock;
   auto backoff = std::chrono::milliseconds(500);
   std::optional<Clock::time_point> failing_since;  // since when calls fail, while they do
@@ -123,7 +124,7 @@ void LeaseLoop(WorkerClient& client, const Device& device, const RunnerSettings&
   bool waiting_for_space = false;
   auto disk_backoff = std::chrono::seconds(30);
   while (!shutting_down) {
-    if (LeaveIdle(idle, client, shutting_down, idle_s)) break;
+    if (LeaveIdle(idle, client, shutting_down)) break;
     // A full scratch folder takes no job: it would only fail there.
     const std::int64_t free_bytes = ScratchFree(settings.work_dir);
     if (free_bytes >= 0 && free_bytes < settings.min_free_bytes) {
@@ -150,11 +151,11 @@ void LeaseLoop(WorkerClient& client, const Device& device, const RunnerSettings&
       failing_since.reset();
       warnings.Reset();
       backoff = std::chrono::milliseconds(500);
-      const auto full = [&] {
+      const auto run_until_scratch_full = [&] {
         const JobOnDevice job(idle);
         return RunLeasedJob(client, *lease, device, settings, metrics, shutting_down);
       };
-      if (lease && full()) {
+      if (lease && run_until_scratch_full()) {
         // The job needed more scratch than this worker has: leave it to others for a while
         // (30 s, doubling to 10 minutes while it keeps happening).
         spdlog::warn("[{}] scratch folder full: taking no job for {} s", device.name, disk_backoff.count());
@@ -284,14 +285,13 @@ int Serve(const ServeFlags& flags) {
         stop_waiter();
         throw;
       }
-      if (idle.Due(std::chrono::steady_clock::now())) {
+      if (idle.Due(std::chrono::steady_clock::now())) {  // stopped below, as for a signal
+        idle.ServerAnswered(false);
+        idle.Leave();
         shutting_down = true;
-        stop_waiter();
-        std::error_code ignored;
-        if (flags.work_dir.empty()) std::filesystem::remove_all(settings.work_dir, ignored);
         spdlog::error("cannot register with {} after {} s (--exit-when-idle): {}; stopping (exit {})",
                       flags.server, flags.exit_when_idle_s, e.what(), kIdleUnreachableExit);
-        return kIdleUnreachableExit;
+        break;
       }
       // A server that refuses this worker's client certificate closes the connection in the TLS
       // handshake; gRPC says only "Socket closed", so the likely reasons are named (TLS over plain
@@ -327,11 +327,11 @@ int Serve(const ServeFlags& flags) {
     }
   }
   std::error_code ignored;
-  if (shutting_down) {  // a signal before the server took the worker: it never served
+  if (shutting_down) {  // a signal (or --exit-when-idle) before the server took the worker: it never served
     stop_waiter();
     if (flags.work_dir.empty()) std::filesystem::remove_all(settings.work_dir, ignored);
     spdlog::info("worker {} stopped before it could register with {}", worker_id, flags.server);
-    return 0;
+    return idle.ExitCode();
   }
   spdlog::info("worker {} serving {} with {} device(s) [{}], metrics {}", worker_id, flags.server,
                devices.size(), fmt::join(names, ","),
@@ -365,8 +365,7 @@ int Serve(const ServeFlags& flags) {
   const auto wait = std::chrono::milliseconds(static_cast<long>(flags.lease_wait_s * 1000));
   for (const auto& device : devices) {
     loops.emplace_back([&, device] {
-      LeaseLoop(client, device, settings, metrics, shutting_down, wait, flags.token_file, idle,
-                flags.exit_when_idle_s);
+      LeaseLoop(client, device, settings, metrics, shutting_down, wait, flags.token_file, idle);
     });
   }
   for (auto& loop : loops) loop.join();
