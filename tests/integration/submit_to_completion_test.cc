@@ -251,6 +251,8 @@ TEST(SubmitToCompletionTest, AWorkersBadNumbersAndIdAreRefusedAtStart) {
       {{"--lease-wait", "-1"}, "--lease-wait: -1 is not above 0"},
       {{"--threads", "-3"}, "--threads"},
       {{"--timeout", "0"}, "--timeout: 0 is not above 0"},
+      {{"--exit-when-idle", "-5"}, "--exit-when-idle: -5 is negative; expected a number >= 0"},
+      {{"--exit-when-idle", "nan"}, "--exit-when-idle: nan is not a finite number"},
       {{"--id", "a\nb"}, "--id: worker id holds a control character (byte 10)"},
   };
   for (const auto& [flags, expected] : cases) {
