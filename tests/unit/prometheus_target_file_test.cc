@@ -1,6 +1,7 @@
 #include "worker/runtime/prometheus_target_file.h"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -31,12 +32,19 @@ TEST(PrometheusTargetFileTest, TheFileNamesTheTargetWhileTheWorkerServes) {
   }
   EXPECT_FALSE(std::filesystem::exists(file));
   {
-    const PrometheusTargetFile target(dir / "made" / "t.json", "node17", 9466, "w");
-    EXPECT_EQ(std::filesystem::status(dir / "made" / "t.json").permissions() & std::filesystem::perms::all,
+    // Under the worker's umask (077), every folder made, not the last alone, is open to Prometheus.
+    const mode_t umask_before = ::umask(077);
+    const PrometheusTargetFile target(dir / "made" / "deeper" / "t.json", "node17", 9466, "w");
+    ::umask(umask_before);
+    EXPECT_EQ(std::filesystem::status(dir / "made" / "deeper" / "t.json").permissions() &
+                  std::filesystem::perms::all,
               std::filesystem::perms(0644))
         << "Prometheus runs as a user of its own";
-    EXPECT_EQ(std::filesystem::status(dir / "made").permissions() & std::filesystem::perms::all,
-              std::filesystem::perms(0755));
+    for (const auto& folder : {dir / "made", dir / "made" / "deeper"}) {
+      EXPECT_EQ(std::filesystem::status(folder).permissions() & std::filesystem::perms::all,
+                std::filesystem::perms(0755))
+          << folder;
+    }
   }
   // Two workers given one file: the first to stop leaves the second's target.
   {

@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 #include <system_error>
 #include <utility>
+#include <vector>
 
 #include "common/error.h"
 #include "common/file_write.h"
@@ -42,8 +43,16 @@ PrometheusTargetFile::PrometheusTargetFile(std::filesystem::path file, const std
   text_ = targets.dump() + "\n";
   const auto folder = file_.parent_path().empty() ? fs::path(".") : file_.parent_path();
   std::error_code error;
-  if (!fs::exists(folder, error) && fs::create_directories(folder, error)) {
-    fs::permissions(folder, fs::perms(0755), error);
+  // Each folder made is opened to all, not the last alone: the worker's umask (077) made the ones
+  // above it 0700, which Prometheus could not pass (found 2026-12-07).
+  std::vector<fs::path> missing;
+  for (fs::path at = fs::absolute(folder, error); !at.empty() && !fs::exists(at, error);
+       at = at.parent_path()) {
+    missing.push_back(at);
+    if (at == at.parent_path()) break;
+  }
+  for (auto it = missing.rbegin(); it != missing.rend(); ++it) {
+    if (fs::create_directory(*it, error)) fs::permissions(*it, fs::perms(0755), error);
   }
   WriteFile(file_, text_, "Prometheus target file");
   fs::permissions(file_, fs::perms(0644), error);

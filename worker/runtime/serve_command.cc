@@ -354,12 +354,14 @@ int Serve(const ServeFlags& flags) {
   if (!flags.prometheus_target_file.empty() && flags.metrics_port >= 0) {
     const auto host = ScrapeHost(flags.metrics_host, Hostname());
     target_file.emplace(flags.prometheus_target_file, host, metrics.port(), worker_id);
-    spdlog::info("Prometheus target {}:{} written to {}{}", host, metrics.port(),
-                 flags.prometheus_target_file,
-                 metrics_on_loopback
-                     ? " (only this machine reaches it: a Prometheus elsewhere needs --metrics-host set to "
-                       "this machine's address on its network, or 0.0.0.0)"
-                     : "");
+    // A loopback target is a warning: the file is for a Prometheus that finds workers it does not run
+    // beside (a warning filter missed it as an info line; found 2026-12-07).
+    spdlog::log(metrics_on_loopback ? spdlog::level::warn : spdlog::level::info,
+                "Prometheus target {}:{} written to {}{}", host, metrics.port(), flags.prometheus_target_file,
+                metrics_on_loopback
+                    ? " (only this machine reaches it: a Prometheus elsewhere needs --metrics-host set to "
+                      "this machine's address on its network, or 0.0.0.0)"
+                    : "");
   }
   std::vector<std::thread> loops;
   const auto wait = std::chrono::milliseconds(static_cast<long>(flags.lease_wait_s * 1000));
