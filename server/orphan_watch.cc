@@ -63,6 +63,9 @@ void OrphanWatch::Sift(RetentionPlan& plan, const OrphanCutoff& cutoff, std::int
   for (auto& file : plan.orphans) {
     const auto since = note(file);
     if (file.written < cutoff.written_before && since < cutoff.found_before_unix_ms) {
+      // Forgotten now, as it is deleted next: kept, orphans.json listed it until the next check (an
+      // hour by default; found 2026-12-07). One whose deletion fails is found anew: later, never earlier.
+      found.erase(Key(file.path));
       plan.orphan_bytes += file.bytes;
       due.push_back(std::move(file));
     } else {

@@ -32,8 +32,8 @@ class OrphanWatch {
 
   // `plan.orphans` and `plan.uploading` are all the store's files no job references (PlanExpiry of
   // every file): notes the ones found now at `now_unix_ms`, forgets those no longer among them
-  // (deleted, or a job's now), and leaves in plan.orphans only those due by `cutoff` (the others are
-  // counted in plan.orphans_waiting).
+  // (deleted, or a job's now) and those due by `cutoff` (to be deleted), and leaves in plan.orphans
+  // only the due ones (the others are counted in plan.orphans_waiting).
   void Sift(RetentionPlan& plan, const OrphanCutoff& cutoff, std::int64_t now_unix_ms);
 
  private:

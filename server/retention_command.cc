@@ -38,12 +38,13 @@ int DryRun(const RetentionFlags& flags) {
         "it would delete: add --dry-run");
   }
   const std::filesystem::path dir = flags.data_dir;
-  if (!std::filesystem::exists(dir / "jobs.sqlite"))
-    Fail(ErrorCode::kNotFound, "no job store in " + dir.string());
   // Before the store is opened: opening one of no table (a running server's, copied without its log)
   // made an empty jobs table, and the server then started on it and deleted every blob as no job's
-  // (found 2026-12-07).
+  // (found 2026-12-07). Before the store's absence is said, too: blobs/ without it is refused as the
+  // server refuses it, with the restore's hint.
   RefuseBlobsWithoutTheirStore(dir);
+  if (!std::filesystem::exists(dir / "jobs.sqlite"))
+    Fail(ErrorCode::kNotFound, "no job store in " + dir.string());
   // The blob store makes blobs/ and partial/ when they are missing; a dry run changes nothing, so the
   // ones it made go again, empty, however it ends (a restored folder without partial/ gained one).
   struct MadeFolders {
@@ -102,7 +103,8 @@ Command AddRetentionCommand(CLI::App& app) {
       ->check(AtLeastZero());
   command
       ->add_option("--orphan-hours", flags->orphan_hours,
-                   "files no job references go this long after they were last written (0: kept)")
+                   "files no job references go once last written and first found no job's (orphans.json) "
+                   "this long ago (0: kept)")
       ->capture_default_str()
       ->check(AtLeastZero());
   command->add_flag("--dry-run", flags->dry_run, "list what would go; change nothing");
