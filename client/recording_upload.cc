@@ -81,7 +81,9 @@ void StagedRecording::CheckBeforeUpload() const {
   };
   const auto users = [&](const std::string& name) { return sources_.at(name + "/"); };
   const auto left = frames_of("left"), right = frames_of("right");
-  if (!left.empty() && !right.empty() && left.size() != right.size()) {
+  // Eyes cut apart (--skip-left, --skip-right) may end apart too: the pairs end with the shorter.
+  const bool cut_apart = flags_.skip_left > 0 || flags_.skip_right > 0;
+  if (!cut_apart && !left.empty() && !right.empty() && left.size() != right.size()) {
     FailInvalid(users("right") + ": " + std::to_string(right.size()) + " frames while " + users("left") +
                 " has " + std::to_string(left.size()) + " (both eyes' recordings must have the same length)");
   }

@@ -303,10 +303,12 @@ int Submit(const Globals& globals, const SubmitFlags& flags) {
   const PrepareFlags& raw = flags.raw;
   if (raw.empty() && (!raw.calibration.empty() || raw.rectified || raw.focal != 0 || raw.baseline != 0 ||
                       !raw.masks.empty() || raw.mask_tool != "white" || !raw.exclude.empty() ||
-                      !raw.poses.empty() || raw.estimate_poses || raw.depth_refine || raw.depth_paths != 0)) {
+                      !raw.poses.empty() || raw.estimate_poses || raw.depth_refine || raw.depth_paths != 0 ||
+                      raw.skip_left != 0 || raw.skip_right != 0)) {
     FailInvalid(
         "--calibration, --rectified, --focal, --baseline, --masks, --mask-tool, --exclude, --poses, "
-        "--estimate-poses, --depth-refine and --depth-paths prepare a raw recording (--left/--right, "
+        "--estimate-poses, --depth-refine, --depth-paths, --skip-left and --skip-right prepare a raw "
+        "recording (--left/--right, "
         "--side-by-side or --top-bottom); a clip folder, a DICOM recording or a PACS study takes none");
   }
   if (!flags.name.empty()) ValidateJobName(flags.name);  // as the server would, after the upload

@@ -146,6 +146,15 @@ void CheckPrepareFlags(const PrepareFlags& f) {
   if (f.depth_paths != 0 && f.depth_paths != 3 && f.depth_paths != 8) {
     FailInvalid("--depth-paths must be 3 or 8, found " + std::to_string(f.depth_paths));
   }
+  if (f.skip_left < 0 || f.skip_right < 0) {
+    FailInvalid("--skip-left and --skip-right count frames: 0 or more, found " +
+                std::to_string(std::min(f.skip_left, f.skip_right)));
+  }
+  if ((f.skip_left > 0 || f.skip_right > 0) && f.left.empty()) {
+    FailInvalid(
+        "--skip-left and --skip-right pair two eyes' recordings (--left with --right); one recording of "
+        "both eyes (--side-by-side, --top-bottom) holds each moment in one frame");
+  }
   if (!f.frames.empty()) ParseFrameRange(f.frames);
   if (!f.size.empty()) ParseFrameSize(f.size);
   for (const std::string& rect : f.exclude) ParsePixelRect(rect);

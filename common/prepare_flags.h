@@ -62,6 +62,10 @@ struct PrepareFlags {
   // --depth-paths 3|8 (SGBM's 3-way or 8-path mode); 0: 8 with --estimate-poses (3-way depth
   // places the synthetic endoscope 0.6 degrees off, 8 paths within 0.5), else 3.
   int depth_paths = 0;
+  // --skip-left N, --skip-right N: with --left/--right, the first N frames of that eye's recording
+  // are dropped (it began N frames before the other's; the preparation says so when the eyes'
+  // motion shows it: worker/prepare/eye_sync.h).
+  int skip_left = 0, skip_right = 0;
 
   bool empty() const { return left.empty() && right.empty() && side_by_side.empty() && top_bottom.empty(); }
   // Every path the options name (recording, calibration, masks, poses), in that order.

@@ -14,6 +14,12 @@ void AddPrepareFlags(CLI::App& cmd, PrepareFlags& f) {
       ->group(recording);
   cmd.add_option("--top-bottom", f.top_bottom, "one video (or folder) of both eyes, left eye on top")
       ->group(recording);
+  cmd.add_option("--skip-left", f.skip_left,
+                 "with --left/--right: drop the left eye's first N frames (its recording began N frames "
+                 "before the right's; the preparation says N when the eyes' motion shows it)")
+      ->group(recording);
+  cmd.add_option("--skip-right", f.skip_right, "with --left/--right: drop the right eye's first N frames")
+      ->group(recording);
   cmd.add_option("--calibration", f.calibration,
                  "OpenCV stereo calibration (K1 D1 K2 D2 R T; YAML or XML), or two ROS camera_info YAMLs "
                  "(left right)")

@@ -23,6 +23,8 @@ v1::PrepareOptions PrepareFlagsToProto(const PrepareFlags& f) {
   o.set_estimate_poses(f.estimate_poses);
   o.set_depth_refine(f.depth_refine);
   o.set_depth_paths(f.depth_paths);
+  o.set_skip_left(f.skip_left);
+  o.set_skip_right(f.skip_right);
   return o;
 }
 
@@ -45,6 +47,8 @@ PrepareFlags PrepareFlagsFromProto(const v1::PrepareOptions& o) {
   f.estimate_poses = o.estimate_poses();
   f.depth_refine = o.depth_refine();
   f.depth_paths = o.depth_paths();
+  f.skip_left = o.skip_left();
+  f.skip_right = o.skip_right();
   return f;
 }
 

@@ -13,7 +13,7 @@ PrepareOptions OptionsFromFlags(const PrepareFlags& f, const std::filesystem::pa
   } else if (!f.top_bottom.empty()) {
     o.recording = {StereoLayout::kTopBottom, {}, {}, path(f.top_bottom)};
   } else {
-    o.recording = {StereoLayout::kTwoSources, path(f.left), path(f.right), {}};
+    o.recording = {StereoLayout::kTwoSources, path(f.left), path(f.right), {}, f.skip_left, f.skip_right};
   }
   for (const std::string& file : f.calibration) o.calibration.push_back(path(file));
   o.rectified = f.rectified;

@@ -19,6 +19,7 @@
 #include "common/error.h"
 #include "common/npy.h"
 #include "worker/prepare/clip_writer.h"
+#include "worker/prepare/eye_sync.h"
 #include "worker/prepare/pose_estimator.h"
 #include "worker/prepare/pose_file.h"
 #include "worker/prepare/preview_image.h"
@@ -135,12 +136,19 @@ std::array<cv::Mat, 2> ExcludedRaw(const std::vector<PixelRect>& rects, StereoLa
 // The tool masks (a video or folder of the raw left eye), read in step with the recording.
 class MaskReader {
  public:
-  MaskReader(const fs::path& path, bool tool_black, cv::Size eye) : tool_black_(tool_black) {
+  // `skip`: the left eye's first frames skipped (--skip-left): their masks are skipped too.
+  MaskReader(const fs::path& path, bool tool_black, cv::Size eye, int skip) : tool_black_(tool_black) {
     if (path.empty()) return;
     source_ = OpenFrameSource(path);
     if (source_->frame_size() != eye) {
       FailInvalid(source_->name() + " frame 0: masks of " + SizeText(source_->frame_size()) +
                   " do not match the left eye's " + SizeText(eye) + " frames");
+    }
+    for (int i = 0; i < skip; ++i) {
+      if (!source_->Skip()) {
+        FailInvalid(source_->name() + ": the masks end after " + std::to_string(i) + " frames, before the " +
+                    std::to_string(skip) + " of --skip-left");
+      }
     }
   }
   bool active() const { return source_ != nullptr; }
@@ -324,8 +332,10 @@ class Preparation {
     const auto raw = ExcludedRaw(options.exclude, options.recording.layout, eye);
     excluded_[0] = rectifier_->LeftMask(raw[0]);
     excluded_[1] = rectifier_->RightMask(raw[1]);
-    masks_ = std::make_unique<MaskReader>(options.masks, options.masks_tool_black, eye);
+    masks_ = std::make_unique<MaskReader>(options.masks, options.masks_tool_black, eye,
+                                          options.recording.skip_left);
     placer_ = std::make_unique<Placer>(options, camera_);
+    CheckEyesInStep(options.recording);
     survey_ = Survey(options, *rectifier_, excluded_[0], source_.announced_frames());
     survey_.CheckTwoViews(source_.name());
     survey_.CheckEyeOrder(source_.name());
@@ -361,7 +371,9 @@ class Preparation {
       if (!more) break;
     }
     recording_frames_ = index;
-    masks_->CheckEnd(recording_frames_);
+    // Eyes cut apart at their start may end apart too: the left eye's masks then go on past the pairs.
+    if (options_.recording.skip_left == 0 && options_.recording.skip_right == 0)
+      masks_->CheckEnd(recording_frames_);
     placer_->CheckCount(recording_frames_);
     if (placements_.empty()) {
       FailInvalid(

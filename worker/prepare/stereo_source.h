@@ -19,6 +19,10 @@ struct RecordingInput {
   StereoLayout layout = StereoLayout::kTwoSources;
   std::filesystem::path left, right;  // kTwoSources: a video or a folder per eye
   std::filesystem::path combined;     // kSideBySide, kTopBottom: one video or folder
+  // kTwoSources: the first frames of one eye's recording, dropped so that the pairs begin at one
+  // moment (its recording began that many frames before the other's: eye_sync.h). With either,
+  // the eyes' recordings may end apart too: the pairs end with the shorter, said.
+  int skip_left = 0, skip_right = 0;
 };
 
 struct StereoFrame {
@@ -48,13 +52,17 @@ class StereoSource {
 
  private:
   bool Ended(bool first, bool second, int index);
-  void CheckPairedByOrder();
+  void CheckPairedByOrder(int skip_left, int skip_right);
+  void SkipFirst(FrameSource& eye, int frames);
 
   StereoLayout layout_;
   std::unique_ptr<FrameSource> first_, second_;  // second_ only for two sources
   cv::Size eye_size_;
   double frame_period_s_ = 0;  // two videos': one frame's time at their rate; 0: not two videos
   double rate_ratio_ = 1;      // two videos': the right eye's rate over the left's
+  double left_origin_s_ = 0, right_origin_s_ = 0;  // two videos': the time of each eye's first pair
+  bool skipped_ = false;                           // an eye's first frames were skipped
+  int skips_[2] = {0, 0};                          // the frames skipped of first_, second_
   static constexpr int kTrailingFrames = 2;  // a longer video's frames past the shorter's, tolerated
   int next_ = 0;
 };

@@ -1,0 +1,178 @@
+// Two eyes' recordings cut at different moments, on the real laparoscopic video (monocular, so its
+// right eye is made here: the frame shifted by 8 pixels) and on made-up motion signals: the lag is
+// found, named with the flag that pairs the eyes, and that flag pairs them.
+#include "worker/prepare/eye_sync.h"
+
+#include <gtest/gtest.h>
+
+#include <iostream>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/videoio.hpp>
+#include <random>
+
+#include "common/prepare_flags.h"
+#include "tests/unit/clip_fixture.h"
+#include "tests/unit/temp_dir.h"
+#include "worker/prepare/frame_source.h"
+
+namespace endorecon::testing {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr int kShift = 8;
+constexpr int kFrames = 160;
+
+// A random walk: motion that speeds up and slows down, as a handheld scope's does.
+std::vector<double> Walk(int n, unsigned seed) {
+  std::mt19937 random(seed);
+  std::normal_distribution<double> step(0, 1);
+  std::vector<double> signal{10};
+  while (static_cast<int>(signal.size()) < n) signal.push_back(std::max(0.0, signal.back() + step(random)));
+  return signal;
+}
+
+TEST(EyeSyncTest, TheLagOfTwoSignalsIsFoundEitherWay) {
+  const auto moments = Walk(300, 3);
+  const std::vector<double> in_step(moments.begin(), moments.begin() + 250);
+  const std::vector<double> later(moments.begin() + 7, moments.begin() + 257);
+  // The left eye's recording began 7 frames before the right's: its frame i + 7 is the right's i.
+  const auto left_first = prepare::MatchLag(in_step, later, 60);
+  EXPECT_EQ(left_first.frames, 7);
+  EXPECT_GT(left_first.match, 0.99);
+  EXPECT_TRUE(left_first.OutOfStep());
+  const auto right_first = prepare::MatchLag(later, in_step, 60);
+  EXPECT_EQ(right_first.frames, -7);
+  EXPECT_TRUE(right_first.OutOfStep());
+  const auto together = prepare::MatchLag(in_step, in_step, 60);
+  EXPECT_EQ(together.frames, 0);
+  EXPECT_FALSE(together.OutOfStep());
+  // A scene that barely moves says nothing.
+  EXPECT_FALSE(
+      prepare::MatchLag(std::vector<double>(250, 1.0), std::vector<double>(250, 1.0), 60).OutOfStep());
+  // Motion of an even rhythm (breathing alone) matches as well a period away: which lag is not known,
+  // and none is said.
+  std::vector<double> breathing;
+  for (int i = 0; i < 255; ++i) breathing.push_back(std::sin(i * 2 * M_PI / 25));
+  const std::vector<double> breathing_later(breathing.begin() + 5, breathing.end());
+  const std::vector<double> breathing_now(breathing.begin(), breathing.end() - 5);
+  const auto rhythm = prepare::MatchLag(breathing_now, breathing_later, 60);
+  EXPECT_GT(rhythm.match, 0.99);
+  EXPECT_GT(rhythm.match_elsewhere, 0.99);
+  EXPECT_FALSE(rhythm.OutOfStep());
+}
+
+class RealEyesTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    const fs::path video = fs::path(ENDORECON_SHARED_DIR) / "data/real/laparoscopy_mono/endo.mp4";
+    if (!fs::exists(video)) return;
+    auto source = prepare::OpenFrameSource(video);
+    prepare::SourceFrame frame;
+    while (source->Next(frame)) {
+      cv::Mat small;
+      cv::resize(frame.image, small, cv::Size(320, 176), 0, 0, cv::INTER_AREA);
+      frames_.push_back(small);
+    }
+  }
+  void SetUp() override {
+    if (frames_.empty()) GTEST_SKIP() << "the real video is not here";
+  }
+  // An eye's video of the real frames first .. first + kFrames - 1, the right eye's seen 8 pixels
+  // further right.
+  fs::path Eye(const std::string& name, int first, bool right) {
+    const fs::path path = dir_ / (name + ".avi");
+    cv::VideoWriter writer(path.string(), cv::CAP_OPENCV_MJPEG, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'),
+                           25, cv::Size(320, 176));
+    for (int i = first; i < first + kFrames; ++i) {
+      cv::Mat eye(176, 320, CV_8UC3, cv::Scalar::all(0));
+      if (right) {
+        frames_[i](cv::Rect(kShift, 0, 320 - kShift, 176)).copyTo(eye(cv::Rect(0, 0, 320 - kShift, 176)));
+      } else {
+        frames_[i].copyTo(eye);
+      }
+      writer.write(eye);
+    }
+    return path;
+  }
+  static std::vector<cv::Mat> frames_;
+  TempDir dir_{"eye-sync"};
+};
+std::vector<cv::Mat> RealEyesTest::frames_;
+
+TEST_F(RealEyesTest, EyesRecordedTogetherPass) {
+  ASSERT_GE(frames_.size(), std::size_t(kFrames + 20));
+  prepare::CheckEyesInStep(
+      {prepare::StereoLayout::kTwoSources, Eye("left", 0, false), Eye("right", 0, true), {}});
+  // The two eyes' motion, as the check measures it, on the video's frames themselves.
+  std::vector<double> left, right;
+  cv::Mat previous_left, previous_right;
+  for (int i = 0; i < kFrames; ++i) {
+    cv::Mat shifted(176, 320, CV_8UC3, cv::Scalar::all(0));
+    frames_[i](cv::Rect(kShift, 0, 320 - kShift, 176)).copyTo(shifted(cv::Rect(0, 0, 320 - kShift, 176)));
+    left.push_back(prepare::FrameChange(frames_[i], previous_left));
+    right.push_back(prepare::FrameChange(shifted, previous_right));
+  }
+  left.erase(left.begin());
+  right.erase(right.begin());
+  const auto lag = prepare::MatchLag(left, right, kFrames / 4);
+  EXPECT_EQ(lag.frames, 0);
+  EXPECT_GT(lag.match, 0.9);
+  EXPECT_LT(lag.match_elsewhere, 0.5);
+  std::cout << "in step: match " << lag.match << ", best other peak " << lag.match_elsewhere << "\n";
+}
+
+TEST_F(RealEyesTest, ALeftEyeThatBeganEarlierIsNamedAndItsSkipPairsTheEyes) {
+  prepare::RecordingInput input{
+      prepare::StereoLayout::kTwoSources, Eye("left", 0, false), Eye("right", 9, true), {}};
+  const std::string message = ErrorFrom([&] { prepare::CheckEyesInStep(input); });
+  EXPECT_NE(message.find("left.avi + " + (dir_ / "right.avi").string() +
+                         ": the eyes' recordings begin 9 frame(s) apart"),
+            std::string::npos)
+      << message;
+  EXPECT_NE(message.find("Pass --skip-left 9 to drop its first 9 frame(s)"), std::string::npos) << message;
+  input.skip_left = 9;
+  prepare::CheckEyesInStep(input);
+  // The pairs now begin at one moment: the left eye's first is the video's frame 9, as the right's.
+  prepare::StereoSource source(input);
+  EXPECT_EQ(source.announced_frames(), kFrames - 9);
+  prepare::StereoFrame pair;
+  ASSERT_TRUE(source.Next(pair));
+  cv::Mat left_grey, expected_grey;
+  cv::cvtColor(pair.left, left_grey, cv::COLOR_BGR2GRAY);
+  cv::cvtColor(frames_[9], expected_grey, cv::COLOR_BGR2GRAY);
+  EXPECT_LT(cv::norm(left_grey, expected_grey, cv::NORM_L1) / double(left_grey.total()),
+            3.0);  // MJPEG's loss
+  // The left eye's recording goes on 9 frames past the right's: the pairs end with the right's.
+  int pairs = 1;
+  while (source.Next(pair)) ++pairs;
+  EXPECT_EQ(pairs, kFrames - 9);
+}
+
+TEST_F(RealEyesTest, ARightEyeThatBeganEarlierIsNamed) {
+  prepare::RecordingInput input{
+      prepare::StereoLayout::kTwoSources, Eye("left", 12, false), Eye("right", 0, true), {}};
+  const std::string message = ErrorFrom([&] { prepare::CheckEyesInStep(input); });
+  EXPECT_NE(message.find("Pass --skip-right 12"), std::string::npos) << message;
+  input.skip_right = 12;
+  prepare::CheckEyesInStep(input);
+}
+
+TEST(EyeSyncFlagsTest, SkipsAreCountsOfTwoEyesFrames) {
+  PrepareFlags flags;
+  flags.side_by_side = "sbs.mp4";
+  flags.rectified = true;
+  flags.focal = flags.baseline = 1;
+  flags.skip_left = 3;
+  EXPECT_NE(ErrorFrom([&] { CheckPrepareFlags(flags); }).find("--skip-left and --skip-right pair two eyes'"),
+            std::string::npos);
+  flags.side_by_side.clear();
+  flags.left = "l.mp4";
+  flags.right = "r.mp4";
+  CheckPrepareFlags(flags);
+  flags.skip_right = -1;
+  EXPECT_NE(ErrorFrom([&] { CheckPrepareFlags(flags); }).find("0 or more, found -1"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace endorecon::testing
