@@ -304,16 +304,19 @@ TEST(ServerStartTest, BlobsWithoutTheirJobStoreAreRefused) {
               std::string::npos)
         << server.Log();
     EXPECT_TRUE(std::filesystem::exists(dir / "data" / "blobs" / "ab" / "abcdef"));
-    // The dry run the docs advise before a restored folder's first start refuses alike, and leaves
-    // the store as it was (it made the missing table, and the server then started on it).
-    if (store == 2) {
-      const auto size = std::filesystem::file_size(dir / "data" / "jobs.sqlite");
+    // The dry run the docs advise before a restored folder's first start refuses alike (with no store
+    // at all too: it said only "no job store"), and leaves the store as it was (it made the missing
+    // table, and the server then started on it).
+    if (store != 1) {
+      const auto size = store == 2 ? std::filesystem::file_size(dir / "data" / "jobs.sqlite") : 0;
       Process dry_run({BuiltBinary("server/endorecon-server"), "retention", "--data-dir",
                        (dir / "data").string(), "--retention-days", "1", "--dry-run"},
                       dir / "dry-run.log");
       EXPECT_NE(dry_run.Wait(), 0);
       EXPECT_NE(dry_run.Log().find("but there is no job store"), std::string::npos) << dry_run.Log();
-      EXPECT_EQ(std::filesystem::file_size(dir / "data" / "jobs.sqlite"), size);
+      if (store == 2) {
+        EXPECT_EQ(std::filesystem::file_size(dir / "data" / "jobs.sqlite"), size);
+      }
     }
   }
 }
@@ -384,6 +387,23 @@ TEST(ServerStartTest, FilesTheServersUserCannotUseAreRefusedNamingThem) {
   WriteBytes(data / "server.lock", "");
   refused("cannot open " + (data / "server.lock").string());
   own(data / "server.lock", kNobody);
+
+  // Another's token store: the chown said once (the store's check and the token guard both said it).
+  WriteBytes(data / "tokens.sqlite", "");
+  {
+    Process server({"/usr/bin/setpriv", "--reuid=65534", "--regid=65534", "--clear-groups",
+                    BuiltBinary("server/endorecon-server"), "--listen", "127.0.0.1:0", "--data-dir",
+                    data.string(), "--metrics-port", "-1"},
+                   dir / "tokens-start.log");  // a log of its own: server.log holds the earlier refusals
+    EXPECT_NE(server.Wait(), 0);
+    const auto log = server.Log();
+    EXPECT_NE(log.find((data / "tokens.sqlite").string() + " cannot be read and written by this user"),
+              std::string::npos)
+        << log;
+    EXPECT_NE(log.find("chown it"), std::string::npos) << log;
+    EXPECT_EQ(log.find("chown it"), log.rfind("chown it")) << log;
+  }
+  std::filesystem::remove(data / "tokens.sqlite");
 
   // Everything the server's user's: it starts (the refusals above were the owners').
   auto server = start();

@@ -62,6 +62,10 @@ TEST(OrphanWatchTest, AnOrphanGoesOnceFoundSoTheHoursAgoAcrossARestart) {
   EXPECT_EQ(plan.orphans[0].sha256, "restored");
   EXPECT_EQ(plan.orphan_bytes, 10);
   EXPECT_EQ(plan.orphans_waiting, 1) << "found long enough ago, but written now";
+  // The file due is deleted next: orphans.json forgets it now (it listed it until the next check).
+  const auto kept = testing::ReadBytes(file);
+  EXPECT_EQ(kept.find("restored"), std::string::npos) << kept;
+  EXPECT_NE(kept.find("fresh"), std::string::npos) << kept;
 }
 
 // A file that became a job's (or was deleted) is forgotten: no job's again later, it is found anew.
