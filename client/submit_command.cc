@@ -111,32 +111,36 @@ std::vector<std::string> LeftOut(const std::filesystem::path& dir, const v1::Man
   return left;
 }
 
-// A clip folder goes up as the files its layout names (ListClipFiles): what no loader reads (notes,
-// a video, a spreadsheet beside the frames) stays on this machine, and is named. A folder of DICOM
-// files goes up whole; a single file (a DICOM recording) as itself, named by its file name. Paths
-// and sizes only: the digests come after the server has seen the sizes.
-v1::Manifest ListingOfClip(const std::filesystem::path& clip, bool clip_folder) {
-  if (clip_folder) {
-    v1::Manifest listing;
-    try {
-      listing = ListingOfFiles(clip, ListClipFiles(clip));
-    } catch (const Error& e) {
-      Fail(e.code(), std::string(e.what()) + " (found before the upload: nothing was sent)");
-    }
-    // On stderr with --json too (stdout is the job's JSON): a script's log should say what stayed
-    // here. Names as printable text: a file named "a\nuploaded 0 file(s)\e[31m" printed a line of its own.
-    const std::vector<std::string> left = LeftOut(clip, listing);
-    if (!left.empty()) {
-      std::cerr << "left out " << left.size() << " file(s) under " << PrintableText(clip.string(), 4096)
-                << " that the clip's layout does not name (docs/formats.md), not uploaded:";
-      constexpr std::size_t kNamed = 10;
-      for (std::size_t i = 0; i < std::min(left.size(), kNamed); ++i)
-        std::cerr << (i ? ", " : " ") << PrintableText(left[i], 4096);
-      if (left.size() > kNamed) std::cerr << " and " << left.size() - kNamed << " more";
-      std::cerr << "\n";
-    }
-    return listing;
+// The clip folder's files its layout names (ListClipFiles), paths and sizes; what no loader reads
+// (notes, a video, a spreadsheet beside the frames) stays on this machine, and is named on stderr
+// (with --json too: stdout is the job's JSON, and a script's log should say what stayed here).
+v1::Manifest ListingOfClipFolder(const std::filesystem::path& clip) {
+  v1::Manifest listing;
+  try {
+    listing = ListingOfFiles(clip, ListClipFiles(clip));
+  } catch (const Error& e) {
+    Fail(e.code(), std::string(e.what()) + " (found before the upload: nothing was sent)");
   }
+  // Names as printable text: a file named "a\nuploaded 0 file(s)\e[31m" printed a line of its own.
+  const std::vector<std::string> left = LeftOut(clip, listing);
+  if (!left.empty()) {
+    std::cerr << "left out " << left.size() << " file(s) under " << PrintableText(clip.string(), 4096)
+              << " that the clip's layout does not name (docs/formats.md), not uploaded:";
+    constexpr std::size_t kNamed = 10;
+    for (std::size_t i = 0; i < std::min(left.size(), kNamed); ++i)
+      std::cerr << (i ? ", " : " ") << PrintableText(left[i], 4096);
+    if (left.size() > kNamed) std::cerr << " and " << left.size() - kNamed << " more";
+    std::cerr << "\n";
+  }
+  return listing;
+}
+
+// A clip folder goes up as the files its layout names (ListingOfClipFolder; a cut to --frames is
+// itself such a folder, its left-out files said of the user's folder). A folder of DICOM files goes
+// up whole; a single file (a DICOM recording) as itself, named by its file name. Paths and sizes
+// only: the digests come after the server has seen the sizes.
+v1::Manifest ListingOfClip(const std::filesystem::path& clip, bool clip_folder) {
+  if (clip_folder) return ListingOfClipFolder(clip);
   if (!std::filesystem::is_regular_file(clip)) return ListingOfDirectory(clip);
   v1::Manifest manifest;
   auto* entry = manifest.add_files();
@@ -349,6 +353,9 @@ int Submit(const Globals& globals, const SubmitFlags& flags) {
     } else {
       std::cerr << "uploading frames " << frames.ToString() << " of " << PrintableText(flags.clip, 4096)
                 << ": " << cut->picked() << " of its " << cut->total() << " frames\n";
+      // The cut holds the layout's files alone: what the user's folder holds beyond them is said
+      // here (it went unsaid with --frames; found 2026-12-07).
+      ListingOfClipFolder(flags.clip);
     }
   }
   const auto stub = globals.Connect();

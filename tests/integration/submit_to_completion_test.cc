@@ -202,6 +202,12 @@ TEST(SubmitToCompletionTest, FramesPicksAClipFoldersFrames) {
   EXPECT_NE(submitted.err.find("uploading frames 2:8:3 of " + clip.string() + ": 2 of its 8 frames"),
             std::string::npos)
       << submitted.err;
+  // What stays here is named as without --frames (it went unsaid with them).
+  EXPECT_NE(submitted.err.find("left out 1 file(s) under " + clip.string() +
+                               " that the clip's layout does not name (docs/formats.md), not uploaded: "
+                               "synth.json"),
+            std::string::npos)
+      << submitted.err;
   const auto id = submitted.out.substr(submitted.out.find("\"id\":\"") + 6, 12);
   EXPECT_FALSE(std::filesystem::exists(left));
   const v1::Job job = cluster.Job(id);
