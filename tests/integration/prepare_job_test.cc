@@ -74,14 +74,18 @@ TEST(PrepareJobTest, RecordingInPreparedClipAndResultsOut) {
   EXPECT_NE(report.find("\"masks\": \"" + (rec / "synth/recording/masks").string()), std::string::npos)
       << report;
 
-  // The same recording again: nothing is uploaded twice.
+  // The same recording again: nothing is uploaded twice. The eyes' skips travel with the job.
   const auto again =
       RunCli(cluster.address(),
              {"submit", "--left", (rec / "left.avi").string(), "--right", (rec / "right.avi").string(),
               "--calibration", (rec / "synth/recording/calibration.yaml").string(), "--masks",
-              (rec / "synth/recording/masks").string(), "--iterations", "20"});
+              (rec / "synth/recording/masks").string(), "--iterations", "20", "--skip-left", "2",
+              "--skip-right", "1"});
   EXPECT_EQ(again.exit_code, 0) << again.err;
   EXPECT_NE(again.err.find(": 0 B sent"), std::string::npos) << again.err;
+  const v1::Job skipped = cluster.Job(again.out.substr(again.out.find("job ") + 4, 12));
+  EXPECT_EQ(skipped.prepare().skip_left(), 2);
+  EXPECT_EQ(skipped.prepare().skip_right(), 1);
 }
 
 // A raw recording is staged under fixed names (left.avi); a job's error names the file as the user

@@ -3,15 +3,18 @@
 // found, named with the flag that pairs the eyes, and that flag pairs them.
 #include "worker/prepare/eye_sync.h"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <iostream>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 #include <random>
+#include <regex>
 
 #include "common/prepare_flags.h"
 #include "tests/unit/clip_fixture.h"
+#include "tests/unit/synthetic_recording_fixture.h"
 #include "tests/unit/temp_dir.h"
 #include "worker/prepare/frame_source.h"
 
@@ -32,31 +35,38 @@ std::vector<double> Walk(int n, unsigned seed) {
   return signal;
 }
 
+// A signal of one band.
+cv::Mat Row(const std::vector<double>& values) {
+  cv::Mat row(1, static_cast<int>(values.size()), CV_32F);
+  for (int i = 0; i < row.cols; ++i) row.at<float>(i) = static_cast<float>(values[i]);
+  return row;
+}
+
 TEST(EyeSyncTest, TheLagOfTwoSignalsIsFoundEitherWay) {
   const auto moments = Walk(300, 3);
   const std::vector<double> in_step(moments.begin(), moments.begin() + 250);
   const std::vector<double> later(moments.begin() + 7, moments.begin() + 257);
   // The left eye's recording began 7 frames before the right's: its frame i + 7 is the right's i.
-  const auto left_first = prepare::MatchLag(in_step, later, 60);
+  const auto left_first = prepare::MatchLag(Row(in_step), Row(later), 60);
   EXPECT_EQ(left_first.frames, 7);
   EXPECT_GT(left_first.match, 0.99);
   EXPECT_TRUE(left_first.OutOfStep());
-  const auto right_first = prepare::MatchLag(later, in_step, 60);
+  const auto right_first = prepare::MatchLag(Row(later), Row(in_step), 60);
   EXPECT_EQ(right_first.frames, -7);
   EXPECT_TRUE(right_first.OutOfStep());
-  const auto together = prepare::MatchLag(in_step, in_step, 60);
+  const auto together = prepare::MatchLag(Row(in_step), Row(in_step), 60);
   EXPECT_EQ(together.frames, 0);
   EXPECT_FALSE(together.OutOfStep());
   // A scene that barely moves says nothing.
-  EXPECT_FALSE(
-      prepare::MatchLag(std::vector<double>(250, 1.0), std::vector<double>(250, 1.0), 60).OutOfStep());
+  EXPECT_FALSE(prepare::MatchLag(Row(std::vector<double>(250, 1.0)), Row(std::vector<double>(250, 1.0)), 60)
+                   .OutOfStep());
   // Motion of an even rhythm (breathing alone) matches as well a period away: which lag is not known,
   // and none is said.
   std::vector<double> breathing;
   for (int i = 0; i < 255; ++i) breathing.push_back(std::sin(i * 2 * M_PI / 25));
   const std::vector<double> breathing_later(breathing.begin() + 5, breathing.end());
   const std::vector<double> breathing_now(breathing.begin(), breathing.end() - 5);
-  const auto rhythm = prepare::MatchLag(breathing_now, breathing_later, 60);
+  const auto rhythm = prepare::MatchLag(Row(breathing_now), Row(breathing_later), 60);
   EXPECT_GT(rhythm.match, 0.99);
   EXPECT_GT(rhythm.match_elsewhere, 0.99);
   EXPECT_FALSE(rhythm.OutOfStep());
@@ -91,12 +101,19 @@ class RealEyesTest : public ::testing::Test {
       } else {
         frames_[i].copyTo(eye);
       }
+      // Each camera's own noise (3 grey levels), as two eyes never share it.
+      cv::Mat noise(eye.size(), CV_16SC3);
+      noise_.fill(noise, cv::RNG::NORMAL, 0, 3);
+      cv::Mat noisy;
+      eye.convertTo(noisy, CV_16SC3);
+      cv::Mat(noisy + noise).convertTo(eye, CV_8UC3);
       writer.write(eye);
     }
     return path;
   }
   static std::vector<cv::Mat> frames_;
   TempDir dir_{"eye-sync"};
+  cv::RNG noise_{7};
 };
 std::vector<cv::Mat> RealEyesTest::frames_;
 
@@ -105,7 +122,7 @@ TEST_F(RealEyesTest, EyesRecordedTogetherPass) {
   prepare::CheckEyesInStep(
       {prepare::StereoLayout::kTwoSources, Eye("left", 0, false), Eye("right", 0, true), {}});
   // The two eyes' motion, as the check measures it, on the video's frames themselves.
-  std::vector<double> left, right;
+  std::vector<cv::Mat> left, right;
   cv::Mat previous_left, previous_right;
   for (int i = 0; i < kFrames; ++i) {
     cv::Mat shifted(176, 320, CV_8UC3, cv::Scalar::all(0));
@@ -115,7 +132,10 @@ TEST_F(RealEyesTest, EyesRecordedTogetherPass) {
   }
   left.erase(left.begin());
   right.erase(right.begin());
-  const auto lag = prepare::MatchLag(left, right, kFrames / 4);
+  cv::Mat left_signal, right_signal;
+  cv::hconcat(left, left_signal);
+  cv::hconcat(right, right_signal);
+  const auto lag = prepare::MatchLag(left_signal, right_signal, kFrames / 4);
   EXPECT_EQ(lag.frames, 0);
   EXPECT_GT(lag.match, 0.9);
   EXPECT_LT(lag.match_elsewhere, 0.5);
@@ -156,6 +176,39 @@ TEST_F(RealEyesTest, ARightEyeThatBeganEarlierIsNamed) {
   EXPECT_NE(message.find("Pass --skip-right 12"), std::string::npos) << message;
   input.skip_right = 12;
   prepare::CheckEyesInStep(input);
+}
+
+// The synthetic recording's scene moves smoothly and its cameras' noise is each eye's own: its lag is
+// told to within a frame or two, and said so (it was read a frame off, the range unsaid).
+TEST(EyeSyncTest, ASyntheticRecordingCutApartIsRefusedThenPrepared) {
+  TempDir dir("eye-sync-synthetic");
+  scene::WriteSyntheticClip(RecordingOptions(96, 72, 120), dir / "synth");
+  // The left eye's recording (and its masks) began 7 frames after the right's; the right's ended first.
+  const auto drop = [&](const std::string& folder, int first, int last) {
+    for (int i = first; i <= last; ++i)
+      fs::remove(dir / "synth/recording" / folder / fmt::format("{:06d}.png", i));
+  };
+  drop("left", 0, 6);
+  drop("masks", 0, 6);
+  drop("right", 113, 119);
+  auto options = RecordingPrepareOptions(dir / "synth", dir / "clip");
+  const std::string message = ErrorFrom([&] { prepare::PrepareClip(options); });
+  const std::smatch said = [&] {
+    std::smatch match;
+    std::regex_search(
+        message, match,
+        std::regex("begin about (\\d+) frame\\(s\\) apart \\(between (\\d+) and (\\d+): the scene moves too "
+                   "smoothly here to tell the frame\\).* Pass --skip-right (\\d+) "));
+    return match;
+  }();
+  ASSERT_EQ(said.size(), 5u) << message;
+  EXPECT_LE(std::abs(std::stoi(said[1]) - 7), 1) << message;
+  EXPECT_LE(std::stoi(said[2]), 7) << message;
+  EXPECT_GE(std::stoi(said[3]), 7) << message;
+  EXPECT_EQ(said[4], said[1]) << message;
+  options.recording.skip_right = 7;
+  const auto summary = prepare::PrepareClip(options);
+  EXPECT_EQ(summary.frames, 106);
 }
 
 TEST(EyeSyncFlagsTest, SkipsAreCountsOfTwoEyesFrames) {

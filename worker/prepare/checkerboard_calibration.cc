@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "common/error.h"
+#include "worker/prepare/eye_sync.h"
 
 namespace endorecon::prepare {
 namespace {
@@ -31,6 +32,9 @@ CheckerboardCalibration CalibrateFromCheckerboard(const RecordingInput& recordin
       !std::isfinite(options.square)) {
     FailInvalid("the board needs at least 2x2 inner corners and a square size > 0");
   }
+  // A board moved by hand: two eyes' recordings cut apart pair views of different moments, and the
+  // calibration fits their motion as the rig's geometry.
+  CheckEyesInStep(recording);
   StereoSource source(recording);
   CheckerboardCalibration result;
   // Corners only are kept: frames are read in batches and searched in parallel.

@@ -19,6 +19,7 @@ struct CalibrateFlags {
   std::string out, left, right, side_by_side, top_bottom, board = "9x6", frames;
   double square = 0;
   int max_views = 40;
+  int skip_left = 0, skip_right = 0;
   bool fit_k3 = false;
 };
 
@@ -27,9 +28,14 @@ prepare::RecordingInput Recording(const CalibrateFlags& f) {
   if (forms != 1 || f.left.empty() != f.right.empty()) {
     FailInvalid("give the checkerboard recording as --left with --right, or --side-by-side, or --top-bottom");
   }
+  if (f.left.empty() && (f.skip_left > 0 || f.skip_right > 0)) {
+    FailInvalid(
+        "--skip-left and --skip-right pair two eyes' recordings (--left with --right); one recording of "
+        "both eyes holds each moment in one frame");
+  }
   if (!f.side_by_side.empty()) return {prepare::StereoLayout::kSideBySide, {}, {}, f.side_by_side};
   if (!f.top_bottom.empty()) return {prepare::StereoLayout::kTopBottom, {}, {}, f.top_bottom};
-  return {prepare::StereoLayout::kTwoSources, f.left, f.right, {}};
+  return {prepare::StereoLayout::kTwoSources, f.left, f.right, {}, f.skip_left, f.skip_right};
 }
 
 cv::Size Board(const std::string& text) {
@@ -52,6 +58,12 @@ Command AddCalibrateCommand(CLI::App& app) {
   cmd->add_option("--right", f->right, "the right eye: a video file or a folder of frames");
   cmd->add_option("--side-by-side", f->side_by_side, "one video of both eyes, left eye in the left half");
   cmd->add_option("--top-bottom", f->top_bottom, "one video of both eyes, left eye on top");
+  cmd->add_option("--skip-left", f->skip_left,
+                  "with --left/--right: drop the left eye's first N frames (its recording began N frames "
+                  "before the right's; said when the eyes' motion shows it)")
+      ->check(AtLeastZero());
+  cmd->add_option("--skip-right", f->skip_right, "with --left/--right: drop the right eye's first N frames")
+      ->check(AtLeastZero());
   cmd->add_option("--board", f->board, "inner corners of the checkerboard, COLUMNSxROWS")
       ->capture_default_str();
   cmd->add_option("--square", f->square, "side of a square, in the unit the clip will use (e.g. mm)")
