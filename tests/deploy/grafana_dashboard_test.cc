@@ -5,7 +5,6 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <fstream>
 #include <nlohmann/json.hpp>
 #include <regex>
 #include <set>
@@ -13,16 +12,15 @@
 #include <thread>
 
 #include "tests/deploy/deploy_files.h"
+#include "tests/integration/prometheus_harness.h"
 
 namespace endorecon::testing {
 namespace {
 
 // The result of an instant query (its "data.result": one entry per series); null when Prometheus
 // did not answer or refused the query.
-nlohmann::json Query(int prometheus_port, const std::string& expression) {
-  const auto answer = Capture("curl -s --max-time 5 'http://127.0.0.1:" + std::to_string(prometheus_port) +
-                              "/api/v1/query' --data-urlencode 'query=" + expression + "'");
-  const auto json = nlohmann::json::parse(answer, nullptr, false);
+nlohmann::json Query(const PrometheusScraper& prometheus, const std::string& expression) {
+  const auto json = nlohmann::json::parse(prometheus.Query(expression), nullptr, false);
   if (json.is_discarded() || json.value("status", "") != "success") return nullptr;
   return json.at("data").at("result");
 }
@@ -49,24 +47,7 @@ TEST(GrafanaDashboardTest, EveryPanelShowsNumbersFromARealPrometheus) {
                      CreateToken(cluster.data_dir(), "worker", "", "w1", {"--expires-in", "30d"}));
   cluster.StartServer();
   cluster.StartWorker("w1", {"--token-file", token.string()});
-  ASSERT_TRUE(WaitUntil([&] { return cluster.worker_metrics_port("w1") > 0; }));
-  const int prometheus_port = FreePort();
-  const auto config = cluster.path("prometheus.yml");
-  std::ofstream(config)
-      << "global:\n  scrape_interval: 1s\n"
-      << "scrape_configs:\n"
-      << "  - job_name: endorecon-server\n    static_configs:\n      - targets: ['127.0.0.1:"
-      << cluster.metrics_port() << "']\n"
-      << "  - job_name: endorecon-worker\n    static_configs:\n      - targets: ['127.0.0.1:"
-      << cluster.worker_metrics_port("w1") << "']\n";
-  Process prometheus({"/usr/bin/prometheus", "--config.file=" + config.string(),
-                      "--storage.tsdb.path=" + cluster.path("tsdb").string(),
-                      "--web.listen-address=127.0.0.1:" + std::to_string(prometheus_port)},
-                     cluster.path("prometheus.log"));
-  ASSERT_TRUE(WaitUntil([&] {
-    const auto up = Query(prometheus_port, "up == 1");
-    return !up.is_null() && up.size() == 2;
-  })) << prometheus.Log();
+  const PrometheusScraper prometheus(cluster, "w1");
 
   // Scraped before the job, so that what it moves is an increase Prometheus sees.
   std::this_thread::sleep_for(std::chrono::seconds(3));
@@ -98,7 +79,7 @@ TEST(GrafanaDashboardTest, EveryPanelShowsNumbersFromARealPrometheus) {
       nlohmann::json result;
       EXPECT_TRUE(WaitUntil(
           [&] {
-            result = Query(prometheus_port, query);
+            result = Query(prometheus, query);
             return ShowsANumber(result);
           },
           std::chrono::seconds(20)))
@@ -111,8 +92,8 @@ TEST(GrafanaDashboardTest, EveryPanelShowsNumbersFromARealPrometheus) {
   nlohmann::json latency;
   for (const auto& panel : dashboard.at("panels")) {
     if (!panel.at("title").get<std::string>().starts_with("Call latency")) continue;
-    latency = Query(prometheus_port, std::regex_replace(panel.at("targets")[0].at("expr").get<std::string>(),
-                                                        std::regex("\\$(server|worker)"), ".*"));
+    latency = Query(prometheus, std::regex_replace(panel.at("targets")[0].at("expr").get<std::string>(),
+                                                   std::regex("\\$(server|worker)"), ".*"));
   }
   ASSERT_TRUE(latency.is_array());
   for (const auto& series : latency) {
