@@ -2,6 +2,7 @@
 #pragma once
 
 #include <filesystem>
+#include <memory>
 #include <regex>
 #include <set>
 #include <string>
@@ -13,6 +14,21 @@ namespace endorecon::testing {
 
 inline std::filesystem::path SourcePath(const std::string& relative) {
   return std::filesystem::path(ENDORECON_SOURCE_DIR) / relative;
+}
+
+// A cluster (admin credentials) whose every metric series exists: a PACS destination named (nothing
+// listens there) for the per-PACS series, and worker "w1" started with a token that expires, for
+// the token expiry's series.
+inline std::unique_ptr<Cluster> ClusterOfEverySeries() {
+  auto cluster =
+      std::make_unique<Cluster>(std::vector<std::string>{"--pacs", "pacs1=PACS1@127.0.0.1:1"}, false);
+  cluster->UseCredentials(MakeCredentials(*cluster, "", "admin", "", "ops"));
+  const auto token =
+      WriteTokenFile(cluster->path("worker.token"),
+                     CreateToken(cluster->data_dir(), "worker", "", "w1", {"--expires-in", "30d"}));
+  cluster->StartServer();
+  cluster->StartWorker("w1", {"--token-file", token.string()});
+  return cluster;
 }
 
 // The built binary that `name` (endorecon-server, endorecon-worker, endorecon) is.

@@ -38,15 +38,8 @@ bool ShowsANumber(const nlohmann::json& result) {
 TEST(GrafanaDashboardTest, EveryPanelShowsNumbersFromARealPrometheus) {
   if (!std::filesystem::exists("/usr/bin/prometheus"))
     GTEST_SKIP() << "prometheus is not installed (scripts/install-deps installs it)";
-  // A PACS named (nothing listens there) so that its series exist, and a worker token that expires
-  // so that the token panel has one.
-  Cluster cluster({"--pacs", "pacs1=PACS1@127.0.0.1:1"}, false);
-  cluster.UseCredentials(MakeCredentials(cluster, "", "admin", "", "ops"));
-  const auto token =
-      WriteTokenFile(cluster.path("worker.token"),
-                     CreateToken(cluster.data_dir(), "worker", "", "w1", {"--expires-in", "30d"}));
-  cluster.StartServer();
-  cluster.StartWorker("w1", {"--token-file", token.string()});
+  const auto every_series = ClusterOfEverySeries();
+  Cluster& cluster = *every_series;
   const PrometheusScraper prometheus(cluster, "w1");
 
   // Scraped before the job, so that what it moves is an increase Prometheus sees.

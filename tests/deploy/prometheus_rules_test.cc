@@ -73,15 +73,8 @@ TEST(PrometheusRulesTest, TheDashboardsQueriesParseAndKeepToThePickedInstances) 
 }
 
 TEST(PrometheusRulesTest, AlertsAndDashboardUseOnlyExportedMetrics) {
-  // A PACS destination (nothing listens there: it is only named) so that the per-PACS series exist,
-  // and a worker token that expires so that its expiry's series does.
-  Cluster cluster({"--pacs", "pacs1=PACS1@127.0.0.1:1"}, false);
-  cluster.UseCredentials(MakeCredentials(cluster, "", "admin", "", "ops"));
-  const auto token =
-      WriteTokenFile(cluster.path("worker.token"),
-                     CreateToken(cluster.data_dir(), "worker", "", "w1", {"--expires-in", "30d"}));
-  cluster.StartServer();
-  cluster.StartWorker("w1", {"--token-file", token.string()});
+  const auto every_series = ClusterOfEverySeries();
+  Cluster& cluster = *every_series;
   const auto metrics_of = [](int port) {
     return Capture("curl -s --max-time 5 http://127.0.0.1:" + std::to_string(port) + "/metrics");
   };
