@@ -122,6 +122,18 @@ std::vector<std::string> PrepareFlags::Paths() const {
   return paths;
 }
 
+void CheckEyeSkips(bool two_sources, int skip_left, int skip_right) {
+  if (skip_left < 0 || skip_right < 0) {
+    FailInvalid("--skip-left and --skip-right count frames: 0 or more, found " +
+                std::to_string(std::min(skip_left, skip_right)));
+  }
+  if ((skip_left > 0 || skip_right > 0) && !two_sources) {
+    FailInvalid(
+        "--skip-left and --skip-right pair two eyes' recordings (--left with --right); one recording of "
+        "both eyes (--side-by-side, --top-bottom) holds each moment in one frame");
+  }
+}
+
 void CheckPrepareFlags(const PrepareFlags& f) {
   const int forms = (!f.left.empty() || !f.right.empty()) + !f.side_by_side.empty() + !f.top_bottom.empty();
   if (forms != 1) {
@@ -146,15 +158,7 @@ void CheckPrepareFlags(const PrepareFlags& f) {
   if (f.depth_paths != 0 && f.depth_paths != 3 && f.depth_paths != 8) {
     FailInvalid("--depth-paths must be 3 or 8, found " + std::to_string(f.depth_paths));
   }
-  if (f.skip_left < 0 || f.skip_right < 0) {
-    FailInvalid("--skip-left and --skip-right count frames: 0 or more, found " +
-                std::to_string(std::min(f.skip_left, f.skip_right)));
-  }
-  if ((f.skip_left > 0 || f.skip_right > 0) && f.left.empty()) {
-    FailInvalid(
-        "--skip-left and --skip-right pair two eyes' recordings (--left with --right); one recording of "
-        "both eyes (--side-by-side, --top-bottom) holds each moment in one frame");
-  }
+  CheckEyeSkips(!f.left.empty(), f.skip_left, f.skip_right);
   if (!f.frames.empty()) ParseFrameRange(f.frames);
   if (!f.size.empty()) ParseFrameSize(f.size);
   for (const std::string& rect : f.exclude) ParsePixelRect(rect);

@@ -72,6 +72,10 @@ struct PrepareFlags {
   std::vector<std::string> Paths() const;
 };
 
+// Throws Error(kInvalidArgument) when --skip-left or --skip-right is negative, or given without two
+// eyes' recordings (`two_sources`: --left with --right). prepare, submit and calibrate take them.
+void CheckEyeSkips(bool two_sources, int skip_left, int skip_right);
+
 // Throws Error(kInvalidArgument) saying which flag is wrong: not exactly one recording form
 // (--left with --right, --side-by-side, --top-bottom), not exactly one of --calibration (one or two
 // files) and --rectified (with --focal and --baseline > 0), --poses with --estimate-poses, a bad

@@ -117,10 +117,11 @@ CallGuard::CallGuard(std::filesystem::path token_store, bool require_worker_cert
   // At start a store that does not open stops the server, saying why (not a temporary fault).
   if (!open_failure_.empty()) {
     // The store's own check names another user's file already: the hint is not said twice.
-    const bool owner_named = open_failure_.find("chown") != std::string::npos;
+    const std::string owner = open_failure_.find("chown") != std::string::npos
+                                  ? ""
+                                  : "owned by another user? chown it to the server's user; ";
     Fail(ErrorCode::kFailedPrecondition,
-         open_failure_ + (owner_named ? "" : " (owned by another user? chown it to the server's user;") +
-             (owner_named ? " (" : " ") +
+         open_failure_ + " (" + owner +
              "an empty file that `sqlite3 tokens.sqlite .backup` left where there was no store: remove it)");
   }
 }

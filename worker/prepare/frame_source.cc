@@ -151,6 +151,12 @@ class VideoFileSource final : public FrameSource {
 
 }  // namespace
 
+int SkipFrames(FrameSource& source, int count) {
+  int skipped = 0;
+  while (skipped < count && source.Skip()) ++skipped;
+  return skipped;
+}
+
 std::unique_ptr<FrameSource> OpenFrameSource(const fs::path& path) {
   if (!fs::exists(path)) Fail(ErrorCode::kNotFound, path.string() + ": does not exist");
   if (fs::is_directory(path)) return std::make_unique<ImageFolderSource>(path);

@@ -46,6 +46,9 @@ class FrameSource {
   }
 };
 
+// Moves `source` past up to `count` frames; returns how many it held (fewer: it ended).
+int SkipFrames(FrameSource& source, int count);
+
 // A folder (of images, ImageExtensions) or a video file. Throws Error(kNotFound) when `path` does
 // not exist, Error(kInvalidArgument) naming it when it cannot be read as either or holds no frame.
 std::unique_ptr<FrameSource> OpenFrameSource(const std::filesystem::path& path);

@@ -144,11 +144,9 @@ class MaskReader {
       FailInvalid(source_->name() + " frame 0: masks of " + SizeText(source_->frame_size()) +
                   " do not match the left eye's " + SizeText(eye) + " frames");
     }
-    for (int i = 0; i < skip; ++i) {
-      if (!source_->Skip()) {
-        FailInvalid(source_->name() + ": the masks end after " + std::to_string(i) + " frames, before the " +
-                    std::to_string(skip) + " of --skip-left");
-      }
+    if (const int skipped = SkipFrames(*source_, skip); skipped < skip) {
+      FailInvalid(source_->name() + ": the masks end after " + std::to_string(skipped) +
+                  " frames, before the " + std::to_string(skip) + " of --skip-left");
     }
   }
   bool active() const { return source_ != nullptr; }
@@ -372,8 +370,7 @@ class Preparation {
     }
     recording_frames_ = index;
     // Eyes cut apart at their start may end apart too: the left eye's masks then go on past the pairs.
-    if (options_.recording.skip_left == 0 && options_.recording.skip_right == 0)
-      masks_->CheckEnd(recording_frames_);
+    if (!source_.cut_apart()) masks_->CheckEnd(recording_frames_);
     placer_->CheckCount(recording_frames_);
     if (placements_.empty()) {
       FailInvalid(

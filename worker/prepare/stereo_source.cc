@@ -31,7 +31,9 @@ StereoSource::StereoSource(const RecordingInput& input) : layout_(input.layout) 
       FailInvalid(second_->name() + ": frames of " + SizeText(second_->frame_size()) + " differ from " +
                   first_->name() + "'s " + SizeText(eye_size_) + " (both eyes must have one size)");
     }
-    CheckPairedByOrder(input.skip_left, input.skip_right);
+    skips_[0] = input.skip_left;
+    skips_[1] = input.skip_right;
+    CheckPairedByOrder();
     SkipFirst(*first_, input.skip_left);
     SkipFirst(*second_, input.skip_right);
     return;
@@ -57,7 +59,7 @@ StereoSource::StereoSource(const RecordingInput& input) : layout_(input.layout) 
 // frames of different moments, and the disparities between them are motion, not depth (a 25 and a
 // 30 fps eye prepared a clip without a word; found 2026-12-06). Checked before any frame is
 // prepared, where the headers say; Next checks each pair's times as it goes.
-void StereoSource::CheckPairedByOrder(int skip_left, int skip_right) {
+void StereoSource::CheckPairedByOrder() {
   const double a = first_->frame_rate(), b = second_->frame_rate();
   if (a > 0 && b > 0 && std::abs(a - b) > 0.01 * std::max(a, b)) {
     FailInvalid(
@@ -71,14 +73,11 @@ void StereoSource::CheckPairedByOrder(int skip_left, int skip_right) {
   // drift apart by a frame every 33 s (a 52 s recording was refused at its end; found 2026-12-06).
   frame_period_s_ = a > 0 && b > 0 ? 1 / a : 0;
   rate_ratio_ = a > 0 && b > 0 ? b / a : 1;
-  left_origin_s_ = a > 0 ? skip_left / a : 0;
-  right_origin_s_ = b > 0 ? skip_right / b : 0;
-  skipped_ = skip_left > 0 || skip_right > 0;
   // Two folders' counts are exact: compared before any frame is prepared. A video's header count may
   // be an estimate (from its duration; a start time of 0.5 s read as 15 frames more), so two videos'
   // lengths are compared as they end (Ended).
   const int m = first_->announced_frames(), n = second_->announced_frames();
-  if (!skipped_ && first_->count_is_exact() && second_->count_is_exact() && m != n) {
+  if (!cut_apart() && first_->count_is_exact() && second_->count_is_exact() && m != n) {
     FailInvalid(fmt::format("{}: {} frames while {} has {} (both eyes' recordings must have the same length)",
                             second_->name(), n, first_->name(), m));
   }
@@ -86,14 +85,11 @@ void StereoSource::CheckPairedByOrder(int skip_left, int skip_right) {
 
 // Drops `eye`'s first `frames` (skip_left, skip_right); a recording of no more frames is refused.
 void StereoSource::SkipFirst(FrameSource& eye, int frames) {
-  for (int i = 0; i < frames; ++i) {
-    if (!eye.Skip()) {
-      FailInvalid(
-          fmt::format("{}: it ends after {} frame(s), before the {} to skip (--skip-left, --skip-right)",
-                      eye.name(), i, frames));
-    }
+  if (const int skipped = SkipFrames(eye, frames); skipped < frames) {
+    FailInvalid(
+        fmt::format("{}: it ends after {} frame(s), before the {} to skip (--skip-left, --skip-right)",
+                    eye.name(), skipped, frames));
   }
-  skips_[&eye == first_.get() ? 0 : 1] = frames;
 }
 
 int StereoSource::announced_frames() const {
@@ -112,8 +108,8 @@ bool StereoSource::Ended(bool first, bool second, int index) {
   if (first == second) return !first;
   FrameSource& ended = first ? *second_ : *first_;
   FrameSource& going = first ? *first_ : *second_;
-  // Eyes cut apart at their start (skipped_) may end apart too: the pairs end with the shorter.
-  if (skipped_) {
+  // Eyes cut apart at their start may end apart too: the pairs end with the shorter.
+  if (cut_apart()) {
     spdlog::warn("{}: its frames after the {} paired with {} are left out (the eyes' recordings end apart)",
                  going.name(), index, ended.name());
     return true;
@@ -141,9 +137,10 @@ bool StereoSource::Next(StereoFrame& frame) {
     if (Ended(a, b, index)) return false;
     // Pairs out of step by more than a frame and a half (a variable-rate eye, say; timestamps
     // jitter by less).
-    const double left_s = left.time_s - left_origin_s_,
-                 right_s = (right.time_s - right_origin_s_) * rate_ratio_;
-    if (frame_period_s_ > 0 && std::abs(left_s - right_s) > 1.5 * frame_period_s_) {
+    // Eyes cut apart are expected that many frames apart in their own times.
+    const double expected_s = (skips_[0] - skips_[1]) * frame_period_s_;
+    if (frame_period_s_ > 0 &&
+        std::abs(left.time_s - right.time_s * rate_ratio_ - expected_s) > 1.5 * frame_period_s_) {
       FailInvalid(
           fmt::format("{} frame {}: at {:.3f} s while {}'s frame {} is at {:.3f} s: the eyes are out of "
                       "step (the frames are paired by their order; is one of them of a variable "

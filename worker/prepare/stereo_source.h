@@ -43,6 +43,9 @@ class StereoSource {
   int announced_frames() const;
   // The file(s), for messages.
   std::string name() const;
+  // Two sources whose first frames are skipped (RecordingInput::skip_left, skip_right): cut apart at
+  // their start, they may end apart too.
+  bool cut_apart() const { return skips_[0] > 0 || skips_[1] > 0; }
 
   // The next pair; false after the last. Throws the sources' errors, and FailInvalid naming both
   // when one eye's recording ends before the other's (a video may go on by kTrailingFrames, left out
@@ -52,7 +55,7 @@ class StereoSource {
 
  private:
   bool Ended(bool first, bool second, int index);
-  void CheckPairedByOrder(int skip_left, int skip_right);
+  void CheckPairedByOrder();
   void SkipFirst(FrameSource& eye, int frames);
 
   StereoLayout layout_;
@@ -60,9 +63,7 @@ class StereoSource {
   cv::Size eye_size_;
   double frame_period_s_ = 0;  // two videos': one frame's time at their rate; 0: not two videos
   double rate_ratio_ = 1;      // two videos': the right eye's rate over the left's
-  double left_origin_s_ = 0, right_origin_s_ = 0;  // two videos': the time of each eye's first pair
-  bool skipped_ = false;                           // an eye's first frames were skipped
-  int skips_[2] = {0, 0};                          // the frames skipped of first_, second_
+  int skips_[2] = {0, 0};      // two sources: the first frames skipped of first_, second_
   static constexpr int kTrailingFrames = 2;  // a longer video's frames past the shorter's, tolerated
   int next_ = 0;
 };

@@ -28,11 +28,7 @@ prepare::RecordingInput Recording(const CalibrateFlags& f) {
   if (forms != 1 || f.left.empty() != f.right.empty()) {
     FailInvalid("give the checkerboard recording as --left with --right, or --side-by-side, or --top-bottom");
   }
-  if (f.left.empty() && (f.skip_left > 0 || f.skip_right > 0)) {
-    FailInvalid(
-        "--skip-left and --skip-right pair two eyes' recordings (--left with --right); one recording of "
-        "both eyes holds each moment in one frame");
-  }
+  CheckEyeSkips(!f.left.empty(), f.skip_left, f.skip_right);
   if (!f.side_by_side.empty()) return {prepare::StereoLayout::kSideBySide, {}, {}, f.side_by_side};
   if (!f.top_bottom.empty()) return {prepare::StereoLayout::kTopBottom, {}, {}, f.top_bottom};
   return {prepare::StereoLayout::kTwoSources, f.left, f.right, {}, f.skip_left, f.skip_right};
