@@ -136,6 +136,11 @@ int Run(const ServerFlags& flags) {
   if (!flags.dicom.uid_root.empty()) dicom::NewUid(flags.dicom.uid_root);  // refuses a malformed root now
   const auto credentials = ServerCredentials(flags.tls);
   CheckPortFree(flags.listen);  // before the data folder is opened and its running jobs requeued
+  // Every flag's file and port is checked before the data folder is made: a refused start leaves no
+  // empty job store behind (found 2026-12-07).
+  TenantQuotas quotas(flags.tenant_quota, flags.quotas_file);
+  const PacsDirectory pacs(flags.pacs);
+  Metrics metrics(flags.metrics_port >= 0 ? MetricsAddress(flags.metrics_host, flags.metrics_port) : "");
   const std::filesystem::path data_dir = flags.data_dir;
   RefuseAStoreBesideIt(data_dir);
   if (MakePrivateFolder(data_dir)) {
@@ -165,7 +170,6 @@ int Run(const ServerFlags& flags) {
   LeaseTable leases(std::chrono::milliseconds(flags.lease_ttl_ms));
   WorkerRegistry workers(std::chrono::milliseconds(flags.lease_ttl_ms), data_dir / "drains.json");
   WatchHub hub;
-  Metrics metrics(flags.metrics_port >= 0 ? MetricsAddress(flags.metrics_host, flags.metrics_port) : "");
   // A commit slower than this is logged: a writing call waited for it (the disk's fsync, usually).
   constexpr double kSlowCommitSeconds = 0.1;
   store.SetCommitObserver([&metrics](double seconds, std::size_t writes) {
@@ -179,11 +183,9 @@ int Run(const ServerFlags& flags) {
   audit.SetFailureObserver([&metrics] { metrics.AuditWriteFailed(); });
   const GrpcLogRoute grpc_log([&metrics] { metrics.TlsHandshakeFailed(); });
   CallGuard guard(TokenStore::PathIn(data_dir), !flags.tls.client_ca_file.empty(), audit, metrics);
-  TenantQuotas quotas(flags.tenant_quota, flags.quotas_file);
   spdlog::info("tenant quotas: {}", quotas.Describe());  // an admin checks what is in force
   JobCoordinator coordinator({store, blobs, scheduler, leases, workers, hub, metrics}, flags.max_attempts,
                              std::move(quotas));
-  const PacsDirectory pacs(flags.pacs);
   for (const auto& name : pacs.Names()) metrics.DeclarePacs(name);
   DicomRetriever* retriever_for_scp = nullptr;
   std::vector<std::string> pacs_ae_titles;

@@ -276,6 +276,28 @@ TEST(ServerStartTest, ASecondServerOnATakenPortIsRefused) {
   EXPECT_EQ(RunCli(cluster.address(), {"list"}).exit_code, 0);
 }
 
+// A start refused for a flag's file, a PACS or the metrics port makes no data folder: it used to leave
+// an empty job store, audit log and blob folders behind (found 2026-12-07).
+TEST(ServerStartTest, AStartRefusedForAFlagMakesNoDataFolder) {
+  Cluster cluster;  // holds a metrics port
+  TempDir dir("refused");
+  const std::string port = std::to_string(FreePort());
+  for (const auto& [flags, said] : std::vector<std::pair<std::vector<std::string>, std::string>>{
+           {{"--quotas", (dir / "missing.json").string()}, "--quotas"},
+           {{"--pacs", "nowhere"}, "--pacs 'nowhere'"},
+           {{"--metrics-port", std::to_string(cluster.metrics_port())},
+            std::to_string(cluster.metrics_port())}}) {
+    std::vector<std::string> command{BuiltBinary("server/endorecon-server"), "--listen", "127.0.0.1:" + port,
+                                     "--data-dir", (dir / "data").string()};
+    if (flags.front() != "--metrics-port") command.insert(command.end(), {"--metrics-port", "-1"});
+    command.insert(command.end(), flags.begin(), flags.end());
+    Process server(command, dir / "server.log");
+    EXPECT_NE(server.Wait(), 0) << flags.front();
+    EXPECT_NE(server.Log().find(said), std::string::npos) << server.Log();
+    EXPECT_FALSE(std::filesystem::exists(dir / "data")) << flags.front() << " made the data folder";
+  }
+}
+
 // A restore that brought blobs/ back without jobs.sqlite (or with an empty one) started a new store,
 // and its first retention sweep deleted every blob as no job's (found 2026-12-05): refused at start.
 TEST(ServerStartTest, BlobsWithoutTheirJobStoreAreRefused) {
