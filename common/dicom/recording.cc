@@ -570,10 +570,12 @@ Recording ReadRecording(const fs::path& path, const RecordingOptions& options) {
   // The eyes are told apart by Series Number alone: equal numbers left them in the order of their
   // UIDs, which swapped the eyes without a word (found 2026-12-05).
   if (two && series[0].front().series_number == series[1].front().series_number) {
-    FailInvalid(path.string() + ": both series have Series Number " +
-                std::to_string(series[0].front().series_number) +
-                "; stereo as two series takes the lower number as the left eye (give the eyes' series "
-                "different numbers, e.g. to-dicom --series-number)");
+    FailInvalid(
+        path.string() + ": both series have Series Number " +
+        std::to_string(series[0].front().series_number) +
+        "; stereo as two series takes the lower number as the left eye (give the eyes' series "
+        "different numbers where the series are made: endorecon-worker to-dicom --series-number, or the "
+        "recorder's settings)");
   }
   Recording recording;
   const auto timeline = Timeline(series[0]);
