@@ -154,6 +154,7 @@ int main(int argc, char** argv) {
   commands["send"] = AddSendCommand(app);
   commands["uploads"] = AddUploadsCommand(app);
   app.set_version_flag("--version", ENDORECON_VERSION);
+  endorecon::DecimalIntegers(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -1,5 +1,7 @@
 #include "common/cli_checks.h"
 
+#include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -116,6 +118,30 @@ std::string AddressProblem(const std::string& text, bool listening) {
 CLI::Validator ListenAddress() {
   return CLI::Validator([](const std::string& text) { return AddressProblem(text, true); }, "HOST:PORT",
                         "ListenAddress");
+}
+
+void DecimalIntegers(CLI::App& app) {
+  const CLI::Validator decimal(
+      [](std::string& text) -> std::string {
+        const std::size_t digits = text.find_first_not_of("+-");
+        if (digits > 1 || digits == std::string::npos) return {};  // left to the option's own reading
+        if (text.find_first_not_of("0123456789", digits) == std::string::npos) {
+          const std::size_t first = std::min(text.find_first_not_of('0', digits), text.size() - 1);
+          text.erase(digits, first - digits);
+          return {};
+        }
+        if (text.size() > digits + 1 && text[digits] == '0' &&
+            std::isalpha(static_cast<unsigned char>(text[digits + 1]))) {
+          return text + ": expected a decimal number";
+        }
+        return {};
+      },
+      "", "DecimalInteger");
+  for (CLI::Option* option : app.get_options()) {
+    const std::string type = option->get_type_name();
+    if (type.rfind("INT", 0) == 0 || type.rfind("UINT", 0) == 0) option->transform(decimal);
+  }
+  for (CLI::App* command : app.get_subcommands(nullptr)) DecimalIntegers(*command);
 }
 
 CLI::Validator ServerAddress() {

@@ -32,4 +32,9 @@ CLI::Validator ListenAddress();
 // modulo 65536 and "localhost" as port 443.
 CLI::Validator ServerAddress();
 
+// Makes every integer option of `app` and of its commands read decimal numbers only: CLI11 reads
+// them as C does, so `--skip-left 011` skipped 9 frames without a word (found 2026-12-07). Leading
+// zeros are dropped; 0x... is refused. Call once every option is added.
+void DecimalIntegers(CLI::App& app);
+
 }  // namespace endorecon

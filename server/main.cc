@@ -523,6 +523,7 @@ int main(int argc, char** argv) {
   app.require_subcommand(0, 1);
   const auto token_command = AddTokenCommand(app);
   const auto retention_command = AddRetentionCommand(app);
+  DecimalIntegers(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -140,6 +140,8 @@ TEST(FullDiskTest, ANegativeFreeSpaceLimitANonPositiveStallTimeoutOrATooSmallThr
            {server + " --stall-timeout 0", "--stall-timeout"},
            {server + " --max-threads 4", "--max-threads"},
            {server + " --max-threads many", "--max-threads"},
+           // CLI11 read 0x3 as 3, and 011 as 9 (found 2026-12-07).
+           {server + " --max-attempts 0x3", "--max-attempts"},
            {worker + " --min-free-bytes -5", "--min-free-bytes"},
            // Taken until 2026-12-05: gRPC listened on a port of its choosing for 99999.
            {server + " --max-upload-bytes -5", "--max-upload-bytes"},

@@ -7,6 +7,7 @@
 #include <map>
 #include <string>
 
+#include "common/cli_checks.h"
 #include "common/error.h"
 #include "common/job_bounds.h"
 #include "worker/runtime/commands.h"
@@ -24,6 +25,7 @@ int main(int argc, char** argv) {
   commands["prepare"] = endorecon::worker::AddPrepareCommand(app);
   commands["calibrate"] = endorecon::worker::AddCalibrateCommand(app);
   commands["to-dicom"] = endorecon::worker::AddToDicomCommand(app);
+  endorecon::DecimalIntegers(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
