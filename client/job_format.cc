@@ -198,9 +198,13 @@ std::string DescribeJob(const v1::Job& job) {
     const std::string picked = !job.has_prepare() && !job.recording().frames().empty()
                                    ? " (frames " + job.recording().frames() + ")"
                                    : "";
+    // The eyes' skips, which decide what was paired, are shown with the recording (found 2026-12-07).
+    std::string skips;
+    if (job.prepare().skip_left() > 0) skips += fmt::format(", --skip-left {}", job.prepare().skip_left());
+    if (job.prepare().skip_right() > 0) skips += fmt::format(", --skip-right {}", job.prepare().skip_right());
     text += fmt::format("  {}  {} file(s){}{}\n", job.has_prepare() ? "recording" : "clip     ",
                         job.clip().files_size(),
-                        job.has_prepare() ? " (prepared into the results' clip/)" : "", picked);
+                        job.has_prepare() ? " (prepared into the results' clip/" + skips + ")" : "", picked);
   }
   if (const auto outcome = OutcomeLine(job); !outcome.empty()) {
     text += "  outcome   " + outcome + "\n";

@@ -1,6 +1,7 @@
 #include "client/recording_upload.h"
 
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "client/staging_folder.h"
@@ -85,7 +86,19 @@ void StagedRecording::CheckBeforeUpload() const {
   const bool cut_apart = flags_.skip_left > 0 || flags_.skip_right > 0;
   if (!cut_apart && !left.empty() && !right.empty() && left.size() != right.size()) {
     FailInvalid(users("right") + ": " + std::to_string(right.size()) + " frames while " + users("left") +
-                " has " + std::to_string(left.size()) + " (both eyes' recordings must have the same length)");
+                " has " + std::to_string(left.size()) +
+                " (both eyes' recordings must have the same length; if one eye's began earlier, pass "
+                "--skip-left or --skip-right with the frames it began before the other: `endorecon-worker "
+                "prepare` on these folders names them)");
+  }
+  // A skip that leaves a folder no frame is said before the upload, not by the job (found 2026-12-07).
+  for (const auto& [name, count, skip, flag] :
+       {std::tuple{"left", left.size(), flags_.skip_left, "--skip-left"},
+        std::tuple{"right", right.size(), flags_.skip_right, "--skip-right"}}) {
+    if (skip > 0 && count > 0 && static_cast<std::size_t>(skip) >= count) {
+      FailInvalid(users(name) + ": it holds " + std::to_string(count) + " frame(s): none is left after the " +
+                  std::to_string(skip) + " skipped (" + flag + " " + std::to_string(skip) + ")");
+    }
   }
   if (!flags_.frames.empty()) return;  // frames outside the window are neither read nor checked
   for (const char* name : {"left", "right", "side_by_side", "top_bottom", "masks"}) {

@@ -2,6 +2,8 @@
 
 #include <CLI/CLI.hpp>
 
+#include "common/cli_checks.h"
+
 namespace endorecon {
 
 void AddPrepareFlags(CLI::App& cmd, PrepareFlags& f) {
@@ -17,8 +19,10 @@ void AddPrepareFlags(CLI::App& cmd, PrepareFlags& f) {
   cmd.add_option("--skip-left", f.skip_left,
                  "with --left/--right: drop the left eye's first N frames (its recording began N frames "
                  "before the right's; the preparation says N when the eyes' motion shows it)")
+      ->check(AtLeastZero())
       ->group(recording);
   cmd.add_option("--skip-right", f.skip_right, "with --left/--right: drop the right eye's first N frames")
+      ->check(AtLeastZero())
       ->group(recording);
   cmd.add_option("--calibration", f.calibration,
                  "OpenCV stereo calibration (K1 D1 K2 D2 R T; YAML or XML), or two ROS camera_info YAMLs "

@@ -144,6 +144,18 @@ TEST(PrepareJobTest, AnEyesFolderSendsOnlyItsFramesAndAFolderIsNoCalibration) {
             std::string::npos)
       << result.err;
   EXPECT_NE(result.err.find("(found before the upload: nothing was sent)"), std::string::npos) << result.err;
+  EXPECT_NE(result.err.find("pass --skip-left or --skip-right"), std::string::npos) << result.err;
+  // A skip that leaves an eye's folder no frame (it was uploaded, and the job failed on a worker;
+  // found 2026-12-07).
+  result = RunCli(cluster.address(), {"submit", "--left", (rec / "synth/recording/left").string(), "--right",
+                                      (rec / "short").string(), "--calibration", calibration, "--skip-left",
+                                      std::to_string(frames.size())});
+  EXPECT_EQ(result.exit_code, 2) << result.err;
+  EXPECT_NE(result.err.find("/: it holds " + std::to_string(frames.size()) +
+                            " frame(s): none is left after the " + std::to_string(frames.size()) +
+                            " skipped (--skip-left " + std::to_string(frames.size()) + ")"),
+            std::string::npos)
+      << result.err;
   const fs::path cut = rec / "cut" / frames.front().filename();
   WriteBytes(cut, ReadBytes(cut).substr(0, 200));
   result =

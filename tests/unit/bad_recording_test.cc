@@ -266,7 +266,80 @@ TEST_F(BadRecordingTest, MasksThatDoNotMatch) {
   for (int i = 5; i < 7; ++i)
     WriteImage(dir_ / "masks" / (std::to_string(i) + ".png"), cv::Mat(48, 64, CV_8U, cv::Scalar(0)));
   message = Refused(options);
-  EXPECT_NE(message.find("masks: holds more mask frames than the recording's 6"), std::string::npos)
+  EXPECT_NE(message.find("masks: holds more mask frames than the left eye's 6"), std::string::npos)
+      << message;
+}
+
+// --skip-left drops the left eye's first frames, and their masks and poses with them; the counts are
+// still checked against the left eye's file, and said as the files count them (a skip let any number
+// of masks through, and poses were not skipped; found 2026-12-07).
+TEST_F(BadRecordingTest, ASkipDropsTheLeftEyesMasksAndPosesAndTheirCountsAreStillChecked) {
+  fs::remove(dir_ / "left/100.png");  // the left eye's file began a frame after the right's
+  WriteImage(dir_ / "left/106.png", Texture(6, {64, 48}));
+  WriteImage(dir_ / "left/107.png", Texture(7, {64, 48}));
+  // left: 7 frames (101-107), right: 6 (100-105); --skip-right 1 pairs 101-105 with 101-105.
+  prepare::PrepareOptions options = Options();
+  options.recording.skip_right = 1;
+  options.masks = dir_ / "masks";
+  const auto masks = [&](int count) {
+    fs::remove_all(dir_ / "masks");
+    for (int i = 0; i < count; ++i)
+      WriteImage(dir_ / "masks" / (std::to_string(i) + ".png"), cv::Mat(48, 64, CV_8U, cv::Scalar(0)));
+  };
+  masks(7);
+  EXPECT_EQ(prepare::PrepareClip(options).frames, 5);  // the right eye's recording ended first
+  fs::remove_all(options.out);
+  // A left eye's file that began 2 frames before the right's: its frames 2-7 pair with the right's 0-5.
+  for (int i = 0; i < 8; ++i)
+    WriteImage(dir_ / "left2" / (std::to_string(100 + i) + ".png"), Texture(i - 2, {64, 48}));
+  options.recording = {prepare::StereoLayout::kTwoSources, dir_ / "left2", dir_ / "right", {}, 2, 0};
+  masks(9);
+  std::string message = Refused(options);
+  EXPECT_NE(
+      message.find("masks: holds more mask frames than the left eye's 8 (6 after the 2 of --skip-left)"),
+      std::string::npos)
+      << message;
+  masks(5);
+  message = Refused(options);
+  EXPECT_NE(
+      message.find("masks frame 5: the masks end after 5 frames (3 after the 2 of --skip-left) while the "
+                   "recording goes on"),
+      std::string::npos)
+      << message;
+  masks(8);
+  EXPECT_EQ(prepare::PrepareClip(options).frames, 6);
+  const std::string report = ReadBytes(options.out / "prepare.json");
+  EXPECT_NE(report.find("\"skip_left\": 2"), std::string::npos) << report;
+  fs::remove_all(options.out);
+  options.masks.clear();
+  // One pose per frame of the left eye's file: the skipped frames' are skipped.
+  options.poses = dir_ / "poses.csv";
+  const auto poses = [&](int count) {
+    std::ofstream csv(options.poses);
+    for (int i = 0; i < count; ++i) csv << "1,0,0,0, 0,1,0,0, 0,0,1," << i << "\n";
+  };
+  poses(8);
+  EXPECT_EQ(prepare::PrepareClip(options).frames, 6);
+  fs::remove_all(options.out);
+  poses(4);
+  message = Refused(options);
+  EXPECT_NE(
+      message.find("poses.csv: holds 4 poses but the recording has more frames (frame 4 has none, the pair 2 "
+                   "after --skip-left 2)"),
+      std::string::npos)
+      << message;
+  poses(9);
+  message = Refused(options);
+  EXPECT_NE(message.find("poses.csv: holds 9 poses but the recording has 8 frames (2 of them dropped by "
+                         "--skip-left)"),
+            std::string::npos)
+      << message;
+  // A skip of every frame of a folder is refused at once, naming the eye and its flag.
+  options.poses.clear();
+  options.recording.skip_left = 8;
+  message = Refused(options);
+  EXPECT_NE(message.find("left2: it holds 8 frame(s): none is left after the 8 skipped (--skip-left 8)"),
+            std::string::npos)
       << message;
 }
 

@@ -144,6 +144,23 @@ TEST(DescribeJob, TheClipLineSaysWhichFramesWerePicked) {
       << DescribeJob(job);
 }
 
+// A raw recording's line says it was prepared, and which eye's first frames were dropped.
+TEST(DescribeJob, TheRecordingLineSaysWhichEyesFirstFramesWereSkipped) {
+  v1::Job job;
+  job.set_id("0123456789ab");
+  job.mutable_clip()->add_files()->set_path("left.mp4");
+  job.mutable_clip()->add_files()->set_path("right.mp4");
+  job.mutable_prepare()->set_rectified(true);
+  EXPECT_NE(DescribeJob(job).find("  recording  2 file(s) (prepared into the results' clip/)\n"),
+            std::string::npos)
+      << DescribeJob(job);
+  job.mutable_prepare()->set_skip_left(9);
+  EXPECT_NE(
+      DescribeJob(job).find("  recording  2 file(s) (prepared into the results' clip/, --skip-left 9)\n"),
+      std::string::npos)
+      << DescribeJob(job);
+}
+
 TEST(DescribeJob, TheIterationsTrainedComeFromTheSummary) {
   v1::Job job = Finished(v1::SUCCEEDED);
   EXPECT_FALSE(TrainedIterations(job).has_value());

@@ -28,6 +28,13 @@ constexpr double kClearRival = 0.1;
 // Lags that match within this of the best are not told from it.
 constexpr double kPeakTolerance = 0.03;
 
+// "--skip-left 3", "--skip-left 3 and --skip-right 1": the skips that are not 0.
+std::string SkipsText(int skip_left, int skip_right) {
+  std::string text = skip_left > 0 ? fmt::format("--skip-left {}", skip_left) : "";
+  if (skip_right > 0) text += (text.empty() ? "" : " and ") + fmt::format("--skip-right {}", skip_right);
+  return text;
+}
+
 }  // namespace
 
 bool EyeLag::OutOfStep() const {
@@ -99,26 +106,48 @@ EyeLag MatchLag(const cv::Mat& left, const cv::Mat& right, int max_lag) {
 
 void CheckEyesInStep(const RecordingInput& input) {
   if (input.layout != StereoLayout::kTwoSources) return;
-  StereoSource source(input);
+  // Two folders of different lengths are read as far as the shorter: cut apart, they usually differ,
+  // and their lag is what to say (the preparation refuses them after, when they are in step).
+  StereoSource source(input, StereoSource::UnequalLengths::kRead);
   std::vector<cv::Mat> left, right;  // a column per frame
   cv::Mat previous_left, previous_right;
   StereoFrame frame;
   // Not past the shorter eye's announced end: reaching it is warned of once, by the preparation.
   const int announced = source.announced_frames();
   const int limit = announced > 0 ? std::min(kSyncFrames, announced) : kSyncFrames;
-  for (int i = 0; i < limit && source.Next(frame); ++i) {
+  int pairs = 0;
+  for (; pairs < limit && source.Next(frame); ++pairs) {
     cv::Mat a = FrameChange(frame.left, previous_left), b = FrameChange(frame.right, previous_right);
-    if (i == 0) continue;  // no change before the first frame
+    if (pairs == 0) continue;  // no change before the first frame
     left.push_back(a);
     right.push_back(b);
   }
-  if (left.empty()) return;
+  if (left.empty()) {
+    // Nothing is left after the skips: said here, where the skips are known, not as "no point
+    // matched" or "no frame selected" later (found 2026-12-07).
+    if (pairs == 0 && (input.skip_left > 0 || input.skip_right > 0)) {
+      FailInvalid(fmt::format("{}: no pair of frames is left after {}", source.name(),
+                              SkipsText(input.skip_left, input.skip_right)));
+    }
+    return;
+  }
   cv::Mat left_signal, right_signal;
   cv::hconcat(left, left_signal);
   cv::hconcat(right, right_signal);
   const EyeLag lag = MatchLag(left_signal, right_signal, left_signal.cols / 4);
   spdlog::debug("{}: the eyes' motion matches {:.2f} as given, best {:.2f} at a lag of {} frame(s)",
                 source.name(), lag.match_in_step, lag.match, lag.frames);
+  // A quarter of the signal each way is searched: what is compared is its middle half.
+  if (const int changes = left_signal.cols; changes - 2 * (changes / 4) < kMinSamples) {
+    // A checkerboard recording of 20 views, a short clip: a lag of a few frames would pass unseen
+    // (found 2026-12-07).
+    spdlog::warn(
+        "{}: {} pair(s) are too few to check that the eyes' recordings begin together (about {} are "
+        "needed); if they were cut at different moments, pass --skip-left or --skip-right "
+        "(docs/formats.md, \"Raw recordings\")",
+        source.name(), changes + 1, 2 * kMinSamples);
+    return;
+  }
   if (!lag.OutOfStep()) return;
   const bool left_first = lag.frames > 0;
   const char* first = left_first ? "left" : "right";
@@ -133,13 +162,22 @@ void CheckEyesInStep(const RecordingInput& input) {
                 "the frame)",
                 frames, std::min(std::abs(lag.earliest), std::abs(lag.latest)),
                 std::max(std::abs(lag.earliest), std::abs(lag.latest)));
+  // The advice counts from the files' first frames: skips given already are added in, so following
+  // it twice cannot swing between two values (found 2026-12-07).
+  const bool skipped = input.skip_left > 0 || input.skip_right > 0;
+  const int needed = input.skip_left - input.skip_right + lag.frames;  // > 0: the left eye's to drop
+  const std::string pass =
+      needed == 0 ? "Pass neither --skip-left nor --skip-right: the files begin together"
+                  : fmt::format("Pass {} to drop the {} eye's first {} frame(s) and pair the rest",
+                                SkipsText(std::max(needed, 0), std::max(-needed, 0)),
+                                needed > 0 ? "left" : "right", std::abs(needed));
   FailInvalid(fmt::format(
-      "{}: the eyes' recordings begin {}: what the {} eye sees move matches what the {} eye sees "
+      "{}: the eyes' recordings{} begin {}: what the {} eye sees move matches what the {} eye sees "
       "{} frame(s) later (correlation {:.2f} over {} frames; {:.2f} as the frames are paired now), so the "
-      "{} eye's recording began first. Pass --skip-{} {} to drop its first {} frame(s) and pair the rest "
-      "(docs/formats.md, \"Raw recordings\")",
-      source.name(), apart, second, first, frames, lag.match, lag.samples, lag.match_in_step, first, first,
-      frames, frames));
+      "{} eye's recording began first. {}{} (docs/formats.md, \"Raw recordings\")",
+      source.name(), skipped ? " after " + SkipsText(input.skip_left, input.skip_right) : "", apart, second,
+      first, frames, lag.match, lag.samples, lag.match_in_step, first, pass,
+      skipped ? fmt::format(" instead of {}", SkipsText(input.skip_left, input.skip_right)) : ""));
 }
 
 }  // namespace endorecon::prepare

@@ -137,7 +137,8 @@ std::array<cv::Mat, 2> ExcludedRaw(const std::vector<PixelRect>& rects, StereoLa
 class MaskReader {
  public:
   // `skip`: the left eye's first frames skipped (--skip-left): their masks are skipped too.
-  MaskReader(const fs::path& path, bool tool_black, cv::Size eye, int skip) : tool_black_(tool_black) {
+  MaskReader(const fs::path& path, bool tool_black, cv::Size eye, int skip)
+      : tool_black_(tool_black), skip_(skip) {
     if (path.empty()) return;
     source_ = OpenFrameSource(path);
     if (source_->frame_size() != eye) {
@@ -165,20 +166,31 @@ class MaskReader {
   void Skip(int index) {
     if (source_ && !source_->Skip()) Short(index);
   }
-  void CheckEnd(int recording_frames) {
-    if (source_ && source_->Skip()) {
-      FailInvalid(source_->name() + ": holds more mask frames than the recording's " +
-                  std::to_string(recording_frames) + " (one mask per frame)");
+  // After the `pairs` read: the masks must end with the left eye's `left_frames` (both after the skip).
+  void CheckEnd(int pairs, int left_frames) {
+    if (!source_) return;
+    for (int index = pairs; index < left_frames; ++index) Skip(index);
+    if (source_->Skip()) {
+      FailInvalid(source_->name() + ": holds more mask frames than the left eye's " +
+                  std::to_string(left_frames + skip_) + AfterSkip(left_frames) + " (one mask per frame)");
     }
   }
 
  private:
+  // Counts are said as the files count them, and after the skip beside (found 2026-12-07).
+  std::string AfterSkip(int frames) const {
+    return skip_ > 0
+               ? " (" + std::to_string(frames) + " after the " + std::to_string(skip_) + " of --skip-left)"
+               : "";
+  }
   [[noreturn]] void Short(int index) const {
-    FailInvalid(source_->name() + " frame " + std::to_string(index) + ": the masks end after " +
-                std::to_string(index) + " frames while the recording goes on (one mask per frame)");
+    FailInvalid(source_->name() + " frame " + std::to_string(index + skip_) + ": the masks end after " +
+                std::to_string(index + skip_) + " frames" + AfterSkip(index) +
+                " while the recording goes on (one mask per frame)");
   }
   std::unique_ptr<FrameSource> source_;
   bool tool_black_;
+  int skip_;
 };
 
 // How frames are placed: fixed (identity), from a pose file, or estimated.
@@ -192,6 +204,7 @@ class Placer {
     }
     if (!options.poses.empty()) {
       file_ = options.poses.string();
+      skip_ = options.recording.skip_left;
       poses_ = ReadPoseFile(options.poses);
       for (std::size_t i = 1; i < poses_.size(); ++i)
         moving_ = moving_ || cv::norm(poses_[i] - poses_[0], cv::NORM_INF) > 1e-9;
@@ -211,16 +224,23 @@ class Placer {
       return kFlipYz * *pose;
     }
     if (poses_.empty()) return kFlipYz;
-    if (index >= static_cast<int>(poses_.size())) {
+    // One pose per frame of the left eye's file: those of the frames --skip-left drops are skipped
+    // too, as its masks are (found 2026-12-07).
+    if (index + skip_ >= static_cast<int>(poses_.size())) {
       FailInvalid(file_ + ": holds " + std::to_string(poses_.size()) +
-                  " poses but the recording has more frames (frame " + std::to_string(index) + " has none)");
+                  " poses but the recording has more frames (frame " + std::to_string(index + skip_) +
+                  " has none" + AfterSkip(index) + ")");
     }
-    return poses_[static_cast<std::size_t>(index)] * rectify_;
+    return poses_[static_cast<std::size_t>(index + skip_)] * rectify_;
   }
-  void CheckCount(int recording_frames) const {
-    if (!poses_.empty() && static_cast<int>(poses_.size()) != recording_frames) {
+  // `left_frames`: the left eye's after its skip (StereoSource::left_eye_frames; -1: not known, the
+  // right eye's recording ended first).
+  void CheckCount(int left_frames) const {
+    if (!poses_.empty() && left_frames >= 0 && static_cast<int>(poses_.size()) != left_frames + skip_) {
       FailInvalid(file_ + ": holds " + std::to_string(poses_.size()) + " poses but the recording has " +
-                  std::to_string(recording_frames) + " frames (one pose per frame)");
+                  std::to_string(left_frames + skip_) + " frames" +
+                  (skip_ > 0 ? " (" + std::to_string(skip_) + " of them dropped by --skip-left)" : "") +
+                  " (one pose per frame)");
     }
   }
   json Report() const {
@@ -235,7 +255,12 @@ class Placer {
   ErrorStats reprojection() const { return estimator_ ? estimator_->reprojection_error() : ErrorStats{}; }
 
  private:
+  std::string AfterSkip(int index) const {
+    return skip_ > 0 ? ", the pair " + std::to_string(index) + " after --skip-left " + std::to_string(skip_)
+                     : "";
+  }
   std::string file_;
+  int skip_ = 0;
   std::vector<cv::Matx44d> poses_;
   bool moving_ = false;
   cv::Matx44d rectify_;
@@ -318,7 +343,10 @@ std::string LayoutName(StereoLayout layout) {
 class Preparation {
  public:
   Preparation(const PrepareOptions& options, const PrepareHooks& hooks)
-      : options_(options), hooks_(hooks), staged_(options.out), source_(options.recording) {
+      : options_(options),
+        hooks_(hooks),
+        staged_(options.out),
+        source_(options.recording, StereoSource::UnequalLengths::kRead) {
     const cv::Size eye = source_.eye_size();
     calibration_ = options.rectified ? RectifiedCalibration(eye, options.focal, options.baseline)
                                      : LoadStereoCalibration(options.calibration);
@@ -333,7 +361,10 @@ class Preparation {
     masks_ = std::make_unique<MaskReader>(options.masks, options.masks_tool_black, eye,
                                           options.recording.skip_left);
     placer_ = std::make_unique<Placer>(options, camera_);
+    // The eyes' timing before their lengths: two folders cut apart differ in length, and the frames
+    // to skip are what to say (found 2026-12-07).
     CheckEyesInStep(options.recording);
+    source_.RequireEqualLengths();
     survey_ = Survey(options, *rectifier_, excluded_[0], source_.announced_frames());
     survey_.CheckTwoViews(source_.name());
     survey_.CheckEyeOrder(source_.name());
@@ -369,9 +400,10 @@ class Preparation {
       if (!more) break;
     }
     recording_frames_ = index;
-    // Eyes cut apart at their start may end apart too: the left eye's masks then go on past the pairs.
-    if (!source_.cut_apart()) masks_->CheckEnd(recording_frames_);
-    placer_->CheckCount(recording_frames_);
+    // The masks end with the left eye's recording: past the pairs by a video's trailing frames, and
+    // not known where eyes cut apart ended with the right eye (its masks go on past the pairs).
+    if (const int left = source_.left_eye_frames(); left >= 0) masks_->CheckEnd(recording_frames_, left);
+    placer_->CheckCount(source_.left_eye_frames());
     if (placements_.empty()) {
       FailInvalid(
           source_.name() + ": no frame " +
@@ -523,6 +555,8 @@ class Preparation {
                      {"frames", recording_frames_}}},
                    {"options",
                     {{"frames", options_.frames.ToString()},
+                     {"skip_left", options_.recording.skip_left},
+                     {"skip_right", options_.recording.skip_right},
                      {"size", {options_.size.width, options_.size.height}},
                      {"masks", options_.masks.string()},
                      {"masks_tool", options_.masks_tool_black ? "black" : "white"},

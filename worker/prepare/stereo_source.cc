@@ -15,7 +15,7 @@ std::string SizeText(cv::Size size) { return std::to_string(size.width) + "x" + 
 
 }  // namespace
 
-StereoSource::StereoSource(const RecordingInput& input) : layout_(input.layout) {
+StereoSource::StereoSource(const RecordingInput& input, UnequalLengths unequal) : layout_(input.layout) {
   if (layout_ == StereoLayout::kTwoSources) {
     // One eye given twice has no disparity: it prepared a clip of 29% depth coverage without a word
     // (found 2026-12-05).
@@ -33,9 +33,9 @@ StereoSource::StereoSource(const RecordingInput& input) : layout_(input.layout) 
     }
     skips_[0] = input.skip_left;
     skips_[1] = input.skip_right;
-    CheckPairedByOrder();
-    SkipFirst(*first_, input.skip_left);
-    SkipFirst(*second_, input.skip_right);
+    CheckPairedByOrder(unequal);
+    SkipFirst(*first_, input.skip_left, "--skip-left");
+    SkipFirst(*second_, input.skip_right, "--skip-right");
     return;
   }
   first_ = OpenFrameSource(input.combined);
@@ -59,7 +59,7 @@ StereoSource::StereoSource(const RecordingInput& input) : layout_(input.layout) 
 // frames of different moments, and the disparities between them are motion, not depth (a 25 and a
 // 30 fps eye prepared a clip without a word; found 2026-12-06). Checked before any frame is
 // prepared, where the headers say; Next checks each pair's times as it goes.
-void StereoSource::CheckPairedByOrder() {
+void StereoSource::CheckPairedByOrder(UnequalLengths unequal) {
   const double a = first_->frame_rate(), b = second_->frame_rate();
   if (a > 0 && b > 0 && std::abs(a - b) > 0.01 * std::max(a, b)) {
     FailInvalid(
@@ -76,19 +76,28 @@ void StereoSource::CheckPairedByOrder() {
   // Two folders' counts are exact: compared before any frame is prepared. A video's header count may
   // be an estimate (from its duration; a start time of 0.5 s read as 15 frames more), so two videos'
   // lengths are compared as they end (Ended).
-  const int m = first_->announced_frames(), n = second_->announced_frames();
-  if (!cut_apart() && first_->count_is_exact() && second_->count_is_exact() && m != n) {
+  if (unequal == UnequalLengths::kRefused) RequireEqualLengths();
+}
+
+void StereoSource::RequireEqualLengths() const {
+  if (!second_ || cut_apart() || !first_->count_is_exact() || !second_->count_is_exact()) return;
+  if (const int m = first_->announced_frames(), n = second_->announced_frames(); m != n) {
     FailInvalid(fmt::format("{}: {} frames while {} has {} (both eyes' recordings must have the same length)",
                             second_->name(), n, first_->name(), m));
   }
 }
 
-// Drops `eye`'s first `frames` (skip_left, skip_right); a recording of no more frames is refused.
-void StereoSource::SkipFirst(FrameSource& eye, int frames) {
+// Drops `eye`'s first `frames` (`flag`: skip_left, skip_right); a recording of no more frames is
+// refused (a video's count is known only once read: the eyes' timing check says when none is left).
+void StereoSource::SkipFirst(FrameSource& eye, int frames, const char* flag) {
+  if (frames == 0) return;
   if (const int skipped = SkipFrames(eye, frames); skipped < frames) {
-    FailInvalid(
-        fmt::format("{}: it ends after {} frame(s), before the {} to skip (--skip-left, --skip-right)",
-                    eye.name(), skipped, frames));
+    FailInvalid(fmt::format("{}: it ends after {} frame(s), before the {} to skip ({} {})", eye.name(),
+                            skipped, frames, flag, frames));
+  }
+  if (eye.count_is_exact() && eye.announced_frames() <= frames) {
+    FailInvalid(fmt::format("{}: it holds {} frame(s): none is left after the {} skipped ({} {})", eye.name(),
+                            eye.announced_frames(), frames, flag, frames));
   }
 }
 
@@ -105,6 +114,7 @@ std::string StereoSource::name() const {
 }
 
 bool StereoSource::Ended(bool first, bool second, int index) {
+  if (!first) left_frames_ = index;
   if (first == second) return !first;
   FrameSource& ended = first ? *second_ : *first_;
   FrameSource& going = first ? *first_ : *second_;
@@ -120,6 +130,7 @@ bool StereoSource::Ended(bool first, bool second, int index) {
     int extra = 1;  // the going eye's frame `index` was read already
     while (extra <= kTrailingFrames && going.Skip()) ++extra;
     if (extra <= kTrailingFrames) {
+      if (first) left_frames_ = index + extra;
       spdlog::warn("{}: {} frame(s) after the {} of {} left out: the eyes are paired up to the shorter",
                    going.name(), extra, index, ended.name());
       return true;
@@ -152,7 +163,10 @@ bool StereoSource::Next(StereoFrame& frame) {
     frame.time_s = left.time_s;
   } else {
     SourceFrame both;
-    if (!first_->Next(both)) return false;
+    if (!first_->Next(both)) {
+      left_frames_ = index;
+      return false;
+    }
     const cv::Rect first_half(0, 0, eye_size_.width, eye_size_.height);
     const cv::Rect second_half = layout_ == StereoLayout::kSideBySide
                                      ? cv::Rect(eye_size_.width, 0, eye_size_.width, eye_size_.height)
@@ -169,6 +183,7 @@ bool StereoSource::Next(StereoFrame& frame) {
 bool StereoSource::Skip() {
   const int index = next_;
   const bool a = first_->Skip();
+  if (!second_ && !a) left_frames_ = index;
   if (second_ ? Ended(a, second_->Skip(), index) : !a) return false;
   ++next_;
   return true;

@@ -33,16 +33,22 @@ struct StereoFrame {
 
 class StereoSource {
  public:
+  // Whether two folders of different lengths are refused at once, or read as far as the shorter
+  // (the eyes' timing check reads their start first: a lag is what usually makes them differ).
+  enum class UnequalLengths { kRefused, kRead };
   // Opens the sources (OpenFrameSource's errors), and throws FailInvalid naming the file when the
-  // eyes differ in size, frame rate or (two folders) length, or a combined frame cannot be split in
-  // equal halves.
-  explicit StereoSource(const RecordingInput& input);
+  // eyes differ in size, frame rate or (two folders, kRefused) length, a skip leaves an eye no frame,
+  // or a combined frame cannot be split in equal halves.
+  explicit StereoSource(const RecordingInput& input, UnequalLengths unequal = UnequalLengths::kRefused);
 
   cv::Size eye_size() const { return eye_size_; }
   // The recording's announced frame count (-1: unknown); the lower of two sources'.
   int announced_frames() const;
   // The file(s), for messages.
   std::string name() const;
+  // Throws FailInvalid naming both when two folders of exact counts differ in length and the eyes
+  // were not cut apart (what the constructor does with UnequalLengths::kRefused).
+  void RequireEqualLengths() const;
   // Two sources whose first frames are skipped (RecordingInput::skip_left, skip_right): cut apart at
   // their start, they may end apart too.
   bool cut_apart() const { return skips_[0] > 0 || skips_[1] > 0; }
@@ -52,11 +58,14 @@ class StereoSource {
   // with a warning) or their frames' times are out of step.
   bool Next(StereoFrame& frame);
   bool Skip();
+  // After the last pair: the frames the left eye's recording held after its skip (its masks' count),
+  // or -1 where the right eye's ended first and the left's went on (eyes cut apart).
+  int left_eye_frames() const { return left_frames_; }
 
  private:
   bool Ended(bool first, bool second, int index);
-  void CheckPairedByOrder();
-  void SkipFirst(FrameSource& eye, int frames);
+  void CheckPairedByOrder(UnequalLengths unequal);
+  static void SkipFirst(FrameSource& eye, int frames, const char* flag);
 
   StereoLayout layout_;
   std::unique_ptr<FrameSource> first_, second_;  // second_ only for two sources
@@ -66,6 +75,7 @@ class StereoSource {
   int skips_[2] = {0, 0};      // two sources: the first frames skipped of first_, second_
   static constexpr int kTrailingFrames = 2;  // a longer video's frames past the shorter's, tolerated
   int next_ = 0;
+  int left_frames_ = -1;
 };
 
 }  // namespace endorecon::prepare
