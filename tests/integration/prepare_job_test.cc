@@ -104,6 +104,24 @@ TEST(PrepareJobTest, AFailedRecordingNamesTheUsersFile) {
   const std::string said = submitted.out + submitted.err;
   EXPECT_NE(said.find((rec / "mine.avi").string()), std::string::npos) << said;
   EXPECT_EQ(said.find("left.avi"), std::string::npos) << said;
+  // A folder is named as the user gave it too, where the worker names it without its slash (it was
+  // "masks frame 4: ...", the upload's name; found 2026-12-07).
+  fs::copy(rec / "synth/recording/masks", rec / "my masks", fs::copy_options::recursive);
+  std::vector<fs::path> masks;
+  for (const auto& entry : fs::directory_iterator(rec / "my masks")) masks.push_back(entry.path());
+  std::sort(masks.begin(), masks.end());
+  fs::remove(masks.back());
+  const auto short_masks =
+      RunCli(cluster.address(),
+             {"submit", "--left", (rec / "left.avi").string(), "--right", (rec / "right.avi").string(),
+              "--calibration", (rec / "synth/recording/calibration.yaml").string(), "--masks",
+              (rec / "my masks").string(), "--iterations", "20", "--wait"});
+  EXPECT_EQ(short_masks.exit_code, 5) << short_masks.err << short_masks.out;
+  const std::string reason = short_masks.out + short_masks.err;
+  EXPECT_NE(reason.find((rec / "my masks").string() + " frame 5: the masks end after 5 frames"),
+            std::string::npos)
+      << reason;
+  EXPECT_EQ(reason.find(": masks frame"), std::string::npos) << reason;
 }
 
 // A folder named as an eye sends only its frames: `--left ../../etc` uploaded every file of /etc

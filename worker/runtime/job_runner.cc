@@ -158,26 +158,36 @@ std::string InTheClip(std::string message, const fs::path& job_dir) {
   return message;
 }
 
-// `message` (InTheClip's) with a raw recording's staged names (side_by_side.mp4, left/) replaced by
-// the files and folders as the submitter named them (PrepareOptions.sources): a name is replaced
-// where it starts a path, not inside another word.
-std::string InTheUsersNames(std::string message, const v1::Job& job) {
-  const auto starts_path = [&](std::size_t at) {
-    if (at == 0) return true;
-    const char before = message[at - 1];
-    return !(std::isalnum(static_cast<unsigned char>(before)) || before == '_' || before == '/' ||
-             before == '.');
+// `message` with a raw recording's staged names (side_by_side.mp4, left/) replaced by the files and
+// folders as the submitter named them (PrepareOptions.sources): first where the message holds them as
+// the worker opened them, under `clip_dir` (a folder's name without its slash too: "left: it ends
+// after ..." was left in the upload's name; found 2026-12-07), then where a name starts a path (not
+// inside another word). Before InTheClip, which shortens `clip_dir`'s paths.
+std::string InTheUsersNames(std::string message, const v1::Job& job, const std::filesystem::path& clip_dir) {
+  const auto path_char = [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '/' || c == '.' || c == '-';
   };
-  for (const auto& [staged, given] : job.prepare().sources()) {
-    for (std::size_t at = message.find(staged); at != std::string::npos; at = message.find(staged, at)) {
-      if (!starts_path(at)) {
-        at += staged.size();
+  // Replaces `from` by `to` where no path character comes before it (`starts`) and, with `ends`,
+  // none but a slash after it.
+  const auto replace = [&](const std::string& from, const std::string& to, bool starts, bool ends) {
+    for (std::size_t at = message.find(from); at != std::string::npos; at = message.find(from, at)) {
+      const std::size_t end = at + from.size();
+      if ((starts && at > 0 && path_char(message[at - 1])) ||
+          (ends && end < message.size() && message[end] != '/' && path_char(message[end]))) {
+        at = end;
         continue;
       }
-      message.replace(at, staged.size(), given);
-      at += given.size();
+      message.replace(at, from.size(), to);
+      at += to.size();
     }
+  };
+  for (const auto& [staged, given] : job.prepare().sources()) {
+    const auto bare = [](const std::string& name) {
+      return name.size() > 1 && name.back() == '/' ? name.substr(0, name.size() - 1) : name;
+    };
+    replace((clip_dir / bare(staged)).string(), bare(given), false, true);
   }
+  for (const auto& [staged, given] : job.prepare().sources()) replace(staged, given, true, false);
   return message;
 }
 
@@ -421,7 +431,7 @@ bool RunLeasedJob(WorkerClient& client, const v1::LeaseResponse& lease, const De
                           " ran out of space (" + std::to_string(free_bytes) + " bytes free now, needs " +
                           std::to_string(settings.min_free_bytes) + " to take a job): " + e.what()
                     : std::string(ErrorCodeName(e.code())) + ": " +
-                          InTheUsersNames(InTheClip(e.what(), job_dir), job);
+                          InTheClip(InTheUsersNames(e.what(), job, job_dir / "clip"), job_dir);
       // Issue 16: stopped by a shutdown while preparing: handed back without counting an attempt; so
       // are results the server's full disk refused (a shutdown while they waited: not the job's fault).
       Tell(client, lease.lease_id(), reason, !bad_input,
