@@ -317,6 +317,13 @@ std::string TlsFailureHint(std::string_view message, const ChannelSecurity& secu
     return "the server's certificate does not verify against --ca " + security.ca_file +
            ": is it signed by that CA, and valid now?";
   }
+  // gRPC's "Peer name 127.0.0.2 is not in peer certificate": the certificate verified, for other names
+  // (said with no hint until 2026-12-07).
+  if (has("is not in peer certificate")) {
+    return "the server's certificate does not name the address dialled: dial one of the names it was "
+           "made for (its subjectAltName), or make it anew naming this one (docs/operations.md, \"Make the "
+           "certificates\")";
+  }
   if (has("wrong version number") || has("wrong_version_number")) {
     return "the address does not answer in TLS: a server without --tls-cert (then drop --ca), or a port "
            "that is not its --listen, such as its health port";

@@ -112,8 +112,14 @@ void DicomSender::Attempt(const std::string& job_id, const std::string& destinat
     return;
   }
   metrics_.DicomSendFailed(destination);
-  spdlog::warn("job {}: sending to {} failed (attempt {} of {}): {}", job_id, destination, attempt,
-               settings_.send_attempts, failure);
+  // The log says whether another attempt follows: "attempt 1 of 5" was said of a rejection that is
+  // not retried (found 2026-12-07).
+  spdlog::warn("job {}: sending to {} failed (attempt {} of {}{}): {}", job_id, destination, attempt,
+               settings_.send_attempts,
+               retry       ? "; retried"
+               : permanent ? "; not retried: the PACS rejected the association permanently"
+                           : "; the last",
+               failure);
   if (retry) due_.Schedule({job_id, destination}, next);
 }
 

@@ -20,6 +20,7 @@
 #include "common/dicom/uid.h"
 #include "common/error.h"
 #include "common/folder_lock.h"
+#include "common/grpc_log.h"
 #include "common/job_bounds.h"
 #include "common/metrics_exposer.h"
 #include "common/private_folder.h"
@@ -29,7 +30,6 @@
 #include "server/data_folder.h"
 #include "server/dicom_retriever.h"
 #include "server/dicom_sender.h"
-#include "server/grpc_log.h"
 #include "server/health_port.h"
 #include "server/idle_trim.h"
 #include "server/job_service.h"
@@ -181,7 +181,10 @@ int Run(const ServerFlags& flags) {
   });
   AuditLog audit(flags.audit_log.empty() ? data_dir / "audit.jsonl" : std::filesystem::path(flags.audit_log));
   audit.SetFailureObserver([&metrics] { metrics.AuditWriteFailed(); });
-  const GrpcLogRoute grpc_log([&metrics] { metrics.TlsHandshakeFailed(); });
+  const GrpcLogRoute grpc_log(
+      "a client or worker whose certificate this server does not trust, or plaintext to the TLS port: "
+      "endorecon_tls_handshake_failures_total counts them",
+      [&metrics] { metrics.TlsHandshakeFailed(); });
   CallGuard guard(TokenStore::PathIn(data_dir), !flags.tls.client_ca_file.empty(), audit, metrics);
   spdlog::info("tenant quotas: {}", quotas.Describe());  // an admin checks what is in force
   JobCoordinator coordinator({store, blobs, scheduler, leases, workers, hub, metrics}, flags.max_attempts,

@@ -125,11 +125,14 @@ int Create(const TokenFlags& flags) {
   const auto token = store->Create(flags.name, *role, flags.tenant, expires);
   Audit(flags, "TokenCreate", {flags.name, *role, flags.tenant, 0, 0, expires});
   if (*role == Role::kWorker && !flags.tenant.empty()) WarnOfAnUnknownTenant(*store, flags.tenant, now);
-  std::cout << fmt::format(
+  // The token alone on stdout, so that T=$(... token create ...) takes it; what it is, on stderr (the
+  // two lines were both on stdout, and $(...) took both; found 2026-12-07).
+  std::cerr << fmt::format(
       "created {} token '{}'{}{}; it is shown only now, keep it in a file only its user can "
-      "read (chmod 600):\n{}\n",
+      "read (chmod 600):\n",
       RoleName(*role), flags.name, flags.tenant.empty() ? "" : fmt::format(" for tenant '{}'", flags.tenant),
-      expires ? fmt::format(" valid until {} UTC", UtcTime(expires)) : "", token);
+      expires ? fmt::format(" valid until {} UTC", UtcTime(expires)) : "");
+  std::cout << token << "\n";
   return 0;
 }
 

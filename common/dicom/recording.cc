@@ -7,6 +7,7 @@
 #include <dcmtk/dcmimage/diregist.h>
 #include <dcmtk/dcmimgle/dcmimage.h>
 #include <dcmtk/dcmjpeg/djdecode.h>
+#include <fmt/format.h>
 #include <spdlog/spdlog.h>
 #include <unistd.h>
 
@@ -508,6 +509,7 @@ std::string MetaSopClass(const fs::path& path) {
 std::vector<std::vector<Instance>> LoadSeries(const fs::path& path) {
   std::vector<fs::path> files;
   if (fs::is_directory(path)) {
+    std::vector<std::string> skipped;  // "ct1.dcm (CTImageStorage)"
     for (const auto& entry : fs::directory_iterator(path)) {
       if (!entry.is_regular_file()) continue;
       const bool marked = IsDicomFile(entry.path());  // opened once for its mark, once more for its class
@@ -515,15 +517,28 @@ std::vector<std::vector<Instance>> LoadSeries(const fs::path& path) {
       const std::string sop = marked ? MetaSopClass(entry.path()) : "";
       if (!sop.empty() && !kVideoClasses.count(sop) && !kImageClasses.count(sop)) {
         spdlog::warn("{}: skipped, SOP class {} is not a recording", entry.path().string(), UidName(sop));
+        skipped.push_back(entry.path().filename().string() + " (" + UidName(sop) + ")");
         continue;
       }
       files.push_back(entry.path());
     }
     std::sort(files.begin(), files.end());
-    if (files.empty())
-      FailInvalid(
-          path.string() +
-          ": no DICOM recording in the folder (other DICOM files, if any, are skipped: see the warnings)");
+    // What was skipped is said in the error too: a submitter sees the job's reason, not the worker's
+    // log (found 2026-12-07).
+    if (files.empty()) {
+      std::sort(skipped.begin(), skipped.end());
+      constexpr std::size_t kNamed = 3;
+      std::string which;
+      for (std::size_t i = 0; i < std::min(skipped.size(), kNamed); ++i)
+        which += (i ? ", " : "") + skipped[i];
+      if (skipped.size() > kNamed) which += fmt::format(" and {} more", skipped.size() - kNamed);
+      FailInvalid(path.string() + ": no DICOM recording in the folder" +
+                  (skipped.empty() ? std::string()
+                                   : fmt::format(" ({} DICOM file(s) of other classes skipped: {}; "
+                                                 "docs/formats.md, \"DICOM recordings\", lists the "
+                                                 "classes read)",
+                                                 skipped.size(), which)));
+    }
   } else if (fs::exists(path)) {
     files.push_back(path);
   } else {

@@ -45,9 +45,13 @@ StudyContext NewStudyContext(const std::string& patient_id, const std::string& p
   CheckPatientName(patient_name, "--patient-name");
   study.study_instance_uid = study_uid.empty() ? NewUid(uid_root) : study_uid;
   study.specific_character_set = "ISO_IR 192";  // UTF-8: names typed on a command line
-  study.patient_id = patient_id.empty()
-                         ? "ENDORECON-" + study.study_instance_uid.substr(study.study_instance_uid.size() - 8)
-                         : patient_id;
+  // The default: the UID's last 8 digits, its dots left out (it took the last 8 characters, a dot
+  // among them, and threw on a --study-uid shorter than 8; found 2026-12-07).
+  std::string digits;
+  for (auto c = study.study_instance_uid.rbegin(); c != study.study_instance_uid.rend() && digits.size() < 8;
+       ++c)
+    if (*c != '.') digits.insert(digits.begin(), *c);
+  study.patient_id = patient_id.empty() ? "ENDORECON-" + digits : patient_id;
   study.patient_name = patient_name;
   OFString date, time;
   DcmDate::getCurrentDate(date);

@@ -355,6 +355,10 @@ TEST_F(AccessControlTest, AWorkerTokenWithATenantRunsThatTenantsJobsOnly) {
       std::string::npos)
       << misspelt;
   EXPECT_NE(misspelt.find("created worker token 'w-typo'"), std::string::npos) << misspelt;
+  // The token alone on stdout: T=$(... token create ...) takes it whole (found 2026-12-07).
+  const auto alone = Capture(BuiltBinary("server/endorecon-server") + " token create --data-dir " +
+                             cluster_.data_dir().string() + " --role worker --name w-alone 2>/dev/null");
+  EXPECT_TRUE(std::regex_match(alone, std::regex("endorecon\\.[^\\s]+\n"))) << alone;
   // A tenant whose client token was revoked: that is said too.
   CreateToken(cluster_.data_dir(), "client", "cardio", "c-card");
   ASSERT_EQ(RevokeToken("c-card"), 0);

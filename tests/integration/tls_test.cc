@@ -192,6 +192,25 @@ TEST_F(TlsTest, WorkersWithoutAClientCertificateOrWithAClientTokenLeaseNothing) 
   ASSERT_NE(counted, std::string::npos) << metrics;
   EXPECT_GE(std::stod(metrics.substr(counted + 40)), 2.0) << "a handshake a retry";
 
+  // A worker whose --ca does not verify the server: gRPC's own lines go to its log paced, not two bare
+  // lines a retry on its stderr (found 2026-12-07).
+  auto& other_ca =
+      cluster_->StartWorker("w-other-ca", {"--ca", pki_->rogue_ca_cert.string(), "--tls-cert",
+                                           pki_->worker_cert.string(), "--tls-key", pki_->worker_key.string(),
+                                           "--token-file", worker_token_, "--timeout", "1"});
+  std::this_thread::sleep_for(std::chrono::seconds(4));
+  other_ca.Signal(SIGTERM);
+  other_ca.Wait();
+  const std::string other_log = other_ca.Log();
+  EXPECT_NE(other_log.find("does not verify"), std::string::npos) << other_log;
+  EXPECT_EQ(other_log.find("ssl_transport_security.cc"), std::string::npos) << other_log;
+  std::size_t handshakes = 0;
+  for (auto at = other_log.find("Handshake failed"); at != std::string::npos;
+       at = other_log.find("Handshake failed", at + 1)) {
+    ++handshakes;
+  }
+  EXPECT_LE(handshakes, 2u) << other_log;
+
   // Plaintext to the TLS port: the log says to give --ca, as the CLI does (it said nothing).
   auto& plaintext = cluster_->StartWorker("w-plaintext", {"--token-file", worker_token_, "--timeout", "2"});
   ASSERT_TRUE(WaitUntil([&] { return plaintext.Log().find("cannot register") != std::string::npos; },

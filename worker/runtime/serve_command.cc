@@ -18,6 +18,7 @@
 #include "common/cli_checks.h"
 #include "common/error.h"
 #include "common/folder_lock.h"
+#include "common/grpc_log.h"
 #include "common/job_bounds.h"
 #include "common/metrics_exposer.h"
 #include "common/private_folder.h"
@@ -215,6 +216,12 @@ int Serve(const ServeFlags& flags) {
   }
   WorkerMetrics metrics(flags.metrics_port >= 0 ? MetricsAddress(flags.metrics_host, flags.metrics_port) : "",
                         devices);
+  // gRPC's own lines (two a second while --ca does not verify the server) into the log, paced; the
+  // worker's own warning says which side to look at.
+  const GrpcLogRoute grpc_log(
+      "the server's certificate does not verify against --ca, or the server does not trust this "
+      "worker's --tls-cert: the warning beside says which",
+      {});
   WorkerClient client(flags.server, SecurityOf(flags), worker_id,
                       std::chrono::milliseconds(static_cast<long>(flags.timeout_s * 1000)));
   std::vector<std::string> names;
