@@ -50,14 +50,16 @@ class StorageScp::Scp : public DcmStorageSCP {
 
   Uint16 checkAndProcessSTORERequest(const T_DIMSE_C_StoreRQ& request, DcmFileFormat& file) override {
     DcmDataset& data = *file.getDataset();
-    if (IsEndoreconResult(data)) return STATUS_Success;  // taken, not kept (storage_classes.h)
     const std::string study = FindString(data, DCM_StudyInstanceUID).value_or("");
     const std::string series = FindString(data, DCM_SeriesInstanceUID).value_or("");
     const std::string sop = request.AffectedSOPInstanceUID;
+    // Whether a retrieval awaits the study is asked first: an endorecon result sent unasked was
+    // answered Success (found 2026-12-07).
     if (!awaits_ || !awaits_(study)) {
       spdlog::warn("storage SCP: refused an instance of a study no retrieval awaits");
       return kRefusedNotAuthorized;
     }
+    if (IsEndoreconResult(data)) return STATUS_Success;  // taken, not kept (storage_classes.h)
     try {
       CheckUid(study, "Study Instance UID");
       CheckUid(series, "Series Instance UID");

@@ -12,6 +12,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "common/dicom/dataset_access.h"
+#include "common/dicom/result_instances.h"
 #include "common/dicom/store_scu.h"
 #include "common/dicom/uid.h"
 #include "common/error.h"
@@ -326,6 +327,15 @@ TEST_F(PacsRoundTripTest, CMoveToTheServersStorageScpWhenCGetIsRefused) {
   ASSERT_EQ(unasked.stored.size(), 1u);
   EXPECT_FALSE(unasked.stored[0]);
   EXPECT_NE(unasked.first_error.find("0x0124"), std::string::npos) << unasked.first_error;
+  // An endorecon result (taken, not kept, while a retrieval of its study runs) is refused too: it was
+  // answered Success, asked or not (found 2026-12-07).
+  dicom::SeriesHeader header;
+  header.study = dicom::NewStudyContext("P-1", "", "", "");
+  dicom::WriteColorFrames(dir_ / "rendered.dcm", header, {cv::Mat(8, 8, CV_8UC3, cv::Scalar(1, 2, 3))});
+  const dicom::StoreResult result_unasked = dicom::StoreFiles(scp, {dir_ / "rendered.dcm"}, as_pacs);
+  ASSERT_EQ(result_unasked.stored.size(), 1u);
+  EXPECT_FALSE(result_unasked.stored[0]);
+  EXPECT_NE(result_unasked.first_error.find("0x0124"), std::string::npos) << result_unasked.first_error;
   int kept = 0;
   for (const auto& entry :
        std::filesystem::recursive_directory_iterator(cluster.data_dir() / "dicom-incoming"))
