@@ -95,8 +95,8 @@ std::vector<std::string> DicomRetriever::RecordingSeries(const std::string& job_
          "the study holds no recording, only objects of classes endorecon does not take (" + others + ")");
   }
   spdlog::info(
-      "job {}: the study holds {} series of other objects ({}): retrieving its {} recording series "
-      "one by one",
+      "job {}: the study holds {} series of other objects ({}): retrieving its {} series of the classes "
+      "endorecon takes (recordings, and its own results, taken and not kept) one by one",
       job_id, contents.other_series, others, contents.recording_series.size());
   return contents.recording_series;
 }
