@@ -24,8 +24,9 @@ struct EyeLag {
   // The lags about `frames` that match within 0.03 of it (a scene that moves smoothly matches
   // nearly as well a frame or two off): the lag is known to lie among them.
   int earliest = 0, latest = 0;
-  // The lag is clear: enough samples, a strong match there, a clearly weaker one as given and at
-  // every other lag but its neighbours (a rhythm matches a period away as well).
+  // The lag is clear: enough samples, a strong match there, a clearly weaker one as given (or, at a
+  // sharp and strong peak, a weaker one) and at every other lag but its neighbours (a rhythm matches
+  // a period away as well).
   bool OutOfStep() const;
 };
 
