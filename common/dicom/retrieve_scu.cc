@@ -178,8 +178,23 @@ int Retrieve(DcmSCU& scu, const RetrieveRequest& request, const char* model, con
   const OFCondition status = send(id, &query, &responses);
   scu.releaseAssociation();
   try {
-    if (status.bad())
-      Fail(ErrorCode::kFailedPrecondition, verb + " of " + What(request) + " failed: " + status.text());
+    // A PACS that will not serve this AE title (Orthanc's per-modality rights) aborts the association
+    // after accepting it rather than answering with a status: that was said with no hint (found
+    // 2026-12-07).
+    if (status.bad()) {
+      const std::string text = status.text();
+      Fail(ErrorCode::kFailedPrecondition,
+           verb + " of " + What(request) + " failed: " + text +
+               (text.find("abort") != std::string::npos || text.find("Abort") != std::string::npos
+                    ? ": the PACS accepted the association, then aborted it: does it allow " +
+                          request.calling_ae_title + " to " + verb.substr(0, verb.find(' ')) +
+                          " (its settings for this AE title)?" +
+                          (request.series_uid.empty()
+                               ? " Or it refuses the study's other objects (a CT, a "
+                                 "report): name the recording's series with --series UID"
+                               : "")
+                    : ""));
+    }
     const int completed = Finish(responses, request, verb);
     FreeAll(responses);
     return completed;
