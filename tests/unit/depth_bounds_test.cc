@@ -63,6 +63,23 @@ TEST(DepthBoundsTest, AThinFarSurfaceIsWidenedByItsOwnSpan) {
   EXPECT_NEAR(flat.far, 85 * 1.05, 1e-3);
 }
 
+// A small clip is read densely enough to fit: four frames of 16 x 12 gave 12 priors at every 61st
+// pixel, too few, and kept bounds that left the surface out of reach (black images, zero depth;
+// found 2026-12-07).
+TEST(DepthBoundsTest, ASmallClipsBoundsAreFittedToo) {
+  Clip clip = ClipWithPriors(85, 85.01);
+  clip.width = 16;
+  clip.height = 12;
+  clip.depth.resize(4);
+  for (auto& frame : clip.depth) {
+    frame.resize(16 * 12);
+    for (std::size_t i = 0; i < frame.size(); ++i) frame[i] = float(60 + 45.0 * double(i) / frame.size());
+  }
+  EXPECT_NE(FitBoundsToPriors(clip).find("cut off the depth priors"), std::string::npos);
+  EXPECT_NEAR(clip.near, 60 - 0.25 * 45, 1);
+  EXPECT_NEAR(clip.far, 105 + 0.25 * 45, 1);
+}
+
 TEST(DepthBoundsTest, FittingBoundsAndOtherClipsAreLeftAlone) {
   Clip fitting = ClipWithPriors(50, 130);
   EXPECT_EQ(FitBoundsToPriors(fitting), "");

@@ -11,8 +11,12 @@
 namespace endorecon::scene {
 namespace {
 
-constexpr std::size_t kLattice = 61;       // every 61st pixel of every frame
-constexpr std::size_t kLeastPriors = 100;  // fewer say too little
+constexpr std::size_t kLattice = 61;  // every 61st pixel of every frame, at most
+// A small clip is read more densely, to about kWantedPriors priors: at every 61st pixel a clip of 4
+// frames of 16 x 12 gave 12, too few, and kept bounds that left its surface out of every ray's
+// reach: black images and zero depth, without a word (found 2026-12-07).
+constexpr std::size_t kWantedPriors = 400;
+constexpr std::size_t kLeastPriors = 16;  // fewer say too little
 constexpr double kMargin = 0.25;           // the priors' range widened by a quarter of its span each way,
 constexpr double kLeastMargin = 0.05;      // and by at least this share of their depth
 constexpr double kLooseFactor = 2;         // bounds over twice that range are loose
@@ -28,10 +32,13 @@ double Percentile(std::vector<float>& values, double p) {
 
 std::string FitBoundsToPriors(Clip& clip) {
   if (!clip.has_depth() || clip.object_radius > 0) return {};
+  std::size_t pixels = 0;
+  for (const auto& frame : clip.depth) pixels += frame.size();
+  const std::size_t lattice = std::clamp<std::size_t>(pixels / kWantedPriors, 1, kLattice);
   std::vector<float> priors;
   std::size_t outside = 0, foreign = 0;
   for (const auto& frame : clip.depth) {
-    for (std::size_t i = 0; i < frame.size(); i += kLattice) {
+    for (std::size_t i = 0; i < frame.size(); i += lattice) {
       const float z = frame[i];
       if (!(z > 0) || !std::isfinite(z)) continue;
       priors.push_back(z);

@@ -9,7 +9,8 @@
 // (at least a twentieth of the highest; not below half the lowest). Bounds spanning more than twice that
 // range, or leaving more than a quarter of the priors outside them, become that range. Left as they are: a
 // clip without depth, an object capture (its box is the object's), and priors mostly outside [near / 2, 2
-// far], which are more likely in other units than the poses (CheckClipGeometry warns of those).
+// far], which are more likely in other units than the poses (CheckClipGeometry warns of those), and
+// clips of fewer than 16 priors (read at every 61st pixel, or denser in a small clip, to about 400).
 #pragma once
 
 #include <string>
