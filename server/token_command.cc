@@ -164,7 +164,12 @@ int Revoke(const TokenFlags& flags) {
          "no token store in " + flags.data_dir + ": no token named '" + flags.name + "'");
   const auto record = store->Revoke(flags.name);
   Audit(flags, "TokenRevoke", record);
-  std::cout << "revoked token '" << record.name << "'; calls with it are refused from now on\n";
+  if (record.expires_unix_ms != 0 && record.revoked_unix_ms == record.expires_unix_ms) {
+    std::cout << "token '" << record.name << "' had expired at " << UtcTime(record.expires_unix_ms)
+              << " UTC already; set aside (its expiry no longer reported, its name free)\n";
+  } else {
+    std::cout << "revoked token '" << record.name << "'; calls with it are refused from now on\n";
+  }
   return 0;
 }
 

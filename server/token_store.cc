@@ -175,13 +175,12 @@ TokenRecord TokenStore::Revoke(const std::string& name) {
                      kStore);
     select.BindText(1, name);
     if (!select.Step()) Fail(ErrorCode::kNotFound, "no active token named '" + name + "'");
-    if (const auto expires = select.Int(3); expires != 0 && expires <= NowUnixMs()) {
-      Fail(ErrorCode::kNotFound, "the token '" + name + "' expired at " + UtcText(expires) +
-                                     ": it is refused already, and its name is free for a new token");
-    }
-    record = {name,           ParseRole(select.Text(0)).value_or(Role::kClient),
-              select.Text(1), select.Int(2),
-              NowUnixMs(),    select.Int(3)};
+    // An expired token is set aside as its successor would set it (revoked at its expiry, listed as
+    // expired): that ends EndoreconWorkerTokenExpired, whose text says to revoke it (it was refused as
+    // expired already, and the alert went on; found 2026-12-07).
+    const std::int64_t expires = select.Int(3), now = NowUnixMs();
+    record = {name,          ParseRole(select.Text(0)).value_or(Role::kClient), select.Text(1),
+              select.Int(2), expires != 0 && expires <= now ? expires : now,    expires};
   }
   Statement update(db_, "UPDATE tokens SET revoked = ? WHERE name = ? AND revoked = 0", kStore);
   update.Bind(1, record.revoked_unix_ms);

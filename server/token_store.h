@@ -53,7 +53,8 @@ class TokenStore {
   std::vector<TokenRecord> List();
   // Whether no token was ever created in the store (a store left empty requires nothing).
   bool Empty();
-  // Revokes the active token named `name`; returns its record. Throws Error(kNotFound).
+  // Revokes the active token named `name`; returns its record. An expired one is revoked at its
+  // expiry (it stays listed as expired). Throws Error(kNotFound).
   TokenRecord Revoke(const std::string& name);
   // The active token's record. Throws Error(kUnauthenticated) saying whether the token is malformed,
   // unknown, revoked or expired (never echoing it).

@@ -117,7 +117,9 @@ TEST(TokenStoreTest, AnExpiredTokenIsRefusedAndGivesUpItsName) {
     EXPECT_EQ(std::string(e.what()).find(token), std::string::npos);
   }
   EXPECT_EQ(store.Verify(lasting).name, "lasting");
-  // Revoking it changes nothing and says so.
+  // Revoking it sets it aside at its expiry, as a successor would: the alert on expired worker tokens
+  // says to revoke it, and it was refused as expired (found 2026-12-07). Once only.
+  EXPECT_EQ(store.Revoke("temp").revoked_unix_ms, expires);
   EXPECT_EQ(CodeOf([&] { store.Revoke("temp"); }), ErrorCode::kNotFound);
   // The expired token's name is free again; the token itself stays expired, not revoked.
   const auto renewed = store.Create("temp", Role::kClient, "radiology");
