@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <limits>
 #include <thread>
@@ -17,6 +18,7 @@
 #include "worker/engine/base/seconds_since.h"
 #include "worker/engine/eval/clip_evaluator.h"
 #include "worker/engine/eval/eval_plan.h"
+#include "worker/engine/eval/one_colour.h"
 #include "worker/engine/eval/report.h"
 #include "worker/engine/eval/run_outputs.h"
 #include "worker/engine/field/field_description.h"
@@ -36,6 +38,24 @@ namespace fs = std::filesystem;
 using nlohmann::literals::operator""_json_pointer;
 
 using Clock = std::chrono::steady_clock;
+
+// Records the one-colour yardstick beside the training frames' PSNR (metrics.json:
+// train.image.psnr_one_colour) and warns when the reconstruction is no better (eval/one_colour.h).
+void CheckItFits(const scene::Clip& clip, const std::vector<int>& train_frames, nlohmann::json& metrics) {
+  const auto mean = "/train/image/psnr/mean"_json_pointer;
+  if (!metrics.contains(mean) || !metrics[mean].is_number()) return;
+  const double yardstick = eval::MeanOneColourPsnr(clip, train_frames);
+  if (!std::isfinite(yardstick)) return;
+  metrics["train"]["image"]["psnr_one_colour"] = yardstick;
+  const double trained = metrics[mean].get<double>();
+  if (trained < yardstick + eval::kLeastGainOverOneColourDb) {
+    spdlog::warn(
+        "the training frames' PSNR ({:.2f} dB) is no better than each frame's mean colour alone gives "
+        "({:.2f} dB): the reconstruction learnt nothing of the scene (a learning rate too high, a config "
+        "that stops the field learning: config.json)",
+        trained, yardstick);
+  }
+}
 
 using base::SecondsSince;
 
@@ -303,6 +323,7 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
   metrics["field"] = field::DescribeField(trainer.field());
   // A resumed run reports the start of the run that began it (the checkpoint carries it).
   metrics["deformation_start"] = train::DeformationStartOf(trainer, extras);
+  CheckItFits(clip, split.train, metrics);
   eval::WriteCurve(out_dir / "curve.svg", extras.curve);
   // Where this process's time went, up to this file; the report page, written last from it (and
   // showing it as it is), takes a few tenths of a second more, logged.
