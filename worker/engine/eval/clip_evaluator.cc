@@ -1,6 +1,7 @@
 #include "worker/engine/eval/clip_evaluator.h"
 
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -424,7 +425,14 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
             WritePly(out_dir / "pointcloud" / FrameFileName(f, ".ply"),
                      BackProject(clip.cameras[f], depth, rgb, cloud_mask));
             if (f == 0) {  // the canonical frame's surface (t = 0)
-              WriteSurfaceMesh(out_dir, TriangulateDepth(clip.cameras[f], depth, rgb, cloud_mask, clip.far));
+              const SurfaceMesh mesh = TriangulateDepth(clip.cameras[f], depth, rgb, cloud_mask, clip.far);
+              // Said, not only written empty (found 2026-12-07).
+              if (mesh.triangle_count() == 0) {
+                spdlog::warn(
+                    "mesh.ply, mesh.obj, mesh.stl: the canonical frame (frame 0) shows no tissue surface "
+                    "(all tool, or nothing rendered short of the far bound): they hold no triangle");
+              }
+              WriteSurfaceMesh(out_dir, mesh);
             }
             return SecondsSince(start);
           });
