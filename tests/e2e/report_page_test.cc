@@ -301,6 +301,10 @@ TEST(ReportPageTest, RenderWritesAPageOfItsViews) {
   // The page names where the views came from and the device.
   EXPECT_EQ(data["clip"], fs::absolute(dir / "out").lexically_normal().string());
   EXPECT_EQ(data["run"]["device"].get<std::string>().rfind("CPU, ", 0), 0u) << data["run"]["device"];
+  // A view that sees no surface is said (it was written blank without a word), the others not.
+  const std::string log = testing::ReadBytes(dir / "render.log");
+  EXPECT_NE(log.find("view 2 sees no surface of the scene"), std::string::npos) << log;
+  EXPECT_EQ(log.find("view 0 sees no surface"), std::string::npos) << log;
   // A view that sees no surface has grey heat maps, as its depth is grey (they were black: "certain").
   for (const char* map : {"000002.png", "000002_model.png"}) {
     const cv::Mat away = cv::imread((dir / "views" / "uncertainty" / map).string());

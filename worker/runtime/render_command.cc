@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cstdint>
 #include <limits>
 #include <memory>
@@ -91,6 +92,14 @@ Command AddRenderCommand(CLI::App& app) {
       eval::ClearDepthWithoutSurface(frame.depth, frame.opacity);
       std::vector<std::uint8_t> surface(frame.opacity.size());
       for (std::size_t p = 0; p < surface.size(); ++p) surface[p] = frame.opacity[p] >= eval::kSurfaceOpacity;
+      // A view that sees nothing (a camera far away, or turned from the scene) was written blank
+      // without a word (found 2026-12-07).
+      if (std::none_of(surface.begin(), surface.end(), [](std::uint8_t s) { return s != 0; })) {
+        spdlog::warn(
+            "view {} sees no surface of the scene (every pixel's opacity under {}): is its camera "
+            "turned away from the scene, or outside it? Its images are blank and its depth 0",
+            i, eval::kSurfaceOpacity);
+      }
       eval::WritePng8(out / "rgb" / eval::FrameFileName(int(i), ".png"), frame.rgb, w, h);
       eval::WriteDepthNpy(out / "depth" / eval::FrameFileName(int(i), ".npy"), frame.depth, w, h);
       eval::WriteDepthPng16(out / "depth" / eval::FrameFileName(int(i), ".png"), frame.depth, w, h, scale);
