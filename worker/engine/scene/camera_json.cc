@@ -1,5 +1,7 @@
 #include "worker/engine/scene/camera_json.h"
 
+#include <fmt/format.h>
+
 #include <cmath>
 #include <numbers>
 #include <string>
@@ -60,8 +62,8 @@ Camera CameraFromJson(const json& frame, const json& top, int width, int height,
   for (const auto& [key, angle] :
        {std::pair{"camera_angle_x", angle_x}, std::pair{"camera_angle_y", angle_y}}) {
     if (angle && !(*angle > 0 && *angle < std::numbers::pi)) {
-      FailInvalid(where + ": \"" + key + "\" must be an angle in radians between 0 and pi, found " +
-                  std::to_string(*angle) + (*angle >= std::numbers::pi && *angle < 360 ? " (degrees?)" : ""));
+      FailInvalid(fmt::format("{}: \"{}\" must be an angle in radians between 0 and pi, found {:g}{}", where,
+                              key, *angle, *angle >= std::numbers::pi && *angle < 360 ? " (degrees?)" : ""));
     }
   }
   if (fl_x) {

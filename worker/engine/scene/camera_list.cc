@@ -1,5 +1,7 @@
 #include "worker/engine/scene/camera_list.h"
 
+#include <fmt/format.h>
+
 #include <optional>
 #include <string>
 
@@ -45,7 +47,9 @@ std::vector<CameraAtTime> ReadCameraList(const std::filesystem::path& path) {
                   "\"time\" for all), or none for a static scene");
     }
     const double time = given.value_or(0.0);
-    if (time < 0 || time > 1) FailInvalid(where + ": \"time\" must lie in [0, 1], found " + std::to_string(time));
+    // {:g}: std::to_string printed 1e300 as its 301 digits (found 2026-12-07).
+    if (time < 0 || time > 1)
+      FailInvalid(fmt::format("{}: \"time\" must lie in [0, 1], found {:g}", where, time));
     view.time = float(time);
     cameras.push_back(view);
   }
