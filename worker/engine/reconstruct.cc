@@ -169,6 +169,13 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
                options.frames.SelectsAll() ? "" : " (--frames " + options.frames.ToString() + ")", clip.width,
                clip.height, split.train.size(), split.heldout.size(), threads, trainer.device(),
                field::DescribeField(trainer.field()));
+  // Said, as a right eye and its baseline were taken without a word and had no effect (found
+  // 2026-12-07): prepare makes depth from both eyes; the reconstruction trains on the left's.
+  if (clip.has_stereo()) {
+    spdlog::info(
+        "the clip's right eye (images_right/) is not trained on: the reconstruction uses the left eye and "
+        "its depth maps (endorecon-worker prepare makes those from both eyes)");
+  }
   // The renderers run where the steps do and skip what the trainer's occupancy grid says is empty.
   render::FrameRenderer renderer(trainer.field(), trainer.box(),
                                  train::EvalRenderSettings(config, clip.near, clip.far), backends.render);
