@@ -223,8 +223,11 @@ int Run(const ServerFlags& flags) {
   JobServiceImpl job_service(guard, coordinator, uploads, blobs, hub, workers, metrics, stalls);
   WorkerServiceImpl worker_service(
       guard, coordinator, uploads, blobs, workers, metrics, stalls,
+      // A long poll is held at most half the alive window: a worker waiting in one for longer was
+      // listed as gone and left out of endorecon_workers_connected (its --lease-wait 10 beside a
+      // --lease-ttl-ms of 4000; found 2026-12-07).
       {std::chrono::milliseconds(flags.lease_ttl_ms), std::chrono::milliseconds(flags.heartbeat_ms),
-       std::chrono::milliseconds(20000)});
+       std::chrono::milliseconds(std::min<std::int64_t>(20000, flags.lease_ttl_ms / 2))});
 
   grpc::EnableDefaultHealthCheckService(true);
   grpc::ServerBuilder builder;

@@ -228,6 +228,23 @@ TEST(ServerRestartTest, AnIdleWorkerIsListedAgainSoonAfterARestart) {
       << worker.Log();
 }
 
+// An idle worker whose long poll is longer than the server's alive window (its --lease-wait 10 beside
+// the harness's lease TTL of 3 s) stays listed alive: the server holds a poll half the window at most
+// (it was listed gone, and out of endorecon_workers_connected, while it waited; found 2026-12-07).
+TEST(ServerRestartTest, AnIdleWorkerInALongPollStaysAlive) {
+  Cluster cluster;
+  auto& worker = cluster.StartWorker("w1", {"--lease-wait", "10"});
+  ASSERT_TRUE(WaitUntil([&] { return ListedWithDevices(cluster, "w1"); })) << worker.Log();
+  for (int i = 0; i < 16; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(500));
+    grpc::ClientContext context;
+    v1::ListWorkersResponse workers;
+    ASSERT_TRUE(cluster.stub().ListWorkers(&context, {}, &workers).ok());
+    ASSERT_EQ(workers.workers_size(), 1);
+    EXPECT_TRUE(workers.workers(0).alive()) << "after " << (i + 1) * 0.5 << " s";
+  }
+}
+
 // A worker stopped by SIGTERM tells the server, and is listed as not alive at once: it was listed
 // alive, and counted in endorecon_workers_connected, until its heartbeats had been missed for the
 // alive window (found 2026-12-05).
