@@ -69,7 +69,9 @@ TEST_F(BadRecordingTest, EyesOfDifferentLengths) {
   // Two folders' counts are exact: refused before any frame is prepared.
   const std::string message = Refused(Options());
   EXPECT_NE(message.find("right: 5 frames while "), std::string::npos) << message;
-  EXPECT_NE(message.find("left has 6 (both eyes' recordings must have the same length)"), std::string::npos)
+  EXPECT_NE(message.find("left has 6 (both eyes' recordings must have the same length; if one eye's began "
+                         "earlier, pass --skip-left or --skip-right"),
+            std::string::npos)
       << message;
 }
 
@@ -259,7 +261,8 @@ TEST_F(BadRecordingTest, MasksThatDoNotMatch) {
   for (int i = 0; i < 5; ++i)
     WriteImage(dir_ / "masks" / (std::to_string(i) + ".png"), cv::Mat(48, 64, CV_8U, cv::Scalar(0)));
   message = Refused(options);
-  EXPECT_NE(message.find("masks frame 5: the masks end after 5 frames while the recording goes on"),
+  // Two folders: the counts are compared before any frame is prepared (found 2026-12-07).
+  EXPECT_NE(message.find("masks: holds 5 mask frames, fewer than the left eye's 6 (one mask per frame)"),
             std::string::npos)
       << message;
 
@@ -302,8 +305,7 @@ TEST_F(BadRecordingTest, ASkipDropsTheLeftEyesMasksAndPosesAndTheirCountsAreStil
   masks(5);
   message = Refused(options);
   EXPECT_NE(
-      message.find("masks frame 5: the masks end after 5 frames (3 after the 2 of --skip-left) while the "
-                   "recording goes on"),
+      message.find("masks: holds 5 mask frames, fewer than the left eye's 8 (6 after the 2 of --skip-left)"),
       std::string::npos)
       << message;
   masks(8);
@@ -323,10 +325,9 @@ TEST_F(BadRecordingTest, ASkipDropsTheLeftEyesMasksAndPosesAndTheirCountsAreStil
   fs::remove_all(options.out);
   poses(4);
   message = Refused(options);
-  EXPECT_NE(
-      message.find("poses.csv: holds 4 poses but the recording has more frames (frame 4 has none, the pair 2 "
-                   "after --skip-left 2)"),
-      std::string::npos)
+  EXPECT_NE(message.find(
+                "poses.csv: holds 4 poses but the recording has 8 frames (2 of them dropped by --skip-left)"),
+            std::string::npos)
       << message;
   poses(9);
   message = Refused(options);
@@ -351,7 +352,7 @@ TEST_F(BadRecordingTest, PoseFilesOfTheWrongCountOrNotRigid) {
     for (int i = 0; i < 5; ++i) csv << "1,0,0,0, 0,1,0,0, 0,0,1," << i << "\n";
   }
   std::string message = Refused(options);
-  EXPECT_NE(message.find("poses.csv: holds 5 poses but the recording has more frames (frame 5 has none)"),
+  EXPECT_NE(message.find("poses.csv: holds 5 poses but the recording has 6 frames (one pose per frame)"),
             std::string::npos)
       << message;
   {

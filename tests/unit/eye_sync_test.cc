@@ -188,6 +188,11 @@ TEST_F(RealEyesTest, ASkipGivenAlreadyIsCountedInTheAdvice) {
                    "--skip-right 9"),
       std::string::npos)
       << message;
+  // Eyes in step given a skip they do not need: told to leave it out.
+  const prepare::RecordingInput together{
+      prepare::StereoLayout::kTwoSources, Eye("left2", 0, false), Eye("right2", 0, true), {}, 2, 0};
+  message = ErrorFrom([&] { prepare::CheckEyesInStep(together); });
+  EXPECT_NE(message.find("Leave out --skip-left 2: the files begin together"), std::string::npos) << message;
   input.skip_right = 0;
   input.skip_left = 5;
   message = ErrorFrom([&] { prepare::CheckEyesInStep(input); });

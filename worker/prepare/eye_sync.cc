@@ -131,23 +131,24 @@ void CheckEyesInStep(const RecordingInput& input) {
     left.push_back(a);
     right.push_back(b);
   }
-  if (left.empty()) {
-    // Nothing is left after the skips: said here, where the skips are known, not as "no point
-    // matched" or "no frame selected" later (found 2026-12-07).
-    if (pairs == 0 && (input.skip_left > 0 || input.skip_right > 0)) {
-      FailInvalid(fmt::format("{}: no pair of frames is left after {}", source.name(),
-                              SkipsText(input.skip_left, input.skip_right)));
-    }
-    return;
+  // Nothing is left after the skips: said here, where the skips are known, not as "no point matched"
+  // or "no frame selected" later (found 2026-12-07).
+  if (pairs == 0 && (input.skip_left > 0 || input.skip_right > 0)) {
+    FailInvalid(fmt::format("{}: no pair of frames is left after {}", source.name(),
+                            SkipsText(input.skip_left, input.skip_right)));
   }
-  cv::Mat left_signal, right_signal;
-  cv::hconcat(left, left_signal);
-  cv::hconcat(right, right_signal);
-  const EyeLag lag = MatchLag(left_signal, right_signal, left_signal.cols / 4);
-  spdlog::debug("{}: the eyes' motion matches {:.2f} as given, best {:.2f} at a lag of {} frame(s)",
-                source.name(), lag.match_in_step, lag.match, lag.frames);
+  if (pairs == 0) return;
+  EyeLag lag;
+  if (!left.empty()) {
+    cv::Mat left_signal, right_signal;
+    cv::hconcat(left, left_signal);
+    cv::hconcat(right, right_signal);
+    lag = MatchLag(left_signal, right_signal, left_signal.cols / 4);
+    spdlog::debug("{}: the eyes' motion matches {:.2f} as given, best {:.2f} at a lag of {} frame(s)",
+                  source.name(), lag.match_in_step, lag.match, lag.frames);
+  }
   // A quarter of the signal each way is searched: what is compared is its middle half.
-  if (const int changes = left_signal.cols; changes - 2 * (changes / 4) < kMinSamples) {
+  if (const int changes = static_cast<int>(left.size()); changes - 2 * (changes / 4) < kMinSamples) {
     // A checkerboard recording of 20 views, a short clip: a lag of a few frames would pass unseen
     // (found 2026-12-07).
     spdlog::warn(
@@ -175,18 +176,19 @@ void CheckEyesInStep(const RecordingInput& input) {
   // it twice cannot swing between two values (found 2026-12-07).
   const bool skipped = input.skip_left > 0 || input.skip_right > 0;
   const int needed = input.skip_left - input.skip_right + lag.frames;  // > 0: the left eye's to drop
+  const std::string given = SkipsText(input.skip_left, input.skip_right);
   const std::string pass =
-      needed == 0 ? "Pass neither --skip-left nor --skip-right: the files begin together"
-                  : fmt::format("Pass {} to drop the {} eye's first {} frame(s) and pair the rest",
-                                SkipsText(std::max(needed, 0), std::max(-needed, 0)),
-                                needed > 0 ? "left" : "right", std::abs(needed));
+      needed == 0
+          ? fmt::format("Leave out {}: the files begin together", given)
+          : fmt::format("Pass {} to drop the {} eye's first {} frame(s) and pair the rest{}",
+                        SkipsText(std::max(needed, 0), std::max(-needed, 0)), needed > 0 ? "left" : "right",
+                        std::abs(needed), skipped ? " instead of " + given : "");
   FailInvalid(fmt::format(
       "{}: the eyes' recordings{} begin {}: what the {} eye sees move matches what the {} eye sees "
       "{} frame(s) later (correlation {:.2f} over {} frames; {:.2f} as the frames are paired now), so the "
-      "{} eye's recording began first. {}{} (docs/formats.md, \"Raw recordings\")",
-      source.name(), skipped ? " after " + SkipsText(input.skip_left, input.skip_right) : "", apart, second,
-      first, frames, lag.match, lag.samples, lag.match_in_step, first, pass,
-      skipped ? fmt::format(" instead of {}", SkipsText(input.skip_left, input.skip_right)) : ""));
+      "{} eye's recording began first. {} (docs/formats.md, \"Raw recordings\")",
+      source.name(), skipped ? " after " + given : "", apart, second, first, frames, lag.match, lag.samples,
+      lag.match_in_step, first, pass));
 }
 
 }  // namespace endorecon::prepare

@@ -152,6 +152,24 @@ class MaskReader {
   }
   bool active() const { return source_ != nullptr; }
 
+  // Before any frame is prepared, where both counts are known (folders): the masks' against the left
+  // eye's file, `left_file_frames` (-1: not known). A wrong count was found only after the whole
+  // recording was prepared (found 2026-12-07).
+  void CheckCount(int left_file_frames) const {
+    if (!source_ || left_file_frames < 0 || !source_->count_is_exact()) return;
+    const int masks = source_->announced_frames();
+    if (masks > left_file_frames) {
+      FailInvalid(source_->name() + ": holds more mask frames than the left eye's " +
+                  std::to_string(left_file_frames) + AfterSkip(left_file_frames - skip_) +
+                  " (one mask per frame)");
+    }
+    if (masks < left_file_frames) {
+      FailInvalid(source_->name() + ": holds " + std::to_string(masks) +
+                  " mask frames, fewer than the left eye's " + std::to_string(left_file_frames) +
+                  AfterSkip(left_file_frames - skip_) + " (one mask per frame)");
+    }
+  }
+
   // The tool mask (0/255) of recording frame `index`, or empty without masks.
   cv::Mat Next(int index) {
     if (!source_) return {};
@@ -365,6 +383,11 @@ class Preparation {
     // to skip are what to say (found 2026-12-07).
     CheckEyesInStep(options.recording);
     source_.RequireEqualLengths();
+    // The masks' and poses' counts, where the files say them, before any frame is prepared.
+    if (const int left = source_.left_file_frames(); left >= 0) {
+      masks_->CheckCount(left);
+      placer_->CheckCount(left - options.recording.skip_left);
+    }
     survey_ = Survey(options, *rectifier_, excluded_[0], source_.announced_frames());
     survey_.CheckTwoViews(source_.name());
     survey_.CheckEyeOrder(source_.name());

@@ -82,8 +82,11 @@ void StereoSource::CheckPairedByOrder(UnequalLengths unequal) {
 void StereoSource::RequireEqualLengths() const {
   if (!second_ || cut_apart() || !first_->count_is_exact() || !second_->count_is_exact()) return;
   if (const int m = first_->announced_frames(), n = second_->announced_frames(); m != n) {
-    FailInvalid(fmt::format("{}: {} frames while {} has {} (both eyes' recordings must have the same length)",
-                            second_->name(), n, first_->name(), m));
+    FailInvalid(fmt::format(
+        "{}: {} frames while {} has {} (both eyes' recordings must have the same length; if one eye's "
+        "began earlier, pass --skip-left or --skip-right with the frames it began before the other: the "
+        "eyes' motion did not tell how many)",
+        second_->name(), n, first_->name(), m));
   }
 }
 
@@ -120,8 +123,11 @@ bool StereoSource::Ended(bool first, bool second, int index) {
   FrameSource& going = first ? *first_ : *second_;
   // Eyes cut apart at their start may end apart too: the pairs end with the shorter.
   if (cut_apart()) {
-    spdlog::warn("{}: its frames after the {} paired with {} are left out (the eyes' recordings end apart)",
-                 going.name(), index, ended.name());
+    // With no pair at all the eyes' timing check refuses the skip instead.
+    if (index > 0) {
+      spdlog::warn("{}: its frames after the {} paired with {} are left out (the eyes' recordings end apart)",
+                   going.name(), index, ended.name());
+    }
     return true;
   }
   // A video a frame or two longer than the other (a trailing frame one eye's file kept) ends the

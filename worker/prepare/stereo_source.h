@@ -58,6 +58,9 @@ class StereoSource {
   // with a warning) or their frames' times are out of step.
   bool Next(StereoFrame& frame);
   bool Skip();
+  // The frames of the left eye's file, its skip included, where they are known before it is read (a
+  // folder's); -1 otherwise.
+  int left_file_frames() const { return first_->count_is_exact() ? first_->announced_frames() : -1; }
   // After the last pair: the frames the left eye's recording held after its skip (its masks' count),
   // or -1 where the right eye's ended first and the left's went on (eyes cut apart).
   int left_eye_frames() const { return left_frames_; }
