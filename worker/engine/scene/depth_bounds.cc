@@ -16,7 +16,7 @@ constexpr std::size_t kLattice = 61;  // every 61st pixel of every frame, at mos
 // frames of 16 x 12 gave 12, too few, and kept bounds that left its surface out of every ray's
 // reach: black images and zero depth, without a word (found 2026-12-07).
 constexpr std::size_t kWantedPriors = 400;
-constexpr std::size_t kLeastPriors = 16;  // fewer say too little
+constexpr std::size_t kLeastPriors = 16;   // fewer say too little
 constexpr double kMargin = 0.25;           // the priors' range widened by a quarter of its span each way,
 constexpr double kLeastMargin = 0.05;      // and by at least this share of their depth
 constexpr double kLooseFactor = 2;         // bounds over twice that range are loose
