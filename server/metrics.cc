@@ -53,8 +53,8 @@ Metrics::Metrics(const std::string& bind_address)
                    .Name("endorecon_calls_refused_total")
                    .Help("Calls refused, by gRPC status")
                    .Register(*registry_)),
-      expired_(
-          Counter(*registry_, "endorecon_jobs_expired_total", "Finished jobs whose files retention deleted")),
+      expired_(Counter(*registry_, "endorecon_jobs_expired_total",
+                       "Finished jobs whose files retention or a delete removed")),
       data_available_(
           Gauge(*registry_, "endorecon_data_available_bytes", "Free bytes on the data folder's file system")),
       data_capacity_(

@@ -363,9 +363,9 @@ bool RunLeasedJob(WorkerClient& client, const v1::LeaseResponse& lease, const De
       reporter.AddPreview(EncodePreview(preview, last_iteration));
     };
     hooks.on_checkpoint = [&](const std::string& path) {
-      // A checkpoint only spares a job handed out again its training so far: one the server cannot
-      // take now (unreachable, its upload slots all taken, or its data disk full) is skipped, and the
-      // job goes on.
+      // A checkpoint only spares a job handed out again its training so far: it is retried while the
+      // server answers the job's heartbeats (a wait for an upload slot too), and skipped, the job going
+      // on, when the server's data disk is full or it has answered nothing for 30 s.
       try {
         reporter.SetCheckpoint(
             WhileLeaseHeld(client, reporter, [&] { return UploadCheckpoint(client, path); }));
