@@ -1,7 +1,6 @@
 #include "common/cli_checks.h"
 
 #include <algorithm>
-#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -123,17 +122,15 @@ CLI::Validator ListenAddress() {
 void DecimalIntegers(CLI::App& app) {
   const CLI::Validator decimal(
       [](std::string& text) -> std::string {
-        const std::size_t digits = text.find_first_not_of("+-");
-        if (digits > 1 || digits == std::string::npos) return {};  // left to the option's own reading
-        if (text.find_first_not_of("0123456789", digits) == std::string::npos) {
-          const std::size_t first = std::min(text.find_first_not_of('0', digits), text.size() - 1);
-          text.erase(digits, first - digits);
-          return {};
-        }
-        if (text.size() > digits + 1 && text[digits] == '0' &&
-            std::isalpha(static_cast<unsigned char>(text[digits + 1]))) {
-          return text + ": expected a decimal number";
-        }
+        const std::size_t begin = text.find_first_not_of(" \t"), end = text.find_last_not_of(" \t");
+        const std::string given = begin == std::string::npos ? "" : text.substr(begin, end - begin + 1);
+        const std::size_t digits = given.empty() || (given[0] != '+' && given[0] != '-') ? 0 : 1;
+        // Whole numbers only, said so: "9abc" was "not a finite number", "9.0" CLI11's "Could not
+        // convert" (found 2026-12-07).
+        if (given.size() == digits || given.find_first_not_of("0123456789", digits) != std::string::npos)
+          return "'" + given + "': expected a whole number (decimal digits)";
+        const std::size_t first = std::min(given.find_first_not_of('0', digits), given.size() - 1);
+        text = given.substr(0, digits) + given.substr(first);
         return {};
       },
       "", "DecimalInteger");

@@ -34,7 +34,8 @@ CLI::Validator ServerAddress();
 
 // Makes every integer option of `app` and of its commands read decimal numbers only: CLI11 reads
 // them as C does, so `--skip-left 011` skipped 9 frames without a word (found 2026-12-07). Leading
-// zeros are dropped; 0x... is refused. Call once every option is added.
+// zeros are dropped; anything but an optional sign and digits (0x9, 9.0, 9abc) is refused as no
+// whole number. Call once every option is added.
 void DecimalIntegers(CLI::App& app);
 
 }  // namespace endorecon

@@ -50,7 +50,13 @@ TEST(DecimalIntegersTest, LeadingZerosAreDecimalAndHexIsRefusedInEveryCommand) {
   CLI::App hex;
   hex.add_subcommand("run")->add_option("--skip", skip);
   const std::string message = Parse(hex, {"run", "--skip", "0x9"});
-  EXPECT_NE(message.find("0x9: expected a decimal number"), std::string::npos) << message;
+  EXPECT_NE(message.find("'0x9': expected a whole number"), std::string::npos) << message;
+  for (const char* not_whole : {"9.0", "9abc", "1e1", "", "-"}) {
+    CLI::App app2;
+    app2.add_option("--skip", skip);
+    EXPECT_NE(Parse(app2, {"--skip", not_whole}).find("expected a whole number"), std::string::npos)
+        << not_whole;
+  }
   // Its check still applies after the zeros are dropped.
   CLI::App negative;
   negative.add_option("--count", count)->check(AtLeastZero());
