@@ -158,11 +158,7 @@ class MaskReader {
   void CheckCount(int left_file_frames) const {
     if (!source_ || left_file_frames < 0 || !source_->count_is_exact()) return;
     const int masks = source_->announced_frames();
-    if (masks > left_file_frames) {
-      FailInvalid(source_->name() + ": holds more mask frames than the left eye's " +
-                  std::to_string(left_file_frames) + AfterSkip(left_file_frames - skip_) +
-                  " (one mask per frame)");
-    }
+    if (masks > left_file_frames) TooMany(left_file_frames);
     if (masks < left_file_frames) {
       FailInvalid(source_->name() + ": holds " + std::to_string(masks) +
                   " mask frames, fewer than the left eye's " + std::to_string(left_file_frames) +
@@ -188,10 +184,7 @@ class MaskReader {
   void CheckEnd(int pairs, int left_frames) {
     if (!source_) return;
     for (int index = pairs; index < left_frames; ++index) Skip(index);
-    if (source_->Skip()) {
-      FailInvalid(source_->name() + ": holds more mask frames than the left eye's " +
-                  std::to_string(left_frames + skip_) + AfterSkip(left_frames) + " (one mask per frame)");
-    }
+    if (source_->Skip()) TooMany(left_frames + skip_);
   }
 
  private:
@@ -200,6 +193,12 @@ class MaskReader {
     return skip_ > 0
                ? " (" + std::to_string(frames) + " after the " + std::to_string(skip_) + " of --skip-left)"
                : "";
+  }
+  // `left_file_frames`: the left eye's file's, its skip included.
+  [[noreturn]] void TooMany(int left_file_frames) const {
+    FailInvalid(source_->name() + ": holds more mask frames than the left eye's " +
+                std::to_string(left_file_frames) + AfterSkip(left_file_frames - skip_) +
+                " (one mask per frame)");
   }
   [[noreturn]] void Short(int index) const {
     FailInvalid(source_->name() + " frame " + std::to_string(index + skip_) + ": the masks end after " +
