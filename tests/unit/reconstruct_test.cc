@@ -244,6 +244,20 @@ TEST(Reconstruct, ResultsAreNotWrittenOverTheClip) {
   EXPECT_EQ(files(), before);
 }
 
+// A refused resume writes nothing: it left a folder holding only config.json, which a later render
+// took for a reconstruction's results.
+TEST(Reconstruct, ARefusedResumeLeavesNoResultsFolder) {
+  testing::TempDir dir("reconstruct-refused-resume");
+  WriteSmallClip(dir / "clip");
+  testing::WriteBytes(dir / "not-a-checkpoint.bin", "hello");
+  ReconstructOptions options = SmallRunOptions(dir / "clip", dir / "out");
+  options.resume_from = (dir / "not-a-checkpoint.bin").string();
+  options.iterations = 5;
+  const std::string message = testing::ErrorFrom([&] { Reconstruct(options, {}); });
+  EXPECT_NE(message.find("not-a-checkpoint.bin"), std::string::npos) << message;
+  EXPECT_FALSE(fs::exists(dir / "out")) << message;
+}
+
 // Without a time budget evaluation still keeps to about a quarter of the run, but nothing is late:
 // the held-out frames are rendered in full however short the training was.
 TEST(Reconstruct, WithoutABudgetHeldOutFramesAreNeverReduced) {

@@ -147,7 +147,6 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
   const train::SceneFit fit = train::FitToScene(clip, config, split.train);
   if (!options.resume_from.empty()) config.adaptive_map_stride = checkpoint_stride;
   const fs::path out_dir = options.out_dir;
-  WriteFile(out_dir / "config.json", RunConfigJson(config, options, threads).dump(2), "run configuration");
 
   const DeviceBackends backends = BackendsFor(options.device);
   train::Trainer trainer(clip, config, split.train, options.seed, backends.step, backends.render);
@@ -159,6 +158,9 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
                  trainer.iteration(), extras.train_seconds,
                  options.time_budget_s > 0 ? ", which the time budget counts" : "");
   }
+  // Written once the checkpoint is taken, not before: a refused resume left a folder holding only
+  // config.json, which later runs and renders took for a reconstruction's results (found 2026-12-07).
+  WriteFile(out_dir / "config.json", RunConfigJson(config, options, threads).dump(2), "run configuration");
   extras.frames = options.frames;  // what its checkpoints record
   // A resumed run's deformation is the checkpoint's: nothing to fit. A stop asked for while the clip
   // loaded skips the fit (seconds of optical flow on a large clip: a cancel took 8 s to land); the
