@@ -17,6 +17,7 @@
 #include "worker/engine/eval/gain_fit.h"
 #include "worker/engine/eval/psnr.h"
 #include "worker/engine/reconstruct.h"
+#include "worker/engine/run_config.h"
 #include "worker/engine/scene/clip_loader.h"
 #include "worker/engine/scene/synthetic_clip.h"
 
@@ -78,9 +79,14 @@ int main(int argc, char** argv) {
   options.holdout = 8;
   options.iterations = 1000000;
   options.time_budget_s = budget;
+  const auto clip = endorecon::scene::LoadClip(options.clip_dir);
+  if (endorecon::SplitFrames(clip.frame_count(), options.holdout).heldout.empty()) {
+    std::fprintf(stderr, "%s: %d frames hold none out at every %dth: the bench needs at least %d frames\n",
+                 clip_dir.c_str(), clip.frame_count(), options.holdout, options.holdout);
+    return 2;
+  }
   endorecon::Reconstruct(options, {});
 
-  const auto clip = endorecon::scene::LoadClip(options.clip_dir);
   std::ifstream in(fs::path(options.out_dir) / "metrics.json");
   const auto metrics = nlohmann::json::parse(in);
   const auto heldout = metrics["heldout"]["frames"].get<std::vector<int>>();

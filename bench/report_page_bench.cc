@@ -3,10 +3,10 @@
 // the 3D view and everything (the page's own marks, dataset.shownMs and readyMs), and the renderer's
 // counters (the DevTools Performance domain). Prints one line per run and the medians.
 // Usage: report_page_bench RESULTS/report.html [--runs N]
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
-#include <cstring>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -14,12 +14,17 @@
 #include "tests/e2e/headless_chromium.h"
 
 int main(int argc, char** argv) {
-  if (argc < 2) {
-    std::fprintf(stderr, "usage: %s REPORT.html [--runs N]\n", argv[0]);
-    return 2;
-  }
-  const std::filesystem::path report = std::filesystem::absolute(argv[1]);
-  const int runs = argc >= 4 && std::strcmp(argv[2], "--runs") == 0 ? std::max(1, std::atoi(argv[3])) : 5;
+  std::string report_file;
+  int runs = 5;
+  CLI::App app{"report_page_bench: how long a results page takes to open in a fresh headless Chromium"};
+  app.add_option("report", report_file, "a results folder's report.html")
+      ->required()
+      ->check(CLI::ExistingFile);
+  app.add_option("--runs", runs, "fresh browsers, one page load each")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  CLI11_PARSE(app, argc, argv);
+  const std::filesystem::path report = std::filesystem::absolute(report_file);
   std::printf("%s: %.2f MB\n", report.c_str(), double(std::filesystem::file_size(report)) / 1e6);
   std::printf("%-4s %10s %10s %12s %12s %12s\n", "run", "shown (s)", "ready (s)", "tasks (s)", "script (s)",
               "CPU (s)");
