@@ -13,14 +13,16 @@ FROM nvidia/cuda:${CUDA_VERSION}-devel-ubuntu22.04 AS cuda
 
 FROM debian:12 AS build
 ARG CUDA_HOST_COMPILER=g++
-ARG CUDA_ARCHITECTURES="70;75;80;86;90"
+# Empty: cmake/Cuda.cmake's cluster list for the toolkit's version (SASS for 7.0 (not with CUDA 13),
+# 7.5, 8.0, 8.6 and 9.0 with its PTX); --build-arg CUDA_ARCHITECTURES="70-real;80" picks others.
+ARG CUDA_ARCHITECTURES=
 COPY --from=cuda /usr/local/cuda /usr/local/cuda
 COPY . /src
 ENV PATH=/usr/local/cuda/bin:$PATH
 RUN /src/scripts/install-deps \
  && if [ "$CUDA_HOST_COMPILER" != g++ ]; then apt-get install -y -qq --no-install-recommends "$CUDA_HOST_COMPILER"; fi \
  && cmake -S /src -B /build -G Ninja -DCMAKE_BUILD_TYPE=Release -DENDORECON_CUDA=ON -DENDORECON_NATIVE=OFF \
-      -DENDORECON_TESTS=OFF -DENDORECON_BENCH=OFF -DCMAKE_CUDA_ARCHITECTURES="$CUDA_ARCHITECTURES" \
+      -DENDORECON_TESTS=OFF -DENDORECON_BENCH=OFF -DENDORECON_CUDA_ARCHITECTURES="$CUDA_ARCHITECTURES" \
       -DCMAKE_CUDA_HOST_COMPILER="$CUDA_HOST_COMPILER" \
  && cmake --build /build --target endorecon-worker endorecon
 
