@@ -204,6 +204,15 @@ TEST(ClipEvaluatorTest, APlanPricedTooLowIsKeptToItsDeadline) {
   EXPECT_EQ(on_time.at("full_frames"), nlohmann::json::array({0, 2}));
   EXPECT_FALSE(on_time.contains("uncertainty_stride_late"));
   EXPECT_FALSE(on_time.contains("heldout_reduced"));
+  // What the frames as rendered cost at the plan's prices, which rendering took far longer than:
+  // reconstruct.cc reprices the leanest plan by that pace.
+  const int pixels = scene::RenderedPixels(run.clip);
+  double priced = 0;
+  for (const FrameRender how : what.plan.frames) priced += FrameSeconds(how, 2, what.plan.cost, pixels);
+  EXPECT_DOUBLE_EQ(on_time.at("seconds").at("render_priced").get<double>(), priced);
+  EXPECT_GT(on_time.at("seconds").at("render").get<double>(), 100 * priced);
+  EXPECT_DOUBLE_EQ(late.at("seconds").at("render_priced").get<double>(),
+                   5 * FrameSeconds(FrameRender::kReduced, 4, what.plan.cost, pixels));
   // A plan that reduces the held-out frame (a budget too small for full ones) says so; with the
   // time to spare the pacer renders it full after all.
   what.plan.frames[2] = FrameRender::kReduced;

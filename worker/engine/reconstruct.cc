@@ -289,8 +289,10 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
       }
       if (options.time_budget_s > 0 && what.plan.seconds > left + slack) {
         spdlog::warn(
-            "rendering the results of {} frames of {}x{} needs about {:.0f} s at the least and the budget "
-            "leaves {:.0f} s: the run will end more than {:.0f}% late (the budget is too small for the clip)",
+            "rendering the results of {} frames of {}x{} needs about {:.0f} s at the least, as priced now, "
+            "and "
+            "the budget leaves {:.0f} s: the run will end more than {:.0f}% late unless the frames render "
+            "faster than priced (the budget is too small for the clip)",
             clip.frame_count(), clip.width, clip.height, what.plan.seconds, left, 100 * kBudgetTolerance);
       }
       what.deadline = now + std::chrono::duration_cast<Clock::duration>(
@@ -311,7 +313,15 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
     what.should_stop = hooks.should_stop;
     try {
       metrics = eval::EvaluateClip(clip, uncertainty_renderer, what, out_dir);
-      if (least_s >= 0) metrics["evaluation"]["seconds"]["render_least"] = least_s;
+      if (least_s >= 0) {
+        // Priced again at the pace the frames rendered: the prices come from a few tenths of a second
+        // of rendering, and a busy machine then priced them 2.3x high, advising a budget twice too
+        // large (found 2026-12-07).
+        nlohmann::json& seconds = metrics["evaluation"]["seconds"];
+        const double priced = seconds.value("render_priced", 0.0);
+        if (priced > 0) least_s *= seconds.at("render").get<double>() / priced;
+        seconds["render_least"] = least_s;
+      }
     } catch (const Error& e) {
       if (e.code() != ErrorCode::kCancelled || !what.should_stop || !what.should_stop()) throw;
       spdlog::info("{}", e.what());

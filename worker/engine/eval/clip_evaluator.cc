@@ -314,6 +314,7 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
                    what.heldout_slack_s);
   std::future<double> writing;  // the previous frame's files; returns the seconds they took
   double render_seconds = 0, write_seconds = 0, model_map_seconds = 0;
+  double render_priced = 0;  // what the frames as rendered cost at the plan's measured prices
   std::vector<int> full_frames, reduced_frames;
   nlohmann::json coarser = nlohmann::json::array();  // reduced frames given a coarser stride than planned
   // Finishes frame f's model map once the frames within kNeighbourFrames after it are rendered: adds
@@ -367,6 +368,7 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
     EvaluatedFrame evaluated = RenderFrame(clip, f, how, choice.stride, renderer, what.plain);
     render::RenderedFrame& frame = evaluated.frame;
     render_seconds += SecondsSince(start);
+    render_priced += FrameSeconds(how, choice.stride, what.plan.cost, RenderedPixels(clip));
     (how == FrameRender::kFull ? full_frames : reduced_frames).push_back(f);
     if (how == FrameRender::kReduced && choice.stride != what.plan.stride) {
       coarser.push_back({{"frame", f}, {"stride", choice.stride}});
@@ -502,7 +504,12 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
                     {"write", write_seconds},
                     {"wall", SecondsSince(wall)}};
   // What the plan predicted the rendering would take (absent when its costs were not measured).
-  if (what.plan.cost.known()) how["seconds"]["render_planned"] = what.plan.seconds;
+  // What the frames as rendered would have taken at those prices: rendering over it is the pace the
+  // prices missed by (a few tenths of a second of rendering on a loaded machine priced 2.3x high).
+  if (what.plan.cost.known()) {
+    how["seconds"]["render_planned"] = what.plan.seconds;
+    how["seconds"]["render_priced"] = render_priced;
+  }
   // The training split's tissue PSNR by how its frames were rendered: a reduced frame's colour is a
   // cheaper render's, so the split's summary mixes two renders; the full frames' is the one to
   // compare across runs. Against the observed images, and against the noise-free truth where known.
