@@ -18,6 +18,7 @@
 #include "client/commands.h"
 #include "client/exit_codes.h"
 #include "common/cli_checks.h"
+#include "common/cli_usage.h"
 #include "common/error.h"
 #include "common/job_bounds.h"
 #include "common/transport_security.h"
@@ -66,22 +67,6 @@ std::string HintFor(const endorecon::Error& error, const Globals& globals) {
   if (error.code() == endorecon::ErrorCode::kUnauthenticated && globals.token_file.empty() &&
       !std::getenv("ENDORECON_TOKEN"))
     return "\nendorecon: pass --token-file FILE or set ENDORECON_TOKEN";
-  return "";
-}
-
-// The first word of the command line that is neither an option, an option's value nor a command,
-// when it comes before any command: what the user meant as one.
-std::string UnknownCommand(const CLI::App& app, int argc, char** argv,
-                           const std::map<std::string, Command>& commands) {
-  for (int i = 1; i < argc; ++i) {
-    const std::string word = argv[i];
-    if (word.starts_with("-")) {
-      const CLI::Option* option = app.get_option_no_throw(word);
-      if (option != nullptr && option->get_items_expected_min() > 0) ++i;  // its value
-      continue;
-    }
-    return commands.contains(word) ? "" : word;
-  }
   return "";
 }
 
@@ -158,19 +143,14 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    // A mistyped command ("statuss") was told "A subcommand is required": it is named.
-    if (const auto unknown = UnknownCommand(app, argc, argv, commands);
-        !unknown.empty() && app.get_subcommands().empty()) {
-      std::string known;
-      for (const auto& [name, command] : commands) known += (known.empty() ? "" : ", ") + name;
-      std::cerr << "endorecon: unknown command '" << unknown << "' (the commands: " << known
-                << "; endorecon --help)\n";
-      return kExitInvalid;
-    }
     if (e.get_exit_code() == 0) return app.exit(e) == 0 ? kExitOk : kExitInvalid;  // --help, --version
-    // CLI11 repeats the words it did not expect: a token typed after a "--token" that does not exist
-    // went to the terminal and its scrollback whole (found 2026-12-06).
-    std::cerr << endorecon::PrintableLines(endorecon::WithoutTokens(e.what())) << "\n";
+    // A mistyped command or option is named, with the nearest known one. CLI11 repeats the words it
+    // did not expect: a token typed after a "--token" that does not exist went to the terminal and
+    // its scrollback whole (found 2026-12-06).
+    const std::string mistake = endorecon::UsageMistake(app, argc, argv);
+    std::cerr << (mistake.empty() ? std::string() : "endorecon: ")
+              << endorecon::PrintableLines(mistake.empty() ? endorecon::WithoutTokens(e.what()) : mistake)
+              << "\n";
     for (int i = 1; i < argc; ++i) {
       if (std::string_view(argv[i]).rfind("--token", 0) == 0 && std::string_view(argv[i]) != "--token-file") {
         std::cerr
@@ -179,7 +159,7 @@ int main(int argc, char** argv) {
         break;
       }
     }
-    std::cerr << "Run with --help for more information.\n";
+    if (mistake.empty()) std::cerr << "Run with --help for more information.\n";
     return kExitInvalid;
   }
   if (app.count("--server") == 0) {  // $ENDORECON_SERVER, checked as --server is

@@ -12,9 +12,11 @@
 #include <CLI/CLI.hpp>
 #include <atomic>
 #include <filesystem>
+#include <iostream>
 #include <thread>
 
 #include "common/cli_checks.h"
+#include "common/cli_usage.h"
 #include "common/dicom/peer.h"
 #include "common/dicom/storage_scp.h"
 #include "common/dicom/uid.h"
@@ -533,6 +535,13 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
+    // A mistyped command or option is named, with the nearest known one (CLI11 said "A subcommand is
+    // required" of a mistyped command).
+    if (const std::string mistake = endorecon::UsageMistake(app, argc, argv);
+        e.get_exit_code() != 0 && !mistake.empty()) {
+      std::cerr << "endorecon-server: " << endorecon::PrintableLines(mistake) << "\n";
+      return 2;
+    }
     return app.exit(e) == 0 ? 0 : 2;  // a usage error is 2, as every other invalid input
   }
   if (app.got_subcommand("token") || app.got_subcommand("retention")) {

@@ -95,9 +95,17 @@ TEST(CliGlobalOptionsTest, UnknownOptionsAreStillRefused) {
   // A mistyped command is named (it was "A subcommand is required").
   const auto typo = RunCliAsTyped({"--timeout", "3", "statuss", "abc"});
   EXPECT_EQ(typo.exit_code, 2);
-  EXPECT_NE(typo.err.find("unknown command 'statuss' (the commands: cancel, delete, drain, fetch, list"),
+  EXPECT_NE(typo.err.find("unknown command 'statuss' (did you mean 'status'?); the commands of endorecon: "
+                          "submit, status, watch, list"),
             std::string::npos)
       << typo.err;
+  // A mistyped option too, after the command, its value not taken for the clip.
+  const auto option = RunCliAsTyped({"submit", "clip", "--time-budjet", "15"});
+  EXPECT_EQ(option.exit_code, 2);
+  EXPECT_NE(option.err.find("endorecon: unknown option --time-budjet of 'submit' (did you mean "
+                            "--time-budget?); endorecon submit --help lists them"),
+            std::string::npos)
+      << option.err;
   const auto version = RunCliAsTyped({"--version"});
   EXPECT_EQ(version.exit_code, 0);
   EXPECT_FALSE(version.out.empty());

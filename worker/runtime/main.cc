@@ -4,10 +4,12 @@
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
+#include <iostream>
 #include <map>
 #include <string>
 
 #include "common/cli_checks.h"
+#include "common/cli_usage.h"
 #include "common/error.h"
 #include "common/job_bounds.h"
 #include "worker/runtime/commands.h"
@@ -29,6 +31,13 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
+    // A mistyped command or option is named, with the nearest known one (CLI11 said "A subcommand is
+    // required" of a mistyped command).
+    if (const std::string mistake = endorecon::UsageMistake(app, argc, argv);
+        e.get_exit_code() != 0 && !mistake.empty()) {
+      std::cerr << "endorecon-worker: " << endorecon::PrintableLines(mistake) << "\n";
+      return 2;
+    }
     return app.exit(e) == 0 ? 0 : 2;  // a usage error is 2, as every other invalid input
   }
   // The commands (synth, reconstruct, prepare, ...) log to stderr, as their progress goes: `synth DIR
