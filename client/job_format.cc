@@ -9,6 +9,8 @@
 #include <cmath>
 #include <nlohmann/json.hpp>
 
+#include "common/job_bounds.h"
+
 namespace endorecon::client {
 
 std::string ToJson(const google::protobuf::Message& message) {
@@ -127,6 +129,12 @@ std::string OutcomeLine(const v1::Job& job) {
         "; its results took more than a quarter of the time budget: {:.0f} s or more leaves training three "
         "quarters",
         number("budget_advised_s"));
+  }
+  // What the results' reader must know (metrics.json "warnings"), under the outcome.
+  if (const auto warnings = summary.find("warnings"); warnings != summary.end() && warnings->is_array()) {
+    for (const auto& warning : *warnings) {
+      if (warning.is_string()) line += "\n  warning   " + PrintableLines(warning.get<std::string>());
+    }
   }
   return line;
 }

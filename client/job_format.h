@@ -22,7 +22,8 @@ std::string DescribeJob(const v1::Job& job);
 // after 5 attempt(s): <the peer's reason>"). Empty when the job has neither.
 std::string DicomLines(const v1::Job& job);
 // What a SUCCEEDED job's engine reported (its summary): "done: 1858 iterations in 41s of training,
-// 1m02s in all, PSNR 31.10 dB (held-out 31.75)". Empty for any other job or an unreadable summary.
+// 1m02s in all, PSNR 31.10 dB (held-out 31.75)", and a line "  warning   ..." for each of the run's
+// warnings (metrics.json "warnings"). Empty for any other job or an unreadable summary.
 std::string OutcomeLine(const v1::Job& job);
 // The iterations a job trained, from the engine's summary (summary_json, set when it SUCCEEDED); none
 // without one.

@@ -19,6 +19,7 @@
 #include "tests/unit/report_data.h"
 #include "tests/unit/temp_dir.h"
 #include "worker/engine/eval/exports.h"
+#include "worker/engine/eval/report.h"
 #include "worker/engine/reconstruct.h"
 #include "worker/engine/scene/synthetic_clip.h"
 
@@ -270,6 +271,17 @@ TEST(ReportPageTest, APageWorksInHeadlessChromium) {
       "(() => { const s = document.getElementById('surface-colour'); s.value = 'rgb';"
       " s.dispatchEvent(new Event('change')); window.scrollTo(0, 0); })()");
   testing::WriteBytes(fs::path(ENDORECON_BINARY_DIR) / "report_page.png", browser->Screenshot());
+
+  // The run's warnings (metrics.json "warnings") are above the numbers, each a sentence.
+  nlohmann::json warned = metrics;
+  warned["warnings"].push_back("the canonical frame shows no tissue surface: mesh.ply holds no triangle");
+  testing::WriteBytes(out / "metrics.json", warned.dump());
+  eval::WriteReport(out);
+  browser->Navigate("file://" + report.string());
+  ASSERT_TRUE(browser->WaitFor("document.body.dataset.ready === 'true'", std::chrono::seconds(20)));
+  EXPECT_EQ(browser->Evaluate("document.getElementById('warnings').textContent.includes('The canonical frame "
+                              "shows no tissue surface: mesh.ply holds no triangle.')"),
+            true);
 }
 
 TEST(ReportPageTest, RenderWritesAPageOfItsViews) {

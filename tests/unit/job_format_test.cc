@@ -131,6 +131,15 @@ TEST(DescribeJob, ASucceededJobShowsItsOutcomeNotItsLastProgress) {
   job.set_summary_json(
       R"({"iterations":120,"train_seconds":12,"train_psnr":24,"time_budget_s":30,"run_seconds":32.9})");
   EXPECT_EQ(OutcomeLine(job).find("time budget"), std::string::npos) << OutcomeLine(job);
+  // The run's warnings (metrics.json "warnings"), each on a line of its own under the outcome.
+  job.set_summary_json(
+      R"({"iterations":40,"train_seconds":1,"train_psnr":8,"warnings":["the reconstruction learnt nothing",)"
+      R"("mesh.ply: no triangle\u001b[2J"]})");
+  EXPECT_NE(DescribeJob(job).find("PSNR 8.00 dB\n  warning   the reconstruction learnt nothing\n  warning   "
+                                  "mesh.ply: no triangle"),
+            std::string::npos)
+      << DescribeJob(job);
+  EXPECT_EQ(DescribeJob(job).find("\x1b"), std::string::npos) << "a control character goes to no terminal";
 }
 
 // The frames --frames picked of a DICOM recording are shown with the clip.

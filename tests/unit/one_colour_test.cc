@@ -31,7 +31,7 @@ TEST(OneColourTest, TheYardstickIsTheImagesVarianceAboutItsMeanColour) {
 
 // A learning rate of 1 without momentum's damping trained to 3.2 dB, its depth all at the near plane,
 // and the run ended as any other (found 2026-12-07): metrics.json holds the yardstick, and the log
-// says the reconstruction learnt nothing.
+// says the reconstruction learnt nothing, as metrics.json's warnings do.
 TEST(OneColourTest, ARunThatLearnsNothingSaysSo) {
   testing::TempDir dir("one-colour");
   scene::SynthOptions synth;
@@ -62,6 +62,10 @@ TEST(OneColourTest, ARunThatLearnsNothingSaysSo) {
   const double trained = metrics.at("train").at("image").at("psnr").at("mean").get<double>();
   EXPECT_LT(trained, yardstick + eval::kLeastGainOverOneColourDb);
   EXPECT_NE(log.str().find("the reconstruction learnt nothing of the scene"), std::string::npos) << log.str();
+  // Not in the worker's log alone: in metrics.json, which the report page and `endorecon status` show.
+  ASSERT_TRUE(metrics.contains("warnings")) << metrics.dump();
+  EXPECT_NE(metrics.at("warnings").dump().find("the reconstruction learnt nothing of the scene"),
+            std::string::npos);
 }
 
 }  // namespace

@@ -21,6 +21,7 @@
 #include "worker/engine/eval/one_colour.h"
 #include "worker/engine/eval/report.h"
 #include "worker/engine/eval/run_outputs.h"
+#include "worker/engine/eval/warnings.h"
 #include "worker/engine/field/field_description.h"
 #include "worker/engine/run_config.h"
 #include "worker/engine/scene/clip_loader.h"
@@ -49,11 +50,12 @@ void CheckItFits(const scene::Clip& clip, const std::vector<int>& train_frames, 
   metrics["train"]["image"]["psnr_one_colour"] = yardstick;
   const double trained = metrics[mean].get<double>();
   if (trained < yardstick + eval::kLeastGainOverOneColourDb) {
-    spdlog::warn(
-        "the training frames' PSNR ({:.2f} dB) is no better than each frame's mean colour alone gives "
-        "({:.2f} dB): the reconstruction learnt nothing of the scene (a learning rate too high, a config "
-        "that stops the field learning: config.json)",
-        trained, yardstick);
+    eval::Warn(metrics,
+               fmt::format("the training frames' PSNR ({:.2f} dB) is no better than each frame's mean "
+                           "colour alone gives ({:.2f} dB): the reconstruction learnt nothing of the "
+                           "scene (a learning rate too high, a config that stops the field learning: "
+                           "config.json)",
+                           trained, yardstick));
   }
 }
 
@@ -383,6 +385,7 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
   summary.budget_advised_s = advised_s;
   summary.time_budget_s = options.time_budget_s;
   summary.run_seconds = metrics["time"]["total_s"].get<double>();
+  summary.warnings = metrics.value("warnings", std::vector<std::string>{});
   const auto heldout = "/heldout/image/psnr_tissue/mean"_json_pointer;
   if (metrics.contains(heldout) && metrics.at(heldout).is_number())
     summary.heldout_psnr = metrics.at(heldout);

@@ -92,6 +92,8 @@ struct ReconstructSummary {
   double budget_advised_s = 0;
   double time_budget_s = 0;  // the run's --time-budget (0: none)
   double run_seconds = 0;    // the whole run, up to metrics.json (metrics.json time.total_s)
+  // What the results' reader must know, also logged: metrics.json's "warnings" (eval/warnings.h).
+  std::vector<std::string> warnings;
 };
 
 // Throws endorecon::Error: kInvalidArgument for a bad clip or option (message names the file),

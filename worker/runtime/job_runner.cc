@@ -62,6 +62,7 @@ std::string SummaryJson(const ReconstructSummary& summary) {
                       {"heldout_psnr", summary.heldout_psnr},
                       {"metrics", fs::path(summary.metrics_path).filename().string()}};
   if (summary.budget_advised_s > 0) json["budget_advised_s"] = summary.budget_advised_s;
+  if (!summary.warnings.empty()) json["warnings"] = summary.warnings;
   if (summary.time_budget_s > 0) {
     json["time_budget_s"] = summary.time_budget_s;
     json["run_seconds"] = summary.run_seconds;

@@ -31,6 +31,7 @@
 #include "worker/engine/eval/summary.h"
 #include "worker/engine/eval/surface_mesh.h"
 #include "worker/engine/eval/video_writer.h"
+#include "worker/engine/eval/warnings.h"
 #include "worker/engine/scene/outside_view.h"
 
 namespace endorecon::eval {
@@ -313,6 +314,7 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
   FramePacer pacer(what.plan, what.heldout_frames, RenderedPixels(clip), what.plain != nullptr,
                    what.heldout_slack_s);
   std::future<double> writing;  // the previous frame's files; returns the seconds they took
+  bool mesh_empty = false;      // set by frame 0's writing, read once it is done
   double render_seconds = 0, write_seconds = 0, model_map_seconds = 0;
   double render_priced = 0;  // what the frames as rendered cost at the plan's measured prices
   std::vector<int> full_frames, reduced_frames;
@@ -415,8 +417,8 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
       if (writing.valid()) write_seconds += writing.get();  // one frame's files in flight at a time
       const auto& cloud_mask = clip.has_masks() ? clip.tool_mask[f] : mask;
       writing = std::async(
-          std::launch::async, [&clip, &out_dir, &cloud_mask, &maps, video = video.get(), f, w, h, depth_scale,
-                               rgb = std::move(frame.rgb), depth = std::move(frame.depth),
+          std::launch::async, [&clip, &out_dir, &cloud_mask, &maps, &mesh_empty, video = video.get(), f, w, h,
+                               depth_scale, rgb = std::move(frame.rgb), depth = std::move(frame.depth),
                                frame_maps = std::move(frame_maps), error_map = std::move(error_map)] {
             const auto start = Clock::now();
             video->Write(rgb);
@@ -428,12 +430,7 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
                      BackProject(clip.cameras[f], depth, rgb, cloud_mask));
             if (f == 0) {  // the canonical frame's surface (t = 0)
               const SurfaceMesh mesh = TriangulateDepth(clip.cameras[f], depth, rgb, cloud_mask, clip.far);
-              // Said, not only written empty (found 2026-12-07).
-              if (mesh.triangle_count() == 0) {
-                spdlog::warn(
-                    "mesh.ply, mesh.obj, mesh.stl: the canonical frame (frame 0) shows no tissue surface "
-                    "(all tool, or nothing rendered short of the far bound): they hold no triangle");
-              }
+              mesh_empty = mesh.triangle_count() == 0;  // said, not only written empty (found 2026-12-07)
               WriteSurfaceMesh(out_dir, mesh);
             }
             return SecondsSince(start);
@@ -449,6 +446,12 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
     for (int f = std::max(0, count - kNeighbourFrames); f < count; ++f) finish_model_map(f);
   }
   nlohmann::json json;
+  if (mesh_empty) {
+    Warn(json,
+         "the canonical frame (frame 0) shows no tissue surface (all tool, or nothing rendered short of the "
+         "far "
+         "bound): mesh.ply, mesh.obj and mesh.stl hold no triangle");
+  }
   json["train"] = SplitMetrics(clip, what.train_frames, false, images, depths, calibrations);
   if (!what.heldout_frames.empty()) {
     json["heldout"] = SplitMetrics(clip, what.heldout_frames, true, images, depths, calibrations);

@@ -105,6 +105,8 @@
 
   // What a reader must know before trusting the numbers, above them.
   const warn = (children) => $('warnings').appendChild(node('p', {class: 'warning'}, children));
+  // The run's own (metrics.json "warnings": a run that learnt nothing, a mesh with no triangle).
+  for (const text of metrics.warnings || []) warn([text.charAt(0).toUpperCase() + text.slice(1) + '.']);
   if (metrics.time && metrics.time.budget_advised_s) {
     warn([
       'The time budget was too small for this clip: training had ',
