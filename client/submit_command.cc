@@ -37,6 +37,7 @@
 #include "common/manifest.h"
 #include "common/prepare_flags_cli.h"
 #include "common/prepare_flags_proto.h"
+#include "common/recording_flags_cli.h"
 #include "common/transport_security.h"
 
 namespace endorecon::client {
@@ -456,31 +457,8 @@ Command AddSubmitCommand(CLI::App& app) {
   sub->add_option("--series", flags->series_uid, "with --pacs: only this series of the study");
   sub->add_option("--send-to", flags->send_to,
                   "send the DICOM results to this PACS when the job succeeds (repeatable)");
-  sub->add_option_function<std::string>(
-         "--stereo", [flags](const std::string& v) { flags->recording.set_stereo(v); },
-         "DICOM recording: side-by-side, top-bottom, or series (two series: left, right)")
-      ->check(CLI::IsMember({"mono", "side-by-side", "top-bottom", "series"}));
-  sub->add_option_function<double>(
-         "--fps", [flags](double v) { flags->recording.set_fps(v); },
-         "DICOM recording: keep at most this many frames per second")
-      ->check(AtLeastZero());
-  sub->add_option_function<std::string>(
-         "--endoscope", [flags](const std::string& v) { flags->recording.set_endoscope(v); },
-         "DICOM recording: moving (estimate the endoscope's motion from the frames: turns for mono, "
-         "poses for stereo; the default) or fixed")
-      ->check(CLI::IsMember({"moving", "fixed"}));
-  sub->add_flag_function(
-      "--dicom", [flags](std::int64_t) { flags->dicom.set_enabled(true); },
-      "DICOM results for a clip that is not DICOM (a DICOM recording always gets them)");
-  sub->add_option_function<std::string>(
-      "--patient-id", [flags](const std::string& v) { flags->dicom.set_patient_id(v); },
-      "with --dicom: the patient's ID");
-  sub->add_option_function<std::string>(
-      "--patient-name", [flags](const std::string& v) { flags->dicom.set_patient_name(v); },
-      "with --dicom: the patient's name (DICOM PN, e.g. Doe^Jane)");
-  sub->add_option_function<std::string>(
-      "--study-uid", [flags](const std::string& v) { flags->dicom.set_study_uid(v); },
-      "with --dicom: the study the results join (default: a new study)");
+  AddRecordingFlags(*sub, flags->recording);
+  AddDicomResultFlags(*sub, flags->dicom);
   sub->add_option("--config", flags->config,
                   "JSON file overriding the preset (as endorecon-worker reconstruct)");
   sub->add_option("--preset", flags->preset, "cpu, gpu or paper (default: the worker's, cpu)")

@@ -45,9 +45,12 @@ void AddPrepareFlags(CLI::App& cmd, PrepareFlags& f) {
       ->group(extras);
   cmd.add_option("--frames", f.frames,
                  "START:END:STEP: the recording's frames to use (0-based, END exclusive; with submit, a "
-                 "clip folder's too, in its own order)")
+                 "DICOM recording's or a clip folder's too, in its own order)")
       ->group(extras);
-  cmd.add_option("--size", f.size, "WxH: the clip's frame size (default: the calibration's resolution)")
+  cmd.add_option("--size", f.size,
+                 "WxH: the clip's frame size (default: the calibration's resolution; with submit, a DICOM "
+                 "recording's frames are scaled to it, even and of the recording's aspect ratio, default as "
+                 "recorded)")
       ->group(extras);
   cmd.add_option("--poses", f.poses,
                  "per-frame camera-to-world of the left eye (JSON or CSV, docs/formats.md)")
@@ -59,8 +62,7 @@ void AddPrepareFlags(CLI::App& cmd, PrepareFlags& f) {
                "Lucas-Kanade sub-pixel refinement of every disparity (slower)")
       ->group(depth);
   cmd.add_option("--depth-paths", f.depth_paths,
-                 "SGBM directions: 3 (fast) or 8 (3x slower; the default with --estimate-poses)")
-      ->capture_default_str()
+                 "SGBM directions: 3 (fast; the default) or 8 (3x slower; the default with --estimate-poses)")
       ->group(depth);
 }
 

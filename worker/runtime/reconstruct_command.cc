@@ -16,6 +16,7 @@
 #include "common/error.h"
 #include "common/job_bounds.h"
 #include "common/json_file.h"
+#include "common/recording_flags_cli.h"
 #include "worker/engine/reconstruct.h"
 #include "worker/engine/run_config.h"
 #include "worker/runtime/commands.h"
@@ -63,39 +64,16 @@ void AddReconstructOptions(CLI::App& cmd, ReconstructOptions& options, std::stri
 }
 
 void AddDicomOptions(CLI::App& cmd, v1::RecordingOptions& recording, v1::DicomOutputOptions& dicom) {
-  cmd.add_option_function<std::string>(
-         "--stereo", [&](const std::string& v) { recording.set_stereo(v); },
-         "DICOM recording: side-by-side, top-bottom, or series (two series: left, right)")
-      ->check(CLI::IsMember({"mono", "side-by-side", "top-bottom", "series"}));
+  AddRecordingFlags(cmd, recording);
   cmd.add_option_function<std::string>(
       "--frames", [&](const std::string& v) { recording.set_frames(v); },
       "the frames to reconstruct, START:END:STEP (as a Python slice) of a DICOM recording or a clip "
       "folder (its frames in its own order)");
-  cmd.add_option_function<double>(
-         "--fps", [&](double v) { recording.set_fps(v); },
-         "DICOM recording: keep at most this many frames per second")
-      ->check(AtLeastZero());
-  cmd.add_option_function<std::string>(
-         "--endoscope", [&](const std::string& v) { recording.set_endoscope(v); },
-         "DICOM recording: moving (estimate the endoscope's motion from the frames: turns for mono, "
-         "poses for stereo; the default) or fixed")
-      ->check(CLI::IsMember({"moving", "fixed"}));
   cmd.add_option_function<std::string>(
       "--size", [&](const std::string& v) { recording.set_size(v); },
       "DICOM recording: scale every frame (each eye) to WxH, even, the recording's aspect ratio (e.g. "
       "320x180 for a 1280x720 recording); default: as recorded");
-  cmd.add_flag_function(
-      "--dicom", [&](std::int64_t) { dicom.set_enabled(true); },
-      "write dicom/ for a clip that is not DICOM (always written for a DICOM recording)");
-  cmd.add_option_function<std::string>(
-      "--patient-id", [&](const std::string& v) { dicom.set_patient_id(v); },
-      "with --dicom: the patient's ID");
-  cmd.add_option_function<std::string>(
-      "--patient-name", [&](const std::string& v) { dicom.set_patient_name(v); },
-      "with --dicom: the patient's name (DICOM PN, e.g. Doe^Jane)");
-  cmd.add_option_function<std::string>(
-      "--study-uid", [&](const std::string& v) { dicom.set_study_uid(v); },
-      "with --dicom: the study the results join (default: a new study)");
+  AddDicomResultFlags(cmd, dicom);
   cmd.add_option_function<std::string>(
       "--uid-root", [&](const std::string& v) { dicom.set_uid_root(v); },
       "root of the DICOM results' new UIDs (default: 2.25 UUID-derived UIDs)");
