@@ -316,7 +316,8 @@ int Run(const ServerFlags& flags) {
   }
   if (flags.orphan_hours > 0) {
     spdlog::info(
-        "files no job references are deleted once last written and first found so {} hour(s) ago (when "
+        "files no job references are deleted once {} hour(s) have passed both since each was last written "
+        "and since it was first found no job's (when "
         "each was first found is kept in {}, so a restart does not count the hours anew; a restored "
         "folder's files are first found at its first check; checked every {} s)",
         flags.orphan_hours, (data_dir / "orphans.json").string(), flags.retention_check_s);

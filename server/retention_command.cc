@@ -87,7 +87,8 @@ int DryRun(const RetentionFlags& flags) {
       plan.jobs.size(), flags.days, plan.blobs.size(), plan.bytes, plan.kept_shared, plan.kept_uploading);
   std::cout << fmt::format(
       "{} file(s), {} bytes, that no job references would be deleted (--orphan-hours {}); {} more wait "
-      "until last written and first found so by the server that long ago\n",
+      "until that long has passed both since each was last written and since the server first found it "
+      "no job's\n",
       plan.orphans.size(), plan.orphan_bytes, flags.orphan_hours, plan.orphans_waiting);
   return 0;
 }
@@ -103,11 +104,12 @@ Command AddRetentionCommand(CLI::App& app) {
       ->check(AtLeastZero());
   command
       ->add_option("--orphan-hours", flags->orphan_hours,
-                   "files no job references go once last written and first found no job's (orphans.json) "
-                   "this long ago (0: kept)")
+                   "files no job references go once this long has passed both since each was last "
+                   "written and since it was first found no job's (orphans.json) (0: kept)")
       ->capture_default_str()
       ->check(AtLeastZero());
-  command->add_flag("--dry-run", flags->dry_run, "list what would go; change nothing");
+  command->add_flag("--dry-run", flags->dry_run,
+                    "required: list what would go and change nothing (a running server does the deleting)");
   return [flags] { return DryRun(*flags); };
 }
 
