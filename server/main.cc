@@ -438,8 +438,8 @@ void AddSecurityFlags(CLI::App& app, ServerFlags& flags) {
       ->check(AboveZero());
   app.add_option("--orphan-hours", flags.orphan_hours,
                  "delete stored files no job references (a running job's earlier checkpoints, uploads never "
-                 "submitted, partial uploads) once last written and first found no job's this long ago "
-                 "(when first found is kept in DATA_DIR/orphans.json; 0: keep them)")
+                 "submitted, partial uploads) once this long has passed both since each was last written and "
+                 "since it was first found no job's (kept in DATA_DIR/orphans.json; 0: keep them)")
       ->capture_default_str()
       ->check(AtLeastZero());
 }
