@@ -64,6 +64,16 @@ TEST(SubmitToCompletionTest, ClipInResultsOut) {
     has_metrics = has_metrics || file.path() == "metrics.json";
   }
   EXPECT_TRUE(has_metrics);
+  // Its size is the results' as `status` says it, though identical files came once (it said the
+  // bytes received, fewer).
+  const std::string described = RunCli(cluster.address(), {"status", id}).out;
+  const std::string results = fmt::format("  results   {} file(s), ", job.result().files_size());
+  ASSERT_NE(described.find(results), std::string::npos) << described;
+  const std::size_t from = described.find(results) + results.size();
+  const std::string size = described.substr(from, described.find(" (", from) - from);
+  EXPECT_NE(fetched.out.find(fmt::format("fetched {0} of {0} file(s) ({1}", job.result().files_size(), size)),
+            std::string::npos)
+      << fetched.out << " / " << described;
 
   // A second fetch finds everything in place and sends nothing.
   const auto again = RunCli(cluster.address(), {"fetch", id, "-o", cluster.path("results").string()});
