@@ -118,6 +118,7 @@ v1::Job WatchJob(const Globals& globals, const std::string& id, const WatchOptio
   request.set_previews(!options.previews_dir.empty());
   auto unreachable_since = std::chrono::steady_clock::now();
   v1::Job job;
+  int previews = 0;
   while (true) {
     auto context = CallContext(std::chrono::milliseconds(static_cast<long>(options.stream_s * 1000)));
     auto reader = stub->Watch(context.get(), request);
@@ -129,6 +130,7 @@ v1::Job WatchJob(const Globals& globals, const std::string& id, const WatchOptio
       if (event.has_preview()) {
         SavePreview(options.previews_dir, event.preview());
         printer.Preview(event.preview(), options.previews_dir);
+        ++previews;
       }
       if (event.has_job()) {
         job = event.job();
@@ -150,6 +152,13 @@ v1::Job WatchJob(const Globals& globals, const std::string& id, const WatchOptio
     PauseBeforeRetry(*channel, std::chrono::milliseconds(500));  // a restarted server: as soon as it is back
   }
   printer.EndLine();
+  // Said, not left to an empty folder (found 2026-12-07).
+  if (!options.previews_dir.empty() && previews == 0 && !globals.json) {
+    std::cerr << "endorecon: no preview arrived while watching, so nothing was saved in "
+              << options.previews_dir
+              << ": a worker sends one each --preview-interval of training (30 s by default) "
+                 "and one of a prepared recording\n";
+  }
   return job;
 }
 

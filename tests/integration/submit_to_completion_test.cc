@@ -26,6 +26,11 @@ TEST(SubmitToCompletionTest, ClipInResultsOut) {
                                  "--previews", cluster.path("previews").string()});
   ASSERT_EQ(submitted.exit_code, 0) << submitted.err << submitted.out << cluster.ServerLog();
   EXPECT_NE(submitted.out.find("SUCCEEDED"), std::string::npos) << submitted.out;
+  // Previews were saved, or the watch says none arrived (it left nothing and said nothing).
+  const bool saved = std::filesystem::exists(cluster.path("previews")) &&
+                     !std::filesystem::is_empty(cluster.path("previews"));
+  EXPECT_NE(saved, submitted.err.find("no preview arrived while watching") != std::string::npos)
+      << submitted.err;
 
   const auto listed = RunCli(cluster.address(), {"--json", "list"});
   ASSERT_EQ(listed.exit_code, 0);
