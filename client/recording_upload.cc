@@ -13,18 +13,38 @@
 namespace endorecon::client {
 namespace fs = std::filesystem;
 
+namespace {
+
+// A path's last name, a trailing separator or "." aside.
+fs::path Named(const std::string& path) {
+  std::error_code error;
+  fs::path named = fs::absolute(path, error).lexically_normal();
+  if (error) named = fs::path(path).lexically_normal();
+  return named.has_filename() ? named : named.parent_path();
+}
+
+}  // namespace
+
+std::string RecordingName(const PrepareFlags& flags) {
+  if (!flags.left.empty() && !flags.right.empty()) {
+    const fs::path left = Named(flags.left), right = Named(flags.right);
+    if (left.parent_path() == right.parent_path() && left.parent_path().has_filename())
+      return left.parent_path().filename().string();
+    return left.filename().string() + " + " + right.filename().string();
+  }
+  const std::string& both = !flags.left.empty()           ? flags.left
+                            : !flags.side_by_side.empty() ? flags.side_by_side
+                                                          : flags.top_bottom;
+  return Named(both).filename().string();
+}
+
 StagedRecording::StagedRecording(const PrepareFlags& flags) : flags_(flags) {
   CheckPrepareFlags(flags);
   dir_ = MakeStagingFolder("recording");
   const auto stage = [&](std::string& path, const std::string& name, const char* flag = nullptr) {
     if (!path.empty()) path = Stage(path, name, flag);
   };
-  name_ = fs::path(!flags.left.empty()           ? flags.left
-                   : !flags.side_by_side.empty() ? flags.side_by_side
-                                                 : flags.top_bottom)
-              .lexically_normal()
-              .filename()
-              .string();
+  name_ = RecordingName(flags);
   stage(flags_.left, "left");
   stage(flags_.right, "right");
   stage(flags_.side_by_side, "side_by_side");

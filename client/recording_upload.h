@@ -13,6 +13,11 @@
 
 namespace endorecon::client {
 
+// A job's default name for a raw recording: for two eyes, the folder that holds both ("case7" for
+// case7/left.mp4 and case7/right.mp4; such a job was named "left", found 2026-12-07), else the eyes'
+// names joined ("l.mp4 + r.mp4"); for one file or folder of both eyes, its name.
+std::string RecordingName(const PrepareFlags& flags);
+
 class StagedRecording {
  public:
   // Checks the flags (CheckPrepareFlags); throws Error(kNotFound) naming a file that does not exist.
@@ -24,7 +29,7 @@ class StagedRecording {
   const std::filesystem::path& dir() const { return dir_; }
   // The flags with the staged names.
   const PrepareFlags& flags() const { return flags_; }
-  // A name for the job: the file name of the recording (left eye, or the combined one).
+  // A name for the job (RecordingName).
   const std::string& name() const { return name_; }
   // Each staged name ("side_by_side.mp4", a folder's "left/") and the path as the user gave it.
   const std::map<std::string, std::string>& sources() const { return sources_; }

@@ -475,7 +475,9 @@ Command AddSubmitCommand(CLI::App& app) {
   sub->add_flag("--static", flags->force_static, "treat the clip as static (no deformation)");
   sub->add_option("--priority", flags->priority, "higher runs first, -100 to 100 (default 0)")
       ->check(CLI::Range(-kMaxPriority, kMaxPriority));
-  sub->add_option("--name", flags->name, "a name to recognise the job by (default: the folder's)");
+  sub->add_option("--name", flags->name,
+                  "a name to recognise the job by (default: the clip's or recording's name; for "
+                  "--left/--right the folder holding both)");
   auto* wait = sub->add_flag("--wait", flags->wait,
                              "watch the job until it finishes; exit code tells how it ended (5 also when a "
                              "--send-to send failed)");

@@ -58,6 +58,7 @@ TEST(PrepareJobTest, RecordingInPreparedClipAndResultsOut) {
   EXPECT_EQ(job.prepare().left(), "left.avi");
   EXPECT_EQ(job.prepare().calibration(0), "calibration.yaml");
   EXPECT_EQ(job.prepare().masks(), "masks");
+  EXPECT_EQ(job.name(), "rec") << "the folder of both eyes, not the left eye's file";
   const auto status = RunCli(cluster.address(), {"status", id});
   EXPECT_NE(status.out.find("recording  9 file(s)"), std::string::npos) << status.out;
 
