@@ -36,18 +36,45 @@ std::string Lower(std::string text) {
   return text;
 }
 
-// Where a per-frame folder and images/ part ways, by file name (stem): the first image without a
-// file here, or the first file here without an image; empty when the names match.
-std::string FirstUnpaired(const std::vector<fs::path>& files, const std::vector<fs::path>& images) {
+// Where a per-frame folder and the folder it is paired with (images/) part ways, by file name (stem):
+// the first file there without one here, or the first here without one there; empty when the names
+// match. `folder` is the other folder's name before its files' ("depth/"; images/ goes unsaid).
+std::string FirstUnpaired(const std::vector<fs::path>& files, const std::vector<fs::path>& images,
+                          const std::string& folder = "") {
   std::set<std::string> stems, image_stems;
   for (const auto& f : files) stems.insert(f.stem().string());
   for (const auto& f : images) image_stems.insert(f.stem().string());
   for (const auto& image : images) {
     if (!stems.count(image.stem().string()))
-      return "no file named " + image.stem().string() + ".* for " + image.filename().string();
+      return "no file named " + image.stem().string() + ".* for " + folder + image.filename().string();
   }
   for (const auto& f : files) {
-    if (!image_stems.count(f.stem().string())) return f.filename().string() + " names no image";
+    if (!image_stems.count(f.stem().string()))
+      return f.filename().string() + " names no " + (folder.empty() ? "image" : "file in " + folder);
+  }
+  return "";
+}
+
+// The first gap in files named by numbers of one width ("no 000005.* between 000004 and 000006");
+// empty when the names are not such numbers or run without a gap.
+std::string FirstGap(const std::vector<fs::path>& files) {
+  std::vector<long long> numbers;
+  std::size_t width = 0;
+  for (const auto& f : files) {
+    const std::string stem = f.stem().string();
+    if (stem.empty() || stem.size() > 15 || (width != 0 && stem.size() != width) ||
+        !std::all_of(stem.begin(), stem.end(), [](unsigned char c) { return std::isdigit(c); }))
+      return "";
+    width = stem.size();
+    numbers.push_back(std::stoll(stem));
+  }
+  std::sort(numbers.begin(), numbers.end());
+  const auto named = [width](long long n) { return fmt::format("{:0{}}", n, width); };
+  for (std::size_t i = 1; i < numbers.size(); ++i) {
+    if (numbers[i] > numbers[i - 1] + 1) {
+      return "no " + named(numbers[i - 1] + 1) + ".* between " + named(numbers[i - 1]) + " and " +
+             named(numbers[i]);
+    }
   }
   return "";
 }
@@ -55,11 +82,14 @@ std::string FirstUnpaired(const std::vector<fs::path>& files, const std::vector<
 // The files of an optional folder: none when absent, otherwise exactly `count`, paired with
 // `images` (when given) by their sorted order.
 std::vector<fs::path> ListFolder(const fs::path& dir, const std::vector<std::string>& extensions,
-                                 std::size_t count, bool required, const std::vector<fs::path>& images = {}) {
+                                 std::size_t count, bool required, const std::vector<fs::path>& images = {},
+                                 const std::string& missing = "") {
   if (!required && !fs::exists(dir)) return {};
   std::vector<fs::path> files = ListFiles(dir, extensions);
   if (files.size() != count) {
-    const std::string unpaired = images.empty() ? "" : FirstUnpaired(files, images);
+    const std::string unpaired = !missing.empty() ? missing
+                                 : images.empty() ? ""
+                                                  : FirstUnpaired(files, images);
     FailInvalid(dir.string() + ": holds " + std::to_string(files.size()) +
                 " files but poses_bounds.npy has " + std::to_string(count) +
                 " rows (the counts of images, depth maps, masks and poses must be equal)" +
@@ -198,7 +228,19 @@ std::size_t PoseRowCount(const NpyArray& poses, const fs::path& path) {
 std::vector<FrameFiles> ListEndoNerfFrames(const fs::path& dir, std::size_t rows) {
   std::vector<std::string> depth_extensions = ImageExtensions();
   depth_extensions.push_back(".npy");
-  const std::vector<fs::path> images = ListFolder(dir / "images", ImageExtensions(), rows, true);
+  const std::vector<fs::path> images = [&] {
+    const std::vector<fs::path> found = ListFiles(dir / "images", ImageExtensions());
+    if (found.size() == rows) return found;
+    // Which frame is missing, said from another per-frame folder with a file for every row, or from a
+    // gap in numbered names (it said only the counts; found 2026-12-07).
+    std::string missing = FirstGap(found);
+    for (const char* other : {"depth", "masks", "gt_masks", "images_right"}) {
+      if (!missing.empty() || !fs::exists(dir / other)) continue;
+      const std::vector<fs::path> files = ListFiles(dir / other, depth_extensions);
+      if (files.size() == rows) missing = FirstUnpaired(found, files, std::string(other) + "/");
+    }
+    return ListFolder(dir / "images", ImageExtensions(), rows, true, {}, missing);
+  }();
   const std::vector<fs::path> depths = ListFolder(dir / "depth", depth_extensions, rows, false, images);
   const std::vector<fs::path> masks = ListFolder(dir / "masks", ImageExtensions(), rows, false, images);
   const std::vector<fs::path> eval_masks =

@@ -78,6 +78,28 @@ TEST(ClipFilesTest, FramesNamedWithoutPaddingKeepTheirNumbersOrder) {
       << "numbers longer than any integer";
 }
 
+// A missing image is named too (it said only the counts): by the gap in numbered names, else by
+// another per-frame folder with a file for every row.
+TEST(ClipFilesTest, AMissingImageIsNamed) {
+  TempDir dir;
+  MakeEndoNerfFolder(dir.path(), 4);
+  fs::remove(dir / "images" / "000002.png");
+  std::string message = ErrorOf([&] { ListClipFrames(dir.path()); });
+  EXPECT_NE(message.find("images: holds 3 files but poses_bounds.npy has 4 rows"), std::string::npos)
+      << message;
+  EXPECT_NE(message.find("; no 000002.* between 000001 and 000003"), std::string::npos) << message;
+  fs::rename(dir / "images" / "000003.png", dir / "images" / "c.png");
+  fs::rename(dir / "masks" / "000003.png", dir / "masks" / "c.png");
+  message = ErrorOf([&] { ListClipFrames(dir.path()); });
+  EXPECT_NE(message.find("; no file named 000002.* for masks/000002.png"), std::string::npos) << message;
+  // The last one missing leaves no gap: said from the masks.
+  fs::rename(dir / "images" / "c.png", dir / "images" / "000002.png");
+  fs::remove(dir / "masks" / "c.png");
+  WriteBytes(dir / "masks" / "000003.png", "bytes");
+  message = ErrorOf([&] { ListClipFrames(dir.path()); });
+  EXPECT_NE(message.find("; no file named 000003.* for masks/000003.png"), std::string::npos) << message;
+}
+
 TEST(ClipFilesTest, AMissingMaskNamesTheFrameThatLacksIt) {
   TempDir dir;
   MakeEndoNerfFolder(dir.path(), 3);
