@@ -101,8 +101,9 @@ std::string OutcomeLine(const v1::Job& job) {
     return found != summary.end() && found->is_number() ? found->get<double>() : -1.0;
   };
   // The training time in the units of the wall times after it ("41s of training, 1m02s in all").
-  std::string line = fmt::format("done: {:.0f} iterations in {} of training", number("iterations"),
-                                 HumanDuration(number("train_seconds")));
+  std::string line =
+      fmt::format("done: {:.0f} iteration{} in {} of training", number("iterations"),
+                  number("iterations") == 1 ? "" : "s", HumanDuration(number("train_seconds")));
   // Training seconds count every run of a resumed job; its wall time is said for the last run and
   // since the first ("36 s of training, 33s in all" read as a contradiction; found 2026-12-05). Not
   // "resumed": a run without a checkpoint to resume from started over (found 2026-12-06).

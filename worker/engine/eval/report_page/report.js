@@ -174,10 +174,12 @@
       summary.append(card(`${splitName} Spearman (model map, noise-free error)`,
                           meanStd(`/${reported}/calibration_model_map_noise_free/spearman`, { digits: 3 })));
     }
-    summary.append(card('training', [metricSpan('/iterations', {digits: 0}), ' iterations'], [
-      metricSpan('/train_seconds', {digits: 1}), ' s of steps, ',
-      metricSpan('/samples_per_second', {digits: 2, factor: 1e-6}), ' M samples/s'
-    ]));
+    summary.append(card(
+        'training',
+        [metricSpan('/iterations', {digits: 0}), metrics.iterations === 1 ? ' iteration' : ' iterations'], [
+          metricSpan('/train_seconds', {digits: 1}), ' s of steps, ',
+          metricSpan('/samples_per_second', {digits: 2, factor: 1e-6}), ' M samples/s'
+        ]));
   } else {
     summary.append(card("views", [node("span", { text: String(frames ? frames.count : 0) })]));
     summary.append(card("dropout passes (uncertainty)", [node("span", { text: String(data.render.mc_passes) })]));
