@@ -144,10 +144,11 @@ Command AddReconstructCommand(CLI::App& app) {
     EndProgress();
     // No training PSNR when this process ran no step (a resume whose budget was spent), as the CLI.
     spdlog::info(
-        "{} {} iteration{} in {:.1f} s; training PSNR {}; held-out tissue PSNR {}",
+        "{} {} iteration{} in {:.1f} s; training PSNR {}; {}",
         summary.cancelled ? "stopped after" : "done:", summary.iterations, summary.iterations == 1 ? "" : "s",
         summary.train_seconds, summary.train_psnr > 0 ? fmt::format("{:.2f} dB", summary.train_psnr) : "n/a",
-        summary.heldout_psnr >= 0 ? fmt::format("{:.2f} dB", summary.heldout_psnr) : "none held out");
+        summary.heldout_psnr >= 0 ? fmt::format("held-out tissue PSNR {:.2f} dB", summary.heldout_psnr)
+                                  : "no frame held out");
     if (!summary.cancelled) WriteJobDicom(options->out_dir, from_dicom, *dicom);
     spdlog::info("results: {}  (metrics: {})", options->out_dir, summary.metrics_path);
     return 0;
