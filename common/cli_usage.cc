@@ -2,9 +2,12 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <iostream>
 #include <numeric>
 #include <string_view>
 #include <vector>
+
+#include "common/job_bounds.h"
 
 namespace endorecon {
 namespace {
@@ -125,6 +128,15 @@ std::string UsageMistake(const CLI::App& app, int argc, const char* const* argv)
     return "give a command: " + CommandList(*at) + " (" + CommandLine(*at, program) + " --help)";
   }
   return "";
+}
+
+int ExplainParseError(const CLI::App& app, const CLI::ParseError& e, int argc, const char* const* argv) {
+  if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version
+  const std::string program = std::filesystem::path(argc > 0 ? argv[0] : "").filename().string();
+  const std::string mistake = UsageMistake(app, argc, argv);
+  std::cerr << program << ": " << PrintableLines(mistake.empty() ? std::string(e.what()) : mistake) << "\n";
+  if (mistake.empty()) std::cerr << "Run with --help for more information.\n";
+  return 2;
 }
 
 }  // namespace endorecon

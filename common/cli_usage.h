@@ -14,4 +14,9 @@ namespace endorecon {
 // those (CLI11's own message then says it). Without the program's name in front.
 std::string UsageMistake(const CLI::App& app, int argc, const char* const* argv);
 
+// What endorecon-worker and endorecon-server do when `app.parse` threw `e`: --help and --version print
+// and give 0; a usage mistake is said on stderr after the program's name, in UsageMistake's words or
+// else CLI11's ("endorecon-worker: --out is required"), and gives 2, as every other invalid input.
+int ExplainParseError(const CLI::App& app, const CLI::ParseError& e, int argc, const char* const* argv);
+
 }  // namespace endorecon

@@ -12,7 +12,6 @@
 #include <CLI/CLI.hpp>
 #include <atomic>
 #include <filesystem>
-#include <iostream>
 #include <thread>
 
 #include "common/cli_checks.h"
@@ -317,7 +316,7 @@ int Run(const ServerFlags& flags) {
   if (flags.orphan_hours > 0) {
     spdlog::info(
         "files no job references are deleted once {} hour(s) have passed both since each was last written "
-        "and since it was first found no job's (when "
+        "and since the server first found that no job names it (when "
         "each was first found is kept in {}, so a restart does not count the hours anew; a restored "
         "folder's files are first found at its first check; checked every {} s)",
         flags.orphan_hours, (data_dir / "orphans.json").string(), flags.retention_check_s);
@@ -439,7 +438,8 @@ void AddSecurityFlags(CLI::App& app, ServerFlags& flags) {
   app.add_option("--orphan-hours", flags.orphan_hours,
                  "delete stored files no job references (a running job's earlier checkpoints, uploads never "
                  "submitted, partial uploads) once this long has passed both since each was last written and "
-                 "since it was first found no job's (kept in DATA_DIR/orphans.json; 0: keep them)")
+                 "since the server first found that no job names it (kept in DATA_DIR/orphans.json; 0: keep "
+                 "them)")
       ->capture_default_str()
       ->check(AtLeastZero());
 }
@@ -538,12 +538,7 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     // A mistyped command or option is named, with the nearest known one (CLI11 said "A subcommand is
     // required" of a mistyped command).
-    if (const std::string mistake = endorecon::UsageMistake(app, argc, argv);
-        e.get_exit_code() != 0 && !mistake.empty()) {
-      std::cerr << "endorecon-server: " << endorecon::PrintableLines(mistake) << "\n";
-      return 2;
-    }
-    return app.exit(e) == 0 ? 0 : 2;  // a usage error is 2, as every other invalid input
+    return endorecon::ExplainParseError(app, e, argc, argv);
   }
   if (app.got_subcommand("token") || app.got_subcommand("retention")) {
     // These print their result on stdout (a token, a plan): their log lines and errors go to stderr,

@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <iostream>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -78,6 +80,38 @@ TEST(CliUsageTest, OtherMistakesAreLeftToCli11) {
   EXPECT_EQ(Program().Mistake({"reconstruct", "clip", "extra"}), "");
   EXPECT_EQ(Program().Mistake({"reconstruct", "clip", "--time-budget"}), "") << "a value missing";
   EXPECT_EQ(Program().Mistake({"reconstruct", "clip", "--full-eval", "--time-budget", "5"}), "(parsed)");
+}
+
+// The binaries' handler: a mistake after the program's name, CLI11's words where it names none, 2;
+// --help 0.
+TEST(CliUsageTest, AParseErrorIsSaidAfterTheProgramsName) {
+  CLI::App app{"test"};
+  std::string out;
+  app.add_option("-o,--out", out)->required();
+  const auto explain = [&](std::vector<const char*> words, std::string& said) {
+    words.insert(words.begin(), "/usr/bin/prog");
+    std::ostringstream err;
+    std::streambuf* const was = std::cerr.rdbuf(err.rdbuf());
+    std::ostringstream help;
+    std::streambuf* const was_out = std::cout.rdbuf(help.rdbuf());
+    int code = -1;
+    try {
+      app.parse(int(words.size()), const_cast<char**>(words.data()));
+    } catch (const CLI::ParseError& e) {
+      code = ExplainParseError(app, e, int(words.size()), words.data());
+    }
+    std::cerr.rdbuf(was);
+    std::cout.rdbuf(was_out);
+    said = err.str() + help.str();
+    return code;
+  };
+  std::string said;
+  EXPECT_EQ(explain({}, said), 2);
+  EXPECT_EQ(said, "prog: --out is required\nRun with --help for more information.\n");
+  EXPECT_EQ(explain({"--otu", "x"}, said), 2);
+  EXPECT_EQ(said, "prog: unknown option --otu (did you mean --out?); prog --help lists them\n");
+  EXPECT_EQ(explain({"--help"}, said), 0);
+  EXPECT_NE(said.find("--out"), std::string::npos) << said;
 }
 
 }  // namespace

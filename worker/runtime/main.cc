@@ -4,7 +4,6 @@
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
-#include <iostream>
 #include <map>
 #include <string>
 
@@ -33,12 +32,7 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     // A mistyped command or option is named, with the nearest known one (CLI11 said "A subcommand is
     // required" of a mistyped command).
-    if (const std::string mistake = endorecon::UsageMistake(app, argc, argv);
-        e.get_exit_code() != 0 && !mistake.empty()) {
-      std::cerr << "endorecon-worker: " << endorecon::PrintableLines(mistake) << "\n";
-      return 2;
-    }
-    return app.exit(e) == 0 ? 0 : 2;  // a usage error is 2, as every other invalid input
+    return endorecon::ExplainParseError(app, e, argc, argv);
   }
   // The commands (synth, reconstruct, prepare, ...) log to stderr, as their progress goes: `synth DIR
   // > /dev/null` hid a failure's message (found 2026-12-06). `serve`, a service, logs to stdout for
