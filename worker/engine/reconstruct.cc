@@ -50,12 +50,17 @@ void CheckItFits(const scene::Clip& clip, const std::vector<int>& train_frames, 
   metrics["train"]["image"]["psnr_one_colour"] = yardstick;
   const double trained = metrics[mean].get<double>();
   if (trained < yardstick + eval::kLeastGainOverOneColourDb) {
-    eval::Warn(metrics,
-               fmt::format("the training frames' PSNR ({:.2f} dB) is no better than each frame's mean "
-                           "colour alone gives ({:.2f} dB): the reconstruction learnt nothing of the "
-                           "scene (a learning rate too high, a config that stops the field learning: "
-                           "config.json)",
-                           trained, yardstick));
+    // Said with the iterations: short runs (tens of steps) meet it too, and the config was blamed
+    // alone (found 2026-12-07). Whole frames both, as the yardstick is of whole frames (the outcome
+    // line's training PSNR is the last batch's).
+    const int iterations = metrics.value("iterations", 0);
+    eval::Warn(
+        metrics,
+        fmt::format("the training frames' PSNR over whole frames ({:.2f} dB) is no better than each "
+                    "frame's mean colour alone gives ({:.2f} dB): the reconstruction learnt nothing of "
+                    "the scene after {} iteration{} (too few for the clip, a learning rate too high, or a "
+                    "config that stops the field learning: config.json)",
+                    trained, yardstick, iterations, iterations == 1 ? "" : "s"));
   }
 }
 
