@@ -7,8 +7,10 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <set>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "client/interrupt_note.h"
@@ -118,7 +120,9 @@ v1::Job WatchJob(const Globals& globals, const std::string& id, const WatchOptio
   request.set_previews(!options.previews_dir.empty());
   auto unreachable_since = std::chrono::steady_clock::now();
   v1::Job job;
-  int previews = 0;
+  // The previews saved, by kind and iteration: a stream opened again (each --timeout, or after a
+  // server restart) starts with the latest preview, which was saved and said again (found 2026-12-07).
+  std::set<std::pair<std::string, std::int64_t>> previews;
   while (true) {
     auto context = CallContext(std::chrono::milliseconds(static_cast<long>(options.stream_s * 1000)));
     auto reader = stub->Watch(context.get(), request);
@@ -127,10 +131,10 @@ v1::Job WatchJob(const Globals& globals, const std::string& id, const WatchOptio
     while (reader->Read(&event)) {
       heard = true;
       if (event.has_progress()) printer.Progress(event.progress());
-      if (event.has_preview()) {
+      if (event.has_preview() &&
+          previews.emplace(event.preview().kind(), event.preview().iteration()).second) {
         SavePreview(options.previews_dir, event.preview());
         printer.Preview(event.preview(), options.previews_dir);
-        ++previews;
       }
       if (event.has_job()) {
         job = event.job();
@@ -153,7 +157,7 @@ v1::Job WatchJob(const Globals& globals, const std::string& id, const WatchOptio
   }
   printer.EndLine();
   // Said, not left to an empty folder (found 2026-12-07).
-  if (!options.previews_dir.empty() && previews == 0 && !globals.json) {
+  if (!options.previews_dir.empty() && previews.empty() && !globals.json) {
     std::cerr << "endorecon: no preview arrived while watching, so nothing was saved in "
               << options.previews_dir
               << ": a worker sends one each --preview-interval of training (30 s by default) "
