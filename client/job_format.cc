@@ -211,7 +211,7 @@ std::string DescribeJob(const v1::Job& job) {
     std::string skips;
     if (job.prepare().skip_left() > 0) skips += fmt::format(", --skip-left {}", job.prepare().skip_left());
     if (job.prepare().skip_right() > 0) skips += fmt::format(", --skip-right {}", job.prepare().skip_right());
-    text += fmt::format("  {}  {} file(s){}{}\n", job.has_prepare() ? "recording" : "clip     ",
+    text += fmt::format("  {} {} file(s){}{}\n", job.has_prepare() ? "recording" : "clip     ",
                         job.clip().files_size(),
                         job.has_prepare() ? " (prepared into the results' clip/" + skips + ")" : "", picked);
   }

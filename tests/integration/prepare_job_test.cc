@@ -60,7 +60,7 @@ TEST(PrepareJobTest, RecordingInPreparedClipAndResultsOut) {
   EXPECT_EQ(job.prepare().masks(), "masks");
   EXPECT_EQ(job.name(), "rec") << "the folder of both eyes, not the left eye's file";
   const auto status = RunCli(cluster.address(), {"status", id});
-  EXPECT_NE(status.out.find("recording  9 file(s)"), std::string::npos) << status.out;
+  EXPECT_NE(status.out.find("  recording 9 file(s)"), std::string::npos) << status.out;
 
   const auto fetched = RunCli(cluster.address(), {"fetch", id, "-o", cluster.path("results").string()});
   ASSERT_EQ(fetched.exit_code, 0) << fetched.err;

@@ -147,9 +147,9 @@ TEST(DescribeJob, TheClipLineSaysWhichFramesWerePicked) {
   v1::Job job;
   job.set_id("0123456789ab");
   job.mutable_clip()->add_files()->set_path("poses_bounds.npy");
-  EXPECT_NE(DescribeJob(job).find("  clip       1 file(s)\n"), std::string::npos) << DescribeJob(job);
+  EXPECT_NE(DescribeJob(job).find("  clip      1 file(s)\n"), std::string::npos) << DescribeJob(job);
   job.mutable_recording()->set_frames("0:500:2");
-  EXPECT_NE(DescribeJob(job).find("  clip       1 file(s) (frames 0:500:2)\n"), std::string::npos)
+  EXPECT_NE(DescribeJob(job).find("  clip      1 file(s) (frames 0:500:2)\n"), std::string::npos)
       << DescribeJob(job);
 }
 
@@ -160,12 +160,12 @@ TEST(DescribeJob, TheRecordingLineSaysWhichEyesFirstFramesWereSkipped) {
   job.mutable_clip()->add_files()->set_path("left.mp4");
   job.mutable_clip()->add_files()->set_path("right.mp4");
   job.mutable_prepare()->set_rectified(true);
-  EXPECT_NE(DescribeJob(job).find("  recording  2 file(s) (prepared into the results' clip/)\n"),
+  EXPECT_NE(DescribeJob(job).find("  recording 2 file(s) (prepared into the results' clip/)\n"),
             std::string::npos)
       << DescribeJob(job);
   job.mutable_prepare()->set_skip_left(9);
   EXPECT_NE(
-      DescribeJob(job).find("  recording  2 file(s) (prepared into the results' clip/, --skip-left 9)\n"),
+      DescribeJob(job).find("  recording 2 file(s) (prepared into the results' clip/, --skip-left 9)\n"),
       std::string::npos)
       << DescribeJob(job);
 }
