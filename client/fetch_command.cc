@@ -192,12 +192,17 @@ int Fetch(const Globals& globals, const FetchFlags& flags) {
         if (file.path() == range.path()) fetched += file.size() - range.offset();
       }
     }
-    std::cout << "fetched " << pending.size() << " of " << job.result().files_size() << " file(s) ("
-              << HumanBytes(fetched)
-              << (received < fetched
-                      ? ", " + HumanBytes(received) + " of it received: identical files come once"
-                      : std::string())
-              << ") into " << flags.out << "; every file verified" << std::endl;
+    if (pending.empty()) {
+      std::cout << "all " << job.result().files_size() << " file(s) are in " << flags.out
+                << " already; every file verified" << std::endl;
+    } else {
+      std::cout << "fetched " << pending.size() << " of " << job.result().files_size() << " file(s) ("
+                << HumanBytes(fetched)
+                << (received < fetched
+                        ? ", " + HumanBytes(received) + " of it received: identical files come once"
+                        : std::string())
+                << ") into " << flags.out << "; every file verified" << std::endl;
+    }
     if (!report.empty()) std::cout << "report: " << report << std::endl;
   }
   return kExitOk;
