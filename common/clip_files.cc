@@ -38,9 +38,9 @@ std::string Lower(std::string text) {
 
 // Where a per-frame folder and the folder it is paired with (images/) part ways, by file name (stem):
 // the first file there without one here, or the first here without one there; empty when the names
-// match. `folder` is the other folder's name before its files' ("depth/"; images/ goes unsaid).
+// match. `folder` is the other folder's name before its files' ("images/", "depth/").
 std::string FirstUnpaired(const std::vector<fs::path>& files, const std::vector<fs::path>& images,
-                          const std::string& folder = "") {
+                          const std::string& folder = "images/") {
   std::set<std::string> stems, image_stems;
   for (const auto& f : files) stems.insert(f.stem().string());
   for (const auto& f : images) image_stems.insert(f.stem().string());
@@ -49,8 +49,7 @@ std::string FirstUnpaired(const std::vector<fs::path>& files, const std::vector<
       return "no file named " + image.stem().string() + ".* for " + folder + image.filename().string();
   }
   for (const auto& f : files) {
-    if (!image_stems.count(f.stem().string()))
-      return f.filename().string() + " names no " + (folder.empty() ? "image" : "file in " + folder);
+    if (!image_stems.count(f.stem().string())) return f.filename().string() + " names no file in " + folder;
   }
   return "";
 }

@@ -212,7 +212,7 @@ TEST_F(BadUploadTest, AClipMissingAMaskOrHoldingATruncatedPngIsRefusedBeforeItsU
   EXPECT_EQ(result.exit_code, 2) << result.err;
   EXPECT_NE(result.err.find("nomask/masks: holds 7 files but poses_bounds.npy has 8 rows"), std::string::npos)
       << result.err;
-  EXPECT_NE(result.err.find("no file named 000003.* for 000003.png"), std::string::npos) << result.err;
+  EXPECT_NE(result.err.find("no file named 000003.* for images/000003.png"), std::string::npos) << result.err;
   EXPECT_NE(result.err.find("found before the upload: nothing was sent"), std::string::npos) << result.err;
 
   MakeClip(cluster_.path("cut"));

@@ -107,7 +107,7 @@ TEST(ClipFilesTest, AMissingMaskNamesTheFrameThatLacksIt) {
   const std::string message = ErrorOf([&] { ListClipFrames(dir.path()); });
   EXPECT_NE(message.find("masks: holds 2 files but poses_bounds.npy has 3 rows"), std::string::npos)
       << message;
-  EXPECT_NE(message.find("no file named 000001.* for 000001.png"), std::string::npos) << message;
+  EXPECT_NE(message.find("no file named 000001.* for images/000001.png"), std::string::npos) << message;
 }
 
 TEST(ClipFilesTest, APoseFileOfAnotherShapeOrNoFolderIsRefused) {
