@@ -79,16 +79,24 @@ int DryRun(const RetentionFlags& flags) {
                              v1::JobState_Name(job.state()),
                              fmt::gmtime(static_cast<std::time_t>(job.finished_unix_ms() / 1000)));
   }
+  // "(0: none)" followed the days whatever they were (found 2026-12-07): --retention-days 0 is said.
+  std::cout
+      << (flags.days > 0 ? fmt::format("dry run: {} job(s) finished more than {} day(s) ago would expire",
+                                       plan.jobs.size(), flags.days)
+                         : std::string("dry run: --retention-days 0 expires no job"))
+      << fmt::format(
+             "; {} blob(s), {} bytes, would be deleted; {} blob(s) stay because other jobs share them, {} "
+             "because uploads not yet submitted bring them\n",
+             plan.blobs.size(), plan.bytes, plan.kept_shared, plan.kept_uploading);
+  if (!orphans_go) {
+    std::cout << "--orphan-hours 0 keeps the files no job references: not counted\n";
+    return 0;
+  }
   std::cout << fmt::format(
-      "dry run: {} job(s) finished more than {} day(s) ago would expire (0: none); {} blob(s), {} bytes, "
-      "would be "
-      "deleted; "
-      "{} blob(s) stay because other jobs share them, {} because uploads not yet submitted bring them\n",
-      plan.jobs.size(), flags.days, plan.blobs.size(), plan.bytes, plan.kept_shared, plan.kept_uploading);
-  std::cout << fmt::format(
-      "{} file(s), {} bytes, that no job references would be deleted (--orphan-hours {}); {} more wait "
-      "until that long has passed both since each was last written and since the server first found it "
-      "no job's\n",
+      "{} file(s), {} bytes, that no job references would be deleted (--orphan-hours {}); {} more are not "
+      "old "
+      "enough yet: each goes once that long has passed since it was last written and since the server first "
+      "found that no job names it\n",
       plan.orphans.size(), plan.orphan_bytes, flags.orphan_hours, plan.orphans_waiting);
   return 0;
 }
@@ -105,7 +113,7 @@ Command AddRetentionCommand(CLI::App& app) {
   command
       ->add_option("--orphan-hours", flags->orphan_hours,
                    "files no job references go once this long has passed both since each was last "
-                   "written and since it was first found no job's (orphans.json) (0: kept)")
+                   "written and since the server first found that no job names it (orphans.json) (0: kept)")
       ->capture_default_str()
       ->check(AtLeastZero());
   command->add_flag("--dry-run", flags->dry_run,
