@@ -246,7 +246,7 @@ TEST_F(EndoNerfLoaderTest, RejectsUnequalCounts) {
   fs::remove(dir_ / "masks" / Name(1));
   ExpectError("masks", "holds 2 files but poses_bounds.npy has 3 rows");
   // ... and which frame has none (found 2026-12-05: the count alone left the user to search).
-  ExpectError("masks", "no file named frame-001.* for frame-001.png");
+  ExpectError("masks", "no file named frame-001.* for images/frame-001.png");
 }
 
 TEST_F(EndoNerfLoaderTest, RejectsUnequalSizes) {
