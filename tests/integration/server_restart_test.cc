@@ -485,7 +485,14 @@ TEST(ServerStartTest, TheRetentionDryRunMakesNoFolder) {
 TEST(ServerStartTest, ATokenStoreThatDoesNotOpenRefusesCallsAndDoesNotStopTheServer) {
   Cluster cluster;
   const auto store = cluster.data_dir() / "tokens.sqlite";
-  WriteBytes(store, "not a database, and not empty");  // as root, what does not open whoever owns it
+  // Put in place whole, as a file appears: written in place, a call between its truncation and its
+  // bytes found an empty file, which SQLite opens as a new store, and the refusal never came (a CI
+  // run under load, 2026-12-07).
+  const auto put_bad_store = [&] {
+    WriteBytes(cluster.path("bad-store"), "not a database, and not empty");
+    std::filesystem::rename(cluster.path("bad-store"), store);
+  };
+  put_bad_store();  // as root, what does not open whoever owns it
   const auto list = [&] {
     grpc::ClientContext context;
     v1::ListJobsRequest request;
@@ -510,7 +517,7 @@ TEST(ServerStartTest, ATokenStoreThatDoesNotOpenRefusesCallsAndDoesNotStopTheSer
   auto& worker = cluster.StartWorker("w");
   const auto id = cluster.Submit(cluster.path("clip"), {"--iterations", "100000"});
   cluster.WaitForState(id, v1::RUNNING);
-  WriteBytes(store, "not a database, and not empty");
+  put_bad_store();
   ASSERT_TRUE(
       WaitUntil([&] { return cluster.ServerLog().find("token store does not open") != std::string::npos; },
                 std::chrono::seconds(30)))
