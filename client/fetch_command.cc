@@ -11,6 +11,7 @@
 #include <cstring>
 #include <filesystem>
 #include <iostream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <string>
@@ -184,18 +185,17 @@ int Fetch(const Globals& globals, const FetchFlags& flags) {
                           {"result", nlohmann::json::parse(ToJson(job.result()))}};
     std::cout << out.dump() << std::endl;
   } else {
-    // The pending files' bytes, as `status` counts them: identical files come once and are copied here,
-    // so the bytes received can be fewer ("115.0 MB" in status read as 103.6 fetched; found 2026-12-07).
-    std::int64_t fetched = 0;
-    for (const auto& range : pending) {
-      for (const auto& file : job.result().files()) {
-        if (file.path() == range.path()) fetched += file.size() - range.offset();
-      }
-    }
     if (pending.empty()) {
       std::cout << "all " << job.result().files_size() << " file(s) are in " << flags.out
                 << " already; every file verified" << std::endl;
     } else {
+      // The pending files' bytes, as `status` counts them: identical files come once and are copied
+      // here, so the bytes received can be fewer ("115.0 MB" in status read as 103.6 fetched; found
+      // 2026-12-07).
+      std::map<std::string, std::int64_t> sizes;
+      for (const auto& file : job.result().files()) sizes[file.path()] = file.size();
+      std::int64_t fetched = 0;
+      for (const auto& range : pending) fetched += sizes[range.path()] - range.offset();
       std::cout << "fetched " << pending.size() << " of " << job.result().files_size() << " file(s) ("
                 << HumanBytes(fetched)
                 << (received < fetched

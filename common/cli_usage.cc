@@ -47,14 +47,24 @@ std::string Nearest(std::string_view word, const std::vector<std::string>& known
 }
 
 std::vector<const CLI::App*> Commands(const CLI::App& app) {
-  std::vector<const CLI::App*> commands;
   return app.get_subcommands([](const CLI::App*) { return true; });
+}
+
+std::vector<std::string> CommandNames(const CLI::App& app) {
+  std::vector<std::string> names;
+  for (const CLI::App* command : Commands(app)) names.push_back(command->get_name());
+  return names;
 }
 
 std::string CommandList(const CLI::App& app) {
   std::string list;
-  for (const CLI::App* command : Commands(app)) list += (list.empty() ? "" : ", ") + command->get_name();
+  for (const std::string& name : CommandNames(app)) list += (list.empty() ? "" : ", ") + name;
   return list;
+}
+
+// The program's name as the user typed it, its folder aside.
+std::string ProgramName(int argc, const char* const* argv) {
+  return std::filesystem::path(argc > 0 ? argv[0] : "").filename().string();
 }
 
 // The program and the commands down to `app`, as the user types them: "endorecon-server token".
@@ -90,7 +100,7 @@ bool TakesPositionals(const CLI::App& app) {
 }  // namespace
 
 std::string UsageMistake(const CLI::App& app, int argc, const char* const* argv) {
-  const std::string program = std::filesystem::path(argc > 0 ? argv[0] : "").filename().string();
+  const std::string program = ProgramName(argc, argv);
   const CLI::App* at = &app;
   for (int i = 1; i < argc; ++i) {
     const std::string word = argv[i];
@@ -115,9 +125,7 @@ std::string UsageMistake(const CLI::App& app, int argc, const char* const* argv)
         continue;
       }
       if (!TakesPositionals(*at)) {
-        std::vector<std::string> names;
-        for (const CLI::App* c : commands) names.push_back(c->get_name());
-        const std::string nearest = Nearest(word, names);
+        const std::string nearest = Nearest(word, CommandNames(*at));
         return "unknown command '" + word + "'" +
                (nearest.empty() ? std::string() : " (did you mean '" + nearest + "'?)") +
                "; the commands of " + CommandLine(*at, program) + ": " + CommandList(*at);
@@ -132,7 +140,7 @@ std::string UsageMistake(const CLI::App& app, int argc, const char* const* argv)
 
 int ExplainParseError(const CLI::App& app, const CLI::ParseError& e, int argc, const char* const* argv) {
   if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version
-  const std::string program = std::filesystem::path(argc > 0 ? argv[0] : "").filename().string();
+  const std::string program = ProgramName(argc, argv);
   const std::string mistake = UsageMistake(app, argc, argv);
   std::cerr << program << ": " << PrintableLines(mistake.empty() ? std::string(e.what()) : mistake) << "\n";
   if (mistake.empty()) std::cerr << "Run with --help for more information.\n";

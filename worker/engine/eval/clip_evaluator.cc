@@ -311,7 +311,8 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
     if (f < 0 || std::size_t(f) >= neighbour_images.size()) continue;
     neighbour_images[f] = {clip.rgb[f], clip.has_masks() ? clip.tool_mask[f] : EvaluationMask(clip, f)};
   }
-  FramePacer pacer(what.plan, what.heldout_frames, RenderedPixels(clip), what.plain != nullptr,
+  const int rendered_pixels = RenderedPixels(clip);  // a frame's price (a count over the mask: once)
+  FramePacer pacer(what.plan, what.heldout_frames, rendered_pixels, what.plain != nullptr,
                    what.heldout_slack_s);
   std::future<double> writing;  // the previous frame's files; returns the seconds they took
   bool mesh_empty = false;      // set by frame 0's writing, read once it is done
@@ -370,7 +371,7 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
     EvaluatedFrame evaluated = RenderFrame(clip, f, how, choice.stride, renderer, what.plain);
     render::RenderedFrame& frame = evaluated.frame;
     render_seconds += SecondsSince(start);
-    render_priced += FrameSeconds(how, choice.stride, what.plan.cost, RenderedPixels(clip));
+    render_priced += FrameSeconds(how, choice.stride, what.plan.cost, rendered_pixels);
     (how == FrameRender::kFull ? full_frames : reduced_frames).push_back(f);
     if (how == FrameRender::kReduced && choice.stride != what.plan.stride) {
       coarser.push_back({{"frame", f}, {"stride", choice.stride}});
@@ -449,8 +450,7 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
   if (mesh_empty) {
     Warn(json,
          "the canonical frame (frame 0) shows no tissue surface (all tool, or nothing rendered short of the "
-         "far "
-         "bound): mesh.ply, mesh.obj and mesh.stl hold no triangle");
+         "far bound): mesh.ply, mesh.obj and mesh.stl hold no triangle");
   }
   json["train"] = SplitMetrics(clip, what.train_frames, false, images, depths, calibrations);
   if (!what.heldout_frames.empty()) {
