@@ -22,6 +22,7 @@
 #include "common/error.h"
 #include "common/job_bounds.h"
 #include "common/transport_security.h"
+#include "endorecon_version.h"
 
 namespace endorecon::client {
 

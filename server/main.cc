@@ -26,6 +26,7 @@
 #include "common/metrics_exposer.h"
 #include "common/private_folder.h"
 #include "common/transport_security.h"
+#include "endorecon_version.h"
 #include "server/call_guard.h"
 #include "server/commands.h"
 #include "server/data_folder.h"

@@ -1,3 +1,4 @@
+#include "endorecon_version.h"
 #include "common/dicom/result_instances.h"
 
 #include <dcmtk/dcmdata/dctk.h>
@@ -15,7 +16,6 @@ namespace endorecon::dicom {
 namespace {
 
 constexpr const char* kManufacturer = "endorecon";
-constexpr const char* kSoftwareVersion = "0.1.0";
 
 DcmItem* AppendItem(DcmItem& parent, const DcmTagKey& sequence) {
   DcmItem* item = nullptr;
@@ -54,7 +54,7 @@ std::string PutCommon(DcmDataset& data, const SeriesHeader& header, const std::s
   Put(data, DCM_ContentDate, date.c_str());
   Put(data, DCM_ContentTime, time.c_str());
   Put(data, DCM_Manufacturer, kManufacturer);
-  Put(data, DCM_SoftwareVersions, kSoftwareVersion);
+  Put(data, DCM_SoftwareVersions, ENDORECON_VERSION);
   Put(data, DCM_DerivationDescription, header.derivation_description.substr(0, 1024));
   if (!header.study.source_series_uid.empty()) {
     DcmItem* series = AppendItem(data, DCM_ReferencedSeriesSequence);

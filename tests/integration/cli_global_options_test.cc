@@ -106,9 +106,13 @@ TEST(CliGlobalOptionsTest, UnknownOptionsAreStillRefused) {
                             "--time-budget?); endorecon submit --help lists them"),
             std::string::npos)
       << option.err;
+  // The three binaries of one build print one version: the project's, with the source's commit
+  // when built from a git checkout (as the tests are), which `endorecon workers` shows too.
   const auto version = RunCliAsTyped({"--version"});
   EXPECT_EQ(version.exit_code, 0);
-  EXPECT_FALSE(version.out.empty());
+  EXPECT_EQ(version.out.rfind("0.1.0", 0), 0u) << version.out;
+  EXPECT_EQ(Capture(BuiltBinary("server/endorecon-server") + " --version"), version.out);
+  EXPECT_EQ(Capture(BuiltBinary("worker/runtime/endorecon-worker") + " --version"), version.out);
 }
 
 }  // namespace

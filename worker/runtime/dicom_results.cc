@@ -3,6 +3,7 @@
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
 
+#include "endorecon_version.h"
 #include "common/dicom/result_instances.h"
 #include "common/dicom/uid.h"
 #include "common/error.h"
@@ -73,7 +74,7 @@ std::vector<fs::path> WriteDicomResults(const fs::path& results_dir, const Dicom
       static_cast<int>(settings.times_s.size()) == count ? settings.times_s : std::vector<double>{};
   header.frame_of_reference_uid = dicom::NewUid(settings.uid_root);
   const std::string method =
-      "endorecon 0.1.0, Endo-NeRF++ (uncertainty-aware hash-grid NeRF) reconstruction of " +
+      "endorecon " ENDORECON_VERSION ", Endo-NeRF++ (uncertainty-aware hash-grid NeRF) reconstruction of " +
       (settings.source_summary.empty() ? std::string("a clip") : settings.source_summary);
   const fs::path out = results_dir / "dicom";
   fs::remove_all(out);

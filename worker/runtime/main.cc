@@ -11,6 +11,7 @@
 #include "common/cli_usage.h"
 #include "common/error.h"
 #include "common/job_bounds.h"
+#include "endorecon_version.h"
 #include "worker/runtime/commands.h"
 #include "worker/runtime/progress_line.h"
 

@@ -8,6 +8,7 @@
 #include "common/file_download.h"
 #include "common/file_upload.h"
 #include "common/grpc_status.h"
+#include "endorecon_version.h"
 
 namespace endorecon::worker {
 
