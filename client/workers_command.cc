@@ -14,7 +14,7 @@ namespace endorecon::client {
 
 Command AddWorkersCommand(CLI::App& app) {
   app.add_subcommand("workers",
-                     "list the workers: alive or not, devices (kind, model, memory, threads), jobs");
+                     "list the workers: alive or not, devices (kind, model, memory, threads), jobs, version");
   return [](const Globals& globals) {
     v1::ListWorkersResponse response;
     auto context = CallContext(globals.timeout());
@@ -34,6 +34,7 @@ Command AddWorkersCommand(CLI::App& app) {
                                fmt::format("{}", fmt::join(worker.devices(), ",")),
                                HumanTime(worker.last_seen_unix_ms()),
                                fmt::format("{}", fmt::join(worker.job_ids(), ",")));
+      if (!worker.version().empty()) std::cout << fmt::format("  version {}\n", worker.version());
       if (!worker.tenant().empty())
         std::cout << fmt::format("  runs the jobs of tenant '{}' only (its token's)\n", worker.tenant());
       for (const auto& device : worker.device_info()) {

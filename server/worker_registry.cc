@@ -67,6 +67,7 @@ std::string WorkerRegistry::Register(const v1::RegisterRequest& request, const s
   entry.registered = true;
   entry.principal = principal;
   entry.info.set_hostname(request.hostname());
+  entry.info.set_version(request.version());
   *entry.info.mutable_devices() = request.devices();
   *entry.info.mutable_device_info() = request.device_info();
   entry.info.set_tenant(tenant);

@@ -9,6 +9,7 @@
 
 #include "common/error.h"
 #include "common/job_bounds.h"
+#include "endorecon_version.h"
 #include "server/file_sender.h"
 
 namespace endorecon::server {
@@ -47,6 +48,17 @@ void WarnOfTokenChange(const std::string& worker_id, const std::string& token, c
       AuditedWorkerId(worker_id), token, before);
 }
 
+// Server and workers check a job's --config alike (a key a newer worker knows is refused by an older
+// server): a worker of another build is said once it registers, as an operator upgrading part of a
+// cluster would want to know.
+void WarnOfOtherVersion(const v1::RegisterRequest& request) {
+  if (request.version() == ENDORECON_VERSION) return;
+  spdlog::warn("worker {} runs endorecon {}, this server {}: deploy server and workers at one version",
+               AuditedWorkerId(request.worker_id()),
+               request.version().empty() ? std::string("of an unnamed version") : request.version(),
+               ENDORECON_VERSION);
+}
+
 // The one tenant whose jobs a worker's token serves (`token create --role worker --tenant T`: a
 // research department's GPU node that must not see clinical recordings); nullopt: every tenant's.
 std::optional<std::string> ServedTenant(const Principal& caller) {
@@ -78,6 +90,7 @@ grpc::Status WorkerServiceImpl::Register(grpc::ServerContext* context, const v1:
                         info.set_kind(PrintableText(info.kind(), 64));
                         info.set_model(PrintableText(info.model(), 1024));
                       }
+                      WarnOfOtherVersion(registered);
                       WarnOfTokenChange(request->worker_id(), call.caller.name,
                                         workers_.Register(registered, call.caller.name,
                                                           ServedTenant(call.caller).value_or("")));

@@ -51,6 +51,10 @@ TEST(ManyClientsTest, ConcurrentUploadsSubmissionsAndWatchers) {
   // Each worker's devices with their kind, model, memory and threads.
   EXPECT_NE(workers.out.find("  cpu0: cpu, "), std::string::npos) << workers.out;
   EXPECT_NE(workers.out.find("host thread(s)"), std::string::npos) << workers.out;
+  // ... and the build each runs, the CLI's own here.
+  EXPECT_NE(workers.out.find("  version " + Capture(BuiltBinary("client/endorecon") + " --version")),
+            std::string::npos)
+      << workers.out;
 }
 
 }  // namespace
