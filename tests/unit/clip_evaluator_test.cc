@@ -221,6 +221,16 @@ TEST(ClipEvaluatorTest, APlanPricedTooLowIsKeptToItsDeadline) {
   const nlohmann::json ahead = evaluate(std::chrono::steady_clock::now() + std::chrono::hours(1));
   EXPECT_FALSE(ahead.contains("heldout_reduced"));
   EXPECT_EQ(ahead.at("full_frames"), nlohmann::json::array({0, 2}));
+  // Without uncertainty (mc_passes 0) there are no maps, so no stride to name, late or not (a
+  // stride of 2 and frames gone to 4 were written until 2026-12-07).
+  auto settings = train::EvalRenderSettings(run.config, run.clip.near, run.clip.far);
+  settings.mc_passes = 0;
+  render::FrameRenderer mapless(run.trainer.field(), run.trainer.box(), settings);
+  what.deadline = std::chrono::steady_clock::now();
+  const nlohmann::json none = EvaluateClip(run.clip, mapless, what, dir / "mapless").at("evaluation");
+  EXPECT_EQ(none.at("reduced_frames"), nlohmann::json::array({0, 1, 2, 3, 4}));
+  EXPECT_FALSE(none.contains("uncertainty_stride")) << none.dump();
+  EXPECT_FALSE(none.contains("uncertainty_stride_late")) << none.dump();
 }
 
 // Outside the scope's view every uncertainty map written holds 0, on full and reduced frames alike:

@@ -300,9 +300,12 @@ TEST(TrainConfigTest, BadValuesAreRejected) {
         // Values that sized memory or made training meaningless, taken until 2026-12-05: a batch of
         // 1e9 rays held 7 GB before its first step; a negative rate or weight trained to 8 dB.
         nlohmann::json{{"rays_per_batch", 1000000000}}, nlohmann::json{{"depth_samples", 100000}},
-        nlohmann::json{{"mc_passes", 1000}}, nlohmann::json{{"adam", {{"lr", {{"grid", -1}}}}}},
-        nlohmann::json{{"adam", {{"default_lr", -0.1}}}}, nlohmann::json{{"adam", {{"beta2", 1.0}}}},
-        nlohmann::json{{"depth_weight", -100}}, nlohmann::json{{"huber_delta", 0}},
+        // ... and a count of evaluation samples ("eval samples must be at most 1024" until 2026-12-07).
+        nlohmann::json{{"eval_fine_samples", 2000}}, nlohmann::json{{"eval_coarse_samples", 0}},
+        nlohmann::json{{"stratified_samples", 0}}, nlohmann::json{{"mc_passes", 1000}},
+        nlohmann::json{{"adam", {{"lr", {{"grid", -1}}}}}}, nlohmann::json{{"adam", {{"default_lr", -0.1}}}},
+        nlohmann::json{{"adam", {{"beta2", 1.0}}}}, nlohmann::json{{"depth_weight", -100}},
+        nlohmann::json{{"huber_delta", 0}},
         // A rate that threw the grid about (1e30 trained to garbage with a finite loss), a group the
         // field has not (a typo left the grid at the default rate), until 2026-12-05.
         nlohmann::json{{"adam", {{"lr", {{"grid", 1e30}}}}}}, nlohmann::json{{"adam", {{"default_lr", 2}}}},

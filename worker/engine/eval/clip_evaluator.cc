@@ -480,7 +480,7 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
                           : "one pass at every pixel";
   if (!reduced_frames.empty()) {
     how["reduced_frames"] = reduced_frames;
-    how["uncertainty_stride"] = what.plan.stride;
+    if (uncertain) how["uncertainty_stride"] = what.plan.stride;  // no maps, no stride (mc_passes 0)
     // Held-out frames reduced when the run's budget could not afford them full: their scores are the
     // reduced render's.
     nlohmann::json heldout_reduced = nlohmann::json::array();
@@ -489,7 +489,7 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
     }
     if (!heldout_reduced.empty()) how["heldout_reduced"] = heldout_reduced;
     // Frames whose maps took a coarser stride to keep the deadline (the plan's prices were low).
-    if (!coarser.empty()) how["uncertainty_stride_late"] = coarser;
+    if (uncertain && !coarser.empty()) how["uncertainty_stride_late"] = coarser;
     const auto& plain = what.plain->settings();
     how["reduced"] =
         uncertain ? fmt::format(

@@ -196,12 +196,15 @@ void Validate(const TrainConfig& c) {
   require(c.rays_per_batch >= 1 && c.rays_per_batch <= kMostRaysPerBatch,
           "rays_per_batch must be in [1, " + std::to_string(kMostRaysPerBatch) + "], got " +
               std::to_string(c.rays_per_batch));
-  require(c.depth_samples >= 0 && c.stratified_samples >= 1 && c.depth_samples <= kMostSamplesPerRay &&
-              c.stratified_samples <= kMostSamplesPerRay,
-          "need stratified_samples in [1, " + std::to_string(kMostSamplesPerRay) +
-              "] and depth_samples in [0, " + std::to_string(kMostSamplesPerRay) + "]");
-  require(c.eval_coarse_samples <= kMostSamplesPerRay && c.eval_fine_samples <= kMostSamplesPerRay,
-          "eval samples must be at most " + std::to_string(kMostSamplesPerRay));
+  // Each count of samples a ray is named when refused (the file's key is what a user fixes).
+  const auto require_samples = [&](int value, int least, const char* key) {
+    require(value >= least && value <= kMostSamplesPerRay,
+            fmt::format("{} must be in [{}, {}], got {}", key, least, kMostSamplesPerRay, value));
+  };
+  require_samples(c.stratified_samples, 1, "stratified_samples");
+  require_samples(c.depth_samples, 0, "depth_samples");
+  require_samples(c.eval_coarse_samples, 1, "eval_coarse_samples");
+  require_samples(c.eval_fine_samples, 1, "eval_fine_samples");
   require(c.mc_passes <= kMostDropoutPasses,
           "mc_passes must be at most " + std::to_string(kMostDropoutPasses));
   // Adam moves each parameter by about its rate every step: a rate past kMostLearningRate throws the
@@ -277,7 +280,6 @@ void Validate(const TrainConfig& c) {
                       c.eval_coarse_samples, c.eval_fine_samples, c.mc_passes, per_pixel,
                       kMostPixelMultiplyAdds));
   require(c.nll_beta >= 0 && c.nll_beta <= 1, "nll_beta must be in [0, 1]");
-  require(c.eval_coarse_samples >= 1 && c.eval_fine_samples >= 1, "eval samples must be >= 1");
   require(c.curve_interval_s > 0, "curve_interval_s must be > 0");
   require(c.mc_passes >= 0, "mc_passes must be >= 0");
   require(c.uncertainty_lambda >= 0, "uncertainty_lambda must be >= 0");
