@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <opencv2/calib3d.hpp>
@@ -34,7 +35,7 @@ CheckerboardCalibration CalibrateFromCheckerboard(const RecordingInput& recordin
   }
   // A board moved by hand: two eyes' recordings cut apart pair views of different moments, and the
   // calibration fits their motion as the rig's geometry.
-  CheckEyesInStep(recording);
+  CheckEyesInStep(recording, TooShortToCheck::kQuiet);
   StereoSource source(recording);
   CheckerboardCalibration result;
   // Corners only are kept: frames are read in batches and searched in parallel.
@@ -113,6 +114,18 @@ CheckerboardCalibration CalibrateFromCheckerboard(const RecordingInput& recordin
     FailInvalid(source.name() + ": the two eyes calibrate to " + fmt::format("{:.3g}", cv::norm(c.t)) +
                 " apart, under " + fmt::format("{:g}", kLeastBaselineSquares) +
                 " of a square: are the left and right images the same eye's?");
+  }
+  // Each eye alone fits its views, the pair not: the views are not of one moment (a left eye's
+  // recording begun a view early wrote a baseline 20 times off, warned of only as a high error).
+  const double eye_rms = std::max(result.left_rms_px, result.right_rms_px);
+  if (eye_rms <= kMostPlausibleRmsPx && result.rms_px > kMostPlausibleRmsPx &&
+      result.rms_px > kMostPairToEyeRmsRatio * eye_rms) {
+    FailInvalid(fmt::format(
+        "{}: each eye calibrates well alone ({:.3g} px left, {:.3g} px right) but not the two together "
+        "({:.3g} px): the eyes' views are not of the same moments. If their recordings began apart, pass "
+        "--skip-left or --skip-right (the eye that began first, by the views it has before the other's "
+        "first); if they are folders of pictures, check that each name pairs one moment",
+        source.name(), result.left_rms_px, result.right_rms_px, result.rms_px));
   }
   c.kind = "opencv";
   c.source = source.name();

@@ -39,11 +39,20 @@ constexpr double kLeastBaselineSquares = 1e-3;
 // corners anyway and calibrated to 4.6 px, a baseline 28 times off, without a word (found 2026-12-06).
 constexpr double kMostPlausibleRmsPx = 1.0;
 
+// Eyes that each calibrate plausibly alone but as a pair more than this many times worse than the
+// worse of them and over kMostPlausibleRmsPx saw the board at different moments: the synthetic rig's
+// views with the left eye's recording begun one view early calibrated to 0.10 px and 0.10 px alone,
+// 16 px together, a baseline of 100 for 5 (measured 2026-12-07).
+constexpr double kMostPairToEyeRmsRatio = 4.0;
+
 // The warning for `result`, or "" when its error is plausible.
 std::string CalibrationWarning(const CheckerboardCalibration& result, const CheckerboardOptions& options);
 
 // Throws the source's errors, and FailInvalid naming the recording when fewer than 4 frames show
-// the whole board to both eyes, or when the eyes calibrate to less than kLeastBaselineSquares apart.
+// the whole board to both eyes, when the eyes calibrate to less than kLeastBaselineSquares apart, or
+// when they calibrate well alone but not together (kMostPairToEyeRmsRatio: views of different
+// moments). Eyes of two files are checked to be in step (CheckEyesInStep) when the recording is
+// long enough to tell.
 CheckerboardCalibration CalibrateFromCheckerboard(const RecordingInput& recording,
                                                   const CheckerboardOptions& options);
 

@@ -113,7 +113,7 @@ EyeLag MatchLag(const cv::Mat& left, const cv::Mat& right, int max_lag) {
   return best;
 }
 
-void CheckEyesInStep(const RecordingInput& input) {
+void CheckEyesInStep(const RecordingInput& input, TooShortToCheck too_short) {
   if (input.layout != StereoLayout::kTwoSources) return;
   // Two folders of different lengths are read as far as the shorter: cut apart, they usually differ,
   // and their lag is what to say (the preparation refuses them after, when they are in step).
@@ -149,8 +149,8 @@ void CheckEyesInStep(const RecordingInput& input) {
   }
   // A quarter of the signal each way is searched: what is compared is its middle half.
   if (const int changes = static_cast<int>(left.size()); changes - 2 * (changes / 4) < kMinSamples) {
-    // A checkerboard recording of 20 views, a short clip: a lag of a few frames would pass unseen
-    // (found 2026-12-07).
+    // A short clip: a lag of a few frames would pass unseen (found 2026-12-07).
+    if (too_short == TooShortToCheck::kQuiet) return;
     spdlog::warn(
         "{}: {} pair(s) are too few to check that the eyes' recordings begin together (about {} are "
         "needed); if they were cut at different moments, pass --skip-left or --skip-right "

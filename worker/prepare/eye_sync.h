@@ -42,11 +42,16 @@ constexpr int kBands = 8;
 // `left`, as their departures from their own running average.
 EyeLag MatchLag(const cv::Mat& left, const cv::Mat& right, int max_lag);
 
+// What a recording too short for the check is told: `prepare` warns that a lag would pass unseen;
+// `calibrate` is quiet, its stereo fit telling views of different moments apart itself
+// (checkerboard_calibration.h), as a board's usual 20-40 views are too few for the motion.
+enum class TooShortToCheck { kWarn, kQuiet };
+
 // Reads up to kSyncFrames pairs of a two-file recording from its start (after its skips) and
 // throws FailInvalid naming both files when the eyes' motion says they are out of step, with the
 // --skip-left or --skip-right that pairs them. A recording of one file (side by side, top-bottom)
 // is one moment per frame and is not read.
-void CheckEyesInStep(const RecordingInput& input);
+void CheckEyesInStep(const RecordingInput& input, TooShortToCheck too_short = TooShortToCheck::kWarn);
 
 constexpr int kSyncFrames = 500;  // 20 s at 25 fps; the lag searched: up to a quarter of those read
 
