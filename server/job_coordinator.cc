@@ -17,6 +17,7 @@
 #include "common/manifest.h"
 #include "common/prepare_flags_proto.h"
 #include "server/job_states.h"
+#include "server/recording_check.h"
 #include "worker/engine/train/config_check.h"
 
 namespace endorecon::server {
@@ -550,6 +551,9 @@ v1::Job JobCoordinator::Submit(const v1::SubmitRequest& request, const Principal
     job.clear_id();
     return job;
   }
+  // A recording's options against its files' headers, before the queue; outside the lock (a folder
+  // of many files takes a while to read).
+  if (!from_pacs && !request.has_prepare()) CheckRecording(request.clip(), request.recording(), parts_.blobs);
   // Under the lock, so retention cannot delete a blob between this check and the insert, and two
   // submits cannot both take a tenant's last job slot.
   Locked([&] {
@@ -940,6 +944,14 @@ v1::Job JobCoordinator::Update(const std::string& id, const std::function<void(v
 }
 
 void JobCoordinator::RetrievalDone(const std::string& id, const v1::Manifest& clip) {
+  // Checked before the queue as a submitted recording is (outside the lock): a window past its end
+  // fails the job now, not after its wait for a worker.
+  std::string refused;
+  try {
+    CheckRecording(clip, Locked([&] { return Load(id).job.recording(); }), parts_.blobs);
+  } catch (const Error& e) {
+    refused = e.what();
+  }
   Locked([&] {
     auto stored = Load(id);
     auto& job = stored.job;
@@ -949,6 +961,11 @@ void JobCoordinator::RetrievalDone(const std::string& id, const v1::Manifest& cl
     *job.mutable_clip() = clip;
     holders_.AddFiles(job.tenant(), clip);
     job.mutable_retrieval()->set_state(v1::Retrieval::RETRIEVED);
+    if (!refused.empty()) {
+      Finish(job, v1::FAILED,
+             "the recording retrieved from PACS " + job.retrieval().source().pacs() + ": " + refused);
+      return;
+    }
     Save(job);
     parts_.scheduler.Push(job.id(), job.priority(), stored.seq, job.tenant());
     spdlog::info("job {}: recording retrieved ({} file(s), {} bytes); queued", id, clip.files_size(),

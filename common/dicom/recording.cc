@@ -21,37 +21,16 @@
 #include <mutex>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
-#include <set>
 
 #include "common/dicom/dataset_access.h"
-#include "common/dicom_file.h"
+#include "common/dicom/recording_header.h"
+#include "common/dicom/recording_series.h"
 #include "common/error.h"
 #include "common/jpeg_header.h"
 
 namespace endorecon::dicom {
 namespace fs = std::filesystem;
 namespace {
-
-const std::set<std::string> kVideoClasses = {
-    UID_VideoEndoscopicImageStorage, UID_VideoPhotographicImageStorage, UID_VideoMicroscopicImageStorage};
-const std::set<std::string> kImageClasses = {UID_VLEndoscopicImageStorage, UID_VLPhotographicImageStorage,
-                                             UID_SecondaryCaptureImageStorage,
-                                             UID_MultiframeTrueColorSecondaryCaptureImageStorage,
-                                             UID_MultiframeGrayscaleByteSecondaryCaptureImageStorage};
-const std::set<std::string> kVideoSyntaxes = {UID_MPEG2MainProfileAtMainLevelTransferSyntax,
-                                              UID_MPEG2MainProfileAtHighLevelTransferSyntax,
-                                              UID_MPEG4HighProfileLevel4_1TransferSyntax,
-                                              UID_MPEG4BDcompatibleHighProfileLevel4_1TransferSyntax,
-                                              UID_MPEG4HighProfileLevel4_2_For2DVideoTransferSyntax,
-                                              UID_MPEG4HighProfileLevel4_2_For3DVideoTransferSyntax,
-                                              UID_MPEG4StereoHighProfileLevel4_2TransferSyntax,
-                                              UID_HEVCMainProfileLevel5_1TransferSyntax,
-                                              UID_HEVCMain10ProfileLevel5_1TransferSyntax};
-const std::set<E_TransferSyntax> kImageSyntaxes = {EXS_LittleEndianImplicit, EXS_LittleEndianExplicit,
-                                                   EXS_BigEndianExplicit,    EXS_DeflatedLittleEndianExplicit,
-                                                   EXS_RLELossless,          EXS_JPEGProcess1,
-                                                   EXS_JPEGProcess2_4,       EXS_JPEGProcess14,
-                                                   EXS_JPEGProcess14SV1};
 
 void RegisterCodecs() {
   static std::once_flag once;
@@ -81,21 +60,13 @@ class TempFile {
   fs::path path_;
 };
 
-struct Instance {
-  fs::path path;
-  std::unique_ptr<DcmFileFormat> file;
-  DcmDataset* dataset = nullptr;
-  std::string sop_class, series_uid, transfer_syntax;
-  E_TransferSyntax xfer = EXS_Unknown;
-  long series_number = 0, instance_number = 0;
-  int frames = 0, rows = 0, columns = 0;
-  bool video = false;
+// A file's header and what reading its pixels needs besides.
+struct Instance : InstanceHeader {
+  explicit Instance(InstanceHeader header) : InstanceHeader(std::move(header)) {}
   std::unique_ptr<TempFile> stream;  // a video's extracted stream
   std::vector<double> times;         // seconds from the instance's first frame
   std::string times_from;
 };
-
-std::string Where(const Instance& instance) { return instance.path.string(); }
 
 // One fragment of encapsulated pixel data (item 0 is the basic offset table).
 struct Fragment {
@@ -106,17 +77,7 @@ struct Fragment {
 // The encapsulated pixel data's items, the offset table first. Throws FailInvalid naming the file for
 // pixel data that is not encapsulated or a fragment that cannot be read.
 std::vector<Fragment> Fragments(const Instance& instance) {
-  DcmElement* element = nullptr;
-  if (instance.dataset->findAndGetElement(DCM_PixelData, element).bad() || element == nullptr) {
-    FailInvalid(Where(instance) + ": no Pixel Data (7FE0,0010)");
-  }
-  auto* pixels = static_cast<DcmPixelData*>(element);
-  DcmPixelSequence* sequence = nullptr;
-  const OFCondition status = pixels->getEncapsulatedRepresentation(instance.xfer, nullptr, sequence);
-  if (status.bad() || sequence == nullptr || sequence->card() == 0) {
-    FailInvalid(Where(instance) + ": the pixel data is not encapsulated as " +
-                UidName(instance.transfer_syntax) + " says (" + status.text() + ")");
-  }
+  DcmPixelSequence* sequence = &EncapsulatedPixels(instance);
   std::vector<Fragment> fragments(sequence->card());
   for (unsigned long i = 0; i < sequence->card(); ++i) {
     DcmPixelItem* item = nullptr;
@@ -263,91 +224,16 @@ void ReadTimes(Instance& instance) {
   for (int i = 0; i < n; ++i) instance.times[i] = i * interval;
 }
 
-// The bytes of the pixel data: the fragments' for encapsulated data (the offset table left out),
-// the element's length otherwise.
-std::size_t PixelDataBytes(const Instance& instance) {
-  if (DcmXfer(instance.xfer).isEncapsulated()) {
-    const std::vector<Fragment> fragments = Fragments(instance);
-    std::size_t bytes = 0;
-    for (std::size_t i = 1; i < fragments.size(); ++i) bytes += fragments[i].size;
-    return bytes;
-  }
-  DcmElement* element = nullptr;
-  if (instance.dataset->findAndGetElement(DCM_PixelData, element).bad() || element == nullptr) {
-    FailInvalid(Where(instance) + ": no Pixel Data (7FE0,0010)");
-  }
-  // Fragments of a compressed stream under a native transfer syntax (a file whose syntax was
-  // rewritten): said as such, not as "0 bytes".
-  if (element->getLengthField() == DCM_UndefinedLength) {
-    FailInvalid(Where(instance) +
-                ": the pixel data is encapsulated (compressed fragments) but the transfer "
-                "syntax " +
-                std::string(DcmXfer(instance.xfer).getXferName()) + " says native pixels");
-  }
-  return element->getLength();
-}
-
-// Number of Frames (0028,0008), 1 when absent: a whole number from 1 up to what the pixel data can
-// hold at one byte a frame, checked before anything is sized by it (tests/fuzz/dicom_recording_fuzz:
-// a 1 KB file declaring ten million frames cost seconds of per-frame bookkeeping).
-int DeclaredFrames(const Instance& instance) {
-  DcmItem& data = *instance.dataset;
-  const std::optional<double> declared = FindNumber(data, DCM_NumberOfFrames);
-  const double frames = declared.value_or(1);
-  const std::string where = Where(instance);
-  const std::string text = FindString(data, DCM_NumberOfFrames).value_or("");
-  if (!(frames == std::floor(frames)) || frames > 2147483647.0 ||
-      (!declared && text.find_first_not_of(' ') != std::string::npos)) {  // present, but no number
-    FailInvalid(where + ": Number of Frames (0028,0008) is not a whole number of frames (\"" + text + "\")");
-  }
-  if (frames <= 0) FailInvalid(where + ": zero frames (Number of Frames is " + std::to_string(long(frames)) + ")");
-  const std::size_t bytes = PixelDataBytes(instance);
-  if (frames > double(bytes)) {
-    FailInvalid(where + ": Number of Frames is " + std::to_string(long(frames)) + " but the pixel data holds " +
-                std::to_string(bytes) + " bytes");
-  }
-  return static_cast<int>(frames);
-}
-
-Instance LoadInstance(const fs::path& path) {
+// What decoding the file's frames needs besides its header: the video stream extracted, JPEG
+// headers checked, every fragment of encapsulated pixel data readable, the frames' times.
+Instance LoadInstance(InstanceHeader header) {
   RegisterCodecs();
-  Instance instance;
-  instance.path = path;
-  if (!IsDicomFile(path)) FailInvalid(path.string() + ": not a DICOM file (no \"DICM\" at byte 128)");
-  instance.file = std::make_unique<DcmFileFormat>();
-  const OFCondition loaded = instance.file->loadFile(path.c_str());
-  if (loaded.bad()) FailInvalid(path.string() + ": not a readable DICOM file: " + loaded.text());
-  instance.dataset = instance.file->getDataset();
-  DcmItem& data = *instance.dataset;
-  instance.sop_class = FindString(data, DCM_SOPClassUID).value_or("");
-  if (!kVideoClasses.count(instance.sop_class) && !kImageClasses.count(instance.sop_class)) {
-    FailInvalid(path.string() + ": SOP class " +
-                (instance.sop_class.empty() ? std::string("(none)") : UidName(instance.sop_class)) +
-                " is not a recording endorecon reads; it reads Video Endoscopic, Video Photographic, VL "
-                "Endoscopic, VL Photographic and (Multi-frame) Secondary Capture images");
+  Instance instance(std::move(header));
+  if (instance.video) {
+    ExtractStream(instance);
+  } else if (DcmXfer(instance.xfer).isEncapsulated()) {
+    Fragments(instance);  // a truncated fragment named here, not by the decoder's words
   }
-  instance.transfer_syntax = FindString(*instance.file->getMetaInfo(), DCM_TransferSyntaxUID).value_or("");
-  instance.xfer = DcmXfer(instance.transfer_syntax.c_str()).getXfer();
-  if (instance.xfer == EXS_Unknown) {
-    FailInvalid(path.string() + ": unknown transfer syntax '" + instance.transfer_syntax + "'");
-  }
-  instance.video = kVideoSyntaxes.count(instance.transfer_syntax) > 0;
-  if (!instance.video && !kImageSyntaxes.count(instance.xfer)) {
-    FailInvalid(path.string() + ": transfer syntax " + UidName(instance.transfer_syntax) +
-                " is not one endorecon decodes (MPEG-2, MPEG-4 AVC/H.264, HEVC, uncompressed, RLE, JPEG "
-                "baseline, extended or lossless)");
-  }
-  instance.series_uid = FindString(data, DCM_SeriesInstanceUID).value_or("");
-  instance.series_number = FindInteger(data, DCM_SeriesNumber).value_or(0);
-  instance.instance_number = FindInteger(data, DCM_InstanceNumber).value_or(0);
-  instance.rows = static_cast<int>(FindInteger(data, DCM_Rows).value_or(0));
-  instance.columns = static_cast<int>(FindInteger(data, DCM_Columns).value_or(0));
-  if (instance.rows <= 0 || instance.columns <= 0) {
-    FailInvalid(path.string() + ": Rows and Columns must be positive (found " +
-                std::to_string(instance.rows) + " x " + std::to_string(instance.columns) + ")");
-  }
-  instance.frames = DeclaredFrames(instance);
-  if (instance.video) ExtractStream(instance);
   if (instance.xfer == EXS_JPEGProcess1 || instance.xfer == EXS_JPEGProcess2_4 ||
       instance.xfer == EXS_JPEGProcess14 || instance.xfer == EXS_JPEGProcess14SV1) {
     CheckJpegHeaders(instance);
@@ -404,6 +290,7 @@ std::vector<FrameRef> Select(const std::vector<FrameRef>& all, const RecordingOp
                              const std::string& where) {
   const int n = static_cast<int>(all.size());
   const FrameRange& w = options.frames;
+  CheckWindowHoldsFrames(w, n, where);  // then the first frame is picked, whatever the fps
   std::vector<FrameRef> picked;
   double next_time = -INFINITY;
   for (const int i : w.Of(n)) {
@@ -412,10 +299,6 @@ std::vector<FrameRef> Select(const std::vector<FrameRef>& all, const RecordingOp
       next_time = (picked.empty() ? all[i].time : next_time) + 1.0 / options.fps;
     }
     picked.push_back(all[i]);
-  }
-  if (picked.empty()) {
-    FailInvalid(where + ": zero frames: the window " + w.ToString() + " holds none of the recording's " +
-                std::to_string(n) + " frames");
   }
   return picked;
 }
@@ -471,94 +354,26 @@ std::vector<cv::Mat> Decode(const std::vector<Instance>& series, const std::vect
 std::vector<cv::Mat> Split(std::vector<cv::Mat>& frames, StereoLayout layout, const std::string& where) {
   std::vector<cv::Mat> right;
   for (auto& frame : frames) {
-    if (layout == StereoLayout::kSideBySide) {
-      if (frame.cols % 2 != 0) {
-        FailInvalid(where + ": a side-by-side frame must have an even width, found " +
-                    std::to_string(frame.cols));
-      }
-      const int half = frame.cols / 2;
-      right.push_back(frame(cv::Rect(half, 0, half, frame.rows)).clone());
-      frame = frame(cv::Rect(0, 0, half, frame.rows)).clone();
-    } else {
-      if (frame.rows % 2 != 0) {
-        FailInvalid(where + ": a top-bottom frame must have an even height, found " +
-                    std::to_string(frame.rows));
-      }
-      const int half = frame.rows / 2;
-      right.push_back(frame(cv::Rect(0, half, frame.cols, half)).clone());
-      frame = frame(cv::Rect(0, 0, frame.cols, half)).clone();
-    }
+    const FrameSize eye = EyeSize(layout, frame.cols, frame.rows, where);
+    const cv::Rect second = layout == StereoLayout::kSideBySide
+                                ? cv::Rect(eye.width, 0, eye.width, eye.height)
+                                : cv::Rect(0, eye.height, eye.width, eye.height);
+    right.push_back(frame(second).clone());
+    frame = frame(cv::Rect(0, 0, eye.width, eye.height)).clone();
   }
   return right;
 }
 
-// The SOP class a DICOM file's meta information names (Media Storage SOP Class UID), read without
-// its dataset; empty when the file has none.
-std::string MetaSopClass(const fs::path& path) {
-  DcmFileFormat file;
-  if (file.loadFile(path.c_str(), EXS_Unknown, EGL_noChange, DCM_MaxReadLength, ERM_metaOnly).bad())
-    return "";
-  OFString sop;
-  file.getMetaInfo()->findAndGetOFString(DCM_MediaStorageSOPClassUID, sop);
-  return sop.c_str();
-}
-
-// The DICOM files of `path` grouped by series, each series' instances in Instance Number order and
-// the series in Series Number order. In a folder, DICOM files of other classes (a DICOMDIR, a CT, a
-// report: what a CD export or a study holds beside a recording) are skipped with a warning.
-std::vector<std::vector<Instance>> LoadSeries(const fs::path& path) {
-  std::vector<fs::path> files;
-  if (fs::is_directory(path)) {
-    std::vector<std::string> skipped;  // "ct1.dcm (CTImageStorage)"
-    for (const auto& entry : fs::directory_iterator(path)) {
-      if (!entry.is_regular_file()) continue;
-      const bool marked = IsDicomFile(entry.path());  // opened once for its mark, once more for its class
-      if (!marked && !HasDicomExtension(entry.path())) continue;
-      const std::string sop = marked ? MetaSopClass(entry.path()) : "";
-      if (!sop.empty() && !kVideoClasses.count(sop) && !kImageClasses.count(sop)) {
-        spdlog::warn("{}: skipped, SOP class {} is not a recording", entry.path().string(), UidName(sop));
-        skipped.push_back(entry.path().filename().string() + " (" + UidName(sop) + ")");
-        continue;
-      }
-      files.push_back(entry.path());
-    }
-    std::sort(files.begin(), files.end());
-    // What was skipped is said in the error too: a submitter sees the job's reason, not the worker's
-    // log (found 2026-12-07).
-    if (files.empty()) {
-      std::sort(skipped.begin(), skipped.end());
-      constexpr std::size_t kNamed = 3;
-      std::string which;
-      for (std::size_t i = 0; i < std::min(skipped.size(), kNamed); ++i)
-        which += (i ? ", " : "") + skipped[i];
-      if (skipped.size() > kNamed) which += fmt::format(" and {} more", skipped.size() - kNamed);
-      FailInvalid(path.string() + ": no DICOM recording in the folder" +
-                  (skipped.empty() ? std::string()
-                                   : fmt::format(" ({} DICOM file(s) of other classes skipped: {}; "
-                                                 "docs/formats.md, \"DICOM recordings\", lists the "
-                                                 "classes read)",
-                                                 skipped.size(), which)));
-    }
-  } else if (fs::exists(path)) {
-    files.push_back(path);
-  } else {
-    Fail(ErrorCode::kNotFound, path.string() + ": does not exist");
-  }
-  std::map<std::string, std::vector<Instance>> by_uid;
-  for (const auto& file : files) {
-    Instance instance = LoadInstance(file);
-    by_uid[instance.series_uid].push_back(std::move(instance));
-  }
+// The recording's series (recording_series.h), checked against `stereo`, each file's pixels then
+// made ready to decode.
+std::vector<std::vector<Instance>> LoadSeries(const fs::path& path, StereoLayout stereo) {
+  auto all = LoadSeriesHeaders(path);
+  CheckSeriesFitLayout(all, stereo, path);
   std::vector<std::vector<Instance>> series;
-  for (auto& [uid, instances] : by_uid) {
-    std::stable_sort(instances.begin(), instances.end(), [](const Instance& a, const Instance& b) {
-      return a.instance_number < b.instance_number;
-    });
-    series.push_back(std::move(instances));
+  for (auto& headers : all) {
+    auto& instances = series.emplace_back();
+    for (auto& header : headers) instances.push_back(LoadInstance(std::move(header)));
   }
-  std::stable_sort(series.begin(), series.end(), [](const auto& a, const auto& b) {
-    return a.front().series_number < b.front().series_number;
-  });
   return series;
 }
 
@@ -574,35 +389,15 @@ std::string Describe(const std::vector<Instance>& series) {
 }  // namespace
 
 Recording ReadRecording(const fs::path& path, const RecordingOptions& options) {
-  auto series = LoadSeries(path);
+  const auto series = LoadSeries(path, options.stereo);
   const bool two = options.stereo == StereoLayout::kTwoSeries;
-  if (series.size() != (two ? 2u : 1u)) {
-    FailInvalid(path.string() + ": holds " + std::to_string(series.size()) + " series; " +
-                (two ? "stereo as two series needs exactly two (left, then right, by Series Number)"
-                     : "a recording is one series (or two with --stereo series); from a PACS, name its "
-                       "series with --series UID"));
-  }
-  // The eyes are told apart by Series Number alone: equal numbers left them in the order of their
-  // UIDs, which swapped the eyes without a word (found 2026-12-05).
-  if (two && series[0].front().series_number == series[1].front().series_number) {
-    FailInvalid(
-        path.string() + ": both series have Series Number " +
-        std::to_string(series[0].front().series_number) +
-        "; stereo as two series takes the lower number as the left eye (give the eyes' series "
-        "different numbers where the series are made: endorecon-worker to-dicom --series-number, or the "
-        "recorder's settings)");
-  }
   Recording recording;
   const auto timeline = Timeline(series[0]);
   recording.recording_frames = static_cast<int>(timeline.size());
   const auto picked = Select(timeline, options, path.string());
   recording.left = Decode(series[0], picked);
   if (two) {
-    const auto right_timeline = Timeline(series[1]);
-    if (right_timeline.size() != timeline.size()) {
-      FailInvalid(path.string() + ": the right series has " + std::to_string(right_timeline.size()) +
-                  " frames, the left " + std::to_string(timeline.size()));
-    }
+    const auto right_timeline = Timeline(series[1]);  // as many frames: CheckSeriesFitLayout
     std::vector<FrameRef> right_picked;
     for (const auto& ref : picked) right_picked.push_back(right_timeline[ref.index]);
     recording.right = Decode(series[1], right_picked);

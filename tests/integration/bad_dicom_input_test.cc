@@ -1,7 +1,8 @@
-// Bad DICOM input is refused with what and where: at submit (a file that is not a recording, an
-// unknown PACS name, a malformed Study UID, an endoscope that is neither moving nor fixed, a frame
-// size that is not WxH, even) or when the worker prepares the clip (a file named *.dcm that is not
-// DICOM); nothing else is lost.
+// Bad DICOM input is refused with what and where at submit: by the CLI before the upload (a file
+// that is not a recording, an unknown PACS name, a malformed Study UID, an endoscope that is neither
+// moving nor fixed, a frame size that is not WxH, even), or by the server from the uploaded files'
+// headers before the queue (a file named *.dcm that is not DICOM, a --frames window past the
+// recording's end, a --size of another shape); nothing else is lost.
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -16,11 +17,35 @@ TEST(BadDicomInputTest, RefusedAtSubmitOrAtPreparation) {
   cluster.StartWorker("w1");
   WriteBytes(cluster.path("recording.dcm"), std::string(1000, 'x'));
   const auto bad = RunCli(cluster.address(), {"submit", cluster.path("recording.dcm").string(), "--wait"});
-  EXPECT_EQ(bad.exit_code, 5) << bad.out << bad.err;
-  EXPECT_NE(bad.out.find("recording.dcm: not a DICOM file (no \"DICM\" at byte 128)"), std::string::npos)
-      << bad.out;
-  // Named as in the clip, not by its path in the worker's scratch folder.
-  EXPECT_NE(bad.out.find("INVALID_ARGUMENT: recording.dcm: not a DICOM file"), std::string::npos) << bad.out;
+  EXPECT_EQ(bad.exit_code, 2) << bad.out << bad.err;
+  // Named as in the clip, not by its path in the server's folder of links (it failed on the worker,
+  // after the queue, until 2026-12-07).
+  EXPECT_NE(bad.err.find("recording.dcm: not a DICOM file (no \"DICM\" at byte 128)"), std::string::npos)
+      << bad.err;
+  EXPECT_EQ(bad.err.find("endorecon-recording-"), std::string::npos) << bad.err;
+
+  // A recording's --frames past its end and a --size of another shape: refused from its header at
+  // submit (they were the worker's to find, after the queue).
+  MakeClip(cluster.path("frames"));
+  Process to_dicom(
+      {BuiltBinary("worker/runtime/endorecon-worker"), "to-dicom", cluster.path("frames/images").string(),
+       "-o", cluster.path("rec.dcm").string(), "--format", "vl"},
+      cluster.path("to-dicom.log"));
+  ASSERT_EQ(to_dicom.Wait(), 0);
+  for (const auto& [args, said] : std::vector<std::pair<std::vector<std::string>, std::string>>{
+           {{"--frames", "20:"},
+            "rec.dcm: zero frames: the window 20::1 holds none of the recording's 8 frames"},
+           {{"--size", "64x64"},
+            "size 64x64 changes the recording's 32x24 aspect ratio; give a size of the same "
+            "shape, e.g. 64x48"},
+           {{"--stereo", "series"}, "rec.dcm: holds 1 series; stereo as two series needs exactly two"}}) {
+    std::vector<std::string> command = {"submit", cluster.path("rec.dcm").string()};
+    command.insert(command.end(), args.begin(), args.end());
+    const auto refused = RunCli(cluster.address(), command);
+    EXPECT_EQ(refused.exit_code, 2) << args[0] << ": " << refused.out << refused.err;
+    EXPECT_NE(refused.err.find(said), std::string::npos) << args[0] << ": " << refused.err;
+  }
+  EXPECT_EQ(RunCli(cluster.address(), {"list"}).out.find(".dcm"), std::string::npos) << "nothing was queued";
 
   // A file that is not a recording at all (a video) is refused by the CLI before anything is uploaded.
   WriteBytes(cluster.path("endo.mp4"), std::string(1000, 'x'));

@@ -257,6 +257,19 @@ TEST_F(PacsRoundTripTest, RecordingFromThePacsResultsBackIntoItsStudy) {
       << missing_job;
   EXPECT_EQ(missing_job.find("1.2.3.4.5"), std::string::npos) << missing_job;
   EXPECT_EQ(missing_job.find("C-GET"), std::string::npos) << missing_job;
+
+  // A window past the retrieved recording's end fails the job from its header before the queue,
+  // naming the file as the job's clip does (a worker found it, after the wait, until 2026-12-07).
+  const auto past = RunCli(cluster.address(),
+                           {"submit", "--pacs", "orthanc", "--study", study, "--frames", "20:", "--wait"});
+  EXPECT_EQ(past.exit_code, 5) << past.out << past.err;
+  const v1::Job past_job = cluster.Job(JobIdIn(past.out));
+  EXPECT_NE(
+      past_job.error().find("the recording retrieved from PACS orthanc: instance-0001.dcm: zero frames: "
+                            "the window 20::1 holds none of the recording's 8 frames"),
+      std::string::npos)
+      << past_job.error();
+  EXPECT_EQ(past_job.started_unix_ms(), 0) << "no worker ran it";
 }
 
 // A PACS that does not answer (down for maintenance, restarting) is waited for: the job stays QUEUED

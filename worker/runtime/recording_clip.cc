@@ -8,6 +8,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "common/dicom/recording_header.h"
 #include "common/dicom_file.h"
 #include "common/error.h"
 #include "common/file_write.h"
@@ -130,19 +131,11 @@ void WritePosesBounds(const dicom::Recording& recording, const fs::path& clip_di
 }
 
 // Every frame (each eye) scaled to `size` (area-averaged when smaller); refused when that would
-// change the recording's aspect ratio by more than 1% (the nominal focal length is per width).
+// change the recording's aspect ratio (dicom::CheckSameShape, the server's check at submit too).
 void ScaleFrames(dicom::Recording& recording, cv::Size size) {
   const cv::Size recorded = recording.left[0].size();
   if (size.empty() || size == recorded) return;
-  const double change = (double(size.width) / size.height) / (double(recorded.width) / recorded.height);
-  if (std::abs(change - 1) > 0.01) {
-    const int height =
-        2 * static_cast<int>(std::lround(size.width * recorded.height / (2.0 * recorded.width)));
-    FailInvalid(
-        fmt::format("size {}x{} changes the recording's {}x{} aspect ratio; give a size of the same "
-                    "shape, e.g. {}x{}",
-                    size.width, size.height, recorded.width, recorded.height, size.width, height));
-  }
+  dicom::CheckSameShape({size.width, size.height}, {recorded.width, recorded.height});
   const int interpolation = size.width < recorded.width ? cv::INTER_AREA : cv::INTER_LINEAR;
   for (auto* eye : {&recording.left, &recording.right}) {
     for (cv::Mat& frame : *eye) cv::resize(frame, frame, size, 0, 0, interpolation);

@@ -1,0 +1,88 @@
+#include "server/recording_check.h"
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+#include <stdlib.h>
+
+#include <filesystem>
+#include <optional>
+#include <string_view>
+#include <system_error>
+
+#include "common/dicom/recording_header.h"
+#include "common/dicom/recording_layout.h"
+#include "common/dicom_file.h"
+#include "common/error.h"
+#include "common/prepare_flags.h"
+
+namespace endorecon::server {
+namespace fs = std::filesystem;
+namespace {
+
+// A private folder of links to the stored blobs, named as the clip names its files: the worker's
+// layout of the job's clip, without a copy. Removed when it goes out of scope.
+class LinkedClip {
+ public:
+  LinkedClip() {
+    std::string name = (fs::temp_directory_path() / "endorecon-recording-XXXXXX").string();
+    if (::mkdtemp(name.data()) == nullptr)  // 0700: the file names may name a patient
+      Fail(ErrorCode::kUnavailable, "cannot make a folder in " + fs::temp_directory_path().string());
+    root_ = name;
+  }
+  ~LinkedClip() {
+    std::error_code ignored;
+    fs::remove_all(root_, ignored);
+  }
+  LinkedClip(const LinkedClip&) = delete;
+  LinkedClip& operator=(const LinkedClip&) = delete;
+
+  // False when the store lacks a blob.
+  bool Link(const v1::Manifest& clip, const BlobStore& blobs) {
+    for (const auto& file : clip.files()) {
+      if (!blobs.Has(file.sha256())) return false;
+      const fs::path link = root_ / file.path();  // a relative path below the clip (ValidateManifest)
+      fs::create_directories(link.parent_path());
+      fs::create_symlink(blobs.PathOf(file.sha256()), link);
+    }
+    return true;
+  }
+  const fs::path& root() const { return root_; }
+
+ private:
+  fs::path root_;
+};
+
+// The message with the folder's paths said as the clip names them: "rec/1.dcm: ..." for
+// "/tmp/endorecon-recording-ab12cd/rec/1.dcm: ..."; the folder itself is the clip's one file (a
+// recording submitted as a file), or "the recording".
+std::string AsClipNames(std::string message, const fs::path& root, const v1::Manifest& clip) {
+  const std::string folder = root.string();
+  const std::string whole = clip.files_size() == 1 ? clip.files(0).path() : "the recording";
+  for (const auto& [from, to] : {std::pair<std::string, std::string>{folder + "/", ""}, {folder, whole}}) {
+    for (std::size_t at = message.find(from); at != std::string::npos; at = message.find(from, at + to.size()))
+      message.replace(at, from.size(), to);
+  }
+  return message;
+}
+
+}  // namespace
+
+void CheckRecording(const v1::Manifest& clip, const v1::RecordingOptions& options, const BlobStore& blobs) {
+  std::optional<LinkedClip> linked;
+  try {
+    linked.emplace();
+    if (!linked->Link(clip, blobs) || !dicom::HoldsDicom(linked->root())) return;
+  } catch (const std::exception& e) {  // a full or unwritable temp folder: the worker checks it still
+    spdlog::warn("a submitted recording is not checked before the queue: {}", e.what());
+    return;
+  }
+  const FrameSize size = options.size().empty() ? FrameSize{} : ParseFrameSize(options.size());
+  try {
+    dicom::CheckRecordingHeader(linked->root(), dicom::ParseStereoLayout(options.stereo()),
+                                ParseFrameRange(options.frames()), size);
+  } catch (const Error& e) {
+    throw Error(e.code(), AsClipNames(e.what(), linked->root(), clip));
+  }
+}
+
+}  // namespace endorecon::server
