@@ -37,6 +37,15 @@ AuditLog::AuditLog(const std::filesystem::path& file) : path_(file) {
              ": a named pipe (FIFO) that no process reads: start its reader first, "
              "or name a file");
   }
+  // A mistyped path is the operator's to fix (exit 2, as a missing --quotas), not the disk's (found
+  // 2026-12-07: exit 1, "UNAVAILABLE").
+  if (fd_ < 0 && errno == ENOENT) {
+    Fail(ErrorCode::kNotFound,
+         "--audit-log " + file.string() + ": its folder " + file.parent_path().string() + " does not exist");
+  }
+  if (fd_ < 0 && errno == EISDIR) {
+    Fail(ErrorCode::kInvalidArgument, "--audit-log " + file.string() + ": a folder; name a file in it");
+  }
   if (fd_ < 0) FailAccess("cannot open audit log " + file.string(), errno);
   ::fcntl(fd_, F_SETFL, ::fcntl(fd_, F_GETFL) & ~O_NONBLOCK);
 }

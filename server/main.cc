@@ -87,7 +87,11 @@ std::unique_ptr<dicom::StorageScp> StartStorageScp(const ServerFlags& flags,
     FailInvalid("--dicom-listen '" + flags.dicom.listen + "': expected HOST:PORT");
   dicom::StorageScpSettings settings;
   settings.ae_title = flags.dicom.ae_title;
-  settings.port = std::stoi(flags.dicom.listen.substr(colon + 1));
+  settings.port = std::stoi(flags.dicom.listen.substr(colon + 1));  // digits, at most 65535: ListenAddress
+  if (settings.port == 0) {
+    FailInvalid("--dicom-listen '" + flags.dicom.listen +
+                "': port 0 would pick a port no PACS is told of; give the port the PACS sends to");
+  }
   settings.folder = folder;
   settings.calling_ae_titles = calling_ae_titles;
   // What an earlier run left (a C-MOVE cut short by a stop) is no study any retrieval awaits now.
@@ -452,8 +456,10 @@ void AddDicomFlags(CLI::App& app, ServerFlags& flags) {
   app.add_option("--pacs", flags.pacs,
                  "a PACS, NAME=AET@HOST:PORT (repeatable): retrieve from it, send results to it");
   app.add_option(
-      "--dicom-listen", flags.dicom.listen,
-      "HOST:PORT of this server's storage SCP (where a PACS delivers C-MOVE retrievals); off by default");
+         "--dicom-listen", flags.dicom.listen,
+         "HOST:PORT of this server's storage SCP (where a PACS delivers C-MOVE retrievals); off by default")
+      ->check(
+          ListenAddress());  // std::stoi read "abc" as an exception and 99999 as a port (found 2026-12-07)
   app.add_option("--uid-root", flags.dicom.uid_root,
                  "UID root of the DICOM results' new UIDs (default: 2.25 UUID-derived UIDs)");
   app.add_option("--send-attempts", flags.dicom.send_attempts,
@@ -491,7 +497,8 @@ int main(int argc, char** argv) {
   app.add_option("--data-dir", flags.data_dir, "where jobs (SQLite) and blobs are kept")
       ->capture_default_str();
   app.add_option("--metrics-port", flags.metrics_port, "Prometheus /metrics port (0 picks one, -1 disables)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(CLI::Range(-1, 65535));  // -2 turned metrics off, 70000 was 'the port is taken'
   app.add_option("--metrics-host", flags.metrics_host,
                  "interface for /metrics (plaintext; loopback by default)")
       ->capture_default_str();

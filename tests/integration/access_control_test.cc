@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <filesystem>
 #include <regex>
 #include <thread>
 
@@ -239,11 +240,19 @@ TEST_F(AccessControlTest, RolesKeepToTheirApi) {
   EXPECT_NE(worker.Wait(), 0);
   EXPECT_NE(worker.Log().find("PERMISSION_DENIED"), std::string::npos) << worker.Log();
   EXPECT_EQ(cluster_.Job(id).state(), v1::QUEUED);
+  // ... and leaves no default scratch folder behind, as at any stop (found 2026-12-07).
+  TempDir tmp("refused-worker-tmp");
+  const std::string refused_out =
+      Capture("TMPDIR=" + tmp.path().string() + " " + BuiltBinary("worker/runtime/endorecon-worker") +
+              " serve --server " + cluster_.address() + " --token-file " + alice_.token_file +
+              " --id w-refused --metrics-port -1 2>&1; echo exit=$?");
+  EXPECT_NE(refused_out.find("exit=11"), std::string::npos) << refused_out;
+  EXPECT_FALSE(std::filesystem::exists(tmp / "endorecon-w-refused")) << refused_out;
 
   const auto audit = Audit();
   EXPECT_EQ(AuditFind(audit, "List", "PERMISSION_DENIED", "node-1").size(), 1u);
   EXPECT_EQ(AuditFind(audit, "ListWorkers", "PERMISSION_DENIED", "alice").size(), 1u);
-  EXPECT_EQ(AuditFind(audit, "Register", "PERMISSION_DENIED", "alice").size(), 1u);
+  EXPECT_EQ(AuditFind(audit, "Register", "PERMISSION_DENIED", "alice").size(), 2u);  // the two workers
 }
 
 TEST_F(AccessControlTest, AnotherTenantsJobIsNotFoundLikeAMissingOne) {

@@ -147,7 +147,13 @@ TEST(FullDiskTest, ANegativeFreeSpaceLimitANonPositiveStallTimeoutOrATooSmallThr
            {server + " --max-upload-bytes -5", "--max-upload-bytes"},
            {server + " --listen 127.0.0.1:99999", "--listen"},
            {server + " --listen garbage", "--listen"},
-           {server + " --health-listen 127.0.0.1:", "--health-listen"}}) {
+           {server + " --health-listen 127.0.0.1:", "--health-listen"},
+           // An exception's word ("stoi") and exit 1, a port past 65535 taken, a negative metrics
+           // port taken as off (found 2026-12-07).
+           {server + " --dicom-listen 127.0.0.1:abc", "--dicom-listen"},
+           {server + " --dicom-listen 127.0.0.1:99999", "--dicom-listen"},
+           {server + " --metrics-port -2", "--metrics-port"},
+           {server + " --metrics-port 70000", "--metrics-port"}}) {
     const std::string output = Capture(command + " 2>&1; echo \"exit=$?\"");
     EXPECT_NE(output.find(option + ": "), std::string::npos) << command << "\n" << output;
     EXPECT_EQ(output.find("179769313486231570814527"), std::string::npos)

@@ -3,6 +3,9 @@
 #include <gtest/gtest.h>
 #include <signal.h>
 
+#include <chrono>
+#include <thread>
+
 #include "tests/integration/service_harness.h"
 
 namespace endorecon::testing {
@@ -60,6 +63,10 @@ TEST(WorkerLossTest, SigtermHandsTheJobBackWithoutLosingAnAttempt) {
   auto& leaving = cluster.StartWorker("leaving", {"--checkpoint-interval", "0.5"});
   const auto id = cluster.Submit(cluster.path("clip"), {"--iterations", "200"});
   WaitForCheckpoint(cluster, id);
+  // Twice at once, as GNU timeout and a kill of the process group deliver it: one request to stop,
+  // the job handed back (the second stopped the worker at once until 2026-12-07).
+  leaving.Signal(SIGTERM);
+  std::this_thread::sleep_for(std::chrono::milliseconds(50));  // taken apart, not merged by the kernel
   leaving.Signal(SIGTERM);
   EXPECT_EQ(leaving.Wait(), 0) << leaving.Log();
   const auto requeued = cluster.Job(id);

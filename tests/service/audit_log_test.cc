@@ -61,6 +61,29 @@ TEST(AuditLogTest, APipeNoProcessReadsIsRefusedNotWaitedOn) {
   }
 }
 
+// A mistyped --audit-log is the operator's to fix: NOT_FOUND naming the missing folder, and a folder
+// refused as no file (both were UNAVAILABLE, the server's exit 1 for trouble with its disk; found
+// 2026-12-07).
+TEST(AuditLogTest, AMissingFolderOrAFolderIsNamed) {
+  testing::TempDir dir("audit");
+  try {
+    AuditLog log(dir / "nowhere" / "audit.jsonl");
+    ADD_FAILURE() << "opened a file in a folder that is not there";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kNotFound);
+    EXPECT_NE(std::string(e.what()).find("its folder " + (dir / "nowhere").string() + " does not exist"),
+              std::string::npos)
+        << e.what();
+  }
+  try {
+    AuditLog log(dir.path());
+    ADD_FAILURE() << "opened a folder";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument);
+    EXPECT_NE(std::string(e.what()).find(": a folder; name a file in it"), std::string::npos) << e.what();
+  }
+}
+
 // A line the disk refuses (/dev/full: ENOSPC on every write) is counted for the metric and its alert
 // (it was only logged).
 TEST(AuditLogTest, AFailedWriteIsCounted) {

@@ -43,6 +43,21 @@ TEST(IdleWatchTest, WhatIsLeftBoundsTheLongPoll) {
   EXPECT_EQ(IdleWatch(seconds(0), t0).Left(t0, milliseconds(10'000)), milliseconds(10'000));
 }
 
+// Idle with no room in the scratch folder to take a job is no empty queue: the exit says so (it was
+// 0, "the server had nothing", with a job waiting; found 2026-12-07), and room again clears it.
+TEST(IdleWatchTest, LeavingWhileTheScratchFolderIsFullSaysSo) {
+  const auto t0 = IdleWatch::Clock::now();
+  IdleWatch idle(seconds(5), t0);
+  idle.ServerAnswered(true);
+  idle.ScratchFull(true);
+  ASSERT_TRUE(idle.Due(t0 + seconds(5)));
+  EXPECT_EQ(idle.ExitCode(), 0) << "not left yet";
+  idle.Leave();
+  EXPECT_EQ(idle.ExitCode(), kIdleScratchFullExit);
+  idle.ScratchFull(false);
+  EXPECT_EQ(idle.ExitCode(), 0);
+}
+
 TEST(IdleWatchTest, ALimitOfZeroIsNeverDue) {
   const auto t0 = IdleWatch::Clock::now();
   const IdleWatch idle(seconds(0), t0);

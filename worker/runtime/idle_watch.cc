@@ -34,6 +34,16 @@ std::chrono::milliseconds IdleWatch::Left(Clock::time_point now, std::chrono::mi
   return std::clamp(left, std::chrono::milliseconds(0), most);
 }
 
+void IdleWatch::ScratchFull(bool full) {
+  std::lock_guard lock(mutex_);
+  scratch_full_ = full;
+}
+
+bool IdleWatch::ScratchWasFull() const {
+  std::lock_guard lock(mutex_);
+  return scratch_full_;
+}
+
 bool IdleWatch::ServerFailing() const {
   std::lock_guard lock(mutex_);
   return server_failing_;
@@ -46,7 +56,8 @@ void IdleWatch::Leave() {
 
 int IdleWatch::ExitCode() const {
   std::lock_guard lock(mutex_);
-  return left_ && server_failing_ ? kIdleUnreachableExit : 0;
+  if (!left_) return 0;
+  return scratch_full_ ? kIdleScratchFullExit : server_failing_ ? kIdleUnreachableExit : 0;
 }
 
 }  // namespace endorecon::worker

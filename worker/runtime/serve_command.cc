@@ -92,7 +92,12 @@ bool LeaveIdle(IdleWatch& idle, WorkerClient& client, std::atomic<bool>& shuttin
   if (!idle.Due(std::chrono::steady_clock::now())) return false;
   if (!shutting_down.exchange(true)) {  // not stopping for a signal already
     idle.Leave();
-    if (idle.ServerFailing()) {
+    if (idle.ScratchWasFull()) {
+      spdlog::error(
+          "no job for {} s: the scratch folder has had no room to take one (--min-free-bytes), so the "
+          "queue was not asked (--exit-when-idle): stopping (exit {})",
+          idle_s, kIdleScratchFullExit);
+    } else if (idle.ServerFailing()) {
       spdlog::error(
           "no job for {} s and the server cannot be reached or refuses this worker (--exit-when-idle): "
           "stopping (exit {})",
@@ -135,11 +140,13 @@ void LeaseLoop(WorkerClient& client, const Device& device, const RunnerSettings&
                      device.name, settings.work_dir.string(), free_bytes, settings.min_free_bytes);
       }
       waiting_for_space = true;
+      idle.ScratchFull(true);
       std::this_thread::sleep_for(std::chrono::seconds(1));
       continue;
     }
     if (waiting_for_space) spdlog::info("[{}] scratch folder has room again", device.name);
     waiting_for_space = false;
+    idle.ScratchFull(false);
     try {
       // A poll of at least 200 ms: one of none would spin while another device's job ends.
       const auto lease = client.Lease(device.name, std::max(idle.Left(std::chrono::steady_clock::now(), wait),
@@ -261,8 +268,18 @@ int Serve(const ServeFlags& flags) {
     if (shutting_down.exchange(true) || stopped) return;  // the refused registration below, or the end
     spdlog::info("signal {}: handing running jobs back and stopping (a second signal stops at once)", signal);
     client.CancelLeases();
-    sigwait(&stop_signals, &signal);
-    if (stopped) return;
+    // A signal within a second of the first is its echo: GNU timeout and a kill of the process group
+    // deliver one signal twice, which stopped the worker at once, its jobs' hand-back lost (found
+    // 2026-12-07). An operator's second signal comes later.
+    const auto first = std::chrono::steady_clock::now();
+    for (;;) {
+      sigwait(&stop_signals, &signal);
+      if (stopped) return;
+      if (std::chrono::steady_clock::now() - first >= std::chrono::seconds(1)) break;
+      spdlog::info(
+          "signal {} again within a second: taken as the first's echo (send it again to stop at once)",
+          signal);
+    }
     spdlog::warn("signal {} again: stopping now; the running jobs' leases expire and they run again", signal);
     std::_Exit(128 + signal);
   });
@@ -290,6 +307,10 @@ int Serve(const ServeFlags& flags) {
       if (Refused(e)) {
         shutting_down = true;
         stop_waiter();
+        // Its default scratch folder goes, as at any stop (it stayed until a later start cleared it;
+        // found 2026-12-07).
+        std::error_code ignored;
+        if (flags.work_dir.empty()) std::filesystem::remove_all(settings.work_dir, ignored);
         throw;
       }
       if (idle.Due(std::chrono::steady_clock::now())) {  // stopped below, as for a signal
