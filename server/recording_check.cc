@@ -36,13 +36,15 @@ class LinkedClip {
   LinkedClip(const LinkedClip&) = delete;
   LinkedClip& operator=(const LinkedClip&) = delete;
 
-  // False when the store lacks a blob.
+  // The clip's files directly in its folder, where a recording's files lie and what tells a clip
+  // folder from a recording (a clip's thousands of frames in images/ are not linked). False when the
+  // store lacks a blob.
   bool Link(const v1::Manifest& clip, const BlobStore& blobs) {
     for (const auto& file : clip.files()) {
+      if (file.path().find('/') != std::string::npos) continue;
       if (!blobs.Has(file.sha256())) return false;
-      const fs::path link = root_ / file.path();  // a relative path below the clip (ValidateManifest)
-      fs::create_directories(link.parent_path());
-      fs::create_symlink(blobs.PathOf(file.sha256()), link);
+      fs::create_symlink(blobs.PathOf(file.sha256()),
+                         root_ / file.path());  // a checked name (ValidateManifest)
     }
     return true;
   }

@@ -13,9 +13,9 @@
 
 namespace endorecon::server {
 
-// Does nothing when `clip` is no DICOM recording as the worker will see it (dicom::HoldsDicom of its
-// files laid out as the worker lays them out) or a blob it names is missing (the caller's own check
-// names that). Throws Error(kInvalidArgument) naming files by their paths in `clip`.
+// Does nothing when `clip` is no DICOM recording as the worker will see it (dicom::HoldsDicom of the
+// files directly in its folder, as the worker lays them out) or a blob it names there is missing (the
+// caller's own check names that). Throws Error(kInvalidArgument) naming files by their paths in `clip`.
 void CheckRecording(const v1::Manifest& clip, const v1::RecordingOptions& options, const BlobStore& blobs);
 
 }  // namespace endorecon::server

@@ -4,8 +4,8 @@
 //    folders before it, never one after it (train and eval stand side by side: neither includes the
 //    other);
 //  - the engine includes no gRPC and nothing of the service (server/, client/, worker/runtime/);
-//  - client/ and server/ never include the engine (worker/), and common/ includes only common/ and the
-//    generated protocol (endorecon/).
+//  - client/ and server/ never include the engine (worker/), and common/ includes only common/ and what
+//    its build generates (the protocol, endorecon/; endorecon_version.h).
 // Only quoted includes of project paths are checked; system headers are the build's business.
 #pragma once
 

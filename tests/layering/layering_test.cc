@@ -35,6 +35,7 @@ TEST(Layering, AnUpwardIncludeIsCaught) {
   Write(dir / "client/submit.cc", "#include \"worker/engine/reconstruct.h\"\n#include \"common/error.h\"\n");
   Write(dir / "server/main.cc", "#include \"endorecon/v1/job.pb.h\"\n#include \"server/store.h\"\n");
   Write(dir / "worker/engine/reconstruct.cc", "#include \"worker/engine/cuda/kernels.h\"\n");
+  Write(dir / "common/dicom/stamp.cc", "#include \"endorecon_version.h\"\n#include \"common/error.h\"\n");
   const auto violations = CheckIncludes(dir.path());
   ASSERT_EQ(violations.size(), 4u);
   EXPECT_EQ(violations[0].file, "client/submit.cc");
