@@ -9,6 +9,7 @@
 #include <cerrno>
 #include <chrono>
 #include <cstring>
+#include <filesystem>
 #include <nlohmann/json.hpp>
 
 #include "common/error.h"
@@ -39,14 +40,21 @@ AuditLog::AuditLog(const std::filesystem::path& file) : path_(file) {
   }
   // A mistyped path is the operator's to fix (exit 2, as a missing --quotas), not the disk's (found
   // 2026-12-07: exit 1, "UNAVAILABLE").
-  if (fd_ < 0 && errno == ENOENT) {
+  const int error = errno;
+  std::error_code ignored;
+  const std::filesystem::path folder = file.parent_path().empty() ? "." : file.parent_path();
+  if (fd_ < 0 && error == ENOENT && !std::filesystem::exists(folder, ignored)) {
     Fail(ErrorCode::kNotFound,
-         "--audit-log " + file.string() + ": its folder " + file.parent_path().string() + " does not exist");
+         "--audit-log " + file.string() + ": its folder " + folder.string() + " does not exist");
   }
-  if (fd_ < 0 && errno == EISDIR) {
+  if (fd_ < 0 && error == ENOTDIR) {
+    Fail(ErrorCode::kInvalidArgument,
+         "--audit-log " + file.string() + ": " + folder.string() + " is a file, not a folder");
+  }
+  if (fd_ < 0 && error == EISDIR) {
     Fail(ErrorCode::kInvalidArgument, "--audit-log " + file.string() + ": a folder; name a file in it");
   }
-  if (fd_ < 0) FailAccess("cannot open audit log " + file.string(), errno);
+  if (fd_ < 0) FailAccess("cannot open audit log " + file.string(), error);
   ::fcntl(fd_, F_SETFL, ::fcntl(fd_, F_GETFL) & ~O_NONBLOCK);
 }
 

@@ -684,6 +684,9 @@ std::optional<JobCoordinator::Granted> JobCoordinator::Lease(const std::string& 
       }
       const auto lease = parts_.leases.Grant(job.id(), worker_id, clock_(), token);
       job.set_state(v1::RUNNING);
+      // The last run's progress is not this run's: `status` showed "evaluating the results: frame 2/6"
+      // while the new worker loaded the clip (found 2026-12-07).
+      job.clear_progress();
       job.set_lease_id(lease.id);
       job.set_worker_id(worker_id);
       job.set_started_unix_ms(NowUnixMs());

@@ -97,12 +97,17 @@ std::unique_ptr<dicom::StorageScp> StartStorageScp(const ServerFlags& flags,
   // What an earlier run left (a C-MOVE cut short by a stop) is no study any retrieval awaits now.
   std::error_code ignored;
   std::filesystem::remove_all(folder, ignored);
-  auto scp = std::make_unique<dicom::StorageScp>(
-      settings,
-      [&retriever](const std::string& study, const std::filesystem::path&, std::int64_t bytes) {
-        if (retriever != nullptr) retriever->Received(study, bytes);
-      },
-      [&retriever](const std::string& study) { return retriever != nullptr && retriever->Awaits(study); });
+  std::unique_ptr<dicom::StorageScp> scp;
+  try {
+    scp = std::make_unique<dicom::StorageScp>(
+        settings,
+        [&retriever](const std::string& study, const std::filesystem::path&, std::int64_t bytes) {
+          if (retriever != nullptr) retriever->Received(study, bytes);
+        },
+        [&retriever](const std::string& study) { return retriever != nullptr && retriever->Awaits(study); });
+  } catch (const Error& e) {  // a port taken: said with the option that chose it
+    Fail(e.code(), "--dicom-listen " + flags.dicom.listen + ": " + e.what());
+  }
   spdlog::info(
       "DICOM storage SCP {} listening on port {} (every interface; admits the configured PACS' AE titles)",
       settings.ae_title, settings.port);

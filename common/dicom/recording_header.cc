@@ -28,14 +28,34 @@ void CheckWindowHoldsFrames(const FrameRange& window, int frames, const std::str
               std::to_string(frames) + " frames");
 }
 
+namespace {
+
+bool KeepsShape(int width, int height, FrameSize recorded) {
+  const double change = (double(width) / height) / (double(recorded.width) / recorded.height);
+  return std::abs(change - 1) <= 0.01;
+}
+
+// The even size nearest `width` wide that keeps `recorded`'s shape: the height rounded to even alone
+// could miss it (64 wide for 48x32 gave 64x42, itself refused; found 2026-12-07). Twice the recorded
+// size keeps it exactly, so the search ends.
+FrameSize SameShapeNear(int width, FrameSize recorded) {
+  for (int step = 0;; step += 2) {
+    for (const int w : {width - step, width + step}) {
+      const int h = 2 * static_cast<int>(std::lround(w * recorded.height / (2.0 * recorded.width)));
+      if (w >= 2 && h >= 2 && KeepsShape(w, h, recorded)) return {w, h};
+    }
+  }
+}
+
+}  // namespace
+
 void CheckSameShape(FrameSize size, FrameSize recorded) {
-  if (size.width <= 0 || size.height <= 0) return;
-  const double change = (double(size.width) / size.height) / (double(recorded.width) / recorded.height);
-  if (std::abs(change - 1) <= 0.01) return;
-  const int height = 2 * static_cast<int>(std::lround(size.width * recorded.height / (2.0 * recorded.width)));
-  FailInvalid(fmt::format("size {}x{} changes the recording's {}x{} aspect ratio; give a size of the same "
-                          "shape, e.g. {}x{}",
-                          size.width, size.height, recorded.width, recorded.height, size.width, height));
+  if (size.width <= 0 || size.height <= 0 || KeepsShape(size.width, size.height, recorded)) return;
+  const FrameSize suggested = SameShapeNear(size.width - size.width % 2, recorded);
+  FailInvalid(fmt::format(
+      "size {}x{} changes the recording's {}x{} aspect ratio; give a size of the same "
+      "shape, e.g. {}x{}",
+      size.width, size.height, recorded.width, recorded.height, suggested.width, suggested.height));
 }
 
 }  // namespace endorecon::dicom

@@ -231,6 +231,17 @@ void CheckSeriesFitLayout(const std::vector<std::vector<InstanceHeader>>& series
         "different numbers where the series are made: endorecon-worker to-dicom --series-number, or the "
         "recorder's settings)");
   }
+  // Two eyes of one recording share a study (and so a patient): series of two studies paired as eyes
+  // ran, the results filed in the left's study (found 2026-12-07).
+  const auto study = [](const InstanceHeader& instance) {
+    return FindString(*instance.dataset, DCM_StudyInstanceUID).value_or("");
+  };
+  if (study(series[0].front()) != study(series[1].front())) {
+    FailInvalid(path.string() +
+                ": the two series belong to different studies (Study Instance UID): the eyes of "
+                "one recording share one (endorecon-worker to-dicom: give both eyes one "
+                "--study-uid)");
+  }
   if (SeriesFrames(series[1]) != SeriesFrames(series[0])) {
     FailInvalid(path.string() + ": the right series has " + std::to_string(SeriesFrames(series[1])) +
                 " frames, the left " + std::to_string(SeriesFrames(series[0])));

@@ -48,8 +48,9 @@ InstanceHeader LoadInstanceHeader(const std::filesystem::path& path);
 // for a folder with no recording (naming what was skipped) and LoadInstanceHeader's errors.
 std::vector<std::vector<InstanceHeader>> LoadSeriesHeaders(const std::filesystem::path& path);
 
-// Throws FailInvalid naming `path` unless the series fit `stereo`: one series, or two of different
-// Series Numbers (the lower the left eye) and as many frames for --stereo series.
+// Throws FailInvalid naming `path` unless the series fit `stereo`: one series, or two of one study,
+// of different Series Numbers (the lower the left eye), as many frames and one size for --stereo
+// series.
 void CheckSeriesFitLayout(const std::vector<std::vector<InstanceHeader>>& series, StereoLayout stereo,
                           const std::filesystem::path& path);
 

@@ -75,6 +75,14 @@ TEST(AuditLogTest, AMissingFolderOrAFolderIsNamed) {
               std::string::npos)
         << e.what();
   }
+  testing::WriteBytes(dir / "plain", "a file");
+  try {
+    AuditLog log(dir / "plain" / "audit.jsonl");
+    ADD_FAILURE() << "opened a file under a file";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument);
+    EXPECT_NE(std::string(e.what()).find("plain is a file, not a folder"), std::string::npos) << e.what();
+  }
   try {
     AuditLog log(dir.path());
     ADD_FAILURE() << "opened a folder";

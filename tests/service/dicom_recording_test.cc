@@ -203,6 +203,15 @@ TEST(DicomRecordingTest, TwoSeriesAreTheLeftAndRightEyes) {
   WriteEndoscopicFrames(flipped, {0, 0.1, 0.2}, false, header, dir / "tied" / "a.dcm");
   const std::string tied = ErrorOf(dir / "tied", options);
   EXPECT_NE(tied.find("both series have Series Number 1"), std::string::npos) << tied;
+
+  // Two studies' series are no recording's eyes (they were paired, the results filed in the left's
+  // study; found 2026-12-07).
+  std::filesystem::create_directories(dir / "apart");
+  WriteEndoscopicFrames(flipped, {0, 0.1, 0.2}, false, header, dir / "apart" / "a.dcm");
+  auto other = Header(2);  // a new study
+  WriteEndoscopicFrames(right, {0, 0.1, 0.2}, false, other, dir / "apart" / "b.dcm");
+  const std::string apart = ErrorOf(dir / "apart", options);
+  EXPECT_NE(apart.find("the two series belong to different studies"), std::string::npos) << apart;
 }
 
 // Found by tests/fuzz/dicom_recording_fuzz.cc: a TEM marker (FF 01) in place of a frame's first

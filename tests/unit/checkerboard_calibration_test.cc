@@ -87,8 +87,9 @@ TEST(CheckerboardCalibrationTest, TooFewViewsOfTheBoardIsAClearError) {
 // Views of different moments (the left eye's recording begun a view early) calibrated each eye to
 // 0.10 px alone and the pair to 16 px, a baseline of 100 for 5, written with a warning that blamed
 // --board: refused, saying what to do (found 2026-12-07). Its 23 pairs are too few for the eyes'
-// motion to tell (eye_sync.h), which calibrate no longer warns of: its own fit tells.
-TEST(CheckerboardCalibrationTest, ViewsOfDifferentMomentsAreRefused) {
+// motion to tell (eye_sync.h), which calibrate no longer warns of: its own fit tells. So are eyes
+// given the other way round.
+TEST(CheckerboardCalibrationTest, ViewsOfDifferentMomentsAndSwappedEyesAreRefused) {
   TempDir dir("checkerboard");
   scene::WriteSyntheticClip(RecordingOptions(320, 256, 1, 24), dir / "synth");
   prepare::RecordingInput recording{prepare::StereoLayout::kTwoSources,
@@ -106,6 +107,17 @@ TEST(CheckerboardCalibrationTest, ViewsOfDifferentMomentsAreRefused) {
   EXPECT_NE(message.find("the eyes' views are not of the same moments"), std::string::npos) << message;
   EXPECT_NE(message.find("--skip-left or --skip-right"), std::string::npos) << message;
   EXPECT_EQ(log.str().find("too few to check"), std::string::npos) << log.str();
+
+  // The eyes the other way round: refused, saying so (a file `prepare` refused was written).
+  const prepare::RecordingInput swapped{prepare::StereoLayout::kTwoSources,
+                                        dir / "synth/recording/checkerboard/right",
+                                        dir / "synth/recording/checkerboard/left",
+                                        {}};
+  const std::string other_way =
+      ErrorFrom([&] { prepare::CalibrateFromCheckerboard(swapped, SyntheticBoard()); });
+  EXPECT_NE(other_way.find("the right eye calibrates to the left of the left eye"), std::string::npos)
+      << other_way;
+  EXPECT_NE(other_way.find("swap --left and --right"), std::string::npos) << other_way;
 }
 
 // One eye's views given for both eyes calibrate to eyes 1e-16 apart: refused, not written for

@@ -245,14 +245,29 @@ TEST(ClipEvaluatorTest, AStopIsHeededBeforeTheNextFrame) {
   ClipEvaluation what;
   what.train_frames = {0, 1, 3, 4};
   what.heldout_frames = {2};
-  int asked = 0;
-  what.should_stop = [&] { return ++asked > 2; };  // after two frames
-  const std::string stopped = testing::ErrorFrom(
-      [&] { EvaluateClip(run.clip, run.renderer, what, dir / "out"); }, ErrorCode::kCancelled);
-  EXPECT_NE(stopped.find("2 of 5 frames rendered"), std::string::npos) << stopped;
-  EXPECT_EQ(asked, 3);
-  EXPECT_TRUE(std::filesystem::exists(dir / "out" / "rgb" / "000001.png"));
-  EXPECT_FALSE(std::filesystem::exists(dir / "out" / "rgb" / "000002.png"));
+  // Asked before each frame and before each of its chunks (1,024 rays by default: a large frame with
+  // uncertainty took 20-30 s, a stop waiting for it; found 2026-12-07). Chunks of 256 rays here, so
+  // the small frame has several.
+  auto settings = run.renderer.settings();
+  settings.rays_per_chunk = 256;
+  render::FrameRenderer chunked(run.trainer.field(), run.trainer.box(), settings);
+  const int chunks =
+      (run.clip.width * run.clip.height + settings.rays_per_chunk - 1) / settings.rays_per_chunk;
+  ASSERT_GT(chunks, 1) << "the test's premise: a frame of several chunks";
+  const int per_frame = 1 + chunks;
+  for (const int answered_no : {2 * per_frame, 2 * per_frame + 2}) {  // before frame 2, within it
+    int asked = 0;
+    what.should_stop = [&] { return ++asked > answered_no; };
+    const std::filesystem::path out = dir / ("out" + std::to_string(answered_no));
+    const std::string stopped =
+        testing::ErrorFrom([&] { EvaluateClip(run.clip, chunked, what, out); }, ErrorCode::kCancelled);
+    EXPECT_NE(stopped.find("2 of 5 frames rendered"), std::string::npos) << stopped;
+    EXPECT_EQ(asked, answered_no + 1);
+    EXPECT_TRUE(std::filesystem::exists(out / "rgb" / "000001.png"));
+    EXPECT_FALSE(std::filesystem::exists(out / "rgb" / "000002.png"));
+  }
+  // The renderer's stop is its own again: a render after the evaluation is not stopped.
+  EXPECT_NO_THROW(chunked.Render(run.clip.cameras[0], run.clip.times[0]));
 }
 
 TEST(ClipEvaluatorTest, OutsideTheViewEveryMapIsZero) {

@@ -127,6 +127,15 @@ CheckerboardCalibration CalibrateFromCheckerboard(const RecordingInput& recordin
         "first); if they are folders of pictures, check that each name pairs one moment",
         source.name(), result.left_rms_px, result.right_rms_px, result.rms_px));
   }
+  // The eyes the other way round calibrate as well, the right eye on the left (T's x > 0): a file
+  // `prepare` then refused (stereo_rectifier.h), written without a word (found 2026-12-07).
+  if (result.rms_px <= kMostPlausibleRmsPx && c.t[0] > 0 && std::abs(c.t[0]) > std::abs(c.t[1])) {
+    FailInvalid(
+        fmt::format("{}: the right eye calibrates to the left of the left eye (T = ({:.4g}, {:.4g}, "
+                    "{:.4g})): the eyes are given the other way round; swap --left and --right (or "
+                    "the halves of the frame)",
+                    source.name(), c.t[0], c.t[1], c.t[2]));
+  }
   c.kind = "opencv";
   c.source = source.name();
   return result;

@@ -427,12 +427,18 @@ bool RunLeasedJob(WorkerClient& client, const v1::LeaseResponse& lease, const De
                 message.find(std::strerror(EDQUOT)) != std::string_view::npos;
     if (!reporter.stop_requested()) {
       const bool bad_input = e.code() == ErrorCode::kInvalidArgument && !disk_full;
+      // A shutdown's stop, wherever it met the job (loading the clip, evaluating), says it as a stop
+      // in training does: "CANCELLED: the clip-from-dicom: the clip's load was stopped" named a scratch
+      // folder (found 2026-12-07); the worker's log has where it was.
+      const bool handed_back = e.code() == ErrorCode::kCancelled && shutting_down.load() && !disk_full;
       const std::string reason =
-          disk_full ? "worker " + client.worker_id() + ": its scratch folder " + settings.work_dir.string() +
-                          " ran out of space (" + std::to_string(free_bytes) + " bytes free now, needs " +
-                          std::to_string(settings.min_free_bytes) + " to take a job): " + e.what()
-                    : std::string(ErrorCodeName(e.code())) + ": " +
-                          InTheClip(InTheUsersNames(e.what(), job, job_dir / "clip"), job_dir);
+          handed_back ? "shutting down (handed back)"
+          : disk_full
+              ? "worker " + client.worker_id() + ": its scratch folder " + settings.work_dir.string() +
+                    " ran out of space (" + std::to_string(free_bytes) + " bytes free now, needs " +
+                    std::to_string(settings.min_free_bytes) + " to take a job): " + e.what()
+              : std::string(ErrorCodeName(e.code())) + ": " +
+                    InTheClip(InTheUsersNames(e.what(), job, job_dir / "clip"), job_dir);
       // Issue 16: stopped by a shutdown while preparing: handed back without counting an attempt; so
       // are results the server's full disk refused (a shutdown while they waited: not the job's fault).
       Tell(client, lease.lease_id(), reason, !bad_input,

@@ -274,6 +274,20 @@ nlohmann::json UncertaintySettings(const render::FrameRenderSettings& settings) 
 nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& renderer,
                             const ClipEvaluation& what, const std::filesystem::path& out_dir) {
   const auto wall = Clock::now();
+  // A stop is heeded within a frame too, between its chunks; the renderers' stop is theirs again after.
+  struct HeededStop {
+    std::vector<render::FrameRenderer*> renderers;
+    ~HeededStop() {
+      for (auto* r : renderers) r->SetStop({});
+    }
+  } heeded;
+  if (what.should_stop) {
+    for (auto* r : {&renderer, what.plain}) {
+      if (r == nullptr) continue;
+      r->SetStop(what.should_stop);
+      heeded.renderers.push_back(r);
+    }
+  }
   const int count = clip.frame_count();
   const int w = clip.width, h = clip.height;
   const double depth_scale = DepthPngScale(clip.far);
@@ -368,7 +382,15 @@ nlohmann::json EvaluateClip(const scene::Clip& clip, render::FrameRenderer& rend
                             : std::chrono::duration<double>(what.deadline - start).count());
     const FrameRender how =
         what.plain != nullptr ? choice.how : FrameRender::kFull;  // (nothing to reduce with)
-    EvaluatedFrame evaluated = RenderFrame(clip, f, how, choice.stride, renderer, what.plain);
+    EvaluatedFrame evaluated;
+    try {
+      evaluated = RenderFrame(clip, f, how, choice.stride, renderer, what.plain);
+    } catch (const Error& e) {
+      if (e.code() != ErrorCode::kCancelled) throw;
+      if (writing.valid()) writing.get();  // the previous frame's files, whose task reads these locals
+      Fail(ErrorCode::kCancelled,
+           fmt::format("stopped during evaluation, in frame {} ({} of {} frames rendered)", f, f, count));
+    }
     render::RenderedFrame& frame = evaluated.frame;
     render_seconds += SecondsSince(start);
     render_priced += FrameSeconds(how, choice.stride, what.plan.cost, rendered_pixels);

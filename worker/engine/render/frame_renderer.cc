@@ -76,6 +76,7 @@ void FrameRenderer::RenderPixels(const scene::Camera& camera, float time, const 
   backend_->Begin(occupancy_);
   const auto at = [](float* p, int offset) { return p ? p + offset : nullptr; };
   for (int start = 0; start < count; start += settings_.rays_per_chunk) {
+    if (stop_ && stop_()) Fail(ErrorCode::kCancelled, "stopped while a frame rendered");
     const int n = std::min(settings_.rays_per_chunk, count - start);
     const PixelOutputs chunk{at(out.rgb, 3 * start),     at(out.depth, start),     at(out.opacity, start),
                              at(out.uncertainty, start), at(out.aleatoric, start), at(out.epistemic, start)};

@@ -11,9 +11,11 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "worker/engine/render/render_backend.h"
@@ -39,6 +41,11 @@ class FrameRenderer {
   // (occupancy_grid.h). The grid must outlive its use; null (the default) samples all of [near, far].
   void SetOccupancy(const OccupancyGrid* grid) { occupancy_ = grid; }
 
+  // A stop asked for (a cancel, a worker's shutdown) ends a render between its chunks (1,024 rays):
+  // Render and RenderPixels throw Error(kCancelled). A large frame with uncertainty took 20-30 s on two
+  // loaded cores, so a stop waited that long (found 2026-12-07). Empty (the default): never stops.
+  void SetStop(std::function<bool()> stop) { stop_ = std::move(stop); }
+
   // `skip` (empty, or one value per pixel): pixels left unrendered where it is nonzero (outside a
   // scope's view), given black, depth 0 (unknown), opacity 0 and no uncertainty.
   RenderedFrame Render(const scene::Camera& camera, float time, std::span<const std::uint8_t> skip = {});
@@ -55,6 +62,7 @@ class FrameRenderer {
  private:
   FrameRenderSettings settings_;
   const OccupancyGrid* occupancy_ = nullptr;
+  std::function<bool()> stop_;
   std::unique_ptr<RenderBackend> backend_;
 };
 
