@@ -43,8 +43,9 @@ class LinkedClip {
     for (const auto& file : clip.files()) {
       if (file.path().find('/') != std::string::npos) continue;
       if (!blobs.Has(file.sha256())) return false;
-      fs::create_symlink(blobs.PathOf(file.sha256()),
-                         root_ / file.path());  // a checked name (ValidateManifest)
+      // Absolute: under a relative --data-dir (the default's) the links pointed nowhere from the
+      // temporary folder, and no recording was checked (found 2026-12-07). A checked name (ValidateManifest).
+      fs::create_symlink(fs::absolute(blobs.PathOf(file.sha256())), root_ / file.path());
     }
     return true;
   }

@@ -272,10 +272,13 @@ StudyContents FindStudyContents(const RetrieveRequest& request) {
         order.push_back(series);
         all_accepted[series] = true;
       }
-      if (!accepted.contains(sop_class)) {
+      // A PACS that returns no SOP Class UID at the image level (DCMTK's dcmqrscp) says nothing of the
+      // class: taken as a recording's, the worker then skipping what is none (every retrieval from such
+      // a PACS failed, "only objects of classes endorecon does not take (an unnamed class x 1)"; found
+      // 2026-12-07).
+      if (!sop_class.empty() && !accepted.contains(sop_class)) {
         all_accepted[series] = false;
-        ++contents.other_classes[sop_class.empty() ? "an unnamed class"
-                                                   : dcmFindNameOfUID(sop_class.c_str(), sop_class.c_str())];
+        ++contents.other_classes[dcmFindNameOfUID(sop_class.c_str(), sop_class.c_str())];
       }
     }
     if (response == responses.back() && response->m_status != STATUS_Success) {
