@@ -14,6 +14,7 @@
 #include "common/dicom_file.h"
 #include "common/error.h"
 #include "common/prepare_flags.h"
+#include "common/replace_all.h"
 
 namespace endorecon::server {
 namespace fs = std::filesystem;
@@ -61,11 +62,7 @@ class LinkedClip {
 std::string AsClipNames(std::string message, const fs::path& root, const v1::Manifest& clip) {
   const std::string folder = root.string();
   const std::string whole = clip.files_size() == 1 ? clip.files(0).path() : "the recording";
-  for (const auto& [from, to] : {std::pair<std::string, std::string>{folder + "/", ""}, {folder, whole}}) {
-    for (std::size_t at = message.find(from); at != std::string::npos; at = message.find(from, at + to.size()))
-      message.replace(at, from.size(), to);
-  }
-  return message;
+  return ReplaceAll(ReplaceAll(std::move(message), folder + "/", ""), folder, whole);
 }
 
 }  // namespace

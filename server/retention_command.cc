@@ -94,9 +94,8 @@ int DryRun(const RetentionFlags& flags) {
   }
   std::cout << fmt::format(
       "{} file(s), {} bytes, that no job references would be deleted (--orphan-hours {}); {} more are not "
-      "old enough yet: each goes once that long has passed since it was last written and since the server "
-      "first "
-      "found that no job names it\n",
+      "old enough yet: each goes once that long has passed since it was last written and since the "
+      "server first found that no job names it\n",
       plan.orphans.size(), plan.orphan_bytes, flags.orphan_hours, plan.orphans_waiting);
   return 0;
 }

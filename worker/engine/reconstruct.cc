@@ -298,8 +298,7 @@ ReconstructSummary RunPipeline(const ReconstructOptions& options, const Reconstr
         spdlog::warn(
             "rendering the results of {} frames of {}x{} needs about {:.0f} s at the least, as priced now, "
             "and the budget leaves {:.0f} s: the run will end more than {:.0f}% late unless the frames "
-            "render "
-            "faster than priced (the budget is too small for the clip)",
+            "render faster than priced (the budget is too small for the clip)",
             clip.frame_count(), clip.width, clip.height, what.plan.seconds, left, 100 * kBudgetTolerance);
       }
       what.deadline = now + std::chrono::duration_cast<Clock::duration>(

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "common/prepare_flags_proto.h"
+#include "common/replace_all.h"
 #include "worker/prepare/options_from_flags.h"
 
 namespace endorecon::worker {
@@ -36,8 +37,7 @@ void NameTheSubmittersFiles(const fs::path& report, const fs::path& recording_di
           (recording_dir / (folder ? staged.substr(0, staged.size() - 1) : staged)).string();
       const std::string to =
           folder && !given.empty() && given.back() == '/' ? given.substr(0, given.size() - 1) : given;
-      for (auto at = text.find(from); at != std::string::npos; at = text.find(from, at + to.size()))
-        text.replace(at, from.size(), to);
+      text = ReplaceAll(std::move(text), from, to);
     }
     value = text;
   };

@@ -16,6 +16,7 @@
 #include "common/error.h"
 #include "common/folder_lock.h"
 #include "common/manifest.h"
+#include "common/replace_all.h"
 #include "common/sha256.h"
 #include "common/warning_pacer.h"
 #include "worker/engine/reconstruct.h"
@@ -148,15 +149,9 @@ auto WhileLeaseHeld(WorkerClient& client, const ProgressReporter& reporter, Call
 // knows the clip, not the worker's scratch folder ("images/000005.png: cannot decode", not
 // "/var/cache/endorecon-worker-0/3b714f29e295/clip/images/000005.png: cannot decode").
 std::string InTheClip(std::string message, const fs::path& job_dir) {
-  const auto replace = [&](const std::string& from, const std::string& to) {
-    for (std::size_t at = message.find(from); at != std::string::npos;
-         at = message.find(from, at + to.size()))
-      message.replace(at, from.size(), to);
-  };
-  replace((job_dir / "clip").string() + "/", "");
-  replace((job_dir / "clip").string(), "the clip");
-  replace(job_dir.string() + "/", "");
-  return message;
+  message = ReplaceAll(std::move(message), (job_dir / "clip").string() + "/", "");
+  message = ReplaceAll(std::move(message), (job_dir / "clip").string(), "the clip");
+  return ReplaceAll(std::move(message), job_dir.string() + "/", "");
 }
 
 // `message` with a raw recording's staged names (side_by_side.mp4, left/) replaced by the files and

@@ -239,6 +239,12 @@ int Serve(const ServeFlags& flags) {
                           ? DefaultWorkDir(std::filesystem::temp_directory_path(), worker_id)
                           : std::filesystem::path(flags.work_dir);
   settings.min_free_bytes = flags.min_free_bytes;
+  // The default scratch folder is this process's alone: gone with it at every stop (its job folders
+  // went with their jobs; a folder given by --work-dir stays for the next worker).
+  const auto remove_default_scratch = [&] {
+    std::error_code ignored;
+    if (flags.work_dir.empty()) std::filesystem::remove_all(settings.work_dir, ignored);
+  };
   settings.preview_interval_s = flags.preview_interval_s;
   settings.checkpoint_interval_s = flags.checkpoint_interval_s;
   if (MakePrivateFolder(settings.work_dir)) {
@@ -307,10 +313,7 @@ int Serve(const ServeFlags& flags) {
       if (Refused(e)) {
         shutting_down = true;
         stop_waiter();
-        // Its default scratch folder goes, as at any stop (it stayed until a later start cleared it;
-        // found 2026-12-07).
-        std::error_code ignored;
-        if (flags.work_dir.empty()) std::filesystem::remove_all(settings.work_dir, ignored);
+        remove_default_scratch();  // it stayed until a later start cleared it (found 2026-12-07)
         throw;
       }
       if (idle.Due(std::chrono::steady_clock::now())) {  // stopped below, as for a signal
@@ -354,10 +357,9 @@ int Serve(const ServeFlags& flags) {
       client.PauseBeforeRetry(std::chrono::seconds(1));
     }
   }
-  std::error_code ignored;
   if (shutting_down) {  // a signal (or --exit-when-idle) before the server took the worker: it never served
     stop_waiter();
-    if (flags.work_dir.empty()) std::filesystem::remove_all(settings.work_dir, ignored);
+    remove_default_scratch();
     spdlog::info("worker {} stopped before it could register with {}", worker_id, flags.server);
     return idle.ExitCode();
   }
@@ -401,9 +403,7 @@ int Serve(const ServeFlags& flags) {
   for (auto& loop : loops) loop.join();
   stop_waiter();
   client.Leave();  // its jobs are handed back by now
-  // The default scratch folder is this process's alone: gone with it (its job folders went with their
-  // jobs; a folder given by --work-dir stays for the next worker).
-  if (flags.work_dir.empty()) std::filesystem::remove_all(settings.work_dir, ignored);
+  remove_default_scratch();
   spdlog::info("worker {} stopped", worker_id);
   return idle.ExitCode();
 }
