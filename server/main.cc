@@ -82,12 +82,10 @@ std::unique_ptr<dicom::StorageScp> StartStorageScp(const ServerFlags& flags,
                                                    const std::vector<std::string>& calling_ae_titles,
                                                    DicomRetriever*& retriever) {
   if (flags.dicom.listen.empty()) return nullptr;
-  const auto colon = flags.dicom.listen.rfind(':');
-  if (colon == std::string::npos)
-    FailInvalid("--dicom-listen '" + flags.dicom.listen + "': expected HOST:PORT");
   dicom::StorageScpSettings settings;
   settings.ae_title = flags.dicom.ae_title;
-  settings.port = std::stoi(flags.dicom.listen.substr(colon + 1));  // digits, at most 65535: ListenAddress
+  // HOST:PORT with digits, at most 65535, no unix: path (the flag's checks).
+  settings.port = std::stoi(flags.dicom.listen.substr(flags.dicom.listen.rfind(':') + 1));
   if (settings.port == 0) {
     FailInvalid("--dicom-listen '" + flags.dicom.listen +
                 "': port 0 would pick a port no PACS is told of; give the port the PACS sends to");
@@ -463,8 +461,15 @@ void AddDicomFlags(CLI::App& app, ServerFlags& flags) {
   app.add_option(
          "--dicom-listen", flags.dicom.listen,
          "HOST:PORT of this server's storage SCP (where a PACS delivers C-MOVE retrievals); off by default")
-      ->check(
-          ListenAddress());  // std::stoi read "abc" as an exception and 99999 as a port (found 2026-12-07)
+      // std::stoi read "abc" as an exception and 99999 as a port, and unix:PATH, which ListenAddress
+      // takes for gRPC, as its path's number (found 2026-12-07).
+      ->check(ListenAddress())
+      ->check(CLI::Validator(
+          [](const std::string& text) {
+            return text.rfind("unix:", 0) == 0 ? text + ": a storage SCP listens on a TCP port (HOST:PORT)"
+                                               : std::string();
+          },
+          "HOST:PORT", "TcpAddress"));
   app.add_option("--uid-root", flags.dicom.uid_root,
                  "UID root of the DICOM results' new UIDs (default: 2.25 UUID-derived UIDs)");
   app.add_option("--send-attempts", flags.dicom.send_attempts,

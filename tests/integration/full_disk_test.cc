@@ -152,6 +152,7 @@ TEST(FullDiskTest, ANegativeFreeSpaceLimitANonPositiveStallTimeoutOrATooSmallThr
            // port taken as off (found 2026-12-07).
            {server + " --dicom-listen 127.0.0.1:abc", "--dicom-listen"},
            {server + " --dicom-listen 127.0.0.1:99999", "--dicom-listen"},
+           {server + " --dicom-listen unix:/tmp/scp", "--dicom-listen"},
            {server + " --metrics-port -2", "--metrics-port"},
            {server + " --metrics-port 70000", "--metrics-port"}}) {
     const std::string output = Capture(command + " 2>&1; echo \"exit=$?\"");
