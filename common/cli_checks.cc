@@ -91,23 +91,32 @@ CLI::Validator HoldoutSpacing() {
 
 namespace {
 
+enum class AddressUse { kListen, kCall, kStorageScp };
+
 // What is wrong with `text` as an address to listen on or to call; "" when nothing.
-std::string AddressProblem(const std::string& text, bool listening) {
-  if (text.rfind("unix:", 0) == 0) return text.size() > 5 ? "" : text + ": unix: needs a path";
+std::string AddressProblem(const std::string& text, AddressUse use) {
+  if (text.rfind("unix:", 0) == 0) {
+    if (use == AddressUse::kStorageScp) return text + ": a storage SCP listens on a TCP port (HOST:PORT)";
+    return text.size() > 5 ? "" : text + ": unix: needs a path";
+  }
   const auto colon = text.rfind(':');
   const std::string host = colon == std::string::npos ? "" : text.substr(0, colon);
   const std::string port = colon == std::string::npos ? "" : text.substr(colon + 1);
   const bool bracketed = host.size() >= 2 && host.front() == '[' && host.back() == ']';
   if (host.empty() || (!bracketed && host.find(':') != std::string::npos) ||
       host.find_first_of(" /") != std::string::npos) {
-    return text + " is no address " + (listening ? "to listen on" : "of a server") +
-           "; expected HOST:PORT, [IPv6]:PORT or unix:PATH";
+    return text + " is no address " + (use == AddressUse::kCall ? "of a server" : "to listen on") +
+           "; expected HOST:PORT, [IPv6]:PORT" + (use == AddressUse::kStorageScp ? "" : " or unix:PATH");
   }
-  const int least = listening ? 0 : 1;
+  const int least = use == AddressUse::kListen ? 0 : 1;
   if (port.empty() || port.size() > 5 || port.find_first_not_of("0123456789") != std::string::npos ||
       std::stoi(port) > 65535 || std::stoi(port) < least) {
-    return text + (listening ? ": the port must be a number from 0 (any free port) to 65535"
-                             : ": the port must be a number from 1 to 65535");
+    switch (use) {
+      case AddressUse::kListen: return text + ": the port must be a number from 0 (any free port) to 65535";
+      case AddressUse::kCall: return text + ": the port must be a number from 1 to 65535";
+      case AddressUse::kStorageScp:
+        return text + ": the port must be a number from 1 to 65535, the port the PACS is told to send to";
+    }
   }
   return "";
 }
@@ -115,8 +124,8 @@ std::string AddressProblem(const std::string& text, bool listening) {
 }  // namespace
 
 CLI::Validator ListenAddress() {
-  return CLI::Validator([](const std::string& text) { return AddressProblem(text, true); }, "HOST:PORT",
-                        "ListenAddress");
+  return CLI::Validator([](const std::string& text) { return AddressProblem(text, AddressUse::kListen); },
+                        "HOST:PORT", "ListenAddress");
 }
 
 void DecimalIntegers(CLI::App& app) {
@@ -142,8 +151,13 @@ void DecimalIntegers(CLI::App& app) {
 }
 
 CLI::Validator ServerAddress() {
-  return CLI::Validator([](const std::string& text) { return AddressProblem(text, false); }, "HOST:PORT",
-                        "ServerAddress");
+  return CLI::Validator([](const std::string& text) { return AddressProblem(text, AddressUse::kCall); },
+                        "HOST:PORT", "ServerAddress");
+}
+
+CLI::Validator StorageScpAddress() {
+  return CLI::Validator([](const std::string& text) { return AddressProblem(text, AddressUse::kStorageScp); },
+                        "HOST:PORT", "StorageScpAddress");
 }
 
 }  // namespace endorecon

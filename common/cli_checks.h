@@ -32,6 +32,10 @@ CLI::Validator ListenAddress();
 // modulo 65536 and "localhost" as port 443.
 CLI::Validator ServerAddress();
 
+// A DICOM storage SCP's address: HOST:PORT or [IPv6]:PORT with a port of 1-65535, the port a PACS
+// is told to send to (0 would pick one no PACS knows); no unix:PATH.
+CLI::Validator StorageScpAddress();
+
 // Makes every integer option of `app` and of its commands read decimal numbers only: CLI11 reads
 // them as C does, so `--skip-left 011` skipped 9 frames without a word (found 2026-12-07). Leading
 // zeros are dropped; anything but an optional sign and digits (0x9, 9.0, 9abc) is refused as no

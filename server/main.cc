@@ -84,12 +84,8 @@ std::unique_ptr<dicom::StorageScp> StartStorageScp(const ServerFlags& flags,
   if (flags.dicom.listen.empty()) return nullptr;
   dicom::StorageScpSettings settings;
   settings.ae_title = flags.dicom.ae_title;
-  // HOST:PORT with digits, at most 65535, no unix: path (the flag's checks).
+  // HOST:PORT with a port of 1-65535 (the flag's check).
   settings.port = std::stoi(flags.dicom.listen.substr(flags.dicom.listen.rfind(':') + 1));
-  if (settings.port == 0) {
-    FailInvalid("--dicom-listen '" + flags.dicom.listen +
-                "': port 0 would pick a port no PACS is told of; give the port the PACS sends to");
-  }
   settings.folder = folder;
   settings.calling_ae_titles = calling_ae_titles;
   // What an earlier run left (a C-MOVE cut short by a stop) is no study any retrieval awaits now.
@@ -461,15 +457,9 @@ void AddDicomFlags(CLI::App& app, ServerFlags& flags) {
   app.add_option(
          "--dicom-listen", flags.dicom.listen,
          "HOST:PORT of this server's storage SCP (where a PACS delivers C-MOVE retrievals); off by default")
-      // std::stoi read "abc" as an exception and 99999 as a port, and unix:PATH, which ListenAddress
-      // takes for gRPC, as its path's number (found 2026-12-07).
-      ->check(ListenAddress())
-      ->check(CLI::Validator(
-          [](const std::string& text) {
-            return text.rfind("unix:", 0) == 0 ? text + ": a storage SCP listens on a TCP port (HOST:PORT)"
-                                               : std::string();
-          },
-          "HOST:PORT", "TcpAddress"));
+      // std::stoi read "abc" as an exception, 99999 as a port and unix:PATH as its path's number
+      // (found 2026-12-07).
+      ->check(StorageScpAddress());
   app.add_option("--uid-root", flags.dicom.uid_root,
                  "UID root of the DICOM results' new UIDs (default: 2.25 UUID-derived UIDs)");
   app.add_option("--send-attempts", flags.dicom.send_attempts,

@@ -153,6 +153,7 @@ TEST(FullDiskTest, ANegativeFreeSpaceLimitANonPositiveStallTimeoutOrATooSmallThr
            {server + " --dicom-listen 127.0.0.1:abc", "--dicom-listen"},
            {server + " --dicom-listen 127.0.0.1:99999", "--dicom-listen"},
            {server + " --dicom-listen unix:/tmp/scp", "--dicom-listen"},
+           {server + " --dicom-listen 127.0.0.1:0", "--dicom-listen"},  // no PACS could be told it
            {server + " --metrics-port -2", "--metrics-port"},
            {server + " --metrics-port 70000", "--metrics-port"}}) {
     const std::string output = Capture(command + " 2>&1; echo \"exit=$?\"");
