@@ -310,6 +310,9 @@ TEST(ReportPageTest, RenderWritesAPageOfItsViews) {
   EXPECT_EQ(data["frames"]["uncertainty"].size(), 3u);
   EXPECT_EQ(data["frames"]["model"].size(), 3u);
   EXPECT_EQ(data["surface"]["frames"].size(), 3u);
+  // The score's scale is shown divided by lambda (1e12 by default): as the colour's variance.
+  EXPECT_DOUBLE_EQ(data["scales"]["uncertainty"]["factor"].get<double>(),
+                   1.0 / data["render"]["lambda"].get<double>());
   // The page names where the views came from and the device.
   EXPECT_EQ(data["clip"], fs::absolute(dir / "out").lexically_normal().string());
   EXPECT_EQ(data["run"]["device"].get<std::string>().rfind("CPU, ", 0), 0u) << data["run"]["device"];

@@ -212,7 +212,16 @@ void AddFrames(const fs::path& results_dir, const Views& views, const json& reco
   json scales = json::object();
   const auto depth_range = DepthRange(results_dir, views);
   scales["depth"] = {{"colormap", "viridis"}, {"range", depth_range}, {"unit", "clip units"}};
-  const auto uncertainty_scale = HeatScale(record, heat + "/uncertainty", "score");
+  auto uncertainty_scale = HeatScale(record, heat + "/uncertainty", "score");
+  // The paper's score weighs the colour's variance by lambda (1e12 by default), so its values (about
+  // 1e10) said nothing to a reader (found 2026-12-07). Divided by lambda they are the colour's
+  // variance (RGB in [0, 1], squared) plus a negligible density term, beside the error map's RMSE.
+  const json::json_pointer lambda_at(heat.substr(0, heat.rfind('/')) + "/lambda");
+  if (uncertainty_scale && record.contains(lambda_at) && record.at(lambda_at).is_number() &&
+      record.at(lambda_at).get<double>() >= 1) {
+    (*uncertainty_scale)["factor"] = 1.0 / record.at(lambda_at).get<double>();
+    (*uncertainty_scale)["unit"] = "colour variance (score / lambda)";
+  }
   const auto error_scale = HeatScale(record, heat + "/error", "RMSE, RGB in [0, 1]");
   const auto model_scale = HeatScale(record, heat + "/model", "unitless");
   const bool uncertainty =

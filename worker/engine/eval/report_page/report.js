@@ -73,7 +73,8 @@
     colormaps[name] = lut;
   }
 
-  // A colour bar for `scale` ({colormap, range, unit, pointers?}): ends labelled with the range.
+  // A colour bar for `scale` ({colormap, range, unit, pointers?, factor?}): ends labelled with the
+  // range, times `factor` where one is given (the uncertainty score, shown divided by lambda).
   function scaleBar(scale) {
     const canvas = node("canvas", { width: 256, height: 1 });
     const context = canvas.getContext("2d");
@@ -83,8 +84,10 @@
       image.data.set([lut[3 * i], lut[3 * i + 1], lut[3 * i + 2], 255], 4 * i);
     }
     context.putImageData(image, 0, 0);
-    const end = (k) => (scale.pointers ? metricSpan(scale.pointers[k], { precision: 3 }, scale.source)
-                                       : node("span", { text: Number(scale.range[k]).toPrecision(4) }));
+    const factor = scale.factor || 1;
+    const end = (k) =>
+        (scale.pointers ? metricSpan(scale.pointers[k], {precision: 3, factor}, scale.source) :
+                          node('span', {text: (factor * Number(scale.range[k])).toPrecision(4)}));
     return node("div", { class: "scale" }, [
       canvas, node("div", { class: "ticks" }, [end(0), node("span", { text: scale.unit }), end(1)])]);
   }
