@@ -108,6 +108,22 @@ TEST(CheckerboardCalibrationTest, ViewsOfDifferentMomentsAndSwappedEyesAreRefuse
   EXPECT_NE(message.find("--skip-left or --skip-right"), std::string::npos) << message;
   EXPECT_EQ(log.str().find("too few to check"), std::string::npos) << log.str();
 
+  // At 96 x 72 the board shows whole in few views of each eye, and one view apart in one of both:
+  // said as views of different moments, not as a board too seldom seen (found 2026-12-07).
+  scene::WriteSyntheticClip(RecordingOptions(96, 72, 1, 24), dir / "small");
+  prepare::RecordingInput small{prepare::StereoLayout::kTwoSources,
+                                dir / "small/recording/checkerboard/left",
+                                dir / "small/recording/checkerboard/right",
+                                {}};
+  small.skip_left = 1;
+  const std::string small_message =
+      ErrorFrom([&] { prepare::CalibrateFromCheckerboard(small, SyntheticBoard()); });
+  EXPECT_NE(small_message.find("the eyes' frames seem not to be of the same moments"), std::string::npos)
+      << small_message;
+  small.skip_left = 0;
+  EXPECT_GT(prepare::CalibrateFromCheckerboard(small, SyntheticBoard()).views_found, 3)
+      << "in step: calibrates";
+
   // The eyes the other way round: refused, saying so (a file `prepare` refused was written).
   const prepare::RecordingInput swapped{prepare::StereoLayout::kTwoSources,
                                         dir / "synth/recording/checkerboard/right",
