@@ -309,5 +309,33 @@ TEST(Reconstruct, AResumeKeepsItsCheckpointsUncertaintyMapStride) {
   EXPECT_EQ(config.at("adaptive_refresh"), 5);
 }
 
+// A run resumed at its checkpoint's end trains nothing: its last progress shows the checkpoint's loss
+// and PSNR (they read 0 in `status` and the worker's gauges), and says where it began, so the worker's
+// iteration counter counts only what it trained (found 2026-12-07).
+TEST(Reconstruct, ARunResumedAtItsEndShowsItsCheckpointsLossAndPsnr) {
+  testing::TempDir dir("reconstruct-resume-end");
+  WriteSmallClip(dir / "clip");
+  ReconstructOptions first = SmallRunOptions(dir / "clip", dir / "first");
+  first.iterations = 12;
+  Reconstruct(first, {});
+  const nlohmann::json last = ReadJsonFile(dir / "first" / "metrics.json").at("curve").back();
+
+  ReconstructOptions resumed = SmallRunOptions(dir / "clip", dir / "resumed");
+  resumed.resume_from = (dir / "first" / "model" / "checkpoint.bin").string();
+  resumed.iterations = 12;
+  std::vector<Progress> training;
+  ReconstructHooks hooks;
+  hooks.on_progress = [&](const Progress& p) {
+    if (p.phase.empty()) training.push_back(p);
+  };
+  Reconstruct(resumed, hooks);
+  ASSERT_FALSE(training.empty());
+  EXPECT_EQ(training.back().iteration, 12);
+  EXPECT_EQ(training.back().first_iteration, 12);
+  EXPECT_GT(training.back().train_psnr, 0.0);
+  EXPECT_DOUBLE_EQ(training.back().train_psnr, last.at("train_psnr").get<double>());
+  EXPECT_DOUBLE_EQ(training.back().loss, last.at("loss").get<double>());
+}
+
 }  // namespace
 }  // namespace endorecon

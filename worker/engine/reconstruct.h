@@ -52,6 +52,7 @@ struct ReconstructOptions {
 
 struct Progress {
   int iteration = 0;
+  int first_iteration = 0;  // where this process's training began: a resumed run's checkpoint's iteration
   // The iteration cap, or with a time budget the iterations the current pace reaches within it
   // (iteration / total_iterations is the share of the run done; at the end, the iterations run).
   int total_iterations = 0;

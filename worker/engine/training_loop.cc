@@ -34,10 +34,20 @@ class TrainingLoop {
         checkpoints_(hooks.checkpoint_interval_s, 0),
         spent_before_(extras.train_seconds) {
     progress_.total_iterations = config_.iterations;
+    progress_.first_iteration = run.trainer.iteration();
   }
 
   TrainingResult Run() {
     TrainingResult result;
+    // A resumed run's last word before its first step is its checkpoint's: a run resumed at its end
+    // showed loss 0 and PSNR 0 dB (found 2026-12-07).
+    if (!extras_.curve.empty()) {
+      const auto& point = extras_.curve.back();
+      result.last.loss = point.value("loss", 0.0);
+      result.last.psnr = point.value("train_psnr", 0.0);
+      progress_.heldout_psnr = point.value("heldout_psnr", -1.0);
+      progress_.depth_rmse = point.value("heldout_depth_rmse_relative", -1.0);
+    }
     wall_ = Clock::now();
     PriceAfterTraining();
     UpdateBudget();

@@ -5,6 +5,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cctype>
 #include <cerrno>
 #include <cstring>
@@ -351,6 +352,8 @@ bool RunLeasedJob(WorkerClient& client, const v1::LeaseResponse& lease, const De
       if (!p.phase.empty()) return;  // evaluation: the training gauges keep their last values
       gauges.samples_per_second.Set(p.samples_per_second);
       gauges.psnr.Set(p.train_psnr);
+      // A resumed run's checkpoint's iterations were counted by the worker that trained them.
+      last_iteration = std::max(last_iteration, p.first_iteration);
       if (p.iteration > last_iteration) gauges.iterations.Increment(p.iteration - last_iteration);
       last_iteration = p.iteration;
       metrics.UpdateMemory();
