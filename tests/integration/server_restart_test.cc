@@ -208,6 +208,31 @@ TEST(ServerRestartTest, KillDuringAJobLosesNothing) {
       << cluster.ServerLog() << worker.Log();
 }
 
+// A server down longer than half a minute while a job's finished results wait to go up (an upgrade,
+// a slow restart): the worker waits for it, and the restarted server takes them under the lease it
+// kept. The worker gave up after 30 s: the finished results were thrown away, and the job lost an
+// attempt and trained again (found 2026-12-07).
+TEST(ServerRestartTest, FinishedResultsWaitForAServerDownLongerThanHalfAMinute) {
+  Cluster cluster;
+  MakeClip(cluster.path("clip"));
+  auto& worker = cluster.StartWorker("w1");
+  const auto id = cluster.Submit(cluster.path("clip"), {"--iterations", "20"});
+  // Training's last checkpoint is up: the evaluation runs, then the results' upload.
+  ASSERT_TRUE(
+      WaitUntil([&] { return !cluster.Job(id).checkpoint().sha256().empty(); }, std::chrono::seconds(120)))
+      << cluster.ServerLog() << worker.Log();
+  cluster.KillServer(SIGKILL);
+  std::this_thread::sleep_for(std::chrono::seconds(35));
+  cluster.StartServer();
+  const auto done = cluster.WaitForState(id, v1::SUCCEEDED, std::chrono::seconds(120));
+  ASSERT_EQ(done.state(), v1::SUCCEEDED) << cluster.ServerLog() << worker.Log();
+  EXPECT_EQ(done.attempts(), 0) << done.error() << "\n" << worker.Log();
+  EXPECT_NE(worker.Log().find("while the server holds the lease"), std::string::npos)
+      << "the results did not wait for the server: the test tested nothing\n"
+      << worker.Log();
+  EXPECT_EQ(worker.Log().find("resumed from"), std::string::npos) << "trained again\n" << worker.Log();
+}
+
 // An idle worker, long-polling as deployed (10 s), is back on a restarted server within seconds:
 // it took 17-20 s (retries 5 s apart, then a whole long poll before the server said "register
 // again"; found 2026-12-05).

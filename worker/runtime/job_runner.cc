@@ -10,6 +10,7 @@
 #include <cerrno>
 #include <cstring>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string_view>
 #include <thread>
 
@@ -128,22 +129,25 @@ auto WhileUnavailable(WorkerClient& client, Call&& call,
 // Retries `call` while it fails UNAVAILABLE (a server restarting, or one whose upload slots are all
 // taken by clients' uploads until the call's deadline) or UNAUTHENTICATED (the worker's token
 // expired or was revoked, and a new one may be written into --token-file) as long as the lease is
-// held: the server answered the job's heartbeats within the last `patience` and asked for no stop.
-// With `on_space_wait`, also while the server refuses an upload for want of space on its data disk;
-// with `shutting_down`, only until it is set (a SIGTERM waited on a full disk for as long as it stayed
-// full; found 2026-12-07).
+// held: the server asked for no stop in its answers to the job's heartbeats (one that took the lease
+// back says so when it answers again) and, with `patience`, answered one within it. Without it a
+// server that is down is waited for: a restarted server keeps the leases for one lease time, and a
+// wait of 30 s threw finished results away and cost the job an attempt when an upgrade took longer
+// (found 2026-12-07). With `on_space_wait`, also while the server refuses an upload for want of space
+// on its data disk; with `shutting_down`, only until it is set (a SIGTERM waited on a full disk for as
+// long as it stayed full; found 2026-12-07).
 template <typename Call>
 auto WhileLeaseHeld(WorkerClient& client, const ProgressReporter& reporter, Call&& call,
                     const std::atomic<bool>* shutting_down = nullptr,
-                    std::function<void()> on_space_wait = {}) {
-  const auto patience = std::chrono::seconds(30);
-  return RetryUnavailable(client, std::forward<Call>(call),
-                          [&] {
-                            return !reporter.stop_requested() && !(shutting_down && shutting_down->load()) &&
-                                   std::chrono::steady_clock::now() - reporter.last_answer() < patience;
-                          },
-                          " while the server holds the lease",
-                          {.token_change = true, .on_space_wait = std::move(on_space_wait)});
+                    std::function<void()> on_space_wait = {},
+                    std::optional<std::chrono::milliseconds> patience = std::nullopt) {
+  return RetryUnavailable(
+      client, std::forward<Call>(call),
+      [&] {
+        return !reporter.stop_requested() && !(shutting_down && shutting_down->load()) &&
+               (!patience || std::chrono::steady_clock::now() - reporter.last_answer() < *patience);
+      },
+      " while the server holds the lease", {.token_change = true, .on_space_wait = std::move(on_space_wait)});
 }
 
 // `message` with the job's folder on this worker taken out of its paths: the user who reads it
@@ -314,13 +318,15 @@ bool RunLeasedJob(WorkerClient& client, const v1::LeaseResponse& lease, const De
   try {
     // A server restart mid-download is waited out while the lease is held, as the results' upload is
     // (it cost the job an attempt; found 2026-12-05); what arrived is kept and the rest resumed.
-    WhileLeaseHeld(client, reporter,
-                   [&] { client.GetFiles(lease.lease_id(), job_dir / "clip", job.clip()); });
+    WhileLeaseHeld(
+        client, reporter, [&] { client.GetFiles(lease.lease_id(), job_dir / "clip", job.clip()); },
+        &shutting_down);
     if (job.has_checkpoint() && !job.checkpoint().sha256().empty()) {
       v1::Manifest checkpoint;
       *checkpoint.add_files() = job.checkpoint();
-      WhileLeaseHeld(client, reporter,
-                     [&] { client.GetFiles(lease.lease_id(), job_dir / "checkpoint", checkpoint); });
+      WhileLeaseHeld(
+          client, reporter, [&] { client.GetFiles(lease.lease_id(), job_dir / "checkpoint", checkpoint); },
+          &shutting_down);
     }
     fs::remove_all(job_dir / "out");
     auto options = OptionsFor(job, job_dir, device);
@@ -361,13 +367,18 @@ bool RunLeasedJob(WorkerClient& client, const v1::LeaseResponse& lease, const De
     hooks.on_preview = [&](const eval::Preview& preview) {
       reporter.AddPreview(EncodePreview(preview, last_iteration));
     };
+    // A checkpoint only spares a job handed out again its training so far: it is retried while the
+    // server answers the job's heartbeats (a wait for an upload slot too), and skipped, the job going
+    // on, when the server's data disk is full or it has answered none for two heartbeats (at least
+    // 5 s). Training waits meanwhile: 30 s of patience held a job past its budget while the server was
+    // down (found 2026-12-07).
+    const auto checkpoint_patience =
+        std::max<std::chrono::milliseconds>(std::chrono::seconds(5), 2 * settings.heartbeat);
     hooks.on_checkpoint = [&](const std::string& path) {
-      // A checkpoint only spares a job handed out again its training so far: it is retried while the
-      // server answers the job's heartbeats (a wait for an upload slot too), and skipped, the job going
-      // on, when the server's data disk is full or it has answered nothing for 30 s.
       try {
-        reporter.SetCheckpoint(
-            WhileLeaseHeld(client, reporter, [&] { return UploadCheckpoint(client, path); }));
+        reporter.SetCheckpoint(WhileLeaseHeld(
+            client, reporter, [&] { return UploadCheckpoint(client, path); }, nullptr, {},
+            checkpoint_patience));
       } catch (const Error& e) {
         if (e.code() != ErrorCode::kUnavailable && !ServerDiskFull(e)) throw;
         spdlog::warn("[{}] job {}: checkpoint not uploaded ({}); the job goes on", device.name, job.id(),
