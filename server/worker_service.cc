@@ -112,7 +112,8 @@ grpc::Status WorkerServiceImpl::Leave(grpc::ServerContext* context, const v1::Le
 
 grpc::Status WorkerServiceImpl::Lease(grpc::ServerContext* context, const v1::LeaseRequest* request,
                                       v1::LeaseResponse* response) {
-  return guard_.Run(context, {"Lease", Access::kWorker, kReads, ""}, [&](Call& call) {
+  const Rpc rpc{"Lease", Access::kWorker, kReads, ""};
+  return guard_.Run(context, rpc, [&](Call& call) {
     // The id goes into job records and `workers` as Register's does: the same rules (a Lease took
     // an id holding escape sequences, which then reached terminals in a job's reason; found
     // 2026-12-06), and a change of token is logged.
@@ -138,14 +139,26 @@ grpc::Status WorkerServiceImpl::Lease(grpc::ServerContext* context, const v1::Le
     if (!granted) return grpc::Status::OK;
     call.wrote = true;
     call.job_id = granted->job.id();
+    const auto release = [&](const std::string& reason) {  // the job back to the queue, uncounted
+      v1::FailRequest request;
+      request.set_lease_id(granted->lease_id);
+      request.set_retry(true);
+      request.set_release(true);
+      request.set_reason(reason);
+      coordinator_.Fail(request);
+    };
     if (context->IsCancelled()) {
-      v1::FailRequest release;
-      release.set_lease_id(granted->lease_id);
-      release.set_retry(true);
-      release.set_release(true);
-      release.set_reason("the lease call was cancelled before the worker got the job");
-      coordinator_.Fail(release);
+      release("the lease call was cancelled before the worker got the job");
       return grpc::Status(grpc::StatusCode::CANCELLED, "lease call cancelled");
+    }
+    // Admitted again once there is a job to give: tokens created, or the caller's revoked, while the
+    // call waited gave the job to a worker that could not report on it; the job waited a lease's time
+    // and lost an attempt (found 2026-12-07).
+    try {
+      guard_.Admit(*context, rpc, call);
+    } catch (const Error& e) {
+      release(std::string("the worker's lease call was refused before it got the job: ") + e.what());
+      throw;
     }
     *response->mutable_job() = std::move(granted->job);
     response->set_lease_id(granted->lease_id);

@@ -7,7 +7,9 @@
 #include <regex>
 #include <thread>
 
+#include "common/error.h"
 #include "tests/integration/audit_reader.h"
+#include "tests/integration/leased_worker.h"
 #include "tests/integration/sanitizer_build.h"
 #include "tests/integration/service_harness.h"
 
@@ -67,6 +69,38 @@ class AccessControlTest : public ::testing::Test {
   ClientCredentials admin_, alice_, bob_, worker_;
   std::vector<std::string> tokens_;
 };
+
+// A worker whose lease call waits while the server's first tokens are created gets no job: it is
+// admitted again when a job comes, refused, and the job stays queued with no attempt counted. The
+// job was given to it, its reports were refused, and the job waited a lease's time and lost an
+// attempt (found 2026-12-07).
+TEST(LeaseAdmissionTest, AWorkerWaitingWhenTokensAreCreatedGetsNoJob) {
+  Cluster cluster;  // no tokens yet
+  MakeClip(cluster.path("clip"));
+  std::string outcome = "no answer";
+  std::thread waiting([&] {
+    try {
+      const auto leased = LeaseAsWorker(cluster, "tokenless");
+      outcome = leased.lease ? "leased " + leased.lease->job().id() : "no job";
+    } catch (const Error& e) {
+      outcome = e.what();
+    }
+  });
+  std::this_thread::sleep_for(std::chrono::milliseconds(1000 * kSlowdown));  // registered, waiting
+  const auto admin = MakeCredentials(cluster, "", "admin", "", "ops");
+  cluster.UseCredentials(admin);
+  const auto alice = MakeCredentials(cluster, "", "client", "radiology", "alice");
+  auto argv = alice.CliFlags();
+  argv.insert(argv.end(), {"--json", "submit", cluster.path("clip").string()});
+  const auto submitted = RunCli(cluster.address(), argv);
+  waiting.join();
+  ASSERT_EQ(submitted.exit_code, 0) << submitted.err;
+  const std::string id = submitted.out.substr(submitted.out.find("\"id\":\"") + 6, 12);
+  EXPECT_NE(outcome.find("token"), std::string::npos) << outcome << "\n" << cluster.ServerLog();
+  const v1::Job job = cluster.Job(id);
+  EXPECT_EQ(job.state(), v1::QUEUED) << cluster.ServerLog();
+  EXPECT_EQ(job.attempts(), 0) << job.error();
+}
 
 TEST_F(AccessControlTest, CallsWithoutAnAcceptedTokenAreUnauthenticated) {
   const auto none = Cli({}, {"list"});
