@@ -1,5 +1,9 @@
 #include "server/data_folder.h"
 
+#include <pwd.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <fstream>
 #include <string_view>
 
@@ -89,6 +93,18 @@ void RefuseBlobsWithoutTheirStore(const std::filesystem::path& data_dir) {
   }
   // A blobs/ this user cannot list (a restore chowned without -R) passed as empty.
   if (error) FailAccess((data_dir / "blobs").string() + ": this user cannot list it", error.value());
+}
+
+void RefuseRootInAnotherUsersFolder(const std::filesystem::path& data_dir, const std::string& program) {
+  struct stat folder {};
+  if (geteuid() != 0 || ::stat(data_dir.c_str(), &folder) != 0 || folder.st_uid == 0) return;
+  const passwd* owner = getpwuid(folder.st_uid);
+  const std::string name = owner ? owner->pw_name : std::to_string(folder.st_uid);
+  Fail(ErrorCode::kFailedPrecondition,
+       data_dir.string() + " belongs to user " + name + " (uid " + std::to_string(folder.st_uid) + "), and " +
+           program + " runs as root: the files it made there would be root's, which a server run as " + name +
+           " cannot open. Run it as " + name + " (runuser -u " + name + " -- ...), or chown -R root " +
+           "the folder to run the server as root");
 }
 
 }  // namespace endorecon::server

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <filesystem>
+#include <string>
 
 namespace endorecon::server {
 
@@ -20,5 +21,12 @@ void RefuseAStoreBesideIt(const std::filesystem::path& data_dir);
 // store would have no job reference them, and retention would delete every one as no job's. Before
 // the server starts, and before `retention --dry-run` reads (its store open made the missing table).
 void RefuseBlobsWithoutTheirStore(const std::filesystem::path& data_dir);
+
+// Throws Error(kFailedPrecondition) when this process runs as root and `data_dir` exists and belongs
+// to another user: every file root made there (server.lock, orphans.json, a store's -wal, a token
+// store) would be root's, which the folder's user's server cannot open. Root passes every permission
+// check, so the refusals of files the server's user cannot use never came (found 2026-12-07).
+// `program` says what refuses ("endorecon-server", "token create").
+void RefuseRootInAnotherUsersFolder(const std::filesystem::path& data_dir, const std::string& program);
 
 }  // namespace endorecon::server

@@ -148,6 +148,7 @@ int Run(const ServerFlags& flags) {
   Metrics metrics(flags.metrics_port >= 0 ? MetricsAddress(flags.metrics_host, flags.metrics_port) : "");
   const std::filesystem::path data_dir = flags.data_dir;
   RefuseAStoreBesideIt(data_dir);
+  RefuseRootInAnotherUsersFolder(data_dir, "endorecon-server");
   if (MakePrivateFolder(data_dir)) {
     spdlog::warn(
         "{} is open to its group or others, and holds patient data: make it its owner's alone "

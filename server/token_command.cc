@@ -56,6 +56,7 @@ std::unique_ptr<TokenStore> OpenStore(const TokenFlags& flags, bool create) {
              ": name the server's data folder (a new deployment's is created first: install -d -m 700 DIR)");
   }
   RefuseAStoreBesideIt(flags.data_dir);  // a second token store, which a move of the data overwrote
+  RefuseRootInAnotherUsersFolder(flags.data_dir, "endorecon-server token");
   const auto path = TokenStore::PathIn(flags.data_dir);
   if (!create && !std::filesystem::exists(path)) return nullptr;
   if (create && MakePrivateFolder(flags.data_dir)) {

@@ -477,6 +477,23 @@ TEST(ServerStartTest, FilesTheServersUserCannotUseAreRefusedNamingThem) {
       << server->Log();
   server->Signal(SIGTERM);
   EXPECT_EQ(server->Wait(), 0) << server->Log();
+
+  // Root in the server's user's folder: refused, the server and `token create` alike, before they make
+  // a file there. Root passes every permission check: it started, and made its server.lock,
+  // orphans.json and partial/ root's, beside nobody's store (found 2026-12-07).
+  const auto before = std::distance(std::filesystem::directory_iterator(data), {});
+  for (const std::vector<std::string>& command :
+       {std::vector<std::string>{BuiltBinary("server/endorecon-server"), "--listen", "127.0.0.1:0",
+                                 "--data-dir", data.string(), "--metrics-port", "-1"},
+        std::vector<std::string>{BuiltBinary("server/endorecon-server"), "token", "create", "--data-dir",
+                                 data.string(), "--role", "admin", "--name", "root-made"}}) {
+    Process as_root(command, dir / "root.log");
+    EXPECT_NE(as_root.Wait(), 0) << command[1];
+    const auto log = as_root.Log();
+    EXPECT_NE(log.find(data.string() + " belongs to user nobody (uid 65534)"), std::string::npos) << log;
+    EXPECT_NE(log.find("runuser -u nobody"), std::string::npos) << log;
+  }
+  EXPECT_EQ(std::distance(std::filesystem::directory_iterator(data), {}), before) << "made nothing";
 }
 
 // The dry run changes nothing: a restored folder without blobs/ or partial/ gained them (found
