@@ -374,6 +374,7 @@ bool RunLeasedJob(WorkerClient& client, const v1::LeaseResponse& lease, const De
     // down (found 2026-12-07).
     const auto checkpoint_patience =
         std::max<std::chrono::milliseconds>(std::chrono::seconds(5), 2 * settings.heartbeat);
+    WarningPacer checkpoint_warnings;
     hooks.on_checkpoint = [&](const std::string& path) {
       try {
         reporter.SetCheckpoint(WhileLeaseHeld(
@@ -381,8 +382,12 @@ bool RunLeasedJob(WorkerClient& client, const v1::LeaseResponse& lease, const De
             checkpoint_patience));
       } catch (const Error& e) {
         if (e.code() != ErrorCode::kUnavailable && !ServerDiskFull(e)) throw;
-        spdlog::warn("[{}] job {}: checkpoint not uploaded ({}); the job goes on", device.name, job.id(),
-                     e.what());
+        // Training's end writes one more at once: the same line twice, 0.1 s apart (found 2026-12-07).
+        if (int held = 0; checkpoint_warnings.Due(held)) {
+          spdlog::warn("[{}] job {}: checkpoint not uploaded ({}); the job goes on{}", device.name, job.id(),
+                       e.what(),
+                       held > 0 ? fmt::format(" ({} more not uploaded since the last warning)", held) : "");
+        }
       }
     };
     hooks.should_stop = [&] { return shutting_down.load() || reporter.stop_requested().has_value(); };
