@@ -16,6 +16,7 @@
 #include <set>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "client/commands.h"
 #include "client/exit_codes.h"
@@ -74,6 +75,7 @@ void CheckFetchFolder(const std::filesystem::path& out, const v1::Manifest& resu
     names.insert(file.path());
     names.insert(file.path() + ".part");
   }
+  std::vector<std::string> others;  // ", ..." followed the one named even when it was alone (2026-12-07)
   for (fs::recursive_directory_iterator it(out, error), end; !error && it != end; it.increment(error)) {
     const std::string name = it->path().lexically_relative(out).generic_string();
     if (it.depth() == 0 && it->path().filename().string().starts_with(".")) {
@@ -81,8 +83,13 @@ void CheckFetchFolder(const std::filesystem::path& out, const v1::Manifest& resu
       continue;
     }
     if (it->is_directory(error) || names.contains(name)) continue;
-    FailInvalid("-o " + out.string() + " holds other files (" + name +
-                ", ...) than this job's results: they would be mixed in; give an empty or new folder");
+    others.push_back(name);
+    if (others.size() > 1) break;  // one named, and whether there are more
+  }
+  if (!others.empty()) {
+    FailInvalid("-o " + out.string() + " holds other files (" + others.front() +
+                (others.size() > 1 ? ", ..." : "") +
+                ") than this job's results: they would be mixed in; give an empty or new folder");
   }
 }
 

@@ -19,8 +19,11 @@ extern "C" void OnInterrupt(int signal) {
 }  // namespace
 
 InterruptNote::InterruptNote(const std::string& message) {
-  const int n =
-      std::snprintf(interrupt_message, sizeof(interrupt_message), "\nendorecon: %s\n", message.c_str());
+  // The leading newline ends a progress line on a terminal (^C leaves the cursor after it); in a log it
+  // was a blank line (found 2026-12-07).
+  const char* start = ::isatty(STDERR_FILENO) ? "\n" : "";
+  const int n = std::snprintf(interrupt_message, sizeof(interrupt_message), "%sendorecon: %s\n", start,
+                              message.c_str());
   interrupt_length = n > 0 ? std::min(static_cast<std::size_t>(n), sizeof(interrupt_message) - 1) : 0;
   struct sigaction action {};
   action.sa_handler = OnInterrupt;

@@ -1,5 +1,6 @@
 #include "client/job_watcher.h"
 
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -62,7 +63,11 @@ class EventPrinter {
     last_state_ = job.state();
     std::cout << "job " << job.id() << " " << v1::JobState_Name(job.state());
     if (job.state() == v1::RUNNING) std::cout << " on " << job.worker_id();
-    if (!job.error().empty()) std::cout << ": " << job.error();
+    // An unfinished job's reason is why it was last requeued, as `status` labels it: "RUNNING on w2:
+    // worker w1: shutting down" read as w2's (found 2026-12-07).
+    if (!job.error().empty())
+      std::cout << (Terminal(job.state()) ? ": " : " (requeued: ") << job.error()
+                << (Terminal(job.state()) ? "" : ")");
     if (const auto outcome = OutcomeLine(job); !outcome.empty()) std::cout << ": " << outcome;
     std::cout << std::endl;
   }
@@ -118,6 +123,9 @@ v1::Job WatchJob(const Globals& globals, const std::string& id, const WatchOptio
   v1::WatchJobRequest request;
   request.set_id(id);
   request.set_previews(!options.previews_dir.empty());
+  // Previews are renders of the patient's frames: what the watch creates is the user's alone, as
+  // fetch's results are. They followed the umask, 0644 (found 2026-12-07).
+  if (!options.previews_dir.empty()) ::umask(077);
   auto unreachable_since = std::chrono::steady_clock::now();
   v1::Job job;
   // The previews saved, by kind and iteration: a stream opened again (each --timeout, or after a
@@ -149,9 +157,21 @@ v1::Job WatchJob(const Globals& globals, const std::string& id, const WatchOptio
     if (status.ok() && Terminal(job.state())) break;
     const bool retry = status.ok() || status.error_code() == grpc::StatusCode::DEADLINE_EXCEEDED ||
                        status.error_code() == grpc::StatusCode::UNAVAILABLE;
-    if (!retry || std::chrono::steady_clock::now() - unreachable_since > globals.timeout()) {
+    if (!retry) {
       printer.EndLine();
       ThrowIfFailed(status, "watch " + id);
+    }
+    if (std::chrono::steady_clock::now() - unreachable_since > globals.timeout()) {
+      printer.EndLine();
+      // The server away longer than --timeout: the job is not lost, and the user is told how to
+      // follow it again (a Ctrl-C said so, a server away did not; found 2026-12-07).
+      try {
+        ThrowIfFailed(status, "watch " + id);
+      } catch (const Error& e) {
+        Fail(e.code(), std::string(e.what()) + "\nendorecon: stopped watching; job " + id +
+                           " goes on on the server once it is back: `endorecon watch " + id +
+                           "` follows it again");
+      }
     }
     PauseBeforeRetry(*channel, std::chrono::milliseconds(500));  // a restarted server: as soon as it is back
   }

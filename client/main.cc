@@ -1,5 +1,6 @@
 // endorecon: the thin client of endorecon-server (no engine linked). Uploads clips, submits,
 // watches, lists, cancels and fetches reconstruction jobs.
+#include <fmt/format.h>
 #include <grpc/support/log.h>
 #include <spdlog/sinks/stdout_sinks.h>
 #include <spdlog/spdlog.h>
@@ -54,6 +55,13 @@ std::string HintFor(const endorecon::Error& error, const Globals& globals) {
       std::string_view(error.what()).find("Failed parsing HTTP/2") != std::string_view::npos)
     return "\nendorecon: " + globals.server +
            " answers, but not as endorecon-server's job API: is it the metrics or health port?";
+  // Connected, and no answer within the deadline: a server too busy, stopped (SIGSTOP), or another
+  // service that takes connections and says nothing. It said only "Deadline Exceeded" (found 2026-12-07).
+  if (error.code() == endorecon::ErrorCode::kUnavailable &&
+      std::string_view(error.what()).find("Deadline Exceeded") != std::string_view::npos)
+    return "\nendorecon: " + globals.server + " took the connection but did not answer within --timeout (" +
+           fmt::format("{:g}", globals.timeout_s) +
+           " s): is the server overloaded or stopped, or is the address another service's?";
   if (error.code() == endorecon::ErrorCode::kUnavailable) {
     endorecon::ChannelSecurity security;
     security.ca_file = globals.ca_file;

@@ -301,6 +301,23 @@ int Submit(const Globals& globals, const SubmitFlags& flags) {
                 "(EndoNeRF layout), and no DICOM recording (docs/formats.md) (found before the upload: "
                 "nothing was sent)");
   }
+  // A file named *.dcm that is no DICOM file is refused by the server's first look: here, before its
+  // upload (a 200 MB folder went up to be refused; found 2026-12-07).
+  if (recording) {
+    std::vector<std::filesystem::path> files{flags.clip};
+    if (std::filesystem::is_directory(flags.clip)) {
+      files.clear();
+      for (const auto& entry : std::filesystem::directory_iterator(flags.clip)) files.push_back(entry.path());
+    }
+    for (const auto& file : files) {
+      if (std::filesystem::is_regular_file(file) && dicom::HasDicomExtension(file) &&
+          !dicom::IsDicomFile(file)) {
+        FailInvalid(
+            file.string() +
+            ": not a DICOM file (no \"DICM\" at byte 128) (found before the upload: nothing was sent)");
+      }
+    }
+  }
   if (flags.raw.empty() && !flags.raw.size.empty()) ParseFrameSize(flags.raw.size);  // before any upload
   if (flags.raw.empty() && !flags.raw.frames.empty()) ParseFrameRange(flags.raw.frames);
   // prepare's options shape a raw recording only: with a clip, a DICOM recording or a PACS study they
@@ -408,11 +425,14 @@ int Submit(const Globals& globals, const SubmitFlags& flags) {
     // Refused after the upload (a submit beside it took the tenant's last job slot, or the server's
     // checks changed in between): what was sent stays, and counts toward the tenant's bytes; said,
     // as a Ctrl-C mid-upload says it (found by a multi-tenant walk-through, 2026-12-06).
-    Fail(e.code(), std::string(e.what()) +
-                       "\nendorecon: what was uploaded is kept on the server (and counts against your "
-                       "tenant's bytes) until the server's --orphan-hours: run the same `endorecon submit` "
-                       "again to submit it without sending it again, or `endorecon uploads --drop` to give "
-                       "it up");
+    // A refusal of the files themselves is not undone by the same submit (found 2026-12-07): said as
+    // "correct what it names".
+    Fail(e.code(),
+         std::string(e.what()) +
+             "\nendorecon: what was uploaded is kept on the server (and counts against your "
+             "tenant's bytes) until the server's --orphan-hours: correct what the message names and "
+             "run `endorecon submit` again (files already there are not sent again), or `endorecon "
+             "uploads --drop` to give it up");
   }
   if (globals.json) {
     std::cout << ToJson(job) << std::endl;
@@ -421,15 +441,7 @@ int Submit(const Globals& globals, const SubmitFlags& flags) {
   }
   if (!flags.wait) return kExitOk;
   // The job is the server's now: a watch that gives up (a long outage) says how to pick it up again.
-  const auto done = [&] {
-    try {
-      return WatchJob(globals, job.id(), {flags.previews});
-    } catch (const Error& e) {
-      if (e.code() != ErrorCode::kUnavailable) throw;
-      Fail(e.code(), std::string(e.what()) + "\nendorecon: job " + job.id() +
-                         " was queued and may still run on the server: `endorecon watch " + job.id() + "`");
-    }
-  }();
+  const auto done = WatchJob(globals, job.id(), {flags.previews});
   // A send the job was submitted with that failed fails the command, as `send --wait` does: the
   // results did not reach the PACS.
   for (const auto& send : done.sends()) {

@@ -284,16 +284,29 @@ void JobCoordinator::RemoveFile(const BlobStore::StoredFile& file) {
   parts_.blobs.Remove(file);
 }
 
+namespace {
+
+// "no job 'ID'", with what an id looks like when `id` does not: a short or upper-case id ("f15961")
+// read as a job that went away (found 2026-12-07).
+[[noreturn]] void FailNoJob(const std::string& id) {
+  const bool like_an_id = id.size() == 12 && id.find_first_not_of("0123456789abcdef") == std::string::npos;
+  endorecon::Fail(
+      ErrorCode::kNotFound,
+      "no job '" + id + "'" +
+          (like_an_id ? "" : " (a job id is 12 lower-case hexadecimal digits, as `endorecon list` shows)"));
+}
+
+}  // namespace
+
 StoredJob JobCoordinator::Load(const std::string& id) {
   auto stored = parts_.store.Get(id);
-  if (!stored) endorecon::Fail(ErrorCode::kNotFound, "no job '" + id + "'");
+  if (!stored) FailNoJob(id);
   return *stored;
 }
 
 StoredJob JobCoordinator::LoadVisible(const std::string& id, const Principal& caller) {
   auto stored = parts_.store.Get(id);
-  if (!stored || (!caller.SeesAllTenants() && stored->job.tenant() != caller.tenant))
-    endorecon::Fail(ErrorCode::kNotFound, "no job '" + id + "'");
+  if (!stored || (!caller.SeesAllTenants() && stored->job.tenant() != caller.tenant)) FailNoJob(id);
   return *stored;
 }
 

@@ -253,11 +253,13 @@ TEST(SubmitToCompletionTest, UnreachableServerExitsWithFour) {
 // and by a worker: gRPC took 127.0.0.1:99999 as port 34463 and "localhost" as port 443, and the
 // worker retried there for good (found 2026-12-05).
 TEST(SubmitToCompletionTest, AServerAddressWithoutAPortOrPastTheLastIsRefused) {
-  for (const std::string address : {"127.0.0.1:99999", "localhost"}) {
+  for (const std::string address : {"127.0.0.1:99999", "localhost", "127.0.0.1:049531"}) {
     const auto result = RunCli(address, {"list"});
     EXPECT_EQ(result.exit_code, 2) << result.err;
     EXPECT_NE(result.err.find(address), std::string::npos) << result.err;
   }
+  // 049531 is in the range: the digits' count is what is wrong, and is said.
+  EXPECT_NE(RunCli("127.0.0.1:049531", {"list"}).err.find("in at most five digits"), std::string::npos);
   TempDir dir("address");
   Process worker({BuiltBinary("worker/runtime/endorecon-worker"), "serve", "--server", "127.0.0.1:99999",
                   "--metrics-port", "-1"},
