@@ -301,23 +301,6 @@ int Submit(const Globals& globals, const SubmitFlags& flags) {
                 "(EndoNeRF layout), and no DICOM recording (docs/formats.md) (found before the upload: "
                 "nothing was sent)");
   }
-  // A file named *.dcm that is no DICOM file is refused by the server's first look: here, before its
-  // upload (a 200 MB folder went up to be refused; found 2026-12-07).
-  if (recording) {
-    std::vector<std::filesystem::path> files{flags.clip};
-    if (std::filesystem::is_directory(flags.clip)) {
-      files.clear();
-      for (const auto& entry : std::filesystem::directory_iterator(flags.clip)) files.push_back(entry.path());
-    }
-    for (const auto& file : files) {
-      if (std::filesystem::is_regular_file(file) && dicom::HasDicomExtension(file) &&
-          !dicom::IsDicomFile(file)) {
-        FailInvalid(
-            file.string() +
-            ": not a DICOM file (no \"DICM\" at byte 128) (found before the upload: nothing was sent)");
-      }
-    }
-  }
   if (flags.raw.empty() && !flags.raw.size.empty()) ParseFrameSize(flags.raw.size);  // before any upload
   if (flags.raw.empty() && !flags.raw.frames.empty()) ParseFrameRange(flags.raw.frames);
   // prepare's options shape a raw recording only: with a clip, a DICOM recording or a PACS study they
@@ -344,6 +327,23 @@ int Submit(const Globals& globals, const SubmitFlags& flags) {
                       !flags.recording.stereo().empty() || !flags.recording.endoscope().empty())) {
     FailInvalid("--size, --fps, --stereo and --endoscope apply to a DICOM recording, and " + flags.clip +
                 " is a clip folder, whose frames are used as they are (--frames picks some)");
+  }
+  // A file named *.dcm that is no DICOM file is refused by the server's first look: here, before its
+  // upload (a 200 MB folder went up to be refused; found 2026-12-07).
+  if (recording) {
+    std::vector<std::filesystem::path> files{flags.clip};
+    if (std::filesystem::is_directory(flags.clip)) {
+      files.clear();
+      for (const auto& entry : std::filesystem::directory_iterator(flags.clip)) files.push_back(entry.path());
+    }
+    for (const auto& file : files) {
+      if (std::filesystem::is_regular_file(file) && dicom::HasDicomExtension(file) &&
+          !dicom::IsDicomFile(file)) {
+        FailInvalid(
+            file.string() +
+            ": not a DICOM file (no \"DICM\" at byte 128) (found before the upload: nothing was sent)");
+      }
+    }
   }
   // A raw recording is staged under canonical names (recording_upload.h); its folder is uploaded.
   std::optional<StagedRecording> staged;

@@ -23,6 +23,8 @@ TEST(BadDicomInputTest, RefusedAtSubmitOrAtPreparation) {
   EXPECT_NE(bad.err.find("recording.dcm: not a DICOM file (no \"DICM\" at byte 128)"), std::string::npos)
       << bad.err;
   EXPECT_EQ(bad.err.find("endorecon-recording-"), std::string::npos) << bad.err;
+  // Before its upload, by the CLI (a 200 MB folder went up to be refused; found 2026-12-07).
+  EXPECT_NE(bad.err.find("found before the upload: nothing was sent"), std::string::npos) << bad.err;
 
   // A recording's --frames past its end and a --size of another shape: refused from its header at
   // submit (they were the worker's to find, after the queue).

@@ -31,6 +31,21 @@ TEST(SubmitToCompletionTest, ClipInResultsOut) {
                      !std::filesystem::is_empty(cluster.path("previews"));
   EXPECT_NE(saved, submitted.err.find("no preview arrived while watching") != std::string::npos)
       << submitted.err;
+  // Renders of the patient's frames are the user's alone, as fetched results are (they followed the
+  // umask; found 2026-12-07).
+  if (saved) {
+    EXPECT_EQ(std::filesystem::status(cluster.path("previews")).permissions() & std::filesystem::perms::all,
+              std::filesystem::perms::owner_all);
+    for (const auto& file : std::filesystem::directory_iterator(cluster.path("previews")))
+      EXPECT_EQ(file.status().permissions() & std::filesystem::perms::all,
+                std::filesystem::perms::owner_read | std::filesystem::perms::owner_write)
+          << file.path();
+  }
+  // An id of another shape is answered with what an id looks like.
+  const auto short_id = RunCli(cluster.address(), {"status", "F15961"});
+  EXPECT_EQ(short_id.exit_code, 3) << short_id.err;
+  EXPECT_NE(short_id.err.find("a job id is 12 lower-case hexadecimal digits"), std::string::npos)
+      << short_id.err;
 
   const auto listed = RunCli(cluster.address(), {"--json", "list"});
   ASSERT_EQ(listed.exit_code, 0);
@@ -104,7 +119,8 @@ TEST(SubmitToCompletionTest, ClipInResultsOut) {
   WriteBytes(cluster.path("documents") / "letter.txt", "dear");
   const auto mixed = RunCli(cluster.address(), {"fetch", id, "-o", cluster.path("documents").string()});
   EXPECT_EQ(mixed.exit_code, 2) << mixed.err;
-  EXPECT_NE(mixed.err.find("holds other files (letter.txt, ...) than this job's results"), std::string::npos)
+  // The one other file named alone: ", ..." followed it however many there were (found 2026-12-07).
+  EXPECT_NE(mixed.err.find("holds other files (letter.txt) than this job's results"), std::string::npos)
       << mixed.err;
   EXPECT_EQ(std::distance(std::filesystem::directory_iterator(cluster.path("documents")),
                           std::filesystem::directory_iterator()),
@@ -124,7 +140,10 @@ TEST(SubmitToCompletionTest, ClipInResultsOut) {
   WriteBytes(cluster.path("other") / "rgb" / "000999.png", "a longer clip's frame");
   const auto longer = RunCli(cluster.address(), {"fetch", id, "-o", cluster.path("other").string()});
   EXPECT_EQ(longer.exit_code, 2) << longer.err;
-  EXPECT_NE(longer.err.find("holds other files (rgb/000999.png, ...)"), std::string::npos) << longer.err;
+  EXPECT_NE(longer.err.find("holds other files (rgb/000999.png)"), std::string::npos) << longer.err;
+  WriteBytes(cluster.path("other") / "rgb" / "001000.png", "and another");
+  EXPECT_NE(RunCli(cluster.address(), {"fetch", id, "-o", cluster.path("other").string()}).err.find(", ...)"),
+            std::string::npos);
   // A second fetch into a folder one is writing into is refused (four at once failed as checksum
   // mismatches).
   {
