@@ -78,7 +78,7 @@ TEST_F(ReportTest, AReconstructionsPageHoldsEveryFrameItsMetricsAndItsRun) {
   // The score's scale is shown divided by lambda (1e12 by default): as the colour's variance.
   EXPECT_DOUBLE_EQ(data["scales"]["uncertainty"]["factor"].get<double>(),
                    1.0 / data["metrics"]["uncertainty_maps"]["lambda"].get<double>());
-  EXPECT_EQ(data["scales"]["uncertainty"]["unit"], "colour variance (score / lambda)");
+  EXPECT_EQ(data["scales"]["uncertainty"]["unit"], "colour variance");
   EXPECT_EQ(data["scales"]["error"]["range"], data["metrics"]["uncertainty_maps"]["heatmap_scale"]["error"]);
   EXPECT_EQ(data["scales"]["model"]["range"], data["metrics"]["uncertainty_maps"]["heatmap_scale"]["model"]);
   const auto depth_range = data["scales"]["depth"]["range"];

@@ -220,7 +220,7 @@ void AddFrames(const fs::path& results_dir, const Views& views, const json& reco
   if (uncertainty_scale && record.contains(lambda_at) && record.at(lambda_at).is_number() &&
       record.at(lambda_at).get<double>() >= 1) {
     (*uncertainty_scale)["factor"] = 1.0 / record.at(lambda_at).get<double>();
-    (*uncertainty_scale)["unit"] = "colour variance (score / lambda)";
+    (*uncertainty_scale)["unit"] = "colour variance";  // the page's note says it is score / lambda
   }
   const auto error_scale = HeatScale(record, heat + "/error", "RMSE, RGB in [0, 1]");
   const auto model_scale = HeatScale(record, heat + "/model", "unitless");

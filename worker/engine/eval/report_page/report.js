@@ -223,7 +223,11 @@
         class: 'note',
         text:
             'Each heat map\'s colours run from 0 to the 99th percentile of this run\'s values on tissue, the same ' +
-            'for every frame of the run: compare colours within a run, not between runs.'
+            'for every frame of the run: compare colours within a run, not between runs.' +
+            (data.scales.uncertainty && data.scales.uncertainty.factor ?
+                 ' The total uncertainty\'s bar is its score divided by lambda (uncertainty_lambda): the ' +
+                     'colour\'s variance, RGB in [0, 1], squared.' :
+                 '')
       }));
     }
     $("tool-shading").addEventListener("change", () => showFrame(current));
