@@ -65,9 +65,12 @@ class EventPrinter {
     if (job.state() == v1::RUNNING) std::cout << " on " << job.worker_id();
     // An unfinished job's reason is why it was last requeued, as `status` labels it: "RUNNING on w2:
     // worker w1: shutting down" read as w2's (found 2026-12-07).
-    if (!job.error().empty())
-      std::cout << (Terminal(job.state()) ? ": " : " (requeued: ") << job.error()
-                << (Terminal(job.state()) ? "" : ")");
+    if (!job.error().empty()) {
+      if (Terminal(job.state()))
+        std::cout << ": " << job.error();
+      else
+        std::cout << " (requeued: " << job.error() << ")";
+    }
     if (const auto outcome = OutcomeLine(job); !outcome.empty()) std::cout << ": " << outcome;
     std::cout << std::endl;
   }

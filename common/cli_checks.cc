@@ -112,16 +112,10 @@ std::string AddressProblem(const std::string& text, AddressUse use) {
   if (port.empty() || port.size() > 5 || port.find_first_not_of("0123456789") != std::string::npos ||
       std::stoi(port) > 65535 || std::stoi(port) < least) {
     // 049531 is 49531, in the range: the digits' count is what is wrong (found 2026-12-07).
-    const std::string digits = port.size() > 5 ? ", in at most five digits" : "";
-    switch (use) {
-      case AddressUse::kListen:
-        return text + ": the port must be a number from 0 (any free port) to 65535" + digits;
-      case AddressUse::kCall:
-        return text + ": the port must be a number from 1 to 65535" + digits;
-      case AddressUse::kStorageScp:
-        return text + ": the port must be a number from 1 to 65535" + digits +
-               ", the port the PACS is told to send to";
-    }
+    return text + ": the port must be a number from " +
+           (use == AddressUse::kListen ? "0 (any free port)" : "1") + " to 65535" +
+           (port.size() > 5 ? ", in at most five digits" : "") +
+           (use == AddressUse::kStorageScp ? ", the port the PACS is told to send to" : "");
   }
   return "";
 }

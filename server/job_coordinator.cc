@@ -116,6 +116,16 @@ void SettleSends(v1::Job& job) {
   }
 }
 
+// "no job 'ID'", with what an id looks like when `id` does not: a short or upper-case id ("f15961")
+// read as a job that went away (found 2026-12-07).
+[[noreturn]] void FailNoJob(const std::string& id) {
+  const bool like_an_id = id.size() == 12 && id.find_first_not_of("0123456789abcdef") == std::string::npos;
+  endorecon::Fail(
+      ErrorCode::kNotFound,
+      "no job '" + id + "'" +
+          (like_an_id ? "" : " (a job id is 12 lower-case hexadecimal digits, as `endorecon list` shows)"));
+}
+
 }  // namespace
 
 JobCoordinator::JobCoordinator(CoordinatorParts parts, int max_attempts, TenantQuotas quotas,
@@ -283,20 +293,6 @@ void JobCoordinator::RemoveFile(const BlobStore::StoredFile& file) {
   if (!file.partial) return RemoveBlob(file.sha256);
   parts_.blobs.Remove(file);
 }
-
-namespace {
-
-// "no job 'ID'", with what an id looks like when `id` does not: a short or upper-case id ("f15961")
-// read as a job that went away (found 2026-12-07).
-[[noreturn]] void FailNoJob(const std::string& id) {
-  const bool like_an_id = id.size() == 12 && id.find_first_not_of("0123456789abcdef") == std::string::npos;
-  endorecon::Fail(
-      ErrorCode::kNotFound,
-      "no job '" + id + "'" +
-          (like_an_id ? "" : " (a job id is 12 lower-case hexadecimal digits, as `endorecon list` shows)"));
-}
-
-}  // namespace
 
 StoredJob JobCoordinator::Load(const std::string& id) {
   auto stored = parts_.store.Get(id);
