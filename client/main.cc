@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <iostream>
 #include <map>
 #include <string>
@@ -21,6 +22,7 @@
 #include "common/cli_checks.h"
 #include "common/cli_usage.h"
 #include "common/error.h"
+#include "common/filesystem_failure.h"
 #include "common/job_bounds.h"
 #include "common/transport_security.h"
 #include "endorecon_version.h"
@@ -185,6 +187,12 @@ int main(int argc, char** argv) {
     std::cerr << "endorecon: " << endorecon::ErrorCodeName(e.code()) << ": "
               << endorecon::PrintableLines(endorecon::WithoutTokens(e.what())) << HintFor(e, globals) << "\n";
     return ExitCodeFor(e.code());
+  } catch (const std::filesystem::filesystem_error& e) {
+    // A local file or folder the system refused (a clip this user may not read): the path and why, as
+    // input to correct. It said "filesystem error: status: Permission denied [PATH]", exit 1 (found
+    // 2026-12-07).
+    std::cerr << "endorecon: " << endorecon::PrintableLines(endorecon::DescribeFilesystemError(e)) << "\n";
+    return endorecon::IsUsersFileProblem(e.code().value()) ? kExitInvalid : kExitInternal;
   } catch (const std::exception& e) {
     std::cerr << "endorecon: " << endorecon::PrintableLines(endorecon::WithoutTokens(e.what())) << "\n";
     return kExitInternal;

@@ -17,8 +17,9 @@ enum class ResultsKind { kReconstruction, kRender };
 // depth/ by the rendered depth, a results folder's frames by other views). `what` names the input
 // ("the clip", "the results folder"). Also refused: an `out` that is a file, a folder holding any
 // clip (common/clip_files.h), a folder holding the other kind's results, or a non-empty folder that
-// holds no earlier results of `kind` (dot files and the input aside). Nothing else is checked when
-// either does not exist yet.
+// holds no earlier results of `kind` (dot files and the input aside), and one this user cannot write
+// or make (the nearest folder that exists decides). Nothing else is checked when either does not exist
+// yet.
 void CheckOutputFolder(const std::filesystem::path& out, const std::filesystem::path& input,
                        std::string_view what, ResultsKind kind);
 

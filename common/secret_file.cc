@@ -3,6 +3,8 @@
 #include <fmt/format.h>
 #include <sys/stat.h>
 
+#include <cerrno>
+#include <cstring>
 #include <fstream>
 #include <sstream>
 
@@ -31,8 +33,13 @@ std::string ReadWhole(const std::filesystem::path& path, const std::string& flag
 
 std::string ReadSecretFile(const std::filesystem::path& path, const std::string& flag) {
   struct stat info {};
-  if (::stat(path.c_str(), &info) != 0)
+  if (::stat(path.c_str(), &info) != 0) {
+    // A file in a folder this user may not enter was "no such file" (found 2026-12-07).
+    const int error = errno;
+    if (error != ENOENT && error != ENOTDIR)
+      FailInvalid(flag + " " + path.string() + ": cannot be read: " + std::strerror(error));
     Fail(ErrorCode::kNotFound, flag + " " + path.string() + ": no such file");
+  }
   // Its kind before its mode: a FIFO's 0644 was reported as a secret others may read.
   if (!S_ISREG(info.st_mode)) ReadWhole(path, flag);
   if ((info.st_mode & S_IRWXO) != 0) {

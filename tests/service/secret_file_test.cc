@@ -28,7 +28,23 @@ TEST(SecretFileTest, RefusesFilesOthersMayAccessAndAcceptsGroupRead) {
     EXPECT_NE(message.find("0644"), std::string::npos) << message;
     EXPECT_NE(message.find("chmod 600 "), std::string::npos) << message;
   }
-  EXPECT_THROW(ReadSecretFile(dir / "missing.key", "--tls-key"), Error);
+  EXPECT_NE(
+      testing::ErrorFrom([&] { ReadSecretFile(dir / "missing.key", "--tls-key"); }, ErrorCode::kNotFound)
+          .find("missing.key: no such file"),
+      std::string::npos);
+}
+
+// A file that is there but cannot be reached (a folder this user may not enter; root enters every
+// folder, so a symbolic link loop stands in) is not "no such file" (found 2026-12-07).
+TEST(SecretFileTest, AFileThatCannotBeReachedSaysWhy) {
+  testing::TempDir dir("secret");
+  fs::create_symlink(dir / "b", dir / "a");
+  fs::create_symlink(dir / "a", dir / "b");
+  const std::string message =
+      testing::ErrorFrom([&] { ReadSecretFile(dir / "a", "--token-file"); }, ErrorCode::kInvalidArgument);
+  EXPECT_NE(message.find("--token-file " + (dir / "a").string() + ": cannot be read: Too many levels of"),
+            std::string::npos)
+      << message;
 }
 
 // A token with a trailing newline in $ENDORECON_TOKEN, or a BOM or control byte in its file, aborted the

@@ -4,12 +4,14 @@
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
+#include <filesystem>
 #include <map>
 #include <string>
 
 #include "common/cli_checks.h"
 #include "common/cli_usage.h"
 #include "common/error.h"
+#include "common/filesystem_failure.h"
 #include "common/job_bounds.h"
 #include "endorecon_version.h"
 #include "worker/runtime/commands.h"
@@ -61,6 +63,11 @@ int main(int argc, char** argv) {
       default:
         return 1;
     }
+  } catch (const std::filesystem::filesystem_error& e) {
+    // A local file or folder the system refused: the path and why (it said "filesystem error:
+    // status: Permission denied [PATH]"; found 2026-12-07); one the user named is input, exit 2.
+    spdlog::error("{}", endorecon::PrintableLines(endorecon::DescribeFilesystemError(e)));
+    return endorecon::IsUsersFileProblem(e.code().value()) ? 2 : 1;
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());
     return 1;

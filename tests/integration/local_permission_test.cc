@@ -1,0 +1,83 @@
+// A local file or folder the user running a command may not use is named, with the reason and the
+// user, as input to correct (exit 2): before, the CLI said "filesystem error: status: Permission
+// denied [PATH]" with exit 1, and a reconstruction into a folder it could not write loaded the whole
+// clip first and failed as "UNAVAILABLE: cannot write run configuration" (found 2026-12-07). Root
+// passes every permission check, so the commands run as user nobody.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+
+#include "tests/integration/service_harness.h"
+#include "tests/unit/temp_dir.h"
+
+namespace endorecon::testing {
+namespace {
+namespace fs = std::filesystem;
+
+constexpr const char* kRunuser = "/usr/sbin/runuser";  // util-linux, in every Debian
+
+CliResult RunAsNobody(const std::vector<std::string>& args) {
+  TempDir scratch("nobody");
+  std::vector<std::string> argv{kRunuser, "-u", "nobody", "--"};
+  argv.insert(argv.end(), args.begin(), args.end());
+  CliResult result;
+  result.exit_code = Process(argv, scratch / "out", scratch / "err").Wait();
+  result.out = ReadBytes(scratch / "out");
+  result.err = ReadBytes(scratch / "err");
+  return result;
+}
+
+class LocalPermissionTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (::geteuid() != 0 || !fs::exists(kRunuser))
+      GTEST_SKIP() << "needs root and runuser, to run the commands as user nobody";
+    MakeClip(dir_ / "private");
+    fs::permissions(dir_ / "private", fs::perms::owner_all);
+    fs::create_directories(dir_ / "readonly");
+    fs::permissions(dir_ / "readonly", fs::perms::owner_all | fs::perms::group_read | fs::perms::group_exec |
+                                           fs::perms::others_read | fs::perms::others_exec);
+    MakeClip(dir_ / "clip");
+    fs::create_directories(dir_ / "open");
+    fs::permissions(dir_ / "open", fs::perms::all);
+  }
+  TempDir dir_{"permission"};
+};
+
+TEST_F(LocalPermissionTest, TheCliNamesAClipItMayNotReadAndItsUser) {
+  const auto result = RunAsNobody({BuiltBinary("client/endorecon"), "submit", (dir_ / "private").string()});
+  EXPECT_EQ(result.exit_code, 2) << result.err;
+  EXPECT_NE(result.err.find("endorecon: " + (dir_ / "private").string()), std::string::npos) << result.err;
+  EXPECT_NE(result.err.find(": Permission denied (this command runs as user nobody)"), std::string::npos)
+      << result.err;
+  EXPECT_EQ(result.err.find("filesystem error"), std::string::npos) << result.err;
+}
+
+TEST_F(LocalPermissionTest, AReconstructionIntoAFolderItMayNotWriteIsRefusedBeforeItStarts) {
+  const auto out = dir_ / "readonly" / "results";
+  const auto result = RunAsNobody({BuiltBinary("worker/runtime/endorecon-worker"), "reconstruct",
+                                   (dir_ / "clip").string(), "--out", out.string(), "--iterations", "2"});
+  EXPECT_EQ(result.exit_code, 2) << result.err;
+  EXPECT_NE(result.err.find("the output folder " + out.string() +
+                            " cannot be made: " + (dir_ / "readonly").string() +
+                            ": Permission denied (this command runs as user nobody)"),
+            std::string::npos)
+      << result.err;
+  // Refused before the clip was loaded (its depth priors are logged as it loads).
+  EXPECT_EQ(result.err.find("depth priors"), std::string::npos) << result.err;
+  EXPECT_FALSE(fs::exists(out));
+}
+
+TEST_F(LocalPermissionTest, TheWorkerNamesAClipItMayNotRead) {
+  const auto result =
+      RunAsNobody({BuiltBinary("worker/runtime/endorecon-worker"), "reconstruct", (dir_ / "private").string(),
+                   "--out", (dir_ / "open" / "results").string()});
+  EXPECT_EQ(result.exit_code, 2) << result.err;
+  EXPECT_NE(result.err.find((dir_ / "private").string()), std::string::npos) << result.err;
+  EXPECT_NE(result.err.find("Permission denied (this command runs as user nobody)"), std::string::npos)
+      << result.err;
+}
+
+}  // namespace
+}  // namespace endorecon::testing
