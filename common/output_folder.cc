@@ -64,37 +64,36 @@ bool IsOrInside(const fs::path& inner, const fs::path& outer) {
   return end_b == b.end();
 }
 
-// Refuses an output folder this user cannot write (or make), before a run spends its time: a
-// reconstruction into a read-only folder loaded the clip and then failed as "UNAVAILABLE: cannot
-// write run configuration" (found 2026-12-07). The nearest folder that exists decides.
-void RequireWritable(const fs::path& out) {
+}  // namespace
+
+// Checked before a run spends its time: a reconstruction into a read-only folder loaded the clip and
+// then failed as "UNAVAILABLE: cannot write run configuration" (found 2026-12-07).
+void RequireWritableFolder(const fs::path& folder, std::string_view what) {
   std::error_code error;
-  fs::path at = fs::absolute(out, error);
+  fs::path at = fs::absolute(folder, error);
   if (error) return;
   struct stat info {};
-  bool itself = true;  // `out` exists (else an ancestor, where it would be made)
+  bool itself = true;  // `folder` exists (else an ancestor, where it would be made)
   while (::stat(at.c_str(), &info) != 0) {
     const int reason = errno;
     if (reason != ENOENT) {
-      FailInvalid("the output folder " + out.string() + " cannot be made or written: " + at.string() + ": " +
-                  std::strerror(reason) + RunsAsNote(reason));
+      FailInvalid(std::string(what) + " " + folder.string() + " cannot be made or written: " + at.string() +
+                  ": " + std::strerror(reason) + RunsAsNote(reason));
     }
     if (!at.has_relative_path()) return;
     at = at.parent_path();
     itself = false;
   }
-  if (!S_ISDIR(info.st_mode)) return;  // a file: refused below, or when it is made
+  if (!S_ISDIR(info.st_mode)) return;  // a file: refused by the caller, or when the folder is made
   if (::access(at.c_str(), W_OK | X_OK) != 0) {
     const int reason = errno;
-    FailInvalid("the output folder " + out.string() + " cannot be " + (itself ? "written" : "made") + ": " +
-                at.string() + ": " + std::strerror(reason) + RunsAsNote(reason));
+    FailInvalid(std::string(what) + " " + folder.string() + " cannot be " + (itself ? "written" : "made") +
+                ": " + at.string() + ": " + std::strerror(reason) + RunsAsNote(reason));
   }
 }
 
-}  // namespace
-
 void CheckOutputFolder(const fs::path& out, const fs::path& input, std::string_view what, ResultsKind kind) {
-  RequireWritable(out);
+  RequireWritableFolder(out);
   std::error_code error;
   if (!fs::exists(out, error)) return;
   if (!fs::is_directory(out, error))

@@ -8,6 +8,11 @@
 
 namespace endorecon {
 
+// Throws Error(kInvalidArgument) when this user cannot write into `folder` or, where it does not exist
+// yet, make it (the nearest folder that exists decides): `what` and the folder, the folder that
+// refused, the system's reason and the user the command runs as.
+void RequireWritableFolder(const std::filesystem::path& folder, std::string_view what = "the output folder");
+
 // What a command writes: a reconstruction's results (`reconstruct`, marked by its config.json or
 // metrics.json) or a render of new cameras (`render`, marked by its render.json).
 enum class ResultsKind { kReconstruction, kRender };

@@ -69,6 +69,29 @@ TEST_F(LocalPermissionTest, AReconstructionIntoAFolderItMayNotWriteIsRefusedBefo
   EXPECT_FALSE(fs::exists(out));
 }
 
+// prepare said "UNAVAILABLE: .../.clip.preparing-PID: cannot create"; to-dicom blamed FFmpeg.
+TEST_F(LocalPermissionTest, PrepareAndToDicomNameTheFolderTheyMayNotWrite) {
+  const std::string worker = BuiltBinary("worker/runtime/endorecon-worker");
+  const std::string readonly = (dir_ / "readonly").string();
+  const auto prepared =
+      RunAsNobody({worker, "prepare", "--side-by-side", (dir_ / "clip" / "images").string(), "--rectified",
+                   "--focal", "30", "--baseline", "1", "-o", readonly + "/prepared"});
+  EXPECT_EQ(prepared.exit_code, 2) << prepared.err;
+  EXPECT_NE(prepared.err.find("-o " + readonly + "/prepared: its parent folder " + readonly +
+                              " cannot be written: " + readonly +
+                              ": Permission denied (this command runs as user nobody)"),
+            std::string::npos)
+      << prepared.err;
+  const auto converted =
+      RunAsNobody({worker, "to-dicom", (dir_ / "clip" / "images").string(), "-o", readonly + "/video.dcm"});
+  EXPECT_EQ(converted.exit_code, 2) << converted.err;
+  EXPECT_NE(
+      converted.err.find("-o " + readonly + "/video.dcm: its folder " + readonly + " cannot be written"),
+      std::string::npos)
+      << converted.err;
+  EXPECT_EQ(converted.err.find("FFmpeg"), std::string::npos) << converted.err;
+}
+
 TEST_F(LocalPermissionTest, TheWorkerNamesAClipItMayNotRead) {
   const auto result =
       RunAsNobody({BuiltBinary("worker/runtime/endorecon-worker"), "reconstruct", (dir_ / "private").string(),

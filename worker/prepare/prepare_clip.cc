@@ -18,6 +18,7 @@
 
 #include "common/error.h"
 #include "common/npy.h"
+#include "common/output_folder.h"
 #include "worker/prepare/clip_writer.h"
 #include "worker/prepare/eye_sync.h"
 #include "worker/prepare/pose_estimator.h"
@@ -53,6 +54,9 @@ void ValidateOptions(const PrepareOptions& o) {
 class StagedFolder {
  public:
   explicit StagedFolder(const fs::path& out) : out_(fs::absolute(out).lexically_normal()) {
+    // Before the recording is read; the staging folder goes beside `out` (found 2026-12-07: a
+    // read-only folder was "UNAVAILABLE: .../.clip.preparing-PID: cannot create").
+    RequireWritableFolder(out_.parent_path(), "-o " + out_.string() + ": its parent folder");
     if (fs::exists(out_) &&
         (!fs::is_directory(out_) || (!fs::is_empty(out_) && !fs::exists(out_ / "prepare.json")))) {
       FailInvalid(out_.string() + ": exists and is not empty (and holds no prepared clip to replace)");
@@ -63,7 +67,9 @@ class StagedFolder {
     std::error_code error;
     fs::remove_all(staging_, error);
     fs::create_directories(staging_, error);
-    if (error) Fail(ErrorCode::kUnavailable, staging_.string() + ": cannot create (" + error.message() + ")");
+    if (error)
+      Fail(ErrorCode::kUnavailable,
+           staging_.string() + ": cannot create the staging folder (" + error.message() + ")");
   }
   ~StagedFolder() {
     std::error_code ignored;

@@ -13,6 +13,8 @@
 #include "common/cli_checks.h"
 #include "common/dicom/recording_writer.h"
 #include "common/error.h"
+#include "common/filesystem_failure.h"
+#include "common/output_folder.h"
 #include "worker/prepare/frame_source.h"
 #include "worker/runtime/commands.h"
 
@@ -112,7 +114,9 @@ int Run(const ToDicomFlags& flags) {
   if (!out_dir.empty()) fs::create_directories(out_dir, error);
   if (error)
     FailInvalid("-o " + flags.out + ": cannot create its folder " + out_dir.string() + ": " +
-                error.message());
+                error.message() + RunsAsNote(error.value()));
+  // One it may not write was said as FFmpeg unable to encode H.264 (found 2026-12-07).
+  RequireWritableFolder(out_dir.empty() ? fs::path(".") : out_dir, "-o " + flags.out + ": its folder");
   const auto source = prepare::OpenFrameSource(flags.frames);
   dicom::RecordingHeader header;
   header.study =
