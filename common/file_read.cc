@@ -5,6 +5,7 @@
 #include <string>
 
 #include "common/error.h"
+#include "common/filesystem_failure.h"
 
 namespace endorecon {
 
@@ -33,8 +34,9 @@ std::ifstream OpenToRead(const std::filesystem::path& path) {
   errno = 0;
   std::ifstream in(path, std::ios::binary);
   if (!in) {
+    const int error = errno;
     FailInvalid(path.string() + ": cannot open the file" +
-                (errno ? std::string(" (") + std::strerror(errno) + ")" : ""));
+                (error ? std::string(" (") + std::strerror(error) + ")" + RunsAsNote(error) : ""));
   }
   return in;
 }

@@ -10,6 +10,7 @@
 
 #include "common/error.h"
 #include "common/file_read.h"
+#include "common/filesystem_failure.h"
 
 namespace endorecon {
 namespace {
@@ -20,8 +21,16 @@ std::string ReadWhole(const std::filesystem::path& path, const std::string& flag
   } catch (const Error& e) {
     FailInvalid(flag + " " + e.what());
   }
+  errno = 0;
   std::ifstream in(path, std::ios::binary);
-  if (!in) Fail(ErrorCode::kNotFound, flag + " " + path.string() + ": cannot be read");
+  if (!in) {
+    // Its reason and the user: a key owned by root (0600) read by the server's user was "NOT_FOUND:
+    // cannot be read", as a missing file (found 2026-12-07).
+    const int error = errno;
+    if (error == 0 || error == ENOENT || error == ENOTDIR)
+      Fail(ErrorCode::kNotFound, flag + " " + path.string() + ": no such file");
+    FailInvalid(flag + " " + path.string() + ": cannot be read: " + std::strerror(error) + RunsAsNote(error));
+  }
   std::ostringstream bytes;
   bytes << in.rdbuf();
   // There, but of no use: a bad argument (exit 2), not a missing one (exit 3).
@@ -37,7 +46,8 @@ std::string ReadSecretFile(const std::filesystem::path& path, const std::string&
     // A file in a folder this user may not enter was "no such file" (found 2026-12-07).
     const int error = errno;
     if (error != ENOENT && error != ENOTDIR)
-      FailInvalid(flag + " " + path.string() + ": cannot be read: " + std::strerror(error));
+      FailInvalid(flag + " " + path.string() + ": cannot be read: " + std::strerror(error) +
+                  RunsAsNote(error));
     Fail(ErrorCode::kNotFound, flag + " " + path.string() + ": no such file");
   }
   // Its kind before its mode: a FIFO's 0644 was reported as a secret others may read.

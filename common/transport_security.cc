@@ -12,6 +12,7 @@
 #include <openssl/evp.h>
 #include <openssl/pem.h>
 #include <openssl/x509.h>
+#include <openssl/x509v3.h>
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
@@ -48,9 +49,12 @@ void RequirePair(const std::string& cert_file, const std::string& key_file) {
 // found this only at the first connection ("Invalid private key", "Handshaker factory creation
 // failed"), so a worker retried "empty address list" forever (found 2026-12-05) and the server
 // failed to listen saying the port might be taken. OpenSSL, which endorecon links for SHA-256,
-// reads and compares them.
+// reads and compares them. Also refused: a certificate not made for its side of TLS (`server`: a
+// server's, else a client's), by its key usage and extended key usage: a server given a worker's
+// certificate (clientAuth only) started, and every client failed "does not verify against --ca: is
+// it signed by that CA, and valid now?", which it was (found 2026-12-07).
 void CheckCertificateAndKey(const std::string& cert_pem, const std::string& key_pem,
-                            const std::string& cert_file, const std::string& key_file) {
+                            const std::string& cert_file, const std::string& key_file, bool server) {
   const auto read = [](const std::string& pem) {
     return std::unique_ptr<BIO, decltype(&BIO_free)>(
         BIO_new_mem_buf(pem.data(), static_cast<int>(pem.size())), &BIO_free);
@@ -80,6 +84,14 @@ void CheckCertificateAndKey(const std::string& cert_pem, const std::string& key_
   if (X509_cmp_current_time(X509_get0_notBefore(cert.get())) > 0) {
     FailInvalid("--tls-cert " + cert_file + " is valid only from " +
                 AsnTimeText(X509_get0_notBefore(cert.get())) + ": is this machine's clock right?");
+  }
+  if (X509_check_purpose(cert.get(), server ? X509_PURPOSE_SSL_SERVER : X509_PURPOSE_SSL_CLIENT, 0) != 1) {
+    ERR_clear_error();
+    FailInvalid("--tls-cert " + cert_file + " is not made for a TLS " + (server ? "server" : "client") +
+                ": its extendedKeyUsage (or keyUsage) leaves out " + (server ? "serverAuth" : "clientAuth") +
+                (server ? ", so clients refuse it; is it a worker's certificate? "
+                        : ", so the server refuses it; is it the server's certificate? ") +
+                "(docs/operations.md, \"Make the certificates\")");
   }
   constexpr long kWarnDays = 30;
   const auto soon = std::time(nullptr) + kWarnDays * 86400;
@@ -206,7 +218,8 @@ std::shared_ptr<grpc::Channel> OpenChannel(const std::string& address, const Cha
     if (!security.cert_file.empty()) {
       tls.pem_cert_chain = ReadPublicFile(security.cert_file, "--tls-cert");
       tls.pem_private_key = ReadSecretFile(security.key_file, "--tls-key");
-      CheckCertificateAndKey(tls.pem_cert_chain, tls.pem_private_key, security.cert_file, security.key_file);
+      CheckCertificateAndKey(tls.pem_cert_chain, tls.pem_private_key, security.cert_file, security.key_file,
+                             /*server=*/false);
     }
     credentials = grpc::SslCredentials(tls);
   }
@@ -239,7 +252,7 @@ std::shared_ptr<grpc::ServerCredentials> ServerCredentials(const ServerSecurity&
   tls.pem_key_cert_pairs.push_back(
       {ReadSecretFile(security.key_file, "--tls-key"), ReadPublicFile(security.cert_file, "--tls-cert")});
   CheckCertificateAndKey(tls.pem_key_cert_pairs[0].cert_chain, tls.pem_key_cert_pairs[0].private_key,
-                         security.cert_file, security.key_file);
+                         security.cert_file, security.key_file, /*server=*/true);
   if (!security.client_ca_file.empty())
     tls.pem_root_certs = ReadPublicFile(security.client_ca_file, "--tls-client-ca");
   return grpc::SslServerCredentials(tls);

@@ -92,6 +92,24 @@ TEST_F(LocalPermissionTest, PrepareAndToDicomNameTheFolderTheyMayNotWrite) {
   EXPECT_EQ(converted.err.find("FFmpeg"), std::string::npos) << converted.err;
 }
 
+// A token file or CA the user may not read (root's, 0600) was "NOT_FOUND: cannot be read", exit 3:
+// read as missing (found 2026-12-07).
+TEST_F(LocalPermissionTest, ATokenFileOrCaItMayNotReadIsNotMissing) {
+  const auto token = dir_ / "open" / "token";
+  WriteBytes(token, "endorecon.0123456789abcdef.0123456789abcdef0123456789abcdef\n");
+  fs::permissions(token, fs::perms::owner_read | fs::perms::owner_write);
+  const auto listed = RunAsNobody({BuiltBinary("client/endorecon"), "--token-file", token.string(), "list"});
+  EXPECT_EQ(listed.exit_code, 2) << listed.err;
+  EXPECT_NE(listed.err.find("--token-file " + token.string() +
+                            ": cannot be read: Permission denied (this command runs as user nobody)"),
+            std::string::npos)
+      << listed.err;
+  const auto missing = RunAsNobody(
+      {BuiltBinary("client/endorecon"), "--token-file", (dir_ / "open" / "none").string(), "list"});
+  EXPECT_EQ(missing.exit_code, 3) << missing.err;
+  EXPECT_NE(missing.err.find("none: no such file"), std::string::npos) << missing.err;
+}
+
 TEST_F(LocalPermissionTest, TheWorkerNamesAClipItMayNotRead) {
   const auto result =
       RunAsNobody({BuiltBinary("worker/runtime/endorecon-worker"), "reconstruct", (dir_ / "private").string(),

@@ -349,7 +349,7 @@ int Serve(const ServeFlags& flags) {
           !tls_hint.empty() ? " (" + tls_hint + ")"
           : handshake && !flags.tls_cert.empty()
               ? " (the server closed the connection in the TLS handshake: is --tls-cert signed by the "
-                "server's --tls-client-ca, valid now and made for client authentication?)"
+                "server's --tls-client-ca?)"
           : handshake        ? " (the server closed the connection in the TLS handshake: does it require a "
                                "client certificate, --tls-cert and --tls-key?)"
           : plaintext_to_tls ? " (the server closed the connection: if it serves TLS, give --ca FILE)"
