@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "common/error.h"
+#include "common/safe_path.h"
 
 namespace endorecon::dicom {
 namespace {
@@ -19,6 +20,15 @@ std::size_t Characters(std::string_view text) {
 }
 
 void CheckCharacters(std::string_view text, const std::string& what) {
+  // The values are written as UTF-8 (ISO_IR 192): Latin-1 bytes from a terminal went into the files
+  // as they were, and a PACS dropped the letters ("Müller" became "Mller"); to the server they were
+  // "INTERNAL: submit (checked before the upload): " with no reason (found 2026-12-07).
+  if (!IsUtf8(text)) {
+    FailInvalid(what +
+                " is not UTF-8 text (a byte of another encoding, such as Latin-1's 0xFC for 'ü'): "
+                "DICOM values are written in UTF-8; type it in a UTF-8 terminal or convert it (iconv -f "
+                "latin1 -t utf-8)");
+  }
   if (text.find('\\') != std::string_view::npos)
     FailInvalid(what + " holds a backslash, which separates values in DICOM; give one value");
   for (const char c : text) {

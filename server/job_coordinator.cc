@@ -116,6 +116,20 @@ void SettleSends(v1::Job& job) {
   }
 }
 
+// Keeps one send per destination, the first. A destination given twice (`--send-to orthanc --send-to
+// orthanc`) made two sends, and the second stayed PENDING for good: the sender works on the first of
+// a name, and the job could never be deleted (found 2026-12-07). Returns whether any was dropped.
+bool DropDuplicateSends(v1::Job& job) {
+  std::set<std::string> seen;
+  auto* sends = job.mutable_sends();
+  const int before = sends->size();
+  sends->erase(
+      std::remove_if(sends->begin(), sends->end(),
+                     [&](const v1::DicomSend& send) { return !seen.insert(send.destination()).second; }),
+      sends->end());
+  return sends->size() != before;
+}
+
 // "no job 'ID'", with what an id looks like when `id` does not: a short or upper-case id ("f15961")
 // read as a job that went away (found 2026-12-07).
 [[noreturn]] void FailNoJob(const std::string& id) {
@@ -224,8 +238,9 @@ void JobCoordinator::Recover() {
     parts_.hub.PublishJob(stored.job);
   }
   for (std::int64_t before = 0;;) {
-    const auto page = parts_.store.List({v1::SUCCEEDED}, 500, before);
-    for (const auto& job : page.jobs) {
+    auto page = parts_.store.List({v1::SUCCEEDED}, 500, before);
+    for (auto& job : page.jobs) {
+      if (DropDuplicateSends(job)) Save(job);  // stored by a server of before DropDuplicateSends
       if (SendsWaiting(job)) sending.push_back(job.id());
     }
     if (page.next_before_seq == 0) break;
@@ -547,6 +562,7 @@ v1::Job JobCoordinator::Submit(const v1::SubmitRequest& request, const Principal
     send->set_destination(name);
     send->set_state(v1::DicomSend::PENDING);
   }
+  DropDuplicateSends(job);
   if (from_pacs) {
     *job.mutable_retrieval()->mutable_source() = request.pacs();
     job.mutable_retrieval()->set_state(v1::Retrieval::RETRIEVING);

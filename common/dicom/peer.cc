@@ -27,11 +27,18 @@ Peer ParsePeer(const std::string& text) {
     peer.host = peer.host.substr(1, peer.host.size() - 2);
   }
   if (peer.host.empty()) FailInvalid("'" + text + "' has no host");
+  // DCMTK 3.6.7's network layer reads "HOST:PORT" up to the first colon: an IPv6 address was taken at
+  // start and every association then failed "Illegal service parameter" (found 2026-12-07).
+  if (peer.host.find(':') != std::string::npos) {
+    FailInvalid("'" + text +
+                "': an IPv6 address, which DCMTK's network layer cannot reach; give the PACS's "
+                "IPv4 address or a host name that resolves to one");
+  }
   const std::string port = text.substr(colon + 1);
   try {
     std::size_t used = 0;
     peer.port = std::stoi(port, &used);
-    if (used != port.size()) peer.port = 0;
+    if (used != port.size() || port.size() > 5) peer.port = 0;  // "000000104" too (found 2026-12-07)
   } catch (const std::exception&) {
     peer.port = 0;
   }

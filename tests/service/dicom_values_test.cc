@@ -37,6 +37,21 @@ TEST(DicomValuesTest, APatientIdIsOneValueOfAtMost64Characters) {
             std::string::npos);
 }
 
+// Latin-1 bytes were written as they were under ISO_IR 192, and a PACS dropped the letter ("Müller"
+// became "Mller"); the server's request failed with no reason (found 2026-12-07).
+TEST(DicomValuesTest, ValuesAreUtf8) {
+  EXPECT_EQ(Refusal([] { CheckPatientName("M\xc3\xbcller^Jos\xc3\xa9", "--patient-name"); }), "");
+  const std::string message = Refusal([] { CheckPatientName("M\xfcller^Jos\xe9", "--patient-name"); });
+  EXPECT_NE(message.find("--patient-name is not UTF-8 text"), std::string::npos) << message;
+  EXPECT_NE(Refusal([] {
+              CheckPatientId(
+                  "P\xfc"
+                  "1",
+                  "--patient-id");
+            }).find("--patient-id is not UTF-8"),
+            std::string::npos);
+}
+
 TEST(DicomValuesTest, APatientNameIsOnePersonName) {
   for (const std::string good : {"", "Doe^Jane", "Doe^Jane^Q^Dr^III", "Yamada^Tarou=山田^太郎=やまだ^たろう"})
     EXPECT_EQ(Refusal([&] { CheckPatientName(good, "--patient-name"); }), "") << good;

@@ -15,6 +15,7 @@
 
 #include "common/error.h"
 #include "common/sha256.h"
+#include "server/pacs_directory.h"
 #include "tests/unit/clip_fixture.h"
 #include "tests/unit/temp_dir.h"
 
@@ -474,6 +475,22 @@ TEST_F(JobCoordinatorTest, ACheckBeforeTheUploadQueuesNothing) {
   request.set_validate_only(false);
   EXPECT_EQ(CodeOf([&] { coordinator_.Submit(request, AnonymousPrincipal()); }), ErrorCode::kInvalidArgument)
       << "a real submit names files with their digests";
+}
+
+// A destination given twice made two sends, and the second stayed PENDING for good (the sender works
+// on the first of a name): the job could never be deleted (found 2026-12-07). One send per destination.
+TEST_F(JobCoordinatorTest, ADestinationGivenTwiceIsSentToOnce) {
+  const PacsDirectory pacs({"orthanc=ORTHANC@127.0.0.1:4242", "archive=ARCHIVE@127.0.0.1:4243"});
+  std::vector<std::string> sends_asked;
+  coordinator_.SetDicomHooks({&pacs, "1.2.3", {}, [&](const std::string& id) { sends_asked.push_back(id); }});
+  v1::SubmitRequest request;
+  *request.mutable_clip() = Uploaded("images/000000.png", "a frame to send");
+  for (const char* name : {"orthanc", "archive", "orthanc"}) request.add_send_to(name);
+  const v1::Job job = coordinator_.Submit(request, AnonymousPrincipal());
+  ASSERT_EQ(job.sends_size(), 2);
+  EXPECT_EQ(job.sends(0).destination(), "orthanc");
+  EXPECT_EQ(job.sends(1).destination(), "archive");
+  EXPECT_EQ(Get(job.id()).sends_size(), 2);
 }
 
 TEST_F(JobCoordinatorTest, AnotherTenantsJobIsNotFoundLikeAMissingOne) {
