@@ -121,7 +121,9 @@ std::string WriteEndoscopicFrames(const std::vector<cv::Mat>& frames, const std:
     return uid;
   }
   static std::once_flag once;
-  std::call_once(once, [] { DJEncoderRegistration::registerCodecs(); });
+  // The SOP Instance UID stays the one made under the caller's root: by default the codec made a new
+  // one under DCMTK's root and referenced a predecessor that exists nowhere (found 2026-12-07).
+  std::call_once(once, [] { DJEncoderRegistration::registerCodecs(ECC_lossyYCbCr, EUC_never); });
   DJ_RPLossy quality(90);
   if (data.chooseRepresentation(EXS_JPEGProcess1, &quality).bad() || !data.canWriteXfer(EXS_JPEGProcess1)) {
     Fail(ErrorCode::kInternal, out.string() + ": DCMTK could not JPEG-compress the frames");

@@ -112,6 +112,22 @@ TEST(DicomRecordingTest, JpegFramesDecodeCloseToTheOriginal) {
   EXPECT_NE(recording.description.find("JPEG"), std::string::npos) << recording.description;
 }
 
+// The codec made a new SOP Instance UID under DCMTK's root, ignoring --uid-root, and referenced an
+// "uncompressed predecessor" that exists nowhere (found 2026-12-07).
+TEST(DicomRecordingTest, JpegFramesKeepTheirUidUnderTheGivenRoot) {
+  TempDir dir;
+  RecordingHeader header = Header();
+  header.uid_root = "1.2.826.0.1.3680043.10.999";
+  const std::string uid = WriteEndoscopicFrames(Frames(2, 32, 24), {0, 0.1}, true, header, dir / "jpeg.dcm");
+  EXPECT_EQ(uid.rfind("1.2.826.0.1.3680043.10.999.", 0), 0u) << uid;
+  DcmFileFormat file;
+  ASSERT_TRUE(file.loadFile((dir / "jpeg.dcm").c_str()).good());
+  OFString stored;
+  file.getDataset()->findAndGetOFString(DCM_SOPInstanceUID, stored);
+  EXPECT_EQ(std::string(stored.c_str()), uid);
+  EXPECT_FALSE(file.getDataset()->tagExists(DCM_SourceImageSequence));
+}
+
 TEST(DicomRecordingTest, H264VideoDecodesEveryFrameAtItsFrameTime) {
   TempDir dir;
   const auto frames = Frames(12, 64, 48);
