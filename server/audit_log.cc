@@ -67,6 +67,7 @@ void AuditLog::Write(const AuditEntry& entry) {
                               {"outcome", entry.outcome}, {"peer", entry.peer}};
   if (!entry.certificate.empty()) line["certificate"] = entry.certificate;
   if (!entry.subject.empty()) line["subject"] = entry.subject;
+  if (entry.held_back > 0) line["held_back"] = entry.held_back;
   // Invalid UTF-8 from a caller (a worker id, a peer name) is replaced rather than thrown.
   const std::string text = line.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
   std::lock_guard lock(mutex_);  // a part line is cut back before another line follows it

@@ -2,7 +2,8 @@
 // read who did what. Each line: time (UTC, ISO 8601 with milliseconds), principal (the token's
 // label), role, tenant, method, job (id, when the call concerns one), outcome ("OK" or the gRPC
 // status name), peer (the caller's address) and, for a caller with a client certificate, its
-// subject's common name; for token changes, the subject (the token's label). Never a token, a message text, a
+// subject's common name; for token changes, the subject (the token's label); for a paced refusal,
+// held_back (server/refusal_pacer.h). Never a token, a message text, a
 // file name or a job name: those may carry patient data.
 //
 // Appends with O_APPEND and one write per line, so the server and `endorecon-server token ...`
@@ -27,6 +28,7 @@ struct AuditEntry {
   std::string peer;
   std::string certificate;
   std::string subject;
+  long long held_back = 0;  // refusals alike not written since the kind's last line (RefusalPacer)
 };
 
 class AuditLog {

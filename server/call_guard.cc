@@ -256,10 +256,22 @@ void CallGuard::Record(const grpc::ServerContext& context, const Rpc& rpc, const
   if (refused) metrics_.CallRefused(CodeName(status.error_code()));
   if (!rpc.writes && !call.wrote && !refused) return;
   const bool known = !call.caller.name.empty();
-  audit_.Write({known ? call.caller.name : "-",
-                known && !call.caller.anonymous ? RoleName(call.caller.role) : "-", call.caller.tenant,
-                rpc.method, call.job_id, CodeName(status.error_code()), PeerText(context.peer()),
-                CertificateName(context), rpc.subject});
+  AuditEntry entry{known ? call.caller.name : "-",
+                   known && !call.caller.anonymous ? RoleName(call.caller.role) : "-",
+                   call.caller.tenant,
+                   rpc.method,
+                   call.job_id,
+                   CodeName(status.error_code()),
+                   PeerText(context.peer()),
+                   CertificateName(context),
+                   rpc.subject};
+  if (refused && !refusals_.Pass(entry, std::chrono::steady_clock::now())) return;
+  audit_.Write(entry);
+}
+
+void CallGuard::FlushRefusals(bool all) {
+  const auto now = std::chrono::steady_clock::now();
+  for (const auto& entry : refusals_.TakeDue(all ? now + std::chrono::hours(1) : now)) audit_.Write(entry);
 }
 
 void CallGuard::RecordServerAction(const std::string& method, const std::string& job_id,

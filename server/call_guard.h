@@ -27,6 +27,7 @@
 #include "server/audit_log.h"
 #include "server/metrics.h"
 #include "server/principal.h"
+#include "server/refusal_pacer.h"
 #include "server/token_store.h"
 
 namespace endorecon::server {
@@ -97,6 +98,9 @@ class CallGuard {
   // "server"; `subject` names what it acted with (a PACS's name), never patient data.
   void RecordServerAction(const std::string& method, const std::string& job_id, const std::string& outcome,
                           const std::string& subject = "");
+  // Writes the audit lines owed for refusals held back (RefusalPacer): the maintenance thread's, each
+  // second, and at shutdown with `all` (every count held back, whatever its age).
+  void FlushRefusals(bool all = false);
 
   // Fills call.caller, then throws Error(kUnauthenticated / kPermissionDenied) unless it may call `rpc`.
   // Run admits every call at its start; a long stream calls it again now and then, so a token
@@ -119,6 +123,7 @@ class CallGuard {
   bool require_worker_certificate_;
   AuditLog& audit_;
   Metrics& metrics_;
+  RefusalPacer refusals_{std::chrono::seconds(10), 5};  // up to 5 lines alike each 10 s
   std::mutex mutex_;
   std::unique_ptr<TokenStore> tokens_;
   bool enforcing_ = false;  // the store holds a token: from then on every call needs one

@@ -363,6 +363,7 @@ int Run(const ServerFlags& flags) {
                               static_cast<std::int64_t>(space.capacity));
         metrics.SetDamagedFiles(blobs.DamagedCount());
         guard.Refresh();
+        guard.FlushRefusals();
         if (tick % 300 == 0) {
           try {
             guard.PublishTokenExpiries();
@@ -408,6 +409,7 @@ int Run(const ServerFlags& flags) {
   server->Wait();
   signal_waiter.join();
   maintenance.join();
+  guard.FlushRefusals(/*all=*/true);  // no call is served now: the counts held back are whole
   spdlog::info("serving stopped; closing the job store, the DICOM threads and the data folder");
   return exit_code;
 }
