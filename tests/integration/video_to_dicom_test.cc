@@ -86,6 +86,20 @@ TEST(VideoToDicomTest, AFailedWriteLeavesNothingAndAFolderIsNoOutput) {
       << folder.Log();
 }
 
+// `to-dicom same.mp4 -o same.mp4` wrote the DICOM file over the only copy of the video (found
+// 2026-12-07): refused, and the video is as it was.
+TEST(VideoToDicomTest, TheVideoItselfIsNoOutput) {
+  TempDir dir("video-to-dicom-same");
+  const auto video = WriteVideo(dir);
+  const std::string before = ReadBytes(video);
+  Process same(
+      {BuiltBinary("worker/runtime/endorecon-worker"), "to-dicom", video.string(), "-o", video.string()},
+      dir / "same.log");
+  EXPECT_EQ(same.Wait(), 2) << same.Log();
+  EXPECT_NE(same.Log().find("is the video it would be made from"), std::string::npos) << same.Log();
+  EXPECT_EQ(ReadBytes(video), before);
+}
+
 // Frames of odd size become H.264 of the even size above, padded, and read back whole: FFmpeg cut
 // them to the size below while the header kept the odd one, a file endorecon could not read.
 TEST(VideoToDicomTest, OddSizedFramesArePaddedToEvenOnes) {

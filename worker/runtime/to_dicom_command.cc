@@ -107,6 +107,15 @@ int Run(const ToDicomFlags& flags) {
     FailInvalid("-o " + flags.out + ": a folder; -o names the DICOM file to write (e.g. " +
                 (fs::path(flags.out) / "recording.dcm").string() + ")");
   }
+  // The input itself: `to-dicom same.mp4 -o same.mp4` wrote the DICOM file over the only copy of
+  // the video (found 2026-12-07).
+  std::error_code same_error;
+  if (fs::exists(flags.out, same_error) && fs::equivalent(flags.out, flags.frames, same_error) &&
+      !same_error) {
+    FailInvalid("-o " + flags.out + " is the video it would be made from (" + flags.frames +
+                "): writing it would destroy the recording; name another file (e.g. " +
+                fs::path(flags.out).replace_extension(".dcm").string() + ")");
+  }
   // The output's folder is made, as for every format (an H.264 recording's missing folder was
   // reported as FFmpeg unable to encode H.264).
   const fs::path out_dir = fs::path(flags.out).parent_path();
@@ -151,8 +160,10 @@ Command AddToDicomCommand(CLI::App& app) {
                   "h264 (Video Endoscopic, MPEG-4 AVC/H.264), vl (multi-frame VL Endoscopic) or vl-jpeg")
       ->capture_default_str()
       ->check(CLI::IsMember({"h264", "vl", "vl-jpeg"}));
-  cmd->add_option("--fps", flags->fps,
-                  "frames per second, 0.01 to 1000 (default: a video's own, 25 for a folder of frames)")
+  cmd->add_option(
+         "--fps", flags->fps,
+         "the recording's frame rate, 0.01 to 1000: every frame is kept, frame N at N / FPS s (default: "
+         "a video's own, 25 for a folder of frames; to keep fewer frames, reconstruct or submit --fps)")
       ->check(Within(0.01, 1000.0));
   cmd->add_option("--patient-id", flags->patient_id, "Patient ID")->capture_default_str();
   cmd->add_option("--patient-name", flags->patient_name, "Patient's Name (DICOM PN, e.g. Doe^Jane)");
