@@ -107,9 +107,10 @@ const char* CodeName(grpc::StatusCode code) {
 }  // namespace
 
 CallGuard::CallGuard(std::filesystem::path token_store, bool require_worker_certificate, AuditLog& audit,
-                     Metrics& metrics)
+                     Metrics& metrics, bool require_tokens)
     : token_store_path_(std::move(token_store)),
       require_worker_certificate_(require_worker_certificate),
+      require_tokens_(require_tokens),
       audit_(audit),
       metrics_(metrics) {
   Refresh();
@@ -208,6 +209,13 @@ void CallGuard::Admit(const grpc::ServerContext& context, const Rpc& rpc, Call& 
     if (!failure.empty())
       Fail(ErrorCode::kUnavailable,
            "the server's token store cannot be opened, so no call is admitted: " + failure);
+    // A server started before its first token (a Kubernetes pod, whose tokens are made with kubectl
+    // exec once it runs) served every caller until then (found 2026-12-07).
+    if (require_tokens_) {
+      Fail(ErrorCode::kUnauthenticated,
+           "this server requires tokens (--require-tokens) and none has been created yet: its admin makes "
+           "the first with `endorecon-server token create --role admin`");
+    }
     call.caller = AnonymousPrincipal();
     return;
   }

@@ -66,8 +66,10 @@ class CallGuard {
  public:
   // `token_store`: where the token store is or will be; `require_worker_certificate`: the server
   // has a client CA.
+  // `require_tokens`: a call is refused while the store holds no token (--require-tokens), rather
+  // than admitted as anonymous.
   CallGuard(std::filesystem::path token_store, bool require_worker_certificate, AuditLog& audit,
-            Metrics& metrics);
+            Metrics& metrics, bool require_tokens = false);
 
   template <typename Body>
   grpc::Status Run(grpc::ServerContext* context, const Rpc& rpc, Body&& body) {
@@ -121,6 +123,7 @@ class CallGuard {
 
   std::filesystem::path token_store_path_;
   bool require_worker_certificate_;
+  bool require_tokens_;
   AuditLog& audit_;
   Metrics& metrics_;
   RefusalPacer refusals_{std::chrono::seconds(10), 5};  // up to 5 lines alike each 10 s

@@ -62,6 +62,7 @@ struct ServerFlags {
   // Security and operations (docs/operations.md, "Securing a deployment").
   ServerSecurity tls;
   bool insecure = false;
+  bool require_tokens = false;
   std::string health_listen;
   std::string audit_log;
   Quota tenant_quota;
@@ -191,7 +192,8 @@ int Run(const ServerFlags& flags) {
       "a client or worker whose certificate this server does not trust, or plaintext to the TLS port: "
       "endorecon_tls_handshake_failures_total counts them",
       [&metrics] { metrics.TlsHandshakeFailed(); });
-  CallGuard guard(TokenStore::PathIn(data_dir), !flags.tls.client_ca_file.empty(), audit, metrics);
+  CallGuard guard(TokenStore::PathIn(data_dir), !flags.tls.client_ca_file.empty(), audit, metrics,
+                  flags.require_tokens);
   spdlog::info("tenant quotas: {}", quotas.Describe());  // an admin checks what is in force
   JobCoordinator coordinator({store, blobs, scheduler, leases, workers, hub, metrics}, flags.max_attempts,
                              std::move(quotas));
@@ -280,6 +282,14 @@ int Run(const ServerFlags& flags) {
                    : "plaintext",
                data_dir.string(),
                flags.metrics_port >= 0 ? fmt::format("on {}:{}", flags.metrics_host, metrics.port()) : "off");
+  // TLS beyond loopback without --tls-client-ca: a worker token alone admits a worker, and the
+  // worker certificates of "Securing a deployment" step 1 are not asked for (only a log line's
+  // "TLS" said so; found 2026-12-07).
+  if (flags.tls.tls() && flags.tls.client_ca_file.empty() && !IsLoopbackAddress(flags.listen)) {
+    spdlog::warn(
+        "no --tls-client-ca: workers are not asked for a client certificate, so a worker token alone "
+        "admits a worker (give --tls-client-ca CA.crt to require certificates signed by it)");
+  }
   // /metrics has neither TLS nor tokens: beyond loopback, anyone who reaches it reads the queue's
   // and the workers' numbers (no patient data). Said, as --insecure is, not refused: a scraper on
   // another host is the usual deployment.
@@ -303,6 +313,12 @@ int Run(const ServerFlags& flags) {
         "that reaches {} may use every API and see every tenant's jobs",
         data_dir.string(), newest.front().submitted_by(),
         newest.front().tenant().empty() ? "" : " of tenant '" + newest.front().tenant() + "'", address);
+  } else if (flags.require_tokens) {
+    spdlog::warn(
+        "no token yet in {}: every call is refused (--require-tokens) until the first `endorecon-server "
+        "token "
+        "create --data-dir {} --role admin --name NAME` (picked up within a second)",
+        data_dir.string(), data_dir.string());
   } else if (IsLoopbackAddress(flags.listen)) {
     spdlog::info(
         "no token store: every local caller may use every API (create tokens with `endorecon-server "
@@ -421,6 +437,9 @@ void AddSecurityFlags(CLI::App& app, ServerFlags& flags) {
   app.add_option("--tls-client-ca", flags.tls.client_ca_file,
                  "the worker API requires a client certificate signed by this CA (mTLS)");
   app.add_flag("--insecure", flags.insecure, "allow a non-loopback --listen without TLS (logged loudly)");
+  app.add_flag("--require-tokens", flags.require_tokens,
+               "refuse every call while no token exists (without it, a server without tokens admits every "
+               "caller); for a server started before its first token is made, as in Kubernetes");
   app.add_option(
          "--health-listen", flags.health_listen,
          "also answer grpc.health.v1 (only) in plaintext on this address, for probes that cannot use TLS")

@@ -70,6 +70,25 @@ class AccessControlTest : public ::testing::Test {
   std::vector<std::string> tokens_;
 };
 
+// A server started before its first token (a Kubernetes pod: tokens are made with kubectl exec once
+// it runs) served every caller until then (found 2026-12-07). With --require-tokens it refuses every
+// call until the first token exists, then takes that token's calls.
+TEST(RequireTokensTest, EveryCallIsRefusedUntilTheFirstToken) {
+  Cluster cluster({"--require-tokens"});
+  const auto before = RunCli(cluster.address(), {"list"});
+  EXPECT_EQ(before.exit_code, 10) << before.err;
+  EXPECT_NE(before.err.find("this server requires tokens (--require-tokens) and none has been created yet"),
+            std::string::npos)
+      << before.err;
+  const auto admin = MakeCredentials(cluster, "", "admin", "", "ops");
+  auto argv = admin.CliFlags();
+  argv.push_back("list");
+  EXPECT_TRUE(
+      WaitUntil([&] { return RunCli(cluster.address(), argv).exit_code == 0; }, std::chrono::seconds(10)));
+  EXPECT_EQ(RunCli(cluster.address(), {"list"}).exit_code, 10)
+      << "no token: refused as on any server with tokens";
+}
+
 // A worker whose lease call waits while the server's first tokens are created gets no job: it is
 // admitted again when a job comes, refused, and the job stays queued with no attempt counted. The
 // job was given to it, its reports were refused, and the job waited a lease's time and lost an
