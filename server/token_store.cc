@@ -174,7 +174,18 @@ TokenRecord TokenStore::Revoke(const std::string& name) {
     Statement select(db_, "SELECT role, tenant, created, expires FROM tokens WHERE name = ? AND revoked = 0",
                      kStore);
     select.BindText(1, name);
-    if (!select.Step()) Fail(ErrorCode::kNotFound, "no active token named '" + name + "'");
+    if (!select.Step()) {
+      // A label whose tokens are all revoked or set aside (an expired one is, when a successor takes
+      // its label) read as unknown while `token list` showed it (found 2026-12-07).
+      Statement known(db_, "SELECT COUNT(*) FROM tokens WHERE name = ?", kStore);
+      known.BindText(1, name);
+      const bool listed = known.Step() && known.Int(0) > 0;
+      Fail(ErrorCode::kNotFound,
+           "no active token named '" + name + "'" +
+               (listed ? ": every token of that name is revoked already or, expired, set aside (`token list` "
+                         "shows them; nothing to do)"
+                       : ""));
+    }
     // An expired token is set aside as its successor would set it (revoked at its expiry, listed as
     // expired): that ends EndoreconWorkerTokenExpired, whose text says to revoke it (it was refused as
     // expired already, and the alert went on; found 2026-12-07).

@@ -9,6 +9,7 @@
 
 #include "common/error.h"
 #include "server/job_coordinator.h"
+#include "tests/unit/clip_fixture.h"
 #include "tests/unit/temp_dir.h"
 
 namespace endorecon::server {
@@ -71,7 +72,12 @@ TEST(TokenStoreTest, RefusesMalformedUnknownForgedAndRevokedTokens) {
     EXPECT_NE(std::string(e.what()).find("revoked"), std::string::npos);
     EXPECT_EQ(std::string(e.what()).find(token), std::string::npos);
   }
-  EXPECT_EQ(CodeOf([&] { store.Revoke("node-1"); }), ErrorCode::kNotFound);
+  // Revoked already: said so, not as an unknown name (found 2026-12-07).
+  EXPECT_NE(testing::ErrorFrom([&] { store.Revoke("node-1"); }, ErrorCode::kNotFound)
+                .find("every token of that name is revoked already"),
+            std::string::npos);
+  EXPECT_EQ(testing::ErrorFrom([&] { store.Revoke("nobody-such"); }, ErrorCode::kNotFound),
+            "no active token named 'nobody-such'");
   // The label is free again; the old token stays revoked.
   const auto again = store.Create("node-1", Role::kWorker, "");
   EXPECT_EQ(store.Verify(again).name, "node-1");
