@@ -91,8 +91,7 @@ FrameSize ParseFrameSize(std::string_view text) {
     Bad(text, expected);
   }
   // The largest frame a clip may have (the loaders' limit): a larger one would be made, then refused.
-  constexpr double kMostPixels = 4096.0 * 4096.0;
-  if (double(size.width) * double(size.height) > kMostPixels) {
+  if (double(size.width) * double(size.height) > kMostFramePixels) {
     Bad(text, "at most 16777216 pixels a frame (4096 x 4096), the largest a clip may have");
   }
   return size;

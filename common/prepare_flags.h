@@ -34,6 +34,9 @@ struct FrameSize {
   int width = 0, height = 0;
 };
 
+// The largest frame a clip may have, in pixels (4096 x 4096; the engine's loaders refuse more).
+inline constexpr double kMostFramePixels = 4096.0 * 4096.0;
+
 // A rectangle of pixels "X,Y,W,H": x, y >= 0, width and height > 0.
 struct PixelRect {
   int x = 0, y = 0, width = 0, height = 0;

@@ -19,6 +19,7 @@ RecordingShape CheckRecordingHeader(const std::filesystem::path& path, StereoLay
   shape.eye = EyeSize(stereo, first.columns, first.rows, path.string());
   CheckWindowHoldsFrames(window, shape.frames, path.string());
   CheckSameShape(size, shape.eye);
+  CheckFrameFits(size, shape.eye, path.string());
   return shape;
 }
 
@@ -48,6 +49,21 @@ FrameSize SameShapeNear(int width, FrameSize recorded) {
 }
 
 }  // namespace
+
+// Frames of 4200x4200 were uploaded, queued and decoded, then refused naming the worker's own
+// "clip-from-dicom/transforms.json" and no --size (found 2026-12-07).
+void CheckFrameFits(FrameSize size, FrameSize recorded, const std::string& where) {
+  const double pixels = double(recorded.width) * double(recorded.height);
+  if ((size.width > 0 && size.height > 0) || pixels <= kMostFramePixels) return;
+  const double scale = std::sqrt(kMostFramePixels / pixels);
+  FrameSize suggested = SameShapeNear(2 * static_cast<int>(recorded.width * scale / 2), recorded);
+  while (double(suggested.width) * suggested.height > kMostFramePixels && suggested.width > 2)
+    suggested = SameShapeNear(suggested.width - 2, recorded);
+  FailInvalid(fmt::format(
+      "{}: frames of {}x{} ({:.0f} pixels) are larger than a clip's frame may be ({:.0f} pixels, 4096 x "
+      "4096); give --size to scale them, e.g. --size {}x{}",
+      where, recorded.width, recorded.height, pixels, kMostFramePixels, suggested.width, suggested.height));
+}
 
 void CheckSameShape(FrameSize size, FrameSize recorded) {
   if (size.width <= 0 || size.height <= 0 || KeepsShape(size.width, size.height, recorded)) return;

@@ -44,5 +44,27 @@ TEST(DicomRecordingHeaderTest, ASizeOfAnotherShapeSuggestsOneThatIsTaken) {
   EXPECT_NO_THROW(CheckSameShape({}, {48, 32}));  // none asked: as recorded
 }
 
+// Frames of 4200x4200 were uploaded, queued and decoded, then refused naming the worker's own
+// "clip-from-dicom/transforms.json" and no --size (found 2026-12-07): refused at submit, with a size
+// that is itself taken.
+TEST(DicomRecordingHeaderTest, FramesTooLargeForAClipAskForASize) {
+  const std::string refused = testing::ErrorFrom([] { CheckFrameFits({}, {4200, 4200}, "huge.dcm"); });
+  EXPECT_NE(refused.find("huge.dcm: frames of 4200x4200 (17640000 pixels) are larger than a clip's frame may "
+                         "be (16777216 pixels, 4096 x 4096); give --size to scale them, e.g. --size "),
+            std::string::npos)
+      << refused;
+  const std::regex suggestion(R"(--size (\d+)x(\d+))");
+  for (const FrameSize recorded : {FrameSize{4200, 4200}, FrameSize{7680, 4320}, FrameSize{5101, 3401}}) {
+    const std::string message = testing::ErrorFrom([&] { CheckFrameFits({}, recorded, "r.dcm"); });
+    std::smatch match;
+    ASSERT_TRUE(std::regex_search(message, match, suggestion)) << message;
+    const FrameSize suggested{std::stoi(match[1]), std::stoi(match[2])};
+    EXPECT_LE(double(suggested.width) * suggested.height, kMostFramePixels) << message;
+    EXPECT_NO_THROW(CheckSameShape(suggested, recorded)) << message;
+    EXPECT_NO_THROW(CheckFrameFits(suggested, recorded, "r.dcm"));
+  }
+  EXPECT_NO_THROW(CheckFrameFits({}, {4096, 4096}, "r.dcm"));
+}
+
 }  // namespace
 }  // namespace endorecon::dicom

@@ -134,6 +134,7 @@ void WritePosesBounds(const dicom::Recording& recording, const fs::path& clip_di
 // change the recording's aspect ratio (dicom::CheckSameShape, the server's check at submit too).
 void ScaleFrames(dicom::Recording& recording, cv::Size size) {
   const cv::Size recorded = recording.left[0].size();
+  dicom::CheckFrameFits({size.width, size.height}, {recorded.width, recorded.height}, "the recording");
   if (size.empty() || size == recorded) return;
   dicom::CheckSameShape({size.width, size.height}, {recorded.width, recorded.height});
   const int interpolation = size.width < recorded.width ? cv::INTER_AREA : cv::INTER_LINEAR;
