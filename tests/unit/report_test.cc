@@ -127,6 +127,23 @@ TEST_F(ReportTest, ARunOfPickedFramesRecordsThemAndItsPageShowsThem) {
   EXPECT_EQ(data["frames"]["input"].size(), 4u);
 }
 
+// A kept clip of a recording reconstructed with --frames: the page showed the time of the frame at the
+// picked frame's index ("frame 2 / 2 ... 0.80 s into the recording" for one recorded at 9.6 s; found
+// 2026-12-07). Each picked frame keeps its own time.
+TEST_F(ReportTest, PickedFramesOfARecordingShowTheirOwnTimes) {
+  const fs::path clip = dir_->path() / "clip-of-a-recording";
+  fs::copy(dir_->path() / "clip", clip, fs::copy_options::recursive);
+  testing::WriteBytes(clip / "recording.json",
+                      R"({"source": "endo.dcm", "times_s": [0.0, 0.4, 0.8, 1.2, 1.6, 2.0, 2.4, 2.8]})");
+  ReconstructOptions options = Options("picked-recording");
+  options.clip_dir = clip.string();
+  options.frames = ParseFrameRange("1:8:3");
+  options.iterations = 3;
+  Reconstruct(options, {});
+  const auto data = testing::ReportData(fs::path(options.out_dir) / "report.html");
+  EXPECT_EQ(data["recording"]["times_s"], (nlohmann::json{0.4, 1.6, 2.8}));
+}
+
 TEST_F(ReportTest, ACancelledRunsPageHasNoFramesButTheRest) {
   const ReconstructOptions options = Options("cancelled");
   ReconstructHooks hooks;

@@ -356,6 +356,28 @@ fs::path WriteReport(const fs::path& results_dir, const scene::Clip* clip) {
                         : PathName(clip_dir);
     data["clip"] = fs::absolute(clip_dir).lexically_normal().string();
     data["recording"] = RecordingOf(clip_dir);
+    // A kept clip reconstructed with --frames: each frame's time in the recording is its picked
+    // frame's; the page read times_s by the frame's index after the pick, a wrong time (found
+    // 2026-12-07). Times already one a frame are kept as they are.
+    json& recording = data["recording"];
+    if (recording.is_object() && recording.contains("times_s") && recording["times_s"].is_array() &&
+        recording["times_s"].size() != views.times.size() && config.contains("frames") &&
+        config["frames"].is_string()) {
+      try {
+        const json& times = recording["times_s"];
+        const auto picked = ParseFrameRange(config["frames"].get<std::string>())
+                                .PickedOf(static_cast<int>(times.size()), "", "the recording's");
+        json kept = json::array();
+        for (const int frame : picked) kept.push_back(times[static_cast<std::size_t>(frame)]);
+        if (kept.size() == views.times.size()) {
+          recording["times_s"] = kept;
+        } else {
+          recording.erase("times_s");  // times of another clip than this one: none shown
+        }
+      } catch (const std::exception&) {  // a window that does not fit these times: none shown
+        recording.erase("times_s");
+      }
+    }
     // The depth's scale: measured (depth images, or a second eye the loss reads) or only the field's
     // own, in the units the clip's near and far bounds set (a mono recording).
     data["depth_bounds"] = {clip->near, clip->far};
