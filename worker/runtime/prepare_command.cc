@@ -38,13 +38,25 @@ Command AddPrepareCommand(CLI::App& app) {
                                 : fmt::format(", {} dropped (could not be placed)", summary.dropped.size()),
         summary.seconds,
         (summary.frames + static_cast<double>(summary.dropped.size())) / std::max(1e-9, summary.seconds));
-    spdlog::info(
-        "rectification: epipolar error median {:.3f} px, RMS {:.3f} px ({} matches); depth coverage {:.1f}%",
-        summary.epipolar_error.median, summary.epipolar_error.rms, summary.epipolar_error.count,
-        100 * summary.depth_coverage);
-    if (options.estimate_poses) {
-      spdlog::info("poses: reprojection error median {:.3f} px, RMS {:.3f} px",
-                   summary.pose_reprojection.median, summary.pose_reprojection.rms);
+    // Nothing measured is said as such: "median 0.000 px, RMS 0.000 px" of no match read as a perfect
+    // rectification (found 2026-12-07, a mono video given as side by side).
+    if (summary.epipolar_error.count > 0) {
+      spdlog::info(
+          "rectification: epipolar error median {:.3f} px, RMS {:.3f} px ({} matches); depth coverage "
+          "{:.1f}%",
+          summary.epipolar_error.median, summary.epipolar_error.rms, summary.epipolar_error.count,
+          100 * summary.depth_coverage);
+    } else {
+      spdlog::warn(
+          "rectification: no match between the eyes, so no epipolar error measured; depth coverage {:.1f}%",
+          100 * summary.depth_coverage);
+    }
+    if (options.estimate_poses && summary.pose_reprojection.count > 0) {
+      spdlog::info("poses: reprojection error median {:.3f} px, RMS {:.3f} px ({} observations)",
+                   summary.pose_reprojection.median, summary.pose_reprojection.rms,
+                   summary.pose_reprojection.count);
+    } else if (options.estimate_poses) {
+      spdlog::warn("poses: no reprojection error measured (no frame placed beyond the first)");
     }
     spdlog::info("every choice and per-frame numbers: {}/prepare.json; preview: {}/preview.png",
                  summary.clip.string(), summary.clip.string());

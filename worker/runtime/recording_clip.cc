@@ -67,17 +67,26 @@ std::vector<cv::Matx33d> EstimateTurns(const dicom::Recording& recording, nlohma
   double widest = 0;
   for (const cv::Matx33d& r : turns.rotations)
     widest = std::max(widest, std::acos(std::clamp((cv::trace(r) - 1) / 2, -1.0, 1.0)));
-  std::vector<double> misses = turns.residual_px;
+  // Over the frames placed: an unplaced frame's 0 px counted as a perfect fit, so a run whose every
+  // frame failed said "missed by 0.00 px" (found 2026-12-07).
+  std::vector<double> misses;
+  for (std::size_t i = 0; i < turns.residual_px.size(); ++i)
+    if (turns.inliers[i] > 0) misses.push_back(turns.residual_px[i]);
   std::sort(misses.begin(), misses.end());
-  const double median_miss = misses.empty() ? 0.0 : misses[misses.size() / 2];
-  record["camera_turns"] = {{"widest_deg", widest * 180 / CV_PI},
-                            {"median_miss_px", median_miss},
-                            {"frames_unplaced", turns.unplaced},
-                            {"inliers", turns.inliers}};
-  spdlog::info(
-      "mono recording: the endoscope turns up to {:.1f} degrees from the first frame (tracks "
-      "missed by {:.2f} px at the median)",
-      widest * 180 / CV_PI, median_miss);
+  const bool measured = !misses.empty();
+  record["camera_turns"] = {
+      {"widest_deg", widest * 180 / CV_PI},
+      {"median_miss_px", measured ? nlohmann::json(misses[misses.size() / 2]) : nullptr},
+      {"frames_unplaced", turns.unplaced},
+      {"inliers", turns.inliers}};
+  if (measured) {
+    spdlog::info(
+        "mono recording: the endoscope turns up to {:.1f} degrees from the first frame (tracks "
+        "missed by {:.2f} px at the median of the {} frame(s) placed)",
+        widest * 180 / CV_PI, misses[misses.size() / 2], misses.size());
+  } else if (!turns.residual_px.empty()) {
+    spdlog::warn("mono recording: no frame after the first could be placed: the endoscope is taken as fixed");
+  }
   if (turns.unplaced > 0) {
     spdlog::warn(
         "mono recording: {} frame(s) could not be placed (too few tracks on tissue); each kept "
