@@ -140,7 +140,13 @@ void CheckPrepareFlags(const PrepareFlags& f) {
         "give the recording as --left VIDEO|DIR with --right VIDEO|DIR, or --side-by-side VIDEO, or "
         "--top-bottom VIDEO (exactly one of these)");
   }
-  if (f.left.empty() != f.right.empty()) FailInvalid("--left and --right go together");
+  // One eye alone is a mono recording, which is not prepared: the way to it was said nowhere here
+  // (found 2026-12-07).
+  if (f.left.empty() != f.right.empty()) {
+    FailInvalid(
+        "--left and --right go together; a recording of one eye (mono) is not prepared: make it a DICOM "
+        "recording (endorecon-worker to-dicom VIDEO -o rec.dcm) and reconstruct or submit rec.dcm");
+  }
   if (f.rectified == !f.calibration.empty()) {
     FailInvalid(
         "give either --calibration FILE (an OpenCV stereo calibration, or two ROS camera_info YAMLs) "
