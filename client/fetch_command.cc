@@ -26,6 +26,7 @@
 #include "common/file_download.h"
 #include "common/grpc_status.h"
 #include "common/job_bounds.h"
+#include "common/job_results_text.h"
 #include "common/manifest.h"
 #include "common/transport_security.h"
 
@@ -137,8 +138,7 @@ int Fetch(const Globals& globals, const FetchFlags& flags) {
              ": its clip and results were deleted from the server (retention, or `endorecon delete`)");
   }
   if (job.state() != v1::SUCCEEDED) {
-    Fail(ErrorCode::kFailedPrecondition, "job " + job.id() + " is " + v1::JobState_Name(job.state()) +
-                                             "; results exist once it has SUCCEEDED");
+    Fail(ErrorCode::kFailedPrecondition, NoResultsYet(job, "fetched"));
   }
   CheckFetchFolder(flags.out, job.result());
   // Results hold patient data (DICOM names the patient): what fetch creates is the user's alone, as

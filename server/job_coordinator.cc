@@ -13,6 +13,7 @@
 #include "common/dicom_values.h"
 #include "common/error.h"
 #include "common/job_bounds.h"
+#include "common/job_results_text.h"
 #include "common/json_file.h"
 #include "common/manifest.h"
 #include "common/prepare_flags_proto.h"
@@ -922,8 +923,7 @@ v1::Job JobCoordinator::RequestSend(const std::string& id, const std::string& de
     if (dicom_.pacs == nullptr) FailInvalid("this server has no PACS configured (--pacs)");
     dicom_.pacs->Find(destination);
     if (job.state() != v1::SUCCEEDED) {
-      endorecon::Fail(ErrorCode::kFailedPrecondition, "job " + id + " is " + v1::JobState_Name(job.state()) +
-                                                          "; results are sent once it has SUCCEEDED");
+      endorecon::Fail(ErrorCode::kFailedPrecondition, NoResultsYet(job, "sent"));
     }
     if (job.expired_unix_ms() > 0) {
       endorecon::Fail(

@@ -7,6 +7,7 @@
 
 #include "common/error.h"
 #include "common/job_bounds.h"
+#include "common/job_results_text.h"
 #include "server/file_sender.h"
 #include "server/job_states.h"
 
@@ -184,8 +185,7 @@ grpc::Status JobServiceImpl::Fetch(grpc::ServerContext* context, const v1::Fetch
     };
     if (job.expired_unix_ms() > 0) refuse_expired(job);
     if (job.state() != v1::SUCCEEDED) {
-      Fail(ErrorCode::kFailedPrecondition, "job " + job.id() + " is " + v1::JobState_Name(job.state()) +
-                                               "; results exist once it has SUCCEEDED");
+      Fail(ErrorCode::kFailedPrecondition, NoResultsYet(job, "fetched"));
     }
     std::map<std::string, v1::FileEntry> by_path;
     for (const auto& entry : job.result().files()) by_path[entry.path()] = entry;

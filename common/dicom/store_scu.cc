@@ -84,7 +84,12 @@ class Association {
       Fail(ErrorCode::kUnavailable, where + " failed: " + status.text());
     }
     if (ASC_countAcceptedPresentationContexts(association_->params) == 0) {
-      Fail(ErrorCode::kUnavailable, where + ": the peer accepted none of the presentation contexts");
+      // Which kinds of object: a retry of the one object a PACS would not store (an Encapsulated STL)
+      // ended "accepted none of the presentation contexts", which named nothing (found 2026-12-07).
+      std::string classes;
+      for (const auto& entry : syntaxes) classes += (classes.empty() ? "" : ", ") + UidName(entry.first);
+      Fail(ErrorCode::kUnavailable, where + ": the peer accepted none of the presentation contexts, for " +
+                                        classes + ": it stores no object of that kind (its configuration)");
     }
     established_ = true;
   }

@@ -493,6 +493,23 @@ TEST_F(JobCoordinatorTest, ADestinationGivenTwiceIsSentToOnce) {
   EXPECT_EQ(Get(job.id()).sends_size(), 2);
 }
 
+// A FAILED job asked to send was told "results are sent once it has SUCCEEDED", which it never would
+// (found 2026-12-07).
+TEST_F(JobCoordinatorTest, ASendOfAJobThatEndedWithoutResultsSaysSo) {
+  const PacsDirectory pacs({"orthanc=ORTHANC@127.0.0.1:4242"});
+  coordinator_.SetDicomHooks({&pacs, "1.2.3", {}, {}});
+  const std::string id = Submit();
+  EXPECT_NE(testing::ErrorFrom([&] { coordinator_.RequestSend(id, "orthanc", AnonymousPrincipal()); },
+                               ErrorCode::kFailedPrecondition)
+                .find("is QUEUED; its results can be sent once it has SUCCEEDED"),
+            std::string::npos);
+  Fail(LeaseNext()->lease_id, /*retry=*/false);
+  EXPECT_NE(testing::ErrorFrom([&] { coordinator_.RequestSend(id, "orthanc", AnonymousPrincipal()); },
+                               ErrorCode::kFailedPrecondition)
+                .find("is FAILED: it ended without results, so none can be sent"),
+            std::string::npos);
+}
+
 TEST_F(JobCoordinatorTest, AnotherTenantsJobIsNotFoundLikeAMissingOne) {
   v1::SubmitRequest request;
   *request.mutable_clip() = Uploaded("images/000000.png", "tenant a's frame", "a");
