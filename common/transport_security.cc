@@ -111,13 +111,14 @@ void WarnOfExpiry(std::string_view unix_ms_text) {
   const auto left = std::chrono::system_clock::time_point(std::chrono::milliseconds(unix_ms)) -
                     std::chrono::system_clock::now();
   if (left > kTokenExpiryWarning || warned.exchange(true)) return;
-  // In the unit that says it: "in 0 hour(s)" was 33 s before a worker's token expired.
+  // In the unit that says it: "in 0 hour(s)" was 33 s before a worker's token expired. Rounded to the
+  // nearest: a token made for 3 days said "in 2 days" seconds later (found 2026-12-07).
   const long seconds = std::max<long>(0, std::chrono::duration_cast<std::chrono::seconds>(left).count());
-  const long minutes = seconds / 60;
+  const long minutes = (seconds + 30) / 60;
   const std::string in = seconds < 120    ? fmt::format("{} s", seconds)
                          : minutes < 120  ? fmt::format("{} minutes", minutes)
-                         : minutes < 2880 ? fmt::format("{} hours", minutes / 60)
-                                          : fmt::format("{} days", minutes / 1440);
+                         : minutes < 2880 ? fmt::format("{} hours", (minutes + 30) / 60)
+                                          : fmt::format("{} days", (minutes + 720) / 1440);
   spdlog::warn("the token in use expires at {:%Y-%m-%d %H:%M:%S} UTC, in {}: ask its issuer for a new one",
                fmt::gmtime(static_cast<std::time_t>(unix_ms / 1000)), in);
 }

@@ -49,6 +49,7 @@ void WorkerRegistry::SaveDrainsOrWarn() const {
 WorkerRegistry::Entry& WorkerRegistry::At(const std::string& worker_id) {
   auto& entry = workers_[worker_id];
   entry.info.set_id(worker_id);
+  if (entry.left) return entry;
   entry.info.set_last_seen_unix_ms(NowUnixMs());
   entry.last_seen = std::chrono::steady_clock::now();
   return entry;
@@ -63,6 +64,7 @@ std::string WorkerRegistry::Register(const v1::RegisterRequest& request, const s
       std::chrono::steady_clock::now() - found->second.last_seen <= alive_window_) {
     before = found->second.principal;
   }
+  workers_[request.worker_id()].left = false;
   auto& entry = At(request.worker_id());
   entry.registered = true;
   entry.principal = principal;
@@ -140,6 +142,7 @@ void WorkerRegistry::Leave(const std::string& worker_id) {
   std::lock_guard lock(mutex_);
   if (const auto found = workers_.find(worker_id); found != workers_.end()) {
     found->second.last_seen = NotAliveSince();
+    found->second.left = true;
   }
 }
 

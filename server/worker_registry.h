@@ -64,6 +64,10 @@ class WorkerRegistry {
     // and the label of the token it did so with.
     bool registered = false;
     std::string principal;
+    // It said it leaves (Leave): a lease call of its still on the way is no sign of life. One that
+    // reached the server after the Leave listed a stopped worker alive (CI, 2026-12-07). Register
+    // ends it.
+    bool left = false;
   };
   Entry& At(const std::string& worker_id);
   // A last-seen time just outside the alive window: listed as not alive from now.

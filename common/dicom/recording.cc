@@ -412,6 +412,12 @@ Recording ReadRecording(const fs::path& path, const RecordingOptions& options) {
     recording.frame_numbers.push_back(static_cast<int>(ref.index));
   }
   recording.times_from = series[0].front().times_from;
+  // A series of one-frame instances has no time between them: the timeline takes them a second
+  // apart, which recording.json credited to the first instance's Frame Time Vector (found 2026-12-07).
+  const bool single_frames = std::all_of(series[0].begin(), series[0].end(),
+                                         [](const Instance& instance) { return instance.frames == 1; });
+  if (series[0].size() > 1 && single_frames)
+    recording.times_from = "none between its instances (one frame each, taken one second apart)";
   recording.study = ReadStudyContext(*series[0].front().dataset, series[0].front().path.string());
   for (std::size_t i = 1; i < series[0].size(); ++i) {
     recording.study.source_instances.push_back(

@@ -112,6 +112,9 @@ TEST(VideoToDicomTest, OddSizedFramesArePaddedToEvenOnes) {
   ASSERT_EQ(odd.left.size(), 3u);
   EXPECT_EQ(odd.left[0].size(), cv::Size(64, 48));
   EXPECT_NEAR(cv::mean(odd.left[2])[2], 200, 4);  // the padding repeats the edge: no dark border
+  // The size said is the size written (it said 63x47).
+  EXPECT_NE(ReadBytes(dir / "to-dicom.log").find("(3 frames of 64x48 at"), std::string::npos)
+      << ReadBytes(dir / "to-dicom.log");
 }
 
 // The flags added on 2026-12-05 refuse their bad forms before any work: a Series Number out of DICOM's

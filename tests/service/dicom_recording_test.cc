@@ -101,6 +101,22 @@ TEST(DicomRecordingTest, WindowAndFrameRatePickFrames) {
   EXPECT_EQ(MeanAbsDifference(thinned.left[1], frames[2]), 0.0);
 }
 
+// A series of one-frame instances has no time between them: its frames are taken a second apart, and
+// recording.json credited that to the Frame Time Vector (found 2026-12-07).
+TEST(DicomRecordingTest, OneFrameInstancesSayTheirTimesAreNotRecorded) {
+  TempDir dir;
+  std::filesystem::create_directories(dir / "series");
+  RecordingHeader header = Header();
+  header.series_uid = NewUid("");
+  for (int i = 0; i < 3; ++i)
+    WriteEndoscopicFrames(Frames(1, 32, 24), {0}, false, header,
+                          dir / "series" / (std::to_string(i) + ".dcm"));
+  const Recording recording = ReadRecording(dir / "series", {});
+  ASSERT_EQ(recording.left.size(), 3u);
+  EXPECT_EQ(recording.times_s, (std::vector<double>{0, 1, 2}));
+  EXPECT_EQ(recording.times_from, "none between its instances (one frame each, taken one second apart)");
+}
+
 TEST(DicomRecordingTest, JpegFramesDecodeCloseToTheOriginal) {
   TempDir dir;
   const auto frames = Frames(4, 32, 24);

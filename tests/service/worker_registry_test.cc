@@ -29,6 +29,22 @@ TEST(WorkerRegistryTest, WorkersGoneLongAndHoldingNoJobAreForgotten) {
   EXPECT_FALSE(registry.Registered("host-101"));
 }
 
+// A lease call of a worker that left, reaching the server after its Leave, listed the stopped worker
+// alive (CI, 2026-12-07): after a Leave only a registration brings it back.
+TEST(WorkerRegistryTest, AWorkerThatLeftStaysGoneUntilItRegistersAgain) {
+  WorkerRegistry registry(std::chrono::seconds(30));
+  v1::RegisterRequest request;
+  request.set_worker_id("w1");
+  request.add_devices("cpu0");
+  registry.Register(request);
+  ASSERT_TRUE(registry.List()[0].alive());
+  registry.Leave("w1");
+  registry.Touch("w1");  // the late lease call
+  EXPECT_FALSE(registry.List()[0].alive());
+  registry.Register(request);
+  EXPECT_TRUE(registry.List()[0].alive());
+}
+
 // A drain lasts until undone or until the worker registers again (a restart after maintenance).
 TEST(WorkerRegistryTest, ADrainLastsUntilUndoneOrTheWorkersNextRegistration) {
   WorkerRegistry registry(std::chrono::seconds(30));

@@ -139,8 +139,11 @@ int Run(const ToDicomFlags& flags) {
   } else {
     WriteVl(*source, flags.fps, flags.format == "vl-jpeg", header, flags.out, frames, fps);
   }
+  // The size written: H.264's even one (it said 161x91 of a recording holding 162x92; found 2026-12-07).
+  const int width = source->frame_size().width, height = source->frame_size().height;
+  const bool even = flags.format == "h264";
   spdlog::info("wrote {} ({} frames of {}x{} at {:.4g} frames/s, {}); study {}", flags.out, frames,
-               source->frame_size().width, source->frame_size().height, fps, flags.format,
+               even ? width + width % 2 : width, even ? height + height % 2 : height, fps, flags.format,
                header.study.study_instance_uid);
   return 0;
 }
