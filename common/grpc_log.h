@@ -22,6 +22,11 @@ class GrpcLogRoute {
   ~GrpcLogRoute();
   GrpcLogRoute(const GrpcLogRoute&) = delete;
   GrpcLogRoute& operator=(const GrpcLogRoute&) = delete;
+
+  // Logs the counts of repeats held back whose 30 s are over with no repeat since to carry them
+  // ("grpc: LINE (N more like it in the last 30 s)"): call it now and then (the server's maintenance
+  // thread, each second).
+  void FlushHeldBack() const;
 };
 
 }  // namespace endorecon

@@ -17,6 +17,18 @@ class WarningPacer {
     held_ = 0;
   }
 
+  // Whether repeats were held back and their line's time has come with no repeat to carry their
+  // count: the caller logs that count now (`held`). Without it, the count of a burst's end was never
+  // said (found 2026-12-07).
+  bool Overdue(int& held) {
+    const auto now = std::chrono::steady_clock::now();
+    if (held_ == 0 || now < next_) return false;
+    next_ = now + every_;
+    held = held_;
+    held_ = 0;
+    return true;
+  }
+
   // Whether to log now; when so, `held` is set to the repeats not logged since the last line.
   bool Due(int& held) {
     const auto now = std::chrono::steady_clock::now();

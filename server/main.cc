@@ -380,6 +380,7 @@ int Run(const ServerFlags& flags) {
         metrics.SetDamagedFiles(blobs.DamagedCount());
         guard.Refresh();
         guard.FlushRefusals();
+        grpc_log.FlushHeldBack();
         if (tick % 300 == 0) {
           try {
             guard.PublishTokenExpiries();

@@ -52,6 +52,9 @@ StudyContext NewStudyContext(const std::string& patient_id, const std::string& p
        ++c)
     if (*c != '.') digits.insert(digits.begin(), *c);
   study.patient_id = patient_id.empty() ? "ENDORECON-" + digits : patient_id;
+  // A new study's Study ID, the same digits: empty, a CD's DICOMDIR could not be made of it (dcmmkdir:
+  // "required attribute StudyID empty"; found 2026-12-07). A study joined keeps the PACS's own.
+  if (study_uid.empty()) study.study_id = digits;
   study.patient_name = patient_name;
   OFString date, time;
   DcmDate::getCurrentDate(date);

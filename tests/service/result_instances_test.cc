@@ -117,6 +117,10 @@ TEST(ResultInstancesTest, WithoutDicomInputTheResultsStartANewStudy) {
   digits.erase(std::remove(digits.begin(), digits.end(), '.'), digits.end());
   EXPECT_EQ(Get(file, DCM_PatientID), "ENDORECON-" + digits.substr(digits.size() - 8));
   EXPECT_EQ(NewStudyContext("", "", "1.2.3", "").patient_id, "ENDORECON-123");
+  // A new study's Study ID, the same digits (empty, a CD's DICOMDIR could not be made; found
+  // 2026-12-07); a study joined keeps the PACS's own, so none is made up for it.
+  EXPECT_EQ(Get(file, DCM_StudyID), digits.substr(digits.size() - 8));
+  EXPECT_EQ(NewStudyContext("", "", "1.2.3", "").study_id, "");
   DcmItem* referenced = nullptr;
   EXPECT_TRUE(file.getDataset()->findAndGetSequenceItem(DCM_ReferencedSeriesSequence, referenced, 0).bad());
 }

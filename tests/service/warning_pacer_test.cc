@@ -23,5 +23,21 @@ TEST(WarningPacerTest, TheFirstIsSaidThenOnePerPeriodCountingWhatWasHeldBack) {
   EXPECT_EQ(held, 2) << "the two held back are counted in the next line";
 }
 
+// The repeats of a burst's end were never said when no later repeat came to carry their count (found
+// 2026-12-07): once the period is over, Overdue hands them over, once.
+TEST(WarningPacerTest, RepeatsHeldBackAreOverdueOnceThePeriodEnds) {
+  WarningPacer brief(std::chrono::milliseconds(20));
+  int held = -1;
+  EXPECT_FALSE(brief.Overdue(held)) << "nothing held";
+  EXPECT_TRUE(brief.Due(held));
+  EXPECT_FALSE(brief.Due(held));
+  EXPECT_FALSE(brief.Due(held));
+  EXPECT_FALSE(brief.Overdue(held)) << "the period is not over";
+  std::this_thread::sleep_for(std::chrono::milliseconds(40));
+  EXPECT_TRUE(brief.Overdue(held));
+  EXPECT_EQ(held, 2);
+  EXPECT_FALSE(brief.Overdue(held)) << "said once";
+}
+
 }  // namespace
 }  // namespace endorecon

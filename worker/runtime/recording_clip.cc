@@ -146,6 +146,13 @@ void ScaleFrames(dicom::Recording& recording, cv::Size size) {
   dicom::CheckFrameFits({size.width, size.height}, {recorded.width, recorded.height}, "the recording");
   if (size.empty() || size == recorded) return;
   dicom::CheckSameShape({size.width, size.height}, {recorded.width, recorded.height});
+  // Larger than recorded adds no detail and costs memory and time (it was taken silently; found
+  // 2026-12-07).
+  if (size.width > recorded.width) {
+    spdlog::warn("--size {}x{} is larger than the recording's {}x{}: the frames are scaled up, which adds no "
+                 "detail and costs memory and time",
+                 size.width, size.height, recorded.width, recorded.height);
+  }
   const int interpolation = size.width < recorded.width ? cv::INTER_AREA : cv::INTER_LINEAR;
   for (auto* eye : {&recording.left, &recording.right}) {
     for (cv::Mat& frame : *eye) cv::resize(frame, frame, size, 0, 0, interpolation);
