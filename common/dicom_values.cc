@@ -78,6 +78,13 @@ void CheckPatientName(const std::string& name, const std::string& what) {
   }
 }
 
+void CheckStudyJoin(const std::string& patient_id, const std::string& study_uid) {
+  if (study_uid.empty() || !patient_id.empty()) return;
+  FailInvalid(
+      "--study-uid joins the results to an existing study: give that study's patient too (--patient-id, "
+      "and --patient-name), or the PACS files the study under two patients, its own and a made-up one");
+}
+
 void CheckDicomResultFlags(bool dicom, bool recording, const std::string& patient_id,
                            const std::string& patient_name, const std::string& study_uid) {
   CheckPatientId(patient_id, "--patient-id");
@@ -89,6 +96,7 @@ void CheckDicomResultFlags(bool dicom, bool recording, const std::string& patien
         "from a clip; a DICOM recording's results keep its own patient and study");
   }
   if (!dicom) FailInvalid("--patient-id, --patient-name and --study-uid go with --dicom (DICOM results)");
+  CheckStudyJoin(patient_id, study_uid);
 }
 
 }  // namespace endorecon::dicom

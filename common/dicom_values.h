@@ -15,6 +15,11 @@ void CheckPatientId(const std::string& id, const std::string& what);
 // each of at most 64 characters and five components separated by '^', no control characters.
 void CheckPatientName(const std::string& name, const std::string& what);
 
+// Throws FailInvalid when `study_uid` (results joining an existing study) comes without the study's
+// patient (`patient_id` empty): the results named a made-up patient, and a PACS filed the one study
+// under two patients (found 2026-12-07).
+void CheckStudyJoin(const std::string& patient_id, const std::string& study_uid);
+
 // The DICOM result flags of `endorecon submit` and `endorecon-worker reconstruct`, checked before
 // anything is uploaded or trained: the patient values (above), and that --patient-id, --patient-name
 // and --study-uid come with --dicom and not with a DICOM recording (`recording`), whose results keep

@@ -542,6 +542,7 @@ v1::Job JobCoordinator::Submit(const v1::SubmitRequest& request, const Principal
   if (!request.dicom().study_uid().empty()) dicom::CheckUid(request.dicom().study_uid(), "dicom.study_uid");
   dicom::CheckPatientId(request.dicom().patient_id(), "dicom.patient_id");
   dicom::CheckPatientName(request.dicom().patient_name(), "dicom.patient_name");
+  dicom::CheckStudyJoin(request.dicom().patient_id(), request.dicom().study_uid());
   for (const auto& name : request.send_to()) {
     if (dicom_.pacs == nullptr) FailInvalid("send_to: this server has no PACS configured (--pacs)");
     dicom_.pacs->Find(name);

@@ -43,6 +43,7 @@ StudyContext NewStudyContext(const std::string& patient_id, const std::string& p
   if (!study_uid.empty()) CheckUid(study_uid, "--study-uid");
   CheckPatientId(patient_id, "--patient-id");
   CheckPatientName(patient_name, "--patient-name");
+  CheckStudyJoin(patient_id, study_uid);
   study.study_instance_uid = study_uid.empty() ? NewUid(uid_root) : study_uid;
   study.specific_character_set = "ISO_IR 192";  // UTF-8: names typed on a command line
   // The default: the UID's last 8 digits, its dots left out (it took the last 8 characters, a dot

@@ -52,6 +52,17 @@ TEST(DicomValuesTest, ValuesAreUtf8) {
             std::string::npos);
 }
 
+// Results joining a study under a made-up patient were filed by the PACS under two patients (found
+// 2026-12-07): a study joined needs its patient.
+TEST(DicomValuesTest, AStudyJoinedNamesItsPatient) {
+  EXPECT_EQ(Refusal([] { CheckStudyJoin("", ""); }), "");
+  EXPECT_EQ(Refusal([] { CheckStudyJoin("PAT-4711", "1.2.3"); }), "");
+  EXPECT_NE(Refusal([] { CheckStudyJoin("", "1.2.3"); }).find("give that study's patient too (--patient-id"),
+            std::string::npos);
+  EXPECT_NE(Refusal([] { CheckDicomResultFlags(true, false, "", "", "1.2.3"); }).find("--study-uid joins"),
+            std::string::npos);
+}
+
 TEST(DicomValuesTest, APatientNameIsOnePersonName) {
   for (const std::string good : {"", "Doe^Jane", "Doe^Jane^Q^Dr^III", "Yamada^Tarou=山田^太郎=やまだ^たろう"})
     EXPECT_EQ(Refusal([&] { CheckPatientName(good, "--patient-name"); }), "") << good;
