@@ -144,7 +144,7 @@ TEST_F(TlsTest, AnExpiredCertificateIsRefusedAtStart) {
       << server.Log();
   Process worker(
       {BuiltBinary("worker/runtime/endorecon-worker"), "serve", "--server",
-       "127.0.0.1:" + std::to_string(FreePort()), "--devices", "cpu", "--ca", pki_->ca_cert.string(),
+       "127.0.0.1:" + std::to_string(FreePort()), "--devices", "cpu", "--metrics-port", "0", "--ca", pki_->ca_cert.string(),
        "--tls-cert", pki_->expired_cert.string(), "--tls-key", pki_->expired_key.string()},
       dir / "worker.log");
   EXPECT_EQ(worker.Wait(), 2) << worker.Log();
@@ -169,7 +169,7 @@ TEST_F(TlsTest, ACertificateForTheOtherSideIsRefusedAtStart) {
       << server.Log();
   Process worker(
       {BuiltBinary("worker/runtime/endorecon-worker"), "serve", "--server",
-       "127.0.0.1:" + std::to_string(FreePort()), "--devices", "cpu", "--ca", pki_->ca_cert.string(),
+       "127.0.0.1:" + std::to_string(FreePort()), "--devices", "cpu", "--metrics-port", "0", "--ca", pki_->ca_cert.string(),
        "--tls-cert", pki_->server_cert.string(), "--tls-key", pki_->server_key.string()},
       dir / "worker.log");
   EXPECT_EQ(worker.Wait(), 2) << worker.Log();

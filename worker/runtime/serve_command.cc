@@ -221,16 +221,18 @@ int Serve(const ServeFlags& flags) {
   } catch (const Error& e) {
     FailInvalid("--id: " + std::string(e.what()));
   }
-  WorkerMetrics metrics(flags.metrics_port >= 0 ? MetricsAddress(flags.metrics_host, flags.metrics_port) : "",
-                        devices);
   // gRPC's own lines (two a second while --ca does not verify the server) into the log, paced; the
   // worker's own warning says which side to look at.
   const GrpcLogRoute grpc_log(
       "the server's certificate does not verify against --ca, or the server does not trust this "
       "worker's --tls-cert: the warning beside says which",
       {});
+  // The credentials (read and checked here) before the metrics port: a certificate refused at start
+  // was hidden behind "cannot serve metrics" when the port was taken (CI, 2026-12-07).
   WorkerClient client(flags.server, SecurityOf(flags), worker_id,
                       std::chrono::milliseconds(static_cast<long>(flags.timeout_s * 1000)));
+  WorkerMetrics metrics(flags.metrics_port >= 0 ? MetricsAddress(flags.metrics_host, flags.metrics_port) : "",
+                        devices);
   std::vector<std::string> names;
   for (const auto& device : devices) names.push_back(device.name);
 
