@@ -116,11 +116,12 @@ TEST(ResultInstancesTest, WithoutDicomInputTheResultsStartANewStudy) {
   std::string digits = uid;
   digits.erase(std::remove(digits.begin(), digits.end(), '.'), digits.end());
   EXPECT_EQ(Get(file, DCM_PatientID), "ENDORECON-" + digits.substr(digits.size() - 8));
-  EXPECT_EQ(NewStudyContext("", "", "1.2.3", "").patient_id, "ENDORECON-123");
   // A new study's Study ID, the same digits (empty, a CD's DICOMDIR could not be made; found
-  // 2026-12-07); a study joined keeps the PACS's own, so none is made up for it.
+  // 2026-12-07); a study joined keeps the PACS's own, so none is made up for it, and it needs its
+  // patient (a made-up one split the study in the PACS; found 2026-12-07).
   EXPECT_EQ(Get(file, DCM_StudyID), digits.substr(digits.size() - 8));
-  EXPECT_EQ(NewStudyContext("", "", "1.2.3", "").study_id, "");
+  EXPECT_EQ(NewStudyContext("P-1", "", "1.2.3", "").study_id, "");
+  EXPECT_THROW(NewStudyContext("", "", "1.2.3", ""), Error);
   DcmItem* referenced = nullptr;
   EXPECT_TRUE(file.getDataset()->findAndGetSequenceItem(DCM_ReferencedSeriesSequence, referenced, 0).bad());
 }
