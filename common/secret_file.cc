@@ -15,6 +15,15 @@
 namespace endorecon {
 namespace {
 
+// A file `error` (errno) kept from being read: missing (NOT_FOUND), or there but refused, with the
+// reason and the user. A key owned by root (0600) read by the server's user, or a file in a folder
+// this user may not enter, was "NOT_FOUND", as a missing file (found 2026-12-07).
+[[noreturn]] void FailUnreadable(const std::filesystem::path& path, const std::string& flag, int error) {
+  if (error == ENOENT || error == ENOTDIR)
+    Fail(ErrorCode::kNotFound, flag + " " + path.string() + ": no such file");
+  FailInvalid(flag + " " + path.string() + ": cannot be read: " + std::strerror(error) + RunsAsNote(error));
+}
+
 std::string ReadWhole(const std::filesystem::path& path, const std::string& flag) {
   try {
     RequireRegularFile(path);
@@ -23,14 +32,7 @@ std::string ReadWhole(const std::filesystem::path& path, const std::string& flag
   }
   errno = 0;
   std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    // Its reason and the user: a key owned by root (0600) read by the server's user was "NOT_FOUND:
-    // cannot be read", as a missing file (found 2026-12-07).
-    const int error = errno;
-    if (error == 0 || error == ENOENT || error == ENOTDIR)
-      Fail(ErrorCode::kNotFound, flag + " " + path.string() + ": no such file");
-    FailInvalid(flag + " " + path.string() + ": cannot be read: " + std::strerror(error) + RunsAsNote(error));
-  }
+  if (!in) FailUnreadable(path, flag, errno != 0 ? errno : ENOENT);
   std::ostringstream bytes;
   bytes << in.rdbuf();
   // There, but of no use: a bad argument (exit 2), not a missing one (exit 3).
@@ -42,14 +44,7 @@ std::string ReadWhole(const std::filesystem::path& path, const std::string& flag
 
 std::string ReadSecretFile(const std::filesystem::path& path, const std::string& flag) {
   struct stat info {};
-  if (::stat(path.c_str(), &info) != 0) {
-    // A file in a folder this user may not enter was "no such file" (found 2026-12-07).
-    const int error = errno;
-    if (error != ENOENT && error != ENOTDIR)
-      FailInvalid(flag + " " + path.string() + ": cannot be read: " + std::strerror(error) +
-                  RunsAsNote(error));
-    Fail(ErrorCode::kNotFound, flag + " " + path.string() + ": no such file");
-  }
+  if (::stat(path.c_str(), &info) != 0) FailUnreadable(path, flag, errno);
   // Its kind before its mode: a FIFO's 0644 was reported as a secret others may read.
   if (!S_ISREG(info.st_mode)) ReadWhole(path, flag);
   if ((info.st_mode & S_IRWXO) != 0) {

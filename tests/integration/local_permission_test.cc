@@ -18,14 +18,9 @@ namespace fs = std::filesystem;
 constexpr const char* kRunuser = "/usr/sbin/runuser";  // util-linux, in every Debian
 
 CliResult RunAsNobody(const std::vector<std::string>& args) {
-  TempDir scratch("nobody");
   std::vector<std::string> argv{kRunuser, "-u", "nobody", "--"};
   argv.insert(argv.end(), args.begin(), args.end());
-  CliResult result;
-  result.exit_code = Process(argv, scratch / "out", scratch / "err").Wait();
-  result.out = ReadBytes(scratch / "out");
-  result.err = ReadBytes(scratch / "err");
-  return result;
+  return RunCommand(argv);
 }
 
 class LocalPermissionTest : public ::testing::Test {

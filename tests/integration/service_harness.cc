@@ -125,9 +125,13 @@ CliResult RunCli(const std::string& address, const std::vector<std::string>& arg
 }
 
 CliResult RunCliAsTyped(const std::vector<std::string>& args) {
-  TempDir scratch("cli");
   std::vector<std::string> argv{BuiltBinary("client/endorecon")};
   argv.insert(argv.end(), args.begin(), args.end());
+  return RunCommand(argv);
+}
+
+CliResult RunCommand(const std::vector<std::string>& argv) {
+  TempDir scratch("cli");
   CliResult result;
   result.exit_code = Process(argv, scratch / "out", scratch / "err").Wait();
   result.out = ReadBytes(scratch / "out");

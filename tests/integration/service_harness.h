@@ -77,6 +77,8 @@ std::string CreateToken(const std::filesystem::path& data_dir, const std::string
 std::filesystem::path WriteTokenFile(const std::filesystem::path& path, const std::string& token);
 // Runs `endorecon args...` to completion, with no --server added.
 CliResult RunCliAsTyped(const std::vector<std::string>& args);
+// Runs `argv` (a binary and its arguments) to completion, keeping its stdout and stderr.
+CliResult RunCommand(const std::vector<std::string>& argv);
 // Writes a tiny synthetic clip (endorecon-worker synth, 8 frames of 32x24) into `dir`.
 void MakeClip(const std::filesystem::path& dir, int seed = 1);
 // Makes the PNG at `path` hold `payload` too, in a private ancillary chunk (with its CRC, as the CLI

@@ -43,6 +43,26 @@ class TlsTest : public ::testing::Test {
     return RunCli(cluster_->address(), flags);
   }
 
+  // A server started in `dir` with this certificate and key, run until it exits; `out` holds its
+  // stdout and stderr.
+  static CliResult StartServerWith(const TempDir& dir, const fs::path& cert, const fs::path& key) {
+    return Together(
+        RunCommand({BuiltBinary("server/endorecon-server"), "--listen",
+                    "127.0.0.1:" + std::to_string(FreePort()), "--data-dir", (dir / "data").string(),
+                    "--metrics-port", "-1", "--tls-cert", cert.string(), "--tls-key", key.string()}));
+  }
+  // A worker given this certificate and key, run until it exits (its metrics on a port it picks).
+  static CliResult StartWorkerWith(const fs::path& cert, const fs::path& key) {
+    return Together(
+        RunCommand({BuiltBinary("worker/runtime/endorecon-worker"), "serve", "--server",
+                    "127.0.0.1:" + std::to_string(FreePort()), "--devices", "cpu", "--metrics-port", "0",
+                    "--ca", pki_->ca_cert.string(), "--tls-cert", cert.string(), "--tls-key", key.string()}));
+  }
+  static CliResult Together(CliResult result) {
+    result.out += result.err;
+    return result;
+  }
+
   static std::unique_ptr<TempDir> pki_dir_;
   static std::unique_ptr<TestPki> pki_;
   std::unique_ptr<Cluster> cluster_;
@@ -133,22 +153,13 @@ TEST_F(TlsTest, TheHealthPortAnswersInPlaintextBesideTheTlsPort) {
 // bare "certificate verify failed" (found 2026-12-05): it is refused at start, as a worker's own.
 TEST_F(TlsTest, AnExpiredCertificateIsRefusedAtStart) {
   TempDir dir("expired");
-  Process server(
-      {BuiltBinary("server/endorecon-server"), "--listen", "127.0.0.1:" + std::to_string(FreePort()),
-       "--data-dir", (dir / "data").string(), "--metrics-port", "-1", "--tls-cert",
-       pki_->expired_cert.string(), "--tls-key", pki_->expired_key.string()},
-      dir / "server.log");
-  EXPECT_EQ(server.Wait(), 2) << server.Log();
-  EXPECT_NE(server.Log().find("--tls-cert " + pki_->expired_cert.string() + " expired on "),
-            std::string::npos)
-      << server.Log();
-  Process worker(
-      {BuiltBinary("worker/runtime/endorecon-worker"), "serve", "--server",
-       "127.0.0.1:" + std::to_string(FreePort()), "--devices", "cpu", "--metrics-port", "0", "--ca", pki_->ca_cert.string(),
-       "--tls-cert", pki_->expired_cert.string(), "--tls-key", pki_->expired_key.string()},
-      dir / "worker.log");
-  EXPECT_EQ(worker.Wait(), 2) << worker.Log();
-  EXPECT_NE(worker.Log().find("expired on "), std::string::npos) << worker.Log();
+  const auto server = StartServerWith(dir, pki_->expired_cert, pki_->expired_key);
+  EXPECT_EQ(server.exit_code, 2) << server.out;
+  EXPECT_NE(server.out.find("--tls-cert " + pki_->expired_cert.string() + " expired on "), std::string::npos)
+      << server.out;
+  const auto worker = StartWorkerWith(pki_->expired_cert, pki_->expired_key);
+  EXPECT_EQ(worker.exit_code, 2) << worker.out;
+  EXPECT_NE(worker.out.find("expired on "), std::string::npos) << worker.out;
 }
 
 // A certificate made for the other side of TLS: a server given a worker's (clientAuth only) started,
@@ -156,27 +167,19 @@ TEST_F(TlsTest, AnExpiredCertificateIsRefusedAtStart) {
 // which it was (found 2026-12-07). Both are refused at start, naming what is left out.
 TEST_F(TlsTest, ACertificateForTheOtherSideIsRefusedAtStart) {
   TempDir dir("purpose");
-  Process server(
-      {BuiltBinary("server/endorecon-server"), "--listen", "127.0.0.1:" + std::to_string(FreePort()),
-       "--data-dir", (dir / "data").string(), "--metrics-port", "-1", "--tls-cert",
-       pki_->worker_cert.string(), "--tls-key", pki_->worker_key.string()},
-      dir / "server.log");
-  EXPECT_EQ(server.Wait(), 2) << server.Log();
-  EXPECT_NE(server.Log().find("--tls-cert " + pki_->worker_cert.string() +
-                              " is not made for a TLS server: its extendedKeyUsage (or keyUsage) leaves out "
-                              "serverAuth, so clients refuse it; is it a worker's certificate?"),
+  const auto server = StartServerWith(dir, pki_->worker_cert, pki_->worker_key);
+  EXPECT_EQ(server.exit_code, 2) << server.out;
+  EXPECT_NE(server.out.find("--tls-cert " + pki_->worker_cert.string() +
+                            " is not made for a TLS server: its extendedKeyUsage (or keyUsage) leaves out "
+                            "serverAuth, so clients refuse it; is it a worker's certificate?"),
             std::string::npos)
-      << server.Log();
-  Process worker(
-      {BuiltBinary("worker/runtime/endorecon-worker"), "serve", "--server",
-       "127.0.0.1:" + std::to_string(FreePort()), "--devices", "cpu", "--metrics-port", "0", "--ca", pki_->ca_cert.string(),
-       "--tls-cert", pki_->server_cert.string(), "--tls-key", pki_->server_key.string()},
-      dir / "worker.log");
-  EXPECT_EQ(worker.Wait(), 2) << worker.Log();
-  EXPECT_NE(worker.Log().find("is not made for a TLS client: its extendedKeyUsage (or keyUsage) leaves out "
-                              "clientAuth, so the server refuses it; is it the server's certificate?"),
+      << server.out;
+  const auto worker = StartWorkerWith(pki_->server_cert, pki_->server_key);
+  EXPECT_EQ(worker.exit_code, 2) << worker.out;
+  EXPECT_NE(worker.out.find("is not made for a TLS client: its extendedKeyUsage (or keyUsage) leaves out "
+                            "clientAuth, so the server refuses it; is it the server's certificate?"),
             std::string::npos)
-      << worker.Log();
+      << worker.out;
 }
 
 TEST_F(TlsTest, WorkersWithoutAClientCertificateOrWithAClientTokenLeaseNothing) {
